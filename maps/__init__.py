@@ -1,0 +1,1 @@
+"""Map data shipped with socialzoo (installed as the package socialzoo._maps)."""

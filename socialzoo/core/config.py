@@ -1,0 +1,166 @@
+"""Configuration of the world: robot, humans, laser and time step (SPEC sections 2 to 4).
+
+Frozen keyword-only dataclasses validated on construction; override with dataclasses.replace.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+
+def _check(cls_name: str, name: str, value: float, *, positive: bool = True, allow_zero: bool = False) -> None:
+    """Raise ValueError naming the field when a number is not finite or out of range."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise ValueError(f"{cls_name}.{name} must be a finite number, got {value!r}")
+    if positive and (value < 0 or (value == 0 and not allow_zero)):
+        raise ValueError(f"{cls_name}.{name} must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+
+
+def _check_all(obj: Any, *, nonnegative: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
+    """Validate every float field of a config dataclass: positive unless listed otherwise."""
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if f.type in ("float", "int") or isinstance(value, float):
+            if f.name in signed:
+                _check(type(obj).__name__, f.name, value, positive=False)
+            else:
+                _check(type(obj).__name__, f.name, value, allow_zero=f.name in nonnegative)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotConfig:
+    """Differential-drive robot (SPEC section 3).
+
+    Attributes:
+        length: footprint length along the heading, m (collision footprint).
+        width: footprint width, m.
+        max_linear_accel: motion-model limit on |dv/dt|, m/s^2.
+        max_angular_accel: motion-model limit on |domega/dt|, rad/s^2.
+        max_angular_speed: motion-model clamp on |omega|, rad/s.
+        max_speed: hard cap on |v| in the motion model, m/s (the sub-policies ask for less).
+    """
+
+    length: float = 0.5
+    width: float = 0.43
+    max_linear_accel: float = 6.0
+    max_angular_accel: float = 5.0
+    max_angular_speed: float = 3.0
+    max_speed: float = 2.25
+
+    def __post_init__(self) -> None:
+        _check_all(self)
+
+    @property
+    def half_length(self) -> float:
+        return self.length / 2.0
+
+    @property
+    def half_width(self) -> float:
+        return self.width / 2.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class HumanConfig:
+    """Social-force pedestrians (SPEC section 4, PedSim's Helbing-Molnar-Moussaid model).
+
+    Attributes:
+        min_humans, max_humans: scenario head count range (inclusive).
+        speed_mean, speed_std: preferred speed distribution N(mean, std), m/s.
+        max_speed: cap on a sampled preferred speed, m/s.
+        min_speed: floor on a sampled preferred speed, m/s.
+        spawn_jitter: uniform spawn offset half-width around the start node, m.
+        force_radius: agent radius in the obstacle force, m.
+        radius: collision and sensing radius, m.
+        relaxation_time: tau of the desired force, s.
+        desired_factor: weight of the desired force.
+        obstacle_strength: weight of the wall force.
+        obstacle_sigma: range of the wall force, m.
+        social_strength: weight of the agent-agent force.
+        social_lambda, social_gamma, social_n, social_n_prime: Moussaid parameters.
+        robot_scale: robot-human position differences are divided by this before the social force.
+        waypoint_radius: a waypoint within this distance counts as reached, m.
+        wall_reach: walls farther than this exert no force, m (the force there is below 1e-3).
+    """
+
+    min_humans: int = 5
+    max_humans: int = 25
+    speed_mean: float = 1.0
+    speed_std: float = 0.1
+    max_speed: float = 1.3
+    min_speed: float = 0.5
+    spawn_jitter: float = 0.5
+    force_radius: float = 0.4
+    radius: float = 0.2
+    relaxation_time: float = 0.5
+    desired_factor: float = 1.0
+    obstacle_strength: float = 5.0
+    obstacle_sigma: float = 0.1
+    social_strength: float = 5.0
+    social_lambda: float = 2.0
+    social_gamma: float = 0.35
+    social_n: float = 2.0
+    social_n_prime: float = 3.0
+    robot_scale: float = 1.5
+    waypoint_radius: float = 1.0
+    wall_reach: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check_all(self, nonnegative=("speed_std", "spawn_jitter", "obstacle_strength", "social_strength", "min_humans"))
+        for name in ("min_humans", "max_humans"):
+            if not isinstance(getattr(self, name), int) or isinstance(getattr(self, name), bool):
+                raise ValueError(f"HumanConfig.{name} must be an int, got {getattr(self, name)!r}")
+        if self.min_humans > self.max_humans:
+            raise ValueError(
+                f"HumanConfig.min_humans ({self.min_humans}) exceeds max_humans ({self.max_humans})"
+            )
+        if self.min_speed > self.max_speed:
+            raise ValueError(f"HumanConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})")
+
+
+@dataclass(frozen=True, kw_only=True)
+class LaserConfig:
+    """2D laser scan against walls and human discs.
+
+    Attributes:
+        num_rays: rays evenly spread over the field of view.
+        fov_deg: field of view, degrees, centred on the heading.
+        max_range: m.
+        noise_std: Gaussian range noise, m (0 for none).
+    """
+
+    num_rays: int = 180
+    fov_deg: float = 270.0
+    max_range: float = 10.0
+    noise_std: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.num_rays, int) or self.num_rays < 1:
+            raise ValueError(f"LaserConfig.num_rays must be a positive int, got {self.num_rays!r}")
+        _check_all(self, nonnegative=("noise_std",))
+        if self.fov_deg > 360.0:
+            raise ValueError(f"LaserConfig.fov_deg must be <= 360, got {self.fov_deg!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class WorldConfig:
+    """Everything the world step needs besides the map and the state.
+
+    Attributes:
+        dt: physics and decision step, s (SPEC: 0.025).
+        robot: robot parameters.
+        human: human parameters.
+        laser: laser parameters, or None for no scan.
+        human_collision_distance: robot-human centre distance counted as a collision, m.
+    """
+
+    dt: float = 0.025
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    human: HumanConfig = field(default_factory=HumanConfig)
+    laser: LaserConfig | None = None
+    human_collision_distance: float = 0.4
+
+    def __post_init__(self) -> None:
+        _check("WorldConfig", "dt", self.dt)
+        _check("WorldConfig", "human_collision_distance", self.human_collision_distance)

@@ -1,0 +1,152 @@
+"""Vectorised 2D geometry on segments, points and rays (numpy only).
+
+Every function broadcasts over leading axes, so one call serves a batch of envs, humans and walls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Segments whose cross product is below this are treated as parallel (metres squared).
+PARALLEL_EPS = 1e-12
+
+
+def cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z component of the cross product of 2D vectors, shape (...,)."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def wrap_angle(theta: np.ndarray | float) -> np.ndarray:
+    """Wrap angles (rad) into [-pi, pi)."""
+    return (np.asarray(theta) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def rotate(vec: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Rotate 2D vectors (..., 2) by angles (...,) counter-clockwise."""
+    c, s = np.cos(theta), np.sin(theta)
+    x, y = vec[..., 0], vec[..., 1]
+    return np.stack((c * x - s * y, s * x + c * y), axis=-1)
+
+
+def to_frame(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Express world points (..., 2) in the frame of poses (..., 3) = (x, y, theta)."""
+    return rotate(points - pose[..., :2], -pose[..., 2])
+
+
+def closest_point_on_segment(
+    p: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closest point of segments [a, b] to points p, and its distance.
+
+    Args:
+        p: points, shape (..., 2), metres.
+        a: segment starts, shape broadcastable with p.
+        b: segment ends, shape broadcastable with p.
+
+    Returns:
+        (closest, dist): closest point (..., 2) and Euclidean distance (...,).
+        Degenerate segments (a == b) behave as the point a.
+    """
+    ab = b - a
+    denom = np.einsum("...i,...i->...", ab, ab)
+    t = np.einsum("...i,...i->...", p - a, ab) / np.where(denom > 0.0, denom, 1.0)
+    t = np.clip(t, 0.0, 1.0)
+    closest = a + t[..., None] * ab
+    diff = p - closest
+    return closest, np.sqrt(np.einsum("...i,...i->...", diff, diff))
+
+
+def segments_intersect(
+    p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
+) -> np.ndarray:
+    """Whether closed segments [p0, p1] and [q0, q1] share a point (touching counts).
+
+    All arguments broadcast; shapes (..., 2). Returns bool (...,).
+    Collinear overlapping segments count as intersecting.
+    """
+    r = p1 - p0
+    s = q1 - q0
+    qp = q0 - p0
+    denom = cross2(r, s)
+    t_num = cross2(qp, s)
+    u_num = cross2(qp, r)
+    parallel = np.abs(denom) <= PARALLEL_EPS
+    safe = np.where(parallel, 1.0, denom)
+    t = t_num / safe
+    u = u_num / safe
+    proper = (~parallel) & (t >= 0.0) & (t <= 1.0) & (u >= 0.0) & (u <= 1.0)
+    # Parallel case: intersect only when collinear and the projections overlap.
+    collinear = parallel & (np.abs(u_num) <= PARALLEL_EPS)
+    rr = np.einsum("...i,...i->...", r, r)
+    rr_safe = np.where(rr > 0.0, rr, 1.0)
+    s0 = np.einsum("...i,...i->...", qp, r) / rr_safe
+    s1 = np.einsum("...i,...i->...", q1 - p0, r) / rr_safe
+    overlap = (np.maximum(s0, s1) >= 0.0) & (np.minimum(s0, s1) <= 1.0)
+    return proper | (collinear & overlap)
+
+
+def ray_segment_hit(
+    origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """Distance along unit rays to segments [a, b]; +inf where the ray misses.
+
+    Args:
+        origin: ray origins (..., 2).
+        direction: unit ray directions (..., 2).
+        a, b: segment end points, broadcastable with origin.
+
+    Returns:
+        Distance (...,) in metres, >= 0, or inf.
+    """
+    s = b - a
+    denom = cross2(direction, s)
+    ao = a - origin
+    safe = np.where(np.abs(denom) <= PARALLEL_EPS, 1.0, denom)
+    t = cross2(ao, s) / safe
+    u = cross2(ao, direction) / safe
+    hit = (np.abs(denom) > PARALLEL_EPS) & (t >= 0.0) & (u >= 0.0) & (u <= 1.0)
+    return np.where(hit, t, np.inf)
+
+
+def ray_circle_hit(
+    origin: np.ndarray, direction: np.ndarray, centre: np.ndarray, radius: float | np.ndarray
+) -> np.ndarray:
+    """Distance along unit rays to the first crossing of circles; +inf on a miss.
+
+    A ray starting inside a circle hits it at distance 0.
+    """
+    oc = centre - origin
+    proj = np.einsum("...i,...i->...", oc, direction)
+    perp2 = np.einsum("...i,...i->...", oc, oc) - proj**2
+    r2 = np.asarray(radius) ** 2
+    half_chord = np.sqrt(np.maximum(r2 - perp2, 0.0))
+    t = proj - half_chord
+    inside = np.einsum("...i,...i->...", oc, oc) <= r2
+    hit = (perp2 <= r2) & ((t >= 0.0) | inside)
+    return np.where(inside, 0.0, np.where(hit, t, np.inf))
+
+
+def segment_hits_box(
+    a: np.ndarray, b: np.ndarray, half_length: float, half_width: float
+) -> np.ndarray:
+    """Whether segments [a, b] (in a box's own frame) touch the box |x|<=hl, |y|<=hw.
+
+    Liang-Barsky clipping of the segment against the four slabs. Shapes (..., 2) -> (...,).
+    """
+    d = b - a
+    t0 = np.zeros(d.shape[:-1])
+    t1 = np.ones(d.shape[:-1])
+    inside = np.ones(d.shape[:-1], dtype=bool)
+    for axis, half in ((0, half_length), (1, half_width)):
+        da = d[..., axis]
+        pa = a[..., axis]
+        still = np.abs(da) <= PARALLEL_EPS
+        inside &= ~(still & (np.abs(pa) > half))
+        safe = np.where(still, 1.0, da)
+        ta = (-half - pa) / safe
+        tb = (half - pa) / safe
+        lo = np.where(still, -np.inf, np.minimum(ta, tb))
+        hi = np.where(still, np.inf, np.maximum(ta, tb))
+        t0 = np.maximum(t0, lo)
+        t1 = np.minimum(t1, hi)
+    return inside & (t0 <= t1)

@@ -1,0 +1,113 @@
+"""The batched world state: a dataclass of numpy arrays with a leading batch axis B.
+
+A single env is the batch of size 1. Absent humans (scenarios have 5 to 25) are masked out.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class WorldState:
+    """State of B worlds with R robots and up to H humans each.
+
+    All positions and velocities are in the world frame, SI units.
+
+    Attributes:
+        robot_pose: (B, R, 3) x, y (m), heading theta (rad).
+        robot_vel: (B, R, 2) linear speed v (m/s) and angular speed omega (rad/s).
+        robot_goal: (B, R, 3) goal pose x, y (m), theta (rad).
+        human_pos: (B, H, 2) position, m.
+        human_vel: (B, H, 2) velocity, m/s.
+        human_pref_speed: (B, H) preferred (and maximum) walking speed, m/s.
+        human_mask: (B, H) True for humans present in the scenario.
+        human_route: (B, H, L, 2) route waypoints from start to goal, m; rows padded by repeating
+            the last waypoint.
+        human_route_len: (B, H) number of valid waypoints in each route (>= 1).
+        human_waypoint: (B, H) index of the waypoint the human walks to.
+        human_direction: (B, H) +1 walking towards the goal end of the route, -1 back to the start.
+        step_count: (B,) physics steps since reset.
+        noise_key: (B,) uint64 key of each row's counter-based noise stream (laser noise).
+    """
+
+    robot_pose: np.ndarray
+    robot_vel: np.ndarray
+    robot_goal: np.ndarray
+    human_pos: np.ndarray
+    human_vel: np.ndarray
+    human_pref_speed: np.ndarray
+    human_mask: np.ndarray
+    human_route: np.ndarray
+    human_route_len: np.ndarray
+    human_waypoint: np.ndarray
+    human_direction: np.ndarray
+    step_count: np.ndarray
+    noise_key: np.ndarray
+
+    @property
+    def batch_size(self) -> int:
+        return self.robot_pose.shape[0]
+
+    @property
+    def num_robots(self) -> int:
+        return self.robot_pose.shape[1]
+
+    @property
+    def max_humans(self) -> int:
+        return self.human_pos.shape[1]
+
+    @property
+    def human_target(self) -> np.ndarray:
+        """(B, H, 2) the waypoint each human walks to, m."""
+        idx = self.human_waypoint[..., None, None].repeat(2, axis=-1)
+        return np.take_along_axis(self.human_route, idx, axis=2)[:, :, 0, :]
+
+    def copy(self) -> WorldState:
+        """Deep copy of every array."""
+        return WorldState(**{f.name: getattr(self, f.name).copy() for f in dataclasses.fields(self)})
+
+    def rows(self, index: np.ndarray | slice | int) -> WorldState:
+        """The sub-batch at `index` (copies)."""
+        if isinstance(index, int):
+            index = slice(index, index + 1)
+        return WorldState(**{f.name: getattr(self, f.name)[index].copy() for f in dataclasses.fields(self)})
+
+    def set_rows(self, index: np.ndarray | slice, other: WorldState) -> None:
+        """Overwrite rows at `index` with `other`'s rows, padding human axes where they differ."""
+        for f in dataclasses.fields(self):
+            dst = getattr(self, f.name)
+            src = getattr(other, f.name)
+            if dst.shape[1:] != src.shape[1:]:
+                src = pad_to(src, dst.shape[1:], f.name)
+            dst[index] = src
+
+    @staticmethod
+    def concatenate(states: list[WorldState]) -> WorldState:
+        """Stack states along the batch axis, padding human and route axes to the largest."""
+        out = {}
+        for f in dataclasses.fields(WorldState):
+            arrays = [getattr(s, f.name) for s in states]
+            shape = tuple(max(a.shape[i] for a in arrays) for i in range(1, arrays[0].ndim))
+            out[f.name] = np.concatenate([pad_to(a, shape, f.name) for a in arrays], axis=0)
+        return WorldState(**out)
+
+
+def pad_to(array: np.ndarray, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """Pad the non-batch axes of a state array up to `shape`.
+
+    Human axes are padded with absent humans (mask False); route axes repeat the last waypoint
+    so that a padded route is still a valid route.
+    """
+    if array.shape[1:] == shape:
+        return array
+    if any(have > want for have, want in zip(array.shape[1:], shape, strict=True)):
+        raise ValueError(f"cannot shrink state field {name} from {array.shape[1:]} to {shape}")
+    widths = [(0, 0)] + [(0, want - have) for have, want in zip(array.shape[1:], shape, strict=True)]
+    if name == "human_route":
+        return np.pad(array, widths, mode="edge")
+    fill = 1 if name in ("human_route_len", "human_direction") else 0
+    return np.pad(array, widths, mode="constant", constant_values=fill)

@@ -1,0 +1,240 @@
+"""Wall segments with a uniform-grid spatial index.
+
+Nearest-wall, crossing, footprint and ray queries look only at the walls listed for a query's grid
+cell, so their cost depends on local wall density, not on the map's total number of walls.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from socialzoo.core.geometry import (
+    closest_point_on_segment,
+    ray_segment_hit,
+    segment_hits_box,
+    segments_intersect,
+    to_frame,
+)
+
+@dataclass(frozen=True)
+class GridTable:
+    """Candidate walls per grid cell, in compressed rows: every wall within `reach` of the cell.
+
+    Attributes:
+        cell_size: side of a square cell, metres.
+        reach: a wall closer than this to any point of a cell is listed for that cell, metres.
+        origin: world position of the grid's lower-left corner, shape (2,), metres.
+        num_x, num_y: number of cells along x and y.
+        cell_start: (num_x * num_y + 1,) offsets into cell_walls; cell c lists
+            cell_walls[cell_start[c]:cell_start[c + 1]].
+        cell_walls: (total,) wall indices.
+    """
+
+    cell_size: float
+    reach: float
+    origin: np.ndarray
+    num_x: int
+    num_y: int
+    cell_start: np.ndarray
+    cell_walls: np.ndarray
+
+    def cells(self, points: np.ndarray) -> np.ndarray:
+        """Flat cell index of world points (..., 2); points outside the grid map to its border."""
+        ij = ((points - self.origin) * (1.0 / self.cell_size)).astype(np.intp)
+        ix = np.clip(ij[..., 0], 0, self.num_x - 1)
+        iy = np.clip(ij[..., 1], 0, self.num_y - 1)
+        return ix * self.num_y + iy
+
+    @cached_property
+    def cell_count(self) -> np.ndarray:
+        """(num_x * num_y,) number of candidate walls per cell."""
+        return np.diff(self.cell_start)
+
+    @property
+    def max_candidates(self) -> int:
+        """The largest number of candidate walls in one cell."""
+        return int(self.cell_count.max(initial=0))
+
+    def candidates(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All (query, wall) candidate pairs for flat query cells (N,).
+
+        Returns:
+            (query, wall): int arrays (M,), grouped by query in increasing order.
+        """
+        counts = self.cell_count[cells]
+        query = np.repeat(np.arange(len(cells)), counts)
+        group_start = np.cumsum(counts) - counts
+        offset = np.arange(len(query)) - group_start[query]
+        return query, self.cell_walls[self.cell_start[cells][query] + offset]
+
+
+def build_grid_table(walls: np.ndarray, cell_size: float, reach: float) -> GridTable:
+    """Index walls (W, 4) on a grid whose cells list every wall within `reach` of them."""
+    if cell_size <= 0 or reach <= 0:
+        raise ValueError(f"cell_size and reach must be positive, got {cell_size}, {reach}")
+    a, b = walls[:, 0:2], walls[:, 2:4]
+    if len(walls):
+        lo = np.minimum(a, b).min(axis=0) - reach - cell_size
+        hi = np.maximum(a, b).max(axis=0) + reach + cell_size
+    else:
+        lo, hi = np.zeros(2), np.full(2, cell_size)
+    num_x = max(1, math.ceil((hi[0] - lo[0]) / cell_size))
+    num_y = max(1, math.ceil((hi[1] - lo[1]) / cell_size))
+    half_diag = cell_size * math.sqrt(0.5)
+    cell_ids: list[np.ndarray] = []
+    wall_ids: list[np.ndarray] = []
+    # Build time only: one pass per wall over the cells of its expanded bounding box.
+    for w in range(len(walls)):
+        ix0, iy0 = np.floor((np.minimum(a[w], b[w]) - reach - lo) / cell_size).astype(int)
+        ix1, iy1 = np.floor((np.maximum(a[w], b[w]) + reach - lo) / cell_size).astype(int)
+        gx, gy = np.meshgrid(
+            np.arange(max(ix0, 0), min(ix1, num_x - 1) + 1),
+            np.arange(max(iy0, 0), min(iy1, num_y - 1) + 1),
+            indexing="ij",
+        )
+        centres = lo + (np.stack((gx, gy), axis=-1) + 0.5) * cell_size
+        _, dist = closest_point_on_segment(centres, a[w], b[w])
+        flat = (gx * num_y + gy)[dist <= reach + half_diag]
+        cell_ids.append(flat)
+        wall_ids.append(np.full(len(flat), w))
+    cell_of = np.concatenate(cell_ids) if cell_ids else np.zeros(0, dtype=np.intp)
+    wall_of = np.concatenate(wall_ids) if wall_ids else np.zeros(0, dtype=np.intp)
+    order = np.lexsort((wall_of, cell_of))
+    counts = np.bincount(cell_of, minlength=num_x * num_y)
+    cell_start = np.concatenate(([0], np.cumsum(counts))).astype(np.intp)
+    return GridTable(
+        cell_size=cell_size,
+        reach=reach,
+        origin=lo,
+        num_x=num_x,
+        num_y=num_y,
+        cell_start=cell_start,
+        cell_walls=wall_of[order].astype(np.intp),
+    )
+
+
+class WallIndex:
+    """Wall segments of one map and the grid tables that answer geometric queries on them.
+
+    Queries gather (query, candidate wall) pairs from the grid and work on those pairs only, so
+    their cost follows the number of walls actually near each query.
+
+    Args:
+        walls: wall segments, shape (W, 4) as (x1, y1, x2, y2), world frame, metres.
+        cell_size: grid cell side for the fine table, metres.
+        reach: how far the fine table looks around a cell, metres; nearest-wall answers are exact
+            up to this distance, and footprints must fit inside it.
+    """
+
+    def __init__(self, walls: np.ndarray, cell_size: float = 0.5, reach: float = 1.0) -> None:
+        walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+        if not np.all(np.isfinite(walls)):
+            raise ValueError("walls contain NaN or infinite coordinates")
+        self.walls = walls
+        self.wall_a = walls[:, 0:2].copy()
+        self.wall_b = walls[:, 2:4].copy()
+        self.cell_size = cell_size
+        self.reach = reach
+        self._tables: dict[tuple[float, float], GridTable] = {}
+
+    @property
+    def num_walls(self) -> int:
+        return len(self.walls)
+
+    def table(self, cell_size: float | None = None, reach: float | None = None) -> GridTable:
+        """The grid table for (cell_size, reach), built on first use and cached."""
+        key = (cell_size or self.cell_size, reach or self.reach)
+        if key not in self._tables:
+            self._tables[key] = build_grid_table(self.walls, *key)
+        return self._tables[key]
+
+    @cached_property
+    def fine(self) -> GridTable:
+        return self.table()
+
+    def nearest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Nearest wall point to each point, within `reach`.
+
+        Args:
+            points: shape (..., 2), world frame.
+
+        Returns:
+            (closest, dist): closest wall point (..., 2) and its distance (...,); where no wall is
+            within reach, dist is inf and closest is the query point itself.
+        """
+        t = self.fine
+        flat = points.reshape(-1, 2)
+        query, wall = t.candidates(t.cells(flat))
+        closest, dist = closest_point_on_segment(flat[query], self.wall_a[wall], self.wall_b[wall])
+        best = np.full(len(flat), np.inf)
+        np.minimum.at(best, query, dist)
+        best[best > t.reach] = np.inf
+        point = flat.copy()
+        is_best = dist == best[query]
+        point[query[is_best]] = closest[is_best]
+        return point.reshape(points.shape), best.reshape(points.shape[:-1])
+
+    def crosses(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+        """Whether segments [p0, p1] (..., 2) touch any wall; returns bool (...,).
+
+        Long segments are covered by sample points spaced at most `reach` apart, each contributing
+        its cell's candidates, so any wall touching the segment is among the candidates tested.
+        """
+        t = self.fine
+        shape = p0.shape[:-1]
+        a0 = p0.reshape(-1, 2)
+        a1 = p1.reshape(-1, 2)
+        if len(a0) == 0:
+            return np.zeros(shape, dtype=bool)
+        length = np.sqrt(((a1 - a0) ** 2).sum(-1))
+        max_len = float(length.max())
+        num_samples = 1 if max_len <= t.reach else math.ceil(max_len / t.reach) + 1
+        frac = np.linspace(0.0, 1.0, num_samples) if num_samples > 1 else np.zeros(1)
+        samples = a0[:, None, :] + frac[:, None] * (a1 - a0)[:, None, :]  # (N, S, 2)
+        query, wall = t.candidates(t.cells(samples).reshape(-1))
+        seg = query // num_samples
+        hit = segments_intersect(a0[seg], a1[seg], self.wall_a[wall], self.wall_b[wall])
+        return (np.bincount(seg[hit], minlength=len(a0)) > 0).reshape(shape)
+
+    def footprint_hits(self, pose: np.ndarray, half_length: float, half_width: float) -> np.ndarray:
+        """Whether rectangular footprints centred at poses (..., 3) touch any wall; bool (...,)."""
+        t = self.fine
+        if math.hypot(half_length, half_width) > t.reach:
+            raise ValueError(
+                f"footprint half-diagonal {math.hypot(half_length, half_width):.3f} m exceeds the "
+                f"wall index reach {t.reach} m"
+            )
+        flat = pose.reshape(-1, 3)
+        query, wall = t.candidates(t.cells(flat[:, :2]))
+        a = to_frame(self.wall_a[wall], flat[query])
+        b = to_frame(self.wall_b[wall], flat[query])
+        hit = segment_hits_box(a, b, half_length, half_width)
+        return (np.bincount(query[hit], minlength=len(flat)) > 0).reshape(pose.shape[:-1])
+
+    def cast_rays(self, origins: np.ndarray, angles: np.ndarray, max_range: float) -> np.ndarray:
+        """Range to the first wall along rays, capped at max_range.
+
+        Args:
+            origins: ray origins, shape (N, 2), world frame.
+            angles: world-frame ray angles, shape (N, M), radians.
+            max_range: metres.
+
+        Returns:
+            Ranges, shape (N, M), metres, in [0, max_range].
+        """
+        t = self.table(cell_size=max(self.cell_size, max_range / 4.0), reach=max_range)
+        query, wall = t.candidates(t.cells(origins))
+        direction = np.stack((np.cos(angles), np.sin(angles)), axis=-1)  # (N, M, 2)
+        hit = ray_segment_hit(
+            origins[query][:, None, :],
+            direction[query],
+            self.wall_a[wall][:, None, :],
+            self.wall_b[wall][:, None, :],
+        )  # (pairs, M)
+        ranges = np.full(angles.shape, float(max_range))
+        np.minimum.at(ranges, query, hit)
+        return ranges

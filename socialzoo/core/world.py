@@ -1,0 +1,123 @@
+"""The world step: robots and humans of B worlds advance one dt together (numpy only).
+
+This is the one copy of the dynamics. Every adapter (ParallelEnv, the single-agent benchmark,
+vector envs, the evaluation runner) calls `step_world`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.robot import step_robot
+from socialzoo.core.state import WorldState
+from socialzoo.core.walls import WallIndex
+from socialzoo.humans.motion import integrate_humans
+from socialzoo.humans.routes import advance_waypoints
+from socialzoo.humans.social_force import human_acceleration
+
+
+@dataclass(frozen=True)
+class StepEvents:
+    """What happened during one step.
+
+    Attributes:
+        robot_wall: (B, R) the robot's footprint touches a wall after the step.
+        robot_human: (B, R, H) robot-human centre distance below the collision distance.
+        human_blocked: (B, H) a wall stopped the human's move this step.
+    """
+
+    robot_wall: np.ndarray
+    robot_human: np.ndarray
+    human_blocked: np.ndarray
+
+
+def robot_velocity_vectors(state: WorldState) -> np.ndarray:
+    """(B, R, 2) robot velocity in the world frame, m/s."""
+    theta = state.robot_pose[..., 2]
+    v = state.robot_vel[..., 0]
+    return np.stack((v * np.cos(theta), v * np.sin(theta)), axis=-1)
+
+
+def robot_collisions(
+    state: WorldState, walls: WallIndex, cfg: WorldConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """(robot_wall (B, R), robot_human (B, R, H)) collision flags for the current state."""
+    robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
+    diff = state.robot_pose[:, :, None, :2] - state.human_pos[:, None, :, :]
+    close = (diff**2).sum(-1) < cfg.human_collision_distance**2
+    return robot_wall, close & state.human_mask[:, None, :]
+
+
+def step_world(
+    state: WorldState,
+    walls: WallIndex,
+    cfg: WorldConfig,
+    robot_command: np.ndarray,
+    robot_halt: np.ndarray | None = None,
+    human_desired_vel: np.ndarray | None = None,
+    human_learned: np.ndarray | None = None,
+) -> tuple[WorldState, StepEvents]:
+    """Advance every world by one step of cfg.dt.
+
+    Humans react to the robots' positions and velocities at the start of the step.
+
+    Args:
+        state: current state (not modified).
+        walls: the map's wall index.
+        cfg: world configuration.
+        robot_command: (B, R, 2) requested (v, omega), m/s and rad/s.
+        robot_halt: (B, R) bool; robots whose velocity is set to zero at once.
+        human_desired_vel: (B, H, 2) desired velocities for learned humans, m/s, world frame.
+        human_learned: (B, H) bool; humans driven by `human_desired_vel` instead of their route.
+
+    Returns:
+        (new_state, events).
+    """
+    if robot_halt is None:
+        robot_halt = np.zeros(state.robot_pose.shape[:2], dtype=bool)
+    hcfg = cfg.human
+    target = state.human_target
+    accel, wall_dist = human_acceleration(
+        state.human_pos,
+        state.human_vel,
+        target,
+        state.human_pref_speed,
+        state.human_mask,
+        state.robot_pose[..., :2],
+        robot_velocity_vectors(state),
+        walls,
+        hcfg,
+        human_desired_vel,
+        human_learned,
+    )
+    human_pos, human_vel, blocked = integrate_humans(
+        state.human_pos, state.human_vel, accel, state.human_pref_speed, state.human_mask, walls, wall_dist,
+        cfg.dt,
+    )
+    waypoint, direction = advance_waypoints(
+        human_pos, target, state.human_route_len, state.human_waypoint, state.human_direction,
+        hcfg.waypoint_radius,
+    )
+    robot_pose, robot_vel = step_robot(
+        state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot
+    )
+    new_state = WorldState(
+        robot_pose=robot_pose,
+        robot_vel=robot_vel,
+        robot_goal=state.robot_goal,
+        human_pos=human_pos,
+        human_vel=human_vel,
+        human_pref_speed=state.human_pref_speed,
+        human_mask=state.human_mask,
+        human_route=state.human_route,
+        human_route_len=state.human_route_len,
+        human_waypoint=waypoint,
+        human_direction=direction,
+        step_count=state.step_count + 1,
+        noise_key=state.noise_key,
+    )
+    robot_wall, robot_human = robot_collisions(new_state, walls, cfg)
+    return new_state, StepEvents(robot_wall=robot_wall, robot_human=robot_human, human_blocked=blocked)
