@@ -48,12 +48,14 @@ def closest_point_on_segment(
         Degenerate segments (a == b) behave as the point a.
     """
     ab = b - a
-    denom = np.einsum("...i,...i->...", ab, ab)
-    t = np.einsum("...i,...i->...", p - a, ab) / np.where(denom > 0.0, denom, 1.0)
-    t = np.clip(t, 0.0, 1.0)
+    ap = p - a
+    abx, aby = ab[..., 0], ab[..., 1]
+    denom = abx * abx + aby * aby
+    t = (ap[..., 0] * abx + ap[..., 1] * aby) / np.where(denom > 0.0, denom, 1.0)
+    t = np.minimum(np.maximum(t, 0.0), 1.0)
     closest = a + t[..., None] * ab
     diff = p - closest
-    return closest, np.sqrt(np.einsum("...i,...i->...", diff, diff))
+    return closest, np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2)
 
 
 def segments_intersect(

@@ -29,11 +29,10 @@ def limit_command(
     """
     dv_max = cfg.max_linear_accel * dt
     dw_max = cfg.max_angular_accel * dt
-    v = np.clip(command[..., 0], vel[..., 0] - dv_max, vel[..., 0] + dv_max)
-    v = np.clip(v, -cfg.max_speed, cfg.max_speed)
-    w = np.clip(command[..., 1], vel[..., 1] - dw_max, vel[..., 1] + dw_max)
-    w = np.clip(w, -cfg.max_angular_speed, cfg.max_angular_speed)
-    return np.stack((v, w), axis=-1)
+    # np.minimum/np.maximum rather than np.clip: the same result at a fraction of the call cost.
+    out = np.minimum(np.maximum(command, vel - (dv_max, dw_max)), vel + (dv_max, dw_max))
+    limit = (cfg.max_speed, cfg.max_angular_speed)
+    return np.minimum(np.maximum(out, np.negative(limit)), limit)
 
 
 def step_robot(
@@ -64,12 +63,8 @@ def step_robot(
     dist = 0.5 * (vel[..., 0] + new_vel[..., 0]) * dt
     dtheta = 0.5 * (vel[..., 1] + new_vel[..., 1]) * dt
     theta = pose[..., 2]
-    new_pose = np.stack(
-        (
-            pose[..., 0] + dist * np.cos(theta),
-            pose[..., 1] + dist * np.sin(theta),
-            wrap_angle(theta + dtheta),
-        ),
-        axis=-1,
-    )
+    new_pose = np.empty(pose.shape)
+    new_pose[..., 0] = pose[..., 0] + dist * np.cos(theta)
+    new_pose[..., 1] = pose[..., 1] + dist * np.sin(theta)
+    new_pose[..., 2] = wrap_angle(theta + dtheta)
     return new_pose, new_vel

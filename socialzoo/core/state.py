@@ -63,8 +63,8 @@ class WorldState:
     @property
     def human_target(self) -> np.ndarray:
         """(B, H, 2) the waypoint each human walks to, m."""
-        idx = self.human_waypoint[..., None, None].repeat(2, axis=-1)
-        return np.take_along_axis(self.human_route, idx, axis=2)[:, :, 0, :]
+        b, h = self.human_waypoint.shape
+        return self.human_route[np.arange(b)[:, None], np.arange(h)[None, :], self.human_waypoint]
 
     def copy(self) -> WorldState:
         """Deep copy of every array."""

@@ -32,6 +32,7 @@ class GridTable:
         cell_start: (num_x * num_y + 1,) offsets into cell_walls; cell c lists
             cell_walls[cell_start[c]:cell_start[c + 1]].
         cell_walls: (total,) wall indices.
+        walls: (W, 4) the indexed wall segments.
     """
 
     cell_size: float
@@ -41,18 +42,34 @@ class GridTable:
     num_y: int
     cell_start: np.ndarray
     cell_walls: np.ndarray
+    walls: np.ndarray
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Flat cell index of world points (..., 2); points outside the grid map to its border."""
         ij = ((points - self.origin) * (1.0 / self.cell_size)).astype(np.intp)
-        ix = np.clip(ij[..., 0], 0, self.num_x - 1)
-        iy = np.clip(ij[..., 1], 0, self.num_y - 1)
+        ix = np.minimum(np.maximum(ij[..., 0], 0), self.num_x - 1)
+        iy = np.minimum(np.maximum(ij[..., 1], 0), self.num_y - 1)
         return ix * self.num_y + iy
 
     @cached_property
     def cell_count(self) -> np.ndarray:
         """(num_x * num_y,) number of candidate walls per cell."""
         return np.diff(self.cell_start)
+
+    @cached_property
+    def cell_clearance(self) -> np.ndarray:
+        """(num_x * num_y,) a lower bound on the distance from any point of a cell to any wall, m.
+
+        Cells with no candidate wall are at least `reach` away from every wall.
+        """
+        clearance = np.full(self.num_x * self.num_y, self.reach)
+        cell_of = np.repeat(np.arange(self.num_x * self.num_y), self.cell_count)
+        ix, iy = np.divmod(cell_of, self.num_y)
+        centre = self.origin + (np.stack((ix, iy), axis=-1) + 0.5) * self.cell_size
+        walls = self.walls
+        _, dist = closest_point_on_segment(centre, walls[self.cell_walls, 0:2], walls[self.cell_walls, 2:4])
+        np.minimum.at(clearance, cell_of, dist - self.cell_size * math.sqrt(0.5))
+        return np.maximum(clearance, 0.0)
 
     @property
     def max_candidates(self) -> int:
@@ -65,11 +82,11 @@ class GridTable:
         Returns:
             (query, wall): int arrays (M,), grouped by query in increasing order.
         """
-        counts = self.cell_count[cells]
+        counts = self.cell_count.take(cells)
         query = np.repeat(np.arange(len(cells)), counts)
-        group_start = np.cumsum(counts) - counts
-        offset = np.arange(len(query)) - group_start[query]
-        return query, self.cell_walls[self.cell_start[cells][query] + offset]
+        # Position of each pair in cell_walls: its cell's start plus its rank within the group.
+        shift = np.repeat(self.cell_start.take(cells) - (np.cumsum(counts) - counts), counts)
+        return query, self.cell_walls.take(np.arange(len(query)) + shift)
 
 
 def build_grid_table(walls: np.ndarray, cell_size: float, reach: float) -> GridTable:
@@ -114,6 +131,7 @@ def build_grid_table(walls: np.ndarray, cell_size: float, reach: float) -> GridT
         num_y=num_y,
         cell_start=cell_start,
         cell_walls=wall_of[order].astype(np.intp),
+        walls=walls,
     )
 
 
@@ -130,13 +148,19 @@ class WallIndex:
             up to this distance, and footprints must fit inside it.
     """
 
-    def __init__(self, walls: np.ndarray, cell_size: float = 0.5, reach: float = 1.0) -> None:
+    def __init__(self, walls: np.ndarray, cell_size: float = 0.25, reach: float = 1.0) -> None:
         walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
         if not np.all(np.isfinite(walls)):
             raise ValueError("walls contain NaN or infinite coordinates")
         self.walls = walls
         self.wall_a = walls[:, 0:2].copy()
         self.wall_b = walls[:, 2:4].copy()
+        ab = self.wall_b - self.wall_a
+        len2 = (ab**2).sum(-1)
+        self._ax, self._ay = self.wall_a[:, 0].copy(), self.wall_a[:, 1].copy()
+        self._abx, self._aby = ab[:, 0].copy(), ab[:, 1].copy()
+        # Zero-length walls act as points: their projection parameter is forced to 0.
+        self._inv_len2 = np.where(len2 > 0.0, 1.0 / np.where(len2 > 0.0, len2, 1.0), 0.0)
         self.cell_size = cell_size
         self.reach = reach
         self._tables: dict[tuple[float, float], GridTable] = {}
@@ -169,13 +193,26 @@ class WallIndex:
         t = self.fine
         flat = points.reshape(-1, 2)
         query, wall = t.candidates(t.cells(flat))
-        closest, dist = closest_point_on_segment(flat[query], self.wall_a[wall], self.wall_b[wall])
+        # Component arrays and np.take: gathers of (M, 2) rows cost several times more.
+        qx = flat[:, 0].take(query)
+        qy = flat[:, 1].take(query)
+        ax = self._ax.take(wall)
+        ay = self._ay.take(wall)
+        abx = self._abx.take(wall)
+        aby = self._aby.take(wall)
+        frac = ((qx - ax) * abx + (qy - ay) * aby) * self._inv_len2.take(wall)
+        frac = np.minimum(np.maximum(frac, 0.0), 1.0)
+        cx = ax + frac * abx
+        cy = ay + frac * aby
+        dist = np.sqrt((qx - cx) ** 2 + (qy - cy) ** 2)
         best = np.full(len(flat), np.inf)
         np.minimum.at(best, query, dist)
         best[best > t.reach] = np.inf
         point = flat.copy()
-        is_best = dist == best[query]
-        point[query[is_best]] = closest[is_best]
+        is_best = dist == best.take(query)
+        winner = query[is_best]
+        point[winner, 0] = cx[is_best]
+        point[winner, 1] = cy[is_best]
         return point.reshape(points.shape), best.reshape(points.shape[:-1])
 
     def crosses(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
@@ -209,11 +246,16 @@ class WallIndex:
                 f"wall index reach {t.reach} m"
             )
         flat = pose.reshape(-1, 3)
-        query, wall = t.candidates(t.cells(flat[:, :2]))
-        a = to_frame(self.wall_a[wall], flat[query])
-        b = to_frame(self.wall_b[wall], flat[query])
-        hit = segment_hits_box(a, b, half_length, half_width)
-        return (np.bincount(query[hit], minlength=len(flat)) > 0).reshape(pose.shape[:-1])
+        result = np.zeros(len(flat), dtype=bool)
+        # Only footprints in cells closer to a wall than their half-diagonal need the exact test.
+        near = np.flatnonzero(t.cell_clearance.take(t.cells(flat[:, :2])) <= math.hypot(half_length, half_width))
+        if len(near):
+            query, wall = t.candidates(t.cells(flat[near, :2]))
+            a = to_frame(self.wall_a[wall], flat[near[query]])
+            b = to_frame(self.wall_b[wall], flat[near[query]])
+            hit = segment_hits_box(a, b, half_length, half_width)
+            result[near] = np.bincount(query[hit], minlength=len(near)) > 0
+        return result.reshape(pose.shape[:-1])
 
     def cast_rays(self, origins: np.ndarray, angles: np.ndarray, max_range: float) -> np.ndarray:
         """Range to the first wall along rays, capped at max_range.

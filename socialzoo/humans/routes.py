@@ -35,4 +35,4 @@ def advance_waypoints(
     turn_back = reached & (((direction > 0) & (waypoint >= last)) | ((direction < 0) & (waypoint <= 0)))
     new_direction = np.where(turn_back, -direction, direction)
     new_waypoint = np.where(reached, waypoint + new_direction, waypoint)
-    return np.clip(new_waypoint, 0, last), new_direction
+    return np.minimum(np.maximum(new_waypoint, 0), last), new_direction

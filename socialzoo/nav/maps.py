@@ -12,11 +12,20 @@ File format ("socialzoo-map/1"), all coordinates in metres, world frame:
       "graph": {"nodes": [[x, y], ...], "edges": [[i, j], ...]},   # undirected, node indices
       "legal_poses": [[x, y, theta], ...]         # robot and human start/goal poses, theta in rad
     }
+
+Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps; load
+them by name with load_map("gdc1"), or load any file with load_map("path/to/map.json"). Every
+loaded map is checked by validate_map (see its docstring for the rules and clearances).
 """
 
 from __future__ import annotations
 
+import functools
+import importlib.resources
 import json
+import logging
+import math
+import os
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -24,9 +33,23 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.geometry import closest_point_on_segment, segments_intersect
 from socialzoo.core.walls import WallIndex
 
+logger = logging.getLogger(__name__)
+
 MAP_FORMAT = "socialzoo-map/1"
+# Python package that holds the shipped maps (the repository's top-level maps/ folder).
+MAPS_PACKAGE = "socialzoo._maps"
+
+# A legal pose must keep the robot's whole footprint (0.5 m x 0.43 m, half-diagonal 0.33 m) off the
+# walls at any heading, since episodes start there and a wall contact ends an episode at once.
+POSE_CLEARANCE = 0.35
+# Graph nodes are waypoints that people (radius 0.2 m) walk through and the robot steers towards
+# with its own clearance checks, so they need less room than a spawn pose.
+NODE_CLEARANCE = 0.25
+# Problems listed in one MapError message at most; the rest are counted.
+MAX_REPORTED = 12
 
 
 class MapError(ValueError):
@@ -100,3 +123,444 @@ class Map:
         path = Path(path)
         path.write_text(json.dumps(self.to_json(), indent=None, separators=(",", ":")) + "\n")
         return path
+
+
+# ----------------------------------------------------------------------------- reading JSON
+
+
+def _fail(where: str, what: str) -> MapError:
+    return MapError(f"{where}: {what}")
+
+
+def _is_number(value: Any) -> bool:
+    # bool is an int subclass in Python but never a coordinate in a map file.
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _number_rows(value: Any, width: int, where: str, field_name: str, names: str) -> np.ndarray:
+    """A JSON list of `width`-number rows as a float array (n, width), checked entry by entry."""
+    if not isinstance(value, list):
+        raise _fail(where, f"{field_name} must be a list of {names}, got {type(value).__name__}")
+    for k, row in enumerate(value):
+        if not isinstance(row, list) or len(row) != width or not all(_is_number(v) for v in row):
+            raise _fail(where, f"{field_name}[{k}]: expected {width} numbers {names}, got {row!r}")
+        for v in row:
+            if not math.isfinite(v):
+                raise _fail(where, f"{field_name}[{k}]: coordinate is {'NaN' if v != v else v}")
+    return np.array(value, dtype=np.float64).reshape(len(value), width)
+
+
+def _edge_rows(value: Any, where: str) -> np.ndarray:
+    if not isinstance(value, list):
+        raise _fail(where, f"graph.edges must be a list of [i, j] pairs, got {type(value).__name__}")
+    for k, row in enumerate(value):
+        ok = isinstance(row, list) and len(row) == 2
+        if not ok or not all(isinstance(v, int) and not isinstance(v, bool) for v in row):
+            raise _fail(where, f"graph.edges[{k}]: expected two integer node indices [i, j], got {row!r}")
+    return np.array(value, dtype=np.int64).reshape(len(value), 2)
+
+
+def _text_field(data: dict[str, Any], key: str, where: str, required: bool) -> str:
+    if key not in data:
+        if required:
+            raise _fail(where, f"missing field {key!r}")
+        return ""
+    if not isinstance(data[key], str):
+        raise _fail(where, f"{key} must be a string, got {data[key]!r}")
+    return str(data[key])
+
+
+_KNOWN_FIELDS = {"format", "name", "source", "licence", "region", "walls", "graph", "legal_poses"}
+
+
+def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
+    """Build a Map from socialzoo-map/1 JSON data, checking its structure (not its geometry).
+
+    Args:
+        data: the parsed JSON object, or the JSON text itself.
+        where: how error messages name the source, usually the file path.
+
+    Returns:
+        The map, with read-only arrays and `path` set to `where`. Zero-length walls are kept: they
+        act as points and do no harm (the importers drop them from raw data).
+
+    Raises:
+        MapError: invalid JSON text, a wrong or missing format tag, a missing field, or an entry of
+            the wrong type or shape or with a NaN or infinite coordinate. Run `validate_map` for the
+            geometric checks.
+    """
+    if isinstance(data, str):
+        try:
+            data = json.loads(data)
+        except json.JSONDecodeError as err:
+            raise _fail(where, f"invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
+    if not isinstance(data, dict):
+        raise _fail(where, f"expected a JSON object at the top level, got {type(data).__name__}")
+    if "format" not in data:
+        raise _fail(where, f"missing field 'format' (expected {MAP_FORMAT!r})")
+    if data["format"] != MAP_FORMAT:
+        raise _fail(where, f"format is {data['format']!r}, expected {MAP_FORMAT!r}")
+    for key in ("name", "walls", "graph", "legal_poses"):
+        if key not in data:
+            raise _fail(where, f"missing field {key!r}")
+    unknown = sorted(set(data) - _KNOWN_FIELDS)
+    if unknown:
+        logger.warning("%s: ignoring unknown fields %s", where, unknown)
+    name = _text_field(data, "name", where, required=True)
+    if not name:
+        raise _fail(where, "name is empty")
+    region: tuple[float, float, float, float] | None = None
+    if data.get("region") is not None:
+        box = _number_rows([data["region"]], 4, where, "region", "[xmin, ymin, xmax, ymax]")[0]
+        region = (float(box[0]), float(box[1]), float(box[2]), float(box[3]))
+    graph = data["graph"]
+    if not isinstance(graph, dict):
+        raise _fail(where, f"graph must be an object with 'nodes' and 'edges', got {type(graph).__name__}")
+    for key in ("nodes", "edges"):
+        if key not in graph:
+            raise _fail(where, f"missing field 'graph.{key}'")
+    walls = _number_rows(data["walls"], 4, where, "walls", "[x1, y1, x2, y2]")
+    nodes = _number_rows(graph["nodes"], 2, where, "graph.nodes", "[x, y]")
+    edges = _edge_rows(graph["edges"], where)
+    poses = _number_rows(data["legal_poses"], 3, where, "legal_poses", "[x, y, theta]")
+    for arr in (walls, nodes, edges, poses):
+        arr.setflags(write=False)
+    return Map(
+        name=name,
+        walls=walls,
+        nodes=nodes,
+        edges=edges,
+        legal_poses=poses,
+        source=_text_field(data, "source", where, required=False),
+        licence=_text_field(data, "licence", where, required=False),
+        region=region,
+        path=where,
+    )
+
+
+def read_map(path: str | os.PathLike[str], validate: bool = True) -> Map:
+    """Read a map JSON file (and, by default, validate it).
+
+    Raises:
+        FileNotFoundError: no such file.
+        MapError: the file is not a valid map; the message names the file and the entry.
+    """
+    where = os.fspath(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{where}: no such map file") from None
+    except UnicodeDecodeError as err:
+        raise _fail(where, f"not UTF-8 text ({err.reason} at byte {err.start})") from None
+    m = map_from_json(text, where)
+    if validate:
+        validate_map(m)
+    return m
+
+
+def list_maps() -> list[str]:
+    """Names of the shipped maps, sorted, e.g. ["doorway", "gdc1", ...]."""
+    folder = importlib.resources.files(MAPS_PACKAGE)
+    return sorted(
+        entry.name.removesuffix(".json") for entry in folder.iterdir() if entry.name.endswith(".json")
+    )
+
+
+@functools.lru_cache(maxsize=None)
+def _load_shipped(name: str) -> Map:
+    # One Map object per name and process, so its WallIndex (and graph caches keyed on the map
+    # object) are built once; its arrays are read-only, so sharing it is safe.
+    resource = importlib.resources.files(MAPS_PACKAGE) / f"{name}.json"
+    where = str(resource) if isinstance(resource, Path) else f"maps/{name}.json"
+    m = map_from_json(resource.read_text(encoding="utf-8"), where)
+    validate_map(m)
+    return m
+
+
+def load_map(name_or_path: str | os.PathLike[str]) -> Map:
+    """A shipped map by name (e.g. "gdc1") or a map file by path (anything ending in .json).
+
+    Shipped maps are loaded, validated and cached once per process: repeated calls return the
+    same Map object. Files are read and validated on every call.
+
+    Raises:
+        FileNotFoundError: a path that does not exist.
+        MapError: an unknown map name, or an invalid map (the message names the file and entry).
+    """
+    text = os.fspath(name_or_path)
+    if isinstance(name_or_path, os.PathLike) or text.endswith(".json") or "/" in text or os.sep in text:
+        return read_map(text)
+    names = list_maps()
+    if text not in names:
+        raise MapError(f"unknown map {text!r}: shipped maps are {', '.join(names)} (or give a .json path)")
+    return _load_shipped(text)
+
+
+# ----------------------------------------------------------------------------- geometry checks
+
+
+def nearest_walls(index: WallIndex, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance from points to their nearest wall, and that wall's index.
+
+    Args:
+        index: the walls.
+        points: (N, 2) world points, m.
+
+    Returns:
+        (dist, wall): (N,) distances in m, exact up to the index's reach and inf beyond it; (N,)
+        wall indices, -1 where no wall is within reach.
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    t = index.fine
+    query, wall = t.candidates(t.cells(points))
+    _, dist = closest_point_on_segment(points[query], index.wall_a[wall], index.wall_b[wall])
+    best = np.full(len(points), np.inf)
+    best_wall = np.full(len(points), -1, dtype=np.int64)
+    if len(query):
+        # Sort pairs by (query, dist, wall) and keep the first of each query: the nearest wall,
+        # ties broken by the lower wall index so the answer does not depend on the grid.
+        order = np.lexsort((wall, dist, query))
+        first = order[np.r_[True, query[order][1:] != query[order][:-1]]]
+        near = dist[first] <= t.reach
+        best[query[first][near]] = dist[first][near]
+        best_wall[query[first][near]] = wall[first][near]
+    return best, best_wall
+
+
+def segment_clearance(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest distance between segments [p0, p1] and any wall, and the wall that is that close.
+
+    Args:
+        index: the walls.
+        p0, p1: (N, 2) segment end points, m.
+
+    Returns:
+        (dist, wall): (N,) distances, exact below reach / 2 of the index (0.5 m by default), 0
+        where the segment touches a wall and inf where no wall is within reach / 2; (N,) wall
+        indices, -1 where none is that close.
+    """
+    a0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    a1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
+    best = np.full(len(a0), np.inf)
+    best_wall = np.full(len(a0), -1, dtype=np.int64)
+    if len(a0) == 0:
+        return best, best_wall
+    t = index.fine
+    limit = 0.5 * t.reach
+    # Samples at most reach/2 apart: every point of a segment is within reach/4 of a sample, so a
+    # wall within reach/2 of the segment is within 3/4 reach of a sample and listed in its cell.
+    length = np.sqrt(((a1 - a0) ** 2).sum(-1))
+    num_samples = max(2, math.ceil(float(length.max(initial=0.0)) / limit) + 1)
+    frac = np.linspace(0.0, 1.0, num_samples)
+    samples = a0[:, None, :] + frac[:, None] * (a1 - a0)[:, None, :]
+    query, wall = t.candidates(t.cells(samples).reshape(-1))
+    seg = query // num_samples
+    # Several samples of one segment list the same wall: test each (segment, wall) pair once.
+    pair = np.unique(seg * index.num_walls + wall)
+    seg, wall = pair // index.num_walls, pair % index.num_walls
+    wa, wb = index.wall_a[wall], index.wall_b[wall]
+    sa, sb = a0[seg], a1[seg]
+    dist = np.minimum.reduce(
+        [
+            closest_point_on_segment(sa, wa, wb)[1],
+            closest_point_on_segment(sb, wa, wb)[1],
+            closest_point_on_segment(wa, sa, sb)[1],
+            closest_point_on_segment(wb, sa, sb)[1],
+        ]
+    )
+    dist = np.where(segments_intersect(sa, sb, wa, wb), 0.0, dist)
+    if len(seg):
+        order = np.lexsort((wall, dist, seg))
+        first = order[np.r_[True, seg[order][1:] != seg[order][:-1]]]
+        near = dist[first] <= limit
+        best[seg[first][near]] = dist[first][near]
+        best_wall[seg[first][near]] = wall[first][near]
+    return best, best_wall
+
+
+def _first_crossed_wall(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> int:
+    """Index of the first wall (lowest index) that segment [p0, p1] touches, or -1."""
+    hit = np.flatnonzero(segments_intersect(p0, p1, index.wall_a, index.wall_b))
+    return int(hit[0]) if len(hit) else -1
+
+
+def reaches_graph(index: WallIndex, points: np.ndarray, nodes: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Whether each point sees the graph: a wall-free straight line to some node or edge.
+
+    For an edge the line goes to the edge's closest point, as a planner joins a start or goal to the
+    graph; nearer targets are tried first, so the usual case tests a handful of lines.
+
+    Args:
+        index: the walls.
+        points: (P, 2) world points, m.
+        nodes: (N, 2) graph nodes, m.
+        edges: (E, 2) node index pairs.
+
+    Returns:
+        bool (P,).
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    out = np.zeros(len(points), dtype=bool)
+    if len(nodes) == 0:
+        return out
+    for k, p in enumerate(points):
+        targets = [nodes]
+        if len(edges):
+            targets.append(closest_point_on_segment(p, nodes[edges[:, 0]], nodes[edges[:, 1]])[0])
+        target = np.concatenate(targets)
+        order = np.argsort(((target - p) ** 2).sum(-1), kind="stable")
+        for chunk in (order[:16], order[16:]):
+            if len(chunk) == 0:
+                continue
+            blocked = index.crosses(np.broadcast_to(p, (len(chunk), 2)), target[chunk])
+            if not blocked.all():
+                out[k] = True
+                break
+    return out
+
+
+def _components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
+    """Connected-component label of each node (the smallest node index in its component)."""
+    parent = list(range(num_nodes))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i, j in edges.tolist():
+        ri, rj = root(i), root(j)
+        if ri != rj:
+            parent[max(ri, rj)] = min(ri, rj)
+    return np.array([root(i) for i in range(num_nodes)], dtype=np.int64)
+
+
+def graph_components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
+    """Component label per node (the smallest node index of its component); edges (E, 2) valid."""
+    return _components(num_nodes, np.asarray(edges, dtype=np.int64).reshape(-1, 2))
+
+
+def _index_list(indices: np.ndarray, limit: int = 20) -> str:
+    shown = ", ".join(str(int(i)) for i in indices[:limit])
+    return f"[{shown}{', ...' if len(indices) > limit else ''}] ({len(indices)} in all)"
+
+
+def _array_problems(m: Map) -> list[str]:
+    """Shape, dtype and finiteness problems of a map's arrays (checked before any geometry)."""
+    problems: list[str] = []
+    shapes = {"walls": (m.walls, 4), "graph.nodes": (m.nodes, 2), "legal_poses": (m.legal_poses, 3)}
+    for name, (arr, width) in shapes.items():
+        a = np.asarray(arr)
+        if a.ndim != 2 or a.shape[1] != width or not np.issubdtype(a.dtype, np.number):
+            problems.append(f"{name} must be a numeric array of shape (n, {width}), got shape {a.shape}")
+            continue
+        bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
+        for k in bad[:MAX_REPORTED]:
+            problems.append(f"{name}[{k}]: coordinate is {'NaN' if np.isnan(a[k]).any() else 'infinite'}")
+    e = np.asarray(m.edges)
+    if e.ndim != 2 or e.shape[1] != 2 or not np.issubdtype(e.dtype, np.integer):
+        if not (e.size == 0 and np.issubdtype(e.dtype, np.number)):
+            problems.append(f"graph.edges must be an integer array of shape (n, 2), got {e.dtype} {e.shape}")
+    if m.region is not None:
+        box = np.asarray(m.region, dtype=np.float64)
+        if box.shape != (4,) or not np.isfinite(box).all() or box[0] >= box[2] or box[1] >= box[3]:
+            problems.append(f"region must be finite [xmin, ymin, xmax, ymax] with min < max, got {m.region}")
+    return problems
+
+
+def validate_map(
+    m: Map, pose_clearance: float = POSE_CLEARANCE, node_clearance: float = NODE_CLEARANCE
+) -> None:
+    """Check a map's geometry; raise MapError naming the file and every offending entry.
+
+    Rules:
+        - walls (W, 4), nodes (N, 2), legal poses (P, 3) are finite numbers; at least one node and two
+          legal poses (a scenario needs a distinct start and goal);
+        - edges (E, 2) name existing nodes, never a node to itself;
+        - every node is at least `node_clearance` (0.25 m) from every wall, every legal pose at least
+          `pose_clearance` (0.35 m: the robot footprint fits at any heading); a point inside a
+          closed wall loop thicker than that is caught by the graph-reach rule instead;
+        - no edge touches a wall;
+        - the graph is connected;
+        - every legal pose sees the graph: a wall-free straight line joins it to a node or to the
+          closest point of an edge;
+        - with a region, every node and pose lies inside it.
+        Zero-length walls are allowed (they act as points).
+
+    Raises:
+        MapError: one message, one line per problem (at most MAX_REPORTED listed).
+    """
+    where = m.where
+    problems = _array_problems(m)
+    if not problems:
+        problems = _graph_problems(m)
+    if not problems:
+        problems = _geometry_problems(m, pose_clearance, node_clearance)
+    if problems:
+        lines = [f"{where}: {p}" for p in problems[:MAX_REPORTED]]
+        if len(problems) > MAX_REPORTED:
+            lines.append(f"{where}: ... and {len(problems) - MAX_REPORTED} more problems")
+        raise MapError("\n".join(lines))
+
+
+def _graph_problems(m: Map) -> list[str]:
+    problems: list[str] = []
+    n = len(m.nodes)
+    edges = np.asarray(m.edges).reshape(-1, 2)
+    if n == 0:
+        problems.append("graph.nodes is empty: a map needs a navigation graph")
+    if len(m.legal_poses) < 2:
+        problems.append(f"legal_poses: needs at least 2 poses (a start and a goal), got {len(m.legal_poses)}")
+    for k in np.flatnonzero(((edges < 0) | (edges >= n)).any(axis=1))[:MAX_REPORTED]:
+        i, j = edges[k]
+        problems.append(f"graph.edges[{k}] ({i}, {j}) names a node outside 0..{n - 1}")
+    for k in np.flatnonzero(edges[:, 0] == edges[:, 1])[:MAX_REPORTED]:
+        problems.append(f"graph.edges[{k}] joins node {edges[k, 0]} to itself")
+    return problems
+
+
+def _geometry_problems(m: Map, pose_clearance: float, node_clearance: float) -> list[str]:
+    problems: list[str] = []
+    index = m.wall_index
+    nodes = np.asarray(m.nodes, dtype=np.float64)
+    poses = np.asarray(m.legal_poses, dtype=np.float64)
+    edges = np.asarray(m.edges, dtype=np.int64).reshape(-1, 2)
+    if m.region is not None:
+        x0, y0, x1, y1 = m.region
+        for name, pts in (("graph.nodes", nodes), ("legal_poses", poses[:, :2])):
+            outside = ~((pts[:, 0] >= x0) & (pts[:, 0] <= x1) & (pts[:, 1] >= y0) & (pts[:, 1] <= y1))
+            for k in np.flatnonzero(outside):
+                problems.append(
+                    f"{name}[{k}] at ({pts[k, 0]:.2f}, {pts[k, 1]:.2f}) lies outside region {list(m.region)}"
+                )
+    for name, pts, need in (
+        ("graph.nodes", nodes, node_clearance),
+        ("legal_poses", poses[:, :2], pose_clearance),
+    ):
+        if index.num_walls == 0 or len(pts) == 0:
+            continue
+        dist, wall = nearest_walls(index, pts)
+        for k in np.flatnonzero(dist < need):
+            where_pt = f"{name}[{k}] at ({pts[k, 0]:.2f}, {pts[k, 1]:.2f})"
+            if dist[k] <= 1e-9:
+                problems.append(f"{where_pt} lies on wall {wall[k]}")
+            else:
+                problems.append(f"{where_pt} is {dist[k]:.2f} m from wall {wall[k]} (needs {need:.2f})")
+    if len(edges) and index.num_walls:
+        a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
+        for k in np.flatnonzero(index.crosses(a, b)):
+            w = _first_crossed_wall(index, a[k], b[k])
+            problems.append(f"graph.edges[{k}] (node {edges[k, 0]} - node {edges[k, 1]}) passes through wall {w}")
+    if len(nodes):
+        label = _components(len(nodes), edges)
+        unreached = np.flatnonzero(label != label[0])
+        if len(unreached):
+            problems.append(f"graph is disconnected: nodes {_index_list(unreached)} not reachable from node 0")
+    if len(nodes) and len(poses):
+        for k in np.flatnonzero(~reaches_graph(index, poses[:, :2], nodes, edges)):
+            problems.append(
+                f"legal_poses[{k}] at ({poses[k, 0]:.2f}, {poses[k, 1]:.2f}) cannot reach the graph "
+                "(no wall-free straight line to any node or edge)"
+            )
+    return problems

@@ -1,0 +1,307 @@
+"""Per-episode metrics of B worlds, accumulated step by step (SPEC section 9, plus the usual
+social-navigation guideline metrics), with rows reset on their own as episodes end.
+
+Definitions (every distance between centres, in metres; times in seconds):
+
+- success: the goal was reached (the env decides: distance < 0.5 m) with no human collision and
+  no wall collision. The env ends an episode at the goal, a wall or the time limit, so a reached
+  goal is reached within the time limit.
+- time_to_goal: elapsed time when the goal was reached, NaN if it was not (collisions or not;
+  filter on success for the benchmark's figure).
+- distance_from_goal: final robot-goal distance. distance_travelled: sum of step displacements.
+- mean/max force and blame: over the episode's steps.
+- human_collisions: number of steps with at least one human in collision (SPEC: "counted each
+  step"); human_contacts: the sum over steps of the number of humans in collision.
+  wall_collisions: steps with the footprint touching a wall.
+- average_step_reward: total_reward / steps.
+- min_human_distance: smallest distance to any present human (visible or not); NaN with none.
+- personal_space_intrusion_time: time with the robot centre inside a human's intimate zone
+  (Hall's 0.45 m, measured from the human's body of radius 0.2 m, so a centre distance below
+  0.65 m by default). Measured from the body and not the centre because the collision distance
+  is already 0.4 m between centres, where a centre-based 0.45 m zone would only count near-hits.
+- path_irregularity: total rotation of the robot minus the rotation needed to face the goal
+  from the start, floored at 0, rad (Guzzi et al. 2013, as listed by Gao and Huang 2022 and
+  Francis et al. 2023: "the amount of rotation that is not needed to reach the goal").
+- path_length_ratio: straight-line start-goal distance / distance travelled (1 for a straight
+  drive; it may exceed 1 by up to the goal tolerance since the goal counts as reached 0.5 m
+  short); NaN when the robot did not move.
+- jerk: mean over steps of |da/dt|, a = dv/dt the linear acceleration from the speed v, with the
+  robot at rest before the first step (a = 0), m/s^3.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from socialzoo.core.geometry import wrap_angle
+
+# Columns of the per-row running sums.
+_SUM_COLUMNS = (
+    "steps",
+    "duration",
+    "distance_travelled",
+    "force",
+    "blame",
+    "reward",
+    "human_collisions",
+    "human_contacts",
+    "wall_collisions",
+    "intrusion_time",
+    "rotation",
+    "jerk",
+)
+_S = {name: i for i, name in enumerate(_SUM_COLUMNS)}
+
+# Keys of a summary, in order.
+SUMMARY_KEYS = (
+    "success",
+    "reached",
+    "time_to_goal",
+    "distance_from_goal",
+    "distance_travelled",
+    "steps",
+    "duration",
+    "mean_force",
+    "max_force",
+    "mean_blame",
+    "max_blame",
+    "human_collisions",
+    "human_contacts",
+    "wall_collisions",
+    "average_step_reward",
+    "total_reward",
+    "min_human_distance",
+    "personal_space_intrusion_time",
+    "path_irregularity",
+    "path_length_ratio",
+    "jerk",
+)
+_BOOL_KEYS = ("success", "reached")
+_INT_KEYS = ("steps", "human_collisions", "human_contacts", "wall_collisions")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MetricsConfig:
+    """Parameters of the guideline metrics.
+
+    Attributes:
+        personal_space: radius of a human's intimate zone around its body, m (Hall: 0.45).
+        human_radius: body radius of a human, m.
+    """
+
+    personal_space: float = 0.45
+    human_radius: float = 0.2
+
+    def __post_init__(self) -> None:
+        for name in ("personal_space", "human_radius"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not (
+                math.isfinite(value) and value >= 0
+            ):
+                raise ValueError(f"MetricsConfig.{name} must be a finite number >= 0, got {value!r}")
+
+    @property
+    def intrusion_distance(self) -> float:
+        """Centre distance below which the robot intrudes, m."""
+        return self.personal_space + self.human_radius
+
+
+class EpisodeMetrics:
+    """Running metrics of the current episode of each of B rows.
+
+    Call `reset` for rows whose episode starts, `update` once per step with the batch's
+    per-step values, and `summary` / `summaries` when episodes end. A row stops accumulating
+    after the step flagged `done` until it is reset.
+
+    Args:
+        batch_size: B.
+        config: parameters of the guideline metrics.
+    """
+
+    def __init__(self, batch_size: int, config: MetricsConfig | None = None) -> None:
+        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
+            raise ValueError(f"EpisodeMetrics.batch_size must be an int >= 1, got {batch_size!r}")
+        self.batch_size = batch_size
+        self.config = config or MetricsConfig()
+        b = batch_size
+        self.sums = np.zeros((b, len(_SUM_COLUMNS)))
+        self.max_force = np.zeros(b)
+        self.max_blame = np.zeros(b)
+        self.min_human_distance = np.full(b, np.inf)
+        self.time_to_goal = np.full(b, np.nan)
+        self.reached = np.zeros(b, dtype=bool)
+        self.finished = np.zeros(b, dtype=bool)
+        self.goal = np.zeros((b, 2))
+        self.last_pose = np.zeros((b, 3))
+        self.last_speed = np.zeros(b)
+        self.last_accel = np.zeros(b)
+        self.straight_distance = np.zeros(b)
+        self.needed_rotation = np.zeros(b)
+
+    def reset(
+        self,
+        rows: np.ndarray | slice | int | None,
+        robot_pose: np.ndarray,
+        goal: np.ndarray,
+        robot_vel: np.ndarray | None = None,
+    ) -> None:
+        """Start new episodes in `rows`.
+
+        Args:
+            rows: index array, bool mask (B,), slice, int, or None for every row.
+            robot_pose: (n, 3) start poses of those rows, world frame (x, y in m, heading rad).
+            goal: (n, 2) goals of those rows, m, world frame.
+            robot_vel: (n, 2) start velocities (v in m/s, omega in rad/s); default at rest.
+        """
+        r = slice(None) if rows is None else rows
+        pose = np.asarray(robot_pose, dtype=np.float64)
+        goal = np.asarray(goal, dtype=np.float64)
+        self.sums[r] = 0.0
+        self.max_force[r] = 0.0
+        self.max_blame[r] = 0.0
+        self.min_human_distance[r] = np.inf
+        self.time_to_goal[r] = np.nan
+        self.reached[r] = False
+        self.finished[r] = False
+        self.goal[r] = goal
+        self.last_pose[r] = pose
+        self.last_speed[r] = 0.0 if robot_vel is None else np.asarray(robot_vel, dtype=np.float64)[..., 0]
+        self.last_accel[r] = 0.0
+        to_goal = goal - pose[..., :2]
+        self.straight_distance[r] = np.hypot(to_goal[..., 0], to_goal[..., 1])
+        bearing = np.arctan2(to_goal[..., 1], to_goal[..., 0])
+        self.needed_rotation[r] = np.abs(wrap_angle(bearing - pose[..., 2]))
+
+    def update(
+        self,
+        *,
+        robot_pose: np.ndarray,
+        robot_vel: np.ndarray,
+        reward: np.ndarray,
+        force: np.ndarray,
+        blame: np.ndarray,
+        human_collisions: np.ndarray,
+        wall_collision: np.ndarray,
+        min_human_distance: np.ndarray,
+        reached: np.ndarray,
+        done: np.ndarray,
+        dt: float,
+        active: np.ndarray | None = None,
+    ) -> None:
+        """Add one step of every row.
+
+        Args:
+            robot_pose: (B, 3) pose after the step, world frame.
+            robot_vel: (B, 2) velocity after the step: v (m/s), omega (rad/s).
+            reward: (B,) reward of the step.
+            force: (B,) social force term of the step.
+            blame: (B,) blame of the step.
+            human_collisions: (B,) int, humans in collision with the robot after the step.
+            wall_collision: (B,) bool, the footprint touches a wall after the step.
+            min_human_distance: (B,) distance to the nearest present human, m (inf for none).
+            reached: (B,) bool, the goal is reached after the step.
+            done: (B,) bool, the episode ended with this step (terminated or truncated).
+            dt: step duration, s.
+            active: (B,) bool, rows that took this step (default: all). Rows that finished
+                and were not reset are skipped either way.
+        """
+        live = ~self.finished if active is None else np.asarray(active, dtype=bool) & ~self.finished
+        pose = np.asarray(robot_pose, dtype=np.float64)
+        speed = np.asarray(robot_vel, dtype=np.float64)[:, 0]
+        step = pose[:, :2] - self.last_pose[:, :2]
+        accel = (speed - self.last_speed) / dt
+        contacts = np.asarray(human_collisions, dtype=np.float64)
+        min_dist = np.asarray(min_human_distance, dtype=np.float64)
+        ones = np.ones(self.batch_size)
+        contrib = np.stack(
+            (
+                ones,
+                ones * dt,
+                np.hypot(step[:, 0], step[:, 1]),
+                force,
+                blame,
+                reward,
+                contacts > 0,
+                contacts,
+                wall_collision,
+                (min_dist < self.config.intrusion_distance) * dt,
+                np.abs(wrap_angle(pose[:, 2] - self.last_pose[:, 2])),
+                np.abs(accel - self.last_accel) / dt,
+            ),
+            axis=1,
+        )
+        self.sums += np.where(live[:, None], contrib, 0.0)
+        self.max_force = np.where(live, np.maximum(self.max_force, force), self.max_force)
+        self.max_blame = np.where(live, np.maximum(self.max_blame, blame), self.max_blame)
+        self.min_human_distance = np.where(
+            live, np.minimum(self.min_human_distance, min_dist), self.min_human_distance
+        )
+        newly_reached = live & np.asarray(reached, dtype=bool) & ~self.reached
+        self.time_to_goal = np.where(newly_reached, self.sums[:, _S["duration"]], self.time_to_goal)
+        self.reached |= newly_reached
+        self.last_pose = np.where(live[:, None], pose, self.last_pose)
+        self.last_speed = np.where(live, speed, self.last_speed)
+        self.last_accel = np.where(live, accel, self.last_accel)
+        self.finished |= live & np.asarray(done, dtype=bool)
+
+    def arrays(self, rows: np.ndarray | slice | None = None) -> dict[str, np.ndarray]:
+        """Every summary metric of `rows` (default all) as arrays, keyed as in SUMMARY_KEYS."""
+        r = slice(None) if rows is None else rows
+        sums = self.sums[r]
+        steps = sums[:, _S["steps"]]
+        per_step = np.where(steps > 0, steps, np.nan)
+        human_collisions = sums[:, _S["human_collisions"]]
+        wall_collisions = sums[:, _S["wall_collisions"]]
+        reached = self.reached[r]
+        travelled = sums[:, _S["distance_travelled"]]
+        to_goal = self.goal[r] - self.last_pose[r][:, :2]
+        min_dist = self.min_human_distance[r]
+        return {
+            "success": reached & (human_collisions == 0) & (wall_collisions == 0),
+            "reached": reached.copy(),
+            "time_to_goal": self.time_to_goal[r].copy(),
+            "distance_from_goal": np.hypot(to_goal[:, 0], to_goal[:, 1]),
+            "distance_travelled": travelled,
+            "steps": steps.astype(np.int64),
+            "duration": sums[:, _S["duration"]],
+            "mean_force": sums[:, _S["force"]] / per_step,
+            "max_force": self.max_force[r].copy(),
+            "mean_blame": sums[:, _S["blame"]] / per_step,
+            "max_blame": self.max_blame[r].copy(),
+            "human_collisions": human_collisions.astype(np.int64),
+            "human_contacts": sums[:, _S["human_contacts"]].astype(np.int64),
+            "wall_collisions": wall_collisions.astype(np.int64),
+            "average_step_reward": sums[:, _S["reward"]] / per_step,
+            "total_reward": sums[:, _S["reward"]],
+            "min_human_distance": np.where(np.isfinite(min_dist), min_dist, np.nan),
+            "personal_space_intrusion_time": sums[:, _S["intrusion_time"]],
+            "path_irregularity": np.maximum(sums[:, _S["rotation"]] - self.needed_rotation[r], 0.0),
+            "path_length_ratio": self.straight_distance[r] / np.where(travelled > 0, travelled, np.nan),
+            "jerk": sums[:, _S["jerk"]] / per_step,
+        }
+
+    def summaries(self, rows: np.ndarray | list[int] | None = None) -> list[dict[str, Any]]:
+        """One plain dict of Python scalars per row of `rows` (index array; default all)."""
+        index = np.arange(self.batch_size) if rows is None else np.asarray(rows, dtype=np.intp).reshape(-1)
+        arrays = self.arrays(index)
+        out = []
+        for i in range(len(index)):
+            entry: dict[str, Any] = {}
+            for key in SUMMARY_KEYS:
+                value = arrays[key][i]
+                if key in _BOOL_KEYS:
+                    entry[key] = bool(value)
+                elif key in _INT_KEYS:
+                    entry[key] = int(value)
+                else:
+                    entry[key] = float(value)
+            out.append(entry)
+        return out
+
+    def summary(self, row: int) -> dict[str, Any]:
+        """The metrics of one row's current episode as a plain dict (keys SUMMARY_KEYS)."""
+        return self.summaries([row])[0]

@@ -1,0 +1,298 @@
+"""Robot-centric observations of the Social Action Selection benchmark (SPEC section 8).
+
+Pure batched functions: which humans the robot sees (walls occlude), the paper's layout, the
+reference code's 244-number "socialgym1" layout, and their gymnasium spaces and entry names.
+
+Conventions shared by both layouts:
+
+- Robot frame: origin at the robot centre, x along its heading, y to its left (metres).
+- Human slots hold the humans the robot sees (present, line of sight clear of walls), nearest
+  first (stable order on ties: lower human index first). Slots past the last visible human are
+  all zero, so an occluded or absent human never takes a slot; when more humans are visible than
+  there are slots, the farthest are dropped.
+- A human's position is its centre minus the robot's centre, in robot axes. Its velocity is
+  relative too: the human's world velocity minus the robot's world velocity (v along the
+  heading), in robot axes. The frame's own rotation (omega x r) is not added: this is the
+  velocity difference seen from a non-rotating frame aligned with the robot.
+- The previous action is the sub-policy index (SPEC section 7) as a float; adapters pass 0
+  (GoAlone) before the first step, as the reference code did.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+from gymnasium import spaces
+
+from socialzoo.core.walls import WallIndex
+
+ObservationLayout = Literal["paper", "socialgym1"]
+
+# Entries before the human slots in the paper layout: goal (2), local target (2), (v, omega) (2),
+# previous action (1).
+PAPER_HEADER_SIZE = 7
+# Numbers per human slot in the paper layout: x, y, vx, vy.
+PAPER_SLOT_SIZE = 4
+# The reference layout: 40 poses (x, y, theta), 40 velocities (vx, vy, omega), local target
+# (x, y, 0), previous action.
+SOCIALGYM1_NUM_SLOTS = 40
+SOCIALGYM1_SIZE = 6 * SOCIALGYM1_NUM_SLOTS + 4
+# Largest sub-policy index (SPEC section 7: Discrete(4)).
+MAX_ACTION_INDEX = 3
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObservationConfig:
+    """Which observation the robot gets.
+
+    Attributes:
+        layout: "paper" (SPEC section 8: goal, local target, robot velocity, previous action,
+            human slots of (x, y, vx, vy)) or "socialgym1" (the reference code's 244 numbers).
+        num_human_slots: human slots of the paper layout. The socialgym1 layout always has 40
+            and ignores this field.
+    """
+
+    layout: ObservationLayout = "paper"
+    num_human_slots: int = 25
+
+    def __post_init__(self) -> None:
+        if self.layout not in get_args(ObservationLayout):
+            raise ValueError(
+                f"ObservationConfig.layout must be one of {get_args(ObservationLayout)}, got {self.layout!r}"
+            )
+        slots = self.num_human_slots
+        if not isinstance(slots, int) or isinstance(slots, bool) or slots < 0:
+            raise ValueError(f"ObservationConfig.num_human_slots must be an int >= 0, got {slots!r}")
+
+    @property
+    def num_slots(self) -> int:
+        """Human slots of the chosen layout."""
+        return SOCIALGYM1_NUM_SLOTS if self.layout == "socialgym1" else self.num_human_slots
+
+    @property
+    def size(self) -> int:
+        """Length of one observation vector."""
+        return observation_size(self)
+
+
+def visible_humans(
+    robot_pose: np.ndarray, human_pos: np.ndarray, human_mask: np.ndarray, walls: WallIndex | None
+) -> np.ndarray:
+    """Humans the robot sees: present, and the robot-human line of sight touches no wall.
+
+    The sight line joins the two centres; a line that only touches a wall counts as blocked.
+    There is no field-of-view or range limit.
+
+    Args:
+        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
+        human_pos: (B, H, 2) human centres, m, world frame.
+        human_mask: (B, H) True for humans present in the scenario.
+        walls: the map's wall index, or None for a map without walls.
+
+    Returns:
+        (B, H) bool.
+    """
+    visible = np.array(human_mask, dtype=bool)
+    if walls is None or walls.num_walls == 0 or not visible.any():
+        return visible
+    # Only present humans are tested: absent ones may sit anywhere and lengthen every sight line.
+    start = np.broadcast_to(robot_pose[:, None, :2], human_pos.shape)[visible]
+    visible[visible] = ~walls.crosses(start, human_pos[visible])
+    return visible
+
+
+def _robot_frame_slots(
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    points: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+    num_slots: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """World points and the visible humans, nearest first, in the robot frame.
+
+    Args:
+        robot_pose: (B, 3) world frame.
+        robot_vel: (B, 2) linear v (m/s) and angular omega (rad/s).
+        points: (B, P, 2) world points to express in the robot frame, m.
+        human_pos, human_vel: (B, H, 2) world frame, m and m/s.
+        visible: (B, H) bool.
+        num_slots: K, the number of human slots.
+
+    Returns:
+        (points_r, slots): points_r (B, P, 2) in the robot frame; slots (B, min(K, H), 4) of
+        (x, y, vx, vy) relative to the robot in robot axes, zero past the last visible human.
+    """
+    num_points = points.shape[1]
+    xy = robot_pose[:, None, :2]
+    rel = human_pos - xy
+    dist2 = rel[..., 0] ** 2 + rel[..., 1] ** 2
+    k = min(num_slots, human_pos.shape[1])
+    order = np.argsort(np.where(visible, dist2, np.inf), axis=1, kind="stable")[:, :k]
+    gather = order[..., None]
+    # One rotation for the points, the human offsets and the human velocities together.
+    vec = np.concatenate(
+        (points - xy, np.take_along_axis(rel, gather, 1), np.take_along_axis(human_vel, gather, 1)), axis=1
+    )
+    theta = robot_pose[:, 2:3]
+    c, s = np.cos(theta), np.sin(theta)
+    x, y = vec[..., 0], vec[..., 1]
+    rx = c * x + s * y
+    ry = c * y - s * x
+    # The robot's own velocity in its frame is (v, 0).
+    rx[:, num_points + k :] -= robot_vel[:, 0:1]
+    seen = np.take_along_axis(visible, order, axis=1)
+    p, q = num_points, num_points + k
+    slots = np.stack((rx[:, p:q], ry[:, p:q], rx[:, q:], ry[:, q:]), axis=-1)
+    slots = np.where(seen[..., None], slots, 0.0)
+    return np.stack((rx[:, :p], ry[:, :p]), axis=-1), slots
+
+
+def paper_observation(
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    goal: np.ndarray,
+    carrot: np.ndarray,
+    prev_action: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+    num_slots: int,
+) -> np.ndarray:
+    """The paper's observation <p_g, p_l, v_r, H_r> (SPEC section 8), robot frame.
+
+    Layout (K = num_slots): [0:2] goal (x, y), m; [2:4] local target (x, y), m; [4:6] robot
+    (v, omega), m/s and rad/s; [6] previous action index; then K slots [7 + 4i : 11 + 4i] of
+    (x, y, vx, vy) of the i-th nearest visible human relative to the robot (module docstring).
+
+    Args:
+        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
+        robot_vel: (B, 2) v (m/s) and omega (rad/s).
+        goal: (B, 2) global goal, m, world frame.
+        carrot: (B, 2) local target on the global plan, m, world frame.
+        prev_action: (B,) int sub-policy index of the previous step (0 before the first).
+        human_pos: (B, H, 2) m, world frame.
+        human_vel: (B, H, 2) m/s, world frame.
+        visible: (B, H) bool, from `visible_humans`.
+        num_slots: K >= 0.
+
+    Returns:
+        (B, 7 + 4K) float32.
+    """
+    batch = robot_pose.shape[0]
+    points = np.stack((goal, carrot), axis=1)
+    points_r, slots = _robot_frame_slots(robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots)
+    out = np.zeros((batch, PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
+    out[:, 0:4] = points_r.reshape(batch, 4)
+    out[:, 4:6] = robot_vel
+    out[:, 6] = prev_action
+    out[:, PAPER_HEADER_SIZE : PAPER_HEADER_SIZE + slots.shape[1] * PAPER_SLOT_SIZE] = slots.reshape(batch, -1)
+    return out
+
+
+def socialgym1_observation(
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    carrot: np.ndarray,
+    prev_action: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+) -> np.ndarray:
+    """The reference code's 244-number observation, robot frame.
+
+    Layout: [3i : 3i + 3] for i < 40, human i's (x, y, theta); [120 + 3i : 123 + 3i] its
+    (vx, vy, omega); [240:243] local target (x, y, 0); [243] previous action index. theta and
+    omega are always 0 (the reference stored a constant index there, SPEC section 11). Human
+    slots follow the module's conventions (visible humans nearest first, relative position and
+    velocity in robot axes), the same values as the paper layout. The goal and the robot's
+    velocity are not part of this layout.
+
+    Args:
+        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
+        robot_vel: (B, 2) v (m/s) and omega (rad/s); used for the relative human velocities.
+        carrot: (B, 2) local target, m, world frame.
+        prev_action: (B,) int sub-policy index of the previous step (0 before the first).
+        human_pos: (B, H, 2) m, world frame.
+        human_vel: (B, H, 2) m/s, world frame.
+        visible: (B, H) bool, from `visible_humans`.
+
+    Returns:
+        (B, 244) float32.
+    """
+    batch = robot_pose.shape[0]
+    n = SOCIALGYM1_NUM_SLOTS
+    points_r, slots = _robot_frame_slots(
+        robot_pose, robot_vel, carrot[:, None, :], human_pos, human_vel, visible, n
+    )
+    k = slots.shape[1]
+    out = np.zeros((batch, SOCIALGYM1_SIZE), dtype=np.float32)
+    out[:, 0 : 3 * k : 3] = slots[..., 0]
+    out[:, 1 : 3 * k : 3] = slots[..., 1]
+    out[:, 3 * n : 3 * n + 3 * k : 3] = slots[..., 2]
+    out[:, 3 * n + 1 : 3 * n + 3 * k : 3] = slots[..., 3]
+    out[:, 6 * n : 6 * n + 2] = points_r[:, 0]
+    out[:, 6 * n + 3] = prev_action
+    return out
+
+
+def build_observation(
+    cfg: ObservationConfig,
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    goal: np.ndarray,
+    carrot: np.ndarray,
+    prev_action: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+) -> np.ndarray:
+    """The observation of `cfg.layout`; arguments as in `paper_observation`.
+
+    Returns:
+        (B, observation_size(cfg)) float32.
+    """
+    if cfg.layout == "paper":
+        return paper_observation(
+            robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, cfg.num_slots
+        )
+    return socialgym1_observation(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)
+
+
+def observation_size(cfg: ObservationConfig) -> int:
+    """Length of one observation vector of `cfg`'s layout."""
+    if cfg.layout == "socialgym1":
+        return SOCIALGYM1_SIZE
+    return PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * cfg.num_human_slots
+
+
+def observation_space(cfg: ObservationConfig) -> spaces.Box:
+    """The float32 Box of one observation (no batch axis).
+
+    Positions and velocities are unbounded (maps have no fixed size, and the robot's limits are
+    configuration); the previous action lies in [0, 3]. A fresh Box each call: an env caches its
+    own, so that seeding one env's space does not seed another's.
+    """
+    size = observation_size(cfg)
+    low = np.full(size, -np.inf, dtype=np.float32)
+    high = np.full(size, np.inf, dtype=np.float32)
+    action = PAPER_HEADER_SIZE - 1 if cfg.layout == "paper" else SOCIALGYM1_SIZE - 1
+    low[action] = 0.0
+    high[action] = MAX_ACTION_INDEX
+    return spaces.Box(low=low, high=high, dtype=np.float32)
+
+
+def describe_observation(cfg: ObservationConfig) -> list[str]:
+    """Name of every entry of an observation, in order (e.g. "goal_x", "human_3_vy")."""
+    if cfg.layout == "paper":
+        names = ["goal_x", "goal_y", "target_x", "target_y", "robot_v", "robot_omega", "prev_action"]
+        for i in range(cfg.num_human_slots):
+            names += [f"human_{i}_x", f"human_{i}_y", f"human_{i}_vx", f"human_{i}_vy"]
+        return names
+    n = SOCIALGYM1_NUM_SLOTS
+    names = [f"human_{i}_{c}" for i in range(n) for c in ("x", "y", "theta")]
+    names += [f"human_{i}_{c}" for i in range(n) for c in ("vx", "vy", "omega")]
+    return [*names, "target_x", "target_y", "target_theta", "prev_action"]

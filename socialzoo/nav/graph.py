@@ -1,0 +1,572 @@
+"""The navigation graph of a map: A*, an all-pairs next-hop table and batched path planning.
+
+Off-graph points (robot and human poses) join the graph at the nearest edge point they can reach by
+a wall-free straight line (SPEC section 5); `plan_batch` plans many start/goal pairs at once.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import weakref
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from socialzoo.core.geometry import closest_point_on_segment
+from socialzoo.core.walls import WallIndex
+
+if TYPE_CHECKING:
+    from socialzoo.nav.maps import Map
+
+# Waypoints closer than this to the previous one are dropped from a plan (metres).
+DUPLICATE_EPS = 1e-9
+# Candidate attach points tested per query point before falling back to all of them.
+ATTACH_CANDIDATES = 8
+# Upper bound on (points x candidates) pairs held in memory at once by `attach`.
+_ATTACH_CHUNK_PAIRS = 1 << 20
+
+
+class NoPathError(ValueError):
+    """No path joins the requested start and goal; the message names them."""
+
+
+class AttachError(NoPathError):
+    """An off-graph point reaches no graph edge or node by a wall-free straight line."""
+
+
+@dataclass(frozen=True)
+class Attachment:
+    """Where off-graph points join the navigation graph.
+
+    The attach point lies on the edge (node_a, node_b); cost_a and cost_b are the distances along
+    that edge from the attach point to its two end nodes. A point joined at a node has
+    node_a == node_b and both costs zero.
+
+    Attributes:
+        point: (N, 2) attach points, world frame, m.
+        dist: (N,) straight-line distance from each query point to its attach point, m.
+        edge: (N,) index into NavGraph.edges, or -1 when the point joins at a node.
+        node_a, node_b: (N,) end nodes of the attach edge.
+        cost_a, cost_b: (N,) distance along the edge from the attach point to node_a, node_b, m.
+    """
+
+    point: np.ndarray
+    dist: np.ndarray
+    edge: np.ndarray
+    node_a: np.ndarray
+    node_b: np.ndarray
+    cost_a: np.ndarray
+    cost_b: np.ndarray
+
+
+def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Whether straight segments [p0, p1] (N, 2) touch no wall; bool (N,).
+
+    `WallIndex.crosses` samples every segment of a call as finely as its longest one needs, so
+    segments are grouped by length (powers of two of the index reach) to keep short ones cheap.
+    """
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
+    free = np.ones(len(p0), dtype=bool)
+    if walls is None or walls.num_walls == 0 or len(p0) == 0:
+        return free
+    length = np.sqrt(((p1 - p0) ** 2).sum(-1))
+    group = np.ceil(np.log2(np.maximum(length / walls.fine.reach, 1.0))).astype(np.intp)
+    for g in np.unique(group):
+        rows = np.flatnonzero(group == g)
+        free[rows] = ~walls.crosses(p0[rows], p1[rows])
+    return free
+
+
+@dataclass(frozen=True)
+class PathTable:
+    """All-pairs shortest paths of a graph.
+
+    Attributes:
+        dist: (N, N) shortest path cost, m; inf between disconnected nodes.
+        next_hop: (N, N) the node after i on a shortest path from i to j; next_hop[j, j] == j;
+            -1 where j is unreachable from i.
+        hops: (N, N) number of edges on that path; -1 where unreachable.
+    """
+
+    dist: np.ndarray
+    next_hop: np.ndarray
+    hops: np.ndarray
+
+    def node_paths(self, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """Node sequences for many (start, goal) node pairs at once.
+
+        Args:
+            start, goal: (M,) node indices; every goal must be reachable from its start.
+
+        Returns:
+            (M, K) node indices, K = 1 + the largest hop count; each row runs from start to goal
+            and is padded by repeating the goal.
+        """
+        start = np.asarray(start, dtype=np.intp)
+        goal = np.asarray(goal, dtype=np.intp)
+        if len(start) == 0:
+            return np.zeros((0, 1), dtype=np.intp)
+        hops = self.hops[start, goal]
+        if np.any(hops < 0):
+            raise NoPathError("node_paths asked for a pair of disconnected nodes")
+        steps = int(hops.max())
+        out = np.empty((len(start), steps + 1), dtype=np.intp)
+        out[:, 0] = start
+        cur = start
+        for s in range(1, steps + 1):
+            cur = self.next_hop[cur, goal]
+            out[:, s] = cur
+        return out
+
+
+def floyd_warshall(nodes: np.ndarray, edges: np.ndarray) -> PathTable:
+    """All-pairs shortest paths with next hops, Floyd-Warshall vectorised over (i, j) in numpy.
+
+    Costs are Euclidean edge lengths. A path through k replaces the current one only when strictly
+    shorter, so among equal-cost paths the earliest found is kept. O(N^3) work in N numpy steps:
+    about 0.1 s for 300 nodes.
+
+    Args:
+        nodes: (N, 2) node positions, m.
+        edges: (E, 2) undirected node index pairs.
+    """
+    n = len(nodes)
+    dist = np.full((n, n), np.inf)
+    next_hop = np.full((n, n), -1, dtype=np.intp)
+    idx = np.arange(n)
+    dist[idx, idx] = 0.0
+    next_hop[idx, idx] = idx
+    if len(edges):
+        i, j = edges[:, 0], edges[:, 1]
+        cost = np.sqrt(((nodes[i] - nodes[j]) ** 2).sum(-1))
+        dist[i, j] = cost
+        dist[j, i] = cost
+        next_hop[i, j] = j
+        next_hop[j, i] = i
+    for k in range(n):
+        via = dist[:, k : k + 1] + dist[k : k + 1, :]
+        better = via < dist
+        if better.any():
+            dist = np.where(better, via, dist)
+            next_hop = np.where(better, next_hop[:, k : k + 1], next_hop)
+    # Hop counts by walking every pair's path one step at a time (at most N - 1 steps).
+    hops = np.where(np.isfinite(dist), 0, -1)
+    cur = np.broadcast_to(idx[:, None], (n, n)).copy()
+    goal = np.broadcast_to(idx[None, :], (n, n))
+    moving = np.isfinite(dist) & (cur != goal)
+    while moving.any():
+        cur = np.where(moving, next_hop[cur, goal], cur)
+        hops += moving
+        moving &= cur != goal
+    return PathTable(dist=dist, next_hop=next_hop, hops=hops)
+
+
+class NavGraph:
+    """An undirected navigation graph with Euclidean edge costs, and the walls it lives among.
+
+    Two ways to find shortest paths give the same answers: `astar` (one pair, cached) and the
+    all-pairs `table` (built once, lazily, by Floyd-Warshall) that `plan_batch` reads so that
+    batched queries need no search per row. Both return shortest paths of equal cost (to float
+    rounding); where several paths tie, they may pick different ones.
+
+    Args:
+        nodes: (N, 2) node positions, world frame, m.
+        edges: (E, 2) node index pairs; duplicates and reversed duplicates are merged.
+        walls: the map's wall index, used to check straight joins; None for a map without walls.
+        name: used in error messages.
+
+    Raises:
+        ValueError: nodes not finite or not (N, 2), edges not (E, 2), an edge index out of range,
+            or an edge from a node to itself.
+    """
+
+    def __init__(
+        self, nodes: np.ndarray, edges: np.ndarray, walls: WallIndex | None = None, name: str = "graph"
+    ) -> None:
+        nodes = np.asarray(nodes, dtype=np.float64)
+        if nodes.ndim != 2 or nodes.shape[1] != 2 or not np.all(np.isfinite(nodes)):
+            raise ValueError(f"{name}: nodes must be a finite (N, 2) array, got shape {nodes.shape}")
+        edges = np.asarray(edges)
+        if edges.size == 0:
+            edges = np.zeros((0, 2), dtype=np.intp)
+        if edges.ndim != 2 or edges.shape[1] != 2 or not np.issubdtype(edges.dtype, np.integer):
+            raise ValueError(f"{name}: edges must be an integer (E, 2) array, got {edges.dtype} {edges.shape}")
+        edges = edges.astype(np.intp)
+        bad = np.flatnonzero((edges < 0).any(1) | (edges >= len(nodes)).any(1))
+        if len(bad):
+            raise ValueError(
+                f"{name}: edge {int(bad[0])} = {edges[bad[0]].tolist()} names a node outside 0..{len(nodes) - 1}"
+            )
+        loops = np.flatnonzero(edges[:, 0] == edges[:, 1])
+        if len(loops):
+            raise ValueError(f"{name}: edge {int(loops[0])} joins node {int(edges[loops[0], 0])} to itself")
+        edges = np.unique(np.sort(edges, axis=1), axis=0)
+        self.name = name
+        self.nodes = nodes
+        self.edges = edges
+        self.walls = walls
+        self.edge_cost = np.sqrt(((nodes[edges[:, 0]] - nodes[edges[:, 1]]) ** 2).sum(-1))
+        self._neighbours: list[list[tuple[int, float]]] = [[] for _ in range(len(nodes))]
+        for (i, j), c in zip(edges.tolist(), self.edge_cost.tolist(), strict=True):
+            self._neighbours[i].append((j, c))
+            self._neighbours[j].append((i, c))
+        self._astar_cache: dict[tuple[int, int], tuple[int, ...]] = {}
+
+    @classmethod
+    def from_map(cls, m: Map) -> NavGraph:
+        """The graph of a map, with the map's wall index (a new object; see `graph_of`)."""
+        return cls(m.nodes, m.edges, m.wall_index, name=m.where)
+
+    @property
+    def num_nodes(self) -> int:
+        return len(self.nodes)
+
+    @property
+    def num_edges(self) -> int:
+        return len(self.edges)
+
+    def _check_node(self, node: int, what: str) -> int:
+        if not 0 <= int(node) < self.num_nodes:
+            raise ValueError(f"{self.name}: {what} node {node} is outside 0..{self.num_nodes - 1}")
+        return int(node)
+
+    # ---------------------------------------------------------------- single-pair search
+    def astar(self, start_node: int, goal_node: int) -> list[int]:
+        """Shortest node path by A* with the (admissible, consistent) Euclidean heuristic.
+
+        Results are cached per (start, goal).
+
+        Returns:
+            Node indices from start_node to goal_node inclusive.
+
+        Raises:
+            NoPathError: the goal is not reachable from the start.
+        """
+        start = self._check_node(start_node, "start")
+        goal = self._check_node(goal_node, "goal")
+        key = (start, goal)
+        if key not in self._astar_cache:
+            self._astar_cache[key] = self._astar(start, goal)
+        return list(self._astar_cache[key])
+
+    def _astar(self, start: int, goal: int) -> tuple[int, ...]:
+        gx, gy = self.nodes[goal].tolist()
+        pos = self.nodes.tolist()
+        best = {start: 0.0}
+        parent = {start: -1}
+        heap = [(math.hypot(pos[start][0] - gx, pos[start][1] - gy), 0.0, start)]
+        closed = set()
+        while heap:
+            _, cost, node = heapq.heappop(heap)
+            if node in closed:
+                continue
+            if node == goal:
+                path = [node]
+                while parent[path[-1]] >= 0:
+                    path.append(parent[path[-1]])
+                return tuple(reversed(path))
+            closed.add(node)
+            for nb, edge_cost in self._neighbours[node]:
+                new = cost + edge_cost
+                if nb not in closed and new < best.get(nb, math.inf):
+                    best[nb] = new
+                    parent[nb] = node
+                    heapq.heappush(heap, (new + math.hypot(pos[nb][0] - gx, pos[nb][1] - gy), new, nb))
+        raise NoPathError(
+            f"{self.name}: no path from node {start} {self.nodes[start].tolist()} "
+            f"to node {goal} {self.nodes[goal].tolist()}: they are not connected"
+        )
+
+    def path_cost(self, path: list[int] | np.ndarray) -> float:
+        """Length of a node path, m (sum of Euclidean edge lengths)."""
+        p = self.nodes[np.asarray(path, dtype=np.intp)]
+        return float(np.sqrt(((p[1:] - p[:-1]) ** 2).sum(-1)).sum())
+
+    # ---------------------------------------------------------------- all-pairs table
+    @cached_property
+    def table(self) -> PathTable:
+        """All-pairs shortest-path costs, next hops and hop counts, computed on first use.
+
+        The table holds shortest paths of the same cost as `astar` for every pair (the tests
+        check it on the shipped maps and on random graphs).
+        """
+        return floyd_warshall(self.nodes, self.edges)
+
+    def node_path(self, start_node: int, goal_node: int) -> list[int]:
+        """Shortest node path read from the all-pairs table; raises NoPathError if unreachable."""
+        start = self._check_node(start_node, "start")
+        goal = self._check_node(goal_node, "goal")
+        if self.table.hops[start, goal] < 0:
+            raise NoPathError(f"{self.name}: no path from node {start} to node {goal}: they are not connected")
+        return self.table.node_paths(np.array([start]), np.array([goal]))[0].tolist()[
+            : self.table.hops[start, goal] + 1
+        ]
+
+    # ---------------------------------------------------------------- joining off-graph points
+    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES) -> Attachment:
+        """Join off-graph points to the graph at the nearest point they can reach in a straight line.
+
+        Candidates are the closest point of every edge and every node. For each query point the k
+        nearest candidates are tested first (one batched wall test for all points); points whose k
+        candidates are all blocked test every candidate, nearest first.
+
+        Args:
+            points: (N, 2) query points, world frame, m.
+            k: candidates per point in the first round.
+
+        Returns:
+            The attachment of every point.
+
+        Raises:
+            AttachError: a point reaches no edge and no node by a wall-free line (the message
+                names the first such point), or the graph has no nodes.
+        """
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        num = len(points)
+        if self.num_nodes == 0:
+            raise AttachError(f"{self.name}: the navigation graph has no nodes to attach to")
+        if not np.all(np.isfinite(points)):
+            raise ValueError(f"{self.name}: attach points must be finite, got {points[~np.isfinite(points).all(1)][0]}")
+        num_cand = self.num_edges + self.num_nodes
+        chosen = np.full(num, -1, dtype=np.intp)
+        cand_point = np.empty((num, 2))
+        cand_t = np.empty(num)
+        chunk = max(1, _ATTACH_CHUNK_PAIRS // num_cand)
+        k = min(k, num_cand)
+        for lo in range(0, num, chunk):
+            rows = np.arange(lo, min(num, lo + chunk))
+            pts, ts, ds = self._candidates(points[rows])
+            order = np.argpartition(ds, k - 1, axis=1)[:, :k] if k < num_cand else np.argsort(ds, axis=1)
+            order = np.take_along_axis(order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1)
+            pick = self._first_free(points[rows], pts, order)
+            missing = np.flatnonzero(pick < 0)
+            if len(missing) and k < num_cand:
+                full = np.argsort(ds[missing], axis=1, kind="stable")
+                pick[missing] = self._first_free(points[rows][missing], pts[missing], full)
+            if np.any(pick < 0):
+                bad = rows[int(np.flatnonzero(pick < 0)[0])]
+                raise AttachError(
+                    f"{self.name}: point {points[bad].tolist()} reaches no edge or node of the navigation "
+                    "graph by a wall-free straight line"
+                )
+            chosen[rows] = pick
+            r = np.arange(len(rows))
+            cand_point[rows] = pts[r, pick]
+            cand_t[rows] = ts[r, pick]
+        is_edge = chosen < self.num_edges
+        edge = np.where(is_edge, chosen, -1)
+        node = chosen - self.num_edges
+        e = np.where(is_edge, chosen, 0)
+        node_a = np.where(is_edge, self.edges[e, 0] if self.num_edges else 0, node)
+        node_b = np.where(is_edge, self.edges[e, 1] if self.num_edges else 0, node)
+        length = self.edge_cost[e] if self.num_edges else np.zeros(num)
+        cost_a = np.where(is_edge, cand_t * length, 0.0)
+        cost_b = np.where(is_edge, (1.0 - cand_t) * length, 0.0)
+        dist = np.sqrt(((cand_point - points) ** 2).sum(-1))
+        return Attachment(
+            point=cand_point,
+            dist=dist,
+            edge=edge,
+            node_a=node_a.astype(np.intp),
+            node_b=node_b.astype(np.intp),
+            cost_a=cost_a,
+            cost_b=cost_b,
+        )
+
+    def _candidates(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(points (M, C, 2), edge parameter t (M, C), distance (M, C)) of all C = E + N candidates."""
+        a = self.nodes[self.edges[:, 0]]
+        b = self.nodes[self.edges[:, 1]]
+        ab = b - a
+        denom = np.where(self.edge_cost > 0, self.edge_cost**2, 1.0)
+        t = np.clip(np.einsum("mei,ei->me", points[:, None, :] - a[None], ab) / denom, 0.0, 1.0)
+        # Clamped ends are the node positions exactly, so duplicate waypoints compare equal.
+        on_edge = np.where(
+            (t <= 0.0)[..., None], a[None], np.where((t >= 1.0)[..., None], b[None], a[None] + t[..., None] * ab[None])
+        )
+        pts = np.concatenate((on_edge, np.broadcast_to(self.nodes[None], (len(points), self.num_nodes, 2))), axis=1)
+        ts = np.concatenate((t, np.zeros((len(points), self.num_nodes))), axis=1)
+        ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
+        return pts, ts, ds
+
+    def _first_free(self, points: np.ndarray, cand: np.ndarray, order: np.ndarray) -> np.ndarray:
+        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none."""
+        m, kk = order.shape
+        targets = np.take_along_axis(cand, order[..., None], axis=1)  # (M, K, 2)
+        free = segments_free(self.walls, np.repeat(points, kk, axis=0), targets.reshape(-1, 2)).reshape(m, kk)
+        first = np.argmax(free, axis=1)
+        found = free[np.arange(m), first]
+        return np.where(found, order[np.arange(m), first], -1)
+
+    # ---------------------------------------------------------------- planning
+    def plan(self, start: np.ndarray, goal: np.ndarray, *, direct: bool = True) -> np.ndarray:
+        """Waypoints from an off-graph start to an off-graph goal.
+
+        The path is: start, its attach point, the graph nodes of the shortest path between the
+        best pair of end nodes of the two attach edges, the goal's attach point, goal; consecutive
+        duplicates are dropped. Start and goal on the same edge go along it without visiting a
+        node; with `direct`, a wall-free straight line start-goal is used whenever it exists (it is
+        then the shortest path). This is `plan_batch` on one row.
+
+        Args:
+            start, goal: (2,) world frame, m.
+            direct: allow the straight line.
+
+        Returns:
+            (L, 2) waypoints, L >= 1, first == start, last == goal.
+
+        Raises:
+            AttachError: start or goal reaches no edge of the graph.
+            NoPathError: their attach edges are not connected.
+        """
+        paths, lengths = self.plan_batch(
+            np.asarray(start, dtype=np.float64).reshape(1, 2),
+            np.asarray(goal, dtype=np.float64).reshape(1, 2),
+            direct=direct,
+        )
+        return paths[0, : lengths[0]]
+
+    def plan_batch(
+        self,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        max_len: int | None = None,
+        *,
+        direct: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Plan N start/goal pairs at once, as `plan` does for one.
+
+        Vectorised over rows: one `attach` call for all starts and goals, one batched wall test
+        for the direct lines, node sequences read from the all-pairs table with a loop over path
+        length (never over rows). Safe to call every step.
+
+        Args:
+            starts, goals: (N, 2) world frame, m.
+            max_len: pad every path to this many waypoints; None pads to the longest path.
+            direct: allow straight start-goal lines where wall-free.
+
+        Returns:
+            (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
+            lengths (N,) int number of valid waypoints.
+
+        Raises:
+            AttachError: a start or goal reaches no edge (the message names the point).
+            NoPathError: a row's attach edges are not connected (the message names the row).
+            ValueError: a path needs more than max_len waypoints.
+        """
+        starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+        goals = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
+        if starts.shape != goals.shape:
+            raise ValueError(f"{self.name}: starts {starts.shape} and goals {goals.shape} differ in shape")
+        n = len(starts)
+        if n == 0:
+            width = max_len or 1
+            return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp)
+        direct_ok = segments_free(self.walls, starts, goals) if direct else np.zeros(n, dtype=bool)
+        need = ~direct_ok
+        # Rows that go straight need no attach: they may even lie where no edge is reachable.
+        rows = np.flatnonzero(need)
+        node_s = np.zeros(n, dtype=np.intp)
+        node_g = np.zeros(n, dtype=np.intp)
+        point_s = starts.copy()
+        point_g = goals.copy()
+        mode = np.zeros(n, dtype=np.intp)  # 0 direct, 1 via nodes, 2 along one edge
+        if len(rows):
+            att = self.attach(np.concatenate((starts[rows], goals[rows])))
+            m = len(rows)
+            sa = _take(att, slice(0, m))
+            ga = _take(att, slice(m, 2 * m))
+            dist = self.table.dist
+            ends_s = np.stack((sa.node_a, sa.node_b), 1)  # (m, 2)
+            ends_g = np.stack((ga.node_a, ga.node_b), 1)
+            cost_s = np.stack((sa.cost_a, sa.cost_b), 1)
+            cost_g = np.stack((ga.cost_a, ga.cost_b), 1)
+            via = cost_s[:, :, None] + dist[ends_s[:, :, None], ends_g[:, None, :]] + cost_g[:, None, :]
+            via = via.reshape(m, 4)
+            same_edge = (sa.edge >= 0) & (sa.edge == ga.edge)
+            along = np.where(same_edge, np.sqrt(((sa.point - ga.point) ** 2).sum(-1)), np.inf)
+            choice = np.argmin(via, axis=1)
+            best = via[np.arange(m), choice]
+            unreachable = ~np.isfinite(best) & ~np.isfinite(along)
+            if unreachable.any():
+                bad = rows[int(np.flatnonzero(unreachable)[0])]
+                raise NoPathError(
+                    f"{self.name}: row {bad}: no path from {starts[bad].tolist()} to {goals[bad].tolist()}: "
+                    "they join parts of the navigation graph that are not connected"
+                )
+            use_along = along <= best
+            mode[rows] = np.where(use_along, 2, 1)
+            node_s[rows] = ends_s[np.arange(m), choice // 2]
+            node_g[rows] = ends_g[np.arange(m), choice % 2]
+            point_s[rows] = sa.point
+            point_g[rows] = ga.point
+        via_nodes = mode == 1
+        seq = self.table.node_paths(
+            np.where(via_nodes, node_s, 0), np.where(via_nodes, node_g, 0)
+        )  # (n, K); rows not via nodes hold node 0 only
+        node_pts = self.nodes[seq]
+        # Rows that do not go via nodes repeat their start attach point instead.
+        node_pts = np.where(via_nodes[:, None, None], node_pts, point_s[:, None, :])
+        # Direct rows collapse every intermediate point onto the start.
+        is_direct = mode == 0
+        point_s = np.where(is_direct[:, None], starts, point_s)
+        point_g = np.where(is_direct[:, None], starts, point_g)
+        node_pts = np.where(is_direct[:, None, None], starts[:, None, :], node_pts)
+        raw = np.concatenate(
+            (starts[:, None], point_s[:, None], node_pts, point_g[:, None], goals[:, None]), axis=1
+        )  # (n, K + 4, 2)
+        step = np.sqrt(((raw[:, 1:] - raw[:, :-1]) ** 2).sum(-1))
+        keep = np.concatenate((np.ones((n, 1), dtype=bool), step > DUPLICATE_EPS), axis=1)
+        # Keep the goal exactly: if it duplicates the previous point, drop that one instead.
+        last_dup = ~keep[:, -1]
+        lengths = keep.sum(1)
+        order = np.argsort(~keep, axis=1, kind="stable")
+        compact = np.take_along_axis(raw, order[..., None], axis=1)
+        idx = np.arange(n)
+        compact[idx[last_dup], lengths[last_dup] - 1] = goals[last_dup]
+        width = int(lengths.max())
+        if max_len is not None:
+            if int(max_len) < width:
+                bad = int(np.argmax(lengths))
+                raise ValueError(
+                    f"{self.name}: row {bad} needs {int(lengths[bad])} waypoints, more than max_len={max_len}"
+                )
+            width = int(max_len)
+        if compact.shape[1] < width:
+            compact = np.concatenate(
+                (compact, np.zeros((n, width - compact.shape[1], 2))), axis=1
+            )
+        compact = compact[:, :width]
+        pad = np.arange(width)[None, :] >= lengths[:, None]
+        last = compact[idx, lengths - 1]
+        paths = np.where(pad[..., None], last[:, None, :], compact)
+        return paths, lengths.astype(np.intp)
+
+
+def _take(att: Attachment, sel: slice) -> Attachment:
+    """Rows `sel` of an attachment."""
+    return Attachment(
+        point=att.point[sel],
+        dist=att.dist[sel],
+        edge=att.edge[sel],
+        node_a=att.node_a[sel],
+        node_b=att.node_b[sel],
+        cost_a=att.cost_a[sel],
+        cost_b=att.cost_b[sel],
+    )
+
+
+_GRAPHS: weakref.WeakKeyDictionary[Map, NavGraph] = weakref.WeakKeyDictionary()
+
+
+def graph_of(m: Map) -> NavGraph:
+    """The navigation graph of a map, built once per map object and shared (with its caches)."""
+    graph = _GRAPHS.get(m)
+    if graph is None:
+        graph = NavGraph.from_map(m)
+        _GRAPHS[m] = graph
+    return graph
