@@ -2,6 +2,16 @@
 
 The world core (socialzoo.core, socialzoo.humans, socialzoo.nav) is numpy only; the environment
 adapters (socialzoo.env) add Gymnasium and PettingZoo; training and plotting are optional extras.
+Importing socialzoo registers the Gymnasium ids (socialzoo/ActionSelection-v0, ...).
 """
 
 __version__ = "0.1.0"
+
+
+def _register() -> None:
+    from socialzoo.env.registration import register_envs
+
+    register_envs()
+
+
+_register()

@@ -64,7 +64,7 @@ def segments_intersect(
     """Whether closed segments [p0, p1] and [q0, q1] share a point (touching counts).
 
     All arguments broadcast; shapes (..., 2). Returns bool (...,).
-    Collinear overlapping segments count as intersecting.
+    Collinear overlapping segments and degenerate (point) segments are handled.
     """
     r = p1 - p0
     s = q1 - q0
@@ -76,15 +76,19 @@ def segments_intersect(
     safe = np.where(parallel, 1.0, denom)
     t = t_num / safe
     u = u_num / safe
-    proper = (~parallel) & (t >= 0.0) & (t <= 1.0) & (u >= 0.0) & (u <= 1.0)
-    # Parallel case: intersect only when collinear and the projections overlap.
-    collinear = parallel & (np.abs(u_num) <= PARALLEL_EPS)
-    rr = np.einsum("...i,...i->...", r, r)
-    rr_safe = np.where(rr > 0.0, rr, 1.0)
-    s0 = np.einsum("...i,...i->...", qp, r) / rr_safe
-    s1 = np.einsum("...i,...i->...", q1 - p0, r) / rr_safe
-    overlap = (np.maximum(s0, s1) >= 0.0) & (np.minimum(s0, s1) <= 1.0)
-    return proper | (collinear & overlap)
+    hit = (~parallel) & (t >= 0.0) & (t <= 1.0) & (u >= 0.0) & (u <= 1.0)
+    if np.any(parallel):
+        # Parallel, collinear or degenerate: they meet iff an end point lies on the other segment.
+        p0b, p1b, q0b, q1b = np.broadcast_arrays(p0, p1, q0, q1)
+        idx = parallel.reshape(p0b.shape[:-1]) if parallel.ndim else np.array(True)
+        a0, a1, b0, b1 = p0b[idx], p1b[idx], q0b[idx], q1b[idx]
+        touch = np.zeros(len(a0), dtype=bool)
+        for point, start, end in ((a0, b0, b1), (a1, b0, b1), (b0, a0, a1), (b1, a0, a1)):
+            touch |= closest_point_on_segment(point, start, end)[1] <= 1e-9
+        if hit.ndim == 0:
+            return np.asarray(touch[0])
+        hit[idx] = touch
+    return hit
 
 
 def ray_segment_hit(

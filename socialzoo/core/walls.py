@@ -218,8 +218,9 @@ class WallIndex:
     def crosses(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
         """Whether segments [p0, p1] (..., 2) touch any wall; returns bool (...,).
 
-        Long segments are covered by sample points spaced at most `reach` apart, each contributing
-        its cell's candidates, so any wall touching the segment is among the candidates tested.
+        Each segment is covered by its own sample points spaced at most `reach` apart, each
+        contributing its cell's candidates, so any wall touching the segment is tested; a
+        (segment, wall) pair met at several samples is tested once.
         """
         t = self.fine
         shape = p0.shape[:-1]
@@ -227,14 +228,21 @@ class WallIndex:
         a1 = p1.reshape(-1, 2)
         if len(a0) == 0:
             return np.zeros(shape, dtype=bool)
-        length = np.sqrt(((a1 - a0) ** 2).sum(-1))
-        max_len = float(length.max())
-        num_samples = 1 if max_len <= t.reach else math.ceil(max_len / t.reach) + 1
-        frac = np.linspace(0.0, 1.0, num_samples) if num_samples > 1 else np.zeros(1)
-        samples = a0[:, None, :] + frac[:, None] * (a1 - a0)[:, None, :]  # (N, S, 2)
-        query, wall = t.candidates(t.cells(samples).reshape(-1))
-        seg = query // num_samples
-        hit = segments_intersect(a0[seg], a1[seg], self.wall_a[wall], self.wall_b[wall])
+        delta = a1 - a0
+        length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
+        num_samples = np.where(length <= t.reach, 1, np.ceil(length / t.reach).astype(np.intp) + 1)
+        if num_samples.max() == 1:
+            query, wall = t.candidates(t.cells(a0))
+            seg = query
+        else:
+            seg_of_sample = np.repeat(np.arange(len(a0)), num_samples)
+            rank = np.arange(len(seg_of_sample)) - np.repeat(np.cumsum(num_samples) - num_samples, num_samples)
+            frac = rank / np.maximum(num_samples - 1, 1).take(seg_of_sample)
+            samples = a0.take(seg_of_sample, axis=0) + frac[:, None] * delta.take(seg_of_sample, axis=0)
+            query, wall = t.candidates(t.cells(samples))
+            key = np.unique(seg_of_sample.take(query) * self.num_walls + wall)
+            seg, wall = np.divmod(key, self.num_walls)
+        hit = segments_intersect(a0.take(seg, axis=0), a1.take(seg, axis=0), self.wall_a[wall], self.wall_b[wall])
         return (np.bincount(seg[hit], minlength=len(a0)) > 0).reshape(shape)
 
     def footprint_hits(self, pose: np.ndarray, half_length: float, half_width: float) -> np.ndarray:

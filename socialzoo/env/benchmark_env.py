@@ -1,0 +1,175 @@
+"""The Social Action Selection benchmark as a Gymnasium single-agent env (SPEC sections 2 to 9).
+
+One robot chooses among four sub-policies (GoAlone, Halt, Follow, Pass) every 0.025 s step, among
+5 to 25 social-force humans, on a building map; episodes end on success (goal within 0.5 m), on a
+wall collision, or after 3200 steps (truncation).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore, StepResult
+from socialzoo.env.observation import observation_space
+from socialzoo.env.scenario_source import ScenarioStream
+from socialzoo.nav.maps import Map
+from socialzoo.nav.scenarios import Scenario
+from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
+
+
+def make_config(config: EnvConfig | None, overrides: dict[str, Any]) -> EnvConfig:
+    """EnvConfig from a base (default: the benchmark's) and plain-value overrides."""
+    base = config if config is not None else EnvConfig()
+    return base.replace(**overrides) if overrides else base
+
+
+def step_info(result: StepResult, row: int = 0, robot: int = 0) -> dict[str, Any]:
+    """The per-step info dict of one robot: plain Python values under stable keys."""
+    target = int(result.target_human[row, robot])
+    return {
+        "reached": bool(result.reached[row, robot]),
+        "wall_collision": bool(result.wall_collision[row, robot]),
+        "human_collisions": int(result.human_collisions[row, robot]),
+        "force": float(result.force[row, robot]),
+        "blame": float(result.blame[row, robot]),
+        "progress": float(result.progress[row, robot]),
+        "target_human": target,
+    }
+
+
+class ActionSelectionEnv(gym.Env):
+    """Social Action Selection (SocialGym benchmark), single robot.
+
+    Action space: Discrete(4): 0 GoAlone, 1 Halt, 2 Follow, 3 Pass (SPEC section 7); with
+    robot_action="velocity", Box([-1, 1]^2) of normalised (v, omega).
+
+    Observation: the paper's robot-frame vector (SPEC section 8, `observation="paper"`, 107
+    numbers with 25 human slots) or the reference layout (`observation={"layout": "socialgym1"}`,
+    244 numbers).
+
+    Reward: 5 * distance gained (10 when negative) - 0.1 * blame - 0.01 * force + 100 on reaching
+    the goal (SPEC section 9; weights in `reward`).
+
+    Episode end: terminated on reaching the goal (< 0.5 m) or touching a wall; truncated after
+    max_steps (3200). The final info holds "episode": the per-episode metrics.
+
+    Args:
+        config: an EnvConfig (default: the benchmark on gdc1).
+        render_mode: None, "rgb_array" or "human".
+        map_data: an already loaded Map instead of config.map.
+        **overrides: EnvConfig fields as plain values (nested configs as dicts), e.g.
+            map="ghc3", max_steps=800, observation={"layout": "socialgym1"}.
+
+    Version History:
+        v0: initial release.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 40}
+
+    def __init__(
+        self,
+        config: EnvConfig | None = None,
+        render_mode: str | None = None,
+        map_data: Map | None = None,
+        **overrides: Any,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+        self.config = make_config(config, overrides)
+        if self.config.num_robots != 1:
+            raise ValueError(
+                f"ActionSelectionEnv has one robot; got num_robots={self.config.num_robots} (use parallel_env)"
+            )
+        if self.config.learned_humans:
+            raise ValueError("ActionSelectionEnv has no learned humans; use parallel_env for them")
+        self.render_mode = render_mode
+        self.core = SocialNavCore(self.config, 1, map_data=map_data)
+        self.scenarios = ScenarioStream(self.core.map, 1, 1, self.config.scenario, self.config.family)
+        self.observation_space = observation_space(self.config.observation)
+        if self.config.robot_action == "subpolicy":
+            self.action_space: gym.Space = gym.spaces.Discrete(NUM_ACTIONS)
+        else:
+            self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        self._renderer: Any = None
+        self._needs_reset = True
+        self._seeded = False
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        """Start an episode.
+
+        Args:
+            seed: seeds the scenario stream (and Gymnasium's np_random); None continues the stream
+                (first reset without a seed: fresh entropy).
+            options: {"scenario": Scenario} replays that scenario.
+        """
+        super().reset(seed=seed)
+        if seed is not None or not self._seeded:
+            self.scenarios.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
+            self._seeded = True
+        scenario = (options or {}).get("scenario")
+        if scenario is not None and not isinstance(scenario, Scenario):
+            raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario).__name__}")
+        scenarios = [scenario] if scenario is not None else self.scenarios.next(np.array([0]))
+        self.core.reset_rows(np.array([0]), scenarios)
+        self._needs_reset = False
+        if self._renderer is not None:
+            self._renderer.reset()
+        if self.render_mode == "human":
+            self.render()
+        return self.core.obs[0, 0].copy(), {"scenario_seed": int(scenarios[0].seed)}
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One 0.025 s step with sub-policy `action`.
+
+        Raises:
+            RuntimeError: stepping before reset or after the episode ended.
+            ValueError: an action outside the action space (before any state changes).
+        """
+        if self._needs_reset:
+            raise RuntimeError("ActionSelectionEnv: call reset() before step() (the episode has ended)")
+        if self.config.robot_action == "subpolicy":
+            robot_action = np.array([[_discrete(action)]])
+        else:
+            robot_action = np.asarray(action, dtype=np.float64).reshape(1, 1, -1)
+        result = self.core.step(robot_action)
+        terminated = bool(result.terminated[0, 0])
+        truncated = bool(result.truncated[0, 0])
+        info = step_info(result)
+        if self.config.robot_action == "subpolicy":
+            info["action_name"] = ACTION_NAMES[int(robot_action[0, 0])]
+        if terminated or truncated:
+            info["episode"] = self.core.episode_summaries([0])[0]
+            self._needs_reset = True
+        if self.render_mode == "human":
+            self.render()
+        return result.obs[0, 0].copy(), float(result.reward[0, 0]), terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
+            return None
+        if self._renderer is None:
+            from socialzoo.env.rendering import CoreRenderer
+
+            self._renderer = CoreRenderer(self.core, self.render_mode)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+def _discrete(action: Any) -> int:
+    """A sub-policy index from an int-like action; anything else raises naming the value."""
+    value = np.asarray(action)
+    if value.size != 1 or not np.issubdtype(value.dtype, np.number) or not np.isfinite(value).all():
+        raise ValueError(f"action must be one integer in 0..{NUM_ACTIONS - 1}, got {action!r}")
+    scalar = value.reshape(()).item()
+    if int(scalar) != scalar or not 0 <= int(scalar) < NUM_ACTIONS:
+        raise ValueError(f"action must be one integer in 0..{NUM_ACTIONS - 1}, got {action!r}")
+    return int(scalar)

@@ -1,0 +1,155 @@
+"""Configuration of the environments: one frozen EnvConfig holds every part.
+
+Every field has the benchmark's value by default (SPEC sections 2 to 9); overrides go through
+dataclasses.replace or `EnvConfig.from_dict`, whose plain-JSON form is what the registry stores.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, Literal, get_args
+
+from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig, WorldConfig
+from socialzoo.env.metrics import MetricsConfig
+from socialzoo.env.observation import ObservationConfig
+from socialzoo.env.reward import RewardConfig
+from socialzoo.nav.local_planner import LocalPlannerConfig
+from socialzoo.nav.scenarios import FAMILIES, ScenarioConfig
+from socialzoo.nav.subpolicies import SubPolicyConfig
+
+RobotAction = Literal["subpolicy", "velocity"]
+
+# Nested configs, by field name, for building an EnvConfig from plain JSON.
+_NESTED: dict[str, type] = {
+    "world": WorldConfig,
+    "scenario": ScenarioConfig,
+    "observation": ObservationConfig,
+    "reward": RewardConfig,
+    "subpolicy": SubPolicyConfig,
+    "planner": LocalPlannerConfig,
+    "metrics": MetricsConfig,
+}
+_WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "laser": LaserConfig}
+
+
+@dataclass(frozen=True, kw_only=True)
+class EnvConfig:
+    """Everything an environment needs.
+
+    Attributes:
+        map: a shipped map name ("gdc1", "ghc3", "open_room", ...) or a path to a map JSON file.
+        num_robots: robots per world (R); the single-agent benchmark uses 1.
+        max_steps: episode time limit in steps (SPEC: 3200 = 80 s); reaching it truncates.
+        goal_radius: success distance between robot centre and goal, m (SPEC: 0.5).
+        robot_action: "subpolicy" (Discrete(4): GoAlone, Halt, Follow, Pass) or "velocity"
+            (Box [-1, 1]^2 scaled to robot.max_speed and robot.max_angular_speed).
+        learned_humans: number of human slots (human_0 .. human_{k-1}) driven by a learner;
+            the others follow their scripted social-force policy.
+        human_neighbours: neighbours (humans and robots) in a learned human's observation.
+        human_collision_penalty: a learned human's reward per step in contact with anyone.
+        family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
+            family name (socialzoo.nav.scenarios.FAMILIES).
+        world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
+    """
+
+    map: str = "gdc1"
+    num_robots: int = 1
+    max_steps: int = 3200
+    goal_radius: float = 0.5
+    robot_action: RobotAction = "subpolicy"
+    learned_humans: int = 0
+    human_neighbours: int = 6
+    human_collision_penalty: float = 1.0
+    family: str | None = None
+    world: WorldConfig = field(default_factory=WorldConfig)
+    scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
+    observation: ObservationConfig = field(default_factory=ObservationConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    subpolicy: SubPolicyConfig = field(default_factory=SubPolicyConfig)
+    planner: LocalPlannerConfig = field(default_factory=LocalPlannerConfig)
+    metrics: MetricsConfig = field(default_factory=MetricsConfig)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.map, str) or not self.map:
+            raise ValueError(f"EnvConfig.map must be a map name or path, got {self.map!r}")
+        for name, low in (("num_robots", 1), ("max_steps", 1), ("learned_humans", 0), ("human_neighbours", 0)):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < low:
+                raise ValueError(f"EnvConfig.{name} must be an int >= {low}, got {value!r}")
+        if self.learned_humans > self.max_humans:
+            raise ValueError(
+                f"EnvConfig.learned_humans ({self.learned_humans}) exceeds the human slots "
+                f"(scenario.max_humans = {self.max_humans})"
+            )
+        if not isinstance(self.goal_radius, (int, float)) or not self.goal_radius > 0:
+            raise ValueError(f"EnvConfig.goal_radius must be > 0, got {self.goal_radius!r}")
+        if self.robot_action not in get_args(RobotAction):
+            raise ValueError(
+                f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"
+            )
+        if self.family is not None and self.family not in FAMILIES:
+            raise ValueError(f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}")
+        for name, cls in _NESTED.items():
+            if not isinstance(getattr(self, name), cls):
+                raise ValueError(f"EnvConfig.{name} must be a {cls.__name__}, got {getattr(self, name)!r}")
+
+    @property
+    def max_humans(self) -> int:
+        """Human slots per world (H): the scenario generator's maximum head count."""
+        return self.scenario.max_humans
+
+    @property
+    def dt(self) -> float:
+        return self.world.dt
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-ready dict (nested configs as dicts)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> EnvConfig:
+        """Build from a plain dict such as `to_dict()` gives; unknown keys raise naming the key."""
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(data) - known
+        if unknown:
+            raise ValueError(f"EnvConfig: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
+        kwargs: dict[str, Any] = {}
+        for key, value in data.items():
+            if key in _NESTED and isinstance(value, dict):
+                kwargs[key] = _build(_NESTED[key], value, f"EnvConfig.{key}")
+            else:
+                kwargs[key] = value
+        return cls(**kwargs)
+
+    def replace(self, **changes: Any) -> EnvConfig:
+        """A copy with `changes`; nested configs may be given as dicts of overrides."""
+        resolved: dict[str, Any] = {}
+        for key, value in changes.items():
+            if key in _NESTED and isinstance(value, dict):
+                resolved[key] = _override(getattr(self, key), value, f"EnvConfig.{key}")
+            else:
+                resolved[key] = value
+        return dataclasses.replace(self, **resolved)
+
+
+def _build(cls: type, data: dict[str, Any], where: str) -> Any:
+    return _override(cls(), data, where)
+
+
+def _override(base: Any, data: dict[str, Any], where: str) -> Any:
+    known = {f.name for f in dataclasses.fields(base)}
+    unknown = set(data) - known
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
+    resolved: dict[str, Any] = {}
+    for key, value in data.items():
+        nested = _WORLD_NESTED.get(key) if isinstance(base, WorldConfig) else None
+        if nested is not None and isinstance(value, dict):
+            current = getattr(base, key) or nested()
+            resolved[key] = _override(current, value, f"{where}.{key}")
+        elif isinstance(value, list):
+            resolved[key] = tuple(value)
+        else:
+            resolved[key] = value
+    return dataclasses.replace(base, **resolved)

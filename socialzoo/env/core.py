@@ -1,0 +1,362 @@
+"""The batched environment core: B worlds with R robots each, stepped together.
+
+Every adapter steps this one class: the Gymnasium benchmark env (B = 1), the Gymnasium VectorEnv,
+the PettingZoo ParallelEnv and the evaluation runner. It turns actions into robot commands (the
+sub-policies), steps the world, tracks global plans, and computes observations, rewards,
+terminations and episode metrics, all as arrays over (B, R).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from socialzoo.core.state import WorldState, pad_to
+from socialzoo.core.world import StepEvents, robot_velocity_vectors, step_world
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.human_agents import human_observations, human_rewards
+from socialzoo.env.metrics import EpisodeMetrics
+from socialzoo.env.observation import build_observation, visible_humans
+from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
+from socialzoo.nav.graph import graph_of
+from socialzoo.nav.maps import Map, load_map
+from socialzoo.nav.navigator import Navigator
+from socialzoo.nav.scenarios import Scenario, scenarios_to_state
+from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
+
+# Robots slower than this (m/s) count as still for the blame term.
+STILL_SPEED = 1e-3
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """One step of every robot (and learned human) of the batch.
+
+    Attributes:
+        obs: (B, R, D) float32 robot observations after the step.
+        reward: (B, R) rewards; 0 for robots whose episode had already ended.
+        terminated: (B, R) the episode ended this step: goal reached or wall collision.
+        truncated: (B, R) the time limit ended the episode this step.
+        reached: (B, R) goal within goal_radius after the step.
+        wall_collision: (B, R) footprint touches a wall after the step.
+        human_collisions: (B, R) int number of humans within the collision distance.
+        force, blame, progress: (B, R) reward terms before weighting (SPEC section 9).
+        target_human: (B, R) human followed or passed this step, -1 for none.
+        human_obs: (B, L, D_h) learned-human observations, or None without learned humans.
+        human_reward: (B, L) learned-human rewards, or None.
+        events: the world's collision events of the step.
+    """
+
+    obs: np.ndarray
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    reached: np.ndarray
+    wall_collision: np.ndarray
+    human_collisions: np.ndarray
+    force: np.ndarray
+    blame: np.ndarray
+    progress: np.ndarray
+    target_human: np.ndarray
+    human_obs: np.ndarray | None
+    human_reward: np.ndarray | None
+    events: StepEvents
+
+
+class SocialNavCore:
+    """B social-navigation worlds stepped as one batch.
+
+    Args:
+        config: the environment configuration.
+        batch_size: B.
+        map_data: an already loaded map (default: load config.map).
+
+    Call `reset_rows` for every row before the first `step`.
+    """
+
+    def __init__(self, config: EnvConfig, batch_size: int, map_data: Map | None = None) -> None:
+        if not isinstance(batch_size, int) or batch_size < 1:
+            raise ValueError(f"batch_size must be an int >= 1, got {batch_size!r}")
+        self.config = config
+        self.batch_size = batch_size
+        self.num_robots = config.num_robots
+        self.map = map_data if map_data is not None else load_map(config.map)
+        self.walls = self.map.wall_index
+        self.graph = graph_of(self.map)
+        self.navigator = Navigator(self.graph, batch_size, config.num_robots)
+        self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
+        self.learned = np.arange(config.learned_humans)
+        b, r = batch_size, config.num_robots
+        self.state: WorldState | None = None
+        self.carrot = np.zeros((b, r, 2))
+        self.prev_action = np.zeros((b, r), dtype=np.int64)
+        self.target_human = np.full((b, r), -1, dtype=np.intp)
+        self.done = np.zeros((b, r), dtype=bool)
+        self.obs = np.zeros((b, r, config.observation.size), dtype=np.float32)
+        self.human_obs: np.ndarray | None = None
+        self.scenarios: list[Scenario | None] = [None] * b
+        self._ever_reset = np.zeros(b, dtype=bool)
+
+    # ------------------------------------------------------------------ reset
+    def reset_rows(self, rows: np.ndarray | list[int], scenarios: list[Scenario]) -> None:
+        """Start new episodes in `rows` from `scenarios` (one per row)."""
+        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+        if len(rows) != len(scenarios):
+            raise ValueError(f"reset_rows got {len(rows)} rows but {len(scenarios)} scenarios")
+        if len(rows) == 0:
+            return
+        if np.any((rows < 0) | (rows >= self.batch_size)):
+            raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
+        fresh = scenarios_to_state(scenarios, num_robots=self.num_robots, max_humans=self.config.max_humans)
+        if self.state is None:
+            self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
+        self._grow_routes(fresh.human_route.shape[2])
+        self.state.set_rows(rows, fresh)
+        for row, scenario in zip(rows, scenarios, strict=True):
+            self.scenarios[row] = scenario
+        self._ever_reset[rows] = True
+        pose = fresh.robot_pose
+        goal = fresh.robot_goal[..., :2]
+        self.navigator.reset(rows, pose[..., :2], goal)
+        self.prev_action[rows] = 0
+        self.target_human[rows] = -1
+        self.done[rows] = False
+        metric_rows = (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
+        self.metrics.reset(metric_rows, pose.reshape(-1, 3), goal.reshape(-1, 2))
+        carrot = self.navigator.update(self.state.robot_pose[..., :2])
+        self.carrot[rows] = carrot[rows]
+        self._observe(rows)
+
+    def _grow_routes(self, length: int) -> None:
+        """Widen the route axis of the state when a new scenario has a longer route."""
+        assert self.state is not None
+        have = self.state.human_route.shape[2]
+        if length > have:
+            route = self.state.human_route
+            self.state.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
+
+    # ------------------------------------------------------------------ step
+    @cached_property
+    def _speeds(self) -> np.ndarray:
+        robot = self.config.world.robot
+        return np.array([robot.max_speed, robot.max_angular_speed])
+
+    def robot_commands(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(command (B, R, 2), halt (B, R), target_human (B, R)) for robot actions.
+
+        Raises:
+            ValueError: an action outside the action space, naming the value and its row.
+        """
+        assert self.state is not None
+        b, r = self.batch_size, self.num_robots
+        state = self.state
+        if self.config.robot_action == "velocity":
+            action = np.asarray(action, dtype=np.float64)
+            if action.shape != (b, r, 2):
+                raise ValueError(f"velocity actions must have shape {(b, r, 2)}, got {action.shape}")
+            bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
+            if bad.any():
+                where = tuple(int(i) for i in np.argwhere(bad)[0])
+                raise ValueError(f"velocity action {action[where]!r} at index {where} is not in [-1, 1]")
+            command = action * self._speeds
+            halt = np.zeros((b, r), dtype=bool)
+            return command, halt, np.full((b, r), -1, dtype=np.intp)
+        flat = check_actions(np.asarray(action).reshape(-1), b * r)
+        human_pos, human_vel, human_mask = self._robot_obstacles()
+        command, halt, target = subpolicy_commands(
+            flat,
+            state.robot_pose.reshape(b * r, 3),
+            state.robot_vel.reshape(b * r, 2),
+            self.carrot.reshape(b * r, 2),
+            human_pos,
+            human_vel,
+            human_mask,
+            self.walls,
+            self.config.subpolicy,
+            self.config.planner,
+            self.config.world.robot,
+            self.config.dt,
+        )
+        return command.reshape(b, r, 2), halt.reshape(b, r), target.reshape(b, r)
+
+    def _robot_obstacles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per robot (B*R rows): the humans, and with several robots the other robots too.
+
+        Other robots are appended after the humans, so human indices keep their meaning.
+        """
+        assert self.state is not None
+        s = self.state
+        r = self.num_robots
+        if r == 1:
+            return s.human_pos, s.human_vel, s.human_mask
+        b, h = s.human_pos.shape[:2]
+        pos = np.concatenate((s.human_pos, s.robot_pose[..., :2]), axis=1)
+        vel = np.concatenate((s.human_vel, robot_velocity_vectors(s)), axis=1)
+        mask = np.concatenate((s.human_mask, np.ones((b, r), dtype=bool)), axis=1)
+        mask = np.repeat(mask, r, axis=0)
+        own = np.tile(np.arange(r), b)
+        mask[np.arange(b * r), h + own] = False
+        return np.repeat(pos, r, axis=0), np.repeat(vel, r, axis=0), mask
+
+    def step(self, robot_action: np.ndarray, human_action: np.ndarray | None = None) -> StepResult:
+        """Advance every row one step.
+
+        Args:
+            robot_action: (B, R) int sub-policy indices, or (B, R, 2) floats in [-1, 1] with
+                robot_action="velocity".
+            human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed)
+                for the L learned humans; required when config.learned_humans > 0.
+
+        Returns:
+            The StepResult. Robots whose episode ended halt and keep their final pose; their
+            reward is 0 until their row is reset.
+
+        Raises:
+            RuntimeError: a row was never reset.
+            ValueError: an action outside its space (naming the value and index), before any
+                state changes.
+        """
+        if self.state is None or not self._ever_reset.all():
+            raise RuntimeError("reset every row (reset_rows) before calling step")
+        cfg = self.config
+        before = self.state
+        b, r = self.batch_size, self.num_robots
+        desired, learned = self._human_drive(human_action)
+        command, halt, target = self.robot_commands(robot_action)
+        halt = halt | self.done
+        command = np.where(self.done[..., None], 0.0, command)
+        after, events = step_world(before, self.walls, cfg.world, command, halt, desired, learned)
+        self.state = after
+        self.carrot = self.navigator.update(after.robot_pose[..., :2])
+        if cfg.robot_action == "subpolicy":
+            self.prev_action = np.asarray(robot_action, dtype=np.int64).reshape(b, r)
+        self.target_human = target
+        visible = self._observe(np.arange(b))
+
+        pos = after.robot_pose[..., :2].reshape(b * r, 2)
+        goal = after.robot_goal[..., :2].reshape(b * r, 2)
+        human_pos = np.repeat(after.human_pos, r, axis=0) if r > 1 else after.human_pos
+        skip = target.reshape(-1)
+        d_g = progress(before.robot_pose[..., :2].reshape(b * r, 2), pos, goal)
+        force = social_force_term(pos, human_pos, visible, skip)
+        speed = after.robot_vel[..., 0].reshape(-1)
+        still = halt.reshape(-1) | (np.abs(speed) < STILL_SPEED)
+        vel_world = robot_velocity_vectors(after).reshape(b * r, 2)
+        blame = blame_term(pos, vel_world, still, human_pos, visible, skip, cfg.reward.blame_horizon)
+        to_goal = pos - goal
+        reached = (to_goal**2).sum(-1) < cfg.goal_radius**2
+        wall = events.robot_wall.reshape(-1)
+        contacts = events.robot_human.sum(-1).reshape(-1)
+        # The success bonus is paid on the step the goal is reached (collision-free or not); the
+        # benchmark's success metric additionally requires zero collisions (EpisodeMetrics).
+        reward, _ = compute_reward(d_g, blame, force, reached, contacts, cfg.reward)
+        was_done = self.done.reshape(-1)
+        terminated = (reached | wall) & ~was_done
+        out_of_time = after.step_count >= cfg.max_steps
+        truncated = np.repeat(out_of_time, r) & ~terminated & ~was_done
+        reward = np.where(was_done, 0.0, reward)
+        self.metrics.update(
+            robot_pose=after.robot_pose.reshape(b * r, 3),
+            robot_vel=after.robot_vel.reshape(b * r, 2),
+            reward=reward,
+            force=force,
+            blame=blame,
+            human_collisions=contacts,
+            wall_collision=wall,
+            min_human_distance=self._min_human_distance(),
+            reached=reached,
+            done=terminated | truncated,
+            dt=cfg.dt,
+        )
+        self.done = (was_done | terminated | truncated).reshape(b, r)
+        human_reward = None
+        if len(self.learned):
+            human_reward = human_rewards(before, after, self.learned, cfg.human_collision_penalty)
+        shape = (b, r)
+        return StepResult(
+            obs=self.obs,
+            reward=reward.reshape(shape),
+            terminated=terminated.reshape(shape),
+            truncated=truncated.reshape(shape),
+            reached=reached.reshape(shape),
+            wall_collision=wall.reshape(shape),
+            human_collisions=contacts.reshape(shape),
+            force=force.reshape(shape),
+            blame=blame.reshape(shape),
+            progress=d_g.reshape(shape),
+            target_human=target,
+            human_obs=self.human_obs,
+            human_reward=human_reward,
+            events=events,
+        )
+
+    def _human_drive(self, human_action: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(desired velocity (B, H, 2), learned mask (B, H)) for the learned humans, or (None, None)."""
+        assert self.state is not None
+        num = len(self.learned)
+        if num == 0:
+            if human_action is not None:
+                raise ValueError("human actions given, but config.learned_humans is 0")
+            return None, None
+        if human_action is None:
+            raise ValueError(f"config.learned_humans = {num}: human_action of shape (B, {num}, 2) is required")
+        action = np.asarray(human_action, dtype=np.float64)
+        if action.shape != (self.batch_size, num, 2):
+            raise ValueError(f"human_action must have shape {(self.batch_size, num, 2)}, got {action.shape}")
+        bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
+        if bad.any():
+            where = tuple(int(i) for i in np.argwhere(bad)[0])
+            raise ValueError(f"human action {action[where]!r} at index {where} is not in [-1, 1]")
+        s = self.state
+        desired = np.zeros(s.human_pos.shape)
+        desired[:, self.learned] = action * s.human_pref_speed[:, self.learned, None]
+        learned = np.zeros(s.human_mask.shape, dtype=bool)
+        learned[:, self.learned] = True
+        return desired, learned & s.human_mask
+
+    # ------------------------------------------------------------------ observe
+    def _observe(self, rows: np.ndarray) -> np.ndarray:
+        """Recompute observations (all rows are computed; `rows` are stored). Returns visibility (B*R, H)."""
+        assert self.state is not None
+        s = self.state
+        b, r = self.batch_size, self.num_robots
+        pose = s.robot_pose.reshape(b * r, 3)
+        human_pos = np.repeat(s.human_pos, r, axis=0) if r > 1 else s.human_pos
+        human_vel = np.repeat(s.human_vel, r, axis=0) if r > 1 else s.human_vel
+        human_mask = np.repeat(s.human_mask, r, axis=0) if r > 1 else s.human_mask
+        visible = visible_humans(pose, human_pos, human_mask, self.walls)
+        obs = build_observation(
+            self.config.observation,
+            pose,
+            s.robot_vel.reshape(b * r, 2),
+            s.robot_goal[..., :2].reshape(b * r, 2),
+            self.carrot.reshape(b * r, 2),
+            self.prev_action.reshape(-1),
+            human_pos,
+            human_vel,
+            visible,
+        ).reshape(b, r, -1)
+        self.obs[rows] = obs[rows]
+        if len(self.learned):
+            human_obs = human_observations(s, self.walls, self.learned, self.config.human_neighbours)
+            if self.human_obs is None:
+                self.human_obs = human_obs
+            else:
+                self.human_obs[rows] = human_obs[rows]
+        return visible
+
+    def _min_human_distance(self) -> np.ndarray:
+        """(B*R,) centre distance from each robot to the nearest present human, inf for none."""
+        assert self.state is not None
+        s = self.state
+        diff = s.robot_pose[:, :, None, :2] - s.human_pos[:, None, :, :]
+        dist2 = np.where(s.human_mask[:, None, :], (diff**2).sum(-1), np.inf)
+        return np.sqrt(dist2.min(axis=-1, initial=np.inf)).reshape(-1)
+
+    # ------------------------------------------------------------------ results
+    def episode_summaries(self, rows: np.ndarray | list[int], robot: int = 0) -> list[dict]:
+        """Episode metrics (socialzoo.env.metrics.SUMMARY_KEYS) of `rows` for one robot."""
+        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+        return self.metrics.summaries(rows * self.num_robots + robot)

@@ -1,0 +1,45 @@
+"""Gymnasium ids of socialzoo's environments.
+
+Registry kwargs are plain JSON values (EnvConfig overrides), so every env spec round-trips.
+Changing what a seeded rollout does bumps the id's version (-v0 -> -v1).
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+from socialzoo.nav.scenarios import FAMILIES
+
+BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
+VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"
+
+# id -> kwargs for the single-agent benchmark envs.
+BENCHMARK_IDS: dict[str, dict] = {
+    "socialzoo/ActionSelection-v0": {"map": "gdc1"},
+    "socialzoo/ActionSelectionTransfer-v0": {"map": "ghc3"},
+}
+
+
+def _family_id(name: str) -> str:
+    return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + "-v0"
+
+
+# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v0; short episodes (60 s).
+FAMILY_IDS: dict[str, dict] = {
+    _family_id(name): {"map": family.map_name, "family": name, "max_steps": 2400}
+    for name, family in FAMILIES.items()
+}
+
+
+def register_envs() -> None:
+    """Register every id (idempotent)."""
+    for env_id, kwargs in {**BENCHMARK_IDS, **FAMILY_IDS}.items():
+        if env_id in gym.registry:
+            continue
+        gym.register(
+            id=env_id,
+            entry_point=BENCHMARK_ENTRY,
+            vector_entry_point=VECTOR_ENTRY,
+            kwargs=dict(kwargs),
+            disable_env_checker=False,
+        )

@@ -1,0 +1,133 @@
+"""A Gymnasium VectorEnv over the batched core: B benchmark envs stepped by one process.
+
+Rows that end an episode are reset within the same step (AutoresetMode.SAME_STEP): the returned
+observation starts the new episode, and info["final_obs"] / info["final_info"] hold the last
+observation and the episode metrics of the one that ended. Row i of a VectorEnv seeded with s
+plays the same episodes whatever the number of envs (row 0 matches a single env seeded with s).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from socialzoo.env.benchmark_env import make_config
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore
+from socialzoo.env.metrics import SUMMARY_KEYS
+from socialzoo.env.observation import observation_space
+from socialzoo.env.scenario_source import ScenarioStream
+from socialzoo.nav.maps import Map
+from socialzoo.nav.subpolicies import NUM_ACTIONS
+
+STEP_KEYS = ("reached", "wall_collision", "human_collisions", "force", "blame", "progress", "target_human")
+
+
+class ActionSelectionVectorEnv(VectorEnv):
+    """num_envs Social Action Selection envs in one batched world.
+
+    Args:
+        num_envs: B.
+        config: an EnvConfig (default: the benchmark on gdc1).
+        map_data: an already loaded Map instead of config.map.
+        render_mode: None or "rgb_array" (renders row 0).
+        **overrides: EnvConfig fields as plain values.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"], "render_fps": 40}
+
+    def __init__(
+        self,
+        num_envs: int,
+        config: EnvConfig | None = None,
+        map_data: Map | None = None,
+        render_mode: str | None = None,
+        **overrides: Any,
+    ) -> None:
+        self.config = make_config(config, overrides)
+        if self.config.num_robots != 1 or self.config.learned_humans:
+            raise ValueError("ActionSelectionVectorEnv needs num_robots=1 and learned_humans=0")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.num_envs = num_envs
+        self.render_mode = render_mode
+        self.core = SocialNavCore(self.config, num_envs, map_data=map_data)
+        self.scenarios = ScenarioStream(self.core.map, num_envs, 1, self.config.scenario, self.config.family)
+        self.single_observation_space = observation_space(self.config.observation)
+        if self.config.robot_action == "subpolicy":
+            self.single_action_space: gym.Space = gym.spaces.Discrete(NUM_ACTIONS)
+        else:
+            self.single_action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self._all = np.arange(num_envs)
+        self._started = False
+        self._renderer: Any = None
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        """Reset every row (options {"reset_mask": (B,) bool} resets only those rows)."""
+        super().reset(seed=seed)
+        if seed is not None or not self._started:
+            self.scenarios.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
+        rows = self._all
+        if options and "reset_mask" in options:
+            if not self._started:
+                raise RuntimeError("the first reset must reset every row")
+            rows = np.flatnonzero(np.asarray(options["reset_mask"], dtype=bool))
+        scenarios = self.scenarios.next(rows)
+        self.core.reset_rows(rows, scenarios)
+        self._started = True
+        seeds = np.zeros(self.num_envs, dtype=np.uint64)
+        seeds[rows] = [int(s.seed) for s in scenarios]
+        return self.core.obs[:, 0].copy(), {"scenario_seed": seeds}
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step every row; rows whose episode ended are reset in the same call."""
+        if not self._started:
+            raise RuntimeError("ActionSelectionVectorEnv: call reset() before step()")
+        actions = np.asarray(actions)
+        if self.config.robot_action == "subpolicy":
+            if actions.shape != (self.num_envs,) or not np.issubdtype(actions.dtype, np.integer):
+                if actions.shape == (self.num_envs,) and np.all(np.isfinite(actions)) and np.all(actions == np.round(actions)):
+                    actions = actions.astype(np.int64)
+                else:
+                    raise ValueError(f"actions must be {self.num_envs} integers, got {actions!r}")
+            robot_action = actions.reshape(self.num_envs, 1)
+        else:
+            robot_action = actions.reshape(self.num_envs, 1, 2)
+        result = self.core.step(robot_action)
+        terminated = result.terminated[:, 0].copy()
+        truncated = result.truncated[:, 0].copy()
+        reward = result.reward[:, 0].copy()
+        info: dict[str, Any] = {key: getattr(result, key)[:, 0].copy() for key in STEP_KEYS}
+        ended = np.flatnonzero(terminated | truncated)
+        if len(ended):
+            final_obs = np.zeros_like(self.core.obs[:, 0])
+            final_obs[ended] = self.core.obs[ended, 0]
+            summaries = self.core.episode_summaries(ended)
+            metrics = {key: np.zeros(self.num_envs) for key in SUMMARY_KEYS}
+            for key in SUMMARY_KEYS:
+                metrics[key][ended] = [s[key] for s in summaries]
+            mask = np.zeros(self.num_envs, dtype=bool)
+            mask[ended] = True
+            info["final_obs"], info["_final_obs"] = final_obs, mask
+            info["final_info"], info["_final_info"] = {"metrics": metrics, "_metrics": mask}, mask
+            self.core.reset_rows(ended, self.scenarios.next(ended))
+        return self.core.obs[:, 0].copy(), reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            return None
+        if self._renderer is None:
+            from socialzoo.env.rendering import CoreRenderer
+
+            self._renderer = CoreRenderer(self.core, "rgb_array")
+        return self._renderer.render(row=0)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if self._renderer is not None:
+            self._renderer.close()

@@ -1,0 +1,121 @@
+"""The batched social force equals a literal scalar transcription of PedSim's model."""
+
+import math
+
+import numpy as np
+import pytest
+
+from socialzoo.core.config import HumanConfig
+from socialzoo.core.walls import WallIndex
+from socialzoo.humans.routes import advance_waypoints
+from socialzoo.humans.social_force import human_acceleration
+
+CFG = HumanConfig()
+
+
+def _moussaid(p, v, q, w, cfg):
+    """PedSim's Agent::socialForce for one other agent, written out with scalars."""
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    dist = math.hypot(dx, dy)
+    ex, ey = dx / dist, dy / dist
+    ix, iy = cfg.social_lambda * (v[0] - w[0]) + ex, cfg.social_lambda * (v[1] - w[1]) + ey
+    ilen = math.hypot(ix, iy)
+    ix, iy = ix / ilen, iy / ilen
+    theta = math.atan2(ey, ex) - math.atan2(iy, ix)
+    theta = (theta + math.pi) % (2 * math.pi) - math.pi
+    b = cfg.social_gamma * ilen
+    speed = -math.exp(-dist / b - (cfg.social_n_prime * b * theta) ** 2)
+    angle = -math.copysign(1.0, theta) * math.exp(-dist / b - (cfg.social_n * b * theta) ** 2)
+    return speed * ix + angle * -iy, speed * iy + angle * ix
+
+
+def _reference(pos, vel, target, speed, robot_pos, robot_vel, walls, cfg):
+    out = np.zeros_like(pos)
+    for i in range(len(pos)):
+        d = target[i] - pos[i]
+        e = d / np.linalg.norm(d)
+        fx, fy = (e * speed[i] - vel[i]) / cfg.relaxation_time * cfg.desired_factor
+        for j in range(len(pos)):
+            if j != i:
+                sx, sy = _moussaid(pos[i], vel[i], pos[j], vel[j], cfg)
+                fx, fy = fx + cfg.social_strength * sx, fy + cfg.social_strength * sy
+        for r in range(len(robot_pos)):
+            scaled = pos[i] + (robot_pos[r] - pos[i]) / cfg.robot_scale
+            sx, sy = _moussaid(pos[i], vel[i], scaled, robot_vel[r], cfg)
+            fx, fy = fx + cfg.social_strength * sx, fy + cfg.social_strength * sy
+        best, point = math.inf, None
+        for x1, y1, x2, y2 in walls:
+            a, b = np.array([x1, y1]), np.array([x2, y2])
+            t = np.clip(np.dot(pos[i] - a, b - a) / np.dot(b - a, b - a), 0, 1)
+            c = a + t * (b - a)
+            if np.linalg.norm(pos[i] - c) < best:
+                best, point = np.linalg.norm(pos[i] - c), c
+        if best <= 1.0:
+            away = (pos[i] - point) / best
+            amount = math.exp(-(best - cfg.force_radius) / cfg.obstacle_sigma)
+            fx, fy = fx + cfg.obstacle_strength * amount * away[0], fy + cfg.obstacle_strength * amount * away[1]
+        out[i] = fx, fy
+    return out
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_matches_scalar_reference(seed):
+    rng = np.random.default_rng(seed)
+    n = 8
+    walls = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0], [4, 2, 6, 3.0]])
+    pos = rng.uniform([0.5, 0.5], [9.5, 5.5], (n, 2))
+    vel = rng.normal(0, 0.7, (n, 2))
+    target = rng.uniform([0.5, 0.5], [9.5, 5.5], (n, 2))
+    speed = rng.uniform(0.8, 1.2, n)
+    robot_pos = rng.uniform([0.5, 0.5], [9.5, 5.5], (2, 2))
+    robot_vel = rng.normal(0, 1.0, (2, 2))
+    got, wall_dist = human_acceleration(
+        pos[None], vel[None], target[None], speed[None], np.ones((1, n), bool),
+        robot_pos[None], robot_vel[None], WallIndex(walls), CFG,
+    )
+    want = _reference(pos, vel, target, speed, robot_pos, robot_vel, walls, CFG)
+    # The pair terms are evaluated in float32: agreement to about 1e-5 relative.
+    np.testing.assert_allclose(got[0], want, rtol=1e-4, atol=1e-4)
+    assert wall_dist.shape == (1, n)
+
+
+def test_absent_humans_exert_and_feel_nothing():
+    rng = np.random.default_rng(3)
+    walls = np.array([[0.0, 0.0, 10.0, 0.0]])
+    pos = rng.uniform(1, 5, (1, 6, 2))
+    vel = rng.normal(0, 1, (1, 6, 2))
+    target = rng.uniform(1, 5, (1, 6, 2))
+    speed = np.ones((1, 6))
+    mask = np.array([[True, True, True, False, False, False]])
+    args = (np.zeros((1, 1, 2)) + 20.0, np.zeros((1, 1, 2)), WallIndex(walls), CFG)
+    full, _ = human_acceleration(pos, vel, target, speed, mask, *args)
+    only, _ = human_acceleration(pos[:, :3], vel[:, :3], target[:, :3], speed[:, :3], mask[:, :3], *args)
+    np.testing.assert_allclose(full[:, :3], only, rtol=1e-6, atol=1e-7)
+    assert np.all(full[:, 3:] == 0.0)
+
+
+def test_pair_force_is_antisymmetric_between_two_humans():
+    walls = np.array([[100.0, 100.0, 101.0, 100.0]])
+    pos = np.array([[[0.0, 0.0], [0.7, 0.2]]])
+    vel = np.array([[[1.0, 0.0], [-0.8, 0.1]]])
+    acc, _ = human_acceleration(
+        pos, vel, pos, np.zeros((1, 2)), np.ones((1, 2), bool), np.full((1, 1, 2), 50.0), np.zeros((1, 1, 2)),
+        WallIndex(walls), HumanConfig(desired_factor=1e-9),
+    )
+    np.testing.assert_allclose(acc[0, 0], -acc[0, 1], atol=1e-5)
+
+
+def test_waypoints_shuttle_between_ends():
+    route_len = np.array([[3]])
+    pos = np.zeros((1, 1, 2))
+    waypoint, direction = np.array([[2]]), np.array([[1]])
+    waypoint, direction = advance_waypoints(pos, pos, route_len, waypoint, direction, 1.0)
+    assert (waypoint[0, 0], direction[0, 0]) == (1, -1)
+    waypoint, direction = advance_waypoints(pos, pos, route_len, np.array([[0]]), np.array([[-1]]), 1.0)
+    assert (waypoint[0, 0], direction[0, 0]) == (1, 1)
+    far = np.full((1, 1, 2), 5.0)
+    waypoint, direction = advance_waypoints(pos, far, route_len, np.array([[1]]), np.array([[1]]), 1.0)
+    assert (waypoint[0, 0], direction[0, 0]) == (1, 1)
+    # A one-waypoint route stays put.
+    waypoint, direction = advance_waypoints(pos, pos, np.array([[1]]), np.array([[0]]), np.array([[1]]), 1.0)
+    assert waypoint[0, 0] == 0
