@@ -99,8 +99,10 @@ class MetricsConfig:
     def __post_init__(self) -> None:
         for name in ("personal_space", "human_radius"):
             value = getattr(self, name)
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not (
-                math.isfinite(value) and value >= 0
+            if (
+                not isinstance(value, (int, float))
+                or isinstance(value, bool)
+                or not (math.isfinite(value) and value >= 0)
             ):
                 raise ValueError(f"MetricsConfig.{name} must be a finite number >= 0, got {value!r}")
 

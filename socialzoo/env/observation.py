@@ -41,6 +41,10 @@ SOCIALGYM1_NUM_SLOTS = 40
 SOCIALGYM1_SIZE = 6 * SOCIALGYM1_NUM_SLOTS + 4
 # Largest sub-policy index (SPEC section 7: Discrete(4)).
 MAX_ACTION_INDEX = 3
+# Length of the first band of sight-line tests, m; later bands double.
+_FIRST_BAND = 4.0
+# Lengths below this are treated as zero, m.
+_TINY = 1e-12
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,6 +89,12 @@ def visible_humans(
     The sight line joins the two centres; a line that only touches a wall counts as blocked.
     There is no field-of-view or range limit.
 
+    Sight lines are tested in distance bands from the robot (0-4 m, 4-8 m, 8-16 m, ...: one
+    `WallIndex.crosses` call per band, for all rows and humans at once), and a line leaves as soon
+    as a band is blocked. Indoors most lines to far humans are blocked within a few metres, and
+    `crosses` samples every segment of a call as densely as the longest one, so this is several
+    times faster than one call on the whole lines when B is large; the answer is the same.
+
     Args:
         robot_pose: (B, 3) x, y (m), heading (rad), world frame.
         human_pos: (B, H, 2) human centres, m, world frame.
@@ -99,7 +109,22 @@ def visible_humans(
         return visible
     # Only present humans are tested: absent ones may sit anywhere and lengthen every sight line.
     start = np.broadcast_to(robot_pose[:, None, :2], human_pos.shape)[visible]
-    visible[visible] = ~walls.crosses(start, human_pos[visible])
+    line = human_pos[visible] - start
+    length = np.sqrt(line[:, 0] ** 2 + line[:, 1] ** 2)
+    inv_length = 1.0 / np.maximum(length, _TINY)
+    clear = np.ones(len(start), dtype=bool)
+    todo = np.arange(len(start))
+    near, far = 0.0, _FIRST_BAND
+    while len(todo):
+        frac0 = near * inv_length[todo]
+        frac1 = np.minimum(far * inv_length[todo], 1.0)
+        blocked = walls.crosses(
+            start[todo] + frac0[:, None] * line[todo], start[todo] + frac1[:, None] * line[todo]
+        )
+        clear[todo[blocked]] = False
+        todo = todo[~blocked & (length[todo] > far)]
+        near, far = far, 2.0 * far
+    visible[visible] = clear
     return visible
 
 
@@ -184,12 +209,16 @@ def paper_observation(
     """
     batch = robot_pose.shape[0]
     points = np.stack((goal, carrot), axis=1)
-    points_r, slots = _robot_frame_slots(robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots)
+    points_r, slots = _robot_frame_slots(
+        robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots
+    )
     out = np.zeros((batch, PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
     out[:, 0:4] = points_r.reshape(batch, 4)
     out[:, 4:6] = robot_vel
     out[:, 6] = prev_action
-    out[:, PAPER_HEADER_SIZE : PAPER_HEADER_SIZE + slots.shape[1] * PAPER_SLOT_SIZE] = slots.reshape(batch, -1)
+    out[:, PAPER_HEADER_SIZE : PAPER_HEADER_SIZE + slots.shape[1] * PAPER_SLOT_SIZE] = slots.reshape(
+        batch, -1
+    )
     return out
 
 

@@ -137,7 +137,9 @@ def blame_term(
     nearest = np.argmin(d2, axis=1)
     rows = np.arange(batch)
     counted = np.isfinite(d2[rows, nearest]) & ~np.asarray(halted_or_still, dtype=bool)
-    _, dist = closest_point_on_segment(human_pos[rows, nearest], robot_pos, robot_pos + horizon * robot_vel_world)
+    _, dist = closest_point_on_segment(
+        human_pos[rows, nearest], robot_pos, robot_pos + horizon * robot_vel_world
+    )
     return np.where(counted, 1.0 - erf(dist), 0.0)
 
 

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.core.walls import WallIndex
 
 if TYPE_CHECKING:
@@ -51,6 +50,8 @@ class Attachment:
         edge: (N,) index into NavGraph.edges, or -1 when the point joins at a node.
         node_a, node_b: (N,) end nodes of the attach edge.
         cost_a, cost_b: (N,) distance along the edge from the attach point to node_a, node_b, m.
+        found: (N,) False for points that reach nothing (only with strict=False); their point is
+            the query point itself, their dist and costs inf, their nodes 0 and edge -1.
     """
 
     point: np.ndarray
@@ -60,6 +61,7 @@ class Attachment:
     node_b: np.ndarray
     cost_a: np.ndarray
     cost_b: np.ndarray
+    found: np.ndarray
 
 
 def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
@@ -194,12 +196,15 @@ class NavGraph:
         if edges.size == 0:
             edges = np.zeros((0, 2), dtype=np.intp)
         if edges.ndim != 2 or edges.shape[1] != 2 or not np.issubdtype(edges.dtype, np.integer):
-            raise ValueError(f"{name}: edges must be an integer (E, 2) array, got {edges.dtype} {edges.shape}")
+            raise ValueError(
+                f"{name}: edges must be an integer (E, 2) array, got {edges.dtype} {edges.shape}"
+            )
         edges = edges.astype(np.intp)
         bad = np.flatnonzero((edges < 0).any(1) | (edges >= len(nodes)).any(1))
         if len(bad):
             raise ValueError(
-                f"{name}: edge {int(bad[0])} = {edges[bad[0]].tolist()} names a node outside 0..{len(nodes) - 1}"
+                f"{name}: edge {int(bad[0])} = {edges[bad[0]].tolist()} names a node outside "
+                f"0..{len(nodes) - 1}"
             )
         loops = np.flatnonzero(edges[:, 0] == edges[:, 1])
         if len(loops):
@@ -301,13 +306,15 @@ class NavGraph:
         start = self._check_node(start_node, "start")
         goal = self._check_node(goal_node, "goal")
         if self.table.hops[start, goal] < 0:
-            raise NoPathError(f"{self.name}: no path from node {start} to node {goal}: they are not connected")
+            raise NoPathError(
+                f"{self.name}: no path from node {start} to node {goal}: they are not connected"
+            )
         return self.table.node_paths(np.array([start]), np.array([goal]))[0].tolist()[
             : self.table.hops[start, goal] + 1
         ]
 
     # ---------------------------------------------------------------- joining off-graph points
-    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES) -> Attachment:
+    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True) -> Attachment:
         """Join off-graph points to the graph at the nearest point they can reach in a straight line.
 
         Candidates are the closest point of every edge and every node. For each query point the k
@@ -317,20 +324,25 @@ class NavGraph:
         Args:
             points: (N, 2) query points, world frame, m.
             k: candidates per point in the first round.
+            strict: raise for a point that reaches nothing; else mark it not found.
 
         Returns:
             The attachment of every point.
 
         Raises:
-            AttachError: a point reaches no edge and no node by a wall-free line (the message
-                names the first such point), or the graph has no nodes.
+            AttachError: with strict, a point reaches no edge and no node by a wall-free line (the
+                message names the first such point), or the graph has no nodes.
         """
         points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         num = len(points)
         if self.num_nodes == 0:
-            raise AttachError(f"{self.name}: the navigation graph has no nodes to attach to")
+            if strict:
+                raise AttachError(f"{self.name}: the navigation graph has no nodes to attach to")
+            return _not_found(points)
         if not np.all(np.isfinite(points)):
-            raise ValueError(f"{self.name}: attach points must be finite, got {points[~np.isfinite(points).all(1)][0]}")
+            raise ValueError(
+                f"{self.name}: attach points must be finite, got {points[~np.isfinite(points).all(1)][0]}"
+            )
         num_cand = self.num_edges + self.num_nodes
         chosen = np.full(num, -1, dtype=np.intp)
         cand_point = np.empty((num, 2))
@@ -341,13 +353,15 @@ class NavGraph:
             rows = np.arange(lo, min(num, lo + chunk))
             pts, ts, ds = self._candidates(points[rows])
             order = np.argpartition(ds, k - 1, axis=1)[:, :k] if k < num_cand else np.argsort(ds, axis=1)
-            order = np.take_along_axis(order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1)
+            order = np.take_along_axis(
+                order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1
+            )
             pick = self._first_free(points[rows], pts, order)
             missing = np.flatnonzero(pick < 0)
             if len(missing) and k < num_cand:
                 full = np.argsort(ds[missing], axis=1, kind="stable")
                 pick[missing] = self._first_free(points[rows][missing], pts[missing], full)
-            if np.any(pick < 0):
+            if strict and np.any(pick < 0):
                 bad = rows[int(np.flatnonzero(pick < 0)[0])]
                 raise AttachError(
                     f"{self.name}: point {points[bad].tolist()} reaches no edge or node of the navigation "
@@ -355,8 +369,10 @@ class NavGraph:
                 )
             chosen[rows] = pick
             r = np.arange(len(rows))
-            cand_point[rows] = pts[r, pick]
+            cand_point[rows] = np.where((pick >= 0)[:, None], pts[r, pick], points[rows])
             cand_t[rows] = ts[r, pick]
+        found = chosen >= 0
+        chosen = np.where(found, chosen, self.num_edges)  # stand-in: node 0, overwritten below
         is_edge = chosen < self.num_edges
         edge = np.where(is_edge, chosen, -1)
         node = chosen - self.num_edges
@@ -366,15 +382,16 @@ class NavGraph:
         length = self.edge_cost[e] if self.num_edges else np.zeros(num)
         cost_a = np.where(is_edge, cand_t * length, 0.0)
         cost_b = np.where(is_edge, (1.0 - cand_t) * length, 0.0)
-        dist = np.sqrt(((cand_point - points) ** 2).sum(-1))
+        dist = np.where(found, np.sqrt(((cand_point - points) ** 2).sum(-1)), np.inf)
         return Attachment(
             point=cand_point,
             dist=dist,
-            edge=edge,
-            node_a=node_a.astype(np.intp),
-            node_b=node_b.astype(np.intp),
-            cost_a=cost_a,
-            cost_b=cost_b,
+            edge=np.where(found, edge, -1),
+            node_a=np.where(found, node_a, 0).astype(np.intp),
+            node_b=np.where(found, node_b, 0).astype(np.intp),
+            cost_a=np.where(found, cost_a, np.inf),
+            cost_b=np.where(found, cost_b, np.inf),
+            found=found,
         )
 
     def _candidates(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -386,9 +403,13 @@ class NavGraph:
         t = np.clip(np.einsum("mei,ei->me", points[:, None, :] - a[None], ab) / denom, 0.0, 1.0)
         # Clamped ends are the node positions exactly, so duplicate waypoints compare equal.
         on_edge = np.where(
-            (t <= 0.0)[..., None], a[None], np.where((t >= 1.0)[..., None], b[None], a[None] + t[..., None] * ab[None])
+            (t <= 0.0)[..., None],
+            a[None],
+            np.where((t >= 1.0)[..., None], b[None], a[None] + t[..., None] * ab[None]),
         )
-        pts = np.concatenate((on_edge, np.broadcast_to(self.nodes[None], (len(points), self.num_nodes, 2))), axis=1)
+        pts = np.concatenate(
+            (on_edge, np.broadcast_to(self.nodes[None], (len(points), self.num_nodes, 2))), axis=1
+        )
         ts = np.concatenate((t, np.zeros((len(points), self.num_nodes))), axis=1)
         ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
         return pts, ts, ds
@@ -442,7 +463,8 @@ class NavGraph:
 
         Vectorised over rows: one `attach` call for all starts and goals, one batched wall test
         for the direct lines, node sequences read from the all-pairs table with a loop over path
-        length (never over rows). Safe to call every step.
+        length (never over rows). Safe to call every step; see `plan_batch_status` for a version
+        that reports unreachable rows instead of raising.
 
         Args:
             starts, goals: (N, 2) world frame, m.
@@ -458,6 +480,32 @@ class NavGraph:
             NoPathError: a row's attach edges are not connected (the message names the row).
             ValueError: a path needs more than max_len waypoints.
         """
+        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True)
+        return paths, lengths
+
+    def plan_batch_status(
+        self,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        max_len: int | None = None,
+        *,
+        direct: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`plan_batch` that never raises for an unreachable row, for batched envs.
+
+        Returns:
+            (paths, lengths, ok): as `plan_batch`, plus ok (N,) bool; a row that is not ok (its
+            start or goal reaches no edge, or they are not connected) gets the straight line
+            [start, goal], which may cross walls.
+
+        Raises:
+            ValueError: a path needs more than max_len waypoints.
+        """
+        return self._plan_batch(starts, goals, max_len, direct, strict=False)
+
+    def _plan_batch(
+        self, starts: np.ndarray, goals: np.ndarray, max_len: int | None, direct: bool, strict: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
         if starts.shape != goals.shape:
@@ -465,7 +513,7 @@ class NavGraph:
         n = len(starts)
         if n == 0:
             width = max_len or 1
-            return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp)
+            return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
         direct_ok = segments_free(self.walls, starts, goals) if direct else np.zeros(n, dtype=bool)
         need = ~direct_ok
         # Rows that go straight need no attach: they may even lie where no edge is reachable.
@@ -474,9 +522,10 @@ class NavGraph:
         node_g = np.zeros(n, dtype=np.intp)
         point_s = starts.copy()
         point_g = goals.copy()
-        mode = np.zeros(n, dtype=np.intp)  # 0 direct, 1 via nodes, 2 along one edge
+        mode = np.zeros(n, dtype=np.intp)  # 0 straight line, 1 via nodes, 2 along one edge
+        ok = np.ones(n, dtype=bool)
         if len(rows):
-            att = self.attach(np.concatenate((starts[rows], goals[rows])))
+            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict)
             m = len(rows)
             sa = _take(att, slice(0, m))
             ga = _take(att, slice(m, 2 * m))
@@ -492,30 +541,28 @@ class NavGraph:
             choice = np.argmin(via, axis=1)
             best = via[np.arange(m), choice]
             unreachable = ~np.isfinite(best) & ~np.isfinite(along)
-            if unreachable.any():
+            if strict and unreachable.any():
                 bad = rows[int(np.flatnonzero(unreachable)[0])]
                 raise NoPathError(
                     f"{self.name}: row {bad}: no path from {starts[bad].tolist()} to {goals[bad].tolist()}: "
                     "they join parts of the navigation graph that are not connected"
                 )
             use_along = along <= best
-            mode[rows] = np.where(use_along, 2, 1)
+            mode[rows] = np.where(unreachable, 0, np.where(use_along, 2, 1))
+            ok[rows] = ~unreachable
             node_s[rows] = ends_s[np.arange(m), choice // 2]
             node_g[rows] = ends_g[np.arange(m), choice % 2]
             point_s[rows] = sa.point
             point_g[rows] = ga.point
-        via_nodes = mode == 1
-        seq = self.table.node_paths(
-            np.where(via_nodes, node_s, 0), np.where(via_nodes, node_g, 0)
-        )  # (n, K); rows not via nodes hold node 0 only
-        node_pts = self.nodes[seq]
-        # Rows that do not go via nodes repeat their start attach point instead.
-        node_pts = np.where(via_nodes[:, None, None], node_pts, point_s[:, None, :])
-        # Direct rows collapse every intermediate point onto the start.
+        # Rows not via nodes repeat their start attach point (the start itself for direct rows)
+        # in place of nodes; the duplicates are dropped below.
+        via_nodes = np.flatnonzero(mode == 1)
         is_direct = mode == 0
         point_s = np.where(is_direct[:, None], starts, point_s)
         point_g = np.where(is_direct[:, None], starts, point_g)
-        node_pts = np.where(is_direct[:, None, None], starts[:, None, :], node_pts)
+        seq = self.table.node_paths(node_s[via_nodes], node_g[via_nodes])  # (len(via_nodes), K)
+        node_pts = np.repeat(point_s[:, None, :], seq.shape[1], axis=1)
+        node_pts[via_nodes] = self.nodes[seq]
         raw = np.concatenate(
             (starts[:, None], point_s[:, None], node_pts, point_g[:, None], goals[:, None]), axis=1
         )  # (n, K + 4, 2)
@@ -537,14 +584,27 @@ class NavGraph:
                 )
             width = int(max_len)
         if compact.shape[1] < width:
-            compact = np.concatenate(
-                (compact, np.zeros((n, width - compact.shape[1], 2))), axis=1
-            )
+            compact = np.concatenate((compact, np.zeros((n, width - compact.shape[1], 2))), axis=1)
         compact = compact[:, :width]
         pad = np.arange(width)[None, :] >= lengths[:, None]
         last = compact[idx, lengths - 1]
         paths = np.where(pad[..., None], last[:, None, :], compact)
-        return paths, lengths.astype(np.intp)
+        return paths, lengths.astype(np.intp), ok
+
+
+def _not_found(points: np.ndarray) -> Attachment:
+    """The attachment of points that reach nothing."""
+    num = len(points)
+    return Attachment(
+        point=points.copy(),
+        dist=np.full(num, np.inf),
+        edge=np.full(num, -1, dtype=np.intp),
+        node_a=np.zeros(num, dtype=np.intp),
+        node_b=np.zeros(num, dtype=np.intp),
+        cost_a=np.full(num, np.inf),
+        cost_b=np.full(num, np.inf),
+        found=np.zeros(num, dtype=bool),
+    )
 
 
 def _take(att: Attachment, sel: slice) -> Attachment:
@@ -557,6 +617,7 @@ def _take(att: Attachment, sel: slice) -> Attachment:
         node_b=att.node_b[sel],
         cost_a=att.cost_a[sel],
         cost_b=att.cost_b[sel],
+        found=att.found[sel],
     )
 
 

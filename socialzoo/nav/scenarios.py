@@ -1,0 +1,782 @@
+"""Seeded scenarios: the benchmark's generator (SPEC section 5), its fixed test sets, small scenario
+families for the small maps, and the conversion of scenarios into a batched WorldState.
+
+A scenario is a plain record of where everyone starts, where they go and how fast the humans walk;
+it is a pure function of (map, seed, config) and saves to JSON exactly, so a saved scenario replays
+bit for bit.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from socialzoo.core.state import WorldState
+from socialzoo.core.walls import WallIndex
+from socialzoo.nav.graph import NoPathError, graph_of, segments_free
+from socialzoo.nav.maps import Map
+
+SCENARIO_FORMAT = "socialzoo-scenario/1"
+# Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).
+_NOISE_STREAM = 0x6E6F697365  # "noise"
+
+
+def _check_number(name: str, value: Any, *, minimum: float = 0.0, strict: bool = False) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise ValueError(f"ScenarioConfig.{name} must be a finite number, got {value!r}")
+    if value < minimum or (strict and value == minimum):
+        raise ValueError(f"ScenarioConfig.{name} must be {'>' if strict else '>='} {minimum}, got {value!r}")
+
+
+def _check_int(name: str, value: Any, minimum: int) -> None:
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < minimum:
+        raise ValueError(f"ScenarioConfig.{name} must be an int >= {minimum}, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ScenarioConfig:
+    """How the benchmark draws scenarios (SPEC sections 4 and 5).
+
+    Attributes:
+        min_humans, max_humans: head count range, inclusive (h_min, h_max).
+        repeats: episodes run on each scenario before a new one is drawn (N_r).
+        spawn_jitter: half-width of the uniform spawn offset around a human's start pose, m.
+        speed_mean, speed_std: preferred walking speed distribution N(mean, std), m/s.
+        min_speed, max_speed: the sampled speed is clipped to this range, m/s.
+        spawn_clearance: a jittered spawn closer than this to a wall is re-drawn, m.
+        spawn_tries: jitter draws per human before it spawns on its start pose itself.
+    """
+
+    min_humans: int = 5
+    max_humans: int = 25
+    repeats: int = 1
+    spawn_jitter: float = 0.5
+    speed_mean: float = 1.0
+    speed_std: float = 0.1
+    min_speed: float = 0.5
+    max_speed: float = 1.3
+    spawn_clearance: float = 0.2
+    spawn_tries: int = 10
+
+    def __post_init__(self) -> None:
+        _check_int("min_humans", self.min_humans, 0)
+        _check_int("max_humans", self.max_humans, 0)
+        _check_int("repeats", self.repeats, 1)
+        _check_int("spawn_tries", self.spawn_tries, 1)
+        if self.min_humans > self.max_humans:
+            raise ValueError(
+                f"ScenarioConfig.min_humans ({self.min_humans}) exceeds max_humans ({self.max_humans})"
+            )
+        for name in ("spawn_jitter", "speed_std", "spawn_clearance"):
+            _check_number(name, getattr(self, name))
+        for name in ("speed_mean", "min_speed", "max_speed"):
+            _check_number(name, getattr(self, name), strict=True)
+        if self.min_speed > self.max_speed:
+            raise ValueError(
+                f"ScenarioConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})"
+            )
+
+
+def _frozen_array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) -> np.ndarray:
+    """A read-only copy of `value` as `dtype`, checked against `shape` (None = any length)."""
+    arr: np.ndarray = np.array(value, dtype=dtype)
+    if arr.size == 0 and len(shape) > 1:
+        arr = arr.reshape((0, *(s or 0 for s in shape[1:])))
+    if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)):
+        want = "(" + ", ".join("*" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"Scenario.{what} must have shape {want}, got {arr.shape}")
+    if dtype is np.float64 and not np.all(np.isfinite(arr)):
+        raise ValueError(f"Scenario.{what} must be finite")
+    arr.flags.writeable = False
+    return arr
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Scenario:
+    """Everything needed to reset a world: robots' starts and goals, humans' spawns, routes, speeds.
+
+    All positions are in the world frame, metres; headings in radians. Arrays are read-only.
+    Equality compares every array exactly (bit for bit).
+
+    Attributes:
+        map_name: name of the map the scenario belongs to.
+        seed: the seed it was generated from.
+        robot_starts: (R, 3) start poses (x, y, theta) of the R robots; the benchmark has R = 1.
+        robot_goals: (R, 3) goal poses.
+        human_spawn: (n, 2) spawn positions (the start pose position plus jitter).
+        human_start_index: (n,) legal-pose index of each human's start, -1 if not a legal pose.
+        human_goal_index: (n,) legal-pose index of each human's goal, -1 if not a legal pose.
+        human_routes: n arrays (L_i, 2), route waypoints from the human's start to its goal.
+        human_speed: (n,) preferred walking speed, m/s.
+        family: "benchmark" for the SPEC generator, else the scenario family's name.
+    """
+
+    map_name: str
+    seed: int
+    robot_starts: np.ndarray
+    robot_goals: np.ndarray
+    human_spawn: np.ndarray
+    human_start_index: np.ndarray
+    human_goal_index: np.ndarray
+    human_routes: tuple[np.ndarray, ...]
+    human_speed: np.ndarray
+    family: str = "benchmark"
+
+    def __post_init__(self) -> None:
+        starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
+        if len(starts) == 0:
+            raise ValueError("Scenario.robot_starts must hold at least one robot")
+        object.__setattr__(self, "robot_starts", starts)
+        object.__setattr__(
+            self, "robot_goals", _frozen_array(self.robot_goals, np.float64, (len(starts), 3), "robot_goals")
+        )
+        spawn = _frozen_array(self.human_spawn, np.float64, (None, 2), "human_spawn")
+        n = len(spawn)
+        object.__setattr__(self, "human_spawn", spawn)
+        for name in ("human_start_index", "human_goal_index"):
+            object.__setattr__(self, name, _frozen_array(getattr(self, name), np.int64, (n,), name))
+        object.__setattr__(
+            self, "human_speed", _frozen_array(self.human_speed, np.float64, (n,), "human_speed")
+        )
+        if len(self.human_routes) != n:
+            raise ValueError(f"Scenario.human_routes holds {len(self.human_routes)} routes for {n} humans")
+        routes = tuple(
+            _frozen_array(r, np.float64, (None, 2), f"human_routes[{i}]")
+            for i, r in enumerate(self.human_routes)
+        )
+        for i, r in enumerate(routes):
+            if len(r) == 0:
+                raise ValueError(f"Scenario.human_routes[{i}] is empty")
+        object.__setattr__(self, "human_routes", routes)
+        object.__setattr__(self, "seed", int(self.seed))
+
+    @property
+    def robot_start(self) -> np.ndarray:
+        """(3,) the first robot's start pose."""
+        return self.robot_starts[0]
+
+    @property
+    def robot_goal(self) -> np.ndarray:
+        """(3,) the first robot's goal pose."""
+        return self.robot_goals[0]
+
+    @property
+    def num_robots(self) -> int:
+        return len(self.robot_starts)
+
+    @property
+    def num_humans(self) -> int:
+        return len(self.human_spawn)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scenario):
+            return NotImplemented
+        same_arrays = all(
+            _same(getattr(self, name), getattr(other, name))
+            for name in (
+                "robot_starts",
+                "robot_goals",
+                "human_spawn",
+                "human_start_index",
+                "human_goal_index",
+                "human_speed",
+            )
+        )
+        return (
+            same_arrays
+            and (self.map_name, self.seed, self.family) == (other.map_name, other.seed, other.family)
+            and len(self.human_routes) == len(other.human_routes)
+            and all(_same(a, b) for a, b in zip(self.human_routes, other.human_routes, strict=True))
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_json(self) -> dict[str, Any]:
+        """The scenario as a JSON-ready dict; floats keep their exact value (shortest repr)."""
+        return {
+            "format": SCENARIO_FORMAT,
+            "map_name": self.map_name,
+            "seed": self.seed,
+            "family": self.family,
+            "robot_starts": self.robot_starts.tolist(),
+            "robot_goals": self.robot_goals.tolist(),
+            "human_spawn": self.human_spawn.tolist(),
+            "human_start_index": self.human_start_index.tolist(),
+            "human_goal_index": self.human_goal_index.tolist(),
+            "human_routes": [r.tolist() for r in self.human_routes],
+            "human_speed": self.human_speed.tolist(),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Scenario:
+        """Inverse of `to_json`; raises ValueError naming a missing key or a wrong format."""
+        if data.get("format") != SCENARIO_FORMAT:
+            raise ValueError(f"scenario format must be {SCENARIO_FORMAT!r}, got {data.get('format')!r}")
+        try:
+            return cls(
+                map_name=data["map_name"],
+                seed=data["seed"],
+                family=data["family"],
+                robot_starts=data["robot_starts"],
+                robot_goals=data["robot_goals"],
+                human_spawn=data["human_spawn"],
+                human_start_index=data["human_start_index"],
+                human_goal_index=data["human_goal_index"],
+                human_routes=tuple(
+                    np.array(r, dtype=np.float64).reshape(-1, 2) for r in data["human_routes"]
+                ),
+                human_speed=data["human_speed"],
+            )
+        except KeyError as err:
+            raise ValueError(f"scenario JSON lacks key {err.args[0]!r}") from None
+
+    def save(self, path: str | Path) -> Path:
+        """Write the scenario as JSON; returns the path."""
+        path = Path(path)
+        path.write_text(json.dumps(self.to_json(), separators=(",", ":")) + "\n")
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Scenario:
+        """Read a scenario written by `save`."""
+        return cls.from_json(json.loads(Path(path).read_text()))
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Exact equality of two arrays: shape, dtype and every value."""
+    return a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b))
+
+
+# ---------------------------------------------------------------------------- the benchmark generator
+def _bad_spawns(
+    walls: WallIndex, spawn: np.ndarray, anchor: np.ndarray, target: np.ndarray, clearance: float
+) -> np.ndarray:
+    """(n,) spawns too close to a wall, or cut off by a wall from their anchor or first target."""
+    _, dist = walls.nearest(spawn)
+    return (dist < clearance) | ~segments_free(walls, spawn, anchor) | ~segments_free(walls, spawn, target)
+
+
+def spawn_points(
+    walls: WallIndex,
+    anchor: np.ndarray,
+    target: np.ndarray,
+    draw: Callable[[int], np.ndarray],
+    clearance: float,
+    tries: int,
+) -> np.ndarray:
+    """Offset anchors by random draws, re-drawing the offsets of spawns that land badly.
+
+    A spawn is bad when it is closer than `clearance` to a wall or when a wall cuts the straight
+    line from it to its anchor or to its first target; after `tries` draws a still-bad spawn
+    falls back to its anchor. Re-draws consume the generator in row order, so the result depends
+    only on the generator's state.
+
+    Args:
+        walls: the map's wall index.
+        anchor: (n, 2) start positions, m.
+        target: (n, 2) the first point each human walks to from its spawn, m.
+        draw: k -> (k, 2) random offsets, m.
+        clearance: m.
+        tries: number of draws, >= 1.
+
+    Returns:
+        (n, 2) spawn positions, m.
+    """
+    spawn = anchor + draw(len(anchor))
+    bad = _bad_spawns(walls, spawn, anchor, target, clearance)
+    for _ in range(tries - 1):
+        rows = np.flatnonzero(bad)
+        if len(rows) == 0:
+            break
+        spawn[rows] = anchor[rows] + draw(len(rows))
+        bad[rows] = _bad_spawns(walls, spawn[rows], anchor[rows], target[rows], clearance)
+    spawn[bad] = anchor[bad]
+    return spawn
+
+
+def _split_routes(paths: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, ...]:
+    return tuple(paths[i, : lengths[i]] for i in range(len(paths)))
+
+
+def _plan_routes(
+    m: Map, starts: np.ndarray, goals: np.ndarray, context: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """plan_batch with errors that say which scenario asked."""
+    try:
+        return graph_of(m).plan_batch(starts, goals)
+    except NoPathError as err:
+        raise NoPathError(f"{context}: {err}") from err
+
+
+def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> Scenario:
+    """Draw one benchmark scenario (SPEC section 5) from a seed.
+
+    Draws, in this order, from np.random.default_rng(seed): robot start and goal (two distinct
+    legal poses); the head count n, uniform in [min_humans, max_humans]; n human starts, each any
+    legal pose but the robot's start; n human goals, each any legal pose but that human's start;
+    n preferred speeds N(speed_mean, speed_std) clipped to [min_speed, max_speed]; spawn jitter,
+    uniform in +-spawn_jitter per axis, re-drawn for bad spawns (see `spawn_points`). Humans may
+    share start and goal poses with each other, and a human's goal may be the robot's start or
+    goal: the benchmark needs up to 25 humans on maps with few poses (GDC1 has 26). Every route
+    is planned with NavGraph.plan_batch (A*-equal shortest paths, start and goal joined to the
+    nearest reachable edge, a straight line where wall-free).
+
+    Args:
+        m: the map.
+        seed: any non-negative int.
+        cfg: generator settings; defaults to ScenarioConfig().
+
+    Returns:
+        The scenario.
+
+    Raises:
+        ValueError: the map has fewer than 2 legal poses.
+        NoPathError: a robot or human goal cannot be reached from its start on the graph.
+    """
+    cfg = cfg or ScenarioConfig()
+    poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
+    num_poses = len(poses)
+    if num_poses < 2:
+        raise ValueError(
+            f"{m.where}: scenario generation needs at least 2 legal poses, the map has {num_poses}"
+        )
+    rng = np.random.default_rng(seed)
+    robot_start = int(rng.integers(num_poses))
+    robot_goal = int(rng.integers(num_poses - 1))
+    robot_goal += robot_goal >= robot_start
+    n = int(rng.integers(cfg.min_humans, cfg.max_humans, endpoint=True))
+    start = rng.integers(num_poses - 1, size=n)
+    start += start >= robot_start
+    goal = rng.integers(num_poses - 1, size=n)
+    goal += goal >= start
+    speed = np.clip(rng.normal(cfg.speed_mean, cfg.speed_std, size=n), cfg.min_speed, cfg.max_speed)
+    context = f"{m.where}, scenario seed {seed}"
+    starts = np.concatenate((poses[[robot_start], :2], poses[start, :2]))
+    goals = np.concatenate((poses[[robot_goal], :2], poses[goal, :2]))
+    paths, lengths = _plan_routes(m, starts, goals, context)
+    routes = _split_routes(paths[1:], lengths[1:])
+    first_target = paths[1:, 1] if n else np.zeros((0, 2))
+    jitter = cfg.spawn_jitter
+    spawn = spawn_points(
+        m.wall_index,
+        poses[start, :2],
+        first_target,
+        lambda k: rng.uniform(-jitter, jitter, size=(k, 2)),
+        cfg.spawn_clearance,
+        cfg.spawn_tries,
+    )
+    return Scenario(
+        map_name=m.name,
+        seed=seed,
+        robot_starts=poses[[robot_start]],
+        robot_goals=poses[[robot_goal]],
+        human_spawn=spawn,
+        human_start_index=start,
+        human_goal_index=goal,
+        human_routes=routes,
+        human_speed=speed,
+    )
+
+
+# ---------------------------------------------------------------------------- fixed test sets
+@dataclass(frozen=True)
+class TestSet:
+    """A fixed list of seeded benchmark scenarios on one map.
+
+    Scenario k has seed `seed(k)`, a 64-bit value derived from (base_seed, k) by numpy's
+    SeedSequence, so it is the same on every machine, whether generated alone or in a list, and
+    independent of every other scenario.
+
+    Attributes:
+        map_name: the map, as `load_map` names it.
+        base_seed: the set's seed.
+        count: number of scenarios.
+        cfg: generator settings.
+        name: the set's registry name, if any.
+    """
+
+    __test__: ClassVar[bool] = False  # not a pytest test class
+
+    map_name: str
+    base_seed: int
+    count: int
+    cfg: ScenarioConfig = field(default_factory=ScenarioConfig)
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.count, int) or self.count < 0:
+            raise ValueError(f"TestSet.count must be an int >= 0, got {self.count!r}")
+        if not isinstance(self.base_seed, int) or self.base_seed < 0:
+            raise ValueError(f"TestSet.base_seed must be an int >= 0, got {self.base_seed!r}")
+
+    def __len__(self) -> int:
+        return self.count
+
+    def seed(self, k: int) -> int:
+        """Seed of scenario k, 0 <= k < count."""
+        if not 0 <= k < self.count:
+            raise IndexError(
+                f"test set {self.name or self.map_name!r}: scenario {k} is outside 0..{self.count - 1}"
+            )
+        return int(np.random.SeedSequence([self.base_seed, k]).generate_state(1, dtype=np.uint64)[0])
+
+    def _map(self, m: Map | None) -> Map:
+        if m is None:
+            from socialzoo.nav import maps
+
+            return maps.load_map(self.map_name)
+        if m.name != self.map_name:
+            raise ValueError(
+                f"test set {self.name or self.map_name!r} is on map {self.map_name!r}, got map {m.name!r}"
+            )
+        return m
+
+    def scenario(self, k: int, m: Map | None = None) -> Scenario:
+        """Scenario k; loads the map by name unless `m` is given."""
+        return generate_scenario(self._map(m), self.seed(k), self.cfg)
+
+    def scenarios(self, indices: Sequence[int] | None = None, m: Map | None = None) -> list[Scenario]:
+        """Scenarios at `indices` (default: all), each exactly as `scenario(k)` makes it."""
+        m = self._map(m)
+        ks = range(self.count) if indices is None else indices
+        return [generate_scenario(m, self.seed(k), self.cfg) for k in ks]
+
+
+TEST_SETS: dict[str, TestSet] = {
+    "gdc1-test": TestSet("gdc1", 20220001, 2000, name="gdc1-test"),
+    "ghc3-test": TestSet("ghc3", 20220002, 2000, name="ghc3-test"),
+    "gdc1-quick": TestSet("gdc1", 20220003, 100, name="gdc1-quick"),
+    "ghc3-quick": TestSet("ghc3", 20220004, 100, name="ghc3-quick"),
+}
+
+
+def get_test_set(name: str) -> TestSet:
+    """A named test set: "gdc1-test", "ghc3-test" (2000 each), "gdc1-quick", "ghc3-quick" (100 each).
+
+    The quick sets have their own base seeds: they are not the first 100 of the full sets, so
+    choosing checkpoints on a quick set does not look at the final test scenarios.
+    """
+    try:
+        return TEST_SETS[name]
+    except KeyError:
+        raise KeyError(f"unknown test set {name!r}; known: {sorted(TEST_SETS)}") from None
+
+
+# ---------------------------------------------------------------------------- scenarios -> state
+def noise_key(seed: int) -> np.uint64:
+    """The counter-based noise key of a scenario seed."""
+    return np.random.SeedSequence([int(seed), _NOISE_STREAM]).generate_state(1, dtype=np.uint64)[0]
+
+
+def scenarios_to_state(
+    scenarios: Sequence[Scenario], num_robots: int = 1, max_humans: int | None = None
+) -> WorldState:
+    """The batched world state at the start of each scenario (one row per scenario).
+
+    Robots stand on their start poses with zero velocity. Humans stand on their spawns with zero
+    velocity, walking towards the second waypoint of their route (index 1; index 0 for a one-point
+    route) in direction +1. Humans beyond a scenario's count are absent (mask False, route of one
+    point at the origin); routes are padded by repeating their last waypoint.
+
+    Args:
+        scenarios: B scenarios.
+        num_robots: robots per row R; each scenario must hold at least R robot starts.
+        max_humans: human slots H; default the largest head count.
+
+    Returns:
+        The state, B = len(scenarios).
+
+    Raises:
+        ValueError: no scenarios, a scenario with fewer than R robots or more than H humans.
+    """
+    if len(scenarios) == 0:
+        raise ValueError("scenarios_to_state needs at least one scenario")
+    if not isinstance(num_robots, int) or num_robots < 1:
+        raise ValueError(f"num_robots must be an int >= 1, got {num_robots!r}")
+    for i, s in enumerate(scenarios):
+        if s.num_robots < num_robots:
+            raise ValueError(
+                f"scenario {i} (seed {s.seed}) has {s.num_robots} robots, {num_robots} requested"
+            )
+    most = max(s.num_humans for s in scenarios)
+    h = most if max_humans is None else max_humans
+    if h < most:
+        bad = int(np.argmax([s.num_humans for s in scenarios]))
+        raise ValueError(f"scenario {bad} has {most} humans, more than max_humans={max_humans}")
+    b = len(scenarios)
+    counts = np.array([s.num_humans for s in scenarios], dtype=np.intp)
+    lens = [np.array([len(r) for r in s.human_routes], dtype=np.intp) for s in scenarios]
+    width = max([1] + [int(x.max()) for x in lens if len(x)])
+    mask = np.arange(h)[None, :] < counts[:, None]
+    route_len = np.ones((b, h), dtype=np.int64)
+    route_len[mask] = np.concatenate(lens) if len(lens) else []
+    # One flat (total humans, width, 2) block padded by repeating each route's last point.
+    flat_routes = [r for s in scenarios for r in s.human_routes]
+    route = np.zeros((b, h, width, 2))
+    if flat_routes:
+        stacked = np.concatenate(flat_routes)
+        flat_len = route_len[mask]
+        offset = np.cumsum(flat_len) - flat_len
+        idx = offset[:, None] + np.minimum(np.arange(width)[None, :], flat_len[:, None] - 1)
+        route[mask] = stacked[idx]
+    pos = np.zeros((b, h, 2))
+    pos[mask] = np.concatenate([s.human_spawn for s in scenarios])
+    speed = np.zeros((b, h))
+    speed[mask] = np.concatenate([s.human_speed for s in scenarios])
+    return WorldState(
+        robot_pose=np.stack([s.robot_starts[:num_robots] for s in scenarios]).astype(np.float64),
+        robot_vel=np.zeros((b, num_robots, 2)),
+        robot_goal=np.stack([s.robot_goals[:num_robots] for s in scenarios]).astype(np.float64),
+        human_pos=pos,
+        human_vel=np.zeros((b, h, 2)),
+        human_pref_speed=speed,
+        human_mask=mask,
+        human_route=route,
+        human_route_len=route_len,
+        human_waypoint=np.where(mask & (route_len > 1), 1, 0).astype(np.int64),
+        human_direction=np.ones((b, h), dtype=np.int64),
+        step_count=np.zeros(b, dtype=np.int64),
+        noise_key=np.array([noise_key(s.seed) for s in scenarios], dtype=np.uint64),
+    )
+
+
+# ---------------------------------------------------------------------------- scenario families
+@dataclass(frozen=True)
+class Layout:
+    """A family's choice of robot and human starts, goals and speeds (world frame, m, m/s).
+
+    Attributes:
+        robot_start, robot_goal: (2,) positions; headings point from start to goal.
+        human_start, human_goal: (n, 2).
+        human_speed: (n,).
+    """
+
+    robot_start: np.ndarray
+    robot_goal: np.ndarray
+    human_start: np.ndarray
+    human_goal: np.ndarray
+    human_speed: np.ndarray
+
+
+@dataclass(frozen=True)
+class Family:
+    """A scenario family: a small layout rule, and the small map it is designed for.
+
+    Families place people relative to the map's legal poses (its main axis is its farthest pair of
+    poses), so they also run on other maps of a similar shape.
+    """
+
+    name: str
+    map_name: str
+    description: str
+    layout: Callable[[Map, np.random.Generator], Layout]
+
+
+def _farthest_pair(m: Map) -> tuple[np.ndarray, np.ndarray]:
+    """The two legal poses farthest apart, (2,) positions each, lower index first."""
+    p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)[:, :2]
+    if len(p) < 2:
+        raise ValueError(f"{m.where}: scenario families need at least 2 legal poses, the map has {len(p)}")
+    d = ((p[:, None] - p[None]) ** 2).sum(-1)
+    i, j = np.unravel_index(int(np.argmax(d)), d.shape)
+    return p[min(i, j)], p[max(i, j)]
+
+
+def _cross_pair(m: Map, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pair of legal poses whose line crosses a-b most squarely, weighted by its length."""
+    p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)[:, :2]
+    u = (b - a) / max(float(np.linalg.norm(b - a)), 1e-9)
+    diff = p[None] - p[:, None]
+    score = np.abs(diff[..., 0] * u[1] - diff[..., 1] * u[0])  # |cross|: perpendicular extent
+    i, j = np.unravel_index(int(np.argmax(score)), score.shape)
+    return p[min(i, j)], p[max(i, j)]
+
+
+def _frame(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vector along a->b and its left normal."""
+    u = (b - a) / max(float(np.linalg.norm(b - a)), 1e-9)
+    return u, np.array([-u[1], u[0]])
+
+
+def _near(
+    m: Map,
+    rng: np.random.Generator,
+    anchor: np.ndarray,
+    n: int,
+    along: tuple[float, float],
+    lateral: tuple[float, float],
+    u: np.ndarray,
+) -> np.ndarray:
+    """n wall-safe points around `anchor`: offsets uniform in `along` x `lateral` in the frame of u."""
+    left = np.array([-u[1], u[0]])
+
+    def draw(k: int) -> np.ndarray:
+        s = rng.uniform(*along, size=(k, 1))
+        t = rng.uniform(*lateral, size=(k, 1))
+        return s * u + t * left
+
+    base = np.broadcast_to(anchor, (n, 2)).copy()
+    return spawn_points(m.wall_index, base, base, draw, 0.3, 20)
+
+
+def _speeds(rng: np.random.Generator, n: int, mean: float = 1.0, std: float = 0.1) -> np.ndarray:
+    return np.clip(rng.normal(mean, std, size=n), 0.5, 1.3)
+
+
+def _hallway_head_on(m: Map, rng: np.random.Generator) -> Layout:
+    a, b = _farthest_pair(m)
+    u, _ = _frame(a, b)
+    n = int(rng.integers(1, 3, endpoint=True))
+    return Layout(
+        a,
+        b,
+        _near(m, rng, b, n, (-2.0, 0.0), (-0.6, 0.6), u),
+        _near(m, rng, a, n, (0.0, 1.0), (-0.6, 0.6), u),
+        _speeds(rng, n),
+    )
+
+
+def _overtaking(m: Map, rng: np.random.Generator) -> Layout:
+    a, b = _farthest_pair(m)
+    u, _ = _frame(a, b)
+    return Layout(
+        a,
+        b,
+        _near(m, rng, a, 1, (2.0, 3.0), (-0.3, 0.3), u),
+        _near(m, rng, b, 1, (-1.0, 0.0), (-0.3, 0.3), u),
+        rng.uniform(0.4, 0.6, size=1),
+    )
+
+
+def _crossing(m: Map, rng: np.random.Generator) -> Layout:
+    a, b = _farthest_pair(m)
+    c, d = _cross_pair(m, a, b)
+    v, _ = _frame(c, d)
+    n = int(rng.integers(2, 4, endpoint=True))
+    forward = rng.random(n) < 0.5
+    starts = np.where(
+        forward[:, None],
+        _near(m, rng, c, n, (0.0, 1.5), (-0.5, 0.5), v),
+        _near(m, rng, d, n, (-1.5, 0.0), (-0.5, 0.5), v),
+    )
+    goals = np.where(forward[:, None], d, c)
+    return Layout(a, b, starts, goals, _speeds(rng, n))
+
+
+def _doorway(m: Map, rng: np.random.Generator) -> Layout:
+    a, b = _farthest_pair(m)
+    u, _ = _frame(a, b)
+    n = int(rng.integers(1, 3, endpoint=True))
+    return Layout(
+        a,
+        b,
+        _near(m, rng, b, n, (-1.5, 0.0), (-0.8, 0.8), u),
+        _near(m, rng, a, n, (0.0, 1.0), (-0.8, 0.8), u),
+        _speeds(rng, n),
+    )
+
+
+def _circle_crossing(m: Map, rng: np.random.Generator) -> Layout:
+    if m.region is not None:
+        lo, hi = np.asarray(m.region[:2], dtype=np.float64), np.asarray(m.region[2:], dtype=np.float64)
+    elif m.num_walls:
+        ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
+        lo, hi = ends.min(0), ends.max(0)
+    else:
+        raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
+    centre = (lo + hi) / 2.0
+    # One metre inside the smaller half-extent keeps everyone clear of the enclosing walls.
+    radius = max(0.5 * float(np.min(hi - lo)) - 1.0, 0.5)
+    n = int(rng.integers(4, 8, endpoint=True))
+    angle = rng.uniform(0.0, 2.0 * np.pi) + 2.0 * np.pi * (
+        np.arange(n + 1) + rng.uniform(-0.2, 0.2, n + 1)
+    ) / (n + 1)
+    ring = centre + radius * np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+    return Layout(ring[0], 2.0 * centre - ring[0], ring[1:], 2.0 * centre - ring[1:], _speeds(rng, n))
+
+
+def _parallel_traffic(m: Map, rng: np.random.Generator) -> Layout:
+    a, b = _farthest_pair(m)
+    u, _ = _frame(a, b)
+    length = float(np.linalg.norm(b - a))
+    n = int(rng.integers(4, 8, endpoint=True))
+    starts = _near(m, rng, a, n, (1.0, 0.6 * length), (-1.0, 1.0), u)
+    goals = _near(m, rng, b, n, (-1.0, 0.0), (-1.0, 1.0), u)
+    return Layout(a, b, starts, goals, _speeds(rng, n, 1.0, 0.2))
+
+
+FAMILIES: dict[str, Family] = {
+    f.name: f
+    for f in (
+        Family(
+            "hallway_head_on",
+            "hallway",
+            "1-3 humans walk down the hallway towards the robot",
+            _hallway_head_on,
+        ),
+        Family(
+            "overtaking",
+            "hallway",
+            "a slow human (0.4-0.6 m/s) walks ahead of the robot, same way",
+            _overtaking,
+        ),
+        Family(
+            "crossing", "intersection", "2-4 humans cross the robot's way along the other corridor", _crossing
+        ),
+        Family("doorway", "doorway", "1-3 humans come through the door the robot must pass", _doorway),
+        Family(
+            "circle_crossing",
+            "open_room",
+            "robot and 4-8 humans on a circle walk to the antipode",
+            _circle_crossing,
+        ),
+        Family(
+            "parallel_traffic",
+            "hallway",
+            "4-8 humans walk the robot's way at mixed speeds",
+            _parallel_traffic,
+        ),
+    )
+}
+
+
+def make_family_scenario(name: str, m: Map, seed: int) -> Scenario:
+    """A scenario of family `name` (a key of FAMILIES) on map m, drawn from default_rng(seed).
+
+    Routes are planned like the benchmark's (a straight line where wall-free); humans spawn on
+    their start points, and their pose indices are -1.
+
+    Raises:
+        KeyError: unknown family (the message lists the known ones).
+        ValueError: the map has fewer than 2 legal poses.
+        NoPathError: someone's goal cannot be reached.
+    """
+    if name not in FAMILIES:
+        raise KeyError(f"unknown scenario family {name!r}; known: {sorted(FAMILIES)}")
+    rng = np.random.default_rng(seed)
+    lay = FAMILIES[name].layout(m, rng)
+    n = len(lay.human_start)
+    starts = np.concatenate((lay.robot_start[None], lay.human_start))
+    goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
+    paths, lengths = _plan_routes(m, starts, goals, f"{m.where}, family {name!r} seed {seed}")
+    # The robot faces along the first leg of its route.
+    first_leg = paths[0, min(1, int(lengths[0]) - 1)] - lay.robot_start
+    heading = math.atan2(float(first_leg[1]), float(first_leg[0]))
+    return Scenario(
+        map_name=m.name,
+        seed=seed,
+        family=name,
+        robot_starts=np.array([[*lay.robot_start, heading]]),
+        robot_goals=np.array([[*lay.robot_goal, heading]]),
+        human_spawn=lay.human_start,
+        human_start_index=np.full(n, -1),
+        human_goal_index=np.full(n, -1),
+        human_routes=_split_routes(paths[1:], lengths[1:]),
+        human_speed=lay.human_speed,
+    )

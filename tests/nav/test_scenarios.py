@@ -1,0 +1,396 @@
+"""Scenario generation: determinism, invariants, JSON replay, test sets, families, WorldState."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.walls import WallIndex
+from socialzoo.core.world import step_world
+from socialzoo.nav import maps
+from socialzoo.nav.graph import NoPathError, segments_free
+from socialzoo.nav.maps import Map
+from socialzoo.nav.scenarios import (
+    FAMILIES,
+    TEST_SETS,
+    Scenario,
+    ScenarioConfig,
+    TestSet,
+    generate_scenario,
+    get_test_set,
+    make_family_scenario,
+    noise_key,
+    scenarios_to_state,
+)
+
+REFERENCE = Path("/work/shared/reference/socialgym")
+if not REFERENCE.exists():
+    REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "socialgym"
+
+
+def shipped(name: str) -> Map | None:
+    if hasattr(maps, "list_maps") and name in maps.list_maps():
+        return maps.load_map(name)
+    return None
+
+
+@functools.cache
+def gdc1() -> Map:
+    """The shipped GDC1 map once it exists, else one built from the reference data."""
+    m = shipped("gdc1")
+    if m is not None:
+        return m
+    walls = np.loadtxt(REFERENCE / "gdc1_walls.txt")
+    walls = walls[(walls[:, 1] > -10) & (walls[:, 3] > -10)]
+    nodes = np.loadtxt(REFERENCE / "gdc1_nav_nodes.txt")
+    index = WallIndex(walls)
+    i, j = np.triu_indices(len(nodes), 1)
+    a, b = nodes[i], nodes[j]
+    d = b - a
+    normal = np.stack((-d[:, 1], d[:, 0]), 1) / np.linalg.norm(d, axis=1)[:, None] * 0.25
+    ok = segments_free(index, a, b) & segments_free(index, a + normal, b + normal)
+    ok &= segments_free(index, a - normal, b - normal)
+    return Map(
+        name="gdc1",
+        walls=walls,
+        nodes=nodes,
+        edges=np.stack((i[ok], j[ok]), 1),
+        legal_poses=np.loadtxt(REFERENCE / "gdc1_legal_poses.txt"),
+    )
+
+
+def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
+    return [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]]
+
+
+def synthetic(name: str) -> Map:
+    """Small stand-ins for the shipped small maps (used until those exist)."""
+    if name == "hallway":
+        return Map(
+            name=name,
+            walls=np.array(box(0, 0, 20, 3)),
+            nodes=np.array([[1, 1.5], [10, 1.5], [19, 1.5]]),
+            edges=np.array([[0, 1], [1, 2]]),
+            legal_poses=np.array([[1, 1.5, 0], [19, 1.5, np.pi]]),
+        )
+    if name == "open_room":
+        g = np.array([[x, y] for x in (2.0, 5.0, 8.0) for y in (2.0, 5.0, 8.0)])
+        return Map(
+            name=name,
+            walls=np.array(box(0, 0, 10, 10)),
+            nodes=g,
+            edges=np.array(
+                [
+                    [0, 1],
+                    [1, 2],
+                    [3, 4],
+                    [4, 5],
+                    [6, 7],
+                    [7, 8],
+                    [0, 3],
+                    [3, 6],
+                    [1, 4],
+                    [4, 7],
+                    [2, 5],
+                    [5, 8],
+                ]
+            ),
+            legal_poses=np.array([[1, 1, 0], [9, 9, 0], [1, 9, 0], [9, 1, 0]]),
+        )
+    if name == "intersection":
+        walls = []
+        for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):  # an L per quadrant: corridors 3 m wide
+            walls += [[1.5 * sx, 1.5 * sy, 10 * sx, 1.5 * sy], [1.5 * sx, 1.5 * sy, 1.5 * sx, 10 * sy]]
+        walls += [[-10, -1.5, -10, 1.5], [10, -1.5, 10, 1.5], [-1.5, -10, 1.5, -10], [-1.5, 10, 1.5, 10]]
+        return Map(
+            name=name,
+            walls=np.array(walls, dtype=float),
+            nodes=np.array([[0, 0], [-9, 0], [9, 0], [0, -9], [0, 9]], dtype=float),
+            edges=np.array([[0, 1], [0, 2], [0, 3], [0, 4]]),
+            legal_poses=np.array([[-9, 0, 0], [9, 0, np.pi], [0, -8.5, 1.57], [0, 8.5, -1.57]]),
+        )
+    if name == "doorway":
+        walls = [*box(0, 0, 16, 6), [8, 0, 8, 2.4], [8, 3.6, 8, 6]]
+        return Map(
+            name=name,
+            walls=np.array(walls, dtype=float),
+            nodes=np.array([[4, 3], [8, 3], [12, 3]]),
+            edges=np.array([[0, 1], [1, 2]]),
+            legal_poses=np.array([[1.5, 3, 0], [14.5, 3, np.pi], [4, 1.5, 0], [12, 4.5, 0]]),
+        )
+    raise KeyError(name)
+
+
+def small_map(name: str) -> Map:
+    return shipped(name) or synthetic(name)
+
+
+def check_scenario_geometry(m: Map, s: Scenario) -> None:
+    """Routes wall-free from the human's start to its goal, spawns on the free side of walls."""
+    for k, route in enumerate(s.human_routes):
+        assert not m.wall_index.crosses(route[:-1], route[1:]).any(), k
+    first = np.array([r[min(1, len(r) - 1)] for r in s.human_routes]).reshape(-1, 2)
+    starts = np.array([r[0] for r in s.human_routes]).reshape(-1, 2)
+    assert segments_free(m.wall_index, s.human_spawn, first).all()
+    assert segments_free(m.wall_index, s.human_spawn, starts).all()
+
+
+# ---------------------------------------------------------------------------- benchmark generator
+def test_same_seed_same_scenario_and_different_seeds_differ() -> None:
+    m = gdc1()
+    a, b = generate_scenario(m, 123), generate_scenario(m, 123)
+    assert a == b
+    assert a is not b
+    others = [generate_scenario(m, s) for s in range(124, 134)]
+    assert all(o != a for o in others)
+    assert len({o.human_spawn.tobytes() for o in others}) == len(others)
+
+
+def test_benchmark_scenarios_follow_the_spec() -> None:
+    m = gdc1()
+    cfg = ScenarioConfig()
+    poses = m.legal_poses
+    counts = []
+    for seed in range(150):
+        s = generate_scenario(m, seed, cfg)
+        assert s.map_name == m.name and s.seed == seed and s.family == "benchmark" and s.num_robots == 1
+        robot_start = int(np.flatnonzero((poses == s.robot_start).all(1))[0])
+        assert not np.array_equal(s.robot_start, s.robot_goal)
+        assert cfg.min_humans <= s.num_humans <= cfg.max_humans
+        counts.append(s.num_humans)
+        assert np.all(s.human_start_index != robot_start)
+        assert np.all(s.human_goal_index != s.human_start_index)
+        assert np.all((s.human_speed >= cfg.min_speed) & (s.human_speed <= cfg.max_speed))
+        start = poses[s.human_start_index, :2]
+        goal = poses[s.human_goal_index, :2]
+        np.testing.assert_array_equal([r[0] for r in s.human_routes], start)
+        np.testing.assert_array_equal([r[-1] for r in s.human_routes], goal)
+        assert np.all(np.abs(s.human_spawn - start) <= cfg.spawn_jitter)
+        _, dist = m.wall_index.nearest(s.human_spawn)
+        on_pose = (s.human_spawn == start).all(1)
+        assert np.all(on_pose | (dist >= cfg.spawn_clearance))
+        check_scenario_geometry(m, s)
+    assert min(counts) == 5 and max(counts) == 25
+
+
+def test_config_bounds_are_respected() -> None:
+    cfg = ScenarioConfig(min_humans=3, max_humans=3, spawn_jitter=0.0, speed_std=0.0, speed_mean=2.0)
+    s = generate_scenario(gdc1(), 5, cfg)
+    assert s.num_humans == 3
+    np.testing.assert_array_equal(s.human_spawn, gdc1().legal_poses[s.human_start_index, :2])
+    np.testing.assert_array_equal(s.human_speed, [1.3, 1.3, 1.3])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"min_humans": 6, "max_humans": 2}, r"min_humans \(6\) exceeds max_humans \(2\)"),
+        ({"max_humans": -1}, r"max_humans must be an int >= 0, got -1"),
+        ({"min_humans": 2.5}, r"min_humans must be an int >= 0, got 2.5"),
+        ({"repeats": 0}, r"repeats must be an int >= 1, got 0"),
+        ({"spawn_jitter": -0.1}, r"spawn_jitter must be >= 0.0, got -0.1"),
+        ({"speed_mean": float("nan")}, r"speed_mean must be a finite number, got nan"),
+        ({"min_speed": 0.0}, r"min_speed must be > 0.0, got 0.0"),
+        ({"min_speed": 1.5}, r"min_speed \(1.5\) exceeds max_speed \(1.3\)"),
+        ({"spawn_tries": True}, r"spawn_tries must be an int >= 1, got True"),
+    ],
+)
+def test_bad_config_raises_naming_field_and_value(kwargs: dict[str, object], message: str) -> None:
+    with pytest.raises(ValueError, match=r"ScenarioConfig\." + message):
+        ScenarioConfig(**kwargs)  # type: ignore[arg-type]
+
+
+def test_maps_without_enough_poses_raise() -> None:
+    m = gdc1()
+    one = dataclasses.replace(m, legal_poses=m.legal_poses[:1])
+    with pytest.raises(ValueError, match="at least 2 legal poses, the map has 1"):
+        generate_scenario(one, 0)
+    empty = Map(
+        name="empty",
+        walls=np.zeros((0, 4)),
+        nodes=np.zeros((0, 2)),
+        edges=np.zeros((0, 2), int),
+        legal_poses=np.zeros((0, 3)),
+    )
+    with pytest.raises(ValueError, match="the map has 0"):
+        generate_scenario(empty, 0)
+    with pytest.raises(ValueError, match="the map has 1"):
+        make_family_scenario("hallway_head_on", one, 0)
+
+
+def test_unreachable_goal_raises_naming_the_scenario() -> None:
+    # A third pose shut in a box: every scenario that sends someone there fails.
+    hallway = synthetic("hallway")
+    walls = np.concatenate((hallway.walls, box(30, 0, 32, 2)))
+    poses = np.concatenate((hallway.legal_poses, [[31.0, 1.0, 0.0]]))
+    m = dataclasses.replace(hallway, walls=walls, legal_poses=poses)
+    with pytest.raises(
+        NoPathError, match=r"map 'hallway', scenario seed 0: .*point \[31.0, 1.0\] reaches no edge"
+    ):
+        generate_scenario(m, 0, ScenarioConfig(min_humans=10, max_humans=10))
+
+
+def test_humans_may_share_poses_on_a_two_pose_map() -> None:
+    s = generate_scenario(synthetic("hallway"), 3, ScenarioConfig(min_humans=6, max_humans=6))
+    robot_start = int(np.flatnonzero((synthetic("hallway").legal_poses == s.robot_start).all(1))[0])
+    np.testing.assert_array_equal(s.human_start_index, [1 - robot_start] * 6)
+    np.testing.assert_array_equal(s.human_goal_index, [robot_start] * 6)
+
+
+# ---------------------------------------------------------------------------- JSON replay
+def test_json_round_trip_is_bit_exact(tmp_path: Path) -> None:
+    for seed in (0, 1, 2**63 + 5):
+        s = generate_scenario(gdc1(), seed)
+        back = Scenario.load(s.save(tmp_path / f"s{seed}.json"))
+        assert back == s
+        for name in ("robot_starts", "robot_goals", "human_spawn", "human_speed"):
+            assert getattr(back, name).tobytes() == getattr(s, name).tobytes()
+        assert all(a.tobytes() == b.tobytes() for a, b in zip(back.human_routes, s.human_routes, strict=True))
+        assert back.seed == seed
+    with pytest.raises(ValueError, match="scenario format must be"):
+        Scenario.from_json({"format": "other"})
+    data = s.to_json()
+    del data["human_speed"]
+    with pytest.raises(ValueError, match="lacks key 'human_speed'"):
+        Scenario.from_json(data)
+
+
+def test_scenario_arrays_are_read_only_and_validated() -> None:
+    s = generate_scenario(gdc1(), 0)
+    with pytest.raises(ValueError):
+        s.human_spawn[0, 0] = 1.0
+    with pytest.raises(ValueError, match=r"robot_goals must have shape \(1, 3\)"):
+        dataclasses.replace(s, robot_goals=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="human_routes holds"):
+        dataclasses.replace(s, human_routes=s.human_routes[:-1])
+
+
+# ---------------------------------------------------------------------------- test sets
+def test_test_set_scenarios_are_the_same_alone_or_in_a_list() -> None:
+    ts = TestSet("gdc1", 77, 12)
+    many = ts.scenarios(m=gdc1())
+    assert len(many) == 12
+    for k in (0, 5, 11):
+        assert ts.scenario(k, m=gdc1()) == many[k]
+    assert ts.scenarios([11, 5], m=gdc1()) == [many[11], many[5]]
+    assert len({s.seed for s in many}) == 12
+    assert ts.seed(3) == int(np.random.SeedSequence([77, 3]).generate_state(1, dtype=np.uint64)[0])
+    with pytest.raises(IndexError, match=r"scenario 12 is outside 0\.\.11"):
+        ts.seed(12)
+    with pytest.raises(ValueError, match="is on map 'gdc1', got map 'hallway'"):
+        ts.scenario(0, m=synthetic("hallway"))
+
+
+def test_named_test_sets() -> None:
+    assert {name: (t.map_name, t.count) for name, t in TEST_SETS.items()} == {
+        "gdc1-test": ("gdc1", 2000),
+        "ghc3-test": ("ghc3", 2000),
+        "gdc1-quick": ("gdc1", 100),
+        "ghc3-quick": ("ghc3", 100),
+    }
+    assert get_test_set("gdc1-quick").name == "gdc1-quick"
+    assert len({t.base_seed for t in TEST_SETS.values()}) == 4
+    # Seeds are pinned: changing them changes every published benchmark number.
+    assert get_test_set("gdc1-test").seed(0) == int(
+        np.random.SeedSequence([20220001, 0]).generate_state(1, dtype=np.uint64)[0]
+    )
+    with pytest.raises(KeyError, match="unknown test set 'gdc1'"):
+        get_test_set("gdc1")
+    s = get_test_set("gdc1-quick").scenario(4, m=gdc1())
+    check_scenario_geometry(gdc1(), s)
+
+
+# ---------------------------------------------------------------------------- WorldState
+def test_scenarios_to_state_shapes_masks_and_padding() -> None:
+    m = gdc1()
+    scenarios = [generate_scenario(m, seed) for seed in range(6)]
+    state = scenarios_to_state(scenarios)
+    b, h = 6, max(s.num_humans for s in scenarios)
+    width = max(len(r) for s in scenarios for r in s.human_routes)
+    assert state.robot_pose.shape == (b, 1, 3) and state.robot_goal.shape == (b, 1, 3)
+    assert state.human_pos.shape == (b, h, 2) and state.human_route.shape == (b, h, width, 2)
+    np.testing.assert_array_equal(state.robot_vel, 0.0)
+    np.testing.assert_array_equal(state.human_vel, 0.0)
+    np.testing.assert_array_equal(state.step_count, 0)
+    np.testing.assert_array_equal(state.human_direction, 1)
+    assert state.noise_key.dtype == np.uint64 and state.noise_key[2] == noise_key(2)
+    for row, s in enumerate(scenarios):
+        n = s.num_humans
+        np.testing.assert_array_equal(state.robot_pose[row, 0], s.robot_start)
+        np.testing.assert_array_equal(state.robot_goal[row, 0], s.robot_goal)
+        assert state.human_mask[row].tolist() == [True] * n + [False] * (h - n)
+        np.testing.assert_array_equal(state.human_pos[row, :n], s.human_spawn)
+        np.testing.assert_array_equal(state.human_pref_speed[row, :n], s.human_speed)
+        for k, route in enumerate(s.human_routes):
+            assert state.human_route_len[row, k] == len(route)
+            np.testing.assert_array_equal(state.human_route[row, k, : len(route)], route)
+            np.testing.assert_array_equal(
+                state.human_route[row, k, len(route) :], route[-1][None].repeat(width - len(route), 0)
+            )
+            assert state.human_waypoint[row, k] == (1 if len(route) > 1 else 0)
+        assert np.all(state.human_route_len[row, n:] == 1) and np.all(state.human_waypoint[row, n:] == 0)
+    # The state steps, and a row of the batch is the batch of one.
+    cfg = WorldConfig()
+    new, _ = step_world(state, m.wall_index, cfg, np.zeros((b, 1, 2)))
+    alone, _ = step_world(
+        scenarios_to_state(scenarios[3:4], max_humans=h), m.wall_index, cfg, np.zeros((1, 1, 2))
+    )
+    np.testing.assert_array_equal(new.human_pos[3], alone.human_pos[0])
+
+
+def test_scenarios_to_state_with_several_robots_and_errors() -> None:
+    s = generate_scenario(gdc1(), 1)
+    poses = gdc1().legal_poses
+    two = dataclasses.replace(s, robot_starts=poses[[0, 1]], robot_goals=poses[[2, 3]])
+    state = scenarios_to_state([two, two], num_robots=2, max_humans=30)
+    assert state.robot_pose.shape == (2, 2, 3) and state.human_mask.shape == (2, 30)
+    np.testing.assert_array_equal(state.robot_goal[1], poses[[2, 3]])
+    assert scenarios_to_state([two]).robot_pose.shape == (1, 1, 3)
+    with pytest.raises(ValueError, match=r"scenario 0 \(seed 1\) has 1 robots, 2 requested"):
+        scenarios_to_state([s], num_robots=2)
+    with pytest.raises(ValueError, match=f"has {s.num_humans} humans, more than max_humans=2"):
+        scenarios_to_state([s], max_humans=2)
+    with pytest.raises(ValueError, match="at least one scenario"):
+        scenarios_to_state([])
+
+
+# ---------------------------------------------------------------------------- families
+@pytest.mark.parametrize("name", sorted(FAMILIES))
+def test_family_scenarios(name: str) -> None:
+    family = FAMILIES[name]
+    m = small_map(family.map_name)
+    s = make_family_scenario(name, m, 7)
+    assert s == make_family_scenario(name, m, 7)
+    assert s != make_family_scenario(name, m, 8)
+    assert s.family == name and s.num_humans >= 1
+    assert np.all(s.human_start_index == -1) and np.all(s.human_goal_index == -1)
+    np.testing.assert_array_equal([r[0] for r in s.human_routes], s.human_spawn)
+    check_scenario_geometry(m, s)
+    _, dist = m.wall_index.nearest(
+        np.concatenate((s.human_spawn, s.robot_starts[:, :2], s.robot_goals[:, :2]))
+    )
+    assert np.all(dist >= 0.3)
+    state = scenarios_to_state([s])
+    assert state.human_mask.sum() == s.num_humans
+
+
+def test_family_layouts_mean_what_they_say() -> None:
+    head_on = make_family_scenario("hallway_head_on", small_map("hallway"), 1)
+    goal_end = np.linalg.norm(head_on.human_spawn - head_on.robot_goal[:2], axis=1)
+    start_end = np.linalg.norm(head_on.human_spawn - head_on.robot_start[:2], axis=1)
+    assert np.all(goal_end < start_end)
+    overtaking = make_family_scenario("overtaking", small_map("hallway"), 1)
+    assert overtaking.num_humans == 1 and overtaking.human_speed[0] <= 0.6
+    circle = make_family_scenario("circle_crossing", small_map("open_room"), 1)
+    ends = np.array([r[-1] for r in circle.human_routes])
+    centre = (circle.robot_start[:2] + circle.robot_goal[:2]) / 2
+    np.testing.assert_allclose(
+        (circle.human_spawn + ends) / 2, np.broadcast_to(centre, ends.shape), atol=1e-9
+    )
+    with pytest.raises(KeyError, match="unknown scenario family 'stampede'"):
+        make_family_scenario("stampede", small_map("hallway"), 0)
