@@ -13,6 +13,7 @@ from typing import Any
 __all__ = [
     "ActionSelectionEnv",
     "ActionSelectionVectorEnv",
+    "BlackDeath",
     "EnvConfig",
     "SocialNavCore",
     "SocialNavParallelEnv",
@@ -22,6 +23,7 @@ __all__ = [
 _WHERE = {
     "ActionSelectionEnv": "socialzoo.env.benchmark_env",
     "ActionSelectionVectorEnv": "socialzoo.env.vector",
+    "BlackDeath": "socialzoo.env.parallel",
     "EnvConfig": "socialzoo.env.config",
     "SocialNavCore": "socialzoo.env.core",
     "SocialNavParallelEnv": "socialzoo.env.parallel",

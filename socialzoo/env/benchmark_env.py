@@ -55,7 +55,8 @@ class ActionSelectionEnv(gym.Env):
     the goal (SPEC section 9; weights in `reward`).
 
     Episode end: terminated on reaching the goal (< 0.5 m) or touching a wall; truncated after
-    max_steps (3200). The final info holds "episode": the per-episode metrics.
+    max_steps (3200). The final info holds "metrics": the per-episode metrics (not "episode", which
+    SB3 and Gymnasium wrappers reserve for their own return/length record).
 
     Args:
         config: an EnvConfig (default: the benchmark on gdc1).
@@ -142,7 +143,7 @@ class ActionSelectionEnv(gym.Env):
         if self.config.robot_action == "subpolicy":
             info["action_name"] = ACTION_NAMES[int(robot_action[0, 0])]
         if terminated or truncated:
-            info["episode"] = self.core.episode_summaries([0])[0]
+            info["metrics"] = self.core.episode_summaries([0])[0]
             self._needs_reset = True
         if self.render_mode == "human":
             self.render()

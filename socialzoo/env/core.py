@@ -228,6 +228,9 @@ class SocialNavCore:
         halt = halt | self.done
         command = np.where(self.done[..., None], 0.0, command)
         after, events = step_world(before, self.walls, cfg.world, command, halt, desired, learned)
+        # A robot whose episode ended stays exactly where it stopped (the halting step's motion
+        # model would still carry it half a step).
+        after.robot_pose = np.where(self.done[..., None], before.robot_pose, after.robot_pose)
         self.state = after
         self.carrot = self.navigator.update(after.robot_pose[..., :2])
         if cfg.robot_action == "subpolicy":

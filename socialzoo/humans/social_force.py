@@ -64,9 +64,10 @@ def pair_force(
         (fx, fy) before the social strength factor, m/s^2, in the dtype of dx.
     """
     dist = np.hypot(dx, dy)
-    valid = valid & (dist > _TINY)
-    invalid = ~valid
-    dist[invalid] = 1.0
+    # Coincident or invalid pairs are zeroed by one multiplication at the end; flooring the
+    # distance keeps their intermediate values finite (boolean-mask writes cost more).
+    weight = (valid & (dist > _TINY)).astype(dx.dtype)
+    np.maximum(dist, _TINY, out=dist)
     ex = dx / dist
     ey = dy / dist
     ix = dvx * cfg.social_lambda
@@ -99,8 +100,8 @@ def pair_force(
     np.maximum(angle_amount, _EXP_FLOOR, out=angle_amount)
     np.exp(angle_amount, out=angle_amount)
     angle_amount *= np.sign(theta, out=theta)
-    speed_amount[invalid] = 0.0
-    angle_amount[invalid] = 0.0
+    speed_amount *= weight
+    angle_amount *= weight
     # Both amounts carry a minus sign in the model; the angle force acts along the left normal:
     # f = -speed * i - angle * (-iy, ix).
     fx = angle_amount * iy

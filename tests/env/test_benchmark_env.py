@@ -1,0 +1,176 @@
+"""The single-agent benchmark env and its VectorEnv: conformance, determinism, bad input."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import socialzoo  # noqa: F401  (registers the ids)
+from socialzoo.env.benchmark_env import ActionSelectionEnv
+from socialzoo.env.registration import BENCHMARK_IDS, FAMILY_IDS
+from socialzoo.env.vector import ActionSelectionVectorEnv
+
+FAST = {"max_steps": 120, "scenario": {"min_humans": 5, "max_humans": 8}}
+
+
+def rollout(env, seed, actions):
+    obs, _ = env.reset(seed=seed)
+    trace = [obs]
+    for a in actions:
+        obs, reward, terminated, truncated, info = env.step(a)
+        trace.append((obs, reward, terminated, truncated, sorted(info.items(), key=str)))
+        if terminated or truncated:
+            obs, _ = env.reset()
+            trace.append(obs)
+    return trace
+
+
+def same(a, b):
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True)
+    if isinstance(a, (tuple, list)):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    if isinstance(a, float) and np.isnan(a):
+        return isinstance(b, float) and np.isnan(b)
+    return a == b
+
+
+@pytest.mark.parametrize("env_id", list(BENCHMARK_IDS))
+def test_gymnasium_check_env_on_registered_ids(env_id):
+    env = gym.make(env_id, **FAST)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.unwrapped.observation_space is env.unwrapped.observation_space
+    assert env.unwrapped.observation_space.shape == (7 + 4 * 25,)
+
+
+def test_stable_baselines3_check_env():
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    sb3_check_env(ActionSelectionEnv(map="open_room", **FAST), warn=False)
+
+
+@pytest.mark.parametrize("env_id", list(FAMILY_IDS))
+def test_family_ids_step(env_id):
+    env = gym.make(env_id, max_steps=50)
+    obs, _ = env.reset(seed=3)
+    assert env.observation_space.contains(obs)
+    for _ in range(50):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        assert np.isfinite(reward)
+        if terminated or truncated:
+            break
+    assert terminated or truncated
+
+
+def test_multi_step_determinism():
+    actions = np.random.default_rng(0).integers(0, 4, 300)
+    a = rollout(ActionSelectionEnv(**FAST), 11, actions)
+    b = rollout(ActionSelectionEnv(**FAST), 11, actions)
+    assert same(a, b)
+    c = rollout(ActionSelectionEnv(**FAST), 12, actions)
+    assert not same(a, c)
+
+
+def test_vector_rows_equal_single_envs():
+    """Row 0 of a VectorEnv seeded s plays the same episode as a single env seeded s."""
+    actions = np.random.default_rng(1).integers(0, 4, 100)
+    single = ActionSelectionEnv(**FAST)
+    obs, _ = single.reset(seed=5)
+    vec = ActionSelectionVectorEnv(4, **FAST)
+    vobs, _ = vec.reset(seed=5)
+    np.testing.assert_array_equal(vobs[0], obs)
+    for a in actions:
+        obs, reward, terminated, truncated, _ = single.step(int(a))
+        batch_actions = np.full(4, int(a))
+        vobs, vreward, vterm, vtrunc, info = vec.step(batch_actions)
+        assert vreward[0] == reward and vterm[0] == terminated and vtrunc[0] == truncated
+        if terminated or truncated:
+            np.testing.assert_array_equal(info["final_obs"][0], obs)
+            break
+        np.testing.assert_array_equal(vobs[0], obs)
+
+
+def test_vector_env_autoresets_and_reports_metrics():
+    vec = gym.make_vec("socialzoo/ActionSelection-v0", num_envs=3, vectorization_mode="vector_entry_point",
+                       max_steps=30, scenario={"min_humans": 5, "max_humans": 5})
+    vec.reset(seed=0)
+    for _ in range(30):
+        obs, reward, terminated, truncated, info = vec.step(np.zeros(3, dtype=np.int64))
+    assert truncated.all() or terminated.any()
+    assert "final_info" in info and info["final_info"]["metrics"]["steps"].max() == 30
+    assert vec.observation_space.contains(obs)
+
+
+def test_episode_end_info_and_step_after_end():
+    env = ActionSelectionEnv(map="open_room", max_steps=20)
+    env.reset(seed=0)
+    for _ in range(20):
+        _, _, terminated, truncated, info = env.step(1)
+        if terminated or truncated:
+            break
+    assert truncated and not terminated
+    assert info["metrics"]["steps"] == 20 and info["metrics"]["success"] is False
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(0)
+
+
+@pytest.mark.parametrize("bad", [4, -1, 1.5, float("nan"), "go", [0, 1]])
+def test_bad_actions_raise_before_anything_changes(bad):
+    env = ActionSelectionEnv(map="open_room", max_steps=20)
+    obs, _ = env.reset(seed=0)
+    before = env.core.state.copy()
+    with pytest.raises(ValueError, match="action"):
+        env.step(bad)
+    np.testing.assert_array_equal(env.core.state.robot_pose, before.robot_pose)
+    np.testing.assert_array_equal(env.core.state.human_pos, before.human_pos)
+
+
+def test_step_before_reset_raises():
+    with pytest.raises(RuntimeError, match="reset"):
+        ActionSelectionEnv(map="open_room").step(0)
+
+
+def test_socialgym1_layout():
+    env = ActionSelectionEnv(map="open_room", observation={"layout": "socialgym1"}, max_steps=20)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (244,) and env.observation_space.contains(obs)
+
+
+def test_bad_config_names_the_field():
+    with pytest.raises(ValueError, match="max_steps"):
+        ActionSelectionEnv(map="open_room", max_steps=0)
+    with pytest.raises(ValueError, match="unknown field"):
+        ActionSelectionEnv(map="open_room", reward={"w_progres": 1.0})
+    with pytest.raises(ValueError, match="num_robots"):
+        ActionSelectionEnv(map="open_room", num_robots=2)
+
+
+def test_replay_a_scenario_through_options():
+    env = ActionSelectionEnv(map="open_room", max_steps=50)
+    env.reset(seed=4)
+    scenario = env.core.scenarios[0]
+    a = rollout_from(env, scenario)
+    b = rollout_from(ActionSelectionEnv(map="open_room", max_steps=50), scenario)
+    assert same(a, b)
+
+
+def rollout_from(env, scenario):
+    obs, _ = env.reset(options={"scenario": scenario})
+    out = [obs]
+    for _ in range(50):
+        obs, reward, terminated, truncated, _ = env.step(0)
+        out.append((obs, reward))
+        if terminated or truncated:
+            break
+    return out
+
+
+def test_rgb_render():
+    env = ActionSelectionEnv(map="open_room", render_mode="rgb_array", max_steps=10)
+    env.reset(seed=0)
+    env.step(0)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+    env.close()
