@@ -1,0 +1,435 @@
+"""The benchmark's discrete actions (SPEC section 7): GoAlone, Halt, Follow, Pass.
+
+Each action sets the local planner's target, speed limit and clearance weight; one call plans
+every row of the batch, whatever its action.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Literal
+
+import numpy as np
+
+from socialzoo.core.config import RobotConfig
+from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.walls import WallIndex
+from socialzoo.nav.local_planner import DistanceField, LocalPlannerConfig, distance_field, plan_commands
+
+GO_ALONE = 0
+HALT = 1
+FOLLOW = 2
+PASS = 3
+ACTION_NAMES = ("GoAlone", "Halt", "Follow", "Pass")
+NUM_ACTIONS = len(ACTION_NAMES)
+
+# Sight lines: piece length of the distance-field pre-check, and the stretches (distances from
+# the robot, m) in which lines are followed, stopping at the first wall.
+_SIGHT_STEP = 0.25
+_SIGHT_STRETCHES = (3.0, 10.0, math.inf)
+# Up to this many sight lines, one plain test against the walls is cheaper than the above.
+_FEW_LINES = 32
+
+
+@dataclass(frozen=True, kw_only=True)
+class SubPolicyConfig:
+    """Parameters of the four sub-policies (SPEC section 7).
+
+    Attributes:
+        go_alone_speed, follow_speed, pass_speed: speed limits, m/s.
+        follow_distance: Follow drives to the point this far short of the human on the
+            robot-human ray, m.
+        pass_distance: Pass drives to the point this far beyond the human, m.
+        pass_direction: the direction "beyond" is measured in. "carrot" (default): from the
+            robot towards its local target, the way it means to travel. "heading": the robot's
+            current heading, the SPEC's literal wording; the target then turns with the robot
+            while it swerves round the human, which makes it circle the human instead of
+            overtaking.
+        go_alone_clearance_weight, follow_clearance_weight, pass_clearance_weight: the local
+            planner's clearance weight (cost sign: negative rewards clearance).
+        num_candidates: Follow and Pass choose among this many nearest visible humans ahead.
+        heading_match_deg: a farther candidate is preferred only when its heading matches the
+            direction to the local target better by more than this, degrees.
+        still_speed: humans slower than this have no heading, m/s.
+    """
+
+    go_alone_speed: float = 1.5
+    follow_speed: float = 1.5
+    pass_speed: float = 2.25
+    follow_distance: float = 1.0
+    pass_distance: float = 1.5
+    pass_direction: Literal["carrot", "heading"] = "carrot"
+    go_alone_clearance_weight: float = -0.5
+    follow_clearance_weight: float = 0.0
+    pass_clearance_weight: float = 0.5
+    num_candidates: int = 3
+    heading_match_deg: float = 30.0
+    still_speed: float = 0.1
+
+    def __post_init__(self) -> None:
+        if self.pass_direction not in ("carrot", "heading"):
+            raise ValueError(
+                f"SubPolicyConfig.pass_direction must be 'carrot' or 'heading', got {self.pass_direction!r}"
+            )
+        for f in fields(self):
+            if f.name == "pass_direction":
+                continue
+            value = getattr(self, f.name)
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+                raise ValueError(f"SubPolicyConfig.{f.name} must be a finite number, got {value!r}")
+            if f.name.endswith("clearance_weight"):
+                continue
+            if value < 0 or (value == 0 and f.name not in ("heading_match_deg", "still_speed")):
+                raise ValueError(f"SubPolicyConfig.{f.name} must be positive, got {value!r}")
+        if not isinstance(self.num_candidates, int):
+            raise ValueError(f"SubPolicyConfig.num_candidates must be an int, got {self.num_candidates!r}")
+        if self.num_candidates < 1:
+            raise ValueError(f"SubPolicyConfig.num_candidates must be >= 1, got {self.num_candidates!r}")
+
+
+def check_actions(action: np.ndarray, num_rows: int) -> np.ndarray:
+    """Validate a batch of actions: (N,) integers in {0, 1, 2, 3}; returns them as intp.
+
+    Raises:
+        ValueError: naming the first bad value and its row, or the bad shape.
+    """
+    action = np.asarray(action)
+    if action.shape != (num_rows,):
+        raise ValueError(f"actions must have shape ({num_rows},), got {action.shape}")
+    if action.dtype.kind == "b" or action.dtype.kind not in "iuf":
+        raise ValueError(f"actions must be integers in 0..{NUM_ACTIONS - 1}, got dtype {action.dtype}")
+    if action.dtype.kind == "f":
+        bad = ~((action >= 0) & (action < NUM_ACTIONS) & (action == np.floor(action)))  # NaN: bad
+    else:
+        bad = (action < 0) | (action >= NUM_ACTIONS)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"action {action[row].item()!r} in row {row} is not one of "
+            + ", ".join(f"{i} ({name})" for i, name in enumerate(ACTION_NAMES))
+        )
+    return action.astype(np.intp)
+
+
+def lines_of_sight(
+    p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: DistanceField | None = None
+) -> np.ndarray:
+    """Whether segments [p0, p1] (M, 2) touch no wall; bool (M,). Exact.
+
+    With a distance field, each segment is cut into pieces of at most `_SIGHT_STEP` m; a piece
+    whose ends read wall distances summing to more than its length (plus the field's error)
+    cannot touch a wall, so only the other pieces are tested against the walls. Segments are
+    followed outwards from p0 in a few stretches (`_SIGHT_STRETCHES`), and a segment found
+    blocked is not followed further: most sight lines in a building end at the first wall.
+    """
+    clear = np.ones(len(p0), dtype=bool)
+    if len(p0) == 0:
+        return clear
+    if field is None or len(p0) <= _FEW_LINES:
+        return ~walls.crosses(p0, p1)
+    delta = p1 - p0
+    length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
+    unit = delta / np.maximum(length, 1e-12)[:, None]
+    slack = field.resolution * math.sqrt(0.5) + 1e-6  # a lookup's largest overestimate
+    begin = 0.0
+    for end in _SIGHT_STRETCHES:
+        lines = np.flatnonzero(clear & (length > begin))
+        if len(lines) == 0:
+            break
+        a = p0[lines] + begin * unit[lines]
+        b = p0[lines] + np.minimum(length[lines], end)[:, None] * unit[lines]
+        clear[lines[_stretch_blocked(a, b, walls, field, slack)]] = False
+        begin = end
+    return clear
+
+
+def _stretch_blocked(
+    a: np.ndarray, b: np.ndarray, walls: WallIndex, field: DistanceField, slack: float
+) -> np.ndarray:
+    """Which segments [a, b] (M, 2) touch a wall, testing only their pieces near one; bool (M,)."""
+    delta = b - a
+    length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
+    count = np.maximum(np.ceil(length / _SIGHT_STEP).astype(np.intp) + 1, 2)
+    seg = np.repeat(np.arange(len(a)), count)
+    rank = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+    points = a[seg] + (rank / (count - 1)[seg])[:, None] * delta[seg]
+    # Piece k joins points k and k + 1; a point of it is within d of one end and (piece - d) of
+    # the other, so the piece clears every wall when the ends' distances sum to more than its
+    # length (plus twice the field's error).
+    dist = field.lookup(points)
+    piece_len = (length / (count - 1))[seg[:-1]]
+    close = dist[:-1] + dist[1:] <= piece_len + 2.0 * slack
+    piece = np.flatnonzero(close & (seg[1:] == seg[:-1]))
+    hit = walls.crosses(points[piece], points[piece + 1])
+    return np.bincount(seg[piece[hit]], minlength=len(a)) > 0
+
+
+def visible_humans(
+    robot_pose: np.ndarray,
+    human_pos: np.ndarray,
+    human_mask: np.ndarray,
+    walls: WallIndex | None,
+    field: DistanceField | None = None,
+) -> np.ndarray:
+    """Humans each robot sees: present, and the robot-human line of sight touches no wall.
+
+    No range or field-of-view limit (the SPEC sets none). Only present humans are tested.
+
+    Args:
+        robot_pose: (N, 3) x, y (m), theta (rad), world frame.
+        human_pos: (N, H, 2) human centres, world frame, m.
+        human_mask: (N, H) present humans (or any subset worth testing).
+        walls: the map's wall index, or None for no walls.
+        field: the walls' distance field (socialzoo.nav.local_planner.distance_field), to clear
+            lines far from any wall without testing them against the walls; same result.
+
+    Returns:
+        (N, H) bool.
+    """
+    visible = np.array(human_mask, dtype=bool)
+    if walls is None or walls.num_walls == 0 or not visible.any():
+        return visible
+    start = np.broadcast_to(robot_pose[:, None, :2], human_pos.shape)[visible]
+    visible[visible] = lines_of_sight(start, human_pos[visible], walls, field)
+    return visible
+
+
+def nearest_visible_ahead(
+    robot_pose: np.ndarray,
+    human_pos: np.ndarray,
+    human_mask: np.ndarray,
+    walls: WallIndex | None,
+    count: int,
+    field: DistanceField | None = None,
+) -> np.ndarray:
+    """Visibility of the humans ahead that target selection can use: (N, H) bool.
+
+    Marks visible humans ahead of each robot (x > 0 in its frame), nearest first, until `count`
+    are found; farther humans are left False. `select_target_human` gives the same answer with
+    this as with every human's visibility, at the cost of a few sight lines per robot: the
+    nearest `count` candidates are tested first, and the rest only for robots that still lack
+    `count` visible ones.
+    """
+    n, num_humans = human_mask.shape
+    visible = np.zeros((n, num_humans), dtype=bool)
+    rel = human_pos - robot_pose[:, None, :2]
+    ahead = (
+        np.cos(robot_pose[:, 2])[:, None] * rel[..., 0] + np.sin(robot_pose[:, 2])[:, None] * rel[..., 1] > 0
+    )
+    cand = human_mask & ahead
+    if not cand.any():
+        return visible
+    order = np.argsort(np.where(cand, rel[..., 0] ** 2 + rel[..., 1] ** 2, np.inf), axis=1, kind="stable")
+    rows = np.arange(n)[:, None]
+    ranked = cand[rows, order]  # candidates first, nearest first
+    if ranked.sum() <= _FEW_LINES:  # few sight lines: one test of all of them is cheaper
+        visible[cand] = visible_humans(robot_pose, human_pos, cand, walls, field)[cand]
+        return visible & (np.cumsum(visible[rows, order], axis=1) <= count)[rows, np.argsort(order, axis=1)]
+    first = ranked & (np.arange(num_humans) < count)
+    seen = visible_humans(robot_pose, human_pos[rows, order], first, walls, field)
+    short = seen.sum(axis=1) < count
+    rest = ranked & ~first & short[:, None]
+    if rest.any():
+        seen |= visible_humans(robot_pose, human_pos[rows, order], rest, walls, field)
+        # Keep only the nearest `count` visible ones (the rest cannot be chosen anyway).
+        seen &= np.cumsum(seen, axis=1) <= count
+    visible[rows, order] = seen
+    return visible
+
+
+def select_target_human(
+    robot_pose: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+    carrot: np.ndarray,
+    cfg: SubPolicyConfig | None = None,
+) -> np.ndarray:
+    """The human Follow and Pass act on, for every row.
+
+    Candidates are the `num_candidates` nearest visible humans ahead of the robot (x > 0 in the
+    robot frame), a, b, c by distance. Each has a heading mismatch: the angle between its walking
+    direction and the direction from the robot to the local target. As in the reference, a is
+    kept unless b or c matches better by more than the threshold; then b, unless c beats b by
+    the threshold too; else c (with another number of candidates: the nearest one that no
+    farther one beats). A human slower than `still_speed` has no walking direction: its
+    mismatch counts as 180 degrees, so it is kept only when it is the nearest and no moving
+    candidate beats it by the threshold.
+
+    Args:
+        robot_pose: (N, 3) x, y (m), theta (rad), world frame.
+        human_pos: (N, H, 2) world frame, m.
+        human_vel: (N, H, 2) world frame, m/s.
+        visible: (N, H) humans the robot sees (present and not occluded).
+        carrot: (N, 2) local target, world frame, m.
+        cfg: sub-policy parameters (defaults if None).
+
+    Returns:
+        (N,) int index of the chosen human, -1 where there is none.
+    """
+    cfg = cfg or SubPolicyConfig()
+    n, num_humans = visible.shape
+    rel = human_pos - robot_pose[:, None, :2]
+    cos, sin = np.cos(robot_pose[:, 2]), np.sin(robot_pose[:, 2])
+    ahead = cos[:, None] * rel[..., 0] + sin[:, None] * rel[..., 1] > 0.0
+    dist2 = np.where(visible & ahead, rel[..., 0] ** 2 + rel[..., 1] ** 2, np.inf)
+    count = min(cfg.num_candidates, num_humans)
+    if count == 0:
+        return np.full(n, -1, dtype=np.intp)
+    order = np.argsort(dist2, axis=1, kind="stable")[:, :count]  # (N, count), nearest first
+    rows = np.arange(n)[:, None]
+    present = np.isfinite(dist2[rows, order])
+    to_target = carrot - robot_pose[:, :2]
+    target_dir = np.arctan2(to_target[:, 1], to_target[:, 0])
+    vel = human_vel[rows, order]
+    moving = vel[..., 0] ** 2 + vel[..., 1] ** 2 > cfg.still_speed**2
+    mismatch = np.abs(wrap_angle(np.arctan2(vel[..., 1], vel[..., 0]) - target_dir[:, None]))
+    mismatch = np.where(moving, mismatch, np.pi)
+    mismatch = np.where(present, mismatch, np.inf)
+    # Keep the first candidate that no farther one beats by the threshold (the last always
+    # qualifies): with three, a unless b or c beats it, then b unless c beats it, else c.
+    threshold = math.radians(cfg.heading_match_deg)
+    with np.errstate(invalid="ignore"):  # inf - inf between absent candidates
+        beaten = mismatch[:, :, None] - mismatch[:, None, :] >= threshold  # (N, i, j)
+    later = np.triu(np.ones((count, count), dtype=bool), k=1)
+    keep = ~(beaten & later).any(axis=2)
+    chosen = order[np.arange(n), np.argmax(keep, axis=1)]
+    return np.where(present[:, 0], chosen, -1)
+
+
+def subpolicy_targets(
+    action: np.ndarray,
+    robot_pose: np.ndarray,
+    carrot: np.ndarray,
+    human_pos: np.ndarray,
+    target_human: np.ndarray,
+    cfg: SubPolicyConfig,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The local planner's inputs for each row's action.
+
+    Args:
+        action: (N,) int valid actions.
+        robot_pose: (N, 3) x, y (m), theta (rad), world frame.
+        carrot: (N, 2) local target of the global plan, world frame, m.
+        human_pos: (N, H, 2) world frame, m.
+        target_human: (N,) index of the human Follow or Pass act on (-1: none; any value for
+            other actions).
+        cfg: sub-policy parameters.
+
+    Returns:
+        (target (N, 2) world frame m, max_speed (N,) m/s, clearance_weight (N,)). Halt rows (and
+        Follow or Pass rows without a human) get the carrot and a zero speed limit.
+    """
+    n = len(robot_pose)
+    speeds = np.array([cfg.go_alone_speed, 0.0, cfg.follow_speed, cfg.pass_speed])
+    weights = np.array(
+        [cfg.go_alone_clearance_weight, 0.0, cfg.follow_clearance_weight, cfg.pass_clearance_weight]
+    )
+    social = (action == FOLLOW) | (action == PASS)
+    if not social.any():
+        return carrot, speeds[action], weights[action]
+    pos = robot_pose[:, :2]
+    if human_pos.shape[1]:
+        human = human_pos[np.arange(n), np.maximum(target_human, 0)]
+    else:
+        human = pos
+    to_human = human - pos
+    dist = np.sqrt(to_human[:, 0] ** 2 + to_human[:, 1] ** 2)
+    unit = to_human / np.maximum(dist, 1e-9)[:, None]
+    follow_point = pos + np.maximum(dist - cfg.follow_distance, 0.0)[:, None] * unit
+    if cfg.pass_direction == "heading":
+        direction = np.stack((np.cos(robot_pose[:, 2]), np.sin(robot_pose[:, 2])), axis=-1)
+    else:
+        to_carrot = carrot - pos
+        direction = to_carrot / np.maximum(np.sqrt((to_carrot**2).sum(-1)), 1e-9)[:, None]
+    pass_point = human + cfg.pass_distance * direction
+    has_human = (target_human >= 0)[:, None]
+    is_follow = ((action == FOLLOW)[:, None]) & has_human
+    is_pass = ((action == PASS)[:, None]) & has_human
+    target = np.where(is_follow, follow_point, np.where(is_pass, pass_point, carrot))
+    max_speed = np.where(social & (target_human < 0), 0.0, speeds[action])
+    return target, max_speed, weights[action]
+
+
+def subpolicy_commands(
+    action: np.ndarray,
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    carrot: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    human_mask: np.ndarray,
+    walls: WallIndex,
+    cfg: SubPolicyConfig,
+    planner_cfg: LocalPlannerConfig,
+    robot_cfg: RobotConfig,
+    dt: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Robot commands for a batch of sub-policy actions, planned in one local-planner call.
+
+    GoAlone drives to the carrot. Halt stops at once. Follow drives to the point
+    `follow_distance` short of the target human on the robot-human ray (the robot itself when the
+    human is nearer than that: it waits). Pass drives to the point `pass_distance` beyond the
+    target human in the direction of travel (see `SubPolicyConfig.pass_direction`). Follow or
+    Pass without a target human halt. Every present human, the followed one included, is an
+    obstacle to the planner.
+
+    Args:
+        action: (N,) int in {0 GoAlone, 1 Halt, 2 Follow, 3 Pass}.
+        robot_pose: (N, 3) x, y (m), theta (rad), world frame.
+        robot_vel: (N, 2) (v, omega), m/s and rad/s.
+        carrot: (N, 2) local target of the global plan, world frame, m.
+        human_pos: (N, H, 2) world frame, m.
+        human_vel: (N, H, 2) world frame, m/s.
+        human_mask: (N, H) present humans.
+        walls: the map's wall index.
+        cfg: sub-policy parameters.
+        planner_cfg: local planner parameters.
+        robot_cfg: robot limits.
+        dt: control period, s.
+
+    Returns:
+        (command, halt, target_human): command (N, 2) (v, omega) (zero where halting), halt (N,)
+        bool (velocity to be zeroed at once), target_human (N,) int index of the human followed or
+        passed, -1 for other rows and where no human qualifies.
+
+    Raises:
+        ValueError: an action outside {0, 1, 2, 3} (naming the value and its row), before anything
+            is computed.
+    """
+    n = len(robot_pose)
+    action = check_actions(action, n)
+    social = (action == FOLLOW) | (action == PASS)
+    target_human = np.full(n, -1, dtype=np.intp)
+    if social.any():
+        rows = np.flatnonzero(social)
+        pose = robot_pose[rows]
+        field = distance_field(
+            walls, planner_cfg.field_resolution, planner_cfg.field_range, planner_cfg.field_pad
+        )
+        seen = nearest_visible_ahead(
+            pose, human_pos[rows], human_mask[rows], walls, cfg.num_candidates, field
+        )
+        target_human[rows] = select_target_human(
+            pose, human_pos[rows], human_vel[rows], seen, carrot[rows], cfg
+        )
+    halt = (action == HALT) | (social & (target_human < 0))
+
+    target, max_speed, weight = subpolicy_targets(action, robot_pose, carrot, human_pos, target_human, cfg)
+    command = plan_commands(
+        robot_pose,
+        robot_vel,
+        target,
+        max_speed,
+        weight,
+        walls,
+        human_pos,
+        human_mask,
+        planner_cfg,
+        robot_cfg,
+        dt,
+        active=~halt,
+        human_vel=human_vel,
+    )
+    return command, halt, target_human
