@@ -18,13 +18,15 @@ from socialzoo.core.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_agents import human_observations, human_rewards
 from socialzoo.env.metrics import EpisodeMetrics
-from socialzoo.env.observation import build_observation, visible_humans
+from socialzoo.env.observation import build_observation
 from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
 from socialzoo.nav.graph import graph_of
+from socialzoo.nav.local_planner import distance_field
 from socialzoo.nav.maps import Map, load_map
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
+from socialzoo.nav.visibility import visible_humans
 
 # Robots slower than this (m/s) count as still for the blame term.
 STILL_SPEED = 1e-3
@@ -84,6 +86,9 @@ class SocialNavCore:
         self.num_robots = config.num_robots
         self.map = map_data if map_data is not None else load_map(config.map)
         self.walls = self.map.wall_index
+        planner = config.planner
+        # The planner's wall distance field also clears sight lines far from walls (cached per map).
+        self.field = distance_field(self.walls, planner.field_resolution, planner.field_range, planner.field_pad)
         self.graph = graph_of(self.map)
         self.navigator = Navigator(self.graph, batch_size, config.num_robots)
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
@@ -329,7 +334,7 @@ class SocialNavCore:
         human_pos = np.repeat(s.human_pos, r, axis=0) if r > 1 else s.human_pos
         human_vel = np.repeat(s.human_vel, r, axis=0) if r > 1 else s.human_vel
         human_mask = np.repeat(s.human_mask, r, axis=0) if r > 1 else s.human_mask
-        visible = visible_humans(pose, human_pos, human_mask, self.walls)
+        visible = visible_humans(pose, human_pos, human_mask, self.walls, self.field)
         obs = build_observation(
             self.config.observation,
             pose,

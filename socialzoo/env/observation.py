@@ -26,7 +26,6 @@ from typing import Literal, get_args
 import numpy as np
 from gymnasium import spaces
 
-from socialzoo.core.walls import WallIndex
 
 ObservationLayout = Literal["paper", "socialgym1"]
 
@@ -41,10 +40,6 @@ SOCIALGYM1_NUM_SLOTS = 40
 SOCIALGYM1_SIZE = 6 * SOCIALGYM1_NUM_SLOTS + 4
 # Largest sub-policy index (SPEC section 7: Discrete(4)).
 MAX_ACTION_INDEX = 3
-# Length of the first band of sight-line tests, m; later bands double.
-_FIRST_BAND = 4.0
-# Lengths below this are treated as zero, m.
-_TINY = 1e-12
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,53 +74,6 @@ class ObservationConfig:
     def size(self) -> int:
         """Length of one observation vector."""
         return observation_size(self)
-
-
-def visible_humans(
-    robot_pose: np.ndarray, human_pos: np.ndarray, human_mask: np.ndarray, walls: WallIndex | None
-) -> np.ndarray:
-    """Humans the robot sees: present, and the robot-human line of sight touches no wall.
-
-    The sight line joins the two centres; a line that only touches a wall counts as blocked.
-    There is no field-of-view or range limit.
-
-    Sight lines are tested in distance bands from the robot (0-4 m, 4-8 m, 8-16 m, ...: one
-    `WallIndex.crosses` call per band, for all rows and humans at once), and a line leaves as soon
-    as a band is blocked. Indoors most lines to far humans are blocked within a few metres, and
-    `crosses` samples every segment of a call as densely as the longest one, so this is several
-    times faster than one call on the whole lines when B is large; the answer is the same.
-
-    Args:
-        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
-        human_pos: (B, H, 2) human centres, m, world frame.
-        human_mask: (B, H) True for humans present in the scenario.
-        walls: the map's wall index, or None for a map without walls.
-
-    Returns:
-        (B, H) bool.
-    """
-    visible = np.array(human_mask, dtype=bool)
-    if walls is None or walls.num_walls == 0 or not visible.any():
-        return visible
-    # Only present humans are tested: absent ones may sit anywhere and lengthen every sight line.
-    start = np.broadcast_to(robot_pose[:, None, :2], human_pos.shape)[visible]
-    line = human_pos[visible] - start
-    length = np.sqrt(line[:, 0] ** 2 + line[:, 1] ** 2)
-    inv_length = 1.0 / np.maximum(length, _TINY)
-    clear = np.ones(len(start), dtype=bool)
-    todo = np.arange(len(start))
-    near, far = 0.0, _FIRST_BAND
-    while len(todo):
-        frac0 = near * inv_length[todo]
-        frac1 = np.minimum(far * inv_length[todo], 1.0)
-        blocked = walls.crosses(
-            start[todo] + frac0[:, None] * line[todo], start[todo] + frac1[:, None] * line[todo]
-        )
-        clear[todo[blocked]] = False
-        todo = todo[~blocked & (length[todo] > far)]
-        near, far = far, 2.0 * far
-    visible[visible] = clear
-    return visible
 
 
 def _robot_frame_slots(
@@ -201,7 +149,7 @@ def paper_observation(
         prev_action: (B,) int sub-policy index of the previous step (0 before the first).
         human_pos: (B, H, 2) m, world frame.
         human_vel: (B, H, 2) m/s, world frame.
-        visible: (B, H) bool, from `visible_humans`.
+        visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
         num_slots: K >= 0.
 
     Returns:
@@ -247,7 +195,7 @@ def socialgym1_observation(
         prev_action: (B,) int sub-policy index of the previous step (0 before the first).
         human_pos: (B, H, 2) m, world frame.
         human_vel: (B, H, 2) m/s, world frame.
-        visible: (B, H) bool, from `visible_humans`.
+        visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
 
     Returns:
         (B, 244) float32.

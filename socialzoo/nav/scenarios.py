@@ -683,13 +683,16 @@ def _doorway(m: Map, rng: np.random.Generator) -> Layout:
 
 
 def _circle_crossing(m: Map, rng: np.random.Generator) -> Layout:
-    if m.region is not None:
-        lo, hi = np.asarray(m.region[:2], dtype=np.float64), np.asarray(m.region[2:], dtype=np.float64)
-    elif m.num_walls:
+    if not m.num_walls and m.region is None:
+        raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
+    # The walls' bounding box, cut down to the region if there is one (a region may have margins).
+    lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
+    if m.num_walls:
         ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
         lo, hi = ends.min(0), ends.max(0)
-    else:
-        raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
+    if m.region is not None:
+        lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
+        hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
     centre = (lo + hi) / 2.0
     # One metre inside the smaller half-extent keeps everyone clear of the enclosing walls.
     radius = max(0.5 * float(np.min(hi - lo)) - 1.0, 0.5)

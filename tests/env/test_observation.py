@@ -20,8 +20,8 @@ from socialzoo.env.observation import (
     observation_space,
     paper_observation,
     socialgym1_observation,
-    visible_humans,
 )
+from socialzoo.nav.visibility import visible_humans
 
 
 def scene(robot_pose, humans, human_vel=None, robot_vel=(0.0, 0.0), goal=(5.0, 0.0), carrot=(1.0, 0.0)):

@@ -20,13 +20,11 @@ from socialzoo.nav.subpolicies import (
     PASS,
     SubPolicyConfig,
     check_actions,
-    lines_of_sight,
-    nearest_visible_ahead,
     select_target_human,
     subpolicy_commands,
     subpolicy_targets,
-    visible_humans,
 )
+from socialzoo.nav.visibility import lines_of_sight, nearest_visible_ahead, visible_humans
 
 WORLD = WorldConfig()
 SUB = SubPolicyConfig()
