@@ -35,11 +35,10 @@ class SubPolicyConfig:
         follow_distance: Follow drives to the point this far short of the human on the
             robot-human ray, m.
         pass_distance: Pass drives to the point this far beyond the human, m.
-        pass_direction: the direction "beyond" is measured in. "carrot" (default): from the
-            robot towards its local target, the way it means to travel. "heading": the robot's
-            current heading, the SPEC's literal wording; the target then turns with the robot
-            while it swerves round the human, which makes it circle the human instead of
-            overtaking.
+        pass_direction: the direction "beyond" is measured in. "heading" (default, SPEC
+            section 7): the robot's current heading; the target turns with the robot while it
+            swerves round the human. "carrot": from the robot towards its local target, the way
+            it means to travel (steadier when the human is off to one side).
         go_alone_clearance_weight, follow_clearance_weight, pass_clearance_weight: the local
             planner's clearance weight (cost sign: negative rewards clearance).
         num_candidates: Follow and Pass choose among this many nearest visible humans ahead.
@@ -53,7 +52,7 @@ class SubPolicyConfig:
     pass_speed: float = 2.25
     follow_distance: float = 1.0
     pass_distance: float = 1.5
-    pass_direction: Literal["carrot", "heading"] = "carrot"
+    pass_direction: Literal["carrot", "heading"] = "heading"
     go_alone_clearance_weight: float = -0.5
     follow_clearance_weight: float = 0.0
     pass_clearance_weight: float = 0.5

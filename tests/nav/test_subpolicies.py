@@ -252,16 +252,18 @@ def test_target_points():
     carrot = np.array([[1.5, 0.0], [1.5, 0.0], [0.0, 1.5], [1.5, 0.0]])
     humans = np.array([[[3.0, 4.0]], [[3.0, 4.0]], [[3.0, 4.0]], [[0.5, 0.0]]])
     action = np.array([FOLLOW, PASS, PASS, FOLLOW])
-    target, speed, weight = subpolicy_targets(action, pose, carrot, humans, np.zeros(4, int), SUB)
+    towards_carrot = SubPolicyConfig(pass_direction="carrot")
+    target, speed, weight = subpolicy_targets(action, pose, carrot, humans, np.zeros(4, int), towards_carrot)
     np.testing.assert_allclose(target[0], [3.0 * 0.8, 4.0 * 0.8])  # 1 m short on the ray
     np.testing.assert_allclose(target[1], [4.5, 4.0])  # 1.5 m beyond, towards the carrot
     np.testing.assert_allclose(target[2], [3.0, 5.5])
     np.testing.assert_allclose(target[3], [0.0, 0.0])  # nearer than 1 m: wait where it is
     np.testing.assert_allclose(speed, [1.5, 2.25, 2.25, 1.5])
     np.testing.assert_allclose(weight, [0.0, 0.5, 0.5, 0.0])
-    heading = SubPolicyConfig(pass_direction="heading")
-    target, _, _ = subpolicy_targets(action, pose, carrot, humans, np.zeros(4, int), heading)
-    np.testing.assert_allclose(target[2], [4.5, 4.0])  # along the robot's heading instead
+    # The default (SPEC section 7): along the robot's heading.
+    assert SUB.pass_direction == "heading"
+    target, _, _ = subpolicy_targets(action, pose, carrot, humans, np.zeros(4, int), SUB)
+    np.testing.assert_allclose(target[2], [4.5, 4.0])
     # GoAlone and Halt drive (or not) to the carrot.
     target, speed, weight = subpolicy_targets(
         np.array([GO_ALONE, HALT]), pose[:2], carrot[:2], humans[:2], np.full(2, -1), SUB
