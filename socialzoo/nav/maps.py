@@ -266,7 +266,7 @@ def list_maps() -> list[str]:
     )
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _load_shipped(name: str) -> Map:
     # One Map object per name and process, so its WallIndex (and graph caches keyed on the map
     # object) are built once; its arrays are read-only, so sharing it is safe.
@@ -419,8 +419,17 @@ def reaches_graph(index: WallIndex, points: np.ndarray, nodes: np.ndarray, edges
     return out
 
 
-def _components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
-    """Connected-component label of each node (the smallest node index in its component)."""
+def graph_components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
+    """Connected-component label of each node: the smallest node index in its component.
+
+    Args:
+        num_nodes: N.
+        edges: (E, 2) valid node index pairs.
+
+    Returns:
+        int (N,).
+    """
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     parent = list(range(num_nodes))
 
     def root(i: int) -> int:
@@ -434,11 +443,6 @@ def _components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
         if ri != rj:
             parent[max(ri, rj)] = min(ri, rj)
     return np.array([root(i) for i in range(num_nodes)], dtype=np.int64)
-
-
-def graph_components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
-    """Component label per node (the smallest node index of its component); edges (E, 2) valid."""
-    return _components(num_nodes, np.asarray(edges, dtype=np.int64).reshape(-1, 2))
 
 
 def _index_list(indices: np.ndarray, limit: int = 20) -> str:
@@ -551,12 +555,14 @@ def _geometry_problems(m: Map, pose_clearance: float, node_clearance: float) -> 
         a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
         for k in np.flatnonzero(index.crosses(a, b)):
             w = _first_crossed_wall(index, a[k], b[k])
-            problems.append(f"graph.edges[{k}] (node {edges[k, 0]} - node {edges[k, 1]}) passes through wall {w}")
+            pair = f"(node {edges[k, 0]} - node {edges[k, 1]})"
+            problems.append(f"graph.edges[{k}] {pair} passes through wall {w}")
     if len(nodes):
-        label = _components(len(nodes), edges)
+        label = graph_components(len(nodes), edges)
         unreached = np.flatnonzero(label != label[0])
         if len(unreached):
-            problems.append(f"graph is disconnected: nodes {_index_list(unreached)} not reachable from node 0")
+            unreached_text = _index_list(unreached)
+            problems.append(f"graph is disconnected: nodes {unreached_text} not reachable from node 0")
     if len(nodes) and len(poses):
         for k in np.flatnonzero(~reaches_graph(index, poses[:, :2], nodes, edges)):
             problems.append(

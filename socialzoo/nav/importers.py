@@ -1,0 +1,258 @@
+"""Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs) and
+pedsim scene XML files.
+
+Each importer returns plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2)); roadmap.complete_map
+turns them into a Map, generating what a source lacks. Zero-length wall segments (both end points
+equal) are dropped on import: they block nothing and only cost time in every wall query.
+Parse errors raise MapError naming the file and line (or entry).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.nav.maps import MapError
+
+logger = logging.getLogger(__name__)
+
+# A vector-map line: numbers separated by commas and/or white space.
+_SEPARATORS = re.compile(r"[,\s]+")
+
+
+def _read_text(path: str | os.PathLike[str]) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{os.fspath(path)}: no such file") from None
+    except UnicodeDecodeError as err:
+        raise MapError(f"{os.fspath(path)}: not UTF-8 text ({err.reason} at byte {err.start})") from None
+
+
+def read_table(path: str | os.PathLike[str], width: int, names: str) -> np.ndarray:
+    """Read a text table of `width` numbers per line.
+
+    Numbers are separated by commas and/or white space; text after "#" and blank lines are skipped.
+
+    Args:
+        path: the text file.
+        width: numbers per line.
+        names: what the numbers are, for error messages, e.g. "x1, y1, x2, y2".
+
+    Returns:
+        float array (n, width), in file order.
+
+    Raises:
+        MapError: a line with the wrong count of numbers, a word that is not a number, or a NaN or
+            infinite value; the message names the file and line.
+    """
+    where = os.fspath(path)
+    rows: list[list[float]] = []
+    for line_no, line in enumerate(_read_text(path).splitlines(), start=1):
+        body = line.split("#", 1)[0].strip().strip(",")
+        if not body:
+            continue
+        words = [w for w in _SEPARATORS.split(body) if w]
+        if len(words) != width:
+            raise MapError(f"{where}:{line_no}: expected {width} numbers ({names}), got {line.strip()!r}")
+        try:
+            values = [float(w) for w in words]
+        except ValueError:
+            raise MapError(f"{where}:{line_no}: not a number in {line.strip()!r}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise MapError(f"{where}:{line_no}: NaN or infinite value in {line.strip()!r}")
+        rows.append(values)
+    return np.array(rows, dtype=np.float64).reshape(len(rows), width)
+
+
+def drop_zero_length(walls: np.ndarray, where: str = "walls") -> np.ndarray:
+    """Walls (W, 4) without the segments whose two end points coincide."""
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    keep = (walls[:, 0] != walls[:, 2]) | (walls[:, 1] != walls[:, 3])
+    if not keep.all():
+        logger.info("%s: dropped %d zero-length wall segments", where, int((~keep).sum()))
+    return walls[keep]
+
+
+def read_vector_map(path: str | os.PathLike[str]) -> np.ndarray:
+    """Read an AMRL vector map: one wall segment "x1, y1, x2, y2" per line, metres.
+
+    Commas and/or spaces separate the numbers, so the SocialGym reference files ("x1 y1 x2 y2" with
+    "#" comments) read too. Zero-length segments are dropped.
+
+    Returns:
+        walls (W, 4).
+
+    Raises:
+        MapError: a malformed line (the message names the file and line).
+    """
+    return drop_zero_length(read_table(path, 4, "x1, y1, x2, y2"), os.fspath(path))
+
+
+def _number(value: Any, where: str, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise MapError(f"{where}: {what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Read an AMRL navigation-graph JSON file.
+
+    The format is {"nodes": [{"id": 3, "loc": {"x": 1.0, "y": 2.0}, ...}, ...],
+    "edges": [{"s0_id": 3, "s1_id": 4, ...}, ...]}; other keys are ignored. Node ids need not be
+    contiguous: nodes are renumbered 0..N-1 in file order. Repeated edges are kept once.
+
+    Returns:
+        (nodes, edges): (N, 2) positions, m, and (E, 2) node index pairs.
+
+    Raises:
+        MapError: invalid JSON (with its line and column), a missing key, a repeated node id, an
+            edge naming an unknown node or joining a node to itself.
+    """
+    where = os.fspath(path)
+    try:
+        data = json.loads(_read_text(path))
+    except json.JSONDecodeError as err:
+        raise MapError(f"{where}: invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("nodes"), list):
+        raise MapError(f"{where}: expected an object with a 'nodes' list (and an 'edges' list)")
+    raw_edges = data.get("edges", [])
+    if not isinstance(raw_edges, list):
+        raise MapError(f"{where}: 'edges' must be a list, got {type(raw_edges).__name__}")
+    index_of: dict[Any, int] = {}
+    nodes: list[tuple[float, float]] = []
+    for k, node in enumerate(data["nodes"]):
+        entry = f"{where}: nodes[{k}]"
+        if not isinstance(node, dict) or "id" not in node or not isinstance(node.get("loc"), dict):
+            raise MapError(f"{entry}: expected {{'id': .., 'loc': {{'x': .., 'y': ..}}}}, got {node!r}")
+        if node["id"] in index_of:
+            raise MapError(f"{entry}: node id {node['id']!r} repeats nodes[{index_of[node['id']]}]")
+        loc = node["loc"]
+        index_of[node["id"]] = len(nodes)
+        nodes.append((_number(loc.get("x"), entry, "loc.x"), _number(loc.get("y"), entry, "loc.y")))
+    edges: set[tuple[int, int]] = set()
+    for k, edge in enumerate(raw_edges):
+        entry = f"{where}: edges[{k}]"
+        if not isinstance(edge, dict) or "s0_id" not in edge or "s1_id" not in edge:
+            raise MapError(f"{entry}: expected {{'s0_id': .., 's1_id': ..}}, got {edge!r}")
+        ends = []
+        for key in ("s0_id", "s1_id"):
+            if edge[key] not in index_of:
+                raise MapError(f"{entry}: {key} {edge[key]!r} is not a node id")
+            ends.append(index_of[edge[key]])
+        if ends[0] == ends[1]:
+            raise MapError(f"{entry}: joins node {edge['s0_id']!r} to itself")
+        edges.add((min(ends), max(ends)))
+    node_arr = np.array(nodes, dtype=np.float64).reshape(len(nodes), 2)
+    edge_arr = np.array(sorted(edges), dtype=np.int64).reshape(len(edges), 2)
+    return node_arr, edge_arr
+
+
+@dataclass(frozen=True)
+class PedsimScene:
+    """The static parts of a pedsim scene.
+
+    Attributes:
+        walls: (W, 4) obstacle segments x1, y1, x2, y2, m.
+        nodes: (N, 2) waypoint positions, m, in file order.
+        node_ids: (N,) waypoint ids as written in the file.
+        node_radius: (N,) waypoint radii, m (0 where the file gives none).
+    """
+
+    walls: np.ndarray
+    nodes: np.ndarray
+    node_ids: tuple[str, ...]
+    node_radius: np.ndarray
+
+
+class _LineTracker:
+    """ElementTree parser target that records the source line of every element it sees.
+
+    The file is fed one line at a time, so when expat reports an element start the line last fed is
+    the one holding the end of its start tag.
+    """
+
+    def __init__(self) -> None:
+        self.builder = ET.TreeBuilder()
+        self.line = 0
+        self.lines: dict[int, int] = {}
+
+    def start(self, tag: str, attrib: dict[str, str]) -> ET.Element:
+        element = self.builder.start(tag, attrib)
+        self.lines[id(element)] = self.line
+        return element
+
+    def end(self, tag: str) -> ET.Element:
+        return self.builder.end(tag)
+
+    def data(self, text: str) -> None:
+        self.builder.data(text)
+
+    def close(self) -> ET.Element:
+        return self.builder.close()
+
+
+def read_pedsim_scene(path: str | os.PathLike[str]) -> PedsimScene:
+    """Read the obstacles and waypoints of a pedsim scene XML file.
+
+    `<obstacle x1=".." y1=".." x2=".." y2=".."/>` elements become walls (zero-length ones dropped);
+    `<waypoint id=".." x=".." y=".." r=".."/>` elements become graph nodes. Both are found at any
+    depth; agents and other elements are ignored.
+
+    Raises:
+        MapError: malformed XML, or an obstacle or waypoint with a missing or non-numeric attribute;
+            the message names the file and line.
+    """
+    where = os.fspath(path)
+    tracker = _LineTracker()
+    parser = ET.XMLParser(target=tracker)
+    try:
+        for line_no, line in enumerate(_read_text(path).splitlines(keepends=True), start=1):
+            tracker.line = line_no
+            parser.feed(line)
+        root = parser.close()
+    except ET.ParseError as err:
+        line_no, column = err.position
+        raise MapError(f"{where}:{line_no}: malformed XML (column {column + 1}): {err}") from None
+
+    def number(element: ET.Element, key: str, default: float | None = None) -> float:
+        text = element.get(key)
+        entry = f"{where}:{tracker.lines.get(id(element), '?')}: <{element.tag}>"
+        if text is None:
+            if default is not None:
+                return default
+            raise MapError(f"{entry}: missing attribute {key!r}")
+        try:
+            value = float(text)
+        except ValueError:
+            raise MapError(f"{entry}: attribute {key}={text!r} is not a number") from None
+        if not math.isfinite(value):
+            raise MapError(f"{entry}: attribute {key}={text!r} is not finite")
+        return value
+
+    walls = [[number(o, k) for k in ("x1", "y1", "x2", "y2")] for o in root.iter("obstacle")]
+    waypoints = list(root.iter("waypoint"))
+    nodes = [[number(w, "x"), number(w, "y")] for w in waypoints]
+    return PedsimScene(
+        walls=drop_zero_length(np.array(walls, dtype=np.float64).reshape(len(walls), 4), where),
+        nodes=np.array(nodes, dtype=np.float64).reshape(len(nodes), 2),
+        node_ids=tuple(w.get("id", str(k)) for k, w in enumerate(waypoints)),
+        node_radius=np.array([number(w, "r", 0.0) for w in waypoints], dtype=np.float64),
+    )
+
+
+def write_vector_map(path: str | os.PathLike[str], walls: np.ndarray) -> Path:
+    """Write walls (W, 4) as an AMRL vector map ("x1, y1, x2, y2" per line); returns the path."""
+    path = Path(path)
+    lines = [", ".join(f"{v:.6f}" for v in w) for w in np.asarray(walls, dtype=np.float64).reshape(-1, 4)]
+    path.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
+    return path

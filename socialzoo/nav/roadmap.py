@@ -1,0 +1,749 @@
+"""Navigation graphs and legal poses for wall maps that come without them.
+
+The free space is rasterised (exact wall clearance per grid cell), the building interior is found
+by flood fill from a seed point, graph nodes are spread over it (most clearance first, one per
+room, a few metres apart along corridors), joined by straight lines that keep clear of walls, and
+legal poses are picked by farthest-point sampling on the graph. Everything is deterministic given
+the seed. Uses scipy (ndimage and sparse.csgraph), which the map tools need but the simulator
+does not.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage, sparse
+from scipy.sparse import csgraph
+
+from socialzoo.core.walls import WallIndex
+from socialzoo.nav.maps import (
+    NODE_CLEARANCE,
+    POSE_CLEARANCE,
+    Map,
+    MapError,
+    graph_components,
+    segment_clearance,
+    validate_map,
+)
+
+logger = logging.getLogger(__name__)
+
+Box = tuple[float, float, float, float]
+
+# 8-neighbourhood steps on the grid (cells) used for geodesic distances.
+_STEPS = ((1, 0), (0, 1), (1, 1), (1, -1))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoadmapConfig:
+    """How a roadmap and its legal poses are built; lengths in metres.
+
+    Attributes:
+        resolution: grid cell side.
+        margin: free border around the walls' bounding box when no region is given.
+        free_clearance: a cell is passable with at least this clearance (robot footprint
+            half-diagonal 0.33 m, so a 0.9 m door stays open).
+        closing_radius: openings in the outer walls narrower than twice this count as closed when
+            telling the inside of a building from the outside.
+        node_clearance: least clearance of a generated node.
+        min_spacing, max_spacing: generated nodes keep at least spacing_per_clearance times their
+            clearance, clipped to [min_spacing, max_spacing], walking distance from each other.
+        spacing_per_clearance: see above.
+        edge_clearance: least distance between an edge and any wall (at most 0.5 m).
+        max_edge_length: longest edge considered.
+        detour_tolerance: an edge i-j is dropped when some node k gives a path i-k-j at most this
+            many times longer.
+        num_poses: legal poses wanted.
+        pose_clearance: least clearance of a generated legal pose.
+        pose_separation: generated poses keep at least this walking distance from each other.
+        good_clearance: poses are preferred up to this clearance (room centres over corners).
+    """
+
+    resolution: float = 0.1
+    margin: float = 2.0
+    free_clearance: float = 0.35
+    closing_radius: float = 1.5
+    node_clearance: float = 0.45
+    min_spacing: float = 1.5
+    max_spacing: float = 5.0
+    spacing_per_clearance: float = 3.0
+    edge_clearance: float = 0.3
+    max_edge_length: float = 15.0
+    detour_tolerance: float = 1.15
+    num_poses: int = 25
+    pose_clearance: float = 0.6
+    pose_separation: float = 2.0
+    good_clearance: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in (
+            "resolution",
+            "free_clearance",
+            "closing_radius",
+            "node_clearance",
+            "min_spacing",
+            "max_spacing",
+            "spacing_per_clearance",
+            "edge_clearance",
+            "max_edge_length",
+            "pose_clearance",
+            "good_clearance",
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"RoadmapConfig.{name} must be a positive number, got {value!r}")
+        if self.margin < 0 or self.pose_separation < 0:
+            raise ValueError(f"RoadmapConfig.margin and pose_separation must be >= 0, got {self}")
+        if self.min_spacing > self.max_spacing:
+            raise ValueError(
+                f"RoadmapConfig.min_spacing {self.min_spacing} exceeds max_spacing {self.max_spacing}"
+            )
+        if self.edge_clearance > 0.5:
+            raise ValueError(f"RoadmapConfig.edge_clearance must be <= 0.5 m, got {self.edge_clearance}")
+        if self.detour_tolerance < 1.0:
+            raise ValueError(f"RoadmapConfig.detour_tolerance must be >= 1, got {self.detour_tolerance}")
+        if self.num_poses < 2:
+            raise ValueError(f"RoadmapConfig.num_poses must be >= 2, got {self.num_poses}")
+        if self.node_clearance < NODE_CLEARANCE or self.pose_clearance < POSE_CLEARANCE:
+            raise ValueError(
+                f"RoadmapConfig.node_clearance and pose_clearance must be at least the validation "
+                f"clearances {NODE_CLEARANCE} and {POSE_CLEARANCE} m, got {self.node_clearance} and "
+                f"{self.pose_clearance}"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class FreeSpace:
+    """The free space of a map on a grid.
+
+    Attributes:
+        origin: (2,) world position of the grid's lower-left corner, m.
+        resolution: cell side, m.
+        clearance: (nx, ny) distance from each cell centre to the nearest wall, m (exact up to 1 m,
+            a grid estimate beyond).
+        interior: (nx, ny) bool, the passable cells of the area being mapped: connected to the seed
+            point, inside the building outline, at least free_clearance from walls.
+    """
+
+    origin: np.ndarray
+    resolution: float
+    clearance: np.ndarray
+    interior: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (int(self.clearance.shape[0]), int(self.clearance.shape[1]))
+
+    def centres(self, cells: np.ndarray) -> np.ndarray:
+        """World positions (K, 2) of cell centres; cells (K, 2) int (i along x, j along y)."""
+        return self.origin + (np.asarray(cells, dtype=np.float64) + 0.5) * self.resolution
+
+    def cell_of(self, points: np.ndarray) -> np.ndarray:
+        """Cells (K, 2) int holding world points (K, 2), clipped to the grid."""
+        ij = np.floor((np.asarray(points, dtype=np.float64) - self.origin) / self.resolution).astype(np.int64)
+        return np.clip(ij, 0, np.array(self.shape) - 1)
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        """Whether world points (K, 2) fall in interior cells; bool (K,)."""
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        ij = np.floor((points - self.origin) / self.resolution).astype(np.int64)
+        inside = ((ij >= 0) & (ij < np.array(self.shape))).all(axis=1)
+        out = np.zeros(len(points), dtype=bool)
+        out[inside] = self.interior[ij[inside, 0], ij[inside, 1]]
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class Roadmap:
+    """A navigation graph and the free space it was built on.
+
+    Attributes:
+        nodes: (N, 2) node positions, m.
+        edges: (E, 2) node index pairs, i < j.
+        space: the free space.
+    """
+
+    nodes: np.ndarray
+    edges: np.ndarray
+    space: FreeSpace = field(repr=False)
+
+
+# ----------------------------------------------------------------------------- walls
+
+
+def clip_walls(walls: np.ndarray, region: Box) -> np.ndarray:
+    """Walls (W, 4) cut to the box region (xmin, ymin, xmax, ymax); walls outside it are dropped.
+
+    Liang-Barsky clipping; pieces that shrink to a point are dropped too.
+    """
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    a, d = walls[:, 0:2], walls[:, 2:4] - walls[:, 0:2]
+    lo, hi = np.array(region[:2], dtype=np.float64), np.array(region[2:], dtype=np.float64)
+    t0 = np.zeros(len(walls))
+    t1 = np.ones(len(walls))
+    keep = np.ones(len(walls), dtype=bool)
+    for axis in range(2):
+        da, pa = d[:, axis], a[:, axis]
+        still = da == 0.0
+        keep &= ~(still & ((pa < lo[axis]) | (pa > hi[axis])))
+        safe = np.where(still, 1.0, da)
+        ta, tb = (lo[axis] - pa) / safe, (hi[axis] - pa) / safe
+        t0 = np.maximum(t0, np.where(still, -np.inf, np.minimum(ta, tb)))
+        t1 = np.minimum(t1, np.where(still, np.inf, np.maximum(ta, tb)))
+    keep &= t0 < t1
+    out = np.concatenate((a + t0[:, None] * d, a + t1[:, None] * d), axis=1)[keep]
+    return out[(out[:, 0] != out[:, 2]) | (out[:, 1] != out[:, 3])]
+
+
+def _bounds(walls: np.ndarray, region: Box | None, margin: float) -> Box:
+    if region is not None:
+        x0, y0, x1, y1 = (float(v) for v in region)
+        if not (x0 < x1 and y0 < y1):
+            raise ValueError(f"region must be (xmin, ymin, xmax, ymax) with min < max, got {region}")
+        return (x0, y0, x1, y1)
+    if len(walls) == 0:
+        raise ValueError("a map without walls needs a region to bound its free space")
+    pts = walls.reshape(-1, 2)
+    lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
+    return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+
+# ----------------------------------------------------------------------------- free space
+
+
+def _grid_clearance(index: WallIndex, origin: np.ndarray, shape: tuple[int, int], res: float) -> np.ndarray:
+    """(nx, ny) wall clearance of cell centres: exact within the index reach, estimated beyond."""
+    walls = index.walls
+    clearance = np.full(shape, np.inf)
+    if len(walls) == 0:
+        return clearance
+    # Rasterise the walls (samples half a cell apart), then estimate clearance by a distance
+    # transform; only cells that may be within reach of a wall get the exact (costlier) query.
+    length = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
+    counts = np.ceil(length / (0.5 * res)).astype(np.int64) + 1
+    wall_of = np.repeat(np.arange(len(walls)), counts)
+    frac = (np.arange(len(wall_of)) - np.repeat(np.cumsum(counts) - counts, counts)) / np.repeat(
+        np.maximum(counts - 1, 1), counts
+    )
+    pts = walls[wall_of, 0:2] + frac[:, None] * (walls[wall_of, 2:4] - walls[wall_of, 0:2])
+    ij = np.floor((pts - origin) / res).astype(np.int64)
+    ok = ((ij >= 0) & (ij < np.array(shape))).all(axis=1)
+    occupied = np.zeros(shape, dtype=bool)
+    occupied[ij[ok, 0], ij[ok, 1]] = True
+    if not occupied.any():
+        return clearance
+    estimate = ndimage.distance_transform_edt(~occupied) * res
+    near = np.argwhere(estimate <= index.reach + res)
+    exact = np.empty(len(near))
+    for start in range(0, len(near), 200_000):
+        chunk = near[start : start + 200_000]
+        exact[start : start + len(chunk)] = index.nearest(origin + (chunk + 0.5) * res)[1]
+    clearance = estimate.astype(np.float64)
+    clearance[near[:, 0], near[:, 1]] = np.where(np.isfinite(exact), exact, estimate[near[:, 0], near[:, 1]])
+    return clearance
+
+
+def free_space(
+    walls: np.ndarray,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    config: RoadmapConfig | None = None,
+    index: WallIndex | None = None,
+) -> FreeSpace:
+    """Rasterise a map's free space and find the area to be mapped.
+
+    The outside is what a flood fill from the grid border reaches through gaps wider than twice
+    config.closing_radius; the interior is the passable cells (clearance >= free_clearance) that
+    are not outside and are connected to the seed point (to the largest such area without one).
+    A seed point outside every closed outline is allowed: its connected free space is used.
+
+    Args:
+        walls: (W, 4) wall segments, m.
+        region: optional (xmin, ymin, xmax, ymax): the grid covers exactly this box; by default the
+            walls' bounding box grown by config.margin.
+        seed_point: optional (x, y) in the area to be mapped, m.
+        config: grid and clearance settings.
+        index: the walls' WallIndex, if already built.
+
+    Raises:
+        ValueError: a seed point outside the grid or too close to a wall, or no free space at all.
+    """
+    config = config or RoadmapConfig()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = index or WallIndex(walls)
+    res = config.resolution
+    x0, y0, x1, y1 = _bounds(walls, region, config.margin)
+    shape = (max(1, math.ceil((x1 - x0) / res)), max(1, math.ceil((y1 - y0) / res)))
+    origin = np.array([x0, y0])
+    clearance = _grid_clearance(index, origin, shape, res)
+    passable = clearance >= config.free_clearance
+
+    roomy = clearance >= config.closing_radius
+    labels, _ = ndimage.label(roomy)
+    border = np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1]))
+    outside = np.isin(labels, np.unique(border[border > 0]))
+    # Grow the outside back by the radius it was shrunk by, so it reaches the outer walls again.
+    outside = ndimage.distance_transform_edt(~outside) * res <= config.closing_radius + res
+    inside = passable & ~outside
+
+    if seed_point is not None:
+        seed = np.asarray(seed_point, dtype=np.float64).reshape(2)
+        if not (x0 <= seed[0] < x1 and y0 <= seed[1] < y1):
+            raise ValueError(
+                f"seed point ({seed[0]:.2f}, {seed[1]:.2f}) lies outside the grid {(x0, y0, x1, y1)}"
+            )
+        i, j = np.floor((seed - origin) / res).astype(np.int64)
+        if not passable[i, j]:
+            raise ValueError(
+                f"seed point ({seed[0]:.2f}, {seed[1]:.2f}) is {clearance[i, j]:.2f} m from a wall "
+                f"(needs {config.free_clearance:.2f})"
+            )
+        if not inside[i, j]:
+            logger.info("seed point (%.2f, %.2f) is outside every closed outline", *seed)
+        area = inside if inside[i, j] else passable
+        labels, _ = ndimage.label(area)
+        interior = labels == labels[i, j]
+    else:
+        area = inside if inside.any() else passable
+        labels, count = ndimage.label(area)
+        if count == 0:
+            raise ValueError(f"no free space with {config.free_clearance} m clearance in {(x0, y0, x1, y1)}")
+        sizes = np.bincount(labels.ravel(), minlength=count + 1)
+        sizes[0] = 0
+        interior = labels == int(np.argmax(sizes))
+    return FreeSpace(origin=origin, resolution=res, clearance=clearance, interior=interior)
+
+
+# ----------------------------------------------------------------------------- nodes and edges
+
+
+def place_nodes(space: FreeSpace, config: RoadmapConfig | None = None, seed: int = 0) -> np.ndarray:
+    """Spread graph nodes over the interior, most clearance first.
+
+    Each accepted node covers the interior cells within its spacing (spacing_per_clearance times its
+    clearance, clipped to [min_spacing, max_spacing]) in walking distance, so a wall between two
+    rooms does not hide one room from getting its own node; the next node is the uncovered cell
+    with most clearance. Rooms thus get a node near their centre, corridors a chain along their
+    centre line.
+
+    Returns:
+        (N, 2) node positions, m (cell centres).
+    """
+    config = config or RoadmapConfig()
+    rng = np.random.default_rng(seed)
+    res = space.resolution
+    candidate = space.interior & (space.clearance >= config.node_clearance)
+    flat = np.flatnonzero(candidate.ravel())
+    # Most clearance first (to the centimetre); the seeded shuffle breaks ties.
+    key = np.round(space.clearance.ravel()[flat], 2)
+    order = flat[np.lexsort((rng.permutation(len(flat)), -key))]
+    covered = np.zeros(space.shape, dtype=bool)
+    nx, ny = space.shape
+    chosen: list[tuple[int, int]] = []
+    for cell in order:
+        i, j = divmod(int(cell), ny)
+        if covered[i, j]:
+            continue
+        chosen.append((i, j))
+        radius = float(
+            np.clip(
+                config.spacing_per_clearance * space.clearance[i, j], config.min_spacing, config.max_spacing
+            )
+        )
+        n = math.ceil(radius / res)
+        i0, i1, j0, j1 = max(i - n, 0), min(i + n + 1, nx), max(j - n, 0), min(j + n + 1, ny)
+        start = np.zeros((i1 - i0, j1 - j0), dtype=bool)
+        start[i - i0, j - j0] = True
+        # Walking distance: grow through interior cells only, then keep the Euclidean disk.
+        walk = ndimage.binary_dilation(
+            start, structure=np.ones((3, 3), dtype=bool), iterations=n, mask=space.interior[i0:i1, j0:j1]
+        )
+        di = np.arange(i0, i1)[:, None] - i
+        dj = np.arange(j0, j1)[None, :] - j
+        covered[i0:i1, j0:j1] |= walk & ((di**2 + dj**2) * res**2 <= radius**2)
+    return space.centres(np.array(chosen, dtype=np.int64).reshape(-1, 2))
+
+
+def _prune_detours(nodes: np.ndarray, edges: np.ndarray, tolerance: float) -> np.ndarray:
+    """Drop edges (longest first) that a two-edge detour replaces within `tolerance`."""
+    if len(edges) == 0:
+        return edges
+    length = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T)
+    dist = {(int(i), int(j)): float(d) for (i, j), d in zip(edges, length, strict=True)}
+    adjacent: list[set[int]] = [set() for _ in range(len(nodes))]
+    for i, j in dist:
+        adjacent[i].add(j)
+        adjacent[j].add(i)
+
+    def d(a: int, b: int) -> float:
+        return dist[(min(a, b), max(a, b))]
+
+    # Longest first; stable on (i, j) so the result does not depend on float ties.
+    for k in np.lexsort((edges[:, 1], edges[:, 0], -length)):
+        i, j = int(edges[k, 0]), int(edges[k, 1])
+        via = adjacent[i] & adjacent[j]
+        if any(d(i, m) + d(m, j) <= tolerance * dist[(i, j)] for m in via):
+            adjacent[i].discard(j)
+            adjacent[j].discard(i)
+            del dist[(i, j)]
+    return np.array(sorted(dist), dtype=np.int64).reshape(-1, 2)
+
+
+def build_edges(
+    nodes: np.ndarray,
+    walls: np.ndarray | WallIndex,
+    clearance: float = 0.3,
+    max_length: float = 15.0,
+    detour_tolerance: float = 1.15,
+) -> np.ndarray:
+    """Join nodes by straight lines that keep `clearance` from every wall, then thin them out.
+
+    Every pair closer than max_length whose segment stays at least `clearance` from all walls is a
+    candidate; an edge is then dropped (longest first) when a path through one other node is at
+    most detour_tolerance times longer. Dropping never disconnects the graph.
+
+    Args:
+        nodes: (N, 2) node positions, m.
+        walls: (W, 4) wall segments, or their WallIndex.
+        clearance: least wall distance along an edge, m (at most 0.5).
+        max_length: longest edge, m.
+        detour_tolerance: >= 1.
+
+    Returns:
+        (E, 2) node index pairs i < j, sorted.
+    """
+    index = walls if isinstance(walls, WallIndex) else WallIndex(np.asarray(walls, dtype=np.float64))
+    if not 0.0 < clearance <= 0.5 * index.reach:
+        raise ValueError(f"clearance must be in (0, {0.5 * index.reach}] m, got {clearance}")
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    i, j = np.triu_indices(len(nodes), k=1)
+    length = np.hypot(*(nodes[i] - nodes[j]).T)
+    near = length <= max_length
+    i, j = i[near], j[near]
+    clear = np.ones(len(i), dtype=bool)
+    for start in range(0, len(i), 4096):
+        part = slice(start, start + 4096)
+        clear[part] = segment_clearance(index, nodes[i[part]], nodes[j[part]])[0] >= clearance
+    edges = np.stack((i[clear], j[clear]), axis=1).astype(np.int64)
+    return _prune_detours(nodes, edges, detour_tolerance)
+
+
+def _grid_graph(space: FreeSpace) -> tuple[sparse.csr_matrix, np.ndarray]:
+    """Sparse 8-neighbour graph over interior cells, weighted to prefer clearance.
+
+    Returns:
+        (graph, cell_id): CSR matrix over interior cells, and (nx, ny) vertex id per cell (-1 off).
+    """
+    interior = space.interior
+    cell_id = np.full(space.shape, -1, dtype=np.int64)
+    cell_id[interior] = np.arange(int(interior.sum()))
+    # Walking next to a wall costs up to 3x: paths keep to the middle of corridors and doors.
+    penalty = 1.0 + 2.0 * np.clip(1.0 - space.clearance, 0.0, 1.0)
+    rows, cols, weights = [], [], []
+    nx, ny = space.shape
+    for di, dj in _STEPS:
+        a = (slice(max(-di, 0), nx - max(di, 0)), slice(max(-dj, 0), ny - max(dj, 0)))
+        b = (slice(max(di, 0), nx - max(-di, 0)), slice(max(dj, 0), ny - max(-dj, 0)))
+        both = interior[a] & interior[b]
+        step = math.hypot(di, dj) * space.resolution
+        rows.append(cell_id[a][both])
+        cols.append(cell_id[b][both])
+        weights.append(step * 0.5 * (penalty[a][both] + penalty[b][both]))
+    n = int(interior.sum())
+    graph = sparse.coo_matrix(
+        (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    ).tocsr()
+    return graph, cell_id
+
+
+def _pull_string(path: np.ndarray, index: WallIndex, clearance: float, max_length: float) -> list[int]:
+    """Indices of the path points (L, 2) kept when straight clear shortcuts replace the rest."""
+    keep = [0]
+    i = 0
+    last = len(path) - 1
+    while i < last:
+        ahead = np.arange(i + 1, last + 1)
+        ahead = ahead[np.hypot(*(path[ahead] - path[i]).T) <= max_length]
+        ok = segment_clearance(index, np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])[0] >= clearance
+        ok &= ~index.crosses(np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])
+        # Next cell at least (grid steps are clear of walls even where the clearance check is not).
+        i = int(ahead[np.flatnonzero(ok)[-1]]) if ok.any() else i + 1
+        keep.append(i)
+    return keep
+
+
+def connect_components(
+    space: FreeSpace,
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    index: WallIndex,
+    config: RoadmapConfig | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Join the graph's components along walking paths through the free space.
+
+    While the graph is disconnected, the shortest grid path (keeping to the middle of passages)
+    from the largest component to the nearest other one is straightened into clear segments whose
+    corners become new nodes. Nodes outside the interior cannot be joined and stay as they are.
+
+    Returns:
+        (nodes, edges) with the added nodes appended after the given ones.
+    """
+    config = config or RoadmapConfig()
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    if len(nodes) < 2 or len(np.unique(graph_components(len(nodes), edges))) == 1:
+        return nodes, edges
+    graph, cell_id = _grid_graph(space)
+    cells = space.cell_of(nodes)
+    vertex = cell_id[cells[:, 0], cells[:, 1]]
+    id_cells = np.argwhere(space.interior)  # vertex id -> cell, in the order cell_id numbers them
+    clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
+    node_list = list(nodes)
+    edge_list = [tuple(e) for e in edges.tolist()]
+    while True:
+        label = graph_components(len(node_list), np.array(edge_list, dtype=np.int64).reshape(-1, 2))
+        names, sizes = np.unique(label, return_counts=True)
+        if len(names) == 1:
+            break
+        main = names[np.argmax(sizes)]
+        source_nodes = np.flatnonzero((label == main) & (vertex[: len(label)] >= 0))
+        # The grid graph stores each neighbour pair once (four of the eight steps): undirected.
+        dist, pred = csgraph.dijkstra(
+            graph, directed=False, indices=vertex[source_nodes], min_only=True, return_predecessors=True
+        )[:2]
+        others = np.flatnonzero((label != main) & (vertex[: len(label)] >= 0))
+        if len(source_nodes) == 0 or len(others) == 0 or not np.isfinite(dist[vertex[others]]).any():
+            logger.warning("connect_components: %d graph components cannot be joined", len(names))
+            break
+        target = int(others[np.argmin(dist[vertex[others]])])
+        walk = [int(vertex[target])]
+        while pred[walk[-1]] >= 0:
+            walk.append(int(pred[walk[-1]]))
+        start = int(source_nodes[np.flatnonzero(vertex[source_nodes] == walk[-1])[0]])
+        path = space.centres(id_cells[walk[::-1]])
+        path[0], path[-1] = node_list[start], node_list[target]
+        corners = _pull_string(path, index, clearance, config.max_edge_length)
+        chain = [start]
+        for k in corners[1:-1]:
+            node_list.append(path[k])
+            chain.append(len(node_list) - 1)
+        chain.append(target)
+        edge_list.extend((min(a, b), max(a, b)) for a, b in itertools.pairwise(chain))
+        added = space.cell_of(np.array(node_list[len(vertex) :], dtype=np.float64).reshape(-1, 2))
+        vertex = np.concatenate((vertex, cell_id[added[:, 0], added[:, 1]]))
+    return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(
+        sorted(set(edge_list)), dtype=np.int64
+    )
+
+
+def build_roadmap(
+    walls: np.ndarray,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    config: RoadmapConfig | None = None,
+    seed: int = 0,
+    index: WallIndex | None = None,
+) -> Roadmap:
+    """A connected navigation graph over a map's interior (see free_space for what that is).
+
+    Returns:
+        the Roadmap: nodes (N, 2), edges (E, 2) and the free space they were built on.
+    """
+    config = config or RoadmapConfig()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = index or WallIndex(walls)
+    space = free_space(walls, region, seed_point, config, index)
+    nodes = place_nodes(space, config, seed)
+    edges = build_edges(nodes, index, config.edge_clearance, config.max_edge_length, config.detour_tolerance)
+    nodes, edges = connect_components(space, nodes, edges, index, config)
+    return Roadmap(nodes=nodes, edges=edges, space=space)
+
+
+# ----------------------------------------------------------------------------- legal poses
+
+
+def _ridge(clearance: np.ndarray) -> np.ndarray:
+    """Cells on the clearance ridge (medial axis): a local maximum along some grid direction."""
+    c = np.where(np.isfinite(clearance), clearance, 1e9)
+    padded = np.pad(c, 1, mode="edge")
+    nx, ny = c.shape
+    eps = 1e-6
+    ridge = np.zeros(c.shape, dtype=bool)
+    for di, dj in _STEPS:
+        fwd = padded[1 + di : 1 + di + nx, 1 + dj : 1 + dj + ny]
+        back = padded[1 - di : 1 - di + nx, 1 - dj : 1 - dj + ny]
+        # Strict on one side at least, so a cell beside a straight wall (flat along it) is no ridge.
+        ridge |= (c >= fwd - eps) & (c >= back - eps) & ((c > fwd + eps) | (c > back + eps))
+    return ridge
+
+
+def _graph_distances(nodes: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    n = len(nodes)
+    length = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T) if len(edges) else np.zeros(0)
+    matrix = sparse.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(n, n)).tocsr()
+    return csgraph.shortest_path(matrix, directed=False)
+
+
+def generate_legal_poses(
+    walls: np.ndarray,
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    space: FreeSpace | None = None,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    config: RoadmapConfig | None = None,
+    seed: int = 0,
+    index: WallIndex | None = None,
+) -> np.ndarray:
+    """Legal start/goal poses spread over the interior, facing along the free space.
+
+    Candidates are clearance-ridge cells (corridor centre lines, room centres) with at least
+    config.pose_clearance, one per half-metre block, that see a graph node. Poses are picked by
+    farthest-point sampling in walking distance (to the nearest visible node, along the graph,
+    then out again), scaled by clearance up to config.good_clearance: dead ends and rooms come
+    first. Each pose faces the direction with the most free space around it.
+
+    Args:
+        walls: (W, 4) wall segments, m.
+        nodes, edges: the navigation graph, (N, 2) m and (E, 2).
+        space: the free space (built from walls, region and seed_point when not given).
+        region, seed_point: see free_space.
+        config: num_poses, pose_clearance, pose_separation, good_clearance.
+        seed: seeds the tie-breaking order.
+        index: the walls' WallIndex, if already built.
+
+    Returns:
+        (P, 3) poses x, y (m), theta (rad), P <= config.num_poses.
+    """
+    config = config or RoadmapConfig()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = index or WallIndex(walls)
+    space = space or free_space(walls, region, seed_point, config, index)
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    rng = np.random.default_rng(seed)
+
+    cells = np.argwhere(space.interior & (space.clearance >= config.pose_clearance) & _ridge(space.clearance))
+    block = max(1, round(0.5 / space.resolution))
+    block_id = (cells[:, 0] // block) * (space.shape[1] // block + 1) + cells[:, 1] // block
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+    order = np.lexsort((-value, block_id))
+    first = order[np.r_[True, block_id[order][1:] != block_id[order][:-1]]]
+    cells = cells[first]
+    cells = cells[rng.permutation(len(cells))]
+    points = space.centres(cells)
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+
+    # Attach each candidate to its nearest visible node among the eight nearest.
+    k = min(8, len(nodes))
+    near = np.argsort(((points[:, None, :] - nodes[None, :, :]) ** 2).sum(-1), axis=1, kind="stable")[:, :k]
+    seen = ~index.crosses(np.repeat(points[:, None, :], k, axis=1), nodes[near])
+    has = seen.any(axis=1)
+    points, value, near, seen = points[has], value[has], near[has], seen[has]
+    attach = near[np.arange(len(points)), np.argmax(seen, axis=1)]
+    if len(points) < 2:
+        raise MapError(f"found {len(points)} places for legal poses with {config.pose_clearance} m clearance")
+    hop = np.hypot(*(points - nodes[attach]).T)
+    graph_dist = _graph_distances(nodes, edges)
+
+    def walking(from_k: int) -> np.ndarray:
+        d = hop + graph_dist[attach, attach[from_k]] + hop[from_k]
+        same = attach == attach[from_k]
+        d[same] = np.hypot(*(points[same] - points[from_k]).T)
+        # Poses must also stand apart in a straight line (two poses either side of a thin wall
+        # are far apart on foot but would still overlap).
+        return np.minimum(d, np.hypot(*(points - points[from_k]).T))
+
+    quality = np.minimum(value / config.good_clearance, 1.0)
+    # Start from the candidate farthest from the roomiest one (a far end of the building).
+    nearest = walking(int(np.argmax(value)))
+    nearest[~np.isfinite(nearest)] = -1.0
+    chosen = [int(np.argmax(nearest * quality))]
+    nearest = walking(chosen[0])
+    while len(chosen) < config.num_poses:
+        score = np.where(np.isfinite(nearest), nearest, -1.0) * quality
+        best = int(np.argmax(score))
+        if nearest[best] < config.pose_separation or score[best] <= 0:
+            break
+        chosen.append(best)
+        nearest = np.minimum(nearest, walking(best))
+    pos = points[chosen]
+    return np.concatenate((pos, _open_heading(index, pos)[:, None]), axis=1)
+
+
+def _open_heading(index: WallIndex, points: np.ndarray, max_range: float = 8.0) -> np.ndarray:
+    """(P,) heading (rad) of the most open direction: the longest free ray, smoothed over 45 degrees."""
+    angles = np.linspace(-np.pi, np.pi, 72, endpoint=False)
+    ranges = index.cast_rays(points, np.broadcast_to(angles, (len(points), len(angles))), max_range)
+    kernel = np.ones(9) / 9.0
+    wrapped = np.concatenate((ranges[:, -4:], ranges, ranges[:, :4]), axis=1)
+    smooth = np.stack([np.convolve(r, kernel, mode="valid") for r in wrapped]).reshape(len(points), -1)
+    return angles[np.argmax(smooth, axis=1)]
+
+
+# ----------------------------------------------------------------------------- whole maps
+
+
+def complete_map(
+    name: str,
+    walls: np.ndarray,
+    *,
+    nodes: np.ndarray | None = None,
+    edges: np.ndarray | None = None,
+    legal_poses: np.ndarray | None = None,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    source: str = "",
+    licence: str = "",
+    config: RoadmapConfig | None = None,
+    seed: int = 0,
+    validate: bool = True,
+) -> Map:
+    """A Map from walls, generating whatever of graph and legal poses is missing.
+
+    Without nodes a roadmap is built; nodes without edges (or with none) are joined by build_edges
+    and, if still disconnected, by walking paths; missing legal poses are generated.
+
+    Raises:
+        MapError: when validate is set and the result breaks a rule of validate_map.
+    """
+    config = config or RoadmapConfig()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = WallIndex(walls)
+    space: FreeSpace | None = None
+    if nodes is None or len(nodes) == 0:
+        roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
+        nodes, edges, space = roadmap.nodes, roadmap.edges, roadmap.space
+    elif edges is None or len(edges) == 0:
+        nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+        edges = build_edges(
+            nodes, index, config.edge_clearance, config.max_edge_length, config.detour_tolerance
+        )
+        if len(np.unique(graph_components(len(nodes), edges))) > 1:
+            space = free_space(walls, region, seed_point, config, index)
+            nodes, edges = connect_components(space, nodes, edges, index, config)
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    if legal_poses is None or len(legal_poses) == 0:
+        legal_poses = generate_legal_poses(
+            walls, nodes, edges, space, region, seed_point, config, seed, index
+        )
+    m = Map(
+        name=name,
+        walls=walls,
+        nodes=nodes,
+        edges=edges,
+        legal_poses=np.asarray(legal_poses, dtype=np.float64).reshape(-1, 3),
+        source=source,
+        licence=licence,
+        region=None
+        if region is None
+        else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
+    )
+    if validate:
+        validate_map(m)
+    return m
