@@ -1,0 +1,52 @@
+"""`socialzoo demo`: an animated GIF or MP4 of one episode with a chosen policy."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add `demo`."""
+    parser = subparsers.add_parser(
+        "demo",
+        help="animate one episode of a policy (GIF or MP4)",
+        description="Run one benchmark episode with a policy and write it as an animation.",
+    )
+    parser.add_argument("--policy", default="ref", help="policy name (goalone, ref, ...; default ref)")
+    parser.add_argument("--policy-path", type=Path, default=None, help="saved file of a learned policy")
+    parser.add_argument("--map", default="gdc1", help="map name or JSON path (default gdc1)")
+    parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
+    parser.add_argument("--seed", type=int, default=0, help="scenario seed (default 0)")
+    parser.add_argument("--view", choices=("follow", "map"), default="follow", help="camera")
+    parser.add_argument("--stride", type=int, default=4, help="steps per frame (default 4 = 0.1 s)")
+    parser.add_argument("--fps", type=float, default=20.0, help="frames per second of the file")
+    parser.add_argument("--max-frames", type=int, default=800, help="longest animation, frames")
+    parser.add_argument("--out", type=Path, default=Path("episode.gif"), help=".gif or .mp4 file")
+    parser.set_defaults(func=run_demo)
+
+
+def run_demo(args: argparse.Namespace) -> int:
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.episode_video import animate_episode
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.scenario_source import ScenarioStream
+    from socialzoo.nav.maps import MapError, load_map
+
+    try:
+        config = EnvConfig(map=args.map, family=args.family)
+        m = load_map(config.map)
+        scenario = ScenarioStream(m, 1, 1, config.scenario, config.family).make(args.seed)
+        policy = make_policy(args.policy, path=args.policy_path) if args.policy_path else make_policy(args.policy)
+        video = animate_episode(
+            args.out, config, scenario, policy, label=f"{args.policy} on {m.name}, seed {args.seed}",
+            view=args.view, stride=args.stride, fps=args.fps, max_frames=args.max_frames,
+        )
+    except (MapError, FileNotFoundError, ValueError, KeyError) as err:
+        print(f"socialzoo demo: error: {err}", file=sys.stderr)
+        return 2
+    result = "success" if video.metrics["success"] else ("goal reached" if video.metrics["reached"] else "no success")
+    print(f"{video.path}: {video.frames} frames; {result} in {video.metrics['duration']:.1f} s")
+    return 0

@@ -1,0 +1,57 @@
+"""Static pictures of maps: walls, navigation graph and legal poses (matplotlib, imported lazily)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.nav.maps import Map
+
+
+def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: bool = True) -> Any:
+    """Draw a map on a matplotlib Axes (a new figure when ax is None); returns the Axes."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 8))
+    walls = np.asarray(m.walls).reshape(-1, 2, 2)
+    ax.add_collection(LineCollection(walls, colors="0.15", linewidths=0.8, label="walls"))
+    if show_graph and len(m.edges):
+        ax.add_collection(
+            LineCollection(m.nodes[m.edges], colors="tab:blue", linewidths=0.6, alpha=0.6, label="graph")
+        )
+        ax.plot(m.nodes[:, 0], m.nodes[:, 1], "o", color="tab:blue", markersize=2.5)
+    if show_poses and len(m.legal_poses):
+        p = m.legal_poses
+        ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color="tab:orange", scale=40, width=0.003,
+                  label="legal poses")
+        ax.plot(p[:, 0], p[:, 1], "o", color="tab:orange", markersize=3)
+    if m.region is not None:
+        x0, y0, x1, y1 = m.region
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+    else:
+        ax.autoscale()
+    ax.set_aspect("equal")
+    ax.set_title(f"{m.name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
+                 f"{len(m.legal_poses)} legal poses")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    return ax
+
+
+def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_poses: bool = True) -> Path:
+    """Write the map picture to a PNG file; returns the path."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    ax = plot_map(m, show_graph=show_graph, show_poses=show_poses)
+    path = Path(path)
+    ax.figure.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(ax.figure)
+    return path
