@@ -1,0 +1,119 @@
+"""Shipped maps load and validate; malformed maps fail with errors naming the file and entry."""
+
+import json
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from socialzoo.nav.maps import MapError, list_maps, load_map, validate_map
+
+SHIPPED = ["gdc1", "ghc3", "open_room", "hallway", "doorway", "intersection"]
+
+
+def test_every_shipped_map_is_listed_loads_and_validates():
+    assert set(SHIPPED) <= set(list_maps())
+    for name in SHIPPED:
+        m = load_map(name)
+        validate_map(m)
+        assert m.source and m.licence, name
+        graph = nx.Graph(m.edges.tolist())
+        graph.add_nodes_from(range(m.num_nodes))
+        assert nx.is_connected(graph), name
+
+
+def test_gdc1_keeps_the_reference_nodes_and_poses():
+    m = load_map("gdc1")
+    assert m.num_nodes == 77 and len(m.legal_poses) == 26
+    ref_nodes = np.loadtxt("../shared/reference/socialgym/gdc1_nav_nodes.txt")
+    np.testing.assert_allclose(m.nodes, ref_nodes, atol=1e-6)
+    assert "Autonomous Mobile Robotics Laboratory" in m.licence
+    assert m.walls[:, [1, 3]].min() > -5.0, "the second floor plan must be cropped away"
+
+
+def test_ghc3_graph_lies_inside_the_building():
+    m = load_map("ghc3")
+    assert m.num_walls == 2082
+    # The building spans about x in [-20, 36], y in [-35, 26]; outdoor fragments lie outside it.
+    for points in (m.nodes, m.legal_poses[:, :2]):
+        assert np.all((points[:, 0] > -20) & (points[:, 0] < 36) & (points[:, 1] > -35) & (points[:, 1] < 26))
+    assert m.num_nodes >= 50 and len(m.legal_poses) >= 20
+
+
+def test_load_is_cached_per_name():
+    assert load_map("gdc1") is load_map("gdc1")
+
+
+def _write(tmp_path, data, name="bad.json"):
+    path = tmp_path / name
+    path.write_text(data if isinstance(data, str) else json.dumps(data))
+    return path
+
+
+def _room(**changes):
+    data = load_map("open_room").to_json()
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"walls": [[0, 0, "x", 1]]}, "walls"),
+        ({"walls": [[0, 0, float("nan"), 1]]}, r"walls\[0\]"),
+        ({"format": "other/1"}, "format"),
+        ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[0, 7]]}}, r"graph.edges\[0\]"),
+        ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[1, 1]]}}, "to itself"),
+        ({"graph": {"nodes": [[5, 5], [0.05, 5]], "edges": [[0, 1]]}}, r"graph.nodes\[1\]"),
+        ({"graph": {"nodes": [[5, 5], [5, 7], [8, 8]], "edges": [[0, 1]]}}, "disconnected"),
+        ({"legal_poses": [[5, 5, 0], [0.1, 5, 0]]}, r"legal_poses\[1\]"),
+        ({"legal_poses": [[5, 5, 0]]}, "at least 2 poses"),
+    ],
+)
+def test_bad_maps_fail_naming_the_entry(tmp_path, change, message):
+    path = _write(tmp_path, _room(**change))
+    with pytest.raises(MapError, match=message) as err:
+        load_map(path)
+    assert "bad.json" in str(err.value)
+
+
+def test_edge_through_a_wall_is_named(tmp_path):
+    data = _room()
+    data["walls"] = [*data["walls"], [5, 0, 5, 10]]  # split the room in two
+    data["graph"] = {"nodes": [[2, 5], [8, 5]], "edges": [[0, 1]]}
+    data["legal_poses"] = [[2, 2, 0], [2, 8, 0]]
+    with pytest.raises(MapError, match=r"graph.edges\[0\] \(node 0 - node 1\) passes through wall 4"):
+        load_map(_write(tmp_path, data))
+
+
+def test_unreachable_pose_is_named(tmp_path):
+    data = _room()
+    data["walls"] = [*data["walls"], [5, 0, 5, 10]]
+    data["graph"] = {"nodes": [[2, 5], [2.5, 7]], "edges": [[0, 1]]}
+    data["legal_poses"] = [[2, 2, 0], [8, 8, 0]]
+    with pytest.raises(MapError, match=r"legal_poses\[1\]"):
+        load_map(_write(tmp_path, data))
+
+
+@pytest.mark.parametrize(("text", "message"), [("{not json", "invalid JSON"), ("[]", "JSON object"), ("{}", "format")])
+def test_malformed_files(tmp_path, text, message):
+    with pytest.raises(MapError, match=message):
+        load_map(_write(tmp_path, text))
+
+
+def test_missing_field_and_unknown_name(tmp_path):
+    data = _room()
+    del data["legal_poses"]
+    with pytest.raises(MapError, match="missing field 'legal_poses'"):
+        load_map(_write(tmp_path, data))
+    with pytest.raises(MapError, match="unknown map 'nowhere'"):
+        load_map("nowhere")
+    with pytest.raises(FileNotFoundError, match="missing.json"):
+        load_map(tmp_path / "missing.json")
+
+
+def test_round_trip(tmp_path):
+    m = load_map("hallway")
+    again = load_map(m.save(tmp_path / "copy.json"))
+    for field in ("walls", "nodes", "edges", "legal_poses"):
+        np.testing.assert_array_equal(getattr(m, field), getattr(again, field))
