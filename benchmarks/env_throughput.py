@@ -65,7 +65,10 @@ def main() -> None:
     args = p.parse_args()
     single(args.map)()  # shared map tables outside the traced peaks
     rate, _ = measure(single(args.map), args.seconds)
-    report(Figure(f"ActionSelectionEnv {args.map}", 1, rate, rate, traced_peak_mib(lambda: single(args.map))), args.json)
+    report(
+        Figure(f"ActionSelectionEnv {args.map}", 1, rate, rate, traced_peak_mib(lambda: single(args.map))),
+        args.json,
+    )
     b = args.vector_batch
     rate, _ = measure(vector(args.map, b), args.seconds, warmup=2)
     peak = traced_peak_mib(lambda: vector(args.map, b), steps=2)

@@ -37,8 +37,18 @@ def build(batch: int, map_name: str = "gdc1"):
         s = holder["state"]
         carrot = navigator.update(s.robot_pose[..., :2])
         command, halt, _ = subpolicy_commands(
-            action, s.robot_pose[:, 0], s.robot_vel[:, 0], carrot[:, 0], s.human_pos, s.human_vel,
-            s.human_mask, m.wall_index, sub, planner, world.robot, world.dt,
+            action,
+            s.robot_pose[:, 0],
+            s.robot_vel[:, 0],
+            carrot[:, 0],
+            s.human_pos,
+            s.human_vel,
+            s.human_mask,
+            m.wall_index,
+            sub,
+            planner,
+            world.robot,
+            world.dt,
         )
         holder["state"], _ = step_world(s, m.wall_index, world, command[:, None], halt[:, None])
 
@@ -54,7 +64,10 @@ def main() -> None:
     for batch in args.batches:
         peak = traced_peak_mib(lambda b=batch: build(b, args.map))
         rate, _ = measure(build(batch, args.map), args.seconds)
-        report(Figure(f"GoAlone + world {args.map} H={HUMANS}", batch, rate * batch, rate * batch, peak), args.json)
+        report(
+            Figure(f"GoAlone + world {args.map} H={HUMANS}", batch, rate * batch, rate * batch, peak),
+            args.json,
+        )
 
 
 if __name__ == "__main__":

@@ -49,7 +49,9 @@ def main() -> None:
         peak = traced_peak_mib(lambda b=batch: build(b, args.map))
         rate, _ = measure(build(batch, args.map), args.seconds)
         report(
-            Figure(f"world humans-only {args.map} H={HUMANS}", batch, rate * batch, rate * batch * HUMANS, peak),
+            Figure(
+                f"world humans-only {args.map} H={HUMANS}", batch, rate * batch, rate * batch * HUMANS, peak
+            ),
             args.json,
         )
         if not args.json:

@@ -36,9 +36,20 @@ SMALL_MAPS = {
     "open_room": (box(0, 0, 10, 10), (-1.0, -1.0, 11.0, 11.0), (5.0, 5.0)),
     "hallway": (
         # two 8 x 9 m rooms joined by a 2 m wide, 14 m long corridor
-        [[0, 0, 8, 0], [8, 0, 8, 3.5], [8, 5.5, 8, 9], [8, 9, 0, 9], [0, 9, 0, 0],
-         [8, 3.5, 22, 3.5], [8, 5.5, 22, 5.5],
-         [22, 0, 30, 0], [30, 0, 30, 9], [30, 9, 22, 9], [22, 9, 22, 5.5], [22, 3.5, 22, 0]],
+        [
+            [0, 0, 8, 0],
+            [8, 0, 8, 3.5],
+            [8, 5.5, 8, 9],
+            [8, 9, 0, 9],
+            [0, 9, 0, 0],
+            [8, 3.5, 22, 3.5],
+            [8, 5.5, 22, 5.5],
+            [22, 0, 30, 0],
+            [30, 0, 30, 9],
+            [30, 9, 22, 9],
+            [22, 9, 22, 5.5],
+            [22, 3.5, 22, 0],
+        ],
         (-1.0, -1.0, 31.0, 10.0),
         (4.0, 4.5),
     ),
@@ -50,9 +61,20 @@ SMALL_MAPS = {
     ),
     "intersection": (
         # two 2 m wide, 20 m long corridors crossing at the origin
-        [[-10, -1, -1, -1], [-1, -1, -1, -10], [1, -10, 1, -1], [1, -1, 10, -1], [10, 1, 1, 1],
-         [1, 1, 1, 10], [-1, 10, -1, 1], [-1, 1, -10, 1], [-10, -1, -10, 1], [10, -1, 10, 1],
-         [-1, -10, 1, -10], [-1, 10, 1, 10]],
+        [
+            [-10, -1, -1, -1],
+            [-1, -1, -1, -10],
+            [1, -10, 1, -1],
+            [1, -1, 10, -1],
+            [10, 1, 1, 1],
+            [1, 1, 1, 10],
+            [-1, 10, -1, 1],
+            [-1, 1, -10, 1],
+            [-10, -1, -10, 1],
+            [10, -1, 10, 1],
+            [-1, -10, 1, -10],
+            [-1, 10, 1, 10],
+        ],
         (-11.0, -11.0, 11.0, 11.0),
         (0.0, 0.0),
     ),
@@ -97,15 +119,23 @@ def build_ghc3(reference: Path) -> None:
 def build_small() -> None:
     for name, (walls, region, inside) in SMALL_MAPS.items():
         m = complete_map(
-            name, np.array(walls, dtype=np.float64), region=region, seed_point=inside,
-            source="socialzoo: hand-drawn test map (tools/build_maps.py)", licence=OURS,
+            name,
+            np.array(walls, dtype=np.float64),
+            region=region,
+            seed_point=inside,
+            source="socialzoo: hand-drawn test map (tools/build_maps.py)",
+            licence=OURS,
         )
         m.save(ROOT / "maps" / f"{name}.json")
-        print(f"{name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses")
+        print(
+            f"{name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses"
+        )
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--reference", type=Path, default=ROOT.parent / "shared" / "reference" / "socialgym")
     args = parser.parse_args()
     build_gdc1(args.reference)

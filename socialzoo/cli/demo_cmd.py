@@ -39,14 +39,27 @@ def run_demo(args: argparse.Namespace) -> int:
         config = EnvConfig(map=args.map, family=args.family)
         m = load_map(config.map)
         scenario = ScenarioStream(m, 1, 1, config.scenario, config.family).make(args.seed)
-        policy = make_policy(args.policy, path=args.policy_path) if args.policy_path else make_policy(args.policy)
+        policy = (
+            make_policy(args.policy, path=args.policy_path) if args.policy_path else make_policy(args.policy)
+        )
         video = animate_episode(
-            args.out, config, scenario, policy, label=f"{args.policy} on {m.name}, seed {args.seed}",
-            view=args.view, stride=args.stride, fps=args.fps, max_frames=args.max_frames,
+            args.out,
+            config,
+            scenario,
+            policy,
+            label=f"{args.policy} on {m.name}, seed {args.seed}",
+            view=args.view,
+            stride=args.stride,
+            fps=args.fps,
+            max_frames=args.max_frames,
         )
     except (MapError, FileNotFoundError, ValueError, KeyError) as err:
         print(f"socialzoo demo: error: {err}", file=sys.stderr)
         return 2
-    result = "success" if video.metrics["success"] else ("goal reached" if video.metrics["reached"] else "no success")
+    result = (
+        "success"
+        if video.metrics["success"]
+        else ("goal reached" if video.metrics["reached"] else "no success")
+    )
     print(f"{video.path}: {video.frames} frames; {result} in {video.metrics['duration']:.1f} s")
     return 0

@@ -44,8 +44,14 @@ def register(subparsers: Any) -> None:
     imp.add_argument("--nav", type=Path, default=None, help="AMRL navigation graph JSON")
     imp.add_argument("--name", required=True, help="map name")
     imp.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"), default=None)
-    imp.add_argument("--seed-point", type=float, nargs=2, metavar=("X", "Y"), default=None,
-                     help="a point inside the building: the graph covers what is reachable from it")
+    imp.add_argument(
+        "--seed-point",
+        type=float,
+        nargs=2,
+        metavar=("X", "Y"),
+        default=None,
+        help="a point inside the building: the graph covers what is reachable from it",
+    )
     imp.add_argument("--source", default="", help="provenance text stored in the map")
     imp.add_argument("--licence", default="", help="licence text stored in the map")
     imp.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
@@ -62,8 +68,10 @@ def run_list(args: argparse.Namespace) -> int:
 
     for name in list_maps():
         m = load_map(name)
-        print(f"{name:<14} {m.num_walls:5d} walls {m.num_nodes:4d} nodes {len(m.edges):4d} edges "
-              f"{len(m.legal_poses):3d} poses  {m.source[:60]}")
+        print(
+            f"{name:<14} {m.num_walls:5d} walls {m.num_nodes:4d} nodes {len(m.edges):4d} edges "
+            f"{len(m.legal_poses):3d} poses  {m.source[:60]}"
+        )
     return 0
 
 
@@ -93,7 +101,12 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_import(args: argparse.Namespace) -> int:
-    from socialzoo.nav.importers import drop_zero_length, read_amrl_nav_graph, read_pedsim_scene, read_vector_map
+    from socialzoo.nav.importers import (
+        drop_zero_length,
+        read_amrl_nav_graph,
+        read_pedsim_scene,
+        read_vector_map,
+    )
     from socialzoo.nav.maps import MapError
     from socialzoo.nav.roadmap import complete_map
 
@@ -122,5 +135,7 @@ def run_import(args: argparse.Namespace) -> int:
     except (MapError, FileNotFoundError, ValueError) as err:
         return _fail(err)
     out = m.save(args.out or Path(f"{args.name}.json"))
-    print(f"{out}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses")
+    print(
+        f"{out}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses"
+    )
     return 0

@@ -10,7 +10,9 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 
-def _check(cls_name: str, name: str, value: float, *, positive: bool = True, allow_zero: bool = False) -> None:
+def _check(
+    cls_name: str, name: str, value: float, *, positive: bool = True, allow_zero: bool = False
+) -> None:
     """Raise ValueError naming the field when a number is not finite or out of range."""
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
         raise ValueError(f"{cls_name}.{name} must be a finite number, got {value!r}")
@@ -109,7 +111,10 @@ class HumanConfig:
     wall_reach: float = 1.0
 
     def __post_init__(self) -> None:
-        _check_all(self, nonnegative=("speed_std", "spawn_jitter", "obstacle_strength", "social_strength", "min_humans"))
+        _check_all(
+            self,
+            nonnegative=("speed_std", "spawn_jitter", "obstacle_strength", "social_strength", "min_humans"),
+        )
         for name in ("min_humans", "max_humans"):
             if not isinstance(getattr(self, name), int) or isinstance(getattr(self, name), bool):
                 raise ValueError(f"HumanConfig.{name} must be an int, got {getattr(self, name)!r}")

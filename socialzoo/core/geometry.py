@@ -33,9 +33,7 @@ def to_frame(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     return rotate(points - pose[..., :2], -pose[..., 2])
 
 
-def closest_point_on_segment(
-    p: np.ndarray, a: np.ndarray, b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def closest_point_on_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closest point of segments [a, b] to points p, and its distance.
 
     Args:
@@ -58,9 +56,7 @@ def closest_point_on_segment(
     return closest, np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2)
 
 
-def segments_intersect(
-    p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
-) -> np.ndarray:
+def segments_intersect(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     """Whether closed segments [p0, p1] and [q0, q1] share a point (touching counts).
 
     All arguments broadcast; shapes (..., 2). Returns bool (...,).
@@ -91,9 +87,7 @@ def segments_intersect(
     return hit
 
 
-def ray_segment_hit(
-    origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray
-) -> np.ndarray:
+def ray_segment_hit(origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance along unit rays to segments [a, b]; +inf where the ray misses.
 
     Args:
@@ -132,9 +126,7 @@ def ray_circle_hit(
     return np.where(inside, 0.0, np.where(hit, t, np.inf))
 
 
-def segment_hits_box(
-    a: np.ndarray, b: np.ndarray, half_length: float, half_width: float
-) -> np.ndarray:
+def segment_hits_box(a: np.ndarray, b: np.ndarray, half_length: float, half_width: float) -> np.ndarray:
     """Whether segments [a, b] (in a box's own frame) touch the box |x|<=hl, |y|<=hw.
 
     Liang-Barsky clipping of the segment against the four slabs. Shapes (..., 2) -> (...,).

@@ -19,9 +19,7 @@ def ray_angles(cfg: LaserConfig) -> np.ndarray:
     return np.linspace(-half, half, cfg.num_rays)
 
 
-def laser_scan(
-    state: WorldState, walls: WallIndex, cfg: LaserConfig, human_radius: float
-) -> np.ndarray:
+def laser_scan(state: WorldState, walls: WallIndex, cfg: LaserConfig, human_radius: float) -> np.ndarray:
     """Ranges seen by every robot.
 
     Args:

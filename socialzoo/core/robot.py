@@ -13,9 +13,7 @@ from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
 
 
-def limit_command(
-    vel: np.ndarray, command: np.ndarray, dt: float, cfg: RobotConfig
-) -> np.ndarray:
+def limit_command(vel: np.ndarray, command: np.ndarray, dt: float, cfg: RobotConfig) -> np.ndarray:
     """Velocities reached after one step of acceleration-limited tracking of a command.
 
     Args:

@@ -20,6 +20,7 @@ from socialzoo.core.geometry import (
     to_frame,
 )
 
+
 @dataclass(frozen=True)
 class GridTable:
     """Candidate walls per grid cell, in compressed rows: every wall within `reach` of the cell.
@@ -236,13 +237,17 @@ class WallIndex:
             seg = query
         else:
             seg_of_sample = np.repeat(np.arange(len(a0)), num_samples)
-            rank = np.arange(len(seg_of_sample)) - np.repeat(np.cumsum(num_samples) - num_samples, num_samples)
+            rank = np.arange(len(seg_of_sample)) - np.repeat(
+                np.cumsum(num_samples) - num_samples, num_samples
+            )
             frac = rank / np.maximum(num_samples - 1, 1).take(seg_of_sample)
             samples = a0.take(seg_of_sample, axis=0) + frac[:, None] * delta.take(seg_of_sample, axis=0)
             query, wall = t.candidates(t.cells(samples))
             key = np.unique(seg_of_sample.take(query) * self.num_walls + wall)
             seg, wall = np.divmod(key, self.num_walls)
-        hit = segments_intersect(a0.take(seg, axis=0), a1.take(seg, axis=0), self.wall_a[wall], self.wall_b[wall])
+        hit = segments_intersect(
+            a0.take(seg, axis=0), a1.take(seg, axis=0), self.wall_a[wall], self.wall_b[wall]
+        )
         return (np.bincount(seg[hit], minlength=len(a0)) > 0).reshape(shape)
 
     def footprint_hits(self, pose: np.ndarray, half_length: float, half_width: float) -> np.ndarray:
@@ -256,7 +261,9 @@ class WallIndex:
         flat = pose.reshape(-1, 3)
         result = np.zeros(len(flat), dtype=bool)
         # Only footprints in cells closer to a wall than their half-diagonal need the exact test.
-        near = np.flatnonzero(t.cell_clearance.take(t.cells(flat[:, :2])) <= math.hypot(half_length, half_width))
+        near = np.flatnonzero(
+            t.cell_clearance.take(t.cells(flat[:, :2])) <= math.hypot(half_length, half_width)
+        )
         if len(near):
             query, wall = t.candidates(t.cells(flat[near, :2]))
             a = to_frame(self.wall_a[wall], flat[near[query]])

@@ -41,9 +41,7 @@ def robot_velocity_vectors(state: WorldState) -> np.ndarray:
     return np.stack((v * np.cos(theta), v * np.sin(theta)), axis=-1)
 
 
-def robot_collisions(
-    state: WorldState, walls: WallIndex, cfg: WorldConfig
-) -> tuple[np.ndarray, np.ndarray]:
+def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> tuple[np.ndarray, np.ndarray]:
     """(robot_wall (B, R), robot_human (B, R, H)) collision flags for the current state."""
     robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
     diff = state.robot_pose[:, :, None, :2] - state.human_pos[:, None, :, :]
@@ -94,11 +92,21 @@ def step_world(
         human_learned,
     )
     human_pos, human_vel, blocked = integrate_humans(
-        state.human_pos, state.human_vel, accel, state.human_pref_speed, state.human_mask, walls, wall_dist,
+        state.human_pos,
+        state.human_vel,
+        accel,
+        state.human_pref_speed,
+        state.human_mask,
+        walls,
+        wall_dist,
         cfg.dt,
     )
     waypoint, direction = advance_waypoints(
-        human_pos, target, state.human_route_len, state.human_waypoint, state.human_direction,
+        human_pos,
+        target,
+        state.human_route_len,
+        state.human_waypoint,
+        state.human_direction,
         hcfg.waypoint_radius,
     )
     robot_pose, robot_vel = step_robot(

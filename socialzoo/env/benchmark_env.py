@@ -79,7 +79,9 @@ class ActionSelectionEnv(gym.Env):
         **overrides: Any,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
+            )
         self.config = make_config(config, overrides)
         if self.config.num_robots != 1:
             raise ValueError(
@@ -99,7 +101,9 @@ class ActionSelectionEnv(gym.Env):
         self._needs_reset = True
         self._seeded = False
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict]:
         """Start an episode.
 
         Args:

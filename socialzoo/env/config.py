@@ -73,7 +73,12 @@ class EnvConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.map, str) or not self.map:
             raise ValueError(f"EnvConfig.map must be a map name or path, got {self.map!r}")
-        for name, low in (("num_robots", 1), ("max_steps", 1), ("learned_humans", 0), ("human_neighbours", 0)):
+        for name, low in (
+            ("num_robots", 1),
+            ("max_steps", 1),
+            ("learned_humans", 0),
+            ("human_neighbours", 0),
+        ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:
                 raise ValueError(f"EnvConfig.{name} must be an int >= {low}, got {value!r}")
@@ -89,7 +94,9 @@ class EnvConfig:
                 f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"
             )
         if self.family is not None and self.family not in FAMILIES:
-            raise ValueError(f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}")
+            raise ValueError(
+                f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
+            )
         for name, cls in _NESTED.items():
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"EnvConfig.{name} must be a {cls.__name__}, got {getattr(self, name)!r}")

@@ -88,7 +88,9 @@ class SocialNavCore:
         self.walls = self.map.wall_index
         planner = config.planner
         # The planner's wall distance field also clears sight lines far from walls (cached per map).
-        self.field = distance_field(self.walls, planner.field_resolution, planner.field_range, planner.field_pad)
+        self.field = distance_field(
+            self.walls, planner.field_resolution, planner.field_range, planner.field_pad
+        )
         self.graph = graph_of(self.map)
         self.navigator = Navigator(self.graph, batch_size, config.num_robots)
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
@@ -309,7 +311,9 @@ class SocialNavCore:
                 raise ValueError("human actions given, but config.learned_humans is 0")
             return None, None
         if human_action is None:
-            raise ValueError(f"config.learned_humans = {num}: human_action of shape (B, {num}, 2) is required")
+            raise ValueError(
+                f"config.learned_humans = {num}: human_action of shape (B, {num}, 2) is required"
+            )
         action = np.asarray(human_action, dtype=np.float64)
         if action.shape != (self.batch_size, num, 2):
             raise ValueError(f"human_action must have shape {(self.batch_size, num, 2)}, got {action.shape}")

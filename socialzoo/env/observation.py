@@ -26,7 +26,6 @@ from typing import Literal, get_args
 import numpy as np
 from gymnasium import spaces
 
-
 ObservationLayout = Literal["paper", "socialgym1"]
 
 # Entries before the human slots in the paper layout: goal (2), local target (2), (v, omega) (2),

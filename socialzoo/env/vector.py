@@ -68,7 +68,9 @@ class ActionSelectionVectorEnv(VectorEnv):
         self._started = False
         self._renderer: Any = None
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict]:
         """Reset every row (options {"reset_mask": (B,) bool} resets only those rows)."""
         super().reset(seed=seed)
         if seed is not None or not self._started:
@@ -92,7 +94,11 @@ class ActionSelectionVectorEnv(VectorEnv):
         actions = np.asarray(actions)
         if self.config.robot_action == "subpolicy":
             if actions.shape != (self.num_envs,) or not np.issubdtype(actions.dtype, np.integer):
-                if actions.shape == (self.num_envs,) and np.all(np.isfinite(actions)) and np.all(actions == np.round(actions)):
+                if (
+                    actions.shape == (self.num_envs,)
+                    and np.all(np.isfinite(actions))
+                    and np.all(actions == np.round(actions))
+                ):
                     actions = actions.astype(np.int64)
                 else:
                     raise ValueError(f"actions must be {self.num_envs} integers, got {actions!r}")

@@ -207,9 +207,7 @@ def social_pair_force(
     return out
 
 
-def obstacle_force(
-    pos: np.ndarray, closest: np.ndarray, dist: np.ndarray, cfg: HumanConfig
-) -> np.ndarray:
+def obstacle_force(pos: np.ndarray, closest: np.ndarray, dist: np.ndarray, cfg: HumanConfig) -> np.ndarray:
     """Repulsion from the nearest wall point, exp(-(d - r) / sigma) along the wall normal.
 
     Args:

@@ -26,8 +26,16 @@ def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: boo
         ax.plot(m.nodes[:, 0], m.nodes[:, 1], "o", color="tab:blue", markersize=2.5)
     if show_poses and len(m.legal_poses):
         p = m.legal_poses
-        ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color="tab:orange", scale=40, width=0.003,
-                  label="legal poses")
+        ax.quiver(
+            p[:, 0],
+            p[:, 1],
+            np.cos(p[:, 2]),
+            np.sin(p[:, 2]),
+            color="tab:orange",
+            scale=40,
+            width=0.003,
+            label="legal poses",
+        )
         ax.plot(p[:, 0], p[:, 1], "o", color="tab:orange", markersize=3)
     if m.region is not None:
         x0, y0, x1, y1 = m.region
@@ -36,8 +44,10 @@ def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: boo
     else:
         ax.autoscale()
     ax.set_aspect("equal")
-    ax.set_title(f"{m.name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
-                 f"{len(m.legal_poses)} legal poses")
+    ax.set_title(
+        f"{m.name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
+        f"{len(m.legal_poses)} legal poses"
+    )
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     return ax

@@ -34,16 +34,53 @@ def test_map_errors_exit_2_without_traceback(tmp_path, capsys):
 def test_map_import_from_walls(tmp_path):
     walls = write_vector_map(tmp_path / "building.txt", load_map("doorway").walls)
     out = tmp_path / "mine.json"
-    assert main(["map", "import", "--walls", str(walls), "--name", "mine", "--seed-point", "4", "4",
-                 "--region", "-1", "-1", "17", "9", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "map",
+                "import",
+                "--walls",
+                str(walls),
+                "--name",
+                "mine",
+                "--seed-point",
+                "4",
+                "4",
+                "--region",
+                "-1",
+                "-1",
+                "17",
+                "9",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     m = load_map(out)
     assert m.name == "mine" and m.num_nodes >= 2 and len(m.legal_poses) >= 2
 
 
 def test_demo_writes_a_gif(tmp_path, capsys):
     out = tmp_path / "episode.gif"
-    assert main(["demo", "--policy", "goalone", "--map", "open_room", "--seed", "1", "--max-frames", "30",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "demo",
+                "--policy",
+                "goalone",
+                "--map",
+                "open_room",
+                "--seed",
+                "1",
+                "--max-frames",
+                "30",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     frames = iio.imread(out, index=None)
     assert frames.ndim == 4 and 2 <= len(frames) <= 30
     assert np.ptp(frames) > 0

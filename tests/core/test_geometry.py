@@ -27,9 +27,10 @@ def _orient(a, b, c):
 
 
 def _on_segment(a, b, p):
-    return min(a[0], b[0]) - 1e-12 <= p[0] <= max(a[0], b[0]) + 1e-12 and min(a[1], b[1]) - 1e-12 <= p[
-        1
-    ] <= max(a[1], b[1]) + 1e-12
+    return (
+        min(a[0], b[0]) - 1e-12 <= p[0] <= max(a[0], b[0]) + 1e-12
+        and min(a[1], b[1]) - 1e-12 <= p[1] <= max(a[1], b[1]) + 1e-12
+    )
 
 
 def _scalar_intersect(p0, p1, q0, q1):

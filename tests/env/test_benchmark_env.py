@@ -93,11 +93,16 @@ def test_vector_rows_equal_single_envs():
 
 
 def test_vector_env_autoresets_and_reports_metrics():
-    vec = gym.make_vec("socialzoo/ActionSelection-v0", num_envs=3, vectorization_mode="vector_entry_point",
-                       max_steps=30, scenario={"min_humans": 5, "max_humans": 5})
+    vec = gym.make_vec(
+        "socialzoo/ActionSelection-v0",
+        num_envs=3,
+        vectorization_mode="vector_entry_point",
+        max_steps=30,
+        scenario={"min_humans": 5, "max_humans": 5},
+    )
     vec.reset(seed=0)
     for _ in range(30):
-        obs, reward, terminated, truncated, info = vec.step(np.zeros(3, dtype=np.int64))
+        obs, _, terminated, truncated, info = vec.step(np.zeros(3, dtype=np.int64))
     assert truncated.all() or terminated.any()
     assert "final_info" in info and info["final_info"]["metrics"]["steps"].max() == 30
     assert vec.observation_space.contains(obs)
@@ -119,7 +124,7 @@ def test_episode_end_info_and_step_after_end():
 @pytest.mark.parametrize("bad", [4, -1, 1.5, float("nan"), "go", [0, 1]])
 def test_bad_actions_raise_before_anything_changes(bad):
     env = ActionSelectionEnv(map="open_room", max_steps=20)
-    obs, _ = env.reset(seed=0)
+    env.reset(seed=0)
     before = env.core.state.copy()
     with pytest.raises(ValueError, match="action"):
         env.step(bad)

@@ -53,7 +53,10 @@ def _reference(pos, vel, target, speed, robot_pos, robot_vel, walls, cfg):
         if best <= 1.0:
             away = (pos[i] - point) / best
             amount = math.exp(-(best - cfg.force_radius) / cfg.obstacle_sigma)
-            fx, fy = fx + cfg.obstacle_strength * amount * away[0], fy + cfg.obstacle_strength * amount * away[1]
+            fx, fy = (
+                fx + cfg.obstacle_strength * amount * away[0],
+                fy + cfg.obstacle_strength * amount * away[1],
+            )
         out[i] = fx, fy
     return out
 
@@ -70,8 +73,15 @@ def test_matches_scalar_reference(seed):
     robot_pos = rng.uniform([0.5, 0.5], [9.5, 5.5], (2, 2))
     robot_vel = rng.normal(0, 1.0, (2, 2))
     got, wall_dist = human_acceleration(
-        pos[None], vel[None], target[None], speed[None], np.ones((1, n), bool),
-        robot_pos[None], robot_vel[None], WallIndex(walls), CFG,
+        pos[None],
+        vel[None],
+        target[None],
+        speed[None],
+        np.ones((1, n), bool),
+        robot_pos[None],
+        robot_vel[None],
+        WallIndex(walls),
+        CFG,
     )
     want = _reference(pos, vel, target, speed, robot_pos, robot_vel, walls, CFG)
     # The pair terms are evaluated in float32: agreement to about 1e-5 relative.
@@ -99,8 +109,15 @@ def test_pair_force_is_antisymmetric_between_two_humans():
     pos = np.array([[[0.0, 0.0], [0.7, 0.2]]])
     vel = np.array([[[1.0, 0.0], [-0.8, 0.1]]])
     acc, _ = human_acceleration(
-        pos, vel, pos, np.zeros((1, 2)), np.ones((1, 2), bool), np.full((1, 1, 2), 50.0), np.zeros((1, 1, 2)),
-        WallIndex(walls), HumanConfig(desired_factor=1e-9),
+        pos,
+        vel,
+        pos,
+        np.zeros((1, 2)),
+        np.ones((1, 2), bool),
+        np.full((1, 1, 2), 50.0),
+        np.zeros((1, 1, 2)),
+        WallIndex(walls),
+        HumanConfig(desired_factor=1e-9),
     )
     np.testing.assert_allclose(acc[0, 0], -acc[0, 1], atol=1e-5)
 

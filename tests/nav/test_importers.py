@@ -38,7 +38,7 @@ def test_amrl_nav_graph(tmp_path):
     np.testing.assert_array_equal(nodes, [[1.0, 2.0], [3.0, 2.0]])
     np.testing.assert_array_equal(edges, [[0, 1]])
     (tmp_path / "broken.json").write_text('{"nodes": [')
-    with pytest.raises(MapError, match="broken.json"):
+    with pytest.raises(MapError, match=r"broken\.json"):
         read_amrl_nav_graph(tmp_path / "broken.json")
 
 
@@ -51,7 +51,7 @@ def test_pedsim_scene(tmp_path):
     np.testing.assert_array_equal(scene.walls, [[0, 0, 10, 0], [10, 0, 10, 5]])
     np.testing.assert_array_equal(scene.nodes, [[2, 2]])
     (tmp_path / "bad.xml").write_text('<scenario><obstacle x1="0" y1="zero" x2="1" y2="0"/></scenario>')
-    with pytest.raises(MapError, match="bad.xml"):
+    with pytest.raises(MapError, match=r"bad\.xml"):
         read_pedsim_scene(tmp_path / "bad.xml")
 
 
@@ -64,7 +64,9 @@ def test_roadmap_is_connected_and_never_crosses_walls(name):
     graph.add_nodes_from(range(len(roadmap.nodes)))
     assert nx.is_connected(graph)
     a, b = roadmap.nodes[roadmap.edges[:, 0]], roadmap.nodes[roadmap.edges[:, 1]]
-    crossing = segments_intersect(a[:, None], b[:, None], source.walls[None, :, :2], source.walls[None, :, 2:])
+    crossing = segments_intersect(
+        a[:, None], b[:, None], source.walls[None, :, :2], source.walls[None, :, 2:]
+    )
     assert not crossing.any()
 
 

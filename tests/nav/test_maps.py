@@ -95,7 +95,9 @@ def test_unreachable_pose_is_named(tmp_path):
         load_map(_write(tmp_path, data))
 
 
-@pytest.mark.parametrize(("text", "message"), [("{not json", "invalid JSON"), ("[]", "JSON object"), ("{}", "format")])
+@pytest.mark.parametrize(
+    ("text", "message"), [("{not json", "invalid JSON"), ("[]", "JSON object"), ("{}", "format")]
+)
 def test_malformed_files(tmp_path, text, message):
     with pytest.raises(MapError, match=message):
         load_map(_write(tmp_path, text))
@@ -108,7 +110,7 @@ def test_missing_field_and_unknown_name(tmp_path):
         load_map(_write(tmp_path, data))
     with pytest.raises(MapError, match="unknown map 'nowhere'"):
         load_map("nowhere")
-    with pytest.raises(FileNotFoundError, match="missing.json"):
+    with pytest.raises(FileNotFoundError, match=r"missing\.json"):
         load_map(tmp_path / "missing.json")
 
 
