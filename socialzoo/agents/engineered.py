@@ -1,0 +1,220 @@
+"""The engineered baselines of the benchmark (SPEC section 10): GoAlone, and the reference policy Ref
+(GoAlone while the corridor ahead is clear, Follow a human walking our way, else Halt).
+
+Ref's decision is a pure, batched function of what the robot sees in its own frame (`ref_actions`);
+the Ref policy feeds it from the paper observation, or from the core's world state for layouts that
+lack the robot's velocity.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from socialzoo.agents.base import check_observations
+from socialzoo.core.geometry import wrap_angle
+from socialzoo.nav.subpolicies import FOLLOW, GO_ALONE, HALT
+
+if TYPE_CHECKING:
+    from socialzoo.env.core import SocialNavCore
+
+# The paper observation layout (socialzoo.env.observation): goal (0:2), local target (2:4), robot
+# (v, omega) (4:6), previous action (6), then slots of (x, y, vx, vy).
+_TARGET = slice(2, 4)
+_ROBOT_V = 4
+_HEADER = 7
+_SLOT = 4
+
+
+class GoAlone:
+    """Always action 0 (GoAlone): follow the global plan's carrot, ignoring everybody."""
+
+    name = "goalone"
+
+    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+        """Zeros of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
+        obs = check_observations(obs, "GoAlone.act")
+        return np.zeros(obs.shape[:-1], dtype=np.int64)
+
+    def config(self) -> dict[str, Any]:
+        return {}
+
+
+def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> None:
+    if (
+        not isinstance(value, (int, float))
+        or isinstance(value, bool)
+        or not math.isfinite(value)
+        or value < 0
+        or (value == 0 and not allow_zero)
+    ):
+        raise ValueError(
+            f"RefConfig.{name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}"
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class RefConfig:
+    """Parameters of the reference policy (SPEC section 10).
+
+    Attributes:
+        corridor_half_width: a human blocks the way when |y| (robot frame) is at most this, m.
+        lookahead_margin: ... and when it is closer than |local target| + this margin, m.
+        heading_tolerance: Follow when the blocking human walks within this angle of the
+            direction to the local target, rad.
+        sector_deg: half-angle of the front sector, degrees: only humans with x > 0 and a
+            bearing within +-sector_deg count. The default 90 is the whole half-plane x > 0 (the
+            SPEC's "ahead"); the corridor test then does the narrowing.
+        still_speed: a human slower than this has no walking direction (never followed), m/s.
+    """
+
+    corridor_half_width: float = 0.62
+    lookahead_margin: float = 0.9
+    heading_tolerance: float = 0.8
+    sector_deg: float = 90.0
+    still_speed: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("corridor_half_width", "heading_tolerance", "sector_deg"):
+            _check_positive(name, getattr(self, name))
+        for name in ("lookahead_margin", "still_speed"):
+            _check_positive(name, getattr(self, name), allow_zero=True)
+        if self.sector_deg > 90.0:
+            raise ValueError(
+                f"RefConfig.sector_deg must be at most 90 (humans ahead), got {self.sector_deg!r}"
+            )
+
+
+def ref_actions(
+    human_xy: np.ndarray,
+    human_vel: np.ndarray,
+    seen: np.ndarray,
+    target_xy: np.ndarray,
+    cfg: RefConfig | None = None,
+) -> np.ndarray:
+    """Ref's action for each of N robots, from what each sees in its own frame.
+
+    A human blocks the way when it is seen, ahead (x > 0, bearing within the front sector),
+    inside the corridor |y| <= corridor_half_width and closer than |local target| +
+    lookahead_margin. No blocker: GoAlone. Otherwise the nearest blocker decides: if it walks
+    (speed >= still_speed) in a direction within heading_tolerance of the direction to the
+    local target, Follow; else Halt. Ref never passes.
+
+    Args:
+        human_xy: (N, H, 2) human centres relative to the robot, robot frame, m.
+        human_vel: (N, H, 2) the humans' own (world) velocities expressed in robot axes, m/s
+            (not relative to the robot: a human standing still has zero velocity).
+        seen: (N, H) bool, the humans the robot sees (present and not occluded).
+        target_xy: (N, 2) the local target (carrot), robot frame, m.
+        cfg: parameters (defaults if None).
+
+    Returns:
+        (N,) int64 actions in {0 GoAlone, 1 Halt, 2 Follow}.
+    """
+    cfg = cfg or RefConfig()
+    x, y = human_xy[..., 0], human_xy[..., 1]
+    dist = np.sqrt(x**2 + y**2)
+    ahead = (x > 0.0) & (np.abs(np.arctan2(y, x)) <= math.radians(cfg.sector_deg))
+    reach = np.sqrt((target_xy**2).sum(-1)) + cfg.lookahead_margin
+    blocking = np.asarray(seen, dtype=bool) & ahead & (np.abs(y) <= cfg.corridor_half_width)
+    blocking &= dist < reach[:, None]
+    n = len(target_xy)
+    if human_xy.shape[1] == 0:
+        return np.full(n, GO_ALONE, dtype=np.int64)
+    nearest = np.argmin(np.where(blocking, dist, np.inf), axis=1)
+    vel = human_vel[np.arange(n), nearest]
+    moving = vel[:, 0] ** 2 + vel[:, 1] ** 2 >= cfg.still_speed**2
+    target_dir = np.arctan2(target_xy[:, 1], target_xy[:, 0])
+    mismatch = np.abs(wrap_angle(np.arctan2(vel[:, 1], vel[:, 0]) - target_dir))
+    follow = moving & (mismatch <= cfg.heading_tolerance)
+    action = np.where(blocking.any(axis=1), np.where(follow, FOLLOW, HALT), GO_ALONE)
+    return action.astype(np.int64)
+
+
+def ref_inputs_from_paper_obs(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`ref_actions`' inputs from paper-layout observations (N, 7 + 4K).
+
+    Slots hold positions and velocities relative to the robot; the robot's own velocity in its
+    frame is (v, 0), so a human's velocity in robot axes is the slot's (vx + v, vy). A slot is
+    seen when its position is not zero (empty and occluded slots are all zero; a visible human
+    at exactly the robot's centre cannot happen).
+
+    Raises:
+        ValueError: the width is not 7 + 4K.
+    """
+    width = obs.shape[-1]
+    if width < _HEADER or (width - _HEADER) % _SLOT:
+        raise ValueError(
+            f"Ref: a paper-layout observation has 7 + 4K numbers, got {width}; "
+            "for another layout pass the core (Ref.act(obs, core))"
+        )
+    obs = obs.astype(np.float64)
+    slots = obs[:, _HEADER:].reshape(len(obs), -1, _SLOT)
+    xy = slots[..., 0:2]
+    vel = slots[..., 2:4].copy()
+    vel[..., 0] += obs[:, _ROBOT_V, None]
+    seen = (xy != 0.0).any(axis=-1)
+    return xy, vel, seen, obs[:, _TARGET]
+
+
+def ref_inputs_from_core(core: SocialNavCore) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`ref_actions`' inputs for all B*R robots of a core, from its world state and carrots.
+
+    Visibility is recomputed with the observation's own rule (socialzoo.nav.visibility).
+    """
+    from socialzoo.nav.visibility import visible_humans
+
+    state = core.state
+    if state is None:
+        raise RuntimeError("Ref: the core has no state yet (reset_rows first)")
+    b, r = state.robot_pose.shape[:2]
+    pose = state.robot_pose.reshape(b * r, 3)
+    human_pos = np.repeat(state.human_pos, r, axis=0)
+    human_vel = np.repeat(state.human_vel, r, axis=0)
+    mask = np.repeat(state.human_mask, r, axis=0)
+    seen = visible_humans(pose, human_pos, mask, core.walls, getattr(core, "field", None))
+    c, s = np.cos(pose[:, 2])[:, None], np.sin(pose[:, 2])[:, None]
+
+    def to_robot_axes(vec: np.ndarray) -> np.ndarray:
+        return np.stack((c * vec[..., 0] + s * vec[..., 1], c * vec[..., 1] - s * vec[..., 0]), axis=-1)
+
+    rel = human_pos - pose[:, None, :2]
+    carrot = core.carrot.reshape(b * r, 1, 2) - pose[:, None, :2]
+    return to_robot_axes(rel), to_robot_axes(human_vel), seen, to_robot_axes(carrot)[:, 0]
+
+
+class Ref:
+    """The engineered reference policy (SPEC section 10); see `ref_actions`.
+
+    With the paper observation layout Ref acts on the observation alone (so its demonstrations
+    are a function of what a learner sees); with another layout it needs the core.
+
+    Args:
+        config: Ref's parameters; keyword arguments build one when config is None.
+    """
+
+    name = "ref"
+
+    def __init__(self, config: RefConfig | None = None, **kwargs: Any) -> None:
+        if config is not None and kwargs:
+            raise ValueError("Ref: give either config or keyword parameters, not both")
+        self.cfg = config if config is not None else RefConfig(**kwargs)
+
+    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+        """Actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
+        obs = check_observations(obs, "Ref.act")
+        lead = obs.shape[:-1]
+        layout = "paper" if core is None else core.config.observation.layout
+        if layout == "paper":
+            inputs = ref_inputs_from_paper_obs(obs.reshape(-1, obs.shape[-1]))
+        else:
+            inputs = ref_inputs_from_core(core)  # type: ignore[arg-type]
+            if inputs[0].shape[0] != math.prod(lead):
+                raise ValueError(f"Ref.act: observations of shape {obs.shape} do not match the core's batch")
+        return ref_actions(*inputs, self.cfg).reshape(lead)
+
+    def config(self) -> dict[str, Any]:
+        return asdict(self.cfg)

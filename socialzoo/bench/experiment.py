@@ -1,0 +1,459 @@
+"""The `benchmark` experiment (SPEC section 10, performance and transfer): policies x maps x trials
+-> results store -> summary.csv, summary.md and figures, with config.json beside them.
+
+Trials already in the store (same policy, test set, scenario and config hash) are read, not rerun,
+so a repeated run is free and an interrupted one resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import inspect
+import json
+import logging
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.runner import BACKENDS, Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
+from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.tables import policy_label, summarize, write_summary_csv, write_summary_md
+from socialzoo.env.config import EnvConfig
+from socialzoo.nav.scenarios import TEST_SETS, TestSet
+
+logger = logging.getLogger(__name__)
+
+STORE_NAME = "results.sqlite"
+CONFIG_NAME = "config.json"
+GIF_NAME = "ref_episode.gif"
+QUICK_POLICIES = ("goalone", "ref")
+QUICK_MAPS = ("gdc1", "ghc3")
+
+
+def benchmark_maps() -> list[str]:
+    """Maps with benchmark test sets ("<map>-test" and "<map>-quick")."""
+    return sorted({ts.map_name for ts in TEST_SETS.values()})
+
+
+@dataclass(frozen=True, kw_only=True)
+class BenchmarkConfig:
+    """What a benchmark run evaluates, and how.
+
+    Attributes:
+        policies: registry names of the policies (socialzoo.agents.POLICIES).
+        maps: maps to evaluate on; each uses its test set "<map>-test" (2000 scenarios), or
+            "<map>-quick" (100) with quick=True.
+        trials: scenarios per policy and map: the first `trials` of each test set; None: all.
+        quick: use the quick test sets.
+        backend: "local" (processes on this machine) or "ray".
+        address: Ray cluster address (Ray backend); None starts a local Ray.
+        workers: local processes, or Ray chunks (None: one per cluster CPU).
+        batch_size: env rows stepped together per worker.
+        env_overrides: EnvConfig.replace keywords applied to every map's env config, e.g.
+            {"max_steps": 400}; plain JSON values.
+        policy_kwargs: make_policy keyword arguments per policy name, e.g. {"ppo": {"path": ...}}.
+        gif: also write one animated Ref episode (ref_episode.gif) on the first map.
+    """
+
+    policies: tuple[str, ...] = QUICK_POLICIES
+    maps: tuple[str, ...] = QUICK_MAPS
+    trials: int | None = None
+    quick: bool = False
+    backend: Backend = "local"
+    address: str | None = None
+    workers: int | None = 2
+    batch_size: int = 64
+    env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    policy_kwargs: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    gif: bool = False
+
+    def __post_init__(self) -> None:
+        from socialzoo.agents import POLICIES
+
+        object.__setattr__(self, "policies", tuple(self.policies))
+        object.__setattr__(self, "maps", tuple(self.maps))
+        if not self.policies:
+            raise ValueError("BenchmarkConfig.policies is empty")
+        for p in self.policies:
+            if p not in POLICIES:
+                known = ", ".join(sorted(POLICIES))
+                raise ValueError(f"BenchmarkConfig.policies: unknown policy {p!r}; known policies: {known}")
+        if not self.maps:
+            raise ValueError("BenchmarkConfig.maps is empty")
+        for name in ("policies", "maps"):
+            values = getattr(self, name)
+            if len(set(values)) != len(values):
+                raise ValueError(f"BenchmarkConfig.{name} has duplicates: {list(values)!r}")
+        unknown = sorted(set(self.policy_kwargs) - set(self.policies))
+        if unknown:
+            raise ValueError(f"BenchmarkConfig.policy_kwargs names policies not evaluated: {unknown}")
+        if self.trials is not None and (
+            not isinstance(self.trials, int) or isinstance(self.trials, bool) or self.trials < 1
+        ):
+            raise ValueError(f"BenchmarkConfig.trials must be an int >= 1 or None, got {self.trials!r}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"BenchmarkConfig.backend must be one of {BACKENDS}, got {self.backend!r}")
+        if self.address is not None and self.backend != "ray":
+            raise ValueError(f"BenchmarkConfig.address is for the Ray backend, got backend {self.backend!r}")
+        if self.workers is not None and (
+            not isinstance(self.workers, int) or isinstance(self.workers, bool) or self.workers < 1
+        ):
+            raise ValueError(f"BenchmarkConfig.workers must be an int >= 1 or None, got {self.workers!r}")
+        if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
+            raise ValueError(f"BenchmarkConfig.batch_size must be an int >= 1, got {self.batch_size!r}")
+        EnvConfig().replace(**dict(self.env_overrides))  # fail early, naming a bad override
+
+    def test_set_name(self, map_name: str) -> str:
+        """The registry test set evaluated on a map."""
+        return f"{map_name}-{'quick' if self.quick else 'test'}"
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON form."""
+        data = dataclasses.asdict(self)
+        data["policies"] = list(self.policies)
+        data["maps"] = list(self.maps)
+        data["env_overrides"] = dict(self.env_overrides)
+        data["policy_kwargs"] = {k: dict(v) for k, v in self.policy_kwargs.items()}
+        return data
+
+
+def quick_config(**changes: Any) -> BenchmarkConfig:
+    """The quick benchmark (`make run`): GoAlone and Ref, 100 trials on each quick test set, a GIF."""
+    base: dict[str, Any] = {"policies": QUICK_POLICIES, "maps": QUICK_MAPS, "quick": True, "gif": True}
+    base.update(changes)
+    return BenchmarkConfig(**base)
+
+
+@dataclass(frozen=True)
+class BenchmarkResult:
+    """What a benchmark run produced.
+
+    Attributes:
+        out_dir: the output directory.
+        summary: one dict per policy and map (socialzoo.bench.tables.summarize).
+        files: every file written (store, config, tables, figures, GIF).
+        computed: trials run by this call.
+        reused: trials read from the store.
+        seconds: wall time of the evaluation itself.
+    """
+
+    out_dir: Path
+    summary: list[dict[str, Any]]
+    files: list[Path]
+    computed: int
+    reused: int
+    seconds: float
+
+
+def env_id_for(map_name: str) -> str | None:
+    """The registered benchmark env id of a map ("gdc1" -> "socialzoo/ActionSelection-v0"), or None.
+
+    Its version suffix changes whenever a seeded rollout changes, so it is part of the config hash.
+    """
+    from socialzoo.env.registration import BENCHMARK_IDS
+
+    return next((env_id for env_id, kw in BENCHMARK_IDS.items() if kw.get("map") == map_name), None)
+
+
+def _file_digest(path: str | Path) -> str | None:
+    p = Path(path)
+    if not p.is_file():
+        return None
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+# Subpackages whose code decides a rollout (with the policy's own module).
+_ROLLOUT_PACKAGES = ("core", "humans", "nav", "env")
+
+
+@functools.cache
+def source_digest(files: tuple[str, ...] = ()) -> str:
+    """sha256 of the source code that decides a rollout (socialzoo.core, humans, nav, env) plus
+    `files`, e.g. a policy's module (paths and contents)."""
+    import socialzoo
+
+    root = Path(socialzoo.__file__).resolve().parent
+    paths = sorted(
+        {f for pkg in _ROLLOUT_PACKAGES for f in (root / pkg).rglob("*.py")} | {Path(f) for f in files}
+    )
+    digest = hashlib.sha256()
+    for path in paths:
+        name = path.relative_to(root).as_posix() if path.is_relative_to(root) else path.name
+        digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def _map_digest(name: str) -> str:
+    from socialzoo.nav.maps import load_map
+
+    text = json.dumps(load_map(name).to_json(), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def config_hash(
+    env_config: EnvConfig,
+    policy: str,
+    policy_object: Any,
+    test_set: TestSet,
+    policy_kwargs: Mapping[str, Any] | None = None,
+) -> str:
+    """16 hex digits naming everything that decides a trial's outcome besides its scenario index.
+
+    Covered: the env config and the map's registered env id; the map's data; the source code of
+    the simulation (socialzoo.core, humans, nav, env) and of the policy's module, so that results
+    of changed code are never read back as current ones; the policy's parameters (and the digest
+    of its file, for learned policies); the test set's generator (map, base seed, scenario
+    config; not its length, so a longer run reuses a shorter one's trials).
+    """
+    from socialzoo.agents.base import policy_config
+
+    kwargs = dict(policy_kwargs or {})
+    module_file = inspect.getsourcefile(type(policy_object))
+    payload = {
+        "env_id": env_id_for(test_set.map_name),
+        "env": env_config.to_dict(),
+        "map_sha256": _map_digest(env_config.map),
+        "code_sha256": source_digest((module_file,) if module_file else ()),
+        "policy": {
+            "name": policy,
+            "config": policy_config(policy_object),
+            "file_sha256": _file_digest(kwargs["path"]) if "path" in kwargs else None,
+        },
+        "test_set": {
+            "map": test_set.map_name,
+            "base_seed": test_set.base_seed,
+            "scenario": dataclasses.asdict(test_set.cfg),
+        },
+    }
+    text = json.dumps(payload, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _resolve_test_sets(
+    config: BenchmarkConfig, test_sets: Mapping[str, TestSet] | None
+) -> dict[str, TestSet]:
+    """Test set per map: given ones first, else the registry's."""
+    out = {}
+    for m in config.maps:
+        if test_sets is not None and m in test_sets:
+            out[m] = test_sets[m]
+            continue
+        name = config.test_set_name(m)
+        if name not in TEST_SETS:
+            raise ValueError(
+                f"unknown map {m!r}: no test set {name!r}; maps with test sets: {', '.join(benchmark_maps())}"
+            )
+        out[m] = TEST_SETS[name]
+    return out
+
+
+def run_benchmark(
+    config: BenchmarkConfig,
+    out_dir: str | Path,
+    *,
+    test_sets: Mapping[str, TestSet] | None = None,
+    progress: bool = True,
+    on_results: Callable[[list[TrialResult]], None] | None = None,
+    figures: bool = True,
+) -> BenchmarkResult:
+    """Run (or resume, or read back) a benchmark and write its tables and figures.
+
+    Writes into out_dir: results.sqlite (every trial), config.json (this config, each map's
+    resolved env config and test set with its scenario seeds, policy parameters, config
+    hashes, package version), summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf},
+    and ref_episode.gif when config.gif.
+
+    Args:
+        config: what to evaluate.
+        out_dir: output directory (created).
+        test_sets: test sets to use for some maps instead of the registry's (keyed by map
+            name as in config.maps); for small custom runs and tests.
+        progress: show a progress bar.
+        on_results: also called with each group of finished trials, after they are stored.
+        figures: draw the figures (needs matplotlib).
+
+    Returns:
+        The BenchmarkResult.
+
+    Raises:
+        ValueError: an unknown map, more trials than a test set holds.
+        socialzoo.bench.store.StoreError: out_dir holds a results file that is not a socialzoo
+            store or is corrupted (it is left untouched).
+    """
+    from socialzoo import __version__
+    from socialzoo.agents import make_policy
+    from socialzoo.agents.base import policy_config
+
+    out = Path(out_dir)
+    sets = _resolve_test_sets(config, test_sets)
+    counts = {}
+    for m, ts in sets.items():
+        n = len(ts) if config.trials is None else config.trials
+        if n > len(ts):
+            raise ValueError(
+                f"{n} trials asked on map {m!r}, but test set {ts.name or m!r} holds only {len(ts)}"
+            )
+        counts[m] = n
+    set_names = {m: ts.name or m for m, ts in sets.items()}
+    env_configs = {set_names[m]: env_config_for(ts, **dict(config.env_overrides)) for m, ts in sets.items()}
+    policy_kwargs = {p: dict(config.policy_kwargs.get(p, {})) for p in config.policies}
+    policies = {p: make_policy(p, **policy_kwargs[p]) for p in config.policies}
+    policy_configs = {p: policy_config(policies[p]) for p in config.policies}
+    spec = RunSpec(
+        test_sets={set_names[m]: ts for m, ts in sets.items()},
+        env_configs=env_configs,
+        policies=policy_kwargs,
+        batch_size=config.batch_size,
+    )
+    hashes = {
+        (p, set_names[m]): config_hash(env_configs[set_names[m]], p, policies[p], ts, policy_kwargs[p])
+        for p in config.policies
+        for m, ts in sets.items()
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    store = ResultsStore(out / STORE_NAME)
+    files = [store.path]
+    try:
+        for (p, name), h in hashes.items():
+            store.register_config(
+                h,
+                {
+                    "policy": p,
+                    "policy_config": policy_configs[p],
+                    "env": env_configs[name].to_dict(),
+                    "test_set": name,
+                },
+            )
+        run_json = _run_json(
+            config, sets, set_names, counts, env_configs, policy_kwargs, policy_configs, hashes
+        )
+        store.set_meta("config", json.dumps(run_json, sort_keys=True))
+        config_path = out / CONFIG_NAME
+        config_path.write_text(json.dumps(run_json, indent=2, sort_keys=True) + "\n")
+        files.append(config_path)
+
+        pending: list[Trial] = []
+        total = 0
+        for p in config.policies:
+            for m in config.maps:
+                name = set_names[m]
+                done = store.stored_indices(p, name, hashes[(p, name)])
+                total += counts[m]
+                pending += [Trial(p, name, k) for k in range(counts[m]) if k not in done]
+        reused = total - len(pending)
+        logger.info("benchmark: %d trials, %d stored, %d to run", total, reused, len(pending))
+
+        def deliver(batch: list[TrialResult]) -> None:
+            store.add(
+                {
+                    "policy": r.trial.policy,
+                    "map": r.map,
+                    "test_set": r.trial.test_set,
+                    "scenario_index": r.trial.index,
+                    "seed": r.seed,
+                    "config_hash": hashes[(r.trial.policy, r.trial.test_set)],
+                    "package_version": __version__,
+                    "metrics": r.metrics,
+                }
+                for r in batch
+            )
+            if on_results is not None:
+                on_results(batch)
+
+        start = time.perf_counter()
+        evaluate(
+            pending,
+            spec,
+            backend=config.backend,
+            workers=config.workers,
+            address=config.address,
+            on_results=deliver,
+            progress=progress,
+            desc="benchmark",
+        )
+        seconds = time.perf_counter() - start
+        rows = []
+        for p in config.policies:
+            for m in config.maps:
+                name = set_names[m]
+                rows += store.rows(
+                    policy=p, test_set=name, config_hash=hashes[(p, name)], indices=range(counts[m])
+                )
+    finally:
+        store.close()
+    summary = summarize(rows, policies=config.policies, maps=[sets[m].map_name for m in config.maps])
+    files.append(write_summary_csv(summary, out / "summary.csv"))
+    files.append(write_summary_md(summary, out / "summary.md", title=_title(config, counts)))
+    if figures:
+        from socialzoo.bench.figures import plot_summary
+
+        files += plot_summary(summary, out)
+    if config.gif:
+        first = config.maps[0]
+        files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))
+    return BenchmarkResult(out, summary, files, len(pending), reused, seconds)
+
+
+def _title(config: BenchmarkConfig, counts: Mapping[str, int]) -> str:
+    kind = "quick test sets" if config.quick else "test sets"
+    return (
+        f"Social Action Selection benchmark ({kind}: "
+        + ", ".join(f"{m} {n}" for m, n in counts.items())
+        + ")"
+    )
+
+
+def _run_json(
+    config: BenchmarkConfig,
+    sets: Mapping[str, TestSet],
+    set_names: Mapping[str, str],
+    counts: Mapping[str, int],
+    env_configs: Mapping[str, EnvConfig],
+    policy_kwargs: Mapping[str, Mapping[str, Any]],
+    policy_configs: Mapping[str, Mapping[str, Any]],
+    hashes: Mapping[tuple[str, str], str],
+) -> dict[str, Any]:
+    from socialzoo import __version__
+
+    return {
+        "package_version": __version__,
+        "written_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "benchmark": config.to_json(),
+        "test_sets": {
+            set_names[m]: {
+                "map": ts.map_name,
+                "env_id": env_id_for(ts.map_name),
+                "base_seed": ts.base_seed,
+                "size": len(ts),
+                "trials": counts[m],
+                "scenario": dataclasses.asdict(ts.cfg),
+                "seeds": [ts.seed(k) for k in range(counts[m])],
+            }
+            for m, ts in sets.items()
+        },
+        "env_configs": {name: cfg.to_dict() for name, cfg in env_configs.items()},
+        "policies": {
+            p: {"kwargs": dict(policy_kwargs[p]), "config": dict(policy_configs[p])} for p in policy_kwargs
+        },
+        "config_hashes": {f"{p}/{name}": h for (p, name), h in hashes.items()},
+    }
+
+
+def write_episode_gif(
+    path: str | Path, env_config: EnvConfig, test_set: TestSet, index: int, policy: str
+) -> Path:
+    """Animate one episode of `policy` on scenario `index` of a test set as a GIF
+    (socialzoo.bench.episode_video.animate_episode at its defaults)."""
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.episode_video import animate_episode
+    from socialzoo.nav.maps import load_map
+    from socialzoo.nav.scenarios import generate_scenario
+
+    scenario = generate_scenario(load_map(env_config.map), test_set.seed(index), test_set.cfg)
+    label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
+    return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path

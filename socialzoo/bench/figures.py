@@ -1,0 +1,164 @@
+"""Benchmark figures (matplotlib, PNG and PDF): success rates by policy and map with the paper's
+numbers, and force, blame and time to goal with 90% confidence intervals, maps side by side.
+
+matplotlib is imported when a figure is drawn (the "plot" extra), with the non-interactive Agg backend.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.tables import MAP_ROLES, paper_success, policy_label
+
+FIGURE_FORMATS = ("png", "pdf")
+# Panels of the metrics figure: (metric, axis label).
+METRIC_PANELS: tuple[tuple[str, str], ...] = (
+    ("mean_force", "force (mean per step)"),
+    ("mean_blame", "blame (mean per step)"),
+    ("time_to_goal", "time to goal, s (successes)"),
+)
+_COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _layout(
+    summary: Sequence[Mapping[str, Any]],
+) -> tuple[list[str], list[str], dict[tuple[str, str], Mapping]]:
+    policies = list(dict.fromkeys(e["policy"] for e in summary))
+    maps = list(dict.fromkeys(e["map"] for e in summary))
+    return policies, maps, {(e["policy"], e["map"]): e for e in summary}
+
+
+def _map_label(map_name: str) -> str:
+    role = MAP_ROLES.get(map_name)
+    return f"{map_name} ({'training' if role == 'test' else role})" if role else map_name
+
+
+def _bars(
+    ax: Any,
+    policies: list[str],
+    maps: list[str],
+    by_key: dict[tuple[str, str], Mapping],
+    key: str,
+    low_key: str,
+    high_key: str,
+    scale: float = 1.0,
+) -> float:
+    """Grouped bars (policy groups, one bar per map) with interval error bars; returns the bar width."""
+    width = 0.8 / max(len(maps), 1)
+    for j, m in enumerate(maps):
+        xs, heights, err_low, err_high = [], [], [], []
+        for i, p in enumerate(policies):
+            e = by_key.get((p, m))
+            if e is None or not math.isfinite(e[key]):
+                continue
+            value = scale * e[key]
+            low = scale * e[low_key] if math.isfinite(e[low_key]) else value
+            high = scale * e[high_key] if math.isfinite(e[high_key]) else value
+            xs.append(i + (j - (len(maps) - 1) / 2) * width)
+            heights.append(value)
+            err_low.append(max(value - low, 0.0))
+            err_high.append(max(high - value, 0.0))
+        ax.bar(
+            xs,
+            heights,
+            width * 0.92,
+            yerr=[err_low, err_high],
+            capsize=3,
+            color=_COLORS[j % len(_COLORS)],
+            label=_map_label(m),
+        )
+    ax.set_xticks(range(len(policies)))
+    ax.set_xticklabels([policy_label(p) for p in policies])
+    return width
+
+
+def _save(fig: Any, out_dir: Path, stem: str, formats: Sequence[str]) -> list[Path]:
+    paths = []
+    for fmt in formats:
+        path = out_dir / f"{stem}.{fmt}"
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+        paths.append(path)
+    return paths
+
+
+def plot_success(
+    summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
+) -> list[Path]:
+    """success.{png,pdf}: success rate (%) per policy, one bar per map with its 90% Wilson interval,
+    and the paper's number as a black tick where the paper has one.
+
+    Returns:
+        The files written.
+    """
+    plt = _pyplot()
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    policies, maps, by_key = _layout(summary)
+    fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) + 2.0), 3.6))
+    width = _bars(ax, policies, maps, by_key, "success_rate", "success_ci_low", "success_ci_high", 100.0)
+    labelled = False
+    for j, m in enumerate(maps):
+        for i, p in enumerate(policies):
+            paper = paper_success(p, m)
+            if paper is None:
+                continue
+            x = i + (j - (len(maps) - 1) / 2) * width
+            ax.plot(
+                [x - 0.4 * width, x + 0.4 * width],
+                [paper, paper],
+                color="black",
+                linewidth=2,
+                label=None if labelled else "paper",
+            )
+            labelled = True
+    ax.set_ylabel("success rate, % (90% CI)")
+    ax.set_ylim(0, 105)
+    ax.legend(loc="lower right", fontsize="small")
+    ax.set_title("Success rate")
+    paths = _save(fig, out_dir, "success", formats)
+    plt.close(fig)
+    return paths
+
+
+def plot_metrics(
+    summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
+) -> list[Path]:
+    """metrics.{png,pdf}: force, blame and time to goal (successful episodes) per policy, the
+    training and transfer maps side by side, with 90% Student-t intervals.
+
+    Returns:
+        The files written.
+    """
+    plt = _pyplot()
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    policies, maps, by_key = _layout(summary)
+    fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(4.2 * len(METRIC_PANELS), 3.4))
+    for ax, (name, label) in zip(axes, METRIC_PANELS, strict=True):
+        _bars(ax, policies, maps, by_key, f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high")
+        ax.set_ylabel(label)
+        ax.set_ylim(bottom=0)
+    axes[0].legend(fontsize="small")
+    fig.tight_layout()
+    paths = _save(fig, out_dir, "metrics", formats)
+    plt.close(fig)
+    return paths
+
+
+def plot_summary(
+    summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
+) -> list[Path]:
+    """Both figures; returns every file written."""
+    return plot_success(summary, out_dir, formats) + plot_metrics(summary, out_dir, formats)

@@ -1,0 +1,476 @@
+"""Batched evaluation of policies on fixed test sets: a pool of B env rows works through a queue of
+trials, refilling each row as its episode ends, locally over processes or on a Ray cluster.
+
+A trial's result depends only on (policy, test set, scenario index, env config): rows of a batch
+do not interact, so any split of the trials over workers and batches gives the same results.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import multiprocessing
+import queue as queue_module
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from socialzoo.agents import Policy, make_policy
+from socialzoo.env.config import EnvConfig
+from socialzoo.nav.scenarios import TestSet, generate_scenario, get_test_set
+from socialzoo.nav.subpolicies import HALT
+
+logger = logging.getLogger(__name__)
+
+Backend = Literal["local", "ray"]
+BACKENDS: tuple[str, ...] = ("local", "ray")
+# Seconds without any result, once every worker has returned, before the run is declared lost.
+_DRAIN_TIMEOUT = 60.0
+
+
+@dataclass(frozen=True, order=True)
+class Trial:
+    """One episode to run: a policy on scenario `index` of a test set.
+
+    Attributes:
+        policy: the policy's registry name.
+        test_set: the test set's name (a key of RunSpec.test_sets).
+        index: the scenario index in the test set.
+    """
+
+    policy: str
+    test_set: str
+    index: int
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """A finished trial.
+
+    Attributes:
+        trial: the trial.
+        map: the map's name.
+        seed: the scenario's seed.
+        metrics: the episode's metrics (socialzoo.env.metrics.SUMMARY_KEYS) of robot 0.
+    """
+
+    trial: Trial
+    map: str
+    seed: int
+    metrics: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunSpec:
+    """Everything a worker needs to run trials; plain picklable values.
+
+    Attributes:
+        test_sets: test sets by name.
+        env_configs: the env config of each test set, by test set name.
+        policies: make_policy keyword arguments of each policy, by registry name.
+        batch_size: env rows stepped together (B).
+    """
+
+    test_sets: Mapping[str, TestSet]
+    env_configs: Mapping[str, EnvConfig]
+    policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    batch_size: int = 64
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
+            raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
+        missing = sorted(set(self.test_sets) - set(self.env_configs))
+        if missing:
+            raise ValueError(f"RunSpec.env_configs lacks the test set(s) {missing}")
+
+    def check(self, trials: Iterable[Trial]) -> None:
+        """Raise ValueError naming a trial whose policy or test set the spec does not know."""
+        for t in trials:
+            if t.test_set not in self.test_sets:
+                raise ValueError(
+                    f"trial {t}: unknown test set {t.test_set!r}; known: {sorted(self.test_sets)}"
+                )
+            if t.policy not in self.policies:
+                raise ValueError(f"trial {t}: unknown policy {t.policy!r}; known: {sorted(self.policies)}")
+            count = len(self.test_sets[t.test_set])
+            if not 0 <= t.index < count:
+                raise ValueError(f"trial {t}: scenario index outside 0..{count - 1} of {t.test_set!r}")
+
+
+def env_config_for(test_set: TestSet, **overrides: Any) -> EnvConfig:
+    """The benchmark env config of a test set: its map and scenario settings, plus `overrides`
+    (EnvConfig.replace keywords, e.g. max_steps=400)."""
+    return EnvConfig(map=test_set.map_name, scenario=test_set.cfg).replace(**overrides)
+
+
+def make_spec(
+    policies: Sequence[str] | Mapping[str, Mapping[str, Any]],
+    test_sets: Sequence[str | TestSet],
+    *,
+    batch_size: int = 64,
+    env_overrides: Mapping[str, Any] | None = None,
+) -> RunSpec:
+    """A RunSpec for policies (names, or names -> make_policy kwargs) on test sets (names or objects).
+
+    Raises:
+        ValueError: an unknown policy name; KeyError: an unknown test set name.
+    """
+    from socialzoo.agents import POLICIES
+
+    kwargs = {p: {} for p in policies} if not isinstance(policies, Mapping) else dict(policies)
+    for name in kwargs:
+        if name not in POLICIES:
+            raise ValueError(f"unknown policy {name!r}; known policies: {', '.join(sorted(POLICIES))}")
+    sets = {}
+    for ts in test_sets:
+        obj = get_test_set(ts) if isinstance(ts, str) else ts
+        sets[obj.name or obj.map_name] = obj
+    overrides = dict(env_overrides or {})
+    configs = {name: env_config_for(ts, **overrides) for name, ts in sets.items()}
+    return RunSpec(test_sets=sets, env_configs=configs, policies=kwargs, batch_size=batch_size)
+
+
+ResultSink = Callable[[list[TrialResult]], None]
+StepHook = Callable[[Any, list[Trial | None], np.ndarray, np.ndarray, Any], None]
+
+
+class BatchedRunner:
+    """Runs trials in this process, B env rows at a time, refilling rows as episodes end.
+
+    Trials are run test set by test set (one core per map); within a test set, trials of several
+    policies share the batch (each policy acts on the whole batch, its rows take its actions).
+    Rows without a trial left halt until the test set is done.
+
+    Args:
+        spec: test sets, env configs, policies and batch size.
+    """
+
+    def __init__(self, spec: RunSpec) -> None:
+        self.spec = spec
+        self._policies: dict[str, Policy] = {}
+
+    def policy(self, name: str) -> Policy:
+        """The policy `name`, built once."""
+        if name not in self._policies:
+            self._policies[name] = make_policy(name, **self.spec.policies[name])
+        return self._policies[name]
+
+    def run(
+        self, trials: Sequence[Trial], on_results: ResultSink | None = None, on_step: StepHook | None = None
+    ) -> list[TrialResult]:
+        """Run every trial once.
+
+        Args:
+            trials: the trials; each is run exactly once, in an order chosen for batching.
+            on_results: called with the trials that finished at each step, as they finish.
+            on_step: called after every step with (core, trial of each row or None, the
+                observations (B, R, D) the actions were chosen on (a copy), actions (B, R),
+                StepResult), before finished rows are refilled.
+
+        Returns:
+            The results, in the order of `trials`.
+        """
+        self.spec.check(trials)
+        results: dict[Trial, TrialResult] = {}
+
+        def collect(batch: list[TrialResult]) -> None:
+            for r in batch:
+                results[r.trial] = r
+            if on_results is not None:
+                on_results(batch)
+
+        by_set: dict[str, list[Trial]] = {}
+        for t in dict.fromkeys(trials):
+            by_set.setdefault(t.test_set, []).append(t)
+        for name in sorted(by_set):
+            self._run_test_set(
+                name, sorted(by_set[name], key=lambda t: (t.index, t.policy)), collect, on_step
+            )
+        return [results[t] for t in trials]
+
+    def _run_test_set(
+        self, name: str, trials: list[Trial], collect: ResultSink, on_step: StepHook | None
+    ) -> None:
+        from socialzoo.env.core import SocialNavCore
+
+        test_set = self.spec.test_sets[name]
+        config = self.spec.env_configs[name]
+        b = min(self.spec.batch_size, len(trials))
+        core = SocialNavCore(config, b)
+        pending = deque(trials)
+
+        def scenario(t: Trial) -> Any:
+            return generate_scenario(core.map, test_set.seed(t.index), test_set.cfg)
+
+        row_trial: list[Trial | None] = [pending.popleft() for _ in range(b)]
+        core.reset_rows(np.arange(b), [scenario(t) for t in row_trial if t is not None])
+        actions = np.full((b, core.num_robots), HALT, dtype=np.int64)
+        while True:
+            policy_rows: dict[str, list[int]] = {}
+            for row, t in enumerate(row_trial):
+                if t is not None:
+                    policy_rows.setdefault(t.policy, []).append(row)
+            if not policy_rows:
+                break
+            actions.fill(HALT)
+            for policy_name, rows in policy_rows.items():
+                chosen = np.asarray(self.policy(policy_name).act(core.obs, core)).reshape(actions.shape)
+                actions[rows] = chosen[rows]
+            obs = core.obs.copy() if on_step is not None else core.obs
+            result = core.step(actions)
+            if on_step is not None:
+                on_step(core, row_trial, obs, actions, result)
+            active = np.array([t is not None for t in row_trial])
+            finished = np.flatnonzero(active & core.done.all(axis=1))
+            if len(finished) == 0:
+                continue
+            summaries = core.episode_summaries(finished)
+            done_batch = []
+            for row, summary in zip(finished.tolist(), summaries, strict=True):
+                t = row_trial[row]
+                assert t is not None
+                done_batch.append(TrialResult(t, core.map.name, test_set.seed(t.index), summary))
+            collect(done_batch)
+            refill_rows, refill = [], []
+            for row in finished.tolist():
+                t = pending.popleft() if pending else None
+                row_trial[row] = t
+                if t is not None:
+                    refill_rows.append(row)
+                    refill.append(scenario(t))
+            if refill_rows:
+                core.reset_rows(np.array(refill_rows), refill)
+
+
+def run_chunk(trials: Sequence[Trial], spec: RunSpec, sink: ResultSink | None = None) -> list[TrialResult]:
+    """Run trials in this process with a BatchedRunner (the unit of work of every backend)."""
+    return BatchedRunner(spec).run(trials, on_results=sink)
+
+
+def split_trials(trials: Sequence[Trial], parts: int) -> list[list[Trial]]:
+    """Deal trials round-robin into at most `parts` non-empty chunks (similar mixes of policies
+    and test sets in every chunk)."""
+    ordered = sorted(dict.fromkeys(trials), key=lambda t: (t.test_set, t.index, t.policy))
+    parts = max(1, min(parts, len(ordered)))
+    return [ordered[i::parts] for i in range(parts)]
+
+
+# ---------------------------------------------------------------------------- local processes
+_WORKER_QUEUE: Any = None
+
+
+def _init_worker(result_queue: Any) -> None:
+    global _WORKER_QUEUE
+    _WORKER_QUEUE = result_queue
+
+
+def _local_chunk(trials: list[Trial], spec: RunSpec) -> int:
+    run_chunk(trials, spec, sink=_WORKER_QUEUE.put)
+    return len(trials)
+
+
+def _terminate(pool: Any) -> None:
+    # concurrent.futures offers no way to stop running tasks before Python 3.14
+    # (ProcessPoolExecutor.terminate_workers): end the worker processes themselves, or an
+    # interrupted run would wait for every chunk to finish.
+    for process in list(getattr(pool, "_processes", {}).values()):
+        process.terminate()
+
+
+def _evaluate_local(chunks: list[list[Trial]], spec: RunSpec, deliver: ResultSink) -> None:
+    from concurrent.futures import ProcessPoolExecutor
+
+    if len(chunks) == 1:
+        run_chunk(chunks[0], spec, sink=deliver)
+        return
+    # spawn, not fork: the parent may hold threads (torch, tqdm's monitor) that fork would copy mid-state.
+    ctx = multiprocessing.get_context("spawn")
+    result_queue = ctx.Queue()
+    pool = ProcessPoolExecutor(
+        max_workers=len(chunks), mp_context=ctx, initializer=_init_worker, initargs=(result_queue,)
+    )
+    try:
+        futures = [pool.submit(_local_chunk, chunk, spec) for chunk in chunks]
+        expected = sum(len(c) for c in chunks)
+        _drain(
+            expected,
+            lambda timeout: result_queue.get(timeout=timeout),
+            queue_module.Empty,
+            lambda: [f for f in futures if f.done()],
+            lambda f: f.result(),
+            len(futures),
+            deliver,
+        )
+    except BaseException:
+        _terminate(pool)
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _drain(
+    expected: int,
+    get: Callable[[float], list[TrialResult]],
+    empty: type[BaseException],
+    finished: Callable[[], list[Any]],
+    result_of: Callable[[Any], Any],
+    num_tasks: int,
+    deliver: ResultSink,
+) -> None:
+    """Deliver results from a queue until `expected` arrived; re-raise a failed task's error."""
+    got = 0
+    idle_since: float | None = None
+    while got < expected:
+        try:
+            batch = get(0.1)
+        except empty:
+            done = finished()
+            for task in done:
+                result_of(task)  # raises the worker's exception
+            if len(done) == num_tasks:
+                idle_since = idle_since or time.monotonic()
+                if time.monotonic() - idle_since > _DRAIN_TIMEOUT:
+                    raise RuntimeError(
+                        f"workers finished but only {got} of {expected} results arrived"
+                    ) from None
+            continue
+        idle_since = None
+        deliver(batch)
+        got += len(batch)
+
+
+# ---------------------------------------------------------------------------- Ray
+def _ray_chunk(trials: list[Trial], spec: RunSpec, result_queue: Any) -> int:
+    run_chunk(trials, spec, sink=result_queue.put)
+    return len(trials)
+
+
+def _evaluate_ray(
+    trials: list[Trial], spec: RunSpec, workers: int | None, address: str | None, deliver: ResultSink
+) -> None:
+    import ray
+    from ray.util.queue import Empty, Queue
+
+    started = False
+    if not ray.is_initialized():
+        if address:
+            ray.init(address=address, logging_level=logging.WARNING)
+        else:
+            ray.init(num_cpus=workers or 2, include_dashboard=False, logging_level=logging.WARNING)
+        started = True
+    try:
+        if workers is None:
+            workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        chunks = split_trials(trials, workers)
+        result_queue = Queue(actor_options={"num_cpus": 0})
+        task = ray.remote(num_cpus=1)(_ray_chunk)
+        refs = [task.remote(chunk, spec, result_queue) for chunk in chunks]
+        try:
+            _drain(
+                len(trials),
+                lambda timeout: result_queue.get(timeout=timeout),
+                Empty,
+                lambda: ray.wait(refs, num_returns=len(refs), timeout=0)[0],
+                ray.get,
+                len(refs),
+                deliver,
+            )
+        except BaseException:
+            for ref in refs:
+                ray.cancel(ref, force=True)
+            raise
+        finally:
+            result_queue.shutdown()
+    finally:
+        if started:
+            ray.shutdown()
+
+
+# ---------------------------------------------------------------------------- entry point
+class _Progress:
+    """A tqdm bar of finished trials (rate and time left), or nothing."""
+
+    def __init__(self, total: int, enabled: bool, desc: str) -> None:
+        self.bar = None
+        if enabled and total:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, unit="trial", desc=desc, smoothing=0.05, dynamic_ncols=True)
+
+    def update(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.update(n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def evaluate(
+    trials: Sequence[Trial],
+    spec: RunSpec,
+    *,
+    backend: Backend = "local",
+    workers: int | None = 2,
+    address: str | None = None,
+    on_results: ResultSink | None = None,
+    progress: bool = False,
+    desc: str = "trials",
+) -> list[TrialResult]:
+    """Run trials on a backend; results reach `on_results` in this process as trials finish.
+
+    Args:
+        trials: the trials (duplicates are run once).
+        spec: test sets, env configs, policies and batch size.
+        backend: "local" (this machine: `workers` processes, or this process for 1 worker) or
+            "ray" (a Ray cluster at `address`, or a local Ray started with `workers` CPUs).
+        workers: processes (local) or chunks (Ray; None: one per CPU of the cluster).
+        address: Ray cluster address (e.g. "auto" or "ray://host:10001"); Ray backend only.
+        on_results: called with each group of finished trials, in this process.
+        progress: show a tqdm bar of finished trials, rate and time left.
+        desc: the bar's label.
+
+    Returns:
+        The results, in the order of `trials` (first occurrence).
+
+    Raises:
+        ValueError: an unknown backend, a bad worker count, or a trial the spec does not know;
+            any exception of a worker.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+        raise ValueError(f"workers must be an int >= 1 or None, got {workers!r}")
+    if address is not None and backend != "ray":
+        raise ValueError("address is for the Ray backend (--backend ray)")
+    unique = list(dict.fromkeys(trials))
+    spec.check(unique)
+    results: dict[Trial, TrialResult] = {}
+    bar = _Progress(len(unique), progress, desc)
+    start = time.perf_counter()
+
+    def deliver(batch: list[TrialResult]) -> None:
+        fresh = [r for r in batch if r.trial not in results]
+        for r in fresh:
+            results[r.trial] = r
+        bar.update(len(fresh))
+        if on_results is not None and fresh:
+            on_results(fresh)
+
+    try:
+        if unique:
+            if backend == "local":
+                _evaluate_local(split_trials(unique, workers or 1), spec, deliver)
+            else:
+                _evaluate_ray(unique, spec, workers, address, deliver)
+    finally:
+        bar.close()
+    elapsed = time.perf_counter() - start
+    if unique:
+        rate = len(unique) / elapsed if elapsed > 0 else math.inf
+        logger.info("%d trials in %.1f s (%.2f trials/s, backend %s)", len(unique), elapsed, rate, backend)
+    return [results[t] for t in unique]

@@ -1,0 +1,161 @@
+"""Confidence intervals for benchmark tables and figures: Student-t intervals for means and Wilson
+score intervals for success rates (90% by default, as in the paper).
+
+Pure Python and numpy (the t quantile is computed here, so scipy is not needed).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from statistics import NormalDist
+
+import numpy as np
+
+CONFIDENCE = 0.9
+
+
+@dataclass(frozen=True)
+class Interval:
+    """An estimate with a two-sided confidence interval.
+
+    Attributes:
+        value: the estimate (a mean or a rate); NaN without data.
+        low, high: interval bounds; NaN when they cannot be computed (fewer than 2 values for a mean).
+        n: number of values the estimate is based on.
+    """
+
+    value: float
+    low: float
+    high: float
+    n: int
+
+
+def _check_confidence(confidence: float) -> None:
+    if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
+        raise ValueError(f"confidence must be a number in (0, 1), got {confidence!r}")
+
+
+def _betacf(a: float, b: float, x: float) -> float:
+    """Continued fraction of the regularized incomplete beta function (modified Lentz)."""
+    tiny = 1e-300
+    qab, qap, qam = a + b, a + 1.0, a - 1.0
+    c, d = 1.0, 1.0 - qab * x / qap
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 1000):
+        m2 = 2 * m
+        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > tiny else tiny)
+        c = 1.0 + aa / c
+        c = c if abs(c) > tiny else tiny
+        h *= d * c
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > tiny else tiny)
+        c = 1.0 + aa / c
+        c = c if abs(c) > tiny else tiny
+        step = d * c
+        h *= step
+        if abs(step - 1.0) < 1e-15:
+            break
+    return h
+
+
+def betainc(a: float, b: float, x: float) -> float:
+    """Regularized incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1."""
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    log_front = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
+    front = math.exp(log_front)
+    if x < (a + 1.0) / (a + b + 2.0):
+        return front * _betacf(a, b, x) / a
+    return 1.0 - front * _betacf(b, a, 1.0 - x) / b
+
+
+def student_t_cdf(t: float, df: float) -> float:
+    """P(T <= t) for Student's t with `df` degrees of freedom."""
+    tail = 0.5 * betainc(0.5 * df, 0.5, df / (df + t * t))
+    return 1.0 - tail if t >= 0 else tail
+
+
+@lru_cache(maxsize=4096)
+def student_t_ppf(q: float, df: float) -> float:
+    """The q-quantile of Student's t with `df` > 0 degrees of freedom (bisection, |error| < 1e-12)."""
+    if not 0.0 < q < 1.0:
+        raise ValueError(f"student_t_ppf: q must be in (0, 1), got {q!r}")
+    if q < 0.5:
+        return -student_t_ppf(1.0 - q, df)
+    lo, hi = 0.0, 1.0
+    while student_t_cdf(hi, df) < q:
+        lo, hi = hi, 2.0 * hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if student_t_cdf(mid, df) < q:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-12:
+            break
+    return 0.5 * (lo + hi)
+
+
+def mean_interval(values: np.ndarray | list[float], confidence: float = CONFIDENCE) -> Interval:
+    """Mean of the finite values with a Student-t confidence interval.
+
+    NaN values (e.g. time to goal of a failed episode) are left out; n counts the rest.
+
+    Args:
+        values: numbers.
+        confidence: two-sided level, e.g. 0.9.
+
+    Returns:
+        Interval(mean, mean - t * s / sqrt(n), mean + t * s / sqrt(n), n), with s the sample
+        standard deviation and t the (1 + confidence) / 2 quantile with n - 1 degrees of
+        freedom. Bounds are NaN for n < 2, the mean is NaN for n = 0.
+    """
+    _check_confidence(confidence)
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    x = x[np.isfinite(x)]
+    n = len(x)
+    if n == 0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    mean = float(x.mean())
+    if n == 1:
+        return Interval(mean, math.nan, math.nan, 1)
+    half = student_t_ppf(0.5 + 0.5 * confidence, n - 1) * float(x.std(ddof=1)) / math.sqrt(n)
+    return Interval(mean, mean - half, mean + half, n)
+
+
+def rate_interval(successes: int, n: int, confidence: float = CONFIDENCE) -> Interval:
+    """Success rate with a Wilson score interval.
+
+    The Wilson interval stays inside [0, 1] and behaves at rates near 0 and 1 (GoAlone succeeds
+    in nearly every episode), where the normal interval collapses to a point.
+
+    Args:
+        successes: number of successes, 0 <= successes <= n.
+        n: number of trials.
+        confidence: two-sided level.
+
+    Returns:
+        Interval(successes / n, low, high, n); all NaN for n = 0.
+
+    Raises:
+        ValueError: counts out of range.
+    """
+    _check_confidence(confidence)
+    if not (0 <= successes <= n):
+        raise ValueError(f"rate_interval: need 0 <= successes <= n, got successes={successes!r}, n={n!r}")
+    if n == 0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    z = NormalDist().inv_cdf(0.5 + 0.5 * confidence)
+    p = successes / n
+    denom = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / denom
+    return Interval(p, max(0.0, centre - half), min(1.0, centre + half), n)

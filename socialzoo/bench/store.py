@@ -1,0 +1,317 @@
+"""The benchmark's results store: one SQLite file, one row per finished trial, written as trials
+finish, so that an interrupted run resumes and a repeated run reads instead of recomputing.
+
+A trial is keyed by (policy, test set, scenario index, config hash); the config hash covers
+everything that changes a trial's outcome (env config, policy parameters, test set definition).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import sqlite3
+from collections.abc import Iterable, Mapping, Sequence
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+logger = logging.getLogger(__name__)
+
+STORE_FORMAT = "socialzoo-results"
+SCHEMA_VERSION = 1
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+# Columns every trial row has, before its metrics.
+KEY_COLUMNS = ("policy", "test_set", "scenario_index", "config_hash")
+TRIAL_COLUMNS = (
+    "policy",
+    "map",
+    "test_set",
+    "scenario_index",
+    "seed",
+    "config_hash",
+    "package_version",
+    "finished_at",
+)
+_SQL_TYPE = {"bool": "INTEGER", "int": "INTEGER", "float": "REAL"}
+
+
+class StoreError(Exception):
+    """A results file that cannot be used: not a socialzoo results store, corrupted, or too new."""
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int):
+        return "int"
+    if isinstance(value, float):
+        return "float"
+    raise TypeError(f"metric values must be bool, int or float, got {type(value).__name__} {value!r}")
+
+
+def _quote(name: str) -> str:
+    if not name.isidentifier():
+        raise ValueError(f"metric name {name!r} is not an identifier")
+    return f'"{name}"'
+
+
+class ResultsStore:
+    """An SQLite file of benchmark trials.
+
+    Tables: meta (format, schema version, package version that created it, metric kinds, and the
+    config of the latest run), configs (config hash -> resolved config JSON), and trials (one row
+    per trial: policy, map, test set, scenario index, seed, config hash, package version, finish
+    time and one column per metric; unique on (policy, test set, scenario index, config hash)).
+
+    A new (or empty) file is created with the schema. An existing file must be a store of this
+    format and schema version; anything else raises StoreError naming the file, and the file is
+    left untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
+    loses at most the trials it had not handed over yet.
+
+    Args:
+        path: the SQLite file.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        fresh = not self.path.exists() or self.path.stat().st_size == 0
+        if not fresh:
+            self._check_header()
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self._db = sqlite3.connect(self.path, timeout=30.0)
+        except sqlite3.Error as err:
+            raise StoreError(f"{self.path}: cannot open the results store: {err}") from None
+        try:
+            if fresh:
+                self._create()
+            else:
+                self._check_store()
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute("PRAGMA synchronous=NORMAL")
+        except sqlite3.DatabaseError as err:
+            self._db.close()
+            raise StoreError(
+                f"{self.path}: corrupted results store ({err}); the file was left as it is"
+            ) from None
+        except StoreError:
+            self._db.close()
+            raise
+        self._kinds: dict[str, str] = json.loads(self._meta("metric_kinds") or "{}")
+
+    # ------------------------------------------------------------------ opening
+    def _check_header(self) -> None:
+        with self.path.open("rb") as f:
+            head = f.read(len(_SQLITE_MAGIC))
+        if head != _SQLITE_MAGIC:
+            raise StoreError(
+                f"{self.path} is not a socialzoo results store (not an SQLite database); "
+                "refusing to use or overwrite it: choose another output directory"
+            )
+
+    def _check_store(self) -> None:
+        problems = self._db.execute("PRAGMA quick_check").fetchall()
+        if problems != [("ok",)]:
+            detail = "; ".join(str(p[0]) for p in problems[:3])
+            raise StoreError(f"{self.path}: corrupted results store ({detail}); the file was left as it is")
+        tables = {row[0] for row in self._db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if not {"meta", "configs", "trials"} <= tables or self._meta("format") != STORE_FORMAT:
+            raise StoreError(
+                f"{self.path} is an SQLite database but not a socialzoo results store "
+                f"(tables: {sorted(tables)}); refusing to use or overwrite it"
+            )
+        version = self._meta("schema_version")
+        if version is None or not version.isdigit() or int(version) > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path}: results store schema version {version!r} is not supported "
+                f"(this socialzoo reads version {SCHEMA_VERSION} and older)"
+            )
+
+    def _create(self) -> None:
+        from socialzoo import __version__
+
+        with self._db:
+            self._db.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+            self._db.execute("CREATE TABLE configs (config_hash TEXT PRIMARY KEY, config_json TEXT NOT NULL)")
+            self._db.execute(
+                "CREATE TABLE trials ("
+                "id INTEGER PRIMARY KEY, policy TEXT NOT NULL, map TEXT NOT NULL, test_set TEXT NOT NULL, "
+                "scenario_index INTEGER NOT NULL, seed TEXT NOT NULL, config_hash TEXT NOT NULL, "
+                "package_version TEXT NOT NULL, finished_at TEXT NOT NULL, "
+                "UNIQUE (policy, test_set, scenario_index, config_hash))"
+            )
+            meta = {
+                "format": STORE_FORMAT,
+                "schema_version": str(SCHEMA_VERSION),
+                "created_with": __version__,
+                "created_at": _now(),
+                "metric_kinds": "{}",
+            }
+            self._db.executemany("INSERT INTO meta VALUES (?, ?)", meta.items())
+
+    def _meta(self, key: str) -> str | None:
+        row = self._db.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
+        return None if row is None else str(row[0])
+
+    # ------------------------------------------------------------------ context
+    def close(self) -> None:
+        """Close the file (further calls fail)."""
+        self._db.close()
+
+    def __enter__(self) -> ResultsStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ configs
+    def set_meta(self, key: str, value: str) -> None:
+        """Set a free-form meta entry (e.g. "config": the latest run's config JSON)."""
+        if key in ("format", "schema_version", "metric_kinds"):
+            raise ValueError(f"ResultsStore.set_meta: {key!r} is managed by the store")
+        with self._db:
+            self._db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
+
+    def meta(self, key: str) -> str | None:
+        """A meta entry, or None."""
+        return self._meta(key)
+
+    def register_config(self, config_hash: str, config: Mapping[str, Any]) -> None:
+        """Record the resolved config behind a config hash (kept as first recorded)."""
+        text = json.dumps(config, sort_keys=True)
+        with self._db:
+            self._db.execute("INSERT OR IGNORE INTO configs VALUES (?, ?)", (config_hash, text))
+
+    def config(self, config_hash: str) -> dict[str, Any] | None:
+        """The config recorded for a hash, or None."""
+        row = self._db.execute(
+            "SELECT config_json FROM configs WHERE config_hash = ?", (config_hash,)
+        ).fetchone()
+        return None if row is None else json.loads(row[0])
+
+    # ------------------------------------------------------------------ trials
+    def stored_indices(self, policy: str, test_set: str, config_hash: str) -> set[int]:
+        """Scenario indices of the trials already stored for (policy, test set, config hash)."""
+        rows = self._db.execute(
+            "SELECT scenario_index FROM trials WHERE policy = ? AND test_set = ? AND config_hash = ?",
+            (policy, test_set, config_hash),
+        )
+        return {int(r[0]) for r in rows}
+
+    def _ensure_columns(self, metrics: Mapping[str, Any]) -> None:
+        new = {k: _kind(v) for k, v in metrics.items() if k not in self._kinds}
+        if not new:
+            return
+        for name in new:
+            if name in TRIAL_COLUMNS or name == "id":
+                raise ValueError(f"metric name {name!r} clashes with a trial column")
+        self._kinds.update(new)
+        for name, kind in new.items():
+            self._db.execute(f"ALTER TABLE trials ADD COLUMN {_quote(name)} {_SQL_TYPE[kind]}")
+        self._db.execute(
+            "UPDATE meta SET value = ? WHERE key = 'metric_kinds'", (json.dumps(self._kinds, sort_keys=True),)
+        )
+
+    def add(self, rows: Iterable[Mapping[str, Any]]) -> int:
+        """Store finished trials in one transaction; trials already stored are skipped.
+
+        Args:
+            rows: dicts with policy, map, test_set, scenario_index, seed, config_hash,
+                package_version and metrics (a dict of bool, int or float values).
+
+        Returns:
+            The number of new rows.
+        """
+        rows = list(rows)
+        if not rows:
+            return 0
+        added = 0
+        finished = _now()
+        with self._db:
+            for row in rows:
+                metrics = dict(row["metrics"])
+                self._ensure_columns(metrics)
+                names = [*TRIAL_COLUMNS, *metrics]
+                values = [
+                    str(row["policy"]),
+                    str(row["map"]),
+                    str(row["test_set"]),
+                    int(row["scenario_index"]),
+                    str(int(row["seed"])),
+                    str(row["config_hash"]),
+                    str(row["package_version"]),
+                    finished,
+                    *(_to_sql(v) for v in metrics.values()),
+                ]
+                cursor = self._db.execute(
+                    f"INSERT OR IGNORE INTO trials ({', '.join(map(_quote, names))}) "
+                    f"VALUES ({', '.join('?' * len(names))})",
+                    values,
+                )
+                added += cursor.rowcount
+        return added
+
+    def rows(
+        self,
+        *,
+        policy: str | None = None,
+        test_set: str | None = None,
+        config_hash: str | None = None,
+        indices: Sequence[int] | None = None,
+    ) -> list[dict[str, Any]]:
+        """Stored trials matching the filters, ordered by policy, test set, scenario index.
+
+        Returns:
+            One dict per trial: the TRIAL_COLUMNS (seed as int) and every metric (bools as bool,
+            missing or NaN floats as NaN, missing ints as None).
+        """
+        where, args = [], []
+        for column, value in (("policy", policy), ("test_set", test_set), ("config_hash", config_hash)):
+            if value is not None:
+                where.append(f"{column} = ?")
+                args.append(value)
+        columns = [*TRIAL_COLUMNS, *self._kinds]
+        sql = f"SELECT {', '.join(map(_quote, columns))} FROM trials"
+        if where:
+            sql += " WHERE " + " AND ".join(where)
+        sql += " ORDER BY policy, test_set, scenario_index, config_hash"
+        wanted = None if indices is None else set(int(i) for i in indices)
+        out = []
+        for values in self._db.execute(sql, args):
+            row = dict(zip(columns, values, strict=True))
+            if wanted is not None and row["scenario_index"] not in wanted:
+                continue
+            row["seed"] = int(row["seed"])
+            for name, kind in self._kinds.items():
+                row[name] = _from_sql(row[name], kind)
+            out.append(row)
+        return out
+
+    def __len__(self) -> int:
+        return int(self._db.execute("SELECT COUNT(*) FROM trials").fetchone()[0])
+
+    @property
+    def metric_names(self) -> list[str]:
+        """Metric columns, in the order they were first stored."""
+        return list(self._kinds)
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def _to_sql(value: Any) -> Any:
+    if isinstance(value, bool):
+        return int(value)
+    return value
+
+
+def _from_sql(value: Any, kind: str) -> Any:
+    if kind == "bool":
+        return None if value is None else bool(value)
+    if kind == "int":
+        return None if value is None else int(value)
+    return math.nan if value is None else float(value)

@@ -1,0 +1,271 @@
+"""Benchmark tables: per policy and map, the success rate and every metric's mean with its 90%
+confidence interval, as summary.csv and summary.md (the paper's success table and metric tables).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.bench.stats import CONFIDENCE, mean_interval, rate_interval
+
+# Metrics of the tables: (column, description). time_to_goal is averaged over successful
+# episodes only (the paper's figure); every other metric over all episodes with a finite value.
+TABLE_METRICS: tuple[tuple[str, str], ...] = (
+    ("mean_force", "force (mean per step)"),
+    ("mean_blame", "blame (mean per step)"),
+    ("time_to_goal", "time to goal, s (successful episodes only)"),
+    ("average_step_reward", "average step reward"),
+    ("human_collisions", "human collision steps"),
+    ("wall_collisions", "wall collision steps"),
+    ("min_human_distance", "minimum distance to a human, m"),
+    ("personal_space_intrusion_time", "personal-space intrusion time, s"),
+    ("path_irregularity", "path irregularity, rad"),
+    ("path_length_ratio", "path length ratio"),
+    ("jerk", "jerk, m/s^3"),
+    ("distance_travelled", "distance travelled, m"),
+    ("max_force", "force (max per episode)"),
+    ("max_blame", "blame (max per episode)"),
+)
+SUCCESS_ONLY = ("time_to_goal",)
+
+# The paper's success rates in percent (SPEC section 10): policy -> (training map, transfer map).
+PAPER_SUCCESS: dict[str, tuple[float, float]] = {
+    "goalone": (97.5, 97.3),
+    "ref": (89.4, 92.4),
+    "bc": (92.3, 49.9),
+    "gail": (83.3, 18.9),
+    "pips": (88.9, 89.2),
+    "dqn": (54.1, 8.8),
+    "ppo": (55.1, 47.2),
+}
+# The paper's maps: training ("test" column of its table) and transfer.
+MAP_ROLES: dict[str, str] = {"gdc1": "test", "ghc3": "transfer"}
+POLICY_LABELS: dict[str, str] = {
+    "goalone": "GoAlone",
+    "ref": "Ref",
+    "bc": "BC",
+    "gail": "GAIL",
+    "pips": "PIPS",
+    "dqn": "DQN",
+    "ppo": "PPO",
+}
+
+
+def policy_label(policy: str) -> str:
+    """Display name of a registry policy name ("goalone" -> "GoAlone")."""
+    return POLICY_LABELS.get(policy, policy)
+
+
+def paper_success(policy: str, map_name: str) -> float | None:
+    """The paper's success rate (%) of a policy on a map, or None where the paper has none."""
+    role = MAP_ROLES.get(map_name)
+    numbers = PAPER_SUCCESS.get(policy)
+    if role is None or numbers is None:
+        return None
+    return numbers[0] if role == "test" else numbers[1]
+
+
+def csv_columns() -> list[str]:
+    """Columns of summary.csv, in order."""
+    columns = ["policy", "map", "test_set", "trials", "success_rate", "success_ci_low", "success_ci_high"]
+    for name, _ in TABLE_METRICS:
+        columns += [f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high"]
+        if name in SUCCESS_ONLY:
+            columns.append(f"{name}_n")
+    return columns
+
+
+def _ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
+    seen = list(dict.fromkeys(values))
+    if order is None:
+        return seen
+    return [v for v in order if v in seen] + [v for v in seen if v not in order]
+
+
+def summarize(
+    rows: Sequence[Mapping[str, Any]],
+    *,
+    policies: Sequence[str] | None = None,
+    maps: Sequence[str] | None = None,
+    confidence: float = CONFIDENCE,
+) -> list[dict[str, Any]]:
+    """One summary per (policy, map) of stored trial rows (ResultsStore.rows).
+
+    Args:
+        rows: trial dicts with policy, map, test_set, success and the TABLE_METRICS.
+        policies, maps: display order (others follow in order of appearance).
+        confidence: two-sided level of the intervals.
+
+    Returns:
+        Dicts keyed by `csv_columns()`: success rate with a Wilson interval, metric means with
+        Student-t intervals (NaN where a metric is missing or has fewer than 2 finite values).
+    """
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["policy"], row["map"]), []).append(row)
+    out = []
+    for policy in _ordered([k[0] for k in groups], policies):
+        for map_name in _ordered([k[1] for k in groups], maps):
+            group = groups.get((policy, map_name))
+            if not group:
+                continue
+            success = np.array([bool(r["success"]) for r in group])
+            rate = rate_interval(int(success.sum()), len(group), confidence)
+            entry: dict[str, Any] = {
+                "policy": policy,
+                "map": map_name,
+                "test_set": ",".join(sorted({str(r["test_set"]) for r in group})),
+                "trials": len(group),
+                "success_rate": rate.value,
+                "success_ci_low": rate.low,
+                "success_ci_high": rate.high,
+            }
+            for name, _ in TABLE_METRICS:
+                values = np.array(
+                    [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
+                )
+                if name in SUCCESS_ONLY:
+                    values = values[success]
+                ci = mean_interval(values, confidence)
+                entry[f"{name}_mean"] = ci.value
+                entry[f"{name}_ci_low"] = ci.low
+                entry[f"{name}_ci_high"] = ci.high
+                if name in SUCCESS_ONLY:
+                    entry[f"{name}_n"] = ci.n
+            out.append(entry)
+    return out
+
+
+def write_summary_csv(summary: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
+    """Write `summarize` output as CSV (columns `csv_columns()`, NaN written as an empty cell)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    columns = csv_columns()
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=columns)
+        writer.writeheader()
+        for entry in summary:
+            writer.writerow({c: _csv_value(entry.get(c)) for c in columns})
+    return path
+
+
+def read_summary_csv(path: str | Path) -> list[dict[str, Any]]:
+    """Read summary.csv back (numbers as float or int, empty cells as NaN)."""
+    out = []
+    with Path(path).open(newline="") as f:
+        for raw in csv.DictReader(f):
+            entry: dict[str, Any] = {}
+            for key, text in raw.items():
+                if key in ("policy", "map", "test_set"):
+                    entry[key] = text
+                elif key == "trials" or key.endswith("_n"):
+                    entry[key] = int(text)
+                else:
+                    entry[key] = float(text) if text != "" else math.nan
+            out.append(entry)
+    return out
+
+
+def _csv_value(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return ""
+    if isinstance(value, float):
+        return repr(value)
+    return value
+
+
+def _fmt(value: float, digits: int) -> str:
+    return "n/a" if not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _fmt_ci(mean: float, low: float, high: float, digits: int) -> str:
+    if not math.isfinite(mean):
+        return "n/a"
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return _fmt(mean, digits)
+    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def _map_header(map_name: str) -> str:
+    role = MAP_ROLES.get(map_name)
+    return f"{role} ({map_name})" if role else map_name
+
+
+def _digits(name: str) -> int:
+    return 2 if name in ("time_to_goal", "human_collisions", "wall_collisions", "distance_travelled") else 4
+
+
+def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benchmark results") -> str:
+    """The Markdown report: the paper's success table, then one table per metric.
+
+    The success table has one row per policy and, for each map, our success rate (%) with its
+    90% interval and, for the paper's maps, the paper's number beside it (SPEC section 10).
+    """
+    policies = list(dict.fromkeys(e["policy"] for e in summary))
+    maps = list(dict.fromkeys(e["map"] for e in summary))
+    by_key = {(e["policy"], e["map"]): e for e in summary}
+    paper_maps = [m for m in maps if m in MAP_ROLES]
+    lines = [f"# {title}", ""]
+    trials = sorted({int(e["trials"]) for e in summary})
+    lines.append(
+        f"Trials per policy and map: {', '.join(map(str, trials))}. Intervals are two-sided 90% "
+        "confidence intervals: Wilson score intervals for success rates, Student-t intervals for "
+        "means. Success: goal reached within the time limit with no human and no wall collision."
+    )
+    lines += ["", "## Success rate (%)", ""]
+    header = ["policy"]
+    for m in maps:
+        header.append(_map_header(m))
+        if m in paper_maps:
+            header.append(f"paper {MAP_ROLES[m]}")
+    lines.append("| " + " | ".join(header) + " |")
+    lines.append("|" + "---|" * len(header))
+    for p in policies:
+        cells = [policy_label(p)]
+        for m in maps:
+            e = by_key.get((p, m))
+            cells.append(
+                "-"
+                if e is None
+                else _fmt_ci(
+                    100 * e["success_rate"], 100 * e["success_ci_low"], 100 * e["success_ci_high"], 1
+                )
+            )
+            if m in paper_maps:
+                paper = paper_success(p, m)
+                cells.append("-" if paper is None else f"{paper:.1f}")
+        lines.append("| " + " | ".join(cells) + " |")
+    for name, description in TABLE_METRICS:
+        lines += ["", f"## {description[0].upper() + description[1:]}", ""]
+        header = ["policy", *(_map_header(m) for m in maps)]
+        lines.append("| " + " | ".join(header) + " |")
+        lines.append("|" + "---|" * len(header))
+        for p in policies:
+            cells = [policy_label(p)]
+            for m in maps:
+                e = by_key.get((p, m))
+                if e is None:
+                    cells.append("-")
+                    continue
+                text = _fmt_ci(e[f"{name}_mean"], e[f"{name}_ci_low"], e[f"{name}_ci_high"], _digits(name))
+                if name in SUCCESS_ONLY:
+                    text += f" (n={e[f'{name}_n']})"
+                cells.append(text)
+            lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_summary_md(
+    summary: Sequence[Mapping[str, Any]], path: str | Path, *, title: str = "Benchmark results"
+) -> Path:
+    """Write `summary_markdown` to a file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(summary_markdown(summary, title=title))
+    return path

@@ -1,0 +1,173 @@
+"""`socialzoo benchmark` (evaluate policies on the benchmark's test sets: store, tables, figures) and
+`socialzoo demos` (record Ref demonstrations for the imitation baselines).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+from typing import Any
+
+logger = logging.getLogger(__name__)
+
+
+def _names(text: str) -> tuple[str, ...]:
+    names = tuple(n.strip().lower() for n in text.split(",") if n.strip())
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
+    return names
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add `benchmark` to a subparsers object; returns its parser."""
+    parser = subparsers.add_parser(
+        "benchmark",
+        help="evaluate policies on the benchmark test sets (results store, tables, figures)",
+        description=(
+            "Evaluate policies on the Social Action Selection benchmark: each policy on the first N "
+            "scenarios of each map's test set (<map>-test: 2000 scenarios; <map>-quick: 100). Trials "
+            "go to DIR/results.sqlite as they finish; a rerun reads stored trials and an interrupted "
+            "run resumes. Writes DIR/summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf} "
+            "and config.json."
+        ),
+    )
+    parser.add_argument(
+        "--policies", type=_names, default=None, help="comma-separated policies (default goalone,ref)"
+    )
+    parser.add_argument("--maps", type=_names, default=None, help="comma-separated maps (default gdc1,ghc3)")
+    parser.add_argument(
+        "--trials", type=_positive, default=None, help="scenarios per policy and map (default: all)"
+    )
+    parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where trials run")
+    parser.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
+    parser.add_argument(
+        "--workers",
+        type=_positive,
+        default=None,
+        help="local processes (default 2), or Ray chunks (default: one per cluster CPU)",
+    )
+    parser.add_argument(
+        "--batch-size", type=_positive, default=64, help="env rows stepped together per worker"
+    )
+    parser.add_argument(
+        "--max-steps", type=_positive, default=None, help="episode time limit override, steps"
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="GoAlone and Ref on gdc1-quick and ghc3-quick (100 trials each), plus one Ref episode GIF",
+    )
+    parser.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run_benchmark_command)
+    return parser
+
+
+def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add `demos` to a subparsers object; returns its parser."""
+    parser = subparsers.add_parser(
+        "demos",
+        help="record Ref demonstrations for the imitation baselines",
+        description=(
+            "Record demonstrations of the reference policy (obs, action, next_obs, reward, terminated, "
+            "truncated, episode) on scenarios of their own seeds. Chunks are written to FILE.parts/ as "
+            "they finish, so an interrupted recording resumes; then they are merged into FILE."
+        ),
+    )
+    parser.add_argument("--episodes", type=_positive, required=True, help="number of episodes")
+    parser.add_argument("--out", type=Path, required=True, help="output .npz file")
+    parser.add_argument("--map", default="gdc1", help="map (default gdc1, the training map)")
+    parser.add_argument("--policy", default="ref", help="demonstrating policy (default ref)")
+    parser.add_argument("--chunk-episodes", type=_positive, default=25, help="episodes per chunk file")
+    parser.add_argument("--batch-size", type=_positive, default=64, help="env rows stepped together")
+    parser.add_argument(
+        "--max-steps", type=_positive, default=None, help="episode time limit override, steps"
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run_demos_command)
+    return parser
+
+
+def register(subparsers: Any) -> None:
+    """Add both subcommands."""
+    add_benchmark_parser(subparsers)
+    add_demos_parser(subparsers)
+
+
+def _fail(command: str, err: Exception) -> int:
+    print(f"socialzoo {command}: error: {err}", file=sys.stderr)
+    return 2
+
+
+def run_benchmark_command(args: argparse.Namespace) -> int:
+    """Run `socialzoo benchmark`; returns the exit status."""
+    from socialzoo.bench.experiment import BenchmarkConfig, quick_config, run_benchmark
+    from socialzoo.bench.store import StoreError
+    from socialzoo.bench.tables import policy_label
+
+    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    chosen: dict[str, Any] = {
+        "backend": args.backend,
+        "address": args.address,
+        "batch_size": args.batch_size,
+        "env_overrides": overrides,
+    }
+    for key in ("policies", "maps", "trials", "workers"):
+        if getattr(args, key) is not None:
+            chosen[key] = getattr(args, key)
+    if args.workers is None and args.backend == "ray":
+        chosen["workers"] = None  # one chunk per CPU of the Ray cluster
+    try:
+        config = quick_config(**chosen) if args.quick else BenchmarkConfig(**chosen)
+        result = run_benchmark(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
+    except (ValueError, KeyError, StoreError) as err:
+        return _fail("benchmark", err)
+    print(f"{result.computed} trials run, {result.reused} read from the store, in {result.seconds:.1f} s")
+    for entry in result.summary:
+        print(
+            f"  {policy_label(entry['policy']):>8} on {entry['map']:<6} success "
+            f"{100 * entry['success_rate']:5.1f}% [{100 * entry['success_ci_low']:.1f}, "
+            f"{100 * entry['success_ci_high']:.1f}] over {entry['trials']} trials"
+        )
+    print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
+    return 0
+
+
+def run_demos_command(args: argparse.Namespace) -> int:
+    """Run `socialzoo demos`; returns the exit status."""
+    from socialzoo.agents.demonstrations import (
+        DemoConfig,
+        DemonstrationError,
+        load_demonstrations,
+        record_demonstrations,
+    )
+
+    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    try:
+        config = DemoConfig(
+            policy=args.policy.lower(),
+            map=args.map,
+            episodes=args.episodes,
+            chunk_episodes=args.chunk_episodes,
+            batch_size=args.batch_size,
+            env_overrides=overrides,
+        )
+        path = record_demonstrations(args.out, config, progress=not args.no_progress)
+        arrays, _ = load_demonstrations(path)
+    except (ValueError, KeyError, DemonstrationError) as err:
+        return _fail("demos", err)
+    print(f"{path}: {len(arrays['episode_ids'])} episodes, {len(arrays['action'])} steps")
+    return 0

@@ -1,0 +1,200 @@
+"""The results store: resume after a killed run, rereads, bad files and bad names."""
+
+import json
+import math
+import shutil
+import sqlite3
+
+import pytest
+
+from socialzoo.bench.experiment import STORE_NAME, BenchmarkConfig, run_benchmark
+from socialzoo.bench.store import ResultsStore, StoreError
+from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+
+ROOMS = {
+    "format": "socialzoo-map/1",
+    "name": "rooms",
+    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
+    "graph": {
+        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
+        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
+    },
+    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
+}
+TRIALS = 6
+
+
+@pytest.fixture(scope="module")
+def rooms(tmp_path_factory):
+    path = tmp_path_factory.mktemp("maps") / "rooms.json"
+    path.write_text(json.dumps(ROOMS))
+    return {"rooms": TestSet(str(path), 7, 20, ScenarioConfig(min_humans=2, max_humans=5), name="rooms-test")}
+
+
+def config(**changes):
+    base = dict(maps=("rooms",), trials=TRIALS, batch_size=4, workers=1, env_overrides={"max_steps": 150})
+    base.update(changes)
+    return BenchmarkConfig(**base)
+
+
+def stored(out_dir):
+    """Every stored trial, without its finish time."""
+    with ResultsStore(out_dir / STORE_NAME) as store:
+        rows = store.rows()
+    for row in rows:
+        del row["finished_at"]
+    return rows
+
+
+def same_rows(a, b):
+    def key(v):
+        return "nan" if isinstance(v, float) and math.isnan(v) else v
+
+    return [{k: key(v) for k, v in r.items()} for r in a] == [{k: key(v) for k, v in r.items()} for r in b]
+
+
+class Killed(Exception):
+    pass
+
+
+def kill_after(k):
+    seen = []
+
+    def callback(batch):
+        seen.extend(batch)
+        if len(seen) >= k:
+            raise Killed
+
+    return callback
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(rooms, tmp_path_factory):
+    out = tmp_path_factory.mktemp("full")
+    result = run_benchmark(config(), out, test_sets=rooms, progress=False, figures=False)
+    assert (result.computed, result.reused) == (2 * TRIALS, 0)
+    return out
+
+
+def test_rerun_reads_instead_of_recomputing(rooms, uninterrupted, tmp_path):
+    out = tmp_path / "copy"
+    shutil.copytree(uninterrupted, out)
+    again = run_benchmark(config(), out, test_sets=rooms, progress=False, figures=False)
+    assert (again.computed, again.reused) == (0, 2 * TRIALS)
+    assert same_rows(stored(out), stored(uninterrupted))
+    assert sorted((r["policy"], r["scenario_index"]) for r in stored(out)) == sorted(
+        (p, k) for p in ("goalone", "ref") for k in range(TRIALS)
+    )
+    # More trials of the same test set: only the new ones run.
+    more = run_benchmark(config(trials=TRIALS + 1), out, test_sets=rooms, progress=False, figures=False)
+    assert (more.computed, more.reused) == (2, 2 * TRIALS)
+    # Another env config is another key: nothing is reused, nothing is overwritten.
+    other = run_benchmark(
+        config(env_overrides={"max_steps": 100}), out, test_sets=rooms, progress=False, figures=False
+    )
+    assert (other.computed, other.reused) == (2 * TRIALS, 0)
+    assert len(stored(out)) == 2 * (2 * TRIALS) + 2
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_resume_after_kill_gives_the_uninterrupted_rows(rooms, uninterrupted, tmp_path, workers):
+    with pytest.raises(Killed):
+        run_benchmark(
+            config(workers=workers),
+            tmp_path,
+            test_sets=rooms,
+            progress=False,
+            figures=False,
+            on_results=kill_after(3),
+        )
+    partial = stored(tmp_path)
+    assert 3 <= len(partial) < 2 * TRIALS
+    resumed = run_benchmark(config(workers=workers), tmp_path, test_sets=rooms, progress=False, figures=False)
+    assert (resumed.computed, resumed.reused) == (2 * TRIALS - len(partial), len(partial))
+    assert same_rows(stored(tmp_path), stored(uninterrupted))
+
+
+def test_store_round_trip(tmp_path):
+    path = tmp_path / "r.sqlite"
+    row = {
+        "policy": "ref",
+        "map": "gdc1",
+        "test_set": "gdc1-test",
+        "scenario_index": 3,
+        "seed": 2**64 - 5,
+        "config_hash": "abc",
+        "package_version": "0.1.0",
+        "metrics": {"success": True, "steps": 12, "time_to_goal": math.nan, "mean_force": 0.25},
+    }
+    with ResultsStore(path) as store:
+        assert store.add([row]) == 1
+        assert store.add([row]) == 0  # the key is unique: a repeat is skipped
+        store.register_config("abc", {"x": 1})
+    with ResultsStore(path) as store:
+        (back,) = store.rows(policy="ref")
+        assert back["seed"] == 2**64 - 5 and back["success"] is True and back["steps"] == 12
+        assert math.isnan(back["time_to_goal"]) and back["mean_force"] == 0.25
+        assert store.stored_indices("ref", "gdc1-test", "abc") == {3}
+        assert store.config("abc") == {"x": 1}
+        assert len(store) == 1
+
+
+def test_foreign_and_corrupted_files_are_refused_and_kept(tmp_path):
+    text = tmp_path / "notes.sqlite"
+    text.write_bytes(b"my thesis, do not delete\n" * 100)
+    foreign = tmp_path / "other.sqlite"
+    with sqlite3.connect(foreign) as db:
+        db.execute("CREATE TABLE people (name TEXT)")
+        db.execute("INSERT INTO people VALUES ('ada')")
+    db.close()
+    good = tmp_path / "good.sqlite"
+    with ResultsStore(good) as store:
+        store.add(
+            [
+                {
+                    "policy": "ref",
+                    "map": "m",
+                    "test_set": "t",
+                    "scenario_index": i,
+                    "seed": i,
+                    "config_hash": "h",
+                    "package_version": "0",
+                    "metrics": {"success": True, "note": 0.5},
+                }
+                for i in range(200)
+            ]
+        )
+    damaged = tmp_path / "damaged.sqlite"
+    data = bytearray(good.read_bytes())
+    data[200:] = b"\xff" * (len(data) - 200)  # keep the SQLite header, wreck the pages
+    damaged.write_bytes(bytes(data))
+    for path, pattern in (
+        (text, "not an SQLite database"),
+        (foreign, "not a socialzoo results store"),
+        (damaged, "corrupt"),
+    ):
+        before = path.read_bytes()
+        with pytest.raises(StoreError, match=pattern) as err:
+            ResultsStore(path)
+        assert str(path) in str(err.value)
+        assert path.read_bytes() == before
+
+
+def test_run_into_a_foreign_file_fails_before_writing(rooms, tmp_path):
+    (tmp_path / STORE_NAME).write_text("not a database")
+    with pytest.raises(StoreError, match=str(tmp_path / STORE_NAME)):
+        run_benchmark(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
+    assert (tmp_path / STORE_NAME).read_text() == "not a database"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [STORE_NAME]
+
+
+def test_unknown_policy_and_map_names(rooms, tmp_path):
+    with pytest.raises(ValueError, match=r"unknown policy 'nope'.*goalone.*ref"):
+        config(policies=("goalone", "nope"))
+    with pytest.raises(ValueError, match=r"unknown map 'atlantis'.*gdc1.*ghc3"):
+        run_benchmark(config(maps=("atlantis",)), tmp_path / "out", progress=False, figures=False)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ValueError, match="holds only 20"):
+        run_benchmark(config(trials=21), tmp_path / "out", test_sets=rooms, progress=False, figures=False)
+    with pytest.raises(ValueError, match=r"BenchmarkConfig\.backend"):
+        config(backend="slurm")

@@ -1,0 +1,142 @@
+"""Confidence intervals on known numbers, and the summary CSV / Markdown / figures."""
+
+import math
+
+import numpy as np
+import pytest
+
+from socialzoo.bench.stats import mean_interval, rate_interval, student_t_cdf, student_t_ppf
+from socialzoo.bench.tables import (
+    csv_columns,
+    read_summary_csv,
+    summarize,
+    summary_markdown,
+    write_summary_csv,
+)
+
+
+@pytest.mark.parametrize(
+    ("q", "df", "expected"),
+    [
+        (0.95, 1, 6.313751514675037),  # scipy.stats.t.ppf
+        (0.95, 4, 2.1318467863266495),
+        (0.95, 29, 1.6991270265334972),
+        (0.975, 10, 2.228138851986274),
+        (0.95, 1999, 1.6456162481872625),
+    ],
+)
+def test_t_quantiles(q, df, expected):
+    assert student_t_ppf(q, df) == pytest.approx(expected, abs=1e-9)
+    assert student_t_ppf(1 - q, df) == pytest.approx(-expected, abs=1e-9)
+    assert student_t_cdf(expected, df) == pytest.approx(q, abs=1e-12)
+
+
+def test_mean_interval_known_numbers():
+    # mean 3, sample sd sqrt(2.5), n 5: half-width t(0.95, 4) * sqrt(2.5 / 5).
+    ci = mean_interval([1.0, 2.0, 3.0, 4.0, 5.0])
+    half = 2.1318467863266495 * math.sqrt(0.5)
+    assert (ci.value, ci.n) == (3.0, 5)
+    assert ci.low == pytest.approx(3.0 - half, abs=1e-12)
+    assert ci.high == pytest.approx(3.0 + half, abs=1e-12)
+    # NaN values are left out; one value has no interval; none has no mean.
+    assert mean_interval([1.0, np.nan, 5.0]).n == 2
+    one = mean_interval([2.0])
+    assert one.value == 2.0 and math.isnan(one.low) and math.isnan(one.high)
+    assert math.isnan(mean_interval([]).value)
+    flat = mean_interval([0.5] * 4)
+    assert flat.low == flat.high == 0.5
+    wider = mean_interval([1.0, 2.0, 3.0, 4.0, 5.0], confidence=0.95)
+    assert wider.low < ci.low
+
+
+def test_wilson_interval_known_numbers():
+    ci = rate_interval(89, 100)  # scipy.stats.binomtest(89, 100).proportion_ci(0.9, "wilson")
+    assert ci.value == 0.89
+    assert ci.low == pytest.approx(0.8279141735549224, abs=1e-12)
+    assert ci.high == pytest.approx(0.9315385042342016, abs=1e-12)
+    full = rate_interval(100, 100)
+    assert full.high == 1.0 and full.low == pytest.approx(0.9736572792168257, abs=1e-12)
+    assert rate_interval(0, 10).low == 0.0
+    assert math.isnan(rate_interval(0, 0).value)
+    with pytest.raises(ValueError, match="successes"):
+        rate_interval(5, 3)
+    with pytest.raises(ValueError, match="confidence"):
+        rate_interval(1, 3, confidence=1.5)
+
+
+def rows_for(policy, map_name, successes, n):
+    rows = []
+    for i in range(n):
+        ok = i < successes
+        rows.append(
+            {
+                "policy": policy,
+                "map": map_name,
+                "test_set": f"{map_name}-quick",
+                "success": ok,
+                "time_to_goal": 10.0 + i if ok else (50.0 if i % 2 else math.nan),
+                "mean_force": 0.1 * (i % 3),
+                "mean_blame": 0.2,
+                "human_collisions": 0,
+                "min_human_distance": math.nan if i == 0 else 1.0,
+            }
+        )
+    return rows
+
+
+def test_summary_rows_and_csv(tmp_path):
+    rows = rows_for("ref", "ghc3", 3, 4) + rows_for("goalone", "gdc1", 4, 5) + rows_for("ref", "gdc1", 2, 4)
+    summary = summarize(rows, policies=["goalone", "ref"], maps=["gdc1", "ghc3"])
+    assert [(e["policy"], e["map"], e["trials"]) for e in summary] == [
+        ("goalone", "gdc1", 5),
+        ("ref", "gdc1", 4),
+        ("ref", "ghc3", 4),
+    ]
+    ref_gdc1 = summary[1]
+    assert ref_gdc1["success_rate"] == 0.5
+    # Time to goal over successful episodes only (10 and 11), never the failures' 50.
+    assert ref_gdc1["time_to_goal_mean"] == 10.5 and ref_gdc1["time_to_goal_n"] == 2
+    assert ref_gdc1["mean_force_mean"] == pytest.approx(np.mean([0.0, 0.1, 0.2, 0.0]))
+    assert ref_gdc1["min_human_distance_mean"] == 1.0  # the NaN is left out
+    assert math.isnan(ref_gdc1["jerk_mean"])  # a metric the rows lack
+
+    path = write_summary_csv(summary, tmp_path / "summary.csv")
+    header = path.read_text().splitlines()[0].split(",")
+    assert header == csv_columns()
+    assert header[:7] == [
+        "policy",
+        "map",
+        "test_set",
+        "trials",
+        "success_rate",
+        "success_ci_low",
+        "success_ci_high",
+    ]
+    for metric in ("mean_force", "mean_blame", "time_to_goal", "personal_space_intrusion_time"):
+        assert {f"{metric}_mean", f"{metric}_ci_low", f"{metric}_ci_high"} <= set(header)
+    back = read_summary_csv(path)
+    assert back[1]["success_rate"] == 0.5 and back[1]["trials"] == 4
+    assert back[0]["success_ci_low"] == summary[0]["success_ci_low"]  # floats round-trip exactly
+    assert math.isnan(back[1]["jerk_mean"])
+
+
+def test_markdown_has_the_paper_table(tmp_path):
+    summary = summarize(rows_for("goalone", "gdc1", 9, 10) + rows_for("goalone", "ghc3", 8, 10))
+    text = summary_markdown(summary)
+    assert "| policy | test (gdc1) | paper test | transfer (ghc3) | paper transfer |" in text
+    line = next(x for x in text.splitlines() if x.startswith("| GoAlone") and "97.5" in x)
+    assert "90.0 [" in line and "97.3" in line
+    assert "successful episodes only" in text
+    assert "(n=9)" in text
+
+
+def test_figures_are_written(tmp_path):
+    pytest.importorskip("matplotlib")
+    from socialzoo.bench.figures import plot_summary
+
+    summary = summarize(
+        rows_for("goalone", "gdc1", 9, 10) + rows_for("ref", "gdc1", 7, 10) + rows_for("ref", "ghc3", 6, 10)
+    )
+    files = plot_summary(summary, tmp_path)
+    assert sorted(p.name for p in files) == ["metrics.pdf", "metrics.png", "success.pdf", "success.png"]
+    assert all(p.stat().st_size > 1000 for p in files)
