@@ -45,6 +45,8 @@ View = Literal["follow", "map"]
 _TILE = 512  # side of a cached background tile in the follow view, pixels
 _SUPERSAMPLE = 3  # the static background is drawn this many times larger, then box-filtered
 _TRAIL_FADE = 0.85  # the oldest trail point is this close to white
+_MIN_HUMAN_PX = 3.0  # smallest drawn human radius, output pixels
+_MIN_ROBOT_PX = 10.0  # smallest drawn robot length, output pixels
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,7 +105,7 @@ def _font(size: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
 
 def _fade(color: tuple[int, int, int], amount: float) -> tuple[int, int, int]:
     """`color` mixed with white: amount 0 keeps it, 1 gives white."""
-    return tuple(int(round(c + (255 - c) * amount)) for c in color)  # type: ignore[return-value]
+    return tuple(round(c + (255 - c) * amount) for c in color)  # type: ignore[return-value]
 
 
 class FrameRenderer:
@@ -112,7 +114,10 @@ class FrameRenderer:
     World y points up in the image. The renderer keeps each human's recent positions (a trail of
     up to `trail_length` points, one every `trail_spacing` metres walked); call reset() at the start
     of an episode. The trails also restart by themselves when the row's step count goes backwards,
-    the row changes or a human jumps (respawns).
+    the row changes or a human jumps (respawns). In zoomed-out views humans and the robot are drawn
+    at least a few pixels wide. The follow view caches the static layer in 512-pixel tiles, made
+    as the robot first comes near them (at most about 90 MiB for a 100 m x 60 m map at the default
+    640x480, antialias=2, once the robot has been everywhere).
 
     Args:
         map: the map whose walls are drawn.
@@ -272,7 +277,7 @@ class FrameRenderer:
 
         if len(self._walls):
             seg = self._walls[visible(self._walls)]
-            wall_px = max(2.0, 0.08 * self.scale) * out_px
+            wall_px = max(1.3, 0.08 * self.scale) * out_px
             cap = wall_px / 2.0
             a_px, b_px = to_px(seg[:, :2]).tolist(), to_px(seg[:, 2:]).tolist()
             for a, b in zip(a_px, b_px, strict=True):
@@ -360,11 +365,22 @@ class FrameRenderer:
 
         self._draw_trails(draw, px, human_pos, human_mask)
 
+        # The scan and the link to the highlighted human go under the discs they end on.
+        if overlay.laser_ranges is not None and overlay.laser is not None:
+            self._draw_laser(draw, px, pose, np.asarray(overlay.laser_ranges, float), overlay.laser)
+        # Zoomed-out views keep humans and the robot at least a few pixels wide.
+        r = max(self.human_radius * s, _MIN_HUMAN_PX * aa)
+        centres = px(human_pos)
+        highlight = overlay.highlight
+        highlighted = (
+            highlight is not None and 0 <= highlight < len(human_pos) and bool(human_mask[highlight])
+        )
+        if highlighted and np.isfinite(pose[:2]).all():
+            draw.line((*px(pose[:2]), *centres[highlight]), fill=HIGHLIGHT, width=aa)
+
         goal = overlay.goal if overlay.goal is not None else state.robot_goal[row, robot]
         self._draw_goal(draw, px, np.asarray(goal, float))
 
-        r = self.human_radius * s
-        centres = px(human_pos)
         for h in np.flatnonzero(human_mask).tolist():
             u, v = centres[h]
             draw.ellipse((u - r, v - r, u + r, v + r), fill=HUMAN, outline=HUMAN_EDGE, width=aa)
@@ -374,16 +390,10 @@ class FrameRenderer:
                 self._draw_robot(draw, px, poses[k], OTHER_ROBOT)
         self._draw_robot(draw, px, pose, ROBOT)
 
-        highlight = overlay.highlight
-        if highlight is not None and 0 <= highlight < len(human_pos) and human_mask[highlight]:
+        if highlighted:
             u, v = centres[highlight]
-            ru, rv = px(pose[:2])
-            draw.line((ru, rv, u, v), fill=HIGHLIGHT, width=aa)
             ring = r + 3 * aa
             draw.ellipse((u - ring, v - ring, u + ring, v + ring), outline=HIGHLIGHT, width=2 * aa)
-
-        if overlay.laser_ranges is not None and overlay.laser is not None:
-            self._draw_laser(draw, px, pose, np.asarray(overlay.laser_ranges, float), overlay.laser)
 
         if overlay.carrot is not None:
             u, v = px(np.asarray(overlay.carrot, float)[:2])
@@ -422,7 +432,9 @@ class FrameRenderer:
         draw.ellipse((u - c, v - c, u + c, v + c), fill=GOAL)
         if goal.shape[-1] >= 3 and math.isfinite(goal[2]):
             cos, sin = math.cos(goal[2]), math.sin(goal[2])
-            draw.line((u + r * cos, v - r * sin, u + 1.7 * r * cos, v - 1.7 * r * sin), fill=GOAL, width=2 * aa)
+            draw.line(
+                (u + r * cos, v - r * sin, u + 1.7 * r * cos, v - 1.7 * r * sin), fill=GOAL, width=2 * aa
+            )
 
     def _draw_robot(
         self, draw: ImageDraw.ImageDraw, px: Any, pose: np.ndarray, color: tuple[int, int, int]
@@ -431,6 +443,8 @@ class FrameRenderer:
         if not np.isfinite(pose).all():
             return
         hl, hw = self.robot_config.half_length, self.robot_config.half_width
+        grow = max(1.0, _MIN_ROBOT_PX * self.antialias / (2.0 * hl * self._s))
+        hl, hw = hl * grow, hw * grow
         c, sn = math.cos(pose[2]), math.sin(pose[2])
         box = [[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]]
         chevron = [[0.85 * hl, 0.0], [-0.35 * hl, 0.6 * hw], [-0.1 * hl, 0.0], [-0.35 * hl, -0.6 * hw]]
@@ -454,7 +468,7 @@ class FrameRenderer:
         hit = np.isfinite(ranges) & (ranges < cfg.max_range - 1e-6)
         theta = pose[2] + angles[hit]
         ends = pose[:2] + ranges[hit, None] * np.stack((np.cos(theta), np.sin(theta)), axis=-1)
-        d = 1.2 * self.antialias
+        d = self.antialias * min(1.2, max(0.7, 0.05 * self.scale))
         for u, v in px(ends).tolist():
             draw.ellipse((u - d, v - d, u + d, v + d), fill=LASER)
 
@@ -477,7 +491,7 @@ class FrameRenderer:
         draw.rectangle(
             (pad, pad, 3 * pad + text_w, 2 * pad + sum(heights) + pad), fill=TEXT_BOX, outline=TEXT_BOX_EDGE
         )
-        y = 2 * pad - 1
+        y: float = 2 * pad - 1
         for k, (line, f) in enumerate(zip(lines, fonts, strict=True)):
             color = ROBOT_MARK if (k == 0 and overlay.action) else TEXT
             draw.text((2 * pad, y), line, fill=color, font=f)
@@ -499,6 +513,7 @@ class HumanWindow:
 
         self._plt = plt
         plt.ion()
+        self.fig: Any
         self.fig, self.ax = plt.subplots(num=title)
         self.ax.set_axis_off()
         self.fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
