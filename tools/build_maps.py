@@ -4,7 +4,8 @@
 
 gdc1: the reference walls of the benchmark area (the second floor plan drawn below y = -5 is
 dropped), its 77 nodes and 26 legal poses; edges joined by socialzoo.nav.roadmap.build_edges.
-ghc3: all 2082 reference walls; graph and legal poses generated inside the building.
+ghc3: all 2082 reference walls; graph and legal poses generated inside the building, keeping only
+poses whose routes to every other pose fit in the benchmark's time limit (at most 90 m).
 Small maps (open_room, hallway, doorway, intersection): hand-drawn walls, generated graph and poses.
 Every map is validated before it is written.
 """
@@ -12,11 +13,14 @@ Every map is validated before it is written.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 
+from socialzoo.nav.graph import graph_of
 from socialzoo.nav.importers import drop_zero_length, read_table
+from socialzoo.nav.maps import Map
 from socialzoo.nav.roadmap import complete_map
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -100,6 +104,32 @@ def build_gdc1(reference: Path) -> None:
     print(f"gdc1: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses")
 
 
+# A legal pose pair whose route is longer than this cannot be driven within the benchmark's 80 s
+# (60 s at GoAlone's 1.5 m/s, leaving 20 s for doors, turns and people), m.
+MAX_ROUTE = 90.0
+
+
+def drop_far_poses(m: Map, max_route: float = MAX_ROUTE) -> Map:
+    """The map without the legal poses that make some route longer than max_route.
+
+    Repeatedly drops the pose with the most over-long routes to the others (ties: the lowest index).
+    """
+    graph = graph_of(m)
+    poses = m.legal_poses[:, :2]
+    n = len(poses)
+    first, second = np.nonzero(~np.eye(n, dtype=bool))
+    paths, _ = graph.plan_batch(poses[first], poses[second])
+    length = np.zeros((n, n))
+    length[first, second] = np.linalg.norm(np.diff(paths, axis=1), axis=-1).sum(-1)
+    keep = list(range(n))
+    while True:
+        too_long = (length[np.ix_(keep, keep)] > max_route).sum(axis=1)
+        if too_long.max() == 0:
+            break
+        keep.pop(int(np.argmax(too_long)))
+    return dataclasses.replace(m, legal_poses=m.legal_poses[keep])
+
+
 def build_ghc3(reference: Path) -> None:
     m = complete_map(
         "ghc3",
@@ -112,6 +142,7 @@ def build_ghc3(reference: Path) -> None:
         ),
         licence=SOCIAL_GYM,
     )
+    m = drop_far_poses(m)
     m.save(ROOT / "maps" / "ghc3.json")
     print(f"ghc3: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses")
 

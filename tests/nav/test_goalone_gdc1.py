@@ -108,3 +108,10 @@ def test_go_alone_reaches_every_goal_on_the_small_maps(name):
     m = maps.load_map(name)
     failed, steps = go_alone_all_pairs(m, graph_of(m))
     assert not failed, f"{len(failed)} of {len(steps)} pairs failed: " + ", ".join(failed)
+
+
+def test_go_alone_reaches_every_goal_on_ghc3():
+    """The transfer map's generated poses are all reachable from each other within 80 s."""
+    m = maps.load_map("ghc3")
+    failed, steps = go_alone_all_pairs(m, graph_of(m))
+    assert not failed, f"{len(failed)} of {len(steps)} pairs failed: " + ", ".join(failed)
