@@ -163,10 +163,8 @@ def ref_inputs_from_paper_obs(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
 def ref_inputs_from_core(core: SocialNavCore) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """`ref_actions`' inputs for all B*R robots of a core, from its world state and carrots.
 
-    Visibility is recomputed with the observation's own rule (socialzoo.nav.visibility).
+    Visibility is the one the core computed for its latest observation.
     """
-    from socialzoo.nav.visibility import visible_humans
-
     state = core.state
     if state is None:
         raise RuntimeError("Ref: the core has no state yet (reset_rows first)")
@@ -174,8 +172,7 @@ def ref_inputs_from_core(core: SocialNavCore) -> tuple[np.ndarray, np.ndarray, n
     pose = state.robot_pose.reshape(b * r, 3)
     human_pos = np.repeat(state.human_pos, r, axis=0)
     human_vel = np.repeat(state.human_vel, r, axis=0)
-    mask = np.repeat(state.human_mask, r, axis=0)
-    seen = visible_humans(pose, human_pos, mask, core.walls, getattr(core, "field", None))
+    seen = core.visible
     c, s = np.cos(pose[:, 2])[:, None], np.sin(pose[:, 2])[:, None]
 
     def to_robot_axes(vec: np.ndarray) -> np.ndarray:

@@ -103,6 +103,8 @@ class SocialNavCore:
         self.done = np.zeros((b, r), dtype=bool)
         self.obs = np.zeros((b, r, config.observation.size), dtype=np.float32)
         self.human_obs: np.ndarray | None = None
+        # (B*R, H) which humans each robot saw in its latest observation.
+        self.visible = np.zeros((b * r, config.max_humans), dtype=bool)
         self.scenarios: list[Scenario | None] = [None] * b
         self._ever_reset = np.zeros(b, dtype=bool)
 
@@ -339,6 +341,7 @@ class SocialNavCore:
         human_vel = np.repeat(s.human_vel, r, axis=0) if r > 1 else s.human_vel
         human_mask = np.repeat(s.human_mask, r, axis=0) if r > 1 else s.human_mask
         visible = visible_humans(pose, human_pos, human_mask, self.walls, self.field)
+        self.visible = visible
         obs = build_observation(
             self.config.observation,
             pose,
