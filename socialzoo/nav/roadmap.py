@@ -298,8 +298,11 @@ def free_space(
             )
         i, j = np.floor((seed - origin) / res).astype(np.int64)
         if not passable[i, j]:
+            # Name the point's own clearance; the grid cell (whose centre decides) may differ a bit.
+            exact = float(index.nearest(seed[None])[1][0])
+            gap = exact if exact < config.free_clearance else float(clearance[i, j])
             raise ValueError(
-                f"seed point ({seed[0]:.2f}, {seed[1]:.2f}) is {clearance[i, j]:.2f} m from a wall "
+                f"seed point ({seed[0]:.2f}, {seed[1]:.2f}) is {gap:.2f} m from a wall "
                 f"(needs {config.free_clearance:.2f})"
             )
         if not inside[i, j]:

@@ -85,3 +85,42 @@ def test_demo_writes_a_gif(tmp_path, capsys):
     assert frames.ndim == 4 and 2 <= len(frames) <= 30
     assert np.ptp(frames) > 0
     assert main(["demo", "--policy", "nobody", "--out", str(out)]) == 2
+
+
+def test_map_import_from_pedsim_waypoints_and_amrl_nav(tmp_path, capsys):
+    walls = load_map("doorway").walls
+    obstacles = "".join(f'<obstacle x1="{a}" y1="{b}" x2="{c}" y2="{d}"/>\n' for a, b, c, d in walls)
+    scene = tmp_path / "scene.xml"
+    scene.write_text(
+        f'<scenario>\n{obstacles}<waypoint id="w1" x="4" y="4" r="1"/>\n'
+        '<waypoint id="w2" x="12" y="4" r="1"/>\n</scenario>\n'
+    )
+    out = tmp_path / "scene.json"
+    assert main(["map", "import", "--pedsim", str(scene), "--name", "scene", "--out", str(out)]) == 0
+    m = load_map(out)
+    np.testing.assert_array_equal(m.nodes, [[4, 4], [12, 4]])
+    np.testing.assert_array_equal(m.edges, [[0, 1]])
+
+    nav = tmp_path / "nav.json"
+    nav.write_text(
+        '{"nodes": [{"id": 7, "loc": {"x": 4, "y": 4}}, {"id": 8, "loc": {"x": 12, "y": 4}}],'
+        ' "edges": [{"s0_id": 7, "s1_id": 8}]}'
+    )
+    vector = write_vector_map(tmp_path / "doorway.txt", walls)
+    out = tmp_path / "nav_map.json"
+    assert (
+        main(["map", "import", "--walls", str(vector), "--nav", str(nav), "--name", "n", "--out", str(out)])
+        == 0
+    )
+    assert load_map(out).num_nodes == 2
+    capsys.readouterr()
+    # A graph edge through the middle wall is refused, naming the entry.
+    nav.write_text(
+        '{"nodes": [{"id": 7, "loc": {"x": 4, "y": 1}}, {"id": 8, "loc": {"x": 12, "y": 1}}],'
+        ' "edges": [{"s0_id": 7, "s1_id": 8}]}'
+    )
+    assert (
+        main(["map", "import", "--walls", str(vector), "--nav", str(nav), "--name", "n", "--out", str(out)])
+        == 2
+    )
+    assert "passes through wall" in capsys.readouterr().err

@@ -1,15 +1,12 @@
-"""Importers: AMRL vector maps and navigation JSON, pedsim scenes; the roadmap builder."""
+"""Importers: AMRL vector maps and navigation JSON, pedsim scenes (roadmap tests: test_roadmap.py)."""
 
 import json
 
-import networkx as nx
 import numpy as np
 import pytest
 
-from socialzoo.core.geometry import segments_intersect
 from socialzoo.nav.importers import read_amrl_nav_graph, read_pedsim_scene, read_vector_map, write_vector_map
-from socialzoo.nav.maps import MapError, load_map, validate_map
-from socialzoo.nav.roadmap import build_roadmap, complete_map
+from socialzoo.nav.maps import MapError, load_map
 
 
 def test_vector_map_round_trip_and_formats(tmp_path):
@@ -55,27 +52,32 @@ def test_pedsim_scene(tmp_path):
         read_pedsim_scene(tmp_path / "bad.xml")
 
 
-@pytest.mark.parametrize("name", ["hallway", "ghc3"])
-def test_roadmap_is_connected_and_never_crosses_walls(name):
-    source = load_map(name)
-    seed_point = {"hallway": (4.0, 4.5), "ghc3": (-5.0, -10.0)}[name]
-    roadmap = build_roadmap(source.walls, region=source.region, seed_point=seed_point)
-    graph = nx.Graph(roadmap.edges.tolist())
-    graph.add_nodes_from(range(len(roadmap.nodes)))
-    assert nx.is_connected(graph)
-    a, b = roadmap.nodes[roadmap.edges[:, 0]], roadmap.nodes[roadmap.edges[:, 1]]
-    crossing = segments_intersect(
-        a[:, None], b[:, None], source.walls[None, :, :2], source.walls[None, :, 2:]
+def test_zero_length_walls_are_dropped_on_import(tmp_path):
+    (tmp_path / "w.txt").write_text("0, 0, 1, 0\n2, 2, 2, 2\n1,0,1,1\n")
+    np.testing.assert_array_equal(read_vector_map(tmp_path / "w.txt"), [[0, 0, 1, 0], [1, 0, 1, 1]])
+
+
+def test_amrl_nav_graph_errors_name_the_entry(tmp_path):
+    nodes = [{"id": 1, "loc": {"x": 0.0, "y": 0.0}}, {"id": 2, "loc": {"x": 1.0, "y": 0.0}}]
+    cases = [
+        ({"nodes": nodes, "edges": [{"s0_id": 1, "s1_id": 9}]}, r"edges\[0\]: s1_id 9 is not a node id"),
+        ({"nodes": nodes, "edges": [{"s0_id": 2, "s1_id": 2}]}, r"edges\[0\]: joins node 2 to itself"),
+        ({"nodes": [*nodes, nodes[0]], "edges": []}, r"nodes\[2\]: node id 1 repeats nodes\[0\]"),
+        ({"nodes": [{"id": 1, "loc": {"x": "a", "y": 0}}], "edges": []}, r"nodes\[0\]: loc.x"),
+    ]
+    for data, message in cases:
+        (tmp_path / "nav.json").write_text(json.dumps(data))
+        with pytest.raises(MapError, match=message):
+            read_amrl_nav_graph(tmp_path / "nav.json")
+
+
+def test_pedsim_errors_name_the_line(tmp_path):
+    (tmp_path / "scene.xml").write_text(
+        '<?xml version="1.0"?>\n<scenario>\n  <obstacle x1="0" y1="0" x2="1" y2="0"/>\n'
+        '  <obstacle x1="0" y1="0" x2="1"/>\n</scenario>\n'
     )
-    assert not crossing.any()
-
-
-def test_complete_map_is_deterministic_and_valid():
-    walls = load_map("doorway").walls
-    one = complete_map("d", walls, region=(-1, -1, 17, 9), seed_point=(4, 4))
-    two = complete_map("d", walls, region=(-1, -1, 17, 9), seed_point=(4, 4))
-    validate_map(one)
-    np.testing.assert_array_equal(one.nodes, two.nodes)
-    np.testing.assert_array_equal(one.legal_poses, two.legal_poses)
-    spacing = np.linalg.norm(one.legal_poses[:, None, :2] - one.legal_poses[None, :, :2], axis=-1)
-    assert spacing[~np.eye(len(spacing), dtype=bool)].min() >= 2.0
+    with pytest.raises(MapError, match=r"scene\.xml:4: <obstacle>: missing attribute 'y2'"):
+        read_pedsim_scene(tmp_path / "scene.xml")
+    (tmp_path / "broken.xml").write_text("<scenario>\n<obstacle x1='0'\n</scenario>\n")
+    with pytest.raises(MapError, match=r"broken\.xml:3: malformed XML"):
+        read_pedsim_scene(tmp_path / "broken.xml")
