@@ -63,7 +63,11 @@ def pair_force(
     Returns:
         (fx, fy) before the social strength factor, m/s^2, in the dtype of dx.
     """
-    dist = np.hypot(dx, dy)
+    # sqrt(x*x + y*y) rather than np.hypot: no overflow is possible here, and hypot's careful
+    # float32 loop is several times slower.
+    dist = dx * dx
+    dist += dy * dy
+    np.sqrt(dist, out=dist)
     # Coincident or invalid pairs are zeroed by one multiplication at the end; flooring the
     # distance keeps their intermediate values finite (boolean-mask writes cost more).
     weight = (valid & (dist > _TINY)).astype(dx.dtype)
@@ -74,7 +78,9 @@ def pair_force(
     ix += ex
     iy = dvy * cfg.social_lambda
     iy += ey
-    inter_len = np.hypot(ix, iy)
+    inter_len = ix * ix
+    inter_len += iy * iy
+    np.sqrt(inter_len, out=inter_len)
     np.maximum(inter_len, _TINY, out=inter_len)
     ix /= inter_len
     iy /= inter_len
