@@ -174,6 +174,10 @@ class SocialNavCore:
             return command, halt, np.full((b, r), -1, dtype=np.intp)
         flat = check_actions(np.asarray(action).reshape(-1), b * r)
         human_pos, human_vel, human_mask = self._robot_obstacles()
+        # The latest observation saw this very state: its visibility serves target selection.
+        # Other robots (appended after the humans) are never Follow or Pass targets.
+        visible = np.zeros(human_mask.shape, dtype=bool)
+        visible[:, : self.visible.shape[1]] = self.visible
         command, halt, target = subpolicy_commands(
             flat,
             state.robot_pose.reshape(b * r, 3),
@@ -187,6 +191,7 @@ class SocialNavCore:
             self.config.planner,
             self.config.world.robot,
             self.config.dt,
+            visible,
         )
         return command.reshape(b, r, 2), halt.reshape(b, r), target.reshape(b, r)
 

@@ -232,6 +232,7 @@ def subpolicy_commands(
     planner_cfg: LocalPlannerConfig,
     robot_cfg: RobotConfig,
     dt: float,
+    visible: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Robot commands for a batch of sub-policy actions, planned in one local-planner call.
 
@@ -255,6 +256,9 @@ def subpolicy_commands(
         planner_cfg: local planner parameters.
         robot_cfg: robot limits.
         dt: control period, s.
+        visible: (N, H) which humans each robot sees, when the caller already knows it (an env
+            core computes it for the observation of this very state); else it is computed here
+            for the few humans that target selection needs.
 
     Returns:
         (command, halt, target_human): command (N, 2) (v, omega) (zero where halting), halt (N,)
@@ -272,12 +276,15 @@ def subpolicy_commands(
     if social.any():
         rows = np.flatnonzero(social)
         pose = robot_pose[rows]
-        field = distance_field(
-            walls, planner_cfg.field_resolution, planner_cfg.field_range, planner_cfg.field_pad
-        )
-        seen = nearest_visible_ahead(
-            pose, human_pos[rows], human_mask[rows], walls, cfg.num_candidates, field
-        )
+        if visible is not None:
+            seen = visible[rows] & human_mask[rows]
+        else:
+            field = distance_field(
+                walls, planner_cfg.field_resolution, planner_cfg.field_range, planner_cfg.field_pad
+            )
+            seen = nearest_visible_ahead(
+                pose, human_pos[rows], human_mask[rows], walls, cfg.num_candidates, field
+            )
         target_human[rows] = select_target_human(
             pose, human_pos[rows], human_vel[rows], seen, carrot[rows], cfg
         )
