@@ -38,7 +38,10 @@ def robot_velocity_vectors(state: WorldState) -> np.ndarray:
     """(B, R, 2) robot velocity in the world frame, m/s."""
     theta = state.robot_pose[..., 2]
     v = state.robot_vel[..., 0]
-    return np.stack((v * np.cos(theta), v * np.sin(theta)), axis=-1)
+    out = np.empty(state.robot_pose.shape[:-1] + (2,))
+    out[..., 0] = v * np.cos(theta)
+    out[..., 1] = v * np.sin(theta)
+    return out
 
 
 def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> tuple[np.ndarray, np.ndarray]:

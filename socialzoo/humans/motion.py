@@ -36,7 +36,7 @@ def integrate_humans(
         wall stopped this step.
     """
     new_vel = vel + dt * accel
-    speed = np.sqrt((new_vel**2).sum(-1))
+    speed = np.sqrt(new_vel[..., 0] * new_vel[..., 0] + new_vel[..., 1] * new_vel[..., 1])
     scale = np.where(speed > max_speed, max_speed / np.maximum(speed, 1e-12), 1.0)
     new_vel = np.where(mask[..., None], new_vel * scale[..., None], 0.0)
     new_pos = pos + dt * new_vel

@@ -36,7 +36,7 @@ def desired_force(
         (B, H, 2) acceleration, m/s^2.
     """
     to_target = target - pos
-    dist = np.sqrt((to_target**2).sum(-1, keepdims=True))
+    dist = np.sqrt(to_target[..., 0:1] * to_target[..., 0:1] + to_target[..., 1:2] * to_target[..., 1:2])
     direction = to_target / np.maximum(dist, _TINY)
     return (direction * pref_speed[..., None] - vel) / cfg.relaxation_time
 
