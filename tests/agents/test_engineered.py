@@ -126,26 +126,15 @@ def test_goalone_and_registry():
         RefConfig(sector_deg=120.0)
 
 
-ROOMS = {
-    "format": "socialzoo-map/1",
-    "name": "rooms",
-    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
-    "graph": {
-        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
-        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
-    },
-    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
-}
 
 
-def test_observation_and_world_state_give_the_same_decisions(tmp_path):
+def test_observation_and_world_state_give_the_same_decisions(rooms_map_path):
     """On a real env, Ref from the paper observation equals Ref from the core's world state."""
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.core import SocialNavCore
     from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario
 
-    path = tmp_path / "rooms.json"
-    path.write_text(json.dumps(ROOMS))
+    path = rooms_map_path
     scenarios = ScenarioConfig(min_humans=4, max_humans=8)
     core = SocialNavCore(EnvConfig(map=str(path), max_steps=200, scenario=scenarios), 6)
     core.reset_rows(np.arange(6), [generate_scenario(core.map, seed, scenarios) for seed in range(6)])

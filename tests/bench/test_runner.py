@@ -2,7 +2,6 @@
 same rows whatever the batching, the number of processes, or the backend (local or Ray)."""
 
 import itertools
-import json
 import math
 
 import pytest
@@ -11,23 +10,12 @@ from socialzoo.bench.runner import BatchedRunner, Trial, evaluate, make_spec, sp
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
 
-ROOMS = {
-    "format": "socialzoo-map/1",
-    "name": "rooms",
-    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
-    "graph": {
-        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
-        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
-    },
-    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
-}
 MAX_STEPS = 150
 
 
 @pytest.fixture(scope="module")
-def test_set(tmp_path_factory):
-    path = tmp_path_factory.mktemp("maps") / "rooms.json"
-    path.write_text(json.dumps(ROOMS))
+def test_set(rooms_map_path):
+    path = rooms_map_path
     return TestSet(str(path), 11, 30, ScenarioConfig(min_humans=2, max_humans=6), name="rooms-test")
 
 

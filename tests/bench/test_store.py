@@ -1,6 +1,5 @@
 """The results store: resume after a killed run, rereads, bad files and bad names."""
 
-import json
 import math
 import shutil
 import sqlite3
@@ -11,23 +10,12 @@ from socialzoo.bench.experiment import STORE_NAME, BenchmarkConfig, run_benchmar
 from socialzoo.bench.store import ResultsStore, StoreError
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
 
-ROOMS = {
-    "format": "socialzoo-map/1",
-    "name": "rooms",
-    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
-    "graph": {
-        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
-        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
-    },
-    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
-}
 TRIALS = 6
 
 
 @pytest.fixture(scope="module")
-def rooms(tmp_path_factory):
-    path = tmp_path_factory.mktemp("maps") / "rooms.json"
-    path.write_text(json.dumps(ROOMS))
+def rooms(rooms_map_path):
+    path = rooms_map_path
     return {"rooms": TestSet(str(path), 7, 20, ScenarioConfig(min_humans=2, max_humans=5), name="rooms-test")}
 
 

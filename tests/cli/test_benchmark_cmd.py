@@ -9,17 +9,6 @@ from socialzoo.agents import demonstrations
 from socialzoo.agents.demonstrations import DemoConfig, load_demonstrations, parts_dir, record_demonstrations
 from socialzoo.cli import main as socialzoo_main
 
-ROOMS = {
-    "format": "socialzoo-map/1",
-    "name": "rooms",
-    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
-    "graph": {
-        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
-        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
-    },
-    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
-}
-
 
 def test_benchmark_end_to_end(tmp_path, capsys):
     pytest.importorskip("matplotlib")
@@ -73,10 +62,8 @@ def test_benchmark_bad_names(tmp_path, capsys):
 
 
 @pytest.fixture
-def rooms_path(tmp_path):
-    path = tmp_path / "rooms.json"
-    path.write_text(json.dumps(ROOMS))
-    return str(path)
+def rooms_path(rooms_map_path):
+    return str(rooms_map_path)
 
 
 def test_demos_command(tmp_path, rooms_path, capsys):

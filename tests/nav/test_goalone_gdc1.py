@@ -7,48 +7,25 @@ limit, and no robot's footprint ever touches a wall; likewise on the other shipp
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.robot import step_robot
-from socialzoo.core.walls import WallIndex
 from socialzoo.nav import maps
-from socialzoo.nav.graph import NavGraph, graph_of, segments_free
+from socialzoo.nav.graph import NavGraph, graph_of
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.maps import Map
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.subpolicies import GO_ALONE, HALT, SubPolicyConfig, subpolicy_commands
 
-REFERENCE = Path("/work/shared/reference/socialgym")
-if not REFERENCE.exists():
-    REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "socialgym"
-
 TIME_LIMIT = 3200  # steps (SPEC section 2)
 SUCCESS_DISTANCE = 0.5  # m
 
 
-def reference_gdc1() -> Map:
-    """GDC1 from the reference data, with a visibility graph (0.25 m clearance) as its edges."""
-    walls = np.loadtxt(REFERENCE / "gdc1_walls.txt")
-    walls = walls[(walls[:, 1] > -10) & (walls[:, 3] > -10)]
-    nodes = np.loadtxt(REFERENCE / "gdc1_nav_nodes.txt")
-    poses = np.loadtxt(REFERENCE / "gdc1_legal_poses.txt")
-    index = WallIndex(walls)
-    i, j = np.triu_indices(len(nodes), 1)
-    a, b = nodes[i], nodes[j]
-    d = b - a
-    normal = np.stack((-d[:, 1], d[:, 0]), 1) / np.linalg.norm(d, axis=1)[:, None] * 0.25
-    ok = segments_free(index, a, b) & segments_free(index, a + normal, b + normal)
-    ok &= segments_free(index, a - normal, b - normal)
-    return Map(name="gdc1", walls=walls, nodes=nodes, edges=np.stack((i[ok], j[ok]), 1), legal_poses=poses)
-
-
 def gdc1() -> tuple[Map, NavGraph]:
     """The shipped GDC1 map and its graph, or one built from the reference data before it ships."""
-    m = maps.load_map("gdc1") if "gdc1" in maps.list_maps() else reference_gdc1()
+    m = maps.load_map("gdc1")
     return m, graph_of(m)
 
 

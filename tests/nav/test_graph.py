@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
-from pathlib import Path
 
 import networkx as nx
 import numpy as np
@@ -18,33 +16,9 @@ from socialzoo.nav import maps
 from socialzoo.nav.graph import AttachError, NavGraph, NoPathError, graph_of, segments_free
 from socialzoo.nav.maps import Map
 
-REFERENCE = Path("/work/shared/reference/socialgym")
-if not REFERENCE.exists():
-    REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "socialgym"
 
-
-def reference_gdc1() -> Map:
-    """GDC1 from the reference data, with a visibility graph (0.25 m clearance) as its edges."""
-    walls = np.loadtxt(REFERENCE / "gdc1_walls.txt")
-    walls = walls[(walls[:, 1] > -10) & (walls[:, 3] > -10)]
-    nodes = np.loadtxt(REFERENCE / "gdc1_nav_nodes.txt")
-    poses = np.loadtxt(REFERENCE / "gdc1_legal_poses.txt")
-    index = WallIndex(walls)
-    i, j = np.triu_indices(len(nodes), 1)
-    a, b = nodes[i], nodes[j]
-    d = b - a
-    normal = np.stack((-d[:, 1], d[:, 0]), 1) / np.linalg.norm(d, axis=1)[:, None] * 0.25
-    ok = segments_free(index, a, b) & segments_free(index, a + normal, b + normal)
-    ok &= segments_free(index, a - normal, b - normal)
-    return Map(name="gdc1", walls=walls, nodes=nodes, edges=np.stack((i[ok], j[ok]), 1), legal_poses=poses)
-
-
-@functools.cache
 def gdc1() -> Map:
-    """The shipped GDC1 map once `load_map` exists, else one built from the reference data."""
-    if hasattr(maps, "list_maps") and "gdc1" in maps.list_maps():
-        return maps.load_map("gdc1")
-    return reference_gdc1()
+    return maps.load_map("gdc1")
 
 
 def to_networkx(g: NavGraph) -> nx.Graph:

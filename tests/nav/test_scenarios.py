@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.core.walls import WallIndex
 from socialzoo.core.world import step_world
 from socialzoo.nav import maps
 from socialzoo.nav.graph import NoPathError, segments_free
@@ -28,40 +26,9 @@ from socialzoo.nav.scenarios import (
     scenarios_to_state,
 )
 
-REFERENCE = Path("/work/shared/reference/socialgym")
-if not REFERENCE.exists():
-    REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "socialgym"
 
-
-def shipped(name: str) -> Map | None:
-    if hasattr(maps, "list_maps") and name in maps.list_maps():
-        return maps.load_map(name)
-    return None
-
-
-@functools.cache
 def gdc1() -> Map:
-    """The shipped GDC1 map once it exists, else one built from the reference data."""
-    m = shipped("gdc1")
-    if m is not None:
-        return m
-    walls = np.loadtxt(REFERENCE / "gdc1_walls.txt")
-    walls = walls[(walls[:, 1] > -10) & (walls[:, 3] > -10)]
-    nodes = np.loadtxt(REFERENCE / "gdc1_nav_nodes.txt")
-    index = WallIndex(walls)
-    i, j = np.triu_indices(len(nodes), 1)
-    a, b = nodes[i], nodes[j]
-    d = b - a
-    normal = np.stack((-d[:, 1], d[:, 0]), 1) / np.linalg.norm(d, axis=1)[:, None] * 0.25
-    ok = segments_free(index, a, b) & segments_free(index, a + normal, b + normal)
-    ok &= segments_free(index, a - normal, b - normal)
-    return Map(
-        name="gdc1",
-        walls=walls,
-        nodes=nodes,
-        edges=np.stack((i[ok], j[ok]), 1),
-        legal_poses=np.loadtxt(REFERENCE / "gdc1_legal_poses.txt"),
-    )
+    return maps.load_map("gdc1")
 
 
 def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
@@ -69,7 +36,7 @@ def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
 
 
 def synthetic(name: str) -> Map:
-    """Small stand-ins for the shipped small maps (used until those exist)."""
+    """Tiny hand-built maps for edge cases (the two-pose hallway, ...)."""
     if name == "hallway":
         return Map(
             name=name,
@@ -127,7 +94,7 @@ def synthetic(name: str) -> Map:
 
 
 def small_map(name: str) -> Map:
-    return shipped(name) or synthetic(name)
+    return maps.load_map(name)
 
 
 def check_scenario_geometry(m: Map, s: Scenario) -> None:

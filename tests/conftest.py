@@ -1,0 +1,25 @@
+"""Shared test fixtures."""
+
+import json
+
+import pytest
+
+# A small two-room map with a door, for fast episodes in the harness and policy tests.
+ROOMS = {
+    "format": "socialzoo-map/1",
+    "name": "rooms",
+    "walls": [[0, 0, 14, 0], [14, 0, 14, 6], [14, 6, 0, 6], [0, 6, 0, 0], [5, 0, 5, 2.2], [5, 3.8, 5, 6]],
+    "graph": {
+        "nodes": [[1, 1], [1, 5], [3, 3], [5, 3], [7, 3], [9, 3], [11, 3], [13, 1], [13, 5]],
+        "edges": [[0, 2], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6], [6, 7], [6, 8]],
+    },
+    "legal_poses": [[1, 1, 0], [1, 5, 0], [3, 3, 0], [13, 1, 3.14], [13, 5, 3.14], [11, 3, 3.14], [7, 4, 0]],
+}
+
+
+@pytest.fixture(scope="session")
+def rooms_map_path(tmp_path_factory):
+    """Path of the two-room map written as a socialzoo-map/1 file."""
+    path = tmp_path_factory.mktemp("maps") / "rooms.json"
+    path.write_text(json.dumps(ROOMS))
+    return path
