@@ -179,3 +179,12 @@ def test_rgb_render():
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
     env.close()
+
+
+@pytest.mark.parametrize("env_id", list(BENCHMARK_IDS) + list(FAMILY_IDS))
+def test_registered_specs_round_trip_through_json(env_id):
+    from gymnasium.envs.registration import EnvSpec
+
+    spec = gym.spec(env_id)
+    again = EnvSpec.from_json(spec.to_json())
+    assert again.id == spec.id and again.kwargs == spec.kwargs and again.entry_point == spec.entry_point
