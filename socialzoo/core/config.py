@@ -67,12 +67,11 @@ class RobotConfig:
 class HumanConfig:
     """Social-force pedestrians (SPEC section 4, PedSim's Helbing-Molnar-Moussaid model).
 
+    How many humans there are, where they spawn and how fast they prefer to walk is the scenario's
+    business (socialzoo.nav.scenarios.ScenarioConfig); walls beyond the map's WallIndex reach
+    (1 m) exert no force.
+
     Attributes:
-        min_humans, max_humans: scenario head count range (inclusive).
-        speed_mean, speed_std: preferred speed distribution N(mean, std), m/s.
-        max_speed: cap on a sampled preferred speed, m/s.
-        min_speed: floor on a sampled preferred speed, m/s.
-        spawn_jitter: uniform spawn offset half-width around the start node, m.
         force_radius: agent radius subtracted from the wall distance in the obstacle force, m.
             PedSim's agentRadius, 0.2; the SPEC also lists a "social-force radius" of 0.4, which
             keeps humans 0.4-0.5 m off walls and squeezes them into robots standing in corridors
@@ -88,16 +87,8 @@ class HumanConfig:
         social_lambda, social_gamma, social_n, social_n_prime: Moussaid parameters.
         robot_scale: robot-human position differences are divided by this before the social force.
         waypoint_radius: a waypoint within this distance counts as reached, m.
-        wall_reach: walls farther than this exert no force, m (the force there is below 1e-3).
     """
 
-    min_humans: int = 5
-    max_humans: int = 25
-    speed_mean: float = 1.0
-    speed_std: float = 0.1
-    max_speed: float = 1.3
-    min_speed: float = 0.5
-    spawn_jitter: float = 0.5
     force_radius: float = 0.2
     radius: float = 0.2
     relaxation_time: float = 0.5
@@ -111,22 +102,9 @@ class HumanConfig:
     social_n_prime: float = 3.0
     robot_scale: float = 1.5
     waypoint_radius: float = 1.0
-    wall_reach: float = 1.0
 
     def __post_init__(self) -> None:
-        _check_all(
-            self,
-            nonnegative=("speed_std", "spawn_jitter", "obstacle_strength", "social_strength", "min_humans"),
-        )
-        for name in ("min_humans", "max_humans"):
-            if not isinstance(getattr(self, name), int) or isinstance(getattr(self, name), bool):
-                raise ValueError(f"HumanConfig.{name} must be an int, got {getattr(self, name)!r}")
-        if self.min_humans > self.max_humans:
-            raise ValueError(
-                f"HumanConfig.min_humans ({self.min_humans}) exceeds max_humans ({self.max_humans})"
-            )
-        if self.min_speed > self.max_speed:
-            raise ValueError(f"HumanConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})")
+        _check_all(self, nonnegative=("obstacle_strength", "social_strength"))
 
 
 @dataclass(frozen=True, kw_only=True)
