@@ -20,8 +20,8 @@ from socialzoo.env.human_agents import human_observations, human_rewards
 from socialzoo.env.metrics import EpisodeMetrics
 from socialzoo.env.observation import build_observation
 from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
+from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
-from socialzoo.nav.local_planner import distance_field
 from socialzoo.nav.maps import Map, load_map
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state

@@ -15,7 +15,8 @@ import numpy as np
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.local_planner import LocalPlannerConfig, distance_field, plan_commands
+from socialzoo.nav.distance_field import distance_field
+from socialzoo.nav.local_planner import LocalPlannerConfig, plan_commands
 from socialzoo.nav.visibility import nearest_visible_ahead
 
 GO_ALONE = 0

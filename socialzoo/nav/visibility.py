@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.local_planner import DistanceField
+from socialzoo.nav.distance_field import DistanceField
 
 # Sight lines: piece length of the distance-field pre-check, and the stretches (distances from
 # the robot, m) in which lines are followed, stopping at the first wall.

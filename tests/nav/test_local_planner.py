@@ -13,11 +13,11 @@ from hypothesis import strategies as st
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.core.walls import WallIndex
+from socialzoo.nav.distance_field import build_distance_field
 from socialzoo.nav.local_planner import (
     LocalPlannerConfig,
     arc_points,
     arc_table,
-    build_distance_field,
     evaluate_arcs,
     plan_commands,
 )

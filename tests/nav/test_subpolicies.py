@@ -11,7 +11,8 @@ from socialzoo.core.config import WorldConfig
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.core.world import step_world
-from socialzoo.nav.local_planner import LocalPlannerConfig, distance_field
+from socialzoo.nav.distance_field import distance_field
+from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.subpolicies import (
     FOLLOW,

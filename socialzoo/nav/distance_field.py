@@ -1,0 +1,128 @@
+"""A map's wall distance field: distance to the nearest wall on a fine grid, one byte per cell.
+
+The local planner reads it at sample points along its arcs and the visibility test uses it to
+clear sight-line pieces far from any wall; one lookup costs one gather whatever the wall density.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from socialzoo.core.walls import WallIndex
+
+
+@dataclass(frozen=True)
+class DistanceField:
+    """The distance to the nearest wall, sampled at the centres of a square grid's cells.
+
+    A lookup returns the value of the cell containing the point, so it is within half a cell
+    diagonal (plus one quantum, rounding down) of the true distance. Distances are stored as uint8
+    codes of `quantum` metres, so a lookup is a one-byte gather and the table stays small in cache.
+
+    Attributes:
+        origin: world position of the grid's lower-left corner, (2,), m.
+        resolution: cell side, m.
+        num_x, num_y: cells along x and y.
+        max_range: distances are capped here, m; points off the grid read max_range.
+        quantum: metres per code unit.
+        codes: (num_x * num_y,) uint8, flat index ix * num_y + iy: the distance from the cell's
+            centre to the nearest wall in quanta, rounded down.
+        inner_lo, inner_hi: (2,) world box whose points are farther than `pad` from the grid's
+            border, m; arc samples of robots inside it need no clamping.
+    """
+
+    origin: np.ndarray
+    resolution: float
+    num_x: int
+    num_y: int
+    max_range: float
+    quantum: float
+    codes: np.ndarray
+    inner_lo: np.ndarray
+    inner_hi: np.ndarray
+
+    def lookup(self, points: np.ndarray) -> np.ndarray:
+        """Wall distance of world points (..., 2) to within half a cell diagonal; (...,) m."""
+        ij = np.floor((points - self.origin) / self.resolution).astype(np.intp)
+        ix = np.minimum(np.maximum(ij[..., 0], 0), self.num_x - 1)
+        iy = np.minimum(np.maximum(ij[..., 1], 0), self.num_y - 1)
+        return self.codes[ix * self.num_y + iy] * self.quantum
+
+
+def build_distance_field(
+    walls: np.ndarray, resolution: float, max_range: float, pad: float = 0.0
+) -> DistanceField:
+    """Distance field of wall segments (W, 4), exact at cell centres, capped at max_range.
+
+    The grid covers the walls' bounding box grown by max_range + pad and two cells, so every
+    point off the grid is at least max_range from every wall, and points up to `pad` away from a
+    point inside the walls' bounding box are on the grid.
+    """
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    grow = max_range + pad + 2.0 * resolution
+    if len(walls):
+        lo = np.minimum(walls[:, 0:2], walls[:, 2:4]).min(axis=0) - grow
+        hi = np.maximum(walls[:, 0:2], walls[:, 2:4]).max(axis=0) + grow
+    else:
+        lo, hi = np.full(2, -grow), np.full(2, grow)
+    num_x = max(1, math.ceil((hi[0] - lo[0]) / resolution))
+    num_y = max(1, math.ceil((hi[1] - lo[1]) / resolution))
+    # Squared distances in float32 (the codes keep 250 levels): a block of cells per wall, its
+    # bounding box grown by the range. Build time only, hence the loop over walls.
+    grid = np.full((num_x, num_y), np.float32(max_range**2), dtype=np.float32)
+    reach = max_range + resolution
+    for a, b in zip(walls[:, 0:2], walls[:, 2:4], strict=True):
+        i0 = np.maximum(np.floor((np.minimum(a, b) - reach - lo) / resolution).astype(int), 0)
+        i1 = np.minimum(np.ceil((np.maximum(a, b) + reach - lo) / resolution).astype(int), (num_x, num_y))
+        px = (lo[0] + (np.arange(i0[0], i1[0]) + 0.5) * resolution - a[0]).astype(np.float32)[:, None]
+        py = (lo[1] + (np.arange(i0[1], i1[1]) + 0.5) * resolution - a[1]).astype(np.float32)[None, :]
+        d = (b - a).astype(np.float32)
+        len2 = float(d @ d)
+        t = px * (d[0] / len2 if len2 > 0 else 0.0) + py * (d[1] / len2 if len2 > 0 else 0.0)
+        np.clip(t, 0.0, 1.0, out=t)
+        ex = px - t * d[0]
+        ey = py - t * d[1]
+        ex *= ex
+        ey *= ey
+        ex += ey
+        block = grid[i0[0] : i1[0], i0[1] : i1[1]]
+        np.minimum(block, ex, out=block)
+    grid = np.sqrt(grid)
+    quantum = max_range / 250.0
+    codes = np.floor(np.clip(grid, 0.0, max_range) / quantum).astype(np.uint8)
+    top = lo + np.array([num_x, num_y]) * resolution
+    return DistanceField(
+        origin=lo,
+        resolution=resolution,
+        num_x=num_x,
+        num_y=num_y,
+        max_range=max_range,
+        quantum=quantum,
+        codes=codes.reshape(-1),
+        inner_lo=lo + pad + resolution,
+        inner_hi=top - pad - resolution,
+    )
+
+
+_LAST_FIELD: dict[str, tuple[weakref.ref[WallIndex], tuple[float, float, float], DistanceField]] = {}
+_FIELDS: weakref.WeakKeyDictionary[WallIndex, dict[tuple[float, float, float], DistanceField]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def distance_field(walls: WallIndex, resolution: float, max_range: float, pad: float = 0.0) -> DistanceField:
+    """The distance field of a wall index, built on first use and cached with the index."""
+    last = _LAST_FIELD.get("entry")
+    if last is not None and last[0]() is walls and last[1] == (resolution, max_range, pad):
+        return last[2]  # the common case, every step: skip the weak-dictionary lookups
+    per_index = _FIELDS.setdefault(walls, {})
+    key = (float(resolution), float(max_range), float(pad))
+    field = per_index.get(key)
+    if field is None:
+        field = per_index[key] = build_distance_field(walls.walls, resolution, max_range, pad)
+    _LAST_FIELD["entry"] = (weakref.ref(walls), (resolution, max_range, pad), field)
+    return field
