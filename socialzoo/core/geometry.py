@@ -87,6 +87,18 @@ def segments_intersect(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.nd
     return hit
 
 
+def segments_gap(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+    """Distance between closed segments [p0, p1] and [q0, q1] that do not meet; (...,).
+
+    Segments that do not meet are closest at an end point of one of them; for segments that do
+    meet this overestimates (their distance is 0). All arguments broadcast; shapes (..., 2).
+    """
+    return np.minimum(
+        np.minimum(closest_point_on_segment(p0, q0, q1)[1], closest_point_on_segment(p1, q0, q1)[1]),
+        np.minimum(closest_point_on_segment(q0, p0, p1)[1], closest_point_on_segment(q1, p0, p1)[1]),
+    )
+
+
 def ray_segment_hit(origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance along unit rays to segments [a, b]; +inf where the ray misses.
 

@@ -26,7 +26,7 @@ from socialzoo.nav.maps import Map, load_map
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
-from socialzoo.nav.visibility import visible_humans
+from socialzoo.nav.sight_cache import SightCache
 
 # Robots slower than this (m/s) count as still for the blame term.
 STILL_SPEED = 1e-3
@@ -105,6 +105,8 @@ class SocialNavCore:
         self.human_obs: np.ndarray | None = None
         # (B*R, H) which humans each robot saw in its latest observation.
         self.visible = np.zeros((b * r, config.max_humans), dtype=bool)
+        # Sight lines are re-tested only when they may have changed since the last step.
+        self.sight = SightCache(self.walls, self.field, b * r, config.max_humans) if self.walls.num_walls else None
         self.scenarios: list[Scenario | None] = [None] * b
         self._ever_reset = np.zeros(b, dtype=bool)
 
@@ -132,8 +134,10 @@ class SocialNavCore:
         self.prev_action[rows] = 0
         self.target_human[rows] = -1
         self.done[rows] = False
-        metric_rows = (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
-        self.metrics.reset(metric_rows, pose.reshape(-1, 3), goal.reshape(-1, 2))
+        robot_rows = (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
+        if self.sight is not None:
+            self.sight.forget(robot_rows)
+        self.metrics.reset(robot_rows, pose.reshape(-1, 3), goal.reshape(-1, 2))
         carrot = self.navigator.update(self.state.robot_pose[..., :2])
         self.carrot[rows] = carrot[rows]
         self._observe(rows)
@@ -345,7 +349,10 @@ class SocialNavCore:
         human_pos = np.repeat(s.human_pos, r, axis=0) if r > 1 else s.human_pos
         human_vel = np.repeat(s.human_vel, r, axis=0) if r > 1 else s.human_vel
         human_mask = np.repeat(s.human_mask, r, axis=0) if r > 1 else s.human_mask
-        visible = visible_humans(pose, human_pos, human_mask, self.walls, self.field)
+        if self.sight is None:
+            visible = np.array(human_mask, dtype=bool)
+        else:
+            visible = self.sight.visible(pose[:, :2], human_pos, human_mask)
         self.visible = visible
         obs = build_observation(
             self.config.observation,

@@ -8,9 +8,11 @@ cleared without testing them against the walls; the answer is the same as WallIn
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
+from socialzoo.core.geometry import segments_gap, segments_intersect
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import DistanceField
 
@@ -18,8 +20,29 @@ from socialzoo.nav.distance_field import DistanceField
 # the robot, m) in which lines are followed, stopping at the first wall.
 _SIGHT_STEP = 0.25
 _SIGHT_STRETCHES = (3.0, 10.0, math.inf)
+# Pieces whose field margin is below this are measured exactly (m): a clearance certificate
+# (socialzoo.nav.sight_cache) then lasts longer than the field's bound would let it.
+_EXACT_BELOW = 0.1
+# Candidate walls of those pieces come from a grid listing the walls within this reach of each
+# cell (m): at least _EXACT_BELOW + _SIGHT_STEP, so the walls left out cannot set the minimum.
+_EXACT_REACH = 0.5
 # Up to this many sight lines, one plain test against the walls is cheaper than the above.
 _FEW_LINES = 32
+
+
+class Sight(NamedTuple):
+    """Line-of-sight answers for M segments.
+
+    Attributes:
+        clear: (M,) bool, the segment touches no wall.
+        clearance: (M,) for clear segments a lower bound on their distance to every wall, m
+            (0 for blocked ones).
+        wall: (M,) for blocked segments the index of a wall they touch, -1 for clear ones.
+    """
+
+    clear: np.ndarray
+    clearance: np.ndarray
+    wall: np.ndarray
 
 
 def lines_of_sight(
@@ -27,52 +50,101 @@ def lines_of_sight(
 ) -> np.ndarray:
     """Whether segments [p0, p1] (M, 2) touch no wall; bool (M,). Exact.
 
-    With a distance field, each segment is cut into pieces of at most `_SIGHT_STEP` m; a piece
-    whose ends read wall distances summing to more than its length (plus the field's error)
-    cannot touch a wall, so only the other pieces are tested against the walls. Segments are
-    followed outwards from p0 in a few stretches (`_SIGHT_STRETCHES`), and a segment found
-    blocked is not followed further: most sight lines in a building end at the first wall.
+    With a distance field and more than a few segments this is `sight_lines(...).clear`;
+    otherwise one plain WallIndex.crosses test.
     """
-    clear = np.ones(len(p0), dtype=bool)
     if len(p0) == 0:
-        return clear
+        return np.ones(0, dtype=bool)
     if field is None or len(p0) <= _FEW_LINES:
         return ~walls.crosses(p0, p1)
+    return sight_lines(p0, p1, walls, field).clear
+
+
+def sight_lines(p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: DistanceField) -> Sight:
+    """Exact wall occlusion of segments [p0, p1] (M, 2), with a clearance or a blocking wall each.
+
+    Each segment is cut into pieces of at most `_SIGHT_STEP` m. A piece whose ends read wall
+    distances d1, d2 in the field keeps at least (d1 + d2 - length) / 2 - error from every wall;
+    only pieces without such a margin are tested against their candidate walls (which also gives
+    their exact clearance). Segments are followed outwards from p0 in a few stretches
+    (`_SIGHT_STRETCHES`), and a segment found blocked is not followed further: most sight lines
+    in a building end at the first wall.
+    """
+    m = len(p0)
+    clear = np.ones(m, dtype=bool)
+    clearance = np.full(m, np.inf)
+    wall = np.full(m, -1, dtype=np.intp)
+    if m == 0:
+        return Sight(clear, clearance, wall)
     delta = p1 - p0
     length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
     unit = delta / np.maximum(length, 1e-12)[:, None]
     slack = field.resolution * math.sqrt(0.5) + 1e-6  # a lookup's largest overestimate
     begin = 0.0
-    for end in _SIGHT_STRETCHES:
-        lines = np.flatnonzero(clear & (length > begin))
+    # Following few lines in stretches saves less than the extra calls cost.
+    for end in _SIGHT_STRETCHES if m > _FEW_LINES else (math.inf,):
+        # The first stretch takes every segment, points (zero length) included.
+        lines = np.flatnonzero(clear & (length > begin)) if begin > 0.0 else np.arange(m)
         if len(lines) == 0:
             break
         a = p0[lines] + begin * unit[lines]
         b = p0[lines] + np.minimum(length[lines], end)[:, None] * unit[lines]
-        clear[lines[_stretch_blocked(a, b, walls, field, slack)]] = False
+        hit_wall, margin = _stretch(a, b, walls, field, slack)
+        blocked = hit_wall >= 0
+        clear[lines[blocked]] = False
+        wall[lines[blocked]] = hit_wall[blocked]
+        clearance[lines] = np.minimum(clearance[lines], margin)
         begin = end
-    return clear
+    clearance[~clear] = 0.0
+    return Sight(clear, np.maximum(clearance, 0.0), wall)
 
 
-def _stretch_blocked(
+def _stretch(
     a: np.ndarray, b: np.ndarray, walls: WallIndex, field: DistanceField, slack: float
-) -> np.ndarray:
-    """Which segments [a, b] (M, 2) touch a wall, testing only their pieces near one; bool (M,)."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """(a wall each segment [a, b] (M, 2) touches or -1, a lower bound on its wall distance)."""
     delta = b - a
     length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
     count = np.maximum(np.ceil(length / _SIGHT_STEP).astype(np.intp) + 1, 2)
+    first = np.cumsum(count) - count
     seg = np.repeat(np.arange(len(a)), count)
-    rank = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+    rank = np.arange(len(seg)) - np.repeat(first, count)
     points = a[seg] + (rank / (count - 1)[seg])[:, None] * delta[seg]
-    # Piece k joins points k and k + 1; a point of it is within d of one end and (piece - d) of
-    # the other, so the piece clears every wall when the ends' distances sum to more than its
-    # length (plus twice the field's error).
+    # Piece k joins points k and k + 1 (pieces spanning two segments are ignored). A point of
+    # it is within s of one end and (length - s) of the other, so it keeps a distance of at
+    # least (d1 + d2 - length) / 2 - slack from every wall.
     dist = field.lookup(points)
     piece_len = (length / (count - 1))[seg[:-1]]
-    close = dist[:-1] + dist[1:] <= piece_len + 2.0 * slack
-    piece = np.flatnonzero(close & (seg[1:] == seg[:-1]))
-    hit = walls.crosses(points[piece], points[piece + 1])
-    return np.bincount(seg[piece[hit]], minlength=len(a)) > 0
+    margin = (dist[:-1] + dist[1:] - piece_len) * 0.5 - slack
+    margin[first[1:] - 1] = np.inf
+    hit_wall = np.full(len(a), -1, dtype=np.intp)
+    near = np.flatnonzero(margin < _EXACT_BELOW)
+    if len(near):
+        exact, touched = _piece_clearance(points[near], points[near + 1], walls)
+        margin[near] = exact
+        hit = touched >= 0
+        hit_wall[seg[near[hit]]] = touched[hit]
+    return hit_wall, np.minimum.reduceat(margin, first)
+
+
+def _piece_clearance(q0: np.ndarray, q1: np.ndarray, walls: WallIndex) -> tuple[np.ndarray, np.ndarray]:
+    """Exact wall distance of short segments [q0, q1] (M, 2) (up to the grid's reach) and a wall
+    each touches (-1 for none).
+
+    The grid lists, for q0's cell, every wall within `reach` of q0; walls not listed are
+    farther than reach - length from every point of the segment.
+    """
+    t = walls.table(reach=_EXACT_REACH)
+    query, cand = t.candidates(t.cells(q0))
+    delta = q1 - q0
+    dist = np.maximum(t.reach - np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2), 0.0)
+    touched = np.full(len(q0), -1, dtype=np.intp)
+    if len(query):
+        a, b, c, d = q0[query], q1[query], walls.wall_a[cand], walls.wall_b[cand]
+        hit = segments_intersect(a, b, c, d)
+        np.minimum.at(dist, query, np.where(hit, 0.0, segments_gap(a, b, c, d)))
+        touched[query[hit]] = cand[hit]
+    return dist, touched
 
 
 def visible_humans(

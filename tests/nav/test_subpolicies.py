@@ -25,7 +25,7 @@ from socialzoo.nav.subpolicies import (
     subpolicy_commands,
     subpolicy_targets,
 )
-from socialzoo.nav.visibility import lines_of_sight, nearest_visible_ahead, visible_humans
+from socialzoo.nav.visibility import nearest_visible_ahead, visible_humans
 
 WORLD = WorldConfig()
 SUB = SubPolicyConfig()
@@ -204,32 +204,7 @@ def test_occluded_humans_are_ignored():
     assert pick([(2.0, 0.0)], walls=walls) == -1
 
 
-def random_building(rng: np.random.Generator) -> np.ndarray:
-    """A grid of rooms: walls every 4 m with 1 m door gaps, plus a few random segments."""
-    walls = []
-    for x in range(0, 21, 4):
-        for y0 in range(0, 20, 4):
-            walls.append((x, y0, x, y0 + 1.5))
-            walls.append((x, y0 + 2.5, x, y0 + 4))
-            walls.append((y0, x, y0 + 1.5, x))
-            walls.append((y0 + 2.5, x, y0 + 4, x))
-    a = rng.uniform(0, 20, (15, 2))
-    extra = np.hstack((a, a + rng.uniform(-1.5, 1.5, (15, 2))))
-    return np.vstack((np.array(walls, float), extra))
-
-
-def test_fast_sight_lines_match_the_wall_test():
-    rng = np.random.default_rng(11)
-    walls = WallIndex(random_building(rng))
-    field = distance_field(walls, PLANNER.field_resolution, PLANNER.field_range, PLANNER.field_pad)
-    p0 = rng.uniform(-1, 21, (3000, 2))
-    p1 = rng.uniform(-1, 21, (3000, 2))
-    p1[:20] = p0[:20]  # points
-    p0[20:60] = walls.wall_a[rng.integers(0, walls.num_walls, 40)]  # starting on a wall
-    np.testing.assert_array_equal(lines_of_sight(p0, p1, walls, field), ~walls.crosses(p0, p1))
-
-
-def test_nearest_visible_ahead_gives_the_same_targets():
+def test_nearest_visible_ahead_gives_the_same_targets(random_building):
     rng = np.random.default_rng(5)
     walls = WallIndex(random_building(rng))
     field = distance_field(walls, PLANNER.field_resolution, PLANNER.field_range, PLANNER.field_pad)
