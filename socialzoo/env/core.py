@@ -25,8 +25,8 @@ from socialzoo.nav.graph import graph_of
 from socialzoo.nav.maps import Map, load_map
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
-from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
 from socialzoo.nav.sight_cache import SightCache
+from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
 
 # Robots slower than this (m/s) count as still for the blame term.
 STILL_SPEED = 1e-3
@@ -106,7 +106,9 @@ class SocialNavCore:
         # (B*R, H) which humans each robot saw in its latest observation.
         self.visible = np.zeros((b * r, config.max_humans), dtype=bool)
         # Sight lines are re-tested only when they may have changed since the last step.
-        self.sight = SightCache(self.walls, self.field, b * r, config.max_humans) if self.walls.num_walls else None
+        self.sight = (
+            SightCache(self.walls, self.field, b * r, config.max_humans) if self.walls.num_walls else None
+        )
         self.scenarios: list[Scenario | None] = [None] * b
         self._ever_reset = np.zeros(b, dtype=bool)
 

@@ -126,8 +126,6 @@ def test_goalone_and_registry():
         RefConfig(sector_deg=120.0)
 
 
-
-
 def test_observation_and_world_state_give_the_same_decisions(rooms_map_path):
     """On a real env, Ref from the paper observation equals Ref from the core's world state."""
     from socialzoo.env.config import EnvConfig

@@ -15,8 +15,12 @@ def brute_force(state, walls, cfg, radius):
     pose = state.robot_pose[:, 0]
     angles = pose[:, 2:3] + ray_angles(cfg)
     direction = np.stack((np.cos(angles), np.sin(angles)), axis=-1)
-    wall_hit = ray_segment_hit(pose[:, None, None, :2], direction[:, :, None], walls[:, :2], walls[:, 2:]).min(-1)
-    human_hit = ray_circle_hit(pose[:, None, None, :2], direction[:, :, None], state.human_pos[:, None], radius)
+    wall_hit = ray_segment_hit(
+        pose[:, None, None, :2], direction[:, :, None], walls[:, :2], walls[:, 2:]
+    ).min(-1)
+    human_hit = ray_circle_hit(
+        pose[:, None, None, :2], direction[:, :, None], state.human_pos[:, None], radius
+    )
     human_hit = np.where(state.human_mask[:, None], human_hit, np.inf).min(-1)
     return np.minimum(np.minimum(wall_hit, human_hit), cfg.max_range)
 

@@ -87,7 +87,7 @@ def test_cache_gives_the_answers_of_a_full_test_every_step(random_building):
 def test_a_jump_expires_what_was_known(random_building):
     # A line cleared in one place is not trusted after its ends jump, even without forget():
     # the certificate is the displacement, so a jump expires it.
-    rng, walls, field = building(random_building, 5)
+    _, walls, field = building(random_building, 5)
     cache = SightCache(walls, field, 1, 1)
     inside = np.array([[1.0, 1.0]]), np.array([[[3.0, 3.0]]])  # same room
     across = np.array([[1.0, 1.0]]), np.array([[[9.0, 1.2]]])  # through two walls
