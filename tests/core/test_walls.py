@@ -47,6 +47,8 @@ def test_nearest_matches_brute_force(scene):
     assert np.all(np.isinf(dist[~within]))
     np.testing.assert_allclose(np.linalg.norm(closest[within] - pts[within], axis=1), dist[within], atol=1e-9)
     np.testing.assert_array_equal(closest[~within], pts[~within])
+    # The answers come from the pruned candidate lists, which are shorter.
+    assert len(index.nearest_candidates.cell_walls) < len(index.fine.cell_walls)
 
 
 def test_crosses_matches_brute_force(scene):
