@@ -93,10 +93,39 @@ def segments_gap(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray)
     Segments that do not meet are closest at an end point of one of them; for segments that do
     meet this overestimates (their distance is 0). All arguments broadcast; shapes (..., 2).
     """
-    return np.minimum(
-        np.minimum(closest_point_on_segment(p0, q0, q1)[1], closest_point_on_segment(p1, q0, q1)[1]),
-        np.minimum(closest_point_on_segment(q0, p0, p1)[1], closest_point_on_segment(q1, p0, p1)[1]),
-    )
+    p0x, p0y, p1x, p1y = p0[..., 0], p0[..., 1], p1[..., 0], p1[..., 1]
+    q0x, q0y, q1x, q1y = q0[..., 0], q0[..., 1], q1[..., 0], q1[..., 1]
+    pdx, pdy, qdx, qdy = p1x - p0x, p1y - p0y, q1x - q0x, q1y - q0y
+    p_len2, q_len2 = pdx * pdx + pdy * pdy, qdx * qdx + qdy * qdy
+    # Reciprocal squared lengths, 0 for a point (whose projection parameter is then 0).
+    p_inv = np.divide(1.0, p_len2, out=np.zeros(np.shape(p_len2)), where=p_len2 > 0.0)
+    q_inv = np.divide(1.0, q_len2, out=np.zeros(np.shape(q_len2)), where=q_len2 > 0.0)
+    best = point_segment_dist2(p0x, p0y, q0x, q0y, qdx, qdy, q_inv)
+    np.minimum(best, point_segment_dist2(p1x, p1y, q0x, q0y, qdx, qdy, q_inv), out=best)
+    np.minimum(best, point_segment_dist2(q0x, q0y, p0x, p0y, pdx, pdy, p_inv), out=best)
+    np.minimum(best, point_segment_dist2(q1x, q1y, p0x, p0y, pdx, pdy, p_inv), out=best)
+    return np.sqrt(best, out=best)
+
+
+def point_segment_dist2(
+    px: np.ndarray,
+    py: np.ndarray,
+    ax: np.ndarray,
+    ay: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    inv_len2: np.ndarray,
+) -> np.ndarray:
+    """Squared distance from points (px, py) to segments a + t (dx, dy), t in [0, 1].
+
+    Component arrays (all broadcast); inv_len2 is 1 / (dx^2 + dy^2), or 0 for a point segment.
+    """
+    rx, ry = px - ax, py - ay
+    t = (rx * dx + ry * dy) * inv_len2
+    np.clip(t, 0.0, 1.0, out=t)
+    rx -= t * dx
+    ry -= t * dy
+    return rx * rx + ry * ry
 
 
 def ray_segment_hit(origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

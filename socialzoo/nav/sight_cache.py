@@ -14,16 +14,20 @@ Every other line (new, expired, or whose human just appeared) is tested exactly 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from socialzoo.core.geometry import segments_intersect
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import DistanceField
-from socialzoo.nav.visibility import sight_lines
+from socialzoo.nav.visibility import Sight, near_sight_lines, sight_lines
 
 UNKNOWN, CLEAR, BLOCKED = 0, 1, 2
 # Taken off every clearance so that rounding in the displacement test cannot matter, m.
 _ROUNDING = 1e-9
+# More fresh lines than this are tested with the distance-field pieces (see SightCache.visible).
+_MANY_FRESH = 256
 
 
 class SightCache:
@@ -82,18 +86,37 @@ class SightCache:
                 self.walls.wall_b.take(wall, axis=0),
             )
             expired.reshape(-1)[blocked[~still]] = True
-        retest = np.flatnonzero((expired | (status == UNKNOWN)) & human_mask)
         self.lines_asked += int(np.count_nonzero(human_mask))
-        if len(retest):
-            self.lines_tested += len(retest)
-            start = observer.take(retest // num_humans, axis=0)
-            end = human_pos.reshape(-1, 2).take(retest, axis=0)
-            sight = sight_lines(start, end, self.walls, self.field)
-            status.reshape(-1)[retest] = np.where(sight.clear, CLEAR, BLOCKED)
-            clearance = np.maximum(sight.clearance - _ROUNDING, 0.0)
-            self.clearance2.reshape(-1)[retest] = clearance**2
-            self.wall.reshape(-1)[retest] = sight.wall
-            self.observer_at.reshape(-1, 2)[retest] = start
-            self.human_at.reshape(-1, 2)[retest] = end
+        fresh = np.flatnonzero((status == UNKNOWN) & human_mask)
+        stale = np.flatnonzero(expired & human_mask)
+        # Many fresh lines (after a reset) are mostly blocked by the first walls they meet, which
+        # the pieces of `sight_lines` find without following them further; a few lines, or lines
+        # known clear a moment ago, cost less with `near_sight_lines`.
+        if len(fresh) > _MANY_FRESH:
+            self._retest(fresh, status, observer, human_pos, sight_lines)
+            fresh = fresh[:0]
+        self._retest(np.concatenate((fresh, stale)), status, observer, human_pos, near_sight_lines)
         self.status = status
         return status == CLEAR
+
+    def _retest(
+        self,
+        lines: np.ndarray,
+        status: np.ndarray,
+        observer: np.ndarray,
+        human_pos: np.ndarray,
+        method: Callable[[np.ndarray, np.ndarray, WallIndex, DistanceField], Sight],
+    ) -> None:
+        """Test flat line indices `lines` exactly and store their answers and certificates."""
+        if len(lines) == 0:
+            return
+        self.lines_tested += len(lines)
+        start = observer.take(lines // status.shape[1], axis=0)
+        end = human_pos.reshape(-1, 2).take(lines, axis=0)
+        sight = method(start, end, self.walls, self.field)
+        status.reshape(-1)[lines] = np.where(sight.clear, CLEAR, BLOCKED)
+        clearance = np.maximum(sight.clearance - _ROUNDING, 0.0)
+        self.clearance2.reshape(-1)[lines] = clearance**2
+        self.wall.reshape(-1)[lines] = sight.wall
+        self.observer_at.reshape(-1, 2)[lines] = start
+        self.human_at.reshape(-1, 2)[lines] = end
