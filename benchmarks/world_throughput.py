@@ -45,6 +45,7 @@ def main() -> None:
     # batch itself costs, so peak / B is the memory per env beyond the shared map.
     shared = load_map(args.map)
     shared.wall_index.fine.cell_clearance  # noqa: B018
+    shared.wall_index.nearest_candidates  # noqa: B018
     for batch in args.batches:
         peak = traced_peak_mib(lambda b=batch: build(b, args.map))
         rate, _ = measure(build(batch, args.map), args.seconds)
