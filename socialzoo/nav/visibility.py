@@ -107,9 +107,10 @@ def near_sight_lines(
     Sample points every `reach` m or less along each segment (as WallIndex.crosses) list every
     wall that can touch it. A segment that meets no wall is closest to a wall either at one of
     its own ends (WallIndex.nearest, or a lower bound from the distance field when given) or at
-    one of the wall's ends, so those distances give the clearance (exact without a field), capped at reach / 2 (any point of the segment is within reach / 2 of a
-    sample, and walls not listed for a sample are farther than reach from it). Cheaper than the
-    pieces of `sight_lines` for a few lines, or for lines that are mostly clear.
+    one of the wall's ends, so those distances give the clearance (exact without a field),
+    capped at reach / 2: any point of the segment is within reach / 2 of a sample, and walls not
+    listed for a sample are farther than reach from it. Cheaper than the pieces of
+    `sight_lines` for a few lines, or for lines that are mostly clear.
     """
     t = walls.fine
     m = len(p0)
