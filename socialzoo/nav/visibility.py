@@ -1,8 +1,14 @@
 """Who sees whom: exact wall occlusion of robot-human sight lines, fast on long lines.
 
-A sight line joins two centres and is blocked when it touches any wall. With the map's distance
-field (socialzoo.nav.local_planner.distance_field) the pieces of a line far from every wall are
-cleared without testing them against the walls; the answer is the same as WallIndex.crosses.
+A sight line joins two centres and is blocked when it touches any wall. Two exact tests, with
+the same answers as WallIndex.crosses, that also return what socialzoo.nav.sight_cache needs to
+trust an answer on later steps (a clear line's clearance, a blocked line's wall):
+
+- `sight_lines` cuts lines into short pieces and clears those far from every wall with the map's
+  distance field (socialzoo.nav.distance_field); it follows lines outwards and stops at the
+  first wall, which suits many fresh lines, most of them blocked;
+- `near_sight_lines` tests each line against the walls listed near it on the wall grid, which
+  suits a few lines, or lines that were clear a moment ago.
 """
 
 from __future__ import annotations
