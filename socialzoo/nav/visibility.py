@@ -222,7 +222,7 @@ def visible_humans(
         human_pos: (N, H, 2) human centres, world frame, m.
         human_mask: (N, H) present humans (or any subset worth testing).
         walls: the map's wall index, or None for no walls.
-        field: the walls' distance field (socialzoo.nav.local_planner.distance_field), to clear
+        field: the walls' distance field (socialzoo.nav.distance_field), to clear
             lines far from any wall without testing them against the walls; same result.
 
     Returns:

@@ -256,7 +256,7 @@ def test_batch_equals_rows_one_by_one():
         [[-5, -1.2, 20, -1.2], [-5, 1.2, 20, 1.2], [4, -1.2, 4, 0.0], [7, 1.2, 7, 0.2]], float
     )
     walls = WallIndex(walls_arr)
-    n = 24
+    n = 48  # large enough for rows with short and long trimmed arcs to be evaluated apart
     pose = np.column_stack((rng.uniform(0, 10, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-1, 1, n)))
     vel = np.column_stack((rng.uniform(0, 1.5, n), rng.uniform(-1, 1, n)))
     target = pose[:, :2] + rng.uniform(-2, 2, (n, 2))
@@ -265,6 +265,9 @@ def test_batch_equals_rows_one_by_one():
     speed = rng.choice([1.5, 2.25], n)
     weight = rng.choice([-0.5, 0.0, 0.5], n)
     batch = plan_commands(pose, vel, target, speed, weight, walls, humans, mask, CFG, ROBOT, DT)
+    ev = evaluate_arcs(pose, target, weight, walls, humans, mask, CFG)
+    longest = ev.trim.max(axis=1)
+    assert (longest <= 1.6).any() and (longest > 1.6).any()
     for i in range(n):
         one = plan_commands(
             pose[i : i + 1],
@@ -280,6 +283,17 @@ def test_batch_equals_rows_one_by_one():
             DT,
         )
         np.testing.assert_allclose(batch[i], one[0], atol=1e-12)
+        alone = evaluate_arcs(
+            pose[i : i + 1],
+            target[i : i + 1],
+            weight[i : i + 1],
+            walls,
+            humans[i : i + 1],
+            mask[i : i + 1],
+            CFG,
+        )
+        for f in dataclasses.fields(alone):
+            np.testing.assert_array_equal(getattr(ev, f.name)[i], getattr(alone, f.name)[0], err_msg=f.name)
     active = rng.random(n) < 0.5
     part = plan_commands(pose, vel, target, speed, weight, walls, humans, mask, CFG, ROBOT, DT, active=active)
     np.testing.assert_allclose(part[active], batch[active], atol=1e-12)
