@@ -256,35 +256,45 @@ class WallIndex:
         point[winner, 1] = cy[is_best]
         return point.reshape(points.shape), best.reshape(points.shape[:-1])
 
+    def line_candidates(self, p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Every wall that can touch each segment [p0, p1] (M, 2), as (segment, wall) pairs.
+
+        A segment up to `reach` long is covered by its start; a longer one by sample points
+        spaced at most `reach` apart. Each sample contributes its cell's candidates (every wall
+        within reach of it), so any wall touching the segment is listed.
+
+        Returns:
+            (segment, wall, repeated): int arrays (P,), and whether a pair may be listed more
+            than once (a segment longer than `reach` has several samples).
+        """
+        t = self.fine
+        delta = p1 - p0
+        length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
+        num_samples = np.where(length <= t.reach, 1, np.ceil(length / t.reach).astype(np.intp) + 1)
+        if len(p0) == 0 or num_samples.max() == 1:
+            query, wall = t.candidates(t.cells(p0))
+            return query, wall, False
+        seg_of_sample = np.repeat(np.arange(len(p0)), num_samples)
+        rank = np.arange(len(seg_of_sample)) - np.repeat(np.cumsum(num_samples) - num_samples, num_samples)
+        frac = rank / np.maximum(num_samples - 1, 1).take(seg_of_sample)
+        samples = p0.take(seg_of_sample, axis=0) + frac[:, None] * delta.take(seg_of_sample, axis=0)
+        query, wall = t.candidates(t.cells(samples))
+        return seg_of_sample.take(query), wall, True
+
     def crosses(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
         """Whether segments [p0, p1] (..., 2) touch any wall; returns bool (...,).
 
-        Each segment is covered by its own sample points spaced at most `reach` apart, each
-        contributing its cell's candidates, so any wall touching the segment is tested; a
-        (segment, wall) pair met at several samples is tested once.
+        The candidates of `line_candidates` are tested; a (segment, wall) pair met at several
+        samples is tested once.
         """
-        t = self.fine
         shape = p0.shape[:-1]
         a0 = p0.reshape(-1, 2)
         a1 = p1.reshape(-1, 2)
         if len(a0) == 0:
             return np.zeros(shape, dtype=bool)
-        delta = a1 - a0
-        length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
-        num_samples = np.where(length <= t.reach, 1, np.ceil(length / t.reach).astype(np.intp) + 1)
-        if num_samples.max() == 1:
-            query, wall = t.candidates(t.cells(a0))
-            seg = query
-        else:
-            seg_of_sample = np.repeat(np.arange(len(a0)), num_samples)
-            rank = np.arange(len(seg_of_sample)) - np.repeat(
-                np.cumsum(num_samples) - num_samples, num_samples
-            )
-            frac = rank / np.maximum(num_samples - 1, 1).take(seg_of_sample)
-            samples = a0.take(seg_of_sample, axis=0) + frac[:, None] * delta.take(seg_of_sample, axis=0)
-            query, wall = t.candidates(t.cells(samples))
-            key = np.unique(seg_of_sample.take(query) * self.num_walls + wall)
-            seg, wall = np.divmod(key, self.num_walls)
+        seg, wall, repeated = self.line_candidates(a0, a1)
+        if repeated:
+            seg, wall = np.divmod(np.unique(seg * self.num_walls + wall), self.num_walls)
         hit = segments_intersect(
             a0.take(seg, axis=0), a1.take(seg, axis=0), self.wall_a[wall], self.wall_b[wall]
         )

@@ -110,26 +110,17 @@ def near_sight_lines(
 ) -> Sight:
     """`sight_lines` from the walls near each segment only.
 
-    Sample points every `reach` m or less along each segment (as WallIndex.crosses) list every
-    wall that can touch it. A segment that meets no wall is closest to a wall either at one of
-    its own ends (WallIndex.nearest, or a lower bound from the distance field when given) or at
-    one of the wall's ends, so those distances give the clearance (exact without a field),
-    capped at reach / 2: any point of the segment is within reach / 2 of a sample, and walls not
-    listed for a sample are farther than reach from it. Cheaper than the pieces of
+    WallIndex.line_candidates lists every wall that can touch each segment. A segment that meets
+    no wall is closest to a wall either at one of its own ends (WallIndex.nearest, or a lower
+    bound from the distance field when given) or at one of the wall's ends, so those distances
+    give the clearance (exact without a field), capped at what the walls not listed are
+    certainly farther than (`reach` less the farthest any point lies from its sample). Cheaper than the pieces of
     `sight_lines` for a few lines, or for lines that are mostly clear.
     """
-    t = walls.fine
     m = len(p0)
     delta = p1 - p0
     len2 = delta[:, 0] ** 2 + delta[:, 1] ** 2
-    length = np.sqrt(len2)
-    count = np.where(length <= t.reach, 1, np.ceil(length / t.reach).astype(np.intp) + 1)
-    line_of = np.repeat(np.arange(m), count)
-    rank = np.arange(len(line_of)) - np.repeat(np.cumsum(count) - count, count)
-    frac = rank / np.maximum(count - 1, 1).take(line_of)
-    samples = p0.take(line_of, axis=0) + frac[:, None] * delta.take(line_of, axis=0)
-    query, cand = t.candidates(t.cells(samples))
-    line = line_of.take(query)
+    line, cand, _ = walls.line_candidates(p0, p1)
     c, d = walls.wall_a.take(cand, axis=0), walls.wall_b.take(cand, axis=0)
     hit = segments_intersect(p0.take(line, axis=0), p1.take(line, axis=0), c, d)
     # Distances from the candidate walls' ends to the segments.
@@ -139,7 +130,11 @@ def near_sight_lines(
     gap2 = point_segment_dist2(c[:, 0], c[:, 1], ax, ay, dx, dy, inv_len2)
     np.minimum(gap2, point_segment_dist2(d[:, 0], d[:, 1], ax, ay, dx, dy, inv_len2), out=gap2)
     gap2[hit] = 0.0
-    clearance2 = np.full(m, (0.5 * t.reach) ** 2)
+    reach = walls.fine.reach
+    length = np.sqrt(len2)
+    # One sample (at p0) for segments up to reach long, else samples length / ceil(length / reach) apart.
+    from_sample = np.where(length <= reach, length, 0.5 * length / np.ceil(length / reach))
+    clearance2 = (reach - from_sample) ** 2
     np.minimum.at(clearance2, line, gap2)
     ends = np.concatenate((p0, p1))
     if field is None:

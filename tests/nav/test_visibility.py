@@ -37,6 +37,11 @@ def test_clearance_is_a_lower_bound_and_the_wall_blocks(random_building, method)
     p0 = rng.uniform(-1, 21, (2000, 2))
     p1 = p0 + rng.uniform(-6, 6, (2000, 2))
     p1[:10] = p0[:10]
+    # Lines up to one grid reach long, covered by a single sample.
+    angle = rng.uniform(0, 2 * np.pi, 400)
+    p1[10:410] = p0[10:410] + rng.uniform(0.5, 1.0, (400, 1)) * np.column_stack(
+        (np.cos(angle), np.sin(angle))
+    )
     sight = sight_lines(p0, p1, walls, field) if method == "pieces" else near_sight_lines(p0, p1, walls)
     np.testing.assert_array_equal(sight.clear, ~walls.crosses(p0, p1))
     assert 100 < sight.clear.sum() < 1900
@@ -47,10 +52,15 @@ def test_clearance_is_a_lower_bound_and_the_wall_blocks(random_building, method)
     assert np.all(sight.clearance[clear] <= gap[clear] + 1e-12)
     assert np.all(sight.clearance[clear] >= 0.0) and np.all(sight.clearance[~clear] == 0.0)
     # Close lines are measured exactly (up to the exact-test band), far ones within the field's error.
-    exact_below = 0.1 if method == "pieces" else 0.5
+    # Pieces are measured exactly within 0.1 m of a wall; the grid lists every wall within its
+    # reach (1 m) of a sample: of p0 for lines up to 1 m, else of samples at most 1 m apart.
+    length = np.linalg.norm(p1 - p0, axis=1)
+    exact_below = np.full(len(p0), 0.1) if method == "pieces" else np.where(length <= 1.0, 1.0 - length, 0.5)
     near = clear & (gap < exact_below)
     np.testing.assert_allclose(sight.clearance[near], gap[near], atol=1e-9)
-    assert np.all(sight.clearance[clear] >= np.minimum(gap[clear], exact_below) - 2 * PLANNER.field_resolution)
+    assert np.all(
+        sight.clearance[clear] >= np.minimum(gap[clear], exact_below[clear]) - 2 * PLANNER.field_resolution
+    )
     blocked = ~clear
     assert np.all(sight.wall[clear] == -1)
     w = sight.wall[blocked]
