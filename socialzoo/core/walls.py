@@ -19,6 +19,7 @@ from socialzoo.core.geometry import (
     segments_intersect,
     to_frame,
 )
+from socialzoo.core.jit import kernel
 
 
 @dataclass(frozen=True)
@@ -171,6 +172,36 @@ def prune_to_nearest(table: GridTable) -> GridTable:
     )
 
 
+@kernel
+def _nearest_on_grid(points, grid, cell_start, cell_walls, segments, closest, dist):
+    """Fill closest (N, 2) and dist (N,) with each point's nearest listed wall point.
+
+    grid: (origin x, origin y, 1 / cell size, num_x, num_y, reach). Points with no wall within
+    reach get dist inf and themselves as closest point. The first of equally near walls wins.
+    """
+    ox, oy, inv_cell, num_x, num_y, reach = grid
+    for q in range(points.shape[0]):
+        px, py = points[q, 0], points[q, 1]
+        # Same cell as GridTable.cells: truncation, then clamping to the grid.
+        ix = min(max(int((px - ox) * inv_cell), 0), num_x - 1)
+        iy = min(max(int((py - oy) * inv_cell), 0), num_y - 1)
+        cell = ix * num_y + iy
+        best, bx, by = np.inf, px, py
+        for k in range(cell_start[cell], cell_start[cell + 1]):
+            ax, ay, abx, aby, inv_len2 = segments[cell_walls[k]]
+            frac = min(max(((px - ax) * abx + (py - ay) * aby) * inv_len2, 0.0), 1.0)
+            cx = ax + frac * abx
+            cy = ay + frac * aby
+            d = math.sqrt((px - cx) ** 2 + (py - cy) ** 2)
+            if d < best:
+                best, bx, by = d, cx, cy
+        if best > reach:
+            best, bx, by = np.inf, px, py
+        closest[q, 0] = bx
+        closest[q, 1] = by
+        dist[q] = best
+
+
 class WallIndex:
     """Wall segments of one map and the grid tables that answer geometric queries on them.
 
@@ -197,6 +228,8 @@ class WallIndex:
         self._abx, self._aby = ab[:, 0].copy(), ab[:, 1].copy()
         # Zero-length walls act as points: their projection parameter is forced to 0.
         self._inv_len2 = np.where(len2 > 0.0, 1.0 / np.where(len2 > 0.0, len2, 1.0), 0.0)
+        # (W, 5) rows (ax, ay, abx, aby, 1 / |ab|^2) for the compiled queries.
+        self._segments = np.stack((self._ax, self._ay, self._abx, self._aby, self._inv_len2), axis=1)
         self.cell_size = cell_size
         self.reach = reach
         self._tables: dict[tuple[float, float], GridTable] = {}
@@ -232,29 +265,12 @@ class WallIndex:
             within reach, dist is inf and closest is the query point itself.
         """
         t = self.nearest_candidates
-        flat = points.reshape(-1, 2)
-        query, wall = t.candidates(t.cells(flat))
-        # Component arrays and np.take: gathers of (M, 2) rows cost several times more.
-        qx = flat[:, 0].take(query)
-        qy = flat[:, 1].take(query)
-        ax = self._ax.take(wall)
-        ay = self._ay.take(wall)
-        abx = self._abx.take(wall)
-        aby = self._aby.take(wall)
-        frac = ((qx - ax) * abx + (qy - ay) * aby) * self._inv_len2.take(wall)
-        frac = np.minimum(np.maximum(frac, 0.0), 1.0)
-        cx = ax + frac * abx
-        cy = ay + frac * aby
-        dist = np.sqrt((qx - cx) ** 2 + (qy - cy) ** 2)
-        best = np.full(len(flat), np.inf)
-        np.minimum.at(best, query, dist)
-        best[best > t.reach] = np.inf
-        point = flat.copy()
-        is_best = dist == best.take(query)
-        winner = query[is_best]
-        point[winner, 0] = cx[is_best]
-        point[winner, 1] = cy[is_best]
-        return point.reshape(points.shape), best.reshape(points.shape[:-1])
+        flat = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+        closest = np.empty_like(flat)
+        dist = np.empty(len(flat))
+        grid = (t.origin[0], t.origin[1], 1.0 / t.cell_size, t.num_x, t.num_y, t.reach)
+        _nearest_on_grid(flat, grid, t.cell_start, t.cell_walls, self._segments, closest, dist)
+        return closest.reshape(points.shape), dist.reshape(points.shape[:-1])
 
     def line_candidates(self, p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         """Every wall that can touch each segment [p0, p1] (M, 2), as (segment, wall) pairs.

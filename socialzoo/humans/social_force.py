@@ -4,16 +4,21 @@ One implementation for every use: arrays carry a batch axis B and a human axis H
 robots are just more agents seen by the humans (their position difference scaled by 1/1.5).
 Moussaid's pair force is antisymmetric between two humans (swapping them negates both the
 position and the velocity difference), so each human pair is computed once.
+
+The forces are compiled kernels (socialzoo.core.jit) that loop over worlds, pairs and humans;
+only atan2 and exp run as numpy calls over all pairs at once, because numpy's vectorised versions
+are several times faster per element than scalar ones. Pairs are laid out and summed per world
+in a fixed order, so a world steps bit for bit the same alone or in any batch.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import lru_cache
+import math
 
 import numpy as np
 
 from socialzoo.core.config import HumanConfig
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 
 # Distances below this are treated as coincident agents (metres).
@@ -23,212 +28,132 @@ _TINY = 1e-9
 _EXP_FLOOR = -60.0
 
 
-def desired_force(
-    pos: np.ndarray, vel: np.ndarray, target: np.ndarray, pref_speed: np.ndarray, cfg: HumanConfig
-) -> np.ndarray:
-    """Relaxation towards walking at the preferred speed straight to the target.
+# Rows of the per-pair work table filled by the kernels below.
+_DIST, _IX, _IY, _INTER, _CROSS, _DOT = range(6)
 
-    Args:
-        pos, vel, target: (B, H, 2) world frame.
-        pref_speed: (B, H) m/s.
 
-    Returns:
-        (B, H, 2) acceleration, m/s^2.
+@kernel
+def _pair_directions(pos, vel, mask, robot_pos, robot_vel, lam, inv_scale, work):
+    """First part of Moussaid's force for every pair: distance and interaction direction.
+
+    Pairs of a world are the human pairs i < j, then every (human, robot) pair; pair p of world
+    b is column b * P + p of work (6, B * P). The force on `this` human from the `other` agent
+    uses dx = other - this (robot offsets scaled by 1 / robot_scale) and dv = v_this - v_other.
+    Absent or coincident pairs get distance 0, which the last kernel reads as "no force".
     """
-    to_target = target - pos
-    dist = np.sqrt(to_target[..., 0:1] * to_target[..., 0:1] + to_target[..., 1:2] * to_target[..., 1:2])
-    direction = to_target / np.maximum(dist, _TINY)
-    return (direction * pref_speed[..., None] - vel) / cfg.relaxation_time
-
-
-def pair_force(
-    dx: np.ndarray,
-    dy: np.ndarray,
-    dvx: np.ndarray,
-    dvy: np.ndarray,
-    valid: np.ndarray,
-    cfg: HumanConfig,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Moussaid's force on an agent from another, elementwise over any shape.
-
-    Written with in-place operations: on batched inputs the temporaries are large, and fresh
-    allocations (and their page faults) cost as much as the arithmetic. Inputs are not modified.
-
-    Args:
-        dx, dy: position of the other agent minus this agent's, m.
-        dvx, dvy: this agent's velocity minus the other's, m/s.
-        valid: pairs that interact; others get zero force.
-        cfg: lambda, gamma, n and n' of the model.
-
-    Returns:
-        (fx, fy) before the social strength factor, m/s^2, in the dtype of dx.
-    """
-    # sqrt(x*x + y*y) rather than np.hypot: no overflow is possible here, and hypot's careful
-    # float32 loop is several times slower.
-    dist = dx * dx
-    dist += dy * dy
-    np.sqrt(dist, out=dist)
-    # Coincident or invalid pairs are zeroed by one multiplication at the end; flooring the
-    # distance keeps their intermediate values finite (boolean-mask writes cost more).
-    weight = (valid & (dist > _TINY)).astype(dx.dtype)
-    np.maximum(dist, _TINY, out=dist)
-    ex = dx / dist
-    ey = dy / dist
-    ix = dvx * cfg.social_lambda
-    ix += ex
-    iy = dvy * cfg.social_lambda
-    iy += ey
-    inter_len = ix * ix
-    inter_len += iy * iy
-    np.sqrt(inter_len, out=inter_len)
-    np.maximum(inter_len, _TINY, out=inter_len)
-    ix /= inter_len
-    iy /= inter_len
-    # Signed angle from the interaction direction to the direction of the other agent.
-    cross = ix * ey
-    cross -= iy * ex
-    dot = ix * ex
-    dot += iy * ey
-    theta = np.arctan2(cross, dot, out=cross)
-    b = inter_len
-    b *= cfg.social_gamma
-    base = np.divide(dist, b, out=dist)
-    np.negative(base, out=base)
-    bt2 = b
-    bt2 *= theta
-    bt2 *= bt2
-    speed_amount = np.multiply(bt2, -(cfg.social_n_prime**2), out=dot)
-    speed_amount += base
-    np.maximum(speed_amount, _EXP_FLOOR, out=speed_amount)
-    np.exp(speed_amount, out=speed_amount)
-    angle_amount = np.multiply(bt2, -(cfg.social_n**2), out=ex)
-    angle_amount += base
-    np.maximum(angle_amount, _EXP_FLOOR, out=angle_amount)
-    np.exp(angle_amount, out=angle_amount)
-    angle_amount *= np.sign(theta, out=theta)
-    speed_amount *= weight
-    angle_amount *= weight
-    # Both amounts carry a minus sign in the model; the angle force acts along the left normal:
-    # f = -speed * i - angle * (-iy, ix).
-    fx = angle_amount * iy
-    fx -= speed_amount * ix
-    fy = speed_amount * iy
-    fy += angle_amount * ix
-    np.negative(fy, out=fy)
-    return fx, fy
-
-
-@dataclass(frozen=True)
-class _PairLayout:
-    """Which agent pairs one batched force evaluation covers.
-
-    Pairs are the human pairs i < j, then every (human, robot) pair. Agents are indexed in the
-    concatenation [humans, robots].
-
-    Attributes:
-        this: (P,) the human the pair force acts on.
-        other: (P,) the agent exerting it.
-        difference: (H + R, P) float32 with +1 at `other` and -1 at `this`, so that
-            values (.., H + R) @ difference gives other - this for every pair exactly (two
-            non-zero terms per column: the sum has a single rounding whatever the BLAS kernel).
-        robot_pairs: (P_r,) columns of the (human, robot) pairs.
-        human_pairs: number of human pairs (the first columns).
-    """
-
-    this: np.ndarray
-    other: np.ndarray
-    difference: np.ndarray
-    robot_pairs: np.ndarray
-    human_pairs: int
-
-
-@lru_cache(maxsize=64)
-def _pair_layout(num_humans: int, num_robots: int) -> _PairLayout:
-    first, second = np.triu_indices(num_humans, k=1)
-    this = np.concatenate((first, np.repeat(np.arange(num_humans), num_robots)))
-    other = np.concatenate((second, num_humans + np.tile(np.arange(num_robots), num_humans)))
-    difference = np.zeros((num_humans + num_robots, len(this)), dtype=np.float32)
-    difference[other, np.arange(len(this))] = 1.0
-    difference[this, np.arange(len(this))] = -1.0
-    return _PairLayout(
-        this=this,
-        other=other,
-        difference=difference,
-        robot_pairs=np.arange(len(first), len(this)),
-        human_pairs=len(first),
-    )
-
-
-def social_pair_force(
-    pos: np.ndarray,
-    vel: np.ndarray,
-    mask: np.ndarray,
-    robot_pos: np.ndarray,
-    robot_vel: np.ndarray,
-    cfg: HumanConfig,
-) -> np.ndarray:
-    """Sum of Moussaid forces on every human from the other humans and from the robots.
-
-    Robot offsets are divided by cfg.robot_scale before the force (SPEC: the robot as an agent
-    like the others, its position difference scaled by 1/1.5). Robots feel no force here.
-
-    Args:
-        pos, vel: (B, H, 2) humans, world frame.
-        mask: (B, H) present humans.
-        robot_pos, robot_vel: (B, R, 2) robots, world frame.
-
-    Returns:
-        (B, H, 2) m/s^2 before the social strength factor.
-    """
-    batch, num_humans = pos.shape[:2]
+    batch, num_humans = mask.shape
     num_robots = robot_pos.shape[1]
-    layout = _pair_layout(num_humans, num_robots)
-    # Pair terms are evaluated in float32: half the memory traffic of the (B, P) temporaries,
-    # relative error ~1e-6 on forces that the 0.025 s Euler step integrates far more coarsely.
-    agents = np.empty((4, batch, num_humans + num_robots), dtype=np.float32)
-    agents[0, :, :num_humans] = pos[..., 0]
-    agents[1, :, :num_humans] = pos[..., 1]
-    agents[2, :, :num_humans] = vel[..., 0]
-    agents[3, :, :num_humans] = vel[..., 1]
-    agents[0, :, num_humans:] = robot_pos[..., 0]
-    agents[1, :, num_humans:] = robot_pos[..., 1]
-    agents[2, :, num_humans:] = robot_vel[..., 0]
-    agents[3, :, num_humans:] = robot_vel[..., 1]
-    # One matmul gives every pair's (other - this) position and velocity difference.
-    diff = agents @ layout.difference  # (4, B, P)
-    diff[:2, :, layout.robot_pairs] *= np.float32(1.0 / cfg.robot_scale)
-    present = np.concatenate((mask, np.ones((batch, num_robots), dtype=bool)), axis=1)
-    valid = np.take(present, layout.this, axis=1) & np.take(present, layout.other, axis=1)
-    fx, fy = pair_force(diff[0], diff[1], -diff[2], -diff[3], valid, cfg)
-    # Scatter into (B, H, H + R) and sum each human's row: the summation order is fixed per
-    # row, so a world steps bit for bit the same alone or in any batch.
-    num_pairs = layout.human_pairs
-    human_this, human_other = layout.this[:num_pairs], layout.other[:num_pairs]
-    out = np.empty(pos.shape)
-    for axis, f in enumerate((fx, fy)):
-        table = np.zeros((batch, num_humans, num_humans + num_robots), dtype=np.float32)
-        table[:, layout.this, layout.other] = f
-        table[:, human_other, human_this] = -f[:, :num_pairs]
-        out[..., axis] = table.sum(axis=2)
-    return out
+    col = 0
+    for b in range(batch):
+        for i in range(num_humans):
+            for j in range(i + 1, num_humans + num_robots):
+                if j < num_humans:
+                    valid = mask[b, i] and mask[b, j]
+                    dx, dy = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
+                    dvx, dvy = vel[b, i, 0] - vel[b, j, 0], vel[b, i, 1] - vel[b, j, 1]
+                else:
+                    r = j - num_humans
+                    valid = mask[b, i]
+                    dx = (robot_pos[b, r, 0] - pos[b, i, 0]) * inv_scale
+                    dy = (robot_pos[b, r, 1] - pos[b, i, 1]) * inv_scale
+                    dvx, dvy = vel[b, i, 0] - robot_vel[b, r, 0], vel[b, i, 1] - robot_vel[b, r, 1]
+                dist = math.sqrt(dx * dx + dy * dy)
+                if not valid or dist <= _TINY:
+                    work[_DIST, col] = 0.0
+                    work[_CROSS, col] = 0.0
+                    work[_DOT, col] = 1.0
+                    col += 1
+                    continue
+                ex, ey = dx / dist, dy / dist
+                ix, iy = lam * dvx + ex, lam * dvy + ey
+                inter_len = max(math.sqrt(ix * ix + iy * iy), _TINY)
+                ix /= inter_len
+                iy /= inter_len
+                work[_DIST, col] = dist
+                work[_IX, col] = ix
+                work[_IY, col] = iy
+                work[_INTER, col] = inter_len
+                # atan2 of these is the signed angle from the interaction direction to the
+                # direction of the other agent (numpy's vectorised atan2 is far faster).
+                work[_CROSS, col] = ix * ey - iy * ex
+                work[_DOT, col] = ix * ex + iy * ey
+                col += 1
 
 
-def obstacle_force(pos: np.ndarray, closest: np.ndarray, dist: np.ndarray, cfg: HumanConfig) -> np.ndarray:
-    """Repulsion from the nearest wall point, exp(-(d - r) / sigma) along the wall normal.
+@kernel
+def _pair_exponents(work, theta, gamma, n2, np2, exponents):
+    """Exponents of the speed and angle terms, floored: (2, N) from work (6, N) and theta (N,)."""
+    for col in range(theta.shape[0]):
+        b = gamma * work[_INTER, col]
+        base = -work[_DIST, col] / b
+        bt2 = (b * theta[col]) ** 2
+        exponents[0, col] = max(base - np2 * bt2, _EXP_FLOOR)
+        exponents[1, col] = max(base - n2 * bt2, _EXP_FLOOR)
 
-    Args:
-        pos: (B, H, 2) world frame.
-        closest: (B, H, 2) nearest wall point (WallIndex.nearest).
-        dist: (B, H) its distance, inf where no wall is within the index reach.
 
-    Returns:
-        (B, H, 2) acceleration before the obstacle strength factor, m/s^2.
+@kernel
+def _accelerations(
+    pos, vel, target, pref_speed, mask, closest, wall_dist, desired_vel, learned,
+    num_robots, work, theta, amounts, params, out,
+):  # fmt: skip
+    """Fill out (B, H, 2) with every human's total acceleration; see human_acceleration.
+
+    amounts: (2, B * P) exp of the pair exponents (speed, angle). params: relaxation_time,
+    desired_factor, social_strength, obstacle_strength, obstacle_sigma, force_radius.
     """
-    near = np.isfinite(dist) & (dist > _TINY)
-    safe = np.where(near, dist, 1.0)
-    exponent = np.maximum(-(safe - cfg.force_radius) / cfg.obstacle_sigma, _EXP_FLOOR)
-    amount = np.where(near, np.exp(exponent) / safe, 0.0)
-    return amount[..., None] * (pos - closest)
+    tau, k_desired, k_social, k_wall, sigma, radius = params
+    batch, num_humans = mask.shape
+    pairs_per_world = theta.shape[0] // batch
+    social = np.zeros((num_humans, 2))
+    for b in range(batch):
+        social[:] = 0.0
+        # Pairs in the order _pair_directions wrote them; the order is fixed per world, so a
+        # world steps bit for bit the same alone or in any batch. Moussaid's force is
+        # antisymmetric between two humans (swapping them negates both differences), so each
+        # human pair was computed once; robots feel no force here.
+        col = b * pairs_per_world
+        for i in range(num_humans):
+            for j in range(i + 1, num_humans + num_robots):
+                if work[_DIST, col] > 0.0:
+                    t = theta[col]
+                    speed = amounts[0, col]
+                    angle = amounts[1, col] if t > 0.0 else (-amounts[1, col] if t < 0.0 else 0.0)
+                    ix, iy = work[_IX, col], work[_IY, col]
+                    # Both amounts carry a minus sign in the model; the angle force acts along
+                    # the left normal: f = -speed * i - angle * (-iy, ix).
+                    fx = angle * iy - speed * ix
+                    fy = -(speed * iy + angle * ix)
+                    social[i, 0] += fx
+                    social[i, 1] += fy
+                    if j < num_humans:
+                        social[j, 0] -= fx
+                        social[j, 1] -= fy
+                col += 1
+        for i in range(num_humans):
+            if not mask[b, i]:
+                out[b, i, 0] = 0.0
+                out[b, i, 1] = 0.0
+                continue
+            px, py = pos[b, i, 0], pos[b, i, 1]
+            vx, vy = vel[b, i, 0], vel[b, i, 1]
+            # Relaxation towards the desired velocity: the preferred speed straight to the route
+            # target, or the learner's desired velocity.
+            if learned[b, i]:
+                wx, wy = desired_vel[b, i, 0], desired_vel[b, i, 1]
+            else:
+                tx, ty = target[b, i, 0] - px, target[b, i, 1] - py
+                scale = pref_speed[b, i] / max(math.sqrt(tx * tx + ty * ty), _TINY)
+                wx, wy = tx * scale, ty * scale
+            ax = k_desired * ((wx - vx) / tau) + k_social * social[i, 0]
+            ay = k_desired * ((wy - vy) / tau) + k_social * social[i, 1]
+            # Repulsion from the nearest wall point, exp(-(d - r) / sigma) along the wall normal.
+            d = wall_dist[b, i]
+            if math.isfinite(d) and d > _TINY:
+                amount = k_wall * math.exp(max(-(d - radius) / sigma, _EXP_FLOOR)) / d
+                ax += amount * (px - closest[b, i, 0])
+                ay += amount * (py - closest[b, i, 1])
+            out[b, i, 0] = ax
+            out[b, i, 1] = ay
 
 
 def human_acceleration(
@@ -260,11 +185,28 @@ def human_acceleration(
         (accel, wall_dist): (B, H, 2) acceleration in m/s^2, zero for absent humans, and (B, H)
         distance to the nearest wall (inf beyond the index reach), reused by the motion step.
     """
-    drive = desired_force(pos, vel, target, pref_speed, cfg)
-    if desired_vel is not None and learned is not None:
-        drive = np.where(learned[..., None], (desired_vel - vel) / cfg.relaxation_time, drive)
-    social = social_pair_force(pos, vel, mask, robot_pos, robot_vel, cfg)
+    batch, num_humans = mask.shape
+    num_robots = robot_pos.shape[1]
+    if learned is None or desired_vel is None:
+        learned = np.zeros((batch, num_humans), dtype=bool)
+        desired_vel = pos
     closest, wall_dist = walls.nearest(pos)
-    wall = obstacle_force(pos, closest, wall_dist, cfg)
-    accel = cfg.desired_factor * drive + cfg.social_strength * social + cfg.obstacle_strength * wall
-    return np.where(mask[..., None], accel, 0.0), wall_dist
+    # Moussaid's pair force in three compiled passes around numpy's vectorised atan2 and exp,
+    # which are several times faster per element than their scalar versions.
+    num_pairs = batch * (num_humans * (num_humans - 1) // 2 + num_humans * num_robots)
+    work = np.empty((6, num_pairs))
+    _pair_directions(pos, vel, mask, robot_pos, robot_vel, cfg.social_lambda, 1.0 / cfg.robot_scale, work)
+    theta = np.arctan2(work[_CROSS], work[_DOT])
+    amounts = np.empty((2, num_pairs))
+    _pair_exponents(work, theta, cfg.social_gamma, cfg.social_n**2, cfg.social_n_prime**2, amounts)
+    np.exp(amounts, out=amounts)
+    params = (
+        cfg.relaxation_time, cfg.desired_factor, cfg.social_strength, cfg.obstacle_strength,
+        cfg.obstacle_sigma, cfg.force_radius,
+    )  # fmt: skip
+    accel = np.empty((batch, num_humans, 2))
+    _accelerations(
+        pos, vel, target, pref_speed, mask, closest, wall_dist, desired_vel, learned,
+        num_robots, work, theta, amounts, params, accel,
+    )  # fmt: skip
+    return accel, wall_dist
