@@ -1,14 +1,20 @@
-"""Vectorised 2D geometry on segments, points and rays (numpy only).
+"""Vectorised 2D geometry on segments, points and rays.
 
 Every function broadcasts over leading axes, so one call serves a batch of envs, humans and walls.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from socialzoo.core.jit import kernel
 
 # Segments whose cross product is below this are treated as parallel (metres squared).
 PARALLEL_EPS = 1e-12
+# An end point this close to the other segment touches it (parallel segments), metres.
+_TOUCH = 1e-9
 
 
 def cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -56,35 +62,101 @@ def closest_point_on_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tup
     return closest, np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2)
 
 
+@kernel
+def point_near_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float, tol: float) -> bool:
+    """Whether point p lies within tol of segment [a, b] (a point if a == b); scalar kernel."""
+    abx, aby = bx - ax, by - ay
+    denom = abx * abx + aby * aby
+    t = ((px - ax) * abx + (py - ay) * aby) / (denom if denom > 0.0 else 1.0)
+    t = min(max(t, 0.0), 1.0)
+    dx, dy = px - (ax + t * abx), py - (ay + t * aby)
+    return math.sqrt(dx * dx + dy * dy) <= tol
+
+
+@kernel
+def segments_meet(
+    p0x: float, p0y: float, p1x: float, p1y: float, q0x: float, q0y: float, q1x: float, q1y: float
+) -> bool:
+    """Whether closed segments [p0, p1] and [q0, q1] share a point (touching counts); scalar kernel.
+
+    Parallel, collinear or degenerate (point) segments meet iff an end point lies on the other.
+    """
+    rx, ry = p1x - p0x, p1y - p0y
+    sx, sy = q1x - q0x, q1y - q0y
+    qpx, qpy = q0x - p0x, q0y - p0y
+    denom = rx * sy - ry * sx
+    if abs(denom) > PARALLEL_EPS:
+        t = (qpx * sy - qpy * sx) / denom
+        u = (qpx * ry - qpy * rx) / denom
+        return 0.0 <= t <= 1.0 and 0.0 <= u <= 1.0
+    return (
+        point_near_segment(p0x, p0y, q0x, q0y, q1x, q1y, _TOUCH)
+        or point_near_segment(p1x, p1y, q0x, q0y, q1x, q1y, _TOUCH)
+        or point_near_segment(q0x, q0y, p0x, p0y, p1x, p1y, _TOUCH)
+        or point_near_segment(q1x, q1y, p0x, p0y, p1x, p1y, _TOUCH)
+    )
+
+
+@kernel
+def point_segment_dist2(
+    px: float, py: float, ax: float, ay: float, dx: float, dy: float, inv_len2: float
+) -> float:
+    """Squared distance from point p to segment a + t (dx, dy), t in [0, 1]; scalar kernel.
+
+    inv_len2 is 1 / (dx^2 + dy^2), or 0 for a point segment.
+    """
+    rx, ry = px - ax, py - ay
+    t = min(max((rx * dx + ry * dy) * inv_len2, 0.0), 1.0)
+    rx -= t * dx
+    ry -= t * dy
+    return rx * rx + ry * ry
+
+
+@kernel
+def segments_gap_at(
+    p0x: float, p0y: float, p1x: float, p1y: float, q0x: float, q0y: float, q1x: float, q1y: float
+) -> float:
+    """Distance between closed segments that do not meet (see segments_gap); scalar kernel."""
+    pdx, pdy, qdx, qdy = p1x - p0x, p1y - p0y, q1x - q0x, q1y - q0y
+    p_len2, q_len2 = pdx * pdx + pdy * pdy, qdx * qdx + qdy * qdy
+    # Reciprocal squared lengths, 0 for a point (whose projection parameter is then 0).
+    p_inv = 1.0 / p_len2 if p_len2 > 0.0 else 0.0
+    q_inv = 1.0 / q_len2 if q_len2 > 0.0 else 0.0
+    best = min(
+        point_segment_dist2(p0x, p0y, q0x, q0y, qdx, qdy, q_inv),
+        point_segment_dist2(p1x, p1y, q0x, q0y, qdx, qdy, q_inv),
+        point_segment_dist2(q0x, q0y, p0x, p0y, pdx, pdy, p_inv),
+        point_segment_dist2(q1x, q1y, p0x, p0y, pdx, pdy, p_inv),
+    )
+    return math.sqrt(best)
+
+
+@kernel
+def _segment_pairs(p0, p1, q0, q1, gap, out):
+    """out[k] = segments_meet (gap False) or segments_gap_at (gap True) of rows k of (N, 2) arrays."""
+    for k in range(out.shape[0]):
+        args = (p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], q0[k, 0], q0[k, 1], q1[k, 0], q1[k, 1])
+        out[k] = segments_gap_at(*args) if gap else segments_meet(*args)
+
+
+def _on_segment_pairs(p0, p1, q0, q1, dtype) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Broadcast four (..., 2) arrays and apply the scalar segment-pair kernel to every pair."""
+    p0, p1, q0, q1 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (p0, p1, q0, q1)))
+    shape = p0.shape[:-1]
+    out = np.empty(int(np.prod(shape)), dtype=dtype)
+    _segment_pairs(
+        p0.reshape(-1, 2), p1.reshape(-1, 2), q0.reshape(-1, 2), q1.reshape(-1, 2), dtype == np.float64, out
+    )
+    return out.reshape(shape)
+
+
 def segments_intersect(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     """Whether closed segments [p0, p1] and [q0, q1] share a point (touching counts).
 
     All arguments broadcast; shapes (..., 2). Returns bool (...,).
-    Collinear overlapping segments and degenerate (point) segments are handled.
+    Collinear overlapping segments and degenerate (point) segments are handled (segments_meet).
     """
-    r = p1 - p0
-    s = q1 - q0
-    qp = q0 - p0
-    denom = cross2(r, s)
-    t_num = cross2(qp, s)
-    u_num = cross2(qp, r)
-    parallel = np.abs(denom) <= PARALLEL_EPS
-    safe = np.where(parallel, 1.0, denom)
-    t = t_num / safe
-    u = u_num / safe
-    hit = (~parallel) & (t >= 0.0) & (t <= 1.0) & (u >= 0.0) & (u <= 1.0)
-    if np.any(parallel):
-        # Parallel, collinear or degenerate: they meet iff an end point lies on the other segment.
-        p0b, p1b, q0b, q1b = np.broadcast_arrays(p0, p1, q0, q1)
-        idx = parallel.reshape(p0b.shape[:-1]) if parallel.ndim else np.array(True)
-        a0, a1, b0, b1 = p0b[idx], p1b[idx], q0b[idx], q1b[idx]
-        touch = np.zeros(len(a0), dtype=bool)
-        for point, start, end in ((a0, b0, b1), (a1, b0, b1), (b0, a0, a1), (b1, a0, a1)):
-            touch |= closest_point_on_segment(point, start, end)[1] <= 1e-9
-        if hit.ndim == 0:
-            return np.asarray(touch[0])
-        hit[idx] = touch
-    return hit
+    return _on_segment_pairs(p0, p1, q0, q1, np.bool_)
 
 
 def segments_gap(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
@@ -93,39 +165,7 @@ def segments_gap(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray)
     Segments that do not meet are closest at an end point of one of them; for segments that do
     meet this overestimates (their distance is 0). All arguments broadcast; shapes (..., 2).
     """
-    p0x, p0y, p1x, p1y = p0[..., 0], p0[..., 1], p1[..., 0], p1[..., 1]
-    q0x, q0y, q1x, q1y = q0[..., 0], q0[..., 1], q1[..., 0], q1[..., 1]
-    pdx, pdy, qdx, qdy = p1x - p0x, p1y - p0y, q1x - q0x, q1y - q0y
-    p_len2, q_len2 = pdx * pdx + pdy * pdy, qdx * qdx + qdy * qdy
-    # Reciprocal squared lengths, 0 for a point (whose projection parameter is then 0).
-    p_inv = np.divide(1.0, p_len2, out=np.zeros(np.shape(p_len2)), where=p_len2 > 0.0)
-    q_inv = np.divide(1.0, q_len2, out=np.zeros(np.shape(q_len2)), where=q_len2 > 0.0)
-    best = point_segment_dist2(p0x, p0y, q0x, q0y, qdx, qdy, q_inv)
-    np.minimum(best, point_segment_dist2(p1x, p1y, q0x, q0y, qdx, qdy, q_inv), out=best)
-    np.minimum(best, point_segment_dist2(q0x, q0y, p0x, p0y, pdx, pdy, p_inv), out=best)
-    np.minimum(best, point_segment_dist2(q1x, q1y, p0x, p0y, pdx, pdy, p_inv), out=best)
-    return np.sqrt(best, out=best)
-
-
-def point_segment_dist2(
-    px: np.ndarray,
-    py: np.ndarray,
-    ax: np.ndarray,
-    ay: np.ndarray,
-    dx: np.ndarray,
-    dy: np.ndarray,
-    inv_len2: np.ndarray,
-) -> np.ndarray:
-    """Squared distance from points (px, py) to segments a + t (dx, dy), t in [0, 1].
-
-    Component arrays (all broadcast); inv_len2 is 1 / (dx^2 + dy^2), or 0 for a point segment.
-    """
-    rx, ry = px - ax, py - ay
-    t = (rx * dx + ry * dy) * inv_len2
-    np.clip(t, 0.0, 1.0, out=t)
-    rx -= t * dx
-    ry -= t * dy
-    return rx * rx + ry * ry
+    return _on_segment_pairs(p0, p1, q0, q1, np.float64)
 
 
 def ray_segment_hit(origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

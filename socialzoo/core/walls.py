@@ -54,6 +54,18 @@ class GridTable:
         return ix * self.num_y + iy
 
     @cached_property
+    def shape_args(self) -> tuple[float, float, float, int, int, float]:
+        """(origin x, origin y, 1 / cell_size, num_x, num_y, reach): the grid for `grid_cell`."""
+        return (
+            float(self.origin[0]),
+            float(self.origin[1]),
+            1.0 / self.cell_size,
+            self.num_x,
+            self.num_y,
+            self.reach,
+        )
+
+    @cached_property
     def cell_count(self) -> np.ndarray:
         """(num_x * num_y,) number of candidate walls per cell."""
         return np.diff(self.cell_start)
@@ -173,19 +185,25 @@ def prune_to_nearest(table: GridTable) -> GridTable:
 
 
 @kernel
+def grid_cell(px: float, py: float, grid: tuple[float, float, float, int, int, float]) -> int:
+    """GridTable.cells for one point, in a kernel; grid is GridTable.shape_args."""
+    ox, oy, inv_cell, num_x, num_y, _ = grid
+    ix = min(max(int((px - ox) * inv_cell), 0), num_x - 1)
+    iy = min(max(int((py - oy) * inv_cell), 0), num_y - 1)
+    return ix * num_y + iy
+
+
+@kernel
 def _nearest_on_grid(points, grid, cell_start, cell_walls, segments, closest, dist):
     """Fill closest (N, 2) and dist (N,) with each point's nearest listed wall point.
 
-    grid: (origin x, origin y, 1 / cell size, num_x, num_y, reach). Points with no wall within
-    reach get dist inf and themselves as closest point. The first of equally near walls wins.
+    grid: GridTable.shape_args. Points with no wall within reach get dist inf and themselves as
+    closest point. The first of equally near walls wins.
     """
-    ox, oy, inv_cell, num_x, num_y, reach = grid
+    reach = grid[5]
     for q in range(points.shape[0]):
         px, py = points[q, 0], points[q, 1]
-        # Same cell as GridTable.cells: truncation, then clamping to the grid.
-        ix = min(max(int((px - ox) * inv_cell), 0), num_x - 1)
-        iy = min(max(int((py - oy) * inv_cell), 0), num_y - 1)
-        cell = ix * num_y + iy
+        cell = grid_cell(px, py, grid)
         best, bx, by = np.inf, px, py
         for k in range(cell_start[cell], cell_start[cell + 1]):
             ax, ay, abx, aby, inv_len2 = segments[cell_walls[k]]
@@ -268,8 +286,7 @@ class WallIndex:
         flat = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
         closest = np.empty_like(flat)
         dist = np.empty(len(flat))
-        grid = (t.origin[0], t.origin[1], 1.0 / t.cell_size, t.num_x, t.num_y, t.reach)
-        _nearest_on_grid(flat, grid, t.cell_start, t.cell_walls, self._segments, closest, dist)
+        _nearest_on_grid(flat, t.shape_args, t.cell_start, t.cell_walls, self._segments, closest, dist)
         return closest.reshape(points.shape), dist.reshape(points.shape[:-1])
 
     def line_candidates(self, p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:

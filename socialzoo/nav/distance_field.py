@@ -9,9 +9,11 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 
 
@@ -51,6 +53,22 @@ class DistanceField:
         ix = np.minimum(np.maximum(ij[..., 0], 0), self.num_x - 1)
         iy = np.minimum(np.maximum(ij[..., 1], 0), self.num_y - 1)
         return self.codes[ix * self.num_y + iy] * self.quantum
+
+    @cached_property
+    def shape_args(self) -> tuple[float, float, float, int, int, float]:
+        """(origin x, origin y, resolution, num_x, num_y, quantum): the grid for `field_distance`."""
+        return (
+            float(self.origin[0]), float(self.origin[1]), self.resolution, self.num_x, self.num_y, self.quantum,
+        )  # fmt: skip
+
+
+@kernel
+def field_distance(px: float, py: float, shape: tuple[float, float, float, int, int, float], codes) -> float:  # type: ignore[no-untyped-def]
+    """DistanceField.lookup for one point, in a kernel; shape is DistanceField.shape_args."""
+    ox, oy, resolution, num_x, num_y, quantum = shape
+    ix = min(max(math.floor((px - ox) / resolution), 0), num_x - 1)
+    iy = min(max(math.floor((py - oy) / resolution), 0), num_y - 1)
+    return codes[ix * num_y + iy] * quantum
 
 
 def build_distance_field(

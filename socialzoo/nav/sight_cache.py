@@ -9,19 +9,19 @@ answer, and each line carries a certificate that proves it without touching the 
 - a blocked line stays blocked while it still crosses the wall that blocked it (one segment test).
 
 Every other line (new, expired, or whose human just appeared) is tested exactly with
-`socialzoo.nav.visibility.sight_lines`, so the answers are always those of a full test.
+`socialzoo.nav.visibility.near_sight_line` (or `sight_lines` for many fresh lines), so the
+answers are always those of a full test. The per-line bookkeeping is one compiled kernel.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
-from socialzoo.core.geometry import segments_intersect
+from socialzoo.core.geometry import segments_meet
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.distance_field import DistanceField
-from socialzoo.nav.visibility import Sight, near_sight_lines, sight_lines
+from socialzoo.nav.distance_field import DistanceField, field_distance
+from socialzoo.nav.visibility import lookup_slack, near_sight_line, sight_lines
 
 UNKNOWN, CLEAR, BLOCKED = 0, 1, 2
 # Taken off every clearance so that rounding in the displacement test cannot matter, m.
@@ -67,56 +67,93 @@ class SightCache:
             human_pos: (N, H, 2) human positions, world frame, m.
             human_mask: (N, H) present humans.
         """
-        status = np.where(human_mask, self.status, UNKNOWN).astype(np.int8)
-        moved_observer = observer[:, None, :] - self.observer_at
-        moved_human = human_pos - self.human_at
-        moved2 = np.maximum(
-            moved_observer[..., 0] ** 2 + moved_observer[..., 1] ** 2,
-            moved_human[..., 0] ** 2 + moved_human[..., 1] ** 2,
-        )
-        expired = (status == CLEAR) & (moved2 >= self.clearance2)
-        num_humans = status.shape[1]
-        blocked = np.flatnonzero(status == BLOCKED)
-        if len(blocked):
-            wall = self.wall.reshape(-1).take(blocked)
-            still = segments_intersect(
-                observer.take(blocked // num_humans, axis=0),
-                human_pos.reshape(-1, 2).take(blocked, axis=0),
-                self.walls.wall_a.take(wall, axis=0),
-                self.walls.wall_b.take(wall, axis=0),
-            )
-            expired.reshape(-1)[blocked[~still]] = True
-        self.lines_asked += int(np.count_nonzero(human_mask))
-        fresh = np.flatnonzero((status == UNKNOWN) & human_mask)
-        stale = np.flatnonzero(expired & human_mask)
+        observer = np.ascontiguousarray(observer, dtype=np.float64)
+        visible = np.empty(human_mask.shape, dtype=bool)
+        t = self.walls.fine
+        args = (
+            observer, human_pos, human_mask, self.status, self.clearance2, self.wall, self.observer_at,
+            self.human_at, t.shape_args, t.cell_start, t.cell_walls, self.walls.walls,
+            self.field.shape_args, self.field.codes, lookup_slack(self.field), visible,
+        )  # fmt: skip
         # Many fresh lines (after a reset) are mostly blocked by the first walls they meet, which
         # the pieces of `sight_lines` find without following them further; a few lines, or lines
-        # known clear a moment ago, cost less with `near_sight_lines`.
-        if len(fresh) > _MANY_FRESH:
-            self._retest(fresh, status, observer, human_pos, sight_lines)
-            fresh = fresh[:0]
-        self._retest(np.concatenate((fresh, stale)), status, observer, human_pos, near_sight_lines)
-        self.status = status
-        return status == CLEAR
+        # known clear a moment ago, cost less with `near_sight_line`. The kernel declines (-1)
+        # when there are more fresh lines than `_MANY_FRESH`.
+        tested = _renew_sight_lines(*args, _MANY_FRESH)
+        if tested < 0:
+            fresh = np.flatnonzero((self.status == UNKNOWN) & human_mask)
+            self._retest(fresh, observer, human_pos)
+            tested = len(fresh) + _renew_sight_lines(*args, fresh.size)
+        self.lines_asked += int(np.count_nonzero(human_mask))
+        self.lines_tested += tested
+        return visible
 
-    def _retest(
-        self,
-        lines: np.ndarray,
-        status: np.ndarray,
-        observer: np.ndarray,
-        human_pos: np.ndarray,
-        method: Callable[[np.ndarray, np.ndarray, WallIndex, DistanceField], Sight],
-    ) -> None:
-        """Test flat line indices `lines` exactly and store their answers and certificates."""
-        if len(lines) == 0:
-            return
-        self.lines_tested += len(lines)
-        start = observer.take(lines // status.shape[1], axis=0)
+    def _retest(self, lines: np.ndarray, observer: np.ndarray, human_pos: np.ndarray) -> None:
+        """Test flat line indices `lines` with `sight_lines` and store answers and certificates."""
+        start = observer.take(lines // self.status.shape[1], axis=0)
         end = human_pos.reshape(-1, 2).take(lines, axis=0)
-        sight = method(start, end, self.walls, self.field)
-        status.reshape(-1)[lines] = np.where(sight.clear, CLEAR, BLOCKED)
+        sight = sight_lines(start, end, self.walls, self.field)
+        self.status.reshape(-1)[lines] = np.where(sight.clear, CLEAR, BLOCKED)
         clearance = np.maximum(sight.clearance - _ROUNDING, 0.0)
         self.clearance2.reshape(-1)[lines] = clearance**2
         self.wall.reshape(-1)[lines] = sight.wall
         self.observer_at.reshape(-1, 2)[lines] = start
         self.human_at.reshape(-1, 2)[lines] = end
+
+
+@kernel
+def _renew_sight_lines(
+    observer, human_pos, human_mask, status, clearance2, wall, observer_at, human_at,
+    grid, cell_start, cell_walls, walls, field_shape, field_codes, field_slack, visible, max_fresh,
+):  # fmt: skip
+    """Bring every present line's answer up to date and write `visible`; returns lines tested.
+
+    Absent humans' lines are forgotten. A clear line is kept while both ends moved less than its
+    clearance, a blocked line while it still crosses its wall; the others are tested with
+    `near_sight_line` and get a new certificate. If more than `max_fresh` lines have never been
+    tested, nothing but the forgetting is done and -1 is returned.
+    """
+    num_observers, num_humans = human_mask.shape
+    fresh = 0
+    for n in range(num_observers):
+        for h in range(num_humans):
+            if not human_mask[n, h]:
+                status[n, h] = UNKNOWN
+            elif status[n, h] == UNKNOWN:
+                fresh += 1
+    if fresh > max_fresh:
+        return -1
+    tested = 0
+    for n in range(num_observers):
+        ox, oy = observer[n, 0], observer[n, 1]
+        end_observer = field_distance(ox, oy, field_shape, field_codes)
+        for h in range(num_humans):
+            visible[n, h] = False
+            if not human_mask[n, h]:
+                continue
+            hx, hy = human_pos[n, h, 0], human_pos[n, h, 1]
+            known = status[n, h]
+            if known == CLEAR:
+                moved2 = max(
+                    (ox - observer_at[n, h, 0]) ** 2 + (oy - observer_at[n, h, 1]) ** 2,
+                    (hx - human_at[n, h, 0]) ** 2 + (hy - human_at[n, h, 1]) ** 2,
+                )
+                if moved2 >= clearance2[n, h]:
+                    known = UNKNOWN
+            elif known == BLOCKED:
+                w = wall[n, h]
+                if not segments_meet(ox, oy, hx, hy, walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]):
+                    known = UNKNOWN
+            if known == UNKNOWN:
+                tested += 1
+                end = min(end_observer, field_distance(hx, hy, field_shape, field_codes)) - field_slack
+                w, clearance = near_sight_line(ox, oy, hx, hy, end, grid, cell_start, cell_walls, walls)
+                known = CLEAR if w < 0 else BLOCKED
+                clearance = max(clearance - _ROUNDING, 0.0)
+                clearance2[n, h] = clearance * clearance
+                wall[n, h] = w
+                observer_at[n, h, 0], observer_at[n, h, 1] = ox, oy
+                human_at[n, h, 0], human_at[n, h, 1] = hx, hy
+            status[n, h] = known
+            visible[n, h] = known == CLEAR
+    return tested

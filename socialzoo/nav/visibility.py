@@ -18,8 +18,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from socialzoo.core.geometry import point_segment_dist2, segments_gap, segments_intersect
-from socialzoo.core.walls import WallIndex
+from socialzoo.core.geometry import point_segment_dist2, segments_gap, segments_intersect, segments_meet
+from socialzoo.core.jit import kernel
+from socialzoo.core.walls import WallIndex, grid_cell
 from socialzoo.nav.distance_field import DistanceField
 
 # Sight lines: piece length of the distance-field pre-check, and the stretches (distances from
@@ -85,7 +86,7 @@ def sight_lines(p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: Distanc
     delta = p1 - p0
     length = np.sqrt(delta[:, 0] ** 2 + delta[:, 1] ** 2)
     unit = delta / np.maximum(length, 1e-12)[:, None]
-    slack = _lookup_slack(field)
+    slack = lookup_slack(field)
     begin = 0.0
     # Following few lines in stretches saves less than the extra calls cost.
     for end in _SIGHT_STRETCHES if m > _FEW_LINES else (math.inf,):
@@ -108,47 +109,78 @@ def sight_lines(p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: Distanc
 def near_sight_lines(
     p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: DistanceField | None = None
 ) -> Sight:
-    """`sight_lines` from the walls near each segment only.
+    """`sight_lines` from the walls near each segment only (see `near_sight_line`).
 
-    WallIndex.line_candidates lists every wall that can touch each segment. A segment that meets
-    no wall is closest to a wall either at one of its own ends (WallIndex.nearest, or a lower
-    bound from the distance field when given) or at one of the wall's ends, so those distances
-    give the clearance (exact without a field), capped at what the walls not listed are
-    certainly farther than (`reach` less the farthest any point lies from its sample). Cheaper than the pieces of
-    `sight_lines` for a few lines, or for lines that are mostly clear.
+    The clearance of the segments' ends comes from the distance field when given (a lower bound),
+    else from WallIndex.nearest (exact). Cheaper than the pieces of `sight_lines` for a few
+    lines, or for lines that are mostly clear.
     """
     m = len(p0)
-    delta = p1 - p0
-    len2 = delta[:, 0] ** 2 + delta[:, 1] ** 2
-    line, cand, _ = walls.line_candidates(p0, p1)
-    c, d = walls.wall_a.take(cand, axis=0), walls.wall_b.take(cand, axis=0)
-    hit = segments_intersect(p0.take(line, axis=0), p1.take(line, axis=0), c, d)
-    # Distances from the candidate walls' ends to the segments.
-    inv_len2 = np.divide(1.0, len2, out=np.zeros(m), where=len2 > 0.0).take(line)
-    ax, ay = p0[:, 0].take(line), p0[:, 1].take(line)
-    dx, dy = delta[:, 0].take(line), delta[:, 1].take(line)
-    gap2 = point_segment_dist2(c[:, 0], c[:, 1], ax, ay, dx, dy, inv_len2)
-    np.minimum(gap2, point_segment_dist2(d[:, 0], d[:, 1], ax, ay, dx, dy, inv_len2), out=gap2)
-    gap2[hit] = 0.0
-    reach = walls.fine.reach
-    length = np.sqrt(len2)
-    # One sample (at p0) for segments up to reach long, else samples length / ceil(length / reach) apart.
-    from_sample = np.where(length <= reach, length, 0.5 * length / np.ceil(length / reach))
-    clearance2 = (reach - from_sample) ** 2
-    np.minimum.at(clearance2, line, gap2)
     ends = np.concatenate((p0, p1))
     if field is None:
         end_dist = walls.nearest(ends)[1]
     else:
-        end_dist = field.lookup(ends) - _lookup_slack(field)
-    clearance = np.minimum(np.sqrt(clearance2), np.minimum(end_dist[:m], end_dist[m:]))
-    wall = np.full(m, -1, dtype=np.intp)
-    wall[line[hit]] = cand[hit]
-    clear = wall < 0
-    return Sight(clear, np.where(clear, clearance, 0.0), wall)
+        end_dist = field.lookup(ends) - lookup_slack(field)
+    wall = np.empty(m, dtype=np.intp)
+    clearance = np.empty(m)
+    t = walls.fine
+    _near_sight_all(
+        np.ascontiguousarray(p0, dtype=np.float64), np.ascontiguousarray(p1, dtype=np.float64),
+        np.minimum(end_dist[:m], end_dist[m:]), t.shape_args, t.cell_start, t.cell_walls, walls.walls,
+        wall, clearance,
+    )  # fmt: skip
+    return Sight(wall < 0, clearance, wall)
 
 
-def _lookup_slack(field: DistanceField) -> float:
+@kernel
+def near_sight_line(x0, y0, x1, y1, end_clearance, grid, cell_start, cell_walls, walls):  # type: ignore[no-untyped-def]
+    """(a wall the segment [p0, p1] touches or -1, its clearance or 0); a scalar kernel.
+
+    Every wall that can touch the segment is listed on the fine wall grid (grid, cell_start,
+    cell_walls: GridTable.shape_args and its lists) for one of its samples: its start for a
+    segment up to `reach` long, else points at most `reach` apart (as WallIndex.line_candidates).
+    A segment that meets no wall is closest to a wall either at one of its own ends
+    (`end_clearance`, a lower bound on both ends' wall distance) or at one of the wall's ends, so
+    those distances give the clearance, capped at what the walls not listed are certainly
+    farther than (`reach` less the farthest any point lies from its sample).
+    """
+    dx, dy = x1 - x0, y1 - y0
+    len2 = dx * dx + dy * dy
+    inv_len2 = 1.0 / len2 if len2 > 0.0 else 0.0
+    length = math.sqrt(len2)
+    reach = grid[5]
+    if length <= reach:
+        samples, from_sample = 1, length
+    else:
+        pieces = math.ceil(length / reach)
+        samples, from_sample = int(pieces) + 1, 0.5 * length / pieces
+    best2 = (reach - from_sample) ** 2
+    for k in range(samples):
+        frac = k / max(samples - 1, 1)
+        cell = grid_cell(x0 + frac * dx, y0 + frac * dy, grid)
+        for c in range(cell_start[cell], cell_start[cell + 1]):
+            w = cell_walls[c]
+            ax, ay, bx, by = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+            if segments_meet(x0, y0, x1, y1, ax, ay, bx, by):
+                return w, 0.0
+            best2 = min(
+                best2,
+                point_segment_dist2(ax, ay, x0, y0, dx, dy, inv_len2),
+                point_segment_dist2(bx, by, x0, y0, dx, dy, inv_len2),
+            )
+    return -1, max(min(math.sqrt(best2), end_clearance), 0.0)
+
+
+@kernel
+def _near_sight_all(p0, p1, end_clearance, grid, cell_start, cell_walls, walls, wall, clearance):  # type: ignore[no-untyped-def]
+    """near_sight_line for every row of p0, p1 (M, 2), into wall (M,) and clearance (M,)."""
+    for k in range(p0.shape[0]):
+        wall[k], clearance[k] = near_sight_line(
+            p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], end_clearance[k], grid, cell_start, cell_walls, walls
+        )
+
+
+def lookup_slack(field: DistanceField) -> float:
     """A distance-field lookup's largest overestimate of the true wall distance, m."""
     return field.resolution * math.sqrt(0.5) + 1e-6
 
