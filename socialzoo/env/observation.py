@@ -20,11 +20,14 @@ Conventions shared by both layouts:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal, get_args
 
 import numpy as np
 from gymnasium import spaces
+
+from socialzoo.core.jit import kernel
 
 ObservationLayout = Literal["paper", "socialgym1"]
 
@@ -98,29 +101,44 @@ def _robot_frame_slots(
         (points_r, slots): points_r (B, P, 2) in the robot frame; slots (B, min(K, H), 4) of
         (x, y, vx, vy) relative to the robot in robot axes, zero past the last visible human.
     """
-    num_points = points.shape[1]
-    xy = robot_pose[:, None, :2]
-    rel = human_pos - xy
-    dist2 = rel[..., 0] ** 2 + rel[..., 1] ** 2
-    k = min(num_slots, human_pos.shape[1])
-    order = np.argsort(np.where(visible, dist2, np.inf), axis=1, kind="stable")[:, :k]
-    gather = order[..., None]
-    # One rotation for the points, the human offsets and the human velocities together.
-    vec = np.concatenate(
-        (points - xy, np.take_along_axis(rel, gather, 1), np.take_along_axis(human_vel, gather, 1)), axis=1
-    )
-    theta = robot_pose[:, 2:3]
-    c, s = np.cos(theta), np.sin(theta)
-    x, y = vec[..., 0], vec[..., 1]
-    rx = c * x + s * y
-    ry = c * y - s * x
-    # The robot's own velocity in its frame is (v, 0).
-    rx[:, num_points + k :] -= robot_vel[:, 0:1]
-    seen = np.take_along_axis(visible, order, axis=1)
-    p, q = num_points, num_points + k
-    slots = np.stack((rx[:, p:q], ry[:, p:q], rx[:, q:], ry[:, q:]), axis=-1)
-    slots = np.where(seen[..., None], slots, 0.0)
-    return np.stack((rx[:, :p], ry[:, :p]), axis=-1), slots
+    batch, num_humans = visible.shape
+    points_r = np.empty(points.shape)
+    slots = np.zeros((batch, min(num_slots, num_humans), 4))
+    _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots)
+    return points_r, slots
+
+
+@kernel
+def _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots):  # type: ignore[no-untyped-def]
+    """_robot_frame_slots into points_r (B, P, 2) and zeroed slots (B, K, 4)."""
+    batch, num_humans = visible.shape
+    taken = np.zeros(num_humans, dtype=np.bool_)
+    for b in range(batch):
+        x0, y0 = robot_pose[b, 0], robot_pose[b, 1]
+        c, s = math.cos(robot_pose[b, 2]), math.sin(robot_pose[b, 2])
+        for p in range(points.shape[1]):
+            x, y = points[b, p, 0] - x0, points[b, p, 1] - y0
+            points_r[b, p, 0] = c * x + s * y
+            points_r[b, p, 1] = c * y - s * x
+        # Visible humans nearest first (ties by index), one slot each.
+        taken[:] = False
+        for k in range(slots.shape[1]):
+            best, pick = np.inf, -1
+            for h in range(num_humans):
+                if visible[b, h] and not taken[h]:
+                    d2 = (human_pos[b, h, 0] - x0) ** 2 + (human_pos[b, h, 1] - y0) ** 2
+                    if d2 < best:
+                        best, pick = d2, h
+            if pick < 0:
+                break
+            taken[pick] = True
+            x, y = human_pos[b, pick, 0] - x0, human_pos[b, pick, 1] - y0
+            vx, vy = human_vel[b, pick, 0], human_vel[b, pick, 1]
+            slots[b, k, 0] = c * x + s * y
+            slots[b, k, 1] = c * y - s * x
+            # The robot's own velocity in its frame is (v, 0).
+            slots[b, k, 2] = c * vx + s * vy - robot_vel[b, 0]
+            slots[b, k, 3] = c * vy - s * vx
 
 
 def paper_observation(

@@ -7,10 +7,13 @@ is the point where a 1.5 m circle around the robot leaves the path.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+
+from socialzoo.core.jit import kernel
 
 logger = logging.getLogger(__name__)
 
@@ -176,48 +179,72 @@ def track(
     paths = paths.reshape(-1, paths.shape[-2], 2)
     if paths.shape[1] == 1:
         paths = np.concatenate((paths, paths), axis=1)
-    rows = np.arange(len(pos))
+    out = np.empty(pos.shape)
+    dist = np.empty(len(pos))
+    _track_rows(pos, paths, lengths, radius, -1 if max_skip is None else max_skip, tolerance, out, dist)
+    return out.reshape(*shape, 2), dist.reshape(shape)
+
+
+@kernel
+def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist):  # type: ignore[no-untyped-def]
+    """`track` for rows of pos (M, 2), paths (M, L >= 2, 2), lengths (M,); max_skip -1 is None."""
     r2 = radius * radius
-    a, b, valid = _segments(paths, lengths)
-    dist, t = _closest_on_segments(pos, a, b, valid)  # (M, S)
-    best = dist.min(axis=1)
-    # The closest segment; of segments about as close (within `tolerance`), the one furthest
-    # along, so that a path doubling back on itself does not pull the robot back and forth.
-    if tolerance > 0.0:
-        near = dist <= best[:, None] + tolerance
-        seg = near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)
-    else:
-        seg = dist.argmin(axis=1)
-    seg_a, seg_b = a[rows, seg], b[rows, seg]
-    closest = seg_a + t[rows, seg][:, None] * (seg_b - seg_a)
-
-    # First waypoint past the closest segment's start that lies outside the circle; the goal is
-    # outside whenever it is used, so one always exists there.
-    rel = paths - pos[:, None, :]
-    rel2 = rel[..., 0] ** 2 + rel[..., 1] ** 2  # (M, L)
-    index = np.arange(paths.shape[1])
-    outside = rel2 >= r2
-    if max_skip is not None:
-        # The waypoint ending the allowed stretch counts as the exit, so the carrot stops there;
-        # if it is nearer than half the radius (short segments), the next one that is not.
-        outside |= (index >= (seg + 1 + max_skip)[:, None]) & (rel2 >= 0.25 * r2)
-    after = (index > seg[:, None]) & (index < lengths[:, None])
-    exit_at = np.maximum(np.argmax(outside & after, axis=1), 1)
-    p1 = paths[rows, exit_at]
-    p0 = paths[rows, exit_at - 1]
-    # Crossing of |p0 + u (p1 - p0) - pos| = radius nearer p1: the larger root.
-    d = p1 - p0
-    f = p0 - pos
-    qa = d[:, 0] ** 2 + d[:, 1] ** 2
-    qb = f[:, 0] * d[:, 0] + f[:, 1] * d[:, 1]
-    qc = f[:, 0] ** 2 + f[:, 1] ** 2 - r2
-    root = (-qb + np.sqrt(np.maximum(qb * qb - qa * qc, 0.0))) / np.where(qa > 0.0, qa, 1.0)
-    crossing = p0 + np.minimum(np.maximum(root, 0.0), 1.0)[:, None] * d
-
-    goal_inside = rel2[rows, lengths - 1] < r2
-    out = np.where((dist[rows, seg] > radius)[:, None], closest, crossing)
-    out = np.where(goal_inside[:, None], paths[rows, lengths - 1], out)
-    return out.reshape(*shape, 2), best.reshape(shape)
+    num_points = paths.shape[1]
+    seg_dist = np.empty(num_points - 1)
+    seg_t = np.empty(num_points - 1)
+    for m in range(pos.shape[0]):
+        px, py = pos[m, 0], pos[m, 1]
+        # Distance to each valid segment (a one-waypoint path is one degenerate segment).
+        num_segments = max(lengths[m] - 1, 1)
+        best = np.inf
+        for s in range(num_segments):
+            ax, ay = paths[m, s, 0], paths[m, s, 1]
+            abx, aby = paths[m, s + 1, 0] - ax, paths[m, s + 1, 1] - ay
+            len2 = abx * abx + aby * aby
+            t = ((px - ax) * abx + (py - ay) * aby) / (len2 if len2 > 0.0 else 1.0)
+            t = min(max(t, 0.0), 1.0)
+            dx, dy = px - ax - t * abx, py - ay - t * aby
+            seg_dist[s] = math.sqrt(dx * dx + dy * dy)
+            seg_t[s] = t
+            best = min(best, seg_dist[s])
+        # The closest segment; of segments about as close (within `tolerance`), the one furthest
+        # along, so that a path doubling back on itself does not pull the robot back and forth.
+        seg = 0
+        for s in range(num_segments):
+            if (tolerance > 0.0 and seg_dist[s] <= best + tolerance) or seg_dist[s] == best:
+                seg = s
+                if tolerance <= 0.0:
+                    break
+        t = seg_t[seg]
+        closest_x = paths[m, seg, 0] + t * (paths[m, seg + 1, 0] - paths[m, seg, 0])
+        closest_y = paths[m, seg, 1] + t * (paths[m, seg + 1, 1] - paths[m, seg, 1])
+        # First waypoint past the closest segment's start that lies outside the circle; the goal
+        # is outside whenever it is used, so one always exists there. With max_skip, the waypoint
+        # ending the allowed stretch counts as the exit, so the carrot stops there; if it is
+        # nearer than half the radius (short segments), the next one that is not.
+        exit_at = 1
+        for k in range(seg + 1, lengths[m]):
+            rel2 = (paths[m, k, 0] - px) ** 2 + (paths[m, k, 1] - py) ** 2
+            if rel2 >= r2 or (max_skip >= 0 and k >= seg + 1 + max_skip and rel2 >= 0.25 * r2):
+                exit_at = k
+                break
+        goal = lengths[m] - 1
+        if (paths[m, goal, 0] - px) ** 2 + (paths[m, goal, 1] - py) ** 2 < r2:
+            out[m, 0], out[m, 1] = paths[m, goal, 0], paths[m, goal, 1]
+        elif seg_dist[seg] > radius:
+            out[m, 0], out[m, 1] = closest_x, closest_y
+        else:
+            # Crossing of |p0 + u (p1 - p0) - pos| = radius nearer p1: the larger root.
+            x0, y0 = paths[m, exit_at - 1, 0], paths[m, exit_at - 1, 1]
+            dx, dy = paths[m, exit_at, 0] - x0, paths[m, exit_at, 1] - y0
+            fx, fy = x0 - px, y0 - py
+            qa = dx * dx + dy * dy
+            qb = fx * dx + fy * dy
+            qc = fx * fx + fy * fy - r2
+            root = (-qb + math.sqrt(max(qb * qb - qa * qc, 0.0))) / (qa if qa > 0.0 else 1.0)
+            root = min(max(root, 0.0), 1.0)
+            out[m, 0], out[m, 1] = x0 + root * dx, y0 + root * dy
+        dist[m] = best
 
 
 class Navigator:
