@@ -48,10 +48,10 @@ class GridTable:
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Flat cell index of world points (..., 2); points outside the grid map to its border."""
-        ij = ((points - self.origin) * (1.0 / self.cell_size)).astype(np.intp)
-        ix = np.minimum(np.maximum(ij[..., 0], 0), self.num_x - 1)
-        iy = np.minimum(np.maximum(ij[..., 1], 0), self.num_y - 1)
-        return ix * self.num_y + iy
+        flat = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+        out = np.empty(len(flat), dtype=np.intp)
+        _cells_all(flat, self.shape_args, out)
+        return out.reshape(points.shape[:-1])
 
     @cached_property
     def shape_args(self) -> tuple[float, float, float, int, int, float]:
@@ -186,11 +186,21 @@ def prune_to_nearest(table: GridTable) -> GridTable:
 
 @kernel
 def grid_cell(px: float, py: float, grid: tuple[float, float, float, int, int, float]) -> int:
-    """GridTable.cells for one point, in a kernel; grid is GridTable.shape_args."""
+    """Flat cell index of one point (GridTable.cells); grid is GridTable.shape_args.
+
+    Coordinates are truncated to cells, then clamped: points outside the grid map to its border.
+    """
     ox, oy, inv_cell, num_x, num_y, _ = grid
     ix = min(max(int((px - ox) * inv_cell), 0), num_x - 1)
     iy = min(max(int((py - oy) * inv_cell), 0), num_y - 1)
     return ix * num_y + iy
+
+
+@kernel
+def _cells_all(points, grid, out):  # type: ignore[no-untyped-def]
+    """grid_cell of every row of points (N, 2) into out (N,)."""
+    for k in range(points.shape[0]):
+        out[k] = grid_cell(points[k, 0], points[k, 1], grid)
 
 
 @kernel

@@ -1,4 +1,4 @@
-"""The world step: robots and humans of B worlds advance one dt together (numpy only).
+"""The world step: robots and humans of B worlds advance one dt together.
 
 This is the one copy of the dynamics. Every adapter (ParallelEnv, the single-agent benchmark,
 vector envs, the evaluation runner) calls `step_world`.

@@ -33,8 +33,6 @@ class DistanceField:
         quantum: metres per code unit.
         codes: (num_x * num_y,) uint8, flat index ix * num_y + iy: the distance from the cell's
             centre to the nearest wall in quanta, rounded down.
-        inner_lo, inner_hi: (2,) world box whose points are farther than `pad` from the grid's
-            border, m; arc samples of robots inside it need no clamping.
     """
 
     origin: np.ndarray
@@ -44,15 +42,13 @@ class DistanceField:
     max_range: float
     quantum: float
     codes: np.ndarray
-    inner_lo: np.ndarray
-    inner_hi: np.ndarray
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Wall distance of world points (..., 2) to within half a cell diagonal; (...,) m."""
-        ij = np.floor((points - self.origin) / self.resolution).astype(np.intp)
-        ix = np.minimum(np.maximum(ij[..., 0], 0), self.num_x - 1)
-        iy = np.minimum(np.maximum(ij[..., 1], 0), self.num_y - 1)
-        return self.codes[ix * self.num_y + iy] * self.quantum
+        flat = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+        out = np.empty(len(flat))
+        _lookup_all(flat, self.shape_args, self.codes, out)
+        return out.reshape(points.shape[:-1])
 
     @cached_property
     def shape_args(self) -> tuple[float, float, float, int, int, float]:
@@ -69,6 +65,13 @@ def field_distance(px: float, py: float, shape: tuple[float, float, float, int, 
     ix = min(max(math.floor((px - ox) / resolution), 0), num_x - 1)
     iy = min(max(math.floor((py - oy) / resolution), 0), num_y - 1)
     return codes[ix * num_y + iy] * quantum
+
+
+@kernel
+def _lookup_all(points, shape, codes, out):  # type: ignore[no-untyped-def]
+    """field_distance of every row of points (N, 2) into out (N,)."""
+    for k in range(points.shape[0]):
+        out[k] = field_distance(points[k, 0], points[k, 1], shape, codes)
 
 
 def build_distance_field(
@@ -112,7 +115,6 @@ def build_distance_field(
     grid = np.sqrt(grid)
     quantum = max_range / 250.0
     codes = np.floor(np.clip(grid, 0.0, max_range) / quantum).astype(np.uint8)
-    top = lo + np.array([num_x, num_y]) * resolution
     return DistanceField(
         origin=lo,
         resolution=resolution,
@@ -121,8 +123,6 @@ def build_distance_field(
         max_range=max_range,
         quantum=quantum,
         codes=codes.reshape(-1),
-        inner_lo=lo + pad + resolution,
-        inner_hi=top - pad - resolution,
     )
 
 

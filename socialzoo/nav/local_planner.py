@@ -53,6 +53,7 @@ from functools import lru_cache
 import numpy as np
 
 from socialzoo.core.config import RobotConfig
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import DistanceField, distance_field
 
@@ -209,7 +210,8 @@ class LocalPlannerConfig:
     @property
     def field_pad(self) -> float:
         """The distance field extends this far past the walls, m: arcs (at most about 1.1 times
-        the clipped target distance) of robots inside the walls' bounding box need no clamping."""
+        the clipped target distance) of robots inside the walls' bounding box stay on the grid
+        (a sample off the grid would read its border cell)."""
         return min(self.max_arc_length, 2.0 * self.target_clip)
 
     @property
@@ -329,6 +331,38 @@ def _scratch(name: str, shape: tuple[int, ...], dtype: type) -> np.ndarray:
     if array is None or array.size < size or array.dtype != dtype:
         array = store[name] = np.empty(max(size, 2 * (0 if array is None else array.size)), dtype=dtype)
     return array[:size].reshape(shape)
+
+
+@kernel
+def _arc_wall_codes(x, y, cos, sin, offsets, field_shape, field_codes, here, codes):  # type: ignore[no-untyped-def]
+    """Distance-field codes along every arc of every row, as running minima.
+
+    codes (S, A, N) gets, for sample j of arc a of row i, the smallest field code over samples
+    0..j; sample 0 (the robot's own position) reads 255, because it never blocks an arc: the
+    robot is where it is, and an arc leading away from a wall it is too close to must stay open.
+    here (N,) gets the code at the robot. offsets (K >= S, A, 2) are the arc samples in field
+    cells (ArcTable.cell_offsets), rotated by each row's heading in float32.
+    """
+    ox, oy, res, num_x, num_y, _ = field_shape
+    num_samples, num_arcs, n = codes.shape
+    c = cos.astype(np.float32)
+    s = sin.astype(np.float32)
+    sx = ((x - ox) / res).astype(np.float32)
+    sy = ((y - oy) / res).astype(np.float32)
+    for i in range(n):
+        ix = min(max(int(sx[i]), 0), num_x - 1)
+        iy = min(max(int(sy[i]), 0), num_y - 1)
+        here[i] = field_codes[ix * num_y + iy]
+        for a in range(num_arcs):
+            codes[0, a, i] = 255
+    for j in range(1, num_samples):
+        for a in range(num_arcs):
+            off_x, off_y = offsets[j, a, 0], offsets[j, a, 1]
+            for i in range(n):
+                # Truncation is the floor on the grid, then rows near its border are clamped.
+                ix = min(max(int(off_x * c[i] - off_y * s[i] + sx[i]), 0), num_x - 1)
+                iy = min(max(int(off_x * s[i] + off_y * c[i] + sy[i]), 0), num_y - 1)
+                codes[j, a, i] = min(field_codes[ix * num_y + iy], codes[j - 1, a, i])
 
 
 def _segment_min_rows(values: np.ndarray, rows: np.ndarray, num_rows: int) -> np.ndarray:
@@ -547,49 +581,14 @@ def _evaluate(
     k = table.abs_curvature
     longest = float(trim.max())
 
-    # Walls: distance-field codes at the arc samples up to the longest trimmed arc, every row's
-    # samples from one (A * S, 2) x (2, 2n) product, x and y cell coordinates interleaved by row.
+    # Walls: distance-field codes at the arc samples up to the longest trimmed arc, as running
+    # minima along each arc: a blocked sample blocks the rest, and the clearance of a trimmed arc
+    # is one read.
     num_samples = min(int(np.searchsorted(table.lengths, longest)) + 1, len(table.lengths))
-    res = field.resolution
-    rot = np.empty((2, 2 * n), dtype=np.float32)
-    rot[0, 0::2], rot[1, 0::2] = cos, -sin
-    rot[0, 1::2], rot[1, 1::2] = sin, cos
-    offsets = table.cell_offsets[:num_samples].reshape(-1, 2)
-    rows_x2 = (len(offsets), 2 * n)
-    grid = np.matmul(offsets, rot, out=_scratch("grid", rows_x2, np.float32))
-    shift = np.empty(2 * n, dtype=np.float32)
-    shift[0::2] = (x - field.origin[0]) / res
-    shift[1::2] = (y - field.origin[1]) / res
-    grid += shift
-    cell = _scratch("cell", rows_x2, np.int32)
-    np.copyto(cell, grid, casting="unsafe")  # truncation is the floor on the grid (coordinates > 0)
-    inside = (
-        (x >= field.inner_lo[0])
-        & (x <= field.inner_hi[0])
-        & (y >= field.inner_lo[1])
-        & (y <= field.inner_hi[1])
-    )
-    if not inside.all():
-        upper = np.empty(2 * n, dtype=np.int32)
-        upper[0::2], upper[1::2] = field.num_x - 1, field.num_y - 1
-        np.minimum(np.maximum(cell, 0, out=cell), upper, out=cell)
-    flat = np.multiply(
-        cell[:, 0::2], np.int32(field.num_y), out=_scratch("flat", (len(offsets), n), np.int32)
-    )
-    flat += cell[:, 1::2]
-    codes = field.codes.take(flat, out=_scratch("codes", flat.shape, np.uint8)).reshape(num_samples, -1, n)
-    here = codes[0, 0] * field.quantum  # every arc starts at the robot
-    # The robot's own position never blocks an arc: it is where it is, and an arc that leads away
-    # from a wall it is too close to must stay open.
-    codes[0] = 255
-    # Running minimum along each arc: a blocked sample blocks the rest, and the clearance of a
-    # trimmed arc is one read.
-    if n < 16:
-        np.minimum.accumulate(codes, axis=0, out=codes)
-    else:
-        # Same result; ufunc.accumulate along an outer axis is far slower on wide blocks.
-        for j in range(1, num_samples):
-            np.minimum(codes[j], codes[j - 1], out=codes[j])
+    codes = _scratch("codes", (num_samples, len(k), n), np.uint8)
+    here_code = np.empty(n, dtype=np.uint8)
+    _arc_wall_codes(x, y, cos, sin, table.cell_offsets, field.shape_args, field.codes, here_code, codes)
+    here = here_code * field.quantum
     limit = _escape_limit(here, cfg.wall_distance, cfg.min_wall_distance, cfg.escape_slack)
     limit_code = np.ceil(limit / field.quantum - 1e-9).astype(np.uint8)
     num_free = (codes >= limit_code).sum(axis=0, dtype=np.uint8)  # (A, n) unblocked samples
