@@ -141,12 +141,12 @@ def _segment_pairs(p0, p1, q0, q1, gap, out):
 
 def _on_segment_pairs(p0, p1, q0, q1, dtype) -> np.ndarray:  # type: ignore[no-untyped-def]
     """Broadcast four (..., 2) arrays and apply the scalar segment-pair kernel to every pair."""
-    p0, p1, q0, q1 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (p0, p1, q0, q1)))
-    shape = p0.shape[:-1]
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (p0, p1, q0, q1)))
+    shape = arrays[0].shape[:-1]
+    # Plain (N, 2) rows: broadcast views are read-only aliases, which numba warns about.
+    a0, a1, b0, b1 = (np.ascontiguousarray(v).reshape(-1, 2) for v in arrays)
     out = np.empty(int(np.prod(shape)), dtype=dtype)
-    _segment_pairs(
-        p0.reshape(-1, 2), p1.reshape(-1, 2), q0.reshape(-1, 2), q1.reshape(-1, 2), dtype == np.float64, out
-    )
+    _segment_pairs(a0, a1, b0, b1, dtype == np.float64, out)
     return out.reshape(shape)
 
 
