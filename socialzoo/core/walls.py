@@ -252,12 +252,10 @@ class WallIndex:
         self.wall_b = walls[:, 2:4].copy()
         ab = self.wall_b - self.wall_a
         len2 = (ab**2).sum(-1)
-        self._ax, self._ay = self.wall_a[:, 0].copy(), self.wall_a[:, 1].copy()
-        self._abx, self._aby = ab[:, 0].copy(), ab[:, 1].copy()
         # Zero-length walls act as points: their projection parameter is forced to 0.
-        self._inv_len2 = np.where(len2 > 0.0, 1.0 / np.where(len2 > 0.0, len2, 1.0), 0.0)
-        # (W, 5) rows (ax, ay, abx, aby, 1 / |ab|^2) for the compiled queries.
-        self._segments = np.stack((self._ax, self._ay, self._abx, self._aby, self._inv_len2), axis=1)
+        inv_len2 = np.where(len2 > 0.0, 1.0 / np.where(len2 > 0.0, len2, 1.0), 0.0)
+        # (W, 5) rows (ax, ay, abx, aby, 1 / |ab|^2) for the compiled nearest-wall query.
+        self._segments = np.column_stack((self.wall_a, ab, inv_len2))
         self.cell_size = cell_size
         self.reach = reach
         self._tables: dict[tuple[float, float], GridTable] = {}

@@ -36,8 +36,8 @@ _DIST, _IX, _IY, _INTER, _CROSS, _DOT = range(6)
 def _pair_directions(pos, vel, mask, robot_pos, robot_vel, lam, inv_scale, work):
     """First part of Moussaid's force for every pair: distance and interaction direction.
 
-    Pairs of a world are the human pairs i < j, then every (human, robot) pair; pair p of world
-    b is column b * P + p of work (6, B * P). The force on `this` human from the `other` agent
+    A world's P pairs are listed human by human: for human i, the humans j > i, then every
+    robot; pair p of world b is column b * P + p of work (6, B * P). The force on `this` human from the `other` agent
     uses dx = other - this (robot offsets scaled by 1 / robot_scale) and dv = v_this - v_other.
     Absent or coincident pairs get distance 0, which the last kernel reads as "no force".
     """
@@ -59,7 +59,9 @@ def _pair_directions(pos, vel, mask, robot_pos, robot_vel, lam, inv_scale, work)
                     dvx, dvy = vel[b, i, 0] - robot_vel[b, r, 0], vel[b, i, 1] - robot_vel[b, r, 1]
                 dist = math.sqrt(dx * dx + dy * dy)
                 if not valid or dist <= _TINY:
+                    # Finite placeholders: the numpy passes run over these columns too.
                     work[_DIST, col] = 0.0
+                    work[_INTER, col] = 1.0
                     work[_CROSS, col] = 0.0
                     work[_DOT, col] = 1.0
                     col += 1
