@@ -8,8 +8,9 @@ Collision model. The planning footprint is a disc of `robot_radius` around the r
 must stay `obstacle_margin` away from walls and from human discs of `human_radius`.
 - Walls: a precomputed distance field of the map (the distance to the nearest wall at the centres
   of a 2.5 cm grid, one byte per cell) is read at sample points along every arc, so a call costs
-  one gather per sample point whatever the wall density. The sample points come from one
-  (A * S, 2) x (2, 2N) product of arc offsets precomputed in the robot frame.
+  one lookup per sample point whatever the wall density. The sample points are arc offsets
+  precomputed in the robot frame, rotated and looked up in one compiled pass that also keeps
+  the running minimum along each arc (socialzoo.nav.arcs.arc_wall_codes).
 - Humans: exact circle-disc intersection of every arc with every human near the row (pairs
   gathered once), in closed form (float32, written to stay accurate for the straight arc). A
   walking human is also an obstacle where it will be `human_lookahead` seconds later.
@@ -35,6 +36,9 @@ Speed: v = min(max_speed, v_prev + a dt, the speed that still stops within L at 
 and no faster than lets omega = v c be reached under the robot's angular acceleration limit, so
 that the robot really follows the arc it checked.
 
+Parameters: socialzoo.nav.planner_config.LocalPlannerConfig; arc geometry and the closed forms:
+socialzoo.nav.arcs.
+
 Turning and recovery (refinements of the SPEC's rule, needed in GDC1's 0.9 m doorways):
 - the 30 degree turn-in-place test uses the target's bearing slid along the nearest wall when
   the robot is within `slide_band` of its margin (so it lines up with a doorway instead of
@@ -48,256 +52,24 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, fields
-from functools import lru_cache
 
 import numpy as np
 
 from socialzoo.core.config import RobotConfig
-from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
+from socialzoo.nav.arcs import ArcTable, arc_points, arc_table, arc_wall_codes, human_arcs, human_gaps
 from socialzoo.nav.distance_field import DistanceField, distance_field
+from socialzoo.nav.planner_config import LocalPlannerConfig
 
-# Curvatures below this are straight lines; the closed forms below use it in place of zero.
-_STRAIGHT = 1e-9
+# The config and the arc geometry live in their own modules; they are part of this API too.
+__all__ = ["ArcEvaluation", "LocalPlannerConfig", "arc_points", "arc_table", "evaluate_arcs", "plan_commands"]
+
 # Free lengths at or below this do not count as a move (m).
 _MIN_FREE = 1e-3
-_TWO_PI = 2.0 * math.pi
 # Batches of at least this many rows evaluate rows whose trimmed arcs all end within
 # _SHORT_ARC (m) apart, with fewer wall samples (see evaluate_arcs).
 _SPLIT_ROWS = 32
 _SHORT_ARC = 1.6
-# Guards float32 divisions by quantities that vanish only in degenerate geometry.
-_TINY32 = np.float32(1e-30)
-
-
-@dataclass(frozen=True, kw_only=True)
-class LocalPlannerConfig:
-    """Trajectory-rollout parameters (SPEC section 6).
-
-    Attributes:
-        curvature_min, curvature_max, curvature_step: the sampled arcs, 1/m (41 by default).
-        turn_in_place_angle_deg: a target farther off the heading than this makes the robot
-            stop and turn in place, degrees.
-        turn_in_place_max_speed: the robot starts turning only once slower than this, m/s
-            (it brakes first, as the reference does).
-        obstacle_margin: required gap between the planning disc and any obstacle, m.
-        max_arc_length: longest arc considered, m.
-        target_clip: local targets farther than this are pulled in along their bearing, m (the
-            reference clips its local target to the carrot distance, 1.5 m).
-        clearance_cap: clearance counts up to this, m.
-        planner_accel: linear acceleration and deceleration limit of the speed control, m/s^2.
-        progress_weight: score per metre of progress towards the target.
-        free_path_weight: score per metre of free path length.
-        robot_radius: planning disc radius, m: smaller than the collision footprint (a
-            0.5 x 0.43 m box, half-diagonal 0.332 m), as the SPEC allows; with the margin the
-            disc still covers it, and GDC1's 0.87 m doors stay passable.
-        human_radius: radius of a human disc, m.
-        human_lookahead: a walking human is also an obstacle where it will be this many seconds
-            later at its present velocity (0: present positions only, as the SPEC's rollout).
-            The rollout itself sees a frozen scene; without this, people who walk into a
-            slowing or waiting robot make up most collisions (GoAlone among 5-25 humans on GDC1:
-            68% of episodes collision-free with 0, 82% with 0.5 s).
-        min_wall_distance: hard floor of the escape rule on the centre's wall distance, m: with
-            the distance field's lookup error (under 0.02 m) it keeps the footprint's corners
-            off the walls even while the robot turns in place.
-        min_human_distance: hard floor of the escape rule on robot-human centre distance, m.
-        escape_slack: how much closer than now an escaping arc may pass, m.
-        slide_band: a robot closer than wall_distance + slide_band to a wall turns towards its
-            target slid along that wall (see ArcEvaluation.bearing), m.
-        stuck_length: a robot whose every arc is blocked by walls within this is stuck, m.
-        recovery_length: how far a stuck robot looks along candidate headings, m.
-        recovery_angle_deg: a stuck robot turns in place until its heading is within this of
-            the recovery direction, degrees.
-        sample_spacing: spacing of wall-check samples along an arc, m.
-        near_sample_spacing: finer spacing used up to `near_range`, m.
-        near_range: extent of the finely sampled start of each arc, m.
-        field_resolution: cell size of the wall distance field, m.
-    """
-
-    curvature_min: float = -2.0
-    curvature_max: float = 2.0
-    curvature_step: float = 0.1
-    turn_in_place_angle_deg: float = 30.0
-    turn_in_place_max_speed: float = 0.1
-    obstacle_margin: float = 0.1
-    max_arc_length: float = 5.0
-    target_clip: float = 1.5
-    clearance_cap: float = 1.0
-    planner_accel: float = 5.0
-    progress_weight: float = 1.0
-    free_path_weight: float = 0.1
-    robot_radius: float = 0.27
-    human_radius: float = 0.2
-    human_lookahead: float = 0.5
-    min_wall_distance: float = 0.355
-    min_human_distance: float = 0.45
-    escape_slack: float = 0.04
-    slide_band: float = 0.1
-    stuck_length: float = 0.05
-    recovery_length: float = 0.6
-    recovery_angle_deg: float = 2.0
-    sample_spacing: float = 0.1
-    near_sample_spacing: float = 0.05
-    near_range: float = 0.3
-    field_resolution: float = 0.025
-
-    def __post_init__(self) -> None:
-        signed = {"curvature_min", "curvature_max"}
-        nonnegative = {"obstacle_margin", "progress_weight", "free_path_weight", "escape_slack", "near_range"}
-        nonnegative |= {"human_lookahead"}
-        nonnegative |= {"turn_in_place_max_speed", "turn_in_place_angle_deg"}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-                raise ValueError(f"LocalPlannerConfig.{f.name} must be a finite number, got {value!r}")
-            if f.name in signed:
-                continue
-            if value < 0 or (value == 0 and f.name not in nonnegative):
-                limit = ">= 0" if f.name in nonnegative else "> 0"
-                raise ValueError(f"LocalPlannerConfig.{f.name} must be {limit}, got {value!r}")
-        if self.curvature_min >= self.curvature_max:
-            raise ValueError(
-                f"LocalPlannerConfig.curvature_min ({self.curvature_min!r}) must be below "
-                f"curvature_max ({self.curvature_max!r})"
-            )
-        steps = (self.curvature_max - self.curvature_min) / self.curvature_step
-        if abs(steps - round(steps)) > 1e-6:
-            raise ValueError(
-                f"LocalPlannerConfig.curvature_step ({self.curvature_step!r}) must divide "
-                f"curvature_max - curvature_min ({self.curvature_max - self.curvature_min!r})"
-            )
-        if self.turn_in_place_angle_deg > 180.0:
-            raise ValueError(
-                "LocalPlannerConfig.turn_in_place_angle_deg must be <= 180, "
-                f"got {self.turn_in_place_angle_deg!r}"
-            )
-        if self.min_wall_distance > self.wall_distance:
-            raise ValueError(
-                f"LocalPlannerConfig.min_wall_distance ({self.min_wall_distance!r}) exceeds "
-                f"robot_radius + obstacle_margin ({self.wall_distance!r})"
-            )
-        if self.min_human_distance > self.human_distance:
-            raise ValueError(
-                f"LocalPlannerConfig.min_human_distance ({self.min_human_distance!r}) exceeds "
-                f"robot_radius + obstacle_margin + human_radius ({self.human_distance!r})"
-            )
-        if self.near_sample_spacing > self.sample_spacing:
-            raise ValueError(
-                f"LocalPlannerConfig.near_sample_spacing ({self.near_sample_spacing!r}) exceeds "
-                f"sample_spacing ({self.sample_spacing!r})"
-            )
-
-    @property
-    def curvatures(self) -> np.ndarray:
-        """(A,) sampled curvatures, 1/m, increasing (A = 41 by default)."""
-        count = round((self.curvature_max - self.curvature_min) / self.curvature_step) + 1
-        return np.round(np.linspace(self.curvature_min, self.curvature_max, count), 12)
-
-    @property
-    def num_arcs(self) -> int:
-        return len(self.curvatures)
-
-    @property
-    def wall_distance(self) -> float:
-        """Required distance from the robot centre to walls, m."""
-        return self.robot_radius + self.obstacle_margin
-
-    @property
-    def human_distance(self) -> float:
-        """Required robot-human centre distance, m."""
-        return self.robot_radius + self.obstacle_margin + self.human_radius
-
-    @property
-    def field_pad(self) -> float:
-        """The distance field extends this far past the walls, m: arcs (at most about 1.1 times
-        the clipped target distance) of robots inside the walls' bounding box stay on the grid
-        (a sample off the grid would read its border cell)."""
-        return min(self.max_arc_length, 2.0 * self.target_clip)
-
-    @property
-    def field_range(self) -> float:
-        """Distances are resolved up to this in the wall distance field, m."""
-        return max(self.wall_distance, self.robot_radius + self.clearance_cap) + 0.1
-
-
-# ---------------------------------------------------------------------------------------------
-# Arc tables
-
-
-@dataclass(frozen=True)
-class ArcTable:
-    """Arc geometry shared by every call with one config.
-
-    Attributes:
-        curvature: (A,) signed curvature, 1/m.
-        abs_curvature: (A,) |curvature|, with straight arcs at a tiny positive value.
-        side: (A,) +1 for left turns (and straight), -1 for right turns.
-        lengths: (K,) arc length of the wall-check samples, m, increasing from 0.
-        free_at: (K + 1,) free length when the first blocked sample is k (k = K: none blocked):
-            the length of the sample before it, 0 for k = 0, inf for k = K, m.
-        offsets: (A, K, 2) sample positions in the robot frame (x ahead, y left), m.
-        cell_offsets: (K, A, 2) float32 offsets in distance-field cells (cfg.field_resolution),
-            sample-major so that a prefix of samples is one contiguous block.
-        abs_curvature32, side32, half_k2, two_over_k2: float32 (A,) copies for the human terms:
-            |c|, side, c^2 / 2 and 2 / c^2.
-    """
-
-    curvature: np.ndarray
-    abs_curvature: np.ndarray
-    side: np.ndarray
-    lengths: np.ndarray
-    free_at: np.ndarray
-    offsets: np.ndarray
-    cell_offsets: np.ndarray
-    abs_curvature32: np.ndarray
-    side32: np.ndarray
-    half_k2: np.ndarray
-    two_over_k2: np.ndarray
-
-
-def arc_points(
-    abs_curvature: np.ndarray, side: np.ndarray, length: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Robot-frame point reached after `length` metres along arcs; broadcasts, returns (x, y)."""
-    turn = abs_curvature * length
-    x = np.sin(turn) / abs_curvature
-    # 1 - cos(u) written as 2 sin^2(u / 2): exact for the tiny curvature of straight arcs.
-    y = side * 2.0 * np.sin(0.5 * turn) ** 2 / abs_curvature
-    return x, y
-
-
-@lru_cache(maxsize=16)
-def arc_table(cfg: LocalPlannerConfig) -> ArcTable:
-    """Precomputed arcs and sample offsets for a config."""
-    curvature = cfg.curvatures
-    side = np.where(curvature < 0.0, -1.0, 1.0)
-    abs_curvature = np.maximum(np.abs(curvature), _STRAIGHT)
-    near = np.arange(0.0, cfg.near_range - 1e-9, cfg.near_sample_spacing)
-    far = np.arange(cfg.near_range, cfg.max_arc_length + 0.5 * cfg.sample_spacing, cfg.sample_spacing)
-    lengths = np.unique(np.round(np.concatenate((near, np.minimum(far, cfg.max_arc_length))), 9))
-    free_at = np.concatenate(([0.0], lengths[:-1], [np.inf]))
-    x, y = arc_points(abs_curvature[:, None], side[:, None], lengths[None, :])
-    offsets = np.stack((x, y), axis=-1)
-    k32 = abs_curvature.astype(np.float32)
-    return ArcTable(
-        curvature=curvature,
-        abs_curvature=abs_curvature,
-        side=side,
-        lengths=lengths,
-        free_at=free_at,
-        offsets=offsets,
-        cell_offsets=np.ascontiguousarray(
-            (offsets / cfg.field_resolution).astype(np.float32).transpose(1, 0, 2)
-        ),
-        abs_curvature32=k32,
-        side32=side.astype(np.float32),
-        half_k2=(0.5 * abs_curvature**2).astype(np.float32),
-        two_over_k2=(2.0 / abs_curvature**2).astype(np.float32),
-    )
-
-
-# ---------------------------------------------------------------------------------------------
-# The planner
 
 
 def _stopping_speed(distance: np.ndarray, accel: float, dt: float) -> np.ndarray:
@@ -333,38 +105,6 @@ def _scratch(name: str, shape: tuple[int, ...], dtype: type) -> np.ndarray:
     return array[:size].reshape(shape)
 
 
-@kernel
-def _arc_wall_codes(x, y, cos, sin, offsets, field_shape, field_codes, here, codes):  # type: ignore[no-untyped-def]
-    """Distance-field codes along every arc of every row, as running minima.
-
-    codes (S, A, N) gets, for sample j of arc a of row i, the smallest field code over samples
-    0..j; sample 0 (the robot's own position) reads 255, because it never blocks an arc: the
-    robot is where it is, and an arc leading away from a wall it is too close to must stay open.
-    here (N,) gets the code at the robot. offsets (K >= S, A, 2) are the arc samples in field
-    cells (ArcTable.cell_offsets), rotated by each row's heading in float32.
-    """
-    ox, oy, res, num_x, num_y, _ = field_shape
-    num_samples, num_arcs, n = codes.shape
-    c = cos.astype(np.float32)
-    s = sin.astype(np.float32)
-    sx = ((x - ox) / res).astype(np.float32)
-    sy = ((y - oy) / res).astype(np.float32)
-    for i in range(n):
-        ix = min(max(int(sx[i]), 0), num_x - 1)
-        iy = min(max(int(sy[i]), 0), num_y - 1)
-        here[i] = field_codes[ix * num_y + iy]
-        for a in range(num_arcs):
-            codes[0, a, i] = 255
-    for j in range(1, num_samples):
-        for a in range(num_arcs):
-            off_x, off_y = offsets[j, a, 0], offsets[j, a, 1]
-            for i in range(n):
-                # Truncation is the floor on the grid, then rows near its border are clamped.
-                ix = min(max(int(off_x * c[i] - off_y * s[i] + sx[i]), 0), num_x - 1)
-                iy = min(max(int(off_x * s[i] + off_y * c[i] + sy[i]), 0), num_y - 1)
-                codes[j, a, i] = min(field_codes[ix * num_y + iy], codes[j - 1, a, i])
-
-
 def _segment_min_rows(values: np.ndarray, rows: np.ndarray, num_rows: int) -> np.ndarray:
     """Row-wise minimum of values (P, A) whose rows (P,) are sorted: (num_rows, A), inf if none."""
     if num_rows == 1:
@@ -373,63 +113,6 @@ def _segment_min_rows(values: np.ndarray, rows: np.ndarray, num_rows: int) -> np
     starts = np.flatnonzero(np.concatenate(([True], rows[1:] != rows[:-1])))
     out[rows[starts]] = np.minimum.reduceat(values, starts, axis=0)
     return out
-
-
-@dataclass(frozen=True)
-class _HumanArcs:
-    """Circle-disc terms of pair humans against every arc (float32, (P, A) unless noted)."""
-
-    yp: np.ndarray  # human's lateral offset towards the arc's turning side, m
-    r: np.ndarray  # k * (distance from the turning centre to the human)
-    r_minus_a: np.ndarray  # r - (1 - k yp), free of cancellation
-    psi: np.ndarray  # turning angle at the human's closest approach, in [0, 2 pi)
-    dist2: np.ndarray  # (P, 1) squared robot-human distance, m^2
-    hit: np.ndarray  # free length before the inflated disc, m (inf on a miss)
-
-
-def _human_arcs(hx: np.ndarray, hy: np.ndarray, radius: np.ndarray, table: ArcTable) -> _HumanArcs:
-    """Where every arc enters the discs of radius `radius` around humans (hx, hy) (P,), robot frame.
-
-    Along an arc of curvature k, the squared distance to h after turning u = k s is
-    (2 / k^2) (a - r cos(u - psi) + k^2 |h|^2 / 2) with a = 1 - k yp, b = k hx, r = |(a, b)|,
-    psi = atan2(b, a). Every term is written so that it stays accurate in float32 down to the
-    tiny curvature of the straight arc.
-    """
-    k = table.abs_curvature32
-    hx32 = hx.astype(np.float32)[:, None]
-    yp = table.side32 * hy.astype(np.float32)[:, None]
-    dist2 = hx32 * hx32 + (hy * hy).astype(np.float32)[:, None]
-    a = 1.0 - k * yp
-    b = k * hx32
-    b2 = b * b
-    r = np.sqrt(a * a + b2)
-    psi = np.arctan2(b, a)
-    # r - a = b^2 / (r + a) when a > 0 (no cancellation); r + |a| never vanishes unless r does.
-    abs_a = np.abs(a)
-    r_minus_a = np.where(a > 0.0, b2 / np.maximum(r + abs_a, _TINY32), r + abs_a)
-    r = np.maximum(r, _TINY32)
-    e = table.half_k2 * (dist2 - (radius * radius).astype(np.float32)[:, None])
-    # 1 - cos(delta), delta the half-angle of the arc inside the disc.
-    one_minus = (r_minus_a - e) / r
-    meets = (one_minus >= 0.0) & (one_minus <= 2.0)
-    delta = 2.0 * np.arcsin(np.sqrt(np.clip(0.5 * one_minus, 0.0, 1.0)))
-    enter = psi - delta
-    enter += np.float32(_TWO_PI) * (enter < 0.0)
-    hit = np.where(meets, enter / k, np.float32(np.inf))
-    psi += np.float32(_TWO_PI) * (psi < 0.0)
-    return _HumanArcs(yp=yp, r=r, r_minus_a=r_minus_a, psi=psi, dist2=dist2, hit=hit)
-
-
-def _human_gaps(h: _HumanArcs, length: np.ndarray, table: ArcTable) -> np.ndarray:
-    """(P, A) smallest robot-human centre distance along the arcs' first `length` (P, A) metres."""
-    k = table.abs_curvature32
-    turn = length.astype(np.float32) * k
-    half = 0.5 * (turn - h.psi)
-    end2 = table.two_over_k2 * (table.half_k2 * h.dist2 - h.r_minus_a + 2.0 * h.r * np.sin(half) ** 2)
-    # Distance from the turning circle to the human, (r - 1) / k = (k |h|^2 - 2 yp) / (r + 1).
-    ring = (k * h.dist2 - 2.0 * h.yp) / (h.r + 1.0)
-    near2 = np.where(h.psi <= turn, ring * ring, np.minimum(end2, h.dist2))
-    return np.sqrt(np.maximum(near2, 0.0))
 
 
 @dataclass(frozen=True)
@@ -587,7 +270,7 @@ def _evaluate(
     num_samples = min(int(np.searchsorted(table.lengths, longest)) + 1, len(table.lengths))
     codes = _scratch("codes", (num_samples, len(k), n), np.uint8)
     here_code = np.empty(n, dtype=np.uint8)
-    _arc_wall_codes(x, y, cos, sin, table.cell_offsets, field.shape_args, field.codes, here_code, codes)
+    arc_wall_codes(x, y, cos, sin, table.cell_offsets, field.shape_args, field.codes, here_code, codes)
     here = here_code * field.quantum
     limit = _escape_limit(here, cfg.wall_distance, cfg.min_wall_distance, cfg.escape_slack)
     limit_code = np.ceil(limit / field.quantum - 1e-9).astype(np.uint8)
@@ -631,7 +314,7 @@ def _evaluate(
     if len(pair_row):
         hx, hy, hd = hx_all[pair_row, pair_h], hy_all[pair_row, pair_h], hdist[pair_row, pair_h]
         radius = _escape_limit(hd, cfg.human_distance, cfg.min_human_distance, cfg.escape_slack)
-        humans = _human_arcs(hx, hy, radius, table)
+        humans = human_arcs(hx, hy, radius, table)
         # Inside the hard floor and not moving away: blocked at once.
         hit = np.where(((hd < radius) & (hx > 0.0))[:, None], np.float32(0.0), humans.hit)
         free = np.minimum(free, _segment_min_rows(hit, pair_row, n))
@@ -641,7 +324,7 @@ def _evaluate(
     wall_code = codes[last, np.arange(len(k)), np.arange(n)[:, None]]  # (n, A)
     clearance = wall_code * field.quantum - cfg.robot_radius
     if humans is not None:
-        gap = _human_gaps(humans, free[pair_row], table) - (cfg.robot_radius + cfg.human_radius)
+        gap = human_gaps(humans, free[pair_row], table) - (cfg.robot_radius + cfg.human_radius)
         clearance = np.minimum(clearance, _segment_min_rows(gap, pair_row, n))
     clearance = np.minimum(np.maximum(clearance, 0.0), cfg.clearance_cap)
 
