@@ -15,7 +15,8 @@ from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig
 from socialzoo.env.reward import RewardConfig
 from socialzoo.nav.local_planner import LocalPlannerConfig
-from socialzoo.nav.scenarios import FAMILIES, ScenarioConfig
+from socialzoo.nav.scenario_families import FAMILIES
+from socialzoo.nav.scenarios import ScenarioConfig
 from socialzoo.nav.subpolicies import SubPolicyConfig
 
 RobotAction = Literal["subpolicy", "velocity"]
@@ -49,7 +50,7 @@ class EnvConfig:
         human_neighbours: neighbours (humans and robots) in a learned human's observation.
         human_collision_penalty: a learned human's reward per step in contact with anyone.
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
-            family name (socialzoo.nav.scenarios.FAMILIES).
+            family name (socialzoo.nav.scenario_families.FAMILIES).
         world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
     """
 

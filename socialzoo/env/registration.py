@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-from socialzoo.nav.scenarios import FAMILIES
+from socialzoo.nav.scenario_families import FAMILIES
 
 BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
 VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"

@@ -12,7 +12,8 @@ import dataclasses
 import numpy as np
 
 from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario, make_family_scenario
+from socialzoo.nav.scenario_families import make_family_scenario
+from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario
 
 
 def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:

@@ -13,15 +13,14 @@ from socialzoo.core.world import step_world
 from socialzoo.nav import maps
 from socialzoo.nav.graph import NoPathError, segments_free
 from socialzoo.nav.maps import Map
+from socialzoo.nav.scenario_families import FAMILIES, make_family_scenario
 from socialzoo.nav.scenarios import (
-    FAMILIES,
     TEST_SETS,
     Scenario,
     ScenarioConfig,
     TestSet,
     generate_scenario,
     get_test_set,
-    make_family_scenario,
     noise_key,
     scenarios_to_state,
 )
