@@ -85,7 +85,7 @@ def test_matches_scalar_reference(seed):
     )
     want = _reference(pos, vel, target, speed, robot_pos, robot_vel, walls, CFG)
     # The pair terms are evaluated in float32: agreement to about 1e-5 relative.
-    np.testing.assert_allclose(got[0], want, rtol=1e-4, atol=1e-4)
+    np.testing.assert_allclose(got[0], want, rtol=1e-9, atol=1e-9)
     assert wall_dist.shape == (1, n)
 
 
