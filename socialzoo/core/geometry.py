@@ -66,11 +66,8 @@ def closest_point_on_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tup
 def point_near_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float, tol: float) -> bool:
     """Whether point p lies within tol of segment [a, b] (a point if a == b); scalar kernel."""
     abx, aby = bx - ax, by - ay
-    denom = abx * abx + aby * aby
-    t = ((px - ax) * abx + (py - ay) * aby) / (denom if denom > 0.0 else 1.0)
-    t = min(max(t, 0.0), 1.0)
-    dx, dy = px - (ax + t * abx), py - (ay + t * aby)
-    return math.sqrt(dx * dx + dy * dy) <= tol
+    len2 = abx * abx + aby * aby
+    return math.sqrt(point_segment_dist2(px, py, ax, ay, abx, aby, 1.0 / len2 if len2 > 0.0 else 0.0)) <= tol
 
 
 @kernel

@@ -74,33 +74,6 @@ def _pad_paths(paths: np.ndarray, width: int) -> np.ndarray:
     return np.concatenate((paths, last), axis=-2)
 
 
-def _segments(paths: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Segment starts and ends (..., S, 2) of paths and which segments are valid (..., S).
-
-    A one-waypoint path is one degenerate segment at that point.
-    """
-    if paths.shape[-2] == 1:
-        paths = np.concatenate((paths, paths), axis=-2)
-    a, b = paths[..., :-1, :], paths[..., 1:, :]
-    index = np.arange(a.shape[-2])
-    valid = index < np.maximum(np.asarray(lengths) - 1, 1)[..., None]
-    return a, b, valid
-
-
-def _closest_on_segments(
-    pos: np.ndarray, a: np.ndarray, b: np.ndarray, valid: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Distance (..., S) from pos (..., 2) to each segment (inf where invalid) and its fraction t."""
-    ab = b - a
-    ap = pos[..., None, :] - a
-    len2 = ab[..., 0] ** 2 + ab[..., 1] ** 2
-    t = (ap[..., 0] * ab[..., 0] + ap[..., 1] * ab[..., 1]) / np.where(len2 > 0.0, len2, 1.0)
-    t = np.minimum(np.maximum(t, 0.0), 1.0)
-    dx = ap[..., 0] - t * ab[..., 0]
-    dy = ap[..., 1] - t * ab[..., 1]
-    return np.where(valid, np.sqrt(dx * dx + dy * dy), np.inf), t
-
-
 def distance_to_path(pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """Distance from points to their polyline paths.
 
@@ -112,9 +85,7 @@ def distance_to_path(pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray) ->
     Returns:
         (...,) distance to the nearest point of the path, m.
     """
-    a, b, valid = _segments(paths, lengths)
-    dist, _ = _closest_on_segments(pos, a, b, valid)
-    return dist.min(axis=-1)
+    return track(pos, paths, lengths)[1]
 
 
 def needs_replan(
