@@ -1,8 +1,12 @@
 """Shared test fixtures."""
 
 import json
+from pathlib import Path
 
 import pytest
+
+# The social_gym 1.0 reference data (MIT, see its LICENSE), kept in the repository.
+REFERENCE_DIR = Path(__file__).resolve().parents[1] / "maps" / "reference" / "socialgym"
 
 # A small two-room map with a door, for fast episodes in the harness and policy tests.
 ROOMS = {
@@ -23,3 +27,9 @@ def rooms_map_path(tmp_path_factory):
     path = tmp_path_factory.mktemp("maps") / "rooms.json"
     path.write_text(json.dumps(ROOMS))
     return path
+
+
+@pytest.fixture(scope="session")
+def reference_dir():
+    """The folder of the social_gym reference data (walls, gdc1 nodes and legal poses)."""
+    return REFERENCE_DIR

@@ -1,6 +1,6 @@
 """Rebuild every shipped map in maps/ from the reference data and the hand-drawn small maps.
 
-    python tools/build_maps.py [--reference ../shared/reference/socialgym]
+    python tools/build_maps.py [--reference maps/reference/socialgym]
 
 gdc1: the reference walls of the benchmark area (the second floor plan drawn below y = -5 is
 dropped), its 77 nodes and 26 legal poses; edges joined by socialzoo.nav.roadmap.build_edges.
@@ -167,7 +167,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--reference", type=Path, default=ROOT.parent / "shared" / "reference" / "socialgym")
+    parser.add_argument("--reference", type=Path, default=ROOT / "maps" / "reference" / "socialgym")
     args = parser.parse_args()
     build_gdc1(args.reference)
     build_ghc3(args.reference)

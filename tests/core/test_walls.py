@@ -16,8 +16,6 @@ from socialzoo.core.geometry import (
 )
 from socialzoo.core.walls import WallIndex
 
-REFERENCE = "../shared/reference/socialgym/gdc1_walls.txt"
-
 
 def random_walls(rng, n, size=20.0, max_len=4.0):
     a = rng.uniform(0, size, (n, 2))

@@ -22,10 +22,10 @@ def test_every_shipped_map_is_listed_loads_and_validates():
         assert nx.is_connected(graph), name
 
 
-def test_gdc1_keeps_the_reference_nodes_and_poses():
+def test_gdc1_keeps_the_reference_nodes_and_poses(reference_dir):
     m = load_map("gdc1")
     assert m.num_nodes == 77 and len(m.legal_poses) == 26
-    ref_nodes = np.loadtxt("../shared/reference/socialgym/gdc1_nav_nodes.txt")
+    ref_nodes = np.loadtxt(reference_dir / "gdc1_nav_nodes.txt")
     np.testing.assert_allclose(m.nodes, ref_nodes, atol=1e-6)
     assert "Autonomous Mobile Robotics Laboratory" in m.licence
     assert m.walls[:, [1, 3]].min() > -5.0, "the second floor plan must be cropped away"

@@ -18,8 +18,6 @@ from socialzoo.nav.roadmap import (
     generate_legal_poses,
 )
 
-REFERENCE = "../shared/reference/socialgym"
-
 
 def _connected(num_nodes: int, edges: np.ndarray) -> bool:
     graph = nx.Graph(np.asarray(edges).tolist())
@@ -73,9 +71,9 @@ def test_seed_point_must_be_free():
         free_space(walls, seed_point=(50.0, 5.0))
 
 
-def test_build_edges_joins_the_gdc1_nodes_with_clearance():
-    walls = read_vector_map(f"{REFERENCE}/gdc1_walls.txt")
-    nodes = read_table(f"{REFERENCE}/gdc1_nav_nodes.txt", 2, "x y")
+def test_build_edges_joins_the_gdc1_nodes_with_clearance(reference_dir):
+    walls = read_vector_map(reference_dir / "gdc1_walls.txt")
+    nodes = read_table(reference_dir / "gdc1_nav_nodes.txt", 2, "x y")
     index = WallIndex(walls)
     edges = build_edges(nodes, index, clearance=0.3)
     assert _connected(len(nodes), edges)
