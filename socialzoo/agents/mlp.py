@@ -1,0 +1,212 @@
+"""Learned policies at inference: a multilayer perceptron read from a policy file, run in numpy.
+
+Every neural baseline (PPO and DQN trained with Stable-Baselines3, BC and GAIL trained with
+TorchRL) is saved as the same kind of file (socialzoo.agents.policy_file): the layers of the
+network that maps an observation to one score per action (logits or Q-values), and the
+observation normalisation it was trained with. Acting is the greedy action: argmax of the scores.
+Evaluating needs neither torch nor the training library, and batches of any size cost one matrix
+product per layer.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from socialzoo.agents.base import check_observations
+from socialzoo.agents.policy_file import PolicyFileError, read_policy_file, save_policy_file
+
+if TYPE_CHECKING:
+    from socialzoo.env.core import SocialNavCore
+
+ACTIVATIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "tanh": np.tanh,
+    "relu": lambda x: np.maximum(x, 0.0),
+}
+# What the network's last layer gives: one score per action either way; the greedy action is its argmax.
+OUTPUTS = ("logits", "q_values")
+
+
+class ObservationNormalizer:
+    """clip((obs - mean) / sqrt(var + epsilon), -clip, clip), as SB3's VecNormalize applies it.
+
+    Args:
+        mean: (D,) running mean of the training observations.
+        var: (D,) running variance.
+        clip: bound of the normalised values.
+        epsilon: added to the variance.
+    """
+
+    def __init__(self, mean: np.ndarray, var: np.ndarray, clip: float, epsilon: float) -> None:
+        self.mean = np.asarray(mean, dtype=np.float64)
+        self.var = np.asarray(var, dtype=np.float64)
+        if self.mean.shape != self.var.shape or self.mean.ndim != 1:
+            raise ValueError(f"normaliser mean {self.mean.shape} and var {self.var.shape} must be equal (D,)")
+        if not (np.isfinite(self.mean).all() and np.isfinite(self.var).all() and (self.var >= 0).all()):
+            raise ValueError("normaliser statistics must be finite, with var >= 0")
+        if not (clip > 0 and epsilon >= 0):
+            raise ValueError(f"normaliser clip must be > 0 and epsilon >= 0, got {clip!r}, {epsilon!r}")
+        self.clip = float(clip)
+        self.epsilon = float(epsilon)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        out = (obs - self.mean) / np.sqrt(self.var + self.epsilon)
+        return np.clip(out, -self.clip, self.clip).astype(np.float32)
+
+
+class MlpPolicy:
+    """A greedy policy over a multilayer perceptron.
+
+    Args:
+        name: the registry name (e.g. "ppo").
+        weights: (W_i (out, in), b_i (out,)) per layer, torch's Linear convention.
+        activation: hidden-layer activation, a key of ACTIVATIONS.
+        observation: the EnvConfig.observation fields the network was trained on (plain dict).
+        normalizer: the training observation normalisation, or None.
+        header: the policy file's header (kept for config() and reports).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        weights: Sequence[tuple[np.ndarray, np.ndarray]],
+        activation: str,
+        observation: dict[str, Any],
+        normalizer: ObservationNormalizer | None = None,
+        header: dict[str, Any] | None = None,
+    ) -> None:
+        if activation not in ACTIVATIONS:
+            raise ValueError(
+                f"MlpPolicy: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}"
+            )
+        if not weights:
+            raise ValueError("MlpPolicy: the network has no layers")
+        self.layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
+        for i, (w, b) in enumerate(self.layers):
+            if w.ndim != 2 or b.shape != (w.shape[0],):
+                raise ValueError(f"MlpPolicy: layer {i} has weight {w.shape} and bias {b.shape}")
+            if i and w.shape[1] != self.layers[i - 1][0].shape[0]:
+                raise ValueError(
+                    f"MlpPolicy: layer {i} takes {w.shape[1]} inputs, the layer before gives "
+                    f"{self.layers[i - 1][0].shape[0]}"
+                )
+        self.name = name
+        self.activation = activation
+        self.observation = dict(observation)
+        self.normalizer = normalizer
+        if normalizer is not None and normalizer.mean.shape[0] != self.input_size:
+            raise ValueError(
+                f"MlpPolicy: normaliser of size {normalizer.mean.shape[0]} for a network of {self.input_size} inputs"
+            )
+        self.header = dict(header or {})
+        self.path: Path | None = None
+        self.digest: str | None = None
+
+    @property
+    def input_size(self) -> int:
+        return int(self.layers[0][0].shape[1])
+
+    @property
+    def num_actions(self) -> int:
+        return int(self.layers[-1][0].shape[0])
+
+    def scores(self, obs: np.ndarray) -> np.ndarray:
+        """(N, A) network outputs (logits or Q-values) for (N, D) observations."""
+        obs = np.asarray(obs, dtype=np.float32)
+        if obs.ndim != 2 or obs.shape[1] != self.input_size:
+            layout = self.observation.get("layout", "?")
+            raise ValueError(
+                f"{self.name}: observations of width {obs.shape[-1]} given to a policy trained on the "
+                f"{layout!r} layout of {self.input_size} numbers (observation {self.observation})"
+            )
+        x = self.normalizer(obs) if self.normalizer is not None else obs
+        act = ACTIVATIONS[self.activation]
+        for i, (w, b) in enumerate(self.layers):
+            x = x @ w.T + b
+            if i < len(self.layers) - 1:
+                x = act(x)
+        return x
+
+    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+        """Greedy actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
+        obs = check_observations(obs, f"{self.name}.act")
+        lead = obs.shape[:-1]
+        scores = self.scores(obs.reshape(-1, obs.shape[-1]))
+        return np.argmax(scores, axis=1).astype(np.int64).reshape(lead)
+
+    def check_observation(self, observation: dict[str, Any]) -> None:
+        """Raise ValueError when an env's observation config differs from the training one."""
+        if dict(observation) != self.observation:
+            raise ValueError(
+                f"{self.name}: trained on observation {self.observation}, the env gives {dict(observation)}"
+            )
+
+    def config(self) -> dict[str, Any]:
+        """What identifies this policy for the results store: the file's digest and training record."""
+        return {"file_sha256": self.digest, "training": self.header.get("training", {})}
+
+    # ---------------------------------------------------------------- files
+    def save(self, path: str | Path, header: dict[str, Any]) -> Path:
+        """Write the policy file (header: env_id and training record; the network part is filled in)."""
+        tensors: dict[str, np.ndarray] = {}
+        for i, (w, b) in enumerate(self.layers):
+            tensors[f"net.{i}.weight"] = w
+            tensors[f"net.{i}.bias"] = b
+        full = {
+            **header,
+            "policy": self.name,
+            "network": {
+                "kind": "mlp",
+                "sizes": [self.input_size] + [int(w.shape[0]) for w, _ in self.layers],
+                "activation": self.activation,
+                "output": header.get("network", {}).get("output", "logits"),
+            },
+            "observation": self.observation,
+            "normalization": None,
+        }
+        if self.normalizer is not None:
+            tensors["obs_mean"] = self.normalizer.mean
+            tensors["obs_var"] = self.normalizer.var
+            full["normalization"] = {"clip": self.normalizer.clip, "epsilon": self.normalizer.epsilon}
+        return save_policy_file(path, tensors, full)
+
+    @classmethod
+    def load(cls, path: str | Path) -> MlpPolicy:
+        """The policy saved at `path` (see socialzoo.agents.policy_file for the checks)."""
+        tensors, header = read_policy_file(path)
+        network = header["network"]
+        try:
+            if network.get("kind") != "mlp":
+                raise ValueError(f"network kind {network.get('kind')!r} is not 'mlp'")
+            if network.get("output") not in OUTPUTS:
+                raise ValueError(f"network output {network.get('output')!r} is not one of {OUTPUTS}")
+            sizes = [int(s) for s in network["sizes"]]
+            weights = [(tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"]) for i in range(len(sizes) - 1)]
+            for i, (w, _) in enumerate(weights):
+                if tuple(w.shape) != (sizes[i + 1], sizes[i]):
+                    raise ValueError(
+                        f"net.{i}.weight has shape {w.shape}, the header says {(sizes[i + 1], sizes[i])}"
+                    )
+            normalizer = None
+            norm = header.get("normalization")
+            if norm is not None:
+                normalizer = ObservationNormalizer(
+                    tensors["obs_mean"], tensors["obs_var"], float(norm["clip"]), float(norm["epsilon"])
+                )
+            policy = cls(
+                str(header["policy"]),
+                weights,
+                str(network["activation"]),
+                header["observation"],
+                normalizer,
+                header,
+            )
+        except (KeyError, TypeError, ValueError) as err:
+            raise PolicyFileError(f"{path}: {err}") from None
+        policy.path = Path(path)
+        policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return policy

@@ -1,0 +1,143 @@
+"""Command-line options from a frozen dataclass of arguments (the trainers' `Args`).
+
+Every field becomes `--field-name`, typed from its annotation, with its default and the help text
+of the class docstring's "Attributes:" section: int, float, str, Path, bool (`--x/--no-x`),
+Literal choices, `X | None` ("none" for None), tuples (several values) and JSON objects (dicts).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import inspect
+import json
+import re
+import types
+import typing
+from pathlib import Path
+from typing import Any, Literal, Union, get_args, get_origin
+
+
+def attribute_docs(cls: type) -> dict[str, str]:
+    """Field name -> description, from the "Attributes:" section of a Google-style docstring."""
+    doc = inspect.getdoc(cls) or ""
+    found: dict[str, str] = {}
+    section = False
+    current: str | None = None
+    for line in doc.splitlines():
+        if re.match(r"^\S.*:$", line):
+            section = line.strip() == "Attributes:"
+            current = None
+            continue
+        if not section:
+            continue
+        match = re.match(r"^    (\w+)(?: \([^)]*\))?: (.*)$", line)
+        if match:
+            current = match.group(1)
+            found[current] = match.group(2).strip()
+        elif current and line.startswith("        "):
+            found[current] += " " + line.strip()
+    return found
+
+
+def _optional(annotation: Any) -> tuple[Any, bool]:
+    """(inner type, True) for `X | None`, else (annotation, False)."""
+    if get_origin(annotation) in (Union, types.UnionType):
+        inner = [a for a in get_args(annotation) if a is not type(None)]
+        if len(inner) == 1 and len(get_args(annotation)) == 2:
+            return inner[0], True
+    return annotation, False
+
+
+def _scalar_parser(annotation: Any, name: str) -> Any:
+    if annotation in (int, float, str):
+        return annotation
+    if annotation is Path:
+        return Path
+    if get_origin(annotation) in (dict, typing.Mapping) or annotation is dict:
+
+        def parse_json(text: str) -> Any:
+            try:
+                value = json.loads(text)
+            except json.JSONDecodeError as err:
+                raise argparse.ArgumentTypeError(f"--{name}: not JSON ({err})") from None
+            if not isinstance(value, dict):
+                raise argparse.ArgumentTypeError(f"--{name}: expected a JSON object, got {text!r}")
+            return value
+
+        return parse_json
+    raise TypeError(f"dataclass_args: field {name!r} has an unsupported type {annotation!r}")
+
+
+def add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
+    """Add one option per field of dataclass `cls` to `parser` (dest = the field name)."""
+    hints = typing.get_type_hints(cls)
+    docs = attribute_docs(cls)
+    for field in dataclasses.fields(cls):
+        if not field.init:
+            continue
+        flag = "--" + field.name.replace("_", "-")
+        annotation, optional = _optional(hints[field.name])
+        default = field.default
+        if default is dataclasses.MISSING and field.default_factory is not dataclasses.MISSING:
+            default = field.default_factory()
+        required = default is dataclasses.MISSING
+        help_text = docs.get(field.name, "")
+        if not required:
+            help_text += f" (default: {json.dumps(_shown(default))})"
+        kwargs: dict[str, Any] = {"dest": field.name, "help": help_text}
+        if required:
+            kwargs["required"] = True
+        else:
+            kwargs["default"] = default
+        if annotation is bool:
+            kwargs["action"] = argparse.BooleanOptionalAction
+        elif get_origin(annotation) is Literal:
+            choices = list(get_args(annotation))
+            kwargs["choices"] = choices + ([None] if optional else [])
+            kwargs["type"] = _literal_parser(choices, optional)
+        elif get_origin(annotation) is tuple:
+            element = get_args(annotation)[0]
+            kwargs["nargs"] = "+"
+            kwargs["type"] = _scalar_parser(element, field.name)
+        else:
+            base = _scalar_parser(annotation, field.name)
+            kwargs["type"] = _none_or(base) if optional else base
+        parser.add_argument(flag, **kwargs)
+
+
+def _shown(value: Any) -> Any:
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, tuple):
+        return list(value)
+    return value
+
+
+def _none_or(parse: Any) -> Any:
+    def parse_optional(text: str) -> Any:
+        return None if text.lower() == "none" else parse(text)
+
+    return parse_optional
+
+
+def _literal_parser(choices: list[Any], optional: bool) -> Any:
+    def parse_choice(text: str) -> Any:
+        if optional and text.lower() == "none":
+            return None
+        for choice in choices:
+            if str(choice) == text:
+                return choice
+        raise argparse.ArgumentTypeError(f"expected one of {choices}, got {text!r}")
+
+    return parse_choice
+
+
+def dataclass_from_namespace(cls: type, namespace: argparse.Namespace) -> Any:
+    """Build `cls` from the options `add_dataclass_arguments` added (tuples from lists)."""
+    values = {}
+    for field in dataclasses.fields(cls):
+        if field.init and hasattr(namespace, field.name):
+            value = getattr(namespace, field.name)
+            values[field.name] = tuple(value) if isinstance(value, list) else value
+    return cls(**values)

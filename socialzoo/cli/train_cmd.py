@@ -1,0 +1,46 @@
+"""`socialzoo train <trainer> [options]`: run one of the trainers of socialzoo.train.
+
+Options are generated from the trainer's argument dataclass (socialzoo.cli.dataclass_args), so the
+command line and the Python API (`train(Args(...))`) take the same arguments with the same defaults.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add `train` with one sub-subcommand per registered trainer."""
+    from socialzoo.cli.dataclass_args import add_dataclass_arguments
+    from socialzoo.train import TRAINERS, trainer_args
+
+    parser = subparsers.add_parser(
+        "train",
+        help="train a learned baseline (writes the policy, its run record, checkpoints and logs)",
+        description="Train a learned policy. Each trainer writes run.json (arguments, command, seed), "
+        "TensorBoard logs and checkpoints beside the policy file.",
+    )
+    trainers = parser.add_subparsers(dest="trainer", required=True, metavar="TRAINER")
+    for name in sorted(TRAINERS):
+        cls = trainer_args(name)
+        doc = (cls.__doc__ or "").strip().splitlines()
+        sub = trainers.add_parser(name, help=doc[0] if doc else name, description=doc[0] if doc else None)
+        add_dataclass_arguments(sub, cls)
+        sub.set_defaults(func=run_train_command, trainer_class=cls)
+
+
+def run_train_command(args: argparse.Namespace) -> int:
+    """Run `socialzoo train <trainer>`; returns the exit status (2 for bad arguments)."""
+    from socialzoo.cli.dataclass_args import dataclass_from_namespace
+    from socialzoo.train import trainer_function
+
+    try:
+        train_args = dataclass_from_namespace(args.trainer_class, args)
+    except (TypeError, ValueError) as err:
+        print(f"socialzoo train {args.trainer}: error: {err}", file=sys.stderr)
+        return 2
+    path = trainer_function(args.trainer)(train_args)
+    print(f"socialzoo train {args.trainer}: wrote {path}")
+    return 0

@@ -1,0 +1,171 @@
+"""A training run's folder: its resolved arguments, command and seed, progress, logs and checkpoints.
+
+Every trainer writes into one folder:
+
+    run.json          algorithm, resolved arguments, command line, seed, package version, times
+    tensorboard/      TensorBoard event files (when the tensorboard package is installed)
+    checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
+    <policy file>     the final policy
+
+A folder already holding a run of other arguments is refused, so two runs never mix; a finished
+run of the same arguments is reported as done, so a rerun repeats nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import os
+import shlex
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+logger = logging.getLogger(__name__)
+
+RUN_FILE = "run.json"
+
+
+class RunDirError(Exception):
+    """A run folder that holds another run."""
+
+
+def plain(value: Any) -> Any:
+    """`value` as plain JSON (dataclasses as dicts, paths and tuples as strings and lists)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): plain(v) for k, v in value.items()}
+    return value
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+    os.replace(tmp, path)
+
+
+class RunDir:
+    """The folder of one training run.
+
+    Args:
+        path: the folder (created).
+        algo: the trainer's name, e.g. "ppo".
+        args: the trainer's argument dataclass (its plain form is the run's identity; fields
+            named in `volatile` are recorded but do not count, e.g. the progress bar switch).
+        volatile: argument names that do not change the result.
+
+    Raises:
+        RunDirError: the folder holds a run of another algorithm or other arguments.
+    """
+
+    def __init__(self, path: str | Path, algo: str, args: Any, volatile: tuple[str, ...] = ()) -> None:
+        from socialzoo import __version__
+
+        self.path = Path(path)
+        self.path.mkdir(parents=True, exist_ok=True)
+        self.algo = algo
+        resolved = plain(args)
+        identity = {k: v for k, v in resolved.items() if k not in volatile}
+        existing = self.read()
+        if existing is not None:
+            theirs = {k: v for k, v in existing.get("args", {}).items() if k not in volatile}
+            if existing.get("algo") != algo or theirs != identity:
+                changed = sorted(k for k in set(theirs) | set(identity) if theirs.get(k) != identity.get(k))
+                raise RunDirError(
+                    f"{self.path} holds a {existing.get('algo')} run with other arguments "
+                    f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
+                )
+        self.record: dict[str, Any] = existing or {
+            "algo": algo,
+            "args": resolved,
+            "command": shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]]),
+            "seed": resolved.get("seed"),
+            "package_version": __version__,
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "finished": None,
+        }
+        _write_json(self.path / RUN_FILE, self.record)
+
+    def read(self) -> dict[str, Any] | None:
+        """The run.json of this folder, or None."""
+        file = self.path / RUN_FILE
+        if not file.exists():
+            return None
+        try:
+            return json.loads(file.read_text())
+        except json.JSONDecodeError as err:
+            raise RunDirError(f"{file}: unreadable run record ({err})") from None
+
+    @property
+    def finished(self) -> bool:
+        """True once `finish` was called for these arguments."""
+        return bool(self.record.get("finished"))
+
+    def finish(self, **results: Any) -> None:
+        """Mark the run finished and record `results` (plain JSON: wall time, final metrics, files)."""
+        self.record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        self.record["results"] = plain(results)
+        _write_json(self.path / RUN_FILE, self.record)
+
+    def checkpoint_path(self, step: int, suffix: str) -> Path:
+        """checkpoints/step_<step>.<suffix> (folder created)."""
+        folder = self.path / "checkpoints"
+        folder.mkdir(exist_ok=True)
+        return folder / f"step_{step:09d}{suffix}"
+
+    def checkpoints(self, suffix: str) -> list[tuple[int, Path]]:
+        """The checkpoints written so far, as (step, path), by step."""
+        folder = self.path / "checkpoints"
+        found = []
+        for file in folder.glob(f"step_*{suffix}") if folder.exists() else ():
+            stem = file.name[len("step_") : -len(suffix)] if suffix else file.name[len("step_") :]
+            if stem.isdigit():
+                found.append((int(stem), file))
+        return sorted(found)
+
+    @contextmanager
+    def tensorboard(self) -> Iterator[Any]:
+        """A TensorBoard SummaryWriter in tensorboard/, or a writer that drops everything when
+        the tensorboard package is missing."""
+        try:
+            from torch.utils.tensorboard import SummaryWriter
+        except ImportError:
+            logger.warning("tensorboard is not installed: no TensorBoard logs for %s", self.path)
+            yield _NullWriter()
+            return
+        writer = SummaryWriter(str(self.path / "tensorboard"))
+        try:
+            yield writer
+        finally:
+            writer.close()
+
+
+class _NullWriter:
+    def add_scalar(self, *args: Any, **kwargs: Any) -> None:
+        pass
+
+
+def checkpoint_steps(total: int, every: int) -> list[int]:
+    """The steps at which to checkpoint: every `every` steps up to `total`, and `total` itself."""
+    if every < 1 or total < 1:
+        raise ValueError(f"checkpoint_steps needs total >= 1 and every >= 1, got {total!r}, {every!r}")
+    steps = list(range(every, total + 1, every))
+    if not steps or steps[-1] != total:
+        steps.append(total)
+    return steps
+
+
+def progress_bar(total: int, desc: str, enabled: bool = True, unit: str = "step") -> Any:
+    """A tqdm progress bar (disabled when `enabled` is False)."""
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, disable=not enabled, dynamic_ncols=True, smoothing=0.05)
