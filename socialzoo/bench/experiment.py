@@ -45,7 +45,8 @@ class BenchmarkConfig:
     """What a benchmark run evaluates, and how.
 
     Attributes:
-        policies: registry names of the policies (socialzoo.agents.POLICIES).
+        policies: policy specs: registry names (socialzoo.agents.POLICIES; a learned policy's
+            name alone is its shipped file) or "NAME:PATH" for a learned policy's file.
         maps: maps to evaluate on; each uses its test set "<map>-test" (2000 scenarios), or
             "<map>-quick" (100) with quick=True.
         trials: scenarios per policy and map: the first `trials` of each test set; None: all.
@@ -73,16 +74,17 @@ class BenchmarkConfig:
     gif: bool = False
 
     def __post_init__(self) -> None:
-        from socialzoo.agents import POLICIES
+        from socialzoo.agents import check_policy_spec
 
         object.__setattr__(self, "policies", tuple(self.policies))
         object.__setattr__(self, "maps", tuple(self.maps))
         if not self.policies:
             raise ValueError("BenchmarkConfig.policies is empty")
         for p in self.policies:
-            if p not in POLICIES:
-                known = ", ".join(sorted(POLICIES))
-                raise ValueError(f"BenchmarkConfig.policies: unknown policy {p!r}; known policies: {known}")
+            try:
+                check_policy_spec(p)
+            except ValueError as err:
+                raise ValueError(f"BenchmarkConfig.policies: {err}") from None
         if not self.maps:
             raise ValueError("BenchmarkConfig.maps is empty")
         for name in ("policies", "maps"):

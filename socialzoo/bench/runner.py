@@ -119,12 +119,11 @@ def make_spec(
     Raises:
         ValueError: an unknown policy name; KeyError: an unknown test set name.
     """
-    from socialzoo.agents import POLICIES
+    from socialzoo.agents import check_policy_spec
 
     kwargs = {p: {} for p in policies} if not isinstance(policies, Mapping) else dict(policies)
     for name in kwargs:
-        if name not in POLICIES:
-            raise ValueError(f"unknown policy {name!r}; known policies: {', '.join(sorted(POLICIES))}")
+        check_policy_spec(name)
     sets = {}
     for ts in test_sets:
         obj = get_test_set(ts) if isinstance(ts, str) else ts

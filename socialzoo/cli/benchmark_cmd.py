@@ -20,6 +20,18 @@ def _names(text: str) -> tuple[str, ...]:
     return names
 
 
+def _policy_specs(text: str) -> tuple[str, ...]:
+    """Comma-separated policy specs; the registry name is lower-cased, a ':PATH' kept as written."""
+    specs = []
+    for item in (n.strip() for n in text.split(",")):
+        if item:
+            name, sep, path = item.partition(":")
+            specs.append(name.lower() + sep + path)
+    if not specs:
+        raise argparse.ArgumentTypeError(f"expected comma-separated policies, got {text!r}")
+    return tuple(specs)
+
+
 def _positive(text: str) -> int:
     try:
         value = int(text)
@@ -44,7 +56,11 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument(
-        "--policies", type=_names, default=None, help="comma-separated policies (default goalone,ref)"
+        "--policies",
+        type=_policy_specs,
+        default=None,
+        help="comma-separated policies: registry names (a learned policy's name alone is its shipped file) "
+        "or NAME:PATH for a policy file (default goalone,ref)",
     )
     parser.add_argument("--maps", type=_names, default=None, help="comma-separated maps (default gdc1,ghc3)")
     parser.add_argument(

@@ -1,0 +1,49 @@
+"""Policies are named "ref", "ppo" (the shipped file) or "ppo:PATH" (a file)."""
+
+import numpy as np
+import pytest
+
+import socialzoo.agents as agents
+from socialzoo.agents import check_policy_spec, make_policy, split_policy_spec
+from socialzoo.agents.mlp import MlpPolicy
+from socialzoo.agents.policy_file import current_env_version
+
+
+def _save(path):
+    rng = np.random.default_rng(0)
+    policy = MlpPolicy(
+        "ppo", [(rng.normal(size=(4, 107)), np.zeros(4))], "tanh", {"layout": "paper", "num_human_slots": 25}
+    )
+    header = {"env_id": f"socialzoo/ActionSelection-v{current_env_version()}", "training": {"seed": 0}}
+    return policy.save(path, header)
+
+
+def test_split():
+    assert split_policy_spec("PPO:runs/A.safetensors") == ("ppo", "runs/A.safetensors")
+    assert split_policy_spec("ref") == ("ref", None)
+    with pytest.raises(ValueError, match=r"unknown policy 'nope'; known policies: .*ref"):
+        split_policy_spec("nope")
+    with pytest.raises(ValueError, match="no file after"):
+        split_policy_spec("ppo:")
+
+
+def test_learned_policies_load_from_a_path_or_the_shipped_file(tmp_path, monkeypatch):
+    file = _save(tmp_path / "mine.safetensors")
+    loaded = make_policy(f"ppo:{file}")
+    assert isinstance(loaded, MlpPolicy) and loaded.path == file
+    monkeypatch.setattr(agents, "SHIPPED_DIR", tmp_path / "shipped")
+    with pytest.raises(ValueError, match=r"no shipped 'ppo' policy.*ppo:PATH"):
+        check_policy_spec("ppo")
+    _save(tmp_path / "shipped" / "ppo.safetensors")
+    assert make_policy("ppo").path == tmp_path / "shipped" / "ppo.safetensors"
+
+
+def test_bad_specs_are_refused_before_anything_runs(tmp_path):
+    with pytest.raises(ValueError, match="no such file"):
+        check_policy_spec(f"ppo:{tmp_path / 'missing.safetensors'}")
+    with pytest.raises(ValueError, match="not loaded from a file"):
+        check_policy_spec(f"ref:{tmp_path}")
+    from socialzoo.bench.experiment import BenchmarkConfig
+
+    with pytest.raises(ValueError, match=r"BenchmarkConfig\.policies: policy 'ppo:"):
+        BenchmarkConfig(policies=(f"ppo:{tmp_path / 'missing.safetensors'}",))
