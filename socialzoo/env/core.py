@@ -14,7 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from socialzoo.core.state import WorldState, pad_to
-from socialzoo.core.world import StepEvents, robot_velocity_vectors, step_world
+from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_agents import human_observations, human_rewards
 from socialzoo.env.metrics import EpisodeMetrics
