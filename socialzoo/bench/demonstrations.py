@@ -35,6 +35,7 @@ from socialzoo.agents.demonstrations import (
 )
 from socialzoo.bench.experiment import source_digest
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
+from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
 from socialzoo.nav.scenarios import TestSet
 from socialzoo.nav.subpolicies import ACTION_NAMES
@@ -75,9 +76,7 @@ class DemoConfig:
                 f"DemoConfig.policy: unknown policy {self.policy!r}; known: {', '.join(sorted(POLICIES))}"
             )
         for name, low in (("episodes", 1), ("chunk_episodes", 1), ("batch_size", 1), ("base_seed", 0)):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise ValueError(f"DemoConfig.{name} must be an int >= {low}, got {value!r}")
+            check_int("DemoConfig", name, getattr(self, name), low=low)
         if not isinstance(self.map, str) or not self.map:
             raise ValueError(f"DemoConfig.map must be a map name, got {self.map!r}")
 
