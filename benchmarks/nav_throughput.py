@@ -10,7 +10,7 @@ import numpy as np
 from _common import Figure, measure, parser, report, traced_peak_mib
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.maps import load_map

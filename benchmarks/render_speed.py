@@ -16,7 +16,7 @@ import numpy as np
 
 from socialzoo.core.config import LaserConfig, WorldConfig
 from socialzoo.core.laser import laser_scan
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav.graph import NavGraph
 from socialzoo.nav.maps import load_map
 from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state

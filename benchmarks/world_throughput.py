@@ -11,7 +11,7 @@ import numpy as np
 from _common import Figure, measure, parser, report, traced_peak_mib
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav.maps import load_map
 from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
 

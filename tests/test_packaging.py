@@ -43,4 +43,4 @@ def test_wheel_ships_the_maps(tmp_path):
     names = set(zipfile.ZipFile(wheel).namelist())
     shipped = {p.name for p in (ROOT / "maps").glob("*.json")}
     assert shipped and {f"socialzoo/_maps/{name}" for name in shipped} <= names
-    assert "socialzoo/core/world.py" in names
+    assert "socialzoo/env/world.py" in names

@@ -1,33 +1,21 @@
-"""Recording demonstrations of an engineered policy (Ref by default) for the imitation baselines:
-(obs, action, next_obs, reward, terminated, truncated, episode) transitions in compressed .npz files.
+"""The demonstration file format: (obs, action, next_obs, reward, terminated, truncated, episode)
+transitions of a demonstrating policy in a compressed .npz file, with a JSON metadata entry.
 
 A recording is written in chunks of episodes as it goes (FILE.parts/chunk_NNNNN.npz plus
-index.json), so a long recording survives an interruption and resumes; when every chunk is there
-they are merged into FILE and the parts are removed. Demonstration scenarios come from their own
-seeds, disjoint from the benchmark's test sets.
+index.json); when every chunk is there they are merged into FILE and the parts are removed.
+This module reads both forms, for the imitation baselines; the recorder that writes them is
+socialzoo.bench.demonstrations.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import inspect
 import json
-import logging
-import os
-import shutil
-from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-logger = logging.getLogger(__name__)
-
 DEMO_FORMAT = "socialzoo-demos/1"
-# Base seed of the demonstration scenarios; the test sets use 20220001 to 20220004.
-DEMO_BASE_SEED = 20220100
 # Per-transition arrays of a recording, in order.
 TRANSITION_KEYS = ("obs", "action", "next_obs", "reward", "terminated", "truncated", "episode")
 # Per-episode arrays.
@@ -38,250 +26,24 @@ class DemonstrationError(Exception):
     """A recording that cannot be resumed or read: another config, or damaged files."""
 
 
-@dataclass(frozen=True, kw_only=True)
-class DemoConfig:
-    """What to record.
-
-    Attributes:
-        policy: registry name of the demonstrating policy.
-        policy_kwargs: its make_policy keyword arguments.
-        map: map name; scenarios are drawn with the benchmark generator from their own seeds.
-        episodes: number of episodes (scenarios 0 .. episodes - 1 of the demonstration set).
-        base_seed: seed of the demonstration scenario set.
-        chunk_episodes: episodes per chunk file.
-        batch_size: env rows stepped together.
-        env_overrides: EnvConfig.replace keywords (plain JSON), e.g. {"max_steps": 1600}.
-    """
-
-    policy: str = "ref"
-    policy_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    map: str = "gdc1"
-    episodes: int = 100
-    base_seed: int = DEMO_BASE_SEED
-    chunk_episodes: int = 25
-    batch_size: int = 64
-    env_overrides: Mapping[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        from socialzoo.agents import POLICIES
-
-        if self.policy not in POLICIES:
-            raise ValueError(
-                f"DemoConfig.policy: unknown policy {self.policy!r}; known: {', '.join(sorted(POLICIES))}"
-            )
-        for name, low in (("episodes", 1), ("chunk_episodes", 1), ("batch_size", 1), ("base_seed", 0)):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise ValueError(f"DemoConfig.{name} must be an int >= {low}, got {value!r}")
-        if not isinstance(self.map, str) or not self.map:
-            raise ValueError(f"DemoConfig.map must be a map name, got {self.map!r}")
-
-    def to_json(self) -> dict[str, Any]:
-        data = dataclasses.asdict(self)
-        data["policy_kwargs"] = dict(self.policy_kwargs)
-        data["env_overrides"] = dict(self.env_overrides)
-        return data
-
-    def test_set(self) -> Any:
-        """The demonstration scenarios as a TestSet (name "<map>-demos")."""
-        from socialzoo.nav.scenarios import TestSet
-
-        return TestSet(self.map, self.base_seed, self.episodes, name=f"{Path(self.map).stem}-demos")
-
-
 def parts_dir(path: str | Path) -> Path:
     """Where the chunks of the recording `path` live while it is being written."""
     path = Path(path)
     return path.with_name(path.name + ".parts")
 
 
-def _metadata(config: DemoConfig) -> dict[str, Any]:
-    from socialzoo import __version__
-    from socialzoo.agents import make_policy
-    from socialzoo.agents.base import policy_config as policy_config_of
-    from socialzoo.bench.experiment import source_digest
-    from socialzoo.bench.runner import env_config_for
-    from socialzoo.env.observation import describe_observation
-    from socialzoo.nav.subpolicies import ACTION_NAMES
-
-    test_set = config.test_set()
-    env = env_config_for(test_set, **dict(config.env_overrides))
-    policy = make_policy(config.policy, **dict(config.policy_kwargs))
-    policy_config = policy_config_of(policy)
-    module_file = inspect.getsourcefile(type(policy))
-    identity = {
-        "code_sha256": source_digest((module_file,) if module_file else ()),
-        "config": config.to_json(),
-        "policy_config": policy_config,
-        "env_config": env.to_dict(),
-        "scenario_config": dataclasses.asdict(test_set.cfg),
-    }
-    digest = hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
-    return {
-        "format": DEMO_FORMAT,
-        "package_version": __version__,
-        "config_hash": digest,
-        **identity,
-        "test_set": {"name": test_set.name, "map": test_set.map_name, "base_seed": test_set.base_seed},
-        "scenario_seeds": [test_set.seed(k) for k in range(config.episodes)],
-        "observation_names": describe_observation(env.observation),
-        "action_names": list(ACTION_NAMES),
-    }
-
-
-def _write_npz(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
-    """Write a compressed .npz atomically (a killed write leaves no half file under `path`)."""
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("wb") as f:
-        np.savez_compressed(f, **arrays)
-    os.replace(tmp, path)
-
-
-def _write_json(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
-
-
-class _Recorder:
-    """Collects each row's transitions and closes an episode when its row finishes."""
-
-    def __init__(self) -> None:
-        self.rows: dict[int, list[tuple[Any, ...]]] = {}
-        self.episodes: dict[int, dict[str, np.ndarray]] = {}
-
-    def __call__(
-        self, core: Any, row_trial: list[Any], obs: np.ndarray, actions: np.ndarray, result: Any
-    ) -> None:
-        for row, trial in enumerate(row_trial):
-            if trial is None:
-                continue
-            buffer = self.rows.setdefault(row, [])
-            buffer.append(
-                (
-                    obs[row, 0],
-                    int(actions[row, 0]),
-                    result.obs[row, 0].copy(),
-                    float(result.reward[row, 0]),
-                    bool(result.terminated[row, 0]),
-                    bool(result.truncated[row, 0]),
-                )
-            )
-            if core.done[row].all():
-                steps = self.rows.pop(row)
-                self.episodes[trial.index] = {
-                    "obs": np.stack([s[0] for s in steps]).astype(np.float32),
-                    "action": np.array([s[1] for s in steps], dtype=np.int64),
-                    "next_obs": np.stack([s[2] for s in steps]).astype(np.float32),
-                    "reward": np.array([s[3] for s in steps], dtype=np.float32),
-                    "terminated": np.array([s[4] for s in steps], dtype=bool),
-                    "truncated": np.array([s[5] for s in steps], dtype=bool),
-                }
-
-
-def _chunk_arrays(
-    episodes: Mapping[int, Mapping[str, np.ndarray]], seeds: list[int]
-) -> dict[str, np.ndarray]:
-    ids = sorted(episodes)
-    out = {
-        key: np.concatenate([episodes[i][key] for i in ids]) for key in TRANSITION_KEYS if key != "episode"
-    }
-    lengths = np.array([len(episodes[i]["action"]) for i in ids], dtype=np.int64)
-    out["episode"] = np.repeat(np.array(ids, dtype=np.int64), lengths)
-    out["episode_ids"] = np.array(ids, dtype=np.int64)
-    out["episode_seeds"] = np.array([seeds[i] for i in ids], dtype=np.uint64)
-    out["episode_lengths"] = lengths
-    return out
-
-
-def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: bool = False) -> Path:
-    """Record (or resume, or confirm) a demonstration file.
-
-    Episodes run in chunks of config.chunk_episodes, batched; each finished chunk is written to
-    FILE.parts/ and listed in its index.json at once. A rerun with the same config skips the
-    chunks already written; once all are there they are merged into `path` and the parts are
-    removed. Calling again when `path` is complete does nothing.
+def read_parts(parts: Path) -> dict[str, np.ndarray]:
+    """The finished chunks of a recording in progress, concatenated in chunk order.
 
     Args:
-        path: the .npz file to produce.
-        config: what to record.
-        progress: show a progress bar of episodes.
+        parts: the recording's parts folder (parts_dir(path)).
 
     Returns:
-        `path`.
+        Arrays keyed by TRANSITION_KEYS and EPISODE_KEYS, as in load_demonstrations.
 
     Raises:
-        DemonstrationError: `path` or its parts hold a recording of another config.
+        DemonstrationError: no index.json, no finished chunk, or an unreadable chunk.
     """
-    from socialzoo.bench.runner import RunSpec, Trial, env_config_for
-
-    path = Path(path)
-    meta = _metadata(config)
-    if path.exists():
-        existing = read_metadata(path)
-        if existing.get("config_hash") != meta["config_hash"]:
-            raise DemonstrationError(
-                f"{path} holds a recording of another config (hash {existing.get('config_hash')!r}, "
-                f"this one {meta['config_hash']!r}); choose another file or remove it"
-            )
-        logger.info("%s is complete; nothing to record", path)
-        return path
-    parts = parts_dir(path)
-    parts.mkdir(parents=True, exist_ok=True)
-    index_path = parts / "index.json"
-    index = json.loads(index_path.read_text()) if index_path.exists() else {"metadata": meta, "chunks": {}}
-    if index["metadata"].get("config_hash") != meta["config_hash"]:
-        raise DemonstrationError(
-            f"{parts} holds a partial recording of another config; remove it or choose another file"
-        )
-    test_set = config.test_set()
-    spec = RunSpec(
-        test_sets={test_set.name: test_set},
-        env_configs={test_set.name: env_config_for(test_set, **dict(config.env_overrides))},
-        policies={config.policy: dict(config.policy_kwargs)},
-        batch_size=config.batch_size,
-    )
-    seeds = meta["scenario_seeds"]
-    num_chunks = -(-config.episodes // config.chunk_episodes)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=config.episodes, unit="episode", desc="demonstrations")
-    try:
-        for c in range(num_chunks):
-            lo, hi = c * config.chunk_episodes, min((c + 1) * config.chunk_episodes, config.episodes)
-            name = f"chunk_{c:05d}.npz"
-            if name in index["chunks"] and (parts / name).exists():
-                if bar is not None:
-                    bar.update(hi - lo)
-                continue
-            recorder = _Recorder()
-            from socialzoo.bench.runner import BatchedRunner
-
-            BatchedRunner(spec).run(
-                [Trial(config.policy, test_set.name, k) for k in range(lo, hi)],
-                on_results=(lambda batch: bar.update(len(batch))) if bar is not None else None,
-                on_step=recorder,
-            )
-            arrays = _chunk_arrays(recorder.episodes, seeds)
-            arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-            _write_npz(parts / name, arrays)
-            index["chunks"][name] = {"episodes": [lo, hi], "steps": len(arrays["action"])}
-            _write_json(index_path, index)
-            logger.info("demonstrations: wrote %s (episodes %d-%d)", parts / name, lo, hi - 1)
-    finally:
-        if bar is not None:
-            bar.close()
-    data = _read_parts(parts)
-    data["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-    _write_npz(path, data)
-    shutil.rmtree(parts)
-    logger.info("demonstrations: %s, %d episodes, %d steps", path, config.episodes, len(data["action"]))
-    return path
-
-
-def _read_parts(parts: Path) -> dict[str, np.ndarray]:
     index_path = parts / "index.json"
     if not index_path.exists():
         raise DemonstrationError(f"{parts}: no index.json; not a demonstration recording")
@@ -328,5 +90,5 @@ def load_demonstrations(path: str | Path) -> tuple[dict[str, np.ndarray], dict[s
     parts = parts_dir(path)
     if not parts.exists():
         raise DemonstrationError(f"{path}: no such demonstration file (nor {parts})")
-    arrays = _read_parts(parts)
+    arrays = read_parts(parts)
     return arrays, json.loads((parts / "index.json").read_text())["metadata"]

@@ -16,6 +16,7 @@ import numpy as np
 
 from socialzoo.agents.base import check_observations
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.validation import check_fields, check_number
 from socialzoo.nav.subpolicies import FOLLOW, GO_ALONE, HALT
 
 if TYPE_CHECKING:
@@ -43,19 +44,6 @@ class GoAlone:
         return {}
 
 
-def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> None:
-    if (
-        not isinstance(value, (int, float))
-        or isinstance(value, bool)
-        or not math.isfinite(value)
-        or value < 0
-        or (value == 0 and not allow_zero)
-    ):
-        raise ValueError(
-            f"RefConfig.{name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}"
-        )
-
-
 @dataclass(frozen=True, kw_only=True)
 class RefConfig:
     """Parameters of the reference policy (SPEC section 10).
@@ -78,14 +66,8 @@ class RefConfig:
     still_speed: float = 0.1
 
     def __post_init__(self) -> None:
-        for name in ("corridor_half_width", "heading_tolerance", "sector_deg"):
-            _check_positive(name, getattr(self, name))
-        for name in ("lookahead_margin", "still_speed"):
-            _check_positive(name, getattr(self, name), allow_zero=True)
-        if self.sector_deg > 90.0:
-            raise ValueError(
-                f"RefConfig.sector_deg must be at most 90 (humans ahead), got {self.sector_deg!r}"
-            )
+        check_fields(self, nonnegative=("lookahead_margin", "still_speed"))
+        check_number("RefConfig", "sector_deg", self.sector_deg, high=90)  # humans ahead only
 
 
 def ref_actions(

@@ -164,12 +164,8 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 
 def run_demos_command(args: argparse.Namespace) -> int:
     """Run `socialzoo demos`; returns the exit status."""
-    from socialzoo.agents.demonstrations import (
-        DemoConfig,
-        DemonstrationError,
-        load_demonstrations,
-        record_demonstrations,
-    )
+    from socialzoo.agents.demonstrations import DemonstrationError, load_demonstrations
+    from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
 
     overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
     try:

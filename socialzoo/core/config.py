@@ -5,30 +5,9 @@ Frozen keyword-only dataclasses validated on construction; override with datacla
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import dataclass, field
 
-
-def _check(
-    cls_name: str, name: str, value: float, *, positive: bool = True, allow_zero: bool = False
-) -> None:
-    """Raise ValueError naming the field when a number is not finite or out of range."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-        raise ValueError(f"{cls_name}.{name} must be a finite number, got {value!r}")
-    if positive and (value < 0 or (value == 0 and not allow_zero)):
-        raise ValueError(f"{cls_name}.{name} must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-
-
-def _check_all(obj: Any, *, nonnegative: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
-    """Validate every float field of a config dataclass: positive unless listed otherwise."""
-    for f in fields(obj):
-        value = getattr(obj, f.name)
-        if f.type in ("float", "int") or isinstance(value, float):
-            if f.name in signed:
-                _check(type(obj).__name__, f.name, value, positive=False)
-            else:
-                _check(type(obj).__name__, f.name, value, allow_zero=f.name in nonnegative)
+from socialzoo.core.validation import check_fields, check_number
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -52,7 +31,7 @@ class RobotConfig:
     max_speed: float = 2.25
 
     def __post_init__(self) -> None:
-        _check_all(self)
+        check_fields(self)
 
     @property
     def half_length(self) -> float:
@@ -104,7 +83,7 @@ class HumanConfig:
     waypoint_radius: float = 1.0
 
     def __post_init__(self) -> None:
-        _check_all(self, nonnegative=("obstacle_strength", "social_strength"))
+        check_fields(self, nonnegative=("obstacle_strength", "social_strength"))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -124,11 +103,8 @@ class LaserConfig:
     noise_std: float = 0.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.num_rays, int) or self.num_rays < 1:
-            raise ValueError(f"LaserConfig.num_rays must be a positive int, got {self.num_rays!r}")
-        _check_all(self, nonnegative=("noise_std",))
-        if self.fov_deg > 360.0:
-            raise ValueError(f"LaserConfig.fov_deg must be <= 360, got {self.fov_deg!r}")
+        check_fields(self, nonnegative=("noise_std",))
+        check_number("LaserConfig", "fov_deg", self.fov_deg, high=360)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -150,5 +126,7 @@ class WorldConfig:
     human_collision_distance: float = 0.4
 
     def __post_init__(self) -> None:
-        _check("WorldConfig", "dt", self.dt)
-        _check("WorldConfig", "human_collision_distance", self.human_collision_distance)
+        check_number("WorldConfig", "dt", self.dt, low=0, low_open=True)
+        check_number(
+            "WorldConfig", "human_collision_distance", self.human_collision_distance, low=0, low_open=True
+        )

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig, WorldConfig
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig
 from socialzoo.env.reward import RewardConfig
@@ -80,16 +81,13 @@ class EnvConfig:
             ("learned_humans", 0),
             ("human_neighbours", 0),
         ):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise ValueError(f"EnvConfig.{name} must be an int >= {low}, got {value!r}")
+            check_int("EnvConfig", name, getattr(self, name), low=low)
         if self.learned_humans > self.max_humans:
             raise ValueError(
                 f"EnvConfig.learned_humans ({self.learned_humans}) exceeds the human slots "
                 f"(scenario.max_humans = {self.max_humans})"
             )
-        if not isinstance(self.goal_radius, (int, float)) or not self.goal_radius > 0:
-            raise ValueError(f"EnvConfig.goal_radius must be > 0, got {self.goal_radius!r}")
+        check_number("EnvConfig", "goal_radius", self.goal_radius, low=0, low_open=True)
         if self.robot_action not in get_args(RobotAction):
             raise ValueError(
                 f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"

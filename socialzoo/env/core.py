@@ -14,12 +14,12 @@ from functools import cached_property
 import numpy as np
 
 from socialzoo.core.state import WorldState, pad_to
-from socialzoo.core.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_agents import human_observations, human_rewards
 from socialzoo.env.metrics import EpisodeMetrics
 from socialzoo.env.observation import build_observation
 from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
+from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.maps import Map, load_map

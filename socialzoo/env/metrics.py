@@ -31,13 +31,13 @@ Definitions (every distance between centres, in metres; times in seconds):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.validation import check_fields, check_int
 
 # Columns of the per-row running sums.
 _SUM_COLUMNS = (
@@ -97,14 +97,7 @@ class MetricsConfig:
     human_radius: float = 0.2
 
     def __post_init__(self) -> None:
-        for name in ("personal_space", "human_radius"):
-            value = getattr(self, name)
-            if (
-                not isinstance(value, (int, float))
-                or isinstance(value, bool)
-                or not (math.isfinite(value) and value >= 0)
-            ):
-                raise ValueError(f"MetricsConfig.{name} must be a finite number >= 0, got {value!r}")
+        check_fields(self, nonnegative=("personal_space", "human_radius"))
 
     @property
     def intrusion_distance(self) -> float:
@@ -125,8 +118,7 @@ class EpisodeMetrics:
     """
 
     def __init__(self, batch_size: int, config: MetricsConfig | None = None) -> None:
-        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
-            raise ValueError(f"EpisodeMetrics.batch_size must be an int >= 1, got {batch_size!r}")
+        check_int("EpisodeMetrics", "batch_size", batch_size, low=1)
         self.batch_size = batch_size
         self.config = config or MetricsConfig()
         b = batch_size

@@ -5,12 +5,12 @@ Pure batched functions over B worlds; the weights live in RewardConfig.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from socialzoo.core.geometry import closest_point_on_segment
+from socialzoo.core.validation import check_fields
 
 try:
     from scipy.special import erf as _scipy_erf
@@ -66,12 +66,7 @@ class RewardConfig:
     blame_horizon: float = 0.5
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-                raise ValueError(f"RewardConfig.{f.name} must be a finite number, got {value!r}")
-        if self.blame_horizon <= 0:
-            raise ValueError(f"RewardConfig.blame_horizon must be > 0, got {self.blame_horizon!r}")
+        check_fields(self, signed=[f.name for f in fields(self) if f.name != "blame_horizon"])
 
 
 def _nearest_distance2(

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.validation import check_number
 from socialzoo.nav.maps import MapError
 
 logger = logging.getLogger(__name__)
@@ -98,12 +99,6 @@ def read_vector_map(path: str | os.PathLike[str]) -> np.ndarray:
     return drop_zero_length(read_table(path, 4, "x1, y1, x2, y2"), os.fspath(path))
 
 
-def _number(value: Any, where: str, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise MapError(f"{where}: {what} must be a finite number, got {value!r}")
-    return float(value)
-
-
 def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     """Read an AMRL navigation-graph JSON file.
 
@@ -138,7 +133,9 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
             raise MapError(f"{entry}: node id {node['id']!r} repeats nodes[{index_of[node['id']]}]")
         loc = node["loc"]
         index_of[node["id"]] = len(nodes)
-        nodes.append((_number(loc.get("x"), entry, "loc.x"), _number(loc.get("y"), entry, "loc.y")))
+        x = check_number(f"{entry}: loc", "x", loc.get("x"), error=MapError)
+        y = check_number(f"{entry}: loc", "y", loc.get("y"), error=MapError)
+        nodes.append((float(x), float(y)))
     edges: set[tuple[int, int]] = set()
     for k, edge in enumerate(raw_edges):
         entry = f"{where}: edges[{k}]"

@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from socialzoo.core.jit import kernel
+from socialzoo.core.validation import check_int, check_number
 
 logger = logging.getLogger(__name__)
 
@@ -246,14 +247,10 @@ class Navigator:
         max_skip: int | None = 0,
         tolerance: float = 0.3,
     ) -> None:
-        if carrot_radius <= 0:
-            raise ValueError(f"Navigator carrot_radius must be > 0, got {carrot_radius!r}")
-        if replan_distance <= 0:
-            raise ValueError(f"Navigator replan_distance must be > 0, got {replan_distance!r}")
-        if max_skip is not None and (not isinstance(max_skip, int) or max_skip < 0):
-            raise ValueError(f"Navigator max_skip must be None or an int >= 0, got {max_skip!r}")
-        if tolerance < 0:
-            raise ValueError(f"Navigator tolerance must be >= 0, got {tolerance!r}")
+        check_number("Navigator", "carrot_radius", carrot_radius, low=0, low_open=True)
+        check_number("Navigator", "replan_distance", replan_distance, low=0, low_open=True)
+        check_int("Navigator", "max_skip", max_skip, low=0, allow_none=True)
+        check_number("Navigator", "tolerance", tolerance, low=0)
         self.graph = graph
         self.carrot_radius = carrot_radius
         self.replan_distance = replan_distance

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
+
+from socialzoo.core.validation import check_fields, check_number
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -80,19 +81,10 @@ class LocalPlannerConfig:
     field_resolution: float = 0.025
 
     def __post_init__(self) -> None:
-        signed = {"curvature_min", "curvature_max"}
         nonnegative = {"obstacle_margin", "progress_weight", "free_path_weight", "escape_slack", "near_range"}
         nonnegative |= {"human_lookahead"}
         nonnegative |= {"turn_in_place_max_speed", "turn_in_place_angle_deg"}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-                raise ValueError(f"LocalPlannerConfig.{f.name} must be a finite number, got {value!r}")
-            if f.name in signed:
-                continue
-            if value < 0 or (value == 0 and f.name not in nonnegative):
-                limit = ">= 0" if f.name in nonnegative else "> 0"
-                raise ValueError(f"LocalPlannerConfig.{f.name} must be {limit}, got {value!r}")
+        check_fields(self, nonnegative=nonnegative, signed=("curvature_min", "curvature_max"))
         if self.curvature_min >= self.curvature_max:
             raise ValueError(
                 f"LocalPlannerConfig.curvature_min ({self.curvature_min!r}) must be below "
@@ -104,11 +96,7 @@ class LocalPlannerConfig:
                 f"LocalPlannerConfig.curvature_step ({self.curvature_step!r}) must divide "
                 f"curvature_max - curvature_min ({self.curvature_max - self.curvature_min!r})"
             )
-        if self.turn_in_place_angle_deg > 180.0:
-            raise ValueError(
-                "LocalPlannerConfig.turn_in_place_angle_deg must be <= 180, "
-                f"got {self.turn_in_place_angle_deg!r}"
-            )
+        check_number("LocalPlannerConfig", "turn_in_place_angle_deg", self.turn_in_place_angle_deg, high=180)
         if self.min_wall_distance > self.wall_distance:
             raise ValueError(
                 f"LocalPlannerConfig.min_wall_distance ({self.min_wall_distance!r}) exceeds "

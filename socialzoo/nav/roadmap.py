@@ -19,6 +19,7 @@ import numpy as np
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
+from socialzoo.core.validation import check_fields, check_int, check_number
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.maps import (
     NODE_CLEARANCE,
@@ -80,34 +81,14 @@ class RoadmapConfig:
     good_clearance: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in (
-            "resolution",
-            "free_clearance",
-            "closing_radius",
-            "node_clearance",
-            "min_spacing",
-            "max_spacing",
-            "spacing_per_clearance",
-            "edge_clearance",
-            "max_edge_length",
-            "pose_clearance",
-            "good_clearance",
-        ):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"RoadmapConfig.{name} must be a positive number, got {value!r}")
-        if self.margin < 0 or self.pose_separation < 0:
-            raise ValueError(f"RoadmapConfig.margin and pose_separation must be >= 0, got {self}")
+        check_fields(self, nonnegative=("margin", "pose_separation"))
         if self.min_spacing > self.max_spacing:
             raise ValueError(
                 f"RoadmapConfig.min_spacing {self.min_spacing} exceeds max_spacing {self.max_spacing}"
             )
-        if self.edge_clearance > 0.5:
-            raise ValueError(f"RoadmapConfig.edge_clearance must be <= 0.5 m, got {self.edge_clearance}")
-        if self.detour_tolerance < 1.0:
-            raise ValueError(f"RoadmapConfig.detour_tolerance must be >= 1, got {self.detour_tolerance}")
-        if self.num_poses < 2:
-            raise ValueError(f"RoadmapConfig.num_poses must be >= 2, got {self.num_poses}")
+        check_number("RoadmapConfig", "edge_clearance", self.edge_clearance, high=0.5)
+        check_number("RoadmapConfig", "detour_tolerance", self.detour_tolerance, low=1)
+        check_int("RoadmapConfig", "num_poses", self.num_poses, low=2)
         if self.node_clearance < NODE_CLEARANCE or self.pose_clearance < POSE_CLEARANCE:
             raise ValueError(
                 f"RoadmapConfig.node_clearance and pose_clearance must be at least the validation "

@@ -10,7 +10,6 @@ bit for bit.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from socialzoo.core.state import WorldState
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.graph import NoPathError, graph_of, segments_free
 from socialzoo.nav.maps import Map
@@ -26,18 +26,6 @@ from socialzoo.nav.maps import Map
 SCENARIO_FORMAT = "socialzoo-scenario/1"
 # Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).
 _NOISE_STREAM = 0x6E6F697365  # "noise"
-
-
-def _check_number(name: str, value: Any, *, minimum: float = 0.0, strict: bool = False) -> None:
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-        raise ValueError(f"ScenarioConfig.{name} must be a finite number, got {value!r}")
-    if value < minimum or (strict and value == minimum):
-        raise ValueError(f"ScenarioConfig.{name} must be {'>' if strict else '>='} {minimum}, got {value!r}")
-
-
-def _check_int(name: str, value: Any, minimum: int) -> None:
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < minimum:
-        raise ValueError(f"ScenarioConfig.{name} must be an int >= {minimum}, got {value!r}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -66,18 +54,16 @@ class ScenarioConfig:
     spawn_tries: int = 10
 
     def __post_init__(self) -> None:
-        _check_int("min_humans", self.min_humans, 0)
-        _check_int("max_humans", self.max_humans, 0)
-        _check_int("repeats", self.repeats, 1)
-        _check_int("spawn_tries", self.spawn_tries, 1)
+        for name, low in (("min_humans", 0), ("max_humans", 0), ("repeats", 1), ("spawn_tries", 1)):
+            check_int("ScenarioConfig", name, getattr(self, name), low=low)
         if self.min_humans > self.max_humans:
             raise ValueError(
                 f"ScenarioConfig.min_humans ({self.min_humans}) exceeds max_humans ({self.max_humans})"
             )
         for name in ("spawn_jitter", "speed_std", "spawn_clearance"):
-            _check_number(name, getattr(self, name))
+            check_number("ScenarioConfig", name, getattr(self, name), low=0.0)
         for name in ("speed_mean", "min_speed", "max_speed"):
-            _check_number(name, getattr(self, name), strict=True)
+            check_number("ScenarioConfig", name, getattr(self, name), low=0.0, low_open=True)
         if self.min_speed > self.max_speed:
             raise ValueError(
                 f"ScenarioConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})"
@@ -409,10 +395,8 @@ class TestSet:
     name: str = ""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.count, int) or self.count < 0:
-            raise ValueError(f"TestSet.count must be an int >= 0, got {self.count!r}")
-        if not isinstance(self.base_seed, int) or self.base_seed < 0:
-            raise ValueError(f"TestSet.base_seed must be an int >= 0, got {self.base_seed!r}")
+        check_int("TestSet", "count", self.count, low=0)
+        check_int("TestSet", "base_seed", self.base_seed, low=0)
 
     def __len__(self) -> int:
         return self.count

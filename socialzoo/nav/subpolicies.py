@@ -14,6 +14,7 @@ import numpy as np
 
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.validation import check_fields
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.local_planner import LocalPlannerConfig, plan_commands
@@ -66,20 +67,8 @@ class SubPolicyConfig:
             raise ValueError(
                 f"SubPolicyConfig.pass_direction must be 'carrot' or 'heading', got {self.pass_direction!r}"
             )
-        for f in fields(self):
-            if f.name == "pass_direction":
-                continue
-            value = getattr(self, f.name)
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-                raise ValueError(f"SubPolicyConfig.{f.name} must be a finite number, got {value!r}")
-            if f.name.endswith("clearance_weight"):
-                continue
-            if value < 0 or (value == 0 and f.name not in ("heading_match_deg", "still_speed")):
-                raise ValueError(f"SubPolicyConfig.{f.name} must be positive, got {value!r}")
-        if not isinstance(self.num_candidates, int):
-            raise ValueError(f"SubPolicyConfig.num_candidates must be an int, got {self.num_candidates!r}")
-        if self.num_candidates < 1:
-            raise ValueError(f"SubPolicyConfig.num_candidates must be >= 1, got {self.num_candidates!r}")
+        signed = [f.name for f in fields(self) if f.name.endswith("clearance_weight")]
+        check_fields(self, nonnegative=("heading_match_deg", "still_speed"), signed=signed)
 
 
 def check_actions(action: np.ndarray, num_rows: int) -> np.ndarray:

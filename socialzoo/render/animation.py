@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from socialzoo.core.validation import check_int, check_number
+
 GIF_SUFFIXES = (".gif",)
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".mkv", ".avi", ".webm")
 
@@ -55,10 +57,8 @@ def write_animation(
         raise ValueError(
             f"write_animation: unknown suffix {path.suffix!r} of {path}; use .gif or one of {VIDEO_SUFFIXES}"
         )
-    if not (isinstance(fps, (int, float)) and fps > 0 and np.isfinite(fps)):
-        raise ValueError(f"write_animation: fps must be a positive number, got {fps!r}")
-    if not isinstance(stride, int) or isinstance(stride, bool) or stride < 1:
-        raise ValueError(f"write_animation: stride must be an int >= 1, got {stride!r}")
+    check_number("write_animation", "fps", fps, low=0, low_open=True)
+    check_int("write_animation", "stride", stride, low=1)
     if suffix in VIDEO_SUFFIXES and importlib.util.find_spec("imageio_ffmpeg") is None:
         raise ImportError(
             f"writing {path.name} needs the ffmpeg plugin of imageio: `pip install imageio-ffmpeg`, "

@@ -16,6 +16,7 @@ import numpy as np
 from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig
 from socialzoo.core.laser import ray_angles
 from socialzoo.core.state import WorldState
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.nav.maps import Map
 
 if TYPE_CHECKING:
@@ -154,15 +155,11 @@ class FrameRenderer:
     ) -> None:
         if view not in ("follow", "map"):
             raise ValueError(f"FrameRenderer.view must be 'follow' or 'map', got {view!r}")
-        for name, value in (("width", width), ("height", height)):
-            if not isinstance(value, int) or value < 16:
-                raise ValueError(f"FrameRenderer.{name} must be an int >= 16, got {value!r}")
-        if not view_radius > 0:
-            raise ValueError(f"FrameRenderer.view_radius must be > 0, got {view_radius!r}")
-        if not isinstance(antialias, int) or not 1 <= antialias <= 4:
-            raise ValueError(f"FrameRenderer.antialias must be an int in 1..4, got {antialias!r}")
-        if not isinstance(trail_length, int) or trail_length < 0:
-            raise ValueError(f"FrameRenderer.trail_length must be an int >= 0, got {trail_length!r}")
+        check_int("FrameRenderer", "width", width, low=16)
+        check_int("FrameRenderer", "height", height, low=16)
+        check_number("FrameRenderer", "view_radius", view_radius, low=0, low_open=True)
+        check_int("FrameRenderer", "antialias", antialias, low=1, high=4)
+        check_int("FrameRenderer", "trail_length", trail_length, low=0)
         self.map = map
         self.width = width
         self.height = height

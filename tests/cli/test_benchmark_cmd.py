@@ -1,12 +1,11 @@
-"""`socialzoo benchmark` end to end on tiny runs, and `socialzoo demos` (recording, resuming)."""
+"""`socialzoo benchmark` end to end on tiny runs, and `socialzoo demos`."""
 
 import json
 
 import numpy as np
 import pytest
 
-from socialzoo.agents import demonstrations
-from socialzoo.agents.demonstrations import DemoConfig, load_demonstrations, parts_dir, record_demonstrations
+from socialzoo.agents.demonstrations import load_demonstrations, parts_dir
 from socialzoo.cli import main as socialzoo_main
 
 
@@ -78,35 +77,3 @@ def test_demos_command(tmp_path, rooms_path, capsys):
     assert (arrays["terminated"] | arrays["truncated"]).sum() == 3
     assert meta["policy_config"]["corridor_half_width"] == 0.62 and len(meta["scenario_seeds"]) == 3
     assert not parts_dir(out).exists()
-
-
-def test_interrupted_recording_resumes(tmp_path, rooms_path, monkeypatch):
-    config = DemoConfig(
-        map=rooms_path, episodes=5, chunk_episodes=2, batch_size=2, env_overrides={"max_steps": 50}
-    )
-    whole = record_demonstrations(tmp_path / "whole.npz", config)
-
-    real_write = demonstrations._write_npz
-    calls = []
-
-    def dying_write(path, arrays):
-        calls.append(path)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        real_write(path, arrays)
-
-    monkeypatch.setattr(demonstrations, "_write_npz", dying_write)
-    target = tmp_path / "resumed.npz"
-    with pytest.raises(KeyboardInterrupt):
-        record_demonstrations(target, config)
-    monkeypatch.setattr(demonstrations, "_write_npz", real_write)
-    partial, _ = load_demonstrations(target)  # the finished chunk is readable already
-    assert partial["episode_ids"].tolist() == [0, 1]
-    record_demonstrations(target, config)
-    a, meta_a = load_demonstrations(whole)
-    b, meta_b = load_demonstrations(target)
-    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
-    assert meta_a["config_hash"] == meta_b["config_hash"]
-    other = DemoConfig(map=rooms_path, episodes=4, chunk_episodes=2, env_overrides={"max_steps": 50})
-    with pytest.raises(demonstrations.DemonstrationError, match="another config"):
-        record_demonstrations(target, other)

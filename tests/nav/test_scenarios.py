@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav import maps
 from socialzoo.nav.graph import NoPathError, segments_free
 from socialzoo.nav.maps import Map

@@ -10,7 +10,7 @@ import pytest
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.navigator import Navigator

@@ -1,7 +1,8 @@
 """The world step: robots and humans of B worlds advance one dt together.
 
 This is the one copy of the dynamics. Every adapter (ParallelEnv, the single-agent benchmark,
-vector envs, the evaluation runner) calls `step_world`.
+vector envs, the evaluation runner) calls `step_world`. It joins the robot kinematics (core) and
+the human model (humans), so it lives above both, in env.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.geometry import segments_intersect
-from socialzoo.core.world import step_world
+from socialzoo.env.world import step_world
 from socialzoo.nav.maps import load_map
 from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
 

@@ -1,0 +1,139 @@
+"""Checks of "a finite number in range" for config dataclasses and input files, with one wording.
+
+Messages name the owner and the field and show the bad value, e.g.
+"ScenarioConfig.min_speed must be > 0.0, got 0.0" or "EnvConfig.max_steps must be an int >= 1, got 0".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+from dataclasses import fields
+from typing import Any
+
+# Field annotations (as written, or as strings under `from __future__ import annotations`) that
+# `check_fields` checks.
+_FLOAT_TYPES: tuple[Any, ...] = (float, "float")
+_INT_TYPES: tuple[Any, ...] = (int, "int")
+
+
+def _range_text(low: float | None, high: float | None, low_open: bool, high_open: bool) -> str:
+    """The allowed range in words: ">= 0", "> 0", "<= 360" or "in (0, 90]"; "" for any."""
+    if low is not None and high is not None:
+        return f"in {'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+    if low is not None:
+        return f"{'>' if low_open else '>='} {low}"
+    if high is not None:
+        return f"{'<' if high_open else '<='} {high}"
+    return ""
+
+
+def check_number(
+    owner: str,
+    field: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    integer: bool = False,
+    allow_none: bool = False,
+    error: type[ValueError] = ValueError,
+) -> Any:
+    """Check that `value` is a finite number (an int with `integer`) within [low, high].
+
+    bool is not a number here. A float field takes ints and floats (numpy float64 included);
+    an int field takes Python ints only, so that configs stay plain JSON.
+
+    Args:
+        owner: who owns the value, usually the class name ("ScenarioConfig"), or a file entry.
+        field: the field's name; messages say "owner.field".
+        value: the value to check.
+        low: lower bound, or None for none.
+        high: upper bound, or None for none.
+        low_open: the lower bound itself is refused (value > low).
+        high_open: the upper bound itself is refused (value < high).
+        integer: the value must be an int.
+        allow_none: None passes.
+        error: the exception class raised (a ValueError).
+
+    Returns:
+        `value`, unchanged.
+
+    Raises:
+        ValueError (or `error`): naming owner.field, the allowed range and the bad value.
+    """
+    if value is None and allow_none:
+        return value
+    rng = _range_text(low, high, low_open, high_open)
+    or_none = " or None" if allow_none else ""
+    if integer:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+        if ok and not _in_range(value, low, high, low_open, high_open):
+            ok = False
+        if not ok:
+            kind = f"an int {rng}" if rng else "an int"
+            raise error(f"{owner}.{field} must be {kind}{or_none}, got {value!r}")
+        return value
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise error(f"{owner}.{field} must be a finite number{or_none}, got {value!r}")
+    if not _in_range(value, low, high, low_open, high_open):
+        raise error(f"{owner}.{field} must be {rng}, got {value!r}")
+    return value
+
+
+def _in_range(value: float, low: float | None, high: float | None, low_open: bool, high_open: bool) -> bool:
+    if low is not None and (value < low or (low_open and value == low)):
+        return False
+    return not (high is not None and (value > high or (high_open and value == high)))
+
+
+def check_int(
+    owner: str,
+    field: str,
+    value: Any,
+    *,
+    low: int | None = None,
+    high: int | None = None,
+    allow_none: bool = False,
+    error: type[ValueError] = ValueError,
+) -> Any:
+    """Check that `value` is an int (not a bool) within [low, high]; see `check_number`.
+
+    Returns:
+        `value`, unchanged.
+
+    Raises:
+        ValueError (or `error`): "owner.field must be an int >= low, got value".
+    """
+    return check_number(
+        owner, field, value, low=low, high=high, integer=True, allow_none=allow_none, error=error
+    )
+
+
+def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collection[str] = ()) -> None:
+    """Check every number field of a config dataclass: finite and > 0 unless listed otherwise.
+
+    Number fields are those annotated `float` or `int` (an int field must hold an int); fields of
+    other types are left to the caller.
+
+    Args:
+        obj: the dataclass instance; messages name its class.
+        nonnegative: fields that may also be 0.
+        signed: fields that may be any finite number.
+
+    Raises:
+        ValueError: the first bad field, as `check_number` words it.
+        TypeError: `nonnegative` or `signed` names a field `obj` does not have as a number field.
+    """
+    owner = type(obj).__name__
+    numbers = {f.name: f.type in _INT_TYPES for f in fields(obj) if f.type in _FLOAT_TYPES + _INT_TYPES}
+    unknown = (set(nonnegative) | set(signed)) - set(numbers)
+    if unknown:
+        raise TypeError(f"check_fields({owner}): not number fields: {sorted(unknown)}")
+    for name, integer in numbers.items():
+        low = None if name in signed else 0
+        check_number(
+            owner, name, getattr(obj, name), low=low, low_open=name not in nonnegative, integer=integer
+        )
