@@ -36,7 +36,10 @@ _NESTED: dict[str, type] = {
 _WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "laser": LaserConfig}
 # Fields that were renamed: old name -> new name. An old name is refused with a message that
 # names its successor, rather than ignored or reported as merely unknown.
-RENAMED_FIELDS: dict[str, str] = {"learned_humans": "num_learned_humans"}
+RENAMED_FIELDS: dict[str, str] = {
+    "learned_humans": "num_learned_humans",
+    "human_neighbours": "num_human_neighbours",
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -53,7 +56,8 @@ class EnvConfig:
         num_learned_humans: number of human slots (human_0 .. human_{k-1}) driven by a learner;
             the others follow their scripted social-force policy. (Called learned_humans before;
             the old name is refused.)
-        human_neighbours: neighbours (humans and robots) in a learned human's observation.
+        num_human_neighbours: neighbours (humans and robots) in a learned human's observation.
+            (Called human_neighbours before; the old name is refused.)
         human_collision_penalty: a learned human's reward per step in contact with anyone.
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
             family name (socialzoo.nav.scenario_families.FAMILIES).
@@ -66,7 +70,7 @@ class EnvConfig:
     goal_radius: float = 0.5
     robot_action: RobotAction = "subpolicy"
     num_learned_humans: int = 0
-    human_neighbours: int = 6
+    num_human_neighbours: int = 6
     human_collision_penalty: float = 1.0
     family: str | None = None
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -84,7 +88,7 @@ class EnvConfig:
             ("num_robots", 1),
             ("max_steps", 1),
             ("num_learned_humans", 0),
-            ("human_neighbours", 0),
+            ("num_human_neighbours", 0),
         ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:

@@ -388,7 +388,7 @@ class SocialNavCore:
         ).reshape(b, r, -1)
         self.obs[rows] = obs[rows]
         if len(self.learned):
-            human_obs = human_observations(s, self.walls, self.learned, self.config.human_neighbours)
+            human_obs = human_observations(s, self.walls, self.learned, self.config.num_human_neighbours)
             if self.human_obs is None:
                 self.human_obs = human_obs
             else:

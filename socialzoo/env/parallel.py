@@ -125,7 +125,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         self.possible_agents = self.robots + self.humans
         self.agents: list[str] = []
         self.observation_spaces = {a: observation_space(cfg.observation) for a in self.robots}
-        human_size = human_observation_size(cfg.human_neighbours)
+        human_size = human_observation_size(cfg.num_human_neighbours)
         for a in self.humans:
             self.observation_spaces[a] = spaces.Box(-np.inf, np.inf, (human_size,), dtype=np.float32)
         self.action_spaces = {a: self._robot_action_space() for a in self.robots}
