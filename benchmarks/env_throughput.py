@@ -42,7 +42,7 @@ def vector(map_name: str, batch: int):
 
 
 def parallel(map_name: str):
-    env = parallel_env(map=map_name, num_robots=4, learned_humans=8, episode_info=False, **CROWD)
+    env = parallel_env(map=map_name, num_robots=4, num_learned_humans=8, episode_info=False, **CROWD)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
 

@@ -17,17 +17,18 @@ import numpy as np
 from socialzoo.agents.base import check_observations
 from socialzoo.core.geometry import wrap_angle
 from socialzoo.core.validation import check_fields, check_number
+from socialzoo.env.observation import (
+    PAPER_TARGET,
+    SLOT_POS,
+    paper_human_velocity,
+    paper_num_slots,
+    paper_slot_seen,
+    paper_slots,
+)
 from socialzoo.nav.subpolicies import FOLLOW, GO_ALONE, HALT
 
 if TYPE_CHECKING:
     from socialzoo.env.core import SocialNavCore
-
-# The paper observation layout (socialzoo.env.observation): goal (0:2), local target (2:4), robot
-# (v, omega) (4:6), previous action (6), then slots of (x, y, vx, vy).
-_TARGET = slice(2, 4)
-_ROBOT_V = 4
-_HEADER = 7
-_SLOT = 4
 
 
 class GoAlone:
@@ -119,27 +120,20 @@ def ref_actions(
 def ref_inputs_from_paper_obs(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """`ref_actions`' inputs from paper-layout observations (N, 7 + 4K).
 
-    Slots hold positions and velocities relative to the robot; the robot's own velocity in its
-    frame is (v, 0), so a human's velocity in robot axes is the slot's (vx + v, vy). A slot is
-    seen when its position is not zero (empty and occluded slots are all zero; a visible human
-    at exactly the robot's centre cannot happen).
+    The layout is read through socialzoo.env.observation's named pieces: positions are the
+    slots' SLOT_POS, velocities the humans' own (`paper_human_velocity`), seen slots those with a
+    non-zero position (`paper_slot_seen`), the target PAPER_TARGET.
 
     Raises:
         ValueError: the width is not 7 + 4K.
     """
-    width = obs.shape[-1]
-    if width < _HEADER or (width - _HEADER) % _SLOT:
-        raise ValueError(
-            f"Ref: a paper-layout observation has 7 + 4K numbers, got {width}; "
-            "for another layout pass the core (Ref.act(obs, core))"
-        )
+    try:
+        paper_num_slots(obs.shape[-1])
+    except ValueError as err:
+        raise ValueError(f"Ref: {err}; for another layout pass the core (Ref.act(obs, core))") from None
     obs = obs.astype(np.float64)
-    slots = obs[:, _HEADER:].reshape(len(obs), -1, _SLOT)
-    xy = slots[..., 0:2]
-    vel = slots[..., 2:4].copy()
-    vel[..., 0] += obs[:, _ROBOT_V, None]
-    seen = (xy != 0.0).any(axis=-1)
-    return xy, vel, seen, obs[:, _TARGET]
+    xy = paper_slots(obs)[..., SLOT_POS]
+    return xy, paper_human_velocity(obs), paper_slot_seen(obs), obs[:, PAPER_TARGET]
 
 
 def ref_inputs_from_core(core: SocialNavCore) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -153,7 +153,7 @@ class BenchmarkResult:
 
 
 def env_id_for(map_name: str) -> str | None:
-    """The registered benchmark env id of a map ("gdc1" -> "socialzoo/ActionSelection-v0"), or None.
+    """The registered benchmark env id of a map ("gdc1" -> "socialzoo/ActionSelection-v1"), or None.
 
     Its version suffix changes whenever a seeded rollout changes, so it is part of the config hash.
     """

@@ -38,7 +38,7 @@ def run_demo(args: argparse.Namespace) -> int:
     try:
         config = EnvConfig(map=args.map, family=args.family)
         m = load_map(config.map)
-        scenario = ScenarioStream(m, 1, 1, config.scenario, config.family).make(args.seed)
+        scenario = ScenarioStream.for_config(m, 1, config).make(args.seed)
         policy = (
             make_policy(args.policy, path=args.policy_path) if args.policy_path else make_policy(args.policy)
         )

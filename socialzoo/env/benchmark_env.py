@@ -13,32 +13,12 @@ import gymnasium as gym
 import numpy as np
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore, StepResult
+from socialzoo.env.core import SocialNavCore
 from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
-
-
-def make_config(config: EnvConfig | None, overrides: dict[str, Any]) -> EnvConfig:
-    """EnvConfig from a base (default: the benchmark's) and plain-value overrides."""
-    base = config if config is not None else EnvConfig()
-    return base.replace(**overrides) if overrides else base
-
-
-def step_info(result: StepResult, row: int = 0, robot: int = 0) -> dict[str, Any]:
-    """The per-step info dict of one robot: plain Python values under stable keys."""
-    target = int(result.target_human[row, robot])
-    return {
-        "reached": bool(result.reached[row, robot]),
-        "wall_collision": bool(result.wall_collision[row, robot]),
-        "human_collisions": int(result.human_collisions[row, robot]),
-        "force": float(result.force[row, robot]),
-        "blame": float(result.blame[row, robot]),
-        "progress": float(result.progress[row, robot]),
-        "target_human": target,
-    }
 
 
 class ActionSelectionEnv(gym.Env):
@@ -52,7 +32,8 @@ class ActionSelectionEnv(gym.Env):
     244 numbers).
 
     Reward: 5 * distance gained (10 when negative) - 0.1 * blame - 0.01 * force + 100 on reaching
-    the goal (SPEC section 9; weights in `reward`).
+    the goal (SPEC section 9; weights in `reward`). Force and blame leave out the followed human
+    during Follow only (socialzoo.env.outcome).
 
     Episode end: terminated on reaching the goal (< 0.5 m) or touching a wall; truncated after
     max_steps (3200). The final info holds "metrics": the per-episode metrics (not "episode", which
@@ -66,6 +47,7 @@ class ActionSelectionEnv(gym.Env):
             map="ghc3", max_steps=800, observation={"layout": "socialgym1"}.
 
     Version History:
+        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
         v0: initial release.
     """
 
@@ -82,16 +64,16 @@ class ActionSelectionEnv(gym.Env):
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
             )
-        self.config = make_config(config, overrides)
+        self.config = EnvConfig.resolve(config, overrides)
         if self.config.num_robots != 1:
             raise ValueError(
                 f"ActionSelectionEnv has one robot; got num_robots={self.config.num_robots} (use parallel_env)"
             )
-        if self.config.learned_humans:
+        if self.config.num_learned_humans:
             raise ValueError("ActionSelectionEnv has no learned humans; use parallel_env for them")
         self.render_mode = render_mode
         self.core = SocialNavCore(self.config, 1, map_data=map_data)
-        self.scenarios = ScenarioStream(self.core.map, 1, 1, self.config.scenario, self.config.family)
+        self.scenarios = ScenarioStream.for_config(self.core.map, 1, self.config)
         self.observation_space = observation_space(self.config.observation)
         if self.config.robot_action == "subpolicy":
             self.action_space: gym.Space = gym.spaces.Discrete(NUM_ACTIONS)
@@ -143,7 +125,7 @@ class ActionSelectionEnv(gym.Env):
         result = self.core.step(robot_action)
         terminated = bool(result.terminated[0, 0])
         truncated = bool(result.truncated[0, 0])
-        info = step_info(result)
+        info = result.info()
         if self.config.robot_action == "subpolicy":
             info["action_name"] = ACTION_NAMES[int(robot_action[0, 0])]
         if terminated or truncated:

@@ -1,12 +1,14 @@
 """Configuration of the environments: one frozen EnvConfig holds every part.
 
 Every field has the benchmark's value by default (SPEC sections 2 to 9); overrides go through
-dataclasses.replace or `EnvConfig.from_dict`, whose plain-JSON form is what the registry stores.
+`EnvConfig.replace`, `EnvConfig.resolve` (what every adapter does with its keyword arguments) or
+`EnvConfig.from_dict`, whose plain-JSON form is what the registry stores.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
@@ -33,6 +35,12 @@ _NESTED: dict[str, type] = {
     "metrics": MetricsConfig,
 }
 _WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "laser": LaserConfig}
+# Fields that were renamed: old name -> new name. An old name is refused with a message that
+# names its successor, rather than ignored or reported as merely unknown.
+RENAMED_FIELDS: dict[str, str] = {
+    "learned_humans": "num_learned_humans",
+    "human_neighbours": "num_human_neighbours",
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -46,9 +54,11 @@ class EnvConfig:
         goal_radius: success distance between robot centre and goal, m (SPEC: 0.5).
         robot_action: "subpolicy" (Discrete(4): GoAlone, Halt, Follow, Pass) or "velocity"
             (Box [-1, 1]^2 scaled to robot.max_speed and robot.max_angular_speed).
-        learned_humans: number of human slots (human_0 .. human_{k-1}) driven by a learner;
-            the others follow their scripted social-force policy.
-        human_neighbours: neighbours (humans and robots) in a learned human's observation.
+        num_learned_humans: number of human slots (human_0 .. human_{k-1}) driven by a learner;
+            the others follow their scripted social-force policy. (Called learned_humans before;
+            the old name is refused.)
+        num_human_neighbours: neighbours (humans and robots) in a learned human's observation.
+            (Called human_neighbours before; the old name is refused.)
         human_collision_penalty: a learned human's reward per step in contact with anyone.
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
             family name (socialzoo.nav.scenario_families.FAMILIES).
@@ -60,8 +70,8 @@ class EnvConfig:
     max_steps: int = 3200
     goal_radius: float = 0.5
     robot_action: RobotAction = "subpolicy"
-    learned_humans: int = 0
-    human_neighbours: int = 6
+    num_learned_humans: int = 0
+    num_human_neighbours: int = 6
     human_collision_penalty: float = 1.0
     family: str | None = None
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -78,13 +88,13 @@ class EnvConfig:
         for name, low in (
             ("num_robots", 1),
             ("max_steps", 1),
-            ("learned_humans", 0),
-            ("human_neighbours", 0),
+            ("num_learned_humans", 0),
+            ("num_human_neighbours", 0),
         ):
             check_int("EnvConfig", name, getattr(self, name), low=low)
-        if self.learned_humans > self.max_humans:
+        if self.num_learned_humans > self.max_humans:
             raise ValueError(
-                f"EnvConfig.learned_humans ({self.learned_humans}) exceeds the human slots "
+                f"EnvConfig.num_learned_humans ({self.num_learned_humans}) exceeds the human slots "
                 f"(scenario.max_humans = {self.max_humans})"
             )
         check_number("EnvConfig", "goal_radius", self.goal_radius, low=0, low_open=True)
@@ -114,8 +124,32 @@ class EnvConfig:
         return dataclasses.asdict(self)
 
     @classmethod
+    def resolve(
+        cls, config: EnvConfig | None = None, overrides: Mapping[str, Any] | None = None
+    ) -> EnvConfig:
+        """The config an adapter runs: `config` (default: the benchmark's) with `overrides`.
+
+        This is what every adapter (single-agent, vector, parallel) does with its `config`
+        argument and keyword arguments.
+
+        Args:
+            config: a base EnvConfig, or None for the defaults.
+            overrides: EnvConfig fields as plain values, nested configs as dicts of overrides
+                (see `replace`).
+
+        Raises:
+            ValueError: an unknown or renamed field, or a bad value (naming it).
+            TypeError: `config` is not an EnvConfig.
+        """
+        if config is not None and not isinstance(config, EnvConfig):
+            raise TypeError(f"config must be an EnvConfig or None, got {type(config).__name__}")
+        base = config if config is not None else cls()
+        return base.replace(**overrides) if overrides else base
+
+    @classmethod
     def from_dict(cls, data: dict[str, Any]) -> EnvConfig:
         """Build from a plain dict such as `to_dict()` gives; unknown keys raise naming the key."""
+        _refuse_renamed(data)
         known = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - known
         if unknown:
@@ -129,7 +163,16 @@ class EnvConfig:
         return cls(**kwargs)
 
     def replace(self, **changes: Any) -> EnvConfig:
-        """A copy with `changes`; nested configs may be given as dicts of overrides."""
+        """A copy with `changes`; nested configs may be given as dicts of overrides.
+
+        Raises:
+            ValueError: an unknown or renamed field (naming it), or a bad value.
+        """
+        _refuse_renamed(changes)
+        known = {f.name for f in dataclasses.fields(self)}
+        unknown = set(changes) - known
+        if unknown:
+            raise ValueError(f"EnvConfig: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
         resolved: dict[str, Any] = {}
         for key, value in changes.items():
             if key in _NESTED and isinstance(value, dict):
@@ -137,6 +180,13 @@ class EnvConfig:
             else:
                 resolved[key] = value
         return dataclasses.replace(self, **resolved)
+
+
+def _refuse_renamed(keys: Iterable[str]) -> None:
+    """Raise for keys that are old names of EnvConfig fields, naming the new name."""
+    for key in keys:
+        if key in RENAMED_FIELDS:
+            raise ValueError(f"EnvConfig: {key} was renamed {RENAMED_FIELDS[key]}")
 
 
 def _build(cls: type, data: dict[str, Any], where: str) -> Any:

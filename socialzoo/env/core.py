@@ -3,13 +3,15 @@
 Every adapter steps this one class: the Gymnasium benchmark env (B = 1), the Gymnasium VectorEnv,
 the PettingZoo ParallelEnv and the evaluation runner. It turns actions into robot commands (the
 sub-policies), steps the world, tracks global plans, and computes observations, rewards,
-terminations and episode metrics, all as arrays over (B, R).
+terminations and episode metrics, all as arrays over (B, R). The reward and the episode end are
+socialzoo.env.outcome's; StepResult carries them and the per-step info every adapter reports.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -18,7 +20,7 @@ from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_agents import human_observations, human_rewards
 from socialzoo.env.metrics import EpisodeMetrics
 from socialzoo.env.observation import build_observation
-from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
+from socialzoo.env.outcome import followed_human, robot_outcome
 from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
@@ -27,9 +29,6 @@ from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
-
-# Robots slower than this (m/s) count as still for the blame term.
-STILL_SPEED = 1e-3
 
 
 @dataclass(frozen=True)
@@ -44,7 +43,8 @@ class StepResult:
         reached: (B, R) goal within goal_radius after the step.
         wall_collision: (B, R) footprint touches a wall after the step.
         human_collisions: (B, R) int number of humans within the collision distance.
-        force, blame, progress: (B, R) reward terms before weighting (SPEC section 9).
+        force, blame, progress: (B, R) reward terms before weighting (SPEC section 9); force
+            and blame leave out the followed human during Follow only.
         target_human: (B, R) human followed or passed this step, -1 for none.
         human_obs: (B, L, D_h) learned-human observations, or None without learned humans.
         human_reward: (B, L) learned-human rewards, or None.
@@ -65,6 +65,46 @@ class StepResult:
     human_obs: np.ndarray | None
     human_reward: np.ndarray | None
     events: StepEvents
+
+    # The per-step info keys of a robot, in the order `info` gives them.
+    INFO_KEYS: ClassVar[tuple[str, ...]] = (
+        "reached",
+        "wall_collision",
+        "human_collisions",
+        "force",
+        "blame",
+        "progress",
+        "target_human",
+    )
+
+    def info(self, row: int = 0, robot: int = 0) -> dict[str, Any]:
+        """The per-step info dict of one robot: plain Python values under INFO_KEYS."""
+        return {
+            "reached": bool(self.reached[row, robot]),
+            "wall_collision": bool(self.wall_collision[row, robot]),
+            "human_collisions": int(self.human_collisions[row, robot]),
+            "force": float(self.force[row, robot]),
+            "blame": float(self.blame[row, robot]),
+            "progress": float(self.progress[row, robot]),
+            "target_human": int(self.target_human[row, robot]),
+        }
+
+    def info_arrays(self, robot: int = 0) -> dict[str, np.ndarray]:
+        """The per-step info of robot `robot` of every row: (B,) array copies under INFO_KEYS."""
+        return {key: getattr(self, key)[:, robot].copy() for key in self.INFO_KEYS}
+
+    @classmethod
+    def initial_info(cls) -> dict[str, Any]:
+        """A robot's info at reset: INFO_KEYS with neutral values (no target: -1)."""
+        return {
+            "reached": False,
+            "wall_collision": False,
+            "human_collisions": 0,
+            "force": 0.0,
+            "blame": 0.0,
+            "progress": 0.0,
+            "target_human": -1,
+        }
 
 
 class SocialNavCore:
@@ -94,7 +134,7 @@ class SocialNavCore:
         self.graph = graph_of(self.map)
         self.navigator = Navigator(self.graph, batch_size, config.num_robots)
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
-        self.learned = np.arange(config.learned_humans)
+        self.learned = np.arange(config.num_learned_humans)
         b, r = batch_size, config.num_robots
         self.state: WorldState | None = None
         self.carrot = np.zeros((b, r, 2))
@@ -227,7 +267,7 @@ class SocialNavCore:
             robot_action: (B, R) int sub-policy indices, or (B, R, 2) floats in [-1, 1] with
                 robot_action="velocity".
             human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed)
-                for the L learned humans; required when config.learned_humans > 0.
+                for the L learned humans; required when config.num_learned_humans > 0.
 
         Returns:
             The StepResult. Robots whose episode ended halt and keep their final pose; their
@@ -258,57 +298,36 @@ class SocialNavCore:
         self.target_human = target
         visible = self._observe(np.arange(b))
 
-        pos = after.robot_pose[..., :2].reshape(b * r, 2)
-        goal = after.robot_goal[..., :2].reshape(b * r, 2)
-        human_pos = np.repeat(after.human_pos, r, axis=0) if r > 1 else after.human_pos
-        skip = target.reshape(-1)
-        d_g = progress(before.robot_pose[..., :2].reshape(b * r, 2), pos, goal)
-        force = social_force_term(pos, human_pos, visible, skip)
-        speed = after.robot_vel[..., 0].reshape(-1)
-        still = halt.reshape(-1) | (np.abs(speed) < STILL_SPEED)
-        vel_world = robot_velocity_vectors(after).reshape(b * r, 2)
-        blame = blame_term(pos, vel_world, still, human_pos, visible, skip, cfg.reward.blame_horizon)
-        to_goal = pos - goal
-        reached = (to_goal**2).sum(-1) < cfg.goal_radius**2
-        wall = events.robot_wall.reshape(-1)
-        contacts = events.robot_human.sum(-1).reshape(-1)
-        # The success bonus is paid on the step the goal is reached (collision-free or not); the
-        # benchmark's success metric additionally requires zero collisions (EpisodeMetrics).
-        reward, _ = compute_reward(d_g, blame, force, reached, contacts, cfg.reward)
-        was_done = self.done.reshape(-1)
-        terminated = (reached | wall) & ~was_done
-        out_of_time = after.step_count >= cfg.max_steps
-        truncated = np.repeat(out_of_time, r) & ~terminated & ~was_done
-        reward = np.where(was_done, 0.0, reward)
+        skip = followed_human(robot_action, target, cfg.robot_action)
+        out = robot_outcome(before, after, events, visible, skip, halt, self.done, cfg)
         self.metrics.update(
             robot_pose=after.robot_pose.reshape(b * r, 3),
             robot_vel=after.robot_vel.reshape(b * r, 2),
-            reward=reward,
-            force=force,
-            blame=blame,
-            human_collisions=contacts,
-            wall_collision=wall,
+            reward=out.reward.reshape(-1),
+            force=out.force.reshape(-1),
+            blame=out.blame.reshape(-1),
+            human_collisions=out.human_collisions.reshape(-1),
+            wall_collision=out.wall_collision.reshape(-1),
             min_human_distance=self._min_human_distance(),
-            reached=reached,
-            done=terminated | truncated,
+            reached=out.reached.reshape(-1),
+            done=(out.terminated | out.truncated).reshape(-1),
             dt=cfg.dt,
         )
-        self.done = (was_done | terminated | truncated).reshape(b, r)
+        self.done = self.done | out.terminated | out.truncated
         human_reward = None
         if len(self.learned):
             human_reward = human_rewards(before, after, self.learned, cfg.human_collision_penalty)
-        shape = (b, r)
         return StepResult(
             obs=self.obs,
-            reward=reward.reshape(shape),
-            terminated=terminated.reshape(shape),
-            truncated=truncated.reshape(shape),
-            reached=reached.reshape(shape),
-            wall_collision=wall.reshape(shape),
-            human_collisions=contacts.reshape(shape),
-            force=force.reshape(shape),
-            blame=blame.reshape(shape),
-            progress=d_g.reshape(shape),
+            reward=out.reward,
+            terminated=out.terminated,
+            truncated=out.truncated,
+            reached=out.reached,
+            wall_collision=out.wall_collision,
+            human_collisions=out.human_collisions,
+            force=out.force,
+            blame=out.blame,
+            progress=out.progress,
             target_human=target,
             human_obs=self.human_obs,
             human_reward=human_reward,
@@ -321,11 +340,11 @@ class SocialNavCore:
         num = len(self.learned)
         if num == 0:
             if human_action is not None:
-                raise ValueError("human actions given, but config.learned_humans is 0")
+                raise ValueError("human actions given, but config.num_learned_humans is 0")
             return None, None
         if human_action is None:
             raise ValueError(
-                f"config.learned_humans = {num}: human_action of shape (B, {num}, 2) is required"
+                f"config.num_learned_humans = {num}: human_action of shape (B, {num}, 2) is required"
             )
         action = np.asarray(human_action, dtype=np.float64)
         if action.shape != (self.batch_size, num, 2):
@@ -369,7 +388,7 @@ class SocialNavCore:
         ).reshape(b, r, -1)
         self.obs[rows] = obs[rows]
         if len(self.learned):
-            human_obs = human_observations(s, self.walls, self.learned, self.config.human_neighbours)
+            human_obs = human_observations(s, self.walls, self.learned, self.config.num_human_neighbours)
             if self.human_obs is None:
                 self.human_obs = human_obs
             else:

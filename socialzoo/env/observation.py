@@ -1,7 +1,9 @@
 """Robot-centric observations of the Social Action Selection benchmark (SPEC section 8).
 
 Pure batched functions: which humans the robot sees (walls occlude), the paper's layout, the
-reference code's 244-number "socialgym1" layout, and their gymnasium spaces and entry names.
+reference code's 244-number "socialgym1" layout, and their gymnasium spaces and entry names. The
+paper layout's pieces are named here once (PAPER_*, SLOT_*, `paper_slots`, `paper_slot_seen`,
+`paper_human_velocity`): policies and features read observations through them.
 
 Conventions shared by both layouts:
 
@@ -31,11 +33,31 @@ from socialzoo.core.jit import kernel
 
 ObservationLayout = Literal["paper", "socialgym1"]
 
-# Entries before the human slots in the paper layout: goal (2), local target (2), (v, omega) (2),
-# previous action (1).
+# The paper layout (SPEC section 8), defined here once. Everything that reads a paper observation
+# (Ref, program-synthesis features, tests) indexes it through these names, never through numbers.
+# Header: robot-frame goal and local target, the robot's own velocity, the previous action.
+PAPER_GOAL = slice(0, 2)
+"""Global goal (x, y) in the robot frame, m."""
+PAPER_TARGET = slice(2, 4)
+"""Local target (the carrot on the global plan) (x, y) in the robot frame, m."""
+PAPER_ROBOT_VEL = slice(4, 6)
+"""The robot's (v, omega), m/s and rad/s."""
+PAPER_ROBOT_V = 4
+"""The robot's linear speed v along its heading, m/s (first entry of PAPER_ROBOT_VEL)."""
+PAPER_ROBOT_OMEGA = 5
+"""The robot's angular speed omega, rad/s."""
+PAPER_PREV_ACTION = 6
+"""The previous sub-policy index (SPEC section 7) as a float; 0 before the first step."""
 PAPER_HEADER_SIZE = 7
-# Numbers per human slot in the paper layout: x, y, vx, vy.
+"""Entries before the human slots; slot i is [PAPER_HEADER_SIZE + 4i : PAPER_HEADER_SIZE + 4i + 4]."""
 PAPER_SLOT_SIZE = 4
+"""Numbers per human slot: x, y, vx, vy (fields below)."""
+# Fields of one human slot: the last axis of `paper_slots(obs)`.
+SLOT_POS = slice(0, 2)
+"""The human's centre minus the robot's, robot axes, m."""
+SLOT_VEL = slice(2, 4)
+"""The human's world velocity minus the robot's, robot axes, m/s (module docstring)."""
+SLOT_X, SLOT_Y, SLOT_VX, SLOT_VY = 0, 1, 2, 3
 # The reference layout: 40 poses (x, y, theta), 40 velocities (vx, vy, omega), local target
 # (x, y, 0), previous action.
 SOCIALGYM1_NUM_SLOTS = 40
@@ -154,9 +176,10 @@ def paper_observation(
 ) -> np.ndarray:
     """The paper's observation <p_g, p_l, v_r, H_r> (SPEC section 8), robot frame.
 
-    Layout (K = num_slots): [0:2] goal (x, y), m; [2:4] local target (x, y), m; [4:6] robot
-    (v, omega), m/s and rad/s; [6] previous action index; then K slots [7 + 4i : 11 + 4i] of
-    (x, y, vx, vy) of the i-th nearest visible human relative to the robot (module docstring).
+    Layout (K = num_slots; the named pieces PAPER_* and SLOT_* of this module): [0:2] goal
+    (x, y), m; [2:4] local target (x, y), m; [4:6] robot (v, omega), m/s and rad/s; [6] previous
+    action index; then K slots [7 + 4i : 11 + 4i] of (x, y, vx, vy) of the i-th nearest visible
+    human relative to the robot (module docstring).
 
     Args:
         robot_pose: (B, 3) x, y (m), heading (rad), world frame.
@@ -178,12 +201,11 @@ def paper_observation(
         robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots
     )
     out = np.zeros((batch, PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
-    out[:, 0:4] = points_r.reshape(batch, 4)
-    out[:, 4:6] = robot_vel
-    out[:, 6] = prev_action
-    out[:, PAPER_HEADER_SIZE : PAPER_HEADER_SIZE + slots.shape[1] * PAPER_SLOT_SIZE] = slots.reshape(
-        batch, -1
-    )
+    out[:, PAPER_GOAL] = points_r[:, 0]
+    out[:, PAPER_TARGET] = points_r[:, 1]
+    out[:, PAPER_ROBOT_VEL] = robot_vel
+    out[:, PAPER_PREV_ACTION] = prev_action
+    paper_slots(out)[:, : slots.shape[1]] = slots
     return out
 
 
@@ -263,6 +285,55 @@ def observation_size(cfg: ObservationConfig) -> int:
     return PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * cfg.num_human_slots
 
 
+def paper_num_slots(width: int) -> int:
+    """K, the human slots of a paper observation of `width` numbers (PAPER_HEADER_SIZE + 4K).
+
+    Raises:
+        ValueError: `width` is not 7 + 4K for some K >= 0 (naming the width).
+    """
+    if width < PAPER_HEADER_SIZE or (width - PAPER_HEADER_SIZE) % PAPER_SLOT_SIZE:
+        raise ValueError(
+            f"a paper-layout observation has {PAPER_HEADER_SIZE} + {PAPER_SLOT_SIZE}K numbers, got {width}"
+        )
+    return (width - PAPER_HEADER_SIZE) // PAPER_SLOT_SIZE
+
+
+def paper_slots(obs: np.ndarray) -> np.ndarray:
+    """The human slots of paper observations as (..., K, 4), fields SLOT_X .. SLOT_VY.
+
+    A view of `obs` (no copy) when its last axis is contiguous, as every observation the envs
+    return is; index it with SLOT_POS and SLOT_VEL.
+
+    Args:
+        obs: (..., 7 + 4K) paper-layout observations.
+
+    Raises:
+        ValueError: the last axis is not 7 + 4K long.
+    """
+    k = paper_num_slots(obs.shape[-1])
+    return obs[..., PAPER_HEADER_SIZE:].reshape(*obs.shape[:-1], k, PAPER_SLOT_SIZE)
+
+
+def paper_slot_seen(obs: np.ndarray) -> np.ndarray:
+    """(..., K) bool: the slot holds a visible human (its position is not zero).
+
+    Empty slots are all zero; a visible human exactly at the robot's centre cannot happen (the
+    two would be in collision long before), so a zero position means an empty slot.
+    """
+    return (paper_slots(obs)[..., SLOT_POS] != 0.0).any(axis=-1)
+
+
+def paper_human_velocity(obs: np.ndarray) -> np.ndarray:
+    """(..., K, 2) each slot's human's own (world) velocity, in robot axes, m/s.
+
+    A slot stores the human's velocity minus the robot's; the robot's own velocity in its frame
+    is (v, 0), so the human's is the slot's (vx + v, vy). Empty slots give (v, 0).
+    """
+    vel = np.array(paper_slots(obs)[..., SLOT_VEL], dtype=np.float64)
+    vel[..., 0] += np.asarray(obs[..., PAPER_ROBOT_V], dtype=np.float64)[..., None]
+    return vel
+
+
 def observation_space(cfg: ObservationConfig) -> spaces.Box:
     """The float32 Box of one observation (no batch axis).
 
@@ -273,7 +344,7 @@ def observation_space(cfg: ObservationConfig) -> spaces.Box:
     size = observation_size(cfg)
     low = np.full(size, -np.inf, dtype=np.float32)
     high = np.full(size, np.inf, dtype=np.float32)
-    action = PAPER_HEADER_SIZE - 1 if cfg.layout == "paper" else SOCIALGYM1_SIZE - 1
+    action = PAPER_PREV_ACTION if cfg.layout == "paper" else SOCIALGYM1_SIZE - 1
     low[action] = 0.0
     high[action] = MAX_ACTION_INDEX
     return spaces.Box(low=low, high=high, dtype=np.float32)

@@ -15,9 +15,8 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
-from socialzoo.env.benchmark_env import make_config, step_info
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
+from socialzoo.env.core import SocialNavCore, StepResult
 from socialzoo.env.human_agents import human_observation_size, human_rewards
 from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
@@ -39,7 +38,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     """R robots (and optionally L learned humans) navigating among social-force humans.
 
     Agents: "robot_0" .. "robot_{R-1}", then "human_0" .. "human_{L-1}" for the first L human
-    slots when config.learned_humans = L > 0. The other humans follow the scripted social-force
+    slots when config.num_learned_humans = L > 0. The other humans follow the scripted social-force
     policy. A scenario may have fewer humans than L: the human agents of empty slots are still
     agents (so that `agents` is the same at every reset), with an all-zero observation, reward 0,
     actions ignored and info["present"] False.
@@ -79,11 +78,12 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
     Version History:
+        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
         v0: initial release.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
-        "name": "socialzoo_parallel_v0",
+        "name": "socialzoo_parallel_v1",
         "render_modes": ["human", "rgb_array"],
         "render_fps": 40,
         "is_parallelizable": True,
@@ -107,7 +107,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             not isinstance(max_cycles, int) or isinstance(max_cycles, bool) or max_cycles < 1
         ):
             raise ValueError(f"max_cycles must be None or an int >= 1, got {max_cycles!r}")
-        self.config = make_config(config, overrides)
+        self.config = EnvConfig.resolve(config, overrides)
         self.render_mode = render_mode
         self.max_cycles = max_cycles
         self.episode_info = bool(episode_info)
@@ -119,13 +119,13 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
                 f"num_robots={cfg.num_robots} needs at least {cfg.num_robots + 1} legal poses for distinct "
                 f"starts; map {self.core.map.name!r} has {num_poses}"
             )
-        self.scenarios = ScenarioStream(self.core.map, 1, cfg.num_robots, cfg.scenario, cfg.family)
+        self.scenarios = ScenarioStream.for_config(self.core.map, 1, cfg)
         self.robots = [f"robot_{i}" for i in range(cfg.num_robots)]
-        self.humans = [f"human_{j}" for j in range(cfg.learned_humans)]
+        self.humans = [f"human_{j}" for j in range(cfg.num_learned_humans)]
         self.possible_agents = self.robots + self.humans
         self.agents: list[str] = []
         self.observation_spaces = {a: observation_space(cfg.observation) for a in self.robots}
-        human_size = human_observation_size(cfg.human_neighbours)
+        human_size = human_observation_size(cfg.num_human_neighbours)
         for a in self.humans:
             self.observation_spaces[a] = spaces.Box(-np.inf, np.inf, (human_size,), dtype=np.float32)
         self.action_spaces = {a: self._robot_action_space() for a in self.robots}
@@ -185,7 +185,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             self._renderer.reset()
         if self.render_mode == "human":
             self.render()
-        infos: dict[str, dict[str, Any]] = {a: _initial_robot_info() for a in self.robots}
+        infos: dict[str, dict[str, Any]] = {a: StepResult.initial_info() for a in self.robots}
         present = self.core.state.human_mask[0, self.core.learned]  # type: ignore[union-attr]
         for j, a in enumerate(self.humans):
             infos[a] = {"contact": False, "present": bool(present[j])}
@@ -250,7 +250,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             rewards[agent] = float(result.reward[0, i])
             terminations[agent] = terminated
             truncations[agent] = truncated
-            infos[agent] = step_info(result, 0, i)
+            infos[agent] = result.info(0, i)
             if (terminated or truncated) and self.episode_info:
                 infos[agent][EPISODE_KEY] = self.episode_summary(agent)
         robots_left = all(a not in live or terminations[a] or truncations[a] for a in self.robots)
@@ -360,7 +360,7 @@ def parallel_env(
     """A SocialNavParallelEnv (arguments as there); `overrides` are EnvConfig fields.
 
     Example:
-        >>> env = parallel_env(map="open_room", num_robots=2, learned_humans=3, max_steps=400)
+        >>> env = parallel_env(map="open_room", num_robots=2, num_learned_humans=3, max_steps=400)
     """
     return SocialNavParallelEnv(
         config,
@@ -418,19 +418,6 @@ class BlackDeath(BaseParallelWrapper):
         if ended:
             self.agents = []
         return observations, rewards, terminations, truncations, infos
-
-
-def _initial_robot_info() -> dict[str, Any]:
-    """A robot's info at reset: the per-step keys with neutral values."""
-    return {
-        "reached": False,
-        "wall_collision": False,
-        "human_collisions": 0,
-        "force": 0.0,
-        "blame": 0.0,
-        "progress": 0.0,
-        "target_human": -1,
-    }
 
 
 def _human_contacts(before: Any, after: Any, learned: np.ndarray) -> np.ndarray:

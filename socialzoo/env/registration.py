@@ -1,7 +1,13 @@
 """Gymnasium ids of socialzoo's environments.
 
 Registry kwargs are plain JSON values (EnvConfig overrides), so every env spec round-trips.
-Changing what a seeded rollout does bumps the id's version (-v0 -> -v1).
+Changing what a seeded rollout does bumps every id's version (ENV_VERSION) and adds a line to the
+Version History of the env docstrings; an old version is not registered, so gymnasium.make of it
+raises gymnasium's DeprecatedEnv naming the current id.
+
+Version History:
+    v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
+    v0: initial release.
 """
 
 from __future__ import annotations
@@ -12,19 +18,21 @@ from socialzoo.nav.scenario_families import FAMILIES
 
 BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
 VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"
+# The version of every id (see the module docstring's Version History).
+ENV_VERSION = 1
 
 # id -> kwargs for the single-agent benchmark envs.
 BENCHMARK_IDS: dict[str, dict] = {
-    "socialzoo/ActionSelection-v0": {"map": "gdc1"},
-    "socialzoo/ActionSelectionTransfer-v0": {"map": "ghc3"},
+    f"socialzoo/ActionSelection-v{ENV_VERSION}": {"map": "gdc1"},
+    f"socialzoo/ActionSelectionTransfer-v{ENV_VERSION}": {"map": "ghc3"},
 }
 
 
 def _family_id(name: str) -> str:
-    return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + "-v0"
+    return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + f"-v{ENV_VERSION}"
 
 
-# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v0; short episodes (60 s).
+# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v1; short episodes (60 s).
 FAMILY_IDS: dict[str, dict] = {
     _family_id(name): {"map": family.map_name, "family": name, "max_steps": 2400}
     for name, family in FAMILIES.items()

@@ -8,12 +8,16 @@ whatever the batch size.
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenario_families import make_family_scenario
 from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario
+
+if TYPE_CHECKING:
+    from socialzoo.env.config import EnvConfig
 
 
 def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:
@@ -66,6 +70,15 @@ class ScenarioStream:
         self._rngs: list[np.random.Generator] = [np.random.default_rng() for _ in range(batch_size)]
         self._current: list[Scenario | None] = [None] * batch_size
         self._uses = np.zeros(batch_size, dtype=np.intp)
+
+    @classmethod
+    def for_config(cls, m: Map, batch_size: int, config: EnvConfig) -> ScenarioStream:
+        """The stream of an environment of `config` on map `m` with B = batch_size rows.
+
+        Every adapter builds its stream here: config.num_robots robots per scenario, the
+        benchmark's generation with config.scenario, or config.family's scenarios.
+        """
+        return cls(m, batch_size, config.num_robots, config.scenario, config.family)
 
     def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
         """Reseed rows (default all): row i of a batch seeded with s uses SeedSequence(s).spawn."""

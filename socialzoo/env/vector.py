@@ -15,7 +15,6 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from socialzoo.env.benchmark_env import make_config
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
 from socialzoo.env.metrics import SUMMARY_KEYS
@@ -23,8 +22,6 @@ from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream
 from socialzoo.nav.maps import Map
 from socialzoo.nav.subpolicies import NUM_ACTIONS
-
-STEP_KEYS = ("reached", "wall_collision", "human_collisions", "force", "blame", "progress", "target_human")
 
 
 class ActionSelectionVectorEnv(VectorEnv):
@@ -36,6 +33,10 @@ class ActionSelectionVectorEnv(VectorEnv):
         map_data: an already loaded Map instead of config.map.
         render_mode: None or "rgb_array" (renders row 0).
         **overrides: EnvConfig fields as plain values.
+
+    Version History:
+        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
+        v0: initial release.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"], "render_fps": 40}
@@ -48,15 +49,15 @@ class ActionSelectionVectorEnv(VectorEnv):
         render_mode: str | None = None,
         **overrides: Any,
     ) -> None:
-        self.config = make_config(config, overrides)
-        if self.config.num_robots != 1 or self.config.learned_humans:
-            raise ValueError("ActionSelectionVectorEnv needs num_robots=1 and learned_humans=0")
+        self.config = EnvConfig.resolve(config, overrides)
+        if self.config.num_robots != 1 or self.config.num_learned_humans:
+            raise ValueError("ActionSelectionVectorEnv needs num_robots=1 and num_learned_humans=0")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.num_envs = num_envs
         self.render_mode = render_mode
         self.core = SocialNavCore(self.config, num_envs, map_data=map_data)
-        self.scenarios = ScenarioStream(self.core.map, num_envs, 1, self.config.scenario, self.config.family)
+        self.scenarios = ScenarioStream.for_config(self.core.map, num_envs, self.config)
         self.single_observation_space = observation_space(self.config.observation)
         if self.config.robot_action == "subpolicy":
             self.single_action_space: gym.Space = gym.spaces.Discrete(NUM_ACTIONS)
@@ -109,7 +110,7 @@ class ActionSelectionVectorEnv(VectorEnv):
         terminated = result.terminated[:, 0].copy()
         truncated = result.truncated[:, 0].copy()
         reward = result.reward[:, 0].copy()
-        info: dict[str, Any] = {key: getattr(result, key)[:, 0].copy() for key in STEP_KEYS}
+        info: dict[str, Any] = result.info_arrays()
         ended = np.flatnonzero(terminated | truncated)
         if len(ended):
             final_obs = np.zeros_like(self.core.obs[:, 0])

@@ -94,7 +94,7 @@ def test_vector_rows_equal_single_envs():
 
 def test_vector_env_autoresets_and_reports_metrics():
     vec = gym.make_vec(
-        "socialzoo/ActionSelection-v0",
+        "socialzoo/ActionSelection-v1",
         num_envs=3,
         vectorization_mode="vector_entry_point",
         max_steps=30,
@@ -188,3 +188,88 @@ def test_registered_specs_round_trip_through_json(env_id):
     spec = gym.spec(env_id)
     again = EnvSpec.from_json(spec.to_json())
     assert again.id == spec.id and again.kwargs == spec.kwargs and again.entry_point == spec.entry_point
+
+
+# ---------------------------------------------------------------------------- SPEC 9: who is skipped
+PASS, FOLLOW = 3, 2
+# One slow human walks ahead of the robot down the hallway: Pass overtakes it, Follow trails it.
+OVERTAKING = {"map": "hallway", "family": "overtaking", "max_steps": 300}
+
+
+def nearest_visible_distance(core, leave_out=-1):
+    """Distance from robot 0 of row 0 to the nearest human it sees after the step (inf for none)."""
+    s = core.state
+    d = np.linalg.norm(s.human_pos[0] - s.robot_pose[0, 0, :2], axis=-1)
+    counted = core.visible[0] & (np.arange(len(d)) != leave_out)
+    return float(d[counted].min(initial=np.inf))
+
+
+def test_pass_is_charged_for_the_human_it_passes():
+    env = gym.make("socialzoo/ActionSelection-v1", **OVERTAKING)
+    env.reset(seed=0)
+    core = env.unwrapped.core
+    for _ in range(300):
+        _, _, terminated, truncated, info = env.step(PASS)
+        assert info["action_name"] == "Pass"
+        target = info["target_human"]
+        if target >= 0:
+            passed = float(np.linalg.norm(core.state.human_pos[0, target] - core.state.robot_pose[0, 0, :2]))
+            if passed < 0.7 and core.visible[0, target]:
+                break
+        assert not (terminated or truncated), "the robot never passed its target within 0.7 m"
+    d = nearest_visible_distance(core)
+    assert d <= passed < 0.7
+    assert info["force"] > 0.0
+    assert info["force"] == pytest.approx(np.exp(-(d**4)), rel=1e-12)
+    assert info["force"] >= np.exp(-(passed**4)) * (1 - 1e-12)
+    assert info["blame"] > 0.0
+
+
+def test_follow_still_skips_its_target():
+    env = gym.make("socialzoo/ActionSelection-v1", **OVERTAKING)
+    env.reset(seed=0)
+    core = env.unwrapped.core
+    checked = 0
+    for _ in range(200):
+        _, _, terminated, truncated, info = env.step(FOLLOW)
+        target = info["target_human"]
+        if target >= 0 and core.visible[0, target]:
+            followed = float(
+                np.linalg.norm(core.state.human_pos[0, target] - core.state.robot_pose[0, 0, :2])
+            )
+            if followed < 1.5:
+                other = nearest_visible_distance(core, leave_out=target)
+                assert info["force"] == pytest.approx(np.exp(-(other**4)), rel=1e-12, abs=0.0)
+                # Were the target counted, the force would be at least exp(-d^4) of it.
+                assert info["force"] < np.exp(-(followed**4))
+                checked += 1
+        if terminated or truncated:
+            break
+    assert checked > 20
+
+
+def test_old_env_versions_are_refused_naming_the_new_one():
+    for old, new in [
+        ("socialzoo/ActionSelection-v0", "socialzoo/ActionSelection-v1"),
+        ("socialzoo/ActionSelectionTransfer-v0", "socialzoo/ActionSelectionTransfer-v1"),
+        ("socialzoo/HallwayHeadOn-v0", "socialzoo/HallwayHeadOn-v1"),
+    ]:
+        assert new in gym.registry and old not in gym.registry
+        with pytest.warns(DeprecationWarning), pytest.raises(gym.error.DeprecatedEnv, match=new):
+            gym.make(old)
+
+
+def test_infos_share_one_set_of_keys():
+    from socialzoo.env.core import StepResult
+
+    env = ActionSelectionEnv(map="open_room", max_steps=5)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(0)
+    assert set(StepResult.INFO_KEYS) <= set(info)
+    assert list(StepResult.initial_info()) == list(StepResult.INFO_KEYS)
+    vec = ActionSelectionVectorEnv(2, map="open_room", max_steps=5)
+    vec.reset(seed=0)
+    *_, vinfo = vec.step(np.zeros(2, dtype=np.int64))
+    assert set(StepResult.INFO_KEYS) <= set(vinfo)
+    assert all(vinfo[key].shape == (2,) for key in StepResult.INFO_KEYS)
+    assert vinfo["force"][0] == info["force"] and vinfo["target_human"][0] == info["target_human"]

@@ -12,13 +12,31 @@ from hypothesis import strategies as st
 from socialzoo.core.geometry import rotate, to_frame
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.observation import (
+    PAPER_GOAL,
+    PAPER_HEADER_SIZE,
+    PAPER_PREV_ACTION,
+    PAPER_ROBOT_OMEGA,
+    PAPER_ROBOT_V,
+    PAPER_ROBOT_VEL,
+    PAPER_SLOT_SIZE,
+    PAPER_TARGET,
+    SLOT_POS,
+    SLOT_VEL,
+    SLOT_VX,
+    SLOT_VY,
+    SLOT_X,
+    SLOT_Y,
     SOCIALGYM1_SIZE,
     ObservationConfig,
     build_observation,
     describe_observation,
     observation_size,
     observation_space,
+    paper_human_velocity,
+    paper_num_slots,
     paper_observation,
+    paper_slot_seen,
+    paper_slots,
     socialgym1_observation,
 )
 from socialzoo.nav.visibility import visible_humans
@@ -283,3 +301,46 @@ def test_space_contains_random_observations(seed, batch, num_humans, layout, num
     assert np.all(np.isfinite(obs))
     for row in obs:
         assert space.contains(row)
+
+
+def test_named_paper_pieces_match_the_entry_names():
+    k = 3
+    names = np.array(describe_observation(ObservationConfig(num_human_slots=k)))
+    assert names[PAPER_GOAL].tolist() == ["goal_x", "goal_y"]
+    assert names[PAPER_TARGET].tolist() == ["target_x", "target_y"]
+    assert names[PAPER_ROBOT_VEL].tolist() == ["robot_v", "robot_omega"]
+    assert names[PAPER_ROBOT_V] == "robot_v" and names[PAPER_ROBOT_OMEGA] == "robot_omega"
+    assert names[PAPER_PREV_ACTION] == "prev_action"
+    assert len(names) == PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * k
+    slot_names = paper_slots(names[None])[0]
+    assert slot_names[2, SLOT_POS].tolist() == ["human_2_x", "human_2_y"]
+    assert slot_names[2, SLOT_VEL].tolist() == ["human_2_vx", "human_2_vy"]
+    assert [slot_names[1, i] for i in (SLOT_X, SLOT_Y, SLOT_VX, SLOT_VY)] == [
+        "human_1_x",
+        "human_1_y",
+        "human_1_vx",
+        "human_1_vy",
+    ]
+
+
+def test_paper_slots_read_an_observation():
+    s = scene(
+        (1.0, 2.0, 0.5), [(3.0, 2.0), (1.0, 5.0), (9.0, 9.0)], human_vel=[(1.0, 0.0), (0.0, 0.0), (0, 0)]
+    )
+    s["visible"][0, 2] = False
+    s["robot_vel"][:] = (0.8, 0.1)
+    obs = paper_observation(**s, num_slots=4)
+    view = paper_slots(obs)
+    assert view.shape == (1, 4, 4) and np.shares_memory(view, obs)
+    assert paper_num_slots(obs.shape[-1]) == 4
+    assert paper_slot_seen(obs).tolist() == [[True, True, False, False]]
+    np.testing.assert_allclose(
+        view[0, 0, SLOT_POS], to_frame(np.array([3.0, 2.0]), s["robot_pose"][0]), atol=1e-6
+    )
+    # The humans' own velocities in robot axes: the first walks along +x, the second stands.
+    own = paper_human_velocity(obs)
+    np.testing.assert_allclose(own[0, 0], rotate(np.array([1.0, 0.0]), -0.5), atol=1e-6)
+    np.testing.assert_allclose(own[0, 1], [0.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(obs[0, PAPER_ROBOT_VEL], [0.8, 0.1], atol=1e-6)
+    with pytest.raises(ValueError, match="7 \\+ 4K numbers, got 9"):
+        paper_slots(np.zeros((2, 9), np.float32))

@@ -84,11 +84,11 @@ def same(a, b) -> bool:
 
 # ---------------------------------------------------------------------------- conformance
 @pytest.mark.parametrize(
-    ("num_robots", "learned_humans", "robot_action"),
+    ("num_robots", "num_learned_humans", "robot_action"),
     [(1, 0, "subpolicy"), (2, 3, "subpolicy"), (2, 3, "velocity"), (1, 2, "velocity")],
 )
-def test_parallel_api(num_robots, learned_humans, robot_action):
-    env = make(num_robots=num_robots, learned_humans=learned_humans, robot_action=robot_action)
+def test_parallel_api(num_robots, num_learned_humans, robot_action):
+    env = make(num_robots=num_robots, num_learned_humans=num_learned_humans, robot_action=robot_action)
     with warnings.catch_warnings():
         # The API test only warns (UserWarning) about missing or extra keys: make that fail.
         warnings.simplefilter("error", UserWarning)
@@ -97,7 +97,7 @@ def test_parallel_api(num_robots, learned_humans, robot_action):
 
 def test_max_cycles():
     def factory(max_cycles: int) -> SocialNavParallelEnv:
-        return make(num_robots=2, learned_humans=2, max_cycles=max_cycles)
+        return make(num_robots=2, num_learned_humans=2, max_cycles=max_cycles)
 
     module = types.SimpleNamespace(
         parallel_env=factory, env=lambda max_cycles: parallel_to_aec(factory(max_cycles))
@@ -106,7 +106,7 @@ def test_max_cycles():
 
 
 def test_spaces_are_cached_and_typed():
-    env = make(num_robots=2, learned_humans=3)
+    env = make(num_robots=2, num_learned_humans=3)
     assert env.possible_agents == ["robot_0", "robot_1", "human_0", "human_1", "human_2"]
     for agent in env.possible_agents:
         assert env.observation_space(agent) is env.observation_space(agent)
@@ -117,11 +117,11 @@ def test_spaces_are_cached_and_typed():
     assert env.observation_space("human_0").shape == (8 + 5 * 6,)
     velocity = make(robot_action="velocity")
     assert velocity.action_space("robot_0").shape == (2,)
-    assert env.metadata["name"] == "socialzoo_parallel_v0" and env.metadata["is_parallelizable"]
+    assert env.metadata["name"] == "socialzoo_parallel_v1" and env.metadata["is_parallelizable"]
 
 
 def test_state_is_the_global_state():
-    env = make(num_robots=2, learned_humans=1)
+    env = make(num_robots=2, num_learned_humans=1)
     env.reset(seed=0)
     for _ in range(5):
         env.step({a: env.action_space(a).sample() for a in env.agents})
@@ -158,7 +158,7 @@ def rollout(env: SocialNavParallelEnv, seed: int, steps: int) -> list:
 
 
 def test_same_seed_same_rollout_bit_for_bit_and_seeds_differ():
-    kwargs = {"num_robots": 2, "learned_humans": 3, "max_steps": 100}
+    kwargs = {"num_robots": 2, "num_learned_humans": 3, "max_steps": 100}
     a = rollout(make(**kwargs), 11, 300)
     b = rollout(make(**kwargs), 11, 300)
     assert same(a, b)
@@ -199,7 +199,7 @@ def test_one_robot_plays_the_single_agent_episode():
 
 # ---------------------------------------------------------------------------- episode end
 def test_robot_leaves_on_reaching_its_goal_and_stands_still():
-    env = make(stand_in_room(), num_robots=2, learned_humans=2)
+    env = make(stand_in_room(), num_robots=2, num_learned_humans=2)
     obs, infos = env.reset(options={"scenario": scenario(NEAR_AND_FAR, humans=1)})
     assert infos["human_1"] == {"contact": False, "present": False}
     assert not obs["human_1"].any()
@@ -231,7 +231,7 @@ def test_robot_leaves_on_reaching_its_goal_and_stands_still():
 
 
 def test_wall_collision_terminates_and_humans_are_truncated_with_the_last_robot():
-    env = make(stand_in_room(), robot_action="velocity", learned_humans=1)
+    env = make(stand_in_room(), robot_action="velocity", num_learned_humans=1)
     env.reset(options={"scenario": scenario([([0.7, 5.0, np.pi], [8.0, 5.0, 0.0])])})
     for _ in range(40):
         _, _, terminations, truncations, infos = env.step(
@@ -248,7 +248,7 @@ def test_wall_collision_terminates_and_humans_are_truncated_with_the_last_robot(
 
 def test_time_limit_and_max_cycles_truncate_everyone():
     for kwargs, steps in (({"max_steps": 7}, 7), ({"max_cycles": 5}, 5)):
-        env = make(num_robots=2, learned_humans=2, **kwargs)
+        env = make(num_robots=2, num_learned_humans=2, **kwargs)
         env.reset(seed=1)
         step = 0
         while env.agents and step < 20:
@@ -263,7 +263,7 @@ def test_time_limit_and_max_cycles_truncate_everyone():
 
 # ---------------------------------------------------------------------------- bad input
 def test_missing_unknown_and_invalid_actions_raise_before_anything_changes():
-    env = make(num_robots=2, learned_humans=1)
+    env = make(num_robots=2, num_learned_humans=1)
     with pytest.raises(RuntimeError, match="reset"):
         env.step({})
     env.reset(seed=3)
@@ -300,8 +300,8 @@ def test_bad_constructor_arguments_raise():
         make(max_cycles=0)
     with pytest.raises(ValueError, match="render_mode"):
         make(render_mode="ansi")
-    with pytest.raises(ValueError, match="learned_humans"):
-        make(learned_humans=9)
+    with pytest.raises(ValueError, match="num_learned_humans"):
+        make(num_learned_humans=9)
     with pytest.raises(ValueError, match="legal poses"):
         make(stand_in_room(), num_robots=4)
 
@@ -340,7 +340,7 @@ def torchrl_wrapper(env: SocialNavParallelEnv, **kwargs):
 def test_torchrl_check_env_specs():
     from torchrl.envs.utils import check_env_specs
 
-    wrapped = torchrl_wrapper(make(num_robots=2, learned_humans=3, episode_info=False), seed=0)
+    wrapped = torchrl_wrapper(make(num_robots=2, num_learned_humans=3, episode_info=False), seed=0)
     assert wrapped.group_map == {"robot": ["robot_0", "robot_1"], "human": ["human_0", "human_1", "human_2"]}
     check_env_specs(wrapped, seed=0)
 
@@ -348,7 +348,7 @@ def test_torchrl_check_env_specs():
 def test_torchrl_masks_robots_that_left():
     import torch
 
-    env = make(stand_in_room(), num_robots=2, learned_humans=1, max_steps=60, episode_info=False)
+    env = make(stand_in_room(), num_robots=2, num_learned_humans=1, max_steps=60, episode_info=False)
     wrapped = torchrl_wrapper(env, done_on_any=False)
 
     def go_alone(td):

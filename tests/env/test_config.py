@@ -1,0 +1,50 @@
+"""EnvConfig: overrides, the plain-JSON round trip, and renamed fields refused by name."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import pytest
+
+import socialzoo  # noqa: F401  (registers the ids)
+from socialzoo.env.config import RENAMED_FIELDS, EnvConfig
+from socialzoo.env.parallel import parallel_env
+
+
+def test_resolve_applies_overrides_to_a_base():
+    assert EnvConfig.resolve() == EnvConfig()
+    assert EnvConfig.resolve(None, {}) == EnvConfig()
+    base = EnvConfig(map="open_room", max_steps=100)
+    assert EnvConfig.resolve(base) is base
+    got = EnvConfig.resolve(base, {"num_learned_humans": 2, "reward": {"success_bonus": 50.0}})
+    assert got.map == "open_room" and got.max_steps == 100 and got.num_learned_humans == 2
+    assert got.reward.success_bonus == 50.0 and got.reward.w_blame == base.reward.w_blame
+    with pytest.raises(TypeError, match="EnvConfig"):
+        EnvConfig.resolve({"map": "gdc1"})  # type: ignore[arg-type]
+
+
+def test_round_trip_through_a_plain_dict():
+    cfg = EnvConfig(map="open_room", num_robots=2, num_learned_humans=3)
+    assert EnvConfig.from_dict(cfg.to_dict()) == cfg
+
+
+@pytest.mark.parametrize("old", sorted(RENAMED_FIELDS))
+def test_renamed_fields_are_refused_naming_the_new_name(old):
+    new = RENAMED_FIELDS[old]
+    message = f"{old} was renamed {new}"
+    with pytest.raises(ValueError, match=message):
+        EnvConfig.from_dict({**EnvConfig().to_dict(), old: 1})
+    with pytest.raises(ValueError, match=message):
+        EnvConfig().replace(**{old: 1})
+    with pytest.raises(ValueError, match=message):
+        EnvConfig.resolve(None, {old: 1})
+    with pytest.raises(ValueError, match=message):
+        gym.make("socialzoo/ActionSelection-v1", map="open_room", **{old: 1})
+    with pytest.raises(ValueError, match=message):
+        parallel_env(map="open_room", **{old: 1})
+
+
+def test_unknown_fields_are_named():
+    with pytest.raises(ValueError, match=r"unknown field\(s\) \['num_robot'\]"):
+        EnvConfig().replace(num_robot=2)
+    with pytest.raises(ValueError, match=r"EnvConfig.reward: unknown field"):
+        EnvConfig().replace(reward={"bonus": 1.0})
