@@ -78,10 +78,11 @@ POLICY_LABELS: dict[str, str] = {
 INTERVALS_NOTE = (
     "Two-sided 90% confidence intervals. Success rates: Wilson score intervals. Counts per episode "
     f"({', '.join(d.split(' (')[0] for n, d in TABLE_METRICS if n in COUNT_METRICS)}): "
-    f"bias-corrected and accelerated (BCa) bootstrap of the mean over episodes ({BOOTSTRAP_RESAMPLES:,} "
-    "resamples, seeded per table cell), so they never go below 0; with no count at all the interval is [0, 3.0 / n], the "
-    "exact Poisson bound for zero events. Every other mean: Student-t intervals. Time to goal is "
-    "averaged over successful episodes only (n given)."
+    "bias-corrected and accelerated (BCa) bootstrap of the mean over episodes "
+    f"({BOOTSTRAP_RESAMPLES:,} resamples, seeded per table cell), so they never go below 0; with "
+    "no count at all the interval is [0, 3.0 / n], the exact Poisson bound for zero events. Every "
+    "other mean: Student-t intervals. Time to goal is averaged over successful episodes only (n "
+    "given)."
 )
 
 

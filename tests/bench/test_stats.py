@@ -65,7 +65,7 @@ def test_edge_cases_and_bad_input():
     assert flat.low == flat.high == 2.0
     a, b = count_interval([0, 0, 4, 1], rng=rng(7)), count_interval([0, 0, 4, 1], rng=rng(7))
     assert a == b
-    with pytest.raises(ValueError, match="counts must be >= 0, got -1.0"):
+    with pytest.raises(ValueError, match=r"counts must be >= 0, got -1\.0"):
         count_interval([0, -1, 2], rng=rng())
     with pytest.raises(ValueError, match="resamples"):
         count_interval([0, 1], rng=rng(), resamples=0)
