@@ -3,6 +3,7 @@ whole test set, in its body (while the trial queue still refills rows) and in it
 queue ran dry, when only the last B episodes are left to finish).
 
 Run: python benchmarks/harness_throughput.py [--json] [--map gdc1] [--trials 100] [--batch-size 64]
+     [--no-compact]
 
 The tail starts at the step on which the last queued trial got a row: with N trials and B rows
 that is the step on which the (N - B)-th trial finished, so the split is measured from the
@@ -19,13 +20,15 @@ import time
 from socialzoo.bench.runner import BatchedRunner, Trial, TrialResult, make_spec
 
 
-def measure(map_name: str, policies: list[str], trials: int, batch: int) -> dict[str, float | int | str]:
+def measure(
+    map_name: str, policies: list[str], trials: int, batch: int, compact: bool = True
+) -> dict[str, float | int | str]:
     """Run `trials` scenarios of `<map>-quick` per policy once; return the figures."""
     test_set = f"{map_name}-quick"
     spec = make_spec(policies, [test_set], batch_size=batch)
     # Warm-up: compiled kernels, the map's tables and the policies, outside the timed run.
     BatchedRunner(spec).run([Trial(p, test_set, 0) for p in policies])
-    runner = BatchedRunner(spec)
+    runner = BatchedRunner(spec) if compact else BatchedRunner(spec, compact_tail=False)
     todo = [Trial(p, test_set, k) for p in policies for k in range(trials)]
     n, b = len(todo), min(batch, len(todo))
     finishes: list[tuple[float, float, int]] = []
@@ -48,7 +51,7 @@ def measure(map_name: str, policies: list[str], trials: int, batch: int) -> dict
     body_s, tail_s = tail_start - start, end - tail_start
     body_cpu, tail_cpu = tail_start_cpu - start_cpu, end_cpu - tail_start_cpu
     figures: dict[str, float | int | str] = {
-        "name": f"BatchedRunner {test_set} {'+'.join(policies)}",
+        "name": f"BatchedRunner {test_set} {'+'.join(policies)}{'' if compact else ' (no compaction)'}",
         "batch": b,
         "trials": n,
         "seconds": end - start,
@@ -82,8 +85,9 @@ def main() -> None:
     p.add_argument("--policies", default="goalone,ref", help="comma-separated policies")
     p.add_argument("--trials", type=int, default=100, help="scenarios per policy (at most 100)")
     p.add_argument("--batch-size", type=int, default=64, help="env rows stepped together (B)")
+    p.add_argument("--no-compact", action="store_true", help="keep finished rows in the batch (the old tail)")
     args = p.parse_args()
-    fig = measure(args.map, args.policies.split(","), args.trials, args.batch_size)
+    fig = measure(args.map, args.policies.split(","), args.trials, args.batch_size, not args.no_compact)
     if args.json:
         print(json.dumps(fig))
     else:
