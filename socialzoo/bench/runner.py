@@ -31,8 +31,9 @@ Backend = Literal["local", "ray"]
 BACKENDS: tuple[str, ...] = ("local", "ray")
 # Seconds without any result, once every worker has returned, before the run is declared lost.
 _DRAIN_TIMEOUT = 60.0
-# In the tail, the core is shrunk to its live rows when they are at most this share of its rows.
-_SHRINK = 0.5
+# Tail: shrink the core when at most this share of its rows is live. A compaction costs ~2-3 steps;
+# 0.75 steps 19% fewer tail rows than 0.5 (gdc1-quick, B = 64), in 12 compactions instead of 6.
+_SHRINK = 0.75
 
 
 @dataclass(frozen=True, order=True)
@@ -146,9 +147,9 @@ class BatchedRunner:
 
     Trials are run test set by test set (one core per map); within a test set, trials of several
     policies share the batch (each policy acts on the whole batch, its rows take its actions).
-    Once no trial is left to start, the core is shrunk to the rows still running whenever at
-    most half of its rows are (socialzoo.bench.compaction), so the tail steps no finished rows
-    beyond that; results are the same either way.
+    Once no trial is left to start, the core is shrunk to the rows still running whenever a
+    quarter of its rows or more have finished (socialzoo.bench.compaction), so the tail steps
+    few finished rows; results are the same either way.
 
     Args:
         spec: test sets, env configs, policies and batch size.

@@ -79,7 +79,7 @@ def test_results_do_not_depend_on_the_batch_and_the_tail_shrinks(test_set, seque
         stats[batch] = runner.stats
     assert by_batch[1] == by_batch[3] == by_batch[8] == as_rows(sequential)
     # B = 8, 10 trials: the queue runs dry after 2 finishes; then the core is shrunk to its live
-    # rows (at most half of its rows idle), so the tail steps far fewer rows than 8 per step.
+    # rows (at most a quarter of its rows idle), so the tail steps far fewer rows than 8 per step.
     shrunk = stats[8]
     assert shrunk.compactions >= 1
     assert shrunk.tail_row_steps < 0.75 * 8 * shrunk.tail_steps
