@@ -22,7 +22,13 @@ from typing import Any
 
 from socialzoo.bench.runner import BACKENDS, Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, summarize, write_summary_csv, write_summary_md
+from socialzoo.bench.tables import (
+    policy_label,
+    summarize,
+    write_summary_csv,
+    write_summary_md,
+    write_text_atomic,
+)
 from socialzoo.env.config import EnvConfig
 from socialzoo.nav.scenarios import TEST_SETS, TestSet
 
@@ -336,7 +342,7 @@ def run_benchmark(
         )
         store.set_meta("config", json.dumps(run_json, sort_keys=True))
         config_path = out / CONFIG_NAME
-        config_path.write_text(json.dumps(run_json, indent=2, sort_keys=True) + "\n")
+        write_text_atomic(config_path, json.dumps(run_json, indent=2, sort_keys=True) + "\n")
         files.append(config_path)
 
         pending: list[Trial] = []

@@ -20,6 +20,7 @@ from typing import Any, Literal
 import numpy as np
 
 from socialzoo.agents import Policy, make_policy
+from socialzoo.bench.compaction import RunStats, compact_core
 from socialzoo.env.config import EnvConfig
 from socialzoo.nav.scenarios import TestSet, generate_scenario, get_test_set
 from socialzoo.nav.subpolicies import HALT
@@ -30,6 +31,9 @@ Backend = Literal["local", "ray"]
 BACKENDS: tuple[str, ...] = ("local", "ray")
 # Seconds without any result, once every worker has returned, before the run is declared lost.
 _DRAIN_TIMEOUT = 60.0
+# Tail: shrink the core when at most this share of its rows is live. A compaction costs ~2-3 steps;
+# 0.75 steps 19% fewer tail rows than 0.5 (gdc1-quick, B = 64), in 12 compactions instead of 6.
+_SHRINK = 0.75
 
 
 @dataclass(frozen=True, order=True)
@@ -142,14 +146,20 @@ class BatchedRunner:
 
     Trials are run test set by test set (one core per map); within a test set, trials of several
     policies share the batch (each policy acts on the whole batch, its rows take its actions).
-    Rows without a trial left halt until the test set is done.
+    Once no trial is left to start, the core is shrunk to the rows still running whenever a
+    quarter of its rows or more have finished (socialzoo.bench.compaction), so the tail steps
+    few finished rows; results are the same either way.
 
     Args:
         spec: test sets, env configs, policies and batch size.
+        compact_tail: shrink the core in the tail (off: finished rows halt until the test set
+            is done, as with a step hook, where rows keep their numbers).
     """
 
-    def __init__(self, spec: RunSpec) -> None:
+    def __init__(self, spec: RunSpec, *, compact_tail: bool = True) -> None:
         self.spec = spec
+        self.compact_tail = compact_tail
+        self.stats = RunStats()
         self._policies: dict[str, Policy] = {}
 
     def policy(self, name: str) -> Policy:
@@ -168,12 +178,14 @@ class BatchedRunner:
             on_results: called with the trials that finished at each step, as they finish.
             on_step: called after every step with (core, trial of each row or None, the
                 observations (B, R, D) the actions were chosen on (a copy), actions (B, R),
-                StepResult), before finished rows are refilled.
+                StepResult), before finished rows are refilled. With a hook the core is never
+                shrunk, so a row keeps its number for the whole test set.
 
         Returns:
             The results, in the order of `trials`.
         """
         self.spec.check(trials)
+        self.stats = RunStats()
         results: dict[Trial, TrialResult] = {}
 
         def collect(batch: list[TrialResult]) -> None:
@@ -208,6 +220,8 @@ class BatchedRunner:
         row_trial: list[Trial | None] = [pending.popleft() for _ in range(b)]
         core.reset_rows(np.arange(b), [scenario(t) for t in row_trial if t is not None])
         actions = np.full((b, core.num_robots), HALT, dtype=np.int64)
+        compact = self.compact_tail and on_step is None
+        stats = self.stats
         while True:
             policy_rows: dict[str, list[int]] = {}
             for row, t in enumerate(row_trial):
@@ -221,6 +235,12 @@ class BatchedRunner:
                 actions[rows] = chosen[rows]
             obs = core.obs.copy() if on_step is not None else core.obs
             result = core.step(actions)
+            if pending:
+                stats.body_steps += 1
+                stats.body_row_steps += core.batch_size
+            else:
+                stats.tail_steps += 1
+                stats.tail_row_steps += core.batch_size
             if on_step is not None:
                 on_step(core, row_trial, obs, actions, result)
             active = np.array([t is not None for t in row_trial])
@@ -243,6 +263,12 @@ class BatchedRunner:
                     refill.append(scenario(t))
             if refill_rows:
                 core.reset_rows(np.array(refill_rows), refill)
+            live = [row for row, t in enumerate(row_trial) if t is not None]
+            if compact and not pending and 0 < len(live) <= _SHRINK * len(row_trial):
+                core = compact_core(core, live)
+                row_trial = [row_trial[row] for row in live]
+                actions = np.full((len(live), core.num_robots), HALT, dtype=np.int64)
+                stats.compactions += 1
 
 
 def run_chunk(trials: Sequence[Trial], spec: RunSpec, sink: ResultSink | None = None) -> list[TrialResult]:

@@ -1,5 +1,6 @@
-"""Confidence intervals for benchmark tables and figures: Student-t intervals for means and Wilson
-score intervals for success rates (90% by default, as in the paper).
+"""Confidence intervals for benchmark tables and figures: Student-t intervals for means, Wilson
+score intervals for success rates and bootstrap (BCa) intervals for mean counts per episode (90%
+by default, as in the paper).
 
 Pure Python and numpy (the t quantile is computed here, so scipy is not needed).
 """
@@ -14,6 +15,11 @@ from statistics import NormalDist
 import numpy as np
 
 CONFIDENCE = 0.9
+# Bootstrap resamples of a count interval: the Monte Carlo error of its 5% and 95% quantiles is
+# then about 1% of the interval's width.
+BOOTSTRAP_RESAMPLES = 10_000
+# Binomial draws per chunk of resamples (bounds the memory of a count interval).
+_CHUNK_DRAWS = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -159,3 +165,90 @@ def rate_interval(successes: int, n: int, confidence: float = CONFIDENCE) -> Int
     centre = (p + z * z / (2 * n)) / denom
     half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / denom
     return Interval(p, max(0.0, centre - half), min(1.0, centre + half), n)
+
+
+def count_interval(
+    values: np.ndarray | list[float],
+    confidence: float = CONFIDENCE,
+    *,
+    rng: np.random.Generator,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+) -> Interval:
+    """Mean count per episode (collision steps) with a bootstrap (BCa) interval.
+
+    Counts are skewed and clumped (most episodes have none, a collision lasts several steps), so
+    a Student-t interval reaches below 0 and a Poisson interval, which assumes independent
+    events, is too narrow. The bootstrap resamples whole episodes, so it follows the counts' real
+    spread, and its bounds are means of resampled episodes: they never leave the range of the
+    data, never below 0. The bounds are the bias-corrected and accelerated (BCa, Efron 1987)
+    quantiles of the resampled means, which cover better than the plain percentile ones when the
+    counts are skewed and n is small. Drawing how often each distinct value is resampled (a
+    multinomial over the distinct values) gives the same distribution as drawing episodes, at a
+    fraction of the cost.
+
+    With no count at all the resamples would collapse to [0, 0]; the upper bound is then the
+    exact Poisson (Garwood) bound for zero events, -ln((1 - confidence) / 2) / n (3.0 / n at 90%).
+
+    NaN values are left out; n counts the rest.
+
+    Args:
+        values: non-negative numbers, one per episode.
+        confidence: two-sided level, e.g. 0.9.
+        rng: the generator of the resamples (seed it for reproducible tables).
+        resamples: number of bootstrap resamples.
+
+    Returns:
+        Interval(mean, low, high, n) with 0 <= low <= mean <= high; bounds NaN for n < 2, the
+        mean NaN for n = 0.
+
+    Raises:
+        ValueError: a negative value, a bad confidence or resample count.
+    """
+    _check_confidence(confidence)
+    if not isinstance(resamples, int) or isinstance(resamples, bool) or resamples < 1:
+        raise ValueError(f"count_interval: resamples must be an int >= 1, got {resamples!r}")
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    x = x[np.isfinite(x)]
+    if np.any(x < 0):
+        raise ValueError(f"count_interval: counts must be >= 0, got {float(x.min())!r}")
+    n = len(x)
+    if n == 0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    mean = float(x.mean())
+    if n == 1:
+        return Interval(mean, math.nan, math.nan, 1)
+    if mean == 0.0:
+        return Interval(0.0, 0.0, -math.log(0.5 - 0.5 * confidence) / n, n)
+    distinct, frequency = np.unique(x, return_counts=True)
+    if len(distinct) == 1:
+        return Interval(mean, mean, mean, n)
+    chunk = max(1, _CHUNK_DRAWS // len(distinct))
+    means = np.empty(resamples)
+    for start in range(0, resamples, chunk):
+        stop = min(resamples, start + chunk)
+        draws = rng.multinomial(n, frequency / n, size=stop - start)
+        means[start:stop] = draws @ distinct / n
+    levels = _bca_levels(means, mean, x, confidence)
+    low, high = (float(q) for q in np.quantile(means, levels))
+    # The quantiles bracket the mean for any real data; min/max keep the promise exact.
+    return Interval(mean, max(0.0, min(low, mean)), max(high, mean), n)
+
+
+def _bca_levels(means: np.ndarray, mean: float, x: np.ndarray, confidence: float) -> list[float]:
+    """The BCa quantile levels of bootstrap means of `x` for a two-sided `confidence` interval.
+
+    Bias correction z0 from the share of resampled means below the sample mean; acceleration
+    from the jackknife of the mean, which is the sample skewness / (6 sqrt(n)).
+    """
+    normal = NormalDist()
+    size = len(means)
+    below = (np.count_nonzero(means < mean) + 0.5 * np.count_nonzero(means == mean)) / size
+    z0 = normal.inv_cdf(min(max(below, 1.0 / size), 1.0 - 1.0 / size))
+    dev = x - mean
+    accel = float((dev**3).sum() / (6.0 * float((dev**2).sum()) ** 1.5))
+    levels = []
+    for q in (0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence):
+        z = z0 + normal.inv_cdf(q)
+        denom = 1.0 - accel * z
+        levels.append(normal.cdf(z0 + z / denom) if denom > 0 else 1.0)
+    return levels

@@ -7,11 +7,13 @@ everything that changes a trial's outcome (env config, policy parameters, test s
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
 import sqlite3
-from collections.abc import Iterable, Mapping, Sequence
+import time
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -35,6 +37,13 @@ TRIAL_COLUMNS = (
     "finished_at",
 )
 _SQL_TYPE = {"bool": "INTEGER", "int": "INTEGER", "float": "REAL"}
+# Seconds to wait for another process's write lock (a write holds it for milliseconds).
+BUSY_TIMEOUT = 60.0
+
+
+def _is_busy(err: sqlite3.OperationalError) -> bool:
+    text = str(err).lower()
+    return "locked" in text or "busy" in text
 
 
 class StoreError(Exception):
@@ -58,7 +67,7 @@ def _quote(name: str) -> str:
 
 
 class ResultsStore:
-    """An SQLite file of benchmark trials.
+    """An SQLite file of benchmark trials, safe to share between runs.
 
     Tables: meta (format, schema version, package version that created it, metric kinds, and the
     config of the latest run), configs (config hash -> resolved config JSON), and trials (one row
@@ -70,28 +79,38 @@ class ResultsStore:
     left untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
     loses at most the trials it had not handed over yet.
 
+    Several processes (two benchmark runs on the same output directory, say) may open and write
+    the same file at once: the schema is created inside a write transaction, and only if it is
+    not there yet; every write takes the write lock first (BEGIN IMMEDIATE) and waits up to
+    `timeout` seconds for another writer; the WAL journal lets readers read while one writes. A
+    trial stored by two runs is kept once (the first), so runs of the same trials simply share
+    them.
+
     Args:
         path: the SQLite file.
+        timeout: seconds to wait for another process's write lock before giving up (StoreError).
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, timeout: float = BUSY_TIMEOUT) -> None:
         self.path = Path(path)
-        fresh = not self.path.exists() or self.path.stat().st_size == 0
-        if not fresh:
+        self.timeout = timeout
+        if self.path.exists() and self.path.stat().st_size > 0:
             self._check_header()
         else:
             self.path.parent.mkdir(parents=True, exist_ok=True)
         try:
-            self._db = sqlite3.connect(self.path, timeout=30.0)
+            self._db = sqlite3.connect(self.path, timeout=timeout)
         except sqlite3.Error as err:
             raise StoreError(f"{self.path}: cannot open the results store: {err}") from None
         try:
-            if fresh:
-                self._create()
-            else:
-                self._check_store()
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=NORMAL")
+            if not self._tables():
+                with self._write():
+                    # Asked again inside the write lock: of two runs opening a new file at once,
+                    # one creates the schema and the other finds it there.
+                    if not self._tables():
+                        self._create()
+            self._check_store()
+            self._use_wal()
         except sqlite3.DatabaseError as err:
             self._db.close()
             raise StoreError(
@@ -112,12 +131,15 @@ class ResultsStore:
                 "refusing to use or overwrite it: choose another output directory"
             )
 
+    def _tables(self) -> set[str]:
+        return {row[0] for row in self._db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+
     def _check_store(self) -> None:
         problems = self._db.execute("PRAGMA quick_check").fetchall()
         if problems != [("ok",)]:
             detail = "; ".join(str(p[0]) for p in problems[:3])
             raise StoreError(f"{self.path}: corrupted results store ({detail}); the file was left as it is")
-        tables = {row[0] for row in self._db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        tables = self._tables()
         if not {"meta", "configs", "trials"} <= tables or self._meta("format") != STORE_FORMAT:
             raise StoreError(
                 f"{self.path} is an SQLite database but not a socialzoo results store "
@@ -130,31 +152,75 @@ class ResultsStore:
                 f"(this socialzoo reads version {SCHEMA_VERSION} and older)"
             )
 
+    def _use_wal(self) -> None:
+        """Switch the file to the WAL journal (kept in the file; a no-op once done)."""
+        # Changing the journal mode needs the file to itself: while another process is inside a
+        # transaction SQLite may answer "locked" at once instead of waiting, so wait here.
+        deadline = time.monotonic() + self.timeout
+        while True:
+            try:
+                self._db.execute("PRAGMA journal_mode=WAL")
+                break
+            except sqlite3.OperationalError as err:
+                if not _is_busy(err) or time.monotonic() > deadline:
+                    raise self._busy_error() if _is_busy(err) else err from None
+                time.sleep(0.05)
+        self._db.execute("PRAGMA synchronous=NORMAL")
+
     def _create(self) -> None:
         from socialzoo import __version__
 
-        with self._db:
-            self._db.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
-            self._db.execute("CREATE TABLE configs (config_hash TEXT PRIMARY KEY, config_json TEXT NOT NULL)")
-            self._db.execute(
-                "CREATE TABLE trials ("
-                "id INTEGER PRIMARY KEY, policy TEXT NOT NULL, map TEXT NOT NULL, test_set TEXT NOT NULL, "
-                "scenario_index INTEGER NOT NULL, seed TEXT NOT NULL, config_hash TEXT NOT NULL, "
-                "package_version TEXT NOT NULL, finished_at TEXT NOT NULL, "
-                "UNIQUE (policy, test_set, scenario_index, config_hash))"
-            )
-            meta = {
-                "format": STORE_FORMAT,
-                "schema_version": str(SCHEMA_VERSION),
-                "created_with": __version__,
-                "created_at": _now(),
-                "metric_kinds": "{}",
-            }
-            self._db.executemany("INSERT INTO meta VALUES (?, ?)", meta.items())
+        self._db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+        self._db.execute(
+            "CREATE TABLE IF NOT EXISTS configs (config_hash TEXT PRIMARY KEY, config_json TEXT NOT NULL)"
+        )
+        self._db.execute(
+            "CREATE TABLE IF NOT EXISTS trials ("
+            "id INTEGER PRIMARY KEY, policy TEXT NOT NULL, map TEXT NOT NULL, test_set TEXT NOT NULL, "
+            "scenario_index INTEGER NOT NULL, seed TEXT NOT NULL, config_hash TEXT NOT NULL, "
+            "package_version TEXT NOT NULL, finished_at TEXT NOT NULL, "
+            "UNIQUE (policy, test_set, scenario_index, config_hash))"
+        )
+        meta = {
+            "format": STORE_FORMAT,
+            "schema_version": str(SCHEMA_VERSION),
+            "created_with": __version__,
+            "created_at": _now(),
+            "metric_kinds": "{}",
+        }
+        self._db.executemany("INSERT OR IGNORE INTO meta VALUES (?, ?)", meta.items())
+
+    @contextlib.contextmanager
+    def _write(self) -> Iterator[None]:
+        """One write transaction: takes the write lock first (waiting for another writer up to
+        the timeout), commits at the end, rolls back on an error."""
+        try:
+            self._db.execute("BEGIN IMMEDIATE")
+        except sqlite3.OperationalError as err:
+            if _is_busy(err):
+                raise self._busy_error() from None
+            raise
+        try:
+            yield
+        except BaseException:
+            self._db.rollback()
+            raise
+        self._db.commit()
+
+    def _busy_error(self) -> StoreError:
+        return StoreError(
+            f"{self.path}: another process has held the results store's write lock for more than "
+            f"{self.timeout:g} s (another run writing to the same directory?); try again when it is "
+            "done, or use another output directory"
+        )
 
     def _meta(self, key: str) -> str | None:
         row = self._db.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
         return None if row is None else str(row[0])
+
+    def _refresh_kinds(self) -> None:
+        """Read the metric columns again: another process may have added some."""
+        self._kinds = json.loads(self._meta("metric_kinds") or "{}")
 
     # ------------------------------------------------------------------ context
     def close(self) -> None:
@@ -172,7 +238,7 @@ class ResultsStore:
         """Set a free-form meta entry (e.g. "config": the latest run's config JSON)."""
         if key in ("format", "schema_version", "metric_kinds"):
             raise ValueError(f"ResultsStore.set_meta: {key!r} is managed by the store")
-        with self._db:
+        with self._write():
             self._db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
 
     def meta(self, key: str) -> str | None:
@@ -182,7 +248,7 @@ class ResultsStore:
     def register_config(self, config_hash: str, config: Mapping[str, Any]) -> None:
         """Record the resolved config behind a config hash (kept as first recorded)."""
         text = json.dumps(config, sort_keys=True)
-        with self._db:
+        with self._write():
             self._db.execute("INSERT OR IGNORE INTO configs VALUES (?, ?)", (config_hash, text))
 
     def config(self, config_hash: str) -> dict[str, Any] | None:
@@ -230,7 +296,8 @@ class ResultsStore:
             return 0
         added = 0
         finished = _now()
-        with self._db:
+        with self._write():
+            self._refresh_kinds()
             for row in rows:
                 metrics = dict(row["metrics"])
                 self._ensure_columns(metrics)
@@ -273,6 +340,7 @@ class ResultsStore:
             if value is not None:
                 where.append(f"{column} = ?")
                 args.append(value)
+        self._refresh_kinds()
         columns = [*TRIAL_COLUMNS, *self._kinds]
         sql = f"SELECT {', '.join(map(_quote, columns))} FROM trials"
         if where:
@@ -296,6 +364,7 @@ class ResultsStore:
     @property
     def metric_names(self) -> list[str]:
         """Metric columns, in the order they were first stored."""
+        self._refresh_kinds()
         return list(self._kinds)
 
 

@@ -1,18 +1,30 @@
 """Benchmark tables: per policy and map, the success rate and every metric's mean with its 90%
 confidence interval, as summary.csv and summary.md (the paper's success table and metric tables).
+
+Intervals: Wilson score for success rates, bootstrap (BCa) for mean counts per episode
+(COUNT_METRICS), Student-t for every other mean (socialzoo.bench.stats).
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
+import os
+import zlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from socialzoo.bench.stats import CONFIDENCE, mean_interval, rate_interval
+from socialzoo.bench.stats import (
+    BOOTSTRAP_RESAMPLES,
+    CONFIDENCE,
+    count_interval,
+    mean_interval,
+    rate_interval,
+)
 
 # Metrics of the tables: (column, description). time_to_goal is averaged over successful
 # episodes only (the paper's figure); every other metric over all episodes with a finite value.
@@ -33,6 +45,11 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("max_blame", "blame (max per episode)"),
 )
 SUCCESS_ONLY = ("time_to_goal",)
+# Counts per episode: skewed, mostly zero, never negative; their means get a bootstrap interval.
+COUNT_METRICS = ("human_collisions", "wall_collisions")
+# Seed of the bootstrap resamples: with the cell's names it seeds one generator per table cell,
+# so a table is reproducible and a cell does not change when other policies or maps are added.
+BOOTSTRAP_SEED = 0
 
 # The paper's success rates in percent (SPEC section 10): policy -> (training map, transfer map).
 PAPER_SUCCESS: dict[str, tuple[float, float]] = {
@@ -55,6 +72,18 @@ POLICY_LABELS: dict[str, str] = {
     "dqn": "DQN",
     "ppo": "PPO",
 }
+
+
+# The footer of summary.md: which interval each kind of number has.
+INTERVALS_NOTE = (
+    "Two-sided 90% confidence intervals. Success rates: Wilson score intervals. Counts per episode "
+    f"({', '.join(d.split(' (')[0] for n, d in TABLE_METRICS if n in COUNT_METRICS)}): "
+    "bias-corrected and accelerated (BCa) bootstrap of the mean over episodes "
+    f"({BOOTSTRAP_RESAMPLES:,} resamples, seeded per table cell), so they never go below 0; with "
+    "no count at all the interval is [0, 3.0 / n], the exact Poisson bound for zero events. Every "
+    "other mean: Student-t intervals. Time to goal is averaged over successful episodes only (n "
+    "given)."
+)
 
 
 def policy_label(policy: str) -> str:
@@ -81,6 +110,12 @@ def csv_columns() -> list[str]:
     return columns
 
 
+def cell_rng(seed: int, policy: str, map_name: str, metric: str) -> np.random.Generator:
+    """The bootstrap generator of one table cell: seeded by `seed` and the cell's names."""
+    names = [zlib.crc32(text.encode()) for text in (policy, map_name, metric)]
+    return np.random.default_rng([seed, *names])
+
+
 def _ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
     seen = list(dict.fromkeys(values))
     if order is None:
@@ -94,6 +129,7 @@ def summarize(
     policies: Sequence[str] | None = None,
     maps: Sequence[str] | None = None,
     confidence: float = CONFIDENCE,
+    seed: int = BOOTSTRAP_SEED,
 ) -> list[dict[str, Any]]:
     """One summary per (policy, map) of stored trial rows (ResultsStore.rows).
 
@@ -101,10 +137,12 @@ def summarize(
         rows: trial dicts with policy, map, test_set, success and the TABLE_METRICS.
         policies, maps: display order (others follow in order of appearance).
         confidence: two-sided level of the intervals.
+        seed: seed of the count intervals' bootstrap resamples (see `cell_rng`).
 
     Returns:
-        Dicts keyed by `csv_columns()`: success rate with a Wilson interval, metric means with
-        Student-t intervals (NaN where a metric is missing or has fewer than 2 finite values).
+        Dicts keyed by `csv_columns()`: success rate with a Wilson interval, mean counts
+        (COUNT_METRICS) with bootstrap (BCa) intervals, other metric means with Student-t
+        intervals (NaN where a metric is missing or has fewer than 2 finite values).
     """
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for row in rows:
@@ -132,7 +170,10 @@ def summarize(
                 )
                 if name in SUCCESS_ONLY:
                     values = values[success]
-                ci = mean_interval(values, confidence)
+                if name in COUNT_METRICS:
+                    ci = count_interval(values, confidence, rng=cell_rng(seed, policy, map_name, name))
+                else:
+                    ci = mean_interval(values, confidence)
                 entry[f"{name}_mean"] = ci.value
                 entry[f"{name}_ci_low"] = ci.low
                 entry[f"{name}_ci_high"] = ci.high
@@ -144,14 +185,27 @@ def summarize(
 
 def write_summary_csv(summary: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
     """Write `summarize` output as CSV (columns `csv_columns()`, NaN written as an empty cell)."""
+    columns = csv_columns()
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=columns)
+    writer.writeheader()
+    for entry in summary:
+        writer.writerow({c: _csv_value(entry.get(c)) for c in columns})
+    return write_text_atomic(path, text.getvalue())
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write a text file whole or not at all: a reader, or another run writing the same file at
+    the same time, never sees half of it (a temporary file of this process, then a rename)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    columns = csv_columns()
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=columns)
-        writer.writeheader()
-        for entry in summary:
-            writer.writerow({c: _csv_value(entry.get(c)) for c in columns})
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with tmp.open("w", newline="") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 
@@ -214,9 +268,9 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
     lines = [f"# {title}", ""]
     trials = sorted({int(e["trials"]) for e in summary})
     lines.append(
-        f"Trials per policy and map: {', '.join(map(str, trials))}. Intervals are two-sided 90% "
-        "confidence intervals: Wilson score intervals for success rates, Student-t intervals for "
-        "means. Success: goal reached within the time limit with no human and no wall collision."
+        f"Trials per policy and map: {', '.join(map(str, trials))}. Success: goal reached within the "
+        "time limit with no human and no wall collision. Values in brackets are two-sided 90% "
+        "confidence intervals (which ones: see the end)."
     )
     lines += ["", "## Success rate (%)", ""]
     header = ["policy"]
@@ -258,6 +312,7 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
                     text += f" (n={e[f'{name}_n']})"
                 cells.append(text)
             lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "## Intervals", "", INTERVALS_NOTE]
     return "\n".join(lines) + "\n"
 
 
@@ -265,7 +320,4 @@ def write_summary_md(
     summary: Sequence[Mapping[str, Any]], path: str | Path, *, title: str = "Benchmark results"
 ) -> Path:
     """Write `summary_markdown` to a file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(summary_markdown(summary, title=title))
-    return path
+    return write_text_atomic(path, summary_markdown(summary, title=title))

@@ -70,6 +70,29 @@ def test_every_trial_once_and_the_batch_stays_full(test_set):
     assert len(active) <= sum(steps) / batch + max(steps)
 
 
+def test_results_do_not_depend_on_the_batch_and_the_tail_shrinks(test_set, sequential):
+    trials = trials_for(5)
+    by_batch, stats = {}, {}
+    for batch in (1, 3, 8):
+        runner = BatchedRunner(spec_for(test_set, batch))
+        by_batch[batch] = as_rows(runner.run(trials))
+        stats[batch] = runner.stats
+    assert by_batch[1] == by_batch[3] == by_batch[8] == as_rows(sequential)
+    # B = 8, 10 trials: the queue runs dry after 2 finishes; then the core is shrunk to its live
+    # rows (at most a quarter of its rows idle), so the tail steps far fewer rows than 8 per step.
+    shrunk = stats[8]
+    assert shrunk.compactions >= 1
+    assert shrunk.tail_row_steps < 0.75 * 8 * shrunk.tail_steps
+    full = BatchedRunner(spec_for(test_set, 8), compact_tail=False)
+    assert as_rows(full.run(trials)) == by_batch[8]
+    assert full.stats.compactions == 0
+    assert full.stats.tail_row_steps == 8 * full.stats.tail_steps
+    assert (full.stats.tail_steps, full.stats.body_steps) == (shrunk.tail_steps, shrunk.body_steps)
+    assert shrunk.tail_row_steps < full.stats.tail_row_steps
+    # Nothing queued behind a batch of 1: every step is a tail step of one row.
+    assert stats[1].compactions == 0 and stats[1].tail_row_steps == stats[1].tail_steps
+
+
 def test_batched_equals_sequential(test_set, sequential):
     batched = evaluate(trials_for(5), spec_for(test_set, 4), workers=1)
     assert as_rows(batched) == as_rows(sequential)

@@ -1,6 +1,8 @@
-"""The results store: resume after a killed run, rereads, bad files and bad names."""
+"""The results store: resume after a killed run, rereads, bad files and bad names, and two
+processes creating and writing the same store at once."""
 
 import math
+import multiprocessing
 import shutil
 import sqlite3
 
@@ -186,3 +188,94 @@ def test_unknown_policy_and_map_names(rooms, tmp_path):
         run_benchmark(config(trials=21), tmp_path / "out", test_sets=rooms, progress=False, figures=False)
     with pytest.raises(ValueError, match=r"BenchmarkConfig\.backend"):
         config(backend="slurm")
+
+
+# ---------------------------------------------------------------------------- two processes at once
+def trial_row(index, writer):
+    """A trial row whose values depend on the index only, plus a metric of the writer's own."""
+    return {
+        "policy": "ref",
+        "map": "m",
+        "test_set": "t",
+        "scenario_index": index,
+        "seed": 1000 + index,
+        "config_hash": "h",
+        "package_version": "0",
+        "metrics": {"success": index % 3 == 0, "steps": 10 * index, f"only_{writer}": 0.5},
+    }
+
+
+def write_trials(paths, writer, indices, barrier):
+    """Child process: for each path, open (create) the store at the same moment as the other
+    child, then store the trials one transaction each."""
+    for path in paths:
+        barrier.wait(timeout=60)
+        with ResultsStore(path) as store:
+            store.register_config("h", {"writer": writer})
+            store.set_meta("config", writer)
+            for i in indices:
+                store.add([trial_row(i, writer)])
+
+
+def run_children(target, args_a, args_b):
+    ctx = multiprocessing.get_context("spawn")
+    barrier = ctx.Barrier(2)
+    children = [ctx.Process(target=target, args=(*args, barrier)) for args in (args_a, args_b)]
+    for child in children:
+        child.start()
+    for child in children:
+        child.join(timeout=300)
+    return [child.exitcode for child in children]
+
+
+def test_two_processes_create_and_write_one_store(tmp_path):
+    paths = [tmp_path / f"round{k}" / "results.sqlite" for k in range(3)]
+    codes = run_children(write_trials, (paths, "a", range(0, 40)), (paths, "b", range(20, 60)))
+    assert codes == [0, 0]
+    for path in paths:
+        with ResultsStore(path) as store:
+            rows = store.rows()
+            assert len(store) == 60
+            assert {"only_a", "only_b"} <= set(store.metric_names)
+            assert store.config("h") in ({"writer": "a"}, {"writer": "b"})
+        assert [r["scenario_index"] for r in rows] == list(range(60))  # each once
+        for r in rows:
+            i = r["scenario_index"]
+            assert (r["seed"], r["success"], r["steps"]) == (1000 + i, i % 3 == 0, 10 * i)
+            # Rows 20-39 were offered by both writers; whichever stored first, one row is kept.
+            assert (r["only_a"] == 0.5) or (r["only_b"] == 0.5)
+        with sqlite3.connect(path) as db:
+            assert db.execute("PRAGMA journal_mode").fetchone() == ("wal",)
+        db.close()
+
+
+def run_rooms_benchmark(out, map_path, barrier):
+    """Child process: the benchmark of `config()` on the rooms test set into `out`."""
+    rooms = {
+        "rooms": TestSet(str(map_path), 7, 20, ScenarioConfig(min_humans=2, max_humans=5), name="rooms-test")
+    }
+    barrier.wait(timeout=60)
+    run_benchmark(config(), out, test_sets=rooms, progress=False, figures=False)
+
+
+def test_two_benchmark_runs_share_one_output_directory(rooms_map_path, uninterrupted, tmp_path):
+    codes = run_children(run_rooms_benchmark, (tmp_path, rooms_map_path), (tmp_path, rooms_map_path))
+    assert codes == [0, 0]
+    assert same_rows(stored(tmp_path), stored(uninterrupted))  # every trial once, as a lone run stores it
+    assert (tmp_path / "summary.md").read_text() == (uninterrupted / "summary.md").read_text()
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_a_store_locked_too_long_is_reported_plainly(tmp_path):
+    path = tmp_path / "r.sqlite"
+    ResultsStore(path).close()
+    holder = sqlite3.connect(path)
+    holder.execute("BEGIN IMMEDIATE")  # another process writing, for longer than we wait
+    try:
+        with ResultsStore(path, timeout=0.2) as store:
+            with pytest.raises(StoreError, match=r"another process has held the results store's write lock"):
+                store.add([trial_row(0, "a")])
+            assert len(store) == 0  # reading still works meanwhile (WAL)
+    finally:
+        holder.rollback()
+        holder.close()

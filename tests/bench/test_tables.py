@@ -130,6 +130,30 @@ def test_markdown_has_the_paper_table(tmp_path):
     assert "(n=9)" in text
 
 
+def test_count_metrics_get_intervals_that_stay_at_or_above_zero(tmp_path):
+    rows = rows_for("ref", "gdc1", 50, 100)
+    for i, row in enumerate(rows):
+        row["human_collisions"] = (5, 2, 1)[i] if i < 3 else 0  # the 0.08 [-0.02, 0.18]
+        row["wall_collisions"] = 0
+    (entry,) = summarize(rows)
+    assert entry["human_collisions_mean"] == 0.08
+    assert 0.0 <= entry["human_collisions_ci_low"] < 0.08 < entry["human_collisions_ci_high"]
+    assert entry["wall_collisions_ci_low"] == 0.0
+    assert entry["wall_collisions_ci_high"] == pytest.approx(-math.log(0.05) / 100)
+    # Other means keep their Student-t interval.
+    assert entry["mean_force_ci_low"] == mean_interval([r["mean_force"] for r in rows]).low
+    # Seeded per cell: the same numbers again, and when another policy joins the table.
+    again = summarize(rows + rows_for("goalone", "gdc1", 9, 10))[0]
+    for key in ("human_collisions_ci_low", "human_collisions_ci_high"):
+        assert again[key] == entry[key]
+    assert summarize(rows, seed=1)[0]["human_collisions_ci_high"] != entry["human_collisions_ci_high"]
+    text = summary_markdown([entry])
+    footer = text[text.index("## Intervals") :]
+    assert "Wilson" in footer and "Student-t" in footer
+    assert "human collision steps, wall collision steps): bias-corrected and accelerated (BCa)" in footer
+    assert "0.08 [0.0" in text
+
+
 def test_figures_are_written(tmp_path):
     pytest.importorskip("matplotlib")
     from socialzoo.bench.figures import plot_summary
