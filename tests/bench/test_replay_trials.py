@@ -113,3 +113,16 @@ def test_compare_metrics():
     assert compare_metrics(stored, {**stored, "total_reward": 1.5 * (1 + 1e-12)}) == []
     wrong = compare_metrics(stored, {**stored, "steps": 11, "time_to_goal": 2.0})
     assert wrong == ["steps: stored 10, replayed 11", "time_to_goal: stored nan, replayed 2.0"]
+
+
+def test_a_changed_configuration_is_flagged(results, tmp_path):
+    """The config hash recomputed now differs from the stored one: the replay says so."""
+    copy = tmp_path / "results"
+    shutil.copytree(results, copy)
+    with sqlite3.connect(copy / "results.sqlite") as db:
+        run = json.loads(db.execute("SELECT value FROM meta WHERE key = 'config'").fetchone()[0])
+        run["test_sets"]["open-mini"]["base_seed"] += 1  # as if the test set had been redefined
+        db.execute("UPDATE meta SET value = ? WHERE key = 'config'", (json.dumps(run),))
+    (trial,) = find_trials(copy, 0, policies=["goalone"])
+    done = replay_trial(trial, laser_rays=0)
+    assert done.code_changed is True and done.mismatches == []
