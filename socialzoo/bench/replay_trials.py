@@ -165,13 +165,13 @@ def find_trials(
     with ResultsStore(path) as store:
         run = json.loads(store.meta("config") or "{}")
         rows = store.rows(indices=[index])
-        everything = store.rows() if not rows else rows
         wanted = [p.lower() for p in policies] if policies else None
         if test_set is not None:
             rows = [r for r in rows if test_set in (r["test_set"], r["map"])]
         if wanted is not None:
             rows = [r for r in rows if r["policy"] in wanted]
         if not rows:
+            everything = store.rows()
             held = sorted({(r["policy"], r["test_set"]) for r in everything})
             indices = sorted({r["scenario_index"] for r in everything})
             span = f"scenario indices {indices[0]}..{indices[-1]}" if indices else "no trials"
