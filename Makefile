@@ -4,7 +4,11 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench venv clean
+CHROMIUM := /usr/bin/chromium
+# apt-get needs root: sudo when make runs as another user.
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: run test lint bench venv clean chromium
 
 venv: $(STAMP)
 
@@ -22,7 +26,15 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check socialzoo tests benchmarks tools
 	$(VENV)/bin/mypy
 
-test: $(STAMP) lint
+# The episode viewer's browser test needs Debian's chromium (driven by Playwright from the dev extra).
+chromium:
+	@test -x $(CHROMIUM) || { \
+		echo "installing Debian's chromium for the browser test"; \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -qq && \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; \
+	}
+
+test: $(STAMP) chromium lint
 	$(VENV)/bin/pytest -q -n 2 tests
 
 bench: $(STAMP)

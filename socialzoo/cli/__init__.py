@@ -18,6 +18,7 @@ COMMANDS: tuple[str, ...] = (
     "socialzoo.cli.benchmark_cmd",  # benchmark, demos
     "socialzoo.cli.demo_cmd",  # demo
     "socialzoo.cli.map_cmd",  # map list|show|import|validate
+    "socialzoo.cli.replay_cmd",  # replay
     "socialzoo.cli.train_cmd",  # train <trainer>
 )
 

@@ -1,0 +1,301 @@
+"""The episode viewer's recorder: run policies on one scenario and keep every step's arrays
+(socialzoo.render.replay_data.EpisodeTrace), for `socialzoo replay`.
+
+Each policy runs its own batch-of-one core, so a recording is the same episode the benchmark runner
+plays for that scenario (rows of a batch never interact). The env does not compute the laser scan
+by default; the recorder scans every state itself (socialzoo.core.laser), which changes nothing
+in the episode.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.agents import Policy, make_policy
+from socialzoo.core.config import LaserConfig
+from socialzoo.core.laser import laser_scan, ray_angles
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore, StepResult
+from socialzoo.env.scenario_source import ScenarioStream
+from socialzoo.nav.maps import Map, load_map
+from socialzoo.nav.scenarios import Scenario
+from socialzoo.render.replay_data import EpisodeTrace, ReplayScene
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A policy to record: its registry name, make_policy keyword arguments, and panel label.
+
+    Attributes:
+        name: registry name (socialzoo.agents.POLICIES).
+        kwargs: make_policy keyword arguments, e.g. {"path": "ppo.zip"} for a learned policy.
+        label: the panel's title (default: the name, with the file name for a learned policy).
+    """
+
+    name: str
+    kwargs: dict[str, Any]
+    label: str
+
+    @classmethod
+    def parse(cls, text: str) -> PolicySpec:
+        """The spec of "name" or "name=PATH" (a learned policy's saved file).
+
+        Raises:
+            ValueError: an empty name.
+        """
+        name, _, path = text.partition("=")
+        name = name.strip().lower()
+        if not name:
+            raise ValueError(f"a policy must be NAME or NAME=PATH, got {text!r}")
+        if path:
+            return cls(name, {"path": path}, f"{name} ({Path(path).name})")
+        return cls(name, {}, name)
+
+    def build(self) -> Policy:
+        """The policy (make_policy).
+
+        Raises:
+            ValueError: an unknown name, or arguments the policy does not take (e.g. a path for
+                an engineered policy).
+        """
+        try:
+            return make_policy(self.name, **self.kwargs)
+        except TypeError as err:
+            raise ValueError(f"policy {self.name!r} cannot be built with {self.kwargs}: {err}") from None
+
+
+def benchmark_scenario(env_config: EnvConfig, seed: int, world_map: Map | None = None) -> Scenario:
+    """The scenario of `seed` as `socialzoo demo` makes it: the env config's scenario generator
+    (the benchmark's, or its scenario family's) with the config's robot count."""
+    m = world_map if world_map is not None else load_map(env_config.map)
+    stream = ScenarioStream(m, 1, env_config.num_robots, env_config.scenario, env_config.family)
+    return stream.make(seed)
+
+
+def _outcome(metrics: dict[str, Any], wall: bool, truncated: bool) -> str:
+    """One phrase for how the episode ended."""
+    if metrics.get("success"):
+        return "success"
+    if metrics.get("reached"):
+        return "goal reached after a collision"
+    if wall:
+        return "wall collision"
+    if truncated:
+        return "time limit"
+    return "ended"
+
+
+def record_episode(
+    env_config: EnvConfig,
+    scenario: Scenario,
+    policy: Policy,
+    *,
+    label: str | None = None,
+    laser: LaserConfig | None = None,
+    laser_rays: int | None = None,
+    laser_stride: int = 1,
+    world_map: Map | None = None,
+) -> EpisodeTrace:
+    """Run `policy` on `scenario` until the episode ends and keep every state and step.
+
+    Args:
+        env_config: the env (map, time limit, ...); robot 0 is recorded.
+        scenario: the scenario to play.
+        policy: a socialzoo.agents Policy.
+        label: the panel's title (default: the policy's name).
+        laser: the scan drawn in the viewer (default: env_config.world.laser, else LaserConfig()).
+        laser_rays: scan with this many rays over the same field of view (default: the laser's
+            own count; 0: no scan); every ray's range is exact, there are just fewer of them.
+        laser_stride: scan every `laser_stride` states (and the last one): a scan of gdc1 costs
+            about as much as a step.
+        world_map: the already loaded map of env_config.map, if at hand.
+
+    Returns:
+        The EpisodeTrace, with the episode's metrics (the same as the benchmark's for this
+        scenario, env config and policy).
+    """
+    if not isinstance(laser_stride, int) or isinstance(laser_stride, bool) or laser_stride < 1:
+        raise ValueError(f"record_episode: laser_stride must be an int >= 1, got {laser_stride!r}")
+    if laser_rays is not None and (
+        not isinstance(laser_rays, int) or isinstance(laser_rays, bool) or laser_rays < 0
+    ):
+        raise ValueError(f"record_episode: laser_rays must be None or an int >= 0, got {laser_rays!r}")
+    laser = laser or env_config.world.laser or LaserConfig()
+    if laser_rays:
+        laser = dataclasses.replace(laser, num_rays=laser_rays)
+    core = SocialNavCore(env_config, 1, map_data=world_map)
+    core.reset_rows(np.array([0]), [scenario])
+    recorder = _Recorder(core, None if laser_rays == 0 else laser)
+    recorder.keep_state(scan=True)
+    while not core.done[0, 0]:
+        action = np.asarray(policy.act(core.obs, core))
+        if env_config.robot_action == "subpolicy":
+            action = action.reshape(core.done.shape)
+            chosen = int(action[0, 0])
+        else:
+            action = action.reshape((*core.done.shape, 2))
+            chosen = -1
+        recorder.keep_step(chosen, core.step(action))
+        steps = len(recorder.actions)
+        recorder.keep_state(scan=steps % laser_stride == 0 or bool(core.done[0, 0]))
+    name = getattr(policy, "name", type(policy).__name__)
+    return recorder.trace(label or str(name), scenario)
+
+
+class _Recorder:
+    """The lists one episode of a batch-of-one core fills, state by state and step by step."""
+
+    def __init__(self, core: SocialNavCore, laser: LaserConfig | None) -> None:
+        state = core.state
+        assert state is not None
+        self.core = core
+        self.laser = laser
+        self.present = np.flatnonzero(state.human_mask[0])
+        # Human slot -> index among the present humans (the trace keeps only those); the extra
+        # last entry stays -1, so the core's "no target" (-1) maps to -1.
+        self.slot_to_present = np.full(state.human_mask.shape[1] + 1, -1, dtype=np.int64)
+        self.slot_to_present[self.present] = np.arange(len(self.present))
+        self.states: dict[str, list[np.ndarray]] = {
+            k: [] for k in ("pose", "vel", "humans", "human_vel", "carrot")
+        }
+        self.plans: list[np.ndarray] = []
+        self.plan_index: list[int] = []
+        self.scans: list[np.ndarray] = []
+        self.scanned: list[int] = []
+        self.actions: list[int] = []
+        self.steps: dict[str, list[Any]] = {
+            k: [] for k in ("target", "reward", "force", "blame", "contacts", "wall")
+        }
+        self.wall_end = False
+        self.truncated = False
+
+    def keep_state(self, scan: bool) -> None:
+        """Keep the core's current state (and scan it when `scan`)."""
+        core = self.core
+        s = core.state
+        assert s is not None
+        kept = self.states
+        kept["pose"].append(s.robot_pose[0, 0].copy())
+        kept["vel"].append(s.robot_vel[0, 0].copy())
+        kept["humans"].append(s.human_pos[0, self.present].copy())
+        kept["human_vel"].append(s.human_vel[0, self.present].copy())
+        kept["carrot"].append(core.carrot[0, 0].copy())
+        length = int(core.navigator.plans.lengths[0, 0])
+        path = core.navigator.plans.paths[0, 0, :length].copy()
+        if not self.plans or self.plans[-1].shape != path.shape or not np.array_equal(self.plans[-1], path):
+            self.plans.append(path)
+        self.plan_index.append(len(self.plans) - 1)
+        # Without a laser only the start state gets its (empty) scan.
+        if (scan and self.laser is not None) or not self.scanned:
+            radius = core.config.world.human.radius
+            ranges = laser_scan(s, core.walls, self.laser, radius)[0, 0] if self.laser else np.zeros(0)
+            self.scans.append(ranges)
+            self.scanned.append(len(kept["pose"]) - 1)
+
+    def keep_step(self, action: int, result: StepResult) -> None:
+        """Keep the step's action and the values of its StepResult (row 0, robot 0)."""
+        self.actions.append(action)
+        steps = self.steps
+        steps["target"].append(int(self.slot_to_present[int(result.target_human[0, 0])]))
+        steps["reward"].append(float(result.reward[0, 0]))
+        steps["force"].append(float(result.force[0, 0]))
+        steps["blame"].append(float(result.blame[0, 0]))
+        steps["contacts"].append(int(result.human_collisions[0, 0]))
+        steps["wall"].append(bool(result.wall_collision[0, 0]))
+        self.wall_end = bool(
+            result.terminated[0, 0] and result.wall_collision[0, 0] and not result.reached[0, 0]
+        )
+        self.truncated = bool(result.truncated[0, 0])
+
+    def trace(self, label: str, scenario: Scenario) -> EpisodeTrace:
+        """The EpisodeTrace of what was kept, with the episode's metrics."""
+        metrics = self.core.episode_summaries([0])[0]
+        kept, steps = self.states, self.steps
+        count, humans = len(kept["pose"]), len(self.present)
+        return EpisodeTrace(
+            label=label,
+            dt=self.core.config.dt,
+            robot_pose=np.array(kept["pose"]),
+            robot_vel=np.array(kept["vel"]),
+            goal=np.asarray(scenario.robot_goals[0], dtype=np.float64),
+            human_pos=np.array(kept["humans"]).reshape(count, humans, 2),
+            human_vel=np.array(kept["human_vel"]).reshape(count, humans, 2),
+            carrot=np.array(kept["carrot"]),
+            plans=tuple(self.plans),
+            plan_index=np.array(self.plan_index),
+            laser_angles=ray_angles(self.laser) if self.laser else np.zeros(0),
+            laser_steps=np.array(self.scanned, dtype=np.int64),
+            laser_ranges=np.array(self.scans).reshape(len(self.scanned), -1),
+            laser_max_range=self.laser.max_range if self.laser else LaserConfig().max_range,
+            action=np.array(self.actions, dtype=np.int64),
+            target_human=np.array(steps["target"], dtype=np.int64),
+            reward=np.array(steps["reward"], dtype=np.float64),
+            force=np.array(steps["force"], dtype=np.float64),
+            blame=np.array(steps["blame"], dtype=np.float64),
+            human_collisions=np.array(steps["contacts"], dtype=np.int64),
+            wall_collision=np.array(steps["wall"], dtype=bool),
+            metrics=metrics,
+            outcome=_outcome(metrics, self.wall_end, self.truncated),
+        )
+
+
+def replay_scene(env_config: EnvConfig, world_map: Map, title: str, subtitle: str = "") -> ReplayScene:
+    """The scene every panel shares: the map's walls and view bounds, the bodies' sizes."""
+    from socialzoo.render.frames import map_bounds
+
+    robot = env_config.world.robot
+    return ReplayScene(
+        title=title,
+        subtitle=subtitle,
+        map_name=world_map.name,
+        walls=world_map.walls,
+        bounds=map_bounds(world_map),
+        robot_length=robot.length,
+        robot_width=robot.width,
+        human_radius=env_config.world.human.radius,
+        goal_radius=env_config.goal_radius,
+    )
+
+
+def record_policies(
+    env_config: EnvConfig,
+    scenario: Scenario,
+    policies: Sequence[PolicySpec],
+    *,
+    laser_rays: int | None = None,
+    laser_stride: int = 1,
+    world_map: Map | None = None,
+) -> list[EpisodeTrace]:
+    """Record each policy on the same scenario (one panel each, in order); `laser_rays` and
+    `laser_stride` as in `record_episode`.
+
+    Raises:
+        ValueError: no policies, or an unknown policy name (make_policy's message).
+    """
+    if not policies:
+        raise ValueError("record_policies: at least one policy is needed")
+    m = world_map if world_map is not None else load_map(env_config.map)
+    built = [(spec, spec.build()) for spec in policies]  # fail on a bad name before any episode runs
+    traces = []
+    for spec, policy in built:
+        trace = record_episode(
+            env_config,
+            scenario,
+            policy,
+            label=spec.label,
+            laser_rays=laser_rays,
+            laser_stride=laser_stride,
+            world_map=m,
+        )
+        logger.debug("replay: %s: %s in %d steps", spec.label, trace.outcome, trace.num_steps)
+        traces.append(trace)
+    return traces

@@ -1,0 +1,250 @@
+"""`socialzoo replay`: one or several policies on one scenario, written as a self-contained HTML
+viewer (socialzoo.render.replay_html), from a seed or from a trial of a benchmark results store."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+
+def _policy_list(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated policies, got {text!r}")
+    return names
+
+
+def _count(low: int) -> Any:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}")
+        return value
+
+    return parse
+
+
+def register(subparsers: Any) -> None:
+    """Add `replay`."""
+    parser = subparsers.add_parser(
+        "replay",
+        help="write an episode (several policies side by side) as an HTML viewer",
+        description=(
+            "Run policies on one scenario and write one self-contained HTML file that plays the "
+            "episodes side by side on a shared timeline: walls, humans and their velocities, the robot's "
+            "footprint, laser, global plan and carrot, the sub-policy at each step, and charts of reward, "
+            "force and blame. The scenario comes from --map/--seed (as in socialzoo demo), or from a trial "
+            "stored by socialzoo benchmark (--results DIR --trial N), which is re-run and checked against "
+            "the stored metrics."
+        ),
+    )
+    parser.add_argument(
+        "--policy",
+        action="append",
+        type=_policy_list,
+        default=None,
+        metavar="NAME[=PATH][,...]",
+        help="policies, comma-separated or repeated; NAME=PATH loads a learned policy's file "
+        "(default ref; with --results: every policy stored for the trial)",
+    )
+    parser.add_argument(
+        "--policy-path", type=Path, default=None, help="saved file of the (single) learned policy"
+    )
+    parser.add_argument("--map", default=None, help="map name or JSON path (default gdc1)")
+    parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
+    parser.add_argument("--seed", type=int, default=None, help="scenario seed (default 0)")
+    parser.add_argument(
+        "--max-steps", type=_count(1), default=None, help="episode time limit override, steps"
+    )
+    parser.add_argument(
+        "--results", type=Path, default=None, help="a socialzoo benchmark --out directory (with --trial)"
+    )
+    parser.add_argument(
+        "--trial", type=_count(0), default=None, help="scenario index of the stored trial (with --results)"
+    )
+    parser.add_argument(
+        "--test-set", default=None, help="test set (or map) of the stored trial, if the store holds several"
+    )
+    parser.add_argument(
+        "--view", choices=("follow", "map"), default="follow", help="camera the page opens with"
+    )
+    parser.add_argument(
+        "--stride", type=_count(1), default=2, help="steps per stored frame (default 2 = 50 ms)"
+    )
+    parser.add_argument(
+        "--laser-rays", type=_count(0), default=60, help="laser rays drawn (default 60; 0: no laser)"
+    )
+    parser.add_argument("--out", type=Path, default=Path("episode.html"), help="the .html file to write")
+    parser.set_defaults(func=run_replay)
+
+
+def _specs(args: argparse.Namespace) -> list[Any]:
+    """The requested policies as PolicySpecs (none: an empty list)."""
+    from socialzoo.bench.replay import PolicySpec
+
+    texts = [t for group in (args.policy or []) for t in group]
+    specs = [PolicySpec.parse(t) for t in texts]
+    if args.policy_path is not None:
+        if len(specs) > 1 or (specs and specs[0].kwargs):
+            raise ValueError("--policy-path goes with a single --policy; for several use --policy NAME=PATH")
+        name = specs[0].name if specs else "ref"
+        specs = [PolicySpec.parse(f"{name}={args.policy_path}")]
+    names = [s.label for s in specs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"--policy names a policy twice: {names}")
+    return specs
+
+
+def _size(path: Path) -> str:
+    size = path.stat().st_size
+    return f"{size / 1e6:.1f} MB" if size >= 1e6 else f"{size / 1e3:.0f} kB"
+
+
+def _describe(trace: Any) -> str:
+    return f"{trace.outcome} at {trace.num_steps * trace.dt:.2f} s ({trace.num_steps} steps)"
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    """Run `socialzoo replay`; returns the exit status (1 when a stored trial is not reproduced)."""
+    from socialzoo.bench.store import StoreError
+    from socialzoo.nav.maps import MapError
+
+    try:
+        if args.out.suffix.lower() not in (".html", ".htm"):
+            raise ValueError(f"--out {args.out} must end in .html")
+        if (args.results is None) != (args.trial is None):
+            raise ValueError("--results and --trial go together")
+        if args.results is not None:
+            given = [f"--{n}" for n in ("map", "family", "seed", "max_steps") if getattr(args, n) is not None]
+            if given:
+                raise ValueError(
+                    f"{', '.join(o.replace('_', '-') for o in given)} cannot be combined with --results: "
+                    "a stored trial runs with its own map, scenario and env config"
+                )
+            return _replay_stored(args)
+        if args.test_set is not None:
+            raise ValueError("--test-set goes with --results")
+        return _replay_seed(args)
+    except (MapError, StoreError, FileNotFoundError, ValueError, KeyError) as err:
+        print(f"socialzoo replay: error: {err}", file=sys.stderr)
+        return 2
+
+
+def _encoding(args: argparse.Namespace) -> Any:
+    from socialzoo.render.replay_data import Encoding
+
+    return Encoding(stride=args.stride, laser_rays=args.laser_rays)
+
+
+def _replay_seed(args: argparse.Namespace) -> int:
+    from socialzoo.bench.replay import PolicySpec, benchmark_scenario, record_policies, replay_scene
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.nav.maps import load_map
+    from socialzoo.render.replay_html import write_replay_html
+
+    specs = _specs(args) or [PolicySpec.parse("ref")]
+    seed = 0 if args.seed is None else args.seed
+    config = EnvConfig(map=args.map or "gdc1", family=args.family)
+    if args.max_steps is not None:
+        config = config.replace(max_steps=args.max_steps)
+    m = load_map(config.map)
+    scenario = benchmark_scenario(config, seed, m)
+    traces = record_policies(
+        config,
+        scenario,
+        specs,
+        laser_rays=args.laser_rays,
+        laser_stride=args.stride,
+        world_map=m,
+    )
+    kind = f"{args.family} scenario" if args.family else "scenario"
+    title = f"{' vs '.join(t.label for t in traces)} on {m.name}, {kind} seed {seed}"
+    subtitle = (
+        f"{len(scenario.human_spawn)} humans; time limit {config.max_steps * config.dt:.0f} s "
+        f"({config.max_steps} steps of {config.dt * 1000:.0f} ms)"
+    )
+    path = write_replay_html(
+        args.out,
+        replay_scene(config, m, title, subtitle),
+        traces,
+        encoding=_encoding(args),
+        view=args.view,
+    )
+    print(f"{path}: {len(traces)} episode(s) on {m.name}, seed {seed}; {_size(path)}")
+    for trace in traces:
+        print(f"  {trace.label}: {_describe(trace)}")
+    return 0
+
+
+def _replay_stored(args: argparse.Namespace) -> int:
+    from socialzoo.bench.replay import record_episode, replay_scene
+    from socialzoo.bench.replay_trials import find_trials, replay_trial
+    from socialzoo.nav.maps import load_map
+    from socialzoo.render.replay_html import write_replay_html
+
+    specs = _specs(args)
+    stored = find_trials(args.results, args.trial, test_set=args.test_set)
+    first = stored[0]
+    m = load_map(first.env_config.map)
+    scenario = first.scenario(m)
+    rays = args.laser_rays
+    by_name = {t.policy: t for t in stored}
+    # The stored trials asked for (all of them by default); a policy the store lacks, or one
+    # loaded from a file given here, runs fresh on the trial's scenario and env config.
+    wanted = [(s, by_name.get(s.name) if not s.kwargs else None) for s in specs] or [
+        (None, t) for t in stored
+    ]
+    # Fail on a policy that cannot be built before any episode runs.
+    fresh = [spec.build() if trial is None and spec is not None else None for spec, trial in wanted]
+    traces, lines, failed = [], [], False
+    for (spec, trial), policy in zip(wanted, fresh, strict=True):
+        if trial is None:
+            assert spec is not None and policy is not None
+            trace = record_episode(
+                first.env_config,
+                scenario,
+                policy,
+                label=f"{spec.label} (not stored)",
+                laser_rays=rays,
+                laser_stride=args.stride,
+                world_map=m,
+            )
+            traces.append(trace)
+            lines.append(f"  {trace.label}: {_describe(trace)}; not in the store, run fresh")
+            continue
+        done = replay_trial(trial, laser_rays=rays, laser_stride=args.stride, world_map=m)
+        traces.append(done.trace)
+        note = " (the code or config changed since it was stored)" if done.code_changed else ""
+        if done.mismatches:
+            failed = True
+            lines.append(
+                f"  {done.trace.label}: {_describe(done.trace)}; DOES NOT reproduce the stored trial{note}: "
+                + "; ".join(done.mismatches)
+            )
+        else:
+            lines.append(
+                f"  {done.trace.label}: {_describe(done.trace)}; "
+                f"all {len(trial.metrics)} metrics match the stored trial{note}"
+            )
+    title = f"{first.test_set} scenario #{first.index}: {' vs '.join(t.label for t in traces)}"
+    config = first.env_config
+    subtitle = (
+        f"{m.name}, seed {first.seed}, {len(scenario.human_spawn)} humans; results {args.results}; "
+        f"time limit {config.max_steps * config.dt:.0f} s"
+    )
+    path = write_replay_html(
+        args.out, replay_scene(config, m, title, subtitle), traces, encoding=_encoding(args), view=args.view
+    )
+    print(
+        f"{path}: {first.test_set} scenario #{first.index} (seed {first.seed}), {len(traces)} episode(s); {_size(path)}"
+    )
+    print("\n".join(lines))
+    if failed:
+        print("socialzoo replay: the replay differs from the stored trial (see above)", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,100 @@
+"""The episode viewer's writer: recorded episodes -> one self-contained HTML file.
+
+The page inlines its stylesheet, its script (socialzoo/render/viewer/, package data) and the
+episodes as JSON, so it opens from disk with no network access and no other file.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Sequence
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+from socialzoo.render.replay_data import Encoding, EpisodeTrace, ReplayScene, encode_replay
+
+# Placeholders of viewer/replay.html, each replaced exactly once.
+_SLOTS = ("{{TITLE}}", "{{STYLE}}", "{{DATA}}", "{{SCRIPT}}")
+
+
+@cache
+def _asset(name: str) -> str:
+    """A file of socialzoo/render/viewer as text."""
+    return resources.files("socialzoo.render").joinpath("viewer", name).read_text(encoding="utf-8")
+
+
+def _script_safe_json(data: object) -> str:
+    """JSON that can sit inside a <script> element: no '<', '>' or '&' (escaped as \\u003c ...),
+    so no text in it can close the element or open a comment."""
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
+
+
+def replay_document(
+    scene: ReplayScene,
+    traces: Sequence[EpisodeTrace],
+    *,
+    encoding: Encoding | None = None,
+    view: str = "follow",
+) -> str:
+    """The viewer page of `traces` (one panel each, sharing one timeline) as an HTML string.
+
+    Args:
+        scene: the map and sizes shared by every panel.
+        traces: the episodes, in panel order.
+        encoding: what is kept and how precisely (default socialzoo.render.replay_data.Encoding()).
+        view: the camera the page opens with, "follow" or "map".
+
+    Raises:
+        ValueError: no traces, a bad view, or values that are not finite.
+    """
+    data = encode_replay(scene, traces, encoding=encoding, view=view)
+    try:
+        payload = _script_safe_json(data)
+    except ValueError as err:  # NaN or infinity in an array: the viewer cannot draw it
+        raise ValueError(f"replay_document: the episode data must be finite ({err})") from None
+    page = _asset("replay.html")
+    for slot in _SLOTS:
+        if page.count(slot) != 1:
+            raise RuntimeError(f"viewer/replay.html must hold {slot} exactly once")
+    # Replaced in one pass over the template, so text in one part never fills another's slot.
+    parts = {
+        "{{TITLE}}": html.escape(scene.title),
+        "{{STYLE}}": _asset("replay.css"),
+        "{{DATA}}": payload,
+        "{{SCRIPT}}": _asset("replay.js"),
+    }
+    out, rest = [], page
+    while rest:
+        positions = [(rest.find(s), s) for s in _SLOTS if s in rest]
+        if not positions:
+            out.append(rest)
+            break
+        at, slot = min(positions)
+        out += [rest[:at], parts[slot]]
+        rest = rest[at + len(slot) :]
+    return "".join(out)
+
+
+def write_replay_html(
+    path: str | Path,
+    scene: ReplayScene,
+    traces: Sequence[EpisodeTrace],
+    *,
+    encoding: Encoding | None = None,
+    view: str = "follow",
+) -> Path:
+    """Write the viewer page of `traces` (see `replay_document`) to `path`; returns the path.
+
+    Raises:
+        ValueError: as `replay_document`, or `path` not ending in .html / .htm.
+    """
+    path = Path(path)
+    if path.suffix.lower() not in (".html", ".htm"):
+        raise ValueError(f"write_replay_html: {path} must end in .html")
+    text = replay_document(scene, traces, encoding=encoding, view=view)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -1,0 +1,101 @@
+"""`socialzoo replay`: policies side by side from a seed, and stored benchmark trials re-run and
+checked against their stored metrics."""
+
+import json
+import re
+
+import pytest
+
+from socialzoo.cli import main as socialzoo_main
+
+
+def embedded(path):
+    text = path.read_text(encoding="utf-8")
+    match = re.search(r'<script type="application/json" id="replay-data">(.*?)</script>', text, re.S)
+    return json.loads(match.group(1))
+
+
+def test_replay_from_a_seed(tmp_path, capsys):
+    out = tmp_path / "ep.html"
+    argv = ["replay", "--policy", "goalone,ref", "--map", "open_room", "--seed", "3", "--max-steps", "60"]
+    assert socialzoo_main([*argv, "--view", "map", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith(f"{out}: 2 episode(s) on open_room, seed 3; ")
+    assert "  goalone: " in text and "  ref: " in text
+    data = embedded(out)
+    assert [e["label"] for e in data["episodes"]] == ["goalone", "ref"]
+    assert data["view"] == "map" and data["title"] == "goalone vs ref on open_room, scenario seed 3"
+    assert all(e["steps"] <= 60 for e in data["episodes"])
+    # Repeated --policy is the same as a list; the same seed gives the same file.
+    again = tmp_path / "again.html"
+    argv_repeated = ["replay", "--policy", "goalone", "--policy", "ref", *argv[3:], "--view", "map"]
+    assert socialzoo_main([*argv_repeated, "--out", str(again)]) == 0
+    assert again.read_text() == out.read_text()
+
+
+def test_replay_options_reach_the_file(tmp_path):
+    out = tmp_path / "ep.html"
+    argv = ["replay", "--map", "open_room", "--seed", "1", "--max-steps", "30", "--stride", "5"]
+    assert socialzoo_main([*argv, "--laser-rays", "7", "--out", str(out)]) == 0
+    (episode,) = embedded(out)["episodes"]
+    assert episode["label"] == "ref"  # the default policy
+    assert episode["frameSteps"][:3] == [0, 5, 10] and len(episode["laser"]["angles"]) == 7
+    assert socialzoo_main([*argv, "--laser-rays", "0", "--out", str(out)]) == 0
+    assert embedded(out)["episodes"][0]["laser"]["angles"] == []
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    """`socialzoo benchmark` of Ref on two gdc1-quick scenarios, 40 steps each."""
+    out = tmp_path_factory.mktemp("bench") / "results"
+    argv = ["benchmark", "--quick", "--policies", "ref", "--maps", "gdc1", "--trials", "2"]
+    argv += ["--max-steps", "40", "--workers", "1", "--batch-size", "2", "--no-figures", "--no-progress"]
+    assert socialzoo_main([*argv, "--out", str(out)]) == 0
+    return out
+
+
+def test_replay_a_stored_trial(tmp_path, results, capsys):
+    capsys.readouterr()
+    out = tmp_path / "trial.html"
+    assert socialzoo_main(["replay", "--results", str(results), "--trial", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "gdc1-quick scenario #1" in text
+    assert text.count("all 21 metrics match the stored trial") == 1
+    data = embedded(out)
+    assert [e["label"] for e in data["episodes"]] == ["ref (stored #1)"]
+    assert data["episodes"][0]["steps"] == 40
+    # A policy the store does not hold runs fresh beside the stored one, on the same scenario.
+    argv = ["replay", "--results", str(results), "--trial", "1", "--policy", "goalone,ref"]
+    assert socialzoo_main([*argv, "--test-set", "gdc1-quick", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "goalone (not stored): " in text and "not in the store, run fresh" in text
+    assert "ref (stored #1): " in text and "all 21 metrics match" in text
+    fresh, stored = embedded(out)["episodes"]
+    assert fresh["label"] == "goalone (not stored)" and fresh["robot"][:3] == stored["robot"][:3]
+    assert fresh["humanPos"][:10] == stored["humanPos"][:10]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--results", "x"], "--results and --trial go together"),
+        (["--trial", "2"], "--results and --trial go together"),
+        (["--results", "x", "--trial", "0", "--seed", "3"], "--seed cannot be combined with --results"),
+        (["--results", "nowhere", "--trial", "0"], "no results store"),
+        (["--policy", "robocop", "--map", "open_room"], "unknown policy 'robocop'"),
+        (["--policy", "ref,goalone", "--policy-path", "a.zip"], "--policy-path goes with a single --policy"),
+        (["--policy", "ref,ref"], "names a policy twice"),
+        (["--map", "narnia"], "narnia"),
+        (["--test-set", "gdc1-quick"], "--test-set goes with --results"),
+    ],
+)
+def test_replay_usage_errors(tmp_path, capsys, argv, message):
+    out = tmp_path / "ep.html"
+    assert socialzoo_main(["replay", *argv, "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_replay_refuses_other_suffixes(tmp_path, capsys):
+    assert socialzoo_main(["replay", "--map", "open_room", "--out", str(tmp_path / "ep.gif")]) == 2
+    assert "must end in .html" in capsys.readouterr().err

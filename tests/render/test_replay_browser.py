@@ -1,0 +1,196 @@
+"""The episode viewer in a real browser: headless Chromium (Debian's chromium package, driven by
+Playwright) opens a replay of two policies with no console errors and no network requests, the
+scrubber and the play button move the drawn frame, and the robot is drawn where its pose says.
+
+Skipped where Chromium or Playwright is missing, except under CI=true, where it fails instead
+(`make test` installs both).
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from socialzoo.agents import make_policy
+from socialzoo.bench.replay import benchmark_scenario, record_episode, replay_scene
+from socialzoo.env.config import EnvConfig
+from socialzoo.nav.maps import load_map
+from socialzoo.render.replay_data import Encoding
+from socialzoo.render.replay_html import write_replay_html
+
+CHROMIUM = Path(os.environ.get("SOCIALZOO_CHROMIUM", "/usr/bin/chromium"))
+CHROMIUM_FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+ROBOT_RGB = np.array([245, 140, 30])  # the viewer's robot colour (replay.js COLORS.robot)
+STRIDE = 2
+
+
+def _need_browser() -> None:
+    """Skip without Chromium or Playwright; fail instead under CI, which must run this test."""
+    problems = []
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        problems.append("the Python package playwright is missing (pip install -e '.[dev]')")
+    if not CHROMIUM.is_file():
+        problems.append(f"{CHROMIUM} is missing (apt-get install chromium; make test installs it)")
+    if problems:
+        message = "browser test: " + "; ".join(problems)
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(message + " (CI=true: this test must run)")
+        pytest.skip(message)
+
+
+@pytest.fixture(scope="module")
+def replay_file(tmp_path_factory):
+    """GoAlone and Ref on one open_room scenario (about 120 steps each)."""
+    config = EnvConfig(map="open_room", max_steps=120)
+    m = load_map(config.map)
+    scenario = benchmark_scenario(config, 3, m)
+    traces = [
+        record_episode(config, scenario, make_policy(name), laser_rays=40, laser_stride=STRIDE, world_map=m)
+        for name in ("goalone", "ref")
+    ]
+    path = tmp_path_factory.mktemp("viewer") / "episode.html"
+    write_replay_html(
+        path,
+        replay_scene(config, m, "goalone vs ref"),
+        traces,
+        encoding=Encoding(stride=STRIDE, laser_rays=40),
+    )
+    return path, traces
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    _need_browser()
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")),  # a fresh profile every run
+            executable_path=str(CHROMIUM),
+            headless=True,
+            args=CHROMIUM_FLAGS,
+            viewport={"width": 1200, "height": 900},
+            device_scale_factor=1,
+        )
+        yield context
+        context.close()
+
+
+@pytest.fixture
+def page(browser, replay_file):
+    """The replay, loaded; the fixture checks at teardown that nothing went wrong or out."""
+    path, _ = replay_file
+    page = browser.new_page()
+    errors: list[str] = []
+    requests: list[str] = []
+    page.on("console", lambda m: errors.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(f"page error: {e}"))
+    page.on("request", lambda r: requests.append(r.url) if not r.url.startswith("file:") else None)
+    page.goto(path.as_uri())
+    page.wait_for_function("document.body.dataset.ready === 'true'", timeout=15_000)
+    yield page
+    page.close()
+    assert errors == []
+    assert requests == []  # self-contained: no network at all
+
+
+def canvas_url(page, panel: int = 0) -> str:
+    return page.evaluate(f"document.querySelectorAll('canvas.scene')[{panel}].toDataURL('image/png')")
+
+
+def robot_pixels(png: bytes) -> np.ndarray:
+    """(N, 2) x, y of the pixels in the robot's colour."""
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    close = np.abs(rgb - ROBOT_RGB).max(axis=-1) <= 12
+    ys, xs = np.nonzero(close)
+    return np.stack((xs, ys), axis=1)
+
+
+def test_page_loads_with_both_panels(page, replay_file):
+    _, traces = replay_file
+    assert page.title() == "goalone vs ref"
+    assert page.locator("section.panel").count() == 2
+    assert page.locator("section.panel h2").all_inner_texts()[1].startswith("ref")
+    max_step = page.evaluate("window.socialzooReplay.maxStep")
+    assert max_step == max(t.num_steps for t in traces)
+    assert page.locator("#scrub").get_attribute("max") == str(max_step)
+
+
+def test_the_scrubber_moves_the_frame(page):
+    first = [canvas_url(page, 0), canvas_url(page, 1)]
+    scrub = page.locator("#scrub")
+    scrub.focus()
+    page.keyboard.press("End")  # the range input's own keyboard handling fires "input"
+    max_step = page.evaluate("window.socialzooReplay.maxStep")
+    assert scrub.input_value() == str(max_step) and page.evaluate("window.socialzooReplay.step") == max_step
+    last = [canvas_url(page, 0), canvas_url(page, 1)]
+    assert last[0] != first[0] and last[1] != first[1]  # both panels follow the shared clock
+    # A click in the middle of the slider lands near the middle of the episode.
+    box = scrub.bounding_box()
+    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    middle = page.evaluate("window.socialzooReplay.step")
+    assert abs(middle - max_step / 2) <= 0.1 * max_step
+    assert canvas_url(page, 0) not in (first[0], last[0])
+    assert page.locator("#clock").inner_text().startswith(f"t = {middle * 0.025:.2f} s")
+    # Arrow keys step one stored frame (outside the slider, which steps itself by one).
+    page.evaluate("document.activeElement.blur()")
+    page.keyboard.press("ArrowRight")
+    assert page.evaluate("window.socialzooReplay.step") == middle + STRIDE
+
+
+def test_play_advances_and_pause_stops(page):
+    page.click("#play")
+    page.wait_for_function("window.socialzooReplay.step >= 10", timeout=10_000)
+    page.click("#play")
+    stopped = page.evaluate("window.socialzooReplay.step")
+    assert page.evaluate("window.socialzooReplay.playing") is False
+    page.wait_for_timeout(200)
+    assert page.evaluate("window.socialzooReplay.step") == stopped
+
+
+@pytest.mark.parametrize("camera", ["follow", "map"])
+def test_screenshot_shows_the_robot_where_it_is(page, replay_file, camera):
+    _, traces = replay_file
+    trace = traces[1]
+    step = (trace.num_steps // 2) // STRIDE * STRIDE  # a stored frame
+    page.evaluate(f"window.socialzooReplay.setCamera('{camera}')")
+    page.evaluate("document.getElementById('show-laser').click()")  # the laser dots are red, not orange
+    page.evaluate(f"window.socialzooReplay.seek({step})")
+    canvas = page.locator("canvas.scene").nth(1)
+    box = canvas.bounding_box()
+    width, height = box["width"], box["height"]
+    if camera == "follow":
+        expected = np.array([width / 2, height / 2])
+    else:
+        bounds = page.evaluate("JSON.parse(document.getElementById('replay-data').textContent).scene.bounds")
+        x0, y0, x1, y1 = bounds
+        scale = 0.97 * min(width / (x1 - x0), height / (y1 - y0))
+        x, y = trace.robot_pose[step, :2]
+        expected = np.array(
+            [(x - (x0 + x1) / 2) * scale + width / 2, ((y0 + y1) / 2 - y) * scale + height / 2]
+        )
+    shot = canvas.screenshot()
+    found = robot_pixels(shot)
+    assert len(found) >= 30, "no robot in the screenshot"
+    assert np.abs(found.mean(axis=0) - expected).max() <= 4.0
+    assert np.abs(found - expected).max() <= 25  # and nowhere else
+    # The same pixels come back from the canvas itself (what the screenshot shows is what it drew).
+    url = canvas_url(page, 1)
+    assert len(robot_pixels(base64.b64decode(url.split(",", 1)[1]))) >= 30
