@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from socialzoo.core.jit import kernel
+from socialzoo.nav.distance_field import DistanceField, field_distance
 
 logger = logging.getLogger(__name__)
 
@@ -129,6 +130,30 @@ def carrot(
     return track(pos, paths, lengths, radius, max_skip, tolerance)[0]
 
 
+@dataclass(frozen=True)
+class Sight:
+    """What keeps the carrot in sight: the map's wall distance field and the clearance wanted.
+
+    A carrot is in sight when the straight line from the robot to it keeps at least
+    min(clearance, the robot's own wall distance, the carrot's wall distance) - tolerance from
+    every wall, read in the distance field (socialzoo.nav.distance_field): the robot can drive
+    straight to it without entering its wall margin.
+
+    Attributes:
+        field: the distance field (its `shape_args` and `codes`).
+        clearance: wanted distance from the line to walls, m (the local planner's wall distance).
+        tolerance: slack for the field's lookup error, m.
+        step: spacing of the carrot candidates along the path, m.
+        spacing: spacing of the field samples along a sight line, m.
+    """
+
+    field: DistanceField
+    clearance: float
+    tolerance: float = 0.02
+    step: float = 0.1
+    spacing: float = 0.05
+
+
 def track(
     pos: np.ndarray,
     paths: np.ndarray,
@@ -136,8 +161,14 @@ def track(
     radius: float = CARROT_RADIUS,
     max_skip: int | None = None,
     tolerance: float = 0.0,
+    sight: Sight | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """`carrot` and `distance_to_path` from one pass over the path segments.
+
+    With `sight`, a carrot the robot cannot drive to in a straight line (see Sight) is pulled back
+    along the path to the last point before the first one out of sight, going forward from the
+    robot's closest path point: the carrot waits at a corner or before a doorway until the robot
+    has come round, instead of pulling it into the wall corner that hides the path.
 
     Returns:
         (carrot (..., 2) world frame m, distance (...,) m).
@@ -152,13 +183,79 @@ def track(
         paths = np.concatenate((paths, paths), axis=1)
     out = np.empty(pos.shape)
     dist = np.empty(len(pos))
-    _track_rows(pos, paths, lengths, radius, -1 if max_skip is None else max_skip, tolerance, out, dist)
+    # Path positions (segment index, fraction) of the closest point and of the carrot.
+    where = np.empty((len(pos), 4))
+    _track_rows(pos, paths, lengths, radius, -1 if max_skip is None else max_skip, tolerance, out, dist, where)
+    if sight is not None:
+        f = sight.field
+        _keep_in_sight(
+            pos, paths, where, out, sight.clearance, sight.tolerance, sight.step, sight.spacing,
+            f.shape_args, f.codes,
+        )  # fmt: skip
     return out.reshape(*shape, 2), dist.reshape(shape)
 
 
 @kernel
-def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist):  # type: ignore[no-untyped-def]
-    """`track` for rows of pos (M, 2), paths (M, L >= 2, 2), lengths (M,); max_skip -1 is None."""
+def _in_sight(px, py, qx, qy, need, spacing, shape, codes):  # type: ignore[no-untyped-def]
+    """Whether the line from (px, py) to (qx, qy) keeps `need` from walls (the start excluded)."""
+    dx, dy = qx - px, qy - py
+    num = int(math.sqrt(dx * dx + dy * dy) / spacing) + 1
+    for i in range(1, num + 1):
+        f = i / num
+        if field_distance(px + f * dx, py + f * dy, shape, codes) < need:
+            return False
+    return True
+
+
+@kernel
+def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, shape, codes):  # type: ignore[no-untyped-def]
+    """Pull each row's carrot `out` (M, 2) back into sight along its path (see `track`).
+
+    where (M, 4): closest segment, its fraction, carrot segment, its fraction.
+    """
+    for m in range(pos.shape[0]):
+        px, py = pos[m, 0], pos[m, 1]
+        here = field_distance(px, py, shape, codes)
+        cx, cy = out[m, 0], out[m, 1]
+        need = min(clearance, here, field_distance(cx, cy, shape, codes)) - tolerance
+        if _in_sight(px, py, cx, cy, need, spacing, shape, codes):
+            continue
+        seg, frac = int(where[m, 0]), where[m, 1]
+        last_seg, last_frac = int(where[m, 2]), where[m, 3]
+        ax, ay = paths[m, seg, 0], paths[m, seg, 1]
+        bx, by = paths[m, seg + 1, 0], paths[m, seg + 1, 1]
+        # Start at the closest point; it stays the carrot if nothing further on is in sight.
+        best_x, best_y = ax + frac * (bx - ax), ay + frac * (by - ay)
+        blocked = False
+        while not blocked:
+            ax, ay = paths[m, seg, 0], paths[m, seg, 1]
+            bx, by = paths[m, seg + 1, 0], paths[m, seg + 1, 1]
+            seg_len = math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
+            end = last_frac if seg == last_seg else 1.0
+            inc = step / seg_len if seg_len > 0.0 else 1.0
+            while True:
+                frac = min(frac + inc, end)
+                qx, qy = ax + frac * (bx - ax), ay + frac * (by - ay)
+                need = min(clearance, here, field_distance(qx, qy, shape, codes)) - tolerance
+                if not _in_sight(px, py, qx, qy, need, spacing, shape, codes):
+                    blocked = True
+                    break
+                best_x, best_y = qx, qy
+                if frac >= end:
+                    break
+            if seg >= last_seg:
+                break
+            seg += 1
+            frac = 0.0
+        out[m, 0], out[m, 1] = best_x, best_y
+
+
+@kernel
+def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist, where):  # type: ignore[no-untyped-def]
+    """`track` for rows of pos (M, 2), paths (M, L >= 2, 2), lengths (M,); max_skip -1 is None.
+
+    where (M, 4) gets each row's closest segment and fraction along it, and the carrot's.
+    """
     r2 = radius * radius
     num_points = paths.shape[1]
     seg_dist = np.empty(num_points - 1)
@@ -200,10 +297,13 @@ def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist):  #
                 exit_at = k
                 break
         goal = lengths[m] - 1
+        where[m, 0], where[m, 1] = seg, t
         if (paths[m, goal, 0] - px) ** 2 + (paths[m, goal, 1] - py) ** 2 < r2:
             out[m, 0], out[m, 1] = paths[m, goal, 0], paths[m, goal, 1]
+            where[m, 2], where[m, 3] = max(goal - 1, 0), 1.0 if goal > 0 else 0.0
         elif seg_dist[seg] > radius:
             out[m, 0], out[m, 1] = closest_x, closest_y
+            where[m, 2], where[m, 3] = seg, t
         else:
             # Crossing of |p0 + u (p1 - p0) - pos| = radius nearer p1: the larger root.
             x0, y0 = paths[m, exit_at - 1, 0], paths[m, exit_at - 1, 1]
@@ -215,6 +315,9 @@ def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist):  #
             root = (-qb + math.sqrt(max(qb * qb - qa * qc, 0.0))) / (qa if qa > 0.0 else 1.0)
             root = min(max(root, 0.0), 1.0)
             out[m, 0], out[m, 1] = x0 + root * dx, y0 + root * dy
+            where[m, 2], where[m, 3] = exit_at - 1, root
+            if exit_at - 1 < seg or (exit_at - 1 == seg and root < t):
+                where[m, 2], where[m, 3] = seg, t
         dist[m] = best
 
 
@@ -245,6 +348,7 @@ class Navigator:
         replan_distance: float = REPLAN_DISTANCE,
         max_skip: int | None = 0,
         tolerance: float = 0.3,
+        sight: Sight | None = None,
     ) -> None:
         if carrot_radius <= 0:
             raise ValueError(f"Navigator carrot_radius must be > 0, got {carrot_radius!r}")
@@ -259,6 +363,7 @@ class Navigator:
         self.replan_distance = replan_distance
         self.max_skip = max_skip
         self.tolerance = tolerance
+        self.sight = sight
         self.plans = GlobalPlans.empty(batch_size, num_robots)
         self.goals = np.zeros((batch_size, num_robots, 2))
 
@@ -305,7 +410,7 @@ class Navigator:
         """
         plans = self.plans
         options = (self.carrot_radius, self.max_skip, self.tolerance)
-        target, dist = track(robot_pos, plans.paths, plans.lengths, *options)
+        target, dist = track(robot_pos, plans.paths, plans.lengths, *options, self.sight)
         stray = dist > self.replan_distance
         if stray.any():
             rows, robots = np.nonzero(stray)
@@ -316,6 +421,6 @@ class Navigator:
                 logger.debug("replanning %d robots failed: %s", len(rows), err)
             else:
                 plans.assign((rows, robots), paths, lengths)
-                new = track(pos, plans.paths[rows, robots], plans.lengths[rows, robots], *options)[0]
+                new = track(pos, plans.paths[rows, robots], plans.lengths[rows, robots], *options, self.sight)[0]
                 target[rows, robots] = new
         return target
