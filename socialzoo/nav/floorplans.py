@@ -40,8 +40,10 @@ class _Drawing:
         self.thickness = thickness
         self.segments: list[list[float]] = []
 
-    def piece(self, a: Point, b: Point) -> None:
-        """A solid wall from a to b (a line, or a thick outline around it)."""
+    def piece(self, a: Point, b: Point, extend: tuple[bool, bool] = (True, True)) -> None:
+        """A solid wall from a to b: a line, or a thick outline around it, grown by half the
+        thickness past each end that `extend` marks (so that walls meeting at a corner close it;
+        a door jamb is not grown, so the door keeps its width)."""
         (x0, y0), (x1, y1) = a, b
         if abs(x1 - x0) + abs(y1 - y0) < 1e-9:
             return
@@ -51,7 +53,7 @@ class _Drawing:
             return
         d = np.array([x1 - x0, y1 - y0]) / np.hypot(x1 - x0, y1 - y0)
         n = np.array([-d[1], d[0]]) * t
-        p0, p1 = np.array(a) - d * t, np.array(b) + d * t
+        p0, p1 = np.array(a) - d * t * extend[0], np.array(b) + d * t * extend[1]
         corners = [p0 + n, p1 + n, p1 - n, p0 - n]
         for k in range(4):
             c, e = corners[k], corners[(k + 1) % 4]
@@ -65,10 +67,11 @@ class _Drawing:
         for centre, width in sorted(doors):
             lo, hi = max(centre - 0.5 * width, 0.0), min(centre + 0.5 * width, length)
             if lo > at:
-                self.piece((a[0] + d[0] * at, a[1] + d[1] * at), (a[0] + d[0] * lo, a[1] + d[1] * lo))
+                start = (a[0] + d[0] * at, a[1] + d[1] * at)
+                self.piece(start, (a[0] + d[0] * lo, a[1] + d[1] * lo), (at == 0.0, False))
             at = max(at, hi)
         if at < length:
-            self.piece((a[0] + d[0] * at, a[1] + d[1] * at), b)
+            self.piece((a[0] + d[0] * at, a[1] + d[1] * at), b, (at == 0.0, True))
 
     def box(self, x0: float, y0: float, x1: float, y1: float) -> None:
         for a, b in (((x0, y0), (x1, y0)), ((x1, y0), (x1, y1)), ((x1, y1), (x0, y1)), ((x0, y1), (x0, y0))):

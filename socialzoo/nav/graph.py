@@ -83,6 +83,17 @@ def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np
     return free
 
 
+def segments_clear(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray, clearance: float) -> np.ndarray:
+    """Whether straight segments [p0, p1] (N, 2) keep `clearance` (m, at most 0.5) from every wall;
+    bool (N,)."""
+    from socialzoo.nav.maps import segment_clearance
+
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    if walls is None or walls.num_walls == 0 or len(p0) == 0:
+        return np.ones(len(p0), dtype=bool)
+    return np.asarray(segment_clearance(walls, p0, p1)[0] >= clearance)
+
+
 @dataclass(frozen=True)
 class PathTable:
     """All-pairs shortest paths of a graph.
@@ -314,7 +325,9 @@ class NavGraph:
         ]
 
     # ---------------------------------------------------------------- joining off-graph points
-    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True) -> Attachment:
+    def attach(
+        self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True, clearance: float = 0.0
+    ) -> Attachment:
         """Join off-graph points to the graph at the nearest point they can reach in a straight line.
 
         Candidates are the closest point of every edge and every node. For each query point the k
@@ -325,6 +338,9 @@ class NavGraph:
             points: (N, 2) query points, world frame, m.
             k: candidates per point in the first round.
             strict: raise for a point that reaches nothing; else mark it not found.
+            clearance: prefer candidates whose line keeps this from walls (m): the nearest such
+                one among a point's candidates wins, else the nearest wall-free one. 0: the
+                nearest wall-free candidate.
 
         Returns:
             The attachment of every point.
@@ -356,11 +372,11 @@ class NavGraph:
             order = np.take_along_axis(
                 order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1
             )
-            pick = self._first_free(points[rows], pts, order)
+            pick = self._first_free(points[rows], pts, order, clearance)
             missing = np.flatnonzero(pick < 0)
             if len(missing) and k < num_cand:
                 full = np.argsort(ds[missing], axis=1, kind="stable")
-                pick[missing] = self._first_free(points[rows][missing], pts[missing], full)
+                pick[missing] = self._first_free(points[rows][missing], pts[missing], full, clearance)
             if strict and np.any(pick < 0):
                 bad = rows[int(np.flatnonzero(pick < 0)[0])]
                 raise AttachError(
@@ -414,11 +430,21 @@ class NavGraph:
         ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
         return pts, ts, ds
 
-    def _first_free(self, points: np.ndarray, cand: np.ndarray, order: np.ndarray) -> np.ndarray:
-        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none."""
+    def _first_free(
+        self, points: np.ndarray, cand: np.ndarray, order: np.ndarray, clearance: float = 0.0
+    ) -> np.ndarray:
+        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none.
+
+        With clearance > 0, the first one whose line keeps `clearance` from walls if any does.
+        """
         m, kk = order.shape
         targets = np.take_along_axis(cand, order[..., None], axis=1)  # (M, K, 2)
-        free = segments_free(self.walls, np.repeat(points, kk, axis=0), targets.reshape(-1, 2)).reshape(m, kk)
+        starts = np.repeat(points, kk, axis=0)
+        free = segments_free(self.walls, starts, targets.reshape(-1, 2)).reshape(m, kk)
+        if clearance > 0 and free.any():
+            clear = np.zeros_like(free)
+            clear[free] = segments_clear(self.walls, starts[free.ravel()], targets.reshape(-1, 2)[free.ravel()], clearance)
+            free = np.where(clear.any(axis=1)[:, None], clear, free)
         first = np.argmax(free, axis=1)
         found = free[np.arange(m), first]
         return np.where(found, order[np.arange(m), first], -1)
@@ -458,6 +484,7 @@ class NavGraph:
         max_len: int | None = None,
         *,
         direct: bool = True,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Plan N start/goal pairs at once, as `plan` does for one.
 
@@ -470,6 +497,10 @@ class NavGraph:
             starts, goals: (N, 2) world frame, m.
             max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
+            clearance: with clearance > 0 (a robot's plans), straight lines that pass closer than
+                this to a wall (m) are avoided: the start-goal line is used only when it keeps
+                it, and starts and goals join the graph where a line keeping it reaches (the
+                nearest reachable point where none does). 0: any wall-free line, as humans' routes.
 
         Returns:
             (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
@@ -480,7 +511,7 @@ class NavGraph:
             NoPathError: a row's attach edges are not connected (the message names the row).
             ValueError: a path needs more than max_len waypoints.
         """
-        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True)
+        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True, clearance=clearance)
         return paths, lengths
 
     def plan_batch_status(
@@ -490,6 +521,7 @@ class NavGraph:
         max_len: int | None = None,
         *,
         direct: bool = True,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """`plan_batch` that never raises for an unreachable row, for batched envs.
 
@@ -501,10 +533,16 @@ class NavGraph:
         Raises:
             ValueError: a path needs more than max_len waypoints.
         """
-        return self._plan_batch(starts, goals, max_len, direct, strict=False)
+        return self._plan_batch(starts, goals, max_len, direct, strict=False, clearance=clearance)
 
     def _plan_batch(
-        self, starts: np.ndarray, goals: np.ndarray, max_len: int | None, direct: bool, strict: bool
+        self,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        max_len: int | None,
+        direct: bool,
+        strict: bool,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
@@ -515,6 +553,8 @@ class NavGraph:
             width = max_len or 1
             return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
         direct_ok = segments_free(self.walls, starts, goals) if direct else np.zeros(n, dtype=bool)
+        if clearance > 0 and direct_ok.any():
+            direct_ok[direct_ok] = segments_clear(self.walls, starts[direct_ok], goals[direct_ok], clearance)
         need = ~direct_ok
         # Rows that go straight need no attach: they may even lie where no edge is reachable.
         rows = np.flatnonzero(need)
@@ -525,7 +565,7 @@ class NavGraph:
         mode = np.zeros(n, dtype=np.intp)  # 0 straight line, 1 via nodes, 2 along one edge
         ok = np.ones(n, dtype=bool)
         if len(rows):
-            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict)
+            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict, clearance=clearance)
             m = len(rows)
             sa = _take(att, slice(0, m))
             ga = _take(att, slice(m, 2 * m))

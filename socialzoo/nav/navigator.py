@@ -26,8 +26,11 @@ REPLAN_DISTANCE = 0.5
 class PathPlanner(Protocol):
     """What the navigator needs from a navigation graph (socialzoo.nav.graph.NavGraph)."""
 
-    def plan_batch(self, starts: np.ndarray, goals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(paths (N, L, 2), lengths (N,)) for starts and goals (N, 2), padded with the last point."""
+    def plan_batch(
+        self, starts: np.ndarray, goals: np.ndarray, *, clearance: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(paths (N, L, 2), lengths (N,)) for starts and goals (N, 2), padded with the last point;
+        straight joins keep `clearance` (m) from walls where they can."""
         ...
 
 
@@ -364,6 +367,7 @@ class Navigator:
         self.max_skip = max_skip
         self.tolerance = tolerance
         self.sight = sight
+        self.plan_clearance = 0.0 if sight is None else sight.clearance
         self.plans = GlobalPlans.empty(batch_size, num_robots)
         self.goals = np.zeros((batch_size, num_robots, 2))
 
@@ -396,7 +400,7 @@ class Navigator:
         self.goals[rows] = goals.reshape(num, r, 2)
         if num == 0:
             return
-        paths, lengths = self.graph.plan_batch(starts, goals)
+        paths, lengths = self.graph.plan_batch(starts, goals, clearance=self.plan_clearance)
         self.plans.assign((rows,), paths, lengths)
 
     def update(self, robot_pos: np.ndarray) -> np.ndarray:
@@ -416,7 +420,7 @@ class Navigator:
             rows, robots = np.nonzero(stray)
             pos = robot_pos[rows, robots]
             try:
-                paths, lengths = self.graph.plan_batch(pos, self.goals[rows, robots])
+                paths, lengths = self.graph.plan_batch(pos, self.goals[rows, robots], clearance=self.plan_clearance)
             except ValueError as err:  # NoPathError: keep the old plans, try again next step
                 logger.debug("replanning %d robots failed: %s", len(rows), err)
             else:

@@ -43,10 +43,13 @@ class RoadmapConfig:
     """How a roadmap and its legal poses are built; lengths in metres.
 
     Attributes:
-        resolution: grid cell side.
+        resolution: grid cell side (5 cm: fine enough that every door of 0.88 m or more keeps
+            a passable cell on its centre line; at 10 cm a door under 0.98 m may close).
         margin: free border around the walls' bounding box when no region is given.
-        free_clearance: a cell is passable with at least this clearance (robot footprint
-            half-diagonal 0.33 m, so a 0.9 m door stays open).
+        free_clearance: a cell is passable with at least this clearance: the local planner's
+            wall distance (0.37 m) and its distance field's lookup error (0.02 m), so that no
+            route leads through a gap the robot cannot drive through (doors under 0.78 m are
+            closed; 0.9 m doors stay open).
         closing_radius: openings in the outer walls narrower than twice this count as closed when
             telling the inside of a building from the outside.
         node_clearance: least clearance of a generated node.
@@ -67,9 +70,9 @@ class RoadmapConfig:
         good_clearance: poses are preferred up to this clearance (room centres over corners).
     """
 
-    resolution: float = 0.1
+    resolution: float = 0.05
     margin: float = 2.0
-    free_clearance: float = 0.35
+    free_clearance: float = 0.39
     closing_radius: float = 1.5
     node_clearance: float = 0.45
     min_spacing: float = 1.5

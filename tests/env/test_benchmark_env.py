@@ -188,3 +188,24 @@ def test_registered_specs_round_trip_through_json(env_id):
     spec = gym.spec(env_id)
     again = EnvSpec.from_json(spec.to_json())
     assert again.id == spec.id and again.kwargs == spec.kwargs and again.entry_point == spec.entry_point
+
+
+def test_gym_make_on_an_imported_map_file(tmp_path):
+    from socialzoo.nav.floorplans import long_corridor
+    from socialzoo.nav.repair import repair_map
+
+    plan = long_corridor(120.0)
+    m, _ = repair_map("corridor", plan.walls, seed_point=plan.inside)
+    path = m.save(tmp_path / "corridor.json")
+    env_id = next(iter(BENCHMARK_IDS))  # the training map's id, on another map
+    env = gym.make(env_id, map=str(path), scenario={"min_humans": 0, "max_humans": 0})
+    obs, _ = env.reset(seed=3)
+    start = env.unwrapped.core.state.robot_pose[0, 0, :2].copy()
+    goal = env.unwrapped.core.state.robot_goal[0, 0, :2].copy()
+    assert abs(goal[0] - start[0]) <= 90.0  # feasible: the 120 m corridor's far pairs are never drawn
+    done, info = False, {}
+    while not done:
+        obs, _, terminated, truncated, info = env.step(0)
+        done = terminated or truncated
+    assert info["metrics"]["success"]
+    env.close()
