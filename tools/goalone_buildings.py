@@ -42,7 +42,9 @@ def buildings() -> dict[str, np.ndarray]:
     for seed in (1, 2):
         out[f"office_corridor_{seed}"] = floorplans.office_corridor(seed, num_offices=10).walls
         out[f"atrium_{seed}"] = floorplans.atrium(seed).walls
-        out[f"winding_corridor_{seed}"] = floorplans.winding_corridor(seed, num_legs=8, leg_length=(3.0, 10.0)).walls
+        out[f"winding_corridor_{seed}"] = floorplans.winding_corridor(
+            seed, num_legs=8, leg_length=(3.0, 10.0)
+        ).walls
         out[f"room_grid_{seed}"] = floorplans.room_grid(seed, rows=3, cols=4).walls
     out["long_corridor"] = floorplans.long_corridor(150.0).walls
     return out
@@ -93,7 +95,9 @@ def evaluate_map(path: Path, episodes: int, batch_size: int) -> dict[str, float]
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--batch-size", type=int, default=25)
     parser.add_argument("--out", type=Path, default=Path("results/buildings"))

@@ -55,7 +55,9 @@ class StoredTestSet(TestSet):
         return generate_scenario(m if m is not None else load_map(self.map_name), self.seed(k), self.cfg)
 
 
-def stored_test_set(map_ref: str, out_dir: str | Path, trials: int | None, quick: bool = False) -> StoredTestSet:
+def stored_test_set(
+    map_ref: str, out_dir: str | Path, trials: int | None, quick: bool = False
+) -> StoredTestSet:
     """The test set of a map without a registered one, read from (or written to) out_dir.
 
     Args:
@@ -91,7 +93,9 @@ def stored_test_set(map_ref: str, out_dir: str | Path, trials: int | None, quick
         logger.info("%s: generating scenarios %d..%d", name, len(scenarios), need - 1)
         scenarios += [generate_scenario(m, base.seed(k), cfg) for k in range(len(scenarios), need)]
         _write(path, base, m, digest, scenarios)
-    return StoredTestSet(base.map_name, base.base_seed, base.count, base.cfg, base.name, stored=tuple(scenarios))
+    return StoredTestSet(
+        base.map_name, base.base_seed, base.count, base.cfg, base.name, stored=tuple(scenarios)
+    )
 
 
 def _read(path: Path, digest: str, base: TestSet) -> list[Scenario]:

@@ -76,7 +76,9 @@ def register(subparsers: Any) -> None:
     imp.add_argument(
         "--threshold", type=float, default=0.5, help="pixels darker than this (0 black .. 1 white) are walls"
     )
-    imp.add_argument("--min-wall-area", type=float, default=0.0, help="drop wall specks smaller than this, m^2")
+    imp.add_argument(
+        "--min-wall-area", type=float, default=0.0, help="drop wall specks smaller than this, m^2"
+    )
     imp.add_argument("--nav", type=Path, default=None, help="AMRL navigation graph JSON")
     imp.add_argument("--name", required=True, help="map name")
     imp.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"), default=None)
@@ -88,7 +90,9 @@ def register(subparsers: Any) -> None:
         default=None,
         help="a point inside the building: the graph covers what is reachable from it",
     )
-    imp.add_argument("--strict", action="store_true", help="repair nothing: refuse a source that breaks a rule")
+    imp.add_argument(
+        "--strict", action="store_true", help="repair nothing: refuse a source that breaks a rule"
+    )
     imp.add_argument("--source", default="", help="provenance text stored in the map")
     imp.add_argument("--licence", default="", help="licence text stored in the map")
     imp.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
@@ -169,7 +173,12 @@ def _read_unvalidated(path: str | Path) -> Any:
 
 def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict]:
     """Walls, nodes and edges of the import's source, and its provenance inputs."""
-    from socialzoo.nav.importers import drop_zero_length, read_amrl_nav_graph, read_pedsim_scene, read_vector_map
+    from socialzoo.nav.importers import (
+        drop_zero_length,
+        read_amrl_nav_graph,
+        read_pedsim_scene,
+        read_vector_map,
+    )
 
     nodes = edges = None
     inputs: dict[str, Any] = {}

@@ -26,7 +26,9 @@ CRUISE_SPEED = 1.5
 
 
 def feasible_route_length(
-    time_limit: float = BENCHMARK_TIME_LIMIT, cruise_speed: float = CRUISE_SPEED, share: float = ROUTE_TIME_SHARE
+    time_limit: float = BENCHMARK_TIME_LIMIT,
+    cruise_speed: float = CRUISE_SPEED,
+    share: float = ROUTE_TIME_SHARE,
 ) -> float:
     """The longest feasible route, m: `share` of the time limit (s) at the cruise speed (m/s)."""
     for name, value in (("time_limit", time_limit), ("cruise_speed", cruise_speed), ("share", share)):
@@ -120,3 +122,64 @@ def route_stats(m: Map, max_route_length: float = MAX_ROUTE_LENGTH) -> RouteStat
         longest=float(reachable.max()) if len(reachable) else math.nan,
         stranded=stranded,
     )
+
+
+# Rejection rounds before an infeasible pair is replaced by a uniform pick among the feasible ones.
+_REDRAWS = 256
+
+
+def redraw_robot_pair(
+    rng: np.random.Generator, feasible: np.ndarray, start: int, goal: int
+) -> tuple[int, int]:
+    """The robot's (start, goal) pose indices, drawn again (both) until the pair is feasible.
+
+    Draws nothing when the first pair is feasible, so on maps where every pair is (GDC1, GHC3)
+    the generator's stream is the same as without the rule.
+    """
+    num_poses = len(feasible)
+    for _ in range(_REDRAWS):
+        if feasible[start, goal]:
+            return start, goal
+        start = int(rng.integers(num_poses))
+        goal = int(rng.integers(num_poses - 1))
+        goal += goal >= start
+    pairs = np.argwhere(feasible)
+    start, goal = (int(v) for v in pairs[int(rng.integers(len(pairs)))])
+    return start, goal
+
+
+def redraw_human_pairs(
+    rng: np.random.Generator,
+    feasible: np.ndarray,
+    robot_start: int,
+    start: np.ndarray,
+    goal: np.ndarray,
+    where: str,
+) -> None:
+    """Draw the infeasible human (start, goal) pairs again, in place, as they were drawn.
+
+    Re-draws consume the generator in row order and only for infeasible rows (none on GDC1 and
+    GHC3). Starts stay off the robot's start and goals off their own start.
+
+    Raises:
+        ValueError: no feasible pair starts anywhere but at the robot's start.
+    """
+    num_poses = len(feasible)
+    bad = ~feasible[start, goal]
+    for _ in range(_REDRAWS):
+        rows = np.flatnonzero(bad)
+        if len(rows) == 0:
+            return
+        s = rng.integers(num_poses - 1, size=len(rows))
+        s += s >= robot_start
+        g = rng.integers(num_poses - 1, size=len(rows))
+        g += g >= s
+        start[rows], goal[rows] = s, g
+        bad[rows] = ~feasible[s, g]
+    pairs = np.argwhere(feasible)
+    pairs = pairs[pairs[:, 0] != robot_start]
+    if len(pairs) == 0:
+        raise ValueError(f"{where}: no feasible human route starts away from the robot's start pose")
+    rows = np.flatnonzero(bad)
+    pick = pairs[rng.integers(len(pairs), size=len(rows))]
+    start[rows], goal[rows] = pick[:, 0], pick[:, 1]

@@ -159,8 +159,14 @@ def atrium(
     # The outer wall of the corridor ring, with doors into rooms on the south and north sides.
     room_depth = float(rng.uniform(4.0, 6.0))
     spans = np.linspace(-r, w + r, num_rooms + 1)
-    doors_s = [(float(a + _door_at(rng, b - a, door_width) + r), door_width) for a, b in itertools.pairwise(spans.tolist())]
-    doors_n = [(float(a + _door_at(rng, b - a, door_width) + r), door_width) for a, b in itertools.pairwise(spans.tolist())]
+    doors_s = [
+        (float(a + _door_at(rng, b - a, door_width) + r), door_width)
+        for a, b in itertools.pairwise(spans.tolist())
+    ]
+    doors_n = [
+        (float(a + _door_at(rng, b - a, door_width) + r), door_width)
+        for a, b in itertools.pairwise(spans.tolist())
+    ]
     draw.wall((-r, -r), (w + r, -r), doors_s)
     draw.wall((-r, h + r), (w + r, h + r), doors_n)
     draw.wall((-r, -r), (-r, h + r))
@@ -206,10 +212,10 @@ def winding_corridor(
             if k < len(pts) - 1:
                 d = (pts[k + 1] - p) / np.linalg.norm(pts[k + 1] - p)
                 normals.append(np.array([-d[1], d[0]]))
-            n = sum(normals)
+            n = np.sum(normals, axis=0)
             n = n / max(float(np.dot(n, normals[0])), 1e-9)
             offset.append(p + side * h * n)
-        for a, b in zip(offset[:-1], offset[1:], strict=True):
+        for a, b in itertools.pairwise(offset):
             draw.wall((float(a[0]), float(a[1])), (float(b[0]), float(b[1])))
     for end in (0, -1):
         d = pts[1] - pts[0] if end == 0 else pts[-1] - pts[-2]

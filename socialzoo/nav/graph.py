@@ -440,11 +440,13 @@ class NavGraph:
         m, kk = order.shape
         targets = np.take_along_axis(cand, order[..., None], axis=1)  # (M, K, 2)
         starts = np.repeat(points, kk, axis=0)
-        free = segments_free(self.walls, starts, targets.reshape(-1, 2)).reshape(m, kk)
+        free: np.ndarray = segments_free(self.walls, starts, targets.reshape(-1, 2)).reshape(m, kk)
         if clearance > 0 and free.any():
             clear = np.zeros_like(free)
-            clear[free] = segments_clear(self.walls, starts[free.ravel()], targets.reshape(-1, 2)[free.ravel()], clearance)
-            free = np.where(clear.any(axis=1)[:, None], clear, free)
+            clear[free] = segments_clear(
+                self.walls, starts[free.ravel()], targets.reshape(-1, 2)[free.ravel()], clearance
+            )
+            free = np.where(clear.any(axis=1, keepdims=True), clear, free)
         first = np.argmax(free, axis=1)
         found = free[np.arange(m), first]
         return np.where(found, order[np.arange(m), first], -1)

@@ -102,7 +102,9 @@ class MapCheck:
         return out
 
 
-def check_map(m: Map, max_route_length: float = MAX_ROUTE_LENGTH, wall_distance: float | None = None) -> MapCheck:
+def check_map(
+    m: Map, max_route_length: float = MAX_ROUTE_LENGTH, wall_distance: float | None = None
+) -> MapCheck:
     """Check a map (see MapCheck); never raises for a map that breaks the rules, it lists them.
 
     Args:
@@ -130,7 +132,9 @@ def check_map(m: Map, max_route_length: float = MAX_ROUTE_LENGTH, wall_distance:
         node_clear, pose_clear = np.full(len(nodes), math.inf), np.full(len(poses), math.inf)
     ok_edges = len(edges) and ((edges >= 0) & (edges < len(nodes))).all()
     if ok_edges and index.num_walls:
-        edge_clear = np.minimum(segment_clearance(index, nodes[edges[:, 0]], nodes[edges[:, 1]])[0], CLEARANCE_CAP)
+        edge_clear = np.minimum(
+            segment_clearance(index, nodes[edges[:, 0]], nodes[edges[:, 1]])[0], CLEARANCE_CAP
+        )
     else:
         edge_clear = np.full(len(edges), CLEARANCE_CAP)
     components = len(np.unique(graph_components(len(nodes), edges))) if ok_edges or len(nodes) else 0

@@ -27,7 +27,15 @@ from scipy import ndimage
 from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.maps import POSE_CLEARANCE, Map, graph_components, nearest_walls, reaches_graph
+from socialzoo.nav.maps import (
+    POSE_CLEARANCE,
+    Map,
+    graph_components,
+    nearest_walls,
+    reaches_graph,
+    segment_clearance,
+    validate_map,
+)
 from socialzoo.nav.roadmap import (
     Box,
     FreeSpace,
@@ -99,7 +107,9 @@ def _at(p: np.ndarray) -> str:
     return f"({p[0]:.2f}, {p[1]:.2f})"
 
 
-def _nearest_cells(space: FreeSpace, allowed: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _nearest_cells(
+    space: FreeSpace, allowed: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Centres (K, 2) of the nearest `allowed` cells to points (K, 2), and the distance to them, m."""
     if not allowed.any():
         return np.array(points, dtype=np.float64), np.full(len(points), np.inf)
@@ -111,7 +121,11 @@ def _nearest_cells(space: FreeSpace, allowed: np.ndarray, points: np.ndarray) ->
 
 
 def _repair_nodes(
-    nodes: np.ndarray, space: FreeSpace, index: WallIndex, config: RoadmapConfig, max_move: float,
+    nodes: np.ndarray,
+    space: FreeSpace,
+    index: WallIndex,
+    config: RoadmapConfig,
+    max_move: float,
     report: RepairReport,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Nodes moved clear of walls; (nodes (N, 2), keep (N,) bool)."""
@@ -157,6 +171,7 @@ class _Walker:
         self.graph, self.cell_id = grid_graph(space)
         self.id_cells = np.argwhere(space.interior)
         self.clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
+        self.keep_clearance = config.keep_clearance
         self.max_edge = config.max_edge_length
 
     def vertex(self, points: np.ndarray) -> np.ndarray:
@@ -170,15 +185,25 @@ class _Walker:
         va, vb = (int(v) for v in self.vertex(np.stack((a, b))))
         if va < 0 or vb < 0:
             return None
-        dist, pred = csgraph.dijkstra(self.graph, directed=False, indices=va, limit=limit, return_predecessors=True)
+        dist, pred = csgraph.dijkstra(
+            self.graph, directed=False, indices=va, limit=limit, return_predecessors=True
+        )
         if not np.isfinite(dist[vb]):
             return None
         walk = [vb]
         while pred[walk[-1]] >= 0:
             walk.append(int(pred[walk[-1]]))
-        path = self.space.centres(self.id_cells[walk[::-1]])
+        cells = self.id_cells[walk[::-1]]
+        path = self.space.centres(cells)
         path[0], path[-1] = a, b
-        corners = pull_string(path, self.index, self.clearance, self.max_edge)
+        corners = pull_string(
+            path,
+            self.index,
+            self.clearance,
+            self.max_edge,
+            self.space.clearance[cells[:, 0], cells[:, 1]],
+            self.keep_clearance,
+        )
         return path[corners]
 
 
@@ -193,8 +218,6 @@ def _repair_edges(
     report: RepairReport,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Edges that keep clear of walls (rerouted or dropped); returns (nodes, edges), nodes appended."""
-    from socialzoo.nav.maps import segment_clearance
-
     edges = edges[keep[edges].all(axis=1)] if len(edges) else edges
     if len(edges) == 0 or index.num_walls == 0:
         return nodes, edges
@@ -207,13 +230,19 @@ def _repair_edges(
     for k in np.flatnonzero(bad).tolist():
         i, j = int(edges[k, 0]), int(edges[k, 1])
         what = f"graph edge (node {i} - node {j})"
-        why = f"passes through wall {wall[k]}" if crossing[k] else f"passes {clear[k]:.2f} m from wall {wall[k]}"
+        why = (
+            f"passes through wall {wall[k]}"
+            if crossing[k]
+            else f"passes {clear[k]:.2f} m from wall {wall[k]}"
+        )
         length = float(np.hypot(*(nodes[i] - nodes[j])))
         # Grid path costs are walking metres times at most 3 (the clearance penalty).
         corners = walker.path(nodes[i], nodes[j], 3.0 * (max_detour * length + 2.0))
         walked = None if corners is None else float(np.hypot(*np.diff(corners, axis=0).T).sum())
         if corners is None or walked is None or walked > max_detour * length + 2.0:
-            report.add("edge_dropped", f"{what} {why}: dropped (no walking path within {max_detour:g}x its length)")
+            report.add(
+                "edge_dropped", f"{what} {why}: dropped (no walking path within {max_detour:g}x its length)"
+            )
             continue
         chain = [i]
         for p in corners[1:-1]:
@@ -225,7 +254,9 @@ def _repair_edges(
             "edge_rerouted",
             f"{what} {why}: rerouted along a {walked:.1f} m walking path with {len(chain) - 2} new nodes",
         )
-    return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(sorted(set(out)), dtype=np.int64).reshape(-1, 2)
+    return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(
+        sorted(set(out)), dtype=np.int64
+    ).reshape(-1, 2)
 
 
 def _keep_largest(
@@ -329,8 +360,6 @@ def repair_map(
         MapError: the repaired map still breaks a rule of validate_map (the message names it).
         ValueError: no free space, or a seed point on a wall.
     """
-    from socialzoo.nav.maps import validate_map
-
     config = config or RoadmapConfig()
     report = RepairReport()
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
@@ -352,11 +381,17 @@ def repair_map(
         else:
             walker = _Walker(space, index, config)
             nodes, edges = _repair_edges(
-                nodes, np.asarray(edges, dtype=np.int64).reshape(-1, 2), keep, walker, index, config,
-                max_detour, report,
+                nodes,
+                np.asarray(edges, dtype=np.int64).reshape(-1, 2),
+                keep,
+                walker,
+                index,
+                config,
+                max_detour,
+                report,
             )
             keep = np.concatenate((keep, np.ones(len(nodes) - len(keep), dtype=bool)))
-        nodes, edges, kept = _join_and_prune(nodes, edges, keep, space, index, config, report)
+        nodes, edges, _ = _join_and_prune(nodes, edges, keep, space, index, config, report)
     nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     poses = None if legal_poses is None else np.asarray(legal_poses, dtype=np.float64).reshape(-1, 3)
@@ -375,7 +410,9 @@ def repair_map(
         legal_poses=poses,
         source=source,
         licence=licence,
-        region=None if region is None else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
+        region=None
+        if region is None
+        else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
         provenance={**(provenance or {}), "repairs": report.to_json()},
     )
     validate_map(m)
@@ -410,5 +447,3 @@ def _join_and_prune(
         sub_nodes, sub_edges = joined_nodes, joined_edges
     all_keep = np.ones(len(sub_nodes), dtype=bool)
     return _keep_largest(sub_nodes, sub_edges, all_keep, report)
-
-

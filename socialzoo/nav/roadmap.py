@@ -113,7 +113,9 @@ class RoadmapConfig:
         if self.edge_clearance > 0.5:
             raise ValueError(f"RoadmapConfig.edge_clearance must be <= 0.5 m, got {self.edge_clearance}")
         if not 0.0 <= self.keep_clearance <= 0.5:
-            raise ValueError(f"RoadmapConfig.keep_clearance must be in [0, 0.5] m, got {self.keep_clearance!r}")
+            raise ValueError(
+                f"RoadmapConfig.keep_clearance must be in [0, 0.5] m, got {self.keep_clearance!r}"
+            )
         if self.detour_tolerance < 1.0:
             raise ValueError(f"RoadmapConfig.detour_tolerance must be >= 1, got {self.detour_tolerance}")
         if self.num_poses < 2:

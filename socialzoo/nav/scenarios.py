@@ -20,7 +20,7 @@ import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, feasible_pairs
+from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, feasible_pairs, redraw_human_pairs, redraw_robot_pair
 from socialzoo.nav.graph import NoPathError, graph_of, segments_free
 from socialzoo.nav.maps import Map
 
@@ -319,67 +319,6 @@ def plan_routes(m: Map, starts: np.ndarray, goals: np.ndarray, context: str) -> 
         raise NoPathError(f"{context}: {err}") from err
 
 
-# Rejection rounds before an infeasible pair is replaced by a uniform pick among the feasible ones.
-_REDRAWS = 256
-
-
-def _redraw_robot(
-    rng: np.random.Generator, feasible: np.ndarray, start: int, goal: int
-) -> tuple[int, int]:
-    """The robot's (start, goal) pose indices, drawn again (both) until the pair is feasible.
-
-    Draws nothing when the first pair is feasible, so on maps where every pair is (GDC1, GHC3)
-    the generator's stream is the same as without the rule.
-    """
-    num_poses = len(feasible)
-    for _ in range(_REDRAWS):
-        if feasible[start, goal]:
-            return start, goal
-        start = int(rng.integers(num_poses))
-        goal = int(rng.integers(num_poses - 1))
-        goal += goal >= start
-    pairs = np.argwhere(feasible)
-    start, goal = (int(v) for v in pairs[int(rng.integers(len(pairs)))])
-    return start, goal
-
-
-def _redraw_humans(
-    rng: np.random.Generator,
-    feasible: np.ndarray,
-    robot_start: int,
-    start: np.ndarray,
-    goal: np.ndarray,
-    where: str,
-) -> None:
-    """Draw the infeasible human (start, goal) pairs again, in place, as they were drawn.
-
-    Re-draws consume the generator in row order and only for infeasible rows (none on GDC1 and
-    GHC3). Starts stay off the robot's start and goals off their own start.
-
-    Raises:
-        ValueError: no feasible pair starts anywhere but at the robot's start.
-    """
-    num_poses = len(feasible)
-    bad = ~feasible[start, goal]
-    for _ in range(_REDRAWS):
-        rows = np.flatnonzero(bad)
-        if len(rows) == 0:
-            return
-        s = rng.integers(num_poses - 1, size=len(rows))
-        s += s >= robot_start
-        g = rng.integers(num_poses - 1, size=len(rows))
-        g += g >= s
-        start[rows], goal[rows] = s, g
-        bad[rows] = ~feasible[s, g]
-    pairs = np.argwhere(feasible)
-    pairs = pairs[pairs[:, 0] != robot_start]
-    if len(pairs) == 0:
-        raise ValueError(f"{where}: no feasible human route starts away from the robot's start pose")
-    rows = np.flatnonzero(bad)
-    pick = pairs[rng.integers(len(pairs), size=len(rows))]
-    start[rows], goal[rows] = pick[:, 0], pick[:, 1]
-
-
 def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> Scenario:
     """Draw one benchmark scenario (SPEC section 5) from a seed.
 
@@ -425,13 +364,13 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
     robot_start = int(rng.integers(num_poses))
     robot_goal = int(rng.integers(num_poses - 1))
     robot_goal += robot_goal >= robot_start
-    robot_start, robot_goal = _redraw_robot(rng, feasible, robot_start, robot_goal)
+    robot_start, robot_goal = redraw_robot_pair(rng, feasible, robot_start, robot_goal)
     n = int(rng.integers(cfg.min_humans, cfg.max_humans, endpoint=True))
     start = rng.integers(num_poses - 1, size=n)
     start += start >= robot_start
     goal = rng.integers(num_poses - 1, size=n)
     goal += goal >= start
-    _redraw_humans(rng, feasible, robot_start, start, goal, m.where)
+    redraw_human_pairs(rng, feasible, robot_start, start, goal, m.where)
     speed = np.clip(rng.normal(cfg.speed_mean, cfg.speed_std, size=n), cfg.min_speed, cfg.max_speed)
     context = f"{m.where}, scenario seed {seed}"
     starts = np.concatenate((poses[[robot_start], :2], poses[start, :2]))

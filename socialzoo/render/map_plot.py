@@ -87,7 +87,9 @@ def save_map_check_png(m: Map, check: Any, path: str | Path) -> Path:
         tight = np.zeros(len(edges), dtype=bool)
         tight[list(check.tight_edges)] = True
         colours = np.where(tight[:, None], [[0.85, 0.1, 0.1, 0.9]], [[0.12, 0.47, 0.71, 0.6]])
-        ax.add_collection(LineCollection(m.nodes[edges], colors=colours, linewidths=np.where(tight, 1.6, 0.7)))
+        ax.add_collection(
+            LineCollection(m.nodes[edges], colors=colours, linewidths=np.where(tight, 1.6, 0.7))
+        )
     if len(m.nodes):
         ax.plot(m.nodes[:, 0], m.nodes[:, 1], "o", color="tab:blue", markersize=2.5)
     p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)

@@ -199,13 +199,13 @@ def test_gym_make_on_an_imported_map_file(tmp_path):
     path = m.save(tmp_path / "corridor.json")
     env_id = next(iter(BENCHMARK_IDS))  # the training map's id, on another map
     env = gym.make(env_id, map=str(path), scenario={"min_humans": 0, "max_humans": 0})
-    obs, _ = env.reset(seed=3)
+    env.reset(seed=3)
     start = env.unwrapped.core.state.robot_pose[0, 0, :2].copy()
     goal = env.unwrapped.core.state.robot_goal[0, 0, :2].copy()
     assert abs(goal[0] - start[0]) <= 90.0  # feasible: the 120 m corridor's far pairs are never drawn
     done, info = False, {}
     while not done:
-        obs, _, terminated, truncated, info = env.step(0)
+        _, _, terminated, truncated, info = env.step(0)
         done = terminated or truncated
     assert info["metrics"]["success"]
     env.close()

@@ -27,7 +27,9 @@ def gdc1() -> tuple[Map, NavGraph]:
     return m, graph_of(m)
 
 
-def go_alone_all_pairs(m: Map, go_alone: Callable[..., tuple[np.ndarray, ...]]) -> tuple[list[str], np.ndarray]:
+def go_alone_all_pairs(
+    m: Map, go_alone: Callable[..., tuple[np.ndarray, ...]]
+) -> tuple[list[str], np.ndarray]:
     """Run GoAlone from every legal pose to every other one at once; (failures, steps taken)."""
     poses = m.legal_poses
     start, goal = np.nonzero(~np.eye(len(poses), dtype=bool))

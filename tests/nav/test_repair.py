@@ -39,7 +39,7 @@ def reach_all(go_alone, m, pairs: list[tuple[int, int]] | None = None, max_steps
     if pairs is None:
         pairs = [(i, j) for i in range(len(poses)) for j in range(len(poses)) if i != j]
     start, goal = np.array(pairs).T
-    reached, hit_wall, steps, pose = go_alone(m, poses[start], poses[goal, :2], max_steps)
+    reached, hit_wall, _, pose = go_alone(m, poses[start], poses[goal, :2], max_steps)
     bad = np.flatnonzero(~reached | hit_wall)
     assert len(bad) == 0, [
         f"{start[k]}->{goal[k]}: {'wall' if hit_wall[k] else 'timeout'} at {pose[k, :2].round(2).tolist()}"
@@ -100,7 +100,6 @@ def test_a_corridor_longer_than_the_time_limit_gets_feasible_scenarios(go_alone)
         s = generate_scenario(m, seed)
         assert np.hypot(*(s.robot_goal[:2] - s.robot_start[:2])) <= MAX_ROUTE_LENGTH
         assert max(np.hypot(*np.diff(r, axis=0).T).sum() for r in s.human_routes) <= MAX_ROUTE_LENGTH
-    poses = m.legal_poses
     i, j = np.unravel_index(np.argmax(np.where(lengths <= MAX_ROUTE_LENGTH, lengths, 0)), lengths.shape)
     reach_all(go_alone, m, [(int(i), int(j))])  # the longest feasible route, in time
 

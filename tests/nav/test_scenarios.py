@@ -13,7 +13,7 @@ import pytest
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.world import step_world
 from socialzoo.nav import maps
-from socialzoo.nav.graph import NoPathError, segments_free
+from socialzoo.nav.graph import segments_free
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenario_families import FAMILIES, make_family_scenario
 from socialzoo.nav.scenarios import (
