@@ -11,6 +11,10 @@ from typing import Any
 import numpy as np
 
 
+# Steps of an import that generate what the source lacks (the others repair what it has).
+GENERATED = ("graph_generated", "edges_built", "poses_generated")
+
+
 def register(subparsers: Any) -> None:
     """Add `map` and its subcommands."""
     parser = subparsers.add_parser("map", help="list, show, validate and import maps")
@@ -253,17 +257,20 @@ def run_import(args: argparse.Namespace) -> int:
         if args.strict:
             m = complete_map(args.name, walls, **common)
             m = dataclasses.replace(m, provenance={**provenance, "repairs": []})
-            repairs: list[str] = []
+            steps: list[tuple[str, str]] = []
         else:
             m, report = repair_map(args.name, walls, provenance=provenance, **common)
-            repairs = report.lines()
+            steps = [(r.kind, r.message) for r in report.repairs]
     except (MapError, FileNotFoundError, ValueError) as err:
         return _fail(err)
     out = m.save(args.out or Path(f"{args.name}.json"))
-    for line in repairs:
-        print(f"repaired: {line}")
+    num_repairs = 0
+    for kind, message in steps:
+        generated = kind in GENERATED
+        num_repairs += not generated
+        print(f"{'generated' if generated else 'repaired'}: {message}")
     print(
         f"{out}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses"
-        f" ({len(repairs)} repairs)"
+        f" ({num_repairs} repairs)"
     )
     return 0

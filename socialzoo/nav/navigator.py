@@ -151,6 +151,9 @@ class Sight:
         tolerance: slack for the field's lookup error, m.
         step: spacing of the carrot candidates along the path, m.
         spacing: spacing of the field samples along a sight line, m.
+        min_ahead: the carrot is never pulled back closer than this along the path to the
+            robot's closest path point, m: where the path itself grazes a corner, the robot
+            still has a target ahead and keeps its own wall distance as it goes round.
     """
 
     field: DistanceField
@@ -158,6 +161,7 @@ class Sight:
     tolerance: float = 0.02
     step: float = 0.1
     spacing: float = 0.05
+    min_ahead: float = 0.5
 
 
 def track(
@@ -198,7 +202,7 @@ def track(
         f = sight.field
         _keep_in_sight(
             pos, paths, where, out, sight.clearance, sight.tolerance, sight.step, sight.spacing,
-            f.shape_args, f.codes,
+            sight.min_ahead, f.shape_args, f.codes,
         )  # fmt: skip
     return out.reshape(*shape, 2), dist.reshape(shape)
 
@@ -216,8 +220,9 @@ def _in_sight(px, py, qx, qy, need, spacing, shape, codes):  # type: ignore[no-u
 
 
 @kernel
-def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, shape, codes):  # type: ignore[no-untyped-def]
-    """Pull each row's carrot `out` (M, 2) back into sight along its path (see `track`).
+def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, min_ahead, shape, codes):  # type: ignore[no-untyped-def]
+    """Pull each row's carrot `out` (M, 2) back into sight along its path (see `track`), never
+    closer than `min_ahead` along the path to the closest point.
 
     where (M, 4): closest segment, its fraction, carrot segment, its fraction.
     """
@@ -235,6 +240,7 @@ def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, 
         # Start at the closest point; it stays the carrot if nothing further on is in sight.
         best_x, best_y = ax + frac * (bx - ax), ay + frac * (by - ay)
         blocked = False
+        walked = 0.0
         while not blocked:
             ax, ay = paths[m, seg, 0], paths[m, seg, 1]
             bx, by = paths[m, seg + 1, 0], paths[m, seg + 1, 1]
@@ -242,10 +248,13 @@ def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, 
             end = last_frac if seg == last_seg else 1.0
             inc = step / seg_len if seg_len > 0.0 else 1.0
             while True:
+                walked += (min(frac + inc, end) - frac) * seg_len
                 frac = min(frac + inc, end)
                 qx, qy = ax + frac * (bx - ax), ay + frac * (by - ay)
                 need = min(clearance, here, field_distance(qx, qy, shape, codes)) - tolerance
-                if not _in_sight(px, py, qx, qy, need, spacing, shape, codes):
+                # The first min_ahead metres are always taken: a carrot that could wait right
+                # at the robot (a path grazing a corner) would give it nothing to drive to.
+                if walked > min_ahead and not _in_sight(px, py, qx, qy, need, spacing, shape, codes):
                     blocked = True
                     break
                 best_x, best_y = qx, qy
@@ -405,8 +414,14 @@ class Navigator:
         self.goals[rows] = goals.reshape(num, r, 2)
         if num == 0:
             return
-        paths, lengths = self.graph.plan_batch(starts, goals, clearance=self.plan_clearance)
+        paths, lengths = self._plan(starts, goals)
         self.plans.assign((rows,), paths, lengths)
+
+    def _plan(self, starts: np.ndarray, goals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """graph.plan_batch, keeping straight joins `plan_clearance` off the walls when set."""
+        if self.plan_clearance > 0:
+            return self.graph.plan_batch(starts, goals, clearance=self.plan_clearance)
+        return self.graph.plan_batch(starts, goals)
 
     def update(self, robot_pos: np.ndarray) -> np.ndarray:
         """Replan robots that strayed, then return every robot's carrot.
@@ -425,9 +440,7 @@ class Navigator:
             rows, robots = np.nonzero(stray)
             pos = robot_pos[rows, robots]
             try:
-                paths, lengths = self.graph.plan_batch(
-                    pos, self.goals[rows, robots], clearance=self.plan_clearance
-                )
+                paths, lengths = self._plan(pos, self.goals[rows, robots])
             except ValueError as err:  # NoPathError: keep the old plans, try again next step
                 logger.debug("replanning %d robots failed: %s", len(rows), err)
             else:

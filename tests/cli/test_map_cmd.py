@@ -155,7 +155,7 @@ def test_map_import_repairs_a_real_graph_and_reports_it(tmp_path, capsys):
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "repaired: graph.nodes[1] at (8.00, 2.00) lies on wall" in text
-    assert "cannot be joined to the rest" in text and "legal poses generated" in text
+    assert "cannot be joined to the rest" in text and "generated: legal poses generated" in text
     m = load_map(out)
     assert m.provenance["importer"] == "socialzoo map import"
     assert m.provenance["inputs"] == {"walls": "building.txt", "nav": "building.navigation.json"}
