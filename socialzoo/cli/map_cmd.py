@@ -10,7 +10,6 @@ from typing import Any
 
 import numpy as np
 
-
 # Steps of an import that generate what the source lacks (the others repair what it has).
 GENERATED = ("graph_generated", "edges_built", "poses_generated")
 
