@@ -56,7 +56,8 @@ class RoadmapConfig:
         min_spacing, max_spacing: generated nodes keep at least spacing_per_clearance times their
             clearance, clipped to [min_spacing, max_spacing], walking distance from each other.
         spacing_per_clearance: see above.
-        edge_clearance: least distance between an edge and any wall (at most 0.5 m).
+        edge_clearance: least distance between an edge and any wall (at most 0.5 m; above the
+            local planner's 0.37 m wall distance, so the robot can follow its edges).
         keep_clearance: paths that join components are straightened only where the straight
             line keeps the walking path's own wall distance, up to this (minus 5 cm): through
             the middle of doorways, off the corners (socialzoo.nav.roadmap.pull_string); 0 lets
@@ -78,7 +79,7 @@ class RoadmapConfig:
     min_spacing: float = 1.5
     max_spacing: float = 5.0
     spacing_per_clearance: float = 3.0
-    edge_clearance: float = 0.3
+    edge_clearance: float = 0.4
     keep_clearance: float = 0.45
     max_edge_length: float = 15.0
     detour_tolerance: float = 1.15
