@@ -325,9 +325,7 @@ class NavGraph:
         ]
 
     # ---------------------------------------------------------------- joining off-graph points
-    def attach(
-        self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True, clearance: float = 0.0
-    ) -> Attachment:
+    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True) -> Attachment:
         """Join off-graph points to the graph at the nearest point they can reach in a straight line.
 
         Candidates are the closest point of every edge and every node. For each query point the k
@@ -338,9 +336,6 @@ class NavGraph:
             points: (N, 2) query points, world frame, m.
             k: candidates per point in the first round.
             strict: raise for a point that reaches nothing; else mark it not found.
-            clearance: prefer candidates whose line keeps this from walls (m): the nearest such
-                one among a point's candidates wins, else the nearest wall-free one. 0: the
-                nearest wall-free candidate.
 
         Returns:
             The attachment of every point.
@@ -372,11 +367,11 @@ class NavGraph:
             order = np.take_along_axis(
                 order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1
             )
-            pick = self._first_free(points[rows], pts, order, clearance)
+            pick = self._first_free(points[rows], pts, order)
             missing = np.flatnonzero(pick < 0)
             if len(missing) and k < num_cand:
                 full = np.argsort(ds[missing], axis=1, kind="stable")
-                pick[missing] = self._first_free(points[rows][missing], pts[missing], full, clearance)
+                pick[missing] = self._first_free(points[rows][missing], pts[missing], full)
             if strict and np.any(pick < 0):
                 bad = rows[int(np.flatnonzero(pick < 0)[0])]
                 raise AttachError(
@@ -430,23 +425,11 @@ class NavGraph:
         ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
         return pts, ts, ds
 
-    def _first_free(
-        self, points: np.ndarray, cand: np.ndarray, order: np.ndarray, clearance: float = 0.0
-    ) -> np.ndarray:
-        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none.
-
-        With clearance > 0, the first one whose line keeps `clearance` from walls if any does.
-        """
+    def _first_free(self, points: np.ndarray, cand: np.ndarray, order: np.ndarray) -> np.ndarray:
+        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none."""
         m, kk = order.shape
         targets = np.take_along_axis(cand, order[..., None], axis=1)  # (M, K, 2)
-        starts = np.repeat(points, kk, axis=0)
-        free: np.ndarray = segments_free(self.walls, starts, targets.reshape(-1, 2)).reshape(m, kk)
-        if clearance > 0 and free.any():
-            clear = np.zeros_like(free)
-            clear[free] = segments_clear(
-                self.walls, starts[free.ravel()], targets.reshape(-1, 2)[free.ravel()], clearance
-            )
-            free = np.where(clear.any(axis=1, keepdims=True), clear, free)
+        free = segments_free(self.walls, np.repeat(points, kk, axis=0), targets.reshape(-1, 2)).reshape(m, kk)
         first = np.argmax(free, axis=1)
         found = free[np.arange(m), first]
         return np.where(found, order[np.arange(m), first], -1)
@@ -499,10 +482,9 @@ class NavGraph:
             starts, goals: (N, 2) world frame, m.
             max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
-            clearance: with clearance > 0 (a robot's plans), straight lines that pass closer than
-                this to a wall (m) are avoided: the start-goal line is used only when it keeps
-                it, and starts and goals join the graph where a line keeping it reaches (the
-                nearest reachable point where none does). 0: any wall-free line, as humans' routes.
+            clearance: with clearance > 0 (a robot's plans), the straight start-goal line is used
+                only where it keeps this from every wall (m); a line grazing a door frame would
+                lead the robot into it. 0: any wall-free line, as humans' routes are planned.
 
         Returns:
             (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
@@ -567,7 +549,7 @@ class NavGraph:
         mode = np.zeros(n, dtype=np.intp)  # 0 straight line, 1 via nodes, 2 along one edge
         ok = np.ones(n, dtype=bool)
         if len(rows):
-            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict, clearance=clearance)
+            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict)
             m = len(rows)
             sa = _take(att, slice(0, m))
             ga = _take(att, slice(m, 2 * m))

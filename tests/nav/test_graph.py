@@ -299,11 +299,3 @@ def test_robot_plans_keep_clearance_where_they_can() -> None:
     path = paths[0, : lengths[0]]
     assert len(path) > 2
     assert segment_clearance(g.walls, path[:-1], path[1:])[0].min() >= 0.37
-    # Attach points prefer lines that keep the clearance: a pillar beside the straight drop to
-    # the edge sends the robot to a node instead.
-    pillar = np.concatenate((walls, box(6.15, 4.2, 6.35, 4.6)))
-    g = NavGraph(np.array([[4.0, 4.0], [12.0, 4.0]]), np.array([[0, 1]]), WallIndex(pillar))
-    point = np.array([[6.0, 5.2]])
-    near, clear = g.attach(point), g.attach(point, clearance=0.37)
-    np.testing.assert_allclose(near.point, [[6.0, 4.0]])
-    np.testing.assert_allclose(clear.point, [[4.0, 4.0]])
