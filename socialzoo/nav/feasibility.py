@@ -5,6 +5,11 @@ a straight line where wall-free) is at most `max_route_length`: by default 75% o
 robot covers in the episode's time limit at its cruise speed, 0.75 x 80 s x 1.5 m/s = 90 m. The
 other quarter of the time is left for turns, doorways and people. GDC1's and GHC3's longest
 pose-to-pose routes are 86.6 m, so on the paper's maps every pair is feasible.
+
+The crowd keeps the benchmark's density on maps that know their walkable area (imported ones):
+the SPEC's 5 to 25 humans walk GDC1's 1352 m^2 of floor, so a map with less floor gets at most
+proportionally fewer (never fewer than min_humans): 25 people in a 340 m^2 office floor would be
+another, much harder, task. The shipped maps carry no area and keep the SPEC's head count.
 """
 
 from __future__ import annotations
@@ -39,6 +44,19 @@ def feasible_route_length(
 
 # The default rule: 0.75 x 80 s x 1.5 m/s.
 MAX_ROUTE_LENGTH = feasible_route_length()
+# GDC1's walkable floor (cells at least 0.39 m from walls, 5 cm grid, socialzoo.nav.roadmap) and
+# the benchmark's largest crowd on it: the density the crowd keeps on other maps.
+GDC1_WALKABLE_AREA = 1352.0
+CROWD_DENSITY = 25 / GDC1_WALKABLE_AREA
+
+
+def max_humans_for(m: Map, min_humans: int, max_humans: int) -> int:
+    """The largest head count of a scenario on map m: max_humans, lowered on a map with a
+    walkable_area to the benchmark's crowd density (rounded, at least min_humans)."""
+    if m.walkable_area is None:
+        return max_humans
+    return int(min(max_humans, max(min_humans, round(m.walkable_area * CROWD_DENSITY))))
+
 
 _LENGTHS: weakref.WeakKeyDictionary[Map, np.ndarray] = weakref.WeakKeyDictionary()
 

@@ -9,10 +9,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, RouteStats, route_stats
+from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, RouteStats, max_humans_for, route_stats
 from socialzoo.nav.maps import Map, MapError, graph_components, nearest_walls, segment_clearance, validate_map
 from socialzoo.nav.planner_config import LocalPlannerConfig
+from socialzoo.nav.scenarios import ScenarioConfig
 
+# The benchmark's scenario settings (head count 5 to 25, SPEC section 4).
+DEFAULT_SCENARIO = ScenarioConfig()
 # Clearance reads are exact up to this (half the wall index's reach), m.
 CLEARANCE_CAP = 0.5
 
@@ -32,6 +35,8 @@ class MapCheck:
         routes: feasible-route statistics of the legal poses (None if the map is invalid).
         wall_distance: the robot wall distance used for tight_edges, m.
         repairs: repairs recorded in the map's provenance (kind -> count).
+        max_humans: the largest crowd of the default scenario settings on this map.
+        walkable: the map's walkable area as text ("n/a" for maps without one).
     """
 
     problems: tuple[str, ...]
@@ -43,6 +48,8 @@ class MapCheck:
     routes: RouteStats | None
     wall_distance: float
     repairs: dict[str, int]
+    max_humans: int | None = None
+    walkable: str = "n/a"
 
     @property
     def valid(self) -> bool:
@@ -96,6 +103,8 @@ class MapCheck:
                 f"({100 * r.feasible_share:.0f}%, route <= {r.max_route_length:g} m); lengths "
                 f"min {r.shortest:.1f}, median {r.median:.1f}, max {r.longest:.1f} m"
             )
+        if self.max_humans is not None:
+            out.append(f"crowd: at most {self.max_humans} humans a scenario (walkable area {self.walkable})")
         if self.repairs:
             out.append("repairs on import: " + ", ".join(f"{k} {v}" for k, v in sorted(self.repairs.items())))
         out += [f"warning: {w}" for w in self.warnings()]
@@ -152,4 +161,6 @@ def check_map(
         routes=None if problems else route_stats(m, max_route_length),
         wall_distance=wall_distance,
         repairs=repairs,
+        max_humans=max_humans_for(m, DEFAULT_SCENARIO.min_humans, DEFAULT_SCENARIO.max_humans),
+        walkable="n/a" if m.walkable_area is None else f"{m.walkable_area:.0f} m^2",
     )

@@ -413,6 +413,7 @@ def repair_map(
         region=None
         if region is None
         else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
+        walkable_area=float(space.interior.sum()) * space.resolution**2,
         provenance={**(provenance or {}), "repairs": report.to_json()},
     )
     validate_map(m)

@@ -20,7 +20,13 @@ import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, feasible_pairs, redraw_human_pairs, redraw_robot_pair
+from socialzoo.nav.feasibility import (
+    MAX_ROUTE_LENGTH,
+    feasible_pairs,
+    max_humans_for,
+    redraw_human_pairs,
+    redraw_robot_pair,
+)
 from socialzoo.nav.graph import NoPathError, graph_of, segments_free
 from socialzoo.nav.maps import Map
 
@@ -324,8 +330,9 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
 
     Draws, in this order, from np.random.default_rng(seed): robot start and goal (two distinct
     legal poses, both drawn again while their route is infeasible); the head count n, uniform in
-    [min_humans, max_humans]; n human starts, each any legal pose but the robot's start; n human
-    goals, each any legal pose but that human's start (infeasible human pairs are drawn again,
+    [min_humans, max_humans] (max_humans lowered to the benchmark's crowd density on a map with
+    a walkable_area, see socialzoo.nav.feasibility); n human starts, each any legal pose but the
+    robot's start; n human goals, each any legal pose but that human's start (infeasible human pairs are drawn again,
     row by row); n preferred speeds N(speed_mean, speed_std) clipped to [min_speed, max_speed]; spawn jitter,
     uniform in +-spawn_jitter per axis, re-drawn for bad spawns (see `spawn_points`). Humans may
     share start and goal poses with each other, and a human's goal may be the robot's start or
@@ -365,7 +372,7 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
     robot_goal = int(rng.integers(num_poses - 1))
     robot_goal += robot_goal >= robot_start
     robot_start, robot_goal = redraw_robot_pair(rng, feasible, robot_start, robot_goal)
-    n = int(rng.integers(cfg.min_humans, cfg.max_humans, endpoint=True))
+    n = int(rng.integers(cfg.min_humans, max_humans_for(m, cfg.min_humans, cfg.max_humans), endpoint=True))
     start = rng.integers(num_poses - 1, size=n)
     start += start >= robot_start
     goal = rng.integers(num_poses - 1, size=n)

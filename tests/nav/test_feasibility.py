@@ -67,3 +67,20 @@ def test_benchmark_maps_have_every_pair_feasible():
         stats = route_stats(m)
         assert stats.num_feasible == stats.num_pairs, name
         assert stats.longest < MAX_ROUTE_LENGTH
+
+
+def test_crowd_keeps_the_benchmark_density_on_maps_with_a_walkable_area(tmp_path):
+    from socialzoo.nav.feasibility import CROWD_DENSITY, max_humans_for
+    from socialzoo.nav.scenarios import generate_scenario
+
+    m = corridor()
+    assert max_humans_for(m, 5, 25) == 25  # no area: the SPEC's head count
+    small = dataclasses.replace(m, walkable_area=400.0, legal_poses=m.legal_poses[:4])
+    assert max_humans_for(small, 5, 25) == round(400.0 * CROWD_DENSITY) == 7
+    assert max_humans_for(dataclasses.replace(small, walkable_area=10.0), 5, 25) == 5
+    assert max_humans_for(dataclasses.replace(small, walkable_area=1e5), 5, 25) == 25
+    counts = {generate_scenario(small, seed).num_humans for seed in range(40)}
+    assert counts == {5, 6, 7}
+    back = load_map(small.save(tmp_path / "small.json"))
+    assert back.walkable_area == 400.0
+    assert load_map("gdc1").walkable_area is None
