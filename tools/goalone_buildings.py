@@ -7,14 +7,16 @@ never uses), the raw GHC3 walls, and seeded synthetic plans (socialzoo.nav.floor
 along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
 0.9-1.2 m doors, a 150 m corridor). Each is imported as `socialzoo map import --walls FILE
 --name NAME` does (repairs on, no seed point, no region), written to DIR, and GoAlone runs on the
-first N scenarios of its generated test set (as `socialzoo benchmark --maps DIR/NAME.json` would,
-humans included). An episode is stuck when it times out with the robot less than 1 m from where
+first N scenarios of a seeded test set of the map (base seed 20261123; generated as `socialzoo
+benchmark --maps DIR/NAME.json` generates its own, humans included: at most the benchmark's crowd density, or 5 to 25 with --spec-crowd). An
+episode is stuck when it times out with the robot less than 1 m from where
 it stood 20 s before the end; "never moved" when it stayed within 1 m of its start throughout.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -102,6 +104,11 @@ def main() -> None:
     parser.add_argument("--batch-size", type=int, default=25)
     parser.add_argument("--out", type=Path, default=Path("results/buildings"))
     parser.add_argument("--only", default=None, help="comma-separated building names")
+    parser.add_argument(
+        "--spec-crowd",
+        action="store_true",
+        help="5 to 25 humans on every building (drop the walkable area: no crowd-density cap)",
+    )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     wanted = None if args.only is None else set(args.only.split(","))
@@ -114,6 +121,8 @@ def main() -> None:
         start = time.perf_counter()
         vector = write_vector_map(args.out / f"{name}.txt", walls)
         m, report = repair_map(name, walls, source=f"tools/goalone_buildings.py: {vector.name}")
+        if args.spec_crowd:
+            m = dataclasses.replace(m, walkable_area=None)
         path = m.save(args.out / f"{name}.json")
         s = evaluate_map(path, args.episodes, args.batch_size)
         print(
