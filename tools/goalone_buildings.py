@@ -7,10 +7,11 @@ never uses), the raw GHC3 walls, and seeded synthetic plans (socialzoo.nav.floor
 along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
 0.9-1.2 m doors, a 150 m corridor). Each is imported as `socialzoo map import --walls FILE
 --name NAME` does (repairs on, no seed point, no region), written to DIR, and GoAlone runs on the
-first N scenarios of a seeded test set of the map (base seed 20261123; generated as `socialzoo
-benchmark --maps DIR/NAME.json` generates its own, humans included: at most the benchmark's crowd density, or 5 to 25 with --spec-crowd). An
-episode is stuck when it times out with the robot less than 1 m from where
-it stood 20 s before the end; "never moved" when it stayed within 1 m of its start throughout.
+first N scenarios of a seeded test set of the map (base seed 20261123, generated as `socialzoo
+benchmark --maps DIR/NAME.json` generates its own; humans at most at the benchmark's crowd
+density, or 5 to 25 with --spec-crowd). An episode is stuck when it times out with the robot
+less than 1 m from where it stood 20 s before the end; "never moved" when it stayed within 1 m
+of its start throughout.
 """
 
 from __future__ import annotations
