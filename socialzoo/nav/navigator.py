@@ -163,6 +163,21 @@ class Sight:
     spacing: float = 0.05
     min_ahead: float = 0.5
 
+    def __post_init__(self) -> None:
+        for name, positive in (
+            ("clearance", True),
+            ("tolerance", False),
+            ("step", True),
+            ("spacing", True),
+            ("min_ahead", False),
+        ):
+            value = getattr(self, name)
+            ok = isinstance(value, (int, float)) and math.isfinite(value) and (value > 0 or not positive)
+            if not ok or value < 0:
+                raise ValueError(
+                    f"Sight.{name} must be a {'positive' if positive else 'non-negative'} number, got {value!r}"
+                )
+
 
 def track(
     pos: np.ndarray,
