@@ -11,10 +11,11 @@ from _common import Figure, measure, parser, report, traced_peak_mib
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
+from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.maps import load_map
-from socialzoo.nav.navigator import Navigator
+from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
 from socialzoo.nav.subpolicies import SubPolicyConfig, subpolicy_commands
 
@@ -27,9 +28,11 @@ def build(batch: int, map_name: str = "gdc1"):
     cfg = ScenarioConfig(min_humans=HUMANS, max_humans=HUMANS)
     distinct = [generate_scenario(m, seed, cfg) for seed in range(min(batch, 16))]
     state = scenarios_to_state([distinct[i % len(distinct)] for i in range(batch)])
-    navigator = Navigator(graph_of(m), batch)
-    navigator.reset(np.arange(batch), state.robot_pose[..., :2], state.robot_goal[..., :2])
     world, sub, planner = WorldConfig(), SubPolicyConfig(), LocalPlannerConfig()
+    # The carrot kept in sight, as the envs track it.
+    field = distance_field(m.wall_index, planner.field_resolution, planner.field_range, planner.field_pad)
+    navigator = Navigator(graph_of(m), batch, sight=Sight(field, planner.wall_distance))
+    navigator.reset(np.arange(batch), state.robot_pose[..., :2], state.robot_goal[..., :2])
     action = np.zeros(batch, dtype=np.int64)
     holder = {"state": state}
 

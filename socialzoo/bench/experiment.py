@@ -243,20 +243,22 @@ def config_hash(
 
 
 def _resolve_test_sets(
-    config: BenchmarkConfig, test_sets: Mapping[str, TestSet] | None
+    config: BenchmarkConfig, test_sets: Mapping[str, TestSet] | None, out_dir: Path
 ) -> dict[str, TestSet]:
-    """Test set per map: given ones first, else the registry's."""
+    """Test set per map: given ones first, else the registry's, else one generated for the map
+    and stored in out_dir (socialzoo.bench.test_sets: any shipped map or map file)."""
+    from socialzoo.bench.test_sets import stored_test_set
+
     out = {}
     for m in config.maps:
         if test_sets is not None and m in test_sets:
             out[m] = test_sets[m]
             continue
         name = config.test_set_name(m)
-        if name not in TEST_SETS:
-            raise ValueError(
-                f"unknown map {m!r}: no test set {name!r}; maps with test sets: {', '.join(benchmark_maps())}"
-            )
-        out[m] = TEST_SETS[name]
+        if name in TEST_SETS:
+            out[m] = TEST_SETS[name]
+        else:
+            out[m] = stored_test_set(m, out_dir, config.trials, quick=config.quick)
     return out
 
 
@@ -288,8 +290,14 @@ def run_benchmark(
     Returns:
         The BenchmarkResult.
 
+    Maps without a registered test set (any shipped map or map file) get one generated on first
+    use and stored in out_dir/test_sets/ with the map's hash (socialzoo.bench.test_sets); reruns
+    read it back, so their trials compare with the stored ones.
+
     Raises:
-        ValueError: an unknown map, more trials than a test set holds.
+        ValueError: an unknown map, more trials than a test set holds, a stored test set made on
+            another version of its map.
+        FileNotFoundError: a map file that does not exist.
         socialzoo.bench.store.StoreError: out_dir holds a results file that is not a socialzoo
             store or is corrupted (it is left untouched).
     """
@@ -298,7 +306,7 @@ def run_benchmark(
     from socialzoo.agents.base import policy_config
 
     out = Path(out_dir)
-    sets = _resolve_test_sets(config, test_sets)
+    sets = _resolve_test_sets(config, test_sets, out)
     counts = {}
     for m, ts in sets.items():
         n = len(ts) if config.trials is None else config.trials
@@ -394,7 +402,7 @@ def run_benchmark(
                 )
     finally:
         store.close()
-    summary = summarize(rows, policies=config.policies, maps=[sets[m].map_name for m in config.maps])
+    summary = summarize(rows, policies=config.policies, maps=[_display_name(sets[m]) for m in config.maps])
     files.append(write_summary_csv(summary, out / "summary.csv"))
     files.append(write_summary_md(summary, out / "summary.md", title=_title(config, counts)))
     if figures:
@@ -405,6 +413,13 @@ def run_benchmark(
         first = config.maps[0]
         files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))
     return BenchmarkResult(out, summary, files, len(pending), reused, seconds)
+
+
+def _display_name(test_set: TestSet) -> str:
+    """The map's own name, as trials record it (a map file names its map inside)."""
+    from socialzoo.nav.maps import load_map
+
+    return load_map(test_set.map_name).name
 
 
 def _title(config: BenchmarkConfig, counts: Mapping[str, int]) -> str:
@@ -460,8 +475,7 @@ def write_episode_gif(
     from socialzoo.agents import make_policy
     from socialzoo.bench.episode_video import animate_episode
     from socialzoo.nav.maps import load_map
-    from socialzoo.nav.scenarios import generate_scenario
 
-    scenario = generate_scenario(load_map(env_config.map), test_set.seed(index), test_set.cfg)
+    scenario = test_set.scenario(index, load_map(env_config.map))
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
     return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path

@@ -22,7 +22,7 @@ import numpy as np
 from socialzoo.agents import Policy, make_policy
 from socialzoo.bench.compaction import RunStats, compact_core
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.scenarios import TestSet, generate_scenario, get_test_set
+from socialzoo.nav.scenarios import TestSet, get_test_set
 from socialzoo.nav.subpolicies import HALT
 
 logger = logging.getLogger(__name__)
@@ -215,7 +215,7 @@ class BatchedRunner:
         pending = deque(trials)
 
         def scenario(t: Trial) -> Any:
-            return generate_scenario(core.map, test_set.seed(t.index), test_set.cfg)
+            return test_set.scenario(t.index, core.map)
 
         row_trial: list[Trial | None] = [pending.popleft() for _ in range(b)]
         core.reset_rows(np.arange(b), [scenario(t) for t in row_trial if t is not None])

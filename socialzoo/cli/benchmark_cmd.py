@@ -32,6 +32,18 @@ def _policy_specs(text: str) -> tuple[str, ...]:
     return tuple(specs)
 
 
+def _map_names(text: str) -> tuple[str, ...]:
+    """Comma-separated maps: shipped names lowercased, map file paths kept as written."""
+    names = tuple(
+        n.strip() if n.strip().endswith(".json") or "/" in n else n.strip().lower()
+        for n in text.split(",")
+        if n.strip()
+    )
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated map names or paths, got {text!r}")
+    return names
+
+
 def _positive(text: str) -> int:
     try:
         value = int(text)
@@ -49,7 +61,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="evaluate policies on the benchmark test sets (results store, tables, figures)",
         description=(
             "Evaluate policies on the Social Action Selection benchmark: each policy on the first N "
-            "scenarios of each map's test set (<map>-test: 2000 scenarios; <map>-quick: 100). Trials "
+            "scenarios of each map's test set (<map>-test: 2000 scenarios; <map>-quick: 100; any other "
+            "map, e.g. an imported building's JSON, gets a seeded test set stored in DIR/test_sets/). Trials "
             "go to DIR/results.sqlite as they finish; a rerun reads stored trials and an interrupted "
             "run resumes. Writes DIR/summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf} "
             "and config.json."
@@ -62,7 +75,16 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="comma-separated policies: registry names (a learned policy's name alone is its shipped file) "
         "or NAME:PATH for a policy file (default goalone,ref)",
     )
-    parser.add_argument("--maps", type=_names, default=None, help="comma-separated maps (default gdc1,ghc3)")
+    parser.add_argument(
+        "--maps",
+        type=_map_names,
+        default=None,
+        help=(
+            "comma-separated maps: shipped names or map JSON files (default gdc1,ghc3); a map without a "
+            "registered test set gets one generated on first use, stored in DIR/test_sets/ with the "
+            "map's hash and reused by reruns"
+        ),
+    )
     parser.add_argument(
         "--trials", type=_positive, default=None, help="scenarios per policy and map (default: all)"
     )
@@ -149,7 +171,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     try:
         config = quick_config(**chosen) if args.quick else BenchmarkConfig(**chosen)
         result = run_benchmark(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
-    except (ValueError, KeyError, StoreError) as err:
+    except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
         return _fail("benchmark", err)
     print(f"{result.computed} trials run, {result.reused} read from the store, in {result.seconds:.1f} s")
     for entry in result.summary:

@@ -25,7 +25,7 @@ from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.navigator import Navigator
+from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
@@ -132,7 +132,9 @@ class SocialNavCore:
             self.walls, planner.field_resolution, planner.field_range, planner.field_pad
         )
         self.graph = graph_of(self.map)
-        self.navigator = Navigator(self.graph, batch_size, config.num_robots)
+        self.navigator = Navigator(
+            self.graph, batch_size, config.num_robots, sight=Sight(self.field, planner.wall_distance)
+        )
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
         self.learned = np.arange(config.num_learned_humans)
         b, r = batch_size, config.num_robots

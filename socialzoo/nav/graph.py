@@ -83,6 +83,17 @@ def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np
     return free
 
 
+def segments_clear(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray, clearance: float) -> np.ndarray:
+    """Whether straight segments [p0, p1] (N, 2) keep `clearance` (m, at most 0.5) from every wall;
+    bool (N,)."""
+    from socialzoo.nav.maps import segment_clearance
+
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    if walls is None or walls.num_walls == 0 or len(p0) == 0:
+        return np.ones(len(p0), dtype=bool)
+    return np.asarray(segment_clearance(walls, p0, p1)[0] >= clearance)
+
+
 @dataclass(frozen=True)
 class PathTable:
     """All-pairs shortest paths of a graph.
@@ -458,6 +469,7 @@ class NavGraph:
         max_len: int | None = None,
         *,
         direct: bool = True,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Plan N start/goal pairs at once, as `plan` does for one.
 
@@ -470,6 +482,9 @@ class NavGraph:
             starts, goals: (N, 2) world frame, m.
             max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
+            clearance: with clearance > 0 (a robot's plans), the straight start-goal line is used
+                only where it keeps this from every wall (m); a line grazing a door frame would
+                lead the robot into it. 0: any wall-free line, as humans' routes are planned.
 
         Returns:
             (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
@@ -480,7 +495,7 @@ class NavGraph:
             NoPathError: a row's attach edges are not connected (the message names the row).
             ValueError: a path needs more than max_len waypoints.
         """
-        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True)
+        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True, clearance=clearance)
         return paths, lengths
 
     def plan_batch_status(
@@ -490,6 +505,7 @@ class NavGraph:
         max_len: int | None = None,
         *,
         direct: bool = True,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """`plan_batch` that never raises for an unreachable row, for batched envs.
 
@@ -501,10 +517,16 @@ class NavGraph:
         Raises:
             ValueError: a path needs more than max_len waypoints.
         """
-        return self._plan_batch(starts, goals, max_len, direct, strict=False)
+        return self._plan_batch(starts, goals, max_len, direct, strict=False, clearance=clearance)
 
     def _plan_batch(
-        self, starts: np.ndarray, goals: np.ndarray, max_len: int | None, direct: bool, strict: bool
+        self,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        max_len: int | None,
+        direct: bool,
+        strict: bool,
+        clearance: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
@@ -515,6 +537,8 @@ class NavGraph:
             width = max_len or 1
             return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
         direct_ok = segments_free(self.walls, starts, goals) if direct else np.zeros(n, dtype=bool)
+        if clearance > 0 and direct_ok.any():
+            direct_ok[direct_ok] = segments_clear(self.walls, starts[direct_ok], goals[direct_ok], clearance)
         need = ~direct_ok
         # Rows that go straight need no attach: they may even lie where no edge is reachable.
         rows = np.flatnonzero(need)

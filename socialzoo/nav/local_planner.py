@@ -41,8 +41,10 @@ socialzoo.nav.arcs.
 
 Turning and recovery (refinements of the SPEC's rule, needed in GDC1's 0.9 m doorways):
 - the 30 degree turn-in-place test uses the target's bearing slid along the nearest wall when
-  the robot is within `slide_band` of its margin (so it lines up with a doorway instead of
-  facing the door frame that hides its target), tilted away from the wall inside the margin;
+  the robot is within `slide_band` of its margin and the straight line to its target is blocked
+  (so it lines up with a doorway instead of facing the door frame that hides its target), tilted
+  away from the wall inside the margin; with the line clear, the target's own bearing (in a
+  doorway the wall gradient points back out of the door);
 - a robot whose every arc is blocked by walls turns in place to the heading, on a 15 degree
   fan, whose straight line makes the most progress towards its target.
 """
@@ -284,6 +286,12 @@ def _evaluate(
     bearing = np.arctan2(ty, tx)
     near = here < cfg.wall_distance + cfg.slide_band
     if near.any():
+        # Only where the straight line to the target is blocked: in a doorway the wall distance's
+        # gradient points back out of the door, and sliding would turn the robot away from a
+        # target it can drive to.
+        rows = np.flatnonzero(near)
+        near[rows] = ~_line_clear(field, pose[rows], tx[rows], ty[rows], limit[rows], cfg.near_sample_spacing)
+    if near.any():
         rows = np.flatnonzero(near)
         # Inside the margin, also head away from the wall (up to 45 degrees).
         tilt = np.clip((cfg.wall_distance - here[rows]) / cfg.escape_slack, 0.0, 1.0)
@@ -490,6 +498,20 @@ def _recovery_bearing(
     best = score.argmax(axis=1)
     found = np.isfinite(score[np.arange(len(pose)), best])
     return np.where(found, headings[best], fallback)
+
+
+def _line_clear(
+    field: DistanceField, pose: np.ndarray, tx: np.ndarray, ty: np.ndarray, limit: np.ndarray, spacing: float
+) -> np.ndarray:
+    """(N,) bool: the straight line from each robot to its target (tx, ty) (robot frame) keeps
+    `limit` (N,) from walls at every sample `spacing` apart past the robot itself."""
+    dist = np.sqrt(tx * tx + ty * ty)
+    steps = np.arange(1, max(1, math.ceil(float(dist.max(initial=0.0)) / spacing)) + 1) * spacing  # (M,)
+    frac = np.minimum(steps[None, :] / np.maximum(dist, 1e-9)[:, None], 1.0)  # (N, M)
+    cos, sin = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+    wx, wy = cos * tx - sin * ty, sin * tx + cos * ty
+    points = pose[:, None, :2] + frac[..., None] * np.stack((wx, wy), axis=-1)[:, None, :]
+    return np.asarray((field.lookup(points) >= limit[:, None]).all(axis=1))
 
 
 def _slide_bearing(

@@ -10,7 +10,9 @@ File format ("socialzoo-map/1"), all coordinates in metres, world frame:
       "region": [xmin, ymin, xmax, ymax],          # optional area of interest
       "walls": [[x1, y1, x2, y2], ...],
       "graph": {"nodes": [[x, y], ...], "edges": [[i, j], ...]},   # undirected, node indices
-      "legal_poses": [[x, y, theta], ...]         # robot and human start/goal poses, theta in rad
+      "legal_poses": [[x, y, theta], ...],        # robot and human start/goal poses, theta in rad
+      "walkable_area": 821.5,                     # optional: m^2 the robot can drive (importers)
+      "provenance": {...}                         # optional: how an importer made the map
     }
 
 Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps; load
@@ -69,6 +71,13 @@ class Map:
         source: provenance of the data.
         licence: licence and attribution of the data.
         region: optional (xmin, ymin, xmax, ymax) area of interest, m.
+        walkable_area: optional floor area the robot can drive in, m^2 (cells at least the
+            passable clearance from walls, measured by the importer); scenario generation caps
+            the head count at the benchmark's crowd density (socialzoo.nav.feasibility). None
+            for the shipped maps: the SPEC's head count.
+        provenance: optional JSON object saying how the map was made: the importer, its options
+            and every repair it made to the source data (socialzoo.nav.repair); None for maps
+            written by hand.
         path: file the map was loaded from, if any (used in error messages).
     """
 
@@ -80,6 +89,8 @@ class Map:
     source: str = ""
     licence: str = ""
     region: tuple[float, float, float, float] | None = None
+    walkable_area: float | None = None
+    provenance: dict[str, Any] | None = field(default=None, compare=False)
     path: str | None = field(default=None, compare=False)
 
     @cached_property
@@ -116,6 +127,10 @@ class Map:
             "edges": [[int(i), int(j)] for i, j in self.edges],
         }
         data["legal_poses"] = [[round(float(v), 6) for v in p] for p in self.legal_poses]
+        if self.walkable_area is not None:
+            data["walkable_area"] = round(float(self.walkable_area), 3)
+        if self.provenance is not None:
+            data["provenance"] = self.provenance
         return data
 
     def save(self, path: str | Path) -> Path:
@@ -170,7 +185,18 @@ def _text_field(data: dict[str, Any], key: str, where: str, required: bool) -> s
     return str(data[key])
 
 
-_KNOWN_FIELDS = {"format", "name", "source", "licence", "region", "walls", "graph", "legal_poses"}
+_KNOWN_FIELDS = {
+    "format",
+    "name",
+    "source",
+    "licence",
+    "region",
+    "walls",
+    "graph",
+    "legal_poses",
+    "walkable_area",
+    "provenance",
+}
 
 
 def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
@@ -223,6 +249,12 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
     nodes = _number_rows(graph["nodes"], 2, where, "graph.nodes", "[x, y]")
     edges = _edge_rows(graph["edges"], where)
     poses = _number_rows(data["legal_poses"], 3, where, "legal_poses", "[x, y, theta]")
+    walkable = data.get("walkable_area")
+    if walkable is not None and not (_is_number(walkable) and math.isfinite(walkable) and walkable > 0):
+        raise _fail(where, f"walkable_area must be a positive number of m^2, got {walkable!r}")
+    provenance = data.get("provenance")
+    if provenance is not None and not isinstance(provenance, dict):
+        raise _fail(where, f"provenance must be an object, got {type(provenance).__name__}")
     for arr in (walls, nodes, edges, poses):
         arr.setflags(write=False)
     return Map(
@@ -234,6 +266,8 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
         source=_text_field(data, "source", where, required=False),
         licence=_text_field(data, "licence", where, required=False),
         region=region,
+        walkable_area=None if walkable is None else float(walkable),
+        provenance=provenance,
         path=where,
     )
 

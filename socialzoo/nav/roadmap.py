@@ -44,17 +44,25 @@ class RoadmapConfig:
     """How a roadmap and its legal poses are built; lengths in metres.
 
     Attributes:
-        resolution: grid cell side.
+        resolution: grid cell side (5 cm: fine enough that every door of 0.88 m or more keeps
+            a passable cell on its centre line; at 10 cm a door under 0.98 m may close).
         margin: free border around the walls' bounding box when no region is given.
-        free_clearance: a cell is passable with at least this clearance (robot footprint
-            half-diagonal 0.33 m, so a 0.9 m door stays open).
+        free_clearance: a cell is passable with at least this clearance: the local planner's
+            wall distance (0.37 m) and its distance field's lookup error (0.02 m), so that no
+            route leads through a gap the robot cannot drive through (doors under 0.78 m are
+            closed; 0.9 m doors stay open).
         closing_radius: openings in the outer walls narrower than twice this count as closed when
             telling the inside of a building from the outside.
         node_clearance: least clearance of a generated node.
         min_spacing, max_spacing: generated nodes keep at least spacing_per_clearance times their
             clearance, clipped to [min_spacing, max_spacing], walking distance from each other.
         spacing_per_clearance: see above.
-        edge_clearance: least distance between an edge and any wall (at most 0.5 m).
+        edge_clearance: least distance between an edge and any wall (at most 0.5 m; above the
+            local planner's 0.37 m wall distance, so the robot can follow its edges).
+        keep_clearance: paths that join components are straightened only where the straight
+            line keeps the walking path's own wall distance, up to this (minus 5 cm): through
+            the middle of doorways, off the corners (socialzoo.nav.roadmap.pull_string); 0 lets
+            them pass as close as edge_clearance allows.
         max_edge_length: longest edge considered.
         detour_tolerance: an edge i-j is dropped when some node k gives a path i-k-j at most this
             many times longer.
@@ -64,15 +72,16 @@ class RoadmapConfig:
         good_clearance: poses are preferred up to this clearance (room centres over corners).
     """
 
-    resolution: float = 0.1
+    resolution: float = 0.05
     margin: float = 2.0
-    free_clearance: float = 0.35
+    free_clearance: float = 0.39
     closing_radius: float = 1.5
     node_clearance: float = 0.45
     min_spacing: float = 1.5
     max_spacing: float = 5.0
     spacing_per_clearance: float = 3.0
-    edge_clearance: float = 0.3
+    edge_clearance: float = 0.4
+    keep_clearance: float = 0.45
     max_edge_length: float = 15.0
     detour_tolerance: float = 1.15
     num_poses: int = 25
@@ -87,6 +96,7 @@ class RoadmapConfig:
                 f"RoadmapConfig.min_spacing {self.min_spacing} exceeds max_spacing {self.max_spacing}"
             )
         check_number("RoadmapConfig", "edge_clearance", self.edge_clearance, high=0.5)
+        check_number("RoadmapConfig", "keep_clearance", self.keep_clearance, low=0, high=0.5)
         check_number("RoadmapConfig", "detour_tolerance", self.detour_tolerance, low=1)
         check_int("RoadmapConfig", "num_poses", self.num_poses, low=2)
         if self.node_clearance < NODE_CLEARANCE or self.pose_clearance < POSE_CLEARANCE:
@@ -416,7 +426,7 @@ def build_edges(
     return _prune_detours(nodes, edges, detour_tolerance)
 
 
-def _grid_graph(space: FreeSpace) -> tuple[sparse.csr_matrix, np.ndarray]:
+def grid_graph(space: FreeSpace) -> tuple[sparse.csr_matrix, np.ndarray]:
     """Sparse 8-neighbour graph over interior cells, weighted to prefer clearance.
 
     Returns:
@@ -444,15 +454,34 @@ def _grid_graph(space: FreeSpace) -> tuple[sparse.csr_matrix, np.ndarray]:
     return graph, cell_id
 
 
-def _pull_string(path: np.ndarray, index: WallIndex, clearance: float, max_length: float) -> list[int]:
-    """Indices of the path points (L, 2) kept when straight clear shortcuts replace the rest."""
+def pull_string(
+    path: np.ndarray,
+    index: WallIndex,
+    clearance: float,
+    max_length: float,
+    path_clearance: np.ndarray | None = None,
+    keep_clearance: float = 0.0,
+    slack: float = 0.05,
+) -> list[int]:
+    """Indices of the path points (L, 2) kept when straight clear shortcuts replace the rest.
+
+    A shortcut keeps at least `clearance` from every wall. With path_clearance (L,) (the wall
+    distance of each path point) and keep_clearance > 0, it also keeps min(keep_clearance, the
+    least path_clearance of the points it replaces) - slack: it never passes much closer to a wall
+    than the walking path did, so a straightened path still goes through the middle of a doorway
+    and keeps off the corners it turns round.
+    """
     keep = [0]
     i = 0
     last = len(path) - 1
     while i < last:
         ahead = np.arange(i + 1, last + 1)
         ahead = ahead[np.hypot(*(path[ahead] - path[i]).T) <= max_length]
-        ok = segment_clearance(index, np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])[0] >= clearance
+        need = np.full(len(ahead), clearance)
+        if path_clearance is not None and keep_clearance > 0 and len(ahead):
+            least = np.minimum.accumulate(np.minimum(path_clearance[ahead], path_clearance[i]))
+            need = np.maximum(need, np.minimum(least, keep_clearance) - slack)
+        ok = segment_clearance(index, np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])[0] >= need
         ok &= ~index.crosses(np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])
         # Next cell at least (grid steps are clear of walls even where the clearance check is not).
         i = int(ahead[np.flatnonzero(ok)[-1]]) if ok.any() else i + 1
@@ -481,7 +510,7 @@ def connect_components(
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     if len(nodes) < 2 or len(np.unique(graph_components(len(nodes), edges))) == 1:
         return nodes, edges
-    graph, cell_id = _grid_graph(space)
+    graph, cell_id = grid_graph(space)
     cells = space.cell_of(nodes)
     vertex = cell_id[cells[:, 0], cells[:, 1]]
     id_cells = np.argwhere(space.interior)  # vertex id -> cell, in the order cell_id numbers them
@@ -508,9 +537,17 @@ def connect_components(
         while pred[walk[-1]] >= 0:
             walk.append(int(pred[walk[-1]]))
         start = int(source_nodes[np.flatnonzero(vertex[source_nodes] == walk[-1])[0]])
-        path = space.centres(id_cells[walk[::-1]])
+        cells_walked = id_cells[walk[::-1]]
+        path = space.centres(cells_walked)
         path[0], path[-1] = node_list[start], node_list[target]
-        corners = _pull_string(path, index, clearance, config.max_edge_length)
+        corners = pull_string(
+            path,
+            index,
+            clearance,
+            config.max_edge_length,
+            space.clearance[cells_walked[:, 0], cells_walked[:, 1]],
+            config.keep_clearance,
+        )
         chain = [start]
         for k in corners[1:-1]:
             node_list.append(path[k])

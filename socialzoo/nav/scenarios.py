@@ -20,6 +20,13 @@ import numpy as np
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.core.walls import WallIndex
+from socialzoo.nav.feasibility import (
+    MAX_ROUTE_LENGTH,
+    feasible_pairs,
+    max_humans_for,
+    redraw_human_pairs,
+    redraw_robot_pair,
+)
 from socialzoo.nav.graph import NoPathError, graph_of, segments_free
 from socialzoo.nav.maps import Map
 
@@ -40,6 +47,9 @@ class ScenarioConfig:
         min_speed, max_speed: the sampled speed is clipped to this range, m/s.
         spawn_clearance: a jittered spawn closer than this to a wall is re-drawn, m.
         spawn_tries: jitter draws per human before it spawns on its start pose itself.
+        max_route_length: the feasibility rule: a robot or human start/goal pair whose planned
+            route is longer than this is drawn again, m (socialzoo.nav.feasibility: by default
+            75% of the 80 s time limit at GoAlone's 1.5 m/s cruise speed, 90 m).
     """
 
     min_humans: int = 5
@@ -52,6 +62,7 @@ class ScenarioConfig:
     max_speed: float = 1.3
     spawn_clearance: float = 0.2
     spawn_tries: int = 10
+    max_route_length: float = MAX_ROUTE_LENGTH
 
     def __post_init__(self) -> None:
         for name, low in (("min_humans", 0), ("max_humans", 0), ("repeats", 1), ("spawn_tries", 1)):
@@ -68,6 +79,7 @@ class ScenarioConfig:
             raise ValueError(
                 f"ScenarioConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})"
             )
+        check_number("ScenarioConfig", "max_route_length", self.max_route_length, low=0.0, low_open=True)
 
 
 def _frozen_array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) -> np.ndarray:
@@ -303,14 +315,18 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
     """Draw one benchmark scenario (SPEC section 5) from a seed.
 
     Draws, in this order, from np.random.default_rng(seed): robot start and goal (two distinct
-    legal poses); the head count n, uniform in [min_humans, max_humans]; n human starts, each any
-    legal pose but the robot's start; n human goals, each any legal pose but that human's start;
-    n preferred speeds N(speed_mean, speed_std) clipped to [min_speed, max_speed]; spawn jitter,
+    legal poses, both drawn again while their route is infeasible); the head count n, uniform in
+    [min_humans, max_humans] (max_humans lowered to the benchmark's crowd density on a map with
+    a walkable_area, see socialzoo.nav.feasibility); n human starts, each any legal pose but the
+    robot's start; n human goals, each any legal pose but that human's start (infeasible human pairs are drawn again,
+    row by row); n preferred speeds N(speed_mean, speed_std) clipped to [min_speed, max_speed]; spawn jitter,
     uniform in +-spawn_jitter per axis, re-drawn for bad spawns (see `spawn_points`). Humans may
     share start and goal poses with each other, and a human's goal may be the robot's start or
     goal: the benchmark needs up to 25 humans on maps with few poses (GDC1 has 26). Every route
     is planned with NavGraph.plan_batch (A*-equal shortest paths, start and goal joined to the
-    nearest reachable edge, a straight line where wall-free).
+    nearest reachable edge, a straight line where wall-free). Feasible: a route at most
+    cfg.max_route_length long (socialzoo.nav.feasibility); a pair still infeasible after 256
+    draws is replaced by a uniform pick among the feasible pairs.
 
     Args:
         m: the map.
@@ -321,8 +337,7 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
         The scenario.
 
     Raises:
-        ValueError: the map has fewer than 2 legal poses.
-        NoPathError: a robot or human goal cannot be reached from its start on the graph.
+        ValueError: the map has fewer than 2 legal poses, or no feasible pair of them.
     """
     cfg = cfg or ScenarioConfig()
     poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
@@ -331,15 +346,24 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
         raise ValueError(
             f"{m.where}: scenario generation needs at least 2 legal poses, the map has {num_poses}"
         )
+    feasible = feasible_pairs(m, cfg.max_route_length)
+    if not feasible.any():
+        raise ValueError(
+            f"{m.where}: no two legal poses are joined by a route of at most {cfg.max_route_length:g} m "
+            "(ScenarioConfig.max_route_length, the feasibility rule); check the map with "
+            "`socialzoo map check`"
+        )
     rng = np.random.default_rng(seed)
     robot_start = int(rng.integers(num_poses))
     robot_goal = int(rng.integers(num_poses - 1))
     robot_goal += robot_goal >= robot_start
-    n = int(rng.integers(cfg.min_humans, cfg.max_humans, endpoint=True))
+    robot_start, robot_goal = redraw_robot_pair(rng, feasible, robot_start, robot_goal)
+    n = int(rng.integers(cfg.min_humans, max_humans_for(m, cfg.min_humans, cfg.max_humans), endpoint=True))
     start = rng.integers(num_poses - 1, size=n)
     start += start >= robot_start
     goal = rng.integers(num_poses - 1, size=n)
     goal += goal >= start
+    redraw_human_pairs(rng, feasible, robot_start, start, goal, m.where)
     speed = np.clip(rng.normal(cfg.speed_mean, cfg.speed_std, size=n), cfg.min_speed, cfg.max_speed)
     context = f"{m.where}, scenario seed {seed}"
     starts = np.concatenate((poses[[robot_start], :2], poses[start, :2]))
@@ -379,7 +403,7 @@ class TestSet:
     independent of every other scenario.
 
     Attributes:
-        map_name: the map, as `load_map` names it.
+        map_name: the map, as `load_map` names it (a shipped name or a map file's path).
         base_seed: the set's seed.
         count: number of scenarios.
         cfg: generator settings.
@@ -414,7 +438,7 @@ class TestSet:
             from socialzoo.nav import maps
 
             return maps.load_map(self.map_name)
-        if m.name != self.map_name:
+        if self.map_name not in (m.name, m.path):
             raise ValueError(
                 f"test set {self.name or self.map_name!r} is on map {self.map_name!r}, got map {m.name!r}"
             )

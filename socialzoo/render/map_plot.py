@@ -65,3 +65,55 @@ def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_pose
     ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
     return path
+
+
+def save_map_check_png(m: Map, check: Any, path: str | Path) -> Path:
+    """Draw a map with what `socialzoo.nav.map_check.check_map` found, to a PNG; returns the path.
+
+    Graph edges closer to a wall than the robot's wall distance are red, the others blue; legal
+    poses with no feasible route to any other pose are red, the others orange; the title sums up
+    the clearance and route statistics.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    fig, ax = plt.subplots(figsize=(11, 9))
+    ax.add_collection(LineCollection(np.asarray(m.walls).reshape(-1, 2, 2), colors="0.15", linewidths=0.8))
+    edges = np.asarray(m.edges, dtype=np.int64).reshape(-1, 2)
+    if len(edges) and ((edges >= 0) & (edges < len(m.nodes))).all():
+        tight = np.zeros(len(edges), dtype=bool)
+        tight[list(check.tight_edges)] = True
+        colours = np.where(tight[:, None], [[0.85, 0.1, 0.1, 0.9]], [[0.12, 0.47, 0.71, 0.6]])
+        ax.add_collection(
+            LineCollection(m.nodes[edges], colors=colours, linewidths=np.where(tight, 1.6, 0.7))
+        )
+    if len(m.nodes):
+        ax.plot(m.nodes[:, 0], m.nodes[:, 1], "o", color="tab:blue", markersize=2.5)
+    p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
+    if len(p):
+        stranded = np.zeros(len(p), dtype=bool)
+        if check.routes is not None:
+            stranded[list(check.routes.stranded)] = True
+        colour = np.where(stranded, "tab:red", "tab:orange")
+        ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color=colour, scale=40, width=0.003)
+        ax.scatter(p[:, 0], p[:, 1], c=colour, s=12, zorder=3)
+    ax.autoscale()
+    ax.set_aspect("equal")
+    title = f"{m.name}: {'valid' if check.valid else 'INVALID'}, {check.num_components} component(s), "
+    title += f"{len(check.tight_edges)} tight edges (red)"
+    if check.routes is not None:
+        r = check.routes
+        title += (
+            f"\n{r.num_feasible}/{r.num_pairs} feasible pose pairs (<= {r.max_route_length:g} m), "
+            f"routes {r.shortest:.0f}-{r.longest:.0f} m, {len(r.stranded)} stranded poses (red)"
+        )
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    path = Path(path)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path

@@ -77,3 +77,33 @@ def test_demos_command(tmp_path, rooms_path, capsys):
     assert (arrays["terminated"] | arrays["truncated"]).sum() == 3
     assert meta["policy_config"]["corridor_half_width"] == 0.62 and len(meta["scenario_seeds"]) == 3
     assert not parts_dir(out).exists()
+
+
+def test_benchmark_on_a_map_file_stores_its_test_set_and_reuses_it(tmp_path, rooms_path, capsys):
+    out = tmp_path / "results"
+    argv = ["benchmark", "--policies", "goalone", "--maps", rooms_path, "--trials", "3", "--max-steps", "60"]
+    argv += ["--workers", "1", "--batch-size", "3", "--out", str(out), "--no-progress", "--no-figures"]
+    assert socialzoo_main(argv) == 0
+    assert "3 trials run, 0 read from the store" in capsys.readouterr().out
+    stored = json.loads((out / "test_sets" / "rooms-test.json").read_text())
+    assert stored["format"] == "socialzoo-testset/1" and stored["map"] == rooms_path
+    assert len(stored["map_sha256"]) == 64 and len(stored["scenarios"]) == 3
+    rows = (out / "summary.csv").read_text().splitlines()
+    assert rows[1].split(",")[:4] == ["goalone", "rooms", "rooms-test", "3"]
+    # A rerun reads the trials back; a longer one adds scenarios 3 and 4 to the stored set.
+    assert socialzoo_main(argv) == 0
+    assert "0 trials run, 3 read from the store" in capsys.readouterr().out
+    longer = [*argv]
+    longer[longer.index("3")] = "5"
+    assert socialzoo_main(longer) == 0
+    assert "2 trials run, 3 read from the store" in capsys.readouterr().out
+    again = json.loads((out / "test_sets" / "rooms-test.json").read_text())
+    assert again["scenarios"][:3] == stored["scenarios"] and len(again["scenarios"]) == 5
+    # The map changed since: its stored test set is refused, naming the file.
+    data = json.loads(open(rooms_path).read())
+    data["legal_poses"] = data["legal_poses"][::-1]
+    changed = tmp_path / "rooms.json"
+    changed.write_text(json.dumps(data))
+    moved = [changed.as_posix() if a == rooms_path else a for a in argv]
+    assert socialzoo_main(moved) == 2
+    assert "rooms-test.json: this test set was generated on map" in capsys.readouterr().err

@@ -114,13 +114,88 @@ def test_map_import_from_pedsim_waypoints_and_amrl_nav(tmp_path, capsys):
     )
     assert load_map(out).num_nodes == 2
     capsys.readouterr()
-    # A graph edge through the middle wall is refused, naming the entry.
+    # A graph edge through the middle wall: --strict refuses it, naming the entry; by default it
+    # is rerouted through the door.
     nav.write_text(
         '{"nodes": [{"id": 7, "loc": {"x": 4, "y": 1}}, {"id": 8, "loc": {"x": 12, "y": 1}}],'
         ' "edges": [{"s0_id": 7, "s1_id": 8}]}'
     )
-    assert (
-        main(["map", "import", "--walls", str(vector), "--nav", str(nav), "--name", "n", "--out", str(out)])
-        == 2
-    )
+    argv = ["map", "import", "--walls", str(vector), "--nav", str(nav), "--name", "n", "--out", str(out)]
+    assert main([*argv, "--strict"]) == 2
     assert "passes through wall" in capsys.readouterr().err
+    assert main(argv) == 0
+    assert "passes through wall 4: rerouted along a" in capsys.readouterr().out
+    assert load_map(out).num_nodes == 3
+
+
+def _bad_graph_files(tmp_path):
+    """A two-room building (0.9 m door) whose navigation graph has a node on the middle wall, an
+    edge through it and a stray component far outside."""
+    walls = np.array(
+        [[0, 0, 16, 0], [16, 0, 16, 8], [16, 8, 0, 8], [0, 8, 0, 0], [8, 0, 8, 3.55], [8, 4.45, 8, 8]], float
+    )
+    vector = write_vector_map(tmp_path / "building.txt", walls)
+    nav = tmp_path / "building.navigation.json"
+    nodes = [(1, 4.0, 4.0), (2, 8.0, 2.0), (3, 12.0, 4.0), (4, 30.0, 30.0), (5, 31.0, 30.0)]
+    nav.write_text(
+        '{"nodes": ['
+        + ", ".join(f'{{"id": {i}, "loc": {{"x": {x}, "y": {y}}}}}' for i, x, y in nodes)
+        + '], "edges": [{"s0_id": 1, "s1_id": 2}, {"s0_id": 2, "s1_id": 3}, {"s0_id": 4, "s1_id": 5}]}'
+    )
+    return vector, nav
+
+
+def test_map_import_repairs_a_real_graph_and_reports_it(tmp_path, capsys):
+    vector, nav = _bad_graph_files(tmp_path)
+    out = tmp_path / "b.json"
+    argv = ["map", "import", "--walls", str(vector), "--nav", str(nav), "--name", "b", "--out", str(out)]
+    assert main([*argv, "--strict"]) == 2
+    assert "graph.nodes[1] at (8.00, 2.00) lies on wall" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "repaired: graph.nodes[1] at (8.00, 2.00) lies on wall" in text
+    assert "cannot be joined to the rest" in text and "generated: legal poses generated" in text
+    m = load_map(out)
+    assert m.provenance["importer"] == "socialzoo map import"
+    assert m.provenance["inputs"] == {"walls": "building.txt", "nav": "building.navigation.json"}
+    kinds = {r["kind"] for r in m.provenance["repairs"]}
+    assert {"node_moved", "component_dropped", "poses_generated"} <= kinds
+
+
+def test_map_check_reports_clearance_routes_and_draws(tmp_path, capsys):
+    out = tmp_path / "check.png"
+    assert main(["map", "check", "hallway", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "valid" in text and "routes: 600 of 600 pose pairs feasible" in text
+    assert "connectivity: 1 graph component(s)" in text
+    assert iio.imread(out).shape[0] > 200
+    # A tighter route limit makes most pairs infeasible and says so.
+    assert main(["map", "check", "hallway", "--max-route", "12", "--no-picture"]) == 0
+    assert "warning: only 46% of pose pairs have a feasible route (<= 12 m)" in capsys.readouterr().out
+    # An invalid map lists its problems and exits 2.
+    bad = load_map("doorway").to_json()
+    bad["graph"]["nodes"][0] = [8.0, 1.0]
+    (tmp_path / "bad.json").write_text(__import__("json").dumps(bad))
+    assert main(["map", "check", str(tmp_path / "bad.json"), "--no-picture"]) == 2
+    assert "INVALID" in capsys.readouterr().out
+
+
+def test_map_import_from_a_png_floor_plan(tmp_path, capsys):
+    img = np.full((160, 320), 255, np.uint8)  # 16 x 8 m at 5 cm per pixel
+    img[:4], img[-4:], img[:, :4], img[:, -4:] = 0, 0, 0, 0
+    img[:, 158:162] = 0
+    img[62:98, 158:162] = 255  # a 1.8 m door in the middle wall
+    png = tmp_path / "plan.png"
+    iio.imwrite(png, img)
+    out = tmp_path / "plan.json"
+    argv = ["map", "import", "--png", str(png), "--name", "plan", "--out", str(out)]
+    assert main(argv) == 2
+    assert "--png needs --scale" in capsys.readouterr().err
+    assert main([*argv, "--scale", "0.05", "--origin", "10", "20"]) == 0
+    m = load_map(out)
+    lo, hi = m.walls.reshape(-1, 2).min(axis=0), m.walls.reshape(-1, 2).max(axis=0)
+    np.testing.assert_allclose(lo, [10.0, 20.0], atol=1e-9)
+    np.testing.assert_allclose(hi, [26.0, 28.0], atol=1e-9)
+    assert (m.legal_poses[:, 0] < 18).any() and (m.legal_poses[:, 0] > 18).any()  # both rooms
+    assert m.provenance["inputs"]["scale"] == 0.05

@@ -273,3 +273,24 @@ def test_infos_share_one_set_of_keys():
     assert set(StepResult.INFO_KEYS) <= set(vinfo)
     assert all(vinfo[key].shape == (2,) for key in StepResult.INFO_KEYS)
     assert vinfo["force"][0] == info["force"] and vinfo["target_human"][0] == info["target_human"]
+
+
+def test_gym_make_on_an_imported_map_file(tmp_path):
+    from socialzoo.nav.floorplans import long_corridor
+    from socialzoo.nav.repair import repair_map
+
+    plan = long_corridor(120.0)
+    m, _ = repair_map("corridor", plan.walls, seed_point=plan.inside)
+    path = m.save(tmp_path / "corridor.json")
+    env_id = next(iter(BENCHMARK_IDS))  # the training map's id, on another map
+    env = gym.make(env_id, map=str(path), scenario={"min_humans": 0, "max_humans": 0})
+    env.reset(seed=3)
+    start = env.unwrapped.core.state.robot_pose[0, 0, :2].copy()
+    goal = env.unwrapped.core.state.robot_goal[0, 0, :2].copy()
+    assert abs(goal[0] - start[0]) <= 90.0  # feasible: the 120 m corridor's far pairs are never drawn
+    done, info = False, {}
+    while not done:
+        _, _, terminated, truncated, info = env.step(0)
+        done = terminated or truncated
+    assert info["metrics"]["success"]
+    env.close()

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav import maps
 from socialzoo.nav.graph import AttachError, NavGraph, NoPathError, graph_of, segments_free
-from socialzoo.nav.maps import Map
+from socialzoo.nav.maps import Map, segment_clearance
 
 
 def gdc1() -> Map:
@@ -284,3 +284,18 @@ def test_plan_batch_status_reports_unreachable_rows_without_raising() -> None:
         split.attach(np.array([[30.0, 30.0]]))
     empty = NavGraph(np.zeros((0, 2)), np.zeros((0, 2), int))
     assert not empty.attach(np.zeros((2, 2)), strict=False).found.any()
+
+
+def test_robot_plans_keep_clearance_where_they_can() -> None:
+    # Two rooms, a 0.9 m door at y 3.55..4.45; a graph node on each side, in line with the door.
+    walls = np.array([*box(0, 0, 16, 8), [8, 0, 8, 3.55], [8, 4.45, 8, 8]], dtype=np.float64)
+    g = NavGraph(np.array([[4.0, 4.0], [12.0, 4.0]]), np.array([[0, 1]]), WallIndex(walls))
+    start, goal = np.array([[9.0, 4.0]]), np.array([[1.0, 7.0]])
+    # The straight start-goal line passes the door 0.05 m from its upper jamb: humans take it ...
+    grazing, _ = g.plan_batch(start, goal)
+    assert len(grazing[0]) == 2
+    # ... a robot keeping 0.37 m goes along the graph, through the middle of the door.
+    paths, lengths = g.plan_batch(start, goal, clearance=0.37)
+    path = paths[0, : lengths[0]]
+    assert len(path) > 2
+    assert segment_clearance(g.walls, path[:-1], path[1:])[0].min() >= 0.37

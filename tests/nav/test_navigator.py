@@ -159,3 +159,34 @@ def test_tolerance_follows_a_path_that_doubles_back():
     pos = np.array([1.0, 0.05])
     assert carrot(pos, path, np.array(4))[0] > 1.0  # the plain carrot: outwards on leg one
     assert carrot(pos, path, np.array(4), tolerance=0.3)[0] < 1.0  # back along leg two
+
+
+def test_carrot_in_sight_waits_at_a_door_frame_but_never_at_the_robot():
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.nav.distance_field import distance_field
+    from socialzoo.nav.navigator import Sight, track
+
+    # A wall along y = 0 with a 0.9 m door at x 2.05..2.95; the path comes along y = 0.6, turns
+    # down through the door at x = 2.5 and back left below the wall (a hairpin round the jamb).
+    walls = WallIndex(np.array([[-5.0, 0.0, 2.05, 0.0], [2.95, 0.0, 8.0, 0.0]]))
+    sight = Sight(distance_field(walls, 0.025, 1.37, 3.0), clearance=0.37)
+    path = np.array([[-3.0, 0.6], [2.5, 0.6], [2.5, -0.6], [-3.0, -0.6]])
+    pos = np.array([2.0, 0.6])  # 0.5 m before the turn
+    plain, _ = track(pos, path, np.array(4), max_skip=0, tolerance=0.3)
+    kept, _ = track(pos, path, np.array(4), max_skip=0, tolerance=0.3, sight=sight)
+    # The plain carrot lies beyond the door, behind its frame as seen from the robot ...
+    assert plain[1] < 0.0
+    # ... the carrot in sight stays on this side, on the path, where the robot can drive straight.
+    assert kept[1] > 0.0 and np.isclose(kept[0], 2.5)
+    assert np.hypot(*(kept - pos)) >= 0.5 - 1e-9
+    # With the line clear (open space), the carrot is the plain one.
+    far = np.array([-2.0, 0.6])
+    np.testing.assert_allclose(
+        track(far, path, np.array(4), sight=sight)[0], track(far, path, np.array(4))[0]
+    )
+    # Hugging the wall with the path on it, the carrot still lies min_ahead along the path.
+    grazing = np.array([[-3.0, 0.05], [4.0, 0.05]])
+    near_wall, _ = track(np.array([0.0, 0.05]), grazing, np.array(2), sight=sight)
+    assert near_wall[0] >= 0.5 - 1e-9
+    with pytest.raises(ValueError, match=r"Sight\.min_ahead must be a non-negative number, got -1"):
+        Sight(sight.field, 0.37, min_ahead=-1)

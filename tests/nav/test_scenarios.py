@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +13,7 @@ import pytest
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
 from socialzoo.nav import maps
-from socialzoo.nav.graph import NoPathError, segments_free
+from socialzoo.nav.graph import segments_free
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenario_families import FAMILIES, make_family_scenario
 from socialzoo.nav.scenarios import (
@@ -189,16 +191,41 @@ def test_maps_without_enough_poses_raise() -> None:
         make_family_scenario("hallway_head_on", one, 0)
 
 
-def test_unreachable_goal_raises_naming_the_scenario() -> None:
-    # A third pose shut in a box: every scenario that sends someone there fails.
+def test_unreachable_poses_are_never_drawn_and_no_feasible_pair_raises() -> None:
+    # A third pose shut in a box: its routes do not exist, so nobody starts or ends there.
     hallway = synthetic("hallway")
     walls = np.concatenate((hallway.walls, box(30, 0, 32, 2)))
     poses = np.concatenate((hallway.legal_poses, [[31.0, 1.0, 0.0]]))
     m = dataclasses.replace(hallway, walls=walls, legal_poses=poses)
-    with pytest.raises(
-        NoPathError, match=r"map 'hallway', scenario seed 0: .*point \[31.0, 1.0\] reaches no edge"
-    ):
-        generate_scenario(m, 0, ScenarioConfig(min_humans=10, max_humans=10))
+    for seed in range(20):
+        s = generate_scenario(m, seed, ScenarioConfig(min_humans=10, max_humans=10))
+        assert s.robot_start[0] < 30 and s.robot_goal[0] < 30
+        assert (s.human_start_index != 2).all() and (s.human_goal_index != 2).all()
+    with pytest.raises(ValueError, match=r"map 'hallway': no two legal poses .* at most 10 m"):
+        generate_scenario(m, 0, ScenarioConfig(max_route_length=10.0))
+
+
+def test_feasibility_rule_redraws_only_long_routes() -> None:
+    # Four poses along a 60 m corridor: with a 25 m limit only neighbours (20 m apart) are feasible.
+    walls = np.array(box(0, 0, 61, 3), dtype=float)
+    xs = np.array([0.5, 20.5, 40.5, 60.5])
+    m = Map(
+        name="corridor",
+        walls=walls,
+        nodes=np.column_stack((xs, np.full(4, 1.5))),
+        edges=np.array([[0, 1], [1, 2], [2, 3]]),
+        legal_poses=np.column_stack((xs, np.full(4, 1.5), np.zeros(4))),
+    )
+    cfg = ScenarioConfig(max_route_length=25.0)
+    for seed in range(30):
+        s = generate_scenario(m, seed, cfg)
+        assert abs(s.robot_goal[0] - s.robot_start[0]) == 20.0
+        lengths = [np.linalg.norm(np.diff(r, axis=0), axis=1).sum() for r in s.human_routes]
+        assert max(lengths) <= 25.0
+        assert generate_scenario(m, seed, cfg) == s
+    # Without the limit the same seeds draw far pairs too.
+    far = [generate_scenario(m, seed) for seed in range(30)]
+    assert any(abs(s.robot_goal[0] - s.robot_start[0]) > 20.0 for s in far)
 
 
 def test_humans_may_share_poses_on_a_two_pose_map() -> None:
@@ -269,6 +296,26 @@ def test_named_test_sets() -> None:
         get_test_set("gdc1")
     s = get_test_set("gdc1-quick").scenario(4, m=gdc1())
     check_scenario_geometry(gdc1(), s)
+
+
+# sha256 of the scenarios' JSON (sort_keys) in index order, computed from the code before the
+# feasibility rule existed (commit cb9a195): the benchmark's test sets must never move. The full
+# sets (2000 each) are checked every 20th scenario; the quick sets in full.
+FROZEN_TEST_SETS = {
+    ("gdc1-test", 20): "57599f8d17918399ad84ec618add5d9d1b6e7787ce784f7e458519a83956a4b3",
+    ("ghc3-test", 20): "ac5d506f4e905cfa6a4a1ab10b2232b88ffb40c80cb8a85a16d319072d899a80",
+    ("gdc1-quick", 1): "971076376d0ec3d97de25ee304348ff7ed3e9ba17f31f1918c84b4c10c96a16e",
+    ("ghc3-quick", 1): "a92e65694a45a28d7b20de284b5f46e23d734230bd5727d9cd9e36c6e2e12740",
+}
+
+
+@pytest.mark.parametrize(("name", "stride"), list(FROZEN_TEST_SETS))
+def test_benchmark_test_sets_are_bit_identical_to_the_published_ones(name: str, stride: int) -> None:
+    ts = get_test_set(name)
+    digest = hashlib.sha256()
+    for k in range(0, len(ts), stride):
+        digest.update(json.dumps(ts.scenario(k).to_json(), sort_keys=True).encode())
+    assert digest.hexdigest() == FROZEN_TEST_SETS[(name, stride)]
 
 
 # ---------------------------------------------------------------------------- WorldState

@@ -1,0 +1,137 @@
+"""Test sets for maps without a registered one (any imported building): generated on first use,
+stored beside the results with the map's hash, and reused so that reruns are comparable.
+
+The file is DIR/test_sets/<map name>-test.json (or -quick): the map's sha256, the set's base
+seed and scenario settings, and every scenario generated so far, exactly (socialzoo-scenario/1).
+A rerun reads the scenarios back instead of generating them, so later changes to the generator
+cannot change them; a run that needs more scenarios generates the next ones (scenario k always
+has seed TestSet.seed(k)) and appends them. A map whose contents changed since is refused.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from socialzoo.nav.maps import Map, load_map
+from socialzoo.nav.scenarios import Scenario, ScenarioConfig, TestSet, generate_scenario
+
+logger = logging.getLogger(__name__)
+
+TEST_SET_FORMAT = "socialzoo-testset/1"
+TEST_SET_DIR = "test_sets"
+# Base seeds of generated test sets (the registered ones use 20220001..20220004).
+CUSTOM_TEST_SEED = 20220100
+CUSTOM_QUICK_SEED = 20220101
+# Scenarios in a generated test set, as in the registered ones.
+CUSTOM_TEST_SIZE = 2000
+CUSTOM_QUICK_SIZE = 100
+
+
+def map_sha256(m: Map) -> str:
+    """sha256 of a map's contents (its JSON form with sorted keys)."""
+    return hashlib.sha256(json.dumps(m.to_json(), sort_keys=True).encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class StoredTestSet(TestSet):
+    """A TestSet whose scenarios were generated once and stored: `scenario(k)` reads them back.
+
+    Attributes:
+        stored: the first len(stored) scenarios of the set, as generated.
+    """
+
+    stored: tuple[Scenario, ...] = field(default=(), compare=False, repr=False)
+
+    def scenario(self, k: int, m: Map | None = None) -> Scenario:
+        """Scenario k as stored (generated from seed(k) when beyond the stored ones)."""
+        if 0 <= k < len(self.stored):
+            return self.stored[k]
+        return generate_scenario(m if m is not None else load_map(self.map_name), self.seed(k), self.cfg)
+
+
+def stored_test_set(
+    map_ref: str, out_dir: str | Path, trials: int | None, quick: bool = False
+) -> StoredTestSet:
+    """The test set of a map without a registered one, read from (or written to) out_dir.
+
+    Args:
+        map_ref: a shipped map name or a map JSON path, as the benchmark names it.
+        out_dir: the benchmark's output directory; the set lives in out_dir/test_sets/.
+        trials: scenarios needed (None: the whole set, 2000, or 100 with quick).
+        quick: the quick set (its own base seed and size).
+
+    Returns:
+        The set with at least `trials` scenarios stored; its map_name is `map_ref`, so that
+        workers load the same map.
+
+    Raises:
+        ValueError: the stored file belongs to another version of the map (its hash differs), or
+            is not a test set file, or trials exceeds the set's size.
+        FileNotFoundError, MapError: the map cannot be loaded.
+    """
+    m = load_map(map_ref)
+    kind = "quick" if quick else "test"
+    size = CUSTOM_QUICK_SIZE if quick else CUSTOM_TEST_SIZE
+    need = size if trials is None else trials
+    if need > size:
+        raise ValueError(f"{need} trials asked on map {map_ref!r}, but its generated test set holds {size}")
+    name = f"{m.name}-{kind}"
+    path = Path(out_dir) / TEST_SET_DIR / f"{name}.json"
+    digest = map_sha256(m)
+    cfg = ScenarioConfig()
+    base = TestSet(map_ref, CUSTOM_QUICK_SEED if quick else CUSTOM_TEST_SEED, size, cfg=cfg, name=name)
+    scenarios: list[Scenario] = []
+    if path.is_file():
+        scenarios = _read(path, digest, base)
+    if len(scenarios) < need:
+        logger.info("%s: generating scenarios %d..%d", name, len(scenarios), need - 1)
+        scenarios += [generate_scenario(m, base.seed(k), cfg) for k in range(len(scenarios), need)]
+        _write(path, base, m, digest, scenarios)
+    return StoredTestSet(
+        base.map_name, base.base_seed, base.count, base.cfg, base.name, stored=tuple(scenarios)
+    )
+
+
+def _read(path: Path, digest: str, base: TestSet) -> list[Scenario]:
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as err:
+        raise ValueError(f"{path}: not a readable test set file ({err})") from None
+    if not isinstance(data, dict) or data.get("format") != TEST_SET_FORMAT:
+        raise ValueError(f"{path}: not a {TEST_SET_FORMAT} file")
+    if data.get("map_sha256") != digest:
+        raise ValueError(
+            f"{path}: this test set was generated on map {data.get('map')!r} with sha256 "
+            f"{str(data.get('map_sha256'))[:12]}..., but the map now has sha256 {digest[:12]}...: results "
+            "would not be comparable; use another --out directory (or delete the file to start afresh)"
+        )
+    if data.get("base_seed") != base.base_seed or data.get("scenario") != dataclasses.asdict(base.cfg):
+        raise ValueError(
+            f"{path}: stored with base seed {data.get('base_seed')} and scenario settings "
+            f"{data.get('scenario')}, which differ from this version's; use another --out directory"
+        )
+    return [Scenario.from_json(s) for s in data.get("scenarios", [])]
+
+
+def _write(path: Path, base: TestSet, m: Map, digest: str, scenarios: list[Scenario]) -> None:
+    data: dict[str, Any] = {
+        "format": TEST_SET_FORMAT,
+        "name": base.name,
+        "map": base.map_name,
+        "map_name": m.name,
+        "map_sha256": digest,
+        "base_seed": base.base_seed,
+        "size": base.count,
+        "scenario": dataclasses.asdict(base.cfg),
+        "scenarios": [s.to_json() for s in scenarios],
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(data, separators=(",", ":")) + "\n")
+    tmp.replace(path)

@@ -1,0 +1,450 @@
+"""Repairs of imported building data: what real floor plans and their navigation graphs get wrong.
+
+Real navigation graphs put nodes in doorways and on walls, draw edges through walls and carry
+stray components; their legal poses stand too close to walls. `repair_map` fixes each of these
+and records every change in a RepairReport, which importers store in the map's provenance:
+- a node closer to a wall than the passable clearance (config.free_clearance), or shut inside a
+  wall loop, moves to the nearest passable grid cell within `max_move`; else it is dropped;
+- an edge that touches a wall or passes closer than config.edge_clearance is rerouted along a
+  walking path through the free space (its corners become new nodes) when that path is at most
+  `max_detour` times longer; else it is dropped;
+- graph components are joined along walking paths where the free space joins them; those that
+  stay apart (outside the building, behind a door too narrow for the robot) are dropped, the
+  largest kept;
+- a legal pose too close to a wall moves to the nearest cell with the pose clearance, a pose that
+  cannot reach the graph is dropped, and with fewer than two left the poses are generated afresh.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+from scipy.sparse import csgraph
+
+from socialzoo.core.walls import WallIndex
+from socialzoo.nav.maps import (
+    POSE_CLEARANCE,
+    Map,
+    graph_components,
+    nearest_walls,
+    reaches_graph,
+    segment_clearance,
+    validate_map,
+)
+from socialzoo.nav.roadmap import (
+    Box,
+    FreeSpace,
+    RoadmapConfig,
+    build_edges,
+    build_roadmap,
+    connect_components,
+    free_space,
+    generate_legal_poses,
+    grid_graph,
+    pull_string,
+)
+
+logger = logging.getLogger(__name__)
+
+# Farthest a node or pose is moved to clear the walls, m.
+MAX_MOVE = 1.5
+# A rerouted edge's walking path may be at most this many times the edge's length (plus 2 m).
+MAX_DETOUR = 2.0
+
+
+@dataclass(frozen=True)
+class Repair:
+    """One change made to imported data.
+
+    Attributes:
+        kind: what was done: "graph_generated", "edges_built", "node_moved", "node_dropped",
+            "edge_rerouted", "edge_dropped", "component_joined", "component_dropped",
+            "pose_moved", "pose_dropped", "poses_generated".
+        message: the change in words, naming the source entry (e.g. "graph.nodes[5]").
+    """
+
+    kind: str
+    message: str
+
+    def to_json(self) -> dict[str, str]:
+        return {"kind": self.kind, "message": self.message}
+
+
+@dataclass
+class RepairReport:
+    """Every repair made while importing a map, in the order they were made."""
+
+    repairs: list[Repair] = field(default_factory=list)
+
+    def add(self, kind: str, message: str) -> None:
+        self.repairs.append(Repair(kind, message))
+        logger.debug("repair: %s", message)
+
+    def __len__(self) -> int:
+        return len(self.repairs)
+
+    def counts(self) -> dict[str, int]:
+        """Number of repairs of each kind."""
+        out: dict[str, int] = {}
+        for r in self.repairs:
+            out[r.kind] = out.get(r.kind, 0) + 1
+        return out
+
+    def lines(self) -> list[str]:
+        """One line per repair."""
+        return [r.message for r in self.repairs]
+
+    def to_json(self) -> list[dict[str, str]]:
+        return [r.to_json() for r in self.repairs]
+
+
+def _at(p: np.ndarray) -> str:
+    return f"({p[0]:.2f}, {p[1]:.2f})"
+
+
+def _nearest_cells(
+    space: FreeSpace, allowed: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (K, 2) of the nearest `allowed` cells to points (K, 2), and the distance to them, m."""
+    if not allowed.any():
+        return np.array(points, dtype=np.float64), np.full(len(points), np.inf)
+    _, (ii, jj) = ndimage.distance_transform_edt(~allowed, return_indices=True)
+    cells = space.cell_of(points)
+    target = np.stack((ii[cells[:, 0], cells[:, 1]], jj[cells[:, 0], cells[:, 1]]), axis=1)
+    centre = space.centres(target)
+    return centre, np.hypot(*(centre - points).T)
+
+
+def _repair_nodes(
+    nodes: np.ndarray,
+    space: FreeSpace,
+    index: WallIndex,
+    config: RoadmapConfig,
+    max_move: float,
+    report: RepairReport,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes moved clear of walls; (nodes (N, 2), keep (N,) bool)."""
+    keep = np.ones(len(nodes), dtype=bool)
+    nodes = nodes.copy()
+    if len(nodes) == 0 or index.num_walls == 0:
+        return nodes, keep
+    dist, wall = nearest_walls(index, nodes)
+    passable = space.clearance >= config.free_clearance
+    # Shut inside a wall loop: passable but in a pocket of fewer cells than a robot needs.
+    labels, _ = ndimage.label(passable)
+    sizes = np.bincount(labels.ravel())
+    cells = space.cell_of(nodes)
+    pocket = sizes[labels[cells[:, 0], cells[:, 1]]] * space.resolution**2 < 1.0
+    pocket &= labels[cells[:, 0], cells[:, 1]] > 0
+    bad = np.flatnonzero((dist < config.free_clearance) | pocket)
+    if len(bad) == 0:
+        return nodes, keep
+    roomy = passable & (sizes[labels] * space.resolution**2 >= 1.0) & (labels > 0)
+    target, moved = _nearest_cells(space, roomy, nodes[bad])
+    for k, new, step in zip(bad.tolist(), target, moved, strict=True):
+        what = f"graph.nodes[{k}] at {_at(nodes[k])}"
+        why = (
+            "lies inside a closed wall loop"
+            if dist[k] >= config.free_clearance
+            else ("lies on wall" if dist[k] <= 1e-9 else f"is {dist[k]:.2f} m from wall") + f" {wall[k]}"
+        )
+        if step <= max_move:
+            report.add("node_moved", f"{what} {why}: moved {step:.2f} m to {_at(new)}")
+            nodes[k] = new
+        else:
+            report.add("node_dropped", f"{what} {why}: dropped (no clear point within {max_move:g} m)")
+            keep[k] = False
+    return nodes, keep
+
+
+class _Walker:
+    """Walking paths between points through a free space's interior (grid shortest paths)."""
+
+    def __init__(self, space: FreeSpace, index: WallIndex, config: RoadmapConfig) -> None:
+        self.space = space
+        self.index = index
+        self.graph, self.cell_id = grid_graph(space)
+        self.id_cells = np.argwhere(space.interior)
+        self.clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
+        self.keep_clearance = config.keep_clearance
+        self.max_edge = config.max_edge_length
+
+    def vertex(self, points: np.ndarray) -> np.ndarray:
+        cells = self.space.cell_of(points)
+        v: np.ndarray = self.cell_id[cells[:, 0], cells[:, 1]]
+        return v
+
+    def path(self, a: np.ndarray, b: np.ndarray, limit: float) -> np.ndarray | None:
+        """Corner points (L, 2) of a straightened walking path from a to b (ends included), or
+        None when there is none of weighted length at most `limit`."""
+        va, vb = (int(v) for v in self.vertex(np.stack((a, b))))
+        if va < 0 or vb < 0:
+            return None
+        dist, pred = csgraph.dijkstra(
+            self.graph, directed=False, indices=va, limit=limit, return_predecessors=True
+        )
+        if not np.isfinite(dist[vb]):
+            return None
+        walk = [vb]
+        while pred[walk[-1]] >= 0:
+            walk.append(int(pred[walk[-1]]))
+        cells = self.id_cells[walk[::-1]]
+        path = self.space.centres(cells)
+        path[0], path[-1] = a, b
+        corners = pull_string(
+            path,
+            self.index,
+            self.clearance,
+            self.max_edge,
+            self.space.clearance[cells[:, 0], cells[:, 1]],
+            self.keep_clearance,
+        )
+        return path[corners]
+
+
+def _repair_edges(
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    keep: np.ndarray,
+    walker: _Walker,
+    index: WallIndex,
+    config: RoadmapConfig,
+    max_detour: float,
+    report: RepairReport,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Edges that keep clear of walls (rerouted or dropped); returns (nodes, edges), nodes appended."""
+    edges = edges[keep[edges].all(axis=1)] if len(edges) else edges
+    if len(edges) == 0 or index.num_walls == 0:
+        return nodes, edges
+    a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
+    clear, wall = segment_clearance(index, a, b)
+    crossing = index.crosses(a, b)
+    bad = crossing | (clear < config.edge_clearance)
+    node_list = list(nodes)
+    out = [tuple(e) for e in edges[~bad].tolist()]
+    for k in np.flatnonzero(bad).tolist():
+        i, j = int(edges[k, 0]), int(edges[k, 1])
+        what = f"graph edge (node {i} - node {j})"
+        why = (
+            f"passes through wall {wall[k]}"
+            if crossing[k]
+            else f"passes {clear[k]:.2f} m from wall {wall[k]}"
+        )
+        length = float(np.hypot(*(nodes[i] - nodes[j])))
+        # Grid path costs are walking metres times at most 3 (the clearance penalty).
+        corners = walker.path(nodes[i], nodes[j], 3.0 * (max_detour * length + 2.0))
+        walked = None if corners is None else float(np.hypot(*np.diff(corners, axis=0).T).sum())
+        if corners is None or walked is None or walked > max_detour * length + 2.0:
+            report.add(
+                "edge_dropped", f"{what} {why}: dropped (no walking path within {max_detour:g}x its length)"
+            )
+            continue
+        chain = [i]
+        for p in corners[1:-1]:
+            node_list.append(p)
+            chain.append(len(node_list) - 1)
+        chain.append(j)
+        out.extend((min(p, q), max(p, q)) for p, q in itertools.pairwise(chain))
+        report.add(
+            "edge_rerouted",
+            f"{what} {why}: rerouted along a {walked:.1f} m walking path with {len(chain) - 2} new nodes",
+        )
+    return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(
+        sorted(set(out)), dtype=np.int64
+    ).reshape(-1, 2)
+
+
+def _keep_largest(
+    nodes: np.ndarray, edges: np.ndarray, keep: np.ndarray, report: RepairReport
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Drop every graph component but the largest; returns (nodes, edges, old index of each node)."""
+    alive = np.flatnonzero(keep)
+    label = graph_components(len(nodes), edges)
+    names, sizes = np.unique(label[alive], return_counts=True)
+    main = names[np.argmax(sizes)] if len(names) else -1
+    for name, size in zip(names.tolist(), sizes.tolist(), strict=True):
+        if name != main:
+            members = alive[label[alive] == name]
+            centre = nodes[members].mean(axis=0)
+            report.add(
+                "component_dropped",
+                f"graph component of {size} node(s) around {_at(centre)} cannot be joined to the rest "
+                "through the free space: dropped",
+            )
+    kept = alive[label[alive] == main] if len(alive) else alive
+    new_index = np.full(len(nodes), -1, dtype=np.int64)
+    new_index[kept] = np.arange(len(kept))
+    edges = new_index[edges] if len(edges) else edges.reshape(-1, 2)
+    edges = edges[(edges >= 0).all(axis=1)] if len(edges) else edges
+    return nodes[kept], edges.reshape(-1, 2), kept
+
+
+def _repair_poses(
+    poses: np.ndarray,
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    space: FreeSpace,
+    index: WallIndex,
+    max_move: float,
+    report: RepairReport,
+) -> np.ndarray:
+    """Legal poses clear of walls that reach the graph (moved or dropped)."""
+    poses = poses.copy()
+    keep = np.ones(len(poses), dtype=bool)
+    need = POSE_CLEARANCE + space.resolution
+    if index.num_walls:
+        dist, wall = nearest_walls(index, poses[:, :2])
+        bad = np.flatnonzero(dist < POSE_CLEARANCE)
+        if len(bad):
+            allowed = space.interior & (space.clearance >= need)
+            target, moved = _nearest_cells(space, allowed, poses[bad, :2])
+            for k, new, step in zip(bad.tolist(), target, moved, strict=True):
+                what = f"legal_poses[{k}] at {_at(poses[k])} is {dist[k]:.2f} m from wall {wall[k]}"
+                if step <= max_move:
+                    report.add("pose_moved", f"{what}: moved {step:.2f} m to {_at(new)}")
+                    poses[k, :2] = new
+                else:
+                    report.add("pose_dropped", f"{what}: dropped (no clear point within {max_move:g} m)")
+                    keep[k] = False
+    alive = np.flatnonzero(keep)
+    reach = reaches_graph(index, poses[alive, :2], nodes, edges)
+    for k in alive[~reach].tolist():
+        report.add("pose_dropped", f"legal_poses[{k}] at {_at(poses[k])} cannot reach the graph: dropped")
+        keep[k] = False
+    return poses[keep]
+
+
+def repair_map(
+    name: str,
+    walls: np.ndarray,
+    *,
+    nodes: np.ndarray | None = None,
+    edges: np.ndarray | None = None,
+    legal_poses: np.ndarray | None = None,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    source: str = "",
+    licence: str = "",
+    config: RoadmapConfig | None = None,
+    seed: int = 0,
+    max_move: float = MAX_MOVE,
+    max_detour: float = MAX_DETOUR,
+    provenance: dict[str, Any] | None = None,
+) -> tuple[Map, RepairReport]:
+    """A valid Map from imported data, repairing what breaks the rules (see the module docstring).
+
+    What the source lacks is generated as `roadmap.complete_map` does (a roadmap without nodes,
+    edges between nodes without edges, legal poses without poses); each such step is reported too.
+
+    Args:
+        name: map name.
+        walls: (W, 4) wall segments, m.
+        nodes, edges, legal_poses: the source's graph (N, 2), (E, 2) and poses (P, 3), if any.
+        region, seed_point: the area to map (see roadmap.free_space).
+        source, licence: stored in the map.
+        config: roadmap settings (clearances of nodes, edges and poses).
+        seed: seeds node placement and pose sampling.
+        max_move: farthest a node or pose is moved, m.
+        max_detour: a rerouted edge's walking path is at most this many times its length plus 2 m.
+        provenance: extra provenance entries (importer, inputs); the report is added as "repairs".
+
+    Returns:
+        (map, report). The map passes validate_map.
+
+    Raises:
+        MapError: the repaired map still breaks a rule of validate_map (the message names it).
+        ValueError: no free space, or a seed point on a wall.
+    """
+    config = config or RoadmapConfig()
+    report = RepairReport()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = WallIndex(walls)
+    space = free_space(walls, region, seed_point, config, index)
+    if nodes is None or len(nodes) == 0:
+        roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
+        nodes, edges = roadmap.nodes, roadmap.edges
+        report.add("graph_generated", f"navigation graph generated: {len(nodes)} nodes, {len(edges)} edges")
+    else:
+        nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+        nodes, keep = _repair_nodes(nodes, space, index, config, max_move, report)
+        if edges is None or len(edges) == 0:
+            edges = build_edges(
+                nodes[keep], index, config.edge_clearance, config.max_edge_length, config.detour_tolerance
+            )
+            edges = np.flatnonzero(keep)[edges] if len(edges) else edges.reshape(-1, 2)
+            report.add("edges_built", f"graph edges built between the given nodes: {len(edges)} edges")
+        else:
+            walker = _Walker(space, index, config)
+            nodes, edges = _repair_edges(
+                nodes,
+                np.asarray(edges, dtype=np.int64).reshape(-1, 2),
+                keep,
+                walker,
+                index,
+                config,
+                max_detour,
+                report,
+            )
+            keep = np.concatenate((keep, np.ones(len(nodes) - len(keep), dtype=bool)))
+        nodes, edges, _ = _join_and_prune(nodes, edges, keep, space, index, config, report)
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    poses = None if legal_poses is None else np.asarray(legal_poses, dtype=np.float64).reshape(-1, 3)
+    if poses is not None and len(poses):
+        poses = _repair_poses(poses, nodes, edges, space, index, max_move, report)
+    if poses is None or len(poses) < 2:
+        had = 0 if poses is None else len(poses)
+        poses = generate_legal_poses(walls, nodes, edges, space, region, seed_point, config, seed, index)
+        why = "the source has none" if legal_poses is None or len(legal_poses) == 0 else f"{had} left"
+        report.add("poses_generated", f"legal poses generated ({why}): {len(poses)} poses")
+    m = Map(
+        name=name,
+        walls=walls,
+        nodes=nodes,
+        edges=edges,
+        legal_poses=poses,
+        source=source,
+        licence=licence,
+        region=None
+        if region is None
+        else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
+        walkable_area=float(space.interior.sum()) * space.resolution**2,
+        provenance={**(provenance or {}), "repairs": report.to_json()},
+    )
+    validate_map(m)
+    return m, report
+
+
+def _join_and_prune(
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    keep: np.ndarray,
+    space: FreeSpace,
+    index: WallIndex,
+    config: RoadmapConfig,
+    report: RepairReport,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Join components along walking paths where possible, then keep the largest one."""
+    alive = np.flatnonzero(keep)
+    remap = np.full(len(nodes), -1, dtype=np.int64)
+    remap[alive] = np.arange(len(alive))
+    sub_edges = remap[edges] if len(edges) else edges.reshape(-1, 2)
+    sub_nodes = nodes[alive]
+    before = len(np.unique(graph_components(len(sub_nodes), sub_edges)))
+    if before > 1:
+        joined_nodes, joined_edges = connect_components(space, sub_nodes, sub_edges, index, config)
+        after = len(np.unique(graph_components(len(joined_nodes), joined_edges)))
+        if after < before:
+            report.add(
+                "component_joined",
+                f"{before - after} graph component(s) joined to the rest along walking paths "
+                f"({len(joined_nodes) - len(sub_nodes)} new nodes)",
+            )
+        sub_nodes, sub_edges = joined_nodes, joined_edges
+    all_keep = np.ones(len(sub_nodes), dtype=bool)
+    return _keep_largest(sub_nodes, sub_edges, all_keep, report)
