@@ -78,7 +78,9 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
     Version History:
-        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
+        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
+            the robot's carrot stays in sight of its wall distance and its plans keep clear
+            of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
         v0: initial release.
     """
 

@@ -6,7 +6,9 @@ Version History of the env docstrings; an old version is not registered, so gymn
 raises gymnasium's DeprecatedEnv naming the current id.
 
 Version History:
-    v1: force and blame no longer skip the passed human (only the followed one, SPEC 9).
+    v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
+        the robot's carrot stays in sight of its wall distance and its plans keep clear
+        of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
     v0: initial release.
 """
 
