@@ -143,4 +143,3 @@ class SB3VecEnv(VecEnv):
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         """No row is wrapped: the rows are not gym.Env objects."""
         return [False for _ in self._get_indices(indices)]
-

@@ -114,7 +114,7 @@ def test_every_row_plays_its_vector_env_rows_episode():
     for a in actions:
         batch = np.full(4, a)
         obs, rewards, dones, infos = venv.step(batch)
-        vobs, vrew, vterm, vtrunc, vinfo = vector.step(batch)
+        vobs, vrew, vterm, vtrunc, _ = vector.step(batch)
         np.testing.assert_array_equal(obs, vobs)
         np.testing.assert_array_equal(rewards, vrew.astype(np.float32))
         np.testing.assert_array_equal(dones, vterm | vtrunc)
@@ -148,7 +148,9 @@ def test_sb3_conventions_shapes_and_infos():
                 seen_done = True
                 assert venv.observation_space.contains(info["terminal_observation"])
                 assert isinstance(info["TimeLimit.truncated"], bool)
-                assert isinstance(info["metrics"]["success"], bool) and isinstance(info["metrics"]["steps"], int)
+                assert isinstance(info["metrics"]["success"], bool) and isinstance(
+                    info["metrics"]["steps"], int
+                )
     assert seen_done
 
 
