@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench venv clean
+.PHONY: run test lint bench venv clean policies
 
 venv: $(STAMP)
 
@@ -27,6 +27,16 @@ test: $(STAMP) lint
 
 bench: $(STAMP)
 	$(PY) benchmarks/world_throughput.py
+
+# Retrain the shipped PPO and DQN policies with the recorded seeds (after an env version bump:
+# policy files trained on another version of the benchmark env are refused when loaded).
+SHIP_SEED ?= 0
+policies: $(STAMP)
+	for algo in ppo dqn; do \
+		$(VENV)/bin/socialzoo train $$algo --out runs/shipped/$$algo --seed $(SHIP_SEED) --no-progress && \
+		cp runs/shipped/$$algo/$$algo.safetensors socialzoo/agents/shipped/$$algo.safetensors && \
+		cp runs/shipped/$$algo/run.json socialzoo/agents/shipped/$$algo.run.json || exit 1; \
+	done
 
 clean:
 	rm -rf $(VENV) results build *.egg-info
