@@ -28,12 +28,16 @@ test: $(STAMP) lint
 bench: $(STAMP)
 	$(PY) benchmarks/world_throughput.py
 
-# Retrain the shipped PPO and DQN policies with the recorded seeds (after an env version bump:
-# policy files trained on another version of the benchmark env are refused when loaded).
-SHIP_SEED ?= 0
+# Retrain the shipped PPO and DQN policies with their recorded commands and seeds (needed after an
+# env version bump: policy files trained on another version of the benchmark env are refused).
+# The shipped DQN normalises observations (chosen on validation scenarios; the paper's DQN did not).
+PPO_SHIP ?= --seed 0
+DQN_SHIP ?= --seed 0 --normalize
 policies: $(STAMP)
+	$(VENV)/bin/socialzoo train ppo --out runs/shipped/ppo $(PPO_SHIP) --no-progress
+	$(VENV)/bin/socialzoo train dqn --out runs/shipped/dqn $(DQN_SHIP) --no-progress
+	mkdir -p socialzoo/agents/shipped
 	for algo in ppo dqn; do \
-		$(VENV)/bin/socialzoo train $$algo --out runs/shipped/$$algo --seed $(SHIP_SEED) --no-progress && \
 		cp runs/shipped/$$algo/$$algo.safetensors socialzoo/agents/shipped/$$algo.safetensors && \
 		cp runs/shipped/$$algo/run.json socialzoo/agents/shipped/$$algo.run.json || exit 1; \
 	done

@@ -1,4 +1,5 @@
-"""Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps."""
+"""Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps and the
+shipped policies."""
 
 import subprocess
 import sys
@@ -44,3 +45,5 @@ def test_wheel_ships_the_maps(tmp_path):
     shipped = {p.name for p in (ROOT / "maps").glob("*.json")}
     assert shipped and {f"socialzoo/_maps/{name}" for name in shipped} <= names
     assert "socialzoo/core/world.py" in names
+    policies = {p.name for p in (ROOT / "socialzoo" / "agents" / "shipped").glob("*.*")}
+    assert {f"socialzoo/agents/shipped/{name}" for name in policies} <= names

@@ -22,8 +22,8 @@ from socialzoo.train.run_dir import RunDir, checkpoint_steps, plain, progress_ba
 logger = logging.getLogger(__name__)
 
 POLICY_SUFFIX = ".safetensors"
-# Fields of every SB3 trainer's Args that do not change what is trained.
-VOLATILE = ("progress",)
+# Fields of every SB3 trainer's Args that do not change what is trained (a run folder may move).
+VOLATILE = ("progress", "out")
 
 
 def training_env_config(
