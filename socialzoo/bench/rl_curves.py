@@ -322,7 +322,7 @@ def steps_to_match(
     *,
     reference: str = "ref",
     validation: TestSet = VALIDATION_SET,
-    trials: int = 500,
+    trials: int = 200,
     label: str = "ppo",
     workers: int = 2,
     batch_size: int = 100,

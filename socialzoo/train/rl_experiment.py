@@ -51,8 +51,8 @@ def train_curve_runs(
 def train_to_match(
     out_dir: str | Path,
     *,
-    total_steps: int = 400_000,
-    checkpoint_every: int = 10_000,
+    total_steps: int = 500_000,
+    checkpoint_every: int = 25_000,
     seed: int = 0,
     progress: bool = True,
     **changes: Any,
