@@ -4,7 +4,9 @@ path, `make_vec_env` of the gym id with 4 DummyVecEnv copies, in the same run.
 
 Every configuration trains behind VecNormalize (as `socialzoo train ppo` does) with SB3's PPO
 defaults except the rollout and minibatch sizes named in its label; the first rollout (env
-creation, compilation, the first reset) is not timed.
+creation, compilation, the first reset) is not timed. Besides wall-clock env-steps/s, each figure
+has env-steps per CPU-second of this process (torch on --threads, the env on one core): the rate
+an idle core would give, when other work shares the machine.
 
 Run: python benchmarks/train_throughput.py [--json] [--seconds 20] [--threads 1]
 """
@@ -36,6 +38,7 @@ class TrainFigure:
     env_steps: int
     seconds: float
     env_steps_per_s: float
+    env_steps_per_cpu_s: float
 
 
 def ours(rows: int):
@@ -63,7 +66,7 @@ def measure(name: str, venv, n_steps: int, batch_size: int, seconds: float) -> T
         )
     rollout = n_steps * venv.num_envs
     model.learn(rollout)  # warm-up: env creation, compiled kernels, the first reset
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     done = 0
     while True:
         model.learn(rollout, reset_num_timesteps=False)
@@ -71,8 +74,11 @@ def measure(name: str, venv, n_steps: int, batch_size: int, seconds: float) -> T
         elapsed = time.perf_counter() - start
         if elapsed >= seconds:
             break
+    cpu = time.process_time() - cpu_start
     venv.close()
-    return TrainFigure(name, venv.num_envs, n_steps, batch_size, done, round(elapsed, 2), done / elapsed)
+    return TrainFigure(
+        name, venv.num_envs, n_steps, batch_size, done, round(elapsed, 2), done / elapsed, done / cpu
+    )
 
 
 def report(fig: TrainFigure, as_json: bool) -> None:
@@ -81,7 +87,8 @@ def report(fig: TrainFigure, as_json: bool) -> None:
     else:
         print(
             f"{fig.name:<44} envs={fig.envs:<3d} n_steps={fig.n_steps:<5d} batch={fig.batch_size:<4d} "
-            f"{fig.env_steps_per_s:>8,.0f} env-steps/s  ({fig.env_steps:,} steps in {fig.seconds:.1f} s)"
+            f"{fig.env_steps_per_s:>8,.0f} env-steps/s  {fig.env_steps_per_cpu_s:>8,.0f} per CPU-s  "
+            f"({fig.env_steps:,} steps in {fig.seconds:.1f} s)"
         )
     sys.stdout.flush()
 

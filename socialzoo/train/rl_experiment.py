@@ -52,7 +52,7 @@ def train_to_match(
     out_dir: str | Path,
     *,
     total_steps: int = 500_000,
-    checkpoint_every: int = 25_000,
+    checkpoint_every: int = 50_000,
     seed: int = 0,
     progress: bool = True,
     **changes: Any,
