@@ -8,7 +8,7 @@ CHROMIUM := /usr/bin/chromium
 # apt-get needs root: sudo when make runs as another user.
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: run test lint bench venv clean chromium
+.PHONY: run test lint bench venv clean chromium policies
 
 venv: $(STAMP)
 
@@ -39,6 +39,20 @@ test: $(STAMP) chromium lint
 
 bench: $(STAMP)
 	$(PY) benchmarks/world_throughput.py
+
+# Retrain the shipped PPO and DQN policies with their recorded commands and seeds (needed after an
+# env version bump: policy files trained on another version of the benchmark env are refused).
+# The shipped DQN normalises observations (chosen on validation scenarios; the paper's DQN did not).
+PPO_SHIP ?= --seed 0
+DQN_SHIP ?= --seed 0 --normalize
+policies: $(STAMP)
+	$(VENV)/bin/socialzoo train ppo --out runs/shipped/ppo $(PPO_SHIP) --no-progress
+	$(VENV)/bin/socialzoo train dqn --out runs/shipped/dqn $(DQN_SHIP) --no-progress
+	mkdir -p socialzoo/agents/shipped
+	for algo in ppo dqn; do \
+		cp runs/shipped/$$algo/$$algo.safetensors socialzoo/agents/shipped/$$algo.safetensors && \
+		cp runs/shipped/$$algo/run.json socialzoo/agents/shipped/$$algo.run.json || exit 1; \
+	done
 
 clean:
 	rm -rf $(VENV) results build *.egg-info

@@ -1,5 +1,5 @@
-"""Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps and the
-episode viewer's files."""
+"""Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps, the
+episode viewer's files and the shipped policies."""
 
 import subprocess
 import sys
@@ -47,3 +47,5 @@ def test_wheel_ships_the_maps(tmp_path):
     assert "socialzoo/env/world.py" in names
     viewer = {f"socialzoo/render/viewer/{p.name}" for p in (ROOT / "socialzoo/render/viewer").iterdir()}
     assert len(viewer) == 3 and viewer <= names  # the episode viewer's page, stylesheet and script
+    policies = {p.name for p in (ROOT / "socialzoo" / "agents" / "shipped").glob("*.*")}
+    assert {f"socialzoo/agents/shipped/{name}" for name in policies} <= names

@@ -21,6 +21,9 @@ class Policy(Protocol):
 
     Attributes:
         name: the policy's registry name (socialzoo.agents.POLICIES), e.g. "ref".
+
+    A policy may also set `reads_core = False` to say that its actions depend on the observations
+    alone (row by row): runners then give it only the rows it acts for.
     """
 
     name: str

@@ -70,6 +70,9 @@ class MlpPolicy:
         header: the policy file's header (kept for config() and reports).
     """
 
+    # Acts on observations alone (never reads the core), so a runner may pass it any subset of rows.
+    reads_core = False
+
     def __init__(
         self,
         name: str,

@@ -37,7 +37,9 @@ logger = logging.getLogger(__name__)
 STORE_NAME = "results.sqlite"
 CONFIG_NAME = "config.json"
 GIF_NAME = "ref_episode.gif"
-QUICK_POLICIES = ("goalone", "ref")
+# The full benchmark's default policies; the quick one (`make run`) adds the shipped learned policies.
+DEFAULT_POLICIES = ("goalone", "ref")
+QUICK_POLICIES = ("goalone", "ref", "ppo", "dqn")
 QUICK_MAPS = ("gdc1", "ghc3")
 
 
@@ -67,7 +69,7 @@ class BenchmarkConfig:
         gif: also write one animated Ref episode (ref_episode.gif) on the first map.
     """
 
-    policies: tuple[str, ...] = QUICK_POLICIES
+    policies: tuple[str, ...] = DEFAULT_POLICIES
     maps: tuple[str, ...] = QUICK_MAPS
     trials: int | None = None
     quick: bool = False
@@ -131,7 +133,8 @@ class BenchmarkConfig:
 
 
 def quick_config(**changes: Any) -> BenchmarkConfig:
-    """The quick benchmark (`make run`): GoAlone and Ref, 100 trials on each quick test set, a GIF."""
+    """The quick benchmark (`make run`): GoAlone, Ref and the shipped learned policies, 100 trials on
+    each quick test set, a GIF."""
     base: dict[str, Any] = {"policies": QUICK_POLICIES, "maps": QUICK_MAPS, "quick": True, "gif": True}
     base.update(changes)
     return BenchmarkConfig(**base)

@@ -231,8 +231,14 @@ class BatchedRunner:
                 break
             actions.fill(HALT)
             for policy_name, rows in policy_rows.items():
-                chosen = np.asarray(self.policy(policy_name).act(core.obs, core)).reshape(actions.shape)
-                actions[rows] = chosen[rows]
+                policy = self.policy(policy_name)
+                if getattr(policy, "reads_core", True):
+                    chosen = np.asarray(policy.act(core.obs, core)).reshape(actions.shape)
+                    actions[rows] = chosen[rows]
+                else:
+                    # A policy of observations alone acts on its own rows only: many checkpoints can
+                    # share a batch without each one computing every row.
+                    actions[rows] = np.asarray(policy.act(core.obs[rows])).reshape(len(rows), -1)
             obs = core.obs.copy() if on_step is not None else core.obs
             result = core.step(actions)
             if pending:

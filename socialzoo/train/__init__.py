@@ -14,7 +14,10 @@ from typing import Any
 __all__ = ["TRAINERS", "trainer_args", "trainer_function"]
 
 # Trainer name -> "module:ArgsClass"; the module's `train(args)` runs it.
-TRAINERS: dict[str, str] = {}
+TRAINERS: dict[str, str] = {
+    "ppo": "socialzoo.train.ppo:PPOArgs",
+    "dqn": "socialzoo.train.dqn:DQNArgs",
+}
 
 
 def trainer_args(name: str) -> type:

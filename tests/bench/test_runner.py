@@ -138,3 +138,41 @@ def test_split_and_bad_input(test_set):
     with pytest.raises(ValueError, match="unknown policy 'nope'"):
         make_spec(["nope"], [test_set])
     assert evaluate([], spec) == []
+
+
+def test_observation_only_policies_act_on_their_rows_with_the_same_results(test_set, tmp_path, monkeypatch):
+    """Learned policies (reads_core = False) get only their rows; results do not depend on the mix."""
+    import numpy as np
+
+    from socialzoo.agents.mlp import MlpPolicy
+    from socialzoo.agents.policy_file import current_env_version
+
+    specs = []
+    for i in range(2):
+        rng = np.random.default_rng(i)
+        policy = MlpPolicy(
+            "ppo", [(rng.normal(size=(4, 107)), rng.normal(size=4))], "relu", {"layout": "paper"}
+        )
+        header = {"env_id": f"socialzoo/ActionSelection-v{current_env_version()}", "training": {}}
+        specs.append(f"ppo:{policy.save(tmp_path / f'p{i}.safetensors', header)}")
+    spec = make_spec([*specs, "goalone"], [test_set], batch_size=5, env_overrides={"max_steps": MAX_STEPS})
+    trials = [Trial(p, "rooms-test", k) for p in [*specs, "goalone"] for k in range(3)]
+    seen = []
+    runner = BatchedRunner(spec)
+    original = MlpPolicy.act
+
+    def recording(self, obs, core=None):
+        seen.append(obs.shape[0])
+        return original(self, obs, core)
+
+    monkeypatch.setattr(MlpPolicy, "act", recording)
+    mixed = runner.run(trials)
+    monkeypatch.undo()
+    assert max(seen) < 5  # never the whole batch of 5
+    alone = [
+        evaluate(
+            [t], make_spec([t.policy], [test_set], batch_size=1, env_overrides={"max_steps": MAX_STEPS})
+        )[0]
+        for t in trials
+    ]
+    assert as_rows(mixed) == as_rows(alone)

@@ -1,0 +1,366 @@
+"""Experiment 1, RL data efficiency (SPEC section 10): every checkpoint of PPO and DQN training runs
+on the same scenarios, with success, time to goal and average step reward per checkpoint and 90%
+confidence bands, as rl_curves.csv and rl_curves.{png,pdf} (the paper's learning-curve figure).
+
+The paper evaluates each checkpoint on the same 100 test scenarios: the first 100 of gdc1-test,
+for evaluation only (never to choose anything). Choosing something, such as how long to train,
+uses VALIDATION_SET instead: scenarios of our own seeds, apart from every test set
+(`steps_to_match` answers "how many steps does PPO need to reach Ref's success?").
+
+Trials are stored as they finish (curves.sqlite, one row per checkpoint and scenario, keyed by the
+checkpoint file's digest and the code), so an interrupted evaluation resumes and a repeated one
+reads. Training runs are folders written by `socialzoo train ppo|dqn` (checkpoints/step_*.safetensors).
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.runner import RunSpec, Trial, TrialResult, env_config_for, evaluate
+from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.tables import policy_label, summarize
+from socialzoo.nav.scenarios import TestSet, get_test_set
+
+logger = logging.getLogger(__name__)
+
+STORE_NAME = "curves.sqlite"
+CSV_NAME = "rl_curves.csv"
+FIGURE_STEM = "rl_curves"
+CURVE_TEST_SET = "gdc1-test"
+CURVE_TRIALS = 100
+# Our own validation scenarios on gdc1 (base seed apart from every test set's): for choices.
+VALIDATION_SET = TestSet("gdc1", 20_229_001, 1000, name="gdc1-val")
+_CHECKPOINT = re.compile(r"step_(\d+)\.safetensors$")
+# Curves: (summary key, axis label, scale).
+CURVE_PANELS: tuple[tuple[str, str, float], ...] = (
+    ("success", "success, %", 100.0),
+    ("time_to_goal", "time to goal, s (successes)", 1.0),
+    ("average_step_reward", "average step reward", 1.0),
+)
+CSV_COLUMNS = (
+    "label",
+    "step",
+    "policy",
+    "test_set",
+    "trials",
+    "success_rate",
+    "success_ci_low",
+    "success_ci_high",
+    "time_to_goal_mean",
+    "time_to_goal_ci_low",
+    "time_to_goal_ci_high",
+    "time_to_goal_n",
+    "average_step_reward_mean",
+    "average_step_reward_ci_low",
+    "average_step_reward_ci_high",
+)
+
+
+def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
+    """(step, policy file) of every checkpoint a training run wrote, by step.
+
+    Raises:
+        FileNotFoundError: the folder has no checkpoints.
+    """
+    folder = Path(run_dir) / "checkpoints"
+    found = sorted(
+        (int(m.group(1)), p) for p in folder.glob("step_*.safetensors") if (m := _CHECKPOINT.search(p.name))
+    )
+    if not found:
+        raise FileNotFoundError(f"{folder}: no checkpoints (step_*.safetensors) of a training run")
+    return found
+
+
+def _policy_key(path: Path) -> str:
+    """The registry name a policy file was saved under (its header's "policy")."""
+    from socialzoo.agents.policy_file import read_policy_file
+
+    return str(read_policy_file(path)[1]["policy"])
+
+
+def checkpoint_specs(runs: Mapping[str, str | Path]) -> dict[str, tuple[str, int]]:
+    """Label "<run label>@<step>" -> (policy spec "ppo:PATH", step) for every checkpoint of the runs."""
+    specs = {}
+    for label, folder in runs.items():
+        for step, path in run_checkpoints(folder):
+            specs[f"{label}@{step}"] = (f"{_policy_key(path)}:{path.resolve()}", step)
+    return specs
+
+
+def evaluate_policies(
+    policies: Mapping[str, str],
+    test_set: TestSet,
+    trials: int,
+    store: ResultsStore,
+    *,
+    workers: int = 2,
+    batch_size: int = 100,
+    progress: bool = True,
+    env_overrides: Mapping[str, Any] | None = None,
+) -> list[dict[str, Any]]:
+    """Run (or read back) `trials` scenarios of a test set for each policy, storing trials as they
+    finish under the policy's label; returns every stored trial row of these labels.
+
+    Args:
+        policies: label -> policy spec ("ref", "ppo:PATH").
+        test_set: the scenarios (its first `trials`).
+        trials: scenarios per policy.
+        store: the results store.
+        workers: local processes.
+        batch_size: env rows per worker.
+        progress: show a progress bar.
+        env_overrides: EnvConfig.replace keywords for the evaluation env (e.g. {"max_steps": 400}).
+    """
+    from socialzoo import __version__
+    from socialzoo.agents import make_policy, split_policy_spec
+    from socialzoo.bench.experiment import config_hash
+
+    if trials > len(test_set):
+        raise ValueError(f"{trials} trials asked of test set {test_set.name!r}, which holds {len(test_set)}")
+    name = test_set.name or test_set.map_name
+    env_config = env_config_for(test_set, **dict(env_overrides or {}))
+    hashes, pending, label_of = {}, [], {}
+    for label, spec in policies.items():
+        key, path = split_policy_spec(spec)
+        h = config_hash(env_config, key, make_policy(spec), test_set, {"path": path} if path else None)
+        store.register_config(
+            h, {"label": label, "policy": spec, "env": env_config.to_dict(), "test_set": name}
+        )
+        hashes[label] = h
+        label_of[spec] = label
+        done = store.stored_indices(label, name, h)
+        pending += [Trial(spec, name, k) for k in range(trials) if k not in done]
+    logger.info(
+        "%d policies x %d scenarios of %s: %d trials to run", len(policies), trials, name, len(pending)
+    )
+
+    def deliver(batch: list[TrialResult]) -> None:
+        store.add(
+            {
+                "policy": label_of[r.trial.policy],
+                "map": r.map,
+                "test_set": name,
+                "scenario_index": r.trial.index,
+                "seed": r.seed,
+                "config_hash": hashes[label_of[r.trial.policy]],
+                "package_version": __version__,
+                "metrics": r.metrics,
+            }
+            for r in batch
+        )
+
+    spec = RunSpec(
+        test_sets={name: test_set},
+        env_configs={name: env_config},
+        policies={s: {} for s in policies.values()},
+        batch_size=batch_size,
+    )
+    evaluate(pending, spec, workers=workers, on_results=deliver, progress=progress, desc="checkpoints")
+    rows = []
+    for label in policies:
+        rows += store.rows(policy=label, test_set=name, config_hash=hashes[label], indices=range(trials))
+    return rows
+
+
+def curve_rows(rows: Sequence[Mapping[str, Any]], steps: Mapping[str, int]) -> list[dict[str, Any]]:
+    """One CSV row per label of stored trials: success rate and means with 90% intervals."""
+    out = []
+    for entry in summarize(rows):
+        label = entry["policy"]
+        row = {
+            "label": label.rsplit("@", 1)[0],
+            "step": steps.get(label, ""),
+            "policy": label,
+            **{k: entry[k] for k in CSV_COLUMNS[3:] if k in entry},
+        }
+        out.append(row)
+    return sorted(out, key=lambda r: (r["label"], r["step"] if r["step"] != "" else -1))
+
+
+def write_curves_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
+    """Write curve rows (curve_rows) as CSV."""
+    path = Path(path)
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow(row)
+    return path
+
+
+def plot_curves(
+    rows: Sequence[Mapping[str, Any]],
+    out_dir: str | Path,
+    references: Sequence[Mapping[str, Any]] = (),
+    formats: Sequence[str] = ("png", "pdf"),
+) -> list[Path]:
+    """rl_curves.{png,pdf}: success, time to goal and average step reward against training steps,
+    one line per run with its 90% band; `references` (curve rows without steps, e.g. Ref) as
+    horizontal lines."""
+    from socialzoo.bench.figures import _pyplot
+
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(CURVE_PANELS), figsize=(4.2 * len(CURVE_PANELS), 3.4))
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
+    for ax, (key, axis_label, scale) in zip(axes, CURVE_PANELS, strict=True):
+        mean_key = "success_rate" if key == "success" else f"{key}_mean"
+        low_key, high_key = (
+            ("success_ci_low", "success_ci_high") if key == "success" else (f"{key}_ci_low", f"{key}_ci_high")
+        )
+        for i, label in enumerate(labels):
+            points = [r for r in rows if r["label"] == label]
+            x = [r["step"] / 1000 for r in points]
+            y = [scale * r[mean_key] for r in points]
+            low = [scale * r[low_key] if math.isfinite(r[low_key]) else math.nan for r in points]
+            high = [scale * r[high_key] if math.isfinite(r[high_key]) else math.nan for r in points]
+            color = colors[i % len(colors)]
+            ax.plot(x, y, color=color, label=policy_label(label))
+            ax.fill_between(x, low, high, color=color, alpha=0.25, linewidth=0)
+        for j, ref in enumerate(references):
+            if math.isfinite(ref[mean_key]):
+                ax.axhline(
+                    scale * ref[mean_key],
+                    color="0.3",
+                    linestyle=("--", ":", "-.")[j % 3],
+                    linewidth=1,
+                    label=policy_label(ref["label"]),
+                )
+        ax.set_xlabel("training steps (thousands)")
+        ax.set_ylabel(axis_label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(out_dir)
+    paths = []
+    for fmt in formats:
+        path = out / f"{FIGURE_STEM}.{fmt}"
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+        paths.append(path)
+    plt.close(fig)
+    return paths
+
+
+@dataclass(frozen=True)
+class CurvesResult:
+    """What `rl_curves` produced.
+
+    Attributes:
+        rows: one row per checkpoint (CSV_COLUMNS).
+        references: one row per reference policy.
+        files: the store, CSV and figures.
+    """
+
+    rows: list[dict[str, Any]]
+    references: list[dict[str, Any]]
+    files: list[Path]
+
+
+def rl_curves(
+    runs: Mapping[str, str | Path],
+    out_dir: str | Path,
+    *,
+    test_set: str | TestSet = CURVE_TEST_SET,
+    trials: int = CURVE_TRIALS,
+    references: Sequence[str] = ("ref",),
+    workers: int = 2,
+    batch_size: int = 100,
+    progress: bool = True,
+    figure: bool = True,
+    env_overrides: Mapping[str, Any] | None = None,
+) -> CurvesResult:
+    """Experiment 1: evaluate every checkpoint of each run on the same scenarios, write the curves.
+
+    Args:
+        runs: label ("ppo", "dqn") -> training run folder.
+        out_dir: where curves.sqlite, rl_curves.csv and rl_curves.{png,pdf} go.
+        test_set: the scenarios (default: the first 100 of gdc1-test, as the paper).
+        trials: scenarios per checkpoint.
+        references: policy specs drawn as horizontal lines (evaluated on the same scenarios).
+        workers: local processes.
+        batch_size: env rows per worker.
+        progress: show a progress bar.
+        figure: draw the figure (needs matplotlib).
+        env_overrides: EnvConfig.replace keywords for the evaluation env (default: the benchmark's).
+    """
+    ts = get_test_set(test_set) if isinstance(test_set, str) else test_set
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    specs = checkpoint_specs(runs)
+    policies = {label: spec for label, (spec, _) in specs.items()} | {r: r for r in references}
+    with ResultsStore(out / STORE_NAME) as store:
+        trial_rows = evaluate_policies(
+            policies,
+            ts,
+            trials,
+            store,
+            workers=workers,
+            batch_size=batch_size,
+            progress=progress,
+            env_overrides=env_overrides,
+        )
+    steps = {label: step for label, (_, step) in specs.items()}
+    all_rows = curve_rows(trial_rows, steps)
+    rows = [r for r in all_rows if r["step"] != ""]
+    refs = [r for r in all_rows if r["step"] == ""]
+    files = [out / STORE_NAME, write_curves_csv(all_rows, out / CSV_NAME)]
+    if figure:
+        files += plot_curves(rows, out, refs)
+    return CurvesResult(rows, refs, files)
+
+
+def steps_to_match(
+    run: str | Path,
+    out_dir: str | Path,
+    *,
+    reference: str = "ref",
+    validation: TestSet = VALIDATION_SET,
+    trials: int = 200,
+    label: str = "ppo",
+    workers: int = 2,
+    batch_size: int = 100,
+    progress: bool = True,
+    env_overrides: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Beyond the paper: the fewest training steps after which a run's checkpoint succeeds at least
+    as often as `reference` does, both measured on the same validation scenarios (never a test set).
+
+    Returns:
+        {"reference": its curve row, "checkpoints": curve rows by step, "steps": the first step
+        whose success rate >= the reference's (None if none does), "steps_ci": the first step whose
+        90% interval reaches the reference's rate (None if none)}.
+    """
+    if validation.name.endswith(("-test", "-quick")):
+        raise ValueError(
+            f"steps_to_match chooses a training length: use validation scenarios, not {validation.name!r}"
+        )
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    specs = checkpoint_specs({label: run})
+    policies = {lab: spec for lab, (spec, _) in specs.items()} | {reference: reference}
+    with ResultsStore(out / STORE_NAME) as store:
+        trial_rows = evaluate_policies(
+            policies,
+            validation,
+            trials,
+            store,
+            workers=workers,
+            batch_size=batch_size,
+            progress=progress,
+            env_overrides=env_overrides,
+        )
+    steps = {lab: step for lab, (_, step) in specs.items()}
+    all_rows = curve_rows(trial_rows, steps)
+    ref = next(r for r in all_rows if r["step"] == "")
+    points = [r for r in all_rows if r["step"] != ""]
+    write_curves_csv(all_rows, out / f"steps_to_{reference}.csv")
+    first = next((r["step"] for r in points if r["success_rate"] >= ref["success_rate"]), None)
+    first_ci = next((r["step"] for r in points if r["success_ci_high"] >= ref["success_rate"]), None)
+    return {"reference": ref, "checkpoints": points, "steps": first, "steps_ci": first_ci}

@@ -1,0 +1,148 @@
+"""`socialzoo train ppo|dqn`: they learn on an easy scenario family, write a complete run folder,
+and refuse bad arguments naming the field."""
+
+import json
+
+import numpy as np
+import pytest
+
+from socialzoo.agents import make_policy
+from socialzoo.agents.policy_file import read_policy_file
+from socialzoo.cli import main
+from socialzoo.env.sb3_vec import SB3VecEnv
+from socialzoo.train import TRAINERS, trainer_args, trainer_function
+from socialzoo.train.dqn import DQNArgs
+from socialzoo.train.ppo import PPOArgs
+
+# The robot and 4-8 people cross an open room; GoAlone reaches the goal in about 210 steps.
+ROOM = {"map": "open_room", "family": "circle_crossing", "max_steps": 400}
+
+
+def first_episodes(act, rows=24, seed=123):
+    """(success rate, mean return) of the first episode of each row, on seeds never trained on."""
+    venv = SB3VecEnv(rows, **ROOM)
+    venv.seed(seed)
+    obs = venv.reset()
+    done = np.zeros(rows, dtype=bool)
+    success = np.zeros(rows)
+    returns = np.zeros(rows)
+    while not done.all():
+        obs, rewards, dones, infos = venv.step(act(obs))
+        returns[~done] += rewards[~done]
+        for row in np.flatnonzero(dones & ~done):
+            success[row] = infos[row]["metrics"]["success"]
+        done |= dones
+    return success.mean(), returns.mean()
+
+
+@pytest.fixture(scope="module")
+def random_baseline():
+    rng = np.random.default_rng(0)
+    return first_episodes(lambda obs: rng.integers(0, 4, len(obs)))
+
+
+@pytest.mark.parametrize(
+    ("algo", "args"),
+    [
+        ("ppo", {"num_envs": 20, "n_steps": 50, "total_steps": 3000, "checkpoint_every": 1000}),
+        (
+            "dqn",
+            {
+                "num_envs": 4,
+                "train_freq": 1,
+                "scenario_repeats": 1,
+                "learning_starts": 500,
+                "target_update_interval": 500,
+                "exploration_fraction": 0.3,
+                "learning_rate": 1e-3,
+                "normalize": True,
+            },
+        ),
+    ],
+)
+def test_learns_over_random_within_a_few_thousand_steps(tmp_path, random_baseline, algo, args):
+    cls = trainer_args(algo)
+    room = {"map": ROOM["map"], "family": ROOM["family"], "max_steps": ROOM["max_steps"]}
+    path = trainer_function(algo)(
+        cls(
+            **{
+                "out": tmp_path,
+                "total_steps": 4000,
+                "checkpoint_every": 2000,
+                "progress": False,
+                **room,
+                **args,
+            }
+        )
+    )
+    policy = make_policy(f"{algo}:{path}")
+    success, returns = first_episodes(policy.act)
+    random_success, random_returns = random_baseline
+    # What the learners maximise is the return; success follows (less for PPO, which also learns
+    # to Pass people for the faster progress: the reward has no collision penalty).
+    assert returns > random_returns + 40, (returns, random_returns)
+    assert success >= random_success + 0.3, (success, random_success)
+
+
+def test_run_folder_from_the_command_line(tmp_path, monkeypatch):
+    out = tmp_path / "run"
+    argv = ["train", "ppo", "--out", str(out), "--total-steps", "400", "--checkpoint-every", "200"]
+    argv += ["--num-envs", "8", "--n-steps", "25", "--map", "open_room", "--family", "circle_crossing"]
+    argv += ["--max-steps", "100", "--seed", "3", "--no-progress"]
+    monkeypatch.setattr("sys.argv", ["/usr/bin/socialzoo", *argv])  # as the console script sees it
+    assert main(argv) == 0
+    record = json.loads((out / "run.json").read_text())
+    assert record["algo"] == "ppo" and record["seed"] == 3 and record["finished"]
+    assert record["command"] == "socialzoo " + " ".join(argv)
+    assert record["args"]["total_steps"] == 400 and record["results"]["env_steps"] == 400
+    checkpoints = sorted(p.name for p in (out / "checkpoints").iterdir())
+    assert checkpoints == ["step_000000200.safetensors", "step_000000400.safetensors"]
+    assert (out / "ppo.safetensors").read_bytes() == (out / "checkpoints" / checkpoints[-1]).read_bytes()
+    assert list((out / "tensorboard").glob("events.out.tfevents.*"))
+    _, header = read_policy_file(out / "ppo.safetensors")
+    assert header["training"]["seed"] == 3 and header["training"]["steps"] == 400
+    assert header["normalization"] is not None and header["env_id"] == "socialzoo/CircleCrossing-v1"
+    _, first = read_policy_file(out / "checkpoints" / checkpoints[0])
+    assert first["training"]["steps"] == 200
+    # A finished run of the same arguments is not repeated; other arguments are refused.
+    before = (out / "ppo.safetensors").stat().st_mtime_ns
+    assert main([*argv[:-1], "--progress"]) == 0
+    assert (out / "ppo.safetensors").stat().st_mtime_ns == before
+    with pytest.raises(Exception, match="seed differ"):
+        main([*argv[:-3], "--seed", "4", "--no-progress"])
+
+
+def test_trainers_are_registered_with_the_papers_defaults():
+    assert {"ppo", "dqn"} <= set(TRAINERS)
+    ppo, dqn = PPOArgs(), DQNArgs()
+    assert (
+        ppo.total_steps == dqn.total_steps == 84_000 and ppo.checkpoint_every == dqn.checkpoint_every == 2_000
+    )
+    assert ppo.map == dqn.map == "gdc1"
+    assert ppo.scenario_repeats == 1 and dqn.scenario_repeats == 20
+    assert ppo.num_envs * ppo.n_steps == 2_000 and ppo.normalize and not dqn.normalize
+    assert (ppo.learning_rate, ppo.batch_size, ppo.n_epochs, ppo.gamma) == (3e-4, 64, 10, 0.99)
+    assert (dqn.learning_rate, dqn.batch_size, dqn.train_freq, dqn.target_update_interval) == (
+        1e-4,
+        32,
+        4,
+        10_000,
+    )
+
+
+@pytest.mark.parametrize(
+    ("cls", "changes", "message"),
+    [
+        (PPOArgs, {"total_steps": 0}, "PPOArgs.total_steps must be an int >= 1, got 0"),
+        (PPOArgs, {"checkpoint_every": 2_100}, r"PPOArgs.checkpoint_every \(2100\) must be a multiple"),
+        (PPOArgs, {"gamma": 1.5}, "PPOArgs.gamma must be a number in"),
+        (PPOArgs, {"net_arch": ()}, "PPOArgs.net_arch"),
+        (PPOArgs, {"env_overrides": {"max_stepz": 3}}, "bad training env.*max_stepz"),
+        (DQNArgs, {"scenario_repeats": 0}, "DQNArgs.scenario_repeats must be an int >= 1, got 0"),
+        (DQNArgs, {"exploration_final_eps": -0.1}, "DQNArgs.exploration_final_eps"),
+        (DQNArgs, {"family": "nope"}, "family"),
+    ],
+)
+def test_bad_arguments_name_the_field(cls, changes, message):
+    with pytest.raises(ValueError, match=message):
+        cls(**changes)
