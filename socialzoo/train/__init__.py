@@ -14,7 +14,10 @@ from typing import Any
 __all__ = ["TRAINERS", "trainer_args", "trainer_function"]
 
 # Trainer name -> "module:ArgsClass"; the module's `train(args)` runs it.
-TRAINERS: dict[str, str] = {}
+TRAINERS: dict[str, str] = {
+    "bc": "socialzoo.train.bc:Args",
+    "gail": "socialzoo.train.gail:Args",
+}
 
 
 def trainer_args(name: str) -> type:
