@@ -73,15 +73,25 @@ def lfd_policy_file(root: str | Path, policy: str, size: int) -> Path:
 
 
 def find_lfd_policies(
-    root: str | Path, policies: Sequence[str] = LFD_ALGOS, sizes: Sequence[int] = LFD_SIZES
+    root: str | Path, policies: Sequence[str] = LFD_ALGOS, sizes: Sequence[int] | None = None
 ) -> dict[tuple[str, int], Path]:
-    """The trained LfD policy files under `root`, keyed (policy, size); missing ones are left out."""
+    """The trained LfD policy files under `root`, keyed (policy, size).
+
+    Args:
+        root: the experiment folder (<root>/<policy>_<size>/<policy>.safetensors).
+        policies: policy names to look for.
+        sizes: demonstration sizes to look for; None: every size found.
+    """
+    root = Path(root)
     found = {}
     for policy in policies:
-        for size in sizes:
-            path = lfd_policy_file(root, policy, size)
+        for folder in sorted(root.glob(f"{policy}_*")) if root.is_dir() else ():
+            size_text = folder.name[len(policy) + 1 :]
+            if not size_text.isdigit() or (sizes is not None and int(size_text) not in sizes):
+                continue
+            path = lfd_policy_file(root, policy, int(size_text))
             if path.is_file():
-                found[(policy, size)] = path
+                found[(policy, int(size_text))] = path
     return found
 
 
@@ -109,6 +119,7 @@ def run_lfd_evaluation(
     trials: int = LFD_TRIALS,
     workers: int | None = 2,
     batch_size: int = 64,
+    env_overrides: Mapping[str, Any] | None = None,
     progress: bool = True,
 ) -> LfdResult:
     """Evaluate LfD policy files on the first `trials` gdc1 test scenarios and write the table.
@@ -120,6 +131,8 @@ def run_lfd_evaluation(
         trials: scenarios per policy (the first of gdc1-test, the same for every policy).
         workers: local evaluation processes.
         batch_size: env rows stepped together per worker.
+        env_overrides: EnvConfig.replace keywords for the evaluation env (plain JSON), e.g.
+            {"max_steps": 400} for a quick look; None: the benchmark as it is.
         progress: show a progress bar.
 
     Raises:
@@ -138,6 +151,7 @@ def run_lfd_evaluation(
         trials=trials,
         workers=workers,
         batch_size=batch_size,
+        env_overrides=dict(env_overrides or {}),
     )
     out = Path(out_dir)
     result = run_benchmark(config, out, progress=progress, figures=False)

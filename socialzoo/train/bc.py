@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -139,7 +140,12 @@ def _train(args: Args) -> Path:
     net = policy_network(
         data.obs.shape[1], args.hidden, args.activation, normalizer_stats(data.obs), generator
     )
-    loss_module = BCLoss(make_actor(net))
+    with warnings.catch_warnings():
+        # TorchRL's LossModule warns about a target-network attribute that BCLoss never declares.
+        warnings.filterwarnings(
+            "ignore", message="The name target_actor_network_params", category=UserWarning
+        )
+        loss_module = BCLoss(make_actor(net))
     optimizer = torch.optim.Adam(loss_module.parameters(), lr=args.lr, weight_decay=args.weight_decay)
     obs = torch.as_tensor(data.obs)
     actions = torch.as_tensor(data.one_hot())
