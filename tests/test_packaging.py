@@ -44,3 +44,6 @@ def test_wheel_ships_the_maps(tmp_path):
     shipped = {p.name for p in (ROOT / "maps").glob("*.json")}
     assert shipped and {f"socialzoo/_maps/{name}" for name in shipped} <= names
     assert "socialzoo/core/world.py" in names
+    # The shipped learned policies and their run records.
+    policies = {p.name for p in (ROOT / "socialzoo" / "agents" / "shipped").glob("*.*")}
+    assert {f"socialzoo/agents/shipped/{name}" for name in policies} <= names

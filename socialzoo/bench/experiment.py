@@ -31,7 +31,7 @@ logger = logging.getLogger(__name__)
 STORE_NAME = "results.sqlite"
 CONFIG_NAME = "config.json"
 GIF_NAME = "ref_episode.gif"
-QUICK_POLICIES = ("goalone", "ref")
+QUICK_POLICIES = ("goalone", "ref", "bc", "gail")
 QUICK_MAPS = ("gdc1", "ghc3")
 
 
@@ -125,7 +125,8 @@ class BenchmarkConfig:
 
 
 def quick_config(**changes: Any) -> BenchmarkConfig:
-    """The quick benchmark (`make run`): GoAlone and Ref, 100 trials on each quick test set, a GIF."""
+    """The quick benchmark (`make run`): GoAlone, Ref and the shipped learned policies (QUICK_POLICIES),
+    100 trials on each quick test set, a GIF."""
     base: dict[str, Any] = {"policies": QUICK_POLICIES, "maps": QUICK_MAPS, "quick": True, "gif": True}
     base.update(changes)
     return BenchmarkConfig(**base)

@@ -84,7 +84,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="GoAlone and Ref on gdc1-quick and ghc3-quick (100 trials each), plus one Ref episode GIF",
+        help="GoAlone, Ref and the shipped BC and GAIL policies on gdc1-quick and ghc3-quick (100 trials "
+        "each), plus one Ref episode GIF",
     )
     parser.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
