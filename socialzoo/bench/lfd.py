@@ -29,8 +29,9 @@ LFD_SIZES: tuple[int, ...] = (155_400, 116_600, 77_700, 38_800, 3_500)
 LFD_ALGOS: tuple[str, ...] = ("bc", "gail")
 # The map whose test set the LfD policies are evaluated on (the paper's training map).
 LFD_MAP = "gdc1"
-# Scenarios per policy: the first LFD_TRIALS of the gdc1 test set.
-LFD_TRIALS = 200
+# Scenarios per policy: the first LFD_TRIALS of the gdc1 test set (the paper's LfD percentages are whole
+# numbers, as from 100 scenarios).
+LFD_TRIALS = 100
 # The paper's LfD table: (policy, demonstration steps) -> (success %, average step reward).
 PAPER_LFD: dict[tuple[str, int], tuple[float, float]] = {
     ("bc", 155_400): (84.0, 0.12),

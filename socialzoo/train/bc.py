@@ -33,7 +33,7 @@ class Args:
     """Behaviour cloning of Ref demonstrations (TorchRL BCLoss).
 
     Attributes:
-        demos: the demonstration file (`socialzoo demos --episodes 125 --out FILE`).
+        demos: the demonstration file (`socialzoo demos --episodes 125 --out runs/lfd/ref_demos.npz`).
         steps: demonstration steps used, the first ones of the file (the paper's sizes: 155400,
             116600, 77700, 38800, 3500); None: all of them.
         hidden: hidden layer sizes of the policy MLP.
@@ -53,7 +53,7 @@ class Args:
         progress: show a progress bar.
     """
 
-    demos: Path = Path("runs/demos/ref_demos.npz")
+    demos: Path = Path("runs/lfd/ref_demos.npz")
     steps: int | None = 155_400
     hidden: tuple[int, ...] = (256, 256)
     activation: Activation = "relu"

@@ -36,7 +36,7 @@ class Args:
     """GAIL on Ref demonstrations: TorchRL GAILLoss discriminator, ClipPPOLoss generator.
 
     Attributes:
-        demos: the demonstration file (`socialzoo demos --episodes 125 --out FILE`).
+        demos: the demonstration file (`socialzoo demos --episodes 125 --out runs/lfd/ref_demos.npz`).
         steps: demonstration steps used, the first ones of the file (the paper's sizes: 155400,
             116600, 77700, 38800, 3500); None: all of them.
         total_steps: env steps of generator experience.
@@ -69,7 +69,7 @@ class Args:
         progress: show a progress bar.
     """
 
-    demos: Path = Path("runs/demos/ref_demos.npz")
+    demos: Path = Path("runs/lfd/ref_demos.npz")
     steps: int | None = 155_400
     total_steps: int = 200_000
     num_envs: int = 40
