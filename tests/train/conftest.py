@@ -2,9 +2,6 @@
 
 import pytest
 
-pytest.importorskip("torch")
-pytest.importorskip("torchrl")
-
 # Episodes of the small recording, and its time limit (steps): about 3,000 transitions.
 DEMO_EPISODES = 12
 DEMO_MAX_STEPS = 250
@@ -12,7 +9,10 @@ DEMO_MAX_STEPS = 250
 
 @pytest.fixture(scope="session")
 def small_demos(tmp_path_factory):
-    """A demonstration file of DEMO_EPISODES Ref episodes on gdc1, cut at DEMO_MAX_STEPS steps."""
+    """A demonstration file of DEMO_EPISODES Ref episodes on gdc1, cut at DEMO_MAX_STEPS steps
+    (the tests that use it train with torch and TorchRL: skipped without them)."""
+    pytest.importorskip("torch")
+    pytest.importorskip("torchrl")
     from socialzoo.agents.demonstrations import DemoConfig, record_demonstrations
 
     path = tmp_path_factory.mktemp("demos") / "ref.npz"
