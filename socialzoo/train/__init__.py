@@ -17,6 +17,8 @@ __all__ = ["TRAINERS", "trainer_args", "trainer_function"]
 TRAINERS: dict[str, str] = {
     "ppo": "socialzoo.train.ppo:PPOArgs",
     "dqn": "socialzoo.train.dqn:DQNArgs",
+    "bc": "socialzoo.train.bc:Args",
+    "gail": "socialzoo.train.gail:Args",
 }
 
 

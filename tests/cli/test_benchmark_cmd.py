@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from socialzoo.agents.demonstrations import load_demonstrations, parts_dir
+from socialzoo.bench.experiment import QUICK_POLICIES
 from socialzoo.cli import main as socialzoo_main
 
 
@@ -27,7 +28,8 @@ def test_benchmark_end_to_end(tmp_path, capsys):
     argv += ["--out", str(out), "--no-progress"]
     assert socialzoo_main(argv) == 0
     text = capsys.readouterr().out
-    assert "16 trials run, 0 read from the store" in text
+    trials = 2 * 4 * len(QUICK_POLICIES)
+    assert f"{trials} trials run, 0 read from the store" in text
     names = {p.name for p in out.iterdir()}
     expected = {"results.sqlite", "config.json", "summary.csv", "summary.md", "ref_episode.gif"}
     expected |= {f"{stem}.{fmt}" for stem in ("success", "metrics") for fmt in ("png", "pdf")}
@@ -35,10 +37,7 @@ def test_benchmark_end_to_end(tmp_path, capsys):
     rows = (out / "summary.csv").read_text().splitlines()
     assert rows[0].startswith("policy,map,test_set,trials,success_rate,success_ci_low,success_ci_high,")
     assert [r.split(",")[:4] for r in rows[1:]] == [
-        ["goalone", "gdc1", "gdc1-quick", "4"],
-        ["goalone", "ghc3", "ghc3-quick", "4"],
-        ["ref", "gdc1", "gdc1-quick", "4"],
-        ["ref", "ghc3", "ghc3-quick", "4"],
+        [policy, m, f"{m}-quick", "4"] for policy in QUICK_POLICIES for m in ("gdc1", "ghc3")
     ]
     markdown = (out / "summary.md").read_text()
     assert "| policy | test (gdc1) | paper test | transfer (ghc3) | paper transfer |" in markdown
@@ -48,7 +47,7 @@ def test_benchmark_end_to_end(tmp_path, capsys):
     assert config["package_version"]
     # Run again: everything is read back from the store.
     assert socialzoo_main([*argv[:-1], "--no-figures", "--no-progress"]) == 0
-    assert "0 trials run, 16 read from the store" in capsys.readouterr().out
+    assert f"0 trials run, {trials} read from the store" in capsys.readouterr().out
 
 
 def test_benchmark_bad_names(tmp_path, capsys):

@@ -1,0 +1,92 @@
+"""The TorchRL adapter: TorchRL's spec check, the same transitions as the Gymnasium VectorEnv,
+partial resets that touch only the rows asked for."""
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("torchrl")
+
+from torchrl.envs.utils import check_env_specs, step_mdp  # noqa: E402
+
+from socialzoo.env.torchrl_single import ActionSelectionTorchEnv  # noqa: E402
+from socialzoo.env.vector import ActionSelectionVectorEnv  # noqa: E402
+
+
+def _one_hot(actions):
+    return torch.nn.functional.one_hot(torch.as_tensor(actions), 4).bool()
+
+
+def test_torchrl_spec_check_passes():
+    env = ActionSelectionTorchEnv(2, max_steps=20)
+    env.set_seed(3)
+    check_env_specs(env)
+
+
+def test_rows_match_the_vector_env_including_episode_ends():
+    b, seed = 3, 7
+    env = ActionSelectionTorchEnv(b, max_steps=25)
+    env.set_seed(seed)
+    td = env.reset()
+    venv = ActionSelectionVectorEnv(b, max_steps=25)
+    obs, _ = venv.reset(seed=seed)
+    np.testing.assert_array_equal(td["observation"].numpy(), obs)
+    rng = np.random.default_rng(0)
+    ends = 0
+    for _ in range(60):
+        actions = rng.integers(0, 4, b)
+        td["action"] = _one_hot(actions)
+        td = env.step(td)
+        obs, reward, terminated, truncated, info = venv.step(actions)
+        nxt = td["next"]
+        ended = terminated | truncated
+        # TorchRL keeps an episode's true last observation; the VectorEnv reports it in final_obs.
+        last = np.where(ended[:, None], info["final_obs"], obs) if ended.any() else obs
+        np.testing.assert_array_equal(nxt["observation"].numpy(), last)
+        np.testing.assert_allclose(nxt["reward"].numpy()[:, 0], reward, rtol=1e-6, atol=1e-7)
+        np.testing.assert_array_equal(nxt["terminated"].numpy()[:, 0], terminated)
+        np.testing.assert_array_equal(nxt["truncated"].numpy()[:, 0], truncated)
+        np.testing.assert_array_equal(nxt["done"].numpy()[:, 0], ended)
+        ends += int(ended.sum())
+        td = env.maybe_reset(step_mdp(td))
+        np.testing.assert_array_equal(td["observation"].numpy(), obs)
+    assert ends >= b  # every row went through at least one truncation
+
+
+def test_partial_reset_touches_only_the_masked_rows():
+    env = ActionSelectionTorchEnv(3, categorical_action_encoding=True)
+    env.set_seed(1)
+    td = env.reset()
+    for _ in range(5):
+        td["action"] = torch.zeros(3, dtype=torch.int64)
+        td = step_mdp(env.step(td))
+    before = td["observation"].clone()
+    seeds = [s.seed for s in env.core.scenarios]
+    td["_reset"] = torch.tensor([[False], [True], [False]])
+    out = env.reset(td)
+    np.testing.assert_array_equal(out["observation"][[0, 2]].numpy(), before[[0, 2]].numpy())
+    assert not torch.equal(out["observation"][1], before[1])
+    assert [s.seed for s in env.core.scenarios][::2] == seeds[::2]
+    assert env.core.state.step_count[1] == 0 and env.core.state.step_count[0] == 5
+
+
+def test_scenarios_repeat_as_configured():
+    from tensordict import TensorDict
+
+    env = ActionSelectionTorchEnv(1, scenario={"repeats": 2})
+    env.set_seed(0)
+    env.reset()
+    seeds = [env.core.scenarios[0].seed]
+    for _ in range(2):
+        env.reset(TensorDict({"_reset": torch.tensor([[True]])}, batch_size=[1]))
+        seeds.append(env.core.scenarios[0].seed)
+    assert seeds[0] == seeds[1] != seeds[2]
+
+
+def test_configs_it_cannot_serve_are_refused():
+    with pytest.raises(ValueError, match="num_robots=1"):
+        ActionSelectionTorchEnv(1, num_robots=2)
+    with pytest.raises(ValueError, match="subpolicy"):
+        ActionSelectionTorchEnv(1, robot_action="velocity")
+    with pytest.raises(ValueError, match="num_envs"):
+        ActionSelectionTorchEnv(0)
