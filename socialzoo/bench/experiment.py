@@ -20,6 +20,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
+from socialzoo.agents import split_policy_name
 from socialzoo.bench.runner import BACKENDS, Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, summarize, write_summary_csv, write_summary_md
@@ -45,7 +46,8 @@ class BenchmarkConfig:
     """What a benchmark run evaluates, and how.
 
     Attributes:
-        policies: registry names of the policies (socialzoo.agents.POLICIES).
+        policies: registry names of the policies (socialzoo.agents.POLICIES), or "NAME:PATH" for
+            a learned policy loaded from a file.
         maps: maps to evaluate on; each uses its test set "<map>-test" (2000 scenarios), or
             "<map>-quick" (100) with quick=True.
         trials: scenarios per policy and map: the first `trials` of each test set; None: all.
@@ -73,16 +75,17 @@ class BenchmarkConfig:
     gif: bool = False
 
     def __post_init__(self) -> None:
-        from socialzoo.agents import POLICIES
+        from socialzoo.agents import check_policy_name
 
         object.__setattr__(self, "policies", tuple(self.policies))
         object.__setattr__(self, "maps", tuple(self.maps))
         if not self.policies:
             raise ValueError("BenchmarkConfig.policies is empty")
         for p in self.policies:
-            if p not in POLICIES:
-                known = ", ".join(sorted(POLICIES))
-                raise ValueError(f"BenchmarkConfig.policies: unknown policy {p!r}; known policies: {known}")
+            try:
+                check_policy_name(p)
+            except ValueError as err:
+                raise ValueError(f"BenchmarkConfig.policies: {err}") from None
         if not self.maps:
             raise ValueError("BenchmarkConfig.maps is empty")
         for name in ("policies", "maps"):
@@ -213,6 +216,7 @@ def config_hash(
     from socialzoo.agents.base import policy_config
 
     kwargs = dict(policy_kwargs or {})
+    path = kwargs.get("path") or split_policy_name(policy)[1]
     module_file = inspect.getsourcefile(type(policy_object))
     payload = {
         "env_id": env_id_for(test_set.map_name),
@@ -222,7 +226,7 @@ def config_hash(
         "policy": {
             "name": policy,
             "config": policy_config(policy_object),
-            "file_sha256": _file_digest(kwargs["path"]) if "path" in kwargs else None,
+            "file_sha256": _file_digest(path) if path else None,
         },
         "test_set": {
             "map": test_set.map_name,

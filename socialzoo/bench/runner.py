@@ -116,15 +116,16 @@ def make_spec(
 ) -> RunSpec:
     """A RunSpec for policies (names, or names -> make_policy kwargs) on test sets (names or objects).
 
+    Policy names are registry names, or "NAME:PATH" for a policy loaded from a file.
+
     Raises:
-        ValueError: an unknown policy name; KeyError: an unknown test set name.
+        ValueError: an unknown policy name (or a missing file); KeyError: an unknown test set name.
     """
-    from socialzoo.agents import POLICIES
+    from socialzoo.agents import check_policy_name
 
     kwargs = {p: {} for p in policies} if not isinstance(policies, Mapping) else dict(policies)
     for name in kwargs:
-        if name not in POLICIES:
-            raise ValueError(f"unknown policy {name!r}; known policies: {', '.join(sorted(POLICIES))}")
+        check_policy_name(name)
     sets = {}
     for ts in test_sets:
         obj = get_test_set(ts) if isinstance(ts, str) else ts
