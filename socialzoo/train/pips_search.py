@@ -2,17 +2,17 @@
 (only unit-consistent ones), fill predicate sketches of one or two comparisons with the exact
 threshold search, extend the best ones, and solve the final candidates' thresholds with z3.
 
-Depth 0 is the atomic features; depth d combines a beam of depth d-1 expressions with an atom by
-+, -, norm (same unit only), *, / (when the result is a comparable unit) or abs. Expressions that
-order the examples exactly as a simpler one does are dropped (a comparison sees only the order).
-The search widens (deeper expressions) only while that improves the guard enough.
+The expressions come from socialzoo.train.pips_enumerate; the thresholds from
+socialzoo.train.pips_thresholds. The search widens (deeper expressions) only while that improves
+the guard by more than the price of complexity.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,146 +22,23 @@ from socialzoo.agents.pips import (
     Compare,
     Expr,
     Junction,
-    Op,
     Predicate,
     expr_atoms,
     expr_depth,
     expr_eval,
-    expr_str,
-    expr_unit,
     predicate_eval,
 )
-from socialzoo.agents.pips_features import (
-    ATOMS,
-    COMPARABLE_UNITS,
-    LANE_CM_RANGE,
-    PaperParts,
-    UnitError,
-    atom_values,
-    lane_cm,
-    with_lane_cm,
+from socialzoo.agents.pips_features import ATOMS, LANE_CM_RANGE, PaperParts, UnitError, lane_cm
+from socialzoo.train.pips_enumerate import (
+    AtomCache,
+    FeatureBank,
+    enumerate_depth,
+    refine_lane_features,
+    rename_lane,
 )
-from socialzoo.train.pips_thresholds import (
-    PairSearch,
-    Sketch,
-    fit_single,
-    score_of,
-    solve_z3,
-)
+from socialzoo.train.pips_thresholds import PairSearch, Sketch, fit_single, score_of, solve_z3
 
 logger = logging.getLogger(__name__)
-
-
-def combine(left: Expr, right: Expr) -> list[Expr]:
-    """Every unit-consistent binary expression of `left` and `right` whose unit is comparable
-    (socialzoo.agents.pips_features.COMPARABLE_UNITS); commutative operators once per pair."""
-    out: list[Expr] = []
-    lu, ru = expr_unit(left), expr_unit(right)
-    if left == right:
-        return out
-    if lu == ru:
-        out.append(Op("-", (left, right)))
-        out.append(Op("-", (right, left)))
-        out.append(Op("+", (left, right)))
-        out.append(Op("norm", (left, right)))
-    for op, unit in (("*", lu * ru), ("/", lu / ru)):
-        if unit in COMPARABLE_UNITS:
-            out.append(Op(op, (left, right)))
-    if (ru / lu) in COMPARABLE_UNITS:
-        out.append(Op("/", (right, left)))
-    return out
-
-
-def enumerate_depth(depth: int, beam: Sequence[Expr], atoms: Sequence[Expr]) -> list[Expr]:
-    """Expressions of exactly `depth`: the atoms (depth 0), or each beam expression of depth
-    depth - 1 under abs and combined with each atom (atom pairs once each at depth 1).
-
-    Every expression returned has a comparable unit; none adds, subtracts or compares
-    quantities of different units (such a combination is never built).
-    """
-    if depth == 0:
-        return list(atoms)
-    out: list[Expr] = []
-    seen: set[Expr] = set()
-    for left in beam:
-        candidates: list[Expr] = [Op("abs", (left,))]
-        for right in atoms:
-            candidates += combine(left, right)
-        for expr in candidates:
-            if expr not in seen and expr_depth(expr) == depth:
-                seen.add(expr)
-                out.append(expr)
-    return out
-
-
-def _rank_signatures(values: np.ndarray) -> tuple[list[bytes], list[bytes]]:
-    """Per row, the dense ranks of its values, and of its negation (rows that order the examples
-    alike, or in reverse, compare alike: f <= t is -f >= -t)."""
-    order = np.argsort(values, axis=1, kind="stable")
-    v = np.take_along_axis(values, order, axis=1)
-    dense = np.concatenate(
-        [np.zeros((len(v), 1), dtype=np.int32), np.cumsum(np.diff(v, axis=1) > 0, axis=1, dtype=np.int32)],
-        axis=1,
-    )
-    ranks = np.empty_like(dense)
-    np.put_along_axis(ranks, order, dense, axis=1)
-    flipped = ranks.max(axis=1, keepdims=True) - ranks
-    return [r.tobytes() for r in ranks], [r.tobytes() for r in flipped]
-
-
-class AtomCache(Mapping[str, np.ndarray]):
-    """Atomic feature values on the examples, computed on first use (lane selectors of any
-    half-width included)."""
-
-    def __init__(self, parts: PaperParts) -> None:
-        self.parts = parts
-        self._values: dict[str, np.ndarray] = {}
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        if name not in self._values:
-            self._values.update(atom_values(self.parts, [name]))
-        return self._values[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._values)
-
-    def __len__(self) -> int:
-        return len(self._values)
-
-
-class FeatureBank:
-    """Feature expressions and their values on the examples, without order-duplicates (an
-    expression that orders the examples as a kept one does, or in reverse, is dropped)."""
-
-    def __init__(self, atoms: Mapping[str, np.ndarray]) -> None:
-        self.atoms = atoms
-        self.exprs: list[Expr] = []
-        self.rows: list[np.ndarray] = []
-        self._signatures: set[bytes] = set()
-
-    def add(self, exprs: Iterable[Expr]) -> list[int]:
-        """Evaluate and keep the expressions that order the examples in a new way (and are
-        finite and not constant); returns their indices."""
-        exprs = list(exprs)
-        if not exprs:
-            return []
-        with np.errstate(all="ignore"):
-            values = np.stack([expr_eval(e, self.atoms) for e in exprs]).astype(np.float64)
-        ok = np.isfinite(values).all(axis=1) & (values.max(axis=1) > values.min(axis=1))
-        kept = []
-        signatures, flipped = _rank_signatures(values)
-        for e, v, sig, flip, good in zip(exprs, values, signatures, flipped, ok, strict=True):
-            if good and sig not in self._signatures and flip not in self._signatures:
-                self._signatures.add(sig)
-                kept.append(len(self.exprs))
-                self.exprs.append(e)
-                self.rows.append(v)
-        return kept
-
-    @property
-    def values(self) -> np.ndarray:
-        """(F, N) values of every kept expression."""
-        return np.stack(self.rows) if self.rows else np.zeros((0, 0))
 
 
 @dataclass(frozen=True)
@@ -173,7 +50,7 @@ class Candidate:
         score: weighted correctly classified examples.
         complexity: comparisons beyond the first plus the deepest expression's depth.
         gap: its smallest threshold margin (normalised; larger is safer), a tie-breaker.
-        solver: "exact" or "z3", whichever filled its thresholds last.
+        solver: "z3" when z3 solved or confirmed its thresholds, else "exact".
     """
 
     predicate: Predicate
@@ -239,7 +116,7 @@ class SearchSettings:
             expression depth, and for itself (than never firing).
         refine: lane-expression families (and best candidates) whose lane widths are refined
             to the centimetre.
-        solver: "z3" (the final candidates' thresholds by MaxSMT) or "exact" (skip z3).
+        solver: "z3" (z3 solves the final candidates' thresholds as MaxSMT) or "exact" (no z3).
         z3_candidates: how many of the best candidates z3 solves.
         z3_timeout_s: z3's time limit per candidate.
         seed: z3's random seed.
@@ -359,20 +236,10 @@ def _refit(
     return _candidate(pred, score, atoms)
 
 
-def _rename(expr: Expr, old: str, new: str) -> Expr:
-    if isinstance(expr, Atom):
-        return Atom(new) if expr.name == old else expr
-    return Op(expr.op, tuple(_rename(a, old, new) for a in expr.args))
-
-
 def _rename_lane(pred: Predicate, cm: int, new_cm: int) -> Predicate:
     if isinstance(pred, Junction):
         return Junction(pred.op, tuple(_rename_lane(a, cm, new_cm) for a in pred.args))
-    out = pred.expr
-    for name in expr_atoms(pred.expr):
-        if lane_cm(name) == cm:
-            out = _rename(out, name, with_lane_cm(name, new_cm))
-    return Compare(out, pred.cmp, pred.threshold)
+    return Compare(rename_lane(pred.expr, cm, new_cm), pred.cmp, pred.threshold)
 
 
 def _refine_lanes(
@@ -397,59 +264,15 @@ def _refine_lanes(
     return best
 
 
-def _rename_expr_lane(expr: Expr, cm: int, new_cm: int) -> Expr:
-    for name in expr_atoms(expr):
-        if lane_cm(name) == cm:
-            expr = _rename(expr, name, with_lane_cm(name, new_cm))
-    return expr
-
-
-def _lane_family(expr: Expr) -> str | None:
-    """The expression's text with every lane half-width blanked (None without lanes)."""
-    widths = {c for n in expr_atoms(expr) if (c := lane_cm(n))}
-    if not widths:
-        return None
-    for cm in widths:
-        expr = _rename_expr_lane(expr, cm, LANE_CM_RANGE[0])
-    return expr_str(expr)
-
-
-def _refine_features(bank: FeatureBank, label: np.ndarray, weight: np.ndarray, count: int) -> list[int]:
-    """For the `count` best families of lane expressions (the same expression at other lane
-    half-widths), add the variant whose half-width, to the centimetre and within 9 cm of the
-    family's best enumerated one, compares best (among ties, the middle one).
-
-    The half-width is a threshold inside a selector: expressions that use it well often show
-    only once combined (a gap to the local target, say), so it is refined at every depth."""
-    fit = fit_single(bank.values, label, weight)
-    best: dict[str, int] = {}
-    for f in np.argsort(-fit.score, kind="stable").tolist():
-        family = _lane_family(bank.exprs[f])
-        if family is not None and family not in best:
-            best[family] = f
-            if len(best) == count:
-                break
-    added: list[int] = []
-    for f in best.values():
-        expr = bank.exprs[f]
-        for cm in sorted({c for n in expr_atoms(expr) if (c := lane_cm(n))}):
-            variants = [
-                _rename_expr_lane(expr, cm, new)
-                for new in range(max(cm - 9, LANE_CM_RANGE[0]), min(cm + 9, LANE_CM_RANGE[1]) + 1)
-            ]
-            with np.errstate(all="ignore"):
-                values = np.stack([expr_eval(e, bank.atoms) for e in variants])
-            scores = fit_single(values, label, weight).score
-            top = np.flatnonzero(scores == scores.max())
-            expr = variants[int(top[len(top) // 2])]
-        added += bank.add([expr])
-    return added
-
-
 def _solve_with_z3(
     cand: Candidate, atoms: Mapping[str, np.ndarray], label, weight, settings: SearchSettings
 ) -> Candidate:
-    """The candidate with its thresholds re-solved jointly by z3 (kept as is if z3 does worse)."""
+    """The candidate's thresholds solved jointly by z3 (MaxSMT).
+
+    z3 proves what the best score of the sketch is. When it finds more than the exact search
+    (three comparisons, where the exact search extended a fixed pair), its thresholds are used;
+    when it confirms the exact search's score, of the two equally good assignments the one with
+    the wider margin is kept; when it gives up, the exact one stays (solver "exact")."""
     pred = cand.predicate
     leaves = _leaves(pred)
     columns = [expr_eval(leaf.expr, atoms) for leaf in leaves]
@@ -464,10 +287,11 @@ def _solve_with_z3(
             "z3 found %.0f correct where the exact search found %.0f; keeping the exact one", score, exact
         )
         return cand
+    found = _candidate(_fill(pred, thresholds, [0]), score, atoms, "z3")
     if score > exact:
         logger.info("z3 improved a guard from %.0f to %.0f correct", exact, score)
-    filled = _fill(pred, thresholds, [0])
-    return _candidate(filled, score, atoms, "z3")
+        return found
+    return found if found.gap > cand.gap else dataclasses.replace(cand, solver="z3")
 
 
 def search_guard(
@@ -506,7 +330,7 @@ def search_guard(
             added = bank.add(enumerate_depth(depth, beam, names))
         except UnitError as err:  # enumeration builds unit-consistent expressions only
             raise AssertionError(f"enumerated an expression with inconsistent units: {err}") from None
-        added += _refine_features(bank, label, weight, settings.refine)
+        added += refine_lane_features(bank, label, weight, settings.refine)
         cands = sorted(_level_candidates(bank, label, weight, settings), key=rank.key)
         logger.debug("depth %d: %d new expressions, %d in all", depth, len(added), len(bank.exprs))
         if not cands or (best and rank.merit(cands[0]) <= rank.merit(best[0])):
@@ -516,7 +340,7 @@ def search_guard(
             break
         fit = fit_single(bank.values[added], label, weight)
         beam = [bank.exprs[added[i]] for i in np.argsort(-fit.score, kind="stable")[: settings.beam]]
-    distinct = list({c.predicate: c for c in reversed(best)}.values())[::-1]
+    distinct = list({c.predicate: c for c in best}.values())
     refined = sorted(
         (_refine_lanes(c, atoms, label, weight) for c in distinct[: settings.refine]), key=rank.key
     )

@@ -110,3 +110,9 @@ def test_interrupted_recording_resumes(tmp_path, rooms_path, monkeypatch):
     other = DemoConfig(map=rooms_path, episodes=4, chunk_episodes=2, env_overrides={"max_steps": 50})
     with pytest.raises(demonstrations.DemonstrationError, match="another config"):
         record_demonstrations(target, other)
+
+
+def test_policy_names_keep_the_case_of_their_file():
+    from socialzoo.cli.benchmark_cmd import _names
+
+    assert _names("Ref, PIPS:/Runs/A.json ,goalone") == ("ref", "pips:/Runs/A.json", "goalone")

@@ -26,7 +26,8 @@ from socialzoo.agents.pips_features import (
 )
 from socialzoo.nav.subpolicies import GO_ALONE, HALT
 from socialzoo.train.pips import PipsArgs, sidecar_path, synthesize, train, window_mask
-from socialzoo.train.pips_search import SearchSettings, combine, enumerate_depth
+from socialzoo.train.pips_enumerate import combine, enumerate_depth
+from socialzoo.train.pips_search import SearchSettings
 from socialzoo.train.pips_thresholds import PairSearch, fit_single, solve_z3
 
 pytest.importorskip("z3")
@@ -244,7 +245,14 @@ def test_agreement_with_ref_on_held_out_demonstrations(ref_demos, tmp_path):
     held-out steps at least 90% of the time, and beat always answering the commonest action by
     at least half of the remaining gap."""
     args = PipsArgs(
-        demos=str(ref_demos), out=str(tmp_path / "p.json"), steps=1500, window=10, max_depth=1, solver="exact"
+        demos=str(ref_demos),
+        out=str(tmp_path / "p.json"),
+        steps=1500,
+        window=10,
+        max_depth=1,
+        pool=8,
+        partners=200,
+        solver="exact",
     )
     out = train(args)
     held = json.loads(sidecar_path(out).read_text())["agreement"]["held_out"]
