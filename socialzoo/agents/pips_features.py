@@ -250,23 +250,17 @@ def _selector_mask(name: str, xy: np.ndarray, seen: np.ndarray) -> np.ndarray:
 def _human_attributes(sel: str, parts: PaperParts) -> dict[str, np.ndarray]:
     """Every attribute of the human `sel` picks, per row; FAR-away defaults where there is none."""
     slots = parts.slots
+    if slots.shape[1] == 0:  # no slots: one empty slot, nobody seen
+        slots = np.zeros((len(slots), 1, 4))
     xy, rel_vel = slots[..., 0:2], slots[..., 2:4]
     seen = (xy != 0.0).any(axis=-1)
     dist = np.sqrt((xy**2).sum(-1))
     mask = _selector_mask(sel, xy, seen)
-    n = len(slots)
-    if slots.shape[1] == 0:
-        found = np.zeros(n, dtype=bool)
-        pick = np.zeros(n, dtype=np.int64)
-    else:
-        pick = np.argmin(np.where(mask, dist, np.inf), axis=1)
-        found = mask.any(axis=1)
-    rows = np.arange(n)
-    if slots.shape[1] == 0:
-        hx = hy = hd = rvx = rvy = np.zeros(n)
-    else:
-        hx, hy, hd = xy[rows, pick, 0], xy[rows, pick, 1], dist[rows, pick]
-        rvx, rvy = rel_vel[rows, pick, 0], rel_vel[rows, pick, 1]
+    rows = np.arange(len(slots))
+    pick = np.argmin(np.where(mask, dist, np.inf), axis=1)
+    found = mask.any(axis=1)
+    hx, hy, hd = xy[rows, pick, 0], xy[rows, pick, 1], dist[rows, pick]
+    rvx, rvy = rel_vel[rows, pick, 0], rel_vel[rows, pick, 1]
     # The human's own walking velocity in robot axes: add back the robot's (v, 0).
     wvx, wvy = rvx + parts.robot_vel[:, 0], rvy
     speed = np.hypot(wvx, wvy)
