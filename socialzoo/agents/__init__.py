@@ -39,6 +39,8 @@ POLICIES: dict[str, str] = {
     "dqn": "socialzoo.agents.mlp:MlpPolicy",
     "bc": "socialzoo.agents.mlp:MlpPolicy",
     "gail": "socialzoo.agents.mlp:MlpPolicy",
+    # Program synthesis: a JSON program (socialzoo.agents.pips_program).
+    "pips": "socialzoo.agents.pips:PipsPolicy",
 }
 
 
@@ -132,7 +134,9 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
     key, path = split_policy_spec(name)
     cls = _policy_class(key)
     if path is not None:
-        kwargs = {**kwargs, "path": path}
+        if kwargs:
+            raise ValueError(f"policy {name!r} names its file; got keyword arguments {sorted(kwargs)} too")
+        kwargs = {"path": path}
     if hasattr(cls, "load"):
         if set(kwargs) == {"path"}:
             return cls.load(kwargs["path"])

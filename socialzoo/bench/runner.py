@@ -120,8 +120,10 @@ def make_spec(
 ) -> RunSpec:
     """A RunSpec for policies (names, or names -> make_policy kwargs) on test sets (names or objects).
 
+    Policy names are registry names, or "NAME:PATH" for a policy loaded from a file.
+
     Raises:
-        ValueError: an unknown policy name; KeyError: an unknown test set name.
+        ValueError: an unknown policy name (or a missing file); KeyError: an unknown test set name.
     """
     from socialzoo.agents import check_policy_spec
 

@@ -87,14 +87,17 @@ INTERVALS_NOTE = (
 
 
 def policy_label(policy: str) -> str:
-    """Display name of a registry policy name ("goalone" -> "GoAlone")."""
+    """Display name of a policy name ("goalone" -> "GoAlone", "pips:runs/a.json" -> "PIPS (a.json)")."""
+    key, sep, path = policy.partition(":")
+    if sep:
+        return f"{POLICY_LABELS.get(key.lower(), key)} ({Path(path).name})"
     return POLICY_LABELS.get(policy, policy)
 
 
 def paper_success(policy: str, map_name: str) -> float | None:
     """The paper's success rate (%) of a policy on a map, or None where the paper has none."""
     role = MAP_ROLES.get(map_name)
-    numbers = PAPER_SUCCESS.get(policy)
+    numbers = PAPER_SUCCESS.get(policy.partition(":")[0].lower())
     if role is None or numbers is None:
         return None
     return numbers[0] if role == "test" else numbers[1]

@@ -14,7 +14,12 @@ logger = logging.getLogger(__name__)
 
 
 def _names(text: str) -> tuple[str, ...]:
-    names = tuple(n.strip().lower() for n in text.split(",") if n.strip())
+    # Lower-case names, but not the file of a "NAME:PATH" policy.
+    names = tuple(
+        key.lower() + sep + path
+        for key, sep, path in (n.strip().partition(":") for n in text.split(","))
+        if key
+    )
     if not names:
         raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
     return names

@@ -19,6 +19,7 @@ TRAINERS: dict[str, str] = {
     "dqn": "socialzoo.train.dqn:DQNArgs",
     "bc": "socialzoo.train.bc:Args",
     "gail": "socialzoo.train.gail:Args",
+    "pips": "socialzoo.train.pips:PipsArgs",
 }
 
 

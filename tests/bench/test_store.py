@@ -279,3 +279,33 @@ def test_a_store_locked_too_long_is_reported_plainly(tmp_path):
     finally:
         holder.rollback()
         holder.close()
+
+
+def test_policy_named_with_its_file(rooms, tmp_path):
+    """ "NAME:PATH" runs the policy NAME loaded from PATH, is stored under that name, and its
+    trials are recomputed when the file changes. A PIPS program without transitions keeps the
+    first action (GoAlone), so it must reproduce GoAlone trial for trial."""
+    from socialzoo.agents.pips import Atom, Compare, Program, Transition
+
+    path = tmp_path / "Prog.json"
+    Program({}).save(path)
+    name = f"pips:{path}"
+    with pytest.raises(ValueError, match="no such file"):
+        config(policies=(f"pips:{tmp_path / 'missing.json'}",))
+    with pytest.raises(ValueError, match="'goalone' is not loaded from a file"):
+        config(policies=(f"goalone:{path}",))
+    out = tmp_path / "out"
+    run_benchmark(config(policies=(name, "goalone")), out, test_sets=rooms, progress=False, figures=False)
+    rows = stored(out)
+    by_policy = {p: [r for r in rows if r["policy"] == p] for p in (name, "goalone")}
+    assert len(by_policy[name]) == TRIALS
+    for a, b in zip(by_policy[name], by_policy["goalone"], strict=True):
+        assert a["scenario_index"] == b["scenario_index"] and a["steps"] == b["steps"]
+        assert a["success"] == b["success"]
+    halt_always = Program({0: (Transition(1, Compare(Atom("robot_v"), ">=", -1.0)),)})
+    halt_always.save(path)
+    result = run_benchmark(config(policies=(name,)), out, test_sets=rooms, progress=False, figures=False)
+    assert result.computed == TRIALS  # another program: nothing read back
+    first_hash = by_policy[name][0]["config_hash"]
+    halted = [r for r in stored(out) if r["policy"] == name and r["config_hash"] != first_hash]
+    assert len(halted) == TRIALS and not any(r["success"] for r in halted)

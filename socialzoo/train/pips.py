@@ -1,0 +1,413 @@
+"""PIPS: synthesise a readable action-selection program from demonstrations (SPEC section 10).
+
+The demonstrations' first `steps` steps are cut into examples (observation, previous action,
+action), windowed around the changes of action; for each current action the synthesiser learns
+the guards of its transitions one target at a time (most frequent first, each on the examples the
+earlier guards leave), with the layered search of socialzoo.train.pips_search. The program is
+written as JSON (socialzoo.agents.pips) with a sidecar recording the arguments, the seed, the
+command, the synthesis time and the program's agreement with the demonstrator.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import logging
+import math
+import shlex
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from socialzoo.agents.demonstrations import load_demonstrations
+from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
+from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
+from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
+from socialzoo.train.pips_search import SearchSettings, search_guard
+
+logger = logging.getLogger(__name__)
+
+SIDECAR_SUFFIX = ".train.json"
+
+
+@dataclass(frozen=True, kw_only=True)
+class PipsArgs:
+    """Arguments of `socialzoo train pips`. The defaults are the paper's set-up: the first 3,500
+    demonstration steps of Ref, windowed around changes of action.
+
+    Attributes:
+        demos: demonstration file (.npz, `socialzoo demos --out FILE`), recorded on training scenarios.
+        out: where the program JSON goes; the sidecar is written beside it (NAME.train.json).
+        steps: demonstration steps used (see `sampling`), in the file's episode order.
+        window: examples are the steps at most this many steps before or after a change of
+            action (in the same episode); 0 uses every step (no windowing).
+        sampling: "prefix": the examples are the windowed steps among the first `steps` steps
+            of the file; "windows": they are the first `steps` windowed steps of the file.
+        max_depth: deepest feature expression (0: atomic features only).
+        max_pred_size: most comparisons in one guard (1 to 3).
+        beam: expressions of each depth combined into the next.
+        pool: best-comparing features tried as the first of two comparisons.
+        partners: best-comparing expressions tried as the second (besides every atomic feature).
+        complexity_cost: the price of complexity, in examples: a guard must classify this many
+            more examples right than never firing, and as many more again for each comparison
+            beyond the first and each level of expression depth.
+        min_positives: a transition is learned only if the examples show it at least this often.
+        solver: "z3" (the best candidates' thresholds by z3's MaxSMT optimiser) or "exact"
+            (the exact threshold search alone).
+        z3_candidates: candidates per guard whose thresholds z3 solves.
+        z3_timeout_s: z3's time limit per candidate, s.
+        seed: z3's random seed (the search itself is deterministic).
+        time_budget_s: no deeper expressions are started after this much synthesis time, s.
+        heldout_steps: demonstration steps after the used ones on which the agreement with the
+            demonstrator is measured (0: none).
+    """
+
+    demos: str
+    out: str = "pips.json"
+    steps: int = 3500
+    window: int = 20
+    sampling: Literal["prefix", "windows"] = "prefix"
+    max_depth: int = 2
+    max_pred_size: int = 2
+    beam: int = 24
+    pool: int = 24
+    partners: int = 1000
+    complexity_cost: float = 1.0
+    min_positives: int = 1
+    solver: Literal["z3", "exact"] = "z3"
+    z3_candidates: int = 3
+    z3_timeout_s: float = 30.0
+    seed: int = 0
+    time_budget_s: float = 540.0
+    heldout_steps: int = 20_000
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.demos, str) or not self.demos:
+            raise ValueError(f"PipsArgs.demos must be a file path, got {self.demos!r}")
+        if not isinstance(self.out, str) or not self.out.endswith(".json"):
+            raise ValueError(f"PipsArgs.out must be a .json path, got {self.out!r}")
+        ints = {
+            "steps": 1,
+            "window": 0,
+            "max_depth": 0,
+            "max_pred_size": 1,
+            "beam": 1,
+            "pool": 1,
+            "partners": 1,
+            "min_positives": 1,
+            "z3_candidates": 1,
+            "seed": 0,
+            "heldout_steps": 0,
+        }
+        for name, low in ints.items():
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < low:
+                raise ValueError(f"PipsArgs.{name} must be an int >= {low}, got {value!r}")
+        if self.max_pred_size > 3:
+            raise ValueError(f"PipsArgs.max_pred_size must be at most 3, got {self.max_pred_size!r}")
+        for name in ("complexity_cost", "z3_timeout_s", "time_budget_s"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"PipsArgs.{name} must be a finite number, got {value!r}")
+            if value < 0 or (value == 0 and name != "complexity_cost"):
+                raise ValueError(f"PipsArgs.{name} must be positive, got {value!r}")
+        if self.sampling not in ("prefix", "windows"):
+            raise ValueError(f"PipsArgs.sampling must be 'prefix' or 'windows', got {self.sampling!r}")
+        if self.solver not in ("z3", "exact"):
+            raise ValueError(f"PipsArgs.solver must be 'z3' or 'exact', got {self.solver!r}")
+
+
+def window_mask(action: np.ndarray, prev: np.ndarray, episode: np.ndarray, window: int) -> np.ndarray:
+    """Steps within `window` steps of a change of action in the same episode ((N,) bool); a
+    change is a step whose action differs from its previous action. window 0: every step."""
+    n = len(action)
+    if window == 0:
+        return np.ones(n, dtype=bool)
+    changes = np.flatnonzero(action != prev)
+    mask = np.zeros(n, dtype=bool)
+    if len(changes) == 0:
+        return mask
+    offsets = np.arange(-window, window + 1)
+    idx = changes[:, None] + offsets[None, :]
+    ok = (idx >= 0) & (idx < n)
+    idx_c = np.clip(idx, 0, n - 1)
+    ok &= episode[idx_c] == episode[changes][:, None]
+    mask[idx_c[ok]] = True
+    return mask
+
+
+def select_examples(
+    action: np.ndarray, prev: np.ndarray, episode: np.ndarray, steps: int, window: int, sampling: str
+) -> tuple[int, np.ndarray]:
+    """Which demonstration steps become examples.
+
+    "prefix": the first `steps` steps, windowed (`window_mask`). "windows": windows around
+    changes of action from the start of the file, in order, until they hold `steps` steps (the
+    examples are `steps` demonstration steps, chosen from a longer stretch). With window 0 both
+    are the first `steps` steps.
+
+    Returns:
+        (span, mask): the examples lie among the first `span` steps, at mask (span,) == True.
+    """
+    n = len(action)
+    if sampling == "prefix" or window == 0:
+        span = min(steps, n)
+        return span, window_mask(action[:span], prev[:span], episode[:span], window)
+    chosen = np.flatnonzero(window_mask(action, prev, episode, window))[:steps]
+    span = int(chosen[-1]) + 1 if len(chosen) else 0
+    mask = np.zeros(span, dtype=bool)
+    mask[chosen] = True
+    return span, mask
+
+
+@dataclass(frozen=True)
+class GuardReport:
+    """How one learned guard fits its examples."""
+
+    state: int
+    target: int
+    examples: int
+    positives: int
+    correct: float
+    solver: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "from": ACTION_NAMES[self.state],
+            "to": ACTION_NAMES[self.target],
+            "examples": self.examples,
+            "positives": self.positives,
+            "correct": self.correct,
+            "solver": self.solver,
+        }
+
+
+def _decision_list(
+    parts: PaperParts, action: np.ndarray, state: int, order: tuple[int, ...], settings: SearchSettings
+) -> tuple[list[Transition], list[GuardReport], float]:
+    """Guards out of `state` for targets in `order`, each learned on the examples the earlier
+    ones leave; returns them, their reports and their merit on all the examples (decisions
+    right, less the price of their complexity)."""
+    rows = np.arange(len(action))
+    learned: list[Transition] = []
+    reports: list[GuardReport] = []
+    complexity = 0
+    for b in order:
+        label = action[rows] == b
+        if not label.any():
+            continue
+        sub = PaperParts(*(p[rows] for p in parts))
+        found = search_guard(sub, label, np.ones(len(rows)), settings)
+        if found is None:
+            continue
+        learned.append(Transition(b, found.predicate))
+        reports.append(GuardReport(state, b, len(rows), int(label.sum()), found.score, found.solver))
+        complexity += 1 + found.complexity
+        rows = rows[~predicate_eval(found.predicate, atom_values(sub, predicate_atoms(found.predicate)))]
+        if len(rows) == 0:
+            break
+    decided = Program({state: tuple(learned)}).decide_parts(parts) if learned else np.full(len(action), state)
+    merit = float((decided == action).sum()) - settings.complexity_cost * complexity
+    return learned, reports, merit
+
+
+def synthesize(
+    obs: np.ndarray, action: np.ndarray, settings: SearchSettings, *, min_positives: int = 1
+) -> tuple[Program, list[GuardReport]]:
+    """A program from examples: for each current action (the observations' previous action), an
+    ordered list of guarded transitions. Each order of the targets is tried (sequential covering:
+    a guard is learned on the examples the earlier guards leave, as first-guard-fires reads
+    them), and the order whose list decides the most examples right, less the price of its
+    complexity, is kept.
+
+    Args:
+        obs: (N, D) paper-layout observations.
+        action: (N,) the demonstrator's actions.
+        settings: the guard search's settings.
+        min_positives: fewest examples of a transition for it to be learned.
+    """
+    parts = paper_parts(obs)
+    state = parts.prev_action
+    transitions: dict[int, tuple[Transition, ...]] = {}
+    reports: list[GuardReport] = []
+    for s in range(NUM_ACTIONS):
+        rows = np.flatnonzero(state == s)
+        if len(rows) == 0:
+            continue
+        counts = np.bincount(action[rows], minlength=NUM_ACTIONS)
+        targets = [b for b in range(NUM_ACTIONS) if b != s and counts[b] >= min_positives]
+        sub = PaperParts(*(p[rows] for p in parts))
+        best: tuple[list[Transition], list[GuardReport], float] | None = None
+        for order in itertools.permutations(targets):
+            found = _decision_list(sub, action[rows], s, order, settings)
+            logger.debug(
+                "%s: order %s, merit %.1f", ACTION_NAMES[s], [ACTION_NAMES[b] for b in order], found[2]
+            )
+            if best is None or found[2] > best[2]:
+                best = found
+        if best is None or not best[0]:
+            continue
+        transitions[s] = tuple(best[0])
+        reports += best[1]
+        for r, t in zip(best[1], best[0], strict=True):
+            logger.info(
+                "%s -> %s if %s  (%d/%d examples right, %d positive)",
+                ACTION_NAMES[s],
+                ACTION_NAMES[t.target],
+                predicate_str(t.guard),
+                r.correct,
+                r.examples,
+                r.positives,
+            )
+    return Program(transitions), reports
+
+
+def agreement(program: Program, obs: np.ndarray, action: np.ndarray) -> dict[str, Any]:
+    """How often the program picks the demonstrator's action, given the same previous action.
+
+    Returns:
+        {"steps", "agreement" (fraction), "majority" (fraction of the most common action, the
+        agreement of always answering it), "confusion" (demonstrator action -> program action
+        -> count)}.
+    """
+    chosen = program.decide(obs)
+    confusion = {
+        ACTION_NAMES[a]: {
+            ACTION_NAMES[b]: int(((action == a) & (chosen == b)).sum())
+            for b in range(NUM_ACTIONS)
+            if ((action == a) & (chosen == b)).any()
+        }
+        for a in range(NUM_ACTIONS)
+        if (action == a).any()
+    }
+    n = len(action)
+    return {
+        "steps": n,
+        "agreement": float((chosen == action).mean()) if n else math.nan,
+        "majority": float(np.bincount(action, minlength=NUM_ACTIONS).max() / n) if n else math.nan,
+        "confusion": confusion,
+    }
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def sidecar_path(program_path: str | Path) -> Path:
+    """The sidecar of a program file: NAME.json -> NAME.train.json."""
+    path = Path(program_path)
+    return path.with_name(path.stem + SIDECAR_SUFFIX)
+
+
+def train(args: PipsArgs) -> Path:
+    """Synthesise a program from demonstrations and write it with its sidecar.
+
+    Writes args.out (the program, socialzoo.agents.pips JSON) and NAME.train.json beside it:
+    the resolved arguments, the seed, the command line, the synthesis time, the demonstrations
+    used (file digest, steps, episodes, examples), each guard's fit, the readable rules, and the
+    agreement with the demonstrator on the examples, on the steps used and on held-out steps.
+
+    Returns:
+        The program's path.
+
+    Raises:
+        socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file.
+        ValueError: a file that is not in the paper observation layout.
+    """
+    from socialzoo import __version__
+
+    started = time.perf_counter()
+    demos = Path(args.demos)
+    arrays, meta = load_demonstrations(demos)
+    layout = meta.get("env_config", {}).get("observation", {}).get("layout", "paper")
+    if layout != "paper":
+        raise ValueError(f"{demos}: PIPS reads the paper observation layout, the file has {layout!r}")
+    obs_all, act_all, ep_all = arrays["obs"], arrays["action"].astype(np.int64), arrays["episode"]
+    prev_all = paper_parts(obs_all).prev_action
+    used, mask = select_examples(act_all, prev_all, ep_all, args.steps, args.window, args.sampling)
+    obs, action, episode, prev = obs_all[:used], act_all[:used], ep_all[:used], prev_all[:used]
+    logger.info(
+        "PIPS: %d examples (window %d, %s) from the first %d demonstration steps (%d episodes, %d changes of action)",
+        int(mask.sum()),
+        args.window,
+        args.sampling,
+        used,
+        len(np.unique(episode)),
+        int((action != prev).sum()),
+    )
+    settings = SearchSettings(
+        max_depth=args.max_depth,
+        max_pred_size=args.max_pred_size,
+        beam=args.beam,
+        pool=args.pool,
+        partners=args.partners,
+        complexity_cost=args.complexity_cost,
+        solver=args.solver,
+        z3_candidates=args.z3_candidates,
+        z3_timeout_s=args.z3_timeout_s,
+        seed=args.seed,
+        deadline=time.monotonic() + args.time_budget_s,
+    )
+    search_started = time.perf_counter()
+    program, reports = synthesize(obs[mask], action[mask], settings, min_positives=args.min_positives)
+    synthesis_s = time.perf_counter() - search_started
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    program.save(out)
+    rules = program.rules()
+    for line in rules:
+        logger.info("PIPS rule: %s", line)
+    held = slice(used, min(used + args.heldout_steps, len(act_all)))
+    fit = {
+        "examples": agreement(program, obs[mask], action[mask]),
+        "steps_spanned": agreement(program, obs, action),
+        "held_out": agreement(program, obs_all[held], act_all[held]) if held.stop > held.start else None,
+    }
+    if fit["held_out"] is not None:
+        logger.info(
+            "PIPS: agreement with the demonstrator on %d held-out steps: %.1f%% (always %s: %.1f%%)",
+            fit["held_out"]["steps"],
+            100 * fit["held_out"]["agreement"],
+            ACTION_NAMES[int(np.bincount(act_all[held]).argmax())],
+            100 * fit["held_out"]["majority"],
+        )
+    import z3
+
+    record = {
+        "algorithm": "pips",
+        "args": dataclasses.asdict(args),
+        "seed": args.seed,
+        "command": shlex.join(getattr(sys, "orig_argv", sys.argv)),
+        "synthesis_seconds": synthesis_s,
+        "total_seconds": time.perf_counter() - started,
+        "package_version": __version__,
+        "z3_version": z3.get_version_string(),
+        "demonstrations": {
+            "path": str(demos),
+            "sha256": _sha256(demos) if demos.exists() else None,
+            "config_hash": meta.get("config_hash"),
+            "test_set": meta.get("test_set"),
+            "steps_in_file": len(act_all),
+            "steps_spanned": used,
+            "episodes_used": len(np.unique(episode)),
+            "changes_of_action": int((action != prev).sum()),
+            "examples": int(mask.sum()),
+        },
+        "guards": [r.to_json() for r in reports],
+        "rules": rules,
+        "agreement": fit,
+    }
+    sidecar = sidecar_path(out)
+    sidecar.write_text(json.dumps(record, indent=1) + "\n")
+    logger.info("PIPS: program in %s, record in %s (synthesis %.1f s)", out, sidecar, synthesis_s)
+    return out
