@@ -319,7 +319,9 @@ class SocialNavCore:
         self.done = self.done | out.terminated | out.truncated
         human = None
         if len(self.learned):
-            human = human_step(before, after, self.learned, self.walls, events.human_blocked, cfg.human_reward)
+            human = human_step(
+                before, after, self.learned, self.walls, events.human_blocked, cfg.human_reward
+            )
         return StepResult(
             obs=self.obs,
             reward=out.reward,

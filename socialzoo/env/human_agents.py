@@ -65,7 +65,14 @@ class HumanRewardConfig:
     def __post_init__(self) -> None:
         check_fields(
             self,
-            nonnegative=("progress", "waypoint_bonus", "speed", "human_contact", "robot_contact", "wall_contact"),
+            nonnegative=(
+                "progress",
+                "waypoint_bonus",
+                "speed",
+                "human_contact",
+                "robot_contact",
+                "wall_contact",
+            ),
         )
 
 
@@ -97,9 +104,7 @@ class HumanStep:
         return self.human_contact | self.robot_contact
 
 
-def action_velocities(
-    state: WorldState, humans: np.ndarray, action: np.ndarray, frame: str
-) -> np.ndarray:
+def action_velocities(state: WorldState, humans: np.ndarray, action: np.ndarray, frame: str) -> np.ndarray:
     """(B, L, 2) world-frame desired velocities, m/s, of learned humans' actions.
 
     Args:
@@ -206,7 +211,9 @@ def human_step(
     present = after.human_mask[:, humans]
     target = before.human_target[:, humans]
     pos = after.human_pos[:, humans]
-    gained = np.linalg.norm(target - before.human_pos[:, humans], axis=-1) - np.linalg.norm(target - pos, axis=-1)
+    gained = np.linalg.norm(target - before.human_pos[:, humans], axis=-1) - np.linalg.norm(
+        target - pos, axis=-1
+    )
     reached = after.human_waypoint[:, humans] != before.human_waypoint[:, humans]
     limit = config.contact_distance**2
     others = after.human_pos[:, None, :, :] - pos[:, :, None, :]  # (B, L, H, 2)

@@ -255,6 +255,7 @@ class SocialNavTorchEnv(EnvBase):
         leaving = robot_term | robot_trunc
         self._robot_alive = robot_was & ~leaving
         ended = row_was & ~self._robot_alive.any(axis=1)
+        self._row_alive = row_was & ~ended
         out_of_time = core.state.step_count >= cfg.max_steps
         dead_r = ~robot_was
         out: dict[str, Any] = {
@@ -285,7 +286,6 @@ class SocialNavTorchEnv(EnvBase):
             all_done &= out[HUMAN]["done"].all(axis=(1, 2))
             all_term &= out[HUMAN]["terminated"].all(axis=(1, 2))
             all_trunc &= out[HUMAN]["truncated"].all(axis=(1, 2))
-        self._row_alive = row_was & ~ended
         out["done"] = all_done[:, None]
         out["terminated"] = all_term[:, None]
         out["truncated"] = all_trunc[:, None]
@@ -299,7 +299,11 @@ class SocialNavTorchEnv(EnvBase):
 
     @staticmethod
     def _flags(done: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> dict[str, np.ndarray]:
-        return {"done": done[..., None], "terminated": terminated[..., None], "truncated": truncated[..., None]}
+        return {
+            "done": done[..., None],
+            "terminated": terminated[..., None],
+            "truncated": truncated[..., None],
+        }
 
     def _robot_info(self, result: StepResult | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
         b, r = self.batch_size[0], self.num_robots
