@@ -43,7 +43,7 @@ _WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "l
 RENAMED_FIELDS: dict[str, str] = {
     "learned_humans": "num_learned_humans",
     "human_neighbours": "num_human_neighbours",
-    "human_collision_penalty": "human_reward (its human_contact and robot_contact weights)",
+    "human_collision_penalty": "human_reward",  # its human_contact and robot_contact weights
 }
 
 
