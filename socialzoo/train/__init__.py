@@ -14,7 +14,11 @@ from typing import Any
 __all__ = ["TRAINERS", "trainer_args", "trainer_function"]
 
 # Trainer name -> "module:ArgsClass"; the module's `train(args)` runs it.
-TRAINERS: dict[str, str] = {}
+TRAINERS: dict[str, str] = {
+    # Multi-agent: learned humans (MAPPO/IPPO), and robots and humans trained together.
+    "humans": "socialzoo.train.humans:HumansArgs",
+    "cotrain": "socialzoo.train.cotrain:CotrainArgs",
+}
 
 
 def trainer_args(name: str) -> type:
