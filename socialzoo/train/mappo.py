@@ -229,12 +229,14 @@ class GroupLearner:
         self.value = value
         self.settings = settings
         loss_class = MAPPOLoss if settings.algo == "mappo" else IPPOLoss
+        # Advantages are standardised in `update` over the agents that acted only (the loss's own
+        # standardisation would count empty human slots and robots that left).
         self.loss = loss_class(
             actor,
             value,
             clip_epsilon=settings.clip_epsilon,
             entropy_coeff=settings.entropy_coef,
-            normalize_advantage=True,
+            normalize_advantage=False,
         )
         self.loss.set_keys(
             reward=(group, "reward"),
@@ -243,6 +245,8 @@ class GroupLearner:
             value=(group, "state_value"),
             done=(group, "done"),
             terminated=(group, "terminated"),
+            advantage=(group, "advantage"),
+            value_target=(group, "value_target"),
         )
         # The agents that acted: present humans and robots still in their episode.
         self.loss.loss_mask_key = (group, "mask")
@@ -258,6 +262,11 @@ class GroupLearner:
                 params=self.loss.critic_network_params,
                 target_params=self.loss.target_critic_network_params,
             )
+        advantage = data[self.group, "advantage"]
+        mask = data[self.group, "mask"].unsqueeze(-1).expand_as(advantage)
+        valid = advantage[mask]
+        if valid.numel() > 1:
+            data[self.group, "advantage"] = (advantage - valid.mean()) / valid.std().clamp_min(1e-6)
         flat = data.reshape(-1)
         size = flat.shape[0]
         buffer = ReplayBuffer(
@@ -400,6 +409,7 @@ def train_loop(
     writer: Any,
     bar: Any,
     seed: int,
+    on_batch: Callable[[list[dict[str, float]]], None] | None = None,
 ) -> LoopResult:
     """Collect, update, log and checkpoint until the collector has given `total_frames` frames.
 
@@ -414,6 +424,7 @@ def train_loop(
         writer: a TensorBoard SummaryWriter (add_scalar).
         bar: a progress bar (update(n), set_postfix).
         seed: seeds the minibatch sampling.
+        on_batch: called with the history so far after every batch (e.g. to write it out).
 
     Returns:
         The LoopResult.
@@ -444,6 +455,8 @@ def train_loop(
         bar.update(batch_frames)
         if HUMAN in groups:
             bar.set_postfix(reward=f"{record[f'{HUMAN}/reward']:.4f}", refresh=False)
+        if on_batch is not None:
+            on_batch(history)
         while pending and frames >= pending[0]:
             checkpoints += write_checkpoint(pending.pop(0))
         if frames >= total_frames:

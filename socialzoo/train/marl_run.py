@@ -196,6 +196,7 @@ class MarlRun:
                         writer,
                         bar,
                         args.seed,
+                        on_batch=lambda history: write_history(run_dir.path / HISTORY_FILE, history),
                     )
                 finally:
                     bar.close()
