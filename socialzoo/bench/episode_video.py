@@ -41,11 +41,14 @@ def animate_episode(
     fps: float = 20.0,
     max_frames: int = 600,
     size: tuple[int, int] = (480, 360),
+    human_policy: Any = None,
 ) -> EpisodeVideo:
     """Run `policy` (a socialzoo.agents Policy) on one scenario and write the animation.
 
     One frame every `stride` steps (at the defaults 100 ms of simulated time per frame, played at
     twice real time); the episode stops after `max_frames` frames if it has not ended.
+    `human_policy` (socialzoo.agents.learned_humans.LearnedHumanPolicy) drives the env config's
+    learned human slots.
     """
     from socialzoo.env.core import SocialNavCore
     from socialzoo.env.rendering import CoreRenderer
@@ -64,7 +67,7 @@ def animate_episode(
         count, step = 1, 0
         while not core.done.all() and count < max_frames:
             action = np.asarray(policy.act(core.obs, core)).reshape(core.done.shape)
-            core.step(action)
+            core.step(action, None if human_policy is None else human_policy.act(core.human_obs))
             step += 1
             if step % stride == 0 or core.done.all():
                 count += 1

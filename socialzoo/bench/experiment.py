@@ -67,6 +67,11 @@ class BenchmarkConfig:
             {"max_steps": 400}; plain JSON values.
         policy_kwargs: make_policy keyword arguments per policy name, e.g. {"ppo": {"path": ...}}.
         gif: also write one animated Ref episode (ref_episode.gif) on the first map.
+        humans: the humans: "social_force" (the scripted model), or "learned:PATH", a learned
+            human policy file (socialzoo train humans) that drives every human slot (or the
+            first env_overrides["num_learned_humans"], the rest staying social-force).
+        human_metrics: also record the humans' episode metrics (socialzoo.bench.human_metrics)
+            with every trial, and write humans.csv and humans.md.
     """
 
     policies: tuple[str, ...] = DEFAULT_POLICIES
@@ -80,9 +85,19 @@ class BenchmarkConfig:
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
     policy_kwargs: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     gif: bool = False
+    humans: str = "social_force"
+    human_metrics: bool = False
 
     def __post_init__(self) -> None:
         from socialzoo.agents import check_policy_spec
+        from socialzoo.agents.learned_humans import check_human_spec
+
+        try:
+            check_human_spec(self.humans)
+        except ValueError as err:
+            raise ValueError(f"BenchmarkConfig.humans: {err}") from None
+        if not isinstance(self.human_metrics, bool):
+            raise ValueError(f"BenchmarkConfig.human_metrics must be a bool, got {self.human_metrics!r}")
 
         object.__setattr__(self, "policies", tuple(self.policies))
         object.__setattr__(self, "maps", tuple(self.maps))
@@ -212,6 +227,7 @@ def config_hash(
     policy_object: Any,
     test_set: TestSet,
     policy_kwargs: Mapping[str, Any] | None = None,
+    humans: Mapping[str, Any] | None = None,
 ) -> str:
     """16 hex digits naming everything that decides a trial's outcome besides its scenario index.
 
@@ -219,7 +235,8 @@ def config_hash(
     the simulation (socialzoo.core, humans, nav, env) and of the policy's module, so that results
     of changed code are never read back as current ones; the policy's parameters (and the digest
     of its file, for learned policies); the test set's generator (map, base seed, scenario
-    config; not its length, so a longer run reuses a shorter one's trials).
+    config; not its length, so a longer run reuses a shorter one's trials); and, when given,
+    `humans`: the human policy (its spec and file digest) and whether human metrics are recorded.
     """
     from socialzoo.agents.base import policy_config
 
@@ -241,8 +258,37 @@ def config_hash(
             "scenario": dataclasses.asdict(test_set.cfg),
         },
     }
+    if humans is not None:
+        payload["humans"] = dict(humans)
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def human_env_overrides(config: BenchmarkConfig, test_set: TestSet) -> dict[str, Any]:
+    """EnvConfig overrides the run's humans need on a test set: none for social-force humans;
+    for a learned policy, every human slot learned (unless env_overrides names
+    num_learned_humans) and the policy's observation and action settings."""
+    from socialzoo.agents.learned_humans import make_human_policy
+
+    policy = make_human_policy(config.humans)
+    if policy is None:
+        return {}
+    return {"num_learned_humans": test_set.cfg.max_humans, **policy.env_overrides()}
+
+
+def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
+    """What the config hash records about the humans: None for the default (social-force humans,
+    no human metrics), so the hashes of such runs are as before."""
+    from socialzoo.agents.learned_humans import split_human_spec
+
+    _, path = split_human_spec(config.humans)
+    if path is None and not config.human_metrics:
+        return None
+    return {
+        "spec": config.humans.split(":", 1)[0],
+        "file_sha256": _file_digest(path) if path is not None else None,
+        "human_metrics": config.human_metrics,
+    }
 
 
 def _resolve_test_sets(
@@ -319,7 +365,10 @@ def run_benchmark(
             )
         counts[m] = n
     set_names = {m: ts.name or m for m, ts in sets.items()}
-    env_configs = {set_names[m]: env_config_for(ts, **dict(config.env_overrides)) for m, ts in sets.items()}
+    env_configs = {
+        set_names[m]: env_config_for(ts, **{**human_env_overrides(config, ts), **dict(config.env_overrides)})
+        for m, ts in sets.items()
+    }
     policy_kwargs = {p: dict(config.policy_kwargs.get(p, {})) for p in config.policies}
     policies = {p: make_policy(p, **policy_kwargs[p]) for p in config.policies}
     policy_configs = {p: policy_config(policies[p]) for p in config.policies}
@@ -328,9 +377,14 @@ def run_benchmark(
         env_configs=env_configs,
         policies=policy_kwargs,
         batch_size=config.batch_size,
+        humans=config.humans,
+        human_metrics=config.human_metrics,
     )
+    humans = humans_record(config)
     hashes = {
-        (p, set_names[m]): config_hash(env_configs[set_names[m]], p, policies[p], ts, policy_kwargs[p])
+        (p, set_names[m]): config_hash(
+            env_configs[set_names[m]], p, policies[p], ts, policy_kwargs[p], humans
+        )
         for p in config.policies
         for m, ts in sets.items()
     }
@@ -408,13 +462,25 @@ def run_benchmark(
     summary = summarize(rows, policies=config.policies, maps=[_display_name(sets[m]) for m in config.maps])
     files.append(write_summary_csv(summary, out / "summary.csv"))
     files.append(write_summary_md(summary, out / "summary.md", title=_title(config, counts)))
+    if config.human_metrics:
+        from socialzoo.bench.human_metrics import summarize_humans, write_humans_tables
+
+        files += write_humans_tables(
+            summarize_humans(rows, policies=config.policies, maps=[sets[m].map_name for m in config.maps]),
+            out,
+            title=f"Humans ({config.humans}) in the {_title(config, counts)}",
+        )
     if figures:
         from socialzoo.bench.figures import plot_summary
 
         files += plot_summary(summary, out)
     if config.gif:
         first = config.maps[0]
-        files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))
+        files.append(
+            write_episode_gif(
+                out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref", config.humans
+            )
+        )
     return BenchmarkResult(out, summary, files, len(pending), reused, seconds)
 
 
@@ -471,14 +537,23 @@ def _run_json(
 
 
 def write_episode_gif(
-    path: str | Path, env_config: EnvConfig, test_set: TestSet, index: int, policy: str
+    path: str | Path,
+    env_config: EnvConfig,
+    test_set: TestSet,
+    index: int,
+    policy: str,
+    humans: str = "social_force",
 ) -> Path:
     """Animate one episode of `policy` on scenario `index` of a test set as a GIF
-    (socialzoo.bench.episode_video.animate_episode at its defaults)."""
+    (socialzoo.bench.episode_video.animate_episode at its defaults), among `humans`."""
     from socialzoo.agents import make_policy
+    from socialzoo.agents.learned_humans import make_human_policy
     from socialzoo.bench.episode_video import animate_episode
     from socialzoo.nav.maps import load_map
 
     scenario = test_set.scenario(index, load_map(env_config.map))
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
-    return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path
+    human_policy = make_human_policy(humans)
+    return animate_episode(
+        path, env_config, scenario, make_policy(policy), label=label, human_policy=human_policy
+    ).path

@@ -77,16 +77,35 @@ class RunSpec:
         env_configs: the env config of each test set, by test set name.
         policies: make_policy keyword arguments of each policy, by registry name.
         batch_size: env rows stepped together (B).
+        humans: the human policy spec (socialzoo.agents.learned_humans): "social_force", or
+            "learned:PATH", whose policy drives the env config's learned human slots
+            (EnvConfig.num_learned_humans) from their observations every step.
+        human_metrics: add the humans' episode metrics (socialzoo.bench.human_metrics) to every
+            trial's metrics.
     """
 
     test_sets: Mapping[str, TestSet]
     env_configs: Mapping[str, EnvConfig]
     policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     batch_size: int = 64
+    humans: str = "social_force"
+    human_metrics: bool = False
 
     def __post_init__(self) -> None:
+        from socialzoo.agents.learned_humans import split_human_spec
+
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
             raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
+        try:
+            learned = split_human_spec(self.humans)[1] is not None
+        except ValueError as err:
+            raise ValueError(f"RunSpec.humans: {err}") from None
+        for name, config in self.env_configs.items():
+            if learned != (config.num_learned_humans > 0):
+                raise ValueError(
+                    f"RunSpec: humans {self.humans!r} with env config {name!r} of num_learned_humans = "
+                    f"{config.num_learned_humans}; learned humans need learned slots and social-force humans none"
+                )
         missing = sorted(set(self.test_sets) - set(self.env_configs))
         if missing:
             raise ValueError(f"RunSpec.env_configs lacks the test set(s) {missing}")
@@ -159,10 +178,13 @@ class BatchedRunner:
     """
 
     def __init__(self, spec: RunSpec, *, compact_tail: bool = True) -> None:
+        from socialzoo.agents.learned_humans import make_human_policy
+
         self.spec = spec
         self.compact_tail = compact_tail
         self.stats = RunStats()
         self._policies: dict[str, Policy] = {}
+        self.human_policy = make_human_policy(spec.humans)
 
     def policy(self, name: str) -> Policy:
         """The policy `name`, built once."""
@@ -221,6 +243,9 @@ class BatchedRunner:
 
         row_trial: list[Trial | None] = [pending.popleft() for _ in range(b)]
         core.reset_rows(np.arange(b), [scenario(t) for t in row_trial if t is not None])
+        humans = self._human_tracker(core)
+        if humans is not None:
+            humans.reset(np.arange(b), core.state)
         actions = np.full((b, core.num_robots), HALT, dtype=np.int64)
         compact = self.compact_tail and on_step is None
         stats = self.stats
@@ -242,7 +267,12 @@ class BatchedRunner:
                     # share a batch without each one computing every row.
                     actions[rows] = np.asarray(policy.act(core.obs[rows])).reshape(len(rows), -1)
             obs = core.obs.copy() if on_step is not None else core.obs
-            result = core.step(actions)
+            before = core.state
+            result = core.step(actions, self._human_actions(core))
+            if humans is not None:
+                humans.update(
+                    before, core.state, result.events.human_blocked, config.dt, core.done.all(axis=1)
+                )
             if pending:
                 stats.body_steps += 1
                 stats.body_row_steps += core.batch_size
@@ -256,6 +286,9 @@ class BatchedRunner:
             if len(finished) == 0:
                 continue
             summaries = core.episode_summaries(finished)
+            if humans is not None:
+                for summary, extra in zip(summaries, humans.summaries(finished), strict=True):
+                    summary.update(extra)
             done_batch = []
             for row, summary in zip(finished.tolist(), summaries, strict=True):
                 t = row_trial[row]
@@ -271,12 +304,33 @@ class BatchedRunner:
                     refill.append(scenario(t))
             if refill_rows:
                 core.reset_rows(np.array(refill_rows), refill)
+                if humans is not None:
+                    humans.reset(np.array(refill_rows), core.state)
             live = [row for row, t in enumerate(row_trial) if t is not None]
             if compact and not pending and 0 < len(live) <= _SHRINK * len(row_trial):
                 core = compact_core(core, live)
+                if humans is not None:
+                    humans = humans.rows(live)
                 row_trial = [row_trial[row] for row in live]
                 actions = np.full((len(live), core.num_robots), HALT, dtype=np.int64)
                 stats.compactions += 1
+
+    def _human_actions(self, core: Any) -> np.ndarray | None:
+        """(B, L, 2) actions of the learned humans from their observations, or None without."""
+        if self.human_policy is None:
+            return None
+        return self.human_policy.act(core.human_obs)
+
+    def _human_tracker(self, core: Any) -> Any:
+        """The humans' episode metrics for `core`, or None when the spec does not ask for them."""
+        if not self.spec.human_metrics:
+            return None
+        from socialzoo.bench.human_metrics import HumanEpisodeMetrics
+
+        distance = core.config.world.human_collision_distance
+        return HumanEpisodeMetrics(
+            core.batch_size, core.config.max_humans, core.num_robots, core.walls, distance
+        )
 
 
 def run_chunk(trials: Sequence[Trial], spec: RunSpec, sink: ResultSink | None = None) -> list[TrialResult]:

@@ -107,6 +107,25 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--max-steps", type=_positive, default=None, help="episode time limit override, steps"
     )
+    parser.add_argument(
+        "--humans",
+        default="social_force",
+        help="the humans: social_force (default) or learned:PATH, a learned human policy file "
+        "(socialzoo train humans) that replaces the social-force humans",
+    )
+    parser.add_argument(
+        "--learned-humans",
+        type=_positive,
+        default=None,
+        help="with --humans learned:PATH, how many human slots it drives (default: all; the rest stay "
+        "social-force)",
+    )
+    parser.add_argument(
+        "--human-metrics",
+        action="store_true",
+        help="also record the humans' metrics (goal reach, collisions, distances, speed, path ratio) "
+        "in humans.csv and humans.md",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument(
         "--quick",
@@ -162,12 +181,18 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.tables import policy_label
 
-    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    if args.learned_humans is not None:
+        if not args.humans.startswith("learned:"):
+            return _fail("benchmark", ValueError("--learned-humans needs --humans learned:PATH"))
+        overrides["num_learned_humans"] = args.learned_humans
     chosen: dict[str, Any] = {
         "backend": args.backend,
         "address": args.address,
         "batch_size": args.batch_size,
         "env_overrides": overrides,
+        "humans": args.humans,
+        "human_metrics": args.human_metrics,
     }
     for key in ("policies", "maps", "trials", "workers"):
         if getattr(args, key) is not None:

@@ -14,6 +14,7 @@ from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_int, check_number
+from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig
 from socialzoo.env.reward import RewardConfig
@@ -23,6 +24,7 @@ from socialzoo.nav.scenarios import ScenarioConfig
 from socialzoo.nav.subpolicies import SubPolicyConfig
 
 RobotAction = Literal["subpolicy", "velocity"]
+HumanActionFrame = Literal["world", "human"]
 
 # Nested configs, by field name, for building an EnvConfig from plain JSON.
 _NESTED: dict[str, type] = {
@@ -33,6 +35,7 @@ _NESTED: dict[str, type] = {
     "subpolicy": SubPolicyConfig,
     "planner": LocalPlannerConfig,
     "metrics": MetricsConfig,
+    "human_reward": HumanRewardConfig,
 }
 _WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "laser": LaserConfig}
 # Fields that were renamed: old name -> new name. An old name is refused with a message that
@@ -40,6 +43,7 @@ _WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "l
 RENAMED_FIELDS: dict[str, str] = {
     "learned_humans": "num_learned_humans",
     "human_neighbours": "num_human_neighbours",
+    "human_collision_penalty": "human_reward",  # its human_contact and robot_contact weights
 }
 
 
@@ -59,7 +63,10 @@ class EnvConfig:
             the old name is refused.)
         num_human_neighbours: neighbours (humans and robots) in a learned human's observation.
             (Called human_neighbours before; the old name is refused.)
-        human_collision_penalty: a learned human's reward per step in contact with anyone.
+        human_action_frame: the frame of a learned human's action: "world" (a world-frame
+            velocity) or "human" (its own frame, x towards its waypoint, as its observation).
+        human_reward: the learned humans' reward weights (socialzoo.env.human_agents).
+            (human_collision_penalty before; the old name is refused.)
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
             family name (socialzoo.nav.scenario_families.FAMILIES).
         world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
@@ -72,7 +79,7 @@ class EnvConfig:
     robot_action: RobotAction = "subpolicy"
     num_learned_humans: int = 0
     num_human_neighbours: int = 6
-    human_collision_penalty: float = 1.0
+    human_action_frame: HumanActionFrame = "world"
     family: str | None = None
     world: WorldConfig = field(default_factory=WorldConfig)
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
@@ -81,6 +88,7 @@ class EnvConfig:
     subpolicy: SubPolicyConfig = field(default_factory=SubPolicyConfig)
     planner: LocalPlannerConfig = field(default_factory=LocalPlannerConfig)
     metrics: MetricsConfig = field(default_factory=MetricsConfig)
+    human_reward: HumanRewardConfig = field(default_factory=HumanRewardConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.map, str) or not self.map:
@@ -101,6 +109,11 @@ class EnvConfig:
         if self.robot_action not in get_args(RobotAction):
             raise ValueError(
                 f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"
+            )
+        if self.human_action_frame not in get_args(HumanActionFrame):
+            raise ValueError(
+                f"EnvConfig.human_action_frame must be one of {get_args(HumanActionFrame)}, "
+                f"got {self.human_action_frame!r}"
             )
         if self.family is not None and self.family not in FAMILIES:
             raise ValueError(

@@ -17,7 +17,7 @@ import numpy as np
 
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.human_agents import human_observations, human_rewards
+from socialzoo.env.human_agents import HumanStep, action_velocities, human_observations, human_step
 from socialzoo.env.metrics import EpisodeMetrics
 from socialzoo.env.observation import build_observation
 from socialzoo.env.outcome import followed_human, robot_outcome
@@ -49,6 +49,7 @@ class StepResult:
         human_obs: (B, L, D_h) learned-human observations, or None without learned humans.
         human_reward: (B, L) learned-human rewards, or None.
         events: the world's collision events of the step.
+        human: the learned humans' reward terms and contacts (HumanStep), or None.
     """
 
     obs: np.ndarray
@@ -65,6 +66,7 @@ class StepResult:
     human_obs: np.ndarray | None
     human_reward: np.ndarray | None
     events: StepEvents
+    human: HumanStep | None = None
 
     # The per-step info keys of a robot, in the order `info` gives them.
     INFO_KEYS: ClassVar[tuple[str, ...]] = (
@@ -269,7 +271,8 @@ class SocialNavCore:
             robot_action: (B, R) int sub-policy indices, or (B, R, 2) floats in [-1, 1] with
                 robot_action="velocity".
             human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed)
-                for the L learned humans; required when config.num_learned_humans > 0.
+                for the L learned humans, in the frame config.human_action_frame names;
+                required when config.num_learned_humans > 0.
 
         Returns:
             The StepResult. Robots whose episode ended halt and keep their final pose; their
@@ -316,9 +319,11 @@ class SocialNavCore:
             dt=cfg.dt,
         )
         self.done = self.done | out.terminated | out.truncated
-        human_reward = None
+        human = None
         if len(self.learned):
-            human_reward = human_rewards(before, after, self.learned, cfg.human_collision_penalty)
+            human = human_step(
+                before, after, self.learned, self.walls, events.human_blocked, cfg.human_reward
+            )
         return StepResult(
             obs=self.obs,
             reward=out.reward,
@@ -332,8 +337,9 @@ class SocialNavCore:
             progress=out.progress,
             target_human=target,
             human_obs=self.human_obs,
-            human_reward=human_reward,
+            human_reward=None if human is None else human.reward,
             events=events,
+            human=human,
         )
 
     def _human_drive(self, human_action: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -357,7 +363,7 @@ class SocialNavCore:
             raise ValueError(f"human action {action[where]!r} at index {where} is not in [-1, 1]")
         s = self.state
         desired = np.zeros(s.human_pos.shape)
-        desired[:, self.learned] = action * s.human_pref_speed[:, self.learned, None]
+        desired[:, self.learned] = action_velocities(s, self.learned, action, self.config.human_action_frame)
         learned = np.zeros(s.human_mask.shape, dtype=bool)
         learned[:, self.learned] = True
         return desired, learned & s.human_mask

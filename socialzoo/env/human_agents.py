@@ -1,17 +1,23 @@
-"""Observations and rewards of learned humans (the optional human agents of the ParallelEnv).
+"""Observations, actions and rewards of learned humans (the optional human agents of the envs).
 
 A learned human sees, in its own frame (x axis towards its current route waypoint): that waypoint,
 its velocity and preferred speed, the nearest wall point, and its nearest neighbours (humans and
-robots) with their relative velocity. Its reward is progress towards its waypoint minus a
-penalty for every step in contact with anyone.
+robots) with their relative velocity. Its action is a desired velocity in [-1, 1]^2 times its
+preferred speed, in the world frame or in its own frame (EnvConfig.human_action_frame). Its
+reward (HumanRewardConfig) adds up, per step: progress towards its waypoint, a bonus for each
+waypoint reached, a penalty for walking off its preferred speed, and penalties for contact with
+other humans, robots and walls.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from socialzoo.core.geometry import rotate
 from socialzoo.core.state import WorldState
+from socialzoo.core.validation import check_fields
 from socialzoo.core.walls import WallIndex
 
 # Per-neighbour entries: x, y, vx, vy (relative, human frame), is_robot.
@@ -20,6 +26,98 @@ NEIGHBOUR_SIZE = 5
 OWN_SIZE = 8
 # Centre distance counted as contact between two agents, m (SPEC: 0.4 for robot-human).
 CONTACT_DISTANCE = 0.4
+
+
+@dataclass(frozen=True, kw_only=True)
+class HumanRewardConfig:
+    """The learned humans' reward per step: a weighted sum of the terms of `HumanStep`.
+
+    reward = progress * metres gained towards the waypoint
+             + waypoint_bonus * (a waypoint was reached this step)
+             - speed * |speed - preferred speed| / preferred speed
+             - human_contact * (another human within contact_distance)
+             - robot_contact * (a robot within contact_distance)
+             - wall_contact * (a wall within wall_distance, or a wall stopped the move)
+
+    The defaults are the reward of env version v1 (progress minus 1 per step in contact with a
+    human or robot); the trainers of socialzoo.train set their own weights.
+
+    Attributes:
+        progress: weight of the distance gained towards the current waypoint, per metre.
+        waypoint_bonus: paid on the step a waypoint is reached.
+        speed: weight of the relative deviation from the preferred walking speed, per step.
+        human_contact: penalty per step within contact_distance of another present human.
+        robot_contact: penalty per step within contact_distance of a robot.
+        wall_contact: penalty per step with the centre within wall_distance of a wall.
+        contact_distance: centre distance counted as contact with a human or robot, m.
+        wall_distance: centre-to-wall distance counted as contact, m (the human radius).
+    """
+
+    progress: float = 1.0
+    waypoint_bonus: float = 0.0
+    speed: float = 0.0
+    human_contact: float = 1.0
+    robot_contact: float = 1.0
+    wall_contact: float = 0.0
+    contact_distance: float = CONTACT_DISTANCE
+    wall_distance: float = 0.2
+
+    def __post_init__(self) -> None:
+        check_fields(
+            self,
+            nonnegative=(
+                "progress",
+                "waypoint_bonus",
+                "speed",
+                "human_contact",
+                "robot_contact",
+                "wall_contact",
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class HumanStep:
+    """One step of the learned humans; every array is (B, L), zero or False for absent humans.
+
+    Attributes:
+        reward: the weighted reward (HumanRewardConfig).
+        progress: distance gained towards the waypoint the human had before the step, m.
+        waypoint_reached: the human reached its waypoint this step (it moved on to the next one).
+        human_contact: another present human within the contact distance after the step.
+        robot_contact: a robot within the contact distance after the step.
+        wall_contact: a wall within the wall distance after the step, or a wall stopped the move.
+        speed_error: |speed - preferred speed| / preferred speed after the step.
+    """
+
+    reward: np.ndarray
+    progress: np.ndarray
+    waypoint_reached: np.ndarray
+    human_contact: np.ndarray
+    robot_contact: np.ndarray
+    wall_contact: np.ndarray
+    speed_error: np.ndarray
+
+    @property
+    def contact(self) -> np.ndarray:
+        """(B, L) in contact with a human or a robot (the ParallelEnv's info["contact"])."""
+        return self.human_contact | self.robot_contact
+
+
+def action_velocities(state: WorldState, humans: np.ndarray, action: np.ndarray, frame: str) -> np.ndarray:
+    """(B, L, 2) world-frame desired velocities, m/s, of learned humans' actions.
+
+    Args:
+        state: the world before the step.
+        humans: (L,) learned human slots.
+        action: (B, L, 2) in [-1, 1], times the preferred speed.
+        frame: "world" (the action is a world-frame vector) or "human" (in the human's own frame,
+            x towards its waypoint, the frame of its observation).
+    """
+    scaled = action * state.human_pref_speed[:, humans, None]
+    if frame == "human":
+        return rotate(scaled, human_frames(state, humans))
+    return scaled
 
 
 def human_observation_size(num_neighbours: int) -> int:
@@ -90,23 +188,61 @@ def human_observations(
     return np.where(state.human_mask[:, humans, None], obs, 0.0).astype(np.float32)
 
 
-def human_rewards(
-    before: WorldState, after: WorldState, humans: np.ndarray, collision_penalty: float
-) -> np.ndarray:
-    """(B, L) reward of the learned humans for one step.
+def human_step(
+    before: WorldState,
+    after: WorldState,
+    humans: np.ndarray,
+    walls: WallIndex,
+    blocked: np.ndarray,
+    config: HumanRewardConfig,
+) -> HumanStep:
+    """Reward and its terms for the learned humans' step before -> after.
 
     Progress is measured towards the waypoint each human had before the step, so switching to
-    the next waypoint does not make the reward jump. Contact: centre distance below 0.4 m to any
-    other present human or any robot.
+    the next waypoint does not make the reward jump.
+
+    Args:
+        before, after: the world before and after the step.
+        humans: (L,) learned human slots.
+        walls: the map's wall index.
+        blocked: (B, H) humans whose move a wall stopped this step (StepEvents.human_blocked).
+        config: the reward weights and contact distances.
     """
+    present = after.human_mask[:, humans]
     target = before.human_target[:, humans]
+    pos = after.human_pos[:, humans]
     gained = np.linalg.norm(target - before.human_pos[:, humans], axis=-1) - np.linalg.norm(
-        target - after.human_pos[:, humans], axis=-1
+        target - pos, axis=-1
     )
-    others = np.concatenate((after.human_pos, after.robot_pose[..., :2]), axis=1)
-    present = np.concatenate((after.human_mask, np.ones(after.robot_pose.shape[:2], bool)), axis=1)
-    dist2 = ((others[:, None, :, :] - after.human_pos[:, humans, None, :]) ** 2).sum(-1)
-    self_slot = np.arange(others.shape[1])[None, None, :] == humans[None, :, None]
-    contact = ((dist2 < CONTACT_DISTANCE**2) & present[:, None, :] & ~self_slot).any(-1)
-    reward = gained - collision_penalty * contact
-    return np.where(after.human_mask[:, humans], reward, 0.0)
+    reached = after.human_waypoint[:, humans] != before.human_waypoint[:, humans]
+    limit = config.contact_distance**2
+    others = after.human_pos[:, None, :, :] - pos[:, :, None, :]  # (B, L, H, 2)
+    self_slot = np.arange(after.max_humans)[None, None, :] == humans[None, :, None]
+    near_human = ((others**2).sum(-1) < limit) & after.human_mask[:, None, :] & ~self_slot
+    robots = after.robot_pose[:, None, :, :2] - pos[:, :, None, :]  # (B, L, R, 2)
+    near_robot = (robots**2).sum(-1) < limit
+    _, wall_dist = walls.nearest(pos)
+    wall = (wall_dist < config.wall_distance) | blocked[:, humans]
+    speed = np.linalg.norm(after.human_vel[:, humans], axis=-1)
+    pref = after.human_pref_speed[:, humans]
+    speed_error = np.abs(speed - pref) / np.maximum(pref, 1e-9)
+    human_contact = near_human.any(-1) & present
+    robot_contact = near_robot.any(-1) & present
+    wall_contact = wall & present
+    reward = (
+        config.progress * gained
+        + config.waypoint_bonus * reached
+        - config.speed * speed_error
+        - config.human_contact * human_contact
+        - config.robot_contact * robot_contact
+        - config.wall_contact * wall_contact
+    )
+    return HumanStep(
+        reward=np.where(present, reward, 0.0),
+        progress=np.where(present, gained, 0.0),
+        waypoint_reached=reached & present,
+        human_contact=human_contact,
+        robot_contact=robot_contact,
+        wall_contact=wall_contact,
+        speed_error=np.where(present, speed_error, 0.0),
+    )

@@ -15,9 +15,10 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
+from socialzoo.core.state import WorldState
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore, StepResult
-from socialzoo.env.human_agents import human_observation_size, human_rewards
+from socialzoo.env.human_agents import human_observation_size
 from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
 from socialzoo.nav.maps import Map
@@ -45,15 +46,16 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
 
     Action spaces: robots Discrete(4) (GoAlone, Halt, Follow, Pass; SPEC section 7) or, with
     robot_action="velocity", Box([-1, 1]^2) of (v, omega) scaled by the robot's maximum speeds;
-    learned humans Box([-1, 1]^2), a desired world-frame velocity scaled by the human's preferred
-    speed.
+    learned humans Box([-1, 1]^2), a desired velocity scaled by the human's preferred speed, in the
+    world frame or the human's own frame (config.human_action_frame).
 
     Observation spaces: robots get the benchmark observation (SPEC section 8; `observation`
     config); learned humans get socialzoo.env.human_agents.human_observations (waypoint, velocity,
     nearest wall and neighbours in their own frame).
 
-    Rewards: robots the benchmark reward (SPEC section 9); learned humans progress towards their
-    waypoint minus human_collision_penalty per step in contact.
+    Rewards: robots the benchmark reward (SPEC section 9); learned humans the weighted terms of
+    config.human_reward (socialzoo.env.human_agents.HumanRewardConfig): by default progress towards
+    their waypoint minus 1 per step in contact with a human and 1 with a robot.
 
     Episode end: a robot leaves `agents` the step it terminates (goal reached or wall touched) or
     is truncated (config.max_steps, or max_cycles steps when set); it then stands still in the
@@ -231,10 +233,9 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             raise KeyError(f"no action for live agents {missing}")
         robot_action, human_action = self._action_arrays(actions)
         live = self.agents
-        before = self.core.state
         result = self.core.step(robot_action, human_action)
         after = self.core.state
-        assert before is not None and after is not None
+        assert after is not None
         self.num_cycles += 1
         out_of_cycles = self.max_cycles is not None and self.num_cycles >= self.max_cycles
         out_of_time = out_of_cycles or bool(after.step_count[0] >= self.config.max_steps)
@@ -257,9 +258,9 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
                 infos[agent][EPISODE_KEY] = self.episode_summary(agent)
         robots_left = all(a not in live or terminations[a] or truncations[a] for a in self.robots)
         if self.humans:
-            assert result.human_reward is not None
+            assert result.human_reward is not None and result.human is not None
             present = after.human_mask[0, self.core.learned]
-            contact = _human_contacts(before, after, self.core.learned)[0]
+            contact = result.human.contact[0]
             for j, agent in enumerate(self.humans):
                 if agent not in live:
                     continue
@@ -318,9 +319,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         s = self.core.state
         if s is None:
             raise RuntimeError("SocialNavParallelEnv: call reset() before state()")
-        robots = np.concatenate((s.robot_pose[0], s.robot_vel[0], s.robot_goal[0]), axis=-1)
-        humans = np.concatenate((s.human_pos[0], s.human_vel[0], s.human_mask[0, :, None]), axis=-1)
-        return np.concatenate((robots.reshape(-1), humans.reshape(-1))).astype(np.float32)
+        return global_state(s)[0]
 
     def episode_summary(self, agent: str) -> dict[str, Any]:
         """The episode metrics of robot `agent` so far (socialzoo.env.metrics.SUMMARY_KEYS)."""
@@ -348,6 +347,14 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+def global_state(s: WorldState) -> np.ndarray:
+    """(B, 8 R + 5 H) float32: the global state of every world (SocialNavParallelEnv.state)."""
+    b = s.batch_size
+    robots = np.concatenate((s.robot_pose, s.robot_vel, s.robot_goal), axis=-1).reshape(b, -1)
+    humans = np.concatenate((s.human_pos, s.human_vel, s.human_mask[..., None]), axis=-1).reshape(b, -1)
+    return np.concatenate((robots, humans), axis=1).astype(np.float32)
 
 
 def parallel_env(
@@ -420,16 +427,6 @@ class BlackDeath(BaseParallelWrapper):
         if ended:
             self.agents = []
         return observations, rewards, terminations, truncations, infos
-
-
-def _human_contacts(before: Any, after: Any, learned: np.ndarray) -> np.ndarray:
-    """(B, L) learned humans within the contact distance of anyone after the step.
-
-    The contact term of human_rewards, read back as the reward difference between penalties 0
-    and 1, so that the definition of contact stays in one place.
-    """
-    difference = human_rewards(before, after, learned, 0.0) - human_rewards(before, after, learned, 1.0)
-    return difference > 0.5
 
 
 def _discrete_action(agent: str, action: Any) -> int:

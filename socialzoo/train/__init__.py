@@ -20,6 +20,9 @@ TRAINERS: dict[str, str] = {
     "bc": "socialzoo.train.bc:Args",
     "gail": "socialzoo.train.gail:Args",
     "pips": "socialzoo.train.pips:PipsArgs",
+    # Multi-agent: learned humans (MAPPO/IPPO), and robots and humans trained together.
+    "humans": "socialzoo.train.humans:HumansArgs",
+    "cotrain": "socialzoo.train.cotrain:CotrainArgs",
 }
 
 

@@ -1,0 +1,346 @@
+"""A native TorchRL multi-agent environment: B worlds of the batched core stepped as one EnvBase.
+
+SocialNavTorchEnv steps SocialNavCore directly (no PettingZoo, no per-agent Python loop), with
+batch_size [B] and the agents stacked in two groups by their name prefix, as TorchRL's
+PettingZooWrapper groups the ParallelEnv's "robot_i" and "human_j":
+
+    ("robot", "observation")  (B, R, D) float32      ("human", "observation")  (B, L, D_h) float32
+    ("robot", "action")       (B, R) int64 sub-policy, or (B, R, 2) velocity in [-1, 1]
+    ("human", "action")       (B, L, 2) desired velocity in [-1, 1] (x preferred speed)
+    ("robot", "reward")       (B, R, 1)              ("human", "reward")       (B, L, 1)
+    (group, "done" | "terminated" | "truncated")  (B, n, 1) bool
+    (group, "mask")           (B, n) bool: the agent acts (alive; for humans also present)
+    (group, "info", key)      (B, n) float32 per-step info
+    "state"                   (B, 8 R + 5 H) float32 global state (SocialNavParallelEnv.state)
+    "done", "terminated", "truncated"  (B, 1) bool: the row's episode ended
+
+The transitions are those of `PettingZooWrapper(SocialNavParallelEnv(...), use_mask=True,
+return_state=True, done_on_any=False)` for the same seed (tests/env/test_torchrl_env.py checks
+it), with one deliberate difference: ("human", "mask") is False for empty human slots (the
+wrapper keeps them as live agents with zero observations), so learners can leave them out.
+
+TorchRL conventions followed:
+- Agents that left: a robot leaves on the step it terminates (goal, wall) or is truncated (time
+  limit); afterwards its observation and reward are zeros, its mask False and its done,
+  terminated and truncated flags all True, as the PettingZooWrapper reports a dead agent.
+  Learned humans never terminate; they are truncated at the time limit and on the step the
+  last robot of their world leaves. The root flags are the `all` of every agent's flags
+  (done_on_any=False): a row is done when its episode ended.
+- Partial resets: `reset` reads the root "_reset" entry (B, 1) that TorchRL's collectors and
+  `rollout(break_when_any_done=False)` / `step_and_maybe_reset` write for done rows, and starts a
+  new episode in those rows only, from each row's own seeded scenario stream; the other rows go
+  on untouched. So finished rows are reset automatically by TorchRL's machinery, while the
+  ("next", ...) entries of a done step keep the last observation of the finished episode.
+  Group-level "_reset" entries are ignored (a world resets as a whole). Without any "_reset",
+  every row is reset.
+- Seeding: `set_seed(s)` seeds the scenario streams: row 0 of any batch plays the episodes of
+  a SocialNavParallelEnv reset with seed s, row i those of SeedSequence(s).spawn(B)[i].
+- A row whose episode ended and was not reset keeps stepping with every agent dead.
+
+The robot group may instead be driven inside the env by `robot_policy` (anything with the
+Policy protocol's `act(obs, core)`, e.g. socialzoo.agents.make_policy("ref")); the robots then have
+no action entry but still report observations, rewards and flags.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+from tensordict import TensorDict, TensorDictBase
+from torchrl.data import Bounded, Categorical, Composite, Unbounded
+from torchrl.envs import EnvBase
+
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore, StepResult
+from socialzoo.env.human_agents import human_observation_size
+from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
+from socialzoo.env.scenario_source import ScenarioStream
+from socialzoo.nav.maps import Map
+from socialzoo.nav.subpolicies import NUM_ACTIONS
+
+ROBOT = "robot"
+HUMAN = "human"
+# Per-step info of the robots: StepResult.INFO_KEYS, as float32 (the PettingZooWrapper's dtype).
+ROBOT_INFO_KEYS = StepResult.INFO_KEYS
+# Per-step info of the learned humans: the ParallelEnv's "contact" and "present", then the other
+# reward terms of socialzoo.env.human_agents.HumanStep.
+HUMAN_INFO_KEYS = ("contact", "present", "wall_contact", "waypoint_reached", "speed_error")
+_DONE_KEYS = ("done", "terminated", "truncated")
+
+
+class SocialNavTorchEnv(EnvBase):
+    """B worlds of R robots and L learned humans (plus scripted humans) as a TorchRL EnvBase.
+
+    Args:
+        config: an EnvConfig (default: the benchmark's, on gdc1); overrides as keyword arguments.
+        batch_size: B, the worlds stepped together.
+        robot_policy: None (robot actions come in the tensordict), or an object with
+            `act(obs (B, R, D), core) -> (B, R)` that drives the robots inside the env.
+        seed: seeds the scenario streams (None: fresh entropy, kept in `stream_seed`).
+        map_data: an already loaded Map instead of config.map.
+        device: torch device of the tensors (the simulation runs in numpy on the CPU).
+        **overrides: EnvConfig fields as plain values (nested configs as dicts).
+
+    Raises:
+        ValueError: bad config overrides, batch size, or too few legal poses for the robots.
+    """
+
+    def __init__(
+        self,
+        config: EnvConfig | None = None,
+        *,
+        batch_size: int = 1,
+        robot_policy: Any = None,
+        seed: int | None = None,
+        map_data: Map | None = None,
+        device: str | torch.device = "cpu",
+        **overrides: Any,
+    ) -> None:
+        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
+            raise ValueError(f"SocialNavTorchEnv: batch_size must be an int >= 1, got {batch_size!r}")
+        if robot_policy is not None and not callable(getattr(robot_policy, "act", None)):
+            raise ValueError(
+                f"SocialNavTorchEnv: robot_policy must have act(obs, core), got {type(robot_policy).__name__}"
+            )
+        super().__init__(device=device, batch_size=torch.Size([batch_size]))
+        self.config = EnvConfig.resolve(config, overrides)
+        cfg = self.config
+        self.core = SocialNavCore(cfg, batch_size, map_data=map_data)
+        num_poses = len(self.core.map.legal_poses)
+        if cfg.num_robots > 1 and num_poses < cfg.num_robots + 1:
+            raise ValueError(
+                f"num_robots={cfg.num_robots} needs at least {cfg.num_robots + 1} legal poses for distinct "
+                f"starts; map {self.core.map.name!r} has {num_poses}"
+            )
+        self.robot_policy = robot_policy
+        self.num_robots = cfg.num_robots
+        self.num_humans = cfg.num_learned_humans
+        self.scenarios = ScenarioStream.for_config(self.core.map, batch_size, cfg)
+        self.stream_seed: int | None = None
+        b, r = batch_size, cfg.num_robots
+        # Agents still in their episode, per row: robots (B, R); humans leave with the episode (B,).
+        self._robot_alive = np.zeros((b, r), dtype=bool)
+        self._row_alive = np.zeros(b, dtype=bool)
+        self._make_specs()
+        self._set_seed(seed)
+
+    @property
+    def group_map(self) -> dict[str, list[str]]:
+        """Group name -> agent names, as PettingZooWrapper.group_map."""
+        groups = {ROBOT: [f"robot_{i}" for i in range(self.num_robots)]}
+        if self.num_humans:
+            groups[HUMAN] = [f"human_{j}" for j in range(self.num_humans)]
+        return groups
+
+    # ------------------------------------------------------------------ specs
+    def _make_specs(self) -> None:
+        cfg = self.config
+        b, r, h = self.batch_size[0], self.num_robots, self.num_humans
+        obs = Composite(shape=(b,))
+        action = Composite(shape=(b,))
+        reward = Composite(shape=(b,))
+        done = Composite(shape=(b,))
+
+        def flags(n: int) -> Composite:
+            return Composite(
+                {k: Categorical(2, shape=(b, n, 1), dtype=torch.bool) for k in _DONE_KEYS}, shape=(b, n)
+            )
+
+        def info(keys: tuple[str, ...], n: int) -> Composite:
+            return Composite({k: Unbounded(shape=(b, n), dtype=torch.float32) for k in keys}, shape=(b, n))
+
+        obs[ROBOT] = Composite(
+            observation=Unbounded(shape=(b, r, cfg.observation.size), dtype=torch.float32),
+            mask=Categorical(2, shape=(b, r), dtype=torch.bool),
+            info=info(ROBOT_INFO_KEYS, r),
+            shape=(b, r),
+        )
+        reward[ROBOT] = Composite(reward=Unbounded(shape=(b, r, 1), dtype=torch.float32), shape=(b, r))
+        done[ROBOT] = flags(r)
+        if self.robot_policy is None:
+            if cfg.robot_action == "subpolicy":
+                robot_action: Any = Categorical(NUM_ACTIONS, shape=(b, r), dtype=torch.int64)
+            else:
+                robot_action = Bounded(-1.0, 1.0, shape=(b, r, 2), dtype=torch.float32)
+            action[ROBOT] = Composite(action=robot_action, shape=(b, r))
+        if h:
+            obs[HUMAN] = Composite(
+                observation=Unbounded(
+                    shape=(b, h, human_observation_size(cfg.num_human_neighbours)), dtype=torch.float32
+                ),
+                mask=Categorical(2, shape=(b, h), dtype=torch.bool),
+                info=info(HUMAN_INFO_KEYS, h),
+                shape=(b, h),
+            )
+            action[HUMAN] = Composite(
+                action=Bounded(-1.0, 1.0, shape=(b, h, 2), dtype=torch.float32), shape=(b, h)
+            )
+            reward[HUMAN] = Composite(reward=Unbounded(shape=(b, h, 1), dtype=torch.float32), shape=(b, h))
+            done[HUMAN] = flags(h)
+        state_size = STATE_ROBOT_SIZE * r + STATE_HUMAN_SIZE * cfg.max_humans
+        obs["state"] = Unbounded(shape=(b, state_size), dtype=torch.float32)
+        for k in _DONE_KEYS:
+            done[k] = Categorical(2, shape=(b, 1), dtype=torch.bool)
+        self.observation_spec = obs
+        self.action_spec = action
+        self.reward_spec = reward
+        self.done_spec = done
+
+    # ------------------------------------------------------------------ seeding, reset
+    def _set_seed(self, seed: int | None) -> None:
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
+        self.scenarios.seed(seed)
+        self.stream_seed = seed
+
+    def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
+        b = self.batch_size[0]
+        reset = None if tensordict is None else tensordict.get("_reset", None)
+        if reset is None:
+            rows = np.arange(b)
+        else:
+            rows = np.flatnonzero(reset.reshape(b, -1).any(-1).cpu().numpy())
+        if len(rows):
+            self.core.reset_rows(rows, self.scenarios.next(rows))
+            self._robot_alive[rows] = True
+            self._row_alive[rows] = True
+        core = self.core
+        assert core.state is not None
+        zeros_r = np.zeros((b, self.num_robots), dtype=bool)
+        out: dict[str, Any] = {
+            ROBOT: {
+                "observation": np.where(self._robot_alive[..., None], core.obs, 0.0).astype(np.float32),
+                "mask": self._robot_alive.copy(),
+                "info": self._robot_info(None),
+                **self._flags(zeros_r, zeros_r, zeros_r),
+            },
+            "state": global_state(core.state),
+        }
+        if self.num_humans:
+            assert core.human_obs is not None
+            zeros_h = np.zeros((b, self.num_humans), dtype=bool)
+            out[HUMAN] = {
+                "observation": core.human_obs.copy(),
+                "mask": self._human_mask(),
+                "info": self._human_info(None),
+                **self._flags(zeros_h, zeros_h, zeros_h),
+            }
+        for k in _DONE_KEYS:
+            out[k] = np.zeros((b, 1), dtype=bool)
+        return self._to_tensordict(out)
+
+    # ------------------------------------------------------------------ step
+    def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
+        core = self.core
+        cfg = self.config
+        b, r, h = self.batch_size[0], self.num_robots, self.num_humans
+        if self.robot_policy is not None:
+            robot_action = np.asarray(self.robot_policy.act(core.obs, core)).reshape(b, r)
+        else:
+            robot_action = tensordict.get((ROBOT, "action")).detach().cpu().numpy()
+            if cfg.robot_action == "subpolicy":
+                robot_action = robot_action.reshape(b, r)
+        human_action = None
+        if h:
+            human_action = tensordict.get((HUMAN, "action")).detach().cpu().numpy().astype(np.float64)
+        robot_was = self._robot_alive.copy()
+        row_was = self._row_alive.copy()
+        result = core.step(robot_action, human_action)
+        assert core.state is not None
+
+        robot_term = result.terminated & robot_was
+        robot_trunc = result.truncated & robot_was
+        leaving = robot_term | robot_trunc
+        self._robot_alive = robot_was & ~leaving
+        ended = row_was & ~self._robot_alive.any(axis=1)
+        self._row_alive = row_was & ~ended
+        out_of_time = core.state.step_count >= cfg.max_steps
+        dead_r = ~robot_was
+        out: dict[str, Any] = {
+            ROBOT: {
+                "observation": np.where(robot_was[..., None], core.obs, 0.0).astype(np.float32),
+                "reward": np.where(robot_was, result.reward, 0.0)[..., None].astype(np.float32),
+                "mask": self._robot_alive.copy(),
+                "info": self._robot_info(result, robot_was),
+                **self._flags(leaving | dead_r, robot_term | dead_r, robot_trunc | dead_r),
+            },
+            "state": global_state(core.state),
+        }
+        all_done = out[ROBOT]["done"].all(axis=(1, 2))
+        all_term = out[ROBOT]["terminated"].all(axis=(1, 2))
+        all_trunc = out[ROBOT]["truncated"].all(axis=(1, 2))
+        if h:
+            assert core.human_obs is not None and result.human is not None
+            live = row_was[:, None].repeat(h, axis=1)
+            trunc = live & (out_of_time | ended)[:, None]
+            dead_h = ~live
+            out[HUMAN] = {
+                "observation": np.where(live[..., None], core.human_obs, 0.0).astype(np.float32),
+                "reward": np.where(live, result.human.reward, 0.0)[..., None].astype(np.float32),
+                "mask": self._human_mask(),
+                "info": self._human_info(result, live),
+                **self._flags(trunc | dead_h, dead_h, trunc | dead_h),
+            }
+            all_done &= out[HUMAN]["done"].all(axis=(1, 2))
+            all_term &= out[HUMAN]["terminated"].all(axis=(1, 2))
+            all_trunc &= out[HUMAN]["truncated"].all(axis=(1, 2))
+        out["done"] = all_done[:, None]
+        out["terminated"] = all_term[:, None]
+        out["truncated"] = all_trunc[:, None]
+        return self._to_tensordict(out)
+
+    # ------------------------------------------------------------------ pieces
+    def _human_mask(self) -> np.ndarray:
+        """(B, L) learned humans that act: present in the scenario and their episode running."""
+        assert self.core.state is not None
+        return self.core.state.human_mask[:, self.core.learned] & self._row_alive[:, None]
+
+    @staticmethod
+    def _flags(done: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> dict[str, np.ndarray]:
+        return {
+            "done": done[..., None],
+            "terminated": terminated[..., None],
+            "truncated": truncated[..., None],
+        }
+
+    def _robot_info(self, result: StepResult | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        b, r = self.batch_size[0], self.num_robots
+        if result is None:
+            neutral = StepResult.initial_info()
+            return {k: np.full((b, r), float(neutral[k]), dtype=np.float32) for k in ROBOT_INFO_KEYS}
+        assert live is not None
+        return {k: np.where(live, getattr(result, k), 0.0).astype(np.float32) for k in ROBOT_INFO_KEYS}
+
+    def _human_info(self, result: StepResult | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        assert self.core.state is not None
+        present = self.core.state.human_mask[:, self.core.learned]
+        if result is None or result.human is None:
+            zeros = np.zeros(present.shape, dtype=np.float32)
+            return {k: (present.astype(np.float32) if k == "present" else zeros) for k in HUMAN_INFO_KEYS}
+        assert live is not None
+        step = result.human
+        values = {
+            "contact": step.contact,
+            "present": present,
+            "wall_contact": step.wall_contact,
+            "waypoint_reached": step.waypoint_reached,
+            "speed_error": step.speed_error,
+        }
+        return {k: np.where(live, values[k], 0.0).astype(np.float32) for k in HUMAN_INFO_KEYS}
+
+    def _to_tensordict(self, data: dict[str, Any]) -> TensorDictBase:
+        b = self.batch_size[0]
+
+        def convert(node: dict[str, Any], shape: tuple[int, ...]) -> TensorDict:
+            fields: dict[str, Any] = {}
+            for key, value in node.items():
+                if isinstance(value, dict):
+                    n = self.num_robots if key == ROBOT else self.num_humans
+                    fields[key] = convert(value, shape if key == "info" else (b, n))
+                else:
+                    fields[key] = torch.from_numpy(np.ascontiguousarray(value))
+            return TensorDict(fields, batch_size=shape, device=self.device)
+
+        return convert(data, (b,))
