@@ -39,7 +39,7 @@ CONFIG_NAME = "config.json"
 GIF_NAME = "ref_episode.gif"
 # The full benchmark's default policies; the quick one (`make run`) adds the shipped learned policies.
 DEFAULT_POLICIES = ("goalone", "ref")
-QUICK_POLICIES = ("goalone", "ref", "ppo", "dqn", "bc", "gail")
+QUICK_POLICIES = ("goalone", "ref", "ppo", "dqn", "bc", "gail", "pips")
 QUICK_MAPS = ("gdc1", "ghc3")
 
 
