@@ -111,6 +111,7 @@ class LearnedHumanPolicy:
 
     @property
     def input_size(self) -> int:
+        """D, the length of the observations the network takes."""
         return int(self.layers[0][0].shape[1])
 
     def env_overrides(self) -> dict[str, Any]:

@@ -162,6 +162,7 @@ class ActionSelectionEnv(gym.Env):
         return result.obs[0, 0].copy(), float(result.reward[0, 0]), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
+        """The current frame as (H, W, 3) uint8 ("rgb_array"), or drawn in a window ("human")."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
@@ -172,6 +173,7 @@ class ActionSelectionEnv(gym.Env):
         return self._renderer.render()
 
     def close(self) -> None:
+        """Close the renderer's window or figure, if one was opened."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

@@ -358,6 +358,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         return self._renderer.render()
 
     def close(self) -> None:
+        """Close the renderer's window or figure, if one was opened."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
@@ -417,12 +418,14 @@ class BlackDeath(BaseParallelWrapper):
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, dict[str, Any]]]:
+        """Reset the wrapped env (PettingZoo's ParallelEnv.reset)."""
         observations, infos = self.env.reset(seed=seed, options=options)
         self.agents = list(self.env.agents)
         self._left = {}
         return observations, infos
 
     def step(self, actions: Mapping[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        """Step the live agents; agents that left get a zero observation and reward, flags False, until the end."""
         live = list(self.env.agents)
         observations, rewards, terminations, truncations, infos = self.env.step({a: actions[a] for a in live})
         for agent in live:

@@ -156,6 +156,7 @@ class ActionSelectionVectorEnv(VectorEnv):
         return self.core.obs[:, 0].copy(), reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
+        """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""
         if self.render_mode is None:
             return None
         if self._renderer is None:
@@ -165,5 +166,6 @@ class ActionSelectionVectorEnv(VectorEnv):
         return self._renderer.render(row=0)
 
     def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderer, if one was opened (Gymnasium's VectorEnv.close calls this)."""
         if self._renderer is not None:
             self._renderer.close()

@@ -240,10 +240,12 @@ class NavGraph:
 
     @property
     def num_nodes(self) -> int:
+        """N, the number of nodes."""
         return len(self.nodes)
 
     @property
     def num_edges(self) -> int:
+        """E, the number of undirected edges."""
         return len(self.edges)
 
     def _check_node(self, node: int, what: str) -> int:

@@ -100,10 +100,12 @@ class Map:
 
     @property
     def num_walls(self) -> int:
+        """W, the number of wall segments."""
         return len(self.walls)
 
     @property
     def num_nodes(self) -> int:
+        """N, the number of navigation graph nodes."""
         return len(self.nodes)
 
     @property

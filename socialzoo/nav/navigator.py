@@ -400,10 +400,12 @@ class Navigator:
 
     @property
     def batch_size(self) -> int:
+        """B, the number of worlds."""
         return self.plans.paths.shape[0]
 
     @property
     def num_robots(self) -> int:
+        """R, the robots per world."""
         return self.plans.paths.shape[1]
 
     def reset(self, rows: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> None:

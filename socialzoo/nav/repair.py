@@ -72,6 +72,7 @@ class Repair:
     message: str
 
     def to_json(self) -> dict[str, str]:
+        """The repair as plain JSON (kind, message), as stored in a map's provenance."""
         return {"kind": self.kind, "message": self.message}
 
 
@@ -82,6 +83,7 @@ class RepairReport:
     repairs: list[Repair] = field(default_factory=list)
 
     def add(self, kind: str, message: str) -> None:
+        """Record a repair of `kind` and log its message."""
         self.repairs.append(Repair(kind, message))
         logger.debug("repair: %s", message)
 
@@ -100,6 +102,7 @@ class RepairReport:
         return [r.message for r in self.repairs]
 
     def to_json(self) -> list[dict[str, str]]:
+        """Every repair as plain JSON, in the order made."""
         return [r.to_json() for r in self.repairs]
 
 

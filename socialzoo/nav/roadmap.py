@@ -127,6 +127,7 @@ class FreeSpace:
 
     @property
     def shape(self) -> tuple[int, int]:
+        """(rows, columns) of the grid."""
         return (int(self.clearance.shape[0]), int(self.clearance.shape[1]))
 
     def centres(self, cells: np.ndarray) -> np.ndarray:
