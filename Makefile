@@ -8,7 +8,7 @@ CHROMIUM := /usr/bin/chromium
 # apt-get needs root: sudo when make runs as another user.
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: run test lint bench venv clean chromium policies
+.PHONY: run test lint bench venv clean chromium policies docs
 
 venv: $(STAMP)
 
@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e ".[train,plot,ray,dev]"
+	$(PY) -m pip install --quiet -e ".[train,plot,ray,dev,docs]"
 	touch $(STAMP)
 
 run: $(STAMP)
@@ -36,6 +36,10 @@ chromium:
 
 test: $(STAMP) chromium lint
 	$(VENV)/bin/pytest -q -n 2 tests
+
+# The documentation site (docs/*.md and the API reference from the docstrings) into site/.
+docs: $(STAMP)
+	$(VENV)/bin/mkdocs build --strict --site-dir site
 
 bench: $(STAMP)
 	$(PY) benchmarks/world_throughput.py
@@ -61,4 +65,4 @@ policies: $(STAMP)
 	cp $(SHIP)/pips/pips.json $(SHIP)/pips/pips.train.json socialzoo/agents/shipped/
 
 clean:
-	rm -rf $(VENV) results build *.egg-info
+	rm -rf $(VENV) results build site *.egg-info

@@ -1,22 +1,43 @@
-"""The notebooks run top to bottom (their code cells, in one namespace, without Jupyter)."""
+"""The notebooks run top to bottom in a Jupyter kernel (quick mode), and are committed without outputs."""
 
 import json
 from pathlib import Path
 
-import matplotlib
 import pytest
 
-matplotlib.use("Agg")
-
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
+# Every notebook reads this in its first code cell and shrinks its runs (episodes, training steps).
+QUICK_ENV = "SOCIALZOO_QUICK"
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs(path):
-    namespace: dict = {}
+def test_notebook_runs(path, monkeypatch):
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    pytest.importorskip("ipykernel")
+    monkeypatch.setenv(QUICK_ENV, "1")  # the kernel inherits the environment
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    notebook = nbformat.read(path, as_version=4)
+    client = nbclient.NotebookClient(
+        notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
+    )
+    client.execute()  # raises CellExecutionError naming the cell on any error
+    assert any(cell.get("outputs") for cell in notebook.cells if cell.cell_type == "code")
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_reads_quick_mode_first(path):
+    cells = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
+    assert cells and QUICK_ENV in "".join(cells[0]["source"]), f"{path.name}: read {QUICK_ENV} in the first code cell"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_is_stripped(path):
+    """Committed notebooks hold no outputs (run `nbstripout notebooks/*.ipynb` before committing)."""
     for cell in json.loads(path.read_text())["cells"]:
         if cell["cell_type"] == "code":
-            exec(compile("".join(cell["source"]), f"{path.name}", "exec"), namespace)
+            assert cell.get("outputs") == [], f"{path.name}, cell {cell.get('id')}: outputs not stripped"
+            assert cell.get("execution_count") is None, f"{path.name}, cell {cell.get('id')}: execution count"
 
 
 def test_there_is_a_notebook():

@@ -42,6 +42,7 @@ class GoAlone:
         return np.zeros(obs.shape[:-1], dtype=np.int64)
 
     def config(self) -> dict[str, Any]:
+        """GoAlone has no parameters: {}."""
         return {}
 
 
@@ -190,4 +191,5 @@ class Ref:
         return ref_actions(*inputs, self.cfg).reshape(lead)
 
     def config(self) -> dict[str, Any]:
+        """Ref's parameters (RefConfig) as plain JSON."""
         return asdict(self.cfg)

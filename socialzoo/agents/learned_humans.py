@@ -40,7 +40,8 @@ class LearnedHumanPolicy:
         weights: (W_i (out, in), b_i (out,)) per layer, torch's Linear convention; the last layer
             gives the 2 pre-tanh action means.
         activation: hidden-layer activation, a key of socialzoo.agents.mlp.ACTIVATIONS.
-        obs_loc, obs_scale: (D,) the network sees (obs - loc) / scale.
+        obs_loc: (D,) observation offset; the network sees (obs - loc) / scale.
+        obs_scale: (D,) observation scale.
         num_neighbours: EnvConfig.num_human_neighbours of the observations it was trained on.
         action_frame: EnvConfig.human_action_frame it was trained with ("world" or "human").
         header: the policy file's header (kept for config() and reports).
@@ -110,6 +111,7 @@ class LearnedHumanPolicy:
 
     @property
     def input_size(self) -> int:
+        """D, the length of the observations the network takes."""
         return int(self.layers[0][0].shape[1])
 
     def env_overrides(self) -> dict[str, Any]:

@@ -54,6 +54,7 @@ class ObservationNormalizer:
         self.epsilon = float(epsilon)
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """Normalised observations, float32, clipped to [-clip, clip]."""
         out = (obs - self.mean) / np.sqrt(self.var + self.epsilon)
         return np.clip(out, -self.clip, self.clip).astype(np.float32)
 
@@ -111,10 +112,12 @@ class MlpPolicy:
 
     @property
     def input_size(self) -> int:
+        """D, the length of the observations the network takes."""
         return int(self.layers[0][0].shape[1])
 
     @property
     def num_actions(self) -> int:
+        """The number of actions (outputs of the last layer)."""
         return int(self.layers[-1][0].shape[0])
 
     def scores(self, obs: np.ndarray) -> np.ndarray:

@@ -245,7 +245,8 @@ def summarize_humans(
 
     Args:
         rows: trial dicts (ResultsStore.rows) holding the HUMAN_METRIC_KEYS.
-        policies, maps: the order of the entries.
+        policies: the order of the policies.
+        maps: the order of the maps.
         confidence: two-sided level.
     """
     from socialzoo.bench.stats import count_interval, mean_interval

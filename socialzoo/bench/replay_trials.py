@@ -275,7 +275,8 @@ def replay_trial(
 
     Args:
         trial: from `find_trials`.
-        laser_rays, laser_stride: the recorded scan (socialzoo.bench.replay.record_episode).
+        laser_rays: rays of the recorded scan (socialzoo.bench.replay.record_episode).
+        laser_stride: steps between recorded scans (likewise).
         world_map: the loaded map of the trial's env config, if at hand.
 
     Raises:

@@ -138,7 +138,8 @@ def summarize(
 
     Args:
         rows: trial dicts with policy, map, test_set, success and the TABLE_METRICS.
-        policies, maps: display order (others follow in order of appearance).
+        policies: display order of the policies (others follow in order of appearance).
+        maps: display order of the maps (likewise).
         confidence: two-sided level of the intervals.
         seed: seed of the count intervals' bootstrap resamples (see `cell_rng`).
 

@@ -29,6 +29,7 @@ def register(subparsers: Any) -> None:
 
 
 def run_demo(args: argparse.Namespace) -> int:
+    """Run `socialzoo demo`; returns the exit status."""
     from socialzoo.agents import make_policy
     from socialzoo.bench.episode_video import animate_episode
     from socialzoo.env.config import EnvConfig

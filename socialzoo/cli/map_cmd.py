@@ -108,6 +108,7 @@ def _fail(err: Exception) -> int:
 
 
 def run_list(args: argparse.Namespace) -> int:
+    """Run `socialzoo map list`; returns the exit status."""
     from socialzoo.nav.maps import list_maps, load_map
 
     for name in list_maps():
@@ -120,6 +121,7 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    """Run `socialzoo map show`; returns the exit status."""
     from socialzoo.nav.maps import MapError, load_map
     from socialzoo.render.map_plot import save_map_png
 
@@ -134,6 +136,7 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_validate(args: argparse.Namespace) -> int:
+    """Run `socialzoo map validate`; returns the exit status."""
     from socialzoo.nav.maps import MapError, load_map, validate_map
 
     try:
@@ -145,6 +148,7 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    """Run `socialzoo map check`; returns the exit status."""
     from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH
     from socialzoo.nav.map_check import check_map
     from socialzoo.nav.maps import MapError, load_map
@@ -228,6 +232,7 @@ def _png_walls(args: argparse.Namespace) -> np.ndarray:
 
 
 def run_import(args: argparse.Namespace) -> int:
+    """Run `socialzoo map import`; returns the exit status."""
     from socialzoo import __version__
     from socialzoo.nav.maps import MapError
     from socialzoo.nav.repair import repair_map

@@ -35,10 +35,12 @@ class RobotConfig:
 
     @property
     def half_length(self) -> float:
+        """Half the footprint's length, m."""
         return self.length / 2.0
 
     @property
     def half_width(self) -> float:
+        """Half the footprint's width, m."""
         return self.width / 2.0
 
 

@@ -171,7 +171,8 @@ def ray_segment_hit(origin: np.ndarray, direction: np.ndarray, a: np.ndarray, b:
     Args:
         origin: ray origins (..., 2).
         direction: unit ray directions (..., 2).
-        a, b: segment end points, broadcastable with origin.
+        a: segment start points, broadcastable with origin.
+        b: segment end points, broadcastable with origin.
 
     Returns:
         Distance (...,) in metres, >= 0, or inf.

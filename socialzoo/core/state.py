@@ -50,14 +50,17 @@ class WorldState:
 
     @property
     def batch_size(self) -> int:
+        """B, the number of worlds."""
         return self.robot_pose.shape[0]
 
     @property
     def num_robots(self) -> int:
+        """R, the robots per world."""
         return self.robot_pose.shape[1]
 
     @property
     def max_humans(self) -> int:
+        """H, the human slots per world (present or not)."""
         return self.human_pos.shape[1]
 
     @property

@@ -262,6 +262,7 @@ class WallIndex:
 
     @property
     def num_walls(self) -> int:
+        """W, the number of wall segments."""
         return len(self.walls)
 
     def table(self, cell_size: float | None = None, reach: float | None = None) -> GridTable:
@@ -273,6 +274,7 @@ class WallIndex:
 
     @cached_property
     def fine(self) -> GridTable:
+        """The grid table with the default cell size and reach, built once."""
         return self.table()
 
     @cached_property

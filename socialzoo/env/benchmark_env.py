@@ -24,21 +24,45 @@ from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
 class ActionSelectionEnv(gym.Env):
     """Social Action Selection (SocialGym benchmark), single robot.
 
-    Action space: Discrete(4): 0 GoAlone, 1 Halt, 2 Follow, 3 Pass (SPEC section 7); with
-    robot_action="velocity", Box([-1, 1]^2) of normalised (v, omega).
+    ## Description
+    A differential-drive robot crosses a building among 5 to 25 pedestrians (the social force
+    model) and picks, every 0.025 s step, one of four sub-policies that drive it: GoAlone, Halt,
+    Follow, Pass. The policy learns *when* to wait, follow or overtake people; the sub-policies
+    do the driving (A* plan, carrot, trajectory rollout). This is the batch-of-one view of the
+    batched core (`SocialNavCore`); `ActionSelectionVectorEnv`, `SB3VecEnv` and
+    `ActionSelectionTorchEnv` step the same functions. Ids: `socialzoo/ActionSelection-v1` (GDC1,
+    the training map), `socialzoo/ActionSelectionTransfer-v1` (GHC3) and the scenario families.
 
-    Observation: the paper's robot-frame vector (SPEC section 8, `observation="paper"`, 107
-    numbers with 25 human slots) or the reference layout (`observation={"layout": "socialgym1"}`,
-    244 numbers).
+    ## Action Space
+    `Discrete(4)`: 0 GoAlone, 1 Halt, 2 Follow, 3 Pass (socialzoo.nav.subpolicies). With
+    `robot_action="velocity"`: `Box(-1, 1, (2,))`, (v, omega) scaled by the robot's maximum speeds.
 
-    Reward: 5 * distance gained (10 when negative) - 0.1 * blame - 0.01 * force + 100 on reaching
-    the goal (SPEC section 9; weights in `reward`). Force and blame leave out the followed human
-    during Follow only (socialzoo.env.outcome).
+    ## Observation Space
+    `observation="paper"` (default): `Box((107,), float32)`, all in the robot frame: goal x, y (m),
+    carrot x, y (m), robot v (m/s) and omega (rad/s), the previous action, then 25 human slots of
+    (x, y, vx, vy) (m, m/s), visible humans nearest first, occluded and empty slots zero.
+    `observation={"layout": "socialgym1"}`: the reference code's 244 numbers. Unbounded, except
+    the previous action in [0, 3]. Index table: docs/benchmark.md.
 
-    Episode end: terminated on reaching the goal (< 0.5 m) or touching a wall; truncated after
-    max_steps (3200). The final info holds "metrics": the per-episode metrics (not "episode", which
-    SB3 and Gymnasium wrappers reserve for their own return/length record).
+    ## Rewards
+    5 x distance gained towards the goal (10 x when negative) - 0.1 x blame - 0.01 x force, plus
+    100 on the step the goal is reached (weights in `reward`, socialzoo.env.reward.RewardConfig).
+    Force and blame leave out the followed human, during Follow only (socialzoo.env.outcome).
 
+    ## Starting State
+    `reset` draws the next scenario of the env's seeded stream (socialzoo.nav.scenarios): the robot
+    at rest on one legal pose of the map with its goal on another (a pair whose route fits the
+    time limit), and 5 to 25 humans spawned within 0.5 m of their start poses with preferred
+    speeds from N(1.0, 0.1) m/s, each shuttling between its start and its goal. `scenario.repeats`
+    episodes run on a scenario before the next one is drawn; `options={"scenario": s}` replays `s`.
+
+    ## Episode End
+    Terminated when the robot is within 0.5 m of the goal or its footprint touches a wall;
+    truncated after `max_steps` (3200 steps, 80 s). The final info holds "metrics": the episode's
+    metrics (success, time_to_goal, force, blame, collisions, ...; not "episode", which SB3 and
+    Gymnasium wrappers reserve for their return/length record).
+
+    ## Arguments
     Args:
         config: an EnvConfig (default: the benchmark on gdc1).
         render_mode: None, "rgb_array" or "human".
@@ -46,11 +70,11 @@ class ActionSelectionEnv(gym.Env):
         **overrides: EnvConfig fields as plain values (nested configs as dicts), e.g.
             map="ghc3", max_steps=800, observation={"layout": "socialgym1"}.
 
-    Version History:
-        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
-            the robot's carrot stays in sight of its wall distance and its plans keep clear
-            of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-        v0: initial release.
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 40}
@@ -138,6 +162,7 @@ class ActionSelectionEnv(gym.Env):
         return result.obs[0, 0].copy(), float(result.reward[0, 0]), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
+        """The current frame as (H, W, 3) uint8 ("rgb_array"), or drawn in a window ("human")."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
@@ -148,6 +173,7 @@ class ActionSelectionEnv(gym.Env):
         return self._renderer.render()
 
     def close(self) -> None:
+        """Close the renderer's window or figure, if one was opened."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

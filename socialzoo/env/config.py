@@ -130,6 +130,7 @@ class EnvConfig:
 
     @property
     def dt(self) -> float:
+        """The step, s (the world's dt)."""
         return self.world.dt
 
     def to_dict(self) -> dict[str, Any]:

@@ -202,7 +202,8 @@ def human_step(
     the next waypoint does not make the reward jump.
 
     Args:
-        before, after: the world before and after the step.
+        before: the world before the step.
+        after: the world after the step.
         humans: (L,) learned human slots.
         walls: the map's wall index.
         blocked: (B, H) humans whose move a wall stopped this step (StepEvents.human_blocked).

@@ -115,7 +115,8 @@ def _robot_frame_slots(
         robot_pose: (B, 3) world frame.
         robot_vel: (B, 2) linear v (m/s) and angular omega (rad/s).
         points: (B, P, 2) world points to express in the robot frame, m.
-        human_pos, human_vel: (B, H, 2) world frame, m and m/s.
+        human_pos: (B, H, 2) human positions, world frame, m.
+        human_vel: (B, H, 2) human velocities, world frame, m/s.
         visible: (B, H) bool.
         num_slots: K, the number of human slots.
 

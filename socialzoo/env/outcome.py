@@ -97,7 +97,8 @@ def robot_outcome(
     """Reward terms, reward and episode end of every robot for the step before -> after.
 
     Args:
-        before, after: the world state before and after the step (B worlds, R robots, H humans).
+        before: the world state before the step (B worlds, R robots, H humans).
+        after: the world state after the step.
         events: the step's collision events.
         visible: (B*R, H) bool, the humans each robot sees after the step (robot-major rows).
         skip: (B, R) human left out of force and blame (`followed_human`), -1 for none.

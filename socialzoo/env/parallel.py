@@ -38,26 +38,39 @@ EPISODE_KEY = "metrics"
 class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     """R robots (and optionally L learned humans) navigating among social-force humans.
 
+    ## Description
+    The PettingZoo view of the batched core (one world): several robots of the benchmark, and
+    human slots that a learner may drive.
+
     Agents: "robot_0" .. "robot_{R-1}", then "human_0" .. "human_{L-1}" for the first L human
     slots when config.num_learned_humans = L > 0. The other humans follow the scripted social-force
     policy. A scenario may have fewer humans than L: the human agents of empty slots are still
     agents (so that `agents` is the same at every reset), with an all-zero observation, reward 0,
     actions ignored and info["present"] False.
 
-    Action spaces: robots Discrete(4) (GoAlone, Halt, Follow, Pass; SPEC section 7) or, with
+    ## Action Space
+    Robots Discrete(4) (GoAlone, Halt, Follow, Pass; SPEC section 7) or, with
     robot_action="velocity", Box([-1, 1]^2) of (v, omega) scaled by the robot's maximum speeds;
     learned humans Box([-1, 1]^2), a desired velocity scaled by the human's preferred speed, in the
     world frame or the human's own frame (config.human_action_frame).
 
-    Observation spaces: robots get the benchmark observation (SPEC section 8; `observation`
+    ## Observation Space
+    Robots get the benchmark observation (SPEC section 8; `observation`
     config); learned humans get socialzoo.env.human_agents.human_observations (waypoint, velocity,
     nearest wall and neighbours in their own frame).
 
-    Rewards: robots the benchmark reward (SPEC section 9); learned humans the weighted terms of
+    ## Rewards
+    Robots the benchmark reward (SPEC section 9); learned humans the weighted terms of
     config.human_reward (socialzoo.env.human_agents.HumanRewardConfig): by default progress towards
     their waypoint minus 1 per step in contact with a human and 1 with a robot.
 
-    Episode end: a robot leaves `agents` the step it terminates (goal reached or wall touched) or
+    ## Starting State
+    `reset` draws the next scenario of the seeded stream: each robot at rest on its own legal
+    pose with a goal on another, 5 to 25 humans (the first L of them driven by learners) spawned
+    near their start poses (as in `ActionSelectionEnv`).
+
+    ## Episode End
+    A robot leaves `agents` the step it terminates (goal reached or wall touched) or
     is truncated (config.max_steps, or max_cycles steps when set); it then stands still in the
     world until the next reset. Learned humans never terminate (they shuttle forever); they are
     truncated at the time limit and on the step the last robot leaves, which ends the episode
@@ -68,6 +81,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     "metrics" (socialzoo.env.metrics.SUMMARY_KEYS) unless episode_info=False; humans "contact"
     (within 0.4 m of anyone after the step) and "present".
 
+    ## Arguments
     Args:
         config: an EnvConfig (default: the benchmark's, on gdc1).
         render_mode: None, "rgb_array" or "human".
@@ -79,11 +93,11 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             `episode_summary(agent)`.
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
-    Version History:
-        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
-            the robot's carrot stays in sight of its wall distance and its plans keep clear
-            of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-        v0: initial release.
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -344,6 +358,7 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         return self._renderer.render()
 
     def close(self) -> None:
+        """Close the renderer's window or figure, if one was opened."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
@@ -403,12 +418,14 @@ class BlackDeath(BaseParallelWrapper):
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, dict[str, Any]]]:
+        """Reset the wrapped env (PettingZoo's ParallelEnv.reset)."""
         observations, infos = self.env.reset(seed=seed, options=options)
         self.agents = list(self.env.agents)
         self._left = {}
         return observations, infos
 
     def step(self, actions: Mapping[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        """Step the live agents; agents that left get a zero observation and reward, flags False, until the end."""
         live = list(self.env.agents)
         observations, rewards, terminations, truncations, infos = self.env.step({a: actions[a] for a in live})
         for agent in live:

@@ -42,11 +42,39 @@ class SB3VecEnv(VecEnv):
     that every row shares (`self.vector_env`): `get_attr("config")` gives its EnvConfig once per
     asked row.
 
+    ## Description
+    An SB3 `VecEnv` over `ActionSelectionVectorEnv` (self.vector_env): B benchmark rows stepped
+    by one batched core, for PPO, DQN, VecNormalize and VecMonitor.
+
+    ## Action Space
+    `Discrete(4)` per row (SB3 passes a (B,) array): 0 GoAlone, 1 Halt, 2 Follow, 3 Pass.
+
+    ## Observation Space
+    `Box((107,), float32)` per row (the paper layout; see `ActionSelectionEnv`); `reset` and
+    `step` return (B, 107).
+
+    ## Rewards
+    (B,) float32, the benchmark reward of each row (see `ActionSelectionEnv`).
+
+    ## Starting State
+    Every row starts on its next scenario at `reset()`, seeded by `seed(s)` (see Seeding above).
+
+    ## Episode End
+    `dones` = terminated | truncated; an ended row is reset within the step (SB3's autoreset) and
+    its info holds `terminal_observation`, `TimeLimit.truncated` and `metrics`.
+
+    ## Arguments
     Args:
         num_envs: B, the rows stepped together.
         config: an EnvConfig (default: the benchmark on gdc1).
         map_data: an already loaded Map instead of config.map.
         **overrides: EnvConfig fields as plain values, e.g. map="ghc3", scenario={"repeats": 20}.
+
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     def __init__(

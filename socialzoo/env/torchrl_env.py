@@ -73,6 +73,33 @@ _DONE_KEYS = ("done", "terminated", "truncated")
 class SocialNavTorchEnv(EnvBase):
     """B worlds of R robots and L learned humans (plus scripted humans) as a TorchRL EnvBase.
 
+    ## Description
+    The multi-agent view of B worlds, with the agents stacked in the groups "robot" and "human"
+    (the module docstring lists every key); the same transitions as TorchRL's PettingZooWrapper
+    over `SocialNavParallelEnv`, without a per-agent Python loop.
+
+    ## Action Space
+    ("robot", "action"): (B, R) int64 sub-policies (Discrete(4)), or (B, R, 2) velocities in
+    [-1, 1] with robot_action="velocity"; absent when `robot_policy` drives the robots.
+    ("human", "action"): (B, L, 2) desired velocities in [-1, 1] (x the preferred speed).
+
+    ## Observation Space
+    ("robot", "observation") (B, R, D) float32, the benchmark observation; ("human",
+    "observation") (B, L, D_h) float32 (socialzoo.env.human_agents); "state" (B, 8 R + 5 H)
+    float32, the global state; (group, "mask") (B, n) bool, the agents that act.
+
+    ## Rewards
+    ("robot", "reward") (B, R, 1): the benchmark reward; ("human", "reward") (B, L, 1): the
+    weighted terms of config.human_reward (see `SocialNavParallelEnv`).
+
+    ## Starting State
+    Each reset row starts on the next scenario of its seeded stream (as `SocialNavParallelEnv`).
+
+    ## Episode End
+    (group, "done" | "terminated" | "truncated") (B, n, 1) per agent; the row's "done" (B, 1)
+    when its last robot has left (goal, wall or time limit).
+
+    ## Arguments
     Args:
         config: an EnvConfig (default: the benchmark's, on gdc1); overrides as keyword arguments.
         batch_size: B, the worlds stepped together.
@@ -85,6 +112,12 @@ class SocialNavTorchEnv(EnvBase):
 
     Raises:
         ValueError: bad config overrides, batch size, or too few legal poses for the robots.
+
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     def __init__(

@@ -34,8 +34,25 @@ def _num_learned_humans(config: EnvConfig) -> int:
 class ActionSelectionTorchEnv(EnvBase):
     """Social Action Selection (one robot, Discrete(4) sub-policies) as a batched TorchRL env.
 
-    Keys: "observation" (B, D) float32 (the env's observation layout); "action" (B, 4) one-hot
-    (or (B,) int64 with categorical_action_encoding=True); ("next", "reward") (B, 1) float32;
+    ## Description
+    B rows of the benchmark stepped by one `SocialNavCore`, with TorchRL's conventions: batch
+    size (B,), partial resets through the "_reset" mask, no autoreset inside a step.
+
+    ## Action Space
+    "action": (B, 4) one-hot (or (B,) int64 with categorical_action_encoding=True), 0 GoAlone,
+    1 Halt, 2 Follow, 3 Pass.
+
+    ## Observation Space
+    "observation": (B, D) float32, the env's observation layout (D = 107 for the paper layout;
+    see `ActionSelectionEnv`).
+
+    ## Rewards
+    ("next", "reward"): (B, 1) float32, the benchmark reward (see `ActionSelectionEnv`).
+
+    ## Starting State
+    As `ActionSelectionEnv`: each row starts on the next scenario of its seeded stream.
+
+    ## Episode End
     "done", "terminated" (goal reached or wall collision), "truncated" (time limit), each (B, 1)
     bool; "success" (B, 1) bool, True on the last step of an episode that the benchmark counts as
     a success (goal reached, no human or wall collision).
@@ -43,6 +60,7 @@ class ActionSelectionTorchEnv(EnvBase):
     Seeding: `set_seed(s)` seeds the rows' scenario streams as ActionSelectionVectorEnv.reset(seed=s)
     does; each row runs a scenario config.scenario.repeats times before drawing the next.
 
+    ## Arguments
     Args:
         num_envs: B.
         config: an EnvConfig (default: the benchmark on gdc1); num_robots must be 1.
@@ -53,6 +71,12 @@ class ActionSelectionTorchEnv(EnvBase):
 
     Raises:
         ValueError: a config with several robots, learned humans or velocity actions.
+
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     def __init__(

@@ -27,6 +27,33 @@ from socialzoo.nav.subpolicies import NUM_ACTIONS
 class ActionSelectionVectorEnv(VectorEnv):
     """num_envs Social Action Selection envs in one batched world.
 
+    ## Description
+    B rows of `ActionSelectionEnv` stepped together by one `SocialNavCore` (one process, no env
+    per row): `gym.make_vec("socialzoo/ActionSelection-v1", num_envs=B,
+    vectorization_mode="vector_entry_point")`. Row i plays the same scenarios whatever B.
+
+    ## Action Space
+    `MultiDiscrete([4] * B)`: one sub-policy per row (0 GoAlone, 1 Halt, 2 Follow, 3 Pass);
+    `Box(-1, 1, (B, 2))` with `robot_action="velocity"`.
+
+    ## Observation Space
+    `Box((B, 107), float32)`, row by row `ActionSelectionEnv`'s observation (the paper layout;
+    (B, 244) with the socialgym1 layout).
+
+    ## Rewards
+    (B,) float64, the benchmark reward of each row (see `ActionSelectionEnv`).
+
+    ## Starting State
+    `reset(seed=s)` seeds the rows' scenario streams and starts every row on its next scenario;
+    `options={"reset_mask": mask}` resets only the masked rows (after the first reset).
+
+    ## Episode End
+    Per row, as `ActionSelectionEnv`: terminated (goal or wall), truncated (time limit). Gymnasium's
+    same-step autoreset: an ended row is reset within the step; `info["final_obs"]` holds its last
+    observation and `info["final_info"]["metrics"]` its episode metrics (masks `_final_obs`,
+    `_final_info`).
+
+    ## Arguments
     Args:
         num_envs: B.
         config: an EnvConfig (default: the benchmark on gdc1).
@@ -34,11 +61,11 @@ class ActionSelectionVectorEnv(VectorEnv):
         render_mode: None or "rgb_array" (renders row 0).
         **overrides: EnvConfig fields as plain values.
 
-    Version History:
-        v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
-            the robot's carrot stays in sight of its wall distance and its plans keep clear
-            of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-        v0: initial release.
+    ## Version History
+    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
+      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
+      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
+    - v0: initial release.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"], "render_fps": 40}
@@ -129,6 +156,7 @@ class ActionSelectionVectorEnv(VectorEnv):
         return self.core.obs[:, 0].copy(), reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
+        """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""
         if self.render_mode is None:
             return None
         if self._renderer is None:
@@ -138,5 +166,6 @@ class ActionSelectionVectorEnv(VectorEnv):
         return self._renderer.render(row=0)
 
     def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderer, if one was opened (Gymnasium's VectorEnv.close calls this)."""
         if self._renderer is not None:
             self._renderer.close()

@@ -24,7 +24,9 @@ def integrate_humans(
     """One explicit Euler step of every human.
 
     Args:
-        pos, vel, accel: (B, H, 2) world frame, SI units.
+        pos: (B, H, 2) positions, world frame, m.
+        vel: (B, H, 2) velocities, world frame, m/s.
+        accel: (B, H, 2) accelerations, world frame, m/s^2.
         max_speed: (B, H) speed cap, m/s.
         mask: (B, H) present humans; absent ones do not move.
         walls: the map's wall index.

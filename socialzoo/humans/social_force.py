@@ -174,10 +174,13 @@ def human_acceleration(
     """Total social-force acceleration on every human.
 
     Args:
-        pos, vel, target: (B, H, 2) human state and current waypoint, world frame.
+        pos: (B, H, 2) human positions, world frame, m.
+        vel: (B, H, 2) human velocities, world frame, m/s.
+        target: (B, H, 2) each human's current waypoint, world frame, m.
         pref_speed: (B, H) m/s.
         mask: (B, H) present humans.
-        robot_pos, robot_vel: (B, R, 2) robot positions and world-frame velocity vectors.
+        robot_pos: (B, R, 2) robot positions, world frame, m.
+        robot_vel: (B, R, 2) robot velocity vectors, world frame, m/s.
         walls: the map's wall index.
         cfg: parameters.
         desired_vel: (B, H, 2) desired velocity given by a learner, used where `learned`.

@@ -113,7 +113,8 @@ class PathTable:
         """Node sequences for many (start, goal) node pairs at once.
 
         Args:
-            start, goal: (M,) node indices; every goal must be reachable from its start.
+            start: (M,) start node indices.
+            goal: (M,) goal node indices; every goal must be reachable from its start.
 
         Returns:
             (M, K) node indices, K = 1 + the largest hop count; each row runs from start to goal
@@ -239,10 +240,12 @@ class NavGraph:
 
     @property
     def num_nodes(self) -> int:
+        """N, the number of nodes."""
         return len(self.nodes)
 
     @property
     def num_edges(self) -> int:
+        """E, the number of undirected edges."""
         return len(self.edges)
 
     def _check_node(self, node: int, what: str) -> int:
@@ -445,7 +448,8 @@ class NavGraph:
         then the shortest path). This is `plan_batch` on one row.
 
         Args:
-            start, goal: (2,) world frame, m.
+            start: (2,) start position, world frame, m.
+            goal: (2,) goal position, world frame, m.
             direct: allow the straight line.
 
         Returns:
@@ -479,7 +483,8 @@ class NavGraph:
         that reports unreachable rows instead of raising.
 
         Args:
-            starts, goals: (N, 2) world frame, m.
+            starts: (N, 2) start positions, world frame, m.
+            goals: (N, 2) goal positions, world frame, m.
             max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
             clearance: with clearance > 0 (a robot's plans), the straight start-goal line is used

@@ -53,6 +53,7 @@ class MapCheck:
 
     @property
     def valid(self) -> bool:
+        """True when the map has no problems (warnings allowed)."""
         return not self.problems
 
     def warnings(self) -> list[str]:

@@ -100,10 +100,12 @@ class Map:
 
     @property
     def num_walls(self) -> int:
+        """W, the number of wall segments."""
         return len(self.walls)
 
     @property
     def num_nodes(self) -> int:
+        """N, the number of navigation graph nodes."""
         return len(self.nodes)
 
     @property
@@ -366,7 +368,8 @@ def segment_clearance(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> tuple
 
     Args:
         index: the walls.
-        p0, p1: (N, 2) segment end points, m.
+        p0: (N, 2) segment start points, m.
+        p1: (N, 2) segment end points, m.
 
     Returns:
         (dist, wall): (N,) distances, exact below reach / 2 of the index (0.5 m by default), 0

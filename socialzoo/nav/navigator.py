@@ -363,12 +363,13 @@ class Navigator:
         num_robots: R robots per batch row.
         carrot_radius: local-target circle radius, m.
         replan_distance: a robot farther than this from its plan gets a new one, m.
-        max_skip, tolerance: passed to `carrot`. The defaults (the carrot stops at the end of
+        max_skip: passed to `carrot`. The defaults (the carrot stops at the end of
             the closest segment, or at the first later waypoint at least radius / 2 away;
             near-equal closest segments resolve to the one furthest along) depart from the plain
             SPEC carrot (None and 0.0) for robustness: with them GoAlone (no humans) reaches the
             goal from all 650 ordered pairs of GDC1's legal poses; the plain carrot cuts through
             the wall between two doors of a U-turn and oscillates on paths that double back.
+        tolerance: as `max_skip`.
     """
 
     def __init__(
@@ -399,10 +400,12 @@ class Navigator:
 
     @property
     def batch_size(self) -> int:
+        """B, the number of worlds."""
         return self.plans.paths.shape[0]
 
     @property
     def num_robots(self) -> int:
+        """R, the robots per world."""
         return self.plans.paths.shape[1]
 
     def reset(self, rows: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> None:

@@ -121,6 +121,7 @@ class LocalPlannerConfig:
 
     @property
     def num_arcs(self) -> int:
+        """The number of sampled arcs (curvatures)."""
         return len(self.curvatures)
 
     @property

@@ -72,6 +72,7 @@ class Repair:
     message: str
 
     def to_json(self) -> dict[str, str]:
+        """The repair as plain JSON (kind, message), as stored in a map's provenance."""
         return {"kind": self.kind, "message": self.message}
 
 
@@ -82,6 +83,7 @@ class RepairReport:
     repairs: list[Repair] = field(default_factory=list)
 
     def add(self, kind: str, message: str) -> None:
+        """Record a repair of `kind` and log its message."""
         self.repairs.append(Repair(kind, message))
         logger.debug("repair: %s", message)
 
@@ -100,6 +102,7 @@ class RepairReport:
         return [r.message for r in self.repairs]
 
     def to_json(self) -> list[dict[str, str]]:
+        """Every repair as plain JSON, in the order made."""
         return [r.to_json() for r in self.repairs]
 
 
@@ -344,9 +347,13 @@ def repair_map(
     Args:
         name: map name.
         walls: (W, 4) wall segments, m.
-        nodes, edges, legal_poses: the source's graph (N, 2), (E, 2) and poses (P, 3), if any.
-        region, seed_point: the area to map (see roadmap.free_space).
-        source, licence: stored in the map.
+        nodes: the source's graph nodes (N, 2), m, if any.
+        edges: the source's graph edges (E, 2), node index pairs, if any.
+        legal_poses: the source's legal poses (P, 3), m and rad, if any.
+        region: the area to map, [xmin, ymin, xmax, ymax] (see roadmap.free_space).
+        seed_point: a point inside the building (see roadmap.free_space).
+        source: stored in the map.
+        licence: stored in the map.
         config: roadmap settings (clearances of nodes, edges and poses).
         seed: seeds node placement and pose sampling.
         max_move: farthest a node or pose is moved, m.

@@ -127,6 +127,7 @@ class FreeSpace:
 
     @property
     def shape(self) -> tuple[int, int]:
+        """(rows, columns) of the grid."""
         return (int(self.clearance.shape[0]), int(self.clearance.shape[1]))
 
     def centres(self, cells: np.ndarray) -> np.ndarray:
@@ -630,9 +631,11 @@ def generate_legal_poses(
 
     Args:
         walls: (W, 4) wall segments, m.
-        nodes, edges: the navigation graph, (N, 2) m and (E, 2).
+        nodes: the navigation graph's nodes, (N, 2) m.
+        edges: the navigation graph's edges, (E, 2) node index pairs.
         space: the free space (built from walls, region and seed_point when not given).
-        region, seed_point: see free_space.
+        region: see free_space.
+        seed_point: see free_space.
         config: num_poses, pose_clearance, pose_separation, good_clearance.
         seed: seeds the tie-breaking order.
         index: the walls' WallIndex, if already built.

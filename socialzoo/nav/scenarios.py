@@ -167,10 +167,12 @@ class Scenario:
 
     @property
     def num_robots(self) -> int:
+        """R, the robots of the scenario."""
         return len(self.robot_starts)
 
     @property
     def num_humans(self) -> int:
+        """The humans of the scenario."""
         return len(self.human_spawn)
 
     def __eq__(self, other: object) -> bool:
@@ -300,6 +302,7 @@ def spawn_points(
 
 
 def split_routes(paths: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each row's route, its first `lengths[i]` points of `paths[i]`."""
     return tuple(paths[i, : lengths[i]] for i in range(len(paths)))
 
 

@@ -26,7 +26,7 @@ def _asset(name: str) -> str:
 
 
 def _script_safe_json(data: object) -> str:
-    """JSON that can sit inside a <script> element: no '<', '>' or '&' (escaped as \\u003c ...),
+    r"""JSON that can sit inside a <script> element: no '<', '>' or '&' (escaped as \u003c ...),
     so no text in it can close the element or open a comment."""
     text = json.dumps(data, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
     return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")

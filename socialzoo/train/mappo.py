@@ -99,6 +99,7 @@ class Normalize(nn.Module):
         self.register_buffer("scale", scale.detach().clone().float())
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """Normalised observations (x - loc) / scale."""
         return (x - self.loc) / self.scale
 
 

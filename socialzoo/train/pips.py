@@ -178,6 +178,7 @@ class GuardReport:
     solver: str
 
     def to_json(self) -> dict[str, Any]:
+        """The transition as plain JSON, action names spelled out."""
         return {
             "from": ACTION_NAMES[self.state],
             "to": ACTION_NAMES[self.target],

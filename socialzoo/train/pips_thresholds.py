@@ -315,7 +315,8 @@ def solve_z3(
     Args:
         sketch: the predicate sketch; its leaves index `columns`.
         columns: (N,) values of each compared expression.
-        label, weight: as in `fit_single`.
+        label: as in `fit_single`.
+        weight: as in `fit_single`.
         timeout_s: z3's time limit.
         seed: z3's random seed.
 

@@ -53,6 +53,7 @@ class Normalize(nn.Module):
         self.register_buffer("var", torch.as_tensor(np.asarray(var), dtype=torch.float64))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """Normalised observations as VecNormalize computes them, clipped, float32."""
         # In float64, as ObservationNormalizer computes it, so the exported policy acts identically.
         out = (x.to(torch.float64) - self.mean) / torch.sqrt(self.var + NORM_EPSILON)
         return out.clamp(-NORM_CLIP, NORM_CLIP).to(torch.float32)
