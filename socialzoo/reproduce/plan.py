@@ -160,7 +160,7 @@ def quick_settings(**changes: Any) -> Settings:
             "ppo": {"num_envs": 4, "n_steps": 50, "n_epochs": 1, "max_steps": 400},
             "dqn": {"max_steps": 400, "learning_starts": 50},
         },
-        "curve_trials": 3,
+        "curve_trials": 2,
         "demo_episodes": 2,
         "demo_env_overrides": {"max_steps": 800},
         "lfd_sizes": (1_000, 300),
@@ -172,10 +172,13 @@ def quick_settings(**changes: Any) -> Settings:
                      "time_budget_s": 10.0, "heldout_steps": 0},
         },
         "pips_steps": 1_000,
-        "lfd_trials": 3,
-        "performance_trials": 3,
-        "transfer_trials": 3,
-        "eval_env_overrides": {"max_steps": 400},
+        "lfd_trials": 2,
+        "performance_trials": 2,
+        "transfer_trials": 2,
+        # 30 s episodes: long enough for GoAlone and Ref to reach most goals.
+        "eval_env_overrides": {"max_steps": 1200},
+        # One in-process worker: for a handful of trials, starting processes costs more than it saves.
+        "workers": 1,
         "batch_size": 8,
     }
     base.update(changes)

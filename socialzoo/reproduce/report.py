@@ -25,21 +25,25 @@ TABLES_DIR = "tables"
 
 # Why a policy's numbers may differ from the paper's (prose; the numbers come from the results).
 EXPLANATIONS: dict[str, str] = {
-    "goalone": "an engineered policy: differences come from the simulators (socialzoo's batched "
+    "goalone": "An engineered policy: differences come from the simulators (socialzoo's batched "
     "social-force humans, planner and imported maps against the paper's ROS simulator).",
-    "ref": "an engineered policy (SPEC section 10's rule): differences come from the simulators, "
+    "ref": "An engineered policy (SPEC section 10's rule): differences come from the simulators, "
     "as for GoAlone.",
-    "bc": "trained on our Ref's demonstrations in our simulator, one seed; the paper's LfD numbers "
-    "do not grow with the data (16% at 116,600 steps, 84% at 155,400), a sign of large seed variance.",
+    "bc": "Trained on our Ref's demonstrations in our simulator, one seed; the paper's own LfD "
+    "numbers do not grow with the data, a sign of a large variance between runs.",
     "gail": "TorchRL's GAILLoss with a PPO generator on our simulator, one seed and our own "
     "defaults (the paper gives no hyper-parameters).",
-    "pips": "our own synthesiser (unit-checked features, z3 thresholds), not the paper's code; the "
-    "program is read from 3,500 demonstration steps as in the paper.",
-    "dqn": "trained on the documented reward (SPEC section 11: the reference code's reward had a "
-    "type slip) for 84,000 steps, one seed: short for RL, so the outcome varies a lot with the seed.",
-    "ppo": "trained on the documented reward and evaluated with its saved observation "
-    "normalisation (SPEC section 11: the reference evaluated without it); 84,000 steps, one seed.",
+    "pips": "Our own synthesiser (unit-checked features, z3 thresholds), not the paper's code.",
+    "dqn": "Trained on the documented reward (SPEC section 11: the reference code's reward had a "
+    "type slip) for the paper's short budget, one seed: the outcome varies a lot with the seed.",
+    "ppo": "Trained on the documented reward and evaluated with its saved observation "
+    "normalisation (SPEC section 11: the reference evaluated without it); the paper's short "
+    "budget, one seed.",
 }
+QUICK_NOTE = (
+    "- Everything: these are the `--quick` settings (tiny trainings, a few scenarios, a shorter "
+    "time limit), so no difference here says anything about the paper."
+)
 PART_TITLES: dict[str, str] = {
     "demos": "Ref demonstrations",
     "rl-curves": "RL data efficiency (PPO and DQN training, every checkpoint evaluated)",
@@ -62,7 +66,7 @@ def _settings_section(run: Mapping[str, Any]) -> list[str]:
         "rl_total_steps": s["rl_total_steps"],
         "rl_checkpoint_every": s["rl_checkpoint_every"],
         "curve_trials": s["curve_trials"],
-        "demo_steps": None,
+        "demo_steps": run.get("demo_steps"),
         "lfd_trials": s["lfd_trials"],
         "pips_steps": s["pips_steps"],
         "performance_trials": s["performance_trials"],
@@ -71,7 +75,9 @@ def _settings_section(run: Mapping[str, Any]) -> list[str]:
     lines = ["| setting | ours | paper |", "|---|---:|---:|"]
     for key, paper in PAPER_PROTOCOL.items():
         value = ours[key]
-        text = f"{value:,}" if value is not None else f"{s['demo_episodes']:,} episodes"
+        text = f"{value:,}" if value is not None else "not recorded yet"
+        if key == "demo_steps":
+            text += f" ({s['demo_episodes']:,} episodes)"
         lines.append(f"| {key.replace('_', ' ')} | {text} | {paper:,} |")
     sizes = ", ".join(f"{n:,}" for n in s["lfd_sizes"])
     lines.append(f"| LfD sizes (BC, GAIL) | {sizes} | 155,400, 116,600, 77,700, 38,800, 3,500 |")
@@ -182,7 +188,8 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     lines += ["", "## Table: LfD data efficiency", ""]
     lines += [tables["lfd"][1] if "lfd" in tables else "*Not run yet.*", ""]
     lines += _figure("lfd", prefix, "LfD success against demonstration steps (crosses: the paper)", figures)
-    lines += ["", "## Where we differ", "", *_differences(tables), ""]
+    differences = [QUICK_NOTE] if quick else _differences(tables)
+    lines += ["", "## Where we differ", "", *differences, ""]
     lines += [
         "Beyond these, socialzoo follows the paper where the reference code did not (SPEC section 11): "
         "Euclidean goal distance, every policy trained on the same documented reward, learned "
@@ -203,13 +210,17 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     return "\n".join(lines)
 
 
-def write_report(out_dir: str | Path) -> Path:
+def write_report(out_dir: str | Path, figures: bool = True) -> Path:
     """Tables (out_dir/tables/), figures (out_dir/figures/) and out_dir/REPRODUCTION.md from
-    out_dir/results/; returns the report's path."""
+    out_dir/results/; returns the report's path. Without `figures`, the figures already drawn
+    are linked (a report between parts)."""
     out = Path(out_dir)
     results = load(out / RESULTS_DIR)
     write_tables(build_tables(results), out / TABLES_DIR)
-    drawn = draw_figures(results, out / FIGURES_DIR)
+    if figures:
+        drawn = set(draw_figures(results, out / FIGURES_DIR))
+    else:
+        drawn = {p.stem for p in (out / FIGURES_DIR).glob("*.png")}
     path = out / REPORT_NAME
-    path.write_text(render_reproduction(results, "", set(drawn)))
+    path.write_text(render_reproduction(results, "", drawn))
     return path

@@ -26,6 +26,7 @@ from typing import Any
 
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
+from socialzoo.reproduce.parts import DEMOS_FILE
 
 RESULTS_DIR = "results"
 RUN_FILE = "run.json"
@@ -84,6 +85,17 @@ def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
     return out
 
 
+def _demo_steps(ledger: Ledger) -> int | None:
+    """Steps in the run's demonstration file (None before it is recorded)."""
+    import numpy as np
+
+    path = ledger.path("demos", DEMOS_FILE)
+    if not path.is_file():
+        return None
+    with np.load(path) as data:
+        return int(data["action"].shape[0])
+
+
 def _lfd_rows(path: Path) -> list[dict[str, Any]]:
     """The LfD CSV with the paper's numbers of every row (PIPS's too, SPEC section 10)."""
     rows = read_csv(path)
@@ -110,6 +122,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
             "command": command_for(ledger.settings.name),
             "machine": machine(),
             "parts_last_run": list(parts),
+            "demo_steps": _demo_steps(ledger),
         },
     )
     if (ledger.work / TIMINGS_FILE).is_file():

@@ -75,7 +75,7 @@ def reproduce(
             made[part] = PART_RUNNERS[part](ctx)
             session["computed"] = made[part]
         collect(ledger, out_dir, chosen)
-        write_report(out_dir)
+        write_report(out_dir, figures=False)
         if on_part is not None:
             on_part(part, made[part])
     collect(ledger, out_dir, chosen)
