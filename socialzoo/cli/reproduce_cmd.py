@@ -26,6 +26,13 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--backend", default="local", choices=("local", "ray"), help="where tasks run")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    parser.add_argument(
+        "--publish",
+        default=None,
+        metavar="REPO",
+        help="then copy the results, tables and figures into REPO/results/reproduction/ and write "
+        "REPO/REPRODUCTION.md",
+    )
     parser.set_defaults(func=run_reproduce_command)
 
 
@@ -53,4 +60,8 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
         return 2
     print(f"socialzoo reproduce: items in {result.work_dir}; report {result.report}")
+    if args.publish is not None:
+        from socialzoo.reproduce.publish import publish
+
+        print(f"socialzoo reproduce: published {publish(args.out, args.publish)}")
     return 0
