@@ -54,7 +54,12 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
 
     try:
         result = reproduce(
-            args.out, settings, parts=parts, backend=args.backend, progress=not args.no_progress, on_part=report
+            args.out,
+            settings,
+            parts=parts,
+            backend=args.backend,
+            progress=not args.no_progress,
+            on_part=report,
         )
     except SettingsMismatch as err:
         print(f"socialzoo reproduce: error: {err}", file=sys.stderr)

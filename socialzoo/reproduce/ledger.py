@@ -66,7 +66,7 @@ class Ledger:
         self.hash = settings_hash(settings)
         self.work = self.out_dir / self.hash
         self.work.mkdir(parents=True, exist_ok=True)
-        record = {"hash": self.hash, "settings": settings.to_json()}
+        record: dict[str, Any] = {"hash": self.hash, "settings": settings.to_json()}
         file = self.work / SETTINGS_FILE
         if file.exists():
             stored = json.loads(file.read_text())
@@ -117,7 +117,9 @@ class Ledger:
             if session["computed"] is None:
                 session["computed"] = 1  # interrupted: it was working
             self._record(part, session)
-            logger.info("%s: %.1f s (%s)", part, session["seconds"], "done" if session["finished"] else "stopped")
+            logger.info(
+                "%s: %.1f s (%s)", part, session["seconds"], "done" if session["finished"] else "stopped"
+            )
 
 
 def _comparable(settings: dict[str, Any]) -> dict[str, Any]:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.reproduce.backend import run_tasks
+from socialzoo.reproduce.backend import Backend, run_tasks
 from socialzoo.reproduce.ledger import Ledger
 from socialzoo.reproduce.paper import PAPER_POLICIES
 
@@ -45,7 +45,7 @@ class Context:
     """
 
     ledger: Ledger
-    backend: str = "local"
+    backend: Backend = "local"
     progress: bool = True
 
     @property
@@ -207,9 +207,7 @@ def run_lfd(ctx: Context) -> int:
     made = run_demos(ctx)
     items = lfd_items(ctx)
     files, trained = _train(ctx, items)
-    policies = {
-        (name, int(args.steps)): path for (name, args), path in zip(items, files, strict=True)
-    }
+    policies = {(name, int(args.steps)): path for (name, args), path in zip(items, files, strict=True)}
     result = run_lfd_evaluation(
         policies,
         ctx.ledger.path("lfd", "eval"),
@@ -243,7 +241,7 @@ def _benchmark(ctx: Context, map_name: str, trials: int, folder: str) -> int:
         policies=PAPER_POLICIES,
         maps=(map_name,),
         trials=trials,
-        backend=ctx.backend,  # type: ignore[arg-type]
+        backend=ctx.backend,
         workers=s.workers,
         batch_size=s.batch_size,
         env_overrides=dict(s.eval_env_overrides),

@@ -7,7 +7,6 @@ Everything is drawn from a results folder (socialzoo.reproduce.results) and noth
 
 from __future__ import annotations
 
-
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -54,10 +53,10 @@ PART_TITLES: dict[str, str] = {
 
 
 def _duration(seconds: float) -> str:
-    seconds = int(round(seconds))
-    return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min" if seconds >= 3600 else (
-        f"{seconds // 60} min {seconds % 60:02d} s"
-    )
+    whole = round(seconds)
+    if whole >= 3600:
+        return f"{whole // 3600} h {whole % 3600 // 60:02d} min"
+    return f"{whole // 60} min {whole % 60:02d} s"
 
 
 def _settings_section(run: Mapping[str, Any]) -> list[str]:
@@ -107,12 +106,17 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
 def _figure(name: str, prefix: str, caption: str, figures: set[str]) -> list[str]:
     if name not in figures:
         return [f"*{caption}: not drawn yet (its part has not run).*"]
-    return [f"![{caption}]({prefix}{FIGURES_DIR}/{name}.png)", "", f"*{caption}* ([PDF]({prefix}{FIGURES_DIR}/{name}.pdf))"]
+    link = f"{prefix}{FIGURES_DIR}/{name}"
+    return [f"![{caption}]({link}.png)", "", f"*{caption}* ([PDF]({link}.pdf))"]
 
 
 def _differences(tables: Mapping[str, tuple[list[dict[str, Any]], str]]) -> list[str]:
     lines = []
-    for name, what in (("performance", "performance (gdc1)"), ("transfer", "transfer (ghc3)"), ("lfd", "LfD")):
+    for name, what in (
+        ("performance", "performance (gdc1)"),
+        ("transfer", "transfer (ghc3)"),
+        ("lfd", "LfD"),
+    ):
         rows = tables.get(name, ([], ""))[0]
         for r in rows:
             if not r["differs"]:
@@ -152,7 +156,7 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
         f"`{run['settings_hash']}`) from the stored results in [`{prefix}{RESULTS_DIR}/`]({prefix}{RESULTS_DIR}/). "
         "Every number here is read from those files; none is typed. The paper's numbers are "
         f"{SPEC_REFERENCE} (`socialzoo.reproduce.paper`). Intervals are 90% (success: Wilson; "
-        "means: Student-t). \"differs\" marks a paper number outside our interval.",
+        'means: Student-t). "differs" marks a paper number outside our interval.',
         "",
     ]
     if quick:
@@ -199,7 +203,11 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     ]
     training = results.get("training", [])
     if training:
-        lines += ["## Trained policies", "", "| run | trainer | demonstration steps | env steps | wall time |"]
+        lines += [
+            "## Trained policies",
+            "",
+            "| run | trainer | demonstration steps | env steps | wall time |",
+        ]
         lines += ["|---|---|---:|---:|---:|"]
         for t in training:
             demo = f"{t['demonstration_steps']:,}" if t.get("demonstration_steps") else ""

@@ -20,7 +20,7 @@ import json
 import math
 import os
 import shutil
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -162,16 +162,14 @@ def read_csv(path: str | Path) -> list[dict[str, Any]]:
         return [{k: _cell(v, k) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
-def write_csv(rows: list[Mapping[str, Any]], path: str | Path) -> Path:
+def write_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
     """Write rows as CSV (columns of the first row; NaN as an empty cell)."""
     path = Path(path)
     with path.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])
         writer.writeheader()
         for row in rows:
-            writer.writerow(
-                {k: "" if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()}
-            )
+            writer.writerow({k: "" if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()})
     return path
 
 

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from socialzoo.reproduce.backend import check_backend
+from socialzoo.reproduce.backend import Backend, check_backend
 from socialzoo.reproduce.ledger import Ledger
 from socialzoo.reproduce.parts import PART_RUNNERS, Context
 from socialzoo.reproduce.plan import PARTS, Settings, parse_parts
@@ -44,7 +44,7 @@ def reproduce(
     settings: Settings,
     *,
     parts: Sequence[str] | str | None = None,
-    backend: str = "local",
+    backend: Backend = "local",
     progress: bool = True,
     on_part: Callable[[str, int], None] | None = None,
 ) -> ReproduceResult:

@@ -2,7 +2,14 @@
 
 import pytest
 
-from socialzoo.reproduce.plan import PARTS, Settings, full_settings, parse_parts, quick_settings, settings_hash
+from socialzoo.reproduce.plan import (
+    PARTS,
+    Settings,
+    full_settings,
+    parse_parts,
+    quick_settings,
+    settings_hash,
+)
 
 
 def test_hash_changes_with_what_is_stored_not_with_how():
@@ -27,7 +34,7 @@ def test_settings_round_trip_and_validation():
     assert Settings.from_json(s.to_json()) == s
     with pytest.raises(ValueError, match="curve_trials"):
         quick_settings(curve_trials=0)
-    with pytest.raises(ValueError, match="rl_overrides.*'sac'"):
+    with pytest.raises(ValueError, match=r"rl_overrides.*'sac'"):
         quick_settings(rl_overrides={"sac": {}})
     with pytest.raises(ValueError, match="name"):
         Settings(name="medium")
@@ -39,5 +46,5 @@ def test_parse_parts():
     assert parse_parts(None) == PARTS
     assert parse_parts("lfd,demos") == ("demos", "lfd")
     assert parse_parts(["transfer"]) == ("transfer",)
-    with pytest.raises(ValueError, match="'rl'.*demos, rl-curves, lfd, performance, transfer"):
+    with pytest.raises(ValueError, match=r"'rl'.*demos, rl-curves, lfd, performance, transfer"):
         parse_parts("rl,lfd")

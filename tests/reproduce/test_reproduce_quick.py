@@ -23,7 +23,9 @@ def test_quick_run_writes_every_table_figure_and_the_report(quick_run):
         for fmt in ("png", "pdf"):
             assert (quick_run / "figures" / f"{name}.{fmt}").stat().st_size > 1000
     for name in TABLES:
-        assert (quick_run / "tables" / f"{name}.md").is_file() and (quick_run / "tables" / f"{name}.csv").is_file()
+        assert (quick_run / "tables" / f"{name}.md").is_file() and (
+            quick_run / "tables" / f"{name}.csv"
+        ).is_file()
     text = (quick_run / "REPRODUCTION.md").read_text()
     assert "socialzoo reproduce --out DIR --quick" in text and "--quick` settings" in text
     results = load(quick_run / "results")
@@ -56,7 +58,10 @@ def test_rerun_repeats_nothing(quick_run, capsys):
     for store_path in sorted(work.rglob("*.sqlite")):
         with ResultsStore(store_path) as store:
             sizes[store_path] = len(store)
-    assert main(["reproduce", "--out", str(quick_run), "--quick", "--no-progress", "--only", "lfd,performance"]) == 0
+    assert (
+        main(["reproduce", "--out", str(quick_run), "--quick", "--no-progress", "--only", "lfd,performance"])
+        == 0
+    )
     out = capsys.readouterr().out
     assert "lfd done (0 items made)" in out and "performance done (0 items made)" in out
     for store_path, size in sizes.items():
