@@ -94,9 +94,11 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
         if entry is None:
             lines.append(f"| {part} | {PART_TITLES[part]} | not run | 0 | no |")
             continue
-        total += entry["seconds"]
+        # Sessions that only read stored items back (a rerun) do not count as the part's time.
+        seconds = entry.get("work_seconds", entry["seconds"])
+        total += seconds
         lines.append(
-            f"| {part} | {PART_TITLES[part]} | {_duration(entry['seconds'])} | {len(entry['sessions'])} "
+            f"| {part} | {PART_TITLES[part]} | {_duration(seconds)} | {len(entry['sessions'])} "
             f"| {'yes' if entry['finished'] else 'no'} |"
         )
     lines.append(f"| all | | {_duration(total)} | | |")
@@ -171,8 +173,9 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
         "## Time on this machine",
         "",
         f"{machine['cpus']} CPUs, {machine['platform']}, Python {machine['python']}. Wall time of each part "
-        "summed over its sessions (a resumed part counts every session); a part also trains the "
-        "policies it needs that an earlier part did not.",
+        "summed over the sessions that made items (a resumed part counts every session; a rerun "
+        "that only read stored items back does not); a part also trains the policies it needs "
+        "that an earlier part did not.",
         "",
         *_timings_section(results.get("timings", {})),
         "",
