@@ -92,7 +92,7 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
     for part in PARTS:
         entry = timings.get(part)
         if entry is None:
-            lines.append(f"| {part} | {PART_TITLES[part]} | not run | 0 | no |")
+            lines.append(f"| {part} | {PART_TITLES[part]} | no session recorded | 0 | no |")
             continue
         # Sessions that only read stored items back (a rerun) do not count as the part's time.
         seconds = entry.get("work_seconds", entry["seconds"])

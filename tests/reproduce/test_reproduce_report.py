@@ -90,7 +90,9 @@ def test_report_explains_each_difference_and_marks_missing_parts(results_dir):
     assert "performance (gdc1), Ref: ours 55.0% [50.0, 60.0], paper 89.4%." in differences
     assert EXPLANATIONS["ref"] in differences and "- performance (gdc1), GoAlone" not in differences
     assert "| demos | Ref demonstrations | 1 min 00 s | 1 | yes |" in text
-    assert "| transfer | transfer on ghc3-test (trains what is missing) | not run | 0 | no |" in text
+    assert (
+        "| transfer | transfer on ghc3-test (trains what is missing) | no session recorded | 0 | no |" in text
+    )
     assert "| demo steps | 160,000 (125 episodes) | 155,000 |" in text
     assert "](published/figures/success.png)" in text and "*Not run yet.*" in text
 
