@@ -36,6 +36,19 @@ def register(subparsers: Any) -> None:
     parser.set_defaults(func=run_reproduce_command)
 
 
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _interrupt_on_signals() -> None:
+    """Make SIGTERM, and SIGINT even where the shell ignores it (a command started with `&`),
+    raise KeyboardInterrupt, so a stopped run records the time of its interrupted part."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _interrupt)
+
+
 def run_reproduce_command(args: argparse.Namespace) -> int:
     """Run `socialzoo reproduce`; returns the exit status (2 for bad arguments or mixed settings)."""
     from socialzoo.reproduce.ledger import SettingsMismatch
@@ -48,6 +61,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         print(f"socialzoo reproduce: error: --only: {err}", file=sys.stderr)
         return 2
     settings = quick_settings() if args.quick else full_settings()
+    _interrupt_on_signals()
 
     def report(part: str, made: int) -> None:
         print(f"socialzoo reproduce: {part} done ({made} items made)", flush=True)

@@ -99,3 +99,30 @@ def test_ray_backend_trains_and_evaluates_as_tasks(tmp_path, tiny_settings):
     }
     timings = json.loads((work["ray"] / "timings.json").read_text())["rl-curves"]
     assert timings["sessions"][0]["backend"] == "ray"
+
+
+def test_a_terminated_command_records_its_part_and_resumes(tmp_path):
+    """`socialzoo reproduce` stopped by SIGTERM mid-part records the session; a rerun finishes it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from socialzoo.reproduce.plan import quick_settings
+
+    work = tmp_path / settings_hash(quick_settings())
+    command = [sys.executable, "-m", "socialzoo", "reproduce", "--out", str(tmp_path), "--quick"]
+    child = subprocess.Popen([*command, "--only", "demos", "--no-progress"])
+    deadline = time.monotonic() + 120
+    while not (work / "settings.json").exists() and child.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    time.sleep(0.5)  # inside the demos part
+    child.send_signal(signal.SIGTERM)
+    assert child.wait(timeout=60) != 0
+    sessions = json.loads((work / "timings.json").read_text())["demos"]["sessions"]
+    assert [s["finished"] for s in sessions] == [False]
+    assert not (work / "demos" / "ref_demos.npz").exists()
+    assert subprocess.run([*command, "--only", "demos", "--no-progress"], timeout=300).returncode == 0
+    sessions = json.loads((work / "timings.json").read_text())["demos"]["sessions"]
+    assert [s["finished"] for s in sessions] == [False, True]
+    assert (work / "demos" / "ref_demos.npz").is_file()
