@@ -18,7 +18,9 @@ def test_every_subpackage_has_an_api_page():
     nav = (ROOT / "mkdocs.yml").read_text()
     for name in _subpackages():
         page = ROOT / "docs" / "api" / f"{name}.md"
-        assert page.is_file(), f"no API page for socialzoo.{name}: add docs/api/{name}.md and list it in mkdocs.yml"
+        assert page.is_file(), (
+            f"no API page for socialzoo.{name}: add docs/api/{name}.md and list it in mkdocs.yml"
+        )
         assert f"::: socialzoo.{name}" in page.read_text(), f"{page} does not render socialzoo.{name}"
         assert f"api/{name}.md" in nav, f"mkdocs.yml's nav does not list api/{name}.md"
 

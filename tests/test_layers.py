@@ -29,7 +29,8 @@ RANKS: dict[str, int] = {
     "agents": 4,
     "bench": 5,
     "train": 6,
-    "cli": 7,
+    "reproduce": 7,
+    "cli": 8,
 }
 # Subpackages that hold data only: anyone may name them.
 DATA = {"_maps"}

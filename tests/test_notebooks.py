@@ -28,7 +28,9 @@ def test_notebook_runs(path, monkeypatch):
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_reads_quick_mode_first(path):
     cells = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
-    assert cells and QUICK_ENV in "".join(cells[0]["source"]), f"{path.name}: read {QUICK_ENV} in the first code cell"
+    assert cells and QUICK_ENV in "".join(cells[0]["source"]), (
+        f"{path.name}: read {QUICK_ENV} in the first code cell"
+    )
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])

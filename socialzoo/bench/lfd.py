@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
+from socialzoo.bench.runner import Backend
 from socialzoo.bench.tables import policy_label
 
 logger = logging.getLogger(__name__)
@@ -122,6 +123,7 @@ def run_lfd_evaluation(
     batch_size: int = 64,
     env_overrides: Mapping[str, Any] | None = None,
     progress: bool = True,
+    backend: Backend = "local",
 ) -> LfdResult:
     """Evaluate LfD policy files on the first `trials` gdc1 test scenarios and write the table.
 
@@ -135,6 +137,7 @@ def run_lfd_evaluation(
         env_overrides: EnvConfig.replace keywords for the evaluation env (plain JSON), e.g.
             {"max_steps": 400} for a quick look; None: the benchmark as it is.
         progress: show a progress bar.
+        backend: "local" (`workers` processes) or "ray" (Ray tasks; a running Ray is used).
 
     Raises:
         ValueError: no policies, a file that does not exist, or too many trials.
@@ -153,6 +156,7 @@ def run_lfd_evaluation(
         workers=workers,
         batch_size=batch_size,
         env_overrides=dict(env_overrides or {}),
+        backend=backend,
     )
     out = Path(out_dir)
     result = run_benchmark(config, out, progress=progress, figures=False)

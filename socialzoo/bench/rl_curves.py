@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.runner import RunSpec, Trial, TrialResult, env_config_for, evaluate
+from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, summarize
 from socialzoo.nav.scenarios import TestSet, get_test_set
@@ -104,6 +104,7 @@ def evaluate_policies(
     batch_size: int = 100,
     progress: bool = True,
     env_overrides: Mapping[str, Any] | None = None,
+    backend: Backend = "local",
 ) -> list[dict[str, Any]]:
     """Run (or read back) `trials` scenarios of a test set for each policy, storing trials as they
     finish under the policy's label; returns every stored trial row of these labels.
@@ -117,6 +118,7 @@ def evaluate_policies(
         batch_size: env rows per worker.
         progress: show a progress bar.
         env_overrides: EnvConfig.replace keywords for the evaluation env (e.g. {"max_steps": 400}).
+        backend: "local" (`workers` processes) or "ray" (Ray tasks; a running Ray is used).
     """
     from socialzoo import __version__
     from socialzoo.agents import make_policy, split_policy_spec
@@ -162,7 +164,15 @@ def evaluate_policies(
         policies={s: {} for s in policies.values()},
         batch_size=batch_size,
     )
-    evaluate(pending, spec, workers=workers, on_results=deliver, progress=progress, desc="checkpoints")
+    evaluate(
+        pending,
+        spec,
+        backend=backend,
+        workers=workers,
+        on_results=deliver,
+        progress=progress,
+        desc="checkpoints",
+    )
     rows = []
     for label in policies:
         rows += store.rows(policy=label, test_set=name, config_hash=hashes[label], indices=range(trials))
@@ -275,6 +285,7 @@ def rl_curves(
     progress: bool = True,
     figure: bool = True,
     env_overrides: Mapping[str, Any] | None = None,
+    backend: Backend = "local",
 ) -> CurvesResult:
     """Experiment 1: evaluate every checkpoint of each run on the same scenarios, write the curves.
 
@@ -289,6 +300,7 @@ def rl_curves(
         progress: show a progress bar.
         figure: draw the figure (needs matplotlib).
         env_overrides: EnvConfig.replace keywords for the evaluation env (default: the benchmark's).
+        backend: "local" or "ray" (see `evaluate_policies`).
     """
     ts = get_test_set(test_set) if isinstance(test_set, str) else test_set
     out = Path(out_dir)
@@ -305,6 +317,7 @@ def rl_curves(
             batch_size=batch_size,
             progress=progress,
             env_overrides=env_overrides,
+            backend=backend,
         )
     steps = {label: step for label, (_, step) in specs.items()}
     all_rows = curve_rows(trial_rows, steps)

@@ -19,6 +19,7 @@ COMMANDS: tuple[str, ...] = (
     "socialzoo.cli.demo_cmd",  # demo
     "socialzoo.cli.map_cmd",  # map list|show|import|validate
     "socialzoo.cli.replay_cmd",  # replay
+    "socialzoo.cli.reproduce_cmd",  # reproduce
     "socialzoo.cli.train_cmd",  # train <trainer>
 )
 

@@ -1,0 +1,86 @@
+"""`socialzoo reproduce --out DIR [--quick] [--only PARTS] [--backend local|ray] [--no-progress]`:
+the paper's experiments, their tables and figures, and DIR/REPRODUCTION.md (socialzoo.reproduce)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add `reproduce`."""
+    from socialzoo.reproduce.plan import PARTS
+
+    parser = subparsers.add_parser(
+        "reproduce",
+        help="regenerate every table and figure of the paper (resumable), with REPRODUCTION.md",
+        description="Run the paper's protocol: Ref demonstrations, PPO/DQN curves, the LfD table, "
+        "performance on gdc1-test and transfer on ghc3-test for the seven policies. Every item is "
+        "stored as it finishes under DIR/<settings hash>/; a rerun continues where it stopped.",
+    )
+    parser.add_argument("--out", required=True, help="output folder DIR")
+    parser.add_argument("--quick", action="store_true", help="a small version of everything (minutes)")
+    parser.add_argument(
+        "--only", default=None, metavar="PARTS", help=f"comma-separated parts to run, of: {','.join(PARTS)}"
+    )
+    parser.add_argument("--backend", default="local", choices=("local", "ray"), help="where tasks run")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    parser.add_argument(
+        "--publish",
+        default=None,
+        metavar="REPO",
+        help="then copy the results, tables and figures into REPO/results/reproduction/ and write "
+        "REPO/REPRODUCTION.md",
+    )
+    parser.set_defaults(func=run_reproduce_command)
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _interrupt_on_signals() -> None:
+    """Make SIGTERM, and SIGINT even where the shell ignores it (a command started with `&`),
+    raise KeyboardInterrupt, so a stopped run records the time of its interrupted part."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _interrupt)
+
+
+def run_reproduce_command(args: argparse.Namespace) -> int:
+    """Run `socialzoo reproduce`; returns the exit status (2 for bad arguments or mixed settings)."""
+    from socialzoo.reproduce.ledger import SettingsMismatch
+    from socialzoo.reproduce.plan import full_settings, parse_parts, quick_settings
+    from socialzoo.reproduce.run import reproduce
+
+    try:
+        parts = parse_parts(args.only)
+    except ValueError as err:
+        print(f"socialzoo reproduce: error: --only: {err}", file=sys.stderr)
+        return 2
+    settings = quick_settings() if args.quick else full_settings()
+    _interrupt_on_signals()
+
+    def report(part: str, made: int) -> None:
+        print(f"socialzoo reproduce: {part} done ({made} items made)", flush=True)
+
+    try:
+        result = reproduce(
+            args.out,
+            settings,
+            parts=parts,
+            backend=args.backend,
+            progress=not args.no_progress,
+            on_part=report,
+        )
+    except SettingsMismatch as err:
+        print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
+        return 2
+    print(f"socialzoo reproduce: items in {result.work_dir}; report {result.report}")
+    if args.publish is not None:
+        from socialzoo.reproduce.publish import publish
+
+        print(f"socialzoo reproduce: published {publish(args.out, args.publish)}")
+    return 0

@@ -1,0 +1,81 @@
+"""The paper's figures from the loaded results (socialzoo.reproduce.results.load), PNG and PDF.
+
+- success.{png,pdf}, metrics.{png,pdf}: success rates with the paper's marks, and force, blame and
+  time to goal, per policy on the training and transfer maps (socialzoo.bench.figures);
+- rl_curves.{png,pdf}: success, time and reward of every checkpoint with 90% bands
+  (socialzoo.bench.rl_curves.plot_curves);
+- lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.tables import policy_label
+
+FORMATS: tuple[str, ...] = ("png", "pdf")
+
+
+def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Path]:
+    """lfd.{png,pdf}: success % of each LfD policy against its demonstration steps (log scale),
+    with 90% intervals, and the paper's numbers as black crosses."""
+    from socialzoo.bench.figures import _pyplot
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    colors = ("#4477aa", "#ee6677", "#228833")
+    for i, policy in enumerate(dict.fromkeys(str(r["policy"]) for r in rows)):
+        points = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["demonstration_steps"])
+        x = [r["demonstration_steps"] for r in points]
+        y = [100 * r["success_rate"] for r in points]
+        low = [100 * (r["success_rate"] - r["success_ci_low"]) for r in points]
+        high = [100 * (r["success_ci_high"] - r["success_rate"]) for r in points]
+        color = colors[i % len(colors)]
+        ax.errorbar(x, y, yerr=[low, high], color=color, marker="o", capsize=3, label=policy_label(policy))
+        paper = [(r["demonstration_steps"], r["paper_success_pct"]) for r in points]
+        paper = [(px, py) for px, py in paper if isinstance(py, float) and math.isfinite(py)]
+        if paper:
+            ax.scatter(*zip(*paper, strict=True), marker="x", color=color, s=50, zorder=3)
+    ax.scatter([], [], marker="x", color="black", label="paper")
+    ax.set_xscale("log")
+    ax.set_xlabel("demonstration steps")
+    ax.set_ylabel("success, %")
+    ax.set_ylim(-2, 102)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    out = Path(out_dir)
+    paths = []
+    for fmt in FORMATS:
+        path = out / f"lfd.{fmt}"
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+        paths.append(path)
+    plt.close(fig)
+    return paths
+
+
+def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, list[Path]]:
+    """Every figure the results allow, into out_dir; returns name -> files ("success",
+    "metrics", "rl_curves", "lfd")."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    drawn: dict[str, list[Path]] = {}
+    summary = [*results.get("performance", []), *results.get("transfer", [])]
+    if summary:
+        from socialzoo.bench.figures import plot_metrics, plot_success
+
+        drawn["success"] = plot_success(summary, out, FORMATS)
+        drawn["metrics"] = plot_metrics(summary, out, FORMATS)
+    curves = results.get("rl_curves", [])
+    if curves:
+        from socialzoo.bench.rl_curves import plot_curves
+
+        points = [r for r in curves if math.isfinite(r["step"])]
+        refs = [r for r in curves if not math.isfinite(r["step"])]
+        drawn["rl_curves"] = plot_curves(points, out, refs, FORMATS)
+    if results.get("lfd"):
+        drawn["lfd"] = plot_lfd(results["lfd"], out)
+    return drawn

@@ -1,0 +1,128 @@
+"""Where a reproduction keeps its items, and how long each part took.
+
+    DIR/<hash>/settings.json     the settings these items were made with (refused if they differ)
+    DIR/<hash>/timings.json      every session of every part: start, wall seconds, finished or not
+    DIR/<hash>/demos/ rl/ lfd/ performance/ transfer/     the parts' items
+
+Items are stored as they finish by the pieces that make them (training run folders, demonstration
+chunks, SQLite trial stores), so a rerun after an interruption continues where it stopped. A part's
+wall time is the sum of its sessions, so an interrupted and resumed part counts every second spent.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import platform
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from socialzoo.reproduce.plan import Settings, settings_hash
+
+logger = logging.getLogger(__name__)
+
+SETTINGS_FILE = "settings.json"
+TIMINGS_FILE = "timings.json"
+
+
+class SettingsMismatch(Exception):
+    """A work folder that holds items of other settings."""
+
+
+def _write_json(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+    os.replace(tmp, path)
+
+
+def machine() -> dict[str, Any]:
+    """A description of this machine for the report (CPU count, platform, Python)."""
+    return {
+        "cpus": os.cpu_count(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "python": platform.python_version(),
+    }
+
+
+class Ledger:
+    """The work folder DIR/<hash>/ of one settings: its settings record and the parts' timings.
+
+    Args:
+        out_dir: the reproduction's output folder DIR.
+        settings: the settings.
+
+    Raises:
+        SettingsMismatch: DIR/<hash>/settings.json records other settings.
+    """
+
+    def __init__(self, out_dir: str | Path, settings: Settings) -> None:
+        self.out_dir = Path(out_dir)
+        self.settings = settings
+        self.hash = settings_hash(settings)
+        self.work = self.out_dir / self.hash
+        self.work.mkdir(parents=True, exist_ok=True)
+        record: dict[str, Any] = {"hash": self.hash, "settings": settings.to_json()}
+        file = self.work / SETTINGS_FILE
+        if file.exists():
+            stored = json.loads(file.read_text())
+            if stored.get("hash") != self.hash or _comparable(stored["settings"]) != _comparable(
+                record["settings"]
+            ):
+                raise SettingsMismatch(f"{self.work} holds items of other settings ({file}); not mixing them")
+        _write_json(file, record)
+
+    def path(self, *parts: str) -> Path:
+        """A path inside the work folder."""
+        return self.work.joinpath(*parts)
+
+    def timings(self) -> dict[str, Any]:
+        """{part: {"sessions": [...], "seconds": total, "finished": bool}} as stored."""
+        file = self.work / TIMINGS_FILE
+        return json.loads(file.read_text()) if file.exists() else {}
+
+    def _record(self, part: str, session: dict[str, Any]) -> None:
+        data = self.timings()
+        entry = data.setdefault(part, {"sessions": []})
+        entry["sessions"].append(session)
+        entry["seconds"] = round(sum(s["seconds"] for s in entry["sessions"]), 1)
+        # The part's own work: sessions that computed something (a rerun that only reads back
+        # stored items is recorded, but it is not the time the part takes).
+        entry["work_seconds"] = round(sum(s["seconds"] for s in entry["sessions"] if s.get("computed")), 1)
+        entry["finished"] = any(s["finished"] for s in entry["sessions"])
+        entry["machine"] = machine()
+        _write_json(self.work / TIMINGS_FILE, data)
+
+    @contextmanager
+    def timed(self, part: str, backend: str) -> Iterator[dict[str, Any]]:
+        """Time one session of a part. The caller sets session["computed"] = number of items it
+        made (0 when everything was read back); an exception (Ctrl-C too) records the session as
+        unfinished and propagates."""
+        session: dict[str, Any] = {
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "backend": backend,
+            "computed": None,
+            "finished": False,
+        }
+        start = time.perf_counter()
+        try:
+            yield session
+            session["finished"] = True
+        finally:
+            session["seconds"] = round(time.perf_counter() - start, 1)
+            if session["computed"] is None:
+                session["computed"] = 1  # interrupted: it was working
+            self._record(part, session)
+            logger.info(
+                "%s: %.1f s (%s)", part, session["seconds"], "done" if session["finished"] else "stopped"
+            )
+
+
+def _comparable(settings: dict[str, Any]) -> dict[str, Any]:
+    from socialzoo.reproduce.plan import VOLATILE_FIELDS
+
+    return {k: v for k, v in settings.items() if k not in VOLATILE_FIELDS}

@@ -1,0 +1,216 @@
+"""The reproduction's parts and settings: the full protocol (SPEC section 10) and `--quick`.
+
+A `Settings` is everything that decides what the run stores; its `settings_hash` names the folder
+DIR/<hash>/ that holds the run's items, so a rerun with other settings never reads items stored
+under different ones. How the run is carried out (parts chosen, backend, progress bars) is not a
+setting and does not change the hash.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from socialzoo.bench.lfd import LFD_SIZES
+from socialzoo.core.validation import check_int
+
+# The parts, in the order they run (later parts reuse what earlier ones trained).
+PARTS: tuple[str, ...] = ("demos", "rl-curves", "lfd", "performance", "transfer")
+# Bumped when the layout of DIR/<hash>/ changes, so old items are never read as current ones.
+LAYOUT_VERSION = 1
+
+
+def _frozen(mapping: Mapping[str, Mapping[str, Any]]) -> Mapping[str, Mapping[str, Any]]:
+    return MappingProxyType({k: MappingProxyType(dict(v)) for k, v in mapping.items()})
+
+
+@dataclass(frozen=True, kw_only=True)
+class Settings:
+    """What a reproduction trains and evaluates.
+
+    Attributes:
+        name: "full" (the paper's protocol) or "quick" (a small version of everything).
+        seed: the seed of every training run.
+        rl_total_steps: PPO and DQN training steps.
+        rl_checkpoint_every: steps between their checkpoints.
+        rl_overrides: per trainer ("ppo", "dqn"), extra trainer arguments.
+        curve_trials: gdc1-test scenarios per checkpoint (the first ones).
+        demo_episodes: Ref demonstration episodes (their own seeds, not a test set).
+        demo_env_overrides: EnvConfig overrides of the demonstration env.
+        lfd_sizes: demonstration steps BC and GAIL train on (largest first).
+        lfd_overrides: per trainer ("bc", "gail", "pips"), extra trainer arguments.
+        pips_steps: demonstration steps PIPS synthesises from.
+        lfd_trials: gdc1-test scenarios per LfD policy.
+        performance_trials: gdc1-test scenarios per policy.
+        transfer_trials: ghc3-test scenarios per policy.
+        eval_env_overrides: EnvConfig overrides of every evaluation env.
+        workers: local evaluation processes (or Ray chunks).
+        batch_size: env rows stepped together per evaluation worker.
+    """
+
+    name: str = "full"
+    seed: int = 0
+    rl_total_steps: int = 84_000
+    rl_checkpoint_every: int = 2_000
+    rl_overrides: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    curve_trials: int = 100
+    demo_episodes: int = 125
+    demo_env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    lfd_sizes: tuple[int, ...] = LFD_SIZES
+    lfd_overrides: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    pips_steps: int = 3_500
+    lfd_trials: int = 100
+    performance_trials: int = 2_000
+    transfer_trials: int = 2_000
+    eval_env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    workers: int = 2
+    batch_size: int = 64
+
+    def __post_init__(self) -> None:
+        if self.name not in ("full", "quick"):
+            raise ValueError(f"Settings.name must be 'full' or 'quick', got {self.name!r}")
+        check_int("Settings", "seed", self.seed, low=0)
+        for name in (
+            "rl_total_steps",
+            "rl_checkpoint_every",
+            "curve_trials",
+            "demo_episodes",
+            "pips_steps",
+            "lfd_trials",
+            "performance_trials",
+            "transfer_trials",
+            "workers",
+            "batch_size",
+        ):
+            check_int("Settings", name, getattr(self, name), low=1)
+        object.__setattr__(self, "lfd_sizes", tuple(self.lfd_sizes))
+        if not self.lfd_sizes:
+            raise ValueError("Settings.lfd_sizes is empty")
+        for size in self.lfd_sizes:
+            check_int("Settings", "lfd_sizes", size, low=1)
+        for name, known in (("rl_overrides", ("ppo", "dqn")), ("lfd_overrides", ("bc", "gail", "pips"))):
+            value = getattr(self, name)
+            bad = sorted(set(value) - set(known))
+            if bad:
+                raise ValueError(f"Settings.{name} names unknown trainers {bad}; known: {list(known)}")
+            object.__setattr__(self, name, _frozen(value))
+        object.__setattr__(self, "demo_env_overrides", MappingProxyType(dict(self.demo_env_overrides)))
+        object.__setattr__(self, "eval_env_overrides", MappingProxyType(dict(self.eval_env_overrides)))
+
+    @property
+    def lfd_largest(self) -> int:
+        """The demonstration size of the BC and GAIL policies in the performance experiments."""
+        return max(self.lfd_sizes)
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON form (sorted mappings), the input of `settings_hash`."""
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, Mapping):
+                value = {k: dict(v) if isinstance(v, Mapping) else v for k, v in value.items()}
+            elif isinstance(value, tuple):
+                value = list(value)
+            out[f.name] = value
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Settings:
+        """Settings from `to_json`'s form.
+
+        Raises:
+            ValueError: unknown fields (named).
+        """
+        names = {f.name for f in dataclasses.fields(cls)}
+        bad = sorted(set(data) - names)
+        if bad:
+            raise ValueError(f"Settings: unknown field(s) {bad}")
+        return cls(**dict(data))
+
+
+# Fields that decide how fast, not what: evaluation results do not depend on how trials are split.
+VOLATILE_FIELDS: tuple[str, ...] = ("workers", "batch_size")
+
+
+def settings_hash(settings: Settings) -> str:
+    """12 hex digits naming the settings (and the folder layout): DIR/<hash>/ holds their items."""
+    data = {k: v for k, v in settings.to_json().items() if k not in VOLATILE_FIELDS}
+    text = json.dumps({"layout": LAYOUT_VERSION, "settings": data}, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+def full_settings(**changes: Any) -> Settings:
+    """The paper's protocol (SPEC section 10) with the trainers' own defaults."""
+    return Settings(name="full", **changes)
+
+
+def quick_settings(**changes: Any) -> Settings:
+    """A small version of everything, a few minutes on 2 cores: tiny trainings on training
+    scenarios, and the first few test scenarios (with a shorter time limit) for evaluation."""
+    base: dict[str, Any] = {
+        "name": "quick",
+        "rl_total_steps": 400,
+        "rl_checkpoint_every": 200,
+        "rl_overrides": {
+            "ppo": {"num_envs": 4, "n_steps": 50, "n_epochs": 1, "max_steps": 400},
+            "dqn": {"max_steps": 400, "learning_starts": 50},
+        },
+        "curve_trials": 2,
+        "demo_episodes": 2,
+        "demo_env_overrides": {"max_steps": 800},
+        "lfd_sizes": (1_000, 300),
+        "lfd_overrides": {
+            "bc": {"min_updates": 20, "epochs": 1, "batch_size": 128},
+            "gail": {
+                "total_steps": 400,
+                "num_envs": 4,
+                "rollout_len": 50,
+                "minibatch": 100,
+                "max_episode_steps": 400,
+                "ppo_epochs": 1,
+                "disc_epochs": 1,
+            },
+            "pips": {
+                "max_depth": 1,
+                "beam": 4,
+                "pool": 4,
+                "partners": 20,
+                "solver": "exact",
+                "time_budget_s": 10.0,
+                "heldout_steps": 0,
+            },
+        },
+        "pips_steps": 1_000,
+        "lfd_trials": 2,
+        "performance_trials": 2,
+        "transfer_trials": 2,
+        # 30 s episodes: long enough for GoAlone and Ref to reach most goals.
+        "eval_env_overrides": {"max_steps": 1200},
+        # One in-process worker: for a handful of trials, starting processes costs more than it saves.
+        "workers": 1,
+        "batch_size": 8,
+    }
+    base.update(changes)
+    return Settings(**base)
+
+
+def parse_parts(text: str | Sequence[str] | None) -> tuple[str, ...]:
+    """The parts named by --only ("rl-curves,lfd"), in run order; None or empty: every part.
+
+    Raises:
+        ValueError: an unknown part (the message lists the known ones).
+    """
+    if text is None:
+        return PARTS
+    names = [n.strip() for n in (text.split(",") if isinstance(text, str) else text) if n.strip()]
+    if not names:
+        return PARTS
+    bad = [n for n in names if n not in PARTS]
+    if bad:
+        raise ValueError(f"unknown part(s) {', '.join(map(repr, bad))}; the parts are: {', '.join(PARTS)}")
+    return tuple(p for p in PARTS if p in names)

@@ -1,0 +1,237 @@
+"""REPRODUCTION.md: for every table and figure of the paper, ours beside the paper's, the command,
+the wall time of each part on this machine, and an explanation wherever we differ.
+
+Everything is drawn from a results folder (socialzoo.reproduce.results) and nothing else, so
+`render_reproduction(load(results_dir))` regenerates the committed file exactly (a test checks it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.tables import policy_label
+from socialzoo.reproduce.figures import draw_figures
+from socialzoo.reproduce.paper import PAPER_PROTOCOL, SPEC_REFERENCE
+from socialzoo.reproduce.plan import PARTS
+from socialzoo.reproduce.results import RESULTS_DIR, load
+from socialzoo.reproduce.tables import build_tables, write_tables
+
+REPORT_NAME = "REPRODUCTION.md"
+FIGURES_DIR = "figures"
+TABLES_DIR = "tables"
+
+# Why a policy's numbers may differ from the paper's (prose; the numbers come from the results).
+EXPLANATIONS: dict[str, str] = {
+    "goalone": "An engineered policy: differences come from the simulators (socialzoo's batched "
+    "social-force humans, planner and imported maps against the paper's ROS simulator).",
+    "ref": "An engineered policy (SPEC section 10's rule): differences come from the simulators, "
+    "as for GoAlone.",
+    "bc": "Trained on our Ref's demonstrations in our simulator, one seed; the paper's own LfD "
+    "numbers do not grow with the data, a sign of a large variance between runs.",
+    "gail": "TorchRL's GAILLoss with a PPO generator on our simulator, one seed and our own "
+    "defaults (the paper gives no hyper-parameters).",
+    "pips": "Our own synthesiser (unit-checked features, z3 thresholds), not the paper's code.",
+    "dqn": "Trained on the documented reward (SPEC section 11: the reference code's reward had a "
+    "type slip) for the paper's short budget, one seed: the outcome varies a lot with the seed.",
+    "ppo": "Trained on the documented reward and evaluated with its saved observation "
+    "normalisation (SPEC section 11: the reference evaluated without it); the paper's short "
+    "budget, one seed.",
+}
+QUICK_NOTE = (
+    "- Everything: these are the `--quick` settings (tiny trainings, a few scenarios, a shorter "
+    "time limit), so no difference here says anything about the paper."
+)
+PART_TITLES: dict[str, str] = {
+    "demos": "Ref demonstrations",
+    "rl-curves": "RL data efficiency (PPO and DQN training, every checkpoint evaluated)",
+    "lfd": "LfD data efficiency (BC and GAIL at every size, PIPS, the table)",
+    "performance": "performance on gdc1-test (trains what is missing)",
+    "transfer": "transfer on ghc3-test (trains what is missing)",
+}
+
+
+def _duration(seconds: float) -> str:
+    whole = round(seconds)
+    if whole >= 3600:
+        return f"{whole // 3600} h {whole % 3600 // 60:02d} min"
+    return f"{whole // 60} min {whole % 60:02d} s"
+
+
+def _settings_section(run: Mapping[str, Any]) -> list[str]:
+    s = run["settings"]
+    ours = {
+        "rl_total_steps": s["rl_total_steps"],
+        "rl_checkpoint_every": s["rl_checkpoint_every"],
+        "curve_trials": s["curve_trials"],
+        "demo_steps": run.get("demo_steps"),
+        "lfd_trials": s["lfd_trials"],
+        "pips_steps": s["pips_steps"],
+        "performance_trials": s["performance_trials"],
+        "transfer_trials": s["transfer_trials"],
+    }
+    lines = ["| setting | ours | paper |", "|---|---:|---:|"]
+    for key, paper in PAPER_PROTOCOL.items():
+        value = ours[key]
+        text = f"{value:,}" if value is not None else "not recorded yet"
+        if key == "demo_steps":
+            text += f" ({s['demo_episodes']:,} episodes)"
+        lines.append(f"| {key.replace('_', ' ')} | {text} | {paper:,} |")
+    sizes = ", ".join(f"{n:,}" for n in s["lfd_sizes"])
+    lines.append(f"| LfD sizes (BC, GAIL) | {sizes} | 155,400, 116,600, 77,700, 38,800, 3,500 |")
+    return lines
+
+
+def _timings_section(timings: Mapping[str, Any]) -> list[str]:
+    lines = [
+        "| part | what it does | wall time | sessions | finished |",
+        "|---|---|---:|---:|---|",
+    ]
+    total = 0.0
+    for part in PARTS:
+        entry = timings.get(part)
+        if entry is None:
+            lines.append(f"| {part} | {PART_TITLES[part]} | no session recorded | 0 | no |")
+            continue
+        # Sessions that only read stored items back (a rerun) do not count as the part's time.
+        seconds = entry.get("work_seconds", entry["seconds"])
+        total += seconds
+        lines.append(
+            f"| {part} | {PART_TITLES[part]} | {_duration(seconds)} | {len(entry['sessions'])} "
+            f"| {'yes' if entry['finished'] else 'no'} |"
+        )
+    lines.append(f"| all | | {_duration(total)} | | |")
+    return lines
+
+
+def _figure(name: str, prefix: str, caption: str, figures: set[str]) -> list[str]:
+    if name not in figures:
+        return [f"*{caption}: not drawn yet (its part has not run).*"]
+    link = f"{prefix}{FIGURES_DIR}/{name}"
+    return [f"![{caption}]({link}.png)", "", f"*{caption}* ([PDF]({link}.pdf))"]
+
+
+def _differences(tables: Mapping[str, tuple[list[dict[str, Any]], str]]) -> list[str]:
+    lines = []
+    for name, what in (
+        ("performance", "performance (gdc1)"),
+        ("transfer", "transfer (ghc3)"),
+        ("lfd", "LfD"),
+    ):
+        rows = tables.get(name, ([], ""))[0]
+        for r in rows:
+            if not r["differs"]:
+                continue
+            size = f" ({r['demonstration_steps']:,} steps)" if "demonstration_steps" in r else ""
+            lines.append(
+                f"- {what}, {policy_label(str(r['policy']))}{size}: ours {r['success_pct']:.1f}% "
+                f"[{r['success_ci_low_pct']:.1f}, {r['success_ci_high_pct']:.1f}], paper "
+                f"{r['paper_success_pct']:.1f}%. {EXPLANATIONS.get(str(r['policy']), '')}"
+            )
+    if not lines:
+        lines.append("- No paper number lies outside our 90% interval in the tables that have run.")
+    return lines
+
+
+def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: set[str] | None = None) -> str:
+    """The text of REPRODUCTION.md from loaded results.
+
+    Args:
+        results: socialzoo.reproduce.results.load's output.
+        prefix: path from the Markdown file to the folder holding results/, figures/, tables/.
+        figures: names of the figures drawn (None: those the results allow).
+    """
+    run = results["run"]
+    tables = build_tables(results)
+    if figures is None:
+        figures = set()
+        figures |= {"success", "metrics"} if results.get("performance") or results.get("transfer") else set()
+        figures |= {"rl_curves"} if results.get("rl_curves") else set()
+        figures |= {"lfd"} if results.get("lfd") else set()
+    machine = run["machine"]
+    quick = run["settings"]["name"] == "quick"
+    lines = [
+        "# Reproducing the Social Action Selection benchmark (SocialGym, Holtz & Biswas 2022)",
+        "",
+        f"Generated by `{run['command']}` (settings `{run['settings']['name']}`, hash "
+        f"`{run['settings_hash']}`) from the stored results in [`{prefix}{RESULTS_DIR}/`]({prefix}{RESULTS_DIR}/). "
+        "Every number here is read from those files; none is typed. The paper's numbers come from "
+        f"{SPEC_REFERENCE} (`socialzoo.reproduce.paper`). Intervals are 90% (success: Wilson; "
+        'means: Student-t). "differs" marks a paper number outside our interval.',
+        "",
+    ]
+    if quick:
+        lines += [
+            "> These are the `--quick` settings: tiny trainings and a few test scenarios with a "
+            "shorter time limit. They show that every part runs; their numbers are not comparable "
+            "with the paper's.",
+            "",
+        ]
+    lines += ["## Settings", "", *_settings_section(run), ""]
+    lines += [
+        "## Time on this machine",
+        "",
+        f"{machine['cpus']} CPUs, {machine['platform']}, Python {machine['python']}. Wall time of each part "
+        "summed over the sessions that made items (a resumed part counts every session; a rerun "
+        "that only read stored items back does not); a part also trains the policies it needs "
+        "that an earlier part did not.",
+        "",
+        *_timings_section(results.get("timings", {})),
+        "",
+    ]
+    for name, title in (
+        ("performance", "Table: performance on the training map (gdc1-test)"),
+        ("transfer", "Table: transfer to GHC3 (ghc3-test)"),
+    ):
+        lines += [f"## {title}", ""]
+        lines += [tables[name][1] if name in tables else "*Not run yet.*", ""]
+    lines += ["## Figure: success rates, and force, blame and time to goal", ""]
+    lines += _figure("success", prefix, "Success rate per policy and map (black ticks: the paper)", figures)
+    lines += [""] + _figure("metrics", prefix, "Force, blame and time to goal (successful episodes)", figures)
+    lines += ["", "## Figure: RL data efficiency (PPO and DQN checkpoints)", ""]
+    lines += _figure("rl_curves", prefix, "Success, time and reward per checkpoint, 90% bands", figures)
+    lines += [""] + ([tables["rl_curves"][1]] if "rl_curves" in tables else [])
+    lines += ["", "## Table: LfD data efficiency", ""]
+    lines += [tables["lfd"][1] if "lfd" in tables else "*Not run yet.*", ""]
+    lines += _figure("lfd", prefix, "LfD success against demonstration steps (crosses: the paper)", figures)
+    differences = [QUICK_NOTE] if quick else _differences(tables)
+    lines += ["", "## Where we differ", "", *differences, ""]
+    lines += [
+        "Beyond these, socialzoo follows the paper where the reference code did not (SPEC section 11): "
+        "Euclidean goal distance, every policy trained on the same documented reward, learned "
+        "policies evaluated with their saved normalisation. The paper's RL curves and LfD numbers "
+        "come from one training run each, as ours do.",
+        "",
+    ]
+    training = results.get("training", [])
+    if training:
+        lines += [
+            "## Trained policies",
+            "",
+            "| run | trainer | demonstration steps | env steps | wall time |",
+        ]
+        lines += ["|---|---|---:|---:|---:|"]
+        for t in training:
+            demo = f"{t['demonstration_steps']:,}" if t.get("demonstration_steps") else ""
+            env = f"{t['env_steps']:,}" if t.get("env_steps") else ""
+            wall = _duration(t["wall_seconds"]) if isinstance(t.get("wall_seconds"), (int, float)) else ""
+            lines.append(f"| {t['run']} | {t['trainer']} | {demo} | {env} | {wall} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_report(out_dir: str | Path, figures: bool = True) -> Path:
+    """Tables (out_dir/tables/), figures (out_dir/figures/) and out_dir/REPRODUCTION.md from
+    out_dir/results/; returns the report's path. Without `figures`, the figures already drawn
+    are linked (a report between parts)."""
+    out = Path(out_dir)
+    results = load(out / RESULTS_DIR)
+    write_tables(build_tables(results), out / TABLES_DIR)
+    if figures:
+        drawn = set(draw_figures(results, out / FIGURES_DIR))
+    else:
+        drawn = {p.stem for p in (out / FIGURES_DIR).glob("*.png")}
+    path = out / REPORT_NAME
+    path.write_text(render_reproduction(results, "", drawn))
+    return path

@@ -1,0 +1,194 @@
+"""The small result files of a reproduction, DIR/results/, from which every table, figure and
+number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
+
+    run.json          settings, their hash, the command, the machine, the parts run
+    timings.json      each part's sessions and wall time
+    training.json     each trained policy: trainer, demonstration steps, wall seconds, env steps
+    rl_curves.csv     every PPO/DQN checkpoint (and Ref) on the curve scenarios
+    lfd.csv           the LfD table rows (ours and the paper's)
+    performance.csv   the seven policies on gdc1-test (socialzoo.bench.tables summary columns)
+    transfer.csv      the same on ghc3-test
+
+`collect` copies them out of the work folder DIR/<hash>/ (where the stores and runs are); `load`
+reads them back with numbers as floats, so the report never needs the big stores.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import shutil
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
+from socialzoo.reproduce.paper import paper_lfd
+from socialzoo.reproduce.parts import DEMOS_FILE
+
+RESULTS_DIR = "results"
+RUN_FILE = "run.json"
+TRAINING_FILE = "training.json"
+CSV_FILES: dict[str, str] = {
+    "rl_curves": "rl_curves.csv",
+    "lfd": "lfd.csv",
+    "performance": "performance.csv",
+    "transfer": "transfer.csv",
+}
+# Columns that hold text; every other CSV cell is read as a number (empty: NaN).
+TEXT_COLUMNS = frozenset({"label", "policy", "map", "test_set", "policy_file"})
+
+
+def command_for(settings_name: str) -> str:
+    """The command that makes a reproduction of these settings."""
+    return "socialzoo reproduce --out DIR" + (" --quick" if settings_name == "quick" else "")
+
+
+def _write_json(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+    os.replace(tmp, path)
+
+
+def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
+    """Each finished training run under the work folder: what it was and how long it took."""
+    out = []
+    for record in sorted(ledger.work.glob("*/*/run.json")):
+        data = json.loads(record.read_text())
+        if not data.get("finished"):
+            continue
+        args, res = data.get("args", {}), data.get("results", {})
+        out.append(
+            {
+                "run": record.parent.relative_to(ledger.work).as_posix(),
+                "trainer": data.get("algo"),
+                "demonstration_steps": args.get("steps") if data.get("algo") in ("bc", "gail") else None,
+                "env_steps": res.get("env_steps"),
+                "wall_seconds": res.get("wall_seconds"),
+                "seed": data.get("seed"),
+            }
+        )
+    for sidecar in sorted(ledger.work.glob("lfd/pips_*/pips.train.json")):
+        data = json.loads(sidecar.read_text())
+        out.append(
+            {
+                "run": sidecar.parent.relative_to(ledger.work).as_posix(),
+                "trainer": "pips",
+                "demonstration_steps": data["args"]["steps"],
+                "env_steps": None,
+                "wall_seconds": round(data["total_seconds"], 1),
+                "seed": data.get("seed"),
+            }
+        )
+    return out
+
+
+def _demo_steps(ledger: Ledger) -> int | None:
+    """Steps in the run's demonstration file (None before it is recorded)."""
+    import numpy as np
+
+    path = ledger.path("demos", DEMOS_FILE)
+    if not path.is_file():
+        return None
+    with np.load(path) as data:
+        return int(data["action"].shape[0])
+
+
+def _lfd_rows(path: Path) -> list[dict[str, Any]]:
+    """The LfD CSV with the paper's numbers of every row (PIPS's too, SPEC section 10)."""
+    rows = read_csv(path)
+    for row in rows:
+        paper = paper_lfd(str(row["policy"]), int(row["demonstration_steps"]))
+        row["paper_success_pct"] = paper[0] if paper else math.nan
+        row["paper_average_step_reward"] = paper[1] if paper else math.nan
+        row.pop("policy_file", None)  # a path of this machine
+    return rows
+
+
+def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path:
+    """Copy the run's small results out of its work folder into out_dir/results/; returns that folder.
+
+    Results of parts that have not run (yet) are left out, and earlier copies of them removed.
+    """
+    results = Path(out_dir) / RESULTS_DIR
+    results.mkdir(parents=True, exist_ok=True)
+    _write_json(
+        results / RUN_FILE,
+        {
+            "settings": ledger.settings.to_json(),
+            "settings_hash": ledger.hash,
+            "command": command_for(ledger.settings.name),
+            "machine": machine(),
+            "parts_last_run": list(parts),
+            "demo_steps": _demo_steps(ledger),
+        },
+    )
+    if (ledger.work / TIMINGS_FILE).is_file():
+        shutil.copyfile(ledger.work / TIMINGS_FILE, results / TIMINGS_FILE)
+    _write_json(results / TRAINING_FILE, _training_record(ledger))
+    sources = {
+        "rl_curves": ledger.path("rl", "curves", "rl_curves.csv"),
+        "lfd": ledger.path("lfd", "eval", "lfd.csv"),
+        "performance": ledger.path("performance", "summary.csv"),
+        "transfer": ledger.path("transfer", "summary.csv"),
+    }
+    for key, source in sources.items():
+        target = results / CSV_FILES[key]
+        if not source.is_file():
+            target.unlink(missing_ok=True)
+        elif key == "lfd":
+            write_csv(_lfd_rows(source), target)
+        else:
+            shutil.copyfile(source, target)
+    return results
+
+
+def _cell(value: str, column: str) -> Any:
+    if column in TEXT_COLUMNS:
+        return value
+    if value == "":
+        return math.nan
+    try:
+        return float(value)
+    except ValueError:
+        return value
+
+
+def read_csv(path: str | Path) -> list[dict[str, Any]]:
+    """A CSV's rows, numbers as floats (empty cells NaN), TEXT_COLUMNS as text."""
+    with Path(path).open(newline="") as f:
+        return [{k: _cell(v, k) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def write_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
+    """Write rows as CSV (columns of the first row; NaN as an empty cell)."""
+    path = Path(path)
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: "" if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()})
+    return path
+
+
+def load(results_dir: str | Path) -> dict[str, Any]:
+    """Everything under a results folder: "run", "timings", "training" (JSON) and the CSV tables
+    (lists of rows; an absent file: an empty list).
+
+    Raises:
+        FileNotFoundError: no run.json (not a reproduction's results folder).
+    """
+    folder = Path(results_dir)
+    run_file = folder / RUN_FILE
+    if not run_file.is_file():
+        raise FileNotFoundError(f"{folder}: no {RUN_FILE}; not the results of `socialzoo reproduce`")
+    data: dict[str, Any] = {"run": json.loads(run_file.read_text())}
+    for key, name in (("timings", TIMINGS_FILE), ("training", TRAINING_FILE)):
+        file = folder / name
+        data[key] = json.loads(file.read_text()) if file.is_file() else ({} if key == "timings" else [])
+    for key, name in CSV_FILES.items():
+        file = folder / name
+        data[key] = read_csv(file) if file.is_file() else []
+    return data

@@ -1,0 +1,83 @@
+"""The whole reproduction: run the chosen parts in order (each timed and resumable), then copy
+the small results out and write the tables, figures and REPRODUCTION.md.
+
+    reproduce("out/repro", quick_settings())                     # everything, small
+    reproduce("out/repro", full_settings(), parts=("lfd",))      # one part of the paper's protocol
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from socialzoo.reproduce.backend import Backend, check_backend
+from socialzoo.reproduce.ledger import Ledger
+from socialzoo.reproduce.parts import PART_RUNNERS, Context
+from socialzoo.reproduce.plan import PARTS, Settings, parse_parts
+from socialzoo.reproduce.report import write_report
+from socialzoo.reproduce.results import collect
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ReproduceResult:
+    """What a reproduction produced.
+
+    Attributes:
+        out_dir: DIR.
+        work_dir: DIR/<hash>/, the stored items.
+        report: DIR/REPRODUCTION.md.
+        made: items made by each part run now (0: all read back).
+    """
+
+    out_dir: Path
+    work_dir: Path
+    report: Path
+    made: dict[str, int]
+
+
+def reproduce(
+    out_dir: str | Path,
+    settings: Settings,
+    *,
+    parts: Sequence[str] | str | None = None,
+    backend: Backend = "local",
+    progress: bool = True,
+    on_part: Callable[[str, int], None] | None = None,
+) -> ReproduceResult:
+    """Run `parts` (default: all, in PARTS order) of the reproduction into out_dir.
+
+    Args:
+        out_dir: DIR: items go to DIR/<settings hash>/, the report to DIR.
+        settings: what to train and evaluate (socialzoo.reproduce.plan).
+        parts: part names or a comma-separated string.
+        backend: "local" or "ray" (trainings and evaluations as Ray tasks).
+        progress: show progress bars.
+        on_part: called with (part, items made) after each part.
+
+    Raises:
+        ValueError: an unknown part or backend.
+        socialzoo.reproduce.ledger.SettingsMismatch: DIR/<hash>/ holds other settings.
+    """
+    chosen = parse_parts(parts if parts is None or isinstance(parts, str) else list(parts))
+    check_backend(backend)
+    ledger = Ledger(out_dir, settings)
+    ctx = Context(ledger, backend=backend, progress=progress)
+    made = {}
+    for part in PARTS:
+        if part not in chosen:
+            continue
+        logger.info("reproduce: part %s (%s)", part, ledger.work)
+        with ledger.timed(part, backend) as session:
+            made[part] = PART_RUNNERS[part](ctx)
+            session["computed"] = made[part]
+        collect(ledger, out_dir, chosen)
+        write_report(out_dir, figures=False)
+        if on_part is not None:
+            on_part(part, made[part])
+    collect(ledger, out_dir, chosen)
+    report = write_report(out_dir)
+    return ReproduceResult(Path(out_dir), ledger.work, report, made)

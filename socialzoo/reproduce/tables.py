@@ -1,0 +1,211 @@
+"""The paper's tables, ours beside the paper's, built from the loaded results
+(socialzoo.reproduce.results.load): each table is a list of rows (written as CSV) and Markdown.
+
+A row's "differs" says whether the paper's number lies outside our 90% interval.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.tables import policy_label
+from socialzoo.reproduce.paper import PAPER_POLICIES, PAPER_SUCCESS
+from socialzoo.reproduce.results import write_csv
+
+# Paper's success on the training map (index 0) or the transfer map (index 1).
+EXPERIMENT_MAPS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer": ("ghc3", 1)}
+
+
+def _num(value: Any, digits: int, scale: float = 1.0) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    return f"{scale * float(value):.{digits}f}"
+
+
+def _interval(row: Mapping[str, Any], key: str, digits: int, scale: float = 1.0) -> str:
+    mean_key = "success_rate" if key == "success" else f"{key}_mean"
+    low, high = row.get(f"{key}_ci_low", math.nan), row.get(f"{key}_ci_high", math.nan)
+    text = _num(row.get(mean_key), digits, scale)
+    if isinstance(low, float) and isinstance(high, float) and math.isfinite(low) and math.isfinite(high):
+        text += f" [{_num(low, digits, scale)}, {_num(high, digits, scale)}]"
+    return text
+
+
+def outside(paper: float | None, low: float, high: float) -> bool:
+    """True when the paper's number lies outside our interval [low, high] (same units)."""
+    if paper is None or not (math.isfinite(low) and math.isfinite(high)):
+        return False
+    return not low <= paper <= high
+
+
+def experiment_table(rows: Sequence[Mapping[str, Any]], experiment: str) -> list[dict[str, Any]]:
+    """The performance or transfer table: per policy, success with its interval beside the paper's,
+    force, blame and time to goal (our means with 90% intervals; the paper gives figures only)."""
+    _, index = EXPERIMENT_MAPS[experiment]
+    by_policy = {str(r["policy"]): r for r in rows}
+    out = []
+    for policy in [p for p in PAPER_POLICIES if p in by_policy]:
+        r = by_policy[policy]
+        paper = PAPER_SUCCESS[policy][index]
+        out.append(
+            {
+                "policy": policy,
+                "trials": int(r["trials"]),
+                "success_pct": 100 * r["success_rate"],
+                "success_ci_low_pct": 100 * r["success_ci_low"],
+                "success_ci_high_pct": 100 * r["success_ci_high"],
+                "paper_success_pct": paper,
+                "differs": outside(paper, 100 * r["success_ci_low"], 100 * r["success_ci_high"]),
+                "mean_force": r["mean_force_mean"],
+                "mean_blame": r["mean_blame_mean"],
+                "time_to_goal_s": r["time_to_goal_mean"],
+                "average_step_reward": r["average_step_reward_mean"],
+                "_row": r,
+            }
+        )
+    return out
+
+
+def experiment_markdown(table: Sequence[Mapping[str, Any]]) -> str:
+    """The performance or transfer table as Markdown."""
+    lines = [
+        "| policy | trials | success % [90% CI] | paper success % | force | blame | time to goal, s | differs |",
+        "|---|---:|---|---:|---|---|---|---|",
+    ]
+    for t in table:
+        r = t["_row"]
+        lines.append(
+            f"| {policy_label(t['policy'])} | {t['trials']:,} | {_interval(r, 'success', 1, 100.0)} "
+            f"| {t['paper_success_pct']:.1f} | {_interval(r, 'mean_force', 4)} | {_interval(r, 'mean_blame', 4)} "
+            f"| {_interval(r, 'time_to_goal', 1)} | {'yes' if t['differs'] else ''} |"
+        )
+    return "\n".join(lines)
+
+
+def lfd_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """The LfD table: per policy and demonstration size, success and average step reward beside
+    the paper's."""
+    out = []
+    for r in rows:
+        paper_success = r.get("paper_success_pct", math.nan)
+        out.append(
+            {
+                "policy": r["policy"],
+                "demonstration_steps": int(r["demonstration_steps"]),
+                "trials": int(r["trials"]),
+                "success_pct": 100 * r["success_rate"],
+                "success_ci_low_pct": 100 * r["success_ci_low"],
+                "success_ci_high_pct": 100 * r["success_ci_high"],
+                "paper_success_pct": paper_success,
+                "average_step_reward": r["average_step_reward"],
+                "paper_average_step_reward": r.get("paper_average_step_reward", math.nan),
+                "differs": outside(
+                    paper_success if math.isfinite(paper_success) else None,
+                    100 * r["success_ci_low"],
+                    100 * r["success_ci_high"],
+                ),
+                "_row": r,
+            }
+        )
+    return out
+
+
+def lfd_markdown(table: Sequence[Mapping[str, Any]]) -> str:
+    """The LfD table as Markdown."""
+    lines = [
+        "| policy | demonstration steps | trials | success % [90% CI] | paper success % "
+        "| average step reward | paper reward | differs |",
+        "|---|---:|---:|---|---:|---:|---:|---|",
+    ]
+    for t in table:
+        r = t["_row"]
+        success = f"{_num(r['success_rate'], 1, 100.0)} [{_num(r['success_ci_low'], 1, 100.0)}, " + (
+            f"{_num(r['success_ci_high'], 1, 100.0)}]"
+        )
+        lines.append(
+            f"| {policy_label(str(t['policy']))} | {t['demonstration_steps']:,} | {t['trials']} | {success} "
+            f"| {_num(t['paper_success_pct'], 0)} | {_num(t['average_step_reward'], 3)} "
+            f"| {_num(t['paper_average_step_reward'], 2)} | {'yes' if t['differs'] else ''} |"
+        )
+    return "\n".join(lines)
+
+
+def curves_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """The RL curves in brief: each run's first and last checkpoint and its best, and the reference
+    policies, on the curve scenarios (the curves themselves are the figure)."""
+    out = []
+    for label in dict.fromkeys(str(r["label"]) for r in rows):
+        points = sorted(
+            (r for r in rows if r["label"] == label and math.isfinite(r["step"])), key=lambda r: r["step"]
+        )
+        refs = [r for r in rows if r["label"] == label and not math.isfinite(r["step"])]
+        chosen = [("reference", refs[0])] if refs else []
+        if points:
+            best = max(points, key=lambda r: r["success_rate"])
+            chosen += [("first", points[0]), ("best", best), ("last", points[-1])]
+        for which, r in chosen:
+            out.append(
+                {
+                    "policy": label,
+                    "checkpoint": which,
+                    "step": int(r["step"]) if math.isfinite(r["step"]) else None,
+                    "trials": int(r["trials"]),
+                    "success_pct": 100 * r["success_rate"],
+                    "success_ci_low_pct": 100 * r["success_ci_low"],
+                    "success_ci_high_pct": 100 * r["success_ci_high"],
+                    "time_to_goal_s": r["time_to_goal_mean"],
+                    "average_step_reward": r["average_step_reward_mean"],
+                    "_row": r,
+                }
+            )
+    return out
+
+
+def curves_markdown(table: Sequence[Mapping[str, Any]]) -> str:
+    """The RL curves table as Markdown."""
+    lines = [
+        "| policy | checkpoint | step | trials | success % [90% CI] | time to goal, s | average step reward |",
+        "|---|---|---:|---:|---|---|---|",
+    ]
+    for t in table:
+        r = t["_row"]
+        step = f"{t['step']:,}" if t["step"] is not None else ""
+        lines.append(
+            f"| {policy_label(str(t['policy']))} | {t['checkpoint']} | {step} | {t['trials']} "
+            f"| {_interval(r, 'success', 1, 100.0)} | {_interval(r, 'time_to_goal', 1)} "
+            f"| {_interval(r, 'average_step_reward', 4)} |"
+        )
+    return "\n".join(lines)
+
+
+def build_tables(results: Mapping[str, Any]) -> dict[str, tuple[list[dict[str, Any]], str]]:
+    """name -> (rows, Markdown) of every table the results allow ("performance", "transfer",
+    "lfd", "rl_curves")."""
+    tables: dict[str, tuple[list[dict[str, Any]], str]] = {}
+    for experiment in EXPERIMENT_MAPS:
+        if results.get(experiment):
+            table = experiment_table(results[experiment], experiment)
+            tables[experiment] = (table, experiment_markdown(table))
+    if results.get("lfd"):
+        table = lfd_table(results["lfd"])
+        tables["lfd"] = (table, lfd_markdown(table))
+    if results.get("rl_curves"):
+        table = curves_table(results["rl_curves"])
+        tables["rl_curves"] = (table, curves_markdown(table))
+    return tables
+
+
+def write_tables(tables: Mapping[str, tuple[list[dict[str, Any]], str]], out_dir: str | Path) -> list[Path]:
+    """Each table as NAME.csv and NAME.md in out_dir."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = []
+    for name, (rows, markdown) in tables.items():
+        plain = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]
+        files.append(write_csv(plain, out / f"{name}.csv"))
+        (out / f"{name}.md").write_text(markdown + "\n")
+        files.append(out / f"{name}.md")
+    return files

@@ -1,0 +1,50 @@
+"""Settings, their hash and the part names."""
+
+import pytest
+
+from socialzoo.reproduce.plan import (
+    PARTS,
+    Settings,
+    full_settings,
+    parse_parts,
+    quick_settings,
+    settings_hash,
+)
+
+
+def test_hash_changes_with_what_is_stored_not_with_how():
+    base = quick_settings()
+    assert settings_hash(base) == settings_hash(quick_settings())
+    assert settings_hash(base) != settings_hash(quick_settings(curve_trials=3))
+    assert settings_hash(base) != settings_hash(quick_settings(lfd_overrides={"bc": {"epochs": 2}}))
+    assert settings_hash(base) == settings_hash(quick_settings(workers=2, batch_size=4))
+    assert settings_hash(base) != settings_hash(full_settings())
+
+
+def test_full_settings_are_the_papers_protocol():
+    s = full_settings()
+    assert (s.rl_total_steps, s.rl_checkpoint_every, s.curve_trials) == (84_000, 2_000, 100)
+    assert s.lfd_sizes == (155_400, 116_600, 77_700, 38_800, 3_500) and s.pips_steps == 3_500
+    assert (s.performance_trials, s.transfer_trials, s.lfd_trials) == (2_000, 2_000, 100)
+    assert s.lfd_largest == 155_400
+
+
+def test_settings_round_trip_and_validation():
+    s = quick_settings()
+    assert Settings.from_json(s.to_json()) == s
+    with pytest.raises(ValueError, match="curve_trials"):
+        quick_settings(curve_trials=0)
+    with pytest.raises(ValueError, match=r"rl_overrides.*'sac'"):
+        quick_settings(rl_overrides={"sac": {}})
+    with pytest.raises(ValueError, match="name"):
+        Settings(name="medium")
+    with pytest.raises(ValueError, match="unknown field"):
+        Settings.from_json({"name": "full", "nope": 1})
+
+
+def test_parse_parts():
+    assert parse_parts(None) == PARTS
+    assert parse_parts("lfd,demos") == ("demos", "lfd")
+    assert parse_parts(["transfer"]) == ("transfer",)
+    with pytest.raises(ValueError, match=r"'rl'.*demos, rl-curves, lfd, performance, transfer"):
+        parse_parts("rl,lfd")
