@@ -245,16 +245,20 @@ def summarize_humans(
 
     Args:
         rows: trial dicts (ResultsStore.rows) holding the HUMAN_METRIC_KEYS.
-        policies, maps: the order of the entries.
+        policies, maps: the order of the entries (others follow in order of appearance: a map
+            file's rows carry the map's own name).
         confidence: two-sided level.
     """
     from socialzoo.bench.stats import count_interval, mean_interval
     from socialzoo.bench.tables import cell_rng
 
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in policies:
-        for map_name in maps:
-            group = [r for r in rows if r["policy"] == policy and r["map"] == map_name]
+    for policy in _ordered([k[0] for k in groups], policies):
+        for map_name in _ordered([k[1] for k in groups], maps):
+            group = groups.get((policy, map_name), [])
             if not group:
                 continue
             entry: dict[str, Any] = {"policy": policy, "map": map_name, "trials": len(group)}
@@ -271,6 +275,11 @@ def summarize_humans(
                 )
             out.append(entry)
     return out
+
+
+def _ordered(values: list[str], order: tuple[str, ...] | list[str]) -> list[str]:
+    seen = list(dict.fromkeys(values))
+    return [v for v in order if v in seen] + [v for v in seen if v not in order]
 
 
 def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: str) -> list[Any]:
