@@ -20,7 +20,11 @@ MAX_STEPS = 150
 
 @pytest.fixture(scope="module")
 def rooms(rooms_map_path):
-    return {"rooms": TestSet(str(rooms_map_path), 7, 20, ScenarioConfig(min_humans=3, max_humans=5), name="rooms-test")}
+    return {
+        "rooms": TestSet(
+            str(rooms_map_path), 7, 20, ScenarioConfig(min_humans=3, max_humans=5), name="rooms-test"
+        )
+    }
 
 
 def config(humans, **changes):
@@ -61,7 +65,9 @@ def learned_run(rooms, walker_policy_path, tmp_path_factory):
     return out
 
 
-def test_learned_humans_run_is_deterministic_and_batch_independent(rooms, walker_policy_path, learned_run, tmp_path):
+def test_learned_humans_run_is_deterministic_and_batch_independent(
+    rooms, walker_policy_path, learned_run, tmp_path
+):
     rows = stored(learned_run)
     assert len(rows) == TRIALS
     assert all(set(HUMAN_METRIC_KEYS) <= set(r) for r in rows)
@@ -90,7 +96,9 @@ def test_learned_humans_replace_the_social_force_humans(rooms, learned_run, writ
     assert "learned:" in text and "route goal reach rate" in text
 
 
-def test_config_hash_follows_the_policy_file_digest(rooms, walker_policy_path, write_walker, learned_run, tmp_path):
+def test_config_hash_follows_the_policy_file_digest(
+    rooms, walker_policy_path, write_walker, learned_run, tmp_path
+):
     out = tmp_path / "store"
     shutil.copytree(learned_run, out)
     # The same bytes under another name: read back from the store.
@@ -108,7 +116,7 @@ def test_config_hash_follows_the_policy_file_digest(rooms, walker_policy_path, w
 
 
 def test_bad_human_specs_fail_naming_them(tmp_path):
-    with pytest.raises(ValueError, match="BenchmarkConfig.humans: .*no such file"):
+    with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*no such file"):
         config(f"learned:{tmp_path / 'missing.safetensors'}")
     with pytest.raises(ValueError, match="unknown human policy 'robots'"):
         config("robots")
