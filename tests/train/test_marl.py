@@ -146,9 +146,9 @@ def test_distributed_collectors_run(tmp_path, collector):
 
 
 def test_bad_arguments_name_the_field(tmp_path):
-    with pytest.raises(ValueError, match="HumansArgs.algo"):
+    with pytest.raises(ValueError, match=r"HumansArgs\.algo"):
         HumansArgs(out=tmp_path, algo="ddpg")
     with pytest.raises(ValueError, match="frames_per_batch"):
         HumansArgs(out=tmp_path, batch_size=16, frames_per_batch=1000)
-    with pytest.raises(ValueError, match="CotrainArgs.schedule"):
+    with pytest.raises(ValueError, match=r"CotrainArgs\.schedule"):
         CotrainArgs(out=tmp_path, schedule="sometimes")
