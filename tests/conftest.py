@@ -33,3 +33,37 @@ def rooms_map_path(tmp_path_factory):
 def reference_dir():
     """The folder of the social_gym reference data (walls, gdc1 nodes and legal poses)."""
     return REFERENCE_DIR
+
+
+def write_walker_policy(path, *, speed: float = 3.0, hidden: int = 8):
+    """A learned human policy file that walks straight at its waypoint (human action frame):
+    zero weights, so every human's action is tanh(speed) forward whatever it observes."""
+    import numpy as np
+
+    from socialzoo.agents.learned_humans import LearnedHumanPolicy
+    from socialzoo.agents.policy_file import current_env_version
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.human_agents import human_observation_size
+
+    k = EnvConfig().num_human_neighbours
+    size = human_observation_size(k)
+    layers = [
+        (np.zeros((hidden, size)), np.zeros(hidden)),
+        (np.zeros((2, hidden)), np.array([speed, 0.0])),
+    ]
+    policy = LearnedHumanPolicy(layers, "tanh", np.zeros(size), np.ones(size), k, "human")
+    return policy.save(
+        path, f"socialzoo/MultiAgent-v{current_env_version()}", {"algo": "handmade", "seed": 0}
+    )
+
+
+@pytest.fixture(scope="session")
+def write_walker():
+    """write_walker_policy, for tests that need walkers of other speeds."""
+    return write_walker_policy
+
+
+@pytest.fixture(scope="session")
+def walker_policy_path(tmp_path_factory):
+    """A learned human policy file whose humans walk straight at their waypoints."""
+    return write_walker_policy(tmp_path_factory.mktemp("humans") / "walker.safetensors")

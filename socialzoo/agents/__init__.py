@@ -39,6 +39,8 @@ POLICIES: dict[str, str] = {
     "dqn": "socialzoo.agents.mlp:MlpPolicy",
     "bc": "socialzoo.agents.mlp:MlpPolicy",
     "gail": "socialzoo.agents.mlp:MlpPolicy",
+    # Robots co-trained with learned humans (`socialzoo train cotrain`, robot.safetensors).
+    "mappo": "socialzoo.agents.mlp:MlpPolicy",
     # Program synthesis: a JSON program (socialzoo.agents.pips_program).
     "pips": "socialzoo.agents.pips:PipsPolicy",
 }

@@ -18,7 +18,9 @@ counts. Definitions (centre distances in metres, times in seconds):
   reach of 1 m, for walls, or with a single human, for humans).
 - humans_mean_speed: mean speed over the humans and steps, m/s.
 - humans_path_ratio: distance walked until the route's goal was first reached / length of the
-  route from the spawn, mean over the humans that reached it (NaN for none); 1 is the route.
+  route from the spawn, mean over the humans that reached it (NaN for none); 1 is the route. A
+  goal counts as reached within the waypoint radius (1 m), so the route's length is taken up
+  to that circle: a human walking straight along a one-segment route scores 1.
 
 Rows are independent: a row is reset when its episode starts and stops accumulating once its
 episode is done, so the runner reads a finished row's summary before refilling it.
@@ -60,13 +62,22 @@ class HumanEpisodeMetrics:
         num_robots: R.
         walls: the map's wall index.
         robot_distance: human-robot centre distance counted as a collision, m.
+        waypoint_radius: the distance within which a waypoint counts as reached, m
+            (HumanConfig.waypoint_radius); the route length of the path ratio stops there.
     """
 
     def __init__(
-        self, batch_size: int, max_humans: int, num_robots: int, walls: WallIndex, robot_distance: float
+        self,
+        batch_size: int,
+        max_humans: int,
+        num_robots: int,
+        walls: WallIndex,
+        robot_distance: float,
+        waypoint_radius: float = 0.0,
     ) -> None:
         self.walls = walls
         self.robot_distance = float(robot_distance)
+        self.waypoint_radius = float(waypoint_radius)
         b, h, r = batch_size, max_humans, num_robots
         self.present = np.zeros((b, h), dtype=bool)
         self.route_length = np.zeros((b, h))
@@ -91,7 +102,7 @@ class HumanEpisodeMetrics:
         """Start the episodes of `rows` from `state` (the core's state right after its reset)."""
         rows = np.asarray(rows, dtype=np.intp)
         self.present[rows] = state.human_mask[rows]
-        self.route_length[rows] = _route_lengths(state, rows)
+        self.route_length[rows] = _route_lengths(state, rows, self.waypoint_radius)
         for name in ("walked", "waypoints", "speed_sum", "steps", "hh", "hw", "hr"):
             getattr(self, name)[rows] = 0
         self.walked_to_goal[rows] = np.nan
@@ -160,7 +171,12 @@ class HumanEpisodeMetrics:
         """A tracker of the rows `index` (copies), for a core compacted to those rows."""
         index = np.asarray(index, dtype=np.intp)
         new = HumanEpisodeMetrics(
-            len(index), self.present.shape[1], self.touch_hr.shape[2], self.walls, self.robot_distance
+            len(index),
+            self.present.shape[1],
+            self.touch_hr.shape[2],
+            self.walls,
+            self.robot_distance,
+            self.waypoint_radius,
         )
         for name, value in vars(self).items():
             if isinstance(value, np.ndarray):
@@ -201,9 +217,9 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else float("nan")
 
 
-def _route_lengths(state: WorldState, rows: np.ndarray) -> np.ndarray:
-    """(len(rows), H) length from the spawn through the route's waypoints to its goal end, m;
-    0 for routes of one waypoint (no goal to walk to)."""
+def _route_lengths(state: WorldState, rows: np.ndarray, radius: float) -> np.ndarray:
+    """(len(rows), H) length from the spawn through the route's waypoints to the circle of
+    `radius` around its goal end, m; 0 for routes of one waypoint (no goal to walk to)."""
     route = state.human_route[rows]
     seg = np.linalg.norm(np.diff(route, axis=2), axis=-1)  # padded repeats add 0
     index = np.arange(route.shape[2] - 1)
@@ -212,8 +228,8 @@ def _route_lengths(state: WorldState, rows: np.ndarray) -> np.ndarray:
     along = np.where(index[None, None, :] >= first[..., None], seg, 0.0).sum(-1)
     target = np.take_along_axis(route, first[..., None, None].repeat(2, axis=-1), axis=2)[:, :, 0]
     to_first = np.linalg.norm(target - state.human_pos[rows], axis=-1)
-    length = to_first + along
-    return np.where(state.human_route_len[rows] > 1, length, 0.0)
+    length = np.maximum(to_first + along - radius, 0.0)
+    return np.where((state.human_route_len[rows] > 1) & (length > 0), length, 0.0)
 
 
 # ---------------------------------------------------------------------------- tables
@@ -252,10 +268,13 @@ def summarize_humans(
     from socialzoo.bench.stats import count_interval, mean_interval
     from socialzoo.bench.tables import cell_rng
 
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in policies:
-        for map_name in maps:
-            group = [r for r in rows if r["policy"] == policy and r["map"] == map_name]
+    for policy in _ordered([k[0] for k in groups], policies):
+        for map_name in _ordered([k[1] for k in groups], maps):
+            group = groups.get((policy, map_name), [])
             if not group:
                 continue
             entry: dict[str, Any] = {"policy": policy, "map": map_name, "trials": len(group)}
@@ -272,6 +291,11 @@ def summarize_humans(
                 )
             out.append(entry)
     return out
+
+
+def _ordered(values: list[str], order: tuple[str, ...] | list[str]) -> list[str]:
+    seen = list(dict.fromkeys(values))
+    return [v for v in order if v in seen] + [v for v in seen if v not in order]
 
 
 def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: str) -> list[Any]:

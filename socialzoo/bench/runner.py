@@ -327,9 +327,14 @@ class BatchedRunner:
             return None
         from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 
-        distance = core.config.world.human_collision_distance
+        world = core.config.world
         return HumanEpisodeMetrics(
-            core.batch_size, core.config.max_humans, core.num_robots, core.walls, distance
+            core.batch_size,
+            core.config.max_humans,
+            core.num_robots,
+            core.walls,
+            world.human_collision_distance,
+            world.human.waypoint_radius,
         )
 
 

@@ -17,6 +17,7 @@ from socialzoo import __version__
 COMMANDS: tuple[str, ...] = (
     "socialzoo.cli.benchmark_cmd",  # benchmark, demos
     "socialzoo.cli.demo_cmd",  # demo
+    "socialzoo.cli.humans_cmd",  # compare-humans
     "socialzoo.cli.map_cmd",  # map list|show|import|validate
     "socialzoo.cli.replay_cmd",  # replay
     "socialzoo.cli.reproduce_cmd",  # reproduce

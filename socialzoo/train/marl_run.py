@@ -3,7 +3,8 @@
 `socialzoo train humans` and `socialzoo train cotrain` differ in which groups learn (humans; or
 robots and humans, at once or in turns); everything else about a run is here: seeds, the fixed
 input normalisation, the TorchRL collector, TensorBoard scalars, the progress bar, checkpoints,
-history.csv (one row per batch: the training curves) and the final policy files.
+history.csv (one row per batch: the training curves) and the final policy files. The untrained
+policy is saved as the step-0 checkpoint, the baseline a trained one is measured against.
 """
 
 from __future__ import annotations
@@ -173,6 +174,8 @@ class MarlRun:
         def checkpoint(frames: int) -> list[Path]:
             return write(*export(frames), lambda suffix: run_dir.checkpoint_path(frames, suffix), frames)
 
+        # The untrained policy, step 0: the baseline that the trained one is compared with.
+        initial = checkpoint(0)
         logger.info(
             "%s: %s on %s, %d frames, collector %s",
             self.name,
@@ -217,7 +220,7 @@ class MarlRun:
             frames_per_s=result.frames / max(result.seconds, 1e-9),
             final=last,
             files=[f.name for f in files],
-            checkpoints=[str(p.relative_to(run_dir.path)) for p in result.checkpoints],
+            checkpoints=[str(p.relative_to(run_dir.path)) for p in initial + result.checkpoints],
         )
         return final if humans is not None else run_dir.path / ROBOT_POLICY_FILE
 

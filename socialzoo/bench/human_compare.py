@@ -1,0 +1,280 @@
+"""Learned humans against social-force humans on the same scenarios: one table, one figure, the targets.
+
+`compare_humans` runs the benchmark twice on the same test sets and robot policy (Ref by
+default), once among the social-force humans and once among the learned humans of a policy file,
+both with the humans' metrics (socialzoo.bench.human_metrics), each into its own folder
+(social_force/, learned/: results stores, so a rerun reads its trials back). It then writes
+comparison.md and comparison.csv (every human metric and the robot's success, force and blame,
+side by side with 90% intervals), comparison.png (the same as bars), and checks issue 13's
+targets: the learned humans' route-goal reach rate within 10% of the social-force humans' (no
+lower than 0.9 times it) and no more collisions of any kind (human-human, human-wall,
+human-robot, means per episode).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
+from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
+from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.tables import write_text_atomic
+from socialzoo.nav.scenarios import TestSet
+
+POPULATIONS = ("social_force", "learned")
+# The robot's metrics shown beside the humans' (summary keys of socialzoo.bench.tables.summarize).
+ROBOT_METRICS: tuple[tuple[str, str, int], ...] = (
+    ("success_rate", "robot success rate", 3),
+    ("mean_force_mean", "robot force (mean per step)", 4),
+    ("mean_blame_mean", "robot blame (mean per step)", 4),
+)
+COLLISION_KEYS = ("humans_hh_collisions", "humans_hw_collisions", "humans_hr_collisions")
+# Target: the learned reach rate is at least this fraction of the social-force one.
+REACH_TOLERANCE = 0.10
+
+
+@dataclass(frozen=True, kw_only=True)
+class ComparisonConfig:
+    """A comparison of learned humans with social-force humans.
+
+    Attributes:
+        humans: "learned:PATH", the learned human policy file.
+        policy: the robot's policy spec (socialzoo.agents), Ref by default.
+        maps: maps whose test sets are used ("<map>-test", or "<map>-quick" with quick).
+        trials: scenarios per map (the first of each test set); None: all.
+        quick: use the quick test sets.
+        workers: local processes.
+        batch_size: env rows stepped together per worker.
+        env_overrides: EnvConfig fields for both populations (e.g. {"max_steps": 1600}).
+    """
+
+    humans: str
+    policy: str = "ref"
+    maps: tuple[str, ...] = ("gdc1", "ghc3")
+    trials: int | None = None
+    quick: bool = False
+    workers: int | None = 2
+    batch_size: int = 64
+    env_overrides: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.humans, str) or not self.humans.startswith("learned:"):
+            raise ValueError(f"ComparisonConfig.humans must be 'learned:PATH', got {self.humans!r}")
+        object.__setattr__(self, "maps", tuple(self.maps))
+        self.benchmark("social_force")  # a bad map, policy, file or count fails here, naming it
+        self.benchmark(self.humans)
+
+    def benchmark(self, humans: str) -> BenchmarkConfig:
+        """The benchmark run of one population."""
+        return BenchmarkConfig(
+            policies=(self.policy,),
+            maps=self.maps,
+            trials=self.trials,
+            quick=self.quick,
+            workers=self.workers,
+            batch_size=self.batch_size,
+            env_overrides=dict(self.env_overrides),
+            humans=humans,
+            human_metrics=True,
+        )
+
+
+@dataclass
+class Comparison:
+    """What compare_humans found.
+
+    Attributes:
+        out_dir: the output folder.
+        rows: one dict per (map, population): trials, every human metric's mean and interval,
+            the robot's success, force and blame.
+        targets: per map, {"reach": bool, "collisions": bool, "met": bool}.
+        files: the files written.
+    """
+
+    out_dir: Path
+    rows: list[dict[str, Any]]
+    targets: dict[str, dict[str, bool]]
+    files: list[Path]
+
+
+def compare_humans(
+    config: ComparisonConfig,
+    out_dir: str | Path,
+    *,
+    test_sets: Mapping[str, TestSet] | None = None,
+    progress: bool = True,
+    figures: bool = True,
+) -> Comparison:
+    """Run both populations and write comparison.md, comparison.csv and comparison.png.
+
+    Args:
+        config: what to compare.
+        out_dir: output folder (social_force/ and learned/ inside hold the two benchmark runs).
+        test_sets: test sets to use instead of the registry's (keyed by map name), for tests.
+        progress: show progress bars.
+        figures: draw comparison.png (needs matplotlib).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[dict[str, Any]] = []
+    for population in POPULATIONS:
+        humans = "social_force" if population == "social_force" else config.humans
+        result = run_benchmark(
+            config.benchmark(humans), out / population, test_sets=test_sets, progress=progress, figures=False
+        )
+        trials = _run_trials(result.out_dir)
+        humans_summary = summarize_humans(trials, policies=[config.policy], maps=[])
+        robot = {e["map"]: e for e in result.summary}
+        for entry in humans_summary:
+            row = {"population": population, **entry}
+            for key, _, _ in ROBOT_METRICS:
+                row[key] = robot.get(entry["map"], {}).get(key, float("nan"))
+            rows.append(row)
+    targets = check_targets(rows)
+    files = [write_comparison_csv(rows, out / "comparison.csv")]
+    files.append(write_comparison_md(rows, targets, out / "comparison.md", config))
+    if figures:
+        files.append(plot_comparison(rows, out / "comparison.png"))
+    return Comparison(out, rows, targets, files)
+
+
+def _run_trials(run_dir: Path) -> list[dict[str, Any]]:
+    """The stored trials of the benchmark run recorded in run_dir/config.json (its config hashes
+    and its first `trials` scenarios of each test set; a store may hold more)."""
+    import json
+
+    record = json.loads((run_dir / "config.json").read_text())
+    hashes = set(record["config_hashes"].values())
+    counts = {name: entry["trials"] for name, entry in record["test_sets"].items()}
+    with ResultsStore(run_dir / "results.sqlite") as store:
+        rows = store.rows()
+    return [
+        r for r in rows if r["config_hash"] in hashes and r["scenario_index"] < counts.get(r["test_set"], 0)
+    ]
+
+
+def check_targets(rows: list[dict[str, Any]]) -> dict[str, dict[str, bool]]:
+    """Per map: the learned reach rate >= (1 - REACH_TOLERANCE) x the social-force one, and no
+    more collisions of any kind (means per episode)."""
+    out: dict[str, dict[str, bool]] = {}
+    for map_name in dict.fromkeys(r["map"] for r in rows):
+        by = {r["population"]: r for r in rows if r["map"] == map_name}
+        if set(by) != set(POPULATIONS):
+            continue
+        social, learned = by["social_force"], by["learned"]
+        reach = learned["humans_goal_rate_mean"] >= (1 - REACH_TOLERANCE) * social["humans_goal_rate_mean"]
+        collisions = all(learned[f"{k}_mean"] <= social[f"{k}_mean"] for k in COLLISION_KEYS)
+        out[map_name] = {
+            "reach": bool(reach),
+            "collisions": bool(collisions),
+            "met": bool(reach and collisions),
+        }
+    return out
+
+
+def write_comparison_csv(rows: list[dict[str, Any]], path: Path) -> Path:
+    """Every column of the comparison rows."""
+    columns: list[str] = []
+    for row in rows:
+        columns += [k for k in row if k not in columns]
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return write_text_atomic(path, text.getvalue())
+
+
+def _cell(row: dict[str, Any], key: str, digits: int) -> str:
+    mean = row.get(f"{key}_mean", float("nan"))
+    if mean != mean:
+        return "-"
+    low, high = row.get(f"{key}_ci_low"), row.get(f"{key}_ci_high")
+    if low is None or high is None or low != low or high != high:
+        return f"{mean:.{digits}f}"
+    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def write_comparison_md(
+    rows: list[dict[str, Any]], targets: dict[str, dict[str, bool]], path: Path, config: ComparisonConfig
+) -> Path:
+    """A table per map: metrics as rows, the two populations as columns, then the targets."""
+    lines = [
+        f"# Learned humans ({config.humans}) against social-force humans",
+        "",
+        f"Robot policy {config.policy}; the same scenarios for both populations; means over episodes "
+        "with 90% intervals (bootstrap for collision counts). Human metrics: socialzoo.bench.human_metrics.",
+        "",
+    ]
+    for map_name in dict.fromkeys(r["map"] for r in rows):
+        by = {r["population"]: r for r in rows if r["map"] == map_name}
+        present = [p for p in POPULATIONS if p in by]
+        lines += [
+            f"## {map_name}",
+            "",
+            "| metric | " + " | ".join(f"{p.replace('_', '-')} ({by[p]['trials']})" for p in present) + " |",
+            "|---|" + "---|" * len(present),
+        ]
+        for key in HUMAN_METRIC_KEYS:
+            label, digits = HUMAN_METRIC_LABELS[key]
+            lines.append(f"| {label} | " + " | ".join(_cell(by[p], key, digits) for p in present) + " |")
+        for key, label, digits in ROBOT_METRICS:
+            lines.append(f"| {label} | " + " | ".join(f"{by[p][key]:.{digits}f}" for p in present) + " |")
+        lines.append("")
+        if map_name in targets:
+            t = targets[map_name]
+            lines.append(
+                f"Targets on {map_name}: reach rate within {REACH_TOLERANCE:.0%} "
+                f"{'met' if t['reach'] else 'NOT met'}; no more collisions {'met' if t['collisions'] else 'NOT met'}."
+            )
+            lines.append("")
+    return write_text_atomic(path, "\n".join(lines))
+
+
+def plot_comparison(rows: list[dict[str, Any]], path: Path) -> Path:
+    """Bars of every human metric and the robot's success, force and blame: one panel per metric,
+    maps along x, the two populations side by side, 90% intervals as error bars."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    panels = [(k, HUMAN_METRIC_LABELS[k][0], True) for k in HUMAN_METRIC_KEYS]
+    panels += [(k, label, False) for k, label, _ in ROBOT_METRICS]
+    maps = list(dict.fromkeys(r["map"] for r in rows))
+    cols = 4
+    fig, axes = plt.subplots(int(np.ceil(len(panels) / cols)), cols, figsize=(3.4 * cols, 2.6 * 3))
+    x = np.arange(len(maps))
+    for ax, (key, label, has_ci) in zip(axes.flat, panels, strict=False):
+        for i, population in enumerate(POPULATIONS):
+            by = {r["map"]: r for r in rows if r["population"] == population}
+            name = f"{key}_mean" if has_ci else key
+            means = np.array([by.get(m, {}).get(name, np.nan) for m in maps], dtype=float)
+            err = None
+            if has_ci:
+                low = np.array([by.get(m, {}).get(f"{key}_ci_low", np.nan) for m in maps], dtype=float)
+                high = np.array([by.get(m, {}).get(f"{key}_ci_high", np.nan) for m in maps], dtype=float)
+                err = np.nan_to_num(np.vstack([means - low, high - means]).clip(min=0))
+            ax.bar(
+                x + (i - 0.5) * 0.38,
+                np.nan_to_num(means),
+                0.38,
+                yerr=err,
+                capsize=2,
+                label=population.replace("_", "-"),
+            )
+        ax.set_xticks(x, maps)
+        ax.set_title(label, fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(panels) :]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,69 @@
+"""`socialzoo compare-humans`: learned humans against social-force humans on the same scenarios."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add `compare-humans`."""
+    parser = subparsers.add_parser(
+        "compare-humans",
+        help="learned humans against social-force humans (reach rate, collisions, distances, speed)",
+        description="Run the benchmark among social-force humans and among learned humans on the same "
+        "scenarios (human metrics on), and write DIR/comparison.md, comparison.csv and comparison.png "
+        "with issue 13's targets (reach rate within 10%%, no more collisions).",
+    )
+    parser.add_argument("--humans", required=True, help="learned:PATH, a learned human policy file")
+    parser.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
+    parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
+    parser.add_argument("--trials", type=_positive, default=None, help="scenarios per map (default: all)")
+    parser.add_argument("--quick", action="store_true", help="the quick test sets (100 scenarios)")
+    parser.add_argument("--max-steps", type=_positive, default=None, help="episode time limit, steps")
+    parser.add_argument("--workers", type=_positive, default=2, help="local processes (default 2)")
+    parser.add_argument("--batch-size", type=_positive, default=64, help="env rows per worker")
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--no-figures", action="store_true", help="skip comparison.png")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    parser.set_defaults(func=run_compare_humans)
+
+
+def run_compare_humans(args: argparse.Namespace) -> int:
+    """Run `socialzoo compare-humans`; returns the exit status."""
+    from socialzoo.bench.human_compare import ComparisonConfig, compare_humans
+
+    try:
+        config = ComparisonConfig(
+            humans=args.humans,
+            policy=args.policy,
+            maps=tuple(m.strip() for m in args.maps.split(",") if m.strip()),
+            trials=args.trials,
+            quick=args.quick,
+            workers=args.workers,
+            batch_size=args.batch_size,
+            env_overrides={} if args.max_steps is None else {"max_steps": args.max_steps},
+        )
+    except (ValueError, KeyError) as err:
+        print(f"socialzoo compare-humans: error: {err}", file=sys.stderr)
+        return 2
+    result = compare_humans(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
+    for map_name, target in result.targets.items():
+        print(
+            f"{map_name}: reach-rate target {'met' if target['reach'] else 'NOT met'}, "
+            f"collision target {'met' if target['collisions'] else 'NOT met'}"
+        )
+    print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
+    return 0

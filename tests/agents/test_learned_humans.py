@@ -1,0 +1,111 @@
+"""Learned human policies at inference: the file round trip, bad files and specs, mixed learned and
+scripted populations, and the shipped policy (trained by `socialzoo train humans`, seed recorded)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from socialzoo.agents import SHIPPED_DIR
+from socialzoo.agents.learned_humans import (
+    LearnedHumanPolicy,
+    check_human_spec,
+    make_human_policy,
+    split_human_spec,
+)
+from socialzoo.agents.policy_file import PolicyFileError, save_policy_file
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore
+from socialzoo.nav.scenarios import Scenario
+from socialzoo.nav.subpolicies import HALT
+
+SHIPPED = SHIPPED_DIR / "humans.safetensors"
+
+
+def test_round_trip_gives_identical_actions(walker_policy_path, tmp_path):
+    rng = np.random.default_rng(1)
+    policy = LearnedHumanPolicy.load(walker_policy_path)
+    layers = [(rng.normal(size=w.shape), rng.normal(size=b.shape)) for w, b in policy.layers]
+    loc, scale = rng.normal(size=policy.input_size), rng.uniform(0.5, 2.0, policy.input_size)
+    original = LearnedHumanPolicy(layers, "tanh", loc, scale, policy.num_neighbours, "world")
+    path = original.save(tmp_path / "p.safetensors", policy.header["env_id"], {"seed": 7})
+    loaded = LearnedHumanPolicy.load(path)
+    obs = rng.normal(size=(3, 4, policy.input_size))
+    np.testing.assert_array_equal(loaded.act(obs), original.act(obs))
+    assert loaded.act(obs).shape == (3, 4, 2) and (np.abs(loaded.act(obs)) <= 1).all()
+    assert loaded.env_overrides() == {
+        "num_human_neighbours": policy.num_neighbours,
+        "human_action_frame": "world",
+    }
+    assert loaded.config()["training"] == {"seed": 7} and len(loaded.config()["file_sha256"]) == 64
+
+
+def test_bad_files_and_specs_are_named(walker_policy_path, tmp_path):
+    policy = LearnedHumanPolicy.load(walker_policy_path)
+    tensors = {"obs_loc": policy.obs_loc, "obs_scale": policy.obs_scale}
+    path = save_policy_file(tmp_path / "ppo.safetensors", tensors, {**policy.header, "policy": "ppo"})
+    with pytest.raises(PolicyFileError, match="not a learned human policy"):
+        LearnedHumanPolicy.load(path)
+    with pytest.raises(ValueError, match="the last layer gives 3 outputs"):
+        LearnedHumanPolicy(
+            [(np.zeros((3, policy.input_size)), np.zeros(3))],
+            "tanh",
+            policy.obs_loc,
+            policy.obs_scale,
+            policy.num_neighbours,
+            "human",
+        )
+    with pytest.raises(ValueError, match="scale > 0"):
+        LearnedHumanPolicy(
+            policy.layers, "tanh", policy.obs_loc, 0 * policy.obs_scale, policy.num_neighbours, "human"
+        )
+    with pytest.raises(ValueError, match="act: observations of shape"):
+        policy.act(np.zeros((2, policy.input_size + 1)))
+    assert split_human_spec("social_force") == ("social_force", None)
+    assert make_human_policy("social_force") is None
+    with pytest.raises(ValueError, match="no such file"):
+        check_human_spec(f"learned:{tmp_path / 'none.safetensors'}")
+    with pytest.raises(ValueError, match="social_force takes no file"):
+        split_human_spec("social_force:x")
+
+
+def test_mixed_population_learned_slots_follow_the_policy_the_rest_their_social_force(write_walker, tmp_path):
+    # Five humans walking up the open room side by side; the first two are learned slow walkers
+    # (tanh(0.5) = 0.46 of their preferred speed), the other three keep their social force.
+    slow = LearnedHumanPolicy.load(write_walker(tmp_path / "slow.safetensors", speed=0.5))
+    spawn = [[1.0 + 2.0 * i, 1.5] for i in range(5)]
+    goals = [[1.0 + 2.0 * i, 9.0] for i in range(5)]
+    scenario = Scenario(
+        map_name="open_room",
+        seed=3,
+        robot_starts=[[9.5, 9.5, 0.0]],
+        robot_goals=[[9.5, 5.0, 0.0]],
+        human_spawn=spawn,
+        human_start_index=[-1] * 5,
+        human_goal_index=[-1] * 5,
+        human_routes=tuple(np.array([s, g]) for s, g in zip(spawn, goals, strict=True)),
+        human_speed=[1.0] * 5,
+    )
+    config = EnvConfig(map="open_room", num_learned_humans=2, **slow.env_overrides())
+    core = SocialNavCore(config, 1)
+    core.reset_rows([0], [scenario])
+    assert core.human_obs.shape == (1, 2, slow.input_size)
+    for _ in range(120):  # 3 s
+        core.step(np.array([[HALT]]), slow.act(core.human_obs))
+    speed = np.linalg.norm(core.state.human_vel[0, :5], axis=-1)
+    assert np.all(np.abs(speed[:2] - np.tanh(0.5)) < 0.05)
+    assert np.all(speed[2:] > 0.9)
+
+
+def test_shipped_human_policy_loads_and_records_its_training():
+    assert SHIPPED.stat().st_size < 2**20
+    policy = LearnedHumanPolicy.load(SHIPPED)
+    training = policy.header["training"]
+    assert training["algo"] == "mappo" and training["trainer"] == "humans" and training["map"] == "gdc1"
+    record = json.loads((SHIPPED_DIR / "humans.run.json").read_text())
+    assert (
+        record["command"].startswith("socialzoo train humans") and record["args"]["seed"] == training["seed"]
+    )
+    assert record["results"]["frames"] == training["frames"] and record["finished"]
+    obs = np.random.default_rng(0).normal(size=(8, policy.input_size))
+    assert np.isfinite(policy.act(obs)).all()

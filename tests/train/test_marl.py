@@ -1,0 +1,154 @@
+"""The multi-agent trainers on tiny runs: a short MAPPO run improves the learned humans' reward on
+open_room; IPPO, co-training (simultaneous and alternating) and the multi-process and Ray
+collectors run; run folders hold run.json with the seed, TensorBoard logs, checkpoints (the
+untrained policy at step 0) and history.csv."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("torchrl")
+
+from socialzoo.agents import make_policy  # noqa: E402
+from socialzoo.agents.learned_humans import LearnedHumanPolicy  # noqa: E402
+from socialzoo.env.torchrl_env import SocialNavTorchEnv  # noqa: E402
+from socialzoo.train.cotrain import CotrainArgs  # noqa: E402
+from socialzoo.train.cotrain import train as cotrain  # noqa: E402
+from socialzoo.train.humans import HumansArgs  # noqa: E402
+from socialzoo.train.humans import train as train_humans  # noqa: E402
+from socialzoo.train.marl_run import read_history  # noqa: E402
+
+# Open room, five learned humans (every human of the scenario), short episodes.
+TINY = dict(
+    map="open_room",
+    num_learned_humans=5,
+    max_humans=5,
+    max_steps=200,
+    batch_size=16,
+    frames_per_batch=1024,
+    minibatch_size=256,
+    checkpoint_every=4096,
+    progress=False,
+)
+
+
+def mean_human_reward(path, config, *, seed: int = 1234, batch_size: int = 8, steps: int = 200) -> float:
+    """Mean reward per present learned human and step of the policy file's (deterministic) humans
+    among Ref robots, on the scenario stream of `seed`."""
+    policy = LearnedHumanPolicy.load(path)
+    env = SocialNavTorchEnv(config, batch_size=batch_size, robot_policy=make_policy("ref"), seed=seed)
+    td = env.reset()
+    total, count = 0.0, 0
+    for _ in range(steps):
+        mask = td["human", "mask"]
+        action = policy.act(td["human", "observation"].numpy())
+        td["human", "action"] = torch.as_tensor(action, dtype=torch.float32)
+        out, td = env.step_and_maybe_reset(td)
+        total += float(out["next", "human", "reward"].squeeze(-1)[mask].sum())
+        count += int(mask.sum())
+    env.close()
+    return total / count
+
+
+@pytest.fixture(scope="module")
+def mappo_run(tmp_path_factory):
+    args = HumansArgs(out=tmp_path_factory.mktemp("mappo"), algo="mappo", frames=8192, seed=3, **TINY)
+    return args, train_humans(args)
+
+
+def test_short_mappo_run_improves_the_human_reward_on_open_room(mappo_run):
+    args, final = mappo_run
+    config = args.env_config()
+    untrained = args.out / "checkpoints" / "step_000000000.humans.safetensors"
+    before = mean_human_reward(untrained, config)
+    after = mean_human_reward(final, config)
+    # The untrained humans barely move (progress ~0, speed penalty); the trained ones walk their routes.
+    assert after > before + 0.01, (before, after)
+    assert after > 0
+
+
+def test_run_folder_records_seed_checkpoints_tensorboard_and_history(mappo_run):
+    args, final = mappo_run
+    record = json.loads((args.out / "run.json").read_text())
+    assert record["args"]["seed"] == 3 and record["args"]["algo"] == "mappo"
+    assert record["finished"] and record["results"]["frames"] == 8192
+    assert record["results"]["checkpoints"] == [
+        "checkpoints/step_000000000.humans.safetensors",
+        "checkpoints/step_000004096.humans.safetensors",
+        "checkpoints/step_000008192.humans.safetensors",
+    ]
+    assert list((args.out / "tensorboard").glob("events.out.tfevents.*"))
+    history = read_history(args.out / "history.csv")
+    assert [row["frames"] for row in history] == [1024.0 * k for k in range(1, 9)]
+    assert all(np.isfinite(row["human/loss_objective"]) for row in history)
+    training = LearnedHumanPolicy.load(final).header["training"]
+    assert training["seed"] == 3 and training["algo"] == "mappo" and training["frames"] == 8192
+    # A rerun of the finished run does not train again.
+    mtime = final.stat().st_mtime_ns
+    assert train_humans(args) == final and final.stat().st_mtime_ns == mtime
+
+
+def test_trained_policy_saves_and_loads_to_identical_actions(mappo_run, tmp_path):
+    _, final = mappo_run
+    policy = LearnedHumanPolicy.load(final)
+    obs = np.random.default_rng(0).normal(size=(5, 3, policy.input_size)).astype(np.float32)
+    copy = policy.save(tmp_path / "copy.safetensors", policy.header["env_id"], policy.header["training"])
+    again = LearnedHumanPolicy.load(copy)
+    np.testing.assert_array_equal(again.act(obs), policy.act(obs))
+    assert again.digest == policy.digest  # same content, same bytes
+
+
+def test_ippo_runs(tmp_path):
+    args = HumansArgs(out=tmp_path, algo="ippo", frames=2048, seed=0, **TINY)
+    final = train_humans(args)
+    assert LearnedHumanPolicy.load(final).header["training"]["algo"] == "ippo"
+    assert len(read_history(tmp_path / "history.csv")) == 2
+
+
+@pytest.mark.parametrize("schedule", ["simultaneous", "alternating"])
+def test_cotrain_runs_and_writes_both_policies(tmp_path, schedule):
+    tiny = {**TINY, "num_learned_humans": 2, "checkpoint_every": 10_000}
+    args = CotrainArgs(
+        out=tmp_path, schedule=schedule, alternate_every=1, num_robots=2, frames=3072, seed=0, **tiny
+    )
+    final = cotrain(args)
+    assert final.name == "humans.safetensors" and (tmp_path / "robot.safetensors").is_file()
+    robot = make_policy(f"mappo:{tmp_path / 'robot.safetensors'}")
+    assert robot.name == "mappo"
+    history = read_history(tmp_path / "history.csv")
+    updated = [
+        (
+            np.isfinite(r.get("robot/loss_objective", np.nan)),
+            np.isfinite(r.get("human/loss_objective", np.nan)),
+        )
+        for r in history
+    ]
+    if schedule == "simultaneous":
+        assert updated == [(True, True)] * 3
+    else:  # robots first, then humans, one batch each
+        assert updated == [(True, False), (False, True), (True, False)]
+
+
+@pytest.mark.parametrize("collector", ["multiprocess", "ray"])
+def test_distributed_collectors_run(tmp_path, collector):
+    if collector == "ray":
+        pytest.importorskip("ray")
+    tiny = {**TINY, "batch_size": 8, "frames_per_batch": 512}
+    args = HumansArgs(out=tmp_path, frames=1024, collector=collector, workers=2, seed=0, **tiny)
+    final = train_humans(args)
+    assert LearnedHumanPolicy.load(final).header["training"]["frames"] == 1024
+    record = json.loads((tmp_path / "run.json").read_text())
+    assert record["args"]["collector"] == collector and record["results"]["frames"] == 1024
+
+
+def test_bad_arguments_name_the_field(tmp_path):
+    with pytest.raises(ValueError, match=r"HumansArgs\.algo"):
+        HumansArgs(out=tmp_path, algo="ddpg")
+    with pytest.raises(ValueError, match="frames_per_batch"):
+        HumansArgs(out=tmp_path, batch_size=16, frames_per_batch=1000)
+    with pytest.raises(ValueError, match=r"CotrainArgs\.schedule"):
+        CotrainArgs(out=tmp_path, schedule="sometimes")
