@@ -7,7 +7,8 @@ Synthesises one program per (steps, window) with the project's trainer (socialzo
 seed recorded in each pips.train.json) from DEMOS (`socialzoo demos`, training scenarios), then
 evaluates each on the first TRIALS scenarios of the gdc1 validation set (gdc1-val) and writes
 pips_study.{csv,md,png} into --out. Both halves resume: finished cells are not synthesised again
-and stored trials are read back. --skip-training evaluates the programs already under --root.
+and stored trials are read back. --skip-training evaluates the programs already under --root;
+--skip-evaluation only synthesises.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--batch-size", type=int, default=100)
     parser.add_argument("--skip-training", action="store_true")
+    parser.add_argument("--skip-evaluation", action="store_true")
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
@@ -61,6 +63,8 @@ def main() -> None:
         )
         programs = train_pips_study(config)
     print(f"synthesis done after {time.perf_counter() - start:.0f} s", flush=True)
+    if args.skip_evaluation:
+        return
     result = run_pips_study(
         programs,
         args.out,
