@@ -79,13 +79,13 @@ def test_the_study_refuses_test_sets_and_bad_configs(rooms_demos, tmp_path):
     program = study_program_file(tmp_path, 500, 20)
     program.parent.mkdir(parents=True)
     program.write_text(json.dumps({"format": "socialzoo-pips/1", "states": {}}))
-    with pytest.raises(ValueError, match="gdc1-test.*benchmark test set"):
+    with pytest.raises(ValueError, match=r"gdc1-test.*benchmark test set"):
         run_pips_study({(500, 20): program}, tmp_path / "out", test_set=get_test_set("gdc1-test"))
     with pytest.raises(ValueError, match="no program file"):
         run_pips_study({(500, 0): tmp_path / "nope.json"}, tmp_path / "out")
     with pytest.raises(ValueError, match=r"per-cell PipsArgs field\(s\) \['window'\]"):
         PipsStudyConfig(demos=rooms_demos, root=tmp_path, overrides={"window": 5})
-    with pytest.raises(ValueError, match="PipsStudyConfig.steps must be ints >= 1"):
+    with pytest.raises(ValueError, match=r"PipsStudyConfig\.steps must be ints >= 1"):
         PipsStudyConfig(demos=rooms_demos, root=tmp_path, steps=(0,))
-    with pytest.raises(ValueError, match="PipsArgs.max_pred_size"):
+    with pytest.raises(ValueError, match=r"PipsArgs\.max_pred_size"):
         PipsStudyConfig(demos=rooms_demos, root=tmp_path, overrides={"max_pred_size": 9})
