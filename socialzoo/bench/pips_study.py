@@ -23,6 +23,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.rl_curves import VALIDATION_SET
+from socialzoo.bench.tables import policy_label
 from socialzoo.nav.scenarios import TestSet
 
 logger = logging.getLogger(__name__)
@@ -33,12 +34,15 @@ STUDY_STEPS: tuple[int, ...] = (500, 1_000, 3_500, 10_000)
 STUDY_WINDOWS: tuple[int, ...] = (20, 0)
 STUDY_TRIALS = 200
 STUDY_MAP = "gdc1"
+# Policies evaluated on the same scenarios for reference: the demonstrator.
+STUDY_BASELINES: tuple[str, ...] = ("ref",)
 # What socialzoo.train.pips writes beside a program NAME.json (its record).
 RECORD_SUFFIX = ".train.json"
 TABLE_CSV = "pips_study.csv"
 TABLE_MD = "pips_study.md"
 FIGURE = "pips_study.png"
 CSV_COLUMNS = (
+    "policy",
     "demonstration_steps",
     "window",
     "trials",
@@ -104,12 +108,15 @@ class StudyResult:
 
     Attributes:
         rows: one dict per (steps, window), keyed by CSV_COLUMNS.
+        baselines: one dict per baseline policy (policy, trials, success_rate, success_ci_low,
+            success_ci_high; the cell columns None).
         files: the table, the figure, and the benchmark's store and summaries.
         computed: trials run by this call.
         reused: trials read back from the store.
     """
 
     rows: list[dict[str, Any]]
+    baselines: list[dict[str, Any]]
     files: list[Path]
     computed: int
     reused: int
@@ -121,6 +128,7 @@ def run_pips_study(
     *,
     trials: int = STUDY_TRIALS,
     test_set: TestSet = VALIDATION_SET,
+    baselines: Sequence[str] = STUDY_BASELINES,
     workers: int | None = 1,
     batch_size: int = 64,
     env_overrides: Mapping[str, Any] | None = None,
@@ -138,6 +146,7 @@ def run_pips_study(
         trials: scenarios per program (the same first ones of `test_set` for every program).
         test_set: the scenarios; gdc1's validation set unless a test gives a smaller one. Never a
             benchmark test set: the study chooses nothing, but it must not be tuned on them either.
+        baselines: registered policies evaluated on the same scenarios, for reference.
         workers: local evaluation processes.
         batch_size: env rows stepped together per worker.
         env_overrides: EnvConfig.replace keywords for the evaluation env, e.g. {"max_steps": 40}.
@@ -159,7 +168,7 @@ def run_pips_study(
             raise ValueError(f"run_pips_study: {steps} steps, window {window}: no program file {path}")
         specs[(int(steps), int(window))] = f"pips:{path}"
     config = BenchmarkConfig(
-        policies=tuple(specs.values()),
+        policies=(*specs.values(), *baselines),
         maps=(test_set.map_name,),
         trials=trials,
         workers=workers,
@@ -179,6 +188,7 @@ def run_pips_study(
         held = (record.get("agreement") or {}).get("held_out") or {}
         rows.append(
             {
+                "policy": "pips",
                 "demonstration_steps": steps,
                 "window": window,
                 "trials": entry["trials"],
@@ -194,11 +204,22 @@ def run_pips_study(
                 "program_file": str(programs[(steps, window)]),
             }
         )
+    base_rows = [
+        {
+            **dict.fromkeys(CSV_COLUMNS),
+            **{k: by_spec[b][k] for k in ("trials", "success_rate", "success_ci_low", "success_ci_high")},
+            "policy": b,
+        }
+        for b in baselines
+    ]
     name = test_set.name or test_set.map_name
-    files = [write_study_csv(rows, out / TABLE_CSV), write_study_md(rows, out / TABLE_MD, trials, name)]
+    files = [
+        write_study_csv([*rows, *base_rows], out / TABLE_CSV),
+        write_study_md(rows, out / TABLE_MD, trials, name, base_rows),
+    ]
     if figure:
-        files.append(plot_study(rows, out / FIGURE, trials, name))
-    return StudyResult(rows, files + list(result.files), result.computed, result.reused)
+        files.append(plot_study(rows, out / FIGURE, trials, name, base_rows))
+    return StudyResult(rows, base_rows, files + list(result.files), result.computed, result.reused)
 
 
 def write_study_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
@@ -223,9 +244,22 @@ def _cell(value: Any, fmt: str) -> str:
     return format(value, fmt)
 
 
-def write_study_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: int, test_set: str) -> Path:
+def _success(r: Mapping[str, Any]) -> str:
+    return (
+        f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, {100 * r['success_ci_high']:.1f}]"
+    )
+
+
+def write_study_md(
+    rows: Sequence[Mapping[str, Any]],
+    path: str | Path,
+    trials: int,
+    test_set: str,
+    baselines: Sequence[Mapping[str, Any]] = (),
+) -> Path:
     """Write the study as a Markdown table: per cell, success with its 90% interval, the
-    examples, the synthesis time, the program's comparisons and its held-out agreement."""
+    examples, the synthesis time, the program's comparisons and its held-out agreement; the
+    baselines' success on the same scenarios below it."""
     lines = [
         f"# PIPS: success against demonstration steps, with and without windowing "
         f"(first {trials} scenarios of {test_set})",
@@ -235,7 +269,7 @@ def write_study_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: 
         "|---:|---|---|---:|---:|---:|---:|---:|",
     ]
     for r in sorted(rows, key=lambda r: (-r["window"], r["demonstration_steps"])):
-        success = f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, {100 * r['success_ci_high']:.1f}]"
+        success = _success(r)
         agree = r.get("heldout_agreement")
         lines.append(
             f"| {r['demonstration_steps']:,} | {_window_label(r['window'])} | {success} "
@@ -243,13 +277,24 @@ def write_study_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: 
             f"| {_cell(r.get('synthesis_seconds'), '.1f')} | {_cell(r.get('comparisons'), 'd')} "
             f"| {_cell(None if agree is None else 100 * agree, '.1f')} |"
         )
+    if baselines:
+        lines.append("")
+        lines += [
+            f"{policy_label(b['policy'])} on the same scenarios: {_success(b)} % success." for b in baselines
+        ]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n")
     return path
 
 
-def plot_study(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: int, test_set: str) -> Path:
+def plot_study(
+    rows: Sequence[Mapping[str, Any]],
+    path: str | Path,
+    trials: int,
+    test_set: str,
+    baselines: Sequence[Mapping[str, Any]] = (),
+) -> Path:
     """Success (with 90% intervals) against demonstration steps, one line per window (PNG)."""
     import matplotlib
 
@@ -270,7 +315,12 @@ def plot_study(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: int,
             x, y, yerr=err, marker="o", capsize=3, color=("#4477aa", "#ee6677", "#228833")[i % 3],
             label=f"window: {_window_label(window)}",
         )  # fmt: skip
-    ax.axhline(88.9, color="grey", linestyle=":", label="paper, 3,500 steps (gdc1 test)")
+    for b in baselines:
+        ax.axhspan(100 * b["success_ci_low"], 100 * b["success_ci_high"], color="grey", alpha=0.2, lw=0)
+        ax.axhline(
+            100 * b["success_rate"], color="grey", label=f"{policy_label(b['policy'])} (same scenarios)"
+        )
+    ax.axhline(88.9, color="black", linestyle=":", label="paper's PIPS, 3,500 steps (gdc1 test)")
     ax.set_xscale("log")
     steps = sorted({r["demonstration_steps"] for r in rows})
     ax.set_xticks(steps, [f"{s:,}" for s in steps])

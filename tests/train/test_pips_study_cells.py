@@ -61,18 +61,22 @@ def test_study_synthesises_each_cell_once_and_tabulates_it(rooms_demos, rooms_ma
     out = tmp_path / "eval"
     kwargs = dict(trials=2, test_set=validation, batch_size=4, env_overrides={"max_steps": 40}, progress=False)
     result = run_pips_study(files, out, **kwargs)
-    assert result.computed == 8 and result.reused == 0
+    assert result.computed == 10 and result.reused == 0  # 4 programs and Ref, 2 scenarios each
+    ((ref,),) = (result.baselines,)
+    assert ref["policy"] == "ref" and ref["trials"] == 2 and ref["demonstration_steps"] is None
     assert [(r["demonstration_steps"], r["window"]) for r in result.rows] == sorted(files)
     for row in result.rows:
         assert row["trials"] == 2 and row["success_ci_low"] <= row["success_rate"] <= row["success_ci_high"]
         assert row["synthesis_seconds"] > 0 and row["seed"] in (3,)
     with (out / "pips_study.csv").open() as f:
-        assert tuple(csv.DictReader(f).fieldnames or ()) == CSV_COLUMNS
+        table = list(csv.DictReader(f))
+    assert tuple(table[0]) == CSV_COLUMNS and [r["policy"] for r in table] == ["pips"] * 4 + ["ref"]
     md = (out / "pips_study.md").read_text()
     assert "rooms-val" in md and "| 900 | none (every step) |" in md and "| 300 | 10 steps |" in md
+    assert "Ref on the same scenarios:" in md
     assert (out / "pips_study.png").stat().st_size > 1000
     again = run_pips_study(files, out, **kwargs)
-    assert again.computed == 0 and again.reused == 8 and again.rows == result.rows
+    assert again.computed == 0 and again.reused == 10 and again.rows == result.rows
 
 
 def test_the_study_refuses_test_sets_and_bad_configs(rooms_demos, tmp_path):
