@@ -154,14 +154,21 @@ def run_pips_study(
         figure: draw pips_study.png (needs matplotlib).
 
     Raises:
-        ValueError: no programs, a file that does not exist, or a registered test set.
+        ValueError: no programs, a file that does not exist, a registered test set, or the
+            demonstrations' own scenarios.
     """
+    from socialzoo.bench.demonstrations import DEMO_BASE_SEED
     from socialzoo.nav.scenarios import TEST_SETS
 
     if not programs:
         raise ValueError("run_pips_study: no programs to evaluate")
     if any(test_set.base_seed == ts.base_seed for ts in TEST_SETS.values()):
         raise ValueError(f"run_pips_study: {test_set.name or test_set.map_name!r} is a benchmark test set")
+    if test_set.base_seed == DEMO_BASE_SEED:
+        raise ValueError(
+            f"run_pips_study: {test_set.name or test_set.map_name!r} has the demonstrations' base seed "
+            f"{DEMO_BASE_SEED}: the programs were learned on those scenarios"
+        )
     specs = {}
     for (steps, window), path in sorted(programs.items()):
         if not Path(path).is_file():

@@ -85,6 +85,8 @@ def test_the_study_refuses_test_sets_and_bad_configs(rooms_demos, tmp_path):
     program.write_text(json.dumps({"format": "socialzoo-pips/1", "states": {}}))
     with pytest.raises(ValueError, match=r"gdc1-test.*benchmark test set"):
         run_pips_study({(500, 20): program}, tmp_path / "out", test_set=get_test_set("gdc1-test"))
+    with pytest.raises(ValueError, match="demonstrations' base seed"):
+        run_pips_study({(500, 20): program}, tmp_path / "out", test_set=TestSet("gdc1", 20220100, 5))
     with pytest.raises(ValueError, match="no program file"):
         run_pips_study({(500, 0): tmp_path / "nope.json"}, tmp_path / "out")
     with pytest.raises(ValueError, match=r"per-cell PipsArgs field\(s\) \['window'\]"):
