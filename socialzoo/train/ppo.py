@@ -19,6 +19,7 @@ from typing import Any
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.sb3_common import (
     check_common,
+    check_int,
     check_number,
     make_training_env,
     run_sb3,
@@ -90,9 +91,7 @@ class PPOArgs:
         object.__setattr__(self, "out", Path(self.out))
         object.__setattr__(self, "net_arch", tuple(self.net_arch))
         for name in ("n_steps", "batch_size", "n_epochs"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ValueError(f"PPOArgs.{name} must be an int >= 1, got {value!r}")
+            check_int("PPOArgs", name, getattr(self, name), 1)
         check_common("PPOArgs", self, self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
         for name, low, high in (
             ("learning_rate", 0.0, 1.0),
