@@ -134,9 +134,16 @@ def test_cotrain_runs_and_writes_both_policies(tmp_path, schedule):
 
 
 @pytest.mark.parametrize("collector", ["multiprocess", "ray"])
-def test_distributed_collectors_run(tmp_path, collector):
+def test_distributed_collectors_run(tmp_path, collector, monkeypatch):
     if collector == "ray":
         pytest.importorskip("ray")
+        from datetime import timedelta
+
+        from torchrl.weight_update import _ray
+
+        # TorchRL waits 60 s for the Ray collectors to join its weight-sync process group; on a
+        # busy 2-core machine starting two actors that import torch takes longer than that.
+        monkeypatch.setattr(_ray, "_DIST_TIMEOUT", timedelta(seconds=600))
     tiny = {**TINY, "batch_size": 8, "frames_per_batch": 512}
     args = HumansArgs(out=tmp_path, frames=1024, collector=collector, workers=2, seed=0, **tiny)
     final = train_humans(args)
