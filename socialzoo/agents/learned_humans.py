@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.agents.mlp import ACTIVATIONS
+from socialzoo.agents.mlp import ACTIVATIONS, checked_layers
 from socialzoo.agents.policy_file import PolicyFileError, read_policy_file, save_policy_file
 from socialzoo.env.human_agents import human_observation_size
 
@@ -71,14 +71,7 @@ class LearnedHumanPolicy:
             raise ValueError(
                 f"LearnedHumanPolicy: action_frame must be one of {ACTION_FRAMES}, got {action_frame!r}"
             )
-        if not weights:
-            raise ValueError("LearnedHumanPolicy: the network has no layers")
-        self.layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
-        for i, (w, b) in enumerate(self.layers):
-            if w.ndim != 2 or b.shape != (w.shape[0],):
-                raise ValueError(f"LearnedHumanPolicy: layer {i} has weight {w.shape} and bias {b.shape}")
-            if i and w.shape[1] != self.layers[i - 1][0].shape[0]:
-                raise ValueError(f"LearnedHumanPolicy: layer {i} does not take the previous layer's output")
+        self.layers = checked_layers("LearnedHumanPolicy", weights)
         if self.layers[-1][0].shape[0] != 2:
             raise ValueError(
                 f"LearnedHumanPolicy: the last layer gives {self.layers[-1][0].shape[0]} outputs, not 2"

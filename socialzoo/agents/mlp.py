@@ -59,6 +59,26 @@ class ObservationNormalizer:
         return np.clip(out, -self.clip, self.clip).astype(np.float32)
 
 
+def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The (weight (out, in), bias (out,)) pairs as float32 arrays, checked to chain.
+
+    Raises:
+        ValueError: naming `owner` and the layer, for no layers, a bad shape, or a layer that does
+            not take the previous layer's output.
+    """
+    if not weights:
+        raise ValueError(f"{owner}: the network has no layers")
+    layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
+    for i, (w, b) in enumerate(layers):
+        if w.ndim != 2 or b.shape != (w.shape[0],):
+            raise ValueError(f"{owner}: layer {i} has weight {w.shape} and bias {b.shape}")
+        if i and w.shape[1] != layers[i - 1][0].shape[0]:
+            raise ValueError(
+                f"{owner}: layer {i} takes {w.shape[1]} inputs, the layer before gives {layers[i - 1][0].shape[0]}"
+            )
+    return layers
+
+
 class MlpPolicy:
     """A greedy policy over a multilayer perceptron.
 
@@ -87,17 +107,7 @@ class MlpPolicy:
             raise ValueError(
                 f"MlpPolicy: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}"
             )
-        if not weights:
-            raise ValueError("MlpPolicy: the network has no layers")
-        self.layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
-        for i, (w, b) in enumerate(self.layers):
-            if w.ndim != 2 or b.shape != (w.shape[0],):
-                raise ValueError(f"MlpPolicy: layer {i} has weight {w.shape} and bias {b.shape}")
-            if i and w.shape[1] != self.layers[i - 1][0].shape[0]:
-                raise ValueError(
-                    f"MlpPolicy: layer {i} takes {w.shape[1]} inputs, the layer before gives "
-                    f"{self.layers[i - 1][0].shape[0]}"
-                )
+        self.layers = checked_layers("MlpPolicy", weights)
         self.name = name
         self.activation = activation
         self.observation = dict(observation)
