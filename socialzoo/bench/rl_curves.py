@@ -210,10 +210,11 @@ def plot_curves(
     out_dir: str | Path,
     references: Sequence[Mapping[str, Any]] = (),
     formats: Sequence[str] = ("png", "pdf"),
+    stem: str = FIGURE_STEM,
 ) -> list[Path]:
-    """rl_curves.{png,pdf}: success, time to goal and average step reward against training steps,
-    one line per run with its 90% band; `references` (curve rows without steps, e.g. Ref) as
-    horizontal lines."""
+    """<stem>.{png,pdf} (default rl_curves): success, time to goal and average step reward against
+    training steps, one line per run with its 90% band; `references` (curve rows without steps,
+    e.g. Ref) as horizontal lines."""
     from socialzoo.bench.figures import _pyplot
 
     plt = _pyplot()
@@ -251,7 +252,7 @@ def plot_curves(
     out = Path(out_dir)
     paths = []
     for fmt in formats:
-        path = out / f"{FIGURE_STEM}.{fmt}"
+        path = out / f"{stem}.{fmt}"
         fig.savefig(path, dpi=150, bbox_inches="tight")
         paths.append(path)
     plt.close(fig)
@@ -344,6 +345,7 @@ def steps_to_match(
 ) -> dict[str, Any]:
     """Beyond the paper: the fewest training steps after which a run's checkpoint succeeds at least
     as often as `reference` does, both measured on the same validation scenarios (never a test set).
+    Trials are stored in out_dir/curves.sqlite, the curve rows written to out_dir/steps_to_ref.csv.
 
     Returns:
         {"reference": its curve row, "checkpoints": curve rows by step, "steps": the first step
@@ -373,7 +375,7 @@ def steps_to_match(
     all_rows = curve_rows(trial_rows, steps)
     ref = next(r for r in all_rows if r["step"] == "")
     points = [r for r in all_rows if r["step"] != ""]
-    write_curves_csv(all_rows, out / f"steps_to_{reference}.csv")
+    write_curves_csv(all_rows, out / "steps_to_ref.csv")
     first = next((r["step"] for r in points if r["success_rate"] >= ref["success_rate"]), None)
     first_ci = next((r["step"] for r in points if r["success_ci_high"] >= ref["success_rate"]), None)
     return {"reference": ref, "checkpoints": points, "steps": first, "steps_ci": first_ci}

@@ -21,6 +21,7 @@ COMMANDS: tuple[str, ...] = (
     "socialzoo.cli.map_cmd",  # map list|show|import|validate
     "socialzoo.cli.replay_cmd",  # replay
     "socialzoo.cli.reproduce_cmd",  # reproduce
+    "socialzoo.cli.steps_cmd",  # steps-to-ref
     "socialzoo.cli.train_cmd",  # train <trainer>
 )
 

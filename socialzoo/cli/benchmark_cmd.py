@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli.arg_types import positive_int
+
 logger = logging.getLogger(__name__)
 
 
@@ -49,16 +51,6 @@ def _map_names(text: str) -> tuple[str, ...]:
     return names
 
 
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
 def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add `benchmark` to a subparsers object; returns its parser."""
     parser = subparsers.add_parser(
@@ -91,21 +83,21 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument(
-        "--trials", type=_positive, default=None, help="scenarios per policy and map (default: all)"
+        "--trials", type=positive_int, default=None, help="scenarios per policy and map (default: all)"
     )
     parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where trials run")
     parser.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
     parser.add_argument(
         "--workers",
-        type=_positive,
+        type=positive_int,
         default=None,
         help="local processes (default 2), or Ray chunks (default: one per cluster CPU)",
     )
     parser.add_argument(
-        "--batch-size", type=_positive, default=64, help="env rows stepped together per worker"
+        "--batch-size", type=positive_int, default=64, help="env rows stepped together per worker"
     )
     parser.add_argument(
-        "--max-steps", type=_positive, default=None, help="episode time limit override, steps"
+        "--max-steps", type=positive_int, default=None, help="episode time limit override, steps"
     )
     parser.add_argument(
         "--humans",
@@ -115,7 +107,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--learned-humans",
-        type=_positive,
+        type=positive_int,
         default=None,
         help="with --humans learned:PATH, how many human slots it drives (default: all; the rest stay "
         "social-force)",
@@ -150,14 +142,14 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
             "they finish, so an interrupted recording resumes; then they are merged into FILE."
         ),
     )
-    parser.add_argument("--episodes", type=_positive, required=True, help="number of episodes")
+    parser.add_argument("--episodes", type=positive_int, required=True, help="number of episodes")
     parser.add_argument("--out", type=Path, required=True, help="output .npz file")
     parser.add_argument("--map", default="gdc1", help="map (default gdc1, the training map)")
     parser.add_argument("--policy", default="ref", help="demonstrating policy (default ref)")
-    parser.add_argument("--chunk-episodes", type=_positive, default=25, help="episodes per chunk file")
-    parser.add_argument("--batch-size", type=_positive, default=64, help="env rows stepped together")
+    parser.add_argument("--chunk-episodes", type=positive_int, default=25, help="episodes per chunk file")
+    parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows stepped together")
     parser.add_argument(
-        "--max-steps", type=_positive, default=None, help="episode time limit override, steps"
+        "--max-steps", type=positive_int, default=None, help="episode time limit override, steps"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run_demos_command)

@@ -7,15 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
+from socialzoo.cli.arg_types import positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -30,11 +22,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--humans", required=True, help="learned:PATH, a learned human policy file")
     parser.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
     parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
-    parser.add_argument("--trials", type=_positive, default=None, help="scenarios per map (default: all)")
+    parser.add_argument("--trials", type=positive_int, default=None, help="scenarios per map (default: all)")
     parser.add_argument("--quick", action="store_true", help="the quick test sets (100 scenarios)")
-    parser.add_argument("--max-steps", type=_positive, default=None, help="episode time limit, steps")
-    parser.add_argument("--workers", type=_positive, default=2, help="local processes (default 2)")
-    parser.add_argument("--batch-size", type=_positive, default=64, help="env rows per worker")
+    parser.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
+    parser.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
+    parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("--no-figures", action="store_true", help="skip comparison.png")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")

@@ -3,19 +3,26 @@
 `train_curve_runs` trains PPO and DQN with the paper's set-up (84,000 steps, a checkpoint every
 2,000) into one folder each; `socialzoo.bench.rl_curves.rl_curves` then evaluates every checkpoint.
 `train_to_match` trains PPO on for longer, for `socialzoo.bench.rl_curves.steps_to_match` (the
-steps PPO needs to reach Ref's success, measured on validation scenarios).
+steps PPO needs to reach Ref's success, measured on validation scenarios); `steps_to_reference`
+does both and writes the answer (`socialzoo steps-to-ref`).
 
     runs = train_curve_runs("results/rl")               # {"ppo": results/rl/ppo, "dqn": ...}
     rl_curves(runs, "results/rl")                       # rl_curves.csv, rl_curves.{png,pdf}
+    steps_to_reference("results/steps")                 # steps_to_ref.json, .csv, .{png,pdf}
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import json
+import sys
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from socialzoo.train import trainer_args, trainer_function
+
+if TYPE_CHECKING:
+    from socialzoo.nav.scenarios import TestSet
 
 CURVE_ALGOS = ("ppo", "dqn")
 
@@ -51,7 +58,7 @@ def train_curve_runs(
 def train_to_match(
     out_dir: str | Path,
     *,
-    total_steps: int = 500_000,
+    total_steps: int = 600_000,
     checkpoint_every: int = 50_000,
     seed: int = 0,
     progress: bool = True,
@@ -69,3 +76,76 @@ def train_to_match(
     )
     trainer_function("ppo")(args)
     return Path(args.out)
+
+
+STEPS_FILE = "steps_to_ref.json"
+
+
+def steps_to_reference(
+    out_dir: str | Path,
+    *,
+    total_steps: int = 600_000,
+    checkpoint_every: int = 50_000,
+    trials: int = 200,
+    reference: str = "ref",
+    seed: int = 0,
+    workers: int = 2,
+    batch_size: int = 64,
+    progress: bool = True,
+    figure: bool = True,
+    validation: TestSet | None = None,
+    env_overrides: Mapping[str, Any] | None = None,
+    **changes: Any,
+) -> dict[str, Any]:
+    """Beyond the paper: how many training steps PPO needs to reach `reference`'s success.
+
+    Trains PPO for `total_steps` (train_to_match; a finished run is reused), evaluates every
+    checkpoint and the reference on the first `trials` validation scenarios
+    (socialzoo.bench.rl_curves.VALIDATION_SET, never a test set), and writes out_dir/steps_to_ref.json
+    (the answer with the settings and the command), steps_to_ref.csv (one row per checkpoint) and,
+    with `figure`, steps_to_ref.{png,pdf} (the curves with the reference as a line).
+    `validation` and `env_overrides` replace the validation scenarios and the evaluation env's
+    settings (tests use small ones); `changes` are PPO arguments.
+
+    Returns:
+        the JSON record: "steps" (first checkpoint at or above the reference's success rate, None if
+        none), "steps_ci" (first whose 90% interval reaches it), "reference", "checkpoints", settings.
+    """
+    from socialzoo.bench.rl_curves import VALIDATION_SET, plot_curves, steps_to_match
+
+    validation = validation or VALIDATION_SET
+    out = Path(out_dir)
+    run = train_to_match(
+        out,
+        total_steps=total_steps,
+        checkpoint_every=checkpoint_every,
+        seed=seed,
+        progress=progress,
+        **changes,
+    )
+    found = steps_to_match(
+        run,
+        out,
+        reference=reference,
+        validation=validation,
+        trials=trials,
+        workers=workers,
+        batch_size=batch_size,
+        progress=progress,
+        env_overrides=env_overrides,
+    )
+    record = {
+        **found,
+        "run": str(run),
+        "total_steps": total_steps,
+        "checkpoint_every": checkpoint_every,
+        "trials": trials,
+        "validation_set": validation.name,
+        "seed": seed,
+        "changes": changes,
+        "command": " ".join(sys.argv),
+    }
+    (out / STEPS_FILE).write_text(json.dumps(record, indent=1, default=str) + "\n")
+    if figure:
+        plot_curves(found["checkpoints"], out, [found["reference"]], stem="steps_to_ref")
+    return record

@@ -1,0 +1,32 @@
+"""`socialzoo steps-to-ref`: its answer in words and its argument checks."""
+
+from socialzoo.cli import main
+from socialzoo.cli.steps_cmd import describe
+
+
+def _record(steps, steps_ci, rates):
+    return {
+        "reference": {"label": "ref", "success_rate": 0.9},
+        "checkpoints": [{"step": 50_000 * (i + 1), "success_rate": r} for i, r in enumerate(rates)],
+        "steps": steps,
+        "steps_ci": steps_ci,
+        "trials": 200,
+        "validation_set": "gdc1-val",
+        "total_steps": 50_000 * len(rates),
+    }
+
+
+def test_describe_names_the_step_or_the_best_checkpoint():
+    found = describe(_record(100_000, 50_000, [0.85, 0.92]))
+    assert "ref succeeds in 90.0% of 200 gdc1-val" in found
+    assert "after 100,000 steps" in found and "covers it after 50,000" in found
+    missed = describe(_record(None, None, [0.5, 0.7, 0.6]))
+    assert "No PPO checkpoint up to 150,000 steps reaches it" in missed and "70.0% at 100,000" in missed
+
+
+def test_total_steps_must_be_a_multiple_of_the_checkpoint_interval(tmp_path, capsys):
+    code = main(
+        ["steps-to-ref", "--out", str(tmp_path), "--total-steps", "1000", "--checkpoint-every", "300"]
+    )
+    assert code == 2
+    assert "--total-steps (1000) must be a multiple of --checkpoint-every (300)" in capsys.readouterr().err
