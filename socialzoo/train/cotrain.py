@@ -18,7 +18,14 @@ from pathlib import Path
 from typing import Any, Literal
 
 from socialzoo.core.validation import check_int, check_number
-from socialzoo.train.humans import DEFAULT_REWARD, POLICY_FILE, check_args, training_env_config
+from socialzoo.train.humans import (
+    DEFAULT_REWARD,
+    INIT_STD,
+    POLICY_FILE,
+    WALK_PRIOR,
+    check_args,
+    training_env_config,
+)
 from socialzoo.train.mappo import Algo, CollectorKind
 
 Schedule = Literal["simultaneous", "alternating"]
@@ -57,6 +64,9 @@ class CotrainArgs:
         hidden: hidden units per layer of the actors and critics.
         depth: hidden layers.
         reward: the humans' reward weights (HumanRewardConfig fields, JSON object).
+        walk_prior: the untrained humans' mean action: towards the waypoint at this fraction of the
+            preferred speed (0: standing still; socialzoo.train.mappo.human_actor).
+        init_std: the humans' initial exploration noise (before the tanh).
         env_overrides: other EnvConfig fields (JSON object), e.g. {"reward": {...}} for the robots.
         stats_steps: random-action steps whose observations set the fixed input normalisation.
         checkpoint_every: frames between checkpoints.
@@ -92,6 +102,8 @@ class CotrainArgs:
     hidden: int = 64
     depth: int = 2
     reward: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_REWARD))
+    walk_prior: float = WALK_PRIOR
+    init_std: float = INIT_STD
     env_overrides: dict[str, Any] = field(default_factory=dict)
     stats_steps: int = 64
     checkpoint_every: int = 500_000

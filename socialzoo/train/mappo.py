@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import logging
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -133,11 +134,29 @@ def observation_stats(env: SocialNavTorchEnv, group: str, steps: int) -> tuple[t
 
 
 def human_actor(
-    obs_size: int, hidden: int, depth: int, loc: torch.Tensor, scale: torch.Tensor
+    obs_size: int,
+    hidden: int,
+    depth: int,
+    loc: torch.Tensor,
+    scale: torch.Tensor,
+    walk_prior: float = 0.0,
+    init_std: float = 1.0,
 ) -> ProbabilisticActor:
-    """The learned humans' shared policy: TanhNormal over (B, L, 2) velocities in [-1, 1]."""
+    """The learned humans' shared policy: TanhNormal over (B, L, 2) velocities in [-1, 1].
+
+    `walk_prior` sets where training starts: the untrained policy's mean action is (walk_prior, 0)
+    in the human's frame, i.e. straight towards its waypoint at that fraction of its preferred
+    speed, what a social-force human wants (0: standing still). `init_std` is the initial
+    exploration noise before the tanh.
+    """
+    body = mlp(obs_size, 2, hidden, depth)
+    last = body[-1]
+    with torch.no_grad():
+        # Small output weights: the prior, not the random initialisation, decides the first moves.
+        last.weight.mul_(0.1)
+        last.bias.copy_(torch.tensor([math.atanh(walk_prior), 0.0]))
     net = nn.Sequential(
-        Normalize(loc, scale), mlp(obs_size, 2, hidden, depth), AddStateIndependentNormalScale(2)
+        Normalize(loc, scale), body, AddStateIndependentNormalScale(2, init_value=math.log(init_std))
     )
     module = TensorDictModule(
         net, in_keys=[(HUMAN, "observation")], out_keys=[(HUMAN, "loc"), (HUMAN, "scale")]

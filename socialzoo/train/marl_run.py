@@ -122,7 +122,7 @@ class MarlRun:
         if "human" in self.learned:
             size = stats_env.observation_spec["human", "observation"].shape[-1]
             loc, scale = observation_stats(stats_env, "human", args.stats_steps)
-            actor = human_actor(size, args.hidden, args.depth, loc, scale)
+            actor = human_actor(size, args.hidden, args.depth, loc, scale, args.walk_prior, args.init_std)
             value = critic(
                 "human", size, cfg.num_learned_humans, args.algo, args.hidden, args.depth, loc, scale
             )

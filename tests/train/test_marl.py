@@ -6,6 +6,7 @@ untrained policy at step 0) and history.csv."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -56,7 +57,17 @@ def mean_human_reward(path, config, *, seed: int = 1234, batch_size: int = 8, st
 
 @pytest.fixture(scope="module")
 def mappo_run(tmp_path_factory):
-    args = HumansArgs(out=tmp_path_factory.mktemp("mappo"), algo="mappo", frames=8192, seed=3, **TINY)
+    # From humans standing still (no walk prior) exploring widely, so that the test sees learning,
+    # not the prior.
+    args = HumansArgs(
+        out=tmp_path_factory.mktemp("mappo"),
+        algo="mappo",
+        frames=8192,
+        seed=3,
+        walk_prior=0.0,
+        init_std=1.0,
+        **TINY,
+    )
     return args, train_humans(args)
 
 
@@ -159,3 +170,20 @@ def test_bad_arguments_name_the_field(tmp_path):
         HumansArgs(out=tmp_path, batch_size=16, frames_per_batch=1000)
     with pytest.raises(ValueError, match=r"CotrainArgs\.schedule"):
         CotrainArgs(out=tmp_path, schedule="sometimes")
+
+
+def test_walk_prior_starts_humans_walking_towards_their_waypoint():
+    import torch
+    from tensordict import TensorDict
+
+    from socialzoo.train.mappo import human_actor
+
+    obs = torch.randn(64, 5, 12)
+    for prior in (0.0, 0.9):
+        actor = human_actor(12, 16, 2, torch.zeros(12), torch.ones(12), walk_prior=prior, init_std=0.5)
+        out = actor.module[0](TensorDict({("human", "observation"): obs}, batch_size=[64]))
+        mean = torch.tanh(out["human", "loc"])
+        assert abs(float(mean[..., 0].mean()) - prior) < 0.05 and float(mean[..., 1].abs().max()) < 0.2
+        assert torch.allclose(out["human", "scale"], torch.full_like(out["human", "scale"], 0.5))
+    with pytest.raises(ValueError, match="walk_prior"):
+        HumansArgs(out=Path("unused"), walk_prior=1.0)
