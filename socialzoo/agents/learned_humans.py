@@ -1,12 +1,15 @@
 """Learned human policies at inference: shared-parameter walkers read from a policy file, run in numpy.
 
 A human policy maps each learned human's observation (socialzoo.env.human_agents, (..., D_h)) to
-its action, a desired velocity in [-1, 1]^2 times its preferred speed, in the frame the policy
-was trained with (EnvConfig.human_action_frame). Every human of a world uses the same network.
+its action, a desired velocity in [-1, 1]^2 times its preferred speed and the action scale the
+policy was trained with (EnvConfig.human_action_scale), in the frame it was trained with
+(EnvConfig.human_action_frame). Every human of a world uses the same network.
 The file is a socialzoo policy file (safetensors weights plus a JSON header, no pickled code):
 the layers of the network that gives the action's pre-tanh mean, and the observation
 normalisation it was trained with. Acting is deterministic: tanh of that mean (the mode of the
-TanhNormal the trainer samples from, before the tanh).
+TanhNormal the trainer samples from, before the tanh). A mirror-symmetric policy (no handedness)
+averages the network over the situation and its mirror image (socialzoo.env.human_agents.
+human_mirror_signs), as it was trained.
 
 Human policies are named by a spec: "social_force" (the scripted model, no learned humans) or
 "learned:PATH" (a file written by `socialzoo train humans` or `socialzoo train cotrain`).
@@ -15,6 +18,7 @@ Human policies are named by a spec: "social_force" (the scripted model, no learn
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -23,7 +27,7 @@ import numpy as np
 
 from socialzoo.agents.mlp import ACTIVATIONS, checked_layers
 from socialzoo.agents.policy_file import PolicyFileError, read_policy_file, save_policy_file
-from socialzoo.env.human_agents import human_observation_size
+from socialzoo.env.human_agents import human_mirror_signs, human_observation_size
 
 SOCIAL_FORCE = "social_force"
 LEARNED = "learned"
@@ -44,11 +48,15 @@ class LearnedHumanPolicy:
         obs_scale: (D,) observation scale.
         num_neighbours: EnvConfig.num_human_neighbours of the observations it was trained on.
         action_frame: EnvConfig.human_action_frame it was trained with ("world" or "human").
+        action_scale: EnvConfig.human_action_scale it was trained with (files written before
+            the scale existed were trained with 1).
+        mirror_symmetric: the pre-tanh mean is (f(obs) + m f(mirror(obs))) / 2, with m = (1, -1):
+            the same behaviour on the left and the right (socialzoo.train.mappo.MirrorSymmetric).
         header: the policy file's header (kept for config() and reports).
 
     Raises:
         ValueError: layers that do not chain, a wrong output size, normalisation of the wrong
-            size or not finite and positive, an unknown activation or frame.
+            size or not finite and positive, an unknown activation or frame, a scale not > 0.
     """
 
     name = LEARNED
@@ -61,7 +69,10 @@ class LearnedHumanPolicy:
         obs_scale: np.ndarray,
         num_neighbours: int,
         action_frame: str,
+        action_scale: float = 1.0,
         header: dict[str, Any] | None = None,
+        *,
+        mirror_symmetric: bool = False,
     ) -> None:
         if activation not in ACTIVATIONS:
             raise ValueError(
@@ -71,6 +82,8 @@ class LearnedHumanPolicy:
             raise ValueError(
                 f"LearnedHumanPolicy: action_frame must be one of {ACTION_FRAMES}, got {action_frame!r}"
             )
+        if not (isinstance(action_scale, (int, float)) and math.isfinite(action_scale) and action_scale > 0):
+            raise ValueError(f"LearnedHumanPolicy: action_scale must be a number > 0, got {action_scale!r}")
         self.layers = checked_layers("LearnedHumanPolicy", weights)
         if self.layers[-1][0].shape[0] != 2:
             raise ValueError(
@@ -98,6 +111,9 @@ class LearnedHumanPolicy:
         self.activation = activation
         self.num_neighbours = int(num_neighbours)
         self.action_frame = action_frame
+        self.action_scale = float(action_scale)
+        self.mirror_symmetric = bool(mirror_symmetric)
+        self._mirror = human_mirror_signs(self.num_neighbours)
         self.header = dict(header or {})
         self.path: Path | None = None
         self.digest: str | None = None
@@ -109,7 +125,11 @@ class LearnedHumanPolicy:
 
     def env_overrides(self) -> dict[str, Any]:
         """EnvConfig fields the observations and actions of this policy need."""
-        return {"num_human_neighbours": self.num_neighbours, "human_action_frame": self.action_frame}
+        return {
+            "num_human_neighbours": self.num_neighbours,
+            "human_action_frame": self.action_frame,
+            "human_action_scale": self.action_scale,
+        }
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """float64 actions (..., 2) in [-1, 1] for observations (..., D)."""
@@ -120,13 +140,21 @@ class LearnedHumanPolicy:
                 f"numbers of width {self.input_size} ({self.num_neighbours} neighbours)"
             )
         lead = obs.shape[:-1]
-        x = (obs.reshape(-1, self.input_size).astype(np.float32) - self.obs_loc) / self.obs_scale
+        flat = obs.reshape(-1, self.input_size).astype(np.float32)
+        mean = self._mean(flat)
+        if self.mirror_symmetric:
+            mean = 0.5 * (mean + self._mean(flat * self._mirror) * np.array([1.0, -1.0], dtype=np.float32))
+        return np.tanh(mean.astype(np.float64)).reshape(*lead, 2)
+
+    def _mean(self, obs: np.ndarray) -> np.ndarray:
+        """(N, 2) the network's pre-tanh mean for (N, D) raw observations."""
+        x = (obs - self.obs_loc) / self.obs_scale
         act = ACTIVATIONS[self.activation]
         for i, (w, b) in enumerate(self.layers):
             x = x @ w.T + b
             if i < len(self.layers) - 1:
                 x = act(x)
-        return np.tanh(x.astype(np.float64)).reshape(*lead, 2)
+        return x
 
     def config(self) -> dict[str, Any]:
         """What identifies this policy for the results store: the file's digest and training record."""
@@ -152,12 +180,14 @@ class LearnedHumanPolicy:
                 "sizes": [self.input_size] + [int(w.shape[0]) for w, _ in self.layers],
                 "activation": self.activation,
                 "output": "tanh_mean",
+                "mirror_symmetric": self.mirror_symmetric,
             },
             "observation": {
                 "kind": "learned_human",
                 "num_human_neighbours": self.num_neighbours,
                 "size": self.input_size,
                 "action_frame": self.action_frame,
+                "action_scale": self.action_scale,
             },
             "env_id": env_id,
             "training": training,
@@ -194,7 +224,9 @@ class LearnedHumanPolicy:
                 tensors["obs_scale"],
                 int(observation["num_human_neighbours"]),
                 str(observation["action_frame"]),
+                float(observation.get("action_scale", 1.0)),
                 header,
+                mirror_symmetric=_flag(network, "mirror_symmetric"),
             )
         except (KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{path}: {err}") from None
@@ -242,3 +274,11 @@ def make_human_policy(spec: str) -> LearnedHumanPolicy | None:
     """The human policy named by `spec`: None for "social_force", the loaded file for "learned:PATH"."""
     _, path = split_human_spec(spec)
     return None if path is None else LearnedHumanPolicy.load(path)
+
+
+def _flag(section: dict[str, Any], name: str) -> bool:
+    """A true/false header entry (false when absent: files written before it existed)."""
+    value = section.get(name, False)
+    if not isinstance(value, bool):
+        raise ValueError(f"network.{name} must be true or false, got {value!r}")
+    return value

@@ -24,7 +24,7 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import write_text_atomic
-from socialzoo.nav.scenarios import TestSet
+from socialzoo.nav.scenarios import TestSet, validation_set
 
 POPULATIONS = ("social_force", "learned")
 # The robot's metrics shown beside the humans' (summary keys of socialzoo.bench.tables.summarize).
@@ -48,6 +48,9 @@ class ComparisonConfig:
         maps: maps whose test sets are used ("<map>-test", or "<map>-quick" with quick).
         trials: scenarios per map (the first of each test set); None: all.
         quick: use the quick test sets.
+        validation: use each map's validation scenarios ("<map>-val",
+            socialzoo.nav.scenarios.validation_set) instead of a test set: for choosing training
+            settings or checkpoints without looking at a test set.
         workers: local processes.
         batch_size: env rows stepped together per worker.
         env_overrides: EnvConfig fields for both populations (e.g. {"max_steps": 1600}).
@@ -58,6 +61,7 @@ class ComparisonConfig:
     maps: tuple[str, ...] = ("gdc1", "ghc3")
     trials: int | None = None
     quick: bool = False
+    validation: bool = False
     workers: int | None = 2
     batch_size: int = 64
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -66,6 +70,8 @@ class ComparisonConfig:
         if not isinstance(self.humans, str) or not self.humans.startswith("learned:"):
             raise ValueError(f"ComparisonConfig.humans must be 'learned:PATH', got {self.humans!r}")
         object.__setattr__(self, "maps", tuple(self.maps))
+        if self.quick and self.validation:
+            raise ValueError("ComparisonConfig: quick (test sets) and validation exclude each other")
         self.benchmark("social_force")  # a bad map, policy, file or count fails here, naming it
         self.benchmark(self.humans)
 
@@ -121,6 +127,8 @@ def compare_humans(
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if config.validation:
+        test_sets = {m: validation_set(m) for m in config.maps} | dict(test_sets or {})
     rows: list[dict[str, Any]] = []
     for population in POPULATIONS:
         humans = "social_force" if population == "social_force" else config.humans
@@ -206,7 +214,8 @@ def write_comparison_md(
     lines = [
         f"# Learned humans ({config.humans}) against social-force humans",
         "",
-        f"Robot policy {config.policy}; the same scenarios for both populations; means over episodes "
+        f"Robot policy {config.policy}; the same scenarios for both populations "
+        f"({'validation scenarios, not a test set' if config.validation else 'test sets'}); means over episodes "
         "with 90% intervals (bootstrap for collision counts). Human metrics: socialzoo.bench.human_metrics.",
         "",
     ]

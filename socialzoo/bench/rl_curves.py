@@ -26,7 +26,7 @@ from typing import Any
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, summarize
-from socialzoo.nav.scenarios import TestSet, get_test_set
+from socialzoo.nav.scenarios import TestSet, get_test_set, validation_set
 
 logger = logging.getLogger(__name__)
 
@@ -36,7 +36,7 @@ FIGURE_STEM = "rl_curves"
 CURVE_TEST_SET = "gdc1-test"
 CURVE_TRIALS = 100
 # Our own validation scenarios on gdc1 (base seed apart from every test set's): for choices.
-VALIDATION_SET = TestSet("gdc1", 20_229_001, 1000, name="gdc1-val")
+VALIDATION_SET = validation_set("gdc1")
 _CHECKPOINT = re.compile(r"step_(\d+)\.safetensors$")
 # Curves: (summary key, axis label, scale).
 CURVE_PANELS: tuple[tuple[str, str, float], ...] = (

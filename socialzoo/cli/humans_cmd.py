@@ -1,4 +1,5 @@
-"""`socialzoo compare-humans`: learned humans against social-force humans on the same scenarios."""
+"""`socialzoo compare-humans`: learned humans against social-force humans on the same scenarios;
+`socialzoo select-humans`: the checkpoint of a training run that compares best on validation scenarios."""
 
 from __future__ import annotations
 
@@ -23,7 +24,13 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
     parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
     parser.add_argument("--trials", type=positive_int, default=None, help="scenarios per map (default: all)")
-    parser.add_argument("--quick", action="store_true", help="the quick test sets (100 scenarios)")
+    sets = parser.add_mutually_exclusive_group()
+    sets.add_argument("--quick", action="store_true", help="the quick test sets (100 scenarios)")
+    sets.add_argument(
+        "--validation",
+        action="store_true",
+        help="each map's validation scenarios (<map>-val), never a test set: for choosing settings",
+    )
     parser.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
     parser.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
     parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
@@ -31,6 +38,26 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--no-figures", action="store_true", help="skip comparison.png")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     parser.set_defaults(func=run_compare_humans)
+
+    select = subparsers.add_parser(
+        "select-humans",
+        help="choose a learned-human checkpoint of a run on validation scenarios",
+        description="Compare every checkpoint of a `socialzoo train humans` run with the social-force "
+        "humans on the training map's validation scenarios (never a test set), keep the most trained one "
+        "that meets both targets (else the one missing them by the least), and write DIR/selection.md, "
+        "selection.csv, selection.json and DIR/humans.safetensors (a copy of the chosen checkpoint).",
+    )
+    select.add_argument("--run", type=Path, required=True, help="the training run folder")
+    select.add_argument("--out", type=Path, default=None, help="output folder (default RUN/selection)")
+    select.add_argument(
+        "--trials", type=positive_int, default=100, help="validation scenarios per checkpoint"
+    )
+    select.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
+    select.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
+    select.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
+    select.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
+    select.add_argument("--no-progress", action="store_true", help="no progress bars")
+    select.set_defaults(func=run_select_humans)
 
 
 def run_compare_humans(args: argparse.Namespace) -> int:
@@ -44,6 +71,7 @@ def run_compare_humans(args: argparse.Namespace) -> int:
             maps=tuple(m.strip() for m in args.maps.split(",") if m.strip()),
             trials=args.trials,
             quick=args.quick,
+            validation=args.validation,
             workers=args.workers,
             batch_size=args.batch_size,
             env_overrides={} if args.max_steps is None else {"max_steps": args.max_steps},
@@ -58,4 +86,32 @@ def run_compare_humans(args: argparse.Namespace) -> int:
             f"collision target {'met' if target['collisions'] else 'NOT met'}"
         )
     print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
+    return 0
+
+
+def run_select_humans(args: argparse.Namespace) -> int:
+    """Run `socialzoo select-humans`; returns the exit status."""
+    from socialzoo.agents import check_policy_spec
+    from socialzoo.bench.human_select import run_checkpoints, select_humans, training_map
+
+    try:
+        run_checkpoints(args.run)
+        training_map(args.run)
+        check_policy_spec(args.policy)
+    except (FileNotFoundError, ValueError) as err:
+        print(f"socialzoo select-humans: error: {err}", file=sys.stderr)
+        return 2
+    result = select_humans(
+        args.run,
+        args.out,
+        trials=args.trials,
+        policy=args.policy,
+        workers=args.workers,
+        batch_size=args.batch_size,
+        env_overrides={} if args.max_steps is None else {"max_steps": args.max_steps},
+        progress=not args.no_progress,
+    )
+    status = "meets both targets" if result.met else "meets no target set; the closest"
+    print(f"chose {result.chosen} ({result.frames:,} frames): {status} on the validation scenarios")
+    print(f"results in {result.out_dir}: selection.md, selection.csv, selection.json, humans.safetensors")
     return 0

@@ -65,6 +65,10 @@ class EnvConfig:
             (Called human_neighbours before; the old name is refused.)
         human_action_frame: the frame of a learned human's action: "world" (a world-frame
             velocity) or "human" (its own frame, x towards its waypoint, as its observation).
+        human_action_scale: a learned human's action [-1, 1]^2 times this times its preferred
+            speed is its desired velocity (> 0). Above 1 a learner can ask for more than the
+            preferred speed (relaxing back to it sooner after a slowdown); the motion model still
+            caps every human's speed at its preferred speed.
         human_reward: the learned humans' reward weights (socialzoo.env.human_agents).
             (human_collision_penalty before; the old name is refused.)
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
@@ -80,6 +84,7 @@ class EnvConfig:
     num_learned_humans: int = 0
     num_human_neighbours: int = 6
     human_action_frame: HumanActionFrame = "world"
+    human_action_scale: float = 1.0
     family: str | None = None
     world: WorldConfig = field(default_factory=WorldConfig)
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
@@ -106,6 +111,7 @@ class EnvConfig:
                 f"(scenario.max_humans = {self.max_humans})"
             )
         check_number("EnvConfig", "goal_radius", self.goal_radius, low=0, low_open=True)
+        check_number("EnvConfig", "human_action_scale", self.human_action_scale, low=0, low_open=True)
         if self.robot_action not in get_args(RobotAction):
             raise ValueError(
                 f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"

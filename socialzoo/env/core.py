@@ -270,8 +270,8 @@ class SocialNavCore:
         Args:
             robot_action: (B, R) int sub-policy indices, or (B, R, 2) floats in [-1, 1] with
                 robot_action="velocity".
-            human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed)
-                for the L learned humans, in the frame config.human_action_frame names;
+            human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed and
+                config.human_action_scale) for the L learned humans, in the frame config.human_action_frame names;
                 required when config.num_learned_humans > 0.
 
         Returns:
@@ -363,7 +363,9 @@ class SocialNavCore:
             raise ValueError(f"human action {action[where]!r} at index {where} is not in [-1, 1]")
         s = self.state
         desired = np.zeros(s.human_pos.shape)
-        desired[:, self.learned] = action_velocities(s, self.learned, action, self.config.human_action_frame)
+        desired[:, self.learned] = action_velocities(
+            s, self.learned, action, self.config.human_action_frame, self.config.human_action_scale
+        )
         learned = np.zeros(s.human_mask.shape, dtype=bool)
         learned[:, self.learned] = True
         return desired, learned & s.human_mask

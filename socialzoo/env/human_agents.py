@@ -3,7 +3,8 @@
 A learned human sees, in its own frame (x axis towards its current route waypoint): that waypoint,
 its velocity and preferred speed, the nearest wall point, and its nearest neighbours (humans and
 robots) with their relative velocity. Its action is a desired velocity in [-1, 1]^2 times its
-preferred speed, in the world frame or in its own frame (EnvConfig.human_action_frame). Its
+preferred speed (and EnvConfig.human_action_scale), in the world frame or in its own frame
+(EnvConfig.human_action_frame). Its
 reward (HumanRewardConfig) adds up, per step: progress towards its waypoint, a bonus for each
 waypoint reached, a penalty for walking off its preferred speed, and penalties for contact with
 other humans, robots and walls.
@@ -38,6 +39,8 @@ class HumanRewardConfig:
              - human_contact * (another human within contact_distance)
              - robot_contact * (a robot within contact_distance)
              - wall_contact * (a wall within wall_distance, or a wall stopped the move)
+             - wall_clearance * (how far inside wall_margin of a wall: 0 at wall_margin,
+                                 1 at wall_distance and closer)
 
     The defaults are the reward of env version v1 (progress minus 1 per step in contact with a
     human or robot); the trainers of socialzoo.train set their own weights.
@@ -49,8 +52,13 @@ class HumanRewardConfig:
         human_contact: penalty per step within contact_distance of another present human.
         robot_contact: penalty per step within contact_distance of a robot.
         wall_contact: penalty per step with the centre within wall_distance of a wall.
+        wall_clearance: penalty per step for walking close to a wall, growing linearly from 0 at
+            wall_margin to its full weight at wall_distance: a warning before the contact, which
+            the contact penalty alone gives only once it is too late.
         contact_distance: centre distance counted as contact with a human or robot, m.
         wall_distance: centre-to-wall distance counted as contact, m (the human radius).
+        wall_margin: centre-to-wall distance where the clearance penalty starts, m (above
+            wall_distance).
     """
 
     progress: float = 1.0
@@ -59,8 +67,10 @@ class HumanRewardConfig:
     human_contact: float = 1.0
     robot_contact: float = 1.0
     wall_contact: float = 0.0
+    wall_clearance: float = 0.0
     contact_distance: float = CONTACT_DISTANCE
     wall_distance: float = 0.2
+    wall_margin: float = 0.4
 
     def __post_init__(self) -> None:
         check_fields(
@@ -72,8 +82,14 @@ class HumanRewardConfig:
                 "human_contact",
                 "robot_contact",
                 "wall_contact",
+                "wall_clearance",
             ),
         )
+        if not self.wall_margin > self.wall_distance:
+            raise ValueError(
+                f"HumanRewardConfig.wall_margin ({self.wall_margin}) must exceed wall_distance "
+                f"({self.wall_distance})"
+            )
 
 
 @dataclass(frozen=True)
@@ -87,6 +103,8 @@ class HumanStep:
         human_contact: another present human within the contact distance after the step.
         robot_contact: a robot within the contact distance after the step.
         wall_contact: a wall within the wall distance after the step, or a wall stopped the move.
+        wall_clearance: how far inside the wall margin after the step, 0 (outside) to 1 (at the
+            wall distance or closer).
         speed_error: |speed - preferred speed| / preferred speed after the step.
     """
 
@@ -96,6 +114,7 @@ class HumanStep:
     human_contact: np.ndarray
     robot_contact: np.ndarray
     wall_contact: np.ndarray
+    wall_clearance: np.ndarray
     speed_error: np.ndarray
 
     @property
@@ -104,17 +123,20 @@ class HumanStep:
         return self.human_contact | self.robot_contact
 
 
-def action_velocities(state: WorldState, humans: np.ndarray, action: np.ndarray, frame: str) -> np.ndarray:
+def action_velocities(
+    state: WorldState, humans: np.ndarray, action: np.ndarray, frame: str, scale: float = 1.0
+) -> np.ndarray:
     """(B, L, 2) world-frame desired velocities, m/s, of learned humans' actions.
 
     Args:
         state: the world before the step.
         humans: (L,) learned human slots.
-        action: (B, L, 2) in [-1, 1], times the preferred speed.
+        action: (B, L, 2) in [-1, 1], times scale times the preferred speed.
         frame: "world" (the action is a world-frame vector) or "human" (in the human's own frame,
             x towards its waypoint, the frame of its observation).
+        scale: EnvConfig.human_action_scale.
     """
-    scaled = action * state.human_pref_speed[:, humans, None]
+    scaled = action * (scale * state.human_pref_speed[:, humans, None])
     if frame == "human":
         return rotate(scaled, human_frames(state, humans))
     return scaled
@@ -123,6 +145,22 @@ def action_velocities(state: WorldState, humans: np.ndarray, action: np.ndarray,
 def human_observation_size(num_neighbours: int) -> int:
     """Length of a learned human's observation."""
     return OWN_SIZE + NEIGHBOUR_SIZE * num_neighbours
+
+
+def human_mirror_signs(num_neighbours: int) -> np.ndarray:
+    """(D,) +1 / -1 per observation entry: the observation of the mirror image of a situation.
+
+    Mirroring about the human's x axis (towards its waypoint) negates every y component: of the
+    waypoint, the velocity, the nearest wall point and each neighbour's position and velocity.
+    A policy with no handedness acts on the mirrored observation with the mirrored action
+    (action y negated).
+    """
+    signs = np.ones(human_observation_size(num_neighbours), dtype=np.float32)
+    signs[[1, 3, 6]] = -1.0  # waypoint y, velocity y, nearest wall y
+    for k in range(num_neighbours):
+        start = OWN_SIZE + NEIGHBOUR_SIZE * k
+        signs[[start + 1, start + 3]] = -1.0  # relative position y, relative velocity y
+    return signs
 
 
 def human_frames(state: WorldState, humans: np.ndarray) -> np.ndarray:
@@ -224,6 +262,11 @@ def human_step(
     near_robot = (robots**2).sum(-1) < limit
     _, wall_dist = walls.nearest(pos)
     wall = (wall_dist < config.wall_distance) | blocked[:, humans]
+    # Beyond the wall index's reach the distance is inf: no penalty.
+    clearance = np.clip(
+        (config.wall_margin - wall_dist) / (config.wall_margin - config.wall_distance), 0.0, 1.0
+    )
+    clearance = np.where(wall, 1.0, clearance)
     speed = np.linalg.norm(after.human_vel[:, humans], axis=-1)
     pref = after.human_pref_speed[:, humans]
     speed_error = np.abs(speed - pref) / np.maximum(pref, 1e-9)
@@ -237,6 +280,7 @@ def human_step(
         - config.human_contact * human_contact
         - config.robot_contact * robot_contact
         - config.wall_contact * wall_contact
+        - config.wall_clearance * np.where(present, clearance, 0.0)
     )
     return HumanStep(
         reward=np.where(present, reward, 0.0),
@@ -245,5 +289,6 @@ def human_step(
         human_contact=human_contact,
         robot_contact=robot_contact,
         wall_contact=wall_contact,
+        wall_clearance=np.where(present, clearance, 0.0),
         speed_error=np.where(present, speed_error, 0.0),
     )

@@ -466,6 +466,17 @@ TEST_SETS: dict[str, TestSet] = {
 }
 
 
+# Base seed of every map's validation scenarios: apart from every test set's, for choices
+# (training lengths, settings, checkpoints) that must not look at a test set.
+VALIDATION_BASE_SEED = 20_229_001
+VALIDATION_SIZE = 1000
+
+
+def validation_set(map_name: str) -> TestSet:
+    """Our own validation scenarios on a map ("<map>-val", 1000 scenarios): never a test set."""
+    return TestSet(map_name, VALIDATION_BASE_SEED, VALIDATION_SIZE, name=f"{map_name}-val")
+
+
 def get_test_set(name: str) -> TestSet:
     """A named test set: "gdc1-test", "ghc3-test" (2000 each), "gdc1-quick", "ghc3-quick" (100 each).
 

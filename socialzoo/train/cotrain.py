@@ -19,6 +19,7 @@ from typing import Any, Literal
 
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.train.humans import (
+    ACTION_SCALE,
     DEFAULT_REWARD,
     INIT_STD,
     POLICY_FILE,
@@ -64,9 +65,15 @@ class CotrainArgs:
         hidden: hidden units per layer of the actors and critics.
         depth: hidden layers.
         reward: the humans' reward weights (HumanRewardConfig fields, JSON object).
-        walk_prior: the untrained humans' mean action: towards the waypoint at this fraction of the
-            preferred speed (0: standing still; socialzoo.train.mappo.human_actor).
+        action_scale: the humans' action times this times the preferred speed is the desired
+            velocity (EnvConfig.human_action_scale; above 1 they can ask for more than the
+            preferred speed, though they never walk faster than it).
+        walk_prior: the untrained humans' desired velocity: towards the waypoint at this fraction
+            of the preferred speed (1: the social-force humans' intent; 0: standing still;
+            socialzoo.train.mappo.human_actor), below action_scale.
         init_std: the humans' initial exploration noise (before the tanh).
+        mirror_symmetric: the humans' policy acts on a situation and its mirror image alike (no
+            handedness; socialzoo.train.mappo.MirrorSymmetric).
         env_overrides: other EnvConfig fields (JSON object), e.g. {"reward": {...}} for the robots.
         stats_steps: random-action steps whose observations set the fixed input normalisation.
         checkpoint_every: frames between checkpoints.
@@ -102,8 +109,10 @@ class CotrainArgs:
     hidden: int = 64
     depth: int = 2
     reward: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_REWARD))
+    action_scale: float = ACTION_SCALE
     walk_prior: float = WALK_PRIOR
     init_std: float = INIT_STD
+    mirror_symmetric: bool = True
     env_overrides: dict[str, Any] = field(default_factory=dict)
     stats_steps: int = 64
     checkpoint_every: int = 500_000

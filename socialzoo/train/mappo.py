@@ -104,6 +104,26 @@ class Normalize(nn.Module):
         return (x - self.loc) / self.scale
 
 
+class MirrorSymmetric(nn.Module):
+    """(f(x) + m * f(s * x)) / 2: a network that acts on a situation and on its mirror image alike.
+
+    `s` negates the observation's y components (socialzoo.env.human_agents.human_mirror_signs) and
+    `m` the action's, so the output for a mirrored situation is the mirrored output: a learned
+    human with no handedness. Without it, shared-parameter humans drift into a side convention
+    (keep right, to pass each other), which pushes them against the walls of narrow corridors.
+    """
+
+    def __init__(self, net: nn.Module, in_signs: torch.Tensor, out_signs: torch.Tensor) -> None:
+        super().__init__()
+        self.net = net
+        self.register_buffer("in_signs", in_signs.detach().clone().float())
+        self.register_buffer("out_signs", out_signs.detach().clone().float())
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """The symmetrised output."""
+        return 0.5 * (self.net(x) + self.out_signs * self.net(x * self.in_signs))
+
+
 def mlp(inputs: int, outputs: int, hidden: int, depth: int) -> nn.Sequential:
     """Linear layers with tanh between them: inputs -> hidden (depth times) -> outputs."""
     layers: list[nn.Module] = []
@@ -141,23 +161,32 @@ def human_actor(
     scale: torch.Tensor,
     walk_prior: float = 0.0,
     init_std: float = 1.0,
+    action_scale: float = 1.0,
+    mirror: torch.Tensor | None = None,
 ) -> ProbabilisticActor:
     """The learned humans' shared policy: TanhNormal over (B, L, 2) velocities in [-1, 1].
 
-    `walk_prior` sets where training starts: the untrained policy's mean action is (walk_prior, 0)
-    in the human's frame, i.e. straight towards its waypoint at that fraction of its preferred
-    speed, what a social-force human wants (0: standing still). `init_std` is the initial
-    exploration noise before the tanh.
+    `walk_prior` sets where training starts: the untrained policy's desired velocity is straight
+    towards the waypoint at that fraction of the preferred speed (1: what a social-force human
+    wants; 0: standing still), i.e. a mean action of (walk_prior / action_scale, 0) in the human's
+    frame, where `action_scale` is EnvConfig.human_action_scale. `init_std` is the initial
+    exploration noise before the tanh. `mirror`: the observation's mirror signs
+    (socialzoo.env.human_agents.human_mirror_signs) make the mean MirrorSymmetric.
     """
+    if not 0 <= walk_prior < action_scale:
+        raise ValueError(
+            f"human_actor: walk_prior must be in [0, action_scale = {action_scale}), got {walk_prior}"
+        )
     body = mlp(obs_size, 2, hidden, depth)
     last = body[-1]
     with torch.no_grad():
         # Small output weights: the prior, not the random initialisation, decides the first moves.
         last.weight.mul_(0.1)
-        last.bias.copy_(torch.tensor([math.atanh(walk_prior), 0.0]))
-    net = nn.Sequential(
-        Normalize(loc, scale), body, AddStateIndependentNormalScale(2, init_value=math.log(init_std))
-    )
+        last.bias.copy_(torch.tensor([math.atanh(walk_prior / action_scale), 0.0]))
+    mean: nn.Module = nn.Sequential(Normalize(loc, scale), body)
+    if mirror is not None:
+        mean = MirrorSymmetric(mean, mirror, torch.tensor([1.0, -1.0]))
+    net = nn.Sequential(mean, AddStateIndependentNormalScale(2, init_value=math.log(init_std)))
     module = TensorDictModule(
         net, in_keys=[(HUMAN, "observation")], out_keys=[(HUMAN, "loc"), (HUMAN, "scale")]
     )
@@ -370,9 +399,11 @@ def _linear_layers(net: nn.Sequential) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanPolicy:
-    """The numpy policy of a human actor: deterministic tanh of its mean, same normalisation."""
-    net = actor.module[0].module
-    norm, body = net[0], net[1]
+    """The numpy policy of a human actor: deterministic tanh of its mean, same normalisation,
+    mirror-symmetric when the actor is."""
+    mean = actor.module[0].module[0]
+    symmetric = isinstance(mean, MirrorSymmetric)
+    norm, body = (mean.net if symmetric else mean)[0], (mean.net if symmetric else mean)[1]
     return LearnedHumanPolicy(
         _linear_layers(body),
         "tanh",
@@ -380,6 +411,8 @@ def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanP
         norm.scale.cpu().numpy(),
         config.num_human_neighbours,
         config.human_action_frame,
+        config.human_action_scale,
+        mirror_symmetric=symmetric,
     )
 
 

@@ -20,6 +20,7 @@ from tensordict.nn import TensorDictSequential
 
 from socialzoo.agents.learned_humans import LearnedHumanPolicy
 from socialzoo.agents.mlp import MlpPolicy
+from socialzoo.env.human_agents import human_mirror_signs
 from socialzoo.nav.subpolicies import NUM_ACTIONS
 from socialzoo.train.mappo import (
     GroupLearner,
@@ -122,7 +123,19 @@ class MarlRun:
         if "human" in self.learned:
             size = stats_env.observation_spec["human", "observation"].shape[-1]
             loc, scale = observation_stats(stats_env, "human", args.stats_steps)
-            actor = human_actor(size, args.hidden, args.depth, loc, scale, args.walk_prior, args.init_std)
+            actor = human_actor(
+                size,
+                args.hidden,
+                args.depth,
+                loc,
+                scale,
+                args.walk_prior,
+                args.init_std,
+                cfg.human_action_scale,
+                torch.from_numpy(human_mirror_signs(cfg.num_human_neighbours))
+                if args.mirror_symmetric
+                else None,
+            )
             value = critic(
                 "human", size, cfg.num_learned_humans, args.algo, args.hidden, args.depth, loc, scale
             )

@@ -27,7 +27,7 @@ def test_round_trip_gives_identical_actions(walker_policy_path, tmp_path):
     policy = LearnedHumanPolicy.load(walker_policy_path)
     layers = [(rng.normal(size=w.shape), rng.normal(size=b.shape)) for w, b in policy.layers]
     loc, scale = rng.normal(size=policy.input_size), rng.uniform(0.5, 2.0, policy.input_size)
-    original = LearnedHumanPolicy(layers, "tanh", loc, scale, policy.num_neighbours, "world")
+    original = LearnedHumanPolicy(layers, "tanh", loc, scale, policy.num_neighbours, "world", 1.25)
     path = original.save(tmp_path / "p.safetensors", policy.header["env_id"], {"seed": 7})
     loaded = LearnedHumanPolicy.load(path)
     obs = rng.normal(size=(3, 4, policy.input_size))
@@ -36,6 +36,7 @@ def test_round_trip_gives_identical_actions(walker_policy_path, tmp_path):
     assert loaded.env_overrides() == {
         "num_human_neighbours": policy.num_neighbours,
         "human_action_frame": "world",
+        "human_action_scale": 1.25,
     }
     assert loaded.config()["training"] == {"seed": 7} and len(loaded.config()["file_sha256"]) == 64
 
@@ -59,6 +60,24 @@ def test_bad_files_and_specs_are_named(walker_policy_path, tmp_path):
         LearnedHumanPolicy(
             policy.layers, "tanh", policy.obs_loc, 0 * policy.obs_scale, policy.num_neighbours, "human"
         )
+    with pytest.raises(ValueError, match="action_scale must be a number > 0"):
+        LearnedHumanPolicy(
+            policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human", 0.0
+        )
+    # A file from before the action scale existed was trained with scale 1.
+    observation = {k: v for k, v in policy.header["observation"].items() if k != "action_scale"}
+    tensors = {"obs_loc": policy.obs_loc, "obs_scale": policy.obs_scale}
+    for i, (w, b) in enumerate(policy.layers):
+        tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"] = w, b
+    old = save_policy_file(
+        tmp_path / "old.safetensors", tensors, {**policy.header, "observation": observation}
+    )
+    assert LearnedHumanPolicy.load(old).env_overrides()["human_action_scale"] == 1.0
+    assert not LearnedHumanPolicy.load(old).mirror_symmetric
+    network = {**policy.header["network"], "mirror_symmetric": "yes"}
+    odd = save_policy_file(tmp_path / "odd.safetensors", tensors, {**policy.header, "network": network})
+    with pytest.raises(PolicyFileError, match=r"network\.mirror_symmetric must be true or false"):
+        LearnedHumanPolicy.load(odd)
     with pytest.raises(ValueError, match="act: observations of shape"):
         policy.act(np.zeros((2, policy.input_size + 1)))
     assert split_human_spec("social_force") == ("social_force", None)

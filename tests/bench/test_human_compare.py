@@ -70,3 +70,28 @@ def test_cli_rejects_social_force_and_names_bad_input(tmp_path, capsys):
     assert "ComparisonConfig.humans must be 'learned:PATH'" in capsys.readouterr().err
     assert socialzoo_main(["compare-humans", "--humans", "learned:nowhere.st", "--out", str(tmp_path)]) == 2
     assert "nowhere.st" in capsys.readouterr().err
+
+
+def test_validation_scenarios_are_no_test_set(tmp_path, walker_policy_path, capsys):
+    from socialzoo.bench.rl_curves import VALIDATION_SET
+    from socialzoo.nav.scenarios import TEST_SETS, validation_set
+
+    val = validation_set("ghc3")
+    assert val.name == "ghc3-val" and val.map_name == "ghc3" and len(val) == 1000
+    assert val.base_seed not in {t.base_seed for t in TEST_SETS.values()}
+    assert VALIDATION_SET == validation_set("gdc1")  # the RL curves' choices use the same scenarios
+    with pytest.raises(ValueError, match=r"quick .* and validation exclude each other"):
+        ComparisonConfig(humans=f"learned:{walker_policy_path}", quick=True, validation=True)
+    with pytest.raises(SystemExit):
+        socialzoo_main(
+            [
+                "compare-humans",
+                "--humans",
+                f"learned:{walker_policy_path}",
+                "--quick",
+                "--validation",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+    assert "not allowed with argument" in capsys.readouterr().err

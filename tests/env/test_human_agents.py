@@ -81,6 +81,10 @@ def test_human_frame_actions_point_at_the_waypoint():
     np.testing.assert_allclose(
         action_velocities(state, learned, forward, "world")[0], [[1.0, 0.0], [1.0, 0.0]]
     )
+    # The action scale multiplies the desired velocity (EnvConfig.human_action_scale).
+    np.testing.assert_allclose(
+        action_velocities(state, learned, forward, "human", 1.25)[0], 1.25 * vel[0], atol=1e-12
+    )
     # The frame is the observation's: the waypoint lies on its +x axis.
     assert np.allclose(np.sin(human_frames(state, learned)[0] - np.arctan2(unit[:, 1], unit[:, 0])), 0.0)
 
@@ -94,6 +98,63 @@ def test_config_fields_are_checked_and_the_old_penalty_name_is_refused():
         EnvConfig().replace(human_collision_penalty=2.0)
     with pytest.raises(ValueError, match="human_action_frame"):
         EnvConfig(human_action_frame="robot")
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="human_action_scale"):
+            EnvConfig(human_action_scale=bad)
     config = EnvConfig().replace(human_reward={"waypoint_bonus": 2.0}, human_action_frame="human")
     assert config.human_reward.waypoint_bonus == 2.0 and config.human_reward.progress == 1.0
     assert EnvConfig.from_dict(config.to_dict()) == config
+
+
+def test_action_scale_lets_a_learner_ask_for_more_but_never_walk_faster_than_its_preferred_speed():
+    # Two humans walking up the room, both asking for the most their action allows: under scale 1
+    # that is the preferred speed, under 1.5 half as much again. The one asking for more gets up
+    # to speed sooner, and neither walks faster than its preferred speed (the motion model's cap).
+    s = scenario([[3.0, 1.0]], [[3.0, 9.0]])
+    speeds = {}
+    for scale in (1.0, 1.5):
+        config = EnvConfig(map="open_room", num_learned_humans=1, human_action_scale=scale)
+        core = SocialNavCore(config, 1)
+        core.reset_rows([0], [s])
+        trace = []
+        for _ in range(80):
+            core.step(np.array([[1]]), np.array([[[0.0, 1.0]]]))
+            trace.append(float(np.linalg.norm(core.state.human_vel[0, 0])))
+        speeds[scale] = np.array(trace)
+    assert (speeds[1.5][:10] > speeds[1.0][:10] + 1e-6).all()
+    assert speeds[1.5].max() <= 1.0 + 1e-9 and speeds[1.0].max() <= 1.0 + 1e-9
+    assert speeds[1.5][-1] == pytest.approx(1.0, abs=1e-6)
+
+
+def test_wall_clearance_warns_before_the_contact():
+    # Standing humans 0.15, 0.3 and 0.6 m off the left wall (and far from each other and the robot):
+    # full penalty in contact, half at 0.3 m (halfway from the 0.4 m margin to the 0.2 m contact),
+    # none beyond the margin. The humans drift a little in the step, so compare with their distance after it.
+    s = scenario([[0.15, 3.0], [0.3, 5.0], [0.6, 7.0]], [[0.15, 3.5], [0.3, 5.5], [0.6, 7.5]])
+    core = core_for(s, progress=0.0, human_contact=0.0, robot_contact=0.0, wall_clearance=2.0)
+    result = core.step(np.array([[1]]), np.zeros((1, 4, 2)))
+    x = core.state.human_pos[0, :3, 0]
+    expected = np.clip((0.4 - x) / 0.2, 0.0, 1.0)
+    np.testing.assert_allclose(result.human.wall_clearance[0, :3], expected, atol=1e-9)
+    assert result.human.wall_clearance[0, 0] == 1.0 and 0.3 < result.human.wall_clearance[0, 1] < 0.7
+    assert result.human.wall_clearance[0, 2] == 0.0 and result.human.wall_clearance[0, 3] == 0.0
+    np.testing.assert_allclose(result.human_reward[0, :3], -2.0 * expected, atol=1e-9)
+    with pytest.raises(ValueError, match=r"wall_margin \(0\.2\) must exceed wall_distance"):
+        HumanRewardConfig(wall_margin=0.2)
+
+
+def test_mirror_signs_give_the_observation_of_the_mirror_image():
+    # Human 0 walks up the middle of the room; a second human stands on its left in one world and
+    # on its right in the other (mirrored about x = 5, the first human's axis; the robot on it too).
+    from socialzoo.env.human_agents import human_mirror_signs, human_observations
+
+    obs = []
+    for side in (4.0, 6.0):
+        s = scenario([[5.0, 2.0], [side, 3.0]], [[5.0, 8.0], [side, 8.0]], robot=(5.0, 9.0, np.pi / 2))
+        core = core_for(s)
+        obs.append(
+            human_observations(core.state, core.walls, np.arange(1), core.config.num_human_neighbours)[0, 0]
+        )
+    signs = human_mirror_signs(core.config.num_human_neighbours)
+    assert obs[0][9] != 0 and (signs == -1).sum() == 3 + 2 * core.config.num_human_neighbours
+    np.testing.assert_allclose(obs[1], obs[0] * signs, atol=1e-6)

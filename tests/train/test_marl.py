@@ -185,5 +185,62 @@ def test_walk_prior_starts_humans_walking_towards_their_waypoint():
         mean = torch.tanh(out["human", "loc"])
         assert abs(float(mean[..., 0].mean()) - prior) < 0.05 and float(mean[..., 1].abs().max()) < 0.2
         assert torch.allclose(out["human", "scale"], torch.full_like(out["human", "scale"], 0.5))
+    # With an action scale the prior is still a fraction of the preferred speed: the mean action
+    # is walk_prior / action_scale.
+    actor = human_actor(12, 16, 2, torch.zeros(12), torch.ones(12), walk_prior=1.0, action_scale=1.25)
+    out = actor.module[0](TensorDict({("human", "observation"): obs}, batch_size=[64]))
+    assert abs(float(torch.tanh(out["human", "loc"])[..., 0].mean()) - 0.8) < 0.05
     with pytest.raises(ValueError, match="walk_prior"):
-        HumansArgs(out=Path("unused"), walk_prior=1.0)
+        HumansArgs(out=Path("unused"), walk_prior=1.0, action_scale=1.0)
+    with pytest.raises(ValueError, match="action_scale"):
+        HumansArgs(out=Path("unused"), action_scale=0.0)
+    assert (
+        HumansArgs(out=Path("unused"), action_scale=1.3, walk_prior=1.0).env_config().human_action_scale
+        == 1.3
+    )
+
+
+def test_mirror_symmetric_humans_act_alike_on_the_left_and_the_right(tmp_path):
+    # A random symmetric actor: on the mirror image of a situation (every y component negated) its
+    # mean action is the mirror image (y negated), in torch and in the exported numpy policy, which
+    # gives the torch actor's tanh(mean) and keeps the symmetry through a save and load.
+    import torch
+    from tensordict import TensorDict
+
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.human_agents import human_mirror_signs, human_observation_size
+    from socialzoo.train.mappo import export_humans, human_actor
+
+    config = EnvConfig(map="open_room", num_learned_humans=1, human_action_frame="human")
+    size = human_observation_size(config.num_human_neighbours)
+    signs = human_mirror_signs(config.num_human_neighbours)
+    torch.manual_seed(0)
+    loc, scale = torch.randn(size), torch.rand(size) + 0.5
+    actor = human_actor(size, 16, 2, loc, scale, walk_prior=0.9, mirror=torch.from_numpy(signs))
+    with torch.no_grad():
+        for p in actor.parameters():
+            p.add_(0.3 * torch.randn_like(p))  # far from the prior's near-zero output weights
+        obs = torch.randn(32, 3, size)
+        mean = actor.module[0](TensorDict({("human", "observation"): obs}, batch_size=[32]))["human", "loc"]
+        mirrored = actor.module[0](
+            TensorDict({("human", "observation"): obs * torch.from_numpy(signs)}, batch_size=[32])
+        )["human", "loc"]
+    torch.testing.assert_close(mirrored, mean * torch.tensor([1.0, -1.0]), atol=1e-5, rtol=1e-5)
+    assert mean[..., 1].abs().mean() > 0.05  # the test is not passed by a zero lateral output
+    policy = export_humans(actor, config)
+    assert policy.mirror_symmetric
+    np.testing.assert_allclose(policy.act(obs.numpy()), torch.tanh(mean).numpy(), atol=1e-5)
+    loaded = LearnedHumanPolicy.load(policy.save(tmp_path / "sym.safetensors", "socialzoo/MultiAgent-v1", {}))
+    assert loaded.mirror_symmetric
+    np.testing.assert_allclose(
+        loaded.act(obs.numpy() * signs), loaded.act(obs.numpy()) * [1.0, -1.0], atol=1e-6
+    )
+    # An unsymmetrised actor of the same weights is not symmetric: the wrapper is what does it.
+    plain = human_actor(size, 16, 2, loc, scale, walk_prior=0.9)
+    plain.module[0].module[0].load_state_dict(actor.module[0].module[0].net.state_dict())
+    with torch.no_grad():
+        out = plain.module[0](TensorDict({("human", "observation"): obs}, batch_size=[32]))["human", "loc"]
+        out_m = plain.module[0](
+            TensorDict({("human", "observation"): obs * torch.from_numpy(signs)}, batch_size=[32])
+        )["human", "loc"]
+    assert not torch.allclose(out_m, out * torch.tensor([1.0, -1.0]), atol=1e-3)
