@@ -126,5 +126,9 @@ def test_shipped_human_policy_loads_and_records_its_training():
         record["command"].startswith("socialzoo train humans") and record["args"]["seed"] == training["seed"]
     )
     assert record["results"]["frames"] == training["frames"] and record["finished"]
+    # The checkpoint was chosen by `socialzoo select-humans` on validation scenarios, never a test set.
+    selection = json.loads((SHIPPED_DIR / "humans.selection.json").read_text())
+    assert selection["scenarios"] == "gdc1-val" and selection["chosen"]["frames"] == training["frames"]
+    assert policy.mirror_symmetric and record["args"]["mirror_symmetric"]
     obs = np.random.default_rng(0).normal(size=(8, policy.input_size))
     assert np.isfinite(policy.act(obs)).all()
