@@ -29,7 +29,10 @@ POLICY_FILE = "humans.safetensors"
 # a metre of progress is worth 1 (about 0.02 per step at walking speed), a waypoint 0.5; walking off
 # the preferred speed costs a little; a step in contact with a human costs ten steps of walking, with
 # a robot twenty, with a wall twenty-five, so scraping a wall never pays for the corner it cuts (at
-# 0.05 per step it did: humans trained with it touched walls six times as often as social-force humans).
+# 0.05 per step it did: humans trained with it touched walls six times as often as social-force humans),
+# and walking within 0.4 m of a wall costs up to 0.05 per step, a warning before the contact (with
+# it, mirror-symmetric humans touched walls 17% less often than social-force humans on validation
+# scenarios; without it, 17% more: docs/multi_agent.md).
 DEFAULT_REWARD: dict[str, float] = {
     "progress": 1.0,
     "waypoint_bonus": 0.5,
@@ -37,6 +40,7 @@ DEFAULT_REWARD: dict[str, float] = {
     "human_contact": 0.2,
     "robot_contact": 0.4,
     "wall_contact": 0.5,
+    "wall_clearance": 0.05,
 }
 # Training starts from humans that walk towards their waypoint (mappo.human_actor): the social-force
 # humans' intent, which the policy then refines, instead of from humans standing still; with little

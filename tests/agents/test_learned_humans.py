@@ -125,10 +125,14 @@ def test_shipped_human_policy_loads_and_records_its_training():
     assert (
         record["command"].startswith("socialzoo train humans") and record["args"]["seed"] == training["seed"]
     )
-    assert record["results"]["frames"] == training["frames"] and record["finished"]
-    # The checkpoint was chosen by `socialzoo select-humans` on validation scenarios, never a test set.
+    assert record["finished"] and record["args"]["frames"] == record["results"]["frames"]
+    # The checkpoint was chosen by `socialzoo select-humans` on validation scenarios, never a test set,
+    # among the checkpoints of that run.
     selection = json.loads((SHIPPED_DIR / "humans.selection.json").read_text())
     assert selection["scenarios"] == "gdc1-val" and selection["chosen"]["frames"] == training["frames"]
+    assert training["frames"] <= record["results"]["frames"] and selection["chosen"]["met"]
+    checkpoint = f"checkpoints/step_{training['frames']:09d}.humans.safetensors"
+    assert checkpoint in record["results"]["checkpoints"]
     assert policy.mirror_symmetric and record["args"]["mirror_symmetric"]
     obs = np.random.default_rng(0).normal(size=(8, policy.input_size))
     assert np.isfinite(policy.act(obs)).all()
