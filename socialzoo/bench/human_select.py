@@ -30,6 +30,7 @@ from socialzoo.bench.human_compare import (
     REACH_TOLERANCE,
     ComparisonConfig,
     compare_humans,
+    write_comparison_csv,
 )
 from socialzoo.bench.tables import write_text_atomic
 from socialzoo.nav.scenarios import TestSet
@@ -195,11 +196,7 @@ def select_humans(
 
 def _write_tables(rows: list[dict[str, Any]], best: dict[str, Any], out: Path, scenarios: str) -> None:
     """selection.csv (every column) and selection.md (a row per checkpoint, the chosen one marked)."""
-    header = ["frames", "file", *(c for c, _ in COLUMNS), "reach_met", "collisions_met", "met", "miss"]
-    lines = [",".join(header)]
-    for r in rows:
-        lines.append(",".join("" if r.get(h) is None else str(r.get(h)) for h in header))
-    write_text_atomic(out / "selection.csv", "\n".join(lines) + "\n")
+    write_comparison_csv(rows, out / "selection.csv")
     md = [
         f"# Checkpoint selection on {scenarios} (validation scenarios, not a test set)",
         "",

@@ -403,7 +403,8 @@ def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanP
     mirror-symmetric when the actor is."""
     mean = actor.module[0].module[0]
     symmetric = isinstance(mean, MirrorSymmetric)
-    norm, body = (mean.net if symmetric else mean)[0], (mean.net if symmetric else mean)[1]
+    inner = mean.net if symmetric else mean
+    norm, body = inner[0], inner[1]
     return LearnedHumanPolicy(
         _linear_layers(body),
         "tanh",
