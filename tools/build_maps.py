@@ -20,8 +20,9 @@ import numpy as np
 
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.importers import drop_zero_length, read_table
+from socialzoo.nav.map_completion import complete_map
 from socialzoo.nav.maps import Map
-from socialzoo.nav.roadmap import RoadmapConfig, complete_map
+from socialzoo.nav.roadmap import RoadmapConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 SOCIAL_GYM = (

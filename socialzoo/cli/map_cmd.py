@@ -234,9 +234,9 @@ def _png_walls(args: argparse.Namespace) -> np.ndarray:
 def run_import(args: argparse.Namespace) -> int:
     """Run `socialzoo map import`; returns the exit status."""
     from socialzoo import __version__
+    from socialzoo.nav.map_completion import complete_map
     from socialzoo.nav.maps import MapError
     from socialzoo.nav.repair import repair_map
-    from socialzoo.nav.roadmap import complete_map
 
     try:
         walls, nodes, edges, inputs = _read_source(args)

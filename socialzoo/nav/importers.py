@@ -1,7 +1,7 @@
 """Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs) and
 pedsim scene XML files.
 
-Each importer returns plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2)); roadmap.complete_map
+Each importer returns plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2)); map_completion.complete_map
 turns them into a Map, generating what a source lacks. Zero-length wall segments (both end points
 equal) are dropped on import: they block nothing and only cost time in every wall query.
 Parse errors raise MapError naming the file and line (or entry).

@@ -27,6 +27,7 @@ from scipy import ndimage
 from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
+from socialzoo.nav.legal_poses import generate_legal_poses
 from socialzoo.nav.maps import (
     POSE_CLEARANCE,
     Map,
@@ -44,7 +45,6 @@ from socialzoo.nav.roadmap import (
     build_roadmap,
     connect_components,
     free_space,
-    generate_legal_poses,
     grid_graph,
     pull_string,
 )
@@ -341,7 +341,7 @@ def repair_map(
 ) -> tuple[Map, RepairReport]:
     """A valid Map from imported data, repairing what breaks the rules (see the module docstring).
 
-    What the source lacks is generated as `roadmap.complete_map` does (a roadmap without nodes,
+    What the source lacks is generated as `map_completion.complete_map` does (a roadmap without nodes,
     edges between nodes without edges, legal poses without poses); each such step is reported too.
 
     Args:

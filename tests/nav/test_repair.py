@@ -12,9 +12,9 @@ import pytest
 
 from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, route_lengths
 from socialzoo.nav.floorplans import atrium, long_corridor, winding_corridor
+from socialzoo.nav.map_completion import complete_map
 from socialzoo.nav.maps import MapError, load_map, nearest_walls, validate_map
 from socialzoo.nav.repair import repair_map
-from socialzoo.nav.roadmap import complete_map
 from socialzoo.nav.scenarios import generate_scenario
 
 

@@ -7,15 +7,15 @@ import pytest
 from socialzoo.core.geometry import segments_intersect
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.importers import read_table, read_vector_map
+from socialzoo.nav.legal_poses import generate_legal_poses
+from socialzoo.nav.map_completion import complete_map
 from socialzoo.nav.maps import load_map, nearest_walls, reaches_graph, segment_clearance, validate_map
 from socialzoo.nav.roadmap import (
     RoadmapConfig,
     build_edges,
     build_roadmap,
     clip_walls,
-    complete_map,
     free_space,
-    generate_legal_poses,
 )
 
 
@@ -149,3 +149,11 @@ def test_complete_map_is_deterministic_and_valid(seed):
 def test_config_errors_name_the_field(field, value):
     with pytest.raises(ValueError, match=field):
         RoadmapConfig(**{field: value})
+
+
+def test_keep_clearance_zero_is_allowed_and_bounded():
+    # 0 turns the straightening limit off (the shipped maps were built that way: tools/build_maps.py).
+    assert RoadmapConfig(keep_clearance=0.0).keep_clearance == 0.0
+    for bad in (-0.1, 0.6):
+        with pytest.raises(ValueError, match="keep_clearance"):
+            RoadmapConfig(keep_clearance=bad)

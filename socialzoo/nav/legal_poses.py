@@ -1,0 +1,137 @@
+"""Legal start/goal poses for a wall map that comes without them.
+
+Candidates are cells on the free space's clearance ridge (socialzoo.nav.roadmap.free_space);
+poses are picked among them by farthest-point sampling in walking distance along the navigation
+graph, and each faces the most open direction. Deterministic given the seed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from socialzoo.core.walls import WallIndex
+from socialzoo.nav.maps import MapError
+from socialzoo.nav.roadmap import GRID_STEPS, Box, FreeSpace, RoadmapConfig, free_space
+
+
+def _ridge(clearance: np.ndarray) -> np.ndarray:
+    """Cells on the clearance ridge (medial axis): a local maximum along some grid direction."""
+    c = np.where(np.isfinite(clearance), clearance, 1e9)
+    padded = np.pad(c, 1, mode="edge")
+    nx, ny = c.shape
+    eps = 1e-6
+    ridge = np.zeros(c.shape, dtype=bool)
+    for di, dj in GRID_STEPS:
+        fwd = padded[1 + di : 1 + di + nx, 1 + dj : 1 + dj + ny]
+        back = padded[1 - di : 1 - di + nx, 1 - dj : 1 - dj + ny]
+        # Strict on one side at least, so a cell beside a straight wall (flat along it) is no ridge.
+        ridge |= (c >= fwd - eps) & (c >= back - eps) & ((c > fwd + eps) | (c > back + eps))
+    return ridge
+
+
+def _graph_distances(nodes: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    n = len(nodes)
+    length = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T) if len(edges) else np.zeros(0)
+    matrix = sparse.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(n, n)).tocsr()
+    return csgraph.shortest_path(matrix, directed=False)
+
+
+def generate_legal_poses(
+    walls: np.ndarray,
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    space: FreeSpace | None = None,
+    region: Box | None = None,
+    seed_point: tuple[float, float] | np.ndarray | None = None,
+    config: RoadmapConfig | None = None,
+    seed: int = 0,
+    index: WallIndex | None = None,
+) -> np.ndarray:
+    """Legal start/goal poses spread over the interior, facing along the free space.
+
+    Candidates are clearance-ridge cells (corridor centre lines, room centres) with at least
+    config.pose_clearance, one per half-metre block, that see a graph node. Poses are picked by
+    farthest-point sampling in walking distance (to the nearest visible node, along the graph,
+    then out again), scaled by clearance up to config.good_clearance: dead ends and rooms come
+    first. Each pose faces the direction with the most free space around it.
+
+    Args:
+        walls: (W, 4) wall segments, m.
+        nodes: the navigation graph's nodes, (N, 2) m.
+        edges: the navigation graph's edges, (E, 2) node index pairs.
+        space: the free space (built from walls, region and seed_point when not given).
+        region: see free_space.
+        seed_point: see free_space.
+        config: num_poses, pose_clearance, pose_separation, good_clearance.
+        seed: seeds the tie-breaking order.
+        index: the walls' WallIndex, if already built.
+
+    Returns:
+        (P, 3) poses x, y (m), theta (rad), P <= config.num_poses.
+    """
+    config = config or RoadmapConfig()
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    index = index or WallIndex(walls)
+    space = space or free_space(walls, region, seed_point, config, index)
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    rng = np.random.default_rng(seed)
+
+    cells = np.argwhere(space.interior & (space.clearance >= config.pose_clearance) & _ridge(space.clearance))
+    block = max(1, round(0.5 / space.resolution))
+    block_id = (cells[:, 0] // block) * (space.shape[1] // block + 1) + cells[:, 1] // block
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+    order = np.lexsort((-value, block_id))
+    first = order[np.r_[True, block_id[order][1:] != block_id[order][:-1]]]
+    cells = cells[first]
+    cells = cells[rng.permutation(len(cells))]
+    points = space.centres(cells)
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+
+    # Attach each candidate to its nearest visible node among the eight nearest.
+    k = min(8, len(nodes))
+    near = np.argsort(((points[:, None, :] - nodes[None, :, :]) ** 2).sum(-1), axis=1, kind="stable")[:, :k]
+    seen = ~index.crosses(np.repeat(points[:, None, :], k, axis=1), nodes[near])
+    has = seen.any(axis=1)
+    points, value, near, seen = points[has], value[has], near[has], seen[has]
+    attach = near[np.arange(len(points)), np.argmax(seen, axis=1)]
+    if len(points) < 2:
+        raise MapError(f"found {len(points)} places for legal poses with {config.pose_clearance} m clearance")
+    hop = np.hypot(*(points - nodes[attach]).T)
+    graph_dist = _graph_distances(nodes, edges)
+
+    def walking(from_k: int) -> np.ndarray:
+        d = hop + graph_dist[attach, attach[from_k]] + hop[from_k]
+        same = attach == attach[from_k]
+        d[same] = np.hypot(*(points[same] - points[from_k]).T)
+        # Poses must also stand apart in a straight line (two poses either side of a thin wall
+        # are far apart on foot but would still overlap).
+        return np.minimum(d, np.hypot(*(points - points[from_k]).T))
+
+    quality = np.minimum(value / config.good_clearance, 1.0)
+    # Start from the candidate farthest from the roomiest one (a far end of the building).
+    nearest = walking(int(np.argmax(value)))
+    nearest[~np.isfinite(nearest)] = -1.0
+    chosen = [int(np.argmax(nearest * quality))]
+    nearest = walking(chosen[0])
+    while len(chosen) < config.num_poses:
+        score = np.where(np.isfinite(nearest), nearest, -1.0) * quality
+        best = int(np.argmax(score))
+        if nearest[best] < config.pose_separation or score[best] <= 0:
+            break
+        chosen.append(best)
+        nearest = np.minimum(nearest, walking(best))
+    pos = points[chosen]
+    return np.concatenate((pos, _open_heading(index, pos)[:, None]), axis=1)
+
+
+def _open_heading(index: WallIndex, points: np.ndarray, max_range: float = 8.0) -> np.ndarray:
+    """(P,) heading (rad) of the most open direction: the longest free ray, smoothed over 45 degrees."""
+    angles = np.linspace(-np.pi, np.pi, 72, endpoint=False)
+    ranges = index.cast_rays(points, np.broadcast_to(angles, (len(points), len(angles))), max_range)
+    kernel = np.ones(9) / 9.0
+    wrapped = np.concatenate((ranges[:, -4:], ranges, ranges[:, :4]), axis=1)
+    smooth = np.stack([np.convolve(r, kernel, mode="valid") for r in wrapped]).reshape(len(points), -1)
+    return angles[np.argmax(smooth, axis=1)]
