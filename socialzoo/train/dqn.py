@@ -14,11 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.sb3_common import (
     check_common,
-    check_int,
-    check_number,
     make_training_env,
     run_sb3,
     training_env_config,
@@ -96,8 +95,8 @@ class DQNArgs:
         object.__setattr__(self, "out", Path(self.out))
         object.__setattr__(self, "net_arch", tuple(self.net_arch))
         for name in ("buffer_size", "batch_size", "train_freq", "gradient_steps", "target_update_interval"):
-            check_int("DQNArgs", name, getattr(self, name), 1)
-        check_int("DQNArgs", "learning_starts", self.learning_starts, 0)
+            check_int("DQNArgs", name, getattr(self, name), low=1)
+        check_int("DQNArgs", "learning_starts", self.learning_starts, low=0)
         check_common("DQNArgs", self, self.num_envs * self.train_freq, "num_envs * train_freq")
         for name, low, high in (
             ("learning_rate", 0.0, 1.0),
@@ -108,7 +107,7 @@ class DQNArgs:
             ("exploration_final_eps", 0.0, 1.0),
             ("max_grad_norm", 0.0, 1e6),
         ):
-            check_number("DQNArgs", name, getattr(self, name), low, high)
+            check_number("DQNArgs", name, getattr(self, name), low=low, high=high)
 
 
 def train(args: DQNArgs) -> Path:

@@ -16,11 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.sb3_common import (
     check_common,
-    check_int,
-    check_number,
     make_training_env,
     run_sb3,
     training_env_config,
@@ -91,7 +90,7 @@ class PPOArgs:
         object.__setattr__(self, "out", Path(self.out))
         object.__setattr__(self, "net_arch", tuple(self.net_arch))
         for name in ("n_steps", "batch_size", "n_epochs"):
-            check_int("PPOArgs", name, getattr(self, name), 1)
+            check_int("PPOArgs", name, getattr(self, name), low=1)
         check_common("PPOArgs", self, self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
         for name, low, high in (
             ("learning_rate", 0.0, 1.0),
@@ -102,7 +101,7 @@ class PPOArgs:
             ("vf_coef", 0.0, 10.0),
             ("max_grad_norm", 0.0, 1e6),
         ):
-            check_number("PPOArgs", name, getattr(self, name), low, high)
+            check_number("PPOArgs", name, getattr(self, name), low=low, high=high)
 
 
 def train(args: PPOArgs) -> Path:

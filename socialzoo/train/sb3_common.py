@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.validation import check_int
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.run_dir import RunDir, checkpoint_steps, plain, progress_bar
 
@@ -62,18 +63,6 @@ def make_training_env(
     return norm, norm
 
 
-def check_int(cls: str, name: str, value: Any, low: int) -> None:
-    """Raise ValueError naming `cls.name` unless value is an int >= low."""
-    if not isinstance(value, int) or isinstance(value, bool) or value < low:
-        raise ValueError(f"{cls}.{name} must be an int >= {low}, got {value!r}")
-
-
-def check_number(cls: str, name: str, value: Any, low: float, high: float = float("inf")) -> None:
-    """Raise ValueError naming `cls.name` unless low <= value <= high."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not low <= value <= high:
-        raise ValueError(f"{cls}.{name} must be a number in [{low}, {high}], got {value!r}")
-
-
 def check_common(cls: str, args: Any, block: int, what: str) -> None:
     """Validate the fields every SB3 trainer's Args has. Checkpoints must fall on `block` env steps
     (a rollout, or a training interval), so each holds the policy at exactly its step.
@@ -82,8 +71,8 @@ def check_common(cls: str, args: Any, block: int, what: str) -> None:
         ValueError: naming the field and the bad value.
     """
     for name in ("seed", "total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs"):
-        check_int(cls, name, getattr(args, name), 0 if name == "seed" else 1)
-    check_int(cls, "threads", args.threads, 1)
+        check_int(cls, name, getattr(args, name), low=0 if name == "seed" else 1)
+    check_int(cls, "threads", args.threads, low=1)
     if args.checkpoint_every % block:
         raise ValueError(
             f"{cls}.checkpoint_every ({args.checkpoint_every}) must be a multiple of {what} ({block})"

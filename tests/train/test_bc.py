@@ -80,3 +80,6 @@ def test_bad_arguments_name_the_field():
         Args(epochs=0)
     with pytest.raises(ValueError, match=r"bc Args\.lr"):
         Args(lr=-1.0)
+    # Non-finite numbers are refused too (a NaN learning rate would train silently into NaNs).
+    with pytest.raises(ValueError, match=r"bc Args\.lr must be a finite number, got nan"):
+        Args(lr=float("nan"))

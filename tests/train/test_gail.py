@@ -42,7 +42,7 @@ def test_reward_forms():
 
 
 def test_bad_arguments_name_the_field():
-    with pytest.raises(ValueError, match=r"gail Args\.gamma must be a number >= 0\.0 and <= 1\.0"):
+    with pytest.raises(ValueError, match=r"gail Args\.gamma must be in \[0\.0, 1\.0\], got 1\.5"):
         Args(gamma=1.5)
     with pytest.raises(ValueError, match=r"gail Args\.num_envs"):
         Args(num_envs=0)

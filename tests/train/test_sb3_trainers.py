@@ -135,7 +135,7 @@ def test_trainers_are_registered_with_the_papers_defaults():
     [
         (PPOArgs, {"total_steps": 0}, "PPOArgs.total_steps must be an int >= 1, got 0"),
         (PPOArgs, {"checkpoint_every": 2_100}, r"PPOArgs.checkpoint_every \(2100\) must be a multiple"),
-        (PPOArgs, {"gamma": 1.5}, "PPOArgs.gamma must be a number in"),
+        (PPOArgs, {"gamma": 1.5}, r"PPOArgs.gamma must be in \[0.0, 1.0\], got 1.5"),
         (PPOArgs, {"net_arch": ()}, "PPOArgs.net_arch"),
         (PPOArgs, {"env_overrides": {"max_stepz": 3}}, "bad training env.*max_stepz"),
         (DQNArgs, {"scenario_repeats": 0}, "DQNArgs.scenario_repeats must be an int >= 1, got 0"),
