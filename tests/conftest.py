@@ -67,3 +67,27 @@ def write_walker():
 def walker_policy_path(tmp_path_factory):
     """A learned human policy file whose humans walk straight at their waypoints."""
     return write_walker_policy(tmp_path_factory.mktemp("humans") / "walker.safetensors")
+
+
+# A small Ref demonstration recording shared by the imitation and study tests: its episodes and
+# their time limit (steps), about 3,000 transitions in all.
+DEMO_EPISODES = 12
+DEMO_MAX_STEPS = 250
+
+
+@pytest.fixture(scope="session")
+def small_demos(tmp_path_factory):
+    """A demonstration file of DEMO_EPISODES Ref episodes on gdc1, cut at DEMO_MAX_STEPS steps
+    (the tests that use it train with torch and TorchRL: skipped without them)."""
+    pytest.importorskip("torch")
+    pytest.importorskip("torchrl")
+    from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
+
+    path = tmp_path_factory.mktemp("demos") / "ref.npz"
+    config = DemoConfig(
+        episodes=DEMO_EPISODES,
+        chunk_episodes=DEMO_EPISODES,
+        batch_size=DEMO_EPISODES,
+        env_overrides={"max_steps": DEMO_MAX_STEPS},
+    )
+    return record_demonstrations(path, config)

@@ -29,8 +29,9 @@ RANKS: dict[str, int] = {
     "agents": 4,
     "bench": 5,
     "train": 6,
-    "reproduce": 7,
-    "cli": 8,
+    "studies": 7,
+    "reproduce": 8,
+    "cli": 9,
 }
 # Subpackages that hold data only: anyone may name them.
 DATA = {"_maps"}
@@ -176,6 +177,18 @@ def test_no_module_imports_a_higher_layer():
         ("socialzoo.humans.motion", "from socialzoo.nav.maps import Map", "nav and humans are peers"),
         ("socialzoo.env.parallel", "from socialzoo import bench", "imports socialzoo.bench"),
         ("socialzoo.agents.reg", 'POLICIES = {"ppo": "socialzoo.train.ppo:PPOPolicy"}', "train (rank 6)"),
+        # Studies sit above the harness and the trainers they compose, below reproduce.
+        (
+            "socialzoo.bench.runner",
+            "from socialzoo.studies.rl_curves import X",
+            "studies (rank 7) is above bench",
+        ),
+        ("socialzoo.train.ppo", "from socialzoo.studies import lfd", "studies (rank 7) is above train"),
+        (
+            "socialzoo.studies.lfd",
+            "from socialzoo.reproduce import plan",
+            "reproduce (rank 8) is above studies",
+        ),
         ("socialzoo.core.state", "from socialzoo.sim import step", "'sim' has no rank"),
         ("socialzoo.sim.step", "import numpy", "'sim' has no rank"),
         ("socialzoo", "from socialzoo.bench import runner", "may import only ['env']"),

@@ -18,14 +18,14 @@ import logging
 import time
 from pathlib import Path
 
-from socialzoo.bench.pips_study import (
+from socialzoo.studies.pips_study import (
     STUDY_STEPS,
     STUDY_TRIALS,
     STUDY_WINDOWS,
     find_study_programs,
     run_pips_study,
 )
-from socialzoo.train.pips_study import PipsStudyConfig, train_pips_study
+from socialzoo.studies.pips_study_training import PipsStudyConfig, train_pips_study
 
 
 def _ints(text: str) -> tuple[int, ...]:

@@ -62,7 +62,7 @@ def register(subparsers: Any) -> None:
 
 def run_compare_humans(args: argparse.Namespace) -> int:
     """Run `socialzoo compare-humans`; returns the exit status."""
-    from socialzoo.bench.human_compare import ComparisonConfig, compare_humans
+    from socialzoo.studies.human_compare import ComparisonConfig, compare_humans
 
     try:
         config = ComparisonConfig(
@@ -92,7 +92,7 @@ def run_compare_humans(args: argparse.Namespace) -> int:
 def run_select_humans(args: argparse.Namespace) -> int:
     """Run `socialzoo select-humans`; returns the exit status."""
     from socialzoo.agents import check_policy_spec
-    from socialzoo.bench.human_select import run_checkpoints, select_humans, training_map
+    from socialzoo.studies.human_select import run_checkpoints, select_humans, training_map
 
     try:
         run_checkpoints(args.run)

@@ -1,5 +1,5 @@
 """`socialzoo steps-to-ref --out DIR`: beyond the paper, the training steps PPO needs to reach
-Ref's success (socialzoo.train.rl_experiment.steps_to_reference), measured on validation
+Ref's success (socialzoo.studies.rl_training.steps_to_reference), measured on validation
 scenarios of our own seeds, never on a test set."""
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def describe(record: dict[str, Any]) -> str:
 
 def run_steps_to_ref(args: argparse.Namespace) -> int:
     """Run `socialzoo steps-to-ref`; returns the exit status."""
-    from socialzoo.train.rl_experiment import steps_to_reference
+    from socialzoo.studies.rl_training import steps_to_reference
 
     if args.total_steps % args.checkpoint_every:
         print(

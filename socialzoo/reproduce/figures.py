@@ -3,7 +3,7 @@
 - success.{png,pdf}, metrics.{png,pdf}: success rates with the paper's marks, and force, blame and
   time to goal, per policy on the training and transfer maps (socialzoo.bench.figures);
 - rl_curves.{png,pdf}: success, time and reward of every checkpoint with 90% bands
-  (socialzoo.bench.rl_curves.plot_curves);
+  (socialzoo.studies.rl_curves.plot_curves);
 - lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks.
 """
 
@@ -71,7 +71,7 @@ def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, l
         drawn["metrics"] = plot_metrics(summary, out, FORMATS)
     curves = results.get("rl_curves", [])
     if curves:
-        from socialzoo.bench.rl_curves import plot_curves
+        from socialzoo.studies.rl_curves import plot_curves
 
         points = [r for r in curves if math.isfinite(r["step"])]
         refs = [r for r in curves if not math.isfinite(r["step"])]

@@ -1,14 +1,14 @@
 """The paper's numbers (SPEC section 10), in one place, for the tables beside ours.
 
 Success rates of the performance and transfer experiments (socialzoo.bench.tables.PAPER_SUCCESS)
-and the LfD table (socialzoo.bench.lfd.PAPER_LFD) already live with the code that prints them; this
+and the LfD table (socialzoo.studies.lfd.PAPER_LFD) already live with the code that prints them; this
 module re-exports them and adds the rest of SPEC section 10: PIPS's LfD row and the protocol.
 """
 
 from __future__ import annotations
 
-from socialzoo.bench.lfd import LFD_SIZES, PAPER_LFD
 from socialzoo.bench.tables import PAPER_SUCCESS
+from socialzoo.studies.lfd import LFD_SIZES, PAPER_LFD
 
 __all__ = [
     "LFD_SIZES",

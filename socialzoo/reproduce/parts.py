@@ -4,8 +4,8 @@ Every part composes pieces that store their items as they finish, so a part is r
 
 - demos: Ref's demonstrations (socialzoo.bench.demonstrations, chunk by chunk).
 - rl-curves: PPO and DQN training runs (socialzoo.train, checkpoints) and every checkpoint on the
-  first gdc1-test scenarios (socialzoo.bench.rl_curves, one stored trial at a time).
-- lfd: BC and GAIL at each demonstration size and PIPS, then the LfD table (socialzoo.bench.lfd).
+  first gdc1-test scenarios (socialzoo.studies.rl_curves, one stored trial at a time).
+- lfd: BC and GAIL at each demonstration size and PIPS, then the LfD table (socialzoo.studies.lfd).
 - performance / transfer: the seven policies on gdc1-test / ghc3-test (socialzoo.bench.experiment).
 
 A training run folder that holds a finished run of the same arguments is not trained again (the
@@ -120,7 +120,7 @@ def demos_path(ctx: Context) -> Path:
 
 def lfd_items(ctx: Context, sizes: tuple[int, ...] | None = None) -> list[tuple[str, Any]]:
     """BC and GAIL at each demonstration size (all of them, or `sizes`), and PIPS."""
-    from socialzoo.train.lfd import LfdTrainConfig
+    from socialzoo.studies.lfd_training import LfdTrainConfig
     from socialzoo.train.pips import PipsArgs
 
     s = ctx.settings
@@ -179,7 +179,7 @@ def _store_size(path: Path) -> int:
 
 def run_rl_curves(ctx: Context) -> int:
     """Train PPO and DQN, evaluate every checkpoint; returns the trainings and trials made."""
-    from socialzoo.bench.rl_curves import STORE_NAME, rl_curves
+    from socialzoo.studies.rl_curves import STORE_NAME, rl_curves
 
     s = ctx.settings
     _, trained = _train(ctx, rl_items(ctx))
@@ -201,7 +201,7 @@ def run_rl_curves(ctx: Context) -> int:
 
 def run_lfd(ctx: Context) -> int:
     """Demonstrations, BC and GAIL at every size, PIPS, then the LfD table; returns items made."""
-    from socialzoo.bench.lfd import run_lfd_evaluation
+    from socialzoo.studies.lfd import run_lfd_evaluation
 
     s = ctx.settings
     made = run_demos(ctx)

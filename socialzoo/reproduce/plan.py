@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from socialzoo.bench.lfd import LFD_SIZES
 from socialzoo.core.validation import check_int
+from socialzoo.studies.lfd import LFD_SIZES
 
 # The parts, in the order they run (later parts reuse what earlier ones trained).
 PARTS: tuple[str, ...] = ("demos", "rl-curves", "lfd", "performance", "transfer")

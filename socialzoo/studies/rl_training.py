@@ -1,8 +1,8 @@
 """Experiment 1, RL data efficiency: the training part (the reproduce command calls these).
 
 `train_curve_runs` trains PPO and DQN with the paper's set-up (84,000 steps, a checkpoint every
-2,000) into one folder each; `socialzoo.bench.rl_curves.rl_curves` then evaluates every checkpoint.
-`train_to_match` trains PPO on for longer, for `socialzoo.bench.rl_curves.steps_to_match` (the
+2,000) into one folder each; `socialzoo.studies.rl_curves.rl_curves` then evaluates every checkpoint.
+`train_to_match` trains PPO on for longer, for `socialzoo.studies.rl_curves.steps_to_match` (the
 steps PPO needs to reach Ref's success, measured on validation scenarios); `steps_to_reference`
 does both and writes the answer (`socialzoo steps-to-ref`).
 
@@ -101,7 +101,7 @@ def steps_to_reference(
 
     Trains PPO for `total_steps` (train_to_match; a finished run is reused), evaluates every
     checkpoint and the reference on the first `trials` validation scenarios
-    (socialzoo.bench.rl_curves.VALIDATION_SET, never a test set), and writes out_dir/steps_to_ref.json
+    (socialzoo.studies.rl_curves.VALIDATION_SET, never a test set), and writes out_dir/steps_to_ref.json
     (the answer with the settings and the command), steps_to_ref.csv (one row per checkpoint) and,
     with `figure`, steps_to_ref.{png,pdf} (the curves with the reference as a line).
     `validation` and `env_overrides` replace the validation scenarios and the evaluation env's
@@ -111,7 +111,7 @@ def steps_to_reference(
         the JSON record: "steps" (first checkpoint at or above the reference's success rate, None if
         none), "steps_ci" (first whose 90% interval reaches it), "reference", "checkpoints", settings.
     """
-    from socialzoo.bench.rl_curves import VALIDATION_SET, plot_curves, steps_to_match
+    from socialzoo.studies.rl_curves import VALIDATION_SET, plot_curves, steps_to_match
 
     validation = validation or VALIDATION_SET
     out = Path(out_dir)

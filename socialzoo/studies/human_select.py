@@ -1,5 +1,5 @@
 """Choose a learned-human checkpoint on validation scenarios: the comparison with social-force
-humans (socialzoo.bench.human_compare) for every checkpoint of a training run, never a test set.
+humans (socialzoo.studies.human_compare) for every checkpoint of a training run, never a test set.
 
 Why: the learned humans' reward is a proxy for what the comparison measures, and a longer run is
 not always closer to the targets (with the default reward, wall contacts grow after the first
@@ -24,7 +24,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.human_compare import (
+from socialzoo.bench.tables import write_text_atomic
+from socialzoo.nav.scenarios import TestSet
+from socialzoo.studies.human_compare import (
     COLLISION_KEYS,
     POPULATIONS,
     REACH_TOLERANCE,
@@ -32,8 +34,6 @@ from socialzoo.bench.human_compare import (
     compare_humans,
     write_comparison_csv,
 )
-from socialzoo.bench.tables import write_text_atomic
-from socialzoo.nav.scenarios import TestSet
 
 CHECKPOINT = re.compile(r"step_(\d+)\.humans\.safetensors$")
 SELECTED_FILE = "humans.safetensors"

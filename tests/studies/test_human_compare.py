@@ -3,9 +3,9 @@
 
 import pytest
 
-from socialzoo.bench.human_compare import ComparisonConfig, check_targets, compare_humans
 from socialzoo.cli import main as socialzoo_main
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.studies.human_compare import ComparisonConfig, check_targets, compare_humans
 
 
 def row(population, reach, hh=1.0, hw=0.0, hr=0.0, map_name="m"):
@@ -73,8 +73,8 @@ def test_cli_rejects_social_force_and_names_bad_input(tmp_path, capsys):
 
 
 def test_validation_scenarios_are_no_test_set(tmp_path, walker_policy_path, capsys):
-    from socialzoo.bench.rl_curves import VALIDATION_SET
     from socialzoo.nav.scenarios import TEST_SETS, validation_set
+    from socialzoo.studies.rl_curves import VALIDATION_SET
 
     val = validation_set("ghc3")
     assert val.name == "ghc3-val" and val.map_name == "ghc3" and len(val) == 1000

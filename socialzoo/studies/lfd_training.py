@@ -5,7 +5,7 @@
 gdc1 scenarios of their own seeds), then trains every (algorithm, size) into
 <root>/<algorithm>_<size>/ with the trainers' own defaults plus the given overrides. Each run is
 skipped when its folder holds a finished run of the same arguments, so an interrupted experiment
-resumes run by run. socialzoo.bench.lfd evaluates the policies and writes the table.
+resumes run by run. socialzoo.studies.lfd evaluates the policies and writes the table.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.lfd import LFD_ALGOS, LFD_SIZES, lfd_run_dir
+from socialzoo.studies.lfd import LFD_ALGOS, LFD_SIZES, lfd_run_dir
 from socialzoo.train import trainer_args, trainer_function
 
 logger = logging.getLogger(__name__)
@@ -104,7 +104,7 @@ def train_lfd(config: LfdTrainConfig) -> dict[tuple[str, int], Path]:
     """Record the demonstrations if needed, then train every (algorithm, size).
 
     Returns:
-        (algorithm, size) -> policy file, the mapping socialzoo.bench.lfd.run_lfd_evaluation takes.
+        (algorithm, size) -> policy file, the mapping socialzoo.studies.lfd.run_lfd_evaluation takes.
     """
     if not config.demos.exists():
         logger.info("lfd: recording %d Ref episodes into %s", config.demo_episodes, config.demos)

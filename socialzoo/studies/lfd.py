@@ -3,7 +3,7 @@
 fixed scenarios; a table of success % and average step reward beside the paper's.
 
 This module evaluates policy files and writes the table; the policies are trained by
-socialzoo.train.lfd into the folder layout below (`lfd_policy_file`). The evaluation scenarios are
+socialzoo.studies.lfd_training into the folder layout below (`lfd_policy_file`). The evaluation scenarios are
 the first `trials` of the gdc1 test set (base seed 20220001): they are only ever evaluated on,
 never used to train, tune or choose anything. Trials go to a results store as they finish, so an
 interrupted evaluation resumes and a repeated one is read back.

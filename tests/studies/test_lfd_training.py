@@ -3,8 +3,8 @@ recording, each skipped once finished."""
 
 import pytest
 
-from socialzoo.bench.lfd import find_lfd_policies, lfd_policy_file
-from socialzoo.train.lfd import LfdTrainConfig, train_lfd
+from socialzoo.studies.lfd import find_lfd_policies, lfd_policy_file
+from socialzoo.studies.lfd_training import LfdTrainConfig, train_lfd
 
 SMALL_BC = {"hidden": [16], "epochs": 1, "min_updates": 20, "batch_size": 64, "checkpoint_every": 20}
 

@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-import socialzoo.bench.rl_curves as rl
+import socialzoo.studies.rl_curves as rl
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.policy_file import current_env_version
 from socialzoo.bench.store import ResultsStore

@@ -9,7 +9,7 @@ import pytest
 
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.policy_file import current_env_version
-from socialzoo.bench.lfd import (
+from socialzoo.studies.lfd import (
     CSV_COLUMNS,
     PAPER_LFD,
     find_lfd_policies,

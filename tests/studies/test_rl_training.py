@@ -2,7 +2,7 @@
 
 import json
 
-from socialzoo.train.rl_experiment import train_curve_runs
+from socialzoo.studies.rl_training import train_curve_runs
 
 TINY = {"map": "open_room", "family": "circle_crossing", "max_steps": 100, "total_steps": 200}
 
@@ -26,7 +26,7 @@ def test_one_run_per_algorithm_with_checkpoints(tmp_path):
 
 def test_steps_to_reference_trains_evaluates_and_writes_the_answer(tmp_path, rooms_map_path):
     from socialzoo.nav.scenarios import ScenarioConfig, TestSet
-    from socialzoo.train.rl_experiment import steps_to_reference
+    from socialzoo.studies.rl_training import steps_to_reference
 
     validation = TestSet(
         str(rooms_map_path), 7, 3, ScenarioConfig(min_humans=1, max_humans=2), name="rooms-val"

@@ -6,7 +6,7 @@ without it (window 0: every step is an example).
 <root>/pips_<steps>_w<window>/pips.json (with its .train.json record: arguments, seed, synthesis
 time), all from one demonstration file recorded on training scenarios. A cell whose record holds
 the same arguments is not synthesised again, so an interrupted study resumes cell by cell.
-socialzoo.bench.pips_study evaluates the programs on validation scenarios and writes the table
+socialzoo.studies.pips_study evaluates the programs on validation scenarios and writes the table
 and the figure.
 """
 
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.pips_study import STUDY_STEPS, STUDY_WINDOWS, study_program_file
+from socialzoo.studies.pips_study import STUDY_STEPS, STUDY_WINDOWS, study_program_file
 from socialzoo.train.pips import PipsArgs, sidecar_path, train
 
 logger = logging.getLogger(__name__)
@@ -99,7 +99,7 @@ def train_pips_study(config: PipsStudyConfig) -> dict[tuple[int, int], Path]:
     """Synthesise every (steps, window) cell, skipping finished ones.
 
     Returns:
-        (steps, window) -> program file, the mapping socialzoo.bench.pips_study.run_pips_study
+        (steps, window) -> program file, the mapping socialzoo.studies.pips_study.run_pips_study
         takes.
 
     Raises:

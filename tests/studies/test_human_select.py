@@ -5,9 +5,9 @@ import json
 
 import pytest
 
-from socialzoo.bench.human_select import miss_score, run_checkpoints, select_humans
 from socialzoo.cli import main as socialzoo_main
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.studies.human_select import miss_score, run_checkpoints, select_humans
 
 
 def fake_run(tmp_path, write_walker, speeds):

@@ -2,9 +2,9 @@
 (500 / 1,000 / 3,500 / 10,000), with the paper's windowing around changes of action and without
 it, on validation scenarios.
 
-The programs are synthesised by socialzoo.train.pips_study into <root>/pips_<steps>_w<window>/
+The programs are synthesised by socialzoo.studies.pips_study_training into <root>/pips_<steps>_w<window>/
 (`study_program_file`). Each is evaluated on the first `trials` scenarios of the gdc1 validation
-set (socialzoo.bench.rl_curves.VALIDATION_SET: our own base seed, apart from the test sets and
+set (socialzoo.studies.rl_curves.VALIDATION_SET: our own base seed, apart from the test sets and
 the quick sets, which are never looked at here) through run_benchmark, so trials go to its store
 as they finish and an interrupted evaluation resumes. Writes pips_study.csv, pips_study.md (success
 with its 90% interval, the synthesis time and the program's size) and pips_study.png.
@@ -22,9 +22,9 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
-from socialzoo.bench.rl_curves import VALIDATION_SET
 from socialzoo.bench.tables import policy_label
 from socialzoo.nav.scenarios import TestSet
+from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
 
@@ -140,7 +140,7 @@ def run_pips_study(
 
     Args:
         programs: (demonstration steps, window) -> program file, e.g. from `find_study_programs`
-            or socialzoo.train.pips_study.train_pips_study.
+            or socialzoo.studies.pips_study_training.train_pips_study.
         out_dir: output folder: results.sqlite (every trial), pips_study.csv, pips_study.md,
             pips_study.png, config.json.
         trials: scenarios per program (the same first ones of `test_set` for every program).

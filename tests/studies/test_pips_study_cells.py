@@ -7,19 +7,26 @@ import json
 
 import pytest
 
-from socialzoo.bench.pips_study import (
+from socialzoo.nav.scenarios import TestSet, get_test_set
+from socialzoo.studies.pips_study import (
     CSV_COLUMNS,
     find_study_programs,
     program_record,
     run_pips_study,
     study_program_file,
 )
-from socialzoo.nav.scenarios import TestSet, get_test_set
-from socialzoo.train.pips_study import PipsStudyConfig, train_pips_study
+from socialzoo.studies.pips_study_training import PipsStudyConfig, train_pips_study
 
 pytest.importorskip("z3")
 
-TINY = {"max_depth": 0, "max_pred_size": 1, "pool": 4, "partners": 20, "solver": "exact", "heldout_steps": 200}
+TINY = {
+    "max_depth": 0,
+    "max_pred_size": 1,
+    "pool": 4,
+    "partners": 20,
+    "solver": "exact",
+    "heldout_steps": 200,
+}
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +66,9 @@ def test_study_synthesises_each_cell_once_and_tabulates_it(rooms_demos, rooms_ma
 
     validation = TestSet(str(rooms_map_path), 4242, 3, name="rooms-val")
     out = tmp_path / "eval"
-    kwargs = dict(trials=2, test_set=validation, batch_size=4, env_overrides={"max_steps": 40}, progress=False)
+    kwargs = dict(
+        trials=2, test_set=validation, batch_size=4, env_overrides={"max_steps": 40}, progress=False
+    )
     result = run_pips_study(files, out, **kwargs)
     assert result.computed == 10 and result.reused == 0  # 4 programs and Ref, 2 scenarios each
     ((ref,),) = (result.baselines,)

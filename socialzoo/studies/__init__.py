@@ -1,0 +1,21 @@
+"""Studies: single experiments composed from the harness (socialzoo.bench) and the trainers
+(socialzoo.train), each with its own tables and figures; `socialzoo reproduce` and the command
+line call them.
+
+Modules, imported where used (`from socialzoo.studies.lfd import run_lfd_evaluation`):
+
+- `rl_curves`: every checkpoint of the PPO and DQN runs evaluated, the data-efficiency curves,
+  and the steps PPO needs to match Ref (`steps_to_match`).
+- `rl_training`: the runs those curves evaluate, and `steps_to_reference` (`socialzoo steps-to-ref`).
+- `lfd`, `lfd_training`: BC and GAIL at each demonstration size (and PIPS): the runs, their
+  evaluation and the LfD table.
+- `pips_study`, `pips_study_training`: PIPS over training-set sizes and windows, on validation
+  scenarios.
+- `human_compare`: a learned human population against the social-force one (`socialzoo
+  compare-humans`); `human_select`: the checkpoint of a humans run chosen on validation
+  scenarios (`socialzoo select-humans`).
+
+A new study is one module here (a frozen config dataclass, a function that runs it resumably into
+a folder, and its table or figure writers); a study's training half may sit beside it as
+`<study>_training.py`.
+"""
