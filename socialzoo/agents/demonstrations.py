@@ -10,6 +10,8 @@ socialzoo.bench.demonstrations.
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +24,15 @@ TRANSITION_KEYS = ("obs", "action", "next_obs", "reward", "terminated", "truncat
 EPISODE_KEYS = ("episode_ids", "episode_seeds", "episode_lengths")
 
 
+# What numpy and zipfile raise for a file that is not a whole, pickle-free .npz: EOFError (an empty
+# or cut .npy), BadZipFile (a cut or foreign zip), zlib.error (damaged compressed data), ValueError
+# (pickled objects refused, a bad .npy header), OSError (unreadable), KeyError (a missing array).
+_NPZ_ERRORS = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error)
+
+
 class DemonstrationError(Exception):
-    """A recording that cannot be resumed or read: another config, or damaged files."""
+    """A recording that cannot be resumed or read: another config, or damaged files (random
+    bytes, a truncated file, a file of another kind); the message names the file."""
 
 
 def parts_dir(path: str | Path) -> Path:
@@ -42,31 +51,92 @@ def read_parts(parts: Path) -> dict[str, np.ndarray]:
         Arrays keyed by TRANSITION_KEYS and EPISODE_KEYS, as in load_demonstrations.
 
     Raises:
-        DemonstrationError: no index.json, no finished chunk, or an unreadable chunk.
+        DemonstrationError: no index.json, an unreadable index.json, no finished chunk, or an
+            unreadable chunk (naming the file).
+    """
+    index = read_index(parts)
+    chunks = [_read_arrays(parts / name, "demonstration chunk") for name in sorted(index["chunks"])]
+    if not chunks:
+        raise DemonstrationError(f"{parts}: no finished chunk yet")
+    return _concatenated(chunks, parts)
+
+
+def read_index(parts: Path) -> dict[str, Any]:
+    """The index.json of a recording in progress: {"metadata": {...}, "chunks": {name: {...}}}.
+
+    Raises:
+        DemonstrationError: no index.json, or one that is not such an object (naming the file).
     """
     index_path = parts / "index.json"
     if not index_path.exists():
         raise DemonstrationError(f"{parts}: no index.json; not a demonstration recording")
-    index = json.loads(index_path.read_text())
-    chunks = []
-    for name in sorted(index["chunks"]):
+    try:
+        index = json.loads(index_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as err:  # UnicodeDecodeError and JSONDecodeError too
+        raise DemonstrationError(f"{index_path}: unreadable recording index ({err})") from None
+    if (
+        not isinstance(index, dict)
+        or not isinstance(index.get("metadata"), dict)
+        or not isinstance(index.get("chunks"), dict)
+    ):
+        raise DemonstrationError(
+            f"{index_path}: not a recording index (an object with 'metadata' and 'chunks' objects)"
+        )
+    return index
+
+
+def _open_npz(path: Path, what: str) -> np.lib.npyio.NpzFile:
+    """`path` opened as a pickle-free .npz archive."""
+    try:
+        data = np.load(path, allow_pickle=False)
+    except _NPZ_ERRORS as err:
+        raise DemonstrationError(f"{path}: not a readable {what} ({type(err).__name__}: {err})") from None
+    if not isinstance(data, np.lib.npyio.NpzFile):
+        raise DemonstrationError(f"{path}: a single .npy array, not a {what} (a .npz archive)")
+    return data
+
+
+def _read_arrays(path: Path, what: str) -> dict[str, np.ndarray]:
+    """The TRANSITION_KEYS and EPISODE_KEYS arrays of one .npz file, checked to agree in length."""
+    with _open_npz(path, what) as f:
         try:
-            with np.load(parts / name, allow_pickle=False) as f:
-                chunks.append({k: f[k] for k in (*TRANSITION_KEYS, *EPISODE_KEYS)})
-        except (OSError, ValueError, KeyError) as err:
-            raise DemonstrationError(f"{parts / name}: unreadable demonstration chunk ({err})") from None
-    if not chunks:
-        raise DemonstrationError(f"{parts}: no finished chunk yet")
-    return {k: np.concatenate([c[k] for c in chunks]) for k in (*TRANSITION_KEYS, *EPISODE_KEYS)}
+            arrays = {k: f[k] for k in (*TRANSITION_KEYS, *EPISODE_KEYS)}
+        except _NPZ_ERRORS as err:
+            raise DemonstrationError(f"{path}: unreadable {what} ({type(err).__name__}: {err})") from None
+    steps = {len(arrays[k]) if arrays[k].ndim else -1 for k in TRANSITION_KEYS}
+    episodes = {len(arrays[k]) if arrays[k].ndim else -1 for k in EPISODE_KEYS}
+    if len(steps) != 1 or len(episodes) != 1 or -1 in steps | episodes:
+        raise DemonstrationError(f"{path}: {what} arrays of different lengths; a damaged file")
+    return arrays
+
+
+def _concatenated(chunks: list[dict[str, np.ndarray]], where: Path) -> dict[str, np.ndarray]:
+    try:
+        return {k: np.concatenate([c[k] for c in chunks]) for k in (*TRANSITION_KEYS, *EPISODE_KEYS)}
+    except ValueError as err:  # chunks of another observation width
+        raise DemonstrationError(f"{where}: chunks that do not fit together ({err})") from None
 
 
 def read_metadata(path: str | Path) -> dict[str, Any]:
-    """The metadata dict of a demonstration file."""
-    try:
-        with np.load(path, allow_pickle=False) as f:
-            return json.loads(str(f["metadata"]))
-    except (OSError, ValueError, KeyError) as err:
-        raise DemonstrationError(f"{path}: not a socialzoo demonstration file ({err})") from None
+    """The metadata dict of a demonstration file.
+
+    Raises:
+        DemonstrationError: no such file, or not a socialzoo demonstration file (random bytes, a
+            truncated file, a file of another kind); the message names the file.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DemonstrationError(f"{path}: no such demonstration file")
+    with _open_npz(path, "socialzoo demonstration file") as f:
+        try:
+            meta = json.loads(str(f["metadata"]))
+        except (*_NPZ_ERRORS, RecursionError) as err:  # RecursionError: JSON nested past Python's limit
+            raise DemonstrationError(
+                f"{path}: not a socialzoo demonstration file ({type(err).__name__}: {err})"
+            ) from None
+    if not isinstance(meta, dict):
+        raise DemonstrationError(f"{path}: not a socialzoo demonstration file (metadata is not an object)")
+    return meta
 
 
 def load_demonstrations(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -80,15 +150,15 @@ def load_demonstrations(path: str | Path) -> tuple[dict[str, np.ndarray], dict[s
         config, seeds, package version, observation and action names).
 
     Raises:
-        DemonstrationError: neither the file nor its parts are readable.
+        DemonstrationError: neither the file nor its parts exist, or they are not readable (random
+            bytes, a truncated file, a file of another kind); the message names the file.
     """
     path = Path(path)
     if path.exists():
         meta = read_metadata(path)
-        with np.load(path, allow_pickle=False) as f:
-            return {k: f[k] for k in (*TRANSITION_KEYS, *EPISODE_KEYS)}, meta
+        return _read_arrays(path, "demonstration file"), meta
     parts = parts_dir(path)
     if not parts.exists():
         raise DemonstrationError(f"{path}: no such demonstration file (nor {parts})")
     arrays = read_parts(parts)
-    return arrays, json.loads((parts / "index.json").read_text())["metadata"]
+    return arrays, read_index(parts)["metadata"]

@@ -199,7 +199,8 @@ class LearnedHumanPolicy:
         """The policy saved at `path`.
 
         Raises:
-            PolicyFileError: not a learned human policy file, or an inconsistent one (naming it).
+            PolicyFileError: not a learned human policy file, or an inconsistent one (naming it):
+                random bytes, a truncated file and a file of another kind included.
         """
         tensors, header = read_policy_file(path)
         try:
@@ -208,6 +209,8 @@ class LearnedHumanPolicy:
                     f"a {header['policy']!r} policy, not a learned human policy ({POLICY_NAME!r})"
                 )
             network, observation = header["network"], header["observation"]
+            if not (isinstance(network, dict) and isinstance(observation, dict)):
+                raise ValueError("the header's network and observation must be objects")
             if network.get("kind") != "mlp" or network.get("output") != "tanh_mean":
                 raise ValueError(f"network {network!r} is not an mlp giving tanh means")
             sizes = [int(s) for s in network["sizes"]]

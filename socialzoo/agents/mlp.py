@@ -192,10 +192,17 @@ class MlpPolicy:
 
     @classmethod
     def load(cls, path: str | Path) -> MlpPolicy:
-        """The policy saved at `path` (see socialzoo.agents.policy_file for the checks)."""
+        """The policy saved at `path` (see socialzoo.agents.policy_file for the checks).
+
+        Raises:
+            PolicyFileError: not a policy file, or not an MLP policy, or an inconsistent one (naming
+                the file): random bytes, a truncated file and a file of another kind included.
+        """
         tensors, header = read_policy_file(path)
         network = header["network"]
         try:
+            if not isinstance(network, dict):
+                raise ValueError(f"the header's network is a {type(network).__name__}, not an object")
             if network.get("kind") != "mlp":
                 raise ValueError(f"network kind {network.get('kind')!r} is not 'mlp'")
             if network.get("output") not in OUTPUTS:

@@ -31,6 +31,8 @@ from socialzoo.agents.pips_features import (
     atom_values,
     paper_parts,
 )
+from socialzoo.agents.policy_file import PolicyFileError
+from socialzoo.core.files import read_json
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 if TYPE_CHECKING:
@@ -50,6 +52,14 @@ _TINY = 1e-6
 
 class ProgramError(ValueError):
     """A PIPS program (or its JSON) that is malformed: the message names the bad node or field."""
+
+
+class ProgramFileError(ProgramError, PolicyFileError):
+    """A PIPS program file that cannot be used: unreadable, not JSON, or not a valid program.
+
+    Both a ProgramError and a PolicyFileError, so `make_policy("pips:FILE")` fails on a bad file
+    as every other learned policy does; the message starts with the file.
+    """
 
 
 # ------------------------------------------------------------------------------------ expressions
@@ -341,6 +351,8 @@ def _fields(node: Any, where: str, required: set[str]) -> dict[str, Any]:
 def _expr_from_json(node: Any, where: str) -> Expr:
     if isinstance(node, dict) and "feature" in node:
         name = _fields(node, where, {"feature"})["feature"]
+        if not isinstance(name, str):
+            raise ProgramError(f"{where}: a feature is named by a string, got {name!r}")
         try:
             atom_spec(name)
         except KeyError as err:
@@ -375,7 +387,10 @@ def _predicate_from_json(node: Any, where: str) -> Predicate:
             or not math.isfinite(threshold)
         ):
             raise ProgramError(f"{where}: threshold must be a finite number, got {threshold!r}")
-        unit = Unit.parse(node["unit"]) if isinstance(node["unit"], str) else None
+        try:
+            unit = Unit.parse(node["unit"]) if isinstance(node["unit"], str) else None
+        except UnitError as err:
+            raise UnitError(f"{where}: {err}") from None
         if unit != expr_unit(expr):
             raise UnitError(
                 f"{where}: unit {node['unit']!r} does not match {expr_str(expr)}'s unit {str(expr_unit(expr))!r}"
@@ -439,14 +454,17 @@ def load_program(path: str | Path) -> Program:
     """Read and check a program file.
 
     Raises:
-        ProgramError, UnitError: a malformed program (the message names the file).
+        ProgramFileError: (a ProgramError and a PolicyFileError) no such file, a file that is not
+            UTF-8 JSON (random bytes, a truncated file, a file of another kind) or not a valid
+            program, a unit error in it included; the message names the file and the bad node.
     """
     path = Path(path)
+    data = read_json(path, "PIPS program file", ProgramFileError, missing=ProgramFileError)
     try:
-        data = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as err:
-        raise ProgramError(f"{path}: not a readable JSON file ({err})") from None
-    return program_from_json(data, str(path))
+        return program_from_json(data, str(path))
+    except (ProgramError, UnitError) as err:
+        text = str(err)
+        raise ProgramFileError(text if text.startswith(str(path)) else f"{path}: {text}") from None
 
 
 def shipped_program_path() -> Path:
@@ -469,7 +487,11 @@ class PipsPolicy:
 
     @classmethod
     def load(cls, path: str | Path) -> PipsPolicy:
-        """The policy running the program saved at `path`."""
+        """The policy running the program saved at `path`.
+
+        Raises:
+            ProgramFileError: no such file, or not a valid program file (see `load_program`).
+        """
         return cls(load_program(path))
 
     def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:

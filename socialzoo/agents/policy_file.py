@@ -23,8 +23,12 @@ HEADER_KEY = "socialzoo"
 REQUIRED_KEYS = ("format", "policy", "network", "observation", "env_id", "training")
 
 
-class PolicyFileError(Exception):
-    """A policy file that cannot be used: unreadable, not a socialzoo policy, or made for another env."""
+class PolicyFileError(ValueError):
+    """A policy file that cannot be used: unreadable, not a socialzoo policy, or made for another env.
+
+    A ValueError, as every loader's error is, so callers that refuse bad arguments with
+    `except ValueError` refuse a bad policy file the same way; the message starts with the file.
+    """
 
 
 def env_version(env_id: str) -> int:

@@ -75,8 +75,9 @@ class ResultsStore:
     time and one column per metric; unique on (policy, test set, scenario index, config hash)).
 
     A new (or empty) file is created with the schema. An existing file must be a store of this
-    format and schema version; anything else raises StoreError naming the file, and the file is
-    left untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
+    format and schema version; anything else (random bytes, a truncated or otherwise corrupted
+    database, a file of another kind) raises StoreError naming the file, and the file is left
+    untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
     loses at most the trials it had not handed over yet.
 
     Several processes (two benchmark runs on the same output directory, say) may open and write
@@ -102,6 +103,7 @@ class ResultsStore:
             self._db = sqlite3.connect(self.path, timeout=timeout)
         except sqlite3.Error as err:
             raise StoreError(f"{self.path}: cannot open the results store: {err}") from None
+        self._kinds: dict[str, str] = {}
         try:
             if not self._tables():
                 with self._write():
@@ -111,6 +113,7 @@ class ResultsStore:
                         self._create()
             self._check_store()
             self._use_wal()
+            self._refresh_kinds()
         except sqlite3.DatabaseError as err:
             self._db.close()
             raise StoreError(
@@ -119,16 +122,32 @@ class ResultsStore:
         except StoreError:
             self._db.close()
             raise
-        self._kinds: dict[str, str] = json.loads(self._meta("metric_kinds") or "{}")
 
     # ------------------------------------------------------------------ opening
     def _check_header(self) -> None:
         with self.path.open("rb") as f:
-            head = f.read(len(_SQLITE_MAGIC))
-        if head != _SQLITE_MAGIC:
+            head = f.read(100)  # the SQLite file header
+        if head[: len(_SQLITE_MAGIC)] != _SQLITE_MAGIC:
             raise StoreError(
                 f"{self.path} is not a socialzoo results store (not an SQLite database); "
                 "refusing to use or overwrite it: choose another output directory"
+            )
+        # SQLite reads a page cut short as zeros and keeps no checksums, so a file cut inside its
+        # last page can open without complaint with rows silently changed: a database file is a
+        # whole number of pages. Not checked while a journal is beside it (another process has the
+        # file open, or recovery may still mend it): SQLite checks it then.
+        journals = [self.path.with_name(self.path.name + suffix) for suffix in ("-wal", "-journal")]
+        if any(j.exists() for j in journals):
+            return
+        page = int.from_bytes(head[16:18], "big")
+        page = 65536 if page == 1 else page  # how SQLite writes its largest page size
+        if len(head) < 100 or page < 512 or page & (page - 1):
+            raise StoreError(f"{self.path}: corrupted results store (a damaged SQLite header); left as it is")
+        size = self.path.stat().st_size
+        if size % page:
+            raise StoreError(
+                f"{self.path}: corrupted results store (truncated: {size} bytes is not a whole number of "
+                f"{page}-byte pages); left as it is"
             )
 
     def _tables(self) -> set[str]:
@@ -220,7 +239,17 @@ class ResultsStore:
 
     def _refresh_kinds(self) -> None:
         """Read the metric columns again: another process may have added some."""
-        self._kinds = json.loads(self._meta("metric_kinds") or "{}")
+        kinds = self._json(self._meta("metric_kinds") or "{}", "meta.metric_kinds")
+        if not isinstance(kinds, dict) or not all(k in _SQL_TYPE for k in kinds.values()):
+            raise StoreError(f"{self.path}: corrupted results store (meta.metric_kinds is {kinds!r})")
+        self._kinds = kinds
+
+    def _json(self, text: str, where: str) -> Any:
+        """A JSON value stored in the file; StoreError naming the file and entry if it is damaged."""
+        try:
+            return json.loads(text)
+        except (ValueError, RecursionError) as err:  # JSONDecodeError, or nesting past Python's limit
+            raise StoreError(f"{self.path}: corrupted results store ({where} is not JSON: {err})") from None
 
     # ------------------------------------------------------------------ context
     def close(self) -> None:
@@ -256,7 +285,7 @@ class ResultsStore:
         row = self._db.execute(
             "SELECT config_json FROM configs WHERE config_hash = ?", (config_hash,)
         ).fetchone()
-        return None if row is None else json.loads(row[0])
+        return None if row is None else self._json(row[0], f"the config of {config_hash}")
 
     # ------------------------------------------------------------------ trials
     def stored_indices(self, policy: str, test_set: str, config_hash: str) -> set[int]:

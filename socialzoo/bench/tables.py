@@ -25,6 +25,7 @@ from socialzoo.bench.stats import (
     mean_interval,
     rate_interval,
 )
+from socialzoo.core.files import read_text
 
 # Metrics of the tables: (column, description). time_to_goal is averaged over successful
 # episodes only (the paper's figure); every other metric over all episodes with a finite value.
@@ -213,20 +214,50 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return path
 
 
+class SummaryError(ValueError):
+    """A summary.csv that cannot be read back: not UTF-8 CSV, without the summary's key columns,
+    or with a row of the wrong width or a cell that is not a number; the message names the file."""
+
+
+# Columns without which a CSV is not a summary (older files may lack some metric columns).
+SUMMARY_KEY_COLUMNS = ("policy", "map", "test_set", "trials")
+
+
 def read_summary_csv(path: str | Path) -> list[dict[str, Any]]:
-    """Read summary.csv back (numbers as float or int, empty cells as NaN)."""
+    """Read summary.csv back (numbers as float or int, empty cells as NaN).
+
+    Raises:
+        FileNotFoundError: no such file.
+        SummaryError: not a summary CSV (random bytes, a file of another kind, a row cut short);
+            the message names the file and the line.
+    """
+    path = Path(path)
+    text = read_text(path, "summary CSV", SummaryError)
+    reader = csv.DictReader(io.StringIO(text, newline=""))
     out = []
-    with Path(path).open(newline="") as f:
-        for raw in csv.DictReader(f):
+    try:
+        header = reader.fieldnames or []
+        missing = [c for c in SUMMARY_KEY_COLUMNS if c not in header]
+        if missing:
+            raise SummaryError(f"{path}: not a summary CSV (no column {', '.join(missing)} in its header)")
+        for raw in reader:
+            where = f"{path}:{reader.line_num}"
+            if None in raw or None in raw.values():  # DictReader's marks of too many or too few cells
+                raise SummaryError(f"{where}: the row's cells do not match the {len(header)} columns")
             entry: dict[str, Any] = {}
-            for key, text in raw.items():
-                if key in ("policy", "map", "test_set"):
-                    entry[key] = text
-                elif key == "trials" or key.endswith("_n"):
-                    entry[key] = int(text)
-                else:
-                    entry[key] = float(text) if text != "" else math.nan
+            for key, cell in raw.items():
+                try:
+                    if key in ("policy", "map", "test_set"):
+                        entry[key] = cell
+                    elif key == "trials" or key.endswith("_n"):
+                        entry[key] = int(cell)
+                    else:
+                        entry[key] = float(cell) if cell != "" else math.nan
+                except ValueError:
+                    raise SummaryError(f"{where}: {key} is {cell!r}, not a number") from None
             out.append(entry)
+    except csv.Error as err:  # a NUL byte or a quote left open
+        raise SummaryError(f"{path}:{reader.line_num}: not a summary CSV ({err})") from None
     return out
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, TestSet, generate_scenario
+from socialzoo.nav.scenarios import Scenario, ScenarioConfig, ScenarioError, TestSet, generate_scenario
 
 logger = logging.getLogger(__name__)
 
@@ -31,6 +31,13 @@ CUSTOM_QUICK_SEED = 20220101
 # Scenarios in a generated test set, as in the registered ones.
 CUSTOM_TEST_SIZE = 2000
 CUSTOM_QUICK_SIZE = 100
+
+
+class TestSetError(ValueError):
+    """A stored test set file that cannot be used: unreadable, of another kind, or made on another
+    version of the map; the message names the file."""
+
+    __test__ = False  # not a pytest test class, despite its name
 
 
 def map_sha256(m: Map) -> str:
@@ -71,8 +78,10 @@ def stored_test_set(
         workers load the same map.
 
     Raises:
-        ValueError: the stored file belongs to another version of the map (its hash differs), or
-            is not a test set file, or trials exceeds the set's size.
+        TestSetError: (a ValueError) the stored file belongs to another version of the map (its
+            hash differs), or is not a test set file (random bytes, a truncated file or a file of
+            another kind included); the message names the file.
+        ValueError: trials exceeds the set's size.
         FileNotFoundError, MapError: the map cannot be loaded.
     """
     m = load_map(map_ref)
@@ -100,23 +109,29 @@ def stored_test_set(
 
 def _read(path: Path, digest: str, base: TestSet) -> list[Scenario]:
     try:
-        data = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as err:
-        raise ValueError(f"{path}: not a readable test set file ({err})") from None
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as err:  # UnicodeDecodeError and JSONDecodeError too
+        raise TestSetError(f"{path}: not a readable test set file ({err})") from None
     if not isinstance(data, dict) or data.get("format") != TEST_SET_FORMAT:
-        raise ValueError(f"{path}: not a {TEST_SET_FORMAT} file")
+        raise TestSetError(f"{path}: not a {TEST_SET_FORMAT} file")
     if data.get("map_sha256") != digest:
-        raise ValueError(
+        raise TestSetError(
             f"{path}: this test set was generated on map {data.get('map')!r} with sha256 "
             f"{str(data.get('map_sha256'))[:12]}..., but the map now has sha256 {digest[:12]}...: results "
             "would not be comparable; use another --out directory (or delete the file to start afresh)"
         )
     if data.get("base_seed") != base.base_seed or data.get("scenario") != dataclasses.asdict(base.cfg):
-        raise ValueError(
+        raise TestSetError(
             f"{path}: stored with base seed {data.get('base_seed')} and scenario settings "
             f"{data.get('scenario')}, which differ from this version's; use another --out directory"
         )
-    return [Scenario.from_json(s) for s in data.get("scenarios", [])]
+    stored = data.get("scenarios", [])
+    if not isinstance(stored, list):
+        raise TestSetError(f"{path}: 'scenarios' must be a list, got {type(stored).__name__}")
+    try:
+        return [Scenario.from_json(s, f"{path}: scenarios[{k}]") for k, s in enumerate(stored)]
+    except ScenarioError as err:
+        raise TestSetError(str(err)) from None
 
 
 def _write(path: Path, base: TestSet, m: Map, digest: str, scenarios: list[Scenario]) -> None:

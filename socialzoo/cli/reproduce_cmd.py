@@ -7,6 +7,8 @@ import argparse
 import sys
 from typing import Any
 
+from socialzoo.cli import command_help
+
 
 def register(subparsers: Any) -> None:
     """Add `reproduce`."""
@@ -14,7 +16,7 @@ def register(subparsers: Any) -> None:
 
     parser = subparsers.add_parser(
         "reproduce",
-        help="regenerate every table and figure of the paper (resumable), with REPRODUCTION.md",
+        help=command_help("reproduce"),
         description="Run the paper's protocol: Ref demonstrations, PPO/DQN curves, the LfD table, "
         "performance on gdc1-test and transfer on ghc3-test for the seven policies. Every item is "
         "stored as it finishes under DIR/<settings hash>/; a rerun continues where it stopped.",
@@ -51,7 +53,7 @@ def _interrupt_on_signals() -> None:
 
 def run_reproduce_command(args: argparse.Namespace) -> int:
     """Run `socialzoo reproduce`; returns the exit status (2 for bad arguments or mixed settings)."""
-    from socialzoo.reproduce.ledger import SettingsMismatch
+    from socialzoo.reproduce.ledger import LedgerError
     from socialzoo.reproduce.plan import full_settings, parse_parts, quick_settings
     from socialzoo.reproduce.run import reproduce
 
@@ -75,7 +77,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             on_part=report,
         )
-    except SettingsMismatch as err:
+    except LedgerError as err:  # mixed settings, an unreadable settings or timings file
         print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
         return 2
     print(f"socialzoo reproduce: items in {result.work_dir}; report {result.report}")

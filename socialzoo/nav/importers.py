@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.files import read_text
 from socialzoo.core.validation import check_number
 from socialzoo.nav.maps import MapError
 
@@ -31,12 +32,7 @@ _SEPARATORS = re.compile(r"[,\s]+")
 
 
 def _read_text(path: str | os.PathLike[str]) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{os.fspath(path)}: no such file") from None
-    except UnicodeDecodeError as err:
-        raise MapError(f"{os.fspath(path)}: not UTF-8 text ({err.reason} at byte {err.start})") from None
+    return read_text(path, "building file", MapError)
 
 
 def read_table(path: str | os.PathLike[str], width: int, names: str) -> np.ndarray:
@@ -53,8 +49,9 @@ def read_table(path: str | os.PathLike[str], width: int, names: str) -> np.ndarr
         float array (n, width), in file order.
 
     Raises:
-        MapError: a line with the wrong count of numbers, a word that is not a number, or a NaN or
-            infinite value; the message names the file and line.
+        FileNotFoundError: no such file.
+        MapError: a file that is not UTF-8 text, a line with the wrong count of numbers, a word that
+            is not a number, or a NaN or infinite value; the message names the file and line.
     """
     where = os.fspath(path)
     rows: list[list[float]] = []
@@ -94,9 +91,14 @@ def read_vector_map(path: str | os.PathLike[str]) -> np.ndarray:
         walls (W, 4).
 
     Raises:
-        MapError: a malformed line (the message names the file and line).
+        FileNotFoundError: no such file.
+        MapError: a file that is not UTF-8 text, a malformed line (the message names the file and
+            line), or a file without any segment (an empty file: a wall map has walls).
     """
-    return drop_zero_length(read_table(path, 4, "x1, y1, x2, y2"), os.fspath(path))
+    walls = read_table(path, 4, "x1, y1, x2, y2")
+    if len(walls) == 0:
+        raise MapError(f"{os.fspath(path)}: no wall segments; not a vector map (x1, y1, x2, y2 per line)")
+    return drop_zero_length(walls, os.fspath(path))
 
 
 def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -110,14 +112,19 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
         (nodes, edges): (N, 2) positions, m, and (E, 2) node index pairs.
 
     Raises:
-        MapError: invalid JSON (with its line and column), a missing key, a repeated node id, an
-            edge naming an unknown node or joining a node to itself.
+        FileNotFoundError: no such file.
+        MapError: not UTF-8 text, invalid JSON (with its line and column), a missing key, a node id
+            that is not a string or an integer, a repeated node id, an edge naming an unknown node
+            or joining a node to itself; the message names the file.
     """
     where = os.fspath(path)
+    text = _read_text(path)
     try:
-        data = json.loads(_read_text(path))
+        data = json.loads(text)
     except json.JSONDecodeError as err:
         raise MapError(f"{where}: invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
+    except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
+        raise MapError(f"{where}: invalid JSON: {err}") from None
     if not isinstance(data, dict) or not isinstance(data.get("nodes"), list):
         raise MapError(f"{where}: expected an object with a 'nodes' list (and an 'edges' list)")
     raw_edges = data.get("edges", [])
@@ -129,6 +136,8 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
         entry = f"{where}: nodes[{k}]"
         if not isinstance(node, dict) or "id" not in node or not isinstance(node.get("loc"), dict):
             raise MapError(f"{entry}: expected {{'id': .., 'loc': {{'x': .., 'y': ..}}}}, got {node!r}")
+        if not isinstance(node["id"], (str, int)):
+            raise MapError(f"{entry}: a node id is a string or an integer, got {node['id']!r}")
         if node["id"] in index_of:
             raise MapError(f"{entry}: node id {node['id']!r} repeats nodes[{index_of[node['id']]}]")
         loc = node["loc"]
@@ -143,7 +152,7 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
             raise MapError(f"{entry}: expected {{'s0_id': .., 's1_id': ..}}, got {edge!r}")
         ends = []
         for key in ("s0_id", "s1_id"):
-            if edge[key] not in index_of:
+            if not isinstance(edge[key], (str, int)) or edge[key] not in index_of:
                 raise MapError(f"{entry}: {key} {edge[key]!r} is not a node id")
             ends.append(index_of[edge[key]])
         if ends[0] == ends[1]:
@@ -206,8 +215,10 @@ def read_pedsim_scene(path: str | os.PathLike[str]) -> PedsimScene:
     depth; agents and other elements are ignored.
 
     Raises:
-        MapError: malformed XML, or an obstacle or waypoint with a missing or non-numeric attribute;
-            the message names the file and line.
+        FileNotFoundError: no such file.
+        MapError: not UTF-8 text, malformed XML (an empty or truncated file included), an XML file
+            without any obstacle or waypoint, or an obstacle or waypoint with a missing or
+            non-numeric attribute; the message names the file and line.
     """
     where = os.fspath(path)
     tracker = _LineTracker()
@@ -238,6 +249,10 @@ def read_pedsim_scene(path: str | os.PathLike[str]) -> PedsimScene:
 
     walls = [[number(o, k) for k in ("x1", "y1", "x2", "y2")] for o in root.iter("obstacle")]
     waypoints = list(root.iter("waypoint"))
+    if not walls and not waypoints:
+        raise MapError(
+            f"{where}: no <obstacle> or <waypoint> elements; not a pedsim scene (root <{root.tag}>)"
+        )
     nodes = [[number(w, "x"), number(w, "y")] for w in waypoints]
     return PedsimScene(
         walls=drop_zero_length(np.array(walls, dtype=np.float64).reshape(len(walls), 4), where),

@@ -17,7 +17,8 @@ File format ("socialzoo-map/1"), all coordinates in metres, world frame:
 
 Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps; load
 them by name with load_map("gdc1"), or load any file with load_map("path/to/map.json"). Every
-loaded map is checked by validate_map (see its docstring for the rules and clearances).
+loaded map is checked by validate_map (see its docstring for the rules and clearances). A file that
+is not such a map (random bytes, a truncated copy, another kind of file) raises MapError naming it.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.files import read_text
 from socialzoo.core.geometry import closest_point_on_segment, segments_intersect
 from socialzoo.core.walls import WallIndex
 
@@ -222,6 +224,8 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
             data = json.loads(data)
         except json.JSONDecodeError as err:
             raise _fail(where, f"invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
+        except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
+            raise _fail(where, f"invalid JSON: {err}") from None
     if not isinstance(data, dict):
         raise _fail(where, f"expected a JSON object at the top level, got {type(data).__name__}")
     if "format" not in data:
@@ -279,16 +283,11 @@ def read_map(path: str | os.PathLike[str], validate: bool = True) -> Map:
 
     Raises:
         FileNotFoundError: no such file.
-        MapError: the file is not a valid map; the message names the file and the entry.
+        MapError: the file is not a valid map (random bytes, a truncated file or a file of another
+            kind included); the message names the file and the entry.
     """
     where = os.fspath(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{where}: no such map file") from None
-    except UnicodeDecodeError as err:
-        raise _fail(where, f"not UTF-8 text ({err.reason} at byte {err.start})") from None
-    m = map_from_json(text, where)
+    m = map_from_json(read_text(path, "map file", MapError), where)
     if validate:
         validate_map(m)
     return m

@@ -17,6 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from socialzoo.core.files import read_json
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.core.walls import WallIndex
@@ -33,6 +34,10 @@ from socialzoo.nav.maps import Map
 SCENARIO_FORMAT = "socialzoo-scenario/1"
 # Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).
 _NOISE_STREAM = 0x6E6F697365  # "noise"
+
+
+class ScenarioError(ValueError):
+    """A scenario file or scenario JSON that cannot be read: the message names the file and field."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -215,10 +220,23 @@ class Scenario:
         }
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> Scenario:
-        """Inverse of `to_json`; raises ValueError naming a missing key or a wrong format."""
+    def from_json(cls, data: dict[str, Any], where: str = "scenario JSON") -> Scenario:
+        """Inverse of `to_json`.
+
+        Args:
+            data: the parsed JSON object.
+            where: how error messages name the source, usually the file path.
+
+        Raises:
+            ScenarioError: not a JSON object, a wrong format, a missing key, or a value of the wrong
+                type or shape (the message starts with `where` and names the key or field).
+        """
+        if not isinstance(data, dict):
+            raise ScenarioError(f"{where}: expected a JSON object, got {type(data).__name__}")
         if data.get("format") != SCENARIO_FORMAT:
-            raise ValueError(f"scenario format must be {SCENARIO_FORMAT!r}, got {data.get('format')!r}")
+            raise ScenarioError(
+                f"{where}: scenario format must be {SCENARIO_FORMAT!r}, got {data.get('format')!r}"
+            )
         try:
             return cls(
                 map_name=data["map_name"],
@@ -235,7 +253,9 @@ class Scenario:
                 human_speed=data["human_speed"],
             )
         except KeyError as err:
-            raise ValueError(f"scenario JSON lacks key {err.args[0]!r}") from None
+            raise ScenarioError(f"{where}: scenario JSON lacks key {err.args[0]!r}") from None
+        except (TypeError, ValueError) as err:  # a value of the wrong type or shape, named by __post_init__
+            raise ScenarioError(f"{where}: {err}") from None
 
     def save(self, path: str | Path) -> Path:
         """Write the scenario as JSON; returns the path."""
@@ -245,8 +265,14 @@ class Scenario:
 
     @classmethod
     def load(cls, path: str | Path) -> Scenario:
-        """Read a scenario written by `save`."""
-        return cls.from_json(json.loads(Path(path).read_text()))
+        """Read a scenario written by `save`.
+
+        Raises:
+            FileNotFoundError: no such file.
+            ScenarioError: not a scenario file (random bytes, a truncated file or a file of another
+                kind included); the message names the file.
+        """
+        return cls.from_json(read_json(path, "scenario file", ScenarioError), str(path))
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

@@ -21,6 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.files import read_json
 from socialzoo.reproduce.plan import Settings, settings_hash
 
 logger = logging.getLogger(__name__)
@@ -29,8 +30,19 @@ SETTINGS_FILE = "settings.json"
 TIMINGS_FILE = "timings.json"
 
 
-class SettingsMismatch(Exception):
-    """A work folder that holds items of other settings."""
+class LedgerError(ValueError):
+    """A work folder's record (settings.json, timings.json) that cannot be read: not UTF-8 JSON,
+    cut short, or of another kind; the message names the file."""
+
+
+class SettingsMismatch(LedgerError):
+    """A work folder that holds items of other settings (or whose settings.json is unreadable, so
+    that whose items they are cannot be told)."""
+
+
+def _read_json(file: Path, what: str, error: type[LedgerError]) -> dict[str, Any]:
+    """The JSON object in `file`; `error` naming the file if it is not one."""
+    return read_json(file, what, error, kind=dict)
 
 
 def _write_json(path: Path, data: Any) -> None:
@@ -57,7 +69,8 @@ class Ledger:
         settings: the settings.
 
     Raises:
-        SettingsMismatch: DIR/<hash>/settings.json records other settings.
+        SettingsMismatch: (a LedgerError) DIR/<hash>/settings.json records other settings, or is
+            unreadable (random bytes, a truncated file, a file of another kind); naming the file.
     """
 
     def __init__(self, out_dir: str | Path, settings: Settings) -> None:
@@ -69,9 +82,11 @@ class Ledger:
         record: dict[str, Any] = {"hash": self.hash, "settings": settings.to_json()}
         file = self.work / SETTINGS_FILE
         if file.exists():
-            stored = json.loads(file.read_text())
-            if stored.get("hash") != self.hash or _comparable(stored["settings"]) != _comparable(
-                record["settings"]
+            stored = _read_json(file, "settings record; not mixing items with it", SettingsMismatch)
+            if (
+                stored.get("hash") != self.hash
+                or not isinstance(stored.get("settings"), dict)
+                or _comparable(stored["settings"]) != _comparable(record["settings"])
             ):
                 raise SettingsMismatch(f"{self.work} holds items of other settings ({file}); not mixing them")
         _write_json(file, record)
@@ -81,9 +96,20 @@ class Ledger:
         return self.work.joinpath(*parts)
 
     def timings(self) -> dict[str, Any]:
-        """{part: {"sessions": [...], "seconds": total, "finished": bool}} as stored."""
+        """{part: {"sessions": [...], "seconds": total, "finished": bool}} as stored.
+
+        Raises:
+            LedgerError: an unreadable timings.json, or one whose parts are not such records
+                (naming the file).
+        """
         file = self.work / TIMINGS_FILE
-        return json.loads(file.read_text()) if file.exists() else {}
+        if not file.exists():
+            return {}
+        data = _read_json(file, "timings record", LedgerError)
+        for part, entry in data.items():
+            if not isinstance(entry, dict) or not isinstance(entry.get("sessions"), list):
+                raise LedgerError(f"{file}: unreadable timings record ({part!r} has no list of sessions)")
+        return data
 
     def _record(self, part: str, session: dict[str, Any]) -> None:
         data = self.timings()

@@ -16,6 +16,7 @@ reads them back with numbers as floats, so the report never needs the big stores
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -24,6 +25,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
 from socialzoo.reproduce.parts import DEMOS_FILE
@@ -41,6 +43,15 @@ CSV_FILES: dict[str, str] = {
 TEXT_COLUMNS = frozenset({"label", "policy", "map", "test_set", "policy_file"})
 
 
+# Entries of run.json the report reads.
+RUN_KEYS = ("settings", "settings_hash", "command", "machine")
+
+
+class ResultsError(ValueError):
+    """A file of a results folder that cannot be read: not UTF-8 JSON or CSV, of another kind, or
+    cut short; the message names the file."""
+
+
 def command_for(settings_name: str) -> str:
     """The command that makes a reproduction of these settings."""
     return "socialzoo reproduce --out DIR" + (" --quick" if settings_name == "quick" else "")
@@ -56,7 +67,7 @@ def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
     """Each finished training run under the work folder: what it was and how long it took."""
     out = []
     for record in sorted(ledger.work.glob("*/*/run.json")):
-        data = json.loads(record.read_text())
+        data = _read_json(record, dict)
         if not data.get("finished"):
             continue
         args, res = data.get("args", {}), data.get("results", {})
@@ -70,15 +81,19 @@ def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
                 "seed": data.get("seed"),
             }
         )
-    for sidecar in sorted(ledger.work.glob("lfd/pips_*/pips.train.json")):
-        data = json.loads(sidecar.read_text())
+    from socialzoo.train.pips import read_program_record
+
+    for program in sorted(ledger.work.glob("lfd/pips_*/pips.json")):
+        data = read_program_record(program)
+        if not data:
+            continue
         out.append(
             {
-                "run": sidecar.parent.relative_to(ledger.work).as_posix(),
+                "run": program.parent.relative_to(ledger.work).as_posix(),
                 "trainer": "pips",
                 "demonstration_steps": data["args"]["steps"],
                 "env_steps": None,
-                "wall_seconds": round(data["total_seconds"], 1),
+                "wall_seconds": round(data.get("wall_seconds", data.get("total_seconds", 0.0)), 1),
                 "seed": data.get("seed"),
             }
         )
@@ -157,9 +172,34 @@ def _cell(value: str, column: str) -> Any:
 
 
 def read_csv(path: str | Path) -> list[dict[str, Any]]:
-    """A CSV's rows, numbers as floats (empty cells NaN), TEXT_COLUMNS as text."""
-    with Path(path).open(newline="") as f:
-        return [{k: _cell(v, k) for k, v in row.items()} for row in csv.DictReader(f)]
+    """A CSV's rows, numbers as floats (empty cells NaN), TEXT_COLUMNS as text.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ResultsError: not UTF-8 CSV, or a row whose cells do not match the header (a file cut
+            short); the message names the file and line.
+    """
+    path = Path(path)
+    text = _read_text(path)
+    reader = csv.DictReader(io.StringIO(text, newline=""))
+    rows = []
+    try:
+        for row in reader:
+            if None in row or None in row.values():  # DictReader's marks of too many or too few cells
+                raise ResultsError(f"{path}:{reader.line_num}: the row's cells do not match the header")
+            rows.append({k: _cell(v, k) for k, v in row.items()})
+    except csv.Error as err:  # a NUL byte or a quote left open
+        raise ResultsError(f"{path}:{reader.line_num}: not a CSV file ({err})") from None
+    return rows
+
+
+def _read_text(path: Path) -> str:
+    return read_text(path, "results file", ResultsError)
+
+
+def _read_json(path: Path, kind: type) -> Any:
+    """The JSON value of `path`, which must be a `kind` (dict or list)."""
+    return read_json(path, "results file", ResultsError, kind=kind)
 
 
 def write_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
@@ -179,15 +219,23 @@ def load(results_dir: str | Path) -> dict[str, Any]:
 
     Raises:
         FileNotFoundError: no run.json (not a reproduction's results folder).
+        ResultsError: a file that cannot be read (random bytes, a truncated file, a file of
+            another kind, a run.json without the entries the report reads); the message names it.
     """
     folder = Path(results_dir)
     run_file = folder / RUN_FILE
     if not run_file.is_file():
         raise FileNotFoundError(f"{folder}: no {RUN_FILE}; not the results of `socialzoo reproduce`")
-    data: dict[str, Any] = {"run": json.loads(run_file.read_text())}
+    data: dict[str, Any] = {"run": _read_json(run_file, dict)}
+    missing = [k for k in RUN_KEYS if k not in data["run"]]
+    if missing or not isinstance(data["run"].get("settings"), dict):
+        raise ResultsError(
+            f"{run_file}: not the run record of a reproduction (it lacks {missing or ['settings']})"
+        )
     for key, name in (("timings", TIMINGS_FILE), ("training", TRAINING_FILE)):
         file = folder / name
-        data[key] = json.loads(file.read_text()) if file.is_file() else ({} if key == "timings" else [])
+        kind = dict if key == "timings" else list
+        data[key] = _read_json(file, kind) if file.is_file() else kind()
     for key, name in CSV_FILES.items():
         file = folder / name
         data[key] = read_csv(file) if file.is_file() else []

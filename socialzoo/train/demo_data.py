@@ -78,8 +78,10 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
     total = len(arrays["action"])
     if steps is None:
         steps = total
+    if total == 0:
+        raise ValueError(f"{path} holds no demonstration steps")
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-        raise ValueError(f"demonstration steps must be an int >= 1, got {steps!r}")
+        raise ValueError(f"{path}: demonstration steps must be an int >= 1, got {steps!r}")
     if steps > total:
         raise ValueError(
             f"{path} holds {total} demonstration steps, {steps} asked; record more episodes "

@@ -1,0 +1,82 @@
+"""Reading the text and JSON files users point at, with one error style: a file that cannot be
+read (not UTF-8, not JSON, a number or a nesting past Python's limits) raises the loader's own
+named error, with the file's path and what the file should have been.
+
+Every loader of the package (maps, scenarios, policy programs, run records, results, summaries)
+reads through these, so a user sees "PATH: not a map file (not JSON: ...)" rather than a bare
+UnicodeDecodeError or JSONDecodeError; tests/test_loader_fuzz.py holds them to it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+
+def read_text(
+    path: str | os.PathLike[str],
+    what: str,
+    error: type[Exception],
+    *,
+    missing: type[Exception] = FileNotFoundError,
+) -> str:
+    """The UTF-8 text of `path`.
+
+    Args:
+        path: the file.
+        what: what the file should be, for messages ("map file", "PIPS program").
+        error: the loader's named exception class.
+        missing: the class raised for a missing file (FileNotFoundError, or the loader's own).
+
+    Raises:
+        `missing`: no such file; `error`: not UTF-8 text, or unreadable (a folder, no permission);
+        each message starts with the path.
+    """
+    where = os.fspath(path)
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise missing(f"{where}: no such {what}") from None
+    except UnicodeDecodeError as err:
+        raise error(f"{where}: not a {what} (not UTF-8 text: {err.reason} at byte {err.start})") from None
+    except OSError as err:
+        raise error(f"{where}: unreadable {what} ({err.strerror or err})") from None
+
+
+def parse_json(text: str, where: str, what: str, error: type[Exception]) -> Any:
+    """The JSON value of `text` read from `where`.
+
+    Raises:
+        `error`: not JSON (with the line and column), or a number or a nesting past Python's limits.
+    """
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as err:
+        raise error(
+            f"{where}: not a {what} (not JSON: {err.msg} at line {err.lineno} column {err.colno})"
+        ) from None
+    except (ValueError, RecursionError) as err:
+        raise error(f"{where}: not a {what} (not JSON: {type(err).__name__}: {err})") from None
+
+
+def read_json(
+    path: str | os.PathLike[str],
+    what: str,
+    error: type[Exception],
+    *,
+    kind: type | None = None,
+    missing: type[Exception] = FileNotFoundError,
+) -> Any:
+    """The JSON value of file `path` (read_text, then parse_json), which must be a `kind` (dict,
+    list) when given.
+
+    Raises:
+        `missing`: no such file; `error`: not UTF-8 JSON, or a value of another kind.
+    """
+    where = os.fspath(path)
+    data = parse_json(read_text(path, what, error, missing=missing), where, what, error)
+    if kind is not None and not isinstance(data, kind):
+        raise error(f"{where}: not a {what} (a JSON {type(data).__name__}, expected a {kind.__name__})")
+    return data
