@@ -30,10 +30,12 @@ from socialzoo.agents.demonstrations import (
     TRANSITION_KEYS,
     DemonstrationError,
     parts_dir,
+    read_index,
     read_metadata,
     read_parts,
 )
 from socialzoo.bench.experiment import source_digest
+from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
@@ -194,7 +196,7 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
     Args:
         path: the .npz file to produce.
         config: what to record.
-        progress: show a progress bar of episodes.
+        progress: show the recorded episodes (a bar on a terminal, lines in a log: bench.progress).
 
     Returns:
         `path`.
@@ -216,7 +218,7 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
     parts = parts_dir(path)
     parts.mkdir(parents=True, exist_ok=True)
     index_path = parts / "index.json"
-    index = json.loads(index_path.read_text()) if index_path.exists() else {"metadata": meta, "chunks": {}}
+    index = read_index(parts) if index_path.exists() else {"metadata": meta, "chunks": {}}
     if index["metadata"].get("config_hash") != meta["config_hash"]:
         raise DemonstrationError(
             f"{parts} holds a partial recording of another config; remove it or choose another file"
@@ -230,23 +232,18 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
     )
     seeds = meta["scenario_seeds"]
     num_chunks = -(-config.episodes // config.chunk_episodes)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=config.episodes, unit="episode", desc="demonstrations")
+    bar = progress_bar(config.episodes, "demonstrations", enabled=progress, unit="episode")
     try:
         for c in range(num_chunks):
             lo, hi = c * config.chunk_episodes, min((c + 1) * config.chunk_episodes, config.episodes)
             name = f"chunk_{c:05d}.npz"
             if name in index["chunks"] and (parts / name).exists():
-                if bar is not None:
-                    bar.update(hi - lo)
+                bar.update(hi - lo)
                 continue
             recorder = _Recorder()
             BatchedRunner(spec).run(
                 [Trial(config.policy, test_set.name, k) for k in range(lo, hi)],
-                on_results=(lambda batch: bar.update(len(batch))) if bar is not None else None,
+                on_results=lambda batch: bar.update(len(batch)),
                 on_step=recorder,
             )
             arrays = _chunk_arrays(recorder.episodes, seeds)
@@ -256,8 +253,7 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
             _write_json(index_path, index)
             logger.info("demonstrations: wrote %s (episodes %d-%d)", parts / name, lo, hi - 1)
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
     data = read_parts(parts)
     data["metadata"] = np.array(json.dumps(meta, sort_keys=True))
     _write_npz(path, data)

@@ -21,6 +21,7 @@ import numpy as np
 
 from socialzoo.agents import Policy, make_policy
 from socialzoo.bench.compaction import RunStats, compact_core
+from socialzoo.bench.progress import progress_bar
 from socialzoo.env.config import EnvConfig
 from socialzoo.nav.scenarios import TestSet, get_test_set
 from socialzoo.nav.subpolicies import HALT
@@ -483,25 +484,6 @@ def _evaluate_ray(
 
 
 # ---------------------------------------------------------------------------- entry point
-class _Progress:
-    """A tqdm bar of finished trials (rate and time left), or nothing."""
-
-    def __init__(self, total: int, enabled: bool, desc: str) -> None:
-        self.bar = None
-        if enabled and total:
-            from tqdm.auto import tqdm
-
-            self.bar = tqdm(total=total, unit="trial", desc=desc, smoothing=0.05, dynamic_ncols=True)
-
-    def update(self, n: int) -> None:
-        if self.bar is not None:
-            self.bar.update(n)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def evaluate(
     trials: Sequence[Trial],
     spec: RunSpec,
@@ -523,8 +505,9 @@ def evaluate(
         workers: processes (local) or chunks (Ray; None: one per CPU of the cluster).
         address: Ray cluster address (e.g. "auto" or "ray://host:10001"); Ray backend only.
         on_results: called with each group of finished trials, in this process.
-        progress: show a tqdm bar of finished trials, rate and time left.
-        desc: the bar's label.
+        progress: show finished trials, rate and time left (socialzoo.bench.progress: a tqdm bar
+            on a terminal, a line every 10% or 30 s in a log).
+        desc: the progress label.
 
     Returns:
         The results, in the order of `trials` (first occurrence).
@@ -542,7 +525,7 @@ def evaluate(
     unique = list(dict.fromkeys(trials))
     spec.check(unique)
     results: dict[Trial, TrialResult] = {}
-    bar = _Progress(len(unique), progress, desc)
+    bar = progress_bar(len(unique), desc, enabled=progress and bool(unique), unit="trial")
     start = time.perf_counter()
 
     def deliver(batch: list[TrialResult]) -> None:

@@ -2,18 +2,36 @@
 
 import imageio.v3 as iio
 import numpy as np
+import pytest
 
 from socialzoo.cli import main
 from socialzoo.nav.importers import write_vector_map
 from socialzoo.nav.maps import load_map
 
 
-def test_map_show_writes_a_png(tmp_path, capsys):
-    out = tmp_path / "gdc1.png"
-    assert main(["map", "show", "gdc1", "--out", str(out)]) == 0
+def test_map_show_writes_a_png_where_asked(tmp_path, capsys):
+    out = tmp_path / "pictures" / "gdc1.png"  # a missing folder is created
+    assert main(["map", "show", "gdc1", "--picture", str(out)]) == 0
     image = iio.imread(out)
     assert image.ndim == 3 and image.shape[0] > 200
-    assert "77 nodes" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "77 nodes" in text and f"picture: {out}" in text
+
+
+def test_map_show_draws_beside_a_map_file_and_nothing_for_a_shipped_name(tmp_path, monkeypatch, capsys):
+    work, maps = tmp_path / "work", tmp_path / "maps"
+    work.mkdir()
+    maps.mkdir()
+    monkeypatch.chdir(work)  # not the map's folder: no picture may land here
+    mine = load_map("doorway").save(maps / "mine.json")
+    assert main(["map", "show", str(mine)]) == 0
+    assert iio.imread(maps / "mine-map.png").shape[0] > 200
+    assert f"picture: {maps / 'mine-map.png'}" in capsys.readouterr().out
+    assert main(["map", "show", "gdc1"]) == 0
+    assert "picture: none (gdc1 is a shipped map: ask for one with --picture gdc1-map.png)" in (
+        capsys.readouterr().out
+    )
+    assert list(work.iterdir()) == []
 
 
 def test_map_list_and_validate(capsys):
@@ -165,10 +183,11 @@ def test_map_import_repairs_a_real_graph_and_reports_it(tmp_path, capsys):
 
 def test_map_check_reports_clearance_routes_and_draws(tmp_path, capsys):
     out = tmp_path / "check.png"
-    assert main(["map", "check", "hallway", "--out", str(out)]) == 0
+    assert main(["map", "check", "hallway", "--picture", str(out)]) == 0
     text = capsys.readouterr().out
     assert "valid" in text and "routes: 600 of 600 pose pairs feasible" in text
     assert "connectivity: 1 graph component(s)" in text
+    assert f"picture: {out}" in text
     assert iio.imread(out).shape[0] > 200
     # A tighter route limit makes most pairs infeasible and says so.
     assert main(["map", "check", "hallway", "--max-route", "12", "--no-picture"]) == 0
@@ -199,3 +218,43 @@ def test_map_import_from_a_png_floor_plan(tmp_path, capsys):
     np.testing.assert_allclose(hi, [26.0, 28.0], atol=1e-9)
     assert (m.legal_poses[:, 0] < 18).any() and (m.legal_poses[:, 0] > 18).any()  # both rooms
     assert m.provenance["inputs"]["scale"] == 0.05
+
+
+def test_map_check_draws_beside_a_map_file(tmp_path, capsys):
+    (tmp_path / "maps").mkdir()
+    mine = load_map("hallway").save(tmp_path / "maps" / "mine.json")
+    assert main(["map", "check", str(mine)]) == 0
+    beside = tmp_path / "maps" / "mine-check.png"
+    assert iio.imread(beside).shape[0] > 200
+    assert f"picture: {beside}" in capsys.readouterr().out
+
+
+def test_map_check_of_a_shipped_name_writes_nothing_and_says_how(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["map", "check", "hallway"]) == 0
+    assert list(tmp_path.iterdir()) == []
+    assert "picture: none (hallway is a shipped map: ask for one with --picture hallway-check.png)" in (
+        capsys.readouterr().out
+    )
+
+
+def test_map_check_no_picture_writes_nothing(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    mine = load_map("hallway").save(tmp_path / "mine.json")
+    assert main(["map", "check", str(mine), "--no-picture"]) == 0
+    assert list(tmp_path.iterdir()) == [mine]
+    assert "picture: none (--no-picture)" in capsys.readouterr().out
+    assert main(["map", "check", str(mine), "--no-picture", "--picture", "x.png"]) == 2
+    assert "contradict" in capsys.readouterr().err
+
+
+def test_map_check_out_is_a_hidden_deprecated_alias_of_picture(tmp_path, capsys):
+    out = tmp_path / "old.png"
+    assert main(["map", "check", "hallway", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert out.is_file() and f"picture: {out}" in captured.out
+    assert "--out is deprecated: use --picture" in captured.err
+    with pytest.raises(SystemExit):
+        main(["map", "check", "--help"])
+    usage = capsys.readouterr().out
+    assert "--picture PATH" in usage and "--out" not in usage

@@ -194,3 +194,81 @@ def test_screenshot_shows_the_robot_where_it_is(page, replay_file, camera):
     # The same pixels come back from the canvas itself (what the screenshot shows is what it drew).
     url = canvas_url(page, 1)
     assert len(robot_pixels(base64.b64decode(url.split(",", 1)[1]))) >= 30
+
+
+# (lo, hi, maxTicks, minSpan): constant, all zero, near-constant (1e-9 spread), tiny, large,
+# negative, and ordinary ranges.
+AXIS_CASES = [
+    (5.0, 5.0, 3, 0),
+    (0.0, 0.0, 3, 0),
+    (0.0, 0.0, 3, 0.1),
+    (1.0, 1.0 + 1e-9, 3, 0),
+    (0.0, 1e-9, 3, 0),
+    (-3.4e-5, 2.4e-5, 3, 0.1),
+    (1e9, 1e9 + 1e-3, 3, 0),
+    (-2e6, 7.5e6, 6, 0),
+    (-7.5, -7.5, 3, 0),
+    (-1234.5, -1234.5 + 1e-9, 4, 0),
+    (-0.3, -0.1, 3, 0),
+    (-0.0405, 0.003, 3, 0.1),
+    (0.0, 1.0, 3, 0),
+    (-7.3, 123.4, 8, 0),
+]
+
+
+def test_chart_axes_have_few_distinct_ticks_around_the_data(page):
+    for lo, hi, max_ticks, min_span in AXIS_CASES:
+        axis = page.evaluate(
+            "([lo, hi, n, s]) => window.socialzooReplay.niceAxis(lo, hi, n, s)", [lo, hi, max_ticks, min_span]
+        )
+        case = f"niceAxis({lo}, {hi}, {max_ticks}, {min_span}) = {axis}"
+        assert axis["hi"] - axis["lo"] > 0, case
+        assert axis["lo"] <= lo and axis["hi"] >= hi, case  # the data stay inside
+        assert axis["hi"] - axis["lo"] >= max(min_span, 0.1 * max(abs(lo), abs(hi))) * (1 - 1e-9), case
+        ticks, labels = axis["ticks"], axis["labels"]
+        assert 2 <= len(ticks) <= max_ticks and len(labels) == len(ticks), case
+        assert len(set(labels)) == len(labels), case
+        assert not any(label.startswith("-0") and float(label) == 0 for label in labels), case
+        step = axis["step"]
+        for tick, label in zip(ticks, labels, strict=True):
+            assert axis["lo"] - 1e-3 * step <= tick <= axis["hi"] + 1e-3 * step, case
+            assert abs(float(label) - tick) <= 1e-6 * step, case  # the label says its tick
+    # Decimals follow the step: no more, no fewer.
+    assert page.evaluate("window.socialzooReplay.niceAxis(0, 1, 3, 0).labels") == ["0.0", "0.5", "1.0"]
+    assert page.evaluate("window.socialzooReplay.niceAxis(0, 0, 3, 0).labels") == ["-1", "0", "1"]
+    assert page.evaluate("window.socialzooReplay.niceAxis(-5, -5, 3, 0).labels") == [
+        "-5.25",
+        "-5.00",
+        "-4.75",
+    ]
+
+
+def test_a_stuck_episode_charts_its_reward_flat(browser, make_scene, make_trace, tmp_path):
+    """A robot standing still: its reward is noise of 1e-4 around 0. The chart draws it as a flat
+    line (before, the noise filled the chart and its clipped-value labels ran into each other)."""
+    steps = 400
+    noise = np.round(np.random.default_rng(0).normal(0.0, 6e-5, steps), 4)
+    trace = make_trace(steps=steps, reward=noise, force=np.zeros(steps), blame=np.full(steps, 1e-5))
+    path = tmp_path / "stuck.html"
+    write_replay_html(path, make_scene(), [trace])
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(path.as_uri())
+    page.wait_for_function("document.body.dataset.ready === 'true'", timeout=15_000)
+    page.evaluate("window.socialzooReplay.seek(0)")
+    shot = page.locator("canvas.charts").screenshot()
+    page.close()
+    assert errors == []
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int)
+    # The reward chart (the top third), between the name on the left and the tick labels on the
+    # right; the cursor is at step 0, on the left edge. Grid lines are light (212 and up), the
+    # antialiased line is darker.
+    height, width = rgb.shape[:2]
+    band = rgb[: height // 3, int(0.15 * width) : int(0.8 * width)]
+    line = band.max(axis=-1) < 190
+    rows = np.nonzero(line.any(axis=1))[0]
+    assert line.sum() > 0.5 * band.shape[1], "no reward line drawn"
+    assert rows.max() - rows.min() <= 3, f"the reward line spans rows {rows.min()}-{rows.max()}"

@@ -29,11 +29,18 @@
   const FOLLOW_RADIUS = 6.0; // half the shorter side of the follow view, m
   const ARROW_SECONDS = 0.5; // velocity arrows show the motion over this time
   const SPEEDS = [0.1, 0.25, 0.5, 1, 2, 4, 8];
+  // minSpan: the least value range a chart shows, in the series' unit, so that a nearly constant
+  // series is drawn flat instead of its noise being blown up to the chart's height. For the
+  // reward it is about half what one step at walking pace earns (5 per m x 1.5 m/s x 0.025 s):
+  // a robot standing still wobbles by far less.
   const SERIES = [
-    { key: "reward", label: "reward", color: "#2b2b33" },
+    { key: "reward", label: "reward", color: "#2b2b33", minSpan: 0.1 },
     { key: "force", label: "force", color: "#d6404e", range: [0, 1] },
     { key: "blame", label: "blame", color: "#3f78d0", range: [0, 1] },
   ];
+  const CHART_LABEL_SPACING = 18; // px between tick labels (10 px text): no two ever touch
+  const MIN_RELATIVE_SPAN = 0.1; // a chart spans at least this fraction of its largest |value|
+  const NICE_MANTISSAS = [1, 2, 2.5, 5];
   const METRIC_ROWS = [
     ["success", "success"],
     ["time_to_goal", "time to goal, s"],
@@ -72,20 +79,82 @@
   }
 
   // The robust reward range shared by all panels: the success bonus (one large step) would
-  // flatten everything else, so values beyond it are drawn clipped with their value.
+  // flatten everything else, so values beyond it are drawn clipped with their value. A range
+  // that is (nearly) empty is widened by niceAxis.
   function rewardRange() {
     const values = [];
     for (const e of episodes) for (const v of e.reward) values.push(v);
-    if (!values.length) return [-1, 1];
+    if (!values.length) return [0, 0];
     values.sort((a, b) => a - b);
     const q = (p) => values[Math.min(values.length - 1, Math.max(0, Math.round(p * (values.length - 1))))];
-    let lo = Math.min(q(0.005), 0);
-    let hi = Math.max(q(0.995), 0);
-    if (hi - lo < 1e-6) { lo -= 0.5; hi += 0.5; }
+    const lo = Math.min(q(0.005), 0);
+    const hi = Math.max(q(0.995), 0);
     const pad = 0.08 * (hi - lo);
     return [lo - pad, hi + pad];
   }
   SERIES[0].range = rewardRange();
+
+  // A chart's value axis over [lo, hi]. A (nearly) empty range is widened, around its middle, to
+  // at least minSpan, a tenth of the largest |value|, or 2 when all is 0, so that noise is not
+  // blown up to the chart's height. Ticks are the multiples of a "nice" step (1, 2, 2.5 or 5 x
+  // 10^k) inside the range, the step no smaller than an even split into maxTicks - 1 parts, so
+  // there are at most maxTicks of them (at least 3 are allowed: see below) and their labels,
+  // with just the digits the step needs, never overlap or repeat. Where fewer than two
+  // multiples fall inside, the range is stretched to the multiples around it. Pure: tests call
+  // it as window.socialzooReplay.niceAxis. Returns { lo, hi, step, ticks, labels }.
+  function niceAxis(lo, hi, maxTicks, minSpan) {
+    // Two would not do: a range around 0 always holds 0 and a multiple on each side once stretched.
+    maxTicks = Math.max(3, Math.floor(maxTicks) || 3);
+    if (!Number.isFinite(lo) || !Number.isFinite(hi)) {
+      lo = Number.isFinite(lo) ? lo : Number.isFinite(hi) ? hi : 0;
+      hi = lo;
+    }
+    // Far inside the doubles, so that the span and the steps below stay finite.
+    lo = Math.min(1e300, Math.max(-1e300, lo));
+    hi = Math.min(1e300, Math.max(-1e300, hi));
+    if (lo > hi) [lo, hi] = [hi, lo];
+    const magnitude = Math.max(Math.abs(lo), Math.abs(hi));
+    let least = Math.max(minSpan || 0, MIN_RELATIVE_SPAN * magnitude);
+    if (!(least > 0)) least = 2;
+    if (hi - lo < least) {
+      const mid = (lo + hi) / 2;
+      lo = mid - least / 2;
+      hi = mid + least / 2;
+    }
+    const raw = (hi - lo) / (maxTicks - 1);
+    let exponent = Math.floor(Math.log10(raw));
+    let m = NICE_MANTISSAS.findIndex((k) => k * 10 ** exponent >= raw * (1 - 1e-9));
+    if (m < 0) { m = 0; exponent += 1; }
+    const step = NICE_MANTISSAS[m] * 10 ** exponent;
+    // A tick a thousandth of a step outside the range still counts (drawn on the edge).
+    let first = Math.ceil(lo / step - 1e-3);
+    let last = Math.floor(hi / step + 1e-3);
+    if (last - first < 1) {
+      first = Math.min(first, Math.floor(lo / step + 1e-3));
+      last = Math.max(last, Math.ceil(hi / step - 1e-3));
+      lo = Math.min(lo, first * step);
+      hi = Math.max(hi, last * step);
+    }
+    const ticks = [];
+    for (let k = first; k <= last; k++) ticks.push(k * step + 0); // + 0: no -0
+    return { lo: lo, hi: hi, step: step, ticks: ticks, labels: tickLabels(ticks, exponent, NICE_MANTISSAS[m] === 2.5 ? 1 : 0) };
+  }
+
+  // Labels of ticks k x step, step = mantissa x 10^exponent (`extra` more digits for 2.5): fixed
+  // decimals down to the step's last digit, or, for huge values or tiny steps, as many mantissa
+  // digits in e-notation (9.50e+8, 1.00e+9).
+  function tickLabels(ticks, exponent, extra) {
+    const largest = Math.max(...ticks.map(Math.abs));
+    if (largest >= 1e6 || exponent < -4) {
+      const digits = Math.max(0, Math.floor(Math.log10(largest)) - exponent + extra);
+      return ticks.map((v) => (v === 0 ? "0" : v.toExponential(digits)));
+    }
+    const decimals = Math.max(0, -exponent + extra);
+    return ticks.map((v) => {
+      const text = v.toFixed(decimals);
+      return Number(text) === 0 ? (0).toFixed(decimals) : text; // rounding can give "-0.00"
+    });
+  }
 
   // ------------------------------------------------------------------ one episode's data
   class Episode {
@@ -128,6 +197,18 @@
     const ctx = canvas.getContext("2d");
     ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
     return { ctx: ctx, w: width, h: cssHeight, canvas: canvas };
+  }
+
+  // Muted chart text on a veil of the chart's background, so a line under it does not blur it.
+  function label(ctx, text, x, y, baseline) {
+    ctx.textBaseline = baseline;
+    const width = ctx.measureText(text).width;
+    const x0 = ctx.textAlign === "right" ? x - width : x;
+    const y0 = baseline === "top" ? y : baseline === "bottom" ? y - 10 : y - 5;
+    ctx.fillStyle = "rgba(250, 250, 252, 0.85)";
+    ctx.fillRect(x0 - 2, y0, width + 4, 10);
+    ctx.fillStyle = "#6b6b78";
+    ctx.fillText(text, x, y);
   }
 
   // An off-screen canvas the size of `box`, for what is drawn once and copied every frame.
@@ -489,19 +570,22 @@
       const d = this.ep.d;
       const band = h / SERIES.length;
       ctx.clearRect(0, 0, w, h);
+      ctx.font = "10px system-ui, sans-serif";
       SERIES.forEach((series, i) => {
         const top = i * band + 3;
         const height = band - 8;
-        const [lo, hi] = series.range;
+        const maxTicks = Math.floor(height / CHART_LABEL_SPACING) + 1;
+        const axis = niceAxis(series.range[0], series.range[1], maxTicks, series.minSpan);
+        const { lo, hi } = axis;
         const yOf = (v) => top + height * (1 - (Math.min(hi, Math.max(lo, v)) - lo) / (hi - lo));
         ctx.fillStyle = "#fafafc";
         ctx.fillRect(0, top, w, height);
-        if (lo < 0 && hi > 0) {
-          ctx.strokeStyle = COLORS.grid;
+        for (const v of axis.ticks) {
+          ctx.strokeStyle = v === 0 && lo < 0 ? "#d4d4dc" : COLORS.grid;
           ctx.lineWidth = 1;
           ctx.beginPath();
-          ctx.moveTo(0, yOf(0));
-          ctx.lineTo(w, yOf(0));
+          ctx.moveTo(0, Math.round(yOf(v)) + 0.5);
+          ctx.lineTo(w, Math.round(yOf(v)) + 0.5);
           ctx.stroke();
         }
         const values = d[series.key];
@@ -513,9 +597,12 @@
           if (k === 0) ctx.moveTo(x, yOf(values[k])); else ctx.lineTo(x, yOf(values[k]));
         }
         ctx.stroke();
-        // Values beyond the robust range (the success bonus): a marker with the value.
+        // Values beyond the robust range (the success bonus): a marker, with the value where it
+        // does not run into the previous one's nor into the tick labels.
         ctx.fillStyle = series.color;
-        ctx.font = "10px system-ui, sans-serif";
+        ctx.textBaseline = "alphabetic";
+        const gutter = Math.max(...axis.labels.map((t) => ctx.measureText(t).width)) + 8;
+        let textEnd = -Infinity;
         for (let k = 0; k < values.length; k++) {
           if (values[k] > hi || values[k] < lo) {
             const x = ((k + 1) / Math.max(1, maxStep)) * w;
@@ -527,12 +614,28 @@
             ctx.lineTo(x + 4, y + (up ? 7 : -7));
             ctx.fill();
             const text = fmt(values[k], 1);
-            ctx.fillText(text, Math.min(x + 6, w - ctx.measureText(text).width - 2), up ? top + 10 : top + height - 2);
+            const width = ctx.measureText(text).width;
+            const tx = Math.min(x + 6, w - gutter - width - 2);
+            if (tx > textEnd + 4) {
+              ctx.fillText(text, tx, up ? top + 10 : top + height - 2);
+              textEnd = tx + width;
+            }
           }
         }
-        ctx.fillStyle = "#6b6b78";
-        ctx.fillText(series.label + " [" + fmt(lo, 2) + ", " + fmt(hi, 2) + "]", 4, top + height - 3);
+        // Tick labels at the right edge (kept inside the band) and the name at the left, on a
+        // veil over the line.
+        ctx.textAlign = "right";
+        axis.ticks.forEach((v, t) => {
+          const y = yOf(v);
+          if (y - top < 6) label(ctx, axis.labels[t], w - 3, top + 1, "top");
+          else if (top + height - y < 6) label(ctx, axis.labels[t], w - 3, top + height - 1, "bottom");
+          else label(ctx, axis.labels[t], w - 3, y, "middle");
+        });
+        ctx.textAlign = "left";
+        label(ctx, series.label, 4, top + 1, "top");
       });
+      ctx.textAlign = "left";
+      ctx.textBaseline = "alphabetic";
     }
 
     // The cursor over the pre-drawn timeline and charts.
@@ -719,6 +822,7 @@
     play: play,
     pause: pause,
     setCamera: setCamera,
+    niceAxis: niceAxis,
     get step() { return Math.floor(step); },
     get playing() { return playing; },
     maxStep: maxStep,
