@@ -1,7 +1,10 @@
 """The `socialzoo` command: one entry point, one module per group of subcommands.
 
-Each entry of COMMANDS names a module with a `register(subparsers)` function that adds its
-subcommands; every subcommand sets `func(args) -> int` (the exit status).
+Each module named in COMMANDS has a `register(subparsers)` function that adds its subcommands;
+every subcommand sets `func(args) -> int` (the exit status). The command starts at once: `socialzoo
+--help` lists the subcommands from the table alone, and only the module of the subcommand asked for
+is imported and registered (with the heavy libraries each imports inside its functions), so no
+command pays for torch, ray or matplotlib unless it runs them.
 """
 
 from __future__ import annotations
@@ -13,21 +16,56 @@ from collections.abc import Sequence
 
 from socialzoo import __version__
 
-# Modules that register subcommands, in the order `socialzoo --help` lists them.
-COMMANDS: tuple[str, ...] = (
-    "socialzoo.cli.benchmark_cmd",  # benchmark, demos
-    "socialzoo.cli.demo_cmd",  # demo
-    "socialzoo.cli.humans_cmd",  # compare-humans
-    "socialzoo.cli.map_cmd",  # map list|show|import|validate
-    "socialzoo.cli.replay_cmd",  # replay
-    "socialzoo.cli.reproduce_cmd",  # reproduce
-    "socialzoo.cli.steps_cmd",  # steps-to-ref
-    "socialzoo.cli.train_cmd",  # train <trainer>
-)
+# Subcommand -> (the module that registers it, the line `socialzoo --help` shows for it), in the
+# order `socialzoo --help` lists them. A module's register() takes its help lines from here.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "benchmark": (
+        "socialzoo.cli.benchmark_cmd",
+        "evaluate policies on the benchmark test sets (results store, tables, figures)",
+    ),
+    "demos": ("socialzoo.cli.benchmark_cmd", "record Ref demonstrations for the imitation baselines"),
+    "demo": ("socialzoo.cli.demo_cmd", "animate one episode of a policy (GIF or MP4)"),
+    "compare-humans": (
+        "socialzoo.cli.humans_cmd",
+        "learned humans against social-force humans (reach rate, collisions, distances, speed)",
+    ),
+    "select-humans": (
+        "socialzoo.cli.humans_cmd",
+        "choose a learned-human checkpoint of a run on validation scenarios",
+    ),
+    "map": ("socialzoo.cli.map_cmd", "list, show, validate, check and import maps"),
+    "replay": (
+        "socialzoo.cli.replay_cmd",
+        "write an episode (several policies side by side) as an HTML viewer",
+    ),
+    "reproduce": (
+        "socialzoo.cli.reproduce_cmd",
+        "regenerate every table and figure of the paper (resumable), with REPRODUCTION.md",
+    ),
+    "steps-to-ref": (
+        "socialzoo.cli.steps_cmd",
+        "train PPO on past the paper's 84,000 steps until it matches Ref (validation scenarios)",
+    ),
+    "train": (
+        "socialzoo.cli.train_cmd",
+        "train a learned baseline (writes the policy, its run record, checkpoints and logs)",
+    ),
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every registered subcommand."""
+def command_help(name: str) -> str:
+    """The one-line help of subcommand `name` (COMMANDS)."""
+    return COMMANDS[name][1]
+
+
+def _chosen_command(argv: Sequence[str]) -> str | None:
+    """The subcommand named on the command line: its first word that is not an option."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser: every subcommand listed, and the one `argv` names (all of them when
+    argv is None) registered with its options."""
     parser = argparse.ArgumentParser(
         prog="socialzoo",
         description="socialzoo: social-navigation simulator, benchmark and baselines.",
@@ -35,14 +73,27 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"socialzoo {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in COMMANDS:
-        importlib.import_module(module).register(subparsers)
+    chosen = _chosen_command(argv) if argv is not None else None
+    wanted = {module for module, _ in COMMANDS.values()} if argv is None else set()
+    if chosen in COMMANDS:
+        wanted.add(COMMANDS[chosen][0])
+    for name, (module, help_line) in COMMANDS.items():
+        if name in subparsers.choices:
+            continue
+        if module in wanted:
+            importlib.import_module(module).register(subparsers)
+        else:
+            # Listed only: its options are registered when it is the command asked for.
+            subparsers.add_parser(name, help=help_line, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for a usage or input error)."""
-    args = build_parser().parse_args(argv)
+    import sys
+
+    words = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(words).parse_args(words)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(name)s: %(message)s"
     )

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
 
 logger = logging.getLogger(__name__)
@@ -55,7 +56,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add `benchmark` to a subparsers object; returns its parser."""
     parser = subparsers.add_parser(
         "benchmark",
-        help="evaluate policies on the benchmark test sets (results store, tables, figures)",
+        help=command_help("benchmark"),
         description=(
             "Evaluate policies on the Social Action Selection benchmark: each policy on the first N "
             "scenarios of each map's test set (<map>-test: 2000 scenarios; <map>-quick: 100; any other "
@@ -135,7 +136,7 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add `demos` to a subparsers object; returns its parser."""
     parser = subparsers.add_parser(
         "demos",
-        help="record Ref demonstrations for the imitation baselines",
+        help=command_help("demos"),
         description=(
             "Record demonstrations of the reference policy (obs, action, next_obs, reward, terminated, "
             "truncated, episode) on scenarios of their own seeds. Chunks are written to FILE.parts/ as "

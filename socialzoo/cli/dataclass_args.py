@@ -19,8 +19,17 @@ from typing import Any, Literal, Union, get_args, get_origin
 
 
 def attribute_docs(cls: type) -> dict[str, str]:
-    """Field name -> description, from the "Attributes:" section of a Google-style docstring."""
-    doc = inspect.getdoc(cls) or ""
+    """Field name -> description, from the "Attributes:" sections of the Google-style docstrings of
+    `cls` and its bases (a class's own description of a field wins over its base's)."""
+    found: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        found.update(_own_attribute_docs(klass))
+    return found
+
+
+def _own_attribute_docs(cls: type) -> dict[str, str]:
+    """Field name -> description from the "Attributes:" section of `cls`'s own docstring."""
+    doc = inspect.cleandoc(cls.__dict__.get("__doc__") or "")
     found: dict[str, str] = {}
     section = False
     current: str | None = None

@@ -7,12 +7,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli import command_help
+
 
 def register(subparsers: Any) -> None:
     """Add `demo`."""
     parser = subparsers.add_parser(
         "demo",
-        help="animate one episode of a policy (GIF or MP4)",
+        help=command_help("demo"),
         description="Run one benchmark episode with a policy and write it as an animation.",
     )
     parser.add_argument("--policy", default="ref", help="policy name (goalone, ref, ...; default ref)")

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
 
 
@@ -15,7 +16,7 @@ def register(subparsers: Any) -> None:
     """Add `compare-humans`."""
     parser = subparsers.add_parser(
         "compare-humans",
-        help="learned humans against social-force humans (reach rate, collisions, distances, speed)",
+        help=command_help("compare-humans"),
         description="Run the benchmark among social-force humans and among learned humans on the same "
         "scenarios (human metrics on), and write DIR/comparison.md, comparison.csv and comparison.png "
         "with issue 13's targets (reach rate within 10%%, no more collisions).",
@@ -41,7 +42,7 @@ def register(subparsers: Any) -> None:
 
     select = subparsers.add_parser(
         "select-humans",
-        help="choose a learned-human checkpoint of a run on validation scenarios",
+        help=command_help("select-humans"),
         description="Compare every checkpoint of a `socialzoo train humans` run with the social-force "
         "humans on the training map's validation scenarios (never a test set), keep the most trained one "
         "that meets both targets (else the one missing them by the least), and write DIR/selection.md, "

@@ -1,14 +1,21 @@
-"""`socialzoo map list|show|validate|check|import`: see, check and import building maps."""
+"""`socialzoo map list|show|validate|check|import`: see, check and import building maps.
+
+`show` and `check` draw a picture only where asked (--picture PATH) or beside a map file, never
+into the current directory or the package's maps folder, and always say where it went.
+"""
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from socialzoo.cli import command_help
 
 # Steps of an import that generate what the source lacks (the others repair what it has).
 GENERATED = ("graph_generated", "edges_built", "poses_generated")
@@ -16,15 +23,23 @@ GENERATED = ("graph_generated", "edges_built", "poses_generated")
 
 def register(subparsers: Any) -> None:
     """Add `map` and its subcommands."""
-    parser = subparsers.add_parser("map", help="list, show, validate and import maps")
+    parser = subparsers.add_parser("map", help=command_help("map"))
     sub = parser.add_subparsers(dest="map_command", required=True, metavar="ACTION")
 
     listing = sub.add_parser("list", help="the shipped maps with their sizes")
     listing.set_defaults(func=run_list)
 
-    show = sub.add_parser("show", help="draw a map (walls, graph, legal poses) to a PNG")
+    show = sub.add_parser(
+        "show",
+        help="draw a map (walls, graph, legal poses) to a PNG",
+        description=(
+            "Draw a map's walls, navigation graph and legal poses to a PNG: to --picture PATH, or "
+            "beside a map file (FILE-map.png). A shipped map name writes nothing unless --picture "
+            "is given (the package's maps folder may be read-only). Prints where the picture went."
+        ),
+    )
     show.add_argument("map", help="shipped map name or path to a map JSON file")
-    show.add_argument("--out", type=Path, default=None, help="PNG file (default NAME.png)")
+    _add_picture_options(show, "map", no_picture=False)
     show.add_argument("--no-graph", action="store_true", help="leave out the navigation graph")
     show.set_defaults(func=run_show)
 
@@ -39,15 +54,16 @@ def register(subparsers: Any) -> None:
             "Validate a map and report the wall clearance of its nodes, edges and legal poses, its "
             "graph components, the edges closer to a wall than the robot keeps (it leaves its path "
             "there), and the feasible-route statistics of its legal poses (a route is feasible when "
-            "it is at most --max-route metres: 75%% of the 80 s time limit at 1.5 m/s). Writes a "
-            "picture of the walls, the graph (tight edges in red) and the poses (stranded ones in "
-            "red). Exit status 0 for a valid map, 2 for an invalid one."
+            "it is at most --max-route metres: 75%% of the 80 s time limit at 1.5 m/s). Draws the "
+            "walls, the graph (tight edges in red) and the poses (stranded ones in red) to "
+            "--picture PATH, or beside a map file (FILE-check.png); a shipped map name gets no "
+            "picture unless --picture is given. Prints where the picture went. Exit status 0 for "
+            "a valid map, 2 for an invalid one."
         ),
     )
     check.add_argument("map", help="shipped map name or path to a map JSON file")
-    check.add_argument("--out", type=Path, default=None, help="PNG picture (default NAME-check.png)")
     check.add_argument("--max-route", type=float, default=None, help="feasible route length, m (default 90)")
-    check.add_argument("--no-picture", action="store_true", help="skip the picture (no matplotlib needed)")
+    _add_picture_options(check, "check", no_picture=True)
     check.set_defaults(func=run_check)
 
     imp = sub.add_parser(
@@ -107,6 +123,71 @@ def _fail(err: Exception) -> int:
     return 2
 
 
+def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_picture: bool) -> None:
+    """Add --picture PATH (and --no-picture), and the old --out as a hidden alias of --picture."""
+    parser.add_argument(
+        "--picture",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help=f"PNG to write (default: beside a map file, FILE-{suffix}.png; none for a shipped map name)",
+    )
+    # The old name, kept so existing command lines still work; hidden so new ones use --picture.
+    parser.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
+    if no_picture:
+        parser.add_argument(
+            "--no-picture", action="store_true", help="skip the picture (no matplotlib needed)"
+        )
+    parser.set_defaults(picture_suffix=suffix)
+
+
+def _map_file(name_or_path: str) -> Path | None:
+    """MAP's file when it is a path (socialzoo.nav.maps.load_map's rule), None for a shipped name."""
+    if name_or_path.endswith(".json") or "/" in name_or_path or os.sep in name_or_path:
+        return Path(name_or_path)
+    return None
+
+
+def _picture_path(args: argparse.Namespace) -> tuple[Path | None, str]:
+    """Where the picture goes, or None and why none is written.
+
+    --picture PATH when given; else beside a map file (FILE-SUFFIX.png in the map's folder); else
+    nowhere: a shipped map's folder is inside the installed package (maybe read-only) and the
+    current directory is not a place the user chose.
+
+    Raises:
+        ValueError: --picture and its old name --out both given, or either with --no-picture.
+    """
+    picture = args.picture
+    if args.out is not None:
+        if picture is not None:
+            raise ValueError("give --picture only (--out is its old name)")
+        print("socialzoo map: --out is deprecated: use --picture", file=sys.stderr)
+        picture = args.out
+    if getattr(args, "no_picture", False):
+        if picture is not None:
+            raise ValueError("--picture (or --out) and --no-picture contradict each other")
+        return None, "none (--no-picture)"
+    if picture is not None:
+        return picture, ""
+    suffix = args.picture_suffix
+    file = _map_file(str(args.map))
+    if file is None:
+        return None, f"none ({args.map} is a shipped map: ask for one with --picture {args.map}-{suffix}.png)"
+    return file.with_name(f"{file.stem}-{suffix}.png"), ""
+
+
+def _save_picture(save: Any, out: Path) -> None:
+    """Call save(out), creating out's folder; an OSError becomes a ValueError that names out."""
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save(out)
+    except OSError as err:
+        raise ValueError(
+            f"cannot write the picture {out} ({err.strerror or err}): choose another with --picture PATH"
+        ) from None
+
+
 def run_list(args: argparse.Namespace) -> int:
     """Run `socialzoo map list`; returns the exit status."""
     from socialzoo.nav.maps import list_maps, load_map
@@ -126,12 +207,19 @@ def run_show(args: argparse.Namespace) -> int:
     from socialzoo.render.map_plot import save_map_png
 
     try:
+        out, why_none = _picture_path(args)
         m = load_map(args.map)
-    except (MapError, FileNotFoundError, KeyError) as err:
+    except (MapError, FileNotFoundError, KeyError, ValueError) as err:
         return _fail(err)
-    out = args.out or Path(f"{m.name}.png")
-    save_map_png(m, out, show_graph=not args.no_graph)
-    print(f"{out}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.legal_poses)} legal poses")
+    print(f"{args.map}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.legal_poses)} legal poses")
+    if out is None:
+        print(f"  picture: {why_none}")
+        return 0
+    try:
+        _save_picture(lambda path: save_map_png(m, path, show_graph=not args.no_graph), out)
+    except ValueError as err:
+        return _fail(err)
+    print(f"  picture: {out}")
     return 0
 
 
@@ -154,7 +242,9 @@ def run_check(args: argparse.Namespace) -> int:
     from socialzoo.nav.maps import MapError, load_map
 
     try:
-        m = load_map(args.map) if not str(args.map).endswith(".json") else _read_unvalidated(args.map)
+        out, why_none = _picture_path(args)
+        file = _map_file(str(args.map))
+        m = _read_unvalidated(file) if file is not None else load_map(args.map)
         report = check_map(m, MAX_ROUTE_LENGTH if args.max_route is None else args.max_route)
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
         return _fail(err)
@@ -162,11 +252,15 @@ def run_check(args: argparse.Namespace) -> int:
           f"{len(m.legal_poses)} legal poses")  # fmt: skip
     for line in report.lines():
         print(f"  {line}")
-    if not args.no_picture:
+    if out is None:
+        print(f"  picture: {why_none}")
+    else:
         from socialzoo.render.map_plot import save_map_check_png
 
-        out = args.out or Path(f"{m.name}-check.png")
-        save_map_check_png(m, report, out)
+        try:
+            _save_picture(lambda path: save_map_check_png(m, report, path), out)
+        except ValueError as err:
+            return _fail(err)
         print(f"  picture: {out}")
     return 0 if report.valid else 2
 

@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli import command_help
+
 
 def _policy_list(text: str) -> list[str]:
     names = [n.strip() for n in text.split(",") if n.strip()]
@@ -33,7 +35,7 @@ def register(subparsers: Any) -> None:
     """Add `replay`."""
     parser = subparsers.add_parser(
         "replay",
-        help="write an episode (several policies side by side) as an HTML viewer",
+        help=command_help("replay"),
         description=(
             "Run policies on one scenario and write one self-contained HTML file that plays the "
             "episodes side by side on a shared timeline: walls, humans and their velocities, the robot's "

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
 
 
@@ -16,7 +17,7 @@ def register(subparsers: Any) -> None:
     """Add `steps-to-ref`."""
     parser = subparsers.add_parser(
         "steps-to-ref",
-        help="train PPO on past the paper's 84,000 steps until it matches Ref (validation scenarios)",
+        help=command_help("steps-to-ref"),
         description="Train PPO (its defaults otherwise) for --total-steps with a checkpoint every "
         "--checkpoint-every steps, evaluate every checkpoint and the reference policy on the first "
         "--trials scenarios of the gdc1 validation set, and report the first checkpoint that succeeds "

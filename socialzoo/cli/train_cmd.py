@@ -10,6 +10,8 @@ import argparse
 import sys
 from typing import Any
 
+from socialzoo.cli import command_help
+
 
 def register(subparsers: Any) -> None:
     """Add `train` with one sub-subcommand per registered trainer."""
@@ -18,7 +20,7 @@ def register(subparsers: Any) -> None:
 
     parser = subparsers.add_parser(
         "train",
-        help="train a learned baseline (writes the policy, its run record, checkpoints and logs)",
+        help=command_help("train"),
         description="Train a learned policy. Each trainer writes run.json (arguments, command, seed), "
         "TensorBoard logs and checkpoints beside the policy file.",
     )

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-from socialzoo.nav.scenario_families import FAMILIES
+from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
 
 BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
 VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"
@@ -36,8 +36,8 @@ def _family_id(name: str) -> str:
 
 # Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v1; short episodes (60 s).
 FAMILY_IDS: dict[str, dict] = {
-    _family_id(name): {"map": family.map_name, "family": name, "max_steps": 2400}
-    for name, family in FAMILIES.items()
+    _family_id(name): {"map": map_name, "family": name, "max_steps": 2400}
+    for name, (map_name, _) in FAMILY_CATALOGUE.items()
 }
 
 

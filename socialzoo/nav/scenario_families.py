@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenarios import Scenario, plan_routes, spawn_points, split_routes
 
@@ -182,38 +183,18 @@ def _parallel_traffic(m: Map, rng: np.random.Generator) -> Layout:
     return Layout(a, b, starts, goals, _speeds(rng, n, 1.0, 0.2))
 
 
+# Each family's layout rule; its map and description are in the catalogue.
+_LAYOUTS: dict[str, Callable[[Map, np.random.Generator], Layout]] = {
+    "hallway_head_on": _hallway_head_on,
+    "overtaking": _overtaking,
+    "crossing": _crossing,
+    "doorway": _doorway,
+    "circle_crossing": _circle_crossing,
+    "parallel_traffic": _parallel_traffic,
+}
 FAMILIES: dict[str, Family] = {
-    f.name: f
-    for f in (
-        Family(
-            "hallway_head_on",
-            "hallway",
-            "1-3 humans walk down the hallway towards the robot",
-            _hallway_head_on,
-        ),
-        Family(
-            "overtaking",
-            "hallway",
-            "a slow human (0.4-0.6 m/s) walks ahead of the robot, same way",
-            _overtaking,
-        ),
-        Family(
-            "crossing", "intersection", "2-4 humans cross the robot's way along the other corridor", _crossing
-        ),
-        Family("doorway", "doorway", "1-3 humans come through the door the robot must pass", _doorway),
-        Family(
-            "circle_crossing",
-            "open_room",
-            "robot and 4-8 humans on a circle walk to the antipode",
-            _circle_crossing,
-        ),
-        Family(
-            "parallel_traffic",
-            "hallway",
-            "4-8 humans walk the robot's way at mixed speeds",
-            _parallel_traffic,
-        ),
-    )
+    name: Family(name, map_name, description, _LAYOUTS[name])
+    for name, (map_name, description) in FAMILY_CATALOGUE.items()
 }
 
 
