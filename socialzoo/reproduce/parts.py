@@ -15,8 +15,6 @@ only what is missing. Each part returns how many items it made (0: everything wa
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -62,24 +60,17 @@ class Context:
 # ---------------------------------------------------------------------------- trainings
 
 
-def _finished(args: Any) -> bool:
-    """True when a trainer's output already holds a finished run of these arguments."""
-    if type(args).__name__ == "PipsArgs":
-        from socialzoo.train.pips import sidecar_path
+def _finished(name: str, args: Any) -> bool:
+    """True when trainer `name`'s output already holds a finished run of these arguments."""
+    from socialzoo.train import trainer_spec
+    from socialzoo.train.skeleton import finished_run
 
-        sidecar = sidecar_path(args.out)
-        if not (Path(args.out).is_file() and sidecar.is_file()):
-            return False
-        return bool(json.loads(sidecar.read_text()).get("args") == dataclasses.asdict(args))
-    record = Path(args.out) / "run.json"
-    return record.is_file() and bool(json.loads(record.read_text()).get("finished"))
+    return finished_run(trainer_spec(name), args)
 
 
 def train_task(item: tuple[str, Any]) -> str:
     """Train one policy (name, trainer arguments) unless finished; returns its file. A Ray task."""
     name, args = item
-    if name == "pips" and _finished(args):
-        return str(args.out)
     from socialzoo.train import trainer_function
 
     return str(trainer_function(name)(args))
@@ -87,7 +78,7 @@ def train_task(item: tuple[str, Any]) -> str:
 
 def _train(ctx: Context, items: list[tuple[str, Any]]) -> tuple[list[Path], int]:
     """Train the items (in parallel on Ray); returns (their files, how many were trained now)."""
-    todo = sum(not _finished(args) for _, args in items)
+    todo = sum(not _finished(name, args) for name, args in items)
     files = run_tasks(train_task, items, backend=ctx.backend, workers=ctx.settings.workers)
     return [Path(f) for f in files], todo
 

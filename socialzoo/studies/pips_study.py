@@ -13,7 +13,6 @@ with its 90% interval, the synthesis time and the program's size) and pips_study
 from __future__ import annotations
 
 import csv
-import json
 import logging
 import math
 from collections.abc import Mapping, Sequence
@@ -83,16 +82,11 @@ def find_study_programs(root: str | Path) -> dict[tuple[int, int], Path]:
 
 
 def program_record(program: str | Path) -> dict[str, Any]:
-    """The synthesis record beside a program file (NAME.train.json); {} when there is none."""
-    path = Path(program)
-    record = path.with_name(path.stem + RECORD_SUFFIX)
-    if not record.is_file():
-        return {}
-    try:
-        data = json.loads(record.read_text())
-    except json.JSONDecodeError as err:
-        raise ValueError(f"{record}: not a JSON synthesis record ({err})") from None
-    return data if isinstance(data, dict) else {}
+    """The synthesis record beside a program file (NAME.train.json), flat; {} when there is none
+    (socialzoo.train.pips.read_program_record)."""
+    from socialzoo.train.pips import read_program_record
+
+    return read_program_record(program)
 
 
 def _comparisons(program: str | Path) -> int:

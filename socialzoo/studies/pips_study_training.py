@@ -5,7 +5,8 @@ without it (window 0: every step is an example).
 `train_pips_study` runs `socialzoo.train.pips.train` once per (steps, window) cell into
 <root>/pips_<steps>_w<window>/pips.json (with its .train.json record: arguments, seed, synthesis
 time), all from one demonstration file recorded on training scenarios. A cell whose record holds
-the same arguments is not synthesised again, so an interrupted study resumes cell by cell.
+the same arguments is not synthesised again, so an interrupted study resumes cell by cell; a cell
+of other arguments (other overrides) is synthesised again in place.
 socialzoo.studies.pips_study evaluates the programs on validation scenarios and writes the table
 and the figure.
 """
@@ -13,7 +14,6 @@ and the figure.
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.studies.pips_study import STUDY_STEPS, STUDY_WINDOWS, study_program_file
-from socialzoo.train.pips import PipsArgs, sidecar_path, train
+from socialzoo.train.pips import TRAINER, PipsArgs, sidecar_path, train
+from socialzoo.train.skeleton import finished_run
 
 logger = logging.getLogger(__name__)
 
@@ -83,18 +84,6 @@ class PipsStudyConfig:
         )
 
 
-def _finished(args: PipsArgs) -> bool:
-    """Whether args.out and its record exist and the record holds exactly these arguments."""
-    program, record = Path(args.out), sidecar_path(args.out)
-    if not (program.is_file() and record.is_file()):
-        return False
-    try:
-        done = json.loads(record.read_text()).get("args")
-    except (OSError, json.JSONDecodeError):
-        return False
-    return bool(done == json.loads(json.dumps(dataclasses.asdict(args))))
-
-
 def train_pips_study(config: PipsStudyConfig) -> dict[tuple[int, int], Path]:
     """Synthesise every (steps, window) cell, skipping finished ones.
 
@@ -111,9 +100,12 @@ def train_pips_study(config: PipsStudyConfig) -> dict[tuple[int, int], Path]:
     for window in config.windows:
         for steps in config.steps:
             args = config.args(steps, window)
-            if _finished(args):
+            if finished_run(TRAINER, args):
                 logger.info("PIPS study: %d steps, window %d: already synthesised", steps, window)
             else:
+                # A cell is named by its steps and window only: a study run with other overrides
+                # replaces the cell's program rather than being refused for the other arguments.
+                sidecar_path(args.out).unlink(missing_ok=True)
                 logger.info("PIPS study: synthesising from %d steps, window %d", steps, window)
                 train(args)
             files[(steps, window)] = Path(args.out)

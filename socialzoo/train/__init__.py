@@ -1,9 +1,13 @@
-"""Trainers of the learned baselines: one readable file per algorithm (cleanrl style).
+"""Trainers of the learned baselines: one readable file per algorithm (cleanrl style) on one
+shared skeleton (socialzoo.train.skeleton: run folder, seed, run record, checkpoints, resume,
+evaluation, TensorBoard, progress).
 
 Each trainer module defines a frozen keyword-only dataclass of arguments (every field a command-line
-option of `socialzoo train <name>`, with defaults that reproduce the paper's set-up) and a function
-`train(args) -> Path` that writes the trained policy and returns its path. Modules import torch and
-the learning libraries inside `train`, so listing the trainers stays cheap.
+option of `socialzoo train <name>`, with defaults that reproduce the paper's set-up; the fields a
+family of trainers shares live in a base class: sb3_common.SB3Args, imitation.ImitationArgs,
+marl_args.MarlArgs), its `TRAINER` (what the skeleton needs to know) and a function
+`train(args) -> Path` that runs its algorithm on the skeleton and returns the policy file. Modules
+import torch and the learning libraries inside `train`, so listing the trainers stays cheap.
 """
 
 from __future__ import annotations
@@ -11,7 +15,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__all__ = ["TRAINERS", "trainer_args", "trainer_function"]
+__all__ = ["TRAINERS", "trainer_args", "trainer_function", "trainer_spec"]
 
 # Trainer name -> "module:ArgsClass"; the module's `train(args)` runs it.
 TRAINERS: dict[str, str] = {
@@ -42,3 +46,9 @@ def trainer_function(name: str) -> Any:
     """The `train(args)` function of trainer `name`."""
     trainer_args(name)
     return importlib.import_module(TRAINERS[name].split(":")[0]).train
+
+
+def trainer_spec(name: str) -> Any:
+    """What trainer `name` is for the skeleton (its module's TRAINER: socialzoo.train.skeleton.Trainer)."""
+    trainer_args(name)
+    return importlib.import_module(TRAINERS[name].split(":")[0]).TRAINER

@@ -11,79 +11,55 @@ checkpoint every `checkpoint_every` gradient updates. Demonstrations come from `
 
 from __future__ import annotations
 
-import logging
 import math
-import time
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from socialzoo.train.checks import Activation, check_int, check_number, check_sizes
+from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.imitation import ImitationArgs, imitation_parts
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
-logger = logging.getLogger(__name__)
-
-POLICY_FILE = "bc.safetensors"
+TRAINER = Trainer("bc", policy_file="bc.safetensors")
+POLICY_FILE = TRAINER.policy_file
 
 
 @dataclass(frozen=True, kw_only=True)
-class Args:
+class Args(ImitationArgs):
     """Behaviour cloning of Ref demonstrations (TorchRL BCLoss).
 
+    The arguments every imitation trainer takes are socialzoo.train.imitation.ImitationArgs (their
+    defaults are this trainer's); these are BC's own.
+
     Attributes:
-        demos: the demonstration file (`socialzoo demos --episodes 125 --out runs/lfd/ref_demos.npz`).
-        steps: demonstration steps used, the first ones of the file (the paper's sizes: 155400,
-            116600, 77700, 38800, 3500); None: all of them.
-        hidden: hidden layer sizes of the policy MLP.
-        activation: hidden activation, tanh or relu.
+        out: run folder: bc.safetensors, run.json, tensorboard/, checkpoints/.
+        checkpoint_every: write a checkpoint policy every this many gradient updates.
         epochs: passes over the demonstration steps.
         min_updates: at least this many gradient updates (more passes for small sets).
         batch_size: demonstration steps per gradient update.
-        lr: Adam learning rate.
         weight_decay: Adam weight decay (L2).
         validation: another demonstration file whose action agreement is logged each pass
             (reported only, never used to choose anything); None: none.
-        seed: seed of the weights and of the minibatch order.
-        out: run folder: bc.safetensors, run.json, tensorboard/, checkpoints/.
-        checkpoint_every: write a checkpoint policy every this many gradient updates.
-        threads: torch CPU threads (small networks train fastest on one; more threads on a
-            shared machine mostly wait on each other).
-        progress: show a progress bar.
     """
 
-    demos: Path = Path("runs/lfd/ref_demos.npz")
-    steps: int | None = 155_400
-    hidden: tuple[int, ...] = (256, 256)
-    activation: Activation = "relu"
+    out: Path = Path("runs/bc")
     epochs: int = 10
     min_updates: int = 2000
     batch_size: int = 512
-    lr: float = 1e-3
     weight_decay: float = 0.0
     validation: Path | None = None
-    seed: int = 0
-    out: Path = Path("runs/bc")
-    checkpoint_every: int = 2000
-    threads: int = 1
-    progress: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "demos", Path(self.demos))
-        object.__setattr__(self, "out", Path(self.out))
-        object.__setattr__(self, "hidden", tuple(self.hidden))
+        super().__post_init__()
         if self.validation is not None:
             object.__setattr__(self, "validation", Path(self.validation))
-        check_int(self, "steps", 1, optional=True)
-        for name in ("epochs", "batch_size", "checkpoint_every", "threads"):
+        for name in ("epochs", "batch_size"):
             check_int(self, name, 1)
-        for name in ("min_updates", "seed"):
-            check_int(self, name, 0)
-        check_sizes(self, "hidden")
-        if self.activation not in ("tanh", "relu"):
-            raise ValueError(f"bc Args.activation must be 'tanh' or 'relu', got {self.activation!r}")
-        check_number(self, "lr", 0.0, strict=True)
+        check_int(self, "min_updates", 0)
         check_number(self, "weight_decay", 0.0)
 
 
@@ -100,46 +76,23 @@ def agreement(net: Any, obs: np.ndarray, action: np.ndarray, batch: int = 8192) 
 
 
 def train(args: Args) -> Path:
-    """Run behaviour cloning; returns the policy file (an existing finished run is reused).
-
-    Raises:
-        ValueError: a demonstration file with fewer than args.steps steps.
-        socialzoo.train.run_dir.RunDirError: args.out holds a run of other arguments.
-    """
-    from socialzoo.train.policy_net import torch_threads
-
-    with torch_threads(args.threads):
-        return _train(args)
+    """Run behaviour cloning on the trainer skeleton; returns bc.safetensors (a finished run of the
+    same arguments in args.out is reused; a short demonstration file raises ValueError)."""
+    return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 
-def _train(args: Args) -> Path:
+def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     import torch
     from tensordict import TensorDict
     from torchrl.envs.utils import ExplorationType, set_exploration_type
     from torchrl.objectives import BCLoss
 
     from socialzoo.train.demo_data import load_demo_steps
-    from socialzoo.train.policy_net import (
-        make_actor,
-        normalizer_stats,
-        policy_header,
-        policy_network,
-        to_mlp_policy,
-    )
-    from socialzoo.train.run_dir import RunDir, checkpoint_steps, progress_bar
+    from socialzoo.train.policy_net import make_actor
 
-    run = RunDir(args.out, "bc", args, volatile=("progress", "threads"))
-    final = run.path / POLICY_FILE
-    if run.finished and final.exists():
-        logger.info("bc: %s is a finished run; nothing to do", run.path)
-        return final
-    start = time.perf_counter()
-    data = load_demo_steps(args.demos, args.steps)
+    parts = imitation_parts(run, args)
+    data, net = parts.data, parts.net
     validation = load_demo_steps(args.validation) if args.validation is not None else None
-    generator = torch.Generator().manual_seed(args.seed)
-    net = policy_network(
-        data.obs.shape[1], args.hidden, args.activation, normalizer_stats(data.obs), generator
-    )
     with warnings.catch_warnings():
         # TorchRL's LossModule warns about a target-network attribute that BCLoss never declares.
         warnings.filterwarnings(
@@ -152,18 +105,13 @@ def _train(args: Args) -> Path:
     n = len(data)
     per_epoch = math.ceil(n / args.batch_size)
     updates = max(args.epochs * per_epoch, args.min_updates)
-    checkpoints = set(checkpoint_steps(updates, args.checkpoint_every))
-
-    def save(path: Path) -> Path:
-        policy = to_mlp_policy("bc", net, data.observation, args.activation)
-        header = policy_header("bc", data, run.record, updates=step, wall_seconds=time.perf_counter() - start)
-        return policy.save(path, header)
-
+    schedule = run.schedule(updates, args.checkpoint_every)
+    bar = run.progress(updates, unit="update")
+    writer = run.writer
     step = 0
-    bar = progress_bar(updates, "bc", args.progress, unit="update")
-    with run.tensorboard() as writer, set_exploration_type(ExplorationType.DETERMINISTIC):
+    with set_exploration_type(ExplorationType.DETERMINISTIC):
         while step < updates:
-            order = torch.randperm(n, generator=generator)
+            order = torch.randperm(n, generator=parts.generator)
             for lo in range(0, n, args.batch_size):
                 if step >= updates:
                     break
@@ -177,8 +125,8 @@ def _train(args: Args) -> Path:
                 bar.update(1)
                 if step % 50 == 0 or step == updates:
                     writer.add_scalar("bc/loss", loss.item(), step)
-                if step in checkpoints:
-                    save(run.checkpoint_path(step, ".safetensors"))
+                for due in schedule.due(step):
+                    run.checkpoint(due, lambda path, due=due: parts.save(path, updates=due))
             train_agreement = agreement(net, data.obs, data.action)
             writer.add_scalar("bc/train_agreement", train_agreement, step)
             bar.set_postfix(loss=f"{loss.item():.3f}", agree=f"{train_agreement:.3f}")
@@ -186,17 +134,12 @@ def _train(args: Args) -> Path:
                 writer.add_scalar(
                     "bc/validation_agreement", agreement(net, validation.obs, validation.action), step
                 )
-    bar.close()
-    path = save(final)
+    parts.save(run.policy, updates=step)
     results: dict[str, Any] = {
-        "policy": str(path),
         "updates": updates,
         "demonstration_steps": n,
         "train_agreement": agreement(net, data.obs, data.action),
-        "wall_seconds": round(time.perf_counter() - start, 1),
     }
     if validation is not None:
         results["validation_agreement"] = agreement(net, validation.obs, validation.action)
-    run.finish(**results)
-    logger.info("bc: wrote %s (%s)", path, results)
-    return path
+    return results

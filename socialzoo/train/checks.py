@@ -12,14 +12,14 @@ from socialzoo.core import validation
 Activation = Literal["tanh", "relu"]
 
 
-def _owner(args: Any) -> str:
+def owner(args: Any) -> str:
     """How messages name a trainer's arguments: "bc Args" for socialzoo.train.bc.Args."""
     return f"{type(args).__module__.rsplit('.', 1)[-1]} Args"
 
 
 def check_int(args: Any, name: str, low: int, optional: bool = False) -> None:
     """Raise ValueError unless args.<name> is an int >= low (or None when optional)."""
-    validation.check_int(_owner(args), name, getattr(args, name), low=low, allow_none=optional)
+    validation.check_int(owner(args), name, getattr(args, name), low=low, allow_none=optional)
 
 
 def check_number(
@@ -27,11 +27,11 @@ def check_number(
 ) -> None:
     """Raise ValueError unless args.<name> is a finite number >= low (> low when strict), <= high if
     given."""
-    validation.check_number(_owner(args), name, getattr(args, name), low=low, high=high, low_open=strict)
+    validation.check_number(owner(args), name, getattr(args, name), low=low, high=high, low_open=strict)
 
 
 def check_sizes(args: Any, name: str) -> None:
     """Raise ValueError unless args.<name> is a non-empty tuple of positive ints."""
     value = getattr(args, name)
     if not value or any(not isinstance(h, int) or isinstance(h, bool) or h < 1 for h in value):
-        raise ValueError(f"{_owner(args)}.{name} must be positive ints, got {value!r}")
+        raise ValueError(f"{owner(args)}.{name} must be positive ints, got {value!r}")

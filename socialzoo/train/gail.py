@@ -12,9 +12,8 @@ DIR/run.json, TensorBoard logs and a checkpoint policy every `checkpoint_every` 
 
 from __future__ import annotations
 
-import logging
-import time
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -22,35 +21,39 @@ from typing import Any, Literal
 import numpy as np
 
 from socialzoo.train.checks import Activation, check_int, check_number, check_sizes
+from socialzoo.train.imitation import ImitationArgs, imitation_parts
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
-logger = logging.getLogger(__name__)
-
-POLICY_FILE = "gail.safetensors"
+TRAINER = Trainer("gail", policy_file="gail.safetensors")
+POLICY_FILE = TRAINER.policy_file
 GailReward = Literal["logit", "positive", "negative"]
 # The generator's reward is clipped to +-REWARD_CLIP (a saturated discriminator would give inf).
 REWARD_CLIP = 10.0
 
 
 @dataclass(frozen=True, kw_only=True)
-class Args:
+class Args(ImitationArgs):
     """GAIL on Ref demonstrations: TorchRL GAILLoss discriminator, ClipPPOLoss generator.
 
+    The arguments every imitation trainer takes are socialzoo.train.imitation.ImitationArgs; these
+    are GAIL's own, and the defaults GAIL changes.
+
     Attributes:
-        demos: the demonstration file (`socialzoo demos --episodes 125 --out runs/lfd/ref_demos.npz`).
-        steps: demonstration steps used, the first ones of the file (the paper's sizes: 155400,
-            116600, 77700, 38800, 3500); None: all of them.
+        out: run folder: gail.safetensors, run.json, tensorboard/, checkpoints/.
+        hidden: hidden sizes of the policy and value MLPs.
+        activation: hidden activation of the policy and value MLPs.
+        lr: Adam learning rate of the policy and value networks.
+        seed: seed of the weights, minibatches, action sampling and training scenarios.
+        checkpoint_every: write a checkpoint policy every this many env steps.
         total_steps: env steps of generator experience.
         num_envs: env rows stepped together (B).
         rollout_len: steps per row per iteration; B * rollout_len transitions per update.
         scenario_repeats: episodes on each training scenario before a new one is drawn (the
             original regenerated one every 20 resets for GAIL).
         max_episode_steps: episode time limit of the training env, steps (the benchmark's 3200).
-        hidden: hidden sizes of the policy and value MLPs.
-        activation: hidden activation of the policy and value MLPs.
         disc_hidden: hidden sizes of the discriminator MLP (tanh).
         reward: the generator's reward from D: "logit" log D - log(1 - D), "positive"
             -log(1 - D), "negative" log D.
-        lr: Adam learning rate of the policy and value networks.
         disc_lr: Adam learning rate of the discriminator.
         disc_epochs: passes of the discriminator over each iteration's transitions.
         grad_penalty: gradient-penalty weight of GAILLoss (0: none).
@@ -62,25 +65,18 @@ class Args:
         entropy_coeff: entropy bonus weight.
         critic_coeff: value loss weight.
         max_grad_norm: gradient-norm clip of the PPO update.
-        seed: seed of the weights, minibatches, action sampling and training scenarios.
-        out: run folder: gail.safetensors, run.json, tensorboard/, checkpoints/.
-        checkpoint_every: write a checkpoint policy every this many env steps.
-        threads: torch CPU threads.
-        progress: show a progress bar.
     """
 
-    demos: Path = Path("runs/lfd/ref_demos.npz")
-    steps: int | None = 155_400
+    out: Path = Path("runs/gail")
+    hidden: tuple[int, ...] = (64, 64)
+    activation: Activation = "tanh"
     total_steps: int = 200_000
     num_envs: int = 40
     rollout_len: int = 50
     scenario_repeats: int = 20
     max_episode_steps: int = 3200
-    hidden: tuple[int, ...] = (64, 64)
-    activation: Activation = "tanh"
     disc_hidden: tuple[int, ...] = (64, 64)
     reward: GailReward = "logit"
-    lr: float = 1e-3
     disc_lr: float = 1e-3
     disc_epochs: int = 2
     grad_penalty: float = 0.0
@@ -92,18 +88,10 @@ class Args:
     entropy_coeff: float = 0.01
     critic_coeff: float = 0.5
     max_grad_norm: float = 0.5
-    seed: int = 0
-    out: Path = Path("runs/gail")
-    checkpoint_every: int = 2000
-    threads: int = 1
-    progress: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "demos", Path(self.demos))
-        object.__setattr__(self, "out", Path(self.out))
-        object.__setattr__(self, "hidden", tuple(self.hidden))
+        super().__post_init__()
         object.__setattr__(self, "disc_hidden", tuple(self.disc_hidden))
-        check_int(self, "steps", 1, optional=True)
         for name in (
             "total_steps",
             "num_envs",
@@ -113,18 +101,12 @@ class Args:
             "disc_epochs",
             "ppo_epochs",
             "minibatch",
-            "checkpoint_every",
-            "threads",
         ):
             check_int(self, name, 1)
-        check_int(self, "seed", 0)
-        check_sizes(self, "hidden")
         check_sizes(self, "disc_hidden")
-        if self.activation not in ("tanh", "relu"):
-            raise ValueError(f"gail Args.activation must be 'tanh' or 'relu', got {self.activation!r}")
         if self.reward not in ("logit", "positive", "negative"):
             raise ValueError(f"gail Args.reward must be logit, positive or negative, got {self.reward!r}")
-        for name in ("lr", "disc_lr", "clip_epsilon", "max_grad_norm"):
+        for name in ("disc_lr", "clip_epsilon", "max_grad_norm"):
             check_number(self, name, 0.0, strict=True)
         for name in ("grad_penalty", "entropy_coeff", "critic_coeff"):
             check_number(self, name, 0.0)
@@ -181,24 +163,13 @@ def gail_reward(logits: Any, kind: GailReward) -> Any:
 
 
 def train(args: Args) -> Path:
-    """Run GAIL; returns the policy file (an existing finished run is reused).
-
-    Raises:
-        ValueError: a demonstration file with fewer than args.steps steps.
-        socialzoo.train.run_dir.RunDirError: args.out holds a run of other arguments.
-    """
-    import torch
-
-    from socialzoo.train.policy_net import torch_threads
-
-    # Action sampling inside TorchRL draws from torch's global generator: seed it for this run
-    # only, and give the caller its own state back afterwards.
-    with torch_threads(args.threads), torch.random.fork_rng(devices=[]):
-        torch.manual_seed(args.seed)
-        return _train(args)
+    """Run GAIL on the trainer skeleton, which seeds torch's global generator for the run (TorchRL's
+    action sampling draws from it); returns gail.safetensors, or that of a finished run of the same
+    arguments in args.out."""
+    return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 
-def _train(args: Args) -> Path:
+def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     import torch
     from torchrl.collectors import Collector
     from torchrl.modules import ValueOperator
@@ -207,31 +178,12 @@ def _train(args: Args) -> Path:
 
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.torchrl_single import ActionSelectionTorchEnv
-    from socialzoo.train.demo_data import load_demo_steps
-    from socialzoo.train.policy_net import (
-        Discriminator,
-        init_linear,
-        make_actor,
-        mlp,
-        normalizer_stats,
-        policy_header,
-        policy_network,
-        to_mlp_policy,
-    )
-    from socialzoo.train.run_dir import RunDir, progress_bar
+    from socialzoo.train.policy_net import Discriminator, init_linear, make_actor, mlp
 
-    run = RunDir(args.out, "gail", args, volatile=("progress", "threads"))
-    final = run.path / POLICY_FILE
-    if run.finished and final.exists():
-        logger.info("gail: %s is a finished run; nothing to do", run.path)
-        return final
-    start = time.perf_counter()
-    data = load_demo_steps(args.demos, args.steps)
-    stats = normalizer_stats(data.obs)
-    generator = torch.Generator().manual_seed(args.seed)
+    parts = imitation_parts(run, args)
+    data, stats, generator, policy_net = parts.data, parts.stats, parts.generator, parts.net
     obs_size = data.obs.shape[1]
 
-    policy_net = policy_network(obs_size, args.hidden, args.activation, stats, generator)
     actor = make_actor(policy_net)
     value_net = mlp(obs_size, args.hidden, 1, args.activation, stats)
     init_linear(value_net, generator, last_gain=1.0)
@@ -271,96 +223,83 @@ def _train(args: Args) -> Path:
     expert_obs = torch.as_tensor(data.obs)
     expert_act = torch.as_tensor(data.one_hot())
     frames = 0
-    next_checkpoint = args.checkpoint_every
+    schedule = run.schedule(args.total_steps, args.checkpoint_every)
     outcomes: deque[float] = deque(maxlen=100)  # success of the latest finished episodes
     stats_log: dict[str, float] = {}
-
-    def save(path: Path) -> Path:
-        policy = to_mlp_policy("gail", policy_net, data.observation, args.activation)
-        header = policy_header(
-            "gail", data, run.record, env_steps=frames, wall_seconds=time.perf_counter() - start
-        )
-        return policy.save(path, header)
 
     def minibatches(n: int) -> list[Any]:
         order = torch.randperm(n, generator=generator)
         return [order[lo : lo + args.minibatch] for lo in range(0, n, args.minibatch)]
 
-    bar = progress_bar(args.total_steps, "gail", args.progress, unit="step")
-    with run.tensorboard() as writer:
-        for batch in collector:
-            flat = batch.reshape(-1)
-            n = flat.numel()
-            frames += n
-            collector_act = flat["action"].to(torch.float32)
-            # 1. The discriminator: demonstrations (label 1) against this iteration's transitions (0).
-            for _ in range(args.disc_epochs):
-                for idx in minibatches(n):
-                    pick = torch.randint(len(expert_obs), (len(idx),), generator=generator)
-                    disc_loss = discriminator_step(
-                        gail_loss,
-                        disc_optim,
-                        (expert_obs[pick], expert_act[pick]),
-                        (flat["observation"][idx], collector_act[idx]),
-                    )
-            # 2. The generator's reward from the updated discriminator.
-            with torch.no_grad():
-                logits = discriminator.logits(batch["observation"], batch["action"])
-                expert_logits = discriminator.logits(expert_obs[pick], expert_act[pick])
-                env_reward = batch["next", "reward"].clone()
-                batch["next", "reward"] = gail_reward(logits, args.reward)
-                advantage(batch)
-            # 3. PPO on that reward.
-            flat = batch.reshape(-1)
-            for _ in range(args.ppo_epochs):
-                for idx in minibatches(n):
-                    losses = ppo_loss(flat[idx])
-                    loss = losses["loss_objective"] + losses["loss_critic"]
-                    if "loss_entropy" in losses.keys():
-                        loss = loss + losses["loss_entropy"]
-                    ppo_optim.zero_grad()
-                    loss.backward()
-                    torch.nn.utils.clip_grad_norm_(ppo_loss.parameters(), args.max_grad_norm)
-                    ppo_optim.step()
-            collector.update_policy_weights_()
+    bar = run.progress(args.total_steps, unit="step")
+    writer = run.writer
+    for batch in collector:
+        flat = batch.reshape(-1)
+        n = flat.numel()
+        frames += n
+        collector_act = flat["action"].to(torch.float32)
+        # 1. The discriminator: demonstrations (label 1) against this iteration's transitions (0).
+        for _ in range(args.disc_epochs):
+            for idx in minibatches(n):
+                pick = torch.randint(len(expert_obs), (len(idx),), generator=generator)
+                disc_loss = discriminator_step(
+                    gail_loss,
+                    disc_optim,
+                    (expert_obs[pick], expert_act[pick]),
+                    (flat["observation"][idx], collector_act[idx]),
+                )
+        # 2. The generator's reward from the updated discriminator.
+        with torch.no_grad():
+            logits = discriminator.logits(batch["observation"], batch["action"])
+            expert_logits = discriminator.logits(expert_obs[pick], expert_act[pick])
+            env_reward = batch["next", "reward"].clone()
+            batch["next", "reward"] = gail_reward(logits, args.reward)
+            advantage(batch)
+        # 3. PPO on that reward.
+        flat = batch.reshape(-1)
+        for _ in range(args.ppo_epochs):
+            for idx in minibatches(n):
+                losses = ppo_loss(flat[idx])
+                loss = losses["loss_objective"] + losses["loss_critic"]
+                if "loss_entropy" in losses.keys():
+                    loss = loss + losses["loss_entropy"]
+                ppo_optim.zero_grad()
+                loss.backward()
+                torch.nn.utils.clip_grad_norm_(ppo_loss.parameters(), args.max_grad_norm)
+                ppo_optim.step()
+        collector.update_policy_weights_()
 
-            done = batch["next", "done"].reshape(-1)
-            outcomes.extend(batch["next", "success"].reshape(-1)[done].to(torch.float32).tolist())
-            actions = flat["action"].to(torch.float32).mean(0)
-            stats_log = {
-                "gail/disc_loss": disc_loss,
-                "gail/disc_expert_prob": torch.sigmoid(expert_logits).mean().item(),
-                "gail/disc_generator_prob": torch.sigmoid(logits).mean().item(),
-                "gail/reward": batch["next", "reward"].mean().item(),
-                "gail/env_reward": env_reward.mean().item(),
-                "ppo/loss_objective": losses["loss_objective"].item(),
-                "ppo/loss_critic": losses["loss_critic"].item(),
-                "ppo/entropy": losses["entropy"].item() if "entropy" in losses.keys() else float("nan"),
-                **{f"actions/{i}": actions[i].item() for i in range(len(actions))},
-            }
-            if outcomes:
-                stats_log["episodes/success_rate_last100"] = float(np.mean(outcomes))
-            for key, value in stats_log.items():
-                writer.add_scalar(key, value, frames)
-            bar.update(n)
-            bar.set_postfix(
-                D=f"{stats_log['gail/disc_expert_prob']:.2f}/{stats_log['gail/disc_generator_prob']:.2f}",
-                success=f"{np.mean(outcomes):.2f}" if outcomes else "-",
-            )
-            if frames >= next_checkpoint:
-                save(run.checkpoint_path(frames, ".safetensors"))
-                next_checkpoint = (frames // args.checkpoint_every + 1) * args.checkpoint_every
-    bar.close()
+        done = batch["next", "done"].reshape(-1)
+        outcomes.extend(batch["next", "success"].reshape(-1)[done].to(torch.float32).tolist())
+        actions = flat["action"].to(torch.float32).mean(0)
+        stats_log = {
+            "gail/disc_loss": disc_loss,
+            "gail/disc_expert_prob": torch.sigmoid(expert_logits).mean().item(),
+            "gail/disc_generator_prob": torch.sigmoid(logits).mean().item(),
+            "gail/reward": batch["next", "reward"].mean().item(),
+            "gail/env_reward": env_reward.mean().item(),
+            "ppo/loss_objective": losses["loss_objective"].item(),
+            "ppo/loss_critic": losses["loss_critic"].item(),
+            "ppo/entropy": losses["entropy"].item() if "entropy" in losses.keys() else float("nan"),
+            **{f"actions/{i}": actions[i].item() for i in range(len(actions))},
+        }
+        if outcomes:
+            stats_log["episodes/success_rate_last100"] = float(np.mean(outcomes))
+        for key, value in stats_log.items():
+            writer.add_scalar(key, value, frames)
+        bar.update(n)
+        bar.set_postfix(
+            D=f"{stats_log['gail/disc_expert_prob']:.2f}/{stats_log['gail/disc_generator_prob']:.2f}",
+            success=f"{np.mean(outcomes):.2f}" if outcomes else "-",
+        )
+        if schedule.due(frames):
+            # One checkpoint per batch, at the frames collected (a batch may pass several steps).
+            run.checkpoint(frames, lambda path, done=frames: parts.save(path, env_steps=done))
     collector.shutdown()
-    path = save(final)
-    results: dict[str, Any] = {
-        "policy": str(path),
+    parts.save(run.policy, env_steps=frames)
+    return {
         "env_steps": frames,
         "demonstration_steps": len(data),
         "training_success_last100": float(np.mean(outcomes)) if outcomes else None,
         "final_stats": stats_log,
-        "wall_seconds": round(time.perf_counter() - start, 1),
     }
-    run.finish(**results)
-    logger.info("gail: wrote %s (%s)", path, {k: v for k, v in results.items() if k != "final_stats"})
-    return path

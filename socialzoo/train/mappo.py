@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import torch
@@ -47,13 +47,10 @@ from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.policy_file import current_env_version
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.torchrl_env import HUMAN, ROBOT, SocialNavTorchEnv
+from socialzoo.train.marl_args import Algo, CollectorKind
 
 logger = logging.getLogger(__name__)
 
-Algo = Literal["mappo", "ippo"]
-CollectorKind = Literal["single", "multiprocess", "ray"]
-ALGOS: tuple[str, ...] = ("mappo", "ippo")
-COLLECTORS: tuple[str, ...] = ("single", "multiprocess", "ray")
 # The env id recorded in policy files: the multi-agent env at the benchmark's env version.
 MULTI_AGENT_ENV_ID = "socialzoo/MultiAgent-v{version}"
 

@@ -10,14 +10,10 @@ command, the synthesis time and the program's agreement with the demonstrator.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import itertools
-import json
 import logging
 import math
-import shlex
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +25,9 @@ from socialzoo.agents.demonstrations import load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
 from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
-from socialzoo.train.pips_search import SearchSettings, search_guard
+from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
+from socialzoo.train.run_dir import read_record
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 logger = logging.getLogger(__name__)
 
@@ -37,31 +35,20 @@ SIDECAR_SUFFIX = ".train.json"
 
 
 @dataclass(frozen=True, kw_only=True)
-class PipsArgs:
+class PipsArgs(SearchOptions):
     """Arguments of `socialzoo train pips`. The defaults are the paper's set-up: the first 3,500
-    demonstration steps of Ref, windowed around changes of action.
+    demonstration steps of Ref, windowed around changes of action. The search options
+    (max_depth ... z3_timeout_s) are socialzoo.train.pips_search.SearchOptions.
 
     Attributes:
         demos: demonstration file (.npz, `socialzoo demos --out FILE`), recorded on training scenarios.
-        out: where the program JSON goes; the sidecar is written beside it (NAME.train.json).
+        out: where the program JSON goes; the run record is written beside it (NAME.train.json).
         steps: demonstration steps used (see `sampling`), in the file's episode order.
         window: examples are the steps at most this many steps before or after a change of
             action (in the same episode); 0 uses every step (no windowing).
         sampling: "prefix": the examples are the windowed steps among the first `steps` steps
             of the file; "windows": they are the first `steps` windowed steps of the file.
-        max_depth: deepest feature expression (0: atomic features only).
-        max_pred_size: most comparisons in one guard (1 to 3).
-        beam: expressions of each depth combined into the next.
-        pool: best-comparing features tried as the first of two comparisons.
-        partners: best-comparing expressions tried as the second (besides every atomic feature).
-        complexity_cost: the price of complexity, in examples: a guard must classify this many
-            more examples right than never firing, and as many more again for each comparison
-            beyond the first and each level of expression depth.
         min_positives: a transition is learned only if the examples show it at least this often.
-        solver: "z3" (the best candidates' thresholds by z3's MaxSMT optimiser) or "exact"
-            (the exact threshold search alone).
-        z3_candidates: candidates per guard whose thresholds z3 solves.
-        z3_timeout_s: z3's time limit per candidate, s.
         seed: z3's random seed (the search itself is deterministic).
         time_budget_s: no deeper expressions are started after this much synthesis time, s.
         heldout_steps: demonstration steps after the used ones on which the agreement with the
@@ -73,16 +60,7 @@ class PipsArgs:
     steps: int = 3500
     window: int = 20
     sampling: Literal["prefix", "windows"] = "prefix"
-    max_depth: int = 2
-    max_pred_size: int = 2
-    beam: int = 24
-    pool: int = 24
-    partners: int = 1000
-    complexity_cost: float = 1.0
     min_positives: int = 1
-    solver: Literal["z3", "exact"] = "z3"
-    z3_candidates: int = 3
-    z3_timeout_s: float = 30.0
     seed: int = 0
     time_budget_s: float = 540.0
     heldout_steps: int = 20_000
@@ -121,6 +99,27 @@ class PipsArgs:
             raise ValueError(f"PipsArgs.sampling must be 'prefix' or 'windows', got {self.sampling!r}")
         if self.solver not in ("z3", "exact"):
             raise ValueError(f"PipsArgs.solver must be 'z3' or 'exact', got {self.solver!r}")
+
+
+@dataclass(frozen=True)
+class ProgramTrainer(Trainer):
+    """PIPS writes a program file (args.out) and its run record beside it (NAME.train.json)."""
+
+    def folder(self, args: Any) -> Path:
+        """The program's folder."""
+        return Path(args.out).parent
+
+    def record_name(self, args: Any) -> str:
+        """NAME.train.json for program NAME.json."""
+        return sidecar_path(args.out).name
+
+    def policy_path(self, args: Any) -> Path:
+        """The program file."""
+        return Path(args.out)
+
+
+# The run's identity is every argument but the program's file name (its record is named after it).
+TRAINER = ProgramTrainer("pips", policy_file="pips.json", uses_torch=False, volatile=("out",))
 
 
 def window_mask(action: np.ndarray, prev: np.ndarray, episode: np.ndarray, window: int) -> np.ndarray:
@@ -311,12 +310,14 @@ def sidecar_path(program_path: str | Path) -> Path:
 
 
 def train(args: PipsArgs) -> Path:
-    """Synthesise a program from demonstrations and write it with its sidecar.
+    """Synthesise a program from demonstrations on the trainer skeleton.
 
-    Writes args.out (the program, socialzoo.agents.pips JSON) and NAME.train.json beside it:
-    the resolved arguments, the seed, the command line, the synthesis time, the demonstrations
-    used (file digest, steps, episodes, examples), each guard's fit, the readable rules, and the
-    agreement with the demonstrator on the examples, on the steps used and on held-out steps.
+    Writes args.out (the program, socialzoo.agents.pips JSON) and its run record NAME.train.json
+    beside it: the resolved arguments, the seed, the command line, and in its results the
+    synthesis time, the demonstrations used (file digest, steps, episodes, examples), each guard's
+    fit, the readable rules, and the agreement with the demonstrator on the examples, on the steps
+    used and on held-out steps (`read_program_record` reads it). A finished run of the same
+    arguments is not repeated.
 
     Returns:
         The program's path.
@@ -325,9 +326,10 @@ def train(args: PipsArgs) -> Path:
         socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file.
         ValueError: a file that is not in the paper observation layout.
     """
-    from socialzoo import __version__
+    return run_training(TRAINER, args, lambda run: _synthesize_run(run, args))
 
-    started = time.perf_counter()
+
+def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     demos = Path(args.demos)
     arrays, meta = load_demonstrations(demos)
     layout = meta.get("env_config", {}).get("observation", {}).get("layout", "paper")
@@ -346,25 +348,11 @@ def train(args: PipsArgs) -> Path:
         len(np.unique(episode)),
         int((action != prev).sum()),
     )
-    settings = SearchSettings(
-        max_depth=args.max_depth,
-        max_pred_size=args.max_pred_size,
-        beam=args.beam,
-        pool=args.pool,
-        partners=args.partners,
-        complexity_cost=args.complexity_cost,
-        solver=args.solver,
-        z3_candidates=args.z3_candidates,
-        z3_timeout_s=args.z3_timeout_s,
-        seed=args.seed,
-        deadline=time.monotonic() + args.time_budget_s,
-    )
+    settings = SearchSettings.of(args, seed=args.seed, deadline=time.monotonic() + args.time_budget_s)
     search_started = time.perf_counter()
     program, reports = synthesize(obs[mask], action[mask], settings, min_positives=args.min_positives)
     synthesis_s = time.perf_counter() - search_started
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    program.save(out)
+    program.save(run.policy)
     rules = program.rules()
     for line in rules:
         logger.info("PIPS rule: %s", line)
@@ -384,14 +372,9 @@ def train(args: PipsArgs) -> Path:
         )
     import z3
 
-    record = {
-        "algorithm": "pips",
-        "args": dataclasses.asdict(args),
-        "seed": args.seed,
-        "command": shlex.join(getattr(sys, "orig_argv", sys.argv)),
+    logger.info("PIPS: program in %s (synthesis %.1f s)", run.policy, synthesis_s)
+    return {
         "synthesis_seconds": synthesis_s,
-        "total_seconds": time.perf_counter() - started,
-        "package_version": __version__,
         "z3_version": z3.get_version_string(),
         "demonstrations": {
             "path": str(demos),
@@ -408,7 +391,18 @@ def train(args: PipsArgs) -> Path:
         "rules": rules,
         "agreement": fit,
     }
-    sidecar = sidecar_path(out)
-    sidecar.write_text(json.dumps(record, indent=1) + "\n")
-    logger.info("PIPS: program in %s, record in %s (synthesis %.1f s)", out, sidecar, synthesis_s)
-    return out
+
+
+def read_program_record(program: str | Path) -> dict[str, Any]:
+    """The run record beside a program file (NAME.train.json) as one flat dict: the record's
+    fields with its results beside them (synthesis_seconds, agreement, demonstrations, rules,
+    wall_seconds, ...); records written before the trainer skeleton are flat already. {} when
+    there is none.
+
+    Raises:
+        socialzoo.train.run_dir.RunDirError: a record that is not a JSON object (naming it).
+    """
+    record = read_record(sidecar_path(program))
+    if record is None:
+        return {}
+    return {**record, **(record.get("results") or {})}

@@ -14,6 +14,7 @@ import logging
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
@@ -102,25 +103,23 @@ def _candidate(
 
 
 @dataclass(frozen=True, kw_only=True)
-class SearchSettings:
-    """How hard one guard is searched (PipsArgs carries these).
+class SearchOptions:
+    """How hard one guard is searched: the options `socialzoo train pips` passes on (PipsArgs
+    inherits them).
 
     Attributes:
-        max_depth: deepest feature expression.
-        max_pred_size: most comparisons in a guard (1 to 3).
-        beam: expressions of each depth carried to the next.
+        max_depth: deepest feature expression (0: atomic features only).
+        max_pred_size: most comparisons in one guard (1 to 3).
+        beam: expressions of each depth combined into the next.
         pool: best-comparing features tried as the first of two comparisons.
         partners: best-comparing expressions tried as the second (besides every atomic feature).
         complexity_cost: the price of complexity, in examples: a guard must classify this many
-            more examples right for each comparison beyond the first and each level of
-            expression depth, and for itself (than never firing).
-        refine: lane-expression families (and best candidates) whose lane widths are refined
-            to the centimetre.
-        solver: "z3" (z3 solves the final candidates' thresholds as MaxSMT) or "exact" (no z3).
-        z3_candidates: how many of the best candidates z3 solves.
-        z3_timeout_s: z3's time limit per candidate.
-        seed: z3's random seed.
-        deadline: time.monotonic() after which no deeper level is started.
+            more examples right than never firing, and as many more again for each comparison
+            beyond the first and each level of expression depth.
+        solver: "z3" (the best candidates' thresholds by z3's MaxSMT optimiser) or "exact"
+            (the exact threshold search alone).
+        z3_candidates: candidates per guard whose thresholds z3 solves.
+        z3_timeout_s: z3's time limit per candidate, s.
     """
 
     max_depth: int = 2
@@ -129,12 +128,31 @@ class SearchSettings:
     pool: int = 24
     partners: int = 1000
     complexity_cost: float = 1.0
-    refine: int = 16
-    solver: str = "z3"
+    solver: Literal["z3", "exact"] = "z3"
     z3_candidates: int = 3
     z3_timeout_s: float = 30.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class SearchSettings(SearchOptions):
+    """The search of one guard: its options and what the synthesiser sets for a run.
+
+    Attributes:
+        refine: lane-expression families (and best candidates) whose lane widths are refined
+            to the centimetre.
+        seed: z3's random seed.
+        deadline: time.monotonic() after which no deeper level is started.
+    """
+
+    refine: int = 16
     seed: int = 0
     deadline: float = float("inf")
+
+    @classmethod
+    def of(cls, options: SearchOptions, **settings: Any) -> SearchSettings:
+        """The settings with `options`' search options (from PipsArgs, say) and `settings`."""
+        shared = {f.name: getattr(options, f.name) for f in dataclasses.fields(SearchOptions)}
+        return cls(**shared, **settings)
 
 
 class _Ranker:

@@ -8,7 +8,9 @@ Every trainer writes into one folder:
     <policy file>     the final policy
 
 A folder already holding a run of other arguments is refused, so two runs never mix; a finished
-run of the same arguments is reported as done, so a rerun repeats nothing.
+run of the same arguments is reported as done, so a rerun repeats nothing. An argument added to a
+trainer after a run was recorded does not count against it while it has its default value.
+Trainers use the folder through their skeleton (socialzoo.train.skeleton).
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from socialzoo.core.files import read_json
 
 logger = logging.getLogger(__name__)
 
@@ -62,26 +66,33 @@ class RunDir:
         args: the trainer's argument dataclass (its plain form is the run's identity; fields
             named in `volatile` are recorded but do not count, e.g. the progress bar switch).
         volatile: argument names that do not change the result.
+        record_name: the record's file name (run.json; PIPS keeps NAME.train.json beside its program).
 
     Raises:
         RunDirError: the folder holds a run of another algorithm or other arguments.
     """
 
-    def __init__(self, path: str | Path, algo: str, args: Any, volatile: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        algo: str,
+        args: Any,
+        volatile: tuple[str, ...] = (),
+        record_name: str = RUN_FILE,
+    ) -> None:
         from socialzoo import __version__
 
         self.path = Path(path)
         self.path.mkdir(parents=True, exist_ok=True)
+        self.file = self.path / record_name
         self.algo = algo
         resolved = plain(args)
-        identity = {k: v for k, v in resolved.items() if k not in volatile}
         existing = self.read()
         if existing is not None:
-            theirs = {k: v for k, v in existing.get("args", {}).items() if k not in volatile}
-            if existing.get("algo") != algo or theirs != identity:
-                changed = sorted(k for k in set(theirs) | set(identity) if theirs.get(k) != identity.get(k))
+            changed = differing_args(existing, algo, args, volatile)
+            if changed is not None:
                 raise RunDirError(
-                    f"{self.path} holds a {existing.get('algo')} run with other arguments "
+                    f"{self.file}: {self.path} holds a {existing.get('algo')} run with other arguments "
                     f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
                 )
         self.record: dict[str, Any] = existing or {
@@ -93,17 +104,11 @@ class RunDir:
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "finished": None,
         }
-        _write_json(self.path / RUN_FILE, self.record)
+        _write_json(self.file, self.record)
 
     def read(self) -> dict[str, Any] | None:
-        """The run.json of this folder, or None."""
-        file = self.path / RUN_FILE
-        if not file.exists():
-            return None
-        try:
-            return json.loads(file.read_text())
-        except json.JSONDecodeError as err:
-            raise RunDirError(f"{file}: unreadable run record ({err})") from None
+        """The record of this folder, or None."""
+        return read_record(self.file)
 
     @property
     def finished(self) -> bool:
@@ -114,7 +119,7 @@ class RunDir:
         """Mark the run finished and record `results` (plain JSON: wall time, final metrics, files)."""
         self.record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         self.record["results"] = plain(results)
-        _write_json(self.path / RUN_FILE, self.record)
+        _write_json(self.file, self.record)
 
     def checkpoint_path(self, step: int, suffix: str) -> Path:
         """checkpoints/step_<step>.<suffix> (folder created)."""
@@ -149,6 +154,49 @@ class RunDir:
             writer.close()
 
 
+def differing_args(
+    record: dict[str, Any], algo: str, args: Any, volatile: tuple[str, ...]
+) -> list[str] | None:
+    """None when `record` is a run of `algo` with these arguments (fields in `volatile` aside, and
+    fields the record does not have yet at their defaults); else the differing argument names
+    (empty when only the algorithm differs)."""
+    identity = {k: v for k, v in plain(args).items() if k not in volatile}
+    theirs = {k: v for k, v in record.get("args", {}).items() if k not in volatile}
+    for name, default in _defaults(args).items():
+        if name not in theirs and name in identity and identity[name] == default:
+            theirs[name] = default
+    if record.get("algo") == algo and theirs == identity:
+        return None
+    return sorted(k for k in set(theirs) | set(identity) if theirs.get(k) != identity.get(k))
+
+
+def read_record(file: Path) -> dict[str, Any] | None:
+    """A run record (JSON object), or None when the file does not exist.
+
+    Raises:
+        RunDirError: the file is not a run record (naming it).
+    """
+    if not file.exists():
+        return None
+    record = read_json(file, "run record", RunDirError, kind=dict)
+    if not isinstance(record.get("algo"), str) or not isinstance(record.get("args"), dict):
+        raise RunDirError(f"{file}: not a run record (no trainer name 'algo' and arguments 'args')")
+    return record
+
+
+def _defaults(args: Any) -> dict[str, Any]:
+    """The plain default of each field of an argument dataclass that has one."""
+    if not dataclasses.is_dataclass(args):
+        return {}
+    found = {}
+    for f in dataclasses.fields(args):
+        if f.default is not dataclasses.MISSING:
+            found[f.name] = plain(f.default)
+        elif f.default_factory is not dataclasses.MISSING:
+            found[f.name] = plain(f.default_factory())
+    return found
+
+
 class _NullWriter:
     def add_scalar(self, *args: Any, **kwargs: Any) -> None:
         pass
@@ -162,10 +210,3 @@ def checkpoint_steps(total: int, every: int) -> list[int]:
     if not steps or steps[-1] != total:
         steps.append(total)
     return steps
-
-
-def progress_bar(total: int, desc: str, enabled: bool = True, unit: str = "step") -> Any:
-    """A tqdm progress bar (disabled when `enabled` is False)."""
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, desc=desc, unit=unit, disable=not enabled, dynamic_ncols=True, smoothing=0.05)

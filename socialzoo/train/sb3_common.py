@@ -1,39 +1,162 @@
-"""What the Stable-Baselines3 trainers (ppo, dqn) share: the training env, policy-file checkpoints,
-logs and the run record.
+"""What the Stable-Baselines3 trainers (ppo, dqn) share: their common arguments, the training
+env, and the SB3 callback that feeds the trainer skeleton's checkpoints, logs and progress.
 
 A run trains on the batched SB3VecEnv (scenarios from the env's own seeded stream, never a test
-set), optionally behind VecNormalize, and writes into its RunDir: a policy file every
-`checkpoint_every` env steps (checkpoints/step_<steps>.safetensors: the policy after training on
-that many steps), TensorBoard logs of SB3's losses and of the episodes' success, and the final
-policy file <algo>.safetensors.
+set), optionally behind VecNormalize, and writes into its run folder (socialzoo.train.skeleton): a
+policy file every `checkpoint_every` env steps (checkpoints/step_<steps>.safetensors: the policy
+after training on that many steps), TensorBoard logs of SB3's losses and of the episodes' success,
+and the final policy file <algo>.safetensors.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
-import time
+import warnings
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
-from socialzoo.train.run_dir import RunDir, checkpoint_steps, plain, progress_bar
+from socialzoo.train.skeleton import CheckpointSchedule, Trainer, TrainingRun, run_training
 
 logger = logging.getLogger(__name__)
 
 POLICY_SUFFIX = ".safetensors"
-# Fields of every SB3 trainer's Args that do not change what is trained (a run folder may move).
-VOLATILE = ("progress", "out")
 
 
-def training_env_config(
-    map_name: str, family: str | None, max_steps: int, repeats: int, overrides: Mapping[str, Any]
-) -> EnvConfig:
-    """The training env's config: the benchmark's, on `map_name` (or a scenario family), with each
-    scenario run `repeats` times before the next is drawn, and other EnvConfig overrides."""
-    config = EnvConfig().replace(**dict(overrides))
-    return config.replace(map=map_name, family=family, max_steps=max_steps, scenario={"repeats": repeats})
+@dataclass(frozen=True)
+class SB3Trainer(Trainer):
+    """An SB3 trainer: its model class and the activation of its network.
+
+    Attributes:
+        model: the stable_baselines3 class name ("PPO", "DQN").
+        activation: the torch.nn activation of the MLP ("Tanh" for PPO, "ReLU" for DQN: SB3's defaults).
+    """
+
+    model: str = "PPO"
+    activation: str = "Tanh"
+
+
+@dataclass(frozen=True, kw_only=True)
+class SB3Args:
+    """The arguments every Stable-Baselines3 trainer takes; the defaults are PPO's set-up (SB3's
+    PPO defaults and the paper's schedule), and each trainer states where it differs.
+
+    Attributes:
+        out: the run folder: run.json, checkpoints/, tensorboard/ and the final <algo>.safetensors.
+        seed: seeds the network, SB3's sampling and the env's scenario stream.
+        total_steps: env steps of training (the paper: 84,000).
+        checkpoint_every: a policy file every this many env steps (the paper: 2,000); a multiple
+            of the trainer's update block (PPO: the rollout, num_envs * n_steps; DQN: num_envs *
+            train_freq).
+        map: the training map; scenarios come from the env's own seeded stream, never a test set.
+        family: a scenario family instead of the benchmark's scenarios (None: the benchmark).
+        max_steps: episode time limit in steps (the benchmark: 3,200 = 80 s).
+        scenario_repeats: episodes run on each scenario before a new one is drawn (the original:
+            1 for PPO, 20 for DQN).
+        env_overrides: other EnvConfig fields, as a JSON object (e.g. {"reward": {"w_force": -0.02}}).
+        num_envs: rows of the batched training env.
+        learning_rate: Adam learning rate (SB3: PPO 3e-4, DQN 1e-4).
+        batch_size: minibatch size of an update (SB3: PPO 64, DQN 32).
+        gamma: discount factor (SB3: 0.99).
+        max_grad_norm: gradient clipping (SB3: PPO 0.5, DQN 10).
+        net_arch: hidden layer sizes of the network (SB3: 64 64; tanh for PPO, ReLU for DQN).
+        normalize: normalise observations with VecNormalize (saved with the policy).
+        normalize_reward: normalise rewards with VecNormalize during training (SB3's PPO default).
+        eval_trials: evaluate every checkpoint on this many validation scenarios of the training
+            map (never a test set; evaluations.csv, TensorBoard eval/*); 0: none.
+        threads: torch CPU threads.
+        progress: show progress.
+    """
+
+    out: Path = Path("runs/sb3")
+    seed: int = 0
+    total_steps: int = 84_000
+    checkpoint_every: int = 2_000
+    map: str = "gdc1"
+    family: str | None = None
+    max_steps: int = 3200
+    scenario_repeats: int = 1
+    env_overrides: dict[str, Any] = field(default_factory=dict)
+    num_envs: int = 50
+    learning_rate: float = 3e-4
+    batch_size: int = 64
+    gamma: float = 0.99
+    max_grad_norm: float = 0.5
+    net_arch: tuple[int, ...] = (64, 64)
+    normalize: bool = True
+    normalize_reward: bool = True
+    eval_trials: int = 0
+    threads: int = 1
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "out", Path(self.out))
+        object.__setattr__(self, "net_arch", tuple(self.net_arch))
+        owner = type(self).__name__
+        for name in ("total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs"):
+            check_int(owner, name, getattr(self, name), low=1)
+        for name in ("batch_size", "threads"):
+            check_int(owner, name, getattr(self, name), low=1)
+        check_int(owner, "seed", self.seed, low=0)
+        check_int(owner, "eval_trials", self.eval_trials, low=0)
+        check_number(owner, "learning_rate", self.learning_rate, low=0.0, high=1.0)
+        check_number(owner, "gamma", self.gamma, low=0.0, high=1.0)
+        check_number(owner, "max_grad_norm", self.max_grad_norm, low=0.0, high=1e6)
+        if not self.net_arch or any(
+            not isinstance(n, int) or isinstance(n, bool) or n < 1 for n in self.net_arch
+        ):
+            raise ValueError(f"{owner}.net_arch must be positive layer sizes, got {self.net_arch!r}")
+        try:
+            self.env_config()
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"{owner}: bad training env ({err})") from None
+
+    def check_block(self, block: int, what: str) -> None:
+        """Raise ValueError unless checkpoints and the end of training fall on `block` env steps (a
+        rollout, or a training interval), so that each checkpoint holds the policy at its step."""
+        owner = type(self).__name__
+        for name in ("checkpoint_every", "total_steps"):
+            if getattr(self, name) % block:
+                raise ValueError(
+                    f"{owner}.{name} ({getattr(self, name)}) must be a multiple of {what} ({block})"
+                )
+
+    def model_kwargs(self, activation: str) -> dict[str, Any]:
+        """The SB3 model's keyword arguments: those every trainer sets from these fields, then the
+        trainer's own fields (every field its Args adds to SB3Args, by the same name as SB3's)."""
+        import torch
+
+        common = {
+            "learning_rate": self.learning_rate,
+            "batch_size": self.batch_size,
+            "gamma": self.gamma,
+            "max_grad_norm": self.max_grad_norm,
+            "policy_kwargs": {
+                "net_arch": list(self.net_arch),
+                "activation_fn": getattr(torch.nn, activation),
+            },
+            "seed": self.seed,
+            "device": "cpu",
+            "verbose": 0,
+        }
+        shared = {f.name for f in dataclasses.fields(SB3Args)}
+        own = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in shared}
+        return {**common, **own}
+
+    def env_config(self) -> EnvConfig:
+        """The training env's config: the benchmark's, on `map` (or a scenario family), with each
+        scenario run `scenario_repeats` times before the next is drawn, and `env_overrides`."""
+        config = EnvConfig().replace(**dict(self.env_overrides))
+        return config.replace(
+            map=self.map,
+            family=self.family,
+            max_steps=self.max_steps,
+            scenario={"repeats": self.scenario_repeats},
+        )
 
 
 def env_id_of(config: EnvConfig) -> str:
@@ -47,69 +170,39 @@ def env_id_of(config: EnvConfig) -> str:
     return next(iter(BENCHMARK_IDS))
 
 
-def make_training_env(
-    config: EnvConfig, num_envs: int, *, normalize: bool, normalize_reward: bool, gamma: float
-) -> tuple[Any, Any]:
+def make_training_env(args: SB3Args, config: EnvConfig) -> tuple[Any, Any]:
     """(the VecEnv to train on, its VecNormalize or None): SB3VecEnv -> VecMonitor (episode returns
     and lengths for SB3's logs) -> VecNormalize (observations, and rewards if asked)."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from socialzoo.env.sb3_vec import SB3VecEnv
 
-    venv = VecMonitor(SB3VecEnv(num_envs, config))
-    if not (normalize or normalize_reward):
+    venv = VecMonitor(SB3VecEnv(args.num_envs, config))
+    if not (args.normalize or args.normalize_reward):
         return venv, None
-    norm = VecNormalize(venv, norm_obs=normalize, norm_reward=normalize_reward, gamma=gamma)
+    norm = VecNormalize(venv, norm_obs=args.normalize, norm_reward=args.normalize_reward, gamma=args.gamma)
     return norm, norm
 
 
-def check_common(cls: str, args: Any, block: int, what: str) -> None:
-    """Validate the fields every SB3 trainer's Args has. Checkpoints must fall on `block` env steps
-    (a rollout, or a training interval), so each holds the policy at exactly its step.
-
-    Raises:
-        ValueError: naming the field and the bad value.
-    """
-    for name in ("seed", "total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs"):
-        check_int(cls, name, getattr(args, name), low=0 if name == "seed" else 1)
-    check_int(cls, "threads", args.threads, low=1)
-    if args.checkpoint_every % block:
-        raise ValueError(
-            f"{cls}.checkpoint_every ({args.checkpoint_every}) must be a multiple of {what} ({block})"
-        )
-    if args.total_steps % block:
-        raise ValueError(f"{cls}.total_steps ({args.total_steps}) must be a multiple of {what} ({block})")
-    if not args.net_arch or any(not isinstance(n, int) or n < 1 for n in args.net_arch):
-        raise ValueError(f"{cls}.net_arch must be positive layer sizes, got {args.net_arch!r}")
-    try:
-        training_env_config(args.map, args.family, args.max_steps, args.scenario_repeats, args.env_overrides)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"{cls}: bad training env ({err})") from None
-
-
 def checkpoint_callback(
-    run: RunDir, total_steps: int, every: int, save: Callable[[Path, int], None], progress: bool
+    run: TrainingRun, schedule: CheckpointSchedule, save: Callable[[Path, int], None]
 ) -> Any:
-    """An SB3 BaseCallback that calls save(path, steps) for each checkpoint step once the model has
-    trained on that many env steps (at the start of the next rollout, or at the end of training),
-    logs the success rate and metrics of finished episodes, and drives a progress bar."""
+    """An SB3 BaseCallback that checkpoints through the run once the model has trained on each
+    checkpoint's env steps (at the start of the next rollout, or at the end of training), logs the
+    success rate and metrics of finished episodes, and drives the run's progress display."""
     from stable_baselines3.common.callbacks import BaseCallback
 
-    class PolicyCheckpoints(BaseCallback):
-        def __init__(self) -> None:
-            super().__init__()
-            self.pending = checkpoint_steps(total_steps, every)
-            self.bar: Any = None
+    total = schedule.steps[-1]
 
+    class PolicyCheckpoints(BaseCallback):
         def _on_training_start(self) -> None:
-            self.bar = progress_bar(total_steps, f"train {run.algo}", progress)
+            self.bar = run.progress(total, desc=f"train {run.trainer.name}")
 
         def _save_due(self) -> None:
-            while self.pending and self.pending[0] <= self.num_timesteps:
-                step = self.pending.pop(0)
+            for step in schedule.due(self.num_timesteps):
                 if step != self.num_timesteps:
                     logger.warning("checkpoint %d written at step %d", step, self.num_timesteps)
-                save(run.checkpoint_path(step, POLICY_SUFFIX), step)
+                run.checkpoint(step, lambda path, step=step: save(path, step), POLICY_SUFFIX)
 
         def _on_rollout_start(self) -> None:
             self._save_due()
@@ -126,43 +219,50 @@ def checkpoint_callback(
 
         def _on_training_end(self) -> None:
             self._save_due()
-            self.bar.close()
 
     return PolicyCheckpoints()
 
 
-def run_sb3(
-    algo: str,
-    args: Any,
-    config: EnvConfig,
-    build_model: Callable[[EnvConfig], tuple[Any, Any]],
-) -> Path:
-    """Train one SB3 model as `args` say and write the run folder; returns the final policy file.
+def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
+    """Train one SB3 model as `args` say on the trainer skeleton; returns the final policy file.
 
-    Args:
-        algo: "ppo" or "dqn" (the registry name of the policy files).
-        args: the trainer's Args (fields out, seed, total_steps, checkpoint_every, threads, progress).
-        config: the training env config.
-        build_model: config -> (the SB3 model on its training env, seeded with args.seed; the
-            env's VecNormalize or None).
-
-    A finished run of the same arguments in args.out is not repeated: its policy file is returned.
+    The model is stable_baselines3.<trainer.model>("MlpPolicy", the training env,
+    **args.model_kwargs(trainer.activation)), seeded with args.seed. A finished run of the same
+    arguments in args.out is not repeated: its policy file is returned.
     """
-    import torch
+    from socialzoo.train.validation import validation_evaluator
+
+    evaluator = None
+    if args.eval_trials:
+        evaluator = validation_evaluator(
+            trainer.name, args.map, args.eval_trials, env_overrides=args.env_overrides
+        )
+    return run_training(trainer, args, lambda run: _fit(run, args), evaluator=evaluator)
+
+
+def _model(trainer: SB3Trainer, args: SB3Args, venv: Any) -> Any:
+    import stable_baselines3
+
+    with warnings.catch_warnings():
+        # PPO warns that 2,000 is no multiple of 64: the last minibatch holds 16 samples, and an
+        # epoch has 32 minibatches, as with SB3's default rollout of 2,048.
+        warnings.filterwarnings("ignore", message=".*mini-batch size.*")
+        model_class = getattr(stable_baselines3, trainer.model)
+        return model_class("MlpPolicy", venv, **args.model_kwargs(trainer.activation))
+
+
+def _fit(run: TrainingRun, args: SB3Args) -> Mapping[str, Any]:
     from stable_baselines3.common.logger import configure
 
+    from socialzoo.train.run_dir import plain
     from socialzoo.train.sb3_export import export_policy
 
-    run = RunDir(args.out, algo, args, volatile=VOLATILE)
-    final = run.path / f"{algo}{POLICY_SUFFIX}"
-    if run.finished and final.is_file():
-        logger.info("%s: finished run of these arguments, nothing to do", run.path)
-        return final
-    torch.set_num_threads(args.threads)
+    config = args.env_config()
     observation = plain(config.observation)
-    start = time.perf_counter()
-    model, norm = build_model(config)
+    venv, norm = make_training_env(args, config)
+    model = _model(run.trainer, args, venv)
     model.set_logger(configure(str(run.path / "tensorboard"), ["tensorboard"]))
+    algo = run.trainer.name
 
     def save(path: Path, step: int) -> None:
         policy, output = export_policy(model, algo, observation, norm)
@@ -181,21 +281,16 @@ def run_sb3(
         }
         policy.save(path, header)
 
-    callback = checkpoint_callback(run, args.total_steps, args.checkpoint_every, save, args.progress)
-    model.learn(total_timesteps=args.total_steps, callback=callback, progress_bar=False)
-    seconds = time.perf_counter() - start
+    schedule = run.schedule(args.total_steps, args.checkpoint_every)
+    model.learn(
+        total_timesteps=args.total_steps,
+        callback=checkpoint_callback(run, schedule, save),
+        progress_bar=False,
+    )
     steps = int(model.num_timesteps)
     last = run.checkpoint_path(args.total_steps, POLICY_SUFFIX)
     if not last.is_file():
-        save(last, steps)
-    final.write_bytes(last.read_bytes())
+        run.checkpoint(args.total_steps, lambda path: save(path, steps), POLICY_SUFFIX)
+    run.policy.write_bytes(last.read_bytes())
     model.get_env().close()
-    run.finish(
-        wall_seconds=round(seconds, 1),
-        env_steps=steps,
-        env_steps_per_second=round(steps / seconds, 1),
-        policy=final.name,
-        checkpoints=[p.name for _, p in run.checkpoints(POLICY_SUFFIX)],
-    )
-    logger.info("%s: %d steps in %.1f s -> %s", algo, steps, seconds, final)
-    return final
+    return {"env_steps": steps, "env_steps_per_second": round(steps / run.seconds, 1)}

@@ -14,8 +14,8 @@ def test_one_run_per_algorithm_with_checkpoints(tmp_path):
     assert runs == {"ppo": tmp_path / "ppo"}
     record = json.loads((tmp_path / "ppo" / "run.json").read_text())
     assert record["seed"] == 2 and record["results"]["checkpoints"] == [
-        "step_000000100.safetensors",
-        "step_000000200.safetensors",
+        "checkpoints/step_000000100.safetensors",
+        "checkpoints/step_000000200.safetensors",
     ]
     stamp = (tmp_path / "ppo" / "ppo.safetensors").stat().st_mtime_ns
     train_curve_runs(

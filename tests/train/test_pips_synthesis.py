@@ -25,7 +25,7 @@ from socialzoo.agents.pips_features import (
     METRE_PER_SECOND,
 )
 from socialzoo.nav.subpolicies import GO_ALONE, HALT
-from socialzoo.train.pips import PipsArgs, sidecar_path, synthesize, train, window_mask
+from socialzoo.train.pips import PipsArgs, read_program_record, synthesize, train, window_mask
 from socialzoo.train.pips_enumerate import combine, enumerate_depth
 from socialzoo.train.pips_search import SearchSettings
 from socialzoo.train.pips_thresholds import PairSearch, fit_single, solve_z3
@@ -200,7 +200,7 @@ def test_train_writes_the_program_and_its_record(tmp_path):
     write_demos(demos, obs, action, episode)
     args = PipsArgs(demos=str(demos), out=str(tmp_path / "p.json"), steps=2000, max_depth=1, solver="exact")
     out = train(args)
-    record = json.loads(sidecar_path(out).read_text())
+    record = read_program_record(out)
     assert record["args"]["steps"] == 2000 and record["seed"] == 0 and record["synthesis_seconds"] > 0
     assert record["command"] and record["rules"] == load_program(out).rules()
     assert record["demonstrations"]["steps_spanned"] == 2000
@@ -255,7 +255,7 @@ def test_agreement_with_ref_on_held_out_demonstrations(ref_demos, tmp_path):
         solver="exact",
     )
     out = train(args)
-    held = json.loads(sidecar_path(out).read_text())["agreement"]["held_out"]
+    held = read_program_record(out)["agreement"]["held_out"]
     print(f"agreement with Ref on {held['steps']} held-out steps: {held['agreement']:.3f}")
     assert held["steps"] >= 500
     assert held["agreement"] >= 0.9

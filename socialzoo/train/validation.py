@@ -1,0 +1,73 @@
+"""The trainers' checkpoint evaluator: a robot policy file on the first scenarios of its training
+map's validation set (socialzoo.nav.scenarios.validation_set, "<map>-val": never a test set).
+
+Run in this process, one batched world of `trials` rows, so a checkpoint costs one episode's wall
+time; the skeleton (socialzoo.train.skeleton) calls it after each checkpoint when a trainer's
+`eval_trials` is above 0, and the run keeps the metrics in evaluations.csv and TensorBoard.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from socialzoo.core.validation import check_int
+from socialzoo.train.skeleton import Evaluator
+
+# The metrics an evaluation reports, averaged over its scenarios.
+EVALUATION_METRICS = ("success", "reached", "time_to_goal", "average_step_reward", "mean_force", "mean_blame")
+
+
+def validation_evaluator(
+    policy: str,
+    map_name: str,
+    trials: int,
+    *,
+    env_overrides: Mapping[str, Any] | None = None,
+    max_rows: int = 128,
+) -> Evaluator:
+    """An evaluator of policy files of registry name `policy` ("ppo", "bc", ...).
+
+    Args:
+        policy: the registry name the files load with (make_policy("<policy>:PATH")).
+        map_name: the training map; its validation scenarios 0 .. trials-1 are run.
+        trials: scenarios per checkpoint.
+        env_overrides: EnvConfig fields the policy was trained with (observation, reward, ...).
+        max_rows: most env rows stepped together.
+
+    Returns:
+        path -> {metric: mean over the scenarios} (EVALUATION_METRICS; time_to_goal over the
+        successful ones, NaN when none).
+
+    Raises:
+        ValueError: trials below 1, or an unknown map.
+    """
+    from socialzoo.bench.runner import RunSpec, Trial, env_config_for, run_chunk
+    from socialzoo.nav.scenarios import validation_set
+
+    check_int("validation_evaluator", "trials", trials, low=1)
+    test_set = validation_set(map_name)
+    config = env_config_for(test_set, **dict(env_overrides or {}))
+
+    def evaluate(path: Path) -> dict[str, float]:
+        import numpy as np
+
+        spec_name = f"{policy}:{path}"
+        spec = RunSpec(
+            test_sets={test_set.name: test_set},
+            env_configs={test_set.name: config},
+            policies={spec_name: {}},
+            batch_size=min(trials, max_rows),
+        )
+        results = run_chunk([Trial(spec_name, test_set.name, k) for k in range(trials)], spec)
+        metrics = [r.metrics for r in results]
+        out = {}
+        for key in EVALUATION_METRICS:
+            values = [
+                float(m[key]) for m in metrics if key in m and (key != "time_to_goal" or m.get("success"))
+            ]
+            out[key] = float(np.mean(values)) if values else float("nan")
+        return out
+
+    return evaluate

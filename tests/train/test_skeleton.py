@@ -1,0 +1,174 @@
+"""The trainer skeleton: run folder and record, resume by run, checkpoints and their evaluation,
+seeding, and trainer modules that import without torch."""
+
+import csv
+import json
+import math
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from socialzoo.train import TRAINERS, trainer_spec
+from socialzoo.train.run_dir import RunDir, RunDirError
+from socialzoo.train.skeleton import CheckpointSchedule, Trainer, finished_run, run_training
+
+TOY = Trainer("toy", policy_file="toy.txt", uses_torch=False)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ToyArgs:
+    out: Path
+    steps: int = 10
+    every: int = 4
+    seed: int = 0
+    progress: bool = False
+
+
+def toy_fit(calls):
+    """A fit that 'trains' for args.steps steps, checkpointing on the run's schedule."""
+
+    def fit(run):
+        calls.append(run.args)
+        schedule = run.schedule(run.args.steps, run.args.every)
+        bar = run.progress(run.args.steps)
+        for step in range(1, run.args.steps + 1):
+            bar.update(1)
+            for due in schedule.due(step):
+                run.checkpoint(due, lambda path, due=due: path.write_text(f"policy at {due}"), ".txt")
+        run.policy.write_text("final")
+        return {"steps": run.args.steps}
+
+    return fit
+
+
+def test_a_run_records_its_results_and_is_not_repeated(tmp_path):
+    calls = []
+    args = ToyArgs(out=tmp_path / "run", seed=3)
+    policy = run_training(TOY, args, toy_fit(calls))
+    assert policy == tmp_path / "run" / "toy.txt" and policy.read_text() == "final"
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["algo"] == "toy" and record["seed"] == 3 and record["finished"]
+    results = record["results"]
+    assert results["steps"] == 10 and results["policy"] == "toy.txt" and results["wall_seconds"] >= 0
+    assert results["checkpoints"] == [f"checkpoints/step_{s:09d}.txt" for s in (4, 8, 10)]
+    assert finished_run(TOY, args)
+    # Resume by run: a finished run of the same arguments is returned without training again.
+    assert run_training(TOY, ToyArgs(out=tmp_path / "run", seed=3, progress=True), toy_fit(calls)) == policy
+    assert len(calls) == 1
+    # Other arguments in the same folder are refused, naming the record and the argument.
+    with pytest.raises(RunDirError, match=r"run\.json.*seed differ"):
+        run_training(TOY, ToyArgs(out=tmp_path / "run", seed=4), toy_fit(calls))
+    assert not finished_run(TOY, ToyArgs(out=tmp_path / "other"))
+
+
+def test_an_interrupted_run_trains_again(tmp_path):
+    def broken(run):
+        raise KeyboardInterrupt
+
+    args = ToyArgs(out=tmp_path / "run")
+    with pytest.raises(KeyboardInterrupt):
+        run_training(TOY, args, broken)
+    assert not finished_run(TOY, args)
+    calls = []
+    run_training(TOY, args, toy_fit(calls))
+    assert len(calls) == 1 and finished_run(TOY, args)
+
+
+def test_a_fit_that_writes_no_policy_fails_and_leaves_the_run_unfinished(tmp_path):
+    args = ToyArgs(out=tmp_path / "run")
+    with pytest.raises(RuntimeError, match="without writing"):
+        run_training(TOY, args, lambda run: {})
+    assert not json.loads((tmp_path / "run" / "run.json").read_text())["finished"]
+
+
+def test_every_checkpoint_is_evaluated_and_the_best_is_named(tmp_path):
+    seen = []
+
+    def evaluator(path):
+        seen.append(path.name)
+        step = int(path.stem.split("_")[1])
+        return {"success": {4: 0.5, 8: 0.9, 10: 0.7}[step], "reward": step / 10}
+
+    run_training(TOY, ToyArgs(out=tmp_path / "run"), toy_fit([]), evaluator=evaluator)
+    assert seen == ["step_000000004.txt", "step_000000008.txt", "step_000000010.txt"]
+    with (tmp_path / "run" / "evaluations.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["step"], r["success"]) for r in rows] == [("4", "0.5"), ("8", "0.9"), ("10", "0.7")]
+    best = json.loads((tmp_path / "run" / "run.json").read_text())["results"]["best_checkpoint"]
+    assert best["step"] == 8 and best["file"] == "checkpoints/step_000000008.txt"
+    assert list((tmp_path / "run" / "tensorboard").glob("events.out.tfevents.*"))
+
+
+def test_checkpoint_schedule_returns_each_step_once():
+    schedule = CheckpointSchedule(10, 4)
+    assert schedule.steps == [4, 8, 10]
+    assert schedule.due(3) == [] and schedule.due(9) == [4, 8] and schedule.due(9) == []
+    assert schedule.due(100) == [10]
+
+
+def test_an_argument_added_later_keeps_old_runs_at_its_default(tmp_path):
+    @dataclass(frozen=True, kw_only=True)
+    class Old:
+        out: Path
+        seed: int = 0
+
+    @dataclass(frozen=True, kw_only=True)
+    class New(Old):
+        eval_trials: int = 0
+
+    RunDir(tmp_path, "ppo", Old(out=tmp_path)).finish(wall_seconds=1.0)
+    assert RunDir(tmp_path, "ppo", New(out=tmp_path)).finished
+    with pytest.raises(RunDirError, match="eval_trials differ"):
+        RunDir(tmp_path, "ppo", New(out=tmp_path, eval_trials=5))
+
+
+def test_torch_is_seeded_for_the_run_and_given_back(tmp_path):
+    torch = pytest.importorskip("torch")
+    draws = []
+
+    def fit(run):
+        draws.append(torch.rand(1))
+        run.policy.write_text("x")
+        return {}
+
+    torch.manual_seed(123)
+    expected_after = torch.rand(1)
+    torch.manual_seed(123)
+    run_training(Trainer("toy", policy_file="toy.txt"), ToyArgs(out=tmp_path, seed=7), fit)
+    # The caller's generator continues as if the run had not drawn...
+    assert torch.equal(torch.rand(1), expected_after)
+    # ... and the run drew from a generator seeded with its own seed.
+    torch.manual_seed(7)
+    assert torch.equal(draws[0], torch.rand(1))
+
+
+def test_every_trainer_is_on_the_skeleton_and_imports_without_torch():
+    for name in TRAINERS:
+        spec = trainer_spec(name)
+        assert isinstance(spec, Trainer) and spec.name == name
+    code = (
+        "import sys\n"
+        "from socialzoo.train import TRAINERS, trainer_args\n"
+        "for name in TRAINERS: trainer_args(name)\n"
+        "heavy = {'torch', 'stable_baselines3', 'torchrl', 'tensordict', 'ray'} & set(sys.modules)\n"
+        "assert not heavy, heavy\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+
+
+def test_the_validation_evaluator_runs_a_policy_file_on_validation_scenarios():
+    from socialzoo.agents import shipped_policy_file
+    from socialzoo.train.validation import EVALUATION_METRICS, validation_evaluator
+
+    evaluate = validation_evaluator("ppo", "gdc1", 3, env_overrides={"max_steps": 60})
+    metrics = evaluate(shipped_policy_file("ppo"))
+    assert set(metrics) == set(EVALUATION_METRICS)
+    assert 0.0 <= metrics["success"] <= metrics["reached"] <= 1.0 and metrics["mean_force"] >= 0
+    again = evaluate(shipped_policy_file("ppo"))  # the same scenarios every time
+    assert all(again[k] == v or (math.isnan(again[k]) and math.isnan(v)) for k, v in metrics.items())
+    with pytest.raises(ValueError, match="trials"):
+        validation_evaluator("ppo", "gdc1", 0)
