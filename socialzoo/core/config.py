@@ -5,22 +5,41 @@ Frozen keyword-only dataclasses validated on construction; override with datacla
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from typing import Literal, get_args
 
 from socialzoo.core.validation import check_fields, check_number
+
+Kinematics = Literal["differential", "holonomic", "unicycle"]
+KINEMATICS: tuple[str, ...] = get_args(Kinematics)
 
 
 @dataclass(frozen=True, kw_only=True)
 class RobotConfig:
-    """Differential-drive robot (SPEC section 3).
+    """The robot's motion model and footprint: the benchmark's differential drive (SPEC section 3)
+    by default, or the holonomic and unicycle robots of the CrowdNav line of work.
+
+    Kinematics (socialzoo.core.robot.step_robot) and what a command and the velocity state mean:
+    - "differential": command (v, omega), m/s and rad/s, reached under the acceleration limits;
+      the position advances by the mean of the old and new speed along the heading (SPEC 3).
+    - "holonomic": command (vx, vy), world frame, m/s, taken at once (CrowdNav's ActionXY), its
+      norm capped at max_speed; the heading stays as it is.
+    - "unicycle": command (v, omega): the heading turns by omega * dt (at most max_rotation per
+      step) and the robot then moves v * dt along the new heading, both at once (CrowdNav's
+      ActionRot); 0 <= v <= max_speed.
 
     Attributes:
         length: footprint length along the heading, m (collision footprint).
         width: footprint width, m.
-        max_linear_accel: motion-model limit on |dv/dt|, m/s^2.
-        max_angular_accel: motion-model limit on |domega/dt|, rad/s^2.
-        max_angular_speed: motion-model clamp on |omega|, rad/s.
-        max_speed: hard cap on |v| in the motion model, m/s (the sub-policies ask for less).
+        max_linear_accel: motion-model limit on |dv/dt|, m/s^2 (differential drive).
+        max_angular_accel: motion-model limit on |domega/dt|, rad/s^2 (differential drive).
+        max_angular_speed: motion-model clamp on |omega|, rad/s (differential drive).
+        max_speed: hard cap on the speed in the motion model, m/s (the sub-policies ask for less).
+        kinematics: "differential", "holonomic" or "unicycle".
+        radius: a disc footprint of this radius, m, instead of the length x width box (the
+            CrowdNav robots: 0.3); None: the box.
+        max_rotation: a unicycle's largest turn in one step, rad (CrowdNav: pi / 4).
     """
 
     length: float = 0.5
@@ -29,9 +48,16 @@ class RobotConfig:
     max_angular_accel: float = 5.0
     max_angular_speed: float = 3.0
     max_speed: float = 2.25
+    kinematics: Kinematics = "differential"
+    radius: float | None = None
+    max_rotation: float = math.pi / 4
 
     def __post_init__(self) -> None:
         check_fields(self)
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(f"RobotConfig.kinematics must be one of {KINEMATICS}, got {self.kinematics!r}")
+        check_number("RobotConfig", "radius", self.radius, low=0, low_open=True, allow_none=True)
+        check_number("RobotConfig", "max_rotation", self.max_rotation, low=0, low_open=True, high=math.pi)
 
     @property
     def half_length(self) -> float:
@@ -42,6 +68,11 @@ class RobotConfig:
     def half_width(self) -> float:
         """Half the footprint's width, m."""
         return self.width / 2.0
+
+    @property
+    def velocity_is_world_vector(self) -> bool:
+        """True when the velocity state is a world-frame (vx, vy) (holonomic), not (v, omega)."""
+        return self.kinematics == "holonomic"
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -1,8 +1,10 @@
-"""Differential-drive robot motion model (SPEC section 3), vectorised over any leading axes.
+"""Robot motion models, vectorised over any leading axes: the benchmark's differential drive
+(SPEC section 3) and the holonomic and unicycle robots of the CrowdNav line of work.
 
-Commands are a linear speed v and an angular speed omega; a constant-curvature arc c is the
-command (v, v * c). The update follows the reference simulator: accelerations are limited, and the
-position advances by the mean of the old and new speed along the current heading.
+Differential drive: commands are a linear speed v and an angular speed omega (a constant-curvature
+arc c is the command (v, v * c)); as in the reference simulator, accelerations are limited and the
+position advances by the mean of the old and new speed along the current heading. Holonomic and
+unicycle robots take their command at once, as CrowdNav's agents do (RobotConfig says which).
 """
 
 from __future__ import annotations
@@ -41,20 +43,24 @@ def step_robot(
     dt: float,
     cfg: RobotConfig,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Advance robots one step.
+    """Advance robots one step with the motion model cfg.kinematics names.
 
     Args:
         pose: (..., 3) x, y (m), theta (rad), world frame.
-        vel: (..., 2) previous (v, omega).
-        command: (..., 2) requested (v, omega).
+        vel: (..., 2) previous velocity: (v, omega), or (vx, vy) world frame for a holonomic robot.
+        command: (..., 2) requested velocity, in the same terms as `vel`.
         halt: (...,) bool; a halting robot's velocity is set to zero at once (the Halt
             sub-policy), bypassing the deceleration limit.
         dt: s.
-        cfg: robot limits.
+        cfg: robot limits and kinematics.
 
     Returns:
         (new_pose, new_vel) with the shapes of pose and vel.
     """
+    if cfg.kinematics == "holonomic":
+        return _step_holonomic(pose, command, halt, dt, cfg)
+    if cfg.kinematics == "unicycle":
+        return _step_unicycle(pose, command, halt, dt, cfg)
     new_vel = limit_command(vel, command, dt, cfg)
     new_vel = np.where(halt[..., None], 0.0, new_vel)
     # Reference update: dx = v_prev*dt + 0.5*(v - v_prev)*dt along the heading, same for theta.
@@ -66,3 +72,45 @@ def step_robot(
     new_pose[..., 1] = pose[..., 1] + dist * np.sin(theta)
     new_pose[..., 2] = wrap_angle(theta + dtheta)
     return new_pose, new_vel
+
+
+def _step_holonomic(
+    pose: np.ndarray, command: np.ndarray, halt: np.ndarray, dt: float, cfg: RobotConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """CrowdNav's holonomic agent: the velocity (vx, vy) is the command, its norm capped at
+    max_speed; the position moves by velocity * dt; the heading is left as it is."""
+    speed = np.hypot(command[..., 0], command[..., 1])
+    scale = np.minimum(1.0, cfg.max_speed / np.maximum(speed, 1e-12))
+    new_vel = np.where(halt[..., None], 0.0, command * scale[..., None])
+    new_pose = pose.astype(np.float64, copy=True)
+    new_pose[..., :2] += new_vel * dt
+    return new_pose, new_vel
+
+
+def _step_unicycle(
+    pose: np.ndarray, command: np.ndarray, halt: np.ndarray, dt: float, cfg: RobotConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """CrowdNav's unicycle agent: the heading turns by omega * dt (at most max_rotation), then the
+    robot moves v * dt along the new heading (0 <= v <= max_speed)."""
+    v = np.clip(command[..., 0], 0.0, cfg.max_speed)
+    turn = np.clip(command[..., 1] * dt, -cfg.max_rotation, cfg.max_rotation)
+    v = np.where(halt, 0.0, v)
+    turn = np.where(halt, 0.0, turn)
+    theta = wrap_angle(pose[..., 2] + turn)
+    new_pose = np.empty(pose.shape)
+    new_pose[..., 0] = pose[..., 0] + v * dt * np.cos(theta)
+    new_pose[..., 1] = pose[..., 1] + v * dt * np.sin(theta)
+    new_pose[..., 2] = theta
+    new_vel = np.stack((v, turn / dt), axis=-1)
+    return new_pose, new_vel
+
+
+def world_velocity(pose: np.ndarray, vel: np.ndarray, cfg: RobotConfig) -> np.ndarray:
+    """(..., 2) the robots' velocity in the world frame, m/s: vel itself for a holonomic robot,
+    v along the heading otherwise."""
+    if cfg.velocity_is_world_vector:
+        return np.asarray(vel, dtype=np.float64)[..., :2].copy()
+    out = np.empty(pose.shape[:-1] + (2,))
+    out[..., 0] = vel[..., 0] * np.cos(pose[..., 2])
+    out[..., 1] = vel[..., 0] * np.sin(pose[..., 2])
+    return out

@@ -73,3 +73,55 @@ def test_batched_equals_single():
             p, v = step_robot(pose[i, r], vel[i, r], cmd[i, r], halt[i, r], DT, CFG)
             np.testing.assert_array_equal(p, bp[i, r])
             np.testing.assert_array_equal(v, bv[i, r])
+
+
+# ---------------------------------------------------------------- CrowdNav's holonomic and unicycle robots
+HOLONOMIC = RobotConfig(kinematics="holonomic", radius=0.3, max_speed=1.0)
+UNICYCLE = RobotConfig(kinematics="unicycle", radius=0.3, max_speed=1.0)
+
+
+def test_holonomic_takes_its_velocity_at_once_and_keeps_its_heading():
+    pose = np.array([[0.0, -4.0, math.pi / 2], [1.0, 1.0, 0.3]])
+    command = np.array([[0.6, 0.8], [3.0, 4.0]])  # the second is capped to speed 1
+    new_pose, vel = step_robot(pose, np.zeros((2, 2)), command, np.array([False, False]), 0.25, HOLONOMIC)
+    np.testing.assert_allclose(vel, [[0.6, 0.8], [0.6, 0.8]])
+    np.testing.assert_allclose(new_pose[:, :2], [[0.15, -3.8], [1.15, 1.2]])
+    np.testing.assert_array_equal(new_pose[:, 2], pose[:, 2])
+    halted, halted_vel = step_robot(pose, vel, command, np.array([True, False]), 0.25, HOLONOMIC)
+    np.testing.assert_array_equal(halted[0], pose[0])
+    np.testing.assert_array_equal(halted_vel[0], 0.0)
+
+
+def test_unicycle_turns_then_moves_along_its_new_heading():
+    pose = np.array([0.0, 0.0, 0.0])
+    # Asks for a quarter turn in one step: CrowdNav's unicycle turns at most pi/4 a step.
+    new_pose, vel = step_robot(
+        pose, np.zeros(2), np.array([1.0, math.pi / 2 / 0.25]), np.array(False), 0.25, UNICYCLE
+    )
+    assert math.isclose(new_pose[2], math.pi / 4)
+    assert math.isclose(new_pose[0], 0.25 * math.cos(math.pi / 4)) and math.isclose(new_pose[1], new_pose[0])
+    assert math.isclose(vel[0], 1.0) and math.isclose(vel[1], (math.pi / 4) / 0.25)
+    # Never backwards, never faster than max_speed.
+    _, vel = step_robot(pose, np.zeros(2), np.array([-1.0, 0.0]), np.array(False), 0.25, UNICYCLE)
+    assert vel[0] == 0.0
+    _, vel = step_robot(pose, np.zeros(2), np.array([5.0, 0.0]), np.array(False), 0.25, UNICYCLE)
+    assert vel[0] == 1.0
+
+
+def test_world_velocity_of_each_kinematics():
+    from socialzoo.core.robot import world_velocity
+
+    pose = np.array([[0.0, 0.0, math.pi / 2]])
+    np.testing.assert_allclose(world_velocity(pose, np.array([[2.0, 0.5]]), CFG), [[0.0, 2.0]], atol=1e-12)
+    np.testing.assert_allclose(world_velocity(pose, np.array([[0.3, -0.4]]), HOLONOMIC), [[0.3, -0.4]])
+
+
+def test_bad_kinematics_are_refused():
+    import pytest
+
+    with pytest.raises(ValueError, match="kinematics"):
+        RobotConfig(kinematics="tank")
+    with pytest.raises(ValueError, match="radius"):
+        RobotConfig(radius=0.0)
+    with pytest.raises(ValueError, match="max_rotation"):
+        RobotConfig(max_rotation=4.0)

@@ -1,0 +1,157 @@
+"""The cases of the CrowdNav task (Chen et al. 2019, vita-epfl/CrowdNav): a robot crossing an open
+arena from (0, -r) to (0, r) among people placed by circle crossing or square crossing.
+
+The rules are CrowdNav's (crowd_sim.py): in circle crossing each person starts on a circle of
+radius `circle_radius` at a uniform angle, plus uniform noise of +-v_pref/2 on each coordinate, and
+walks to the antipode of its start; in square crossing each person starts in a random half of a
+square `square_width` wide and walks to a random point of the other half. A draw closer than
+radius + other radius + discomfort distance to an earlier agent's position (or goal) is drawn
+again. Case k of a split is drawn with numpy's legacy RandomState seeded as CrowdNav seeds it
+(validation k: k; test k: 1000 + k; training k: 2000 + k), consuming draws in CrowdNav's order,
+so our validation and test cases are CrowdNav's own (same positions, to float precision), apart
+from the training stream by construction. People get one-point routes: they walk to their goal
+and stay there, as CrowdNav's people do.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+
+from socialzoo.core.validation import check_int, check_number
+from socialzoo.nav.scenarios import Scenario
+
+Layout = Literal["circle_crossing", "square_crossing"]
+LAYOUTS: tuple[str, ...] = get_args(Layout)
+Split = Literal["train", "val", "test"]
+SPLITS: tuple[str, ...] = get_args(Split)
+# CrowdNav's case seeds: validation from 0, test from 1000 (case_capacity val 1000), training from 2000.
+SPLIT_SEED_OFFSET: dict[str, int] = {"val": 0, "test": 1000, "train": 2000}
+# CrowdNav's fixed set sizes (env.config val_size, test_size).
+SPLIT_SIZE: dict[str, int] = {"val": 100, "test": 500}
+ARENA_MAP = "arena"
+
+
+@dataclass(frozen=True, kw_only=True)
+class CrowdCaseConfig:
+    """How the CrowdNav cases are drawn (CrowdNav's env.config [sim], [humans], [robot]).
+
+    Attributes:
+        layout: "circle_crossing" or "square_crossing".
+        num_humans: people per case (CrowdNav: 5; CrowdNav++'s arena: 20).
+        circle_radius: radius of the circle of starts, and the robot's distance from the centre, m.
+        square_width: side of the square crossing's square, m.
+        human_radius: the people's radius, m.
+        robot_radius: the robot's radius, m.
+        human_speed: the people's preferred speed v_pref, m/s (also the scale of the start noise).
+        discomfort_dist: extra spacing between drawn agents, m.
+    """
+
+    layout: Layout = "circle_crossing"
+    num_humans: int = 5
+    circle_radius: float = 4.0
+    square_width: float = 10.0
+    human_radius: float = 0.3
+    robot_radius: float = 0.3
+    human_speed: float = 1.0
+    discomfort_dist: float = 0.2
+
+    def __post_init__(self) -> None:
+        if self.layout not in LAYOUTS:
+            raise ValueError(f"CrowdCaseConfig.layout must be one of {LAYOUTS}, got {self.layout!r}")
+        check_int("CrowdCaseConfig", "num_humans", self.num_humans, low=0)
+        for name in ("circle_radius", "square_width", "human_radius", "robot_radius", "human_speed"):
+            check_number("CrowdCaseConfig", name, getattr(self, name), low=0, low_open=True)
+        check_number("CrowdCaseConfig", "discomfort_dist", self.discomfort_dist, low=0)
+
+
+def case_seed(split: Split, index: int) -> int:
+    """The seed of case `index` of a split (CrowdNav's np.random.seed for that case)."""
+    if split not in SPLITS:
+        raise ValueError(f"unknown split {split!r}; known: {SPLITS}")
+    check_int("case_seed", "index", index, low=0)
+    if split in SPLIT_SIZE and index >= SPLIT_SIZE[split]:
+        raise ValueError(f"the {split} split holds {SPLIT_SIZE[split]} cases; index {index} is outside it")
+    return SPLIT_SEED_OFFSET[split] + index
+
+
+def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
+    """The case drawn from RandomState(seed): the robot at (0, -r) heading +y with its goal at
+    (0, r), and config.num_humans people with one-point routes to their goals."""
+    rs = np.random.RandomState(seed)
+    r = config.circle_radius
+    robot = np.array([[0.0, -r], [0.0, r]])  # position, goal
+    positions: list[np.ndarray] = [robot[0]]
+    goals: list[np.ndarray] = [robot[1]]
+    radii = [config.robot_radius]
+    for _ in range(config.num_humans):
+        if config.layout == "circle_crossing":
+            start, goal = _circle_human(rs, config, positions, goals, radii)
+        else:
+            start, goal = _square_human(rs, config, positions, goals, radii)
+        positions.append(start)
+        goals.append(goal)
+        radii.append(config.human_radius)
+    n = config.num_humans
+    spawn = np.array(positions[1:]).reshape(n, 2)
+    return Scenario(
+        map_name=ARENA_MAP,
+        seed=seed,
+        robot_starts=np.array([[0.0, -r, math.pi / 2]]),
+        robot_goals=np.array([[0.0, r, math.pi / 2]]),
+        human_spawn=spawn,
+        human_start_index=np.full(n, -1),
+        human_goal_index=np.full(n, -1),
+        human_routes=tuple(np.array([g]) for g in goals[1:]),
+        human_speed=np.full(n, config.human_speed),
+        family=config.layout,
+    )
+
+
+def _too_close(p: np.ndarray, others: list[np.ndarray], radii: list[float], own: float, gap: float) -> bool:
+    return any(math.hypot(*(p - o)) < own + r + gap for o, r in zip(others, radii, strict=True))
+
+
+def _circle_human(
+    rs: np.random.RandomState,
+    config: CrowdCaseConfig,
+    positions: list[np.ndarray],
+    goals: list[np.ndarray],
+    radii: list[float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """CrowdNav's generate_circle_crossing_human: a start on the circle with noise, kept clear of
+    every earlier agent's position and goal; the goal is the start's antipode."""
+    own, gap = config.human_radius, config.discomfort_dist
+    while True:
+        angle = rs.random_sample() * np.pi * 2
+        noise_x = (rs.random_sample() - 0.5) * config.human_speed
+        noise_y = (rs.random_sample() - 0.5) * config.human_speed
+        start = np.array(
+            [config.circle_radius * np.cos(angle) + noise_x, config.circle_radius * np.sin(angle) + noise_y]
+        )
+        if not (_too_close(start, positions, radii, own, gap) or _too_close(start, goals, radii, own, gap)):
+            return start, -start
+
+
+def _square_human(
+    rs: np.random.RandomState,
+    config: CrowdCaseConfig,
+    positions: list[np.ndarray],
+    goals: list[np.ndarray],
+    radii: list[float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """CrowdNav's generate_square_crossing_human: a start in a random half of the square kept clear
+    of earlier positions, a goal in the other half kept clear of earlier goals."""
+    own, gap, w = config.human_radius, config.discomfort_dist, config.square_width
+    sign = -1.0 if rs.random_sample() > 0.5 else 1.0
+    while True:
+        start = np.array([rs.random_sample() * w * 0.5 * sign, (rs.random_sample() - 0.5) * w])
+        if not _too_close(start, positions, radii, own, gap):
+            break
+    while True:
+        goal = np.array([rs.random_sample() * w * 0.5 * -sign, (rs.random_sample() - 0.5) * w])
+        if not _too_close(goal, goals, radii, own, gap):
+            return start, goal
