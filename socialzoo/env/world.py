@@ -11,13 +11,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from socialzoo.core.config import WorldConfig
-from socialzoo.core.robot import step_robot
+from socialzoo.core.config import RobotConfig, WorldConfig
+from socialzoo.core.robot import step_robot, world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.humans.motion import integrate_humans
 from socialzoo.humans.routes import advance_waypoints
 from socialzoo.humans.social_force import human_acceleration
+
+_DIFFERENTIAL = RobotConfig()
 
 
 @dataclass(frozen=True)
@@ -35,19 +37,18 @@ class StepEvents:
     human_blocked: np.ndarray
 
 
-def robot_velocity_vectors(state: WorldState) -> np.ndarray:
-    """(B, R, 2) robot velocity in the world frame, m/s."""
-    theta = state.robot_pose[..., 2]
-    v = state.robot_vel[..., 0]
-    out = np.empty(state.robot_pose.shape[:-1] + (2,))
-    out[..., 0] = v * np.cos(theta)
-    out[..., 1] = v * np.sin(theta)
-    return out
+def robot_velocity_vectors(state: WorldState, robot: RobotConfig | None = None) -> np.ndarray:
+    """(B, R, 2) robot velocity in the world frame, m/s (robot: the kinematics that say what the
+    velocity state means; default the differential drive)."""
+    return world_velocity(state.robot_pose, state.robot_vel, robot or _DIFFERENTIAL)
 
 
 def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> tuple[np.ndarray, np.ndarray]:
     """(robot_wall (B, R), robot_human (B, R, H)) collision flags for the current state."""
-    robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
+    if cfg.robot.radius is not None:  # a disc footprint
+        robot_wall = walls.nearest(state.robot_pose[..., :2])[1] < cfg.robot.radius
+    else:
+        robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
     diff = state.robot_pose[:, :, None, :2] - state.human_pos[:, None, :, :]
     close = (diff**2).sum(-1) < cfg.human_collision_distance**2
     return robot_wall, close & state.human_mask[:, None, :]
@@ -89,7 +90,7 @@ def step_world(
         state.human_pref_speed,
         state.human_mask,
         state.robot_pose[..., :2],
-        robot_velocity_vectors(state),
+        robot_velocity_vectors(state, cfg.robot),
         walls,
         hcfg,
         human_desired_vel,

@@ -1,0 +1,232 @@
+"""What a step of the CrowdNav task means: collision, goal, time limit, reward and the episode metrics
+of that line of work (CrowdNav's crowd_sim.py step() and explorer.py).
+
+A step is judged as CrowdNav judges it, in CrowdNav's order:
+1. time limit: a step that starts at time >= time_limit - 1 s ends the episode (truncated, reward 0);
+2. collision: the closest distance between the robot's and a person's boundaries while both move
+   through the step (the robot at its new velocity, the person at its velocity at the start of the
+   step: the relative segment against the origin) is below 0: terminated, `collision_penalty`;
+3. goal: the robot's position after the step is within its radius of the goal: terminated,
+   `success_reward`;
+4. discomfort: closest boundary distance d below `discomfort_dist`: (d - discomfort_dist) *
+   discomfort_penalty_factor * dt.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from socialzoo.core.validation import check_fields
+
+# Episode outcomes, as CrowdNav's info classes.
+SUCCESS, COLLISION, TIMEOUT = "success", "collision", "timeout"
+# The per-episode metrics of the task (CrowdNavMetrics.summaries keys).
+METRIC_KEYS: tuple[str, ...] = (
+    "success",
+    "collision",
+    "timeout",
+    "navigation_time",
+    "path_length",
+    "discomfort_steps",
+    "steps",
+    "discomfort_frequency",
+    "min_separation",
+    "intrusion_ratio",
+    "return",
+    "discounted_return",
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class CrowdRewardConfig:
+    """CrowdNav's reward ([reward] of env.config).
+
+    Attributes:
+        success_reward: at the goal.
+        collision_penalty: on a collision (negative).
+        discomfort_dist: boundary distance below which the robot is penalised, m.
+        discomfort_penalty_factor: the penalty's weight, per second.
+        gamma: the discount of the reported discounted return, per second at the preferred speed
+            (CrowdNav's rl gamma 0.9, applied as gamma ** (t * dt * v_pref)).
+    """
+
+    success_reward: float = 1.0
+    collision_penalty: float = -0.25
+    discomfort_dist: float = 0.2
+    discomfort_penalty_factor: float = 0.5
+    gamma: float = 0.9
+
+    def __post_init__(self) -> None:
+        check_fields(
+            self, nonnegative=("discomfort_dist", "discomfort_penalty_factor"), signed=("collision_penalty",)
+        )
+
+
+def closest_boundary_distance(
+    robot_pos: np.ndarray,
+    robot_vel: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    radius_sum: np.ndarray | float,
+    human_mask: np.ndarray,
+    dt: float,
+) -> np.ndarray:
+    """(B,) the smallest distance between the robot's and a person's boundaries during the step
+    (inf where no person is present); negative means they overlapped.
+
+    Args:
+        robot_pos: (B, 2) robot position at the start of the step.
+        robot_vel: (B, 2) the robot's velocity through the step.
+        human_pos: (B, H, 2) the people's positions at the start of the step.
+        human_vel: (B, H, 2) their velocities at the start of the step.
+        radius_sum: robot radius + person radius, (B, H) or one value.
+        human_mask: (B, H).
+        dt: s.
+    """
+    start = human_pos - robot_pos[:, None, :]
+    move = (human_vel - robot_vel[:, None, :]) * dt
+    length2 = (move**2).sum(-1)
+    t = np.clip(-(start * move).sum(-1) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+    closest = start + t[..., None] * move
+    gap = np.hypot(closest[..., 0], closest[..., 1]) - radius_sum
+    return (
+        np.where(human_mask, gap, np.inf).min(axis=1)
+        if human_mask.shape[1]
+        else np.full(len(robot_pos), np.inf)
+    )
+
+
+@dataclass(frozen=True)
+class CrowdOutcome:
+    """One step's judgement for B rows.
+
+    Attributes:
+        reward: (B,) float64.
+        success, collision, timeout: (B,) bool; at most one is true.
+        terminated: (B,) success or collision.
+        truncated: (B,) timeout.
+        closest: (B,) the closest boundary distance during the step, m (inf with nobody).
+        discomfort: (B,) 0 <= closest < discomfort_dist (and no collision, no end).
+    """
+
+    reward: np.ndarray
+    success: np.ndarray
+    collision: np.ndarray
+    timeout: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    closest: np.ndarray
+    discomfort: np.ndarray
+
+
+def judge_step(
+    closest: np.ndarray,
+    goal_distance_after: np.ndarray,
+    robot_radius: float,
+    step_start_time: np.ndarray,
+    time_limit: float,
+    cfg: CrowdRewardConfig,
+    dt: float,
+) -> CrowdOutcome:
+    """Judge a step in CrowdNav's order (see the module docstring).
+
+    Args:
+        closest: (B,) closest boundary distance during the step (closest_boundary_distance).
+        goal_distance_after: (B,) robot-goal distance after the step, m.
+        robot_radius: m (the goal tolerance).
+        step_start_time: (B,) episode time at the start of the step, s.
+        time_limit: the episode's time limit, s.
+        cfg: the reward.
+        dt: s.
+    """
+    timeout = step_start_time >= time_limit - 1.0 - 1e-9
+    collision = ~timeout & (closest < 0)
+    success = ~timeout & ~collision & (goal_distance_after < robot_radius)
+    discomfort = ~(timeout | collision | success) & (closest < cfg.discomfort_dist)
+    reward = np.zeros(len(closest))
+    reward[collision] = cfg.collision_penalty
+    reward[success] = cfg.success_reward
+    reward[discomfort] = (closest[discomfort] - cfg.discomfort_dist) * cfg.discomfort_penalty_factor * dt
+    return CrowdOutcome(
+        reward=reward,
+        success=success,
+        collision=collision,
+        timeout=timeout,
+        terminated=success | collision,
+        truncated=timeout,
+        closest=closest,
+        discomfort=discomfort,
+    )
+
+
+class CrowdNavMetrics:
+    """Per-episode accumulators of B rows: CrowdNav's test metrics and ours.
+
+    success / collision / timeout; navigation_time (s, at the end of a successful episode, as
+    CrowdNav's success_times; NaN otherwise); path_length (m the robot moved); discomfort_steps
+    and steps; discomfort_frequency (share of the episode's steps in discomfort, CrowdNav's
+    "frequency of being in danger"); min_separation (smallest boundary distance of the episode,
+    m); intrusion_ratio (share of steps with a person's boundary within discomfort_dist of the
+    robot's, a collision step included: CrowdNav++'s intrusion, measured on the real rather than
+    predicted positions); return and discounted_return (gamma ** (t * dt * v_pref) per step t, as
+    CrowdNav's total reward).
+    """
+
+    def __init__(self, batch_size: int, dt: float, preferred_speed: float, cfg: CrowdRewardConfig) -> None:
+        self.dt, self.v_pref, self.cfg = dt, preferred_speed, cfg
+        self.steps = np.zeros(batch_size, dtype=np.int64)
+        self.path = np.zeros(batch_size)
+        self.discomfort = np.zeros(batch_size, dtype=np.int64)
+        self.intrusion = np.zeros(batch_size, dtype=np.int64)
+        self.min_gap = np.full(batch_size, np.inf)
+        self.ret = np.zeros(batch_size)
+        self.discounted = np.zeros(batch_size)
+
+    def reset_rows(self, rows: np.ndarray) -> None:
+        """Start new episodes in `rows`."""
+        self.steps[rows] = 0
+        self.path[rows] = 0.0
+        self.discomfort[rows] = 0
+        self.intrusion[rows] = 0
+        self.min_gap[rows] = np.inf
+        self.ret[rows] = 0.0
+        self.discounted[rows] = 0.0
+
+    def update(self, outcome: CrowdOutcome, moved: np.ndarray) -> None:
+        """Add one step: its outcome and the distance (B,) each robot moved."""
+        discount = self.cfg.gamma ** (self.steps * self.dt * self.v_pref)
+        self.ret += outcome.reward
+        self.discounted += discount * outcome.reward
+        self.steps += 1
+        self.path += moved
+        self.discomfort += outcome.discomfort
+        self.intrusion += outcome.closest < self.cfg.discomfort_dist
+        self.min_gap = np.minimum(self.min_gap, outcome.closest)
+
+    def summaries(self, rows: np.ndarray, outcome: CrowdOutcome) -> list[dict[str, float]]:
+        """The ending episodes' metrics (METRIC_KEYS), one dict per row of `rows`."""
+        out = []
+        for i in np.asarray(rows, dtype=np.intp):
+            steps = int(self.steps[i])
+            success = bool(outcome.success[i])
+            out.append(
+                {
+                    "success": float(success),
+                    "collision": float(outcome.collision[i]),
+                    "timeout": float(outcome.timeout[i]),
+                    "navigation_time": steps * self.dt if success else float("nan"),
+                    "path_length": float(self.path[i]),
+                    "discomfort_steps": float(self.discomfort[i]),
+                    "steps": float(steps),
+                    "discomfort_frequency": float(self.discomfort[i]) / max(steps, 1),
+                    "min_separation": float(self.min_gap[i])
+                    if np.isfinite(self.min_gap[i])
+                    else float("nan"),
+                    "intrusion_ratio": float(self.intrusion[i]) / max(steps, 1),
+                    "return": float(self.ret[i]),
+                    "discounted_return": float(self.discounted[i]),
+                }
+            )
+        return out

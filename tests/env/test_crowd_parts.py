@@ -1,0 +1,89 @@
+"""The CrowdNav task's parts against hand-worked cases: the joint-state observation and the step's
+judgement (collision along the step, goal, time limit, discomfort), in CrowdNav's order."""
+
+import math
+
+import numpy as np
+
+from socialzoo.env.crowd_observation import flat_size, joint_state
+from socialzoo.env.crowd_outcome import (
+    CrowdNavMetrics,
+    CrowdRewardConfig,
+    closest_boundary_distance,
+    judge_step,
+)
+
+
+def test_joint_state_is_robot_centred_with_x_towards_the_goal():
+    state = joint_state(
+        robot_pos=np.array([[0.0, -4.0]]),
+        robot_goal=np.array([[0.0, 4.0]]),
+        robot_vel=np.array([[0.0, 1.0]]),
+        robot_heading=np.array([math.pi / 2]),
+        robot_radius=0.3,
+        preferred_speed=1.0,
+        unicycle=False,
+        human_pos=np.array([[[1.0, -4.0], [0.0, 0.0]]]),
+        human_vel=np.array([[[0.0, -1.0], [0.0, 0.0]]]),
+        human_radius=0.3,
+        human_mask=np.array([[True, False]]),
+    )
+    np.testing.assert_allclose(state.robot[0], [8.0, 1.0, 0.0, 0.3, 1.0, 0.0], atol=1e-6)
+    # The person to the robot's right (world +x) is at robot-frame y = -1, walking towards it.
+    np.testing.assert_allclose(state.humans[0, 0], [0.0, -1.0, -1.0, 0.0, 0.3, 1.0, 0.6], atol=1e-6)
+    np.testing.assert_array_equal(state.humans[0, 1], 0.0)
+    flat = state.flat()
+    assert flat.shape == (1, flat_size(2)) == (1, 6 + 16) and flat[0, -2:].tolist() == [1.0, 0.0]
+
+
+def test_closest_distance_along_the_step_catches_a_pass_through():
+    # At the start and end of the step they are 1.2 m apart, but they cross in between.
+    gap = closest_boundary_distance(
+        robot_pos=np.array([[0.0, 0.0]]),
+        robot_vel=np.array([[0.0, 0.0]]),
+        human_pos=np.array([[[-0.6, 0.0]]]),
+        human_vel=np.array([[[4.8, 0.0]]]),
+        radius_sum=0.6,
+        human_mask=np.array([[True]]),
+        dt=0.25,
+    )
+    assert math.isclose(gap[0], -0.6)
+    nobody = closest_boundary_distance(
+        np.zeros((1, 2)),
+        np.zeros((1, 2)),
+        np.zeros((1, 1, 2)),
+        np.zeros((1, 1, 2)),
+        0.6,
+        np.array([[False]]),
+        0.25,
+    )
+    assert nobody[0] == math.inf
+
+
+def test_judgement_follows_crowdnavs_order_and_reward():
+    cfg = CrowdRewardConfig()
+    out = judge_step(
+        closest=np.array([-0.1, -0.1, 0.5, 0.1, 0.5]),
+        goal_distance_after=np.array([0.1, 1.0, 0.2, 3.0, 3.0]),
+        robot_radius=0.3,
+        step_start_time=np.array([24.0, 1.0, 1.0, 1.0, 1.0]),
+        time_limit=25.0,
+        cfg=cfg,
+        dt=0.25,
+    )
+    assert out.timeout.tolist() == [True, False, False, False, False]  # the limit wins over everything
+    assert out.collision.tolist() == [False, True, False, False, False]
+    assert out.success.tolist() == [False, False, True, False, False]
+    np.testing.assert_allclose(out.reward, [0.0, -0.25, 1.0, (0.1 - 0.2) * 0.5 * 0.25, 0.0])
+    assert out.terminated.tolist() == [False, True, True, False, False] and out.truncated.tolist()[0]
+    metrics = CrowdNavMetrics(5, 0.25, 1.0, cfg)
+    metrics.update(out, moved=np.full(5, 0.25))
+    rows = metrics.summaries(np.arange(5), out)
+    assert (
+        rows[2]["success"] == 1.0
+        and rows[2]["navigation_time"] == 0.25
+        and rows[3]["discomfort_frequency"] == 1.0
+    )
+    assert (
+        math.isnan(rows[1]["navigation_time"]) and rows[1]["collision"] == 1.0 and rows[0]["timeout"] == 1.0
+    )
