@@ -43,6 +43,8 @@ POLICIES: dict[str, str] = {
     "mappo": "socialzoo.agents.mlp:MlpPolicy",
     # Program synthesis: a JSON program (socialzoo.agents.pips_program).
     "pips": "socialzoo.agents.pips:PipsPolicy",
+    # The CrowdNav task's learned velocity policy (`socialzoo train crowdnav`): PPO with attention.
+    "crowdnav": "socialzoo.agents.crowd_policy:CrowdAttentionPolicy",
 }
 
 

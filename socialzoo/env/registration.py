@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 
+from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
 from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
 
 BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
@@ -41,8 +42,24 @@ FAMILY_IDS: dict[str, dict] = {
 }
 
 
+CROWD_ENTRY = "socialzoo.env.crowd_env:CrowdNavEnv"
+CROWD_VECTOR_ENTRY = "socialzoo.env.crowd_env:CrowdNavVectorEnv"
+# The CrowdNav task and its variants (socialzoo.env.crowd_variants), e.g. socialzoo/CrowdNav-v1; their
+# version is the task's own (CROWD_ENV_VERSION), apart from the benchmark's.
+CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"variant": name} for name in VARIANTS}
+
+
 def register_envs() -> None:
     """Register every id (idempotent)."""
+    for env_id, kwargs in CROWD_IDS.items():
+        if env_id not in gym.registry:
+            gym.register(
+                id=env_id,
+                entry_point=CROWD_ENTRY,
+                vector_entry_point=CROWD_VECTOR_ENTRY,
+                kwargs=dict(kwargs),
+                disable_env_checker=False,
+            )
     for env_id, kwargs in {**BENCHMARK_IDS, **FAMILY_IDS}.items():
         if env_id in gym.registry:
             continue

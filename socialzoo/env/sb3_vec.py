@@ -20,6 +20,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.vector import VectorEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
 from socialzoo.env.config import EnvConfig
@@ -78,12 +79,25 @@ class SB3VecEnv(VecEnv):
     """
 
     def __init__(
-        self, num_envs: int, config: EnvConfig | None = None, map_data: Map | None = None, **overrides: Any
+        self,
+        num_envs: int,
+        config: EnvConfig | None = None,
+        map_data: Map | None = None,
+        vector_env: VectorEnv | None = None,
+        **overrides: Any,
     ) -> None:
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"SB3VecEnv: num_envs must be an int >= 1, got {num_envs!r}")
-        self.vector_env = ActionSelectionVectorEnv(num_envs, config=config, map_data=map_data, **overrides)
-        self.config: EnvConfig = self.vector_env.config
+        if vector_env is None:
+            vector_env = ActionSelectionVectorEnv(num_envs, config=config, map_data=map_data, **overrides)
+        elif vector_env.num_envs != num_envs:
+            raise ValueError(
+                f"SB3VecEnv: num_envs {num_envs} but the vector env has {vector_env.num_envs} rows"
+            )
+        # Any of socialzoo's batched VectorEnvs (same-step autoreset, final_obs and final_info
+        # metrics), e.g. the CrowdNav task's CrowdNavVectorEnv.
+        self.vector_env = vector_env
+        self.config = self.vector_env.config
         self.render_mode = None
         super().__init__(
             num_envs, self.vector_env.single_observation_space, self.vector_env.single_action_space
@@ -98,8 +112,9 @@ class SB3VecEnv(VecEnv):
         seed = self._seeds[0]
         obs, info = self.vector_env.reset(seed=seed)
         self._started = True
-        self.reset_infos = [{"scenario_seed": int(s)} for s in info["scenario_seed"]]
-        if not self._metric_types:
+        seeds = info.get("scenario_seed", info.get("case_seed", [None] * self.num_envs))
+        self.reset_infos = [{"scenario_seed": None if s is None else int(s)} for s in seeds]
+        if not self._metric_types and hasattr(self.vector_env.core, "episode_summaries"):
             # The vector env hands episode metrics over as float arrays; the core's typed summary
             # (bool success, int counts) says what each one is, as a single env reports it.
             summary = self.vector_env.core.episode_summaries([0])[0]
@@ -119,7 +134,11 @@ class SB3VecEnv(VecEnv):
         if not self._started or self._actions is None:
             raise RuntimeError("SB3VecEnv: call reset() and step_async(actions) before step_wait()")
         actions, self._actions = self._actions, None
-        if actions.ndim == 2 and actions.shape[1] == 1 and self.config.robot_action == "subpolicy":
+        if (
+            actions.ndim == 2
+            and actions.shape[1] == 1
+            and isinstance(self.action_space, gym.spaces.Discrete)
+        ):
             actions = actions[:, 0]  # SB3 gives (B, 1) discrete actions from some code paths
         obs, reward, terminated, truncated, info = self.vector_env.step(actions)
         dones = terminated | truncated
@@ -134,7 +153,10 @@ class SB3VecEnv(VecEnv):
                 infos[row] = {
                     "terminal_observation": final_obs[row],
                     "TimeLimit.truncated": bool(truncated[row] and not terminated[row]),
-                    "metrics": {key: self._metric_types[key](values[row]) for key, values in metrics.items()},
+                    "metrics": {
+                        key: self._metric_types.get(key, float)(values[row])
+                        for key, values in metrics.items()
+                    },
                 }
         return obs, reward.astype(np.float32), dones, infos
 

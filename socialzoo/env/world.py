@@ -15,9 +15,8 @@ from socialzoo.core.config import RobotConfig, WorldConfig
 from socialzoo.core.robot import step_robot, world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.humans.motion import integrate_humans
+from socialzoo.humans.people import step_people
 from socialzoo.humans.routes import advance_waypoints
-from socialzoo.humans.social_force import human_acceleration
 
 _DIFFERENTIAL = RobotConfig()
 
@@ -62,6 +61,7 @@ def step_world(
     robot_halt: np.ndarray | None = None,
     human_desired_vel: np.ndarray | None = None,
     human_learned: np.ndarray | None = None,
+    robot_visible: bool = True,
 ) -> tuple[WorldState, StepEvents]:
     """Advance every world by one step of cfg.dt.
 
@@ -75,6 +75,8 @@ def step_world(
         robot_halt: (B, R) bool; robots whose velocity is set to zero at once.
         human_desired_vel: (B, H, 2) desired velocities for learned humans, m/s, world frame.
         human_learned: (B, H) bool; humans driven by `human_desired_vel` instead of their route.
+        robot_visible: False: the humans neither see nor avoid the robots (CrowdNav's invisible
+            robot); collisions with them still count.
 
     Returns:
         (new_state, events).
@@ -83,28 +85,22 @@ def step_world(
         robot_halt = np.zeros(state.robot_pose.shape[:2], dtype=bool)
     hcfg = cfg.human
     target = state.human_target
-    accel, wall_dist = human_acceleration(
+    # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
+    # and human_group: socialzoo.humans.people.
+    human_pos, human_vel, blocked = step_people(
         state.human_pos,
         state.human_vel,
         target,
         state.human_pref_speed,
         state.human_mask,
-        state.robot_pose[..., :2],
-        robot_velocity_vectors(state, cfg.robot),
+        state.human_model,
+        state.human_group,
+        state.robot_pose[..., :2] if robot_visible else state.robot_pose[:, :0, :2],
+        robot_velocity_vectors(state, cfg.robot)[:, : state.num_robots if robot_visible else 0],
         walls,
-        hcfg,
+        cfg,
         human_desired_vel,
         human_learned,
-    )
-    human_pos, human_vel, blocked = integrate_humans(
-        state.human_pos,
-        state.human_vel,
-        accel,
-        state.human_pref_speed,
-        state.human_mask,
-        walls,
-        wall_dist,
-        cfg.dt,
     )
     waypoint, direction = advance_waypoints(
         human_pos,
@@ -131,6 +127,8 @@ def step_world(
         human_direction=direction,
         step_count=state.step_count + 1,
         noise_key=state.noise_key,
+        human_model=state.human_model,
+        human_group=state.human_group,
     )
     robot_wall, robot_human = robot_collisions(new_state, walls, cfg)
     return new_state, StepEvents(robot_wall=robot_wall, robot_human=robot_human, human_blocked=blocked)

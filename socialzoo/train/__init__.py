@@ -27,6 +27,8 @@ TRAINERS: dict[str, str] = {
     # Multi-agent: learned humans (MAPPO/IPPO), and robots and humans trained together.
     "humans": "socialzoo.train.humans:HumansArgs",
     "cotrain": "socialzoo.train.cotrain:CotrainArgs",
+    # The CrowdNav task: PPO with attention over people (velocity control).
+    "crowdnav": "socialzoo.train.crowdnav:CrowdNavArgs",
 }
 
 

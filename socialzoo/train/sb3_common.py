@@ -184,6 +184,10 @@ def make_training_env(args: SB3Args, config: EnvConfig) -> tuple[Any, Any]:
     return norm, norm
 
 
+# Episode metrics every SB3 trainer logs to TensorBoard as episode/<key> (those its task reports).
+EPISODE_METRICS = ("success", "reached", "collision", "timeout", "average_step_reward", "navigation_time")
+
+
 def checkpoint_callback(
     run: TrainingRun, schedule: CheckpointSchedule, save: Callable[[Path, int], None]
 ) -> Any:
@@ -212,9 +216,10 @@ def checkpoint_callback(
             for info in self.locals.get("infos", ()):
                 metrics = info.get("metrics")
                 if metrics is not None:
-                    self.logger.record_mean("episode/success", float(metrics["success"]))
-                    self.logger.record_mean("episode/reached", float(metrics["reached"]))
-                    self.logger.record_mean("episode/average_step_reward", metrics["average_step_reward"])
+                    for key in EPISODE_METRICS:
+                        value = metrics.get(key)
+                        if value is not None and value == value:  # NaN: not defined for this episode
+                            self.logger.record_mean(f"episode/{key}", float(value))
             return True
 
         def _on_training_end(self) -> None:

@@ -1,0 +1,158 @@
+"""Learned CrowdNav policies at inference: the attention-over-people network (socialzoo.train.
+crowd_attention) and its policy head, run in numpy from a socialzoo policy file (safetensors with
+a JSON header), greedy: the most likely of CrowdNav's discrete actions, or the mean velocity.
+
+The file's tensors: `attention.embed.*`, `attention.value.*`, `attention.score.*` (the pooling
+network), `policy.*` (the policy MLP on its features) and `action.weight`, `action.bias` (the
+action head: logits, or the mean action in [-1, 1]). Its header says the observation's person
+slots, the activation of the policy MLP, the action kind and the task's env id.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.agents.policy_file import PolicyFileError, env_version, read_policy_file, save_policy_file
+from socialzoo.env.crowd_variants import CROWD_ENV_VERSION
+
+POLICY_NAME = "crowdnav"
+# The CrowdNav task's env ids carry their own version (socialzoo.env.crowd_variants).
+ROBOT_DIM, HUMAN_DIM = 6, 7
+_LAYER = re.compile(r"(?P<group>.+)\.(?P<index>\d+)\.(?P<kind>weight|bias)$")
+
+
+def _layers(tensors: dict[str, np.ndarray], prefix: str, where: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The (W, b) pairs of a torch Sequential's Linear layers named prefix.<i>.weight, in order."""
+    found: dict[int, dict[str, np.ndarray]] = {}
+    for name, value in tensors.items():
+        match = _LAYER.fullmatch(name)
+        if match and match["group"] == prefix:
+            found.setdefault(int(match["index"]), {})[match["kind"]] = value
+    if not found or any(set(v) != {"weight", "bias"} for v in found.values()):
+        raise PolicyFileError(f"{where}: no complete layers {prefix}.<i>.weight/bias")
+    return [
+        (found[i]["weight"].astype(np.float64), found[i]["bias"].astype(np.float64)) for i in sorted(found)
+    ]
+
+
+def _run(
+    layers: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray, last_relu: bool, act: str = "relu"
+) -> np.ndarray:
+    for k, (w, b) in enumerate(layers):
+        x = x @ w.T + b
+        if k < len(layers) - 1 or last_relu:
+            x = np.maximum(x, 0.0) if act == "relu" else np.tanh(x)
+    return x
+
+
+class CrowdAttentionPolicy:
+    """A learned CrowdNav policy (PPO with attention over people), greedy.
+
+    Args:
+        tensors: the file's tensors (see the module docstring).
+        header: its header.
+        where: the file, for messages.
+    """
+
+    name = POLICY_NAME
+    reads_core = False
+
+    def __init__(self, tensors: dict[str, np.ndarray], header: dict[str, Any], where: str = "policy") -> None:
+        network = header.get("network", {})
+        try:
+            self.slots = int(header["observation"]["slots"])
+            self.action_kind = str(network["action"])
+            self.activation = str(network["activation"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise PolicyFileError(f"{where}: the header lacks the crowd policy's shape ({err})") from None
+        if self.action_kind not in ("discrete", "continuous") or self.activation not in ("tanh", "relu"):
+            raise PolicyFileError(
+                f"{where}: unknown action {self.action_kind!r} or activation {self.activation!r}"
+            )
+        self.embed = _layers(tensors, "attention.embed", where)
+        self.value = _layers(tensors, "attention.value", where)
+        self.score = _layers(tensors, "attention.score", where)
+        self.policy = (
+            _layers(tensors, "policy", where) if any(k.startswith("policy.") for k in tensors) else []
+        )
+        if "action.weight" not in tensors or "action.bias" not in tensors:
+            raise PolicyFileError(f"{where}: no action head (action.weight, action.bias)")
+        self.action = (tensors["action.weight"].astype(np.float64), tensors["action.bias"].astype(np.float64))
+        if self.embed[0][0].shape[1] != ROBOT_DIM + HUMAN_DIM:
+            raise PolicyFileError(f"{where}: the embedding takes {self.embed[0][0].shape[1]} inputs, not 13")
+        self.header = header
+
+    @property
+    def observation_size(self) -> int:
+        """Length of the flat observation the policy reads."""
+        return ROBOT_DIM + (HUMAN_DIM + 1) * self.slots
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """(N, 6 + value size) [robot state, attention-pooled crowd feature] of flat observations."""
+        n, h = obs.shape[0], self.slots
+        robot = obs[:, :ROBOT_DIM].astype(np.float64)
+        humans = obs[:, ROBOT_DIM : ROBOT_DIM + h * HUMAN_DIM].reshape(n, h, HUMAN_DIM).astype(np.float64)
+        mask = obs[:, ROBOT_DIM + h * HUMAN_DIM :] > 0.5
+        pairs = np.concatenate((np.broadcast_to(robot[:, None, :], (n, h, ROBOT_DIM)), humans), axis=-1)
+        emb = _run(self.embed, pairs, last_relu=True)
+        present = mask[..., None].astype(np.float64)
+        crowd = (emb * present).sum(1, keepdims=True) / np.maximum(present.sum(1, keepdims=True), 1.0)
+        scores = _run(self.score, np.concatenate((emb, np.broadcast_to(crowd, emb.shape)), axis=-1), False)[
+            ..., 0
+        ]
+        scores = np.where(mask, scores, -np.inf)
+        top = np.max(scores, axis=1, keepdims=True)
+        exp = np.where(mask, np.exp(scores - np.where(np.isfinite(top), top, 0.0)), 0.0)
+        weights = exp / np.maximum(exp.sum(1, keepdims=True), 1e-300)
+        pooled = (weights[..., None] * _run(self.value, emb, last_relu=False)).sum(1)
+        return np.concatenate((robot, pooled), axis=-1)
+
+    def action_output(self, obs: np.ndarray) -> np.ndarray:
+        """(N, A) the action head's output: logits, or mean actions before clipping."""
+        x = self.features(np.asarray(obs))
+        if self.policy:
+            x = _run(self.policy, x, last_relu=True, act=self.activation)
+        return x @ self.action[0].T + self.action[1]
+
+    def act(self, obs: np.ndarray, core: Any = None) -> np.ndarray:
+        """Greedy actions of (N, D) flat observations: (N,) action indices, or (N, 2) in [-1, 1]."""
+        obs = np.asarray(obs)
+        if obs.ndim != 2 or obs.shape[1] != self.observation_size:
+            raise ValueError(
+                f"{self.name}: observations must be (N, {self.observation_size}), got {obs.shape}"
+            )
+        out = self.action_output(obs)
+        if self.action_kind == "discrete":
+            return np.argmax(out, axis=-1).astype(np.int64)
+        return np.clip(out, -1.0, 1.0).astype(np.float32)
+
+    def config(self) -> dict[str, Any]:
+        """What the policy is (its header's network and training records)."""
+        return {"network": self.header.get("network"), "training": self.header.get("training")}
+
+    def save(self, path: str | Path, tensors: dict[str, Any]) -> Path:
+        """Write `tensors` with this policy's header to `path`."""
+        return save_policy_file(path, tensors, self.header)
+
+    @classmethod
+    def load(cls, path: str | Path) -> CrowdAttentionPolicy:
+        """Load a policy file, refusing one of another kind or task version (PolicyFileError)."""
+        tensors, header = read_policy_file(path, check_env_version=False)
+        if header.get("policy") != POLICY_NAME:
+            raise PolicyFileError(
+                f"{path}: a {header.get('policy')!r} policy file, not a {POLICY_NAME!r} one"
+            )
+        try:
+            theirs = env_version(str(header["env_id"]))
+        except ValueError as err:
+            raise PolicyFileError(f"{path}: {err}") from None
+        if theirs != CROWD_ENV_VERSION:
+            raise PolicyFileError(
+                f"{path}: trained on {header['env_id']} but this socialzoo's CrowdNav task is v{CROWD_ENV_VERSION}; "
+                "retrain it (`socialzoo train crowdnav`)"
+            )
+        return cls(tensors, header, str(path))

@@ -1,0 +1,131 @@
+"""Evaluation of CrowdNav-task policies on the task's fixed cases (CrowdNav's 100 validation and 500
+test cases), batched: every row plays one case at a time and takes the next pending case when its
+episode ends, so N cases cost about N / B episodes of wall time.
+
+The summary reports CrowdNav's test metrics (success, collision and timeout rates, navigation time
+of the successful episodes, the frequency of discomfort over all steps) and ours (path length,
+minimum separation, intrusion ratio, returns), each rate with a 95% Wilson interval and each mean
+with a Student-t interval over the cases (socialzoo.bench.stats).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from socialzoo.env.crowd_config import CrowdNavConfig
+from socialzoo.env.crowd_core import CrowdNavCore
+from socialzoo.env.crowd_source import CrowdCaseSource
+from socialzoo.nav.crowd_cases import SPLIT_SIZE, Split
+
+# A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
+CrowdActor = Callable[[np.ndarray, CrowdNavCore], np.ndarray]
+RATES = ("success", "collision", "timeout")
+MEANS = ("navigation_time", "path_length", "min_separation", "intrusion_ratio", "discounted_return")
+
+
+@dataclass(frozen=True)
+class CrowdEvaluation:
+    """The result of one policy on fixed cases.
+
+    Attributes:
+        split: "val" or "test".
+        episodes: one metrics dict per case, in case order (with its "case" index).
+        summary: the aggregate (rates, means, intervals).
+    """
+
+    split: str
+    episodes: list[dict[str, Any]]
+    summary: dict[str, Any]
+
+
+def evaluate_crowd(
+    act: CrowdActor,
+    config: CrowdNavConfig,
+    split: Split = "test",
+    cases: int | None = None,
+    batch_size: int = 100,
+) -> CrowdEvaluation:
+    """Run `act` on the first `cases` cases of a split (all of them by default).
+
+    Args:
+        act: the policy: flat observations and the core -> actions.
+        config: the task (its observation is read in the flat layout whatever config.observation).
+        split: "val" or "test".
+        cases: how many cases (default the split's size: 100 or 500).
+        batch_size: rows stepped together.
+
+    Raises:
+        ValueError: a training split, or more cases than the split holds.
+    """
+    if split not in SPLIT_SIZE:
+        raise ValueError(f"evaluate_crowd: split must be 'val' or 'test', got {split!r}")
+    total = SPLIT_SIZE[split] if cases is None else cases
+    if not 1 <= total <= SPLIT_SIZE[split]:
+        raise ValueError(
+            f"evaluate_crowd: {total} cases asked of the {split} split, which holds {SPLIT_SIZE[split]}"
+        )
+    rows = min(batch_size, total)
+    core = CrowdNavCore(config, rows)
+    source = CrowdCaseSource(config, rows)
+    playing = np.arange(rows)
+    core.reset_rows(np.arange(rows), source.fixed(split, playing))
+    next_case = rows
+    active = np.ones(rows, dtype=bool)
+    episodes: dict[int, dict[str, Any]] = {}
+    while active.any():
+        obs = core.observation.flat()  # type: ignore[union-attr]
+        actions = act(obs, core)
+        step = core.step(_idle(actions, active, config))
+        done = [r for r in step.metrics if active[r]]
+        for row in done:
+            episodes[int(playing[row])] = {"case": int(playing[row]), **step.metrics[row]}
+        refill = []
+        for row in done:
+            if next_case < total:
+                playing[row] = next_case
+                next_case += 1
+                refill.append(row)
+            else:
+                active[row] = False
+        if refill:
+            core.reset_rows(refill, source.fixed(split, playing[refill]))
+        # Finished rows keep stepping (their results are no longer read) until all are done.
+    ordered = [episodes[k] for k in range(total)]
+    return CrowdEvaluation(split=split, episodes=ordered, summary=summarize_crowd(ordered, config.time_step))
+
+
+def _idle(actions: np.ndarray, active: np.ndarray, config: CrowdNavConfig) -> np.ndarray:
+    """The actions with finished rows standing still (they may be out of cases)."""
+    actions = np.array(actions, copy=True)
+    if config.action == "discrete":
+        actions[~active] = 0
+    else:
+        actions[~active] = 0.0 if config.robot.kinematics == "holonomic" else np.array([-1.0, 0.0])
+    return actions
+
+
+def summarize_crowd(
+    episodes: list[dict[str, Any]], time_step: float, confidence: float = 0.95
+) -> dict[str, Any]:
+    """Rates with Wilson intervals and means with Student-t intervals over the episodes (NaN values,
+    e.g. the navigation time of a failed episode, left out of a mean)."""
+    from socialzoo.bench.stats import mean_interval, rate_interval
+
+    n = len(episodes)
+    out: dict[str, Any] = {"episodes": n}
+    for key in RATES:
+        rate = rate_interval(int(sum(e[key] for e in episodes)), n, confidence)
+        out[f"{key}_rate"], out[f"{key}_ci"] = rate.value, [rate.low, rate.high]
+    for key in MEANS:
+        mean = mean_interval([e[key] for e in episodes], confidence)
+        out[key], out[f"{key}_ci"] = mean.value, [mean.low, mean.high]
+    steps = sum(e["steps"] for e in episodes)
+    # CrowdNav's "frequency of being in danger": discomfort steps over all steps of all episodes.
+    out["discomfort_frequency"] = sum(e["discomfort_steps"] for e in episodes) / steps if steps else math.nan
+    out["time_step"] = time_step
+    return out

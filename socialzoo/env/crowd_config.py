@@ -1,0 +1,166 @@
+"""Configuration of the CrowdNav task: a velocity-controlled robot crossing a crowd (Chen et al.
+2019, vita-epfl/CrowdNav), with CrowdNav's settings as the defaults and its usual variants.
+
+CrowdNav's env.config: time step 0.25 s, time limit 25 s, circle crossing of radius 4 m with 5
+people, square crossing 10 m wide; people ORCA with radius 0.3 m and preferred speed 1 m/s; the
+robot holonomic, radius 0.3 m, preferred speed 1 m/s, invisible to the people; reward +1 at the
+goal, -0.25 on a collision, (d - 0.2) * 0.5 * dt closer than 0.2 m; 100 validation and 500 test
+cases. Variants change one thing each (socialzoo.env.crowd_variants.VARIANTS).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal, get_args
+
+from socialzoo.core.config import RobotConfig
+from socialzoo.core.validation import check_int, check_number
+from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
+from socialzoo.env.crowd_outcome import CrowdRewardConfig
+from socialzoo.env.crowd_variants import VARIANTS
+from socialzoo.nav.crowd_cases import CrowdCaseConfig
+
+CrowdAction = Literal["continuous", "discrete"]
+CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
+# The people's motion models the task offers (socialzoo.env.crowd_core drives them through the
+# one world step).
+CrowdHumans = Literal["orca", "social_force"]
+CROWD_HUMANS: tuple[str, ...] = get_args(CrowdHumans)
+# CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
+SPEED_SAMPLES = 5
+ROTATION_SAMPLES = 16
+
+
+def crowdnav_robot(kinematics: str = "holonomic") -> RobotConfig:
+    """CrowdNav's robot: radius 0.3 m, preferred (and largest) speed 1 m/s."""
+    return RobotConfig(kinematics=kinematics, radius=0.3, max_speed=1.0)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, kw_only=True)
+class CrowdNavConfig:
+    """Everything the CrowdNav task needs; the defaults are CrowdNav's.
+
+    Attributes:
+        cases: how cases are drawn (layout, people, radii, speeds).
+        time_step: the decision step, s (CrowdNav: 0.25).
+        physics_substeps: world steps per decision (1: the people move at the decision step, as
+            CrowdNav's ORCA people do; social-force people take 10 steps of 0.025 s, the
+            benchmark's physics).
+        time_limit: s; a step that starts at time_limit - 1 s or later ends the episode (CrowdNav).
+        robot: the robot (kinematics, radius, max_speed = its preferred speed).
+        robot_visible: whether the people see and avoid the robot (CrowdNav: invisible).
+        humans: the people's model, "orca" or "social_force".
+        reward: the task's reward.
+        action: "continuous" (Box [-1, 1]^2 scaled to the robot's speed: (vx, vy) for a holonomic
+            robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
+        observation: "flat" or "dict" (socialzoo.env.crowd_observation).
+        max_humans: person slots of the observation and the state (default: cases.num_humans).
+        map: None for CrowdNav's open arena; a building map ("gdc1", a path) for crowd navigation
+            among walls, with the benchmark's scenarios and social-force people.
+    """
+
+    cases: CrowdCaseConfig = field(default_factory=CrowdCaseConfig)
+    time_step: float = 0.25
+    physics_substeps: int = 1
+    time_limit: float = 25.0
+    robot: RobotConfig = field(default_factory=crowdnav_robot)
+    robot_visible: bool = False
+    humans: CrowdHumans = "orca"
+    reward: CrowdRewardConfig = field(default_factory=CrowdRewardConfig)
+    action: CrowdAction = "continuous"
+    observation: ObservationKind = "flat"
+    max_humans: int | None = None
+    map: str | None = None
+
+    def __post_init__(self) -> None:
+        check_number("CrowdNavConfig", "time_step", self.time_step, low=0, low_open=True)
+        check_int("CrowdNavConfig", "physics_substeps", self.physics_substeps, low=1)
+        check_number("CrowdNavConfig", "time_limit", self.time_limit, low=1, low_open=True)
+        if self.robot.kinematics == "differential":
+            raise ValueError(
+                "CrowdNavConfig.robot.kinematics must be 'holonomic' or 'unicycle', got 'differential'"
+            )
+        if self.robot.radius is None:
+            raise ValueError("CrowdNavConfig.robot.radius must be set (the task's robot is a disc)")
+        if self.humans not in CROWD_HUMANS:
+            raise ValueError(f"CrowdNavConfig.humans must be one of {CROWD_HUMANS}, got {self.humans!r}")
+        if self.action not in CROWD_ACTIONS:
+            raise ValueError(f"CrowdNavConfig.action must be one of {CROWD_ACTIONS}, got {self.action!r}")
+        if self.observation not in OBSERVATION_KINDS:
+            raise ValueError(
+                f"CrowdNavConfig.observation must be one of {OBSERVATION_KINDS}, got {self.observation!r}"
+            )
+        check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
+        if self.max_humans is not None and self.max_humans < self.cases.num_humans:
+            raise ValueError(
+                f"CrowdNavConfig.max_humans ({self.max_humans}) is below cases.num_humans ({self.cases.num_humans})"
+            )
+        if self.map is not None and (not isinstance(self.map, str) or not self.map):
+            raise ValueError(f"CrowdNavConfig.map must be None or a map name or path, got {self.map!r}")
+
+    @property
+    def slots(self) -> int:
+        """Person slots H."""
+        return self.cases.num_humans if self.max_humans is None else self.max_humans
+
+    @property
+    def physics_dt(self) -> float:
+        """The world step, s."""
+        return self.time_step / self.physics_substeps
+
+    @property
+    def preferred_speed(self) -> float:
+        """The robot's preferred speed v_pref, m/s (its largest)."""
+        return self.robot.max_speed
+
+    def replace(self, **changes: Any) -> CrowdNavConfig:
+        """A copy with `changes`; nested configs may be given as dicts of their fields."""
+        for name in ("cases", "robot", "reward"):
+            if isinstance(changes.get(name), dict):
+                changes[name] = dataclasses.replace(getattr(self, name), **changes[name])
+        try:
+            return dataclasses.replace(self, **changes)
+        except TypeError as err:
+            known = sorted(f.name for f in dataclasses.fields(self))
+            raise ValueError(f"CrowdNavConfig: {err}; known fields: {known}") from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON values (what the registry and run records store)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CrowdNavConfig:
+        """The config of `to_dict`'s form (missing fields keep their defaults)."""
+        return cls().replace(**dict(data))
+
+    @classmethod
+    def variant(cls, name: str, **overrides: Any) -> CrowdNavConfig:
+        """The config of a registered variant ("" for CrowdNav's own; VARIANTS), then `overrides`.
+
+        Raises:
+            ValueError: an unknown variant (the message lists them).
+        """
+        if name not in VARIANTS:
+            known = ", ".join(repr(v) for v in VARIANTS)
+            raise ValueError(f"unknown CrowdNav variant {name!r}; known variants: {known}")
+        return cls().replace(**_copy(VARIANTS[name][1])).replace(**overrides)
+
+
+def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:
+    """CrowdNav's 81 actions (build_action_space): stop, then 16 headings x 5 speeds exponentially
+    spaced up to the preferred speed; headings over the full circle for a holonomic robot (as
+    (vx, vy)), within +-pi/4 for a unicycle (as (speed, turn))."""
+    v_pref = robot.max_speed
+    speeds = [(math.exp((i + 1) / SPEED_SAMPLES) - 1) / (math.e - 1) * v_pref for i in range(SPEED_SAMPLES)]
+    if robot.kinematics == "holonomic":
+        rotations = [2 * math.pi * k / ROTATION_SAMPLES for k in range(ROTATION_SAMPLES)]
+        return [(0.0, 0.0)] + [(s * math.cos(r), s * math.sin(r)) for r in rotations for s in speeds]
+    rotations = [-math.pi / 4 + (math.pi / 2) * k / (ROTATION_SAMPLES - 1) for k in range(ROTATION_SAMPLES)]
+    return [(0.0, 0.0)] + [(s, r) for r in rotations for s in speeds]
+
+
+def _copy(overrides: dict[str, Any]) -> dict[str, Any]:
+    """A copy of a variant's overrides (nested dicts copied, so replace() never shares them)."""
+    return {k: dict(v) if isinstance(v, dict) else v for k, v in overrides.items()}

@@ -1,0 +1,73 @@
+"""Where the CrowdNav task's episodes come from: a seeded training stream per batch row, or the fixed
+validation and test cases.
+
+Training cases are CrowdNav's training split (case seeds from 2000 up, socialzoo.nav.crowd_cases):
+row i of a batch reset with seed s draws its case seeds from its own Generator (row 0 from s
+itself, so a single env seeded with s plays row 0's episodes), never a validation or test case.
+On a building map (crowd navigation among walls) the cases are the benchmark's scenarios of that
+map, drawn by the benchmark's training stream (socialzoo.env.scenario_source).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from socialzoo.env.crowd_config import CrowdNavConfig
+from socialzoo.nav.crowd_cases import SPLIT_SEED_OFFSET, Split, case_seed, crowd_case
+from socialzoo.nav.scenarios import Scenario
+
+# CrowdNav seeds numpy's legacy generator, whose seeds are below 2**32.
+_SEED_LIMIT = 2**32
+
+
+class CrowdCaseSource:
+    """Cases for the rows of a batch.
+
+    Args:
+        config: the task (its case settings and map).
+        batch_size: B.
+    """
+
+    def __init__(self, config: CrowdNavConfig, batch_size: int) -> None:
+        self.config = config
+        self.batch_size = batch_size
+        self._rngs = [np.random.default_rng() for _ in range(batch_size)]
+        self._scenarios = None
+        if config.map is not None:
+            from socialzoo.env.scenario_source import ScenarioStream
+            from socialzoo.nav.maps import load_map
+            from socialzoo.nav.scenarios import ScenarioConfig
+
+            scenario = ScenarioConfig(max_humans=config.slots, min_humans=min(5, config.slots))
+            self._scenarios = ScenarioStream(load_map(config.map), batch_size, 1, scenario)
+
+    def seed(self, seed: int | None) -> None:
+        """Reseed every row's training stream (row 0 with the seed itself)."""
+        children = np.random.SeedSequence(seed).spawn(self.batch_size)
+        self._rngs = [
+            np.random.default_rng(seed if row == 0 else children[row]) for row in range(self.batch_size)
+        ]
+        if self._scenarios is not None:
+            self._scenarios.seed(seed)
+
+    def next(self, rows: np.ndarray) -> list[Scenario]:
+        """The next training case of each row in `rows`."""
+        rows = np.asarray(rows, dtype=np.intp)
+        if self._scenarios is not None:
+            return self._scenarios.next(rows)
+        low = SPLIT_SEED_OFFSET["train"]
+        return [
+            crowd_case(self.config.cases, int(self._rngs[row].integers(low, _SEED_LIMIT))) for row in rows
+        ]
+
+    def fixed(self, split: Split, indices: list[int] | np.ndarray) -> list[Scenario]:
+        """Cases `indices` of the validation or test split (CrowdNav's fixed cases; on a building
+        map, the map's registered test set or validation scenarios)."""
+        if self.config.map is None:
+            return [crowd_case(self.config.cases, case_seed(split, int(k))) for k in indices]
+        from socialzoo.nav.maps import load_map
+        from socialzoo.nav.scenarios import get_test_set, validation_set
+
+        m = load_map(self.config.map)
+        test_set = validation_set(m.name) if split == "val" else get_test_set(f"{m.name}-test")
+        return [test_set.scenario(int(k), m) for k in indices]

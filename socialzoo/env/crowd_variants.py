@@ -1,0 +1,45 @@
+"""The registered variants of the CrowdNav task, as plain overrides of CrowdNavConfig.
+
+Free of numpy, so that the Gymnasium registration (socialzoo.env.registration) names every
+variant's id without importing the world: socialzoo/CrowdNav-v1 is CrowdNav's own task, and
+socialzoo/CrowdNav<Name>-v1 each variant below.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+# The version of the CrowdNav task's ids (a change to a seeded rollout of the task bumps it; the
+# benchmark ids have their own, socialzoo.env.registration.ENV_VERSION).
+CROWD_ENV_VERSION = 1
+
+# Variant name -> (one line, CrowdNavConfig overrides as plain JSON values).
+VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
+    "": ("CrowdNav's circle crossing: 5 ORCA people, holonomic invisible robot", {}),
+    "Square": ("square crossing, 5 ORCA people", {"cases": {"layout": "square_crossing"}}),
+    "20": ("CrowdNav++'s crowd: 20 ORCA people in circle crossing", {"cases": {"num_humans": 20}}),
+    "Unicycle": (
+        "a unicycle robot (turns at most pi/4 a step, CrowdNav's rotation limit)",
+        {"robot": {"kinematics": "unicycle"}},
+    ),
+    "Visible": ("the people see the robot and avoid it", {"robot_visible": True}),
+    "SocialForce": (
+        "social-force people (the benchmark's PedSim model at its 0.025 s step) instead of ORCA",
+        {"humans": "social_force", "physics_substeps": 10},
+    ),
+    "Walls": (
+        "crowd navigation among walls: the velocity robot on gdc1 with the benchmark's scenarios and people",
+        {
+            "map": "gdc1",
+            "humans": "social_force",
+            "physics_substeps": 10,
+            "time_limit": 81.0,
+            "max_humans": 25,
+        },
+    ),
+}
+
+
+def crowd_env_id(variant: str) -> str:
+    """The Gymnasium id of a variant ("" for CrowdNav's own task)."""
+    return f"socialzoo/CrowdNav{variant}-v{CROWD_ENV_VERSION}"

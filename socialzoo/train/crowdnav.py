@@ -1,0 +1,296 @@
+"""`socialzoo train crowdnav`: PPO (Stable-Baselines3) with attention over people on the CrowdNav task.
+
+The policy reads the robot-centred joint state (socialzoo.env.crowd_observation) through an
+attention-pooling features extractor in the spirit of SARL (socialzoo.train.crowd_attention), and
+picks one of CrowdNav's 81 actions (or a velocity, with --action continuous). It trains on the
+task's training cases only (CrowdNav's training split; the 100 validation cases choose nothing
+unless --eval-trials asks for checkpoint evaluations, and the 500 test cases are never seen), on
+the batched CrowdNavVectorEnv behind SB3's VecEnv.
+
+The training reward is the task's (CrowdNav's) plus, when `progress_reward` > 0, a potential-based
+shaping term progress_reward * (d_before - d_after) on the robot's goal distance d (Ng et al. 1999:
+shaping by a potential's difference keeps the optimal policies; CrowdNav++ shapes the same way).
+Episodes are judged, and every reported metric computed, on the task's reward and outcomes alone.
+
+    socialzoo train crowdnav --out runs/crowdnav --seed 0
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from socialzoo.core.validation import check_int, check_number
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
+
+TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CrowdNavArgs:
+    """Train PPO with attention over people on the CrowdNav task.
+
+    Attributes:
+        out: the run folder: run.json, checkpoints/, tensorboard/, crowdnav.safetensors.
+        seed: seeds the network, SB3's sampling and the training cases.
+        variant: the task's variant ("" CrowdNav's own; "20", "Unicycle", "Square", "Visible",
+            "SocialForce", "Walls": socialzoo.env.crowd_variants).
+        env_overrides: other CrowdNavConfig fields, as a JSON object.
+        action: "discrete" (CrowdNav's 81 actions) or "continuous" (a velocity).
+        total_steps: env steps (decisions) of training.
+        checkpoint_every: a policy file every this many env steps; a multiple of the rollout.
+        num_envs: rows of the batched training env.
+        n_steps: env steps per row per rollout.
+        batch_size: minibatch size of the PPO update.
+        n_epochs: passes over each rollout.
+        learning_rate: Adam learning rate.
+        gamma: discount per decision step (0.25 s).
+        gae_lambda: GAE lambda.
+        clip_range: PPO clipping.
+        ent_coef: entropy bonus weight.
+        vf_coef: value loss weight.
+        max_grad_norm: gradient clipping.
+        net_arch: hidden sizes of the policy and value MLPs on the attention features.
+        embed: hidden sizes of the per-person embedding (ReLU).
+        value: hidden sizes of the per-person feature MLP.
+        attention: hidden sizes of the attention-score MLP.
+        progress_reward: weight of the goal-distance shaping term per metre (0: the task's reward only).
+        eval_trials: evaluate every checkpoint on this many of the task's validation cases
+            (evaluations.csv, TensorBoard eval/*); 0: none.
+        threads: torch CPU threads.
+        progress: show progress.
+    """
+
+    out: Path = Path("runs/crowdnav")
+    seed: int = 0
+    variant: str = ""
+    env_overrides: dict[str, Any] = field(default_factory=dict)
+    action: Literal["discrete", "continuous"] = "discrete"
+    total_steps: int = 2_000_000
+    checkpoint_every: int = 200_000
+    num_envs: int = 64
+    n_steps: int = 64
+    batch_size: int = 1024
+    n_epochs: int = 4
+    learning_rate: float = 5e-4
+    gamma: float = 0.97
+    gae_lambda: float = 0.95
+    clip_range: float = 0.2
+    ent_coef: float = 0.005
+    vf_coef: float = 0.5
+    max_grad_norm: float = 0.5
+    net_arch: tuple[int, ...] = (128, 128)
+    embed: tuple[int, ...] = (64, 64)
+    value: tuple[int, ...] = (64, 32)
+    attention: tuple[int, ...] = (64,)
+    progress_reward: float = 0.1
+    eval_trials: int = 0
+    threads: int = 1
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "out", Path(self.out))
+        for name in ("net_arch", "embed", "value", "attention"):
+            value = tuple(getattr(self, name))
+            object.__setattr__(self, name, value)
+            if not value or any(not isinstance(n, int) or isinstance(n, bool) or n < 1 for n in value):
+                raise ValueError(f"CrowdNavArgs.{name} must be positive layer sizes, got {value!r}")
+        for name in (
+            "total_steps",
+            "checkpoint_every",
+            "num_envs",
+            "n_steps",
+            "batch_size",
+            "n_epochs",
+            "threads",
+        ):
+            check_int("CrowdNavArgs", name, getattr(self, name), low=1)
+        check_int("CrowdNavArgs", "seed", self.seed, low=0)
+        check_int("CrowdNavArgs", "eval_trials", self.eval_trials, low=0, high=100)
+        for name, low, high in (
+            ("learning_rate", 0.0, 1.0),
+            ("gamma", 0.0, 1.0),
+            ("gae_lambda", 0.0, 1.0),
+            ("clip_range", 0.0, 10.0),
+            ("ent_coef", 0.0, 10.0),
+            ("vf_coef", 0.0, 10.0),
+            ("max_grad_norm", 0.0, 1e6),
+            ("progress_reward", 0.0, 100.0),
+        ):
+            check_number("CrowdNavArgs", name, getattr(self, name), low=low, high=high)
+        if self.action not in ("discrete", "continuous"):
+            raise ValueError(f"CrowdNavArgs.action must be 'discrete' or 'continuous', got {self.action!r}")
+        rollout = self.num_envs * self.n_steps
+        for name in ("checkpoint_every", "total_steps"):
+            if getattr(self, name) % rollout:
+                raise ValueError(
+                    f"CrowdNavArgs.{name} ({getattr(self, name)}) must be a multiple of the rollout, "
+                    f"num_envs * n_steps ({rollout})"
+                )
+        try:
+            self.task()
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"CrowdNavArgs: bad task ({err})") from None
+
+    def task(self) -> Any:
+        """The task's CrowdNavConfig: the variant, the overrides, the action kind, a flat observation."""
+        from socialzoo.env.crowd_config import CrowdNavConfig
+
+        overrides = {**dict(self.env_overrides), "action": self.action, "observation": "flat"}
+        return CrowdNavConfig.variant(self.variant, **overrides)
+
+
+def progress_shaping(venv: Any, weight: float) -> Any:
+    """An SB3 VecEnvWrapper adding weight * (goal distance before - after) to each row's reward;
+    the goal distance is the observation's first entry (socialzoo.env.crowd_observation)."""
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class ProgressShaping(VecEnvWrapper):
+        def reset(self) -> np.ndarray:
+            obs = self.venv.reset()
+            self.distance = obs[:, 0].astype(np.float64)
+            return obs
+
+        def step_wait(self) -> Any:
+            obs, reward, done, infos = self.venv.step_wait()
+            after = obs[:, 0].astype(np.float64)
+            for row in np.flatnonzero(done):
+                after[row] = infos[row]["terminal_observation"][0]
+            reward = reward + weight * (self.distance - after)
+            self.distance = obs[:, 0].astype(np.float64)
+            return obs, reward.astype(np.float32), done, infos
+
+    return ProgressShaping(venv)
+
+
+def train(args: CrowdNavArgs) -> Path:
+    """Train on the trainer skeleton; returns crowdnav.safetensors (or a finished run's)."""
+    evaluator = None
+    if args.eval_trials:
+        evaluator = _validation(args)
+    return run_training(TRAINER, args, lambda run: _fit(run, args), evaluator=evaluator)
+
+
+def _validation(args: CrowdNavArgs) -> Any:
+    """A checkpoint evaluator on the first eval_trials validation cases (success first)."""
+
+    def evaluate(path: Path) -> dict[str, float]:
+        from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
+        from socialzoo.bench.crowd_eval import evaluate_crowd
+
+        policy = CrowdAttentionPolicy.load(path)
+        result = evaluate_crowd(lambda obs, core: policy.act(obs), args.task(), "val", args.eval_trials)
+        s = result.summary
+        keys = ("success_rate", "collision_rate", "timeout_rate", "navigation_time", "discounted_return")
+        return {k.removesuffix("_rate"): float(s[k]) for k in keys}
+
+    return evaluate
+
+
+def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from socialzoo.env.crowd_env import CrowdNavVectorEnv
+    from socialzoo.env.sb3_vec import SB3VecEnv
+    from socialzoo.train.crowd_attention import CrowdAttentionExtractor
+    from socialzoo.train.sb3_common import checkpoint_callback
+
+    task = args.task()
+    venv: Any = VecMonitor(SB3VecEnv(args.num_envs, vector_env=CrowdNavVectorEnv(args.num_envs, task)))
+    if args.progress_reward > 0:
+        venv = progress_shaping(venv, args.progress_reward)
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=args.n_steps,
+        batch_size=args.batch_size,
+        n_epochs=args.n_epochs,
+        learning_rate=args.learning_rate,
+        gamma=args.gamma,
+        gae_lambda=args.gae_lambda,
+        clip_range=args.clip_range,
+        ent_coef=args.ent_coef,
+        vf_coef=args.vf_coef,
+        max_grad_norm=args.max_grad_norm,
+        policy_kwargs={
+            "net_arch": list(args.net_arch),
+            "activation_fn": torch.nn.Tanh,
+            "features_extractor_class": CrowdAttentionExtractor,
+            "features_extractor_kwargs": {
+                "slots": task.slots,
+                "embed": args.embed,
+                "value": args.value,
+                "attention": args.attention,
+            },
+        },
+        seed=args.seed,
+        device="cpu",
+        verbose=0,
+    )
+    model.set_logger(configure(str(run.path / "tensorboard"), ["tensorboard"]))
+
+    def save(path: Path, step: int) -> None:
+        export_crowd_policy(model, task, run, step).save(path, crowd_tensors(model))
+
+    schedule = run.schedule(args.total_steps, args.checkpoint_every)
+    model.learn(
+        total_timesteps=args.total_steps,
+        callback=checkpoint_callback(run, schedule, save),
+        progress_bar=False,
+    )
+    steps = int(model.num_timesteps)
+    last = run.checkpoint_path(args.total_steps)
+    if not last.is_file():
+        run.checkpoint(args.total_steps, lambda path: save(path, steps))
+    run.policy.write_bytes(last.read_bytes())
+    venv.close()
+    return {"env_steps": steps, "env_steps_per_second": round(steps / run.seconds, 1), "task": task.to_dict()}
+
+
+def crowd_tensors(model: Any) -> dict[str, Any]:
+    """The acting network of an SB3 PPO model with the attention extractor, named as
+    socialzoo.agents.crowd_policy reads them."""
+    policy = model.policy
+    tensors = {f"attention.{k}": v for k, v in policy.features_extractor.net.state_dict().items()}
+    tensors.update({f"policy.{k}": v for k, v in policy.mlp_extractor.policy_net.state_dict().items()})
+    tensors.update({f"action.{k}": v for k, v in policy.action_net.state_dict().items()})
+    return tensors
+
+
+def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> Any:
+    """The numpy policy (header and all) of an SB3 PPO model trained on `task`."""
+    from socialzoo.agents.crowd_policy import POLICY_NAME, CrowdAttentionPolicy
+    from socialzoo.env.crowd_variants import crowd_env_id
+
+    tensors = {k: v.detach().cpu().numpy() for k, v in crowd_tensors(model).items()}
+    args = run.args
+    header = {
+        "policy": POLICY_NAME,
+        "env_id": crowd_env_id(args.variant),
+        "observation": {"kind": "flat", "slots": task.slots},
+        "network": {
+            "action": task.action,
+            "activation": "tanh",
+            "embed": list(args.embed),
+            "value": list(args.value),
+            "attention": list(args.attention),
+            "net_arch": list(args.net_arch),
+        },
+        "training": {
+            "algo": "ppo",
+            "library": "stable-baselines3",
+            "seed": args.seed,
+            "steps": step,
+            "command": run.record["command"],
+            "args": run.record["args"],
+            "task": task.to_dict(),
+        },
+    }
+    return CrowdAttentionPolicy(tensors, header)
