@@ -16,6 +16,7 @@ and stay there, as CrowdNav's people do.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, get_args
 
@@ -81,7 +82,7 @@ def case_seed(split: Split, index: int) -> int:
 def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
     """The case drawn from RandomState(seed): the robot at (0, -r) heading +y with its goal at
     (0, r), and config.num_humans people with one-point routes to their goals."""
-    rs = np.random.RandomState(seed)
+    u = _Uniforms(np.random.RandomState(seed))
     r = config.circle_radius
     robot = np.array([[0.0, -r], [0.0, r]])  # position, goal
     positions: list[np.ndarray] = [robot[0]]
@@ -89,9 +90,9 @@ def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
     radii = [config.robot_radius]
     for _ in range(config.num_humans):
         if config.layout == "circle_crossing":
-            start, goal = _circle_human(rs, config, positions, goals, radii)
+            start, goal = _circle_human(u, config, positions, goals, radii)
         else:
-            start, goal = _square_human(rs, config, positions, goals, radii)
+            start, goal = _square_human(u, config, positions, goals, radii)
         positions.append(start)
         goals.append(goal)
         radii.append(config.human_radius)
@@ -111,12 +112,72 @@ def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
     )
 
 
-def _too_close(p: np.ndarray, others: list[np.ndarray], radii: list[float], own: float, gap: float) -> bool:
-    return any(math.hypot(*(p - o)) < own + r + gap for o, r in zip(others, radii, strict=True))
+class _Uniforms:
+    """The case generator's uniform draws as one stream read in order: CrowdNav's sequential
+    draws, fetched from the generator in blocks (appending keeps their order)."""
+
+    def __init__(self, rs: np.random.RandomState) -> None:
+        self.rs = rs
+        self.values = rs.random_sample(256)
+        self.at = 0
+
+    def peek(self, count: int) -> np.ndarray:
+        """The next `count` draws, without consuming them."""
+        while self.at + count > len(self.values):
+            self.values = np.concatenate((self.values, self.rs.random_sample(max(count, len(self.values)))))
+        return self.values[self.at : self.at + count]
+
+    def take(self, count: int) -> np.ndarray:
+        """The next `count` draws, consumed."""
+        out = self.peek(count)
+        self.at += count
+        return out
+
+
+def _first_clear(
+    u: _Uniforms,
+    draws: int,
+    candidates: Callable[[np.ndarray], np.ndarray],
+    clear: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """CrowdNav's rejection loop `while True: draw; if clear: break`, batched: the candidates of
+    many tries are checked at once and only the draws up to the accepted try are consumed, so the
+    cases stay CrowdNav's.
+
+    Args:
+        u: the case's draws.
+        draws: uniform draws per try.
+        candidates: (K, draws) uniform draws -> (K, 2) candidate points.
+        clear: (K, 2) points -> (K,) bool, the point keeps its distances.
+    """
+    tries = 16
+    while True:
+        points = candidates(u.peek(draws * tries).reshape(tries, draws))
+        ok = clear(points)
+        if ok.any():
+            first = int(np.argmax(ok))
+            u.take(draws * (first + 1))
+            return points[first]
+        u.take(draws * tries)
+        tries = min(tries * 2, 4096)
+
+
+def _clear_of(
+    others: list[np.ndarray], radii: list[float], own: float, gap: float
+) -> Callable[[np.ndarray], np.ndarray]:
+    """points (K, 2) -> (K,) no closer than own + radius + gap to any of `others`."""
+    at = np.array(others).reshape(-1, 2)
+    limit = own + np.array(radii) + gap
+
+    def clear(points: np.ndarray) -> np.ndarray:
+        d = np.hypot(points[:, None, 0] - at[None, :, 0], points[:, None, 1] - at[None, :, 1])
+        return ~(d < limit[None, :]).any(axis=1)
+
+    return clear
 
 
 def _circle_human(
-    rs: np.random.RandomState,
+    u: _Uniforms,
     config: CrowdCaseConfig,
     positions: list[np.ndarray],
     goals: list[np.ndarray],
@@ -124,20 +185,22 @@ def _circle_human(
 ) -> tuple[np.ndarray, np.ndarray]:
     """CrowdNav's generate_circle_crossing_human: a start on the circle with noise, kept clear of
     every earlier agent's position and goal; the goal is the start's antipode."""
-    own, gap = config.human_radius, config.discomfort_dist
-    while True:
-        angle = rs.random_sample() * np.pi * 2
-        noise_x = (rs.random_sample() - 0.5) * config.human_speed
-        noise_y = (rs.random_sample() - 0.5) * config.human_speed
-        start = np.array(
-            [config.circle_radius * np.cos(angle) + noise_x, config.circle_radius * np.sin(angle) + noise_y]
+    own, gap, r, v = config.human_radius, config.discomfort_dist, config.circle_radius, config.human_speed
+    near_start = _clear_of(positions, radii, own, gap)
+    near_goal = _clear_of(goals, radii, own, gap)
+
+    def candidates(u: np.ndarray) -> np.ndarray:
+        angle = u[:, 0] * np.pi * 2
+        return np.stack(
+            (r * np.cos(angle) + (u[:, 1] - 0.5) * v, r * np.sin(angle) + (u[:, 2] - 0.5) * v), axis=1
         )
-        if not (_too_close(start, positions, radii, own, gap) or _too_close(start, goals, radii, own, gap)):
-            return start, -start
+
+    start = _first_clear(u, 3, candidates, lambda p: near_start(p) & near_goal(p))
+    return start, -start
 
 
 def _square_human(
-    rs: np.random.RandomState,
+    u: _Uniforms,
     config: CrowdCaseConfig,
     positions: list[np.ndarray],
     goals: list[np.ndarray],
@@ -146,12 +209,11 @@ def _square_human(
     """CrowdNav's generate_square_crossing_human: a start in a random half of the square kept clear
     of earlier positions, a goal in the other half kept clear of earlier goals."""
     own, gap, w = config.human_radius, config.discomfort_dist, config.square_width
-    sign = -1.0 if rs.random_sample() > 0.5 else 1.0
-    while True:
-        start = np.array([rs.random_sample() * w * 0.5 * sign, (rs.random_sample() - 0.5) * w])
-        if not _too_close(start, positions, radii, own, gap):
-            break
-    while True:
-        goal = np.array([rs.random_sample() * w * 0.5 * -sign, (rs.random_sample() - 0.5) * w])
-        if not _too_close(goal, goals, radii, own, gap):
-            return start, goal
+    sign = -1.0 if u.take(1)[0] > 0.5 else 1.0
+
+    def half(side: float) -> Callable[[np.ndarray], np.ndarray]:
+        return lambda u: np.stack((u[:, 0] * w * 0.5 * side, (u[:, 1] - 0.5) * w), axis=1)
+
+    start = _first_clear(u, 2, half(sign), _clear_of(positions, radii, own, gap))
+    goal = _first_clear(u, 2, half(-sign), _clear_of(goals, radii, own, gap))
+    return start, goal

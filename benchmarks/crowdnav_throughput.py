@@ -1,0 +1,60 @@
+"""Throughput of the CrowdNav task: env-steps/s of CrowdNavVectorEnv (random velocity actions, the
+same-step autoreset included) and of the bare core, at several batch sizes and head counts.
+
+CrowdNav's own simulator (one process, env.step alone) steps about 5,035 times a second with 5 people
+and 253 with 20 on the 2-core machine (the issue's measurement); the goal is at least 10x that with 5
+ORCA people at B = 256 (>= 50,000 env-steps/s) and 20x with 20 (>= 5,000).
+
+Run: python benchmarks/crowdnav_throughput.py [--seconds 3] [--json] [--variant SocialForce]
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from _common import parser
+
+from socialzoo.env.crowd_env import CrowdNavVectorEnv
+
+CASES = ((1, 5), (256, 5), (1, 20), (256, 20))
+
+
+def measure(batch: int, people: int, variant: str, seconds: float) -> float:
+    """env-steps/s of a vector env of `batch` rows with `people` people each."""
+    import time
+
+    env = CrowdNavVectorEnv(batch, variant=variant, cases={"num_humans": people})
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (256, batch, 2)).astype(np.float32)
+    for k in range(5):
+        env.step(actions[k])
+    steps, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds:
+        env.step(actions[steps % 256])
+        steps += 1
+    return steps * batch / (time.perf_counter() - start)
+
+
+def main() -> None:
+    p = parser(__doc__.splitlines()[0])
+    p.add_argument("--variant", default="", help="a registered variant of the task ('' CrowdNav's own)")
+    args = p.parse_args()
+    for batch, people in CASES:
+        rate = measure(batch, people, args.variant, args.seconds)
+        figure = {
+            "variant": args.variant or "CrowdNav",
+            "batch": batch,
+            "people": people,
+            "env_steps_per_s": round(rate),
+        }
+        print(
+            json.dumps(figure)
+            if args.json
+            else f"{figure['variant']:12s} B={batch:4d} people={people:3d}  {rate:12,.0f} env-steps/s"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,152 @@
+"""Engineered robots of the CrowdNav task: ORCA (CrowdNav's own baseline) and social force.
+
+Both read the world through the task's core (positions and velocities of everyone, as CrowdNav's
+"coordinates" sensor gives them) and answer with the task's action for every row.
+
+- ORCA (CrowdNav's crowd_sim/envs/policy/orca.py): the robot and the people in one ORCA step in
+  which only the robot is driven; the robot prefers its goal direction at its preferred speed, the
+  people are assumed to prefer standing still (the robot does not know their goals), every radius
+  is padded by 0.01 m plus `safety_space`; CrowdNav's parameters (neighbour distance 10, 10
+  neighbours, time horizons 5 s). Reciprocity is ORCA's premise: against invisible people who do
+  not avoid back it fails often, as CrowdNav reports (0.43 success).
+- Social force: the robot as one more social-force pedestrian (the benchmark's PedSim model)
+  heading for its goal at its preferred speed; its velocity after one step of the force.
+
+A velocity is turned into the task's action: (vx, vy) / v_pref for a holonomic robot; for a
+unicycle, the turn towards the velocity's direction (at most pi/4) and its speed; for the
+discrete action set, the nearest of CrowdNav's 81 actions.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from socialzoo.core.config import HumanConfig, OrcaConfig
+from socialzoo.core.robot import world_velocity
+
+# CrowdNav's radius padding of every agent in the robot's ORCA step, m.
+_ORCA_PADDING = 0.01
+
+
+def velocity_to_action(velocity: np.ndarray, core: Any) -> np.ndarray:
+    """The task's actions (B,) or (B, 2) that come closest to world-frame velocities (B, 2)."""
+    config = core.config
+    robot = config.robot
+    v_pref = config.preferred_speed
+    state = core.state
+    if robot.kinematics == "holonomic":
+        command = velocity
+        action = np.clip(velocity / v_pref, -1.0, 1.0)
+    else:
+        heading = state.robot_pose[:, 0, 2]
+        turn = np.angle(np.exp(1j * (np.arctan2(velocity[:, 1], velocity[:, 0]) - heading)))
+        turn = np.clip(turn, -robot.max_rotation, robot.max_rotation)
+        speed = np.minimum(np.hypot(velocity[:, 0], velocity[:, 1]), v_pref)
+        command = np.stack((speed, turn), axis=-1)
+        action = np.stack((2.0 * speed / v_pref - 1.0, turn / robot.max_rotation), axis=-1)
+    if core.action_table is None:
+        return action.astype(np.float32)
+    # The nearest of the discrete actions, in the same terms as the command.
+    table = core.action_table
+    distance = ((command[:, None, :] - table[None, :, :]) ** 2).sum(-1)
+    return np.argmin(distance, axis=1).astype(np.int64)
+
+
+class CrowdOrcaRobot:
+    """CrowdNav's ORCA robot.
+
+    Args:
+        safety_space: extra radius the robot keeps, m (CrowdNav: 0; 0.15 for its demonstrations).
+        orca: ORCA's parameters (default CrowdNav's).
+    """
+
+    name = "orca"
+    reads_core = True
+
+    def __init__(self, safety_space: float = 0.0, orca: OrcaConfig | None = None) -> None:
+        if not safety_space >= 0.0:
+            raise ValueError(f"CrowdOrcaRobot: safety_space must be >= 0, got {safety_space!r}")
+        self.safety_space = float(safety_space)
+        self.orca = orca or OrcaConfig.preset("crowdnav")
+
+    def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
+        """The ORCA velocity of every row's robot, as the task's actions."""
+        from socialzoo.humans.orca import orca_velocities
+
+        s, config = core.state, core.config
+        robot = config.robot
+        b, h = s.human_mask.shape
+        pos = np.concatenate((s.robot_pose[:, :1, :2], s.human_pos), axis=1)
+        robot_vel = world_velocity(s.robot_pose[:, 0], s.robot_vel[:, 0], robot)
+        vel = np.concatenate((robot_vel[:, None, :], s.human_vel), axis=1)
+        to_goal = s.robot_goal[:, 0, :2] - s.robot_pose[:, 0, :2]
+        distance = np.hypot(to_goal[:, 0], to_goal[:, 1])[:, None]
+        pref = np.zeros((b, 1 + h, 2))
+        # CrowdNav: the goal direction at the preferred speed, slower only within a metre.
+        pref[:, 0] = to_goal / np.maximum(distance, 1.0) * config.preferred_speed
+        radius = np.full((b, 1 + h), config.cases.human_radius + _ORCA_PADDING)
+        radius[:, 0] = float(robot.radius) + _ORCA_PADDING + self.safety_space
+        max_speed = np.full((b, 1 + h), config.preferred_speed)
+        present = np.concatenate((np.ones((b, 1), dtype=bool), s.human_mask), axis=1)
+        drive = np.zeros((b, 1 + h), dtype=bool)
+        drive[:, 0] = True
+        new = orca_velocities(
+            pos,
+            vel,
+            pref,
+            radius,
+            max_speed,
+            present,
+            drive,
+            present,
+            core.walls,
+            self.orca,
+            config.time_step,
+        )
+        return velocity_to_action(new[:, 0], core)
+
+    def config(self) -> dict[str, Any]:
+        """The policy's parameters."""
+        return {"safety_space": self.safety_space, "orca": dataclasses.asdict(self.orca)}
+
+
+class CrowdSocialForceRobot:
+    """The robot as one more social-force pedestrian heading for its goal.
+
+    Args:
+        human: the social-force parameters (default the benchmark's people's).
+    """
+
+    name = "social_force"
+    reads_core = True
+
+    def __init__(self, human: HumanConfig | None = None) -> None:
+        self.human = human or HumanConfig()
+
+    def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
+        """The robot's velocity after one step of the social force, as the task's actions."""
+        from socialzoo.humans.social_force import human_acceleration
+
+        s, config = core.state, core.config
+        b = s.human_mask.shape[0]
+        pos = np.concatenate((s.robot_pose[:, :1, :2], s.human_pos), axis=1)
+        robot_vel = world_velocity(s.robot_pose[:, 0], s.robot_vel[:, 0], config.robot)
+        vel = np.concatenate((robot_vel[:, None, :], s.human_vel), axis=1)
+        target = np.concatenate((s.robot_goal[:, :1, :2], s.human_pos), axis=1)
+        speed = np.concatenate((np.full((b, 1), config.preferred_speed), s.human_pref_speed), axis=1)
+        mask = np.concatenate((np.ones((b, 1), dtype=bool), s.human_mask), axis=1)
+        no_robot = np.zeros((b, 0, 2))
+        accel, _ = human_acceleration(
+            pos, vel, target, speed, mask, no_robot, no_robot, core.walls, self.human
+        )
+        new = robot_vel + accel[:, 0] * config.time_step
+        norm = np.hypot(new[:, 0], new[:, 1])
+        new *= np.minimum(1.0, config.preferred_speed / np.maximum(norm, 1e-12))[:, None]
+        return velocity_to_action(new, core)
+
+    def config(self) -> dict[str, Any]:
+        """The policy's parameters."""
+        return {"human": dataclasses.asdict(self.human)}

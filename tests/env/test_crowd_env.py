@@ -1,0 +1,96 @@
+"""The CrowdNav task's Gymnasium adapters: API conformance, multi-step determinism, the batch
+equals single envs, fixed cases, and bad input refused before anything changes."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import socialzoo  # noqa: F401  (registers the ids)
+from socialzoo.env.crowd_env import CrowdNavEnv, CrowdNavVectorEnv
+from socialzoo.env.registration import CROWD_IDS
+
+VARIANTS = ["SocialForce", ""]
+
+
+def _rollout(env, seed, steps=40):
+    obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    trace = [obs.copy()]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        trace.append(np.append(obs, reward))
+        if terminated or truncated:
+            obs, _ = env.reset()
+    return np.concatenate(trace)
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_every_variant_id_passes_gymnasiums_checker(variant):
+    env = gym.make(f"socialzoo/CrowdNav{variant}-v1")
+    check_env(env.unwrapped, skip_render_check=True)
+    assert set(CROWD_IDS) >= {
+        "socialzoo/CrowdNav-v1",
+        "socialzoo/CrowdNavWalls-v1",
+        "socialzoo/CrowdNav20-v1",
+    }
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_rollouts_repeat_bit_for_bit_over_many_steps(variant):
+    a = _rollout(CrowdNavEnv(variant=variant), seed=3)
+    np.testing.assert_array_equal(a, _rollout(CrowdNavEnv(variant=variant), seed=3))
+    assert not np.array_equal(a, _rollout(CrowdNavEnv(variant=variant), seed=4))
+
+
+def test_a_batch_row_plays_what_a_single_env_plays():
+    vec = CrowdNavVectorEnv(3, variant="SocialForce")
+    single = CrowdNavEnv(variant="SocialForce")
+    obs, _ = vec.reset(seed=5)
+    one, _ = single.reset(seed=5)
+    np.testing.assert_array_equal(obs[0], one)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        actions = rng.uniform(-1, 1, (3, 2)).astype(np.float32)
+        obs, reward, terminated, truncated, info = vec.step(actions)
+        one, r, te, tr, _ = single.step(actions[0])
+        assert (terminated[0], truncated[0], reward[0]) == (te, tr, r)
+        if te or tr:
+            np.testing.assert_array_equal(info["final_obs"][0], one)  # the ended episode's last observation
+            one, _ = single.reset()
+        np.testing.assert_array_equal(obs[0], one)
+
+
+def test_fixed_cases_are_crowdnavs_and_end_with_metrics():
+    env = CrowdNavEnv(variant="SocialForce", action="discrete")
+    _, info = env.reset(options={"split": "test", "case": 7})
+    assert info["case_seed"] == 1007
+    for _ in range(200):
+        _, _, terminated, truncated, info = env.step(0)  # stand still
+        if terminated or truncated:
+            break
+    assert "metrics" in info and info["metrics"]["steps"] <= 97
+    vec = CrowdNavVectorEnv(2, variant="SocialForce")
+    _, info = vec.reset(options={"split": "val", "cases": [0, 99]})
+    assert info["case_seed"].tolist() == [0, 99]
+
+
+def test_bad_actions_and_configs_are_refused_before_any_change():
+    vec = CrowdNavVectorEnv(2, variant="SocialForce")
+    vec.reset(seed=0)
+    before = vec.core.state.copy()
+    for bad in (np.array([[np.nan, 0.0], [0.0, 0.0]]), np.array([[2.0, 0.0], [0.0, 0.0]]), np.zeros((3, 2))):
+        with pytest.raises(ValueError, match="action"):
+            vec.step(bad)
+    np.testing.assert_array_equal(vec.core.state.robot_pose, before.robot_pose)
+    np.testing.assert_array_equal(vec.core.state.human_pos, before.human_pos)
+    with pytest.raises(ValueError, match="variant"):
+        CrowdNavEnv(variant="Stadium")
+    with pytest.raises(ValueError, match="human_radius"):
+        CrowdNavEnv(cases={"human_radius": -0.3})
+    with pytest.raises(ValueError, match="humans"):
+        CrowdNavEnv(humans="boids")
+    discrete = CrowdNavEnv(action="discrete")
+    discrete.reset(seed=0)
+    with pytest.raises(ValueError, match=r"not in 0\.\.80"):
+        discrete.step(81)
