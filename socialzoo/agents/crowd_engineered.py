@@ -150,3 +150,30 @@ class CrowdSocialForceRobot:
     def config(self) -> dict[str, Any]:
         """The policy's parameters."""
         return {"human": dataclasses.asdict(self.human)}
+
+
+# The CrowdNav task's policies by name: engineered ones here, the learned one from a policy file
+# ("crowdnav" alone: the shipped file; "crowdnav:PATH": a file of `socialzoo train crowdnav`).
+CROWD_POLICIES = ("orca", "social_force", "crowdnav")
+
+
+def make_crowd_policy(spec: str) -> Any:
+    """The CrowdNav-task policy named by `spec`: an object with act(obs, core) and a name.
+
+    Raises:
+        ValueError: an unknown name (the message lists the known ones), or a learned policy with
+            no file; socialzoo.agents.policy_file.PolicyFileError: a bad policy file.
+    """
+    name, _, path = str(spec).partition(":")
+    key = name.strip().lower()
+    if key == "orca" and not path:
+        return CrowdOrcaRobot()
+    if key == "social_force" and not path:
+        return CrowdSocialForceRobot()
+    if key == "crowdnav":
+        from socialzoo.agents import SHIPPED_DIR
+        from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
+
+        file = path or str(SHIPPED_DIR / "crowdnav.safetensors")
+        return CrowdAttentionPolicy.load(file)
+    raise ValueError(f"unknown CrowdNav policy {spec!r}; known: orca, social_force, crowdnav[:PATH]")

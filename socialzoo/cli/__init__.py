@@ -25,6 +25,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "demos": ("socialzoo.cli.benchmark_cmd", "record Ref demonstrations for the imitation baselines"),
     "demo": ("socialzoo.cli.demo_cmd", "animate one episode of a policy (GIF or MP4)"),
+    "crowdnav": (
+        "socialzoo.cli.crowdnav_cmd",
+        "the CrowdNav task: evaluate velocity policies on its fixed cases, replay an episode",
+    ),
     "compare-humans": (
         "socialzoo.cli.humans_cmd",
         "learned humans against social-force humans (reach rate, collisions, distances, speed)",
@@ -32,6 +36,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "select-humans": (
         "socialzoo.cli.humans_cmd",
         "choose a learned-human checkpoint of a run on validation scenarios",
+    ),
+    "humans": (
+        "socialzoo.cli.people_cmd",
+        "how each crowd model walks: speed, density, contacts, path length, time to goal (humans report)",
     ),
     "map": ("socialzoo.cli.map_cmd", "list, show, validate, check and import maps"),
     "replay": (

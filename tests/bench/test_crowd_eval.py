@@ -1,0 +1,81 @@
+"""CrowdNav-task evaluation on fixed cases, the engineered robots, the episode page and the command."""
+
+import json
+
+import numpy as np
+import pytest
+
+from socialzoo.agents.crowd_engineered import CrowdOrcaRobot, CrowdSocialForceRobot, make_crowd_policy
+from socialzoo.bench.crowd_eval import evaluate_crowd
+from socialzoo.bench.crowd_replay import crowd_scene, record_crowd_episode
+from socialzoo.cli import main
+from socialzoo.env.crowd_config import CrowdNavConfig
+
+CONFIG = CrowdNavConfig.variant("SocialForce")
+
+
+def _straight(obs, core):
+    actions = np.zeros((len(obs), 2), dtype=np.float32)
+    actions[:, 1] = 1.0  # due north, where the goal is
+    return actions
+
+
+def test_every_case_is_played_once_whatever_the_batch():
+    a = evaluate_crowd(_straight, CONFIG, "val", cases=7, batch_size=3)
+    b = evaluate_crowd(_straight, CONFIG, "val", cases=7, batch_size=7)
+    assert [e["case"] for e in a.episodes] == list(range(7))
+    np.testing.assert_equal(a.episodes, b.episodes)  # each case plays the same whatever the batch (NaN == NaN)
+    s = a.summary
+    assert s["episodes"] == 7 and s["success_rate"] + s["collision_rate"] + s[
+        "timeout_rate"
+    ] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="holds 100"):
+        evaluate_crowd(_straight, CONFIG, "val", cases=101)
+    with pytest.raises(ValueError, match="split"):
+        evaluate_crowd(_straight, CONFIG, "train", cases=1)
+
+
+def test_engineered_robots_reach_the_goal_of_an_empty_arena():
+    empty = CONFIG.replace(cases={"num_humans": 0})
+    for robot in (CrowdOrcaRobot(), CrowdSocialForceRobot()):
+        result = evaluate_crowd(robot.act, empty, "val", cases=3)
+        assert result.summary["success_rate"] == 1.0, robot.name
+        assert 8.0 <= result.summary["navigation_time"] <= 9.5  # 7.7 m at 1 m/s, then the last step
+    with pytest.raises(ValueError, match="unknown CrowdNav policy"):
+        make_crowd_policy("teleport")
+
+
+def test_an_episode_is_recorded_for_the_viewer():
+    trace = record_crowd_episode(CrowdOrcaRobot().act, "orca", CONFIG, "test", 3)
+    assert trace.outcome in ("success", "collision", "timeout") and trace.num_steps == trace.metrics["steps"]
+    assert trace.num_humans == 5
+    scene = crowd_scene(CONFIG, [trace], "case 3")
+    assert scene.robot_length == pytest.approx(0.6)
+
+
+def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys):
+    args = [
+        "crowdnav",
+        "eval",
+        "--variant",
+        "SocialForce",
+        "--cases",
+        "4",
+        "--policies",
+        "orca",
+        "--out",
+        str(tmp_path),
+    ]
+    assert main(args) == 0
+    record = json.loads((tmp_path / "episodes" / "orca.json").read_text())
+    assert len(record["episodes"]) == 4 and (tmp_path / "crowdnav.md").read_text().count("| orca |") == 1
+    stamp = (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns
+    assert main(args) == 0 and (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns == stamp
+    page = tmp_path / "case.html"
+    assert (
+        main(["crowdnav", "replay", "--variant", "SocialForce", "--policies", "orca", "--out", str(page)])
+        == 0
+    )
+    assert page.stat().st_size > 10_000
+    assert main(["crowdnav", "eval", "--policies", "wizard", "--out", str(tmp_path)]) == 2
+    assert "unknown CrowdNav policy" in capsys.readouterr().err
