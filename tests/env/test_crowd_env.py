@@ -94,3 +94,31 @@ def test_bad_actions_and_configs_are_refused_before_any_change():
     discrete.reset(seed=0)
     with pytest.raises(ValueError, match=r"not in 0\.\.80"):
         discrete.step(81)
+
+
+@pytest.mark.parametrize("action", ["continuous", "discrete"])
+def test_the_torchrl_env_passes_its_spec_check_and_matches_the_vector_env(action):
+    pytest.importorskip("torchrl")
+    import torch
+    from torchrl.envs.utils import check_env_specs
+
+    from socialzoo.env.crowd_torchrl import CrowdNavTorchEnv
+
+    env = CrowdNavTorchEnv(3, variant="SocialForce", action=action, categorical_action_encoding=True)
+    check_env_specs(env)
+    env.set_seed(11)
+    td = env.reset()
+    vec = CrowdNavVectorEnv(3, variant="SocialForce", action=action)
+    obs, _ = vec.reset(seed=11)
+    np.testing.assert_array_equal(td["observation"].numpy(), obs)
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        a = rng.integers(0, 81, 3) if action == "discrete" else rng.uniform(-1, 1, (3, 2)).astype(np.float32)
+        td["action"] = torch.as_tensor(a)
+        td = env.step(td)
+        obs, reward, terminated, truncated, _ = vec.step(a)
+        np.testing.assert_allclose(td["next", "reward"].numpy()[:, 0], reward, rtol=1e-6)
+        if (terminated | truncated).any():
+            break
+        np.testing.assert_array_equal(td["next", "observation"].numpy(), obs)
+        td = td["next"].clone()
