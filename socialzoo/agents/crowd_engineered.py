@@ -32,27 +32,30 @@ _ORCA_PADDING = 0.01
 
 
 def velocity_to_action(velocity: np.ndarray, core: Any) -> np.ndarray:
-    """The task's actions (B,) or (B, 2) that come closest to world-frame velocities (B, 2)."""
+    """The task's actions that come closest to world-frame velocities (B, R, 2): (B, R, 2) or
+    (B, R) (with one robot (B, 2) or (B,))."""
     config = core.config
     robot = config.robot
     v_pref = config.preferred_speed
-    state = core.state
+    b, r = velocity.shape[:2]
     if robot.kinematics == "holonomic":
         command = velocity
         action = np.clip(velocity / v_pref, -1.0, 1.0)
     else:
-        heading = state.robot_pose[:, 0, 2]
-        turn = np.angle(np.exp(1j * (np.arctan2(velocity[:, 1], velocity[:, 0]) - heading)))
+        heading = core.state.robot_pose[..., 2]
+        turn = np.angle(np.exp(1j * (np.arctan2(velocity[..., 1], velocity[..., 0]) - heading)))
         turn = np.clip(turn, -robot.max_rotation, robot.max_rotation)
-        speed = np.minimum(np.hypot(velocity[:, 0], velocity[:, 1]), v_pref)
+        speed = np.minimum(np.hypot(velocity[..., 0], velocity[..., 1]), v_pref)
         command = np.stack((speed, turn), axis=-1)
         action = np.stack((2.0 * speed / v_pref - 1.0, turn / robot.max_rotation), axis=-1)
     if core.action_table is None:
-        return action.astype(np.float32)
+        out = action.astype(np.float32)
+        return out[:, 0] if r == 1 else out
     # The nearest of the discrete actions, in the same terms as the command.
     table = core.action_table
-    distance = ((command[:, None, :] - table[None, :, :]) ** 2).sum(-1)
-    return np.argmin(distance, axis=1).astype(np.int64)
+    distance = ((command.reshape(b * r, 1, 2) - table[None, :, :]) ** 2).sum(-1)
+    index = np.argmin(distance, axis=1).astype(np.int64).reshape(b, r)
+    return index[:, 0] if r == 1 else index
 
 
 class CrowdOrcaRobot:
@@ -73,26 +76,28 @@ class CrowdOrcaRobot:
         self.orca = orca or OrcaConfig.preset("crowdnav")
 
     def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
-        """The ORCA velocity of every row's robot, as the task's actions."""
+        """The ORCA velocity of every robot, as the task's actions (each robot driven, the other
+        robots seen like the people)."""
         from socialzoo.humans.orca import orca_velocities
 
         s, config = core.state, core.config
         robot = config.robot
         b, h = s.human_mask.shape
-        pos = np.concatenate((s.robot_pose[:, :1, :2], s.human_pos), axis=1)
-        robot_vel = world_velocity(s.robot_pose[:, 0], s.robot_vel[:, 0], robot)
-        vel = np.concatenate((robot_vel[:, None, :], s.human_vel), axis=1)
-        to_goal = s.robot_goal[:, 0, :2] - s.robot_pose[:, 0, :2]
-        distance = np.hypot(to_goal[:, 0], to_goal[:, 1])[:, None]
-        pref = np.zeros((b, 1 + h, 2))
+        r = s.robot_pose.shape[1]
+        pos = np.concatenate((s.robot_pose[..., :2], s.human_pos), axis=1)
+        robot_vel = world_velocity(s.robot_pose, s.robot_vel, robot)
+        vel = np.concatenate((robot_vel, s.human_vel), axis=1)
+        to_goal = s.robot_goal[..., :2] - s.robot_pose[..., :2]
+        distance = np.hypot(to_goal[..., 0], to_goal[..., 1])[..., None]
+        pref = np.zeros((b, r + h, 2))
         # CrowdNav: the goal direction at the preferred speed, slower only within a metre.
-        pref[:, 0] = to_goal / np.maximum(distance, 1.0) * config.preferred_speed
-        radius = np.full((b, 1 + h), config.cases.human_radius + _ORCA_PADDING)
-        radius[:, 0] = float(robot.radius) + _ORCA_PADDING + self.safety_space
-        max_speed = np.full((b, 1 + h), config.preferred_speed)
-        present = np.concatenate((np.ones((b, 1), dtype=bool), s.human_mask), axis=1)
-        drive = np.zeros((b, 1 + h), dtype=bool)
-        drive[:, 0] = True
+        pref[:, :r] = to_goal / np.maximum(distance, 1.0) * config.preferred_speed
+        radius = np.full((b, r + h), config.cases.human_radius + _ORCA_PADDING)
+        radius[:, :r] = float(robot.radius) + _ORCA_PADDING + self.safety_space
+        max_speed = np.full((b, r + h), config.preferred_speed)
+        present = np.concatenate((np.ones((b, r), dtype=bool), s.human_mask), axis=1)
+        drive = np.zeros((b, r + h), dtype=bool)
+        drive[:, :r] = True
         new = orca_velocities(
             pos,
             vel,
@@ -106,7 +111,7 @@ class CrowdOrcaRobot:
             self.orca,
             config.time_step,
         )
-        return velocity_to_action(new[:, 0], core)
+        return velocity_to_action(new[:, :r], core)
 
     def config(self) -> dict[str, Any]:
         """The policy's parameters."""
@@ -127,24 +132,26 @@ class CrowdSocialForceRobot:
         self.human = human or HumanConfig()
 
     def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
-        """The robot's velocity after one step of the social force, as the task's actions."""
+        """Each robot's velocity after one step of the social force, as the task's actions (the
+        other robots push like people)."""
         from socialzoo.humans.social_force import human_acceleration
 
         s, config = core.state, core.config
         b = s.human_mask.shape[0]
-        pos = np.concatenate((s.robot_pose[:, :1, :2], s.human_pos), axis=1)
-        robot_vel = world_velocity(s.robot_pose[:, 0], s.robot_vel[:, 0], config.robot)
-        vel = np.concatenate((robot_vel[:, None, :], s.human_vel), axis=1)
-        target = np.concatenate((s.robot_goal[:, :1, :2], s.human_pos), axis=1)
-        speed = np.concatenate((np.full((b, 1), config.preferred_speed), s.human_pref_speed), axis=1)
-        mask = np.concatenate((np.ones((b, 1), dtype=bool), s.human_mask), axis=1)
+        r = s.robot_pose.shape[1]
+        pos = np.concatenate((s.robot_pose[..., :2], s.human_pos), axis=1)
+        robot_vel = world_velocity(s.robot_pose, s.robot_vel, config.robot)
+        vel = np.concatenate((robot_vel, s.human_vel), axis=1)
+        target = np.concatenate((s.robot_goal[..., :2], s.human_pos), axis=1)
+        speed = np.concatenate((np.full((b, r), config.preferred_speed), s.human_pref_speed), axis=1)
+        mask = np.concatenate((np.ones((b, r), dtype=bool), s.human_mask), axis=1)
         no_robot = np.zeros((b, 0, 2))
         accel, _ = human_acceleration(
             pos, vel, target, speed, mask, no_robot, no_robot, core.walls, self.human
         )
-        new = robot_vel + accel[:, 0] * config.time_step
-        norm = np.hypot(new[:, 0], new[:, 1])
-        new *= np.minimum(1.0, config.preferred_speed / np.maximum(norm, 1e-12))[:, None]
+        new = robot_vel + accel[:, :r] * config.time_step
+        norm = np.hypot(new[..., 0], new[..., 1])
+        new *= np.minimum(1.0, config.preferred_speed / np.maximum(norm, 1e-12))[..., None]
         return velocity_to_action(new, core)
 
     def config(self) -> dict[str, Any]:

@@ -62,6 +62,10 @@ def evaluate_crowd(
     Raises:
         ValueError: a training split, or more cases than the split holds.
     """
+    if config.num_robots != 1:
+        raise ValueError(
+            f"evaluate_crowd: the fixed cases are CrowdNav's one-robot cases, got num_robots={config.num_robots}"
+        )
     if split not in SPLIT_SIZE:
         raise ValueError(f"evaluate_crowd: split must be 'val' or 'test', got {split!r}")
     total = SPLIT_SIZE[split] if cases is None else cases

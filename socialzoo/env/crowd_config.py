@@ -57,6 +57,8 @@ class CrowdNavConfig:
             robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
         observation: "flat" or "dict" (socialzoo.env.crowd_observation).
         max_humans: person slots of the observation and the state (default: cases.num_humans).
+        num_robots: robots per world (1: CrowdNav's task; more for the PettingZoo env, each seeing
+            the others as people: socialzoo.nav.crowd_cases.robot_poses).
         map: None for CrowdNav's open arena; a building map ("gdc1", a path) for crowd navigation
             among walls, with the benchmark's scenarios and social-force people.
     """
@@ -72,6 +74,7 @@ class CrowdNavConfig:
     action: CrowdAction = "continuous"
     observation: ObservationKind = "flat"
     max_humans: int | None = None
+    num_robots: int = 1
     map: str | None = None
 
     def __post_init__(self) -> None:
@@ -93,6 +96,7 @@ class CrowdNavConfig:
                 f"CrowdNavConfig.observation must be one of {OBSERVATION_KINDS}, got {self.observation!r}"
             )
         check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
+        check_int("CrowdNavConfig", "num_robots", self.num_robots, low=1)
         if self.max_humans is not None and self.max_humans < self.cases.num_humans:
             raise ValueError(
                 f"CrowdNavConfig.max_humans ({self.max_humans}) is below cases.num_humans ({self.cases.num_humans})"
@@ -104,6 +108,11 @@ class CrowdNavConfig:
     def slots(self) -> int:
         """Person slots H."""
         return self.cases.num_humans if self.max_humans is None else self.max_humans
+
+    @property
+    def observed_slots(self) -> int:
+        """Slots of a robot's observation: the people, then the other robots."""
+        return self.slots + self.num_robots - 1
 
     @property
     def physics_dt(self) -> float:

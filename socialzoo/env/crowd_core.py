@@ -1,17 +1,22 @@
-"""The batched core of the CrowdNav task: B rows of a velocity-controlled robot among people,
-stepped through the one world step (socialzoo.env.world.step_world).
+"""The batched core of the CrowdNav task: B rows of velocity-controlled robots among people, stepped
+through the one world step (socialzoo.env.world.step_world).
 
-A decision step takes each row's action (a velocity, or one of CrowdNav's 81 actions), turns it
-into the robot's command, advances the world `physics_substeps` steps, judges the step as CrowdNav
-does (socialzoo.env.crowd_outcome: the closest approach along every substep, the goal, the time
-limit), accumulates the episode metrics and builds the joint-state observation. Rows are reset by
-the adapters (socialzoo.env.crowd_env) with cases from socialzoo.env.crowd_source.
+A decision step takes each robot's action (a velocity, or one of CrowdNav's 81 actions), turns it
+into its command, advances the world `physics_substeps` steps, judges the step for each robot as
+CrowdNav does (socialzoo.env.crowd_outcome: the closest approach along every substep, the goal,
+the time limit), accumulates the episode metrics and builds each robot's joint-state observation.
+CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a
+robot whose episode ended stands still where it is, and the row's episode lasts until every
+robot's has ended. Rows are reset by the adapters (socialzoo.env.crowd_env, crowd_parallel) with
+cases from socialzoo.env.crowd_source.
+
+Per-robot arrays are flat over (B, R), row-major: robot r of row b is entry b * R + r (with R = 1,
+entry b is row b).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -28,19 +33,22 @@ from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
 @dataclass(frozen=True)
 class CrowdStep:
-    """What one decision step gives back for B rows.
+    """What one decision step gives back, per robot (flat over B x R).
 
     Attributes:
-        observation: the joint state after the step.
-        outcome: the step's judgement (reward, success, collision, timeout, terminated, truncated).
-        wall_collision: (B,) the robot touched a wall (counted as a collision).
-        metrics: the metrics of the episodes that ended, by row.
+        observation: each robot's joint state after the step.
+        outcome: the step's judgement of each robot (reward, success, collision, timeout, ...);
+            a robot whose episode had already ended gets reward 0 and no flags.
+        wall_collision: (B R,) the robot touched a wall (counted as a collision).
+        metrics: the metrics of the robots whose episode ended on this step, by flat index.
+        row_done: (B,) every robot of the row has ended its episode.
     """
 
     observation: JointState
     outcome: CrowdOutcome
     wall_collision: np.ndarray
     metrics: dict[int, dict[str, float]]
+    row_done: np.ndarray
 
 
 class CrowdNavCore:
@@ -57,33 +65,43 @@ class CrowdNavCore:
             raise ValueError(f"CrowdNavCore: batch_size must be an int >= 1, got {batch_size!r}")
         self.config = config
         self.batch_size = batch_size
-        if walls is None:
-            walls = _map_walls(config.map)
-        self.walls = walls
+        self.num_robots = config.num_robots
+        self.walls = walls if walls is not None else _map_walls(config.map)
         cases = config.cases
+        radius = float(config.robot.radius)  # type: ignore[arg-type]
         self.world = WorldConfig(
             dt=config.physics_dt,
             robot=config.robot,
             human=HumanConfig(radius=cases.human_radius),
-            human_collision_distance=config.robot.radius + cases.human_radius,  # type: ignore[operator]
+            human_collision_distance=radius + cases.human_radius,
         )
-        self.radius_sum = float(config.robot.radius) + cases.human_radius  # type: ignore[arg-type]
+        r = self.num_robots
+        # Observation slots: the people, then the other robots (each robot's own slot left out).
+        self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
+            r, r - 1
+        )
+        slots = config.slots
+        self.slot_radius = np.concatenate((np.full(slots, cases.human_radius), np.full(r - 1, radius)))
+        self.radius_sum = radius + self.slot_radius
         self.action_table = np.array(discrete_actions(config.robot)) if config.action == "discrete" else None
         self.state: WorldState | None = None
         self.time = np.zeros(batch_size)
-        self.metrics = CrowdNavMetrics(batch_size, config.time_step, config.preferred_speed, config.reward)
+        self.robot_done = np.zeros((batch_size, r), dtype=bool)
+        self.metrics = CrowdNavMetrics(
+            batch_size * r, config.time_step, config.preferred_speed, config.reward
+        )
         self.cases: list[Scenario | None] = [None] * batch_size
         self.observation: JointState | None = None
 
     # ------------------------------------------------------------------ reset
     def reset_rows(self, rows: np.ndarray | list[int], cases: list[Scenario]) -> JointState:
-        """Start new episodes in `rows` from `cases` (one per row); returns the observation of all rows."""
+        """Start new episodes in `rows` from `cases` (one per row); returns every robot's observation."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         if len(rows) != len(cases):
             raise ValueError(f"reset_rows got {len(rows)} rows but {len(cases)} cases")
         if np.any((rows < 0) | (rows >= self.batch_size)):
             raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
-        fresh = scenarios_to_state(cases, num_robots=1, max_humans=self.config.slots)
+        fresh = scenarios_to_state(cases, num_robots=self.num_robots, max_humans=self.config.slots)
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
         if fresh.human_route.shape[2] > self.state.human_route.shape[2]:
@@ -92,52 +110,60 @@ class CrowdNavCore:
         for row, case in zip(rows.tolist(), cases, strict=True):
             self.cases[row] = case
         self.time[rows] = 0.0
-        self.metrics.reset_rows(rows)
+        self.robot_done[rows] = False
+        self.metrics.reset_rows(self._flat(rows))
         self.observation = self._observe()
         return self.observation
 
+    def _flat(self, rows: np.ndarray) -> np.ndarray:
+        """The flat robot indices of `rows`."""
+        return (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
+
     # ------------------------------------------------------------------ step
     def commands(self, action: np.ndarray) -> np.ndarray:
-        """(B, 1, 2) robot commands of the actions, checked before anything changes.
+        """(B, R, 2) robot commands of the actions, checked before anything changes. Actions are
+        (B, R, 2) velocities or (B, R) indices; with one robot also (B, 2) or (B,).
 
         Raises:
             ValueError: a wrong shape, a NaN or infinite value, a velocity outside [-1, 1], or an
                 index outside the discrete actions; the message names the row.
         """
-        b = self.batch_size
+        b, r = self.batch_size, self.num_robots
         action = np.asarray(action)
         robot = self.config.robot
         if self.action_table is not None:
-            flat = action.reshape(-1) if action.size == b else action
-            if flat.shape != (b,) or not np.issubdtype(flat.dtype, np.integer):
+            if action.size != b * r or not np.issubdtype(action.dtype, np.integer):
                 raise ValueError(
-                    f"CrowdNav: discrete actions must be {b} integers, got {action.dtype} {action.shape}"
+                    f"CrowdNav: discrete actions must be {b} x {r} integers, got {action.dtype} {action.shape}"
                 )
+            flat = action.reshape(b * r)
             bad = np.flatnonzero((flat < 0) | (flat >= len(self.action_table)))
             if len(bad):
                 top = len(self.action_table) - 1
                 raise ValueError(
-                    f"CrowdNav: action {int(flat[bad[0]])} of row {int(bad[0])} is not in 0..{top}"
+                    f"CrowdNav: action {int(flat[bad[0]])} of robot {int(bad[0])} is not in 0..{top}"
                 )
             chosen = self.action_table[flat]
             if robot.kinematics == "unicycle":  # (speed, turn per step) -> (v, omega)
                 chosen = np.stack((chosen[:, 0], chosen[:, 1] / self.config.time_step), axis=-1)
-            return chosen[:, None, :]
-        action = np.asarray(action, dtype=np.float64).reshape(b, -1) if action.size == 2 * b else action
-        if action.shape != (b, 2):
-            raise ValueError(f"CrowdNav: velocity actions must have shape {(b, 2)}, got {np.shape(action)}")
+            return chosen.reshape(b, r, 2)
+        if action.shape not in ((b, r, 2),) + (((b, 2),) if r == 1 else ()):
+            raise ValueError(
+                f"CrowdNav: velocity actions must have shape {(b, r, 2)}, got {np.shape(action)}"
+            )
+        action = np.asarray(action, dtype=np.float64).reshape(b * r, 2)
         bad = ~np.isfinite(action).all(axis=1) | (np.abs(action) > 1.0).any(axis=1)
         if bad.any():
-            row = int(np.flatnonzero(bad)[0])
+            k = int(np.flatnonzero(bad)[0])
             raise ValueError(
-                f"CrowdNav: velocity action {action[row].tolist()} of row {row} is not finite in [-1, 1]"
+                f"CrowdNav: velocity action {action[k].tolist()} of robot {k} is not finite in [-1, 1]"
             )
         v_pref = self.config.preferred_speed
         if robot.kinematics == "holonomic":
-            return (action * v_pref)[:, None, :]
+            return (action * v_pref).reshape(b, r, 2)
         speed = (action[:, 0] + 1.0) * 0.5 * v_pref
         omega = action[:, 1] * robot.max_rotation / self.config.time_step
-        return np.stack((speed, omega), axis=-1)[:, None, :]
+        return np.stack((speed, omega), axis=-1).reshape(b, r, 2)
 
     def step(self, action: np.ndarray) -> CrowdStep:
         """Advance every row one decision step (rows whose episode ended wait to be reset)."""
@@ -145,33 +171,31 @@ class CrowdNavCore:
             raise RuntimeError("CrowdNavCore: reset_rows before step")
         command = self.commands(action)
         cfg = self.config
-        closest = np.full(self.batch_size, np.inf)
-        wall = np.zeros(self.batch_size, dtype=bool)
-        moved = np.zeros(self.batch_size)
-        start_time = self.time.copy()
+        b, r = self.batch_size, self.num_robots
+        # A robot whose episode ended stands still (CrowdNav's robot stops at its end).
+        halt = self.robot_done.copy()
+        closest = np.full(b * r, np.inf)
+        wall = np.zeros(b * r, dtype=bool)
+        moved = np.zeros(b * r)
+        start_time = np.repeat(self.time, r)
         state = self.state
         dt = cfg.physics_dt
         for _ in range(cfg.physics_substeps):
             before = state
             state, events = step_world(
-                before, self.walls, self.world, command, robot_visible=cfg.robot_visible
+                before, self.walls, self.world, command, robot_halt=halt, robot_visible=cfg.robot_visible
             )
-            shift = state.robot_pose[:, 0, :2] - before.robot_pose[:, 0, :2]
+            shift = (state.robot_pose[..., :2] - before.robot_pose[..., :2]).reshape(b * r, 2)
             moved += np.hypot(shift[:, 0], shift[:, 1])
+            pos, vel, mask = self._others_of(before, shift.reshape(b, r, 2) / dt)
             gap = closest_boundary_distance(
-                before.robot_pose[:, 0, :2],
-                shift / dt,
-                before.human_pos,
-                before.human_vel,
-                self.radius_sum,
-                before.human_mask,
-                dt,
+                before.robot_pose[..., :2].reshape(b * r, 2), shift / dt, pos, vel, self.radius_sum, mask, dt
             )
             closest = np.minimum(closest, gap)
-            wall |= events.robot_wall[:, 0]
+            wall |= events.robot_wall.reshape(b * r)
         self.state = state
         self.time += cfg.time_step
-        goal = state.robot_goal[:, 0, :2] - state.robot_pose[:, 0, :2]
+        goal = (state.robot_goal[..., :2] - state.robot_pose[..., :2]).reshape(b * r, 2)
         # A wall contact is a collision of the task (CrowdNav's arena has none).
         closest = np.where(wall, np.minimum(closest, -1e-9), closest)
         outcome = judge_step(
@@ -183,46 +207,75 @@ class CrowdNavCore:
             cfg.reward,
             cfg.time_step,
         )
+        outcome = _mask_ended(outcome, self.robot_done.reshape(b * r))
         self.metrics.update(outcome, moved)
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
         summaries = self.metrics.summaries(ended, outcome)
-        for row, summary in zip(ended.tolist(), summaries, strict=True):
-            summary["wall_collision"] = float(wall[row] and outcome.collision[row])
+        for k, summary in zip(ended.tolist(), summaries, strict=True):
+            summary["wall_collision"] = float(wall[k] and outcome.collision[k])
+        self.robot_done |= (outcome.terminated | outcome.truncated).reshape(b, r)
         self.observation = self._observe()
         return CrowdStep(
             observation=self.observation,
             outcome=outcome,
             wall_collision=wall & outcome.collision,
             metrics=dict(zip(ended.tolist(), summaries, strict=True)),
+            row_done=self.robot_done.all(axis=1),
         )
+
+    def _others_of(self, s: WorldState, robot_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(pos, vel, mask) of what each robot must keep clear of, (B R, slots + R - 1, ...): the
+        people (at their velocity at the start of the step), then the other robots (at theirs)."""
+        b, r = self.batch_size, self.num_robots
+        people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
+        people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
+        people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
+        if r == 1:
+            return people_pos.reshape(b, -1, 2), people_vel.reshape(b, -1, 2), people_mask.reshape(b, -1)
+        robot_pos = s.robot_pose[..., :2][:, self._others]
+        other_vel = robot_vel[:, self._others]
+        pos = np.concatenate((people_pos, robot_pos), axis=2).reshape(b * r, -1, 2)
+        vel = np.concatenate((people_vel, other_vel), axis=2).reshape(b * r, -1, 2)
+        mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2).reshape(b * r, -1)
+        return pos, vel, mask
 
     def _observe(self) -> JointState:
         s = self.state
         assert s is not None
+        b, r = self.batch_size, self.num_robots
         robot = self.config.robot
+        velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
+        pos, vel, mask = self._others_of(s, velocity)
         return joint_state(
-            robot_pos=s.robot_pose[:, 0, :2],
-            robot_goal=s.robot_goal[:, 0, :2],
-            robot_vel=world_velocity(s.robot_pose[:, 0], s.robot_vel[:, 0], robot),
-            robot_heading=s.robot_pose[:, 0, 2],
+            robot_pos=s.robot_pose[..., :2].reshape(b * r, 2),
+            robot_goal=s.robot_goal[..., :2].reshape(b * r, 2),
+            robot_vel=velocity.reshape(b * r, 2),
+            robot_heading=s.robot_pose[..., 2].reshape(b * r),
             robot_radius=float(robot.radius),  # type: ignore[arg-type]
             preferred_speed=self.config.preferred_speed,
             unicycle=robot.kinematics == "unicycle",
-            human_pos=s.human_pos,
-            human_vel=s.human_vel,
-            human_radius=self.config.cases.human_radius,
-            human_mask=s.human_mask,
+            human_pos=pos,
+            human_vel=vel,
+            human_radius=np.broadcast_to(self.slot_radius, mask.shape),
+            human_mask=mask,
         )
 
-    def render_state(self) -> dict[str, Any]:
-        """Row 0's robot, goal and people, for drawing."""
-        s = self.state
-        assert s is not None
-        return {
-            "robot": s.robot_pose[0, 0].copy(),
-            "goal": s.robot_goal[0, 0, :2].copy(),
-            "humans": s.human_pos[0][s.human_mask[0]].copy(),
-        }
+
+def _mask_ended(outcome: CrowdOutcome, done: np.ndarray) -> CrowdOutcome:
+    """The outcome with robots that had already ended cleared: no reward, no flags."""
+    if not done.any():
+        return outcome
+    keep = ~done
+    return CrowdOutcome(
+        reward=np.where(keep, outcome.reward, 0.0),
+        success=outcome.success & keep,
+        collision=outcome.collision & keep,
+        timeout=outcome.timeout & keep,
+        terminated=outcome.terminated & keep,
+        truncated=outcome.truncated & keep,
+        closest=outcome.closest,
+        discomfort=outcome.discomfort & keep,
+    )
 
 
 def _map_walls(map_name: str | None) -> WallIndex:

@@ -51,6 +51,16 @@ def action_space(config: CrowdNavConfig) -> spaces.Space:
     return spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
+def _one_robot(config: CrowdNavConfig, who: str) -> CrowdNavConfig:
+    """`config`, refused when it has several robots (the PettingZoo env has them)."""
+    if config.num_robots != 1:
+        raise ValueError(
+            f"{who} drives one robot, got num_robots={config.num_robots}; several robots: "
+            "socialzoo.env.crowd_parallel.CrowdNavParallelEnv"
+        )
+    return config
+
+
 def _rows(observation: JointState, kind: str) -> Any:
     return observation.flat() if kind == "flat" else observation.as_dict()
 
@@ -96,7 +106,7 @@ class CrowdNavVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, num_envs: int, config: CrowdNavConfig | None = None, **overrides: Any) -> None:
-        self.config = _resolve(config, overrides)
+        self.config = _one_robot(_resolve(config, overrides), "CrowdNavVectorEnv")
         self.num_envs = num_envs
         self.core = CrowdNavCore(self.config, num_envs)
         self.source = CrowdCaseSource(self.config, num_envs)
@@ -142,7 +152,7 @@ class CrowdNavVectorEnv(VectorEnv):
             raise RuntimeError("CrowdNavVectorEnv: reset before step")
         result = self.core.step(actions)
         outcome = result.outcome
-        ended = np.flatnonzero(outcome.terminated | outcome.truncated)
+        ended = np.flatnonzero(result.row_done)
         info: dict[str, Any] = {}
         if len(ended):
             final_obs = _rows(result.observation, self.config.observation)
@@ -173,7 +183,7 @@ class CrowdNavEnv(gym.Env):
     metadata = {"render_modes": []}
 
     def __init__(self, config: CrowdNavConfig | None = None, **overrides: Any) -> None:
-        self.config = _resolve(config, overrides)
+        self.config = _one_robot(_resolve(config, overrides), "CrowdNavEnv")
         self.core = CrowdNavCore(self.config, 1)
         self.source = CrowdCaseSource(self.config, 1)
         self.observation_space = observation_space(self.config)

@@ -39,7 +39,7 @@ class CrowdCaseSource:
             from socialzoo.nav.scenarios import ScenarioConfig
 
             scenario = ScenarioConfig(max_humans=config.slots, min_humans=min(5, config.slots))
-            self._scenarios = ScenarioStream(load_map(config.map), batch_size, 1, scenario)
+            self._scenarios = ScenarioStream(load_map(config.map), batch_size, config.num_robots, scenario)
 
     def seed(self, seed: int | None) -> None:
         """Reseed every row's training stream (row 0 with the seed itself)."""
@@ -57,17 +57,23 @@ class CrowdCaseSource:
             return self._scenarios.next(rows)
         low = SPLIT_SEED_OFFSET["train"]
         return [
-            crowd_case(self.config.cases, int(self._rngs[row].integers(low, _SEED_LIMIT))) for row in rows
+            crowd_case(
+                self.config.cases, int(self._rngs[row].integers(low, _SEED_LIMIT)), self.config.num_robots
+            )
+            for row in rows
         ]
 
     def fixed(self, split: Split, indices: list[int] | np.ndarray) -> list[Scenario]:
         """Cases `indices` of the validation or test split (CrowdNav's fixed cases; on a building
         map, the map's registered test set or validation scenarios)."""
+        r = self.config.num_robots
         if self.config.map is None:
-            return [crowd_case(self.config.cases, case_seed(split, int(k))) for k in indices]
+            return [crowd_case(self.config.cases, case_seed(split, int(k)), r) for k in indices]
         from socialzoo.nav.maps import load_map
         from socialzoo.nav.scenarios import get_test_set, validation_set
 
         m = load_map(self.config.map)
         test_set = validation_set(m.name) if split == "val" else get_test_set(f"{m.name}-test")
-        return [test_set.scenario(int(k), m) for k in indices]
+        from socialzoo.env.scenario_source import with_robots
+
+        return [with_robots(test_set.scenario(int(k), m), m, r) for k in indices]

@@ -21,7 +21,7 @@ from torchrl.envs import EnvBase
 
 from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
 from socialzoo.env.crowd_core import CrowdNavCore
-from socialzoo.env.crowd_env import _resolve
+from socialzoo.env.crowd_env import _one_robot, _resolve
 from socialzoo.env.crowd_observation import flat_size
 from socialzoo.env.crowd_source import CrowdCaseSource
 
@@ -51,7 +51,9 @@ class CrowdNavTorchEnv(EnvBase):
     ) -> None:
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"CrowdNavTorchEnv: num_envs must be an int >= 1, got {num_envs!r}")
-        self.config = _resolve(config, dict(overrides)).replace(observation="flat")
+        self.config = _one_robot(
+            _resolve(config, dict(overrides)).replace(observation="flat"), "CrowdNavTorchEnv"
+        )
         super().__init__(device=device, batch_size=torch.Size([num_envs]))
         self.num_envs = num_envs
         self.categorical_action_encoding = categorical_action_encoding

@@ -79,15 +79,29 @@ def case_seed(split: Split, index: int) -> int:
     return SPLIT_SEED_OFFSET[split] + index
 
 
-def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
-    """The case drawn from RandomState(seed): the robot at (0, -r) heading +y with its goal at
-    (0, r), and config.num_humans people with one-point routes to their goals."""
+def robot_poses(num_robots: int, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(starts, goals) (R, 3) of R robots on the circle: robot 0 at (0, -r) heading +y with its
+    goal at (0, r), as CrowdNav's robot; robot k at angle -pi/2 + 2 pi k / R, heading for its
+    antipode (our extension for several robots)."""
+    angle = -math.pi / 2 + 2 * math.pi * np.arange(num_robots) / num_robots
+    start = radius * np.stack((np.cos(angle), np.sin(angle)), axis=1)
+    start[0] = (0.0, -radius)  # exactly CrowdNav's, not cos(-pi/2) ~ 6e-17
+    heading = np.arctan2(-start[:, 1], -start[:, 0])
+    starts = np.column_stack((start, heading))
+    goals = np.column_stack((0.0 - start, heading))  # 0.0 - x: no -0.0 in the goals
+    return starts, goals
+
+
+def crowd_case(config: CrowdCaseConfig, seed: int, num_robots: int = 1) -> Scenario:
+    """The case drawn from RandomState(seed): the robots (robot_poses; one robot: CrowdNav's, at
+    (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
+    routes to their goals, each drawn clear of the robots and of the people before it."""
+    check_int("crowd_case", "num_robots", num_robots, low=1)
     u = _Uniforms(np.random.RandomState(seed))
-    r = config.circle_radius
-    robot = np.array([[0.0, -r], [0.0, r]])  # position, goal
-    positions: list[np.ndarray] = [robot[0]]
-    goals: list[np.ndarray] = [robot[1]]
-    radii = [config.robot_radius]
+    robot_starts, robot_goals = robot_poses(num_robots, config.circle_radius)
+    positions: list[np.ndarray] = list(robot_starts[:, :2])
+    goals: list[np.ndarray] = list(robot_goals[:, :2])
+    radii = [config.robot_radius] * num_robots
     for _ in range(config.num_humans):
         if config.layout == "circle_crossing":
             start, goal = _circle_human(u, config, positions, goals, radii)
@@ -97,16 +111,16 @@ def crowd_case(config: CrowdCaseConfig, seed: int) -> Scenario:
         goals.append(goal)
         radii.append(config.human_radius)
     n = config.num_humans
-    spawn = np.array(positions[1:]).reshape(n, 2)
+    spawn = np.array(positions[num_robots:]).reshape(n, 2)
     return Scenario(
         map_name=ARENA_MAP,
         seed=seed,
-        robot_starts=np.array([[0.0, -r, math.pi / 2]]),
-        robot_goals=np.array([[0.0, r, math.pi / 2]]),
+        robot_starts=robot_starts,
+        robot_goals=robot_goals,
         human_spawn=spawn,
         human_start_index=np.full(n, -1),
         human_goal_index=np.full(n, -1),
-        human_routes=tuple(np.array([g]) for g in goals[1:]),
+        human_routes=tuple(np.array([g]) for g in goals[num_robots:]),
         human_speed=np.full(n, config.human_speed),
         family=config.layout,
     )

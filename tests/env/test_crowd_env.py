@@ -122,3 +122,30 @@ def test_the_torchrl_env_passes_its_spec_check_and_matches_the_vector_env(action
             break
         np.testing.assert_array_equal(td["next", "observation"].numpy(), obs)
         td = td["next"].clone()
+
+
+def test_several_robots_pass_pettingzoos_tests_and_repeat_over_many_steps():
+    from pettingzoo.test import parallel_api_test, parallel_seed_test
+
+    from socialzoo.env.crowd_parallel import CrowdNavParallelEnv, parallel_crowd_env
+
+    env = parallel_crowd_env(num_robots=3, variant="SocialForce")
+    parallel_api_test(env, num_cycles=100)
+    parallel_seed_test(lambda: CrowdNavParallelEnv(num_robots=3, variant="SocialForce"))
+
+    def rollout(seed):
+        env = CrowdNavParallelEnv(num_robots=2, variant="SocialForce", action="discrete")
+        obs, _ = env.reset(seed=seed)
+        trace = [obs["robot_0"]]
+        rng = np.random.default_rng(seed)
+        while env.agents:
+            obs, rewards, _, _, infos = env.step({a: int(rng.integers(81)) for a in env.agents})
+            trace += [*obs.values(), np.array(list(rewards.values()))]
+        return np.concatenate(trace), infos
+
+    a, infos = rollout(7)
+    np.testing.assert_array_equal(a, rollout(7)[0])
+    assert all("metrics" in info for info in infos.values())
+    assert CrowdNavParallelEnv(num_robots=2).observation_space("robot_0").shape == (6 + 8 * 6,)
+    with pytest.raises(ValueError, match="num_robots"):
+        CrowdNavVectorEnv(2, num_robots=2)
