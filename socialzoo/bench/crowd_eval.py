@@ -25,7 +25,15 @@ from socialzoo.nav.crowd_cases import SPLIT_SIZE, Split
 # A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
 CrowdActor = Callable[[np.ndarray, CrowdNavCore], np.ndarray]
 RATES = ("success", "collision", "timeout")
-MEANS = ("navigation_time", "path_length", "min_separation", "intrusion_ratio", "discounted_return")
+MEANS = (
+    "navigation_time",
+    "path_length",
+    "min_separation",
+    "intrusion_ratio",
+    "discounted_return",
+    "mean_force",
+    "mean_blame",
+)
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,8 @@ TABLE_COLUMNS = (
     "min_separation",
     "intrusion_ratio",
     "discounted_return",
+    "mean_force",
+    "mean_blame",
 )
 
 
@@ -127,15 +129,15 @@ def write_crowd_tables(rows: list[dict[str, Any]], out: Path, config: Any, split
         f"CrowdNav task ({config.cases.layout}, {config.cases.num_humans} {config.humans} people, "
         f"{config.robot.kinematics} robot, {'visible' if config.robot_visible else 'invisible'}), {split} cases",
         "",
-        "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort | min sep. (m) |",
-        "|---|---|---|---|---|---|---|---|",
+        "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort | min sep. (m) | force |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         low, high = r["success_ci"]
         lines.append(
             f"| {r['policy']} | {r['success_rate']:.3f} [{low:.3f}, {high:.3f}] | {r['collision_rate']:.3f} | "
             f"{r['timeout_rate']:.3f} | {r['navigation_time']:.2f} | {r['path_length']:.2f} | "
-            f"{r['discomfort_frequency']:.3f} | {r['min_separation']:.3f} |"
+            f"{r['discomfort_frequency']:.3f} | {r['min_separation']:.3f} | {r['mean_force']:.4f} |"
         )
     md_path = out / "crowdnav.md"
     md_path.write_text("\n".join(lines) + "\n")

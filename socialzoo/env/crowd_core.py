@@ -27,6 +27,8 @@ from socialzoo.core.walls import WallIndex
 from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
 from socialzoo.env.crowd_observation import JointState, joint_state
 from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_boundary_distance, judge_step
+from socialzoo.env.outcome import STILL_SPEED
+from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
@@ -92,6 +94,7 @@ class CrowdNavCore:
         )
         self.cases: list[Scenario | None] = [None] * batch_size
         self.observation: JointState | None = None
+        self._blame_horizon = RewardConfig().blame_horizon
 
     # ------------------------------------------------------------------ reset
     def reset_rows(self, rows: np.ndarray | list[int], cases: list[Scenario]) -> JointState:
@@ -208,7 +211,7 @@ class CrowdNavCore:
             cfg.time_step,
         )
         outcome = _mask_ended(outcome, self.robot_done.reshape(b * r))
-        self.metrics.update(outcome, moved)
+        self.metrics.update(outcome, moved, *self._force_and_blame(state))
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
         summaries = self.metrics.summaries(ended, outcome)
         for k, summary in zip(ended.tolist(), summaries, strict=True):
@@ -238,6 +241,21 @@ class CrowdNavCore:
         vel = np.concatenate((people_vel, other_vel), axis=2).reshape(b * r, -1, 2)
         mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2).reshape(b * r, -1)
         return pos, vel, mask
+
+    def _force_and_blame(self, s: WorldState) -> tuple[np.ndarray, np.ndarray]:
+        """(B R,) the benchmark's social force and blame terms of each robot after the step
+        (SPEC section 9; every person counts: the task's robot sees everyone)."""
+        b, r = self.batch_size, self.num_robots
+        velocity = world_velocity(s.robot_pose, s.robot_vel, self.config.robot)
+        pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        people = np.repeat(s.human_pos, r, axis=0)
+        seen = np.repeat(s.human_mask, r, axis=0)
+        skip = np.full(b * r, -1)
+        force = social_force_term(pos, people, seen, skip)
+        vel = velocity.reshape(b * r, 2)
+        still = np.hypot(vel[:, 0], vel[:, 1]) < STILL_SPEED
+        blame = blame_term(pos, vel, still, people, seen, skip, self._blame_horizon)
+        return force, blame
 
     def _observe(self) -> JointState:
         s = self.state

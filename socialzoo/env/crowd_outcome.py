@@ -36,6 +36,8 @@ METRIC_KEYS: tuple[str, ...] = (
     "intrusion_ratio",
     "return",
     "discounted_return",
+    "mean_force",
+    "mean_blame",
 )
 
 
@@ -171,7 +173,9 @@ class CrowdNavMetrics:
     m); intrusion_ratio (share of steps with a person's boundary within discomfort_dist of the
     robot's, a collision step included: CrowdNav++'s intrusion, measured on the real rather than
     predicted positions); return and discounted_return (gamma ** (t * dt * v_pref) per step t, as
-    CrowdNav's total reward).
+    CrowdNav's total reward); mean_force and mean_blame, the benchmark's social force and blame
+    terms (SPEC section 9, socialzoo.env.reward) averaged over the episode's steps, so the task's
+    policies compare with the Social Action Selection policies.
     """
 
     def __init__(self, batch_size: int, dt: float, preferred_speed: float, cfg: CrowdRewardConfig) -> None:
@@ -183,6 +187,8 @@ class CrowdNavMetrics:
         self.min_gap = np.full(batch_size, np.inf)
         self.ret = np.zeros(batch_size)
         self.discounted = np.zeros(batch_size)
+        self.force = np.zeros(batch_size)
+        self.blame = np.zeros(batch_size)
 
     def reset_rows(self, rows: np.ndarray) -> None:
         """Start new episodes in `rows`."""
@@ -193,9 +199,22 @@ class CrowdNavMetrics:
         self.min_gap[rows] = np.inf
         self.ret[rows] = 0.0
         self.discounted[rows] = 0.0
+        self.force[rows] = 0.0
+        self.blame[rows] = 0.0
 
-    def update(self, outcome: CrowdOutcome, moved: np.ndarray) -> None:
-        """Add one step: its outcome and the distance (B,) each robot moved."""
+    def update(
+        self,
+        outcome: CrowdOutcome,
+        moved: np.ndarray,
+        force: np.ndarray | None = None,
+        blame: np.ndarray | None = None,
+    ) -> None:
+        """Add one step: its outcome, the distance (B,) each robot moved, and the step's social
+        force and blame terms (B,) (0 when not given)."""
+        if force is not None:
+            self.force += force
+        if blame is not None:
+            self.blame += blame
         discount = self.cfg.gamma ** (self.steps * self.dt * self.v_pref)
         self.ret += outcome.reward
         self.discounted += discount * outcome.reward
@@ -227,6 +246,8 @@ class CrowdNavMetrics:
                     "intrusion_ratio": float(self.intrusion[i]) / max(steps, 1),
                     "return": float(self.ret[i]),
                     "discounted_return": float(self.discounted[i]),
+                    "mean_force": float(self.force[i]) / max(steps, 1),
+                    "mean_blame": float(self.blame[i]) / max(steps, 1),
                 }
             )
         return out
