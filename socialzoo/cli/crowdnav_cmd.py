@@ -129,7 +129,8 @@ def write_crowd_tables(rows: list[dict[str, Any]], out: Path, config: Any, split
         f"CrowdNav task ({config.cases.layout}, {config.cases.num_humans} {config.humans} people, "
         f"{config.robot.kinematics} robot, {'visible' if config.robot_visible else 'invisible'}), {split} cases",
         "",
-        "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort | min sep. (m) | force |",
+        "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort "
+        "| min sep. (m) | force |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
