@@ -16,11 +16,12 @@ entry b is row b).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from socialzoo.core.config import HumanConfig, WorldConfig
+from socialzoo.core.config import HumanConfig, OrcaConfig, WorldConfig
 from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
@@ -30,6 +31,8 @@ from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_b
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
+from socialzoo.humans.models import ORCA, SOCIAL_FORCE
+from socialzoo.nav.crowd_cases import ARENA_MAP, CrowdCase
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
 
@@ -76,7 +79,15 @@ class CrowdNavCore:
             robot=config.robot,
             human=HumanConfig(radius=cases.human_radius),
             human_collision_distance=radius + cases.human_radius,
+            # CrowdNav's people: ORCA with its parameters, at the people's own radius and speed.
+            orca=dataclasses.replace(
+                OrcaConfig.preset("crowdnav"),
+                radius=cases.human_radius,
+                max_speed=cases.human_speed,
+                robot_visible=config.robot_visible,
+            ),
         )
+        self._model = ORCA if config.humans == "orca" else SOCIAL_FORCE
         r = self.num_robots
         # Observation slots: the people, then the other robots (each robot's own slot left out).
         self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
@@ -92,31 +103,77 @@ class CrowdNavCore:
         self.metrics = CrowdNavMetrics(
             batch_size * r, config.time_step, config.preferred_speed, config.reward
         )
+        # Each row's case (a Scenario; None for an arena case written as arrays) and its seed.
         self.cases: list[Scenario | None] = [None] * batch_size
+        self.case_seed = np.zeros(batch_size, dtype=np.int64)
         self.observation: JointState | None = None
         self._blame_horizon = RewardConfig().blame_horizon
 
     # ------------------------------------------------------------------ reset
-    def reset_rows(self, rows: np.ndarray | list[int], cases: list[Scenario]) -> JointState:
-        """Start new episodes in `rows` from `cases` (one per row); returns every robot's observation."""
+    def reset_rows(self, rows: np.ndarray | list[int], cases: list[Scenario] | list[CrowdCase]) -> JointState:
+        """Start new episodes in `rows` from `cases` (one per row: Scenarios, or the arena's
+        CrowdCases, written straight into the state); returns every robot's observation."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         if len(rows) != len(cases):
             raise ValueError(f"reset_rows got {len(rows)} rows but {len(cases)} cases")
         if np.any((rows < 0) | (rows >= self.batch_size)):
             raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
+        if len(cases) and isinstance(cases[0], CrowdCase) and self.state is not None:
+            self._write_cases(rows, cases)  # type: ignore[arg-type]
+            return self._after_reset(rows, [None] * len(rows), [c.seed for c in cases])
+        if len(cases) and isinstance(cases[0], CrowdCase):
+            cases = [_scenario(c, self.config) for c in cases]  # type: ignore[arg-type]
         fresh = scenarios_to_state(cases, num_robots=self.num_robots, max_humans=self.config.slots)
+        fresh.human_model[:] = self._model
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
         if fresh.human_route.shape[2] > self.state.human_route.shape[2]:
             self.state = WorldState.concatenate([self.state, fresh.rows(0)]).rows(slice(0, self.batch_size))
         self.state.set_rows(rows, fresh)
+        return self._after_reset(rows, cases, [c.seed for c in cases])  # type: ignore[arg-type]
+
+    def _after_reset(self, rows: np.ndarray, cases: list[Scenario | None], seeds: list[int]) -> JointState:
         for row, case in zip(rows.tolist(), cases, strict=True):
             self.cases[row] = case
+        self.case_seed[rows] = seeds
         self.time[rows] = 0.0
         self.robot_done[rows] = False
         self.metrics.reset_rows(self._flat(rows))
-        self.observation = self._observe()
+        if self.observation is None or len(rows) == self.batch_size:
+            self.observation = self._observe()
+        else:
+            # Only the reset rows' robots see anything new.
+            fresh = self._observe(rows)
+            robots = self._flat(rows)
+            self.observation.buffer[robots] = fresh.flat()  # type: ignore[index]
+            self.observation.mask[robots] = fresh.mask
         return self.observation
+
+    def _write_cases(self, rows: np.ndarray, cases: list[CrowdCase]) -> None:
+        """Write arena cases into the state's rows: robots on their starts, people on theirs
+        with a one-point route to their goals, everyone still (as scenarios_to_state would)."""
+        s = self.state
+        assert s is not None
+        n = cases[0].human_starts.shape[0]
+        s.robot_pose[rows] = np.stack([c.robot_starts for c in cases])
+        s.robot_goal[rows] = np.stack([c.robot_goals for c in cases])
+        s.robot_vel[rows] = 0.0
+        s.human_pos[rows] = 0.0
+        s.human_pos[rows, :n] = np.stack([c.human_starts for c in cases])
+        s.human_vel[rows] = 0.0
+        s.human_route[rows] = 0.0
+        s.human_route[rows, :n] = np.stack([c.human_goals for c in cases])[:, :, None, :]
+        s.human_mask[rows] = False
+        s.human_mask[rows, :n] = True
+        s.human_pref_speed[rows] = 0.0
+        s.human_pref_speed[rows, :n] = self.config.cases.human_speed
+        s.human_route_len[rows] = 1
+        s.human_waypoint[rows] = 0
+        s.human_direction[rows] = 1
+        s.step_count[rows] = 0
+        s.noise_key[rows] = [c.seed for c in cases]  # the task has no laser to draw noise for
+        s.human_model[rows] = self._model
+        s.human_group[rows] = -1
 
     def _flat(self, rows: np.ndarray) -> np.ndarray:
         """The flat robot indices of `rows`."""
@@ -229,7 +286,7 @@ class CrowdNavCore:
     def _others_of(self, s: WorldState, robot_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(pos, vel, mask) of what each robot must keep clear of, (B R, slots + R - 1, ...): the
         people (at their velocity at the start of the step), then the other robots (at theirs)."""
-        b, r = self.batch_size, self.num_robots
+        b, r = s.batch_size, self.num_robots
         people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
         people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
         people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
@@ -257,10 +314,13 @@ class CrowdNavCore:
         blame = blame_term(pos, vel, still, people, seen, skip, self._blame_horizon)
         return force, blame
 
-    def _observe(self) -> JointState:
+    def _observe(self, rows: np.ndarray | None = None) -> JointState:
+        """The joint state of every robot (of `rows` only, when given)."""
         s = self.state
         assert s is not None
-        b, r = self.batch_size, self.num_robots
+        if rows is not None:
+            s = s.rows(rows)
+        b, r = s.batch_size, self.num_robots
         robot = self.config.robot
         velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
         pos, vel, mask = self._others_of(s, velocity)
@@ -303,3 +363,20 @@ def _map_walls(map_name: str | None) -> WallIndex:
     from socialzoo.nav.maps import load_map
 
     return load_map(map_name).wall_index
+
+
+def _scenario(case: CrowdCase, config: CrowdNavConfig) -> Scenario:
+    """An arena case as a Scenario (one-point routes to the people's goals)."""
+    n = case.human_starts.shape[0]
+    return Scenario(
+        map_name=ARENA_MAP,
+        seed=case.seed,
+        robot_starts=case.robot_starts,
+        robot_goals=case.robot_goals,
+        human_spawn=case.human_starts,
+        human_start_index=np.full(n, -1),
+        human_goal_index=np.full(n, -1),
+        human_routes=tuple(g[None, :] for g in case.human_goals),
+        human_speed=np.full(n, config.cases.human_speed),
+        family=config.cases.layout,
+    )

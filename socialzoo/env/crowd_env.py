@@ -61,6 +61,11 @@ def _one_robot(config: CrowdNavConfig, who: str) -> CrowdNavConfig:
     return config
 
 
+def _copy(rows: Any) -> Any:
+    """A copy of a batch of observations (an array, or a dict of arrays)."""
+    return {k: v.copy() for k, v in rows.items()} if isinstance(rows, dict) else rows.copy()
+
+
 def _rows(observation: JointState, kind: str) -> Any:
     return observation.flat() if kind == "flat" else observation.as_dict()
 
@@ -143,7 +148,7 @@ class CrowdNavVectorEnv(VectorEnv):
         observation = self.core.reset_rows(rows, scenarios)
         self._started = True
         return _rows(observation, self.config.observation), {
-            "case_seed": np.array([s.seed for s in self.core.cases])
+            "case_seed": self.core.case_seed.copy()
         }
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
@@ -155,7 +160,8 @@ class CrowdNavVectorEnv(VectorEnv):
         ended = np.flatnonzero(result.row_done)
         info: dict[str, Any] = {}
         if len(ended):
-            final_obs = _rows(result.observation, self.config.observation)
+            # A copy: resetting the ended rows below rewrites the observation's rows in place.
+            final_obs = _copy(_rows(result.observation, self.config.observation))
             info["final_obs"] = final_obs
             info["_final_obs"] = np.isin(np.arange(self.num_envs), ended)
             keys = next(iter(result.metrics.values())).keys()

@@ -14,10 +14,13 @@ Two layouts of the same numbers: "dict" ({"robot": (6,), "humans": (H, 7), "mask
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal, get_args
 
 import numpy as np
+
+from socialzoo.core.jit import kernel
 
 ROBOT_FEATURES: tuple[str, ...] = ("goal_distance", "preferred_speed", "heading", "radius", "vx", "vy")
 HUMAN_FEATURES: tuple[str, ...] = ("px", "py", "vx", "vy", "radius", "distance", "radius_sum")
@@ -33,14 +36,18 @@ class JointState:
         robot: (B, 6) float32, ROBOT_FEATURES.
         humans: (B, H, 7) float32, HUMAN_FEATURES per person slot (zeros for an empty slot).
         mask: (B, H) bool, the slot holds a person.
+        buffer: the flat layout that robot and humans are views of, when built that way.
     """
 
     robot: np.ndarray
     humans: np.ndarray
     mask: np.ndarray
+    buffer: np.ndarray | None = None
 
     def flat(self) -> np.ndarray:
         """(B, 6 + 8 H) float32: robot, people row by row, then the mask as 0/1."""
+        if self.buffer is not None:
+            return self.buffer
         b = self.robot.shape[0]
         return np.concatenate(
             (self.robot, self.humans.reshape(b, -1), self.mask.astype(np.float32)), axis=1
@@ -84,31 +91,73 @@ def joint_state(
         human_radius: (B, H) or one radius for all, m.
         human_mask: (B, H) bool.
     """
-    to_goal = robot_goal - robot_pos
-    rot = np.arctan2(to_goal[:, 1], to_goal[:, 0])
-    cos, sin = np.cos(rot), np.sin(rot)
-    b = len(robot_pos)
-    robot = np.empty((b, len(ROBOT_FEATURES)), dtype=np.float32)
-    robot[:, 0] = np.hypot(to_goal[:, 0], to_goal[:, 1])
-    robot[:, 1] = preferred_speed
-    robot[:, 2] = _wrap(robot_heading - rot) if unicycle else 0.0
-    robot[:, 3] = robot_radius
-    robot[:, 4] = robot_vel[:, 0] * cos + robot_vel[:, 1] * sin
-    robot[:, 5] = robot_vel[:, 1] * cos - robot_vel[:, 0] * sin
-    c, s = cos[:, None], sin[:, None]
-    rel = human_pos - robot_pos[:, None, :]
-    radius = np.broadcast_to(np.asarray(human_radius, dtype=np.float64), human_mask.shape)
-    humans = np.empty(human_mask.shape + (len(HUMAN_FEATURES),), dtype=np.float32)
-    humans[..., 0] = rel[..., 0] * c + rel[..., 1] * s
-    humans[..., 1] = rel[..., 1] * c - rel[..., 0] * s
-    humans[..., 2] = human_vel[..., 0] * c + human_vel[..., 1] * s
-    humans[..., 3] = human_vel[..., 1] * c - human_vel[..., 0] * s
-    humans[..., 4] = radius
-    humans[..., 5] = np.hypot(rel[..., 0], rel[..., 1])
-    humans[..., 6] = radius + robot_radius
-    humans[~human_mask] = 0.0
-    return JointState(robot=robot, humans=humans, mask=human_mask.copy())
+    n, h = human_mask.shape
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n, h)))
+    flat = np.empty((n, flat_size(h)), dtype=np.float32)
+    _fill_joint_state(
+        np.ascontiguousarray(robot_pos, dtype=np.float64),
+        np.ascontiguousarray(robot_goal, dtype=np.float64),
+        np.ascontiguousarray(robot_vel, dtype=np.float64),
+        np.ascontiguousarray(robot_heading, dtype=np.float64),
+        float(robot_radius),
+        float(preferred_speed),
+        bool(unicycle),
+        np.ascontiguousarray(human_pos, dtype=np.float64),
+        np.ascontiguousarray(human_vel, dtype=np.float64),
+        radius,
+        np.ascontiguousarray(human_mask, dtype=np.bool_),
+        flat,
+    )
+    robot_dim, human_dim = len(ROBOT_FEATURES), len(HUMAN_FEATURES)
+    humans = flat[:, robot_dim : robot_dim + human_dim * h].reshape(n, h, human_dim)
+    return JointState(robot=flat[:, :robot_dim], humans=humans, mask=human_mask.copy(), buffer=flat)
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return (angle + np.pi) % (2 * np.pi) - np.pi
+@kernel
+def _fill_joint_state(  # type: ignore[no-untyped-def]
+    robot_pos,
+    robot_goal,
+    robot_vel,
+    heading,
+    robot_radius,
+    v_pref,
+    unicycle,
+    human_pos,
+    human_vel,
+    radius,
+    mask,
+    out,
+):
+    """Write each row's flat joint state into `out` (N, 6 + 8 H): robot, people, mask."""
+    n, h = mask.shape
+    for i in range(n):
+        gx = robot_goal[i, 0] - robot_pos[i, 0]
+        gy = robot_goal[i, 1] - robot_pos[i, 1]
+        rot = math.atan2(gy, gx)
+        c, s = math.cos(rot), math.sin(rot)
+        out[i, 0] = math.hypot(gx, gy)
+        out[i, 1] = v_pref
+        if unicycle:
+            out[i, 2] = (heading[i] - rot + math.pi) % (2 * math.pi) - math.pi
+        else:
+            out[i, 2] = 0.0
+        out[i, 3] = robot_radius
+        out[i, 4] = robot_vel[i, 0] * c + robot_vel[i, 1] * s
+        out[i, 5] = robot_vel[i, 1] * c - robot_vel[i, 0] * s
+        for j in range(h):
+            k = 6 + 7 * j
+            if not mask[i, j]:
+                for f in range(7):
+                    out[i, k + f] = 0.0
+                out[i, 6 + 7 * h + j] = 0.0
+                continue
+            rx = human_pos[i, j, 0] - robot_pos[i, 0]
+            ry = human_pos[i, j, 1] - robot_pos[i, 1]
+            out[i, k] = rx * c + ry * s
+            out[i, k + 1] = ry * c - rx * s
+            out[i, k + 2] = human_vel[i, j, 0] * c + human_vel[i, j, 1] * s
+            out[i, k + 3] = human_vel[i, j, 1] * c - human_vel[i, j, 0] * s
+            out[i, k + 4] = radius[i, j]
+            out[i, k + 5] = math.hypot(rx, ry)
+            out[i, k + 6] = radius[i, j] + robot_radius
+            out[i, 6 + 7 * h + j] = 1.0

@@ -4,7 +4,8 @@ TorchRL's conventions: batch size (B,), "observation" (the flat joint state), "a
 [-1, 1] or (B, 81) one-hot (or integer indices with categorical_action_encoding=True),
 ("next", "reward"), done / terminated / truncated kept apart, a "success" flag on the last step of
 a successful episode, and partial resets through the "_reset" mask (no autoreset inside a step).
-Row i plays the same cases as row i of CrowdNavVectorEnv seeded alike.
+Row i plays the same cases as row i of CrowdNavVectorEnv seeded alike. Observations are copied
+into their tensors (the core rewrites reset rows of its arrays in place).
 
 Imported lazily: TorchRL and torch are optional dependencies (the "train" extra).
 """
@@ -95,7 +96,7 @@ class CrowdNavTorchEnv(EnvBase):
         no = torch.zeros((self.num_envs, 1), dtype=torch.bool, device=self.device)
         return TensorDict(
             {
-                "observation": torch.as_tensor(observation.flat(), device=self.device),
+                "observation": torch.tensor(observation.flat(), device=self.device),
                 "success": no.clone(),
                 "done": no.clone(),
                 "terminated": no.clone(),
@@ -121,7 +122,7 @@ class CrowdNavTorchEnv(EnvBase):
 
         return TensorDict(
             {
-                "observation": torch.as_tensor(result.observation.flat(), device=self.device),
+                "observation": torch.tensor(result.observation.flat(), device=self.device),
                 "reward": column(outcome.reward.astype(np.float32)),
                 "success": column(outcome.success),
                 "done": column(outcome.terminated | outcome.truncated),

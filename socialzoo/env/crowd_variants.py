@@ -7,6 +7,7 @@ socialzoo/CrowdNav<Name>-v1 each variant below.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 # The version of the CrowdNav task's ids (a change to a seeded rollout of the task bumps it; the
@@ -17,7 +18,14 @@ CROWD_ENV_VERSION = 1
 VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "": ("CrowdNav's circle crossing: 5 ORCA people, holonomic invisible robot", {}),
     "Square": ("square crossing, 5 ORCA people", {"cases": {"layout": "square_crossing"}}),
-    "20": ("CrowdNav++'s crowd: 20 ORCA people in circle crossing", {"cases": {"num_humans": 20}}),
+    "20": (
+        "CrowdNav++'s arena: 20 ORCA people crossing a circle of radius 6 sqrt 2 m, the robot's start and goal "
+        "uniform in the arena at least 6 m apart, 50 s",
+        {
+            "cases": {"num_humans": 20, "circle_radius": 6 * math.sqrt(2), "robot_layout": "random"},
+            "time_limit": 50.0,
+        },
+    ),
     "Unicycle": (
         "a unicycle robot (turns at most pi/4 a step, CrowdNav's rotation limit)",
         {"robot": {"kinematics": "unicycle"}},

@@ -15,13 +15,14 @@ and stay there, as CrowdNav's people do.
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, get_args
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.nav.scenarios import Scenario
 
@@ -49,6 +50,10 @@ class CrowdCaseConfig:
         robot_radius: the robot's radius, m.
         human_speed: the people's preferred speed v_pref, m/s (also the scale of the start noise).
         discomfort_dist: extra spacing between drawn agents, m.
+        robot_layout: "crossing" (CrowdNav: the robot from (0, -r) to (0, r)) or "random"
+            (CrowdNav++: start and goal uniform in [-r, r]^2, at least min_robot_route apart,
+            drawn before the people from the same stream).
+        min_robot_route: the shortest start-goal distance of a "random" robot, m (CrowdNav++: 6).
     """
 
     layout: Layout = "circle_crossing"
@@ -59,6 +64,8 @@ class CrowdCaseConfig:
     robot_radius: float = 0.3
     human_speed: float = 1.0
     discomfort_dist: float = 0.2
+    robot_layout: Literal["crossing", "random"] = "crossing"
+    min_robot_route: float = 6.0
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
@@ -67,6 +74,16 @@ class CrowdCaseConfig:
         for name in ("circle_radius", "square_width", "human_radius", "robot_radius", "human_speed"):
             check_number("CrowdCaseConfig", name, getattr(self, name), low=0, low_open=True)
         check_number("CrowdCaseConfig", "discomfort_dist", self.discomfort_dist, low=0)
+        if self.robot_layout not in ("crossing", "random"):
+            raise ValueError(
+                f"CrowdCaseConfig.robot_layout must be 'crossing' or 'random', got {self.robot_layout!r}"
+            )
+        check_number("CrowdCaseConfig", "min_robot_route", self.min_robot_route, low=0)
+        if self.robot_layout == "random" and self.min_robot_route >= 2 * math.sqrt(2) * self.circle_radius:
+            raise ValueError(
+                f"CrowdCaseConfig.min_robot_route ({self.min_robot_route}) leaves no start-goal pair in the "
+                f"[-{self.circle_radius}, {self.circle_radius}]^2 square"
+            )
 
 
 def case_seed(split: Split, index: int) -> int:
@@ -79,6 +96,7 @@ def case_seed(split: Split, index: int) -> int:
     return SPLIT_SEED_OFFSET[split] + index
 
 
+@functools.lru_cache(maxsize=64)
 def robot_poses(num_robots: int, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """(starts, goals) (R, 3) of R robots on the circle: robot 0 at (0, -r) heading +y with its
     goal at (0, r), as CrowdNav's robot; robot k at angle -pi/2 + 2 pi k / R, heading for its
@@ -89,145 +107,170 @@ def robot_poses(num_robots: int, radius: float) -> tuple[np.ndarray, np.ndarray]
     heading = np.arctan2(-start[:, 1], -start[:, 0])
     starts = np.column_stack((start, heading))
     goals = np.column_stack((0.0 - start, heading))  # 0.0 - x: no -0.0 in the goals
+    starts.flags.writeable = False  # cached: shared by every case
+    goals.flags.writeable = False
     return starts, goals
+
+
+@dataclass(frozen=True)
+class CrowdCase:
+    """A case as plain arrays (what a reset writes into the state; crowd_case wraps it in a
+    Scenario).
+
+    Attributes:
+        seed: the case's seed.
+        robot_starts: (R, 3) start poses.
+        robot_goals: (R, 3) goal poses.
+        human_starts: (n, 2) the people's starts, m.
+        human_goals: (n, 2) their goals, m.
+    """
+
+    seed: int
+    robot_starts: np.ndarray
+    robot_goals: np.ndarray
+    human_starts: np.ndarray
+    human_goals: np.ndarray
+
+
+def crowd_case_arrays(
+    config: CrowdCaseConfig, seed: int, num_robots: int = 1, rs: np.random.RandomState | None = None
+) -> CrowdCase:
+    """The case drawn from RandomState(seed) (see crowd_case), as plain arrays.
+
+    Args:
+        config: how cases are drawn.
+        seed: the case's seed.
+        num_robots: R.
+        rs: a RandomState to reseed and reuse (a new one costs ~0.6 ms, a reseed ~0.01 ms).
+    """
+    check_int("crowd_case", "num_robots", num_robots, low=1)
+    if rs is None:
+        rs = np.random.RandomState(seed)
+    else:
+        rs.seed(seed)
+    # Enough draws for most cases at once (a 5-person case uses about 30, a 20-person one a median 5,300).
+    n = config.num_humans
+    draws = rs.random_sample(256 * (n + 1) + 64 * num_robots)
+    used = 0
+    if config.robot_layout == "random":
+        robot_starts, robot_goals, used = _random_robots(
+            draws, num_robots, config.circle_radius, config.min_robot_route
+        )
+    else:
+        robot_starts, robot_goals = robot_poses(num_robots, config.circle_radius)
+    positions = np.empty((num_robots + n, 2))
+    goals = np.empty((num_robots + n, 2))
+    radii = np.full(num_robots + n, config.human_radius)
+    positions[:num_robots], goals[:num_robots], radii[:num_robots] = (
+        robot_starts[:, :2],
+        robot_goals[:, :2],
+        config.robot_radius,
+    )
+    square = config.layout == "square_crossing"
+    while True:
+        taken = _draw_people(
+            draws[used:], square, num_robots, n, config.circle_radius, config.square_width, config.human_speed,
+            config.human_radius, config.discomfort_dist, positions, goals, radii,
+        )  # fmt: skip
+        if taken >= 0:
+            break
+        # The draws ran out before every person found a place: the same stream, longer.
+        draws = np.concatenate((draws, rs.random_sample(len(draws))))
+    return CrowdCase(
+        seed, robot_starts, robot_goals, positions[num_robots:].copy(), goals[num_robots:].copy()
+    )
+
+
+def _random_robots(
+    draws: np.ndarray, num_robots: int, half: float, min_route: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """CrowdNav++'s robots: start and goal uniform in [-half, half]^2 until at least min_route apart
+    (4 draws a try), heading pi / 2; returns (starts, goals, draws used)."""
+    starts, goals, at = np.empty((num_robots, 3)), np.empty((num_robots, 3)), 0
+    for k in range(num_robots):
+        while True:
+            if at + 4 > len(draws):
+                raise RuntimeError("crowd_case: the robots' draws ran out")  # ~never: each try succeeds often
+            px, py, gx, gy = -half + 2 * half * draws[at : at + 4]
+            at += 4
+            if math.hypot(px - gx, py - gy) >= min_route:
+                break
+        starts[k], goals[k] = (px, py, math.pi / 2), (gx, gy, math.pi / 2)
+    return starts, goals, at
 
 
 def crowd_case(config: CrowdCaseConfig, seed: int, num_robots: int = 1) -> Scenario:
     """The case drawn from RandomState(seed): the robots (robot_poses; one robot: CrowdNav's, at
     (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
     routes to their goals, each drawn clear of the robots and of the people before it."""
-    check_int("crowd_case", "num_robots", num_robots, low=1)
-    u = _Uniforms(np.random.RandomState(seed))
-    robot_starts, robot_goals = robot_poses(num_robots, config.circle_radius)
-    positions: list[np.ndarray] = list(robot_starts[:, :2])
-    goals: list[np.ndarray] = list(robot_goals[:, :2])
-    radii = [config.robot_radius] * num_robots
-    for _ in range(config.num_humans):
-        if config.layout == "circle_crossing":
-            start, goal = _circle_human(u, config, positions, goals, radii)
-        else:
-            start, goal = _square_human(u, config, positions, goals, radii)
-        positions.append(start)
-        goals.append(goal)
-        radii.append(config.human_radius)
+    case = crowd_case_arrays(config, seed, num_robots)
     n = config.num_humans
-    spawn = np.array(positions[num_robots:]).reshape(n, 2)
     return Scenario(
         map_name=ARENA_MAP,
         seed=seed,
-        robot_starts=robot_starts,
-        robot_goals=robot_goals,
-        human_spawn=spawn,
+        robot_starts=case.robot_starts,
+        robot_goals=case.robot_goals,
+        human_spawn=case.human_starts,
         human_start_index=np.full(n, -1),
         human_goal_index=np.full(n, -1),
-        human_routes=tuple(np.array([g]) for g in goals[num_robots:]),
+        human_routes=tuple(g[None, :] for g in case.human_goals),
         human_speed=np.full(n, config.human_speed),
         family=config.layout,
     )
 
 
-class _Uniforms:
-    """The case generator's uniform draws as one stream read in order: CrowdNav's sequential
-    draws, fetched from the generator in blocks (appending keeps their order)."""
-
-    def __init__(self, rs: np.random.RandomState) -> None:
-        self.rs = rs
-        self.values = rs.random_sample(256)
-        self.at = 0
-
-    def peek(self, count: int) -> np.ndarray:
-        """The next `count` draws, without consuming them."""
-        while self.at + count > len(self.values):
-            self.values = np.concatenate((self.values, self.rs.random_sample(max(count, len(self.values)))))
-        return self.values[self.at : self.at + count]
-
-    def take(self, count: int) -> np.ndarray:
-        """The next `count` draws, consumed."""
-        out = self.peek(count)
-        self.at += count
-        return out
+@kernel
+def _clear(x, y, points, radii, count, own, gap):  # type: ignore[no-untyped-def]
+    """(x, y) no closer than own + radius + gap to any of the first `count` points."""
+    for j in range(count):
+        if math.hypot(x - points[j, 0], y - points[j, 1]) < own + radii[j] + gap:
+            return False
+    return True
 
 
-def _first_clear(
-    u: _Uniforms,
-    draws: int,
-    candidates: Callable[[np.ndarray], np.ndarray],
-    clear: Callable[[np.ndarray], np.ndarray],
-) -> np.ndarray:
-    """CrowdNav's rejection loop `while True: draw; if clear: break`, batched: the candidates of
-    many tries are checked at once and only the draws up to the accepted try are consumed, so the
-    cases stay CrowdNav's.
-
-    Args:
-        u: the case's draws.
-        draws: uniform draws per try.
-        candidates: (K, draws) uniform draws -> (K, 2) candidate points.
-        clear: (K, 2) points -> (K,) bool, the point keeps its distances.
-    """
-    tries = 16
-    while True:
-        points = candidates(u.peek(draws * tries).reshape(tries, draws))
-        ok = clear(points)
-        if ok.any():
-            first = int(np.argmax(ok))
-            u.take(draws * (first + 1))
-            return points[first]
-        u.take(draws * tries)
-        tries = min(tries * 2, 4096)
-
-
-def _clear_of(
-    others: list[np.ndarray], radii: list[float], own: float, gap: float
-) -> Callable[[np.ndarray], np.ndarray]:
-    """points (K, 2) -> (K,) no closer than own + radius + gap to any of `others`."""
-    at = np.array(others).reshape(-1, 2)
-    limit = own + np.array(radii) + gap
-
-    def clear(points: np.ndarray) -> np.ndarray:
-        d = np.hypot(points[:, None, 0] - at[None, :, 0], points[:, None, 1] - at[None, :, 1])
-        return ~(d < limit[None, :]).any(axis=1)
-
-    return clear
-
-
-def _circle_human(
-    u: _Uniforms,
-    config: CrowdCaseConfig,
-    positions: list[np.ndarray],
-    goals: list[np.ndarray],
-    radii: list[float],
-) -> tuple[np.ndarray, np.ndarray]:
-    """CrowdNav's generate_circle_crossing_human: a start on the circle with noise, kept clear of
-    every earlier agent's position and goal; the goal is the start's antipode."""
-    own, gap, r, v = config.human_radius, config.discomfort_dist, config.circle_radius, config.human_speed
-    near_start = _clear_of(positions, radii, own, gap)
-    near_goal = _clear_of(goals, radii, own, gap)
-
-    def candidates(u: np.ndarray) -> np.ndarray:
-        angle = u[:, 0] * np.pi * 2
-        return np.stack(
-            (r * np.cos(angle) + (u[:, 1] - 0.5) * v, r * np.sin(angle) + (u[:, 2] - 0.5) * v), axis=1
-        )
-
-    start = _first_clear(u, 3, candidates, lambda p: near_start(p) & near_goal(p))
-    return start, -start
-
-
-def _square_human(
-    u: _Uniforms,
-    config: CrowdCaseConfig,
-    positions: list[np.ndarray],
-    goals: list[np.ndarray],
-    radii: list[float],
-) -> tuple[np.ndarray, np.ndarray]:
-    """CrowdNav's generate_square_crossing_human: a start in a random half of the square kept clear
-    of earlier positions, a goal in the other half kept clear of earlier goals."""
-    own, gap, w = config.human_radius, config.discomfort_dist, config.square_width
-    sign = -1.0 if u.take(1)[0] > 0.5 else 1.0
-
-    def half(side: float) -> Callable[[np.ndarray], np.ndarray]:
-        return lambda u: np.stack((u[:, 0] * w * 0.5 * side, (u[:, 1] - 0.5) * w), axis=1)
-
-    start = _first_clear(u, 2, half(sign), _clear_of(positions, radii, own, gap))
-    goal = _first_clear(u, 2, half(-sign), _clear_of(goals, radii, own, gap))
-    return start, goal
+@kernel
+def _draw_people(  # type: ignore[no-untyped-def]
+    u, square, first, n, circle_radius, width, speed, own, gap, positions, goals, radii
+):
+    """CrowdNav's rejection loops for people first .. first + n - 1 (agents before `first` are
+    placed), reading the uniform draws `u` in CrowdNav's order; fills positions and goals and
+    returns the draws used, or -1 when `u` ran out."""
+    at = 0
+    size = len(u)
+    for i in range(first, first + n):
+        if square:
+            if at >= size:
+                return -1
+            sign = -1.0 if u[at] > 0.5 else 1.0
+            at += 1
+            while True:
+                if at + 2 > size:
+                    return -1
+                x = u[at] * width * 0.5 * sign
+                y = (u[at + 1] - 0.5) * width
+                at += 2
+                if _clear(x, y, positions, radii, i, own, gap):
+                    break
+            positions[i, 0], positions[i, 1] = x, y
+            while True:
+                if at + 2 > size:
+                    return -1
+                x = u[at] * width * 0.5 * -sign
+                y = (u[at + 1] - 0.5) * width
+                at += 2
+                if _clear(x, y, goals, radii, i, own, gap):
+                    break
+            goals[i, 0], goals[i, 1] = x, y
+        else:
+            while True:
+                if at + 3 > size:
+                    return -1
+                angle = u[at] * np.pi * 2
+                x = circle_radius * np.cos(angle) + (u[at + 1] - 0.5) * speed
+                y = circle_radius * np.sin(angle) + (u[at + 2] - 0.5) * speed
+                at += 3
+                if _clear(x, y, positions, radii, i, own, gap) and _clear(x, y, goals, radii, i, own, gap):
+                    break
+            positions[i, 0], positions[i, 1] = x, y
+            goals[i, 0], goals[i, 1] = -x, -y
+    return at
