@@ -35,6 +35,10 @@ from socialzoo.humans.models import ORCA, SOCIAL_FORCE
 from socialzoo.nav.crowd_cases import ARENA_MAP, CrowdCase
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
+# CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
+# to the goal per this time, capped at their preferred speed (s).
+_ARRIVAL_TIME = 1.0
+
 
 @dataclass(frozen=True)
 class CrowdStep:
@@ -242,6 +246,8 @@ class CrowdNavCore:
         dt = cfg.physics_dt
         for _ in range(cfg.physics_substeps):
             before = state
+            if cfg.map is None:
+                self._arrive(before)
             state, events = step_world(
                 before, self.walls, self.world, command, robot_halt=halt, robot_visible=cfg.robot_visible
             )
@@ -281,6 +287,17 @@ class CrowdNavCore:
             wall_collision=wall & outcome.collision,
             metrics=dict(zip(ended.tolist(), summaries, strict=True)),
             row_done=self.robot_done.all(axis=1),
+        )
+
+    def _arrive(self, s: WorldState) -> None:
+        """CrowdNav's people slow down on their last metre and stop at their goal: the preferred
+        velocity is the goal's offset per second, capped at the preferred speed (its ORCA policy's
+        `velocity / speed if speed > 1 else velocity` at v_pref 1). Written into the state's
+        preferred speeds before each step; the arena's routes are one point, the goal."""
+        offset = s.human_route[:, :, 0] - s.human_pos
+        distance = np.sqrt(offset[..., 0] ** 2 + offset[..., 1] ** 2)
+        s.human_pref_speed[...] = np.where(
+            s.human_mask, np.minimum(self.config.cases.human_speed, distance / _ARRIVAL_TIME), 0.0
         )
 
     def _others_of(self, s: WorldState, robot_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
