@@ -24,7 +24,7 @@ from _common import parser
 
 import socialzoo  # noqa: F401  (registers the ids)
 
-GDC1_ID = "socialzoo/ActionSelection-v1"
+GDC1_ID = "socialzoo/ActionSelection-v2"
 
 
 @dataclass

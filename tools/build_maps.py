@@ -30,9 +30,12 @@ SOCIAL_GYM = (
     "UT Austin (see NOTICE)"
 )
 OURS = "CC0-1.0 (part of socialzoo)"
-# The roadmap settings the shipped maps were built with (before keep_clearance existed): the
-# benchmark's test sets depend on their graphs and poses, so a rebuild must reproduce them.
-SHIPPED = RoadmapConfig(resolution=0.1, free_clearance=0.35, edge_clearance=0.3, keep_clearance=0.0)
+# The roadmap settings the shipped maps were built with (before keep_clearance and
+# join_clearance existed): the benchmark's test sets depend on their graphs and poses, so a
+# rebuild must reproduce them.
+SHIPPED = RoadmapConfig(
+    resolution=0.1, free_clearance=0.35, edge_clearance=0.3, keep_clearance=0.0, join_clearance=0.0
+)
 
 
 def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:

@@ -6,7 +6,8 @@ Buildings: the second floor plan in the social_gym GDC1 data (below y = -5 m, wh
 never uses), the raw GHC3 walls, and seeded synthetic plans (socialzoo.nav.floorplans: offices
 along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
 0.9-1.2 m doors, a 150 m corridor). Each is imported as `socialzoo map import --walls FILE
---name NAME` does (repairs on, no seed point, no region), written to DIR, and GoAlone runs on the
+--name NAME` does (repairs on, the drive check and its repairs included, no seed point, no
+region), written to DIR, and GoAlone runs on the
 first N scenarios of a seeded test set of the map (base seed 20261123, generated as `socialzoo
 benchmark --maps DIR/NAME.json` generates its own; humans at most at the benchmark's crowd
 density, or 5 to 25 with --spec-crowd). An episode is stuck when it times out with the robot
@@ -23,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from socialzoo.bench.map_repair import repair_by_driving
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
 from socialzoo.nav import floorplans
 from socialzoo.nav.importers import drop_zero_length, read_table, write_vector_map
@@ -122,12 +124,13 @@ def main() -> None:
         start = time.perf_counter()
         vector = write_vector_map(args.out / f"{name}.txt", walls)
         m, report = repair_map(name, walls, source=f"tools/goalone_buildings.py: {vector.name}")
+        m, driven, _ = repair_by_driving(m)
         if args.spec_crowd:
             m = dataclasses.replace(m, walkable_area=None)
         path = m.save(args.out / f"{name}.json")
         s = evaluate_map(path, args.episodes, args.batch_size)
         print(
-            f"| {name} | {m.num_walls} | {m.num_nodes} | {len(m.legal_poses)} | {len(report)} | "
+            f"| {name} | {m.num_walls} | {m.num_nodes} | {len(m.legal_poses)} | {len(report) + len(driven)} | "
             f"{100 * s['success'] / s['episodes']:.0f} | {s['reached']}/{s['episodes']} | "
             f"{s['human_collision_episodes']} | {s['wall_collision_episodes']} | {s['timeouts']} | "
             f"{s['stuck']} | {s['never_moved']} | {time.perf_counter() - start:.0f} |",

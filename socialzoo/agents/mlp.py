@@ -11,22 +11,19 @@ product per layer.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from socialzoo.agents.base import check_observations
-from socialzoo.agents.policy_file import PolicyFileError, read_policy_file, save_policy_file
+from socialzoo.env.policy_file import ACTIVATIONS as ACTIVATIONS
+from socialzoo.env.policy_file import PolicyFileError, checked_layers, read_policy_file, save_policy_file
 
 if TYPE_CHECKING:
     from socialzoo.env.core import SocialNavCore
 
-ACTIVATIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
-    "tanh": np.tanh,
-    "relu": lambda x: np.maximum(x, 0.0),
-}
 # What the network's last layer gives: one score per action either way; the greedy action is its argmax.
 OUTPUTS = ("logits", "q_values")
 
@@ -57,26 +54,6 @@ class ObservationNormalizer:
         """Normalised observations, float32, clipped to [-clip, clip]."""
         out = (obs - self.mean) / np.sqrt(self.var + self.epsilon)
         return np.clip(out, -self.clip, self.clip).astype(np.float32)
-
-
-def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The (weight (out, in), bias (out,)) pairs as float32 arrays, checked to chain.
-
-    Raises:
-        ValueError: naming `owner` and the layer, for no layers, a bad shape, or a layer that does
-            not take the previous layer's output.
-    """
-    if not weights:
-        raise ValueError(f"{owner}: the network has no layers")
-    layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
-    for i, (w, b) in enumerate(layers):
-        if w.ndim != 2 or b.shape != (w.shape[0],):
-            raise ValueError(f"{owner}: layer {i} has weight {w.shape} and bias {b.shape}")
-        if i and w.shape[1] != layers[i - 1][0].shape[0]:
-            raise ValueError(
-                f"{owner}: layer {i} takes {w.shape[1]} inputs, the layer before gives {layers[i - 1][0].shape[0]}"
-            )
-    return layers
 
 
 class MlpPolicy:

@@ -72,11 +72,19 @@ def compact_core(core: SocialNavCore, rows: Sequence[int] | np.ndarray) -> Socia
     plans = core.navigator.plans
     new.navigator.plans = GlobalPlans(paths=plans.paths[index].copy(), lengths=plans.lengths[index].copy())
     new.navigator.goals = core.navigator.goals[index].copy()
+    # The navigator's other per-row state (route length left, progress and recovery).
+    for name, value in vars(core.navigator).items():
+        if isinstance(value, np.ndarray) and name != "goals":
+            if value.shape[:1] != (b,):
+                raise RuntimeError(f"compact_core: Navigator.{name} is not a per-row array")
+            setattr(new.navigator, name, value[index].copy())
     for name in _CORE_ROW_ARRAYS:
         setattr(new, name, getattr(core, name)[index].copy())
     new.visible = core.visible[robot_rows].copy()
     if core.human_obs is not None:
         new.human_obs = core.human_obs[index].copy()
+    # The people's side: counterfactual rows and the people's metrics so far.
+    new.people = core.people.rows(index)
     # Every array of the metrics is per robot row (B * R); reading them all keeps a new
     # running metric from being forgotten here.
     for name, value in vars(core.metrics).items():

@@ -13,6 +13,7 @@ import hashlib
 import inspect
 import json
 import logging
+import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -69,9 +70,14 @@ class BenchmarkConfig:
         gif: also write one animated Ref episode (ref_episode.gif) on the first map.
         humans: the humans: "social_force" (the scripted model), or "learned:PATH", a learned
             human policy file (socialzoo train humans) that drives every human slot (or the
-            first env_overrides["num_learned_humans"], the rest staying social-force).
+            first env_overrides["num_learned_humans"], the rest staying social-force); or a
+            people spec of the env (socialzoo.humans.models: "sf", "orca", "groups", mixes such
+            as "sf@0.5+orca@0.5", learned files among them), set as EnvConfig.people.models.
         human_metrics: also record the humans' episode metrics (socialzoo.bench.human_metrics)
             with every trial, and write humans.csv and humans.md.
+        counterfactual: also run every scenario without the robot and record what the robot
+            costs the people (EnvConfig.people.counterfactual: people_time_lost,
+            people_extra_distance); not with learned humans driven by the runner.
     """
 
     policies: tuple[str, ...] = DEFAULT_POLICIES
@@ -87,15 +93,17 @@ class BenchmarkConfig:
     gif: bool = False
     humans: str = "social_force"
     human_metrics: bool = False
+    counterfactual: bool = False
 
     def __post_init__(self) -> None:
         from socialzoo.agents import check_policy_spec
-        from socialzoo.agents.learned_humans import check_human_spec
 
         try:
-            check_human_spec(self.humans)
+            check_humans(self.humans)
         except ValueError as err:
             raise ValueError(f"BenchmarkConfig.humans: {err}") from None
+        if not isinstance(self.counterfactual, bool):
+            raise ValueError(f"BenchmarkConfig.counterfactual must be a bool, got {self.counterfactual!r}")
         if not isinstance(self.human_metrics, bool):
             raise ValueError(f"BenchmarkConfig.human_metrics must be a bool, got {self.human_metrics!r}")
 
@@ -177,7 +185,7 @@ class BenchmarkResult:
 
 
 def env_id_for(map_name: str) -> str | None:
-    """The registered benchmark env id of a map ("gdc1" -> "socialzoo/ActionSelection-v1"), or None.
+    """The registered benchmark env id of a map ("gdc1" -> "socialzoo/ActionSelection-v2"), or None.
 
     Its version suffix changes whenever a seeded rollout changes, so it is part of the config hash.
     """
@@ -264,28 +272,96 @@ def config_hash(
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def people_spec(humans: str) -> str | None:
+    """The people spec (EnvConfig.people.models) that a benchmark's `humans` names, or None for
+    the humans the runner drives itself: "social_force", and "learned:PATH" alone (learned slots
+    acting on their observations, socialzoo.bench.runner; "learned:PATH@1" is the people spec of
+    the same file, driven by the env)."""
+    from socialzoo.agents.learned_humans import split_human_spec
+
+    # A mix, or a model with its share ("learned:PATH@1"), is a people spec.
+    if "+" in humans or re.search(r"@\s*[0-9.]+\s*$", humans):
+        return humans
+    try:
+        split_human_spec(humans)
+    except ValueError:
+        return humans
+    return None
+
+
+def check_humans(humans: str) -> str:
+    """Validate a benchmark's humans (the file of a learned model must exist); returns it.
+
+    Raises:
+        ValueError: naming the spec: an unknown name, a bad people spec, a missing file.
+    """
+    from socialzoo.agents.learned_humans import check_human_spec
+    from socialzoo.humans.models import PeopleConfig, PeopleSpecError
+
+    if not isinstance(humans, str) or not humans:
+        raise ValueError(f"the humans are named by a non-empty string, got {humans!r}")
+    if people_spec(humans) is None:
+        return check_human_spec(humans)
+    try:
+        path = PeopleConfig(models=humans).learned_path
+    except PeopleSpecError as err:
+        try:
+            check_human_spec(humans)
+        except ValueError as runner_error:
+            raise ValueError(
+                f"{runner_error}; or a people spec (sf, orca, groups, learned:PATH, mixes such as "
+                f"sf@0.5+orca@0.5): {err}"
+            ) from None
+        raise
+    if path is not None and not Path(path).is_file():
+        raise ValueError(f"humans {humans!r}: no such file {path!r}")
+    return humans
+
+
+def runner_humans(config: BenchmarkConfig) -> str:
+    """The human policy spec the runner drives (RunSpec.humans): social_force when the env
+    drives the people (a people spec)."""
+    return config.humans if people_spec(config.humans) is None else "social_force"
+
+
 def human_env_overrides(config: BenchmarkConfig, test_set: TestSet) -> dict[str, Any]:
     """EnvConfig overrides the run's humans need on a test set: none for social-force humans;
     for a learned policy, every human slot learned (unless env_overrides names
-    num_learned_humans) and the policy's observation and action settings."""
+    num_learned_humans) and the policy's observation and action settings; for a people spec
+    or counterfactual rows, EnvConfig.people."""
     from socialzoo.agents.learned_humans import make_human_policy
 
-    policy = make_human_policy(config.humans)
-    if policy is None:
-        return {}
-    return {"num_learned_humans": test_set.cfg.max_humans, **policy.env_overrides()}
+    spec = people_spec(config.humans)
+    out: dict[str, Any] = {}
+    if spec is None:
+        policy = make_human_policy(config.humans)
+        if policy is not None:
+            out = {"num_learned_humans": test_set.cfg.max_humans, **policy.env_overrides()}
+    if spec is not None or config.counterfactual:
+        out["people"] = {"models": spec or "sf", "counterfactual": config.counterfactual}
+    return out
 
 
 def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
     """What the config hash records about the humans: None for the default (social-force humans,
     no human metrics), so the hashes of such runs are as before."""
     from socialzoo.agents.learned_humans import split_human_spec
+    from socialzoo.humans.models import PeopleConfig
 
-    _, path = split_human_spec(config.humans)
+    people = people_spec(config.humans)
+    if people is None:
+        _, path = split_human_spec(config.humans)
+        # People set through env_overrides: their learned file's bytes count too.
+        models = dict(config.env_overrides.get("people") or {}).get("models")
+        if path is None and isinstance(models, str):
+            path = PeopleConfig(models=models).learned_path
+    else:
+        # The env config names the people spec; a learned file's bytes are recorded here.
+        path = PeopleConfig(models=people).learned_path
     if path is None and not config.human_metrics:
         return None
     return {
-        "spec": config.humans.split(":", 1)[0],
+        "spec": config.humans.split(":", 1)[0] if people is None else people,
         "file_sha256": _file_digest(path) if path is not None else None,
         "human_metrics": config.human_metrics,
     }
@@ -377,7 +453,7 @@ def run_benchmark(
         env_configs=env_configs,
         policies=policy_kwargs,
         batch_size=config.batch_size,
-        humans=config.humans,
+        humans=runner_humans(config),
         human_metrics=config.human_metrics,
     )
     humans = humans_record(config)
@@ -478,7 +554,7 @@ def run_benchmark(
         first = config.maps[0]
         files.append(
             write_episode_gif(
-                out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref", config.humans
+                out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref", runner_humans(config)
             )
         )
     return BenchmarkResult(out, summary, files, len(pending), reused, seconds)

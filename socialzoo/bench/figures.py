@@ -1,5 +1,6 @@
 """Benchmark figures (matplotlib, PNG and PDF): success rates by policy and map with the paper's
-numbers, and force, blame and time to goal with 90% confidence intervals, maps side by side.
+numbers, the failures by cause, and force, blame and time to goal with 90% confidence intervals,
+maps side by side.
 
 matplotlib is imported when a figure is drawn (the "plot" extra), with the non-interactive Agg backend.
 """
@@ -11,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import MAP_ROLES, paper_success, policy_label
+from socialzoo.bench.tables import FAILURE_LABELS, MAP_ROLES, paper_success, policy_label
 
 FIGURE_FORMATS = ("png", "pdf")
 # Panels of the metrics figure: (metric, axis label).
@@ -157,8 +158,65 @@ def plot_metrics(
     return paths
 
 
+# Colours of the failure causes (success is white) in failures.{png,pdf}.
+_CAUSE_COLORS = {
+    "human_collision": "#ee6677",
+    "wall_collision": "#222222",
+    "stuck": "#ccbb44",
+    "timeout": "#66ccee",
+}
+
+
+def plot_failures(
+    summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
+) -> list[Path]:
+    """failures.{png,pdf}: for each policy and map, a bar of the episodes that failed, stacked by
+    cause (human collision, wall collision, stuck, timeout while moving; % of episodes).
+
+    Returns:
+        The files written.
+    """
+    plt = _pyplot()
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    policies, maps, by_key = _layout(summary)
+    fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) * max(len(maps), 1) / 2 + 2.5), 3.6))
+    width = 0.8 / max(len(maps), 1)
+    labelled: set[str] = set()
+    for j, m in enumerate(maps):
+        for i, p in enumerate(policies):
+            e = by_key.get((p, m))
+            if e is None:
+                continue
+            x = i + (j - (len(maps) - 1) / 2) * width
+            bottom = 0.0
+            for cause, label in FAILURE_LABELS.items():
+                value = 100.0 * float(e.get(f"failure_{cause}_rate", math.nan))
+                if not math.isfinite(value) or value <= 0.0:
+                    continue
+                ax.bar(x, value, width * 0.92, bottom=bottom, color=_CAUSE_COLORS[cause],
+                       label=None if cause in labelled else label)  # fmt: skip
+                labelled.add(cause)
+                bottom += value
+            ax.text(x, bottom, m, ha="center", va="bottom", fontsize=6, rotation=90)
+    ax.set_xticks(range(len(policies)))
+    ax.set_xticklabels([policy_label(p) for p in policies])
+    ax.set_ylabel("failed episodes, % (by cause)")
+    ax.set_ylim(bottom=0)
+    if labelled:
+        ax.legend(fontsize="small")
+    ax.set_title("Failures by cause")
+    paths = _save(fig, out_dir, "failures", formats)
+    plt.close(fig)
+    return paths
+
+
 def plot_summary(
     summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
 ) -> list[Path]:
-    """Both figures; returns every file written."""
-    return plot_success(summary, out_dir, formats) + plot_metrics(summary, out_dir, formats)
+    """The three figures; returns every file written."""
+    return (
+        plot_success(summary, out_dir, formats)
+        + plot_failures(summary, out_dir, formats)
+        + plot_metrics(summary, out_dir, formats)
+    )

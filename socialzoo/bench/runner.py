@@ -176,13 +176,17 @@ class BatchedRunner:
         spec: test sets, env configs, policies and batch size.
         compact_tail: shrink the core in the tail (off: finished rows halt until the test set
             is done, as with a step hook, where rows keep their numbers).
+        stack_policies: learned policies of one network shape (a run's checkpoints) act as one
+            stack (socialzoo.bench.policy_stack.MlpStack: the same actions, one product per
+            layer); off: each acts on its own rows.
     """
 
-    def __init__(self, spec: RunSpec, *, compact_tail: bool = True) -> None:
+    def __init__(self, spec: RunSpec, *, compact_tail: bool = True, stack_policies: bool = True) -> None:
         from socialzoo.agents.learned_humans import make_human_policy
 
         self.spec = spec
         self.compact_tail = compact_tail
+        self.stack_policies = stack_policies
         self.stats = RunStats()
         self._policies: dict[str, Policy] = {}
         self.human_policy = make_human_policy(spec.humans)
@@ -219,13 +223,16 @@ class BatchedRunner:
             if on_results is not None:
                 on_results(batch)
 
+        from socialzoo.bench.policy_stack import single_blas_thread
+
         by_set: dict[str, list[Trial]] = {}
         for t in dict.fromkeys(trials):
             by_set.setdefault(t.test_set, []).append(t)
-        for name in sorted(by_set):
-            self._run_test_set(
-                name, sorted(by_set[name], key=lambda t: (t.index, t.policy)), collect, on_step
-            )
+        with single_blas_thread():  # small products: BLAS threads only wait (policy_stack)
+            for name in sorted(by_set):
+                self._run_test_set(
+                    name, sorted(by_set[name], key=lambda t: (t.index, t.policy)), collect, on_step
+                )
         return [results[t] for t in trials]
 
     def _run_test_set(
@@ -248,6 +255,8 @@ class BatchedRunner:
         if humans is not None:
             humans.reset(np.arange(b), core.state)
         actions = np.full((b, core.num_robots), HALT, dtype=np.int64)
+        stacks = self._stacks(dict.fromkeys(t.policy for t in trials))
+        stacked_names = {name for _, index in stacks for name in index}
         compact = self.compact_tail and on_step is None
         stats = self.stats
         while True:
@@ -258,7 +267,21 @@ class BatchedRunner:
             if not policy_rows:
                 break
             actions.fill(HALT)
+            for stack, index in stacks:
+                # Several learned policies of one network shape (checkpoints): one product per layer.
+                stacked = [(index[name], rows) for name, rows in policy_rows.items() if name in index]
+                if not stacked:
+                    continue
+                rows = np.concatenate([np.asarray(r) for _, r in stacked])
+                which = np.concatenate([np.full(len(r), i) for i, r in stacked])
+                obs_rows = core.obs[rows]
+                chosen = stack.act(
+                    obs_rows.reshape(-1, obs_rows.shape[-1]), np.repeat(which, core.num_robots)
+                )
+                actions[rows] = chosen.reshape(len(rows), -1)
             for policy_name, rows in policy_rows.items():
+                if policy_name in stacked_names:
+                    continue
                 policy = self.policy(policy_name)
                 if getattr(policy, "reads_core", True):
                     chosen = np.asarray(policy.act(core.obs, core)).reshape(actions.shape)
@@ -315,6 +338,24 @@ class BatchedRunner:
                 row_trial = [row_trial[row] for row in live]
                 actions = np.full((len(live), core.num_robots), HALT, dtype=np.int64)
                 stats.compactions += 1
+
+    def _stacks(self, names: Iterable[str]) -> list[tuple[Any, dict[str, int]]]:
+        """(MlpStack, {policy name: index in it}) for each group of two or more of these policies
+        that share a network shape (socialzoo.bench.policy_stack), unless `stack_policies` is off."""
+        from socialzoo.bench.policy_stack import MlpStack, stack_key
+
+        if not self.stack_policies:
+            return []
+        groups: dict[Any, list[str]] = {}
+        for name in names:
+            key = stack_key(self.policy(name))
+            if key is not None:
+                groups.setdefault(key, []).append(name)
+        return [
+            (MlpStack([self.policy(n) for n in group]), {n: i for i, n in enumerate(group)})  # type: ignore[misc]
+            for group in groups.values()
+            if len(group) > 1
+        ]
 
     def _human_actions(self, core: Any) -> np.ndarray | None:
         """(B, L, 2) actions of the learned humans from their observations, or None without."""

@@ -1,5 +1,6 @@
-"""Benchmark tables: per policy and map, the success rate and every metric's mean with its 90%
-confidence interval, as summary.csv and summary.md (the paper's success table and metric tables).
+"""Benchmark tables: per policy and map, the success rate, the failures by cause and every
+metric's mean with its 90% confidence interval, as summary.csv and summary.md (the paper's success
+table, a failure table and metric tables).
 
 Intervals: Wilson score for success rates, bootstrap (BCa) for mean counts per episode
 (COUNT_METRICS), Student-t for every other mean (socialzoo.bench.stats).
@@ -26,6 +27,7 @@ from socialzoo.bench.stats import (
     rate_interval,
 )
 from socialzoo.core.files import read_text
+from socialzoo.env.metrics import failure_cause
 
 # Metrics of the tables: (column, description). time_to_goal is averaged over successful
 # episodes only (the paper's figure); every other metric over all episodes with a finite value.
@@ -44,7 +46,16 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("distance_travelled", "distance travelled, m"),
     ("max_force", "force (max per episode)"),
     ("max_blame", "blame (max per episode)"),
+    ("stuck", "episodes stuck (share; no progress for 10 s while not halting)"),
 )
+# Why episodes fail (socialzoo.env.metrics.failure_cause), each a share of all episodes with a
+# Wilson interval: columns failure_<cause>_rate, _ci_low, _ci_high; labels for the tables.
+FAILURE_LABELS: dict[str, str] = {
+    "human_collision": "human collision",
+    "wall_collision": "wall collision",
+    "stuck": "stuck",
+    "timeout": "timeout while moving",
+}
 SUCCESS_ONLY = ("time_to_goal",)
 # Counts per episode: skewed, mostly zero, never negative; their means get a bootstrap interval.
 COUNT_METRICS = ("human_collisions", "wall_collisions")
@@ -107,6 +118,8 @@ def paper_success(policy: str, map_name: str) -> float | None:
 def csv_columns() -> list[str]:
     """Columns of summary.csv, in order."""
     columns = ["policy", "map", "test_set", "trials", "success_rate", "success_ci_low", "success_ci_high"]
+    for cause in FAILURE_LABELS:
+        columns += [f"failure_{cause}_rate", f"failure_{cause}_ci_low", f"failure_{cause}_ci_high"]
     for name, _ in TABLE_METRICS:
         columns += [f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high"]
         if name in SUCCESS_ONLY:
@@ -169,6 +182,12 @@ def summarize(
                 "success_ci_low": rate.low,
                 "success_ci_high": rate.high,
             }
+            causes = [failure_cause(r) for r in group]
+            for cause in FAILURE_LABELS:
+                share = rate_interval(causes.count(cause), len(group), confidence)
+                entry[f"failure_{cause}_rate"] = share.value
+                entry[f"failure_{cause}_ci_low"] = share.low
+                entry[f"failure_{cause}_ci_high"] = share.high
             for name, _ in TABLE_METRICS:
                 values = np.array(
                     [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
@@ -330,6 +349,7 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
                 paper = paper_success(p, m)
                 cells.append("-" if paper is None else f"{paper:.1f}")
         lines.append("| " + " | ".join(cells) + " |")
+    lines += _failure_table(summary)
     for name, description in TABLE_METRICS:
         lines += ["", f"## {description[0].upper() + description[1:]}", ""]
         header = ["policy", *(_map_header(m) for m in maps)]
@@ -349,6 +369,28 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
             lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "## Intervals", "", INTERVALS_NOTE]
     return "\n".join(lines) + "\n"
+
+
+def _failure_table(summary: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Markdown lines of the failures by cause: one row per policy and map, each cause's share of
+    the episodes (%), in the order of precedence of socialzoo.env.metrics.failure_cause."""
+    lines = [
+        "",
+        "## Failures by cause (% of episodes)",
+        "",
+        "Each failed episode counts once, for the first that applies: wall collision (it ends the "
+        "episode), human collision, stuck (no progress for 10 s while not halting), else timeout while "
+        "moving (socialzoo.env.metrics).",
+        "",
+    ]
+    header = ["policy", "map", "success", *FAILURE_LABELS.values()]
+    lines.append("| " + " | ".join(header) + " |")
+    lines.append("|" + "---|" * len(header))
+    for e in summary:
+        cells = [policy_label(e["policy"]), str(e["map"]), _fmt(100 * e["success_rate"], 1)]
+        cells += [_fmt(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
 
 
 def write_summary_md(

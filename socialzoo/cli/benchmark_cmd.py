@@ -103,8 +103,18 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--humans",
         default="social_force",
-        help="the humans: social_force (default) or learned:PATH, a learned human policy file "
-        "(socialzoo train humans) that replaces the social-force humans",
+        help="the humans: social_force (default); learned:PATH, a learned human policy file "
+        "(socialzoo train humans) that replaces the social-force humans; or a people spec of the env: "
+        "sf, orca, groups, learned:PATH, or a mix such as sf@0.5+orca@0.5. Several, comma-separated "
+        "(e.g. sf,orca,groups,learned:PATH), run every policy among every crowd model with counterfactual "
+        "rows and write DIR/matrix.md, matrix.csv and matrix.png (success, collisions, force, blame, "
+        "the people's time lost and extra distance), one folder per model",
+    )
+    parser.add_argument(
+        "--counterfactual",
+        action="store_true",
+        help="also run every scenario without the robot and record the people's time lost and extra "
+        "distance walked because of it (people_time_lost, people_extra_distance)",
     )
     parser.add_argument(
         "--learned-humans",
@@ -175,6 +185,9 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from socialzoo.bench.tables import policy_label
 
     overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    specs = [h.strip() for h in args.humans.split(",") if h.strip()]
+    if len(specs) > 1:
+        return run_matrix_command(args, specs, overrides)
     if args.learned_humans is not None:
         if not args.humans.startswith("learned:"):
             return _fail("benchmark", ValueError("--learned-humans needs --humans learned:PATH"))
@@ -186,6 +199,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         "env_overrides": overrides,
         "humans": args.humans,
         "human_metrics": args.human_metrics,
+        "counterfactual": args.counterfactual,
     }
     for key in ("policies", "maps", "trials", "workers"):
         if getattr(args, key) is not None:
@@ -204,6 +218,36 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             f"{100 * entry['success_rate']:5.1f}% [{100 * entry['success_ci_low']:.1f}, "
             f"{100 * entry['success_ci_high']:.1f}] over {entry['trials']} trials"
         )
+    print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
+    return 0
+
+
+def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: dict[str, Any]) -> int:
+    """`socialzoo benchmark --humans A,B,...`: every policy among every crowd model (the matrix)."""
+    from socialzoo.bench.store import StoreError
+    from socialzoo.cli.people_cmd import shipped_humans
+    from socialzoo.studies.crowd_matrix import MatrixConfig, crowd_matrix
+
+    # "learned" alone: the shipped learned humans.
+    specs = [f"learned:{shipped_humans()}" if s == "learned" else s for s in specs]
+    if args.learned_humans is not None or args.quick:
+        return _fail(
+            "benchmark", ValueError("several --humans make a matrix: without --learned-humans or --quick")
+        )
+    chosen: dict[str, Any] = {
+        "humans": tuple(specs),
+        "batch_size": args.batch_size,
+        "env_overrides": overrides,
+    }
+    for key in ("policies", "maps", "trials", "workers"):
+        if getattr(args, key) is not None:
+            chosen[key] = getattr(args, key)
+    try:
+        config = MatrixConfig(**chosen)
+        result = crowd_matrix(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
+    except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
+        return _fail("benchmark", err)
+    print((result.out_dir / "matrix.md").read_text())
     print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
     return 0
 

@@ -67,18 +67,21 @@ def register(subparsers: Any) -> None:
     replay.set_defaults(func=run_replay)
 
 
-def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any]]]:
+def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
+    """(the variant's config, [(spec, policy, the config it acts in)]): a learned policy acts with
+    the action kind it was trained with, an engineered one with velocities (its own output)."""
     from socialzoo.agents.crowd_engineered import make_crowd_policy
     from socialzoo.env.crowd_config import CrowdNavConfig
 
     specs = [p.strip() for p in args.policies.split(",") if p.strip()]
     if not specs:
         raise ValueError("--policies names no policy")
-    policies = [(spec, make_crowd_policy(spec)) for spec in specs]
-    actions = {getattr(p, "action_kind", None) for _, p in policies} - {None}
-    if len(actions) > 1:
-        raise ValueError("--policies mixes discrete and continuous learned policies; evaluate them apart")
-    config = CrowdNavConfig.variant(args.variant, **({"action": actions.pop()} if actions else {}))
+    config = CrowdNavConfig.variant(args.variant)
+    policies = []
+    for spec in specs:
+        policy = make_crowd_policy(spec)
+        kind = getattr(policy, "action_kind", "continuous")
+        policies.append((spec, policy, config.replace(action=kind)))
     return config, policies
 
 
@@ -94,14 +97,14 @@ def run_eval(args: argparse.Namespace) -> int:
     out = Path(args.out)
     (out / "episodes").mkdir(parents=True, exist_ok=True)
     rows = []
-    for spec, policy in policies:
+    for spec, policy, acting in policies:
         label = spec.replace("/", "_").replace(":", "_")
         record = out / "episodes" / f"{label}.json"
-        key = {"policy": spec, "task": config.to_dict(), "split": args.split, "cases": args.cases}
+        key = {"policy": spec, "task": acting.to_dict(), "split": args.split, "cases": args.cases}
         if record.is_file() and json.loads(record.read_text()).get("key") == key:
             summary = json.loads(record.read_text())["summary"]  # a rerun reuses a finished policy
         else:
-            result = evaluate_crowd(policy.act, config, args.split, args.cases, args.batch_size)
+            result = evaluate_crowd(policy.act, acting, args.split, args.cases, args.batch_size)
             summary = result.summary
             record.write_text(
                 json.dumps({"key": key, "summary": summary, "episodes": result.episodes}, indent=1)
@@ -152,7 +155,9 @@ def run_replay(args: argparse.Namespace) -> int:
 
     try:
         config, policies = _setup(args)
-        traces = [record_crowd_episode(p.act, spec, config, args.split, args.case) for spec, p in policies]
+        traces = [
+            record_crowd_episode(p.act, spec, acting, args.split, args.case) for spec, p, acting in policies
+        ]
     except ValueError as err:
         print(f"socialzoo crowdnav replay: error: {err}", file=sys.stderr)
         return 2

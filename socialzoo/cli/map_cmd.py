@@ -57,12 +57,22 @@ def register(subparsers: Any) -> None:
             "it is at most --max-route metres: 75%% of the 80 s time limit at 1.5 m/s). Draws the "
             "walls, the graph (tight edges in red) and the poses (stranded ones in red) to "
             "--picture PATH, or beside a map file (FILE-check.png); a shipped map name gets no "
-            "picture unless --picture is given. Prints where the picture went. Exit status 0 for "
-            "a valid map, 2 for an invalid one."
+            "picture unless --picture is given. Prints where the picture went. With --drive the "
+            "map checks itself by driving: the robot alone (GoAlone, no people, one batched world) "
+            "drives every feasible pose pair (or a seeded sample of N) within 80 s, and every route "
+            "it cannot complete is reported with where it stopped and why (blocked doorway, goal "
+            "unreachable, start cannot be left, oscillation, stuck, wall collision, timeout) and "
+            "marked on the picture. Exit status 0 for a valid map (whose driven routes were all "
+            "completed), 1 when a driven route failed, 2 for an invalid map."
         ),
     )
     check.add_argument("map", help="shipped map name or path to a map JSON file")
     check.add_argument("--max-route", type=float, default=None, help="feasible route length, m (default 90)")
+    check.add_argument(
+        "--drive", nargs="?", type=int, const=0, default=None, metavar="N",
+        help="drive every feasible pose pair (or a seeded sample of N pairs) and report the failed routes",
+    )  # fmt: skip
+    check.add_argument("--seed", type=int, default=0, help="seed of the --drive N sample (default 0)")
     _add_picture_options(check, "check", no_picture=True)
     check.set_defaults(func=run_check)
 
@@ -79,8 +89,12 @@ def register(subparsers: Any) -> None:
             "in walls are moved to the nearest clear point (or dropped), edges through walls are "
             "rerouted along walking paths (or dropped), stray graph components are joined where the "
             "free space joins them and dropped otherwise, legal poses are moved clear of walls (or "
-            "dropped, and generated when fewer than two are left). Every repair is printed and "
-            "stored in the map's provenance. --strict refuses the source instead (exit 2)."
+            "dropped, and generated when fewer than two are left). Then the map checks itself by "
+            "driving (as map check --drive): a pose the robot cannot reach or leave is moved where "
+            "it can (or dropped), an edge through a gap too narrow for the robot is dropped, and "
+            "while a route still fails the pose in most failed routes is dropped, so that scenarios "
+            "draw only pairs the robot has driven (--no-drive skips this). Every repair is printed "
+            "and stored in the map's provenance. --strict refuses the source instead (exit 2)."
         ),
     )
     source = imp.add_mutually_exclusive_group(required=True)
@@ -110,7 +124,14 @@ def register(subparsers: Any) -> None:
         help="a point inside the building: the graph covers what is reachable from it",
     )
     imp.add_argument(
-        "--strict", action="store_true", help="repair nothing: refuse a source that breaks a rule"
+        "--strict",
+        action="store_true",
+        help="repair nothing: refuse a source that breaks a rule or a route the robot cannot drive",
+    )
+    imp.add_argument(
+        "--no-drive",
+        action="store_true",
+        help="skip the drive check (the robot alone over every feasible pose pair) and its repairs",
     )
     imp.add_argument("--source", default="", help="provenance text stored in the map")
     imp.add_argument("--licence", default="", help="licence text stored in the map")
@@ -245,24 +266,49 @@ def run_check(args: argparse.Namespace) -> int:
         out, why_none = _picture_path(args)
         file = _map_file(str(args.map))
         m = _read_unvalidated(file) if file is not None else load_map(args.map)
-        report = check_map(m, MAX_ROUTE_LENGTH if args.max_route is None else args.max_route)
+        max_route = MAX_ROUTE_LENGTH if args.max_route is None else args.max_route
+        report = check_map(m, max_route)
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
         return _fail(err)
     print(f"{args.map}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
           f"{len(m.legal_poses)} legal poses")  # fmt: skip
     for line in report.lines():
         print(f"  {line}")
+    drive = None
+    if args.drive is not None and report.valid:
+        from socialzoo.bench.drive_check import drive_map, pose_pairs
+
+        pairs = pose_pairs(m, args.drive or None, args.seed, max_route)
+        drive = drive_map(m, pairs, progress=_drive_progress(len(pairs)))
+        for line in drive.lines(limit=None):
+            print(f"  {line}")
+    elif args.drive is not None:
+        print("  drive: skipped (the map is invalid)")
     if out is None:
         print(f"  picture: {why_none}")
     else:
         from socialzoo.render.map_plot import save_map_check_png
 
         try:
-            _save_picture(lambda path: save_map_check_png(m, report, path), out)
+            _save_picture(lambda path: save_map_check_png(m, report, path, drive), out)
         except ValueError as err:
             return _fail(err)
         print(f"  picture: {out}")
-    return 0 if report.valid else 2
+    if not report.valid:
+        return 2
+    return 1 if drive is not None and not drive.complete else 0
+
+
+def _drive_progress(total: int) -> Any:
+    """A progress callback for drive_map: a line on stderr every 10% of the routes."""
+    marks = {max(1, round(total * k / 10)) for k in range(1, 11)}
+
+    def report(done: int, _: int) -> None:
+        if done in marks:
+            marks.discard(done)
+            print(f"socialzoo map: drove {done} of {total} routes", file=sys.stderr, flush=True)
+
+    return report
 
 
 def _read_unvalidated(path: str | Path) -> Any:
@@ -300,6 +346,31 @@ def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | Non
         inputs["nav"] = args.nav.name
     walls = drop_zero_length(np.asarray(walls, dtype=np.float64), str(args.walls or args.pedsim or args.png))
     return walls, nodes, edges, inputs
+
+
+def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str]]]:
+    """The import's drive check: the map repaired by driving, and its repairs as (kind, message).
+
+    Raises:
+        MapError: with strict, a route failed (the message lists the failed routes).
+    """
+    from socialzoo.bench.drive_check import drive_map, pose_pairs
+    from socialzoo.bench.map_repair import repair_by_driving
+    from socialzoo.nav.maps import MapError
+
+    pairs = pose_pairs(m)
+    print(f"driving: the robot alone over {len(pairs)} pose pairs", flush=True)
+    drive = drive_map(m, pairs, progress=_drive_progress(len(pairs)))
+    print(drive.lines(limit=0)[0])
+    if strict:
+        if not drive.complete:
+            raise MapError(f"{m.name}: --strict: " + "\n".join(drive.lines(limit=None)[1:]))
+        done = len(drive.routes)
+        record = {"routes_driven": done, "routes_completed": done, "failures": {}, "repairs": 0}
+        record["pairs_completed_after_repairs"] = done
+        return dataclasses.replace(m, provenance={**(m.provenance or {}), "drive": record}), []
+    m, repairs, _ = repair_by_driving(m, report=drive)
+    return m, [(r.kind, r.message) for r in repairs]
 
 
 def _png_walls(args: argparse.Namespace) -> np.ndarray:
@@ -359,6 +430,9 @@ def run_import(args: argparse.Namespace) -> int:
         else:
             m, report = repair_map(args.name, walls, provenance=provenance, **common)
             steps = [(r.kind, r.message) for r in report.repairs]
+        if not args.no_drive:
+            m, drive_steps = _drive_and_repair(m, strict=args.strict)
+            steps += drive_steps
     except (MapError, FileNotFoundError, ValueError) as err:
         return _fail(err)
     out = m.save(args.out or Path(f"{args.name}.json"))

@@ -1,4 +1,4 @@
-"""`socialzoo reproduce --out DIR [--quick] [--only PARTS] [--backend local|ray] [--no-progress]`:
+"""`socialzoo reproduce --out DIR [--quick] [--seeds K] [--only PARTS] [--backend local|ray] [--no-progress]`:
 the paper's experiments, their tables and figures, and DIR/REPRODUCTION.md (socialzoo.reproduce)."""
 
 from __future__ import annotations
@@ -24,9 +24,32 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--out", required=True, help="output folder DIR")
     parser.add_argument("--quick", action="store_true", help="a small version of everything (minutes)")
     parser.add_argument(
+        "--seeds",
+        type=int,
+        default=1,
+        metavar="K",
+        help="train every learned policy with K seeds (seed, seed+1, ...) and report the aggregates over them",
+    )
+    parser.add_argument(
+        "--seed-trials",
+        type=int,
+        default=None,
+        metavar="N",
+        help="evaluate the seeds after the first on the first N scenarios of each test set in the "
+        "performance and transfer parts (default: all of them)",
+    )
+    parser.add_argument(
         "--only", default=None, metavar="PARTS", help=f"comma-separated parts to run, of: {','.join(PARTS)}"
     )
     parser.add_argument("--backend", default="local", choices=("local", "ray"), help="where tasks run")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="trainings side by side and evaluation processes (or Ray CPUs of a local Ray); default 2 "
+        "(--quick: 1); changes no result",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     parser.add_argument(
         "--publish",
@@ -62,7 +85,17 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
     except ValueError as err:
         print(f"socialzoo reproduce: error: --only: {err}", file=sys.stderr)
         return 2
-    settings = quick_settings() if args.quick else full_settings()
+    if args.seeds < 1:
+        print(f"socialzoo reproduce: error: --seeds must be at least 1, got {args.seeds}", file=sys.stderr)
+        return 2
+    try:
+        volatile = {} if args.workers is None else {"workers": args.workers}
+        settings = (quick_settings if args.quick else full_settings)(
+            seeds=args.seeds, seed_trials=args.seed_trials, **volatile
+        )
+    except ValueError as err:
+        print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
+        return 2
     _interrupt_on_signals()
 
     def report(part: str, made: int) -> None:

@@ -141,6 +141,104 @@ class LaserConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
+class OrcaConfig:
+    """ORCA people (socialzoo.humans.orca; van den Berg et al. 2011), the reference library's
+    parameters by name. Two documented sets: the defaults, fitted to the benchmark's
+    social-force people (tools/fit_orca.py: the closest mean and 10th-percentile speed, reach
+    rate and time to goal on gdc1's validation scenarios; docs/humans.md), and CrowdNav's
+    (`OrcaConfig.preset("crowdnav")`).
+
+    Attributes:
+        neighbor_dist: agents farther than this are not avoided, m.
+        max_neighbors: at most this many nearest agents are avoided.
+        time_horizon: agents avoid each other for this long ahead, s.
+        time_horizon_obst: agents avoid walls for this long ahead, s (the walls within
+            time_horizon_obst * speed + radius count).
+        radius: a person's radius in ORCA's constraints, m.
+        max_speed: the speed limit, m/s; None: each person's preferred speed (the scenario's).
+        robot_visible: the people see and avoid the robots (False: CrowdNav's invisible robot).
+        robot_radius: the radius the people give a robot, m; None: the robot's disc radius, or
+            the half-diagonal of its box footprint (0.33 m for the benchmark's robot).
+    """
+
+    neighbor_dist: float = 4.0
+    max_neighbors: int = 10
+    time_horizon: float = 2.0
+    time_horizon_obst: float = 0.45
+    radius: float = 0.35
+    max_speed: float | None = None
+    robot_visible: bool = True
+    robot_radius: float | None = None
+
+    def __post_init__(self) -> None:
+        check_fields(self, nonnegative=("max_neighbors",))
+        check_number("OrcaConfig", "max_speed", self.max_speed, low=0, low_open=True, allow_none=True)
+        check_number("OrcaConfig", "robot_radius", self.robot_radius, low=0, low_open=True, allow_none=True)
+        if not isinstance(self.robot_visible, bool):
+            raise ValueError(f"OrcaConfig.robot_visible must be a bool, got {self.robot_visible!r}")
+
+    @classmethod
+    def preset(cls, name: str) -> OrcaConfig:
+        """A documented parameter set: "socialzoo" (the defaults) or "crowdnav" (CrowdNav's
+        people: neighbor_dist 10, max_neighbors 10, time_horizon 5, time_horizon_obst 5,
+        radius 0.3, max_speed 1; its robot is invisible only in CrowdNav's own task, so set
+        robot_visible=False with `dataclasses.replace` to have that too).
+
+        Raises:
+            ValueError: an unknown name, listing the known ones.
+        """
+        presets = {
+            "socialzoo": {},
+            "crowdnav": {
+                "neighbor_dist": 10.0,
+                "max_neighbors": 10,
+                "time_horizon": 5.0,
+                "time_horizon_obst": 5.0,
+                "radius": 0.3,
+                "max_speed": 1.0,
+            },
+        }
+        if name not in presets:
+            raise ValueError(f"unknown ORCA parameter set {name!r}; known: {sorted(presets)}")
+        return cls(**presets[name])  # type: ignore[arg-type]
+
+    def robot_disc(self, robot: RobotConfig) -> float:
+        """The radius the people give a robot of config `robot`, m."""
+        if self.robot_radius is not None:
+            return self.robot_radius
+        disc = getattr(robot, "radius", None)
+        return float(disc) if disc is not None else math.hypot(robot.half_length, robot.half_width)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GroupConfig:
+    """The forces that keep a walking group together (Moussaid et al. 2010, "The walking
+    behaviour of pedestrian social groups and its impact on crowd dynamics"), added to the social
+    force of people who walk in a group (socialzoo.humans.groups). The defaults are PySocialForce's.
+
+    Attributes:
+        coherence: weight of the attraction to the group's centre of mass, beyond
+            (group size - 1) / 2 m from it (Moussaid's beta_2; PySocialForce 3.0).
+        repulsion: weight of the push away from a member closer than repulsion_threshold
+            (beta_3; PySocialForce 1.0).
+        repulsion_threshold: m (PySocialForce 0.55).
+        gaze: weight of the slowing down that keeps the others' centre in the field of view
+            (beta_1; PySocialForce 4.0).
+        vision_deg: half-width of the field of view, degrees (Moussaid: 90).
+    """
+
+    coherence: float = 3.0
+    repulsion: float = 1.0
+    repulsion_threshold: float = 0.55
+    gaze: float = 4.0
+    vision_deg: float = 90.0
+
+    def __post_init__(self) -> None:
+        check_fields(self, nonnegative=("coherence", "repulsion", "gaze"))
+        check_number("GroupConfig", "vision_deg", self.vision_deg, low=0, high=180, low_open=True)
+
+
+@dataclass(frozen=True, kw_only=True)
 class WorldConfig:
     """Everything the world step needs besides the map and the state.
 
@@ -150,6 +248,8 @@ class WorldConfig:
         human: human parameters.
         laser: laser parameters, or None for no scan.
         human_collision_distance: robot-human centre distance counted as a collision, m.
+        orca: parameters of the people that ORCA drives (WorldState.human_model).
+        groups: the group forces of people who walk in a group (WorldState.human_group).
     """
 
     dt: float = 0.025
@@ -157,6 +257,8 @@ class WorldConfig:
     human: HumanConfig = field(default_factory=HumanConfig)
     laser: LaserConfig | None = None
     human_collision_distance: float = 0.4
+    orca: OrcaConfig = field(default_factory=OrcaConfig)
+    groups: GroupConfig = field(default_factory=GroupConfig)
 
     def __post_init__(self) -> None:
         check_number("WorldConfig", "dt", self.dt, low=0, low_open=True)

@@ -32,7 +32,7 @@ def read_text(
 
     Raises:
         `missing`: no such file; `error`: not UTF-8 text, or unreadable (a folder, no permission);
-        each message starts with the path.
+            each message starts with the path.
     """
     where = os.fspath(path)
     try:

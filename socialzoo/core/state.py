@@ -32,6 +32,10 @@ class WorldState:
         human_direction: (B, H) +1 walking towards the goal end of the route, -1 back to the start.
         step_count: (B,) physics steps since reset.
         noise_key: (B,) uint64 key of each row's counter-based noise stream (laser noise).
+        human_model: (B, H) int8, the model that drives each human (socialzoo.humans.models:
+            0 social force, 1 ORCA, 2 a learned policy); default all social force.
+        human_group: (B, H) int64, the walking group of each human (the slot of its first
+            member), -1 for none; default none.
     """
 
     robot_pose: np.ndarray
@@ -47,6 +51,15 @@ class WorldState:
     human_direction: np.ndarray
     step_count: np.ndarray
     noise_key: np.ndarray
+    human_model: np.ndarray = None  # type: ignore[assignment]
+    human_group: np.ndarray = None  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        shape = self.human_mask.shape
+        if self.human_model is None:
+            self.human_model = np.zeros(shape, dtype=np.int8)
+        if self.human_group is None:
+            self.human_group = np.full(shape, -1, dtype=np.int64)
 
     @property
     def batch_size(self) -> int:
@@ -115,5 +128,5 @@ def pad_to(array: np.ndarray, shape: tuple[int, ...], name: str) -> np.ndarray:
     widths = [(0, 0)] + [(0, want - have) for have, want in zip(array.shape[1:], shape, strict=True)]
     if name == "human_route":
         return np.pad(array, widths, mode="edge")
-    fill = 1 if name in ("human_route_len", "human_direction") else 0
+    fill = 1 if name in ("human_route_len", "human_direction") else (-1 if name == "human_group" else 0)
     return np.pad(array, widths, mode="constant", constant_values=fill)

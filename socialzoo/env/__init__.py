@@ -1,7 +1,7 @@
 """Environment adapters over the batched core: Gymnasium single-agent and vector envs, PettingZoo.
 
     import gymnasium as gym, socialzoo
-    env = gym.make("socialzoo/ActionSelection-v1")
+    env = gym.make("socialzoo/ActionSelection-v2")
 
 Heavy modules load on first use, so `import socialzoo` stays quick.
 """

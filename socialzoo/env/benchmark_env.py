@@ -30,8 +30,8 @@ class ActionSelectionEnv(gym.Env):
     Follow, Pass. The policy learns *when* to wait, follow or overtake people; the sub-policies
     do the driving (A* plan, carrot, trajectory rollout). This is the batch-of-one view of the
     batched core (`SocialNavCore`); `ActionSelectionVectorEnv`, `SB3VecEnv` and
-    `ActionSelectionTorchEnv` step the same functions. Ids: `socialzoo/ActionSelection-v1` (GDC1,
-    the training map), `socialzoo/ActionSelectionTransfer-v1` (GHC3) and the scenario families.
+    `ActionSelectionTorchEnv` step the same functions. Ids: `socialzoo/ActionSelection-v2` (GDC1,
+    the training map), `socialzoo/ActionSelectionTransfer-v2` (GHC3) and the scenario families.
 
     ## Action Space
     `Discrete(4)`: 0 GoAlone, 1 Halt, 2 Follow, 3 Pass (socialzoo.nav.subpolicies). With
@@ -71,6 +71,10 @@ class ActionSelectionEnv(gym.Env):
             map="ghc3", max_steps=800, observation={"layout": "socialgym1"}.
 
     ## Version History
+    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
+      its carrot is in sight only along a line keeping its full wall distance; its plans join the
+      graph by lines it can drive; people in contact with the robot do not press into it;
+      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
     - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
       robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
       scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).

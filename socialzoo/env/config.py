@@ -10,14 +10,16 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal, get_args
 
-from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig, WorldConfig
+from socialzoo.core.config import GroupConfig, HumanConfig, LaserConfig, OrcaConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig
 from socialzoo.env.reward import RewardConfig
+from socialzoo.humans.models import PeopleConfig
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.scenario_families import FAMILIES
 from socialzoo.nav.scenarios import ScenarioConfig
@@ -36,8 +38,15 @@ _NESTED: dict[str, type] = {
     "planner": LocalPlannerConfig,
     "metrics": MetricsConfig,
     "human_reward": HumanRewardConfig,
+    "people": PeopleConfig,
 }
-_WORLD_NESTED: dict[str, type] = {"robot": RobotConfig, "human": HumanConfig, "laser": LaserConfig}
+_WORLD_NESTED: dict[str, type] = {
+    "robot": RobotConfig,
+    "human": HumanConfig,
+    "laser": LaserConfig,
+    "orca": OrcaConfig,
+    "groups": GroupConfig,
+}
 # Fields that were renamed: old name -> new name. An old name is refused with a message that
 # names its successor, rather than ignored or reported as merely unknown.
 RENAMED_FIELDS: dict[str, str] = {
@@ -74,6 +83,10 @@ class EnvConfig:
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
             family name (socialzoo.nav.scenario_families.FAMILIES).
         world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
+        people: which models drive the people of each scenario (social force, ORCA, walking
+            groups, a learned policy file, or a mix), and whether each scenario also runs
+            without the robot to measure what it costs them (socialzoo.humans.models.PeopleConfig,
+            socialzoo.env.people). The default is the benchmark's social-force people.
     """
 
     map: str = "gdc1"
@@ -94,6 +107,7 @@ class EnvConfig:
     planner: LocalPlannerConfig = field(default_factory=LocalPlannerConfig)
     metrics: MetricsConfig = field(default_factory=MetricsConfig)
     human_reward: HumanRewardConfig = field(default_factory=HumanRewardConfig)
+    people: PeopleConfig = field(default_factory=PeopleConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.map, str) or not self.map:
@@ -125,9 +139,23 @@ class EnvConfig:
             raise ValueError(
                 f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
             )
+        self._check_people()
         for name, cls in _NESTED.items():
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"EnvConfig.{name} must be a {cls.__name__}, got {getattr(self, name)!r}")
+
+    def _check_people(self) -> None:
+        """Refuse people the env cannot drive, naming the field."""
+        if not isinstance(self.people, PeopleConfig):
+            return  # reported with the other nested configs
+        path = self.people.learned_path
+        if path is not None and not Path(path).is_file():
+            raise ValueError(f"EnvConfig.people.models: no such learned policy file {path!r}")
+        if self.people.counterfactual and self.num_learned_humans:
+            raise ValueError(
+                "EnvConfig.people.counterfactual needs people the env drives itself, but "
+                f"num_learned_humans = {self.num_learned_humans} are driven from outside"
+            )
 
     @property
     def max_humans(self) -> int:

@@ -21,14 +21,15 @@ from socialzoo.env.human_agents import HumanStep, action_velocities, human_obser
 from socialzoo.env.metrics import EpisodeMetrics
 from socialzoo.env.observation import build_observation
 from socialzoo.env.outcome import followed_human, robot_outcome
+from socialzoo.env.people import People
 from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.navigator import Navigator, Sight
+from socialzoo.nav.navigator import Navigator, RecoveryConfig, Sight, backoff_commands
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.sight_cache import SightCache
-from socialzoo.nav.subpolicies import check_actions, subpolicy_commands
+from socialzoo.nav.subpolicies import GO_ALONE, check_actions, subpolicy_commands
 
 
 @dataclass(frozen=True)
@@ -135,9 +136,15 @@ class SocialNavCore:
         )
         self.graph = graph_of(self.map)
         self.navigator = Navigator(
-            self.graph, batch_size, config.num_robots, sight=Sight(self.field, planner.wall_distance)
+            self.graph,
+            batch_size,
+            config.num_robots,
+            sight=Sight(self.field, planner.wall_distance),
+            recovery=RecoveryConfig(),
         )
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
+        # Which model drives each person, counterfactual rows, the people's metrics.
+        self.people = People(config, batch_size, self.map)
         self.learned = np.arange(config.num_learned_humans)
         b, r = batch_size, config.num_robots
         self.state: WorldState | None = None
@@ -166,11 +173,14 @@ class SocialNavCore:
             return
         if np.any((rows < 0) | (rows >= self.batch_size)):
             raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
+        scenarios, models = self.people.prepare(list(scenarios))
         fresh = scenarios_to_state(scenarios, num_robots=self.num_robots, max_humans=self.config.max_humans)
+        fresh.human_model[:] = models
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
         self._grow_routes(fresh.human_route.shape[2])
         self.state.set_rows(rows, fresh)
+        self.people.reset(rows, fresh)
         for row, scenario in zip(rows, scenarios, strict=True):
             self.scenarios[row] = scenario
         self._ever_reset[rows] = True
@@ -289,15 +299,23 @@ class SocialNavCore:
         before = self.state
         b, r = self.batch_size, self.num_robots
         desired, learned = self._human_drive(human_action)
+        desired, learned = self.people.drive(before, desired, learned)
         command, halt, target = self.robot_commands(robot_action)
         halt = halt | self.done
+        # Robots driving their plan (GoAlone, not halted): the navigator's recovery watches them.
+        moving = np.zeros((b, r), dtype=bool)
+        if cfg.robot_action == "subpolicy":
+            moving = (np.asarray(robot_action).reshape(b, r) == GO_ALONE) & ~halt
+        command = self._backoff(command, moving)
         command = np.where(self.done[..., None], 0.0, command)
         after, events = step_world(before, self.walls, cfg.world, command, halt, desired, learned)
         # A robot whose episode ended stays exactly where it stopped (the halting step's motion
         # model would still carry it half a step).
         after.robot_pose = np.where(self.done[..., None], before.robot_pose, after.robot_pose)
         self.state = after
-        self.carrot = self.navigator.update(after.robot_pose[..., :2])
+        self.carrot = self.navigator.update(
+            after.robot_pose[..., :2], moving, cfg.dt, after.human_pos, after.human_mask
+        )
         if cfg.robot_action == "subpolicy":
             self.prev_action = np.asarray(robot_action, dtype=np.int64).reshape(b, r)
         self.target_human = target
@@ -317,8 +335,13 @@ class SocialNavCore:
             reached=out.reached.reshape(-1),
             done=(out.terminated | out.truncated).reshape(-1),
             dt=cfg.dt,
+            route_left=self.navigator.route_left.reshape(-1),
+            halted=self._halted(halt, command).reshape(-1),
+            rerouted=self.navigator.rerouted.reshape(-1),
         )
+        was_done = self.done
         self.done = self.done | out.terminated | out.truncated
+        self.people.step(before, after, was_done, self.done)
         human = None
         if len(self.learned):
             human = human_step(
@@ -341,6 +364,33 @@ class SocialNavCore:
             events=events,
             human=human,
         )
+
+    def _backoff(self, command: np.ndarray, moving: np.ndarray) -> np.ndarray:
+        """Commands (B, R, 2) with those of recovering robots (the navigator's back-off) in place
+        of their planner's, for robots still driving their plan."""
+        rows, robots = np.nonzero(self.navigator.backing_off & moving)
+        if len(rows) == 0:
+            return command
+        assert self.state is not None
+        human_pos, _, human_mask = self._robot_obstacles()
+        flat = rows * self.num_robots + robots
+        command = command.copy()
+        command[rows, robots] = backoff_commands(
+            self.state.robot_pose[rows, robots],
+            self.field,
+            self.config.planner.wall_distance,
+            self.navigator.recovery or RecoveryConfig(),
+            human_pos[flat],
+            human_mask[flat],
+        )
+        return command
+
+    def _halted(self, halt: np.ndarray, command: np.ndarray) -> np.ndarray:
+        """(B, R) robots the policy halted this step: the sub-policies' halt, or with velocity
+        actions a zero command (the stuck metric's clock pauses for them)."""
+        if self.config.robot_action == "velocity":
+            return halt | ~np.any(command != 0.0, axis=-1)
+        return halt
 
     def _human_drive(self, human_action: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(desired velocity (B, H, 2), learned mask (B, H)) for the learned humans, or (None, None)."""
@@ -415,6 +465,11 @@ class SocialNavCore:
 
     # ------------------------------------------------------------------ results
     def episode_summaries(self, rows: np.ndarray | list[int], robot: int = 0) -> list[dict]:
-        """Episode metrics (socialzoo.env.metrics.SUMMARY_KEYS) of `rows` for one robot."""
+        """Episode metrics (socialzoo.env.metrics.SUMMARY_KEYS) of `rows` for one robot, and the
+        people's metrics the config asks for (socialzoo.env.people.People.keys)."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
-        return self.metrics.summaries(rows * self.num_robots + robot)
+        summaries = self.metrics.summaries(rows * self.num_robots + robot)
+        if self.people.keys:
+            for summary, extra in zip(summaries, self.people.summaries(rows, robot), strict=True):
+                summary.update(extra)
+        return summaries

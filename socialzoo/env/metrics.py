@@ -27,10 +27,24 @@ Definitions (every distance between centres, in metres; times in seconds):
   short); NaN when the robot did not move.
 - jerk: mean over steps of |da/dt|, a = dv/dt the linear acceleration from the speed v, with the
   robot at rest before the first step (a = 0), m/s^3.
+- stuck: the robot went `stuck_time` (10 s) of steps without progress towards its goal while it
+  was not halting (the Halt action, or Follow and Pass without a target, pause the clock).
+  Progress is the route length left (the distance to the global plan plus the plan's length
+  from there to the goal, socialzoo.nav.navigator.Navigator.route_left; the straight distance
+  to the goal where no plan is given) coming `stuck_progress` (0.25 m) below its least value so
+  far: a robot pressed against a wall, turning on the spot or rocking in a doorway makes none,
+  one driving a long way round along its plan does. When the navigator's recovery gives the
+  robot another route, progress counts along that route from then on (the clock runs on: a
+  robot that keeps recovering without getting anywhere is stuck). max_time_without_progress:
+  the longest such stretch, s.
+- failure causes (`failure_cause`): every episode is "success" or fails for one cause, in this
+  order of precedence: "wall_collision" (it ended the episode), "human_collision", "stuck",
+  "timeout" (the time limit ended an episode in which the robot kept making progress).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -79,8 +93,10 @@ SUMMARY_KEYS = (
     "path_irregularity",
     "path_length_ratio",
     "jerk",
+    "stuck",
+    "max_time_without_progress",
 )
-_BOOL_KEYS = ("success", "reached")
+_BOOL_KEYS = ("success", "reached", "stuck")
 _INT_KEYS = ("steps", "human_collisions", "human_contacts", "wall_collisions")
 
 
@@ -91,10 +107,15 @@ class MetricsConfig:
     Attributes:
         personal_space: radius of a human's intimate zone around its body, m (Hall: 0.45).
         human_radius: body radius of a human, m.
+        stuck_time: an episode is stuck after this long without progress while not halting, s.
+        stuck_progress: progress is the route length left coming this far below its least
+            value so far, m.
     """
 
     personal_space: float = 0.45
     human_radius: float = 0.2
+    stuck_time: float = 10.0
+    stuck_progress: float = 0.25
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("personal_space", "human_radius"))
@@ -135,6 +156,11 @@ class EpisodeMetrics:
         self.last_accel = np.zeros(b)
         self.straight_distance = np.zeros(b)
         self.needed_rotation = np.zeros(b)
+        # Least route length left so far (inf before the first step), and the time since it last
+        # fell by stuck_progress, counted while not halting, s.
+        self.best_route_left = np.full(b, np.inf)
+        self.without_progress = np.zeros(b)
+        self.max_without_progress = np.zeros(b)
 
     def reset(
         self,
@@ -169,6 +195,9 @@ class EpisodeMetrics:
         self.straight_distance[r] = np.hypot(to_goal[..., 0], to_goal[..., 1])
         bearing = np.arctan2(to_goal[..., 1], to_goal[..., 0])
         self.needed_rotation[r] = np.abs(wrap_angle(bearing - pose[..., 2]))
+        self.best_route_left[r] = np.inf
+        self.without_progress[r] = 0.0
+        self.max_without_progress[r] = 0.0
 
     def update(
         self,
@@ -185,6 +214,9 @@ class EpisodeMetrics:
         done: np.ndarray,
         dt: float,
         active: np.ndarray | None = None,
+        route_left: np.ndarray | None = None,
+        halted: np.ndarray | None = None,
+        rerouted: np.ndarray | None = None,
     ) -> None:
         """Add one step of every row.
 
@@ -202,6 +234,12 @@ class EpisodeMetrics:
             dt: step duration, s.
             active: (B,) bool, rows that took this step (default: all). Rows that finished
                 and were not reset are skipped either way.
+            route_left: (B,) route length left to the goal after the step, m (default: the
+                straight distance to the goal); progress for `stuck` is counted on it.
+            halted: (B,) bool, the policy halted the robot this step (default: none): the
+                stuck clock pauses.
+            rerouted: (B,) bool, the robot took another route this step (the navigator's
+                recovery): progress counts from its length left now on; the clock runs on.
         """
         live = ~self.finished if active is None else np.asarray(active, dtype=bool) & ~self.finished
         pose = np.asarray(robot_pose, dtype=np.float64)
@@ -210,6 +248,16 @@ class EpisodeMetrics:
         accel = (speed - self.last_speed) / dt
         contacts = np.asarray(human_collisions, dtype=np.float64)
         min_dist = np.asarray(min_human_distance, dtype=np.float64)
+        if route_left is None:
+            route_left = np.hypot(*(self.goal - pose[:, :2]).T)
+        left = np.asarray(route_left, dtype=np.float64)
+        if rerouted is not None:
+            self.best_route_left = np.where(
+                np.asarray(rerouted, dtype=bool) & live, left, self.best_route_left
+            )
+        progress = left <= self.best_route_left - self.config.stuck_progress
+        moving = np.ones(self.batch_size, dtype=bool) if halted is None else ~np.asarray(halted, dtype=bool)
+        clock = np.where(progress, 0.0, self.without_progress + moving * dt)
         ones = np.ones(self.batch_size)
         contrib = np.stack(
             (
@@ -229,6 +277,11 @@ class EpisodeMetrics:
             axis=1,
         )
         self.sums += np.where(live[:, None], contrib, 0.0)
+        self.best_route_left = np.where(live & progress, left, self.best_route_left)
+        self.without_progress = np.where(live, clock, self.without_progress)
+        self.max_without_progress = np.where(
+            live, np.maximum(self.max_without_progress, clock), self.max_without_progress
+        )
         self.max_force = np.where(live, np.maximum(self.max_force, force), self.max_force)
         self.max_blame = np.where(live, np.maximum(self.max_blame, blame), self.max_blame)
         self.min_human_distance = np.where(
@@ -276,6 +329,8 @@ class EpisodeMetrics:
             "path_irregularity": np.maximum(sums[:, _S["rotation"]] - self.needed_rotation[r], 0.0),
             "path_length_ratio": self.straight_distance[r] / np.where(travelled > 0, travelled, np.nan),
             "jerk": sums[:, _S["jerk"]] / per_step,
+            "stuck": self.max_without_progress[r] >= self.config.stuck_time - 1e-9,
+            "max_time_without_progress": self.max_without_progress[r].copy(),
         }
 
     def summaries(self, rows: np.ndarray | list[int] | None = None) -> list[dict[str, Any]]:
@@ -299,3 +354,31 @@ class EpisodeMetrics:
     def summary(self, row: int) -> dict[str, Any]:
         """The metrics of one row's current episode as a plain dict (keys SUMMARY_KEYS)."""
         return self.summaries([row])[0]
+
+
+# The outcome of an episode: success or one failure cause, in order of precedence.
+FAILURE_CAUSES = ("success", "wall_collision", "human_collision", "stuck", "timeout")
+
+
+def failure_cause(metrics: Mapping[str, Any]) -> str:
+    """The outcome of one episode's metrics (a summary dict): one of FAILURE_CAUSES.
+
+    "success"; else "wall_collision" (the footprint touched a wall: the episode ended there),
+    "human_collision" (at least one step in collision with a human), "stuck" (see the module
+    docstring), else "timeout": the time limit ended an episode in which the robot kept making
+    progress. Summaries stored before `stuck` existed count as not stuck.
+    """
+    if _flag(metrics.get("success")):
+        return "success"
+    if _flag(metrics.get("wall_collisions")):
+        return "wall_collision"
+    if _flag(metrics.get("human_collisions")):
+        return "human_collision"
+    if _flag(metrics.get("stuck")):
+        return "stuck"
+    return "timeout"
+
+
+def _flag(value: Any) -> bool:
+    """A stored flag or count as a bool: None and NaN (a value never stored) are False."""
+    return value is not None and value == value and bool(value)

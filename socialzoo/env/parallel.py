@@ -94,6 +94,10 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
     ## Version History
+    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
+      its carrot is in sight only along a line keeping its full wall distance; its plans join the
+      graph by lines it can drive; people in contact with the robot do not press into it;
+      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
     - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
       robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
       scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).

@@ -6,6 +6,10 @@ Version History of the env docstrings; an old version is not registered, so gymn
 raises gymnasium's DeprecatedEnv naming the current id.
 
 Version History:
+    v2: the robot recovers when it makes no progress (backs off, replans over another edge),
+        its carrot is in sight only along a line keeping its full wall distance, its plans
+        join the graph by lines it can drive; people in contact with the robot do not press
+        into it; episode metrics gain `stuck` (and failure causes).
     v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
         the robot's carrot stays in sight of its wall distance and its plans keep clear
         of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
@@ -22,7 +26,7 @@ from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
 BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
 VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"
 # The version of every id (see the module docstring's Version History).
-ENV_VERSION = 1
+ENV_VERSION = 2
 
 # id -> kwargs for the single-agent benchmark envs.
 BENCHMARK_IDS: dict[str, dict] = {
@@ -35,7 +39,7 @@ def _family_id(name: str) -> str:
     return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + f"-v{ENV_VERSION}"
 
 
-# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v1; short episodes (60 s).
+# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v2; short episodes (60 s).
 FAMILY_IDS: dict[str, dict] = {
     _family_id(name): {"map": map_name, "family": name, "max_steps": 2400}
     for name, (map_name, _) in FAMILY_CATALOGUE.items()

@@ -32,7 +32,7 @@ class SB3VecEnv(VecEnv):
     """num_envs Social Action Selection envs as one SB3 VecEnv.
 
     Row 0 of a VecEnv seeded with s plays the same episodes as a single env
-    (`gymnasium.make("socialzoo/ActionSelection-v1")`) reset with seed s and then without a seed;
+    (`gymnasium.make("socialzoo/ActionSelection-v2")`) reset with seed s and then without a seed;
     row i plays those of row i of an ActionSelectionVectorEnv seeded with s, whatever num_envs.
 
     Seeding follows SB3: `seed(s)` (which SB3 algorithms call with their own seed) takes effect at
@@ -72,6 +72,10 @@ class SB3VecEnv(VecEnv):
         **overrides: EnvConfig fields as plain values, e.g. map="ghc3", scenario={"repeats": 20}.
 
     ## Version History
+    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
+      its carrot is in sight only along a line keeping its full wall distance; its plans join the
+      graph by lines it can drive; people in contact with the robot do not press into it;
+      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
     - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
       robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
       scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).

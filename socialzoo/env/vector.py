@@ -29,7 +29,7 @@ class ActionSelectionVectorEnv(VectorEnv):
 
     ## Description
     B rows of `ActionSelectionEnv` stepped together by one `SocialNavCore` (one process, no env
-    per row): `gym.make_vec("socialzoo/ActionSelection-v1", num_envs=B,
+    per row): `gym.make_vec("socialzoo/ActionSelection-v2", num_envs=B,
     vectorization_mode="vector_entry_point")`. Row i plays the same scenarios whatever B.
 
     ## Action Space

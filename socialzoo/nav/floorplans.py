@@ -276,6 +276,23 @@ def room_grid(
     return FloorPlan(f"room_grid_{seed}", draw.result(), (0.5 * float(xs[1]), 0.5 * float(ys[1])))
 
 
+def two_rooms(
+    door_width: float = 0.9,
+    *,
+    room: tuple[float, float] = (5.0, 4.0),
+    door_offset: float = 0.0,
+    thickness: float = 0.15,
+) -> FloorPlan:
+    """Two rooms side by side (each room[0] x room[1] m, the first from x = 0) joined by one door
+    in the wall between them at x = room[0], its centre door_offset m off the middle: the plan for
+    doorways, from a door too narrow for the robot (0.6 m) to real ones (0.8 to 1.0 m)."""
+    draw = _Drawing(thickness)
+    w, h = room
+    draw.box(0.0, 0.0, 2.0 * w, h)
+    draw.wall((w, 0.0), (w, h), [(0.5 * h + door_offset, door_width)])
+    return FloorPlan(f"two_rooms_{door_width:g}", draw.result(), (0.5 * w, 0.5 * h))
+
+
 def long_corridor(length: float = 150.0, width: float = 2.0) -> FloorPlan:
     """One straight corridor, closed at both ends (longer than the robot drives in 80 s)."""
     draw = _Drawing(0.0)

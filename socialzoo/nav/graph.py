@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 DUPLICATE_EPS = 1e-9
 # Candidate attach points tested per query point before falling back to all of them.
 ATTACH_CANDIDATES = 8
+# A robot's join to the graph may pass this much closer to a wall than asked (the distance
+# field's lookup error, as the navigator's Sight allows), m.
+JOIN_TOLERANCE = 0.02
 # Upper bound on (points x candidates) pairs held in memory at once by `attach`.
 _ATTACH_CHUNK_PAIRS = 1 << 20
 
@@ -78,6 +81,24 @@ def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np
         rows = np.flatnonzero(group == g)
         free[rows] = ~walls.crosses(p0[rows], p1[rows])
     return free
+
+
+def segments_clear_of(walls: WallIndex, p0: np.ndarray, p1: np.ndarray, need: np.ndarray) -> np.ndarray:
+    """Whether straight segments [p0, p1] (N, 2) keep need (N,) (m, at most 0.5) from every wall;
+    bool (N,). Segments are grouped by length, as in `segments_free`."""
+    from socialzoo.nav.maps import segment_clearance
+
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
+    ok = np.ones(len(p0), dtype=bool)
+    if len(p0) == 0:
+        return ok
+    length = np.sqrt(((p1 - p0) ** 2).sum(-1))
+    group = np.ceil(np.log2(np.maximum(length / walls.fine.reach, 1.0))).astype(np.intp)
+    for g in np.unique(group):
+        rows = np.flatnonzero(group == g)
+        ok[rows] = segment_clearance(walls, p0[rows], p1[rows])[0] >= need[rows]
+    return ok
 
 
 def segments_clear(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray, clearance: float) -> np.ndarray:
@@ -212,6 +233,60 @@ class NavGraph:
             f"to node {goal} {self.nodes[goal].tolist()}: they are not connected"
         )
 
+    def plan_avoiding(
+        self, start: np.ndarray, goal: np.ndarray, avoid: np.ndarray, *, clearance: float = 0.0
+    ) -> np.ndarray | None:
+        """Waypoints (L, 2) from start to goal (2,) over the graph without the edges `avoid`
+        (edge indices; -1 entries ignored), or None when no such path exists.
+
+        A recovering robot's plan (socialzoo.nav.navigator): start and goal join the graph as in
+        `plan_batch` (keeping `clearance` where they can) but never on an avoided edge, then
+        Dijkstra from the start's attach edge ends to the goal's, skipping the avoided edges; a
+        straight start-goal line is not used (the robot came back from where it was stuck).
+        """
+        avoided = {int(e) for e in np.asarray(avoid).reshape(-1) if e >= 0}
+        skip = np.array(sorted(avoided), dtype=np.intp)
+        att = self.attach(np.stack((start, goal)), strict=False, clearance=clearance, skip_edges=skip)
+        if not att.found.all():
+            return None
+        best: dict[int, float] = {}
+        parent: dict[int, int] = {}
+        heap: list[tuple[float, int]] = []
+        for node, cost in (
+            (int(att.node_a[0]), float(att.cost_a[0])),
+            (int(att.node_b[0]), float(att.cost_b[0])),
+        ):
+            if cost < best.get(node, math.inf):
+                best[node], parent[node] = cost, -1
+                heapq.heappush(heap, (cost, node))
+        edge_of = {(int(i), int(j)): k for k, (i, j) in enumerate(self.edges.tolist())}
+        done: set[int] = set()
+        while heap:
+            cost, node = heapq.heappop(heap)
+            if node in done:
+                continue
+            done.add(node)
+            for nb, edge_cost in self._neighbours[node]:
+                if edge_of[(min(node, nb), max(node, nb))] in avoided or nb in done:
+                    continue
+                if cost + edge_cost < best.get(nb, math.inf):
+                    best[nb], parent[nb] = cost + edge_cost, node
+                    heapq.heappush(heap, (cost + edge_cost, nb))
+        ends = ((int(att.node_a[1]), float(att.cost_a[1])), (int(att.node_b[1]), float(att.cost_b[1])))
+        total, last = min((best.get(n, math.inf) + c, n) for n, c in ends)
+        if not math.isfinite(total):
+            return None
+        chain = [last]
+        while parent[chain[-1]] >= 0:
+            chain.append(parent[chain[-1]])
+        points = [start, att.point[0], *self.nodes[chain[::-1]], att.point[1], goal]
+        out = [np.asarray(points[0], dtype=np.float64)]
+        for q in points[1:]:
+            if np.hypot(*(np.asarray(q) - out[-1])) > DUPLICATE_EPS:
+                out.append(np.asarray(q, dtype=np.float64))
+        out[-1] = np.asarray(goal, dtype=np.float64)  # the goal exactly, as plan_batch keeps it
+        return np.array(out)
+
     def path_cost(self, path: list[int] | np.ndarray) -> float:
         """Length of a node path, m (sum of Euclidean edge lengths)."""
         p = self.nodes[np.asarray(path, dtype=np.intp)]
@@ -240,17 +315,33 @@ class NavGraph:
         ]
 
     # ---------------------------------------------------------------- joining off-graph points
-    def attach(self, points: np.ndarray, k: int = ATTACH_CANDIDATES, *, strict: bool = True) -> Attachment:
+    def attach(
+        self,
+        points: np.ndarray,
+        k: int = ATTACH_CANDIDATES,
+        *,
+        strict: bool = True,
+        clearance: float = 0.0,
+        skip_edges: np.ndarray | None = None,
+    ) -> Attachment:
         """Join off-graph points to the graph at the nearest point they can reach in a straight line.
 
         Candidates are the closest point of every edge and every node. For each query point the k
         nearest candidates are tested first (one batched wall test for all points); points whose k
         candidates are all blocked test every candidate, nearest first.
 
+        With clearance > 0 (a robot's plans), the nearest candidate whose line keeps
+        min(clearance, the point's own wall distance) - JOIN_TOLERANCE from every wall is taken,
+        and only a point with no such candidate at all joins by a merely wall-free line: a join
+        through a crack between two wall segments or grazing a door frame is a line the robot
+        cannot drive.
+
         Args:
             points: (N, 2) query points, world frame, m.
             k: candidates per point in the first round.
             strict: raise for a point that reaches nothing; else mark it not found.
+            clearance: the clearance a join should keep, m (0: any wall-free line).
+            skip_edges: edge indices whose points are no candidates (their end nodes still are).
 
         Returns:
             The attachment of every point.
@@ -278,15 +369,23 @@ class NavGraph:
         for lo in range(0, num, chunk):
             rows = np.arange(lo, min(num, lo + chunk))
             pts, ts, ds = self._candidates(points[rows])
+            if skip_edges is not None and len(skip_edges):
+                ds[:, np.asarray(skip_edges, dtype=np.intp)] = np.inf
             order = np.argpartition(ds, k - 1, axis=1)[:, :k] if k < num_cand else np.argsort(ds, axis=1)
             order = np.take_along_axis(
                 order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1
             )
-            pick = self._first_free(points[rows], pts, order)
-            missing = np.flatnonzero(pick < 0)
+            valid = np.isfinite(np.take_along_axis(ds, order, 1))
+            pick, clear = self._first_free(points[rows], pts, order, clearance, valid)
+            missing = np.flatnonzero((pick < 0) | ~clear)
             if len(missing) and k < num_cand:
                 full = np.argsort(ds[missing], axis=1, kind="stable")
-                pick[missing] = self._first_free(points[rows][missing], pts[missing], full)
+                more_valid = np.isfinite(np.take_along_axis(ds[missing], full, 1))
+                more, more_clear = self._first_free(
+                    points[rows][missing], pts[missing], full, clearance, more_valid
+                )
+                better = (pick[missing] < 0) | more_clear
+                pick[missing] = np.where(better, more, pick[missing])
             if strict and np.any(pick < 0):
                 bad = rows[int(np.flatnonzero(pick < 0)[0])]
                 raise AttachError(
@@ -340,14 +439,36 @@ class NavGraph:
         ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
         return pts, ts, ds
 
-    def _first_free(self, points: np.ndarray, cand: np.ndarray, order: np.ndarray) -> np.ndarray:
-        """Index of the first candidate in `order` (M, K) reachable from each point; -1 if none."""
+    def _first_free(
+        self,
+        points: np.ndarray,
+        cand: np.ndarray,
+        order: np.ndarray,
+        clearance: float = 0.0,
+        valid: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(index (M,) of the first candidate in `order` (M, K) reachable from each point, -1 if
+        none; (M,) bool, that line keeps the clearance asked for, see `attach`). Candidates where
+        `valid` (M, K) is False are skipped."""
         m, kk = order.shape
-        targets = np.take_along_axis(cand, order[..., None], axis=1)  # (M, K, 2)
-        free = segments_free(self.walls, np.repeat(points, kk, axis=0), targets.reshape(-1, 2)).reshape(m, kk)
-        first = np.argmax(free, axis=1)
-        found = free[np.arange(m), first]
-        return np.where(found, order[np.arange(m), first], -1)
+        targets = np.take_along_axis(cand, order[..., None], axis=1).reshape(-1, 2)  # (M * K, 2)
+        starts = np.repeat(points, kk, axis=0)
+        free = segments_free(self.walls, starts, targets)
+        if valid is not None:
+            free &= valid.reshape(-1)
+        use = free.reshape(m, kk)
+        clear: np.ndarray = np.ones(m, dtype=bool)
+        if clearance > 0 and self.walls is not None and self.walls.num_walls and free.any():
+            own = self.walls.nearest(points)[1]
+            need = np.repeat(np.minimum(clearance, own) - JOIN_TOLERANCE, kk)
+            good = free.copy()
+            good[free] = segments_clear_of(self.walls, starts[free], targets[free], need[free])
+            good = good.reshape(m, kk)
+            clear = np.asarray(good.any(axis=1))
+            use = np.where(clear[:, None], good, use)
+        first = np.argmax(use, axis=1)
+        found = use[np.arange(m), first]
+        return np.where(found, order[np.arange(m), first], -1), clear & found
 
     # ---------------------------------------------------------------- planning
     def plan(self, start: np.ndarray, goal: np.ndarray, *, direct: bool = True) -> np.ndarray:
@@ -400,8 +521,9 @@ class NavGraph:
             max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
             clearance: with clearance > 0 (a robot's plans), the straight start-goal line is used
-                only where it keeps this from every wall (m); a line grazing a door frame would
-                lead the robot into it. 0: any wall-free line, as humans' routes are planned.
+                only where it keeps this from every wall (m), and start and goal join the graph
+                by lines that keep it where they can (see `attach`); a line grazing a door frame
+                would lead the robot into it. 0: any wall-free line, as humans' routes are planned.
 
         Returns:
             (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
@@ -466,7 +588,7 @@ class NavGraph:
         mode = np.zeros(n, dtype=np.intp)  # 0 straight line, 1 via nodes, 2 along one edge
         ok = np.ones(n, dtype=bool)
         if len(rows):
-            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict)
+            att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict, clearance=clearance)
             m = len(rows)
             sa = _take(att, slice(0, m))
             ga = _take(att, slice(m, 2 * m))

@@ -12,7 +12,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.maps import MapError
+from socialzoo.nav.maps import POSE_CLEARANCE, MapError, segment_clearance
 from socialzoo.nav.roadmap import GRID_STEPS, Box, FreeSpace, RoadmapConfig, free_space
 
 
@@ -52,7 +52,10 @@ def generate_legal_poses(
     """Legal start/goal poses spread over the interior, facing along the free space.
 
     Candidates are clearance-ridge cells (corridor centre lines, room centres) with at least
-    config.pose_clearance, one per half-metre block, that see a graph node. Poses are picked by
+    config.pose_clearance, one per half-metre block, that see a graph node along a line keeping
+    config.join_clearance from walls (the robot can drive from the pose to the graph and back).
+    A building with fewer than two such places (tight spaces: rooms and corridors narrower than
+    1.2 m) gets candidates down to config.free_clearance plus one grid cell. Poses are picked by
     farthest-point sampling in walking distance (to the nearest visible node, along the graph,
     then out again), scaled by clearance up to config.good_clearance: dead ends and rooms come
     first. Each pose faces the direction with the most free space around it.
@@ -79,26 +82,14 @@ def generate_legal_poses(
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     rng = np.random.default_rng(seed)
 
-    cells = np.argwhere(space.interior & (space.clearance >= config.pose_clearance) & _ridge(space.clearance))
-    block = max(1, round(0.5 / space.resolution))
-    block_id = (cells[:, 0] // block) * (space.shape[1] // block + 1) + cells[:, 1] // block
-    value = space.clearance[cells[:, 0], cells[:, 1]]
-    order = np.lexsort((-value, block_id))
-    first = order[np.r_[True, block_id[order][1:] != block_id[order][:-1]]]
-    cells = cells[first]
-    cells = cells[rng.permutation(len(cells))]
-    points = space.centres(cells)
-    value = space.clearance[cells[:, 0], cells[:, 1]]
-
-    # Attach each candidate to its nearest visible node among the eight nearest.
-    k = min(8, len(nodes))
-    near = np.argsort(((points[:, None, :] - nodes[None, :, :]) ** 2).sum(-1), axis=1, kind="stable")[:, :k]
-    seen = ~index.crosses(np.repeat(points[:, None, :], k, axis=1), nodes[near])
-    has = seen.any(axis=1)
-    points, value, near, seen = points[has], value[has], near[has], seen[has]
-    attach = near[np.arange(len(points)), np.argmax(seen, axis=1)]
+    ridge = _ridge(space.clearance)
+    tight = max(POSE_CLEARANCE, config.free_clearance + space.resolution)
+    for clearance in dict.fromkeys((config.pose_clearance, min(tight, config.pose_clearance))):
+        points, value, attach = _candidates(space, ridge, clearance, nodes, index, config, rng)
+        if len(points) >= 2:
+            break
     if len(points) < 2:
-        raise MapError(f"found {len(points)} places for legal poses with {config.pose_clearance} m clearance")
+        raise MapError(_no_place_message(space, nodes, clearance, config, len(points)))
     hop = np.hypot(*(points - nodes[attach]).T)
     graph_dist = _graph_distances(nodes, edges)
 
@@ -125,6 +116,66 @@ def generate_legal_poses(
         nearest = np.minimum(nearest, walking(best))
     pos = points[chosen]
     return np.concatenate((pos, _open_heading(index, pos)[:, None]), axis=1)
+
+
+def _candidates(
+    space: FreeSpace,
+    ridge: np.ndarray,
+    clearance: float,
+    nodes: np.ndarray,
+    index: WallIndex,
+    config: RoadmapConfig,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(points (K, 2), clearance (K,), attach node (K,)) of the pose candidates with `clearance`:
+    the roomiest ridge cell of each half-metre block, in a seeded order, that joins one of its
+    eight nearest nodes by a straight line keeping config.join_clearance from walls (the
+    nearest such node is its attach node)."""
+    cells = np.argwhere(space.interior & (space.clearance >= clearance) & ridge)
+    if len(cells) == 0:
+        return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    block = max(1, round(0.5 / space.resolution))
+    block_id = (cells[:, 0] // block) * (space.shape[1] // block + 1) + cells[:, 1] // block
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+    order = np.lexsort((-value, block_id))
+    first = order[np.r_[True, block_id[order][1:] != block_id[order][:-1]]]
+    cells = cells[first]
+    cells = cells[rng.permutation(len(cells))]
+    points = space.centres(cells)
+    value = space.clearance[cells[:, 0], cells[:, 1]]
+    k = min(8, len(nodes))
+    near = np.argsort(((points[:, None, :] - nodes[None, :, :]) ** 2).sum(-1), axis=1, kind="stable")[:, :k]
+    starts = np.repeat(points[:, None, :], k, axis=1).reshape(-1, 2)
+    ends = nodes[near].reshape(-1, 2)
+    seen = ~index.crosses(starts, ends)
+    if config.join_clearance > 0 and seen.any():
+        seen[seen] = segment_clearance(index, starts[seen], ends[seen])[0] >= config.join_clearance
+    seen = seen.reshape(len(points), k)
+    has = seen.any(axis=1)
+    points, value, near, seen = points[has], value[has], near[has], seen[has]
+    return points, value, near[np.arange(len(points)), np.argmax(seen, axis=1)]
+
+
+def _no_place_message(
+    space: FreeSpace, nodes: np.ndarray, clearance: float, config: RoadmapConfig, found: int
+) -> str:
+    """Why no legal poses can be placed, naming the part of the plan: the free space the graph
+    lies in, its extent and area, and what a pose needs there."""
+    cells = np.argwhere(space.interior)
+    if len(cells) == 0:
+        return f"found {found} places for legal poses: the free space is empty"
+    lo, hi = space.centres(cells.min(axis=0)[None])[0], space.centres(cells.max(axis=0)[None])[0]
+    area = len(cells) * space.resolution**2
+    widest = float(space.clearance[space.interior].max())
+    need = f"no point {clearance:.2f} m from every wall"
+    if config.join_clearance > 0:
+        need += f" that joins a graph node by a line {config.join_clearance:.2f} m from walls"
+    return (
+        f"found {found} places for legal poses with {clearance:.2f} m clearance: the free space the robot "
+        f"can drive ({area:.1f} m^2 between ({lo[0]:.1f}, {lo[1]:.1f}) and ({hi[0]:.1f}, {hi[1]:.1f}), "
+        f"at most {widest:.2f} m from a wall, {len(nodes)} graph nodes) has {need}: its rooms and "
+        f"passages are narrower than the {2 * clearance:.2f} m a pose needs"
+    )
 
 
 def _open_heading(index: WallIndex, points: np.ndarray, max_range: float = 8.0) -> np.ndarray:

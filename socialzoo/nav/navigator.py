@@ -149,7 +149,11 @@ class Sight:
     Attributes:
         field: the distance field (its `shape_args` and `codes`).
         clearance: wanted distance from the line to walls, m (the local planner's wall distance).
-        tolerance: slack for the field's lookup error, m.
+        tolerance: how much closer than that a sight line may pass, m. 0 by default: the local
+            planner drives only arcs that keep its wall distance (less an escape slack only for a
+            robot already inside it), so a carrot "in sight" along a line closer than that drew
+            the robot across a door jamb it could not pass, and it wedged beside a 0.8 m door
+            turning to and fro (0.02, the field's lookup error, until env v2).
         step: spacing of the carrot candidates along the path, m.
         spacing: spacing of the field samples along a sight line, m.
         min_ahead: the carrot is never pulled back closer than this along the path to the
@@ -159,7 +163,7 @@ class Sight:
 
     field: DistanceField
     clearance: float
-    tolerance: float = 0.02
+    tolerance: float = 0.0
     step: float = 0.1
     spacing: float = 0.05
     min_ahead: float = 0.5
@@ -199,6 +203,21 @@ def track(
     Returns:
         (carrot (..., 2) world frame m, distance (...,) m).
     """
+    out, dist, _ = _track_where(pos, paths, lengths, radius, max_skip, tolerance, sight)
+    return out, dist
+
+
+def _track_where(
+    pos: np.ndarray,
+    paths: np.ndarray,
+    lengths: np.ndarray,
+    radius: float = CARROT_RADIUS,
+    max_skip: int | None = None,
+    tolerance: float = 0.0,
+    sight: Sight | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`track`, plus the route length left (..., ) m: from the robot to its closest path point,
+    then along the path to its end."""
     shape = np.shape(pos)[:-1]
     pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
     lengths = np.asarray(lengths)
@@ -220,7 +239,27 @@ def track(
             pos, paths, where, out, sight.clearance, sight.tolerance, sight.step, sight.spacing,
             sight.min_ahead, f.shape_args, f.codes,
         )  # fmt: skip
-    return out.reshape(*shape, 2), dist.reshape(shape)
+    left = np.empty(len(pos))
+    _route_left(pos, paths, lengths, where, left)
+    return out.reshape(*shape, 2), dist.reshape(shape), left.reshape(shape)
+
+
+@kernel
+def _route_left(pos, paths, lengths, where, out):  # type: ignore[no-untyped-def]
+    """Route length left of each row (M,): robot to its closest path point (where[:, :2]), then
+    along the rest of the path, m."""
+    for m in range(pos.shape[0]):
+        seg, t = int(where[m, 0]), where[m, 1]
+        ax, ay = paths[m, seg, 0], paths[m, seg, 1]
+        bx, by = paths[m, seg + 1, 0], paths[m, seg + 1, 1]
+        cx, cy = ax + t * (bx - ax), ay + t * (by - ay)
+        total = math.sqrt((pos[m, 0] - cx) ** 2 + (pos[m, 1] - cy) ** 2)
+        total += (1.0 - t) * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
+        for s in range(seg + 1, lengths[m] - 1):
+            total += math.sqrt(
+                (paths[m, s + 1, 0] - paths[m, s, 0]) ** 2 + (paths[m, s + 1, 1] - paths[m, s, 1]) ** 2
+            )
+        out[m] = total
 
 
 @kernel
@@ -354,8 +393,88 @@ def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist, whe
         dist[m] = best
 
 
+def backoff_commands(
+    pose: np.ndarray,
+    field: DistanceField,
+    need: float,
+    cfg: RecoveryConfig,
+    human_pos: np.ndarray,
+    human_mask: np.ndarray,
+) -> np.ndarray:
+    """(N, 2) commands (v, omega) of backing-off robots: straight backwards at cfg.backoff_speed
+    where the line behind the robot (as long as the back-off drives) keeps min(need, the robot's
+    own wall distance) from walls and cfg.human_gap from every present human; else standing.
+
+    Args:
+        pose: (N, 3) robot poses x, y (m), theta (rad), world frame.
+        field: the map's wall distance field.
+        need: the wall distance wanted, m (the local planner's wall distance).
+        cfg: the recovery settings.
+        human_pos: (N, H, 2) human positions, world frame, m.
+        human_mask: (N, H) present humans.
+    """
+    n = len(pose)
+    out = np.zeros((n, 2))
+    if n == 0 or cfg.backoff_speed <= 0.0:
+        return out
+    reach = cfg.backoff_speed * cfg.backoff_time
+    dist = np.arange(1, max(1, math.ceil(reach / 0.05)) + 1) * min(0.05, reach)  # (M,)
+    back = -np.stack((np.cos(pose[:, 2]), np.sin(pose[:, 2])), axis=-1)  # (N, 2)
+    points = pose[:, None, :2] + dist[None, :, None] * back[:, None, :]  # (N, M, 2)
+    here = field.lookup(pose[:, :2])
+    clear = (field.lookup(points) >= np.minimum(need, here)[:, None] - 1e-3).all(axis=1)
+    if human_pos.shape[1]:
+        gap = np.sqrt(((points[:, :, None, :] - human_pos[:, None, :, :]) ** 2).sum(-1))  # (N, M, H)
+        clear &= ~((gap < cfg.human_gap) & human_mask[:, None, :]).any(axis=(1, 2))
+    out[:, 0] = np.where(clear, -cfg.backoff_speed, 0.0)
+    return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class RecoveryConfig:
+    """How a robot that makes no progress recovers (see `Navigator`).
+
+    Attributes:
+        after: a robot driving its plan (GoAlone, not halted) that goes this long without
+            progress recovers, s. Progress: its route length left (`Navigator.route_left`)
+            coming `progress` below its least value since the episode's start or its last
+            recovery.
+        progress: m.
+        backoff_time: the robot backs off for this long, s.
+        backoff_speed: straight backwards at this speed, m/s, where the line behind it keeps
+            its wall distance and no human is within `human_gap` of it; else it stands.
+        human_gap: m.
+        crowd_radius: when a human is this close as the robot starts to recover, people block
+            it, not the building: it replans as usual; otherwise it replans avoiding the graph
+            edge where it stopped (at most `max_avoided` edges per episode, then none), m.
+        max_avoided: edges a robot avoids at most in one episode.
+    """
+
+    after: float = 3.0
+    progress: float = 0.25
+    backoff_time: float = 1.0
+    backoff_speed: float = 0.3
+    human_gap: float = 0.6
+    crowd_radius: float = 1.5
+    max_avoided: int = 4
+
+    def __post_init__(self) -> None:
+        for name in ("after", "progress", "backoff_time", "crowd_radius", "human_gap"):
+            check_number("RecoveryConfig", name, getattr(self, name), low=0, low_open=True)
+        check_number("RecoveryConfig", "backoff_speed", self.backoff_speed, low=0)
+        check_int("RecoveryConfig", "max_avoided", self.max_avoided, low=0)
+
+
 class Navigator:
     """Global plans of a batch of robots, replanned when a robot strays from its plan.
+
+    Recovery: a robot that drives its plan (the caller says which robots do, `update`'s
+    `moving`) without progress for `recovery.after` seconds backs off for
+    `recovery.backoff_time` (the caller drives it: `backoff_commands` while `backing_off`), then
+    replans; unless people stood around it, over another edge (the edge where it stopped is
+    avoided for the rest of the episode: `socialzoo.nav.graph.NavGraph.plan_avoiding`). A robot
+    wedged beside a door, in a crack of the plan, or pressed against a person gets out; the
+    episode metric `stuck` counts the time it lost.
 
     Args:
         graph: plans paths (a socialzoo.nav.graph.NavGraph).
@@ -370,6 +489,8 @@ class Navigator:
             goal from all 650 ordered pairs of GDC1's legal poses; the plain carrot cuts through
             the wall between two doors of a U-turn and oscillates on paths that double back.
         tolerance: as `max_skip`.
+        sight: keeps the carrot in sight (see `Sight`); None: the plain carrot.
+        recovery: the recovery behaviour; None: none.
     """
 
     def __init__(
@@ -383,6 +504,7 @@ class Navigator:
         max_skip: int | None = 0,
         tolerance: float = 0.3,
         sight: Sight | None = None,
+        recovery: RecoveryConfig | None = None,
     ) -> None:
         check_number("Navigator", "carrot_radius", carrot_radius, low=0, low_open=True)
         check_number("Navigator", "replan_distance", replan_distance, low=0, low_open=True)
@@ -397,6 +519,19 @@ class Navigator:
         self.plan_clearance = 0.0 if sight is None else sight.clearance
         self.plans = GlobalPlans.empty(batch_size, num_robots)
         self.goals = np.zeros((batch_size, num_robots, 2))
+        # (B, R) route length left after the latest update, m (see `update`).
+        self.route_left = np.zeros((batch_size, num_robots))
+        self.recovery = recovery
+        b, r = batch_size, num_robots
+        # Recovery state, per robot: least route left since the last recovery (m), time without
+        # progress (s), back-off time left (s), recoveries this episode, avoided edges (-1: none).
+        self.best_left = np.full((b, r), np.inf)
+        self.idle = np.zeros((b, r))
+        self.backoff_left = np.zeros((b, r))
+        self.recoveries = np.zeros((b, r), dtype=np.int64)
+        # (B, R) robots given a new route by a recovery in the latest update.
+        self.rerouted = np.zeros((b, r), dtype=bool)
+        self.avoid = np.full((b, r, max(1, recovery.max_avoided if recovery else 1)), -1, dtype=np.int64)
 
     @property
     def batch_size(self) -> int:
@@ -427,6 +562,11 @@ class Navigator:
         starts = np.asarray(starts, dtype=np.float64).reshape(num * r, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(num * r, 2)
         self.goals[rows] = goals.reshape(num, r, 2)
+        self.best_left[rows] = np.inf
+        self.idle[rows] = 0.0
+        self.backoff_left[rows] = 0.0
+        self.recoveries[rows] = 0
+        self.avoid[rows] = -1
         if num == 0:
             return
         paths, lengths = self._plan(starts, goals)
@@ -438,30 +578,149 @@ class Navigator:
             return self.graph.plan_batch(starts, goals, clearance=self.plan_clearance)
         return self.graph.plan_batch(starts, goals)
 
-    def update(self, robot_pos: np.ndarray) -> np.ndarray:
-        """Replan robots that strayed, then return every robot's carrot.
+    @property
+    def backing_off(self) -> np.ndarray:
+        """(B, R) bool: robots backing off (their commands: `backoff_commands`)."""
+        return self.backoff_left > 0.0
+
+    def update(
+        self,
+        robot_pos: np.ndarray,
+        moving: np.ndarray | None = None,
+        dt: float = 0.0,
+        human_pos: np.ndarray | None = None,
+        human_mask: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Replan robots that strayed, recover robots that make no progress, return every carrot.
+
+        Also sets `route_left` (B, R): each robot's distance to its plan plus the plan's length
+        from the closest point on to the goal, m (what the episode metrics count progress on).
 
         Args:
             robot_pos: (B, R, 2) robot positions, world frame, m.
+            moving: (B, R) bool, robots that drove their plan this step (GoAlone, not halted);
+                None: no recovery bookkeeping this call (a reset).
+            dt: the step, s.
+            human_pos: (B, H, 2) human positions, world frame, m (who blocks a recovering robot).
+            human_mask: (B, H) present humans.
 
         Returns:
             (B, R, 2) carrot, world frame, m.
         """
+        self.rerouted = np.zeros(self.plans.lengths.shape, dtype=bool)
+        if moving is not None and self.recovery is not None:
+            self._recover(robot_pos, np.asarray(moving, dtype=bool), dt, human_pos, human_mask)
         plans = self.plans
         options = (self.carrot_radius, self.max_skip, self.tolerance)
-        target, dist = track(robot_pos, plans.paths, plans.lengths, *options, self.sight)
+        target, dist, left = _track_where(robot_pos, plans.paths, plans.lengths, *options, self.sight)
         stray = dist > self.replan_distance
         if stray.any():
             rows, robots = np.nonzero(stray)
             pos = robot_pos[rows, robots]
             try:
                 paths, lengths = self._plan(pos, self.goals[rows, robots])
+                paths, lengths = self._keep_avoiding(rows, robots, pos, paths, lengths)
             except ValueError as err:  # NoPathError: keep the old plans, try again next step
                 logger.debug("replanning %d robots failed: %s", len(rows), err)
             else:
                 plans.assign((rows, robots), paths, lengths)
-                new = track(
+                new, _, new_left = _track_where(
                     pos, plans.paths[rows, robots], plans.lengths[rows, robots], *options, self.sight
-                )[0]
+                )
                 target[rows, robots] = new
+                left[rows, robots] = new_left
+        self.route_left = left
         return target
+
+    def _recover(
+        self,
+        robot_pos: np.ndarray,
+        moving: np.ndarray,
+        dt: float,
+        human_pos: np.ndarray | None,
+        human_mask: np.ndarray | None,
+    ) -> None:
+        """Progress bookkeeping on the route left of the last update; start and end back-offs."""
+        cfg = self.recovery
+        assert cfg is not None
+        left = self.route_left
+        progress = left <= self.best_left - cfg.progress
+        self.best_left = np.where(progress | ~np.isfinite(self.best_left), left, self.best_left)
+        self.idle = np.where(progress, 0.0, self.idle + np.where(moving, dt, 0.0))
+        was = self.backoff_left > 0.0
+        self.backoff_left = np.maximum(self.backoff_left - dt, 0.0)
+        ended = was & (self.backoff_left <= 0.0)
+        start = moving & ~was & (self.idle >= cfg.after - 1e-9)
+        if start.any():
+            rows, robots = np.nonzero(start)
+            self.backoff_left[rows, robots] = cfg.backoff_time
+            self.recoveries[rows, robots] += 1
+            crowd: np.ndarray = np.zeros(len(rows), dtype=bool)
+            if human_pos is not None and human_mask is not None and human_pos.shape[1]:
+                gap = np.hypot(*(human_pos[rows] - robot_pos[rows, robots][:, None, :]).transpose(2, 0, 1))
+                crowd = np.asarray((np.where(human_mask[rows], gap, np.inf) < cfg.crowd_radius).any(axis=1))
+            for row, robot in zip(rows[~crowd].tolist(), robots[~crowd].tolist(), strict=True):
+                self._avoid_edge_at(row, robot, robot_pos[row, robot])
+        if ended.any():
+            rows, robots = np.nonzero(ended)
+            self._replan_avoiding(rows, robots, robot_pos[rows, robots])
+            self.rerouted[rows, robots] = True
+        # A recovery starts the count afresh: a detour is longer than the route it replaces.
+        reset = start | ended
+        self.idle[reset] = 0.0
+        self.best_left[reset] = np.inf
+
+    def _avoid_edge_at(self, row: int, robot: int, pos: np.ndarray) -> None:
+        """Add the graph edge nearest to pos (within 1 m) to the robot's avoided edges."""
+        graph = self.graph
+        nodes, edges = getattr(graph, "nodes", None), getattr(graph, "edges", None)
+        slots = np.flatnonzero(self.avoid[row, robot] < 0)
+        if nodes is None or edges is None or len(edges) == 0 or len(slots) == 0:
+            return
+        a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
+        ab = b - a
+        t = np.clip(((pos - a) * ab).sum(-1) / np.maximum((ab**2).sum(-1), 1e-12), 0.0, 1.0)
+        gap = np.hypot(*(a + t[:, None] * ab - pos).T)
+        gap[self.avoid[row, robot][self.avoid[row, robot] >= 0]] = np.inf
+        edge = int(np.argmin(gap))
+        if gap[edge] <= 1.0:
+            self.avoid[row, robot, slots[0]] = edge
+
+    def _replan_avoiding(self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray) -> None:
+        """New plans for robots whose back-off ended (avoiding their avoided edges, if any)."""
+        try:
+            paths, lengths = self._plan(pos, self.goals[rows, robots])
+        except ValueError as err:  # NoPathError: keep the old plans
+            logger.debug("replanning %d recovering robots failed: %s", len(rows), err)
+            return
+        paths, lengths = self._keep_avoiding(rows, robots, pos, paths, lengths)
+        self.plans.assign((rows, robots), paths, lengths)
+
+    def _keep_avoiding(
+        self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Plans (paths (M, L, 2), lengths (M,)) with those of robots that avoid edges replaced by
+        plans around them (where the graph has one; else the avoided edges are forgotten)."""
+        avoiding = np.flatnonzero((self.avoid[rows, robots] >= 0).any(axis=1))
+        plan_avoiding = getattr(self.graph, "plan_avoiding", None)
+        if len(avoiding) == 0 or plan_avoiding is None:
+            return paths, lengths
+        found: dict[int, np.ndarray] = {}
+        for k in avoiding.tolist():
+            row, robot = int(rows[k]), int(robots[k])
+            path = plan_avoiding(
+                pos[k], self.goals[row, robot], self.avoid[row, robot], clearance=self.plan_clearance
+            )
+            if path is None:
+                self.avoid[row, robot] = -1  # no way round: take the usual route again
+            else:
+                found[k] = path
+        if not found:
+            return paths, lengths
+        width = max(paths.shape[1], *(len(p) for p in found.values()))
+        paths = _pad_paths(paths, width).copy()
+        lengths = np.array(lengths, copy=True)
+        for k, path in found.items():
+            paths[k] = _pad_paths(path[None], width)[0]
+            lengths[k] = len(path)
+        return paths, lengths

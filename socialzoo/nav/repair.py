@@ -13,10 +13,15 @@ and records every change in a RepairReport, which importers store in the map's p
   largest kept;
 - a legal pose too close to a wall moves to the nearest cell with the pose clearance, a pose that
   cannot reach the graph is dropped, and with fewer than two left the poses are generated afresh.
+With a given graph the free space is where that graph lies (`_graph_free_space`): the enclosed
+area holding most of its nodes, with wider openings of the outline closed where needed.
+What only driving shows (a pose the robot cannot reach, a gap too narrow) is repaired afterwards
+by socialzoo.bench.map_repair.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 from dataclasses import dataclass, field
@@ -55,6 +60,9 @@ logger = logging.getLogger(__name__)
 MAX_MOVE = 1.5
 # A rerouted edge's walking path may be at most this many times the edge's length (plus 2 m).
 MAX_DETOUR = 2.0
+# Closing radii tried, in order, when most of a given graph's nodes lie outside every enclosed
+# area found with config.closing_radius (an outline drawn with wide gaps), m.
+CLOSING_RADII = (2.0, 2.5, 3.0, 4.0, 5.0)
 
 
 @dataclass(frozen=True)
@@ -62,9 +70,11 @@ class Repair:
     """One change made to imported data.
 
     Attributes:
-        kind: what was done: "graph_generated", "edges_built", "node_moved", "node_dropped",
-            "edge_rerouted", "edge_dropped", "component_joined", "component_dropped",
-            "pose_moved", "pose_dropped", "poses_generated".
+        kind: what was done: "outline_closed", "graph_generated", "edges_built",
+            "node_moved", "node_dropped", "edge_rerouted", "edge_dropped", "component_joined",
+            "component_dropped", "pose_moved", "pose_dropped", "poses_generated" (and, after
+            the drive check, socialzoo.bench.map_repair's "pose_moved", "pose_dropped",
+            "edge_dropped").
         message: the change in words, naming the source entry (e.g. "graph.nodes[5]").
     """
 
@@ -175,6 +185,7 @@ class _Walker:
         self.id_cells = np.argwhere(space.interior)
         self.clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
         self.keep_clearance = config.keep_clearance
+        self.floor = config.free_clearance
         self.max_edge = config.max_edge_length
 
     def vertex(self, points: np.ndarray) -> np.ndarray:
@@ -206,6 +217,7 @@ class _Walker:
             self.max_edge,
             self.space.clearance[cells[:, 0], cells[:, 1]],
             self.keep_clearance,
+            floor=self.floor,
         )
         return path[corners]
 
@@ -371,7 +383,11 @@ def repair_map(
     report = RepairReport()
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     index = WallIndex(walls)
-    space = free_space(walls, region, seed_point, config, index)
+    if nodes is not None and len(nodes) and seed_point is None:
+        given = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
+        space = _graph_free_space(walls, given, region, config, index, report)
+    else:
+        space = free_space(walls, region, seed_point, config, index)
     if nodes is None or len(nodes) == 0:
         roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
         nodes, edges = roadmap.nodes, roadmap.edges
@@ -425,6 +441,50 @@ def repair_map(
     )
     validate_map(m)
     return m, report
+
+
+def _graph_free_space(
+    walls: np.ndarray,
+    nodes: np.ndarray,
+    region: Box | None,
+    config: RoadmapConfig,
+    index: WallIndex,
+    report: RepairReport,
+) -> FreeSpace:
+    """The free space people walk in by the source's own graph: the enclosed area holding most of
+    its nodes (not merely the largest one). Where most nodes lie outside every enclosed area
+    (an outline drawn with gaps wider than 2 x closing_radius), wider openings are closed, one
+    CLOSING_RADII step at a time, until at least half of them lie inside."""
+    space = free_space(walls, region, None, config, index, anchors=nodes)
+    # Nodes on the grid in passable space (nodes on walls are moved later and do not count).
+    cells = space.cell_of(nodes)
+    on_grid = space.contains(nodes) | (
+        (space.clearance[cells[:, 0], cells[:, 1]] >= config.free_clearance)
+        & (nodes >= space.origin).all(axis=1)
+        & (nodes < space.origin + np.array(space.shape) * space.resolution).all(axis=1)
+    )
+    wanted = int(on_grid.sum())
+    best, held = space, int(space.contains(nodes).sum())
+    if wanted == 0 or 2 * held >= wanted:
+        return space
+    for radius in CLOSING_RADII:
+        if radius <= config.closing_radius:
+            continue
+        wider = free_space(
+            walls, region, None, dataclasses.replace(config, closing_radius=radius), index, nodes
+        )
+        count = int(wider.contains(nodes).sum())
+        if count > held:
+            best, held = wider, count
+            report.add(
+                "outline_closed",
+                f"{wanted - int(space.contains(nodes).sum())} of the navigation graph's {wanted} nodes lie "
+                f"outside every enclosed area: openings in the building's outline up to {2 * radius:g} m "
+                f"wide count as closed, so that {count} lie inside",
+            )
+            if 2 * held >= wanted:
+                break
+    return best
 
 
 def _join_and_prune(

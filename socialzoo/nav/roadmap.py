@@ -64,7 +64,12 @@ class RoadmapConfig:
         detour_tolerance: an edge i-j is dropped when some node k gives a path i-k-j at most this
             many times longer.
         num_poses: legal poses wanted.
-        pose_clearance: least clearance of a generated legal pose.
+        pose_clearance: least clearance of a generated legal pose (a building with fewer than
+            two such places gets poses down to free_clearance + resolution: tight spaces).
+        join_clearance: a generated legal pose joins a graph node by a straight line at least
+            this far from every wall, m: the robot can drive it (its wall distance 0.37 m and
+            the field's lookup error); 0 accepts any wall-free line, as the shipped maps were
+            built (a line through a crack between two wall segments left goals unreachable).
         pose_separation: generated poses keep at least this walking distance from each other.
         good_clearance: poses are preferred up to this clearance (room centres over corners).
     """
@@ -83,17 +88,19 @@ class RoadmapConfig:
     detour_tolerance: float = 1.15
     num_poses: int = 25
     pose_clearance: float = 0.6
+    join_clearance: float = 0.39
     pose_separation: float = 2.0
     good_clearance: float = 1.0
 
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("margin", "pose_separation", "keep_clearance"))
+        check_fields(self, nonnegative=("margin", "pose_separation", "keep_clearance", "join_clearance"))
         if self.min_spacing > self.max_spacing:
             raise ValueError(
                 f"RoadmapConfig.min_spacing {self.min_spacing} exceeds max_spacing {self.max_spacing}"
             )
         check_number("RoadmapConfig", "edge_clearance", self.edge_clearance, high=0.5)
         check_number("RoadmapConfig", "keep_clearance", self.keep_clearance, low=0, high=0.5)
+        check_number("RoadmapConfig", "join_clearance", self.join_clearance, low=0, high=0.5)
         check_number("RoadmapConfig", "detour_tolerance", self.detour_tolerance, low=1)
         check_int("RoadmapConfig", "num_poses", self.num_poses, low=2)
         if self.node_clearance < NODE_CLEARANCE or self.pose_clearance < POSE_CLEARANCE:
@@ -242,12 +249,14 @@ def free_space(
     seed_point: tuple[float, float] | np.ndarray | None = None,
     config: RoadmapConfig | None = None,
     index: WallIndex | None = None,
+    anchors: np.ndarray | None = None,
 ) -> FreeSpace:
     """Rasterise a map's free space and find the area to be mapped.
 
     The outside is what a flood fill from the grid border reaches through gaps wider than twice
     config.closing_radius; the interior is the passable cells (clearance >= free_clearance) that
-    are not outside and are connected to the seed point (to the largest such area without one).
+    are not outside and are connected to the seed point (without one: to the area holding the
+    most anchors, or the largest area when no anchor lies in any).
     A seed point outside every closed outline is allowed: its connected free space is used.
 
     Args:
@@ -257,6 +266,8 @@ def free_space(
         seed_point: optional (x, y) in the area to be mapped, m.
         config: grid and clearance settings.
         index: the walls' WallIndex, if already built.
+        anchors: optional (K, 2) points that should lie in the area to be mapped, m (a given
+            navigation graph's nodes: the area people walk in).
 
     Raises:
         ValueError: a seed point outside the grid or too close to a wall, or no free space at all.
@@ -306,8 +317,24 @@ def free_space(
             raise ValueError(f"no free space with {config.free_clearance} m clearance in {(x0, y0, x1, y1)}")
         sizes = np.bincount(labels.ravel(), minlength=count + 1)
         sizes[0] = 0
-        interior = labels == int(np.argmax(sizes))
+        pick = int(np.argmax(sizes))
+        if anchors is not None and len(anchors):
+            held = np.bincount(labels[_anchor_cells(anchors, origin, res, shape)], minlength=count + 1)
+            held[0] = 0
+            if held.max() > 0:
+                # Most anchors first, the larger area among equals.
+                pick = int(np.lexsort((sizes, held))[-1])
+        interior = labels == pick
     return FreeSpace(origin=origin, resolution=res, clearance=clearance, interior=interior)
+
+
+def _anchor_cells(
+    points: np.ndarray, origin: np.ndarray, res: float, shape: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Grid cells (i, j) of the points that fall on the grid."""
+    ij = np.floor((np.asarray(points, dtype=np.float64).reshape(-1, 2) - origin) / res).astype(np.int64)
+    ij = ij[((ij >= 0) & (ij < np.array(shape))).all(axis=1)]
+    return ij[:, 0], ij[:, 1]
 
 
 # ----------------------------------------------------------------------------- nodes and edges
@@ -460,6 +487,7 @@ def pull_string(
     path_clearance: np.ndarray | None = None,
     keep_clearance: float = 0.0,
     slack: float = 0.05,
+    floor: float = 0.0,
 ) -> list[int]:
     """Indices of the path points (L, 2) kept when straight clear shortcuts replace the rest.
 
@@ -467,7 +495,10 @@ def pull_string(
     distance of each path point) and keep_clearance > 0, it also keeps min(keep_clearance, the
     least path_clearance of the points it replaces) - slack: it never passes much closer to a wall
     than the walking path did, so a straightened path still goes through the middle of a doorway
-    and keeps off the corners it turns round.
+    and keeps off the corners it turns round. And it keeps min(floor, that least path_clearance)
+    without any slack: through a door barely wider than the robot needs (0.8 m for its 0.39 m),
+    the path keeps to the door's centre line, where the robot can follow it, rather than the
+    slack's 5 cm off it, where it cannot.
     """
     keep = [0]
     i = 0
@@ -479,6 +510,7 @@ def pull_string(
         if path_clearance is not None and keep_clearance > 0 and len(ahead):
             least = np.minimum.accumulate(np.minimum(path_clearance[ahead], path_clearance[i]))
             need = np.maximum(need, np.minimum(least, keep_clearance) - slack)
+            need = np.maximum(need, np.minimum(least, floor) - 1e-9)
         ok = segment_clearance(index, np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])[0] >= need
         ok &= ~index.crosses(np.broadcast_to(path[i], (len(ahead), 2)), path[ahead])
         # Next cell at least (grid steps are clear of walls even where the clearance check is not).
@@ -545,6 +577,7 @@ def connect_components(
             config.max_edge_length,
             space.clearance[cells_walked[:, 0], cells_walked[:, 1]],
             config.keep_clearance,
+            floor=config.free_clearance,
         )
         chain = [start]
         for k in corners[1:-1]:

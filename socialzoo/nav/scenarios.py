@@ -119,6 +119,8 @@ class Scenario:
         human_routes: n arrays (L_i, 2), route waypoints from the human's start to its goal.
         human_speed: (n,) preferred walking speed, m/s.
         family: "benchmark" for the SPEC generator, else the scenario family's name.
+        human_group: (n,) the walking group of each human (the index of its first member), -1
+            for none (socialzoo.nav.groups); default none. Saved only when someone walks in a group.
     """
 
     map_name: str
@@ -131,6 +133,7 @@ class Scenario:
     human_routes: tuple[np.ndarray, ...]
     human_speed: np.ndarray
     family: str = "benchmark"
+    human_group: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
@@ -159,6 +162,11 @@ class Scenario:
                 raise ValueError(f"Scenario.human_routes[{i}] is empty")
         object.__setattr__(self, "human_routes", routes)
         object.__setattr__(self, "seed", int(self.seed))
+        group = np.full(n, -1) if self.human_group is None else self.human_group
+        group = _frozen_array(group, np.int64, (n,), "human_group")
+        if np.any((group < -1) | (group >= n)) or np.any((group >= 0) & (group > np.arange(n))):
+            raise ValueError("Scenario.human_group must hold -1 or the index of a group's first member")
+        object.__setattr__(self, "human_group", group)
 
     @property
     def robot_start(self) -> np.ndarray:
@@ -192,6 +200,7 @@ class Scenario:
                 "human_start_index",
                 "human_goal_index",
                 "human_speed",
+                "human_group",
             )
         )
         return (
@@ -217,6 +226,7 @@ class Scenario:
             "human_goal_index": self.human_goal_index.tolist(),
             "human_routes": [r.tolist() for r in self.human_routes],
             "human_speed": self.human_speed.tolist(),
+            **({"human_group": self.human_group.tolist()} if np.any(self.human_group >= 0) else {}),
         }
 
     @classmethod
@@ -251,6 +261,7 @@ class Scenario:
                     np.array(r, dtype=np.float64).reshape(-1, 2) for r in data["human_routes"]
                 ),
                 human_speed=data["human_speed"],
+                human_group=data.get("human_group"),  # type: ignore[arg-type]
             )
         except KeyError as err:
             raise ScenarioError(f"{where}: scenario JSON lacks key {err.args[0]!r}") from None
@@ -590,4 +601,13 @@ def scenarios_to_state(
         human_direction=np.ones((b, h), dtype=np.int64),
         step_count=np.zeros(b, dtype=np.int64),
         noise_key=np.array([noise_key(s.seed) for s in scenarios], dtype=np.uint64),
+        human_group=_groups_of(scenarios, mask),
     )
+
+
+def _groups_of(scenarios: Sequence[Scenario], mask: np.ndarray) -> np.ndarray:
+    """(B, H) walking group of each human slot (Scenario.human_group), -1 for none."""
+    group = np.full(mask.shape, -1, dtype=np.int64)
+    if mask.any():
+        group[mask] = np.concatenate([s.human_group for s in scenarios])
+    return group

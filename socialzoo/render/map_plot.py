@@ -67,12 +67,27 @@ def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_pose
     return path
 
 
-def save_map_check_png(m: Map, check: Any, path: str | Path) -> Path:
+# Marker colour of each drive-check failure cause (socialzoo.bench.drive_check.DRIVE_CAUSES).
+DRIVE_COLOURS = {
+    "wall_collision": "black",
+    "goal_unreachable": "tab:red",
+    "start_unleavable": "tab:pink",
+    "blocked_doorway": "tab:purple",
+    "oscillation": "tab:olive",
+    "stuck": "tab:brown",
+    "timeout": "tab:gray",
+}
+
+
+def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) -> Path:
     """Draw a map with what `socialzoo.nav.map_check.check_map` found, to a PNG; returns the path.
 
     Graph edges closer to a wall than the robot's wall distance are red, the others blue; legal
     poses with no feasible route to any other pose are red, the others orange; the title sums up
-    the clearance and route statistics.
+    the clearance and route statistics. With `drive` (a socialzoo.bench.drive_check.DriveReport),
+    every route the robot could not complete is marked where it stopped (x, coloured by cause)
+    and at the place its cause names (a ring: the narrow gap, the goal's join), with a legend of
+    the causes, and the poses of failed routes are ringed in red.
     """
     import matplotlib
 
@@ -100,6 +115,19 @@ def save_map_check_png(m: Map, check: Any, path: str | Path) -> Path:
         colour = np.where(stranded, "tab:red", "tab:orange")
         ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color=colour, scale=40, width=0.003)
         ax.scatter(p[:, 0], p[:, 1], c=colour, s=12, zorder=3)
+    if drive is not None and len(drive.failures) and len(p):
+        for cause in DRIVE_COLOURS:
+            fails = [r for r in drive.failures if r.cause == cause]
+            if not fails:
+                continue
+            stop = np.array([r.stop for r in fails])
+            where = np.array([r.where for r in fails])
+            ax.plot(stop[:, 0], stop[:, 1], "x", color=DRIVE_COLOURS[cause], ms=8, mew=2,
+                    label=f"{cause.replace('_', ' ')} ({len(fails)})", zorder=4)  # fmt: skip
+            ax.plot(where[:, 0], where[:, 1], "o", mfc="none", color=DRIVE_COLOURS[cause], ms=12, zorder=4)
+        involved = sorted({k for r in drive.failures for k in (r.start, r.goal) if k < len(p)})
+        ax.scatter(p[involved, 0], p[involved, 1], s=80, facecolors="none", edgecolors="tab:red", zorder=4)
+        ax.legend(loc="best", fontsize=8, title="routes not completed: where they stopped")
     ax.autoscale()
     ax.set_aspect("equal")
     title = f"{m.name}: {'valid' if check.valid else 'INVALID'}, {check.num_components} component(s), "
@@ -110,6 +138,9 @@ def save_map_check_png(m: Map, check: Any, path: str | Path) -> Path:
             f"\n{r.num_feasible}/{r.num_pairs} feasible pose pairs (<= {r.max_route_length:g} m), "
             f"routes {r.shortest:.0f}-{r.longest:.0f} m, {len(r.stranded)} stranded poses (red)"
         )
+    if drive is not None:
+        done = len(drive.routes) - len(drive.failures)
+        title += f"\ndriven alone: {done}/{len(drive.routes)} routes completed"
     ax.set_title(title, fontsize=10)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

@@ -7,8 +7,9 @@ trainers (socialzoo.train), the RL curves (socialzoo.studies.rl_curves), the LfD
 - `paper`: the paper's numbers (SPEC section 10), one place.
 - `plan`: the parts and the full and quick settings (a frozen dataclass) with their hash.
 - `ledger`: where a run's items live (DIR/<hash>/), and the wall time of each part.
-- `backend`: independent trainings run here one after another, or as Ray tasks.
-- `parts`: the runner of each part.
+- `backend`: independent trainings run side by side, in local processes or as Ray tasks.
+- `parts`: the runner of each part (every seed of every learned policy).
+- `seeds`: which checkpoint each RL run kept (chosen on validation) and the aggregates over seeds.
 - `results`: the small result files every table and figure is drawn from.
-- `report`: tables, figures and REPRODUCTION.md from those files.
+- `report`, `seed_report`: tables, figures and REPRODUCTION.md from those files.
 """

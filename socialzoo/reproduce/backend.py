@@ -1,8 +1,11 @@
-"""Independent tasks (trainings) run here one after another, or as Ray tasks side by side.
+"""Independent tasks (trainings) run side by side: in `workers` local processes, or as Ray tasks.
 
-Evaluations have their own Ray path (socialzoo.bench.runner.evaluate with backend="ray"); this
-module spreads the trainings. A Ray already initialised (a cluster, or `ray.init(num_cpus=2)` in a
-test) is used as it is; otherwise a local Ray with `workers` CPUs is started and shut down after.
+Evaluations have their own paths (socialzoo.bench.runner.evaluate); this module spreads the
+trainings, every seed of every learner. Each training uses one CPU thread (the trainers'
+`threads`), so on the local backend `workers` processes train `workers` policies at once (spawned,
+not forked: the parent may hold torch's threads). A Ray already initialised (a cluster, or
+`ray.init(num_cpus=2)` in a test) is used as it is; otherwise a local Ray with `workers` CPUs is
+started and shut down after.
 """
 
 from __future__ import annotations
@@ -27,15 +30,19 @@ def check_backend(backend: str) -> str:
 def run_tasks(
     function: Callable[[Any], Any], inputs: Sequence[Any], *, backend: str = "local", workers: int = 2
 ) -> list[Any]:
-    """[function(x) for x in inputs], locally in order or as Ray tasks (one CPU each).
+    """[function(x) for x in inputs]: on "local", in this process (1 worker or 1 input) or in
+    `workers` spawned processes; on "ray", as Ray tasks (one CPU each).
 
+    `function` must be importable by name (a module-level function) and the inputs picklable.
     Each task stores its own result as it finishes (a training run folder), so when one fails or
     the run is interrupted, the finished ones are kept; the first error is raised after the others
     ended.
     """
     check_backend(backend)
-    if backend == "local" or len(inputs) <= 1:
+    if len(inputs) <= 1 or (backend == "local" and workers <= 1):
         return [function(x) for x in inputs]
+    if backend == "local":
+        return _run_local(function, inputs, workers)
     import ray
 
     started = False
@@ -55,3 +62,22 @@ def run_tasks(
     finally:
         if started:
             ray.shutdown()
+
+
+def _run_local(function: Callable[[Any], Any], inputs: Sequence[Any], workers: int) -> list[Any]:
+    """The inputs in min(workers, len(inputs)) spawned processes, results in input order."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, wait
+
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(inputs)), mp_context=context)
+    try:
+        futures = [pool.submit(function, x) for x in inputs]
+        wait(futures)
+        return [f.result() for f in futures]
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()  # Ctrl-C: end the trainings now, not when they finish
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -4,7 +4,9 @@
   time to goal, per policy on the training and transfer maps (socialzoo.bench.figures);
 - rl_curves.{png,pdf}: success, time and reward of every checkpoint with 90% bands
   (socialzoo.studies.rl_curves.plot_curves);
-- lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks.
+- lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks;
+- profiles.{png,pdf}: with several training seeds, performance profiles per map
+  (socialzoo.studies.seeds.plot_profiles).
 """
 
 from __future__ import annotations
@@ -78,4 +80,10 @@ def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, l
         drawn["rl_curves"] = plot_curves(points, out, refs, FORMATS)
     if results.get("lfd"):
         drawn["lfd"] = plot_lfd(results["lfd"], out)
+    if results.get("profiles"):
+        from socialzoo.studies.seeds import plot_profiles
+
+        profiles = plot_profiles(results["profiles"], out, FORMATS)
+        if profiles:
+            drawn["profiles"] = profiles
     return drawn

@@ -35,7 +35,18 @@ class Settings:
 
     Attributes:
         name: "full" (the paper's protocol) or "quick" (a small version of everything).
-        seed: the seed of every training run.
+        seed: the first training seed; run k of every learned policy has seed `seed + k`.
+        seeds: training seeds of every learned policy (PPO, DQN, BC and GAIL at every LfD size,
+            PIPS): each seed is its own run folder, its own policy file and its own trials.
+        select_trials: validation scenarios (the training map's "<map>-val", never a test set) on
+            which PPO and DQN checkpoints are evaluated while they train; the kept policy of a
+            run (the one of `performance` and `transfer`) is its best validation checkpoint.
+            0: the final policy is kept.
+        select_every: evaluate a checkpoint every this many training steps (a multiple of
+            rl_checkpoint_every; the last checkpoint is evaluated too).
+        seed_trials: scenarios of each test set on which seeds after the first are evaluated in
+            `performance` and `transfer` (the first ones; None: all of them). The aggregates
+            over seeds use the scenarios every seed ran.
         rl_total_steps: PPO and DQN training steps.
         rl_checkpoint_every: steps between their checkpoints.
         rl_overrides: per trainer ("ppo", "dqn"), extra trainer arguments.
@@ -55,6 +66,10 @@ class Settings:
 
     name: str = "full"
     seed: int = 0
+    seeds: int = 1
+    select_trials: int = 100
+    select_every: int = 12_000
+    seed_trials: int | None = None
     rl_total_steps: int = 84_000
     rl_checkpoint_every: int = 2_000
     rl_overrides: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
@@ -69,15 +84,21 @@ class Settings:
     transfer_trials: int = 2_000
     eval_env_overrides: Mapping[str, Any] = field(default_factory=dict)
     workers: int = 2
-    batch_size: int = 64
+    # 256 rows: a step costs about a third less per row than at 64 (benchmarks/reproduce_profile.py).
+    batch_size: int = 256
 
     def __post_init__(self) -> None:
         if self.name not in ("full", "quick"):
             raise ValueError(f"Settings.name must be 'full' or 'quick', got {self.name!r}")
         check_int("Settings", "seed", self.seed, low=0)
+        check_int("Settings", "select_trials", self.select_trials, low=0)
+        if self.seed_trials is not None:
+            check_int("Settings", "seed_trials", self.seed_trials, low=1)
         for name in (
             "rl_total_steps",
             "rl_checkpoint_every",
+            "seeds",
+            "select_every",
             "curve_trials",
             "demo_episodes",
             "pips_steps",
@@ -88,6 +109,11 @@ class Settings:
             "batch_size",
         ):
             check_int("Settings", name, getattr(self, name), low=1)
+        if self.select_every % self.rl_checkpoint_every:
+            raise ValueError(
+                f"Settings.select_every ({self.select_every}) must be a multiple of "
+                f"rl_checkpoint_every ({self.rl_checkpoint_every})"
+            )
         object.__setattr__(self, "lfd_sizes", tuple(self.lfd_sizes))
         if not self.lfd_sizes:
             raise ValueError("Settings.lfd_sizes is empty")
@@ -101,6 +127,11 @@ class Settings:
             object.__setattr__(self, name, _frozen(value))
         object.__setattr__(self, "demo_env_overrides", MappingProxyType(dict(self.demo_env_overrides)))
         object.__setattr__(self, "eval_env_overrides", MappingProxyType(dict(self.eval_env_overrides)))
+
+    @property
+    def seed_list(self) -> tuple[int, ...]:
+        """The training seeds, in order: seed, seed + 1, ..., seed + seeds - 1."""
+        return tuple(range(self.seed, self.seed + self.seeds))
 
     @property
     def lfd_largest(self) -> int:
@@ -156,9 +187,18 @@ def quick_settings(**changes: Any) -> Settings:
         "name": "quick",
         "rl_total_steps": 400,
         "rl_checkpoint_every": 200,
+        "select_trials": 2,
+        "select_every": 200,
         "rl_overrides": {
-            "ppo": {"num_envs": 4, "n_steps": 50, "n_epochs": 1, "max_steps": 400},
-            "dqn": {"max_steps": 400, "learning_starts": 50},
+            # Validation episodes (select_trials) as short as the training ones.
+            "ppo": {
+                "num_envs": 4,
+                "n_steps": 50,
+                "n_epochs": 1,
+                "max_steps": 400,
+                "env_overrides": {"max_steps": 400},
+            },
+            "dqn": {"max_steps": 400, "learning_starts": 50, "env_overrides": {"max_steps": 400}},
         },
         "curve_trials": 2,
         "demo_episodes": 2,

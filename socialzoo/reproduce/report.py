@@ -16,6 +16,7 @@ from socialzoo.reproduce.figures import draw_figures
 from socialzoo.reproduce.paper import PAPER_PROTOCOL, SPEC_REFERENCE
 from socialzoo.reproduce.plan import PARTS
 from socialzoo.reproduce.results import RESULTS_DIR, load
+from socialzoo.reproduce.seed_report import seed_note, seeds_section, selection_section
 from socialzoo.reproduce.tables import build_tables, write_tables
 
 REPORT_NAME = "REPRODUCTION.md"
@@ -80,6 +81,27 @@ def _settings_section(run: Mapping[str, Any]) -> list[str]:
         lines.append(f"| {key.replace('_', ' ')} | {text} | {paper:,} |")
     sizes = ", ".join(f"{n:,}" for n in s["lfd_sizes"])
     lines.append(f"| LfD sizes (BC, GAIL) | {sizes} | 155,400, 116,600, 77,700, 38,800, 3,500 |")
+    return lines + _seed_settings(s)
+
+
+def _seed_settings(s: Mapping[str, Any]) -> list[str]:
+    """Rows of the settings table for training seeds and checkpoint choice (results that have them)."""
+    if "seeds" not in s:
+        return []
+    seeds = ", ".join(str(s["seed"] + k) for k in range(s["seeds"]))
+    choice = (
+        f"best of the checkpoints every {s['select_every']:,} steps on {s['select_trials']:,} validation "
+        "scenarios"
+        if s.get("select_trials")
+        else "the final policy"
+    )
+    trials = "all" if s.get("seed_trials") is None else f"the first {s['seed_trials']:,}"
+    lines = [
+        f"| training seeds | {s['seeds']} ({seeds}) | 1 |",
+        f"| kept PPO/DQN policy | {choice} | final |",
+    ]
+    if s["seeds"] > 1:
+        lines.append(f"| test scenarios of seeds after the first | {trials} | |")
     return lines
 
 
@@ -112,7 +134,9 @@ def _figure(name: str, prefix: str, caption: str, figures: set[str]) -> list[str
     return [f"![{caption}]({link}.png)", "", f"*{caption}* ([PDF]({link}.pdf))"]
 
 
-def _differences(tables: Mapping[str, tuple[list[dict[str, Any]], str]]) -> list[str]:
+def _differences(
+    tables: Mapping[str, tuple[list[dict[str, Any]], str]], seeds: list[dict[str, Any]] | None = None
+) -> list[str]:
     lines = []
     for name, what in (
         ("performance", "performance (gdc1)"),
@@ -124,10 +148,17 @@ def _differences(tables: Mapping[str, tuple[list[dict[str, Any]], str]]) -> list
             if not r["differs"]:
                 continue
             size = f" ({r['demonstration_steps']:,} steps)" if "demonstration_steps" in r else ""
+            why = EXPLANATIONS.get(str(r["policy"]), "")
+            note = seed_note(seeds or [], name, str(r["policy"])) if name != "lfd" else None
+            if note:  # the seed spread measured, instead of "one seed"
+                why = why.replace(", one seed: the outcome varies a lot with the seed", "").replace(
+                    ", one seed", ""
+                )
+                why = f"{why} {note}"
             lines.append(
                 f"- {what}, {policy_label(str(r['policy']))}{size}: ours {r['success_pct']:.1f}% "
                 f"[{r['success_ci_low_pct']:.1f}, {r['success_ci_high_pct']:.1f}], paper "
-                f"{r['paper_success_pct']:.1f}%. {EXPLANATIONS.get(str(r['policy']), '')}"
+                f"{r['paper_success_pct']:.1f}%. {why}"
             )
     if not lines:
         lines.append("- No paper number lies outside our 90% interval in the tables that have run.")
@@ -149,6 +180,7 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
         figures |= {"success", "metrics"} if results.get("performance") or results.get("transfer") else set()
         figures |= {"rl_curves"} if results.get("rl_curves") else set()
         figures |= {"lfd"} if results.get("lfd") else set()
+        figures |= {"profiles"} if results.get("profiles") else set()
     machine = run["machine"]
     quick = run["settings"]["name"] == "quick"
     lines = [
@@ -195,13 +227,26 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     lines += ["", "## Table: LfD data efficiency", ""]
     lines += [tables["lfd"][1] if "lfd" in tables else "*Not run yet.*", ""]
     lines += _figure("lfd", prefix, "LfD success against demonstration steps (crosses: the paper)", figures)
-    differences = [QUICK_NOTE] if quick else _differences(tables)
-    lines += ["", "## Where we differ", "", *differences, ""]
+    lines += [""] + selection_section(results.get("selection", []))
+    profiles = (
+        _figure("profiles", prefix, "Performance profiles: share of seeds above each success rate", figures)
+        if results.get("profiles")
+        else []
+    )
+    lines += seeds_section(results, profiles)
+    seeds = results.get("seeds", [])
+    differences = [QUICK_NOTE] if quick else _differences(tables, seeds)
+    lines += ["## Where we differ", "", *differences, ""]
+    runs = (
+        "The paper's RL curves and LfD numbers come from one training run each, as ours do."
+        if not seeds
+        else "The paper's RL curves and LfD numbers come from one training run each; ours from "
+        f"{max(int(r['seeds']) for r in seeds)} seeds (every seed's curve is drawn)."
+    )
     lines += [
         "Beyond these, socialzoo follows the paper where the reference code did not (SPEC section 11): "
         "Euclidean goal distance, every policy trained on the same documented reward, learned "
-        "policies evaluated with their saved normalisation. The paper's RL curves and LfD numbers "
-        "come from one training run each, as ours do.",
+        f"policies evaluated with their saved normalisation. {runs}",
         "",
     ]
     training = results.get("training", [])

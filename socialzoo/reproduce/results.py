@@ -8,6 +8,9 @@ number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
     lfd.csv           the LfD table rows (ours and the paper's)
     performance.csv   the seven policies on gdc1-test (socialzoo.bench.tables summary columns)
     transfer.csv      the same on ghc3-test
+    selection.csv     the checkpoint each RL run kept, chosen on validation scenarios
+    seeds.csv, improvement.csv, profiles.csv    with several training seeds: the aggregates over
+                      them (socialzoo.reproduce.seeds)
 
 `collect` copies them out of the work folder DIR/<hash>/ (where the stores and runs are); `load`
 reads them back with numbers as floats, so the report never needs the big stores.
@@ -29,6 +32,7 @@ from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
 from socialzoo.reproduce.parts import DEMOS_FILE
+from socialzoo.reproduce.seeds import SEEDS_DIR
 
 RESULTS_DIR = "results"
 RUN_FILE = "run.json"
@@ -38,9 +42,29 @@ CSV_FILES: dict[str, str] = {
     "lfd": "lfd.csv",
     "performance": "performance.csv",
     "transfer": "transfer.csv",
+    "selection": "selection.csv",
+    "seeds": "seeds.csv",
+    "improvement": "improvement.csv",
+    "profiles": "profiles.csv",
 }
 # Columns that hold text; every other CSV cell is read as a number (empty: NaN).
-TEXT_COLUMNS = frozenset({"label", "policy", "map", "test_set", "policy_file"})
+TEXT_COLUMNS = frozenset(
+    {
+        "label",
+        "policy",
+        "map",
+        "test_set",
+        "policy_file",
+        "experiment",
+        "run",
+        "x",
+        "y",
+        "seed_list",
+        "seed_success_pct",
+        "paper_where",
+        "paper_in_interval",
+    }
+)
 
 
 # Entries of run.json the report reads.
@@ -52,9 +76,10 @@ class ResultsError(ValueError):
     cut short; the message names the file."""
 
 
-def command_for(settings_name: str) -> str:
-    """The command that makes a reproduction of these settings."""
-    return "socialzoo reproduce --out DIR" + (" --quick" if settings_name == "quick" else "")
+def command_for(settings_name: str, seeds: int = 1) -> str:
+    """The command that makes a reproduction of these settings (`seeds` training seeds)."""
+    command = "socialzoo reproduce --out DIR" + (" --quick" if settings_name == "quick" else "")
+    return command + (f" --seeds {seeds}" if seeds > 1 else "")
 
 
 def _write_json(path: Path, data: Any) -> None:
@@ -134,7 +159,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
         {
             "settings": ledger.settings.to_json(),
             "settings_hash": ledger.hash,
-            "command": command_for(ledger.settings.name),
+            "command": command_for(ledger.settings.name, ledger.settings.seeds),
             "machine": machine(),
             "parts_last_run": list(parts),
             "demo_steps": _demo_steps(ledger),
@@ -148,6 +173,10 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
         "lfd": ledger.path("lfd", "eval", "lfd.csv"),
         "performance": ledger.path("performance", "summary.csv"),
         "transfer": ledger.path("transfer", "summary.csv"),
+        **{
+            key: ledger.path(SEEDS_DIR, CSV_FILES[key])
+            for key in ("selection", "seeds", "improvement", "profiles")
+        },
     }
     for key, source in sources.items():
         target = results / CSV_FILES[key]

@@ -14,6 +14,11 @@ Modules, imported where used (`from socialzoo.studies.lfd import run_lfd_evaluat
 - `human_compare`: a learned human population against the social-force one (`socialzoo
   compare-humans`); `human_select`: the checkpoint of a humans run chosen on validation
   scenarios (`socialzoo select-humans`).
+- `human_report`: how each crowd model walks (`socialzoo humans report`); `crowd_matrix`: every
+  robot policy among every crowd model (`socialzoo benchmark --humans A,B,...`).
+- `seeds`: training seeds as an axis: each seed's success per policy and setting aggregated over
+  the seeds (mean and IQM with stratified bootstrap intervals, probability of improvement,
+  performance profiles; socialzoo.bench.aggregates).
 
 A new study is one module here (a frozen config dataclass, a function that runs it resumably into
 a folder, and its table or figure writers); a study's training half may sit beside it as

@@ -38,6 +38,8 @@ CURVE_TRIALS = 100
 # Our own validation scenarios on gdc1 (base seed apart from every test set's): for choices.
 VALIDATION_SET = validation_set("gdc1")
 _CHECKPOINT = re.compile(r"step_(\d+)\.safetensors$")
+# The label of a run of another seed than the first: "<learner>-s<seed>" (socialzoo.reproduce).
+_SEED_SUFFIX = re.compile(r"-s\d+$")
 # Curves: (summary key, axis label, scale).
 CURVE_PANELS: tuple[tuple[str, str, float], ...] = (
     ("success", "success, %", 100.0),
@@ -220,21 +222,27 @@ def plot_curves(
     plt = _pyplot()
     fig, axes = plt.subplots(1, len(CURVE_PANELS), figsize=(4.2 * len(CURVE_PANELS), 3.4))
     labels = list(dict.fromkeys(r["label"] for r in rows))
+    bases = list(dict.fromkeys(_SEED_SUFFIX.sub("", label) for label in labels))
     colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
     for ax, (key, axis_label, scale) in zip(axes, CURVE_PANELS, strict=True):
         mean_key = "success_rate" if key == "success" else f"{key}_mean"
         low_key, high_key = (
             ("success_ci_low", "success_ci_high") if key == "success" else (f"{key}_ci_low", f"{key}_ci_high")
         )
-        for i, label in enumerate(labels):
+        for label in labels:
             points = [r for r in rows if r["label"] == label]
             x = [r["step"] / 1000 for r in points]
             y = [scale * r[mean_key] for r in points]
             low = [scale * r[low_key] if math.isfinite(r[low_key]) else math.nan for r in points]
             high = [scale * r[high_key] if math.isfinite(r[high_key]) else math.nan for r in points]
-            color = colors[i % len(colors)]
-            ax.plot(x, y, color=color, label=policy_label(label))
-            ax.fill_between(x, low, high, color=color, alpha=0.25, linewidth=0)
+            # Runs of one learner with several seeds ("ppo", "ppo-s1", ...) share its colour.
+            base = _SEED_SUFFIX.sub("", label)
+            color = colors[bases.index(base) % len(colors)]
+            seeds = sum(_SEED_SUFFIX.sub("", other) == base for other in labels)
+            first = label == next(o for o in labels if _SEED_SUFFIX.sub("", o) == base)
+            name = policy_label(base) + (f" ({seeds} seeds)" if seeds > 1 else "")
+            ax.plot(x, y, color=color, label=name if first else None, linewidth=1.5 if seeds == 1 else 1.0)
+            ax.fill_between(x, low, high, color=color, alpha=0.25 / seeds, linewidth=0)
         for j, ref in enumerate(references):
             if math.isfinite(ref[mean_key]):
                 ax.axhline(

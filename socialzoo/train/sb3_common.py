@@ -68,6 +68,8 @@ class SB3Args:
         normalize_reward: normalise rewards with VecNormalize during training (SB3's PPO default).
         eval_trials: evaluate every checkpoint on this many validation scenarios of the training
             map (never a test set; evaluations.csv, TensorBoard eval/*); 0: none.
+        eval_every: evaluate only the checkpoints at multiples of this many env steps, and the
+            last one (a multiple of checkpoint_every); 0: every checkpoint.
         threads: torch CPU threads.
         progress: show progress.
     """
@@ -90,6 +92,7 @@ class SB3Args:
     normalize: bool = True
     normalize_reward: bool = True
     eval_trials: int = 0
+    eval_every: int = 0
     threads: int = 1
     progress: bool = True
 
@@ -103,6 +106,12 @@ class SB3Args:
             check_int(owner, name, getattr(self, name), low=1)
         check_int(owner, "seed", self.seed, low=0)
         check_int(owner, "eval_trials", self.eval_trials, low=0)
+        check_int(owner, "eval_every", self.eval_every, low=0)
+        if self.eval_every % self.checkpoint_every:
+            raise ValueError(
+                f"{owner}.eval_every ({self.eval_every}) must be a multiple of checkpoint_every "
+                f"({self.checkpoint_every})"
+            )
         check_number(owner, "learning_rate", self.learning_rate, low=0.0, high=1.0)
         check_number(owner, "gamma", self.gamma, low=0.0, high=1.0)
         check_number(owner, "max_grad_norm", self.max_grad_norm, low=0.0, high=1e6)

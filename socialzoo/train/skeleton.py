@@ -30,7 +30,8 @@ through the `TrainingRun` it is given:
 - the seed: torch's global generator seeded from args.seed for the run only (the caller's state is
   given back), torch CPU threads from args.threads (restored after);
 - checkpoints on a fixed schedule (`schedule`), each one evaluated by the run's evaluator when it
-  has one (`evaluations.csv`, TensorBoard `eval/*`, the best one named in run.json);
+  has one (`evaluations.csv`, TensorBoard `eval/*`, the best one named in run.json); with
+  args.eval_every > 0 only the checkpoints at multiples of it and the last one are evaluated;
 - TensorBoard (`tensorboard/`, opened on first use) and a progress display that suits a terminal
   or a log (socialzoo.bench.progress);
 - wall time, the checkpoint list and the policy file in run.json when the run finishes.
@@ -158,6 +159,7 @@ class TrainingRun:
         self.evaluator = evaluator
         self.evaluations: list[dict[str, Any]] = []
         self.checkpoint_files: list[Path] = []
+        self._last_step: int | None = None
         self._started = time.perf_counter()
         self._writer: Any = None
         self._closing = contextlib.ExitStack()
@@ -197,7 +199,16 @@ class TrainingRun:
 
     def schedule(self, total: int, every: int) -> CheckpointSchedule:
         """The run's checkpoint steps (CheckpointSchedule)."""
+        self._last_step = total
         return CheckpointSchedule(total, every)
+
+    def evaluation_due(self, step: int) -> bool:
+        """True when the checkpoint at `step` is to be evaluated: the run has an evaluator, and
+        args.eval_every is 0 (every checkpoint), divides `step`, or `step` is the last one."""
+        if self.evaluator is None:
+            return False
+        every = int(getattr(self.args, "eval_every", 0) or 0)
+        return every <= 0 or step % every == 0 or step == self._last_step
 
     def checkpoint_path(self, step: int, suffix: str = ".safetensors") -> Path:
         """checkpoints/step_<step><suffix> (folder created)."""
@@ -209,7 +220,7 @@ class TrainingRun:
         path = self.checkpoint_path(step, suffix)
         save(path)
         self.checkpoint_files.append(path)
-        if self.evaluator is not None:
+        if self.evaluation_due(step):
             self._evaluate(step, path)
         return path
 

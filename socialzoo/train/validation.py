@@ -4,6 +4,7 @@ map's validation set (socialzoo.nav.scenarios.validation_set, "<map>-val": never
 Run in this process, one batched world of `trials` rows, so a checkpoint costs one episode's wall
 time; the skeleton (socialzoo.train.skeleton) calls it after each checkpoint when a trainer's
 `eval_trials` is above 0, and the run keeps the metrics in evaluations.csv and TensorBoard.
+`kept_policy` is the policy such a run keeps: its best validation checkpoint.
 """
 
 from __future__ import annotations
@@ -71,3 +72,28 @@ def validation_evaluator(
         return out
 
     return evaluate
+
+
+def kept_policy(policy: str | Path) -> Path:
+    """The policy a training run keeps: its best validation checkpoint when the run evaluated its
+    checkpoints (run.json's results.best_checkpoint: the highest validation success, the earliest
+    among equals; chosen on validation scenarios, never on a test set), else `policy`, the run's
+    final policy file.
+
+    Args:
+        policy: the final policy file a trainer returned (its folder holds the run's run.json).
+
+    Raises:
+        socialzoo.train.run_dir.RunDirError: an unreadable run record.
+    """
+    from socialzoo.train.run_dir import RUN_FILE, read_record
+
+    policy = Path(policy)
+    record = read_record(policy.parent / RUN_FILE)
+    best = (record or {}).get("results", {}).get("best_checkpoint") if record else None
+    if not isinstance(best, dict) or not isinstance(best.get("file"), str):
+        return policy
+    chosen = policy.parent / best["file"]
+    if not chosen.is_file():
+        raise FileNotFoundError(f"{policy.parent / RUN_FILE}: its best checkpoint {chosen} is missing")
+    return chosen

@@ -158,7 +158,7 @@ def test_observation_only_policies_act_on_their_rows_with_the_same_results(test_
     spec = make_spec([*specs, "goalone"], [test_set], batch_size=5, env_overrides={"max_steps": MAX_STEPS})
     trials = [Trial(p, "rooms-test", k) for p in [*specs, "goalone"] for k in range(3)]
     seen = []
-    runner = BatchedRunner(spec)
+    runner = BatchedRunner(spec, stack_policies=False)
     original = MlpPolicy.act
 
     def recording(self, obs, core=None):
@@ -176,3 +176,5 @@ def test_observation_only_policies_act_on_their_rows_with_the_same_results(test_
         for t in trials
     ]
     assert as_rows(mixed) == as_rows(alone)
+    # Stacked (socialzoo.bench.policy_stack: both files share a network shape): the same results.
+    assert as_rows(BatchedRunner(spec).run(trials)) == as_rows(alone)

@@ -162,5 +162,27 @@ def test_figures_are_written(tmp_path):
         rows_for("goalone", "gdc1", 9, 10) + rows_for("ref", "gdc1", 7, 10) + rows_for("ref", "ghc3", 6, 10)
     )
     files = plot_summary(summary, tmp_path)
-    assert sorted(p.name for p in files) == ["metrics.pdf", "metrics.png", "success.pdf", "success.png"]
+    assert sorted(p.name for p in files) == [
+        "failures.pdf", "failures.png", "metrics.pdf", "metrics.png", "success.pdf", "success.png",
+    ]  # fmt: skip
     assert all(p.stat().st_size > 1000 for p in files)
+
+
+def test_failures_by_cause_in_the_summary_and_markdown():
+    rows = [{**r, "stuck": False} for r in rows_for("goalone", "gdc1", 6, 10)]
+    # Failed episodes 6..9: a wall (with a human contact too: the wall comes first), a human
+    # collision, one stuck, one timeout while moving; a stuck episode that succeeded counts as one.
+    rows[6].update(wall_collisions=1, human_collisions=2)
+    rows[7].update(human_collisions=3, stuck=True)
+    rows[8].update(stuck=True)
+    rows[0].update(stuck=True)
+    summary = summarize(rows)
+    e = summary[0]
+    shares = {c: e[f"failure_{c}_rate"] for c in ("wall_collision", "human_collision", "stuck", "timeout")}
+    assert shares == {"wall_collision": 0.1, "human_collision": 0.1, "stuck": 0.1, "timeout": 0.1}
+    assert e["failure_stuck_ci_low"] < 0.1 < e["failure_stuck_ci_high"]
+    assert e["stuck_mean"] == pytest.approx(0.3)  # the stuck metric over every episode
+    assert {f"failure_{c}_rate" for c in shares} <= set(csv_columns())
+    text = summary_markdown(summary)
+    assert "## Failures by cause (% of episodes)" in text
+    assert "| GoAlone | gdc1 | 60.0 | 10.0 | 10.0 | 10.0 | 10.0 |" in text

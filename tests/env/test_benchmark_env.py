@@ -94,7 +94,7 @@ def test_vector_rows_equal_single_envs():
 
 def test_vector_env_autoresets_and_reports_metrics():
     vec = gym.make_vec(
-        "socialzoo/ActionSelection-v1",
+        "socialzoo/ActionSelection-v2",
         num_envs=3,
         vectorization_mode="vector_entry_point",
         max_steps=30,
@@ -205,7 +205,7 @@ def nearest_visible_distance(core, leave_out=-1):
 
 
 def test_pass_is_charged_for_the_human_it_passes():
-    env = gym.make("socialzoo/ActionSelection-v1", **OVERTAKING)
+    env = gym.make("socialzoo/ActionSelection-v2", **OVERTAKING)
     env.reset(seed=0)
     core = env.unwrapped.core
     for _ in range(300):
@@ -226,7 +226,7 @@ def test_pass_is_charged_for_the_human_it_passes():
 
 
 def test_follow_still_skips_its_target():
-    env = gym.make("socialzoo/ActionSelection-v1", **OVERTAKING)
+    env = gym.make("socialzoo/ActionSelection-v2", **OVERTAKING)
     env.reset(seed=0)
     core = env.unwrapped.core
     checked = 0
@@ -250,9 +250,9 @@ def test_follow_still_skips_its_target():
 
 def test_old_env_versions_are_refused_naming_the_new_one():
     for old, new in [
-        ("socialzoo/ActionSelection-v0", "socialzoo/ActionSelection-v1"),
-        ("socialzoo/ActionSelectionTransfer-v0", "socialzoo/ActionSelectionTransfer-v1"),
-        ("socialzoo/HallwayHeadOn-v0", "socialzoo/HallwayHeadOn-v1"),
+        ("socialzoo/ActionSelection-v1", "socialzoo/ActionSelection-v2"),
+        ("socialzoo/ActionSelectionTransfer-v1", "socialzoo/ActionSelectionTransfer-v2"),
+        ("socialzoo/HallwayHeadOn-v1", "socialzoo/HallwayHeadOn-v2"),
     ]:
         assert new in gym.registry and old not in gym.registry
         with pytest.warns(DeprecationWarning), pytest.raises(gym.error.DeprecatedEnv, match=new):

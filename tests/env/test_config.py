@@ -38,7 +38,7 @@ def test_renamed_fields_are_refused_naming_the_new_name(old):
     with pytest.raises(ValueError, match=message):
         EnvConfig.resolve(None, {old: 1})
     with pytest.raises(ValueError, match=message):
-        gym.make("socialzoo/ActionSelection-v1", map="open_room", **{old: 1})
+        gym.make("socialzoo/ActionSelection-v2", map="open_room", **{old: 1})
     with pytest.raises(ValueError, match=message):
         parallel_env(map="open_room", **{old: 1})
 

@@ -104,7 +104,7 @@ def test_summary_types_and_summaries():
     assert same(both, [m.summary(0), m.summary(1)])
     assert same(m.summaries([1]), [m.summary(1)])
     for key, value in both[0].items():
-        if key in ("success", "reached"):
+        if key in ("success", "reached", "stuck"):
             assert type(value) is bool
         elif key in ("steps", "human_collisions", "human_contacts", "wall_collisions"):
             assert type(value) is int
@@ -168,3 +168,54 @@ def test_bad_arguments():
     with pytest.raises(ValueError, match=r"MetricsConfig\.personal_space"):
         MetricsConfig(personal_space=-1.0)
     assert MetricsConfig().intrusion_distance == pytest.approx(0.65)
+
+
+def _stuck_run(route_left, halted, dt=1.0, config=None):
+    """One row stepped with the given route lengths left (m) and halt flags; its summary."""
+    m = EpisodeMetrics(1, config)
+    m.reset(None, np.zeros((1, 3)), np.array([[20.0, 0.0]]))
+    for t, (left, halt) in enumerate(zip(route_left, halted, strict=True)):
+        m.update(
+            robot_pose=np.zeros((1, 3)), robot_vel=np.zeros((1, 2)), reward=np.zeros(1), force=np.zeros(1),
+            blame=np.zeros(1), human_collisions=np.zeros(1, dtype=int), wall_collision=np.zeros(1, dtype=bool),
+            min_human_distance=np.full(1, math.inf), reached=np.zeros(1, dtype=bool),
+            done=np.array([t == len(route_left) - 1]), dt=dt, route_left=np.array([left]), halted=np.array([halt]),
+        )  # fmt: skip
+    return m.summary(0)
+
+
+def test_stuck_is_no_progress_for_ten_seconds_while_not_halting():
+    # Progress for 5 s, then 10 s without (the route left stays at 15 m): stuck.
+    left = [19.0, 18.0, 17.0, 16.0, 15.0] + [15.0] * 10
+    s = _stuck_run(left, [False] * len(left))
+    assert s["stuck"] is True and s["max_time_without_progress"] == 10.0
+    # 9 s without progress is not stuck; halted steps pause the clock (the policy waits).
+    assert _stuck_run(left[:-1], [False] * (len(left) - 1))["stuck"] is False
+    waiting = _stuck_run(left, [False] * 5 + [True] * 5 + [False] * 5)
+    assert waiting["stuck"] is False and waiting["max_time_without_progress"] == 5.0
+    # Less than stuck_progress (0.25 m) below the least so far is no progress (rocking in place);
+    # a detour that comes back below the least in time is.
+    rocking = [15.0] + [15.1, 14.9] * 6
+    assert _stuck_run(rocking, [False] * len(rocking))["stuck"] is True
+    detour = [15.0] + [16.0 + k for k in range(5)] + [14.0]
+    assert _stuck_run(detour, [False] * len(detour))["stuck"] is False
+    # Documented settings.
+    quick = MetricsConfig(stuck_time=3.0)
+    assert _stuck_run([15.0] * 5, [False] * 5, config=quick)["stuck"] is True
+
+
+def test_failure_cause_precedence():
+    from socialzoo.env.metrics import FAILURE_CAUSES, failure_cause
+
+    base = {"success": False, "reached": False, "wall_collisions": 0, "human_collisions": 0, "stuck": False}
+    assert failure_cause({**base, "success": True, "reached": True}) == "success"
+    assert (
+        failure_cause({**base, "wall_collisions": 1, "human_collisions": 4, "stuck": True})
+        == "wall_collision"
+    )
+    assert failure_cause({**base, "human_collisions": 2, "stuck": True, "reached": True}) == "human_collision"
+    assert failure_cause({**base, "stuck": True}) == "stuck"
+    assert failure_cause(base) == "timeout"
+    # Rows stored before `stuck` existed (None or NaN from the store) count as not stuck.
+    assert failure_cause({**base, "stuck": None}) == failure_cause({**base, "stuck": math.nan}) == "timeout"
+    assert FAILURE_CAUSES == ("success", "wall_collision", "human_collision", "stuck", "timeout")

@@ -48,3 +48,28 @@ def test_parse_parts():
     assert parse_parts(["transfer"]) == ("transfer",)
     with pytest.raises(ValueError, match=r"'rl'.*demos, rl-curves, lfd, performance, transfer"):
         parse_parts("rl,lfd")
+
+
+def test_seeds_and_checkpoint_choice_settings():
+    s = full_settings(seeds=3, seed=4)
+    assert s.seed_list == (4, 5, 6) and full_settings().seed_list == (0,)
+    assert (s.select_trials, s.select_every, s.batch_size) == (100, 12_000, 256)
+    assert settings_hash(full_settings(seeds=3)) != settings_hash(full_settings())
+    assert Settings.from_json(s.to_json()) == s
+    with pytest.raises(ValueError, match="select_every"):
+        full_settings(select_every=3_000)  # not a multiple of 2,000
+    with pytest.raises(ValueError, match="seeds"):
+        full_settings(seeds=0)
+    with pytest.raises(ValueError, match="seed_trials"):
+        full_settings(seed_trials=0)
+
+
+def test_seeds_on_the_command_line(tmp_path, capsys):
+    from socialzoo.cli import main
+
+    assert main(["reproduce", "--out", str(tmp_path), "--seeds", "0"]) == 2
+    assert "--seeds" in capsys.readouterr().err and not any(tmp_path.iterdir())
+    assert main(["reproduce", "--out", str(tmp_path), "--seed-trials", "0"]) == 2
+    assert "seed_trials" in capsys.readouterr().err and not any(tmp_path.iterdir())
+    assert main(["reproduce", "--out", str(tmp_path), "--workers", "0"]) == 2
+    assert "workers" in capsys.readouterr().err and not any(tmp_path.iterdir())

@@ -101,7 +101,7 @@ def test_run_folder_from_the_command_line(tmp_path, monkeypatch):
     assert list((out / "tensorboard").glob("events.out.tfevents.*"))
     _, header = read_policy_file(out / "ppo.safetensors")
     assert header["training"]["seed"] == 3 and header["training"]["steps"] == 400
-    assert header["normalization"] is not None and header["env_id"] == "socialzoo/CircleCrossing-v1"
+    assert header["normalization"] is not None and header["env_id"] == "socialzoo/CircleCrossing-v2"
     _, first = read_policy_file(out / "checkpoints" / checkpoints[0])
     assert first["training"]["steps"] == 200
     # A finished run of the same arguments is not repeated; other arguments are refused.

@@ -172,3 +172,29 @@ def test_the_validation_evaluator_runs_a_policy_file_on_validation_scenarios():
     assert all(again[k] == v or (math.isnan(again[k]) and math.isnan(v)) for k, v in metrics.items())
     with pytest.raises(ValueError, match="trials"):
         validation_evaluator("ppo", "gdc1", 0)
+
+
+def test_eval_every_evaluates_multiples_and_the_last_and_the_kept_policy_is_the_best(tmp_path):
+    import dataclasses
+
+    from socialzoo.train.validation import kept_policy
+
+    @dataclasses.dataclass(frozen=True)
+    class EveryArgs(ToyArgs):
+        eval_every: int = 8
+
+    seen = []
+
+    def evaluator(path):
+        step = int(path.stem.split("_")[1])
+        seen.append(step)
+        return {"success": {8: 0.9, 10: 0.7}[step]}
+
+    policy = run_training(
+        TOY, EveryArgs(out=tmp_path / "run", steps=10, every=2), toy_fit([]), evaluator=evaluator
+    )
+    assert seen == [8, 10]  # 2, 4, 6 skipped; 8 a multiple; 10 the last
+    assert kept_policy(policy) == tmp_path / "run" / "checkpoints" / "step_000000008.txt"
+    # A run that evaluated nothing keeps its final policy.
+    plain = run_training(TOY, ToyArgs(out=tmp_path / "plain"), toy_fit([]))
+    assert kept_policy(plain) == plain

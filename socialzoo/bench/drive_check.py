@@ -1,0 +1,355 @@
+"""A map that checks itself by driving: GoAlone, alone (no people), over pose pairs in one batched
+world, and a report of every route it cannot complete, where it stopped and why.
+
+`drive_map` runs the benchmark's robot (the env core with GoAlone on every row, the same
+navigator, local planner and motion model as every episode) from each legal pose to each other
+one (or a seeded sample of the ordered pairs) within the benchmark's 80 s. A route that does not
+reach its goal gets a cause, judged from where the robot stopped and the plan it was following:
+
+- "wall_collision": the footprint touched a wall (the episode ended there);
+- "goal_unreachable": it stopped on the last leg of its plan, the straight join from the graph to
+  the goal pose, and that join passes closer to a wall than the robot keeps (a goal behind a gap
+  it cannot drive through);
+- "start_unleavable": likewise on the first leg, from the start pose to the graph;
+- "blocked_doorway": it stopped where the plan ahead passes closer to a wall than the robot
+  keeps (a door or gap narrower than about 0.74 m on its way);
+- "oscillation": no progress for the last `stuck_time` seconds (the episode metric `stuck`) but
+  it kept moving, back and forth;
+- "stuck": no progress and it stayed within 1 m, with no narrow gap ahead;
+- "timeout": it was still making progress when the time ran out (a route too long or slow).
+
+socialzoo.bench.map_repair turns the report into repairs of an imported map; `socialzoo map check
+MAP --drive` prints it and draws it (socialzoo.render.map_plot.save_drive_check_png).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from socialzoo.env.config import EnvConfig
+from socialzoo.nav.maps import Map
+from socialzoo.nav.scenarios import Scenario, ScenarioConfig
+from socialzoo.nav.subpolicies import GO_ALONE
+
+# The causes of a route that was not completed, in the order the report lists them.
+DRIVE_CAUSES = (
+    "wall_collision",
+    "goal_unreachable",
+    "start_unleavable",
+    "blocked_doorway",
+    "oscillation",
+    "stuck",
+    "timeout",
+)
+# How far along the plan past the stopping point a narrow gap counts as blocking it, m.
+LOOK_AHEAD = 2.0
+# Shrink the batch to its live rows once at most this share of them is live (the tail).
+_SHRINK = 0.75
+# A robot that stayed within this of its final position over the last stuck_time seconds
+# stopped; one that went farther oscillated, m.
+STILL_RADIUS = 1.0
+
+
+@dataclass(frozen=True)
+class RouteDrive:
+    """One driven route.
+
+    Attributes:
+        start, goal: legal-pose indices.
+        reached: the goal was reached within the time limit.
+        time: the episode's duration, s.
+        stop: (2,) where the robot stopped (its final position), m.
+        cause: "" for a completed route, else one of DRIVE_CAUSES.
+        where: (2,) the place the cause names (the narrowest gap, the wall touched, the
+            stopping point), m.
+        gap: the plan's least wall distance near `where`, m (nan where it does not apply).
+    """
+
+    start: int
+    goal: int
+    reached: bool
+    time: float
+    stop: np.ndarray
+    cause: str = ""
+    where: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    gap: float = math.nan
+
+    def describe(self) -> str:
+        """The route's outcome in words."""
+        head = f"pose {self.start} -> pose {self.goal}"
+        if self.reached:
+            return f"{head}: reached in {self.time:.1f} s"
+        at = f"({self.where[0]:.2f}, {self.where[1]:.2f})"
+        stop = f"stopped at ({self.stop[0]:.2f}, {self.stop[1]:.2f})"
+        gap = f"{self.gap:.2f} m from a wall" if math.isfinite(self.gap) else ""
+        why = {
+            "wall_collision": f"touched a wall at {at}",
+            "goal_unreachable": f"goal unreachable: its join to the graph passes {gap} at {at}",
+            "start_unleavable": f"start cannot be left: its join to the graph passes {gap} at {at}",
+            "blocked_doorway": f"blocked doorway at {at}: the plan passes {gap} there",
+            "oscillation": "oscillation: moving without progress",
+            "stuck": "stuck: no progress, not moving",
+            "timeout": f"timeout after {self.time:.0f} s while still making progress",
+        }[self.cause]
+        return f"{head}: {why}; {stop}"
+
+
+@dataclass(frozen=True)
+class DriveReport:
+    """What `drive_map` found.
+
+    Attributes:
+        map_name: the map.
+        num_poses: its legal poses.
+        routes: every driven route, in the order driven (sorted by start, then goal).
+        wall_distance: the distance the robot keeps from walls, m (what a gap is judged by).
+        time_limit: the time each route had, s.
+    """
+
+    map_name: str
+    num_poses: int
+    routes: tuple[RouteDrive, ...]
+    wall_distance: float
+    time_limit: float
+
+    @property
+    def failures(self) -> tuple[RouteDrive, ...]:
+        """The routes not completed."""
+        return tuple(r for r in self.routes if not r.reached)
+
+    @property
+    def complete(self) -> bool:
+        """True when every driven route was completed."""
+        return not self.failures
+
+    def counts(self) -> dict[str, int]:
+        """Failed routes by cause (causes with none left out)."""
+        out: dict[str, int] = {}
+        for r in self.failures:
+            out[r.cause] = out.get(r.cause, 0) + 1
+        return {c: out[c] for c in DRIVE_CAUSES if c in out}
+
+    def failed_pairs(self) -> np.ndarray:
+        """(F, 2) int (start, goal) pose indices of the routes not completed."""
+        return np.array([(r.start, r.goal) for r in self.failures], dtype=np.int64).reshape(-1, 2)
+
+    def driven_pairs(self) -> np.ndarray:
+        """(D, 2) int (start, goal) pose indices of the routes completed."""
+        done = [(r.start, r.goal) for r in self.routes if r.reached]
+        return np.array(done, dtype=np.int64).reshape(-1, 2)
+
+    def lines(self, limit: int | None = 50) -> list[str]:
+        """The report as text lines: a summary, then every failed route (at most `limit`)."""
+        n = len(self.routes)
+        done = n - len(self.failures)
+        times = np.array([r.time for r in self.routes if r.reached])
+        head = f"drive: {done} of {n} routes completed ({100 * done / n:.0f}%)" if n else "drive: no routes"
+        if len(times):
+            head += f"; time to goal median {np.median(times):.1f} s, max {times.max():.1f} s"
+        out = [head]
+        if self.failures:
+            out.append("failed: " + ", ".join(f"{c} {k}" for c, k in self.counts().items()))
+            shown = self.failures if limit is None else self.failures[:limit]
+            out += [f"  {r.describe()}" for r in shown]
+            if len(shown) < len(self.failures):
+                out.append(f"  ... and {len(self.failures) - len(shown)} more")
+        return out
+
+
+def pose_pairs(
+    m: Map, sample: int | None = None, seed: int = 0, max_route_length: float | None = None
+) -> np.ndarray:
+    """The pose pairs scenarios may draw for the robot (M, 2): every ordered pair of distinct legal
+    poses with a feasible route (socialzoo.nav.feasibility), or a seeded sample of `sample` of them."""
+    from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, feasible_pairs
+
+    limit = MAX_ROUTE_LENGTH if max_route_length is None else max_route_length
+    first, second = np.nonzero(feasible_pairs(m, limit))
+    pairs = np.stack((first, second), axis=1).astype(np.int64)
+    if sample is not None and sample < len(pairs):
+        pick = np.sort(np.random.default_rng(seed).choice(len(pairs), size=sample, replace=False))
+        pairs = pairs[pick]
+    return pairs
+
+
+def _scenario(m: Map, poses: np.ndarray, start: int, goal: int) -> Scenario:
+    return Scenario(
+        map_name=m.name,
+        seed=0,
+        robot_starts=poses[[start]],
+        robot_goals=poses[[goal]],
+        human_spawn=np.zeros((0, 2)),
+        human_start_index=np.zeros(0, dtype=np.int64),
+        human_goal_index=np.zeros(0, dtype=np.int64),
+        human_routes=(),
+        human_speed=np.zeros(0),
+        family="drive_check",
+    )
+
+
+def drive_config(m: Map, max_steps: int = 3200) -> EnvConfig:
+    """The env config of a drive: the benchmark's robot and time limit, no human slots."""
+    return EnvConfig(
+        map=m.path or m.name, max_steps=max_steps, scenario=ScenarioConfig(min_humans=0, max_humans=0)
+    )
+
+
+def drive_map(
+    m: Map,
+    pairs: Sequence[tuple[int, int]] | np.ndarray | None = None,
+    *,
+    batch_size: int = 256,
+    config: EnvConfig | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> DriveReport:
+    """Drive GoAlone alone over pose pairs of a map and report every route it cannot complete.
+
+    Args:
+        m: the map (valid: its legal poses join the graph).
+        pairs: (M, 2) ordered (start, goal) legal-pose indices; default every feasible ordered
+            pair (`pose_pairs`).
+        batch_size: rows driven together.
+        config: the env config (default `drive_config`: the benchmark's robot, 80 s, no humans).
+        progress: called with (routes done, routes) as routes finish.
+
+    Returns:
+        The report; its routes are in the order of `pairs`.
+    """
+    from socialzoo.bench.compaction import compact_core
+    from socialzoo.env.core import SocialNavCore
+
+    poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
+    todo = pose_pairs(m) if pairs is None else np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    config = config or drive_config(m)
+    if len(todo) == 0:
+        return DriveReport(m.name, len(poses), (), config.planner.wall_distance, config.max_steps * config.dt)
+    b = min(batch_size, len(todo))
+    core = SocialNavCore(config, b, map_data=m)
+    # Positions once a second over the last stuck_time seconds (for the oscillation test), per row.
+    every = max(1, round(1.0 / config.dt))
+    window = max(2, math.ceil(config.metrics.stuck_time) + 1)
+    trace = np.zeros((b, window, 2))
+    pending = deque(range(len(todo)))
+    row_job = np.full(b, -1, dtype=np.int64)
+    results: dict[int, RouteDrive] = {}
+
+    def start_rows(rows: np.ndarray) -> None:
+        jobs = [pending.popleft() for _ in range(min(len(rows), len(pending)))]
+        rows = rows[: len(jobs)]
+        if jobs:
+            core.reset_rows(rows, [_scenario(m, poses, int(todo[j, 0]), int(todo[j, 1])) for j in jobs])
+            row_job[rows] = jobs
+            trace[rows] = poses[todo[jobs, 0], None, :2]
+
+    start_rows(np.arange(b))
+    while (row_job >= 0).any():
+        core.step(np.full((core.batch_size, 1), GO_ALONE, dtype=np.int64))
+        count = core.state.step_count
+        sample = np.flatnonzero(count % every == 0)
+        trace[sample, (count[sample] // every) % window] = core.state.robot_pose[sample, 0, :2]
+        # A route without progress for stuck_time is judged at once: it has failed (`stuck`).
+        stuck = core.metrics.without_progress >= config.metrics.stuck_time - 1e-9
+        finished = np.flatnonzero((row_job >= 0) & (core.done[:, 0] | stuck))
+        if len(finished) == 0:
+            continue
+        summaries = core.episode_summaries(finished)
+        for row, summary in zip(finished.tolist(), summaries, strict=True):
+            job = int(row_job[row])
+            results[job] = _judge(core, row, int(todo[job, 0]), int(todo[job, 1]), summary, trace[row])
+        row_job[finished] = -1
+        start_rows(finished)
+        if progress is not None:
+            progress(len(results), len(todo))
+        live = np.flatnonzero(row_job >= 0)
+        if not pending and 0 < len(live) <= _SHRINK * len(row_job):
+            # The tail: step only the routes still driving (each continues exactly as before).
+            core = compact_core(core, live)
+            row_job, trace = row_job[live], trace[live]
+    return DriveReport(
+        map_name=m.name,
+        num_poses=len(poses),
+        routes=tuple(results[j] for j in range(len(todo))),
+        wall_distance=config.planner.wall_distance,
+        time_limit=config.max_steps * config.dt,
+    )
+
+
+def _judge(core: object, row: int, start: int, goal: int, summary: dict, trace: np.ndarray) -> RouteDrive:
+    """The RouteDrive of a finished row of `core` (a SocialNavCore)."""
+    state = core.state  # type: ignore[attr-defined]
+    stop = state.robot_pose[row, 0, :2].copy()
+    time = float(summary["duration"])
+    if summary["reached"]:
+        return RouteDrive(start, goal, True, time, stop)
+    if summary["wall_collisions"]:
+        return RouteDrive(start, goal, False, time, stop, "wall_collision", stop.copy(), 0.0)
+    wall_distance = core.config.planner.wall_distance  # type: ignore[attr-defined]
+    plans = core.navigator.plans  # type: ignore[attr-defined]
+    length = int(plans.lengths[row, 0])
+    path = plans.paths[row, 0, :length]
+    _, where, gap = _narrowest_ahead(core.field, path, stop)  # type: ignore[attr-defined]
+    narrow = gap < wall_distance
+    # The joins of the start and goal poses to the graph, as the robot's plans make them.
+    poses = core.scenarios[row].robot_starts[0, :2], core.scenarios[row].robot_goals[0, :2]  # type: ignore[attr-defined]
+    att = core.graph.attach(np.stack(poses), strict=False, clearance=wall_distance)  # type: ignore[attr-defined]
+    on_join = [bool(att.found[k]) and _segment_gap(where, poses[k], att.point[k]) < 0.25 for k in (0, 1)]
+    if not summary["stuck"]:
+        cause = "timeout"
+    elif narrow and on_join[1]:
+        cause = "goal_unreachable"
+    elif narrow and on_join[0]:
+        cause = "start_unleavable"
+    elif narrow:
+        cause = "blocked_doorway"
+    elif np.hypot(*(trace - stop).T).max() > STILL_RADIUS:
+        cause = "oscillation"
+    else:
+        cause = "stuck"
+    if cause in ("timeout", "oscillation", "stuck"):
+        where, gap = stop.copy(), math.nan
+    return RouteDrive(start, goal, False, time, stop, cause, where, gap)
+
+
+def _segment_gap(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance from a point (2,) to the segment [a, b], m."""
+    ab = b - a
+    t = float(np.clip(np.dot(point - a, ab) / max(float(np.dot(ab, ab)), 1e-12), 0.0, 1.0))
+    return float(np.hypot(*(a + t * ab - point)))
+
+
+def _narrowest_ahead(field: object, path: np.ndarray, pos: np.ndarray) -> tuple[int, np.ndarray, float]:
+    """(leg, point, wall distance) of the narrowest point of `path` (L, 2) within LOOK_AHEAD of its
+    point closest to `pos`, read in the planner's distance field."""
+    if len(path) < 2:
+        return 0, path[0].copy(), math.inf
+    a, b = path[:-1], path[1:]
+    ab = b - a
+    len2 = np.maximum((ab**2).sum(-1), 1e-12)
+    t = np.clip(((pos - a) * ab).sum(-1) / len2, 0.0, 1.0)
+    dist = np.hypot(*(a + t[:, None] * ab - pos).T)
+    seg = int(np.argmin(dist))
+    # Sample the path from the closest point on, 5 cm apart, up to LOOK_AHEAD.
+    pts, legs = [], []
+    left = LOOK_AHEAD
+    frac = float(t[seg])
+    for s in range(seg, len(path) - 1):
+        seg_len = math.sqrt(float(len2[s]))
+        span = min((1.0 - frac) * seg_len, left)
+        num = max(1, math.ceil(span / 0.05))
+        u = frac + np.linspace(0.0, span / max(seg_len, 1e-12), num + 1)
+        pts.append(a[s] + u[:, None] * ab[s])
+        legs.append(np.full(num + 1, s))
+        left -= span
+        frac = 0.0
+        if left <= 0:
+            break
+    samples = np.concatenate(pts)
+    leg_of = np.concatenate(legs)
+    d = field.lookup(samples)  # type: ignore[attr-defined]
+    k = int(np.argmin(d))
+    return int(leg_of[k]), samples[k].copy(), float(d[k])

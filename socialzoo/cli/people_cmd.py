@@ -1,0 +1,75 @@
+"""`socialzoo humans report`: how each crowd model walks (speed, the fundamental diagram beside
+Weidmann's curve, contacts, path length, time to goal), one figure per model and one table."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from socialzoo.cli import command_help
+from socialzoo.cli.arg_types import positive_int
+
+
+def shipped_humans() -> str:
+    """The path of the shipped learned humans' policy file."""
+    import socialzoo.agents
+
+    return str(Path(socialzoo.agents.__file__).parent / "shipped" / "humans.safetensors")
+
+
+def people_specs(text: str) -> tuple[str, ...]:
+    """Comma-separated people specs; "learned" alone names the shipped learned humans."""
+    specs = tuple(s.strip() for s in text.split(",") if s.strip())
+    if not specs:
+        raise argparse.ArgumentTypeError(f"expected comma-separated people specs, got {text!r}")
+    return tuple(f"learned:{shipped_humans()}" if s == "learned" else s for s in specs)
+
+
+def register(subparsers: Any) -> None:
+    """Add `humans` and its subcommand `report`."""
+    parser = subparsers.add_parser("humans", help=command_help("humans"), description=command_help("humans"))
+    commands = parser.add_subparsers(dest="humans_command", required=True, metavar="SUBCOMMAND")
+    report = commands.add_parser(
+        "report",
+        help="how each crowd model walks, one figure per model and one table",
+        description="Walk each model's people on the map's validation scenarios without a robot and write "
+        "DIR/report.md, report.csv (speed, local density, reach rate, time to goal, path length ratio, "
+        "person-person and person-wall contacts per person-minute; learned models checked against the "
+        "learned humans' targets: reach rate within 10% of the social force's, no more wall contacts), "
+        "DIR/walk_<model>.png (speed histogram, speed against density beside Weidmann's 1993 curve, time "
+        "to goal) and config.json.",
+    )
+    report.add_argument(
+        "--humans",
+        type=people_specs,
+        default=("sf", "orca", "groups"),
+        help="comma-separated people specs: sf, orca, groups, learned (the shipped learned humans), "
+        "learned:PATH, or mixes such as sf@0.5+orca@0.5 (default sf,orca,groups)",
+    )
+    report.add_argument("--map", default="gdc1", help="the map (its validation scenarios; default gdc1)")
+    report.add_argument("--scenarios", type=positive_int, default=16, help="scenarios per model (default 16)")
+    report.add_argument(
+        "--seconds", type=float, default=60.0, help="how long the people walk, s (default 60)"
+    )
+    report.add_argument("--out", type=Path, required=True, help="output directory")
+    report.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
+    report.set_defaults(func=run_report)
+
+
+def run_report(args: argparse.Namespace) -> int:
+    """Run `socialzoo humans report`; returns the exit status."""
+    from socialzoo.studies.human_report import HumanReportConfig, human_report
+
+    try:
+        config = HumanReportConfig(
+            humans=args.humans, map=args.map, scenarios=args.scenarios, seconds=args.seconds
+        )
+        _, files = human_report(config, args.out, figures=not args.no_figures)
+    except (ValueError, FileNotFoundError) as err:
+        print(f"socialzoo humans report: error: {err}", file=sys.stderr)
+        return 2
+    print((args.out / "report.md").read_text())
+    print(f"results in {args.out}: " + ", ".join(p.name for p in files))
+    return 0

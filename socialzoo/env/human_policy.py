@@ -1,0 +1,294 @@
+"""Learned human policies at inference: shared-parameter walkers read from a policy file, run in numpy.
+
+A human policy maps each learned human's observation (socialzoo.env.human_agents, (..., D_h)) to
+its action, a desired velocity in [-1, 1]^2 times its preferred speed and the action scale the
+policy was trained with (EnvConfig.human_action_scale), in the frame it was trained with
+(EnvConfig.human_action_frame). Every human of a world uses the same network.
+The file is a socialzoo policy file (safetensors weights plus a JSON header, no pickled code):
+the layers of the network that gives the action's pre-tanh mean, and the observation
+normalisation it was trained with. Acting is deterministic: tanh of that mean (the mode of the
+TanhNormal the trainer samples from, before the tanh). A mirror-symmetric policy (no handedness)
+averages the network over the situation and its mirror image (socialzoo.env.human_agents.
+human_mirror_signs), as it was trained.
+
+Human policies are named by a spec: "social_force" (the scripted model, no learned humans) or
+"learned:PATH" (a file written by `socialzoo train humans` or `socialzoo train cotrain`).
+It lives in env so that the env can drive learned people itself (EnvConfig.people, the "learned"
+model of socialzoo.humans.models); socialzoo.agents.learned_humans re-exports it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from socialzoo.env.human_agents import human_mirror_signs, human_observation_size
+from socialzoo.env.policy_file import (
+    ACTIVATIONS,
+    PolicyFileError,
+    checked_layers,
+    read_policy_file,
+    save_policy_file,
+)
+
+SOCIAL_FORCE = "social_force"
+LEARNED = "learned"
+HUMAN_POLICY_NAMES = (SOCIAL_FORCE, LEARNED)
+# The "policy" entry of a learned human policy file's header.
+POLICY_NAME = "learned_humans"
+ACTION_FRAMES = ("world", "human")
+
+
+class LearnedHumanPolicy:
+    """Deterministic actions of learned humans from a multilayer perceptron.
+
+    Args:
+        weights: (W_i (out, in), b_i (out,)) per layer, torch's Linear convention; the last layer
+            gives the 2 pre-tanh action means.
+        activation: hidden-layer activation, a key of socialzoo.env.policy_file.ACTIVATIONS.
+        obs_loc: (D,) observation offset; the network sees (obs - loc) / scale.
+        obs_scale: (D,) observation scale.
+        num_neighbours: EnvConfig.num_human_neighbours of the observations it was trained on.
+        action_frame: EnvConfig.human_action_frame it was trained with ("world" or "human").
+        action_scale: EnvConfig.human_action_scale it was trained with (files written before
+            the scale existed were trained with 1).
+        mirror_symmetric: the pre-tanh mean is (f(obs) + m f(mirror(obs))) / 2, with m = (1, -1):
+            the same behaviour on the left and the right (socialzoo.train.mappo.MirrorSymmetric).
+        header: the policy file's header (kept for config() and reports).
+
+    Raises:
+        ValueError: layers that do not chain, a wrong output size, normalisation of the wrong
+            size or not finite and positive, an unknown activation or frame, a scale not > 0.
+    """
+
+    name = LEARNED
+
+    def __init__(
+        self,
+        weights: Sequence[tuple[np.ndarray, np.ndarray]],
+        activation: str,
+        obs_loc: np.ndarray,
+        obs_scale: np.ndarray,
+        num_neighbours: int,
+        action_frame: str,
+        action_scale: float = 1.0,
+        header: dict[str, Any] | None = None,
+        *,
+        mirror_symmetric: bool = False,
+    ) -> None:
+        if activation not in ACTIVATIONS:
+            raise ValueError(
+                f"LearnedHumanPolicy: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}"
+            )
+        if action_frame not in ACTION_FRAMES:
+            raise ValueError(
+                f"LearnedHumanPolicy: action_frame must be one of {ACTION_FRAMES}, got {action_frame!r}"
+            )
+        if not (isinstance(action_scale, (int, float)) and math.isfinite(action_scale) and action_scale > 0):
+            raise ValueError(f"LearnedHumanPolicy: action_scale must be a number > 0, got {action_scale!r}")
+        self.layers = checked_layers("LearnedHumanPolicy", weights)
+        if self.layers[-1][0].shape[0] != 2:
+            raise ValueError(
+                f"LearnedHumanPolicy: the last layer gives {self.layers[-1][0].shape[0]} outputs, not 2"
+            )
+        size = human_observation_size(num_neighbours)
+        if self.input_size != size:
+            raise ValueError(
+                f"LearnedHumanPolicy: a network of {self.input_size} inputs for observations of {size} "
+                f"({num_neighbours} neighbours)"
+            )
+        self.obs_loc = np.asarray(obs_loc, dtype=np.float32)
+        self.obs_scale = np.asarray(obs_scale, dtype=np.float32)
+        if self.obs_loc.shape != (size,) or self.obs_scale.shape != (size,):
+            raise ValueError(
+                f"LearnedHumanPolicy: normalisation of shapes {self.obs_loc.shape}, {self.obs_scale.shape}; "
+                f"expected ({size},)"
+            )
+        if not (
+            np.isfinite(self.obs_loc).all()
+            and np.isfinite(self.obs_scale).all()
+            and (self.obs_scale > 0).all()
+        ):
+            raise ValueError("LearnedHumanPolicy: normalisation must be finite with scale > 0")
+        self.activation = activation
+        self.num_neighbours = int(num_neighbours)
+        self.action_frame = action_frame
+        self.action_scale = float(action_scale)
+        self.mirror_symmetric = bool(mirror_symmetric)
+        self._mirror = human_mirror_signs(self.num_neighbours)
+        self.header = dict(header or {})
+        self.path: Path | None = None
+        self.digest: str | None = None
+
+    @property
+    def input_size(self) -> int:
+        """D, the length of the observations the network takes."""
+        return int(self.layers[0][0].shape[1])
+
+    def env_overrides(self) -> dict[str, Any]:
+        """EnvConfig fields the observations and actions of this policy need."""
+        return {
+            "num_human_neighbours": self.num_neighbours,
+            "human_action_frame": self.action_frame,
+            "human_action_scale": self.action_scale,
+        }
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """float64 actions (..., 2) in [-1, 1] for observations (..., D)."""
+        obs = np.asarray(obs)
+        if obs.ndim < 1 or obs.shape[-1] != self.input_size or obs.dtype.kind not in "fiu":
+            raise ValueError(
+                f"LearnedHumanPolicy.act: observations of shape {obs.shape} and dtype {obs.dtype}; expected "
+                f"numbers of width {self.input_size} ({self.num_neighbours} neighbours)"
+            )
+        lead = obs.shape[:-1]
+        flat = obs.reshape(-1, self.input_size).astype(np.float32)
+        mean = self._mean(flat)
+        if self.mirror_symmetric:
+            mean = 0.5 * (mean + self._mean(flat * self._mirror) * np.array([1.0, -1.0], dtype=np.float32))
+        return np.tanh(mean.astype(np.float64)).reshape(*lead, 2)
+
+    def _mean(self, obs: np.ndarray) -> np.ndarray:
+        """(N, 2) the network's pre-tanh mean for (N, D) raw observations."""
+        x = (obs - self.obs_loc) / self.obs_scale
+        act = ACTIVATIONS[self.activation]
+        for i, (w, b) in enumerate(self.layers):
+            x = x @ w.T + b
+            if i < len(self.layers) - 1:
+                x = act(x)
+        return x
+
+    def config(self) -> dict[str, Any]:
+        """What identifies this policy for the results store: the file's digest and training record."""
+        return {"file_sha256": self.digest, "training": self.header.get("training", {})}
+
+    # ---------------------------------------------------------------- files
+    def save(self, path: str | Path, env_id: str, training: dict[str, Any]) -> Path:
+        """Write the policy file.
+
+        Args:
+            path: the file (parent folders created).
+            env_id: the env id and version the policy was trained on ("...-vN").
+            training: plain-JSON record of how it was made (algorithm, command, seed, frames).
+        """
+        tensors: dict[str, np.ndarray] = {"obs_loc": self.obs_loc, "obs_scale": self.obs_scale}
+        for i, (w, b) in enumerate(self.layers):
+            tensors[f"net.{i}.weight"] = w
+            tensors[f"net.{i}.bias"] = b
+        header = {
+            "policy": POLICY_NAME,
+            "network": {
+                "kind": "mlp",
+                "sizes": [self.input_size] + [int(w.shape[0]) for w, _ in self.layers],
+                "activation": self.activation,
+                "output": "tanh_mean",
+                "mirror_symmetric": self.mirror_symmetric,
+            },
+            "observation": {
+                "kind": "learned_human",
+                "num_human_neighbours": self.num_neighbours,
+                "size": self.input_size,
+                "action_frame": self.action_frame,
+                "action_scale": self.action_scale,
+            },
+            "env_id": env_id,
+            "training": training,
+        }
+        return save_policy_file(path, tensors, header)
+
+    @classmethod
+    def load(cls, path: str | Path) -> LearnedHumanPolicy:
+        """The policy saved at `path`.
+
+        Raises:
+            PolicyFileError: not a learned human policy file, or an inconsistent one (naming it):
+                random bytes, a truncated file and a file of another kind included.
+        """
+        tensors, header = read_policy_file(path)
+        try:
+            if header["policy"] != POLICY_NAME:
+                raise ValueError(
+                    f"a {header['policy']!r} policy, not a learned human policy ({POLICY_NAME!r})"
+                )
+            network, observation = header["network"], header["observation"]
+            if not (isinstance(network, dict) and isinstance(observation, dict)):
+                raise ValueError("the header's network and observation must be objects")
+            if network.get("kind") != "mlp" or network.get("output") != "tanh_mean":
+                raise ValueError(f"network {network!r} is not an mlp giving tanh means")
+            sizes = [int(s) for s in network["sizes"]]
+            weights = [(tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"]) for i in range(len(sizes) - 1)]
+            for i, (w, _) in enumerate(weights):
+                if tuple(w.shape) != (sizes[i + 1], sizes[i]):
+                    raise ValueError(
+                        f"net.{i}.weight has shape {w.shape}, the header says {(sizes[i + 1], sizes[i])}"
+                    )
+            policy = cls(
+                weights,
+                str(network["activation"]),
+                tensors["obs_loc"],
+                tensors["obs_scale"],
+                int(observation["num_human_neighbours"]),
+                str(observation["action_frame"]),
+                float(observation.get("action_scale", 1.0)),
+                header,
+                mirror_symmetric=_flag(network, "mirror_symmetric"),
+            )
+        except (KeyError, TypeError, ValueError) as err:
+            raise PolicyFileError(f"{path}: {err}") from None
+        policy.path = Path(path)
+        policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return policy
+
+
+def split_human_spec(spec: str) -> tuple[str, str | None]:
+    """("learned", "runs/h/humans.safetensors") for "learned:runs/h/humans.safetensors";
+    ("social_force", None) for "social_force".
+
+    Raises:
+        ValueError: an unknown name (listing the known ones), "learned" without a path, or a
+            path after "social_force".
+    """
+    if not isinstance(spec, str) or not spec:
+        raise ValueError(f"a human policy is named by a non-empty string, got {spec!r}")
+    name, sep, path = spec.partition(":")
+    key = name.strip().lower()
+    if key not in HUMAN_POLICY_NAMES:
+        raise ValueError(
+            f"unknown human policy {name!r}; known: {', '.join(HUMAN_POLICY_NAMES)} (learned:PATH)"
+        )
+    if key == SOCIAL_FORCE and sep:
+        raise ValueError(f"human policy {spec!r}: social_force takes no file")
+    if key == LEARNED and not path:
+        raise ValueError(f"human policy {spec!r}: name the file as learned:PATH")
+    return key, (path or None)
+
+
+def check_human_spec(spec: str) -> str:
+    """Validate a human policy spec (the file must exist); returns it.
+
+    Raises:
+        ValueError: as split_human_spec, or a path that is not a file.
+    """
+    _, path = split_human_spec(spec)
+    if path is not None and not Path(path).is_file():
+        raise ValueError(f"human policy {spec!r}: no such file {path!r}")
+    return spec
+
+
+def make_human_policy(spec: str) -> LearnedHumanPolicy | None:
+    """The human policy named by `spec`: None for "social_force", the loaded file for "learned:PATH"."""
+    _, path = split_human_spec(spec)
+    return None if path is None else LearnedHumanPolicy.load(path)
+
+
+def _flag(section: dict[str, Any], name: str) -> bool:
+    """A true/false header entry (false when absent: files written before it existed)."""
+    value = section.get(name, False)
+    if not isinstance(value, bool):
+        raise ValueError(f"network.{name} must be true or false, got {value!r}")
+    return value

@@ -1,0 +1,169 @@
+"""Policy files of the learned baselines and learned humans: weights as safetensors, plus a JSON
+header; and the numpy helpers that run the networks they hold.
+
+A policy file holds plain tensors (no pickled objects, so loading never executes code from the
+file) and, in the safetensors metadata, one JSON header that says what the tensors are and what
+they were trained for: the network, the observation layout, the env id and version, the
+normalisation statistics, and how the policy was made (algorithm, command, seed, steps).
+Loading checks all of it and refuses a file made for another observation layout or env version.
+It lives in env, beside the env versions it checks, so that the env itself can run a learned
+crowd model (socialzoo.env.human_policy); socialzoo.agents.policy_file re-exports it.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+POLICY_FORMAT = "socialzoo-policy/1"
+# safetensors metadata key under which the JSON header is stored.
+HEADER_KEY = "socialzoo"
+REQUIRED_KEYS = ("format", "policy", "network", "observation", "env_id", "training")
+# Hidden-layer activations of the networks a policy file holds.
+ACTIVATIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "tanh": np.tanh,
+    "relu": lambda x: np.maximum(x, 0.0),
+}
+
+
+class PolicyFileError(ValueError):
+    """A policy file that cannot be used: unreadable, not a socialzoo policy, or made for another env.
+
+    A ValueError, as every loader's error is, so callers that refuse bad arguments with
+    `except ValueError` refuse a bad policy file the same way; the message starts with the file.
+    """
+
+
+def env_version(env_id: str) -> int:
+    """The version number of a Gymnasium id such as "socialzoo/ActionSelection-v2"."""
+    match = re.fullmatch(r".+-v(\d+)", env_id)
+    if match is None:
+        raise ValueError(f"env id {env_id!r} has no version suffix (-vN)")
+    return int(match.group(1))
+
+
+def current_env_version() -> int:
+    """The version of the benchmark env ids this package registers."""
+    from socialzoo.env.registration import BENCHMARK_IDS
+
+    versions = {env_version(env_id) for env_id in BENCHMARK_IDS}
+    if len(versions) != 1:
+        raise RuntimeError(f"the benchmark ids disagree on their version: {sorted(BENCHMARK_IDS)}")
+    return versions.pop()
+
+
+def save_policy_file(path: str | Path, tensors: Mapping[str, Any], header: Mapping[str, Any]) -> Path:
+    """Write `tensors` (name -> array) and `header` (plain JSON) to a safetensors file.
+
+    Args:
+        path: the file to write (parent folders are created).
+        tensors: numpy arrays or torch tensors; stored as contiguous numpy arrays.
+        header: the JSON header; "format" is filled in. Must hold REQUIRED_KEYS.
+
+    Returns:
+        `path`.
+
+    Raises:
+        ValueError: a required header key is missing, or the header is not plain JSON.
+    """
+    from safetensors.numpy import save_file
+
+    header = {"format": POLICY_FORMAT, **header}
+    missing = [k for k in REQUIRED_KEYS if k not in header]
+    if missing:
+        raise ValueError(f"policy header lacks {missing}")
+    try:
+        text = json.dumps(header, sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"policy header is not plain JSON: {err}") from None
+    arrays = {name: np.ascontiguousarray(_to_numpy(value)) for name, value in tensors.items()}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    save_file(arrays, str(tmp), metadata={HEADER_KEY: text})
+    tmp.replace(path)
+    return path
+
+
+def _to_numpy(value: Any) -> np.ndarray:
+    if hasattr(value, "detach"):  # a torch tensor
+        return value.detach().cpu().numpy()
+    return np.asarray(value)
+
+
+def read_policy_file(
+    path: str | Path, *, check_env_version: bool = True
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """Read and check a policy file.
+
+    Args:
+        path: a file written by `save_policy_file`.
+        check_env_version: refuse a file trained on another version of the benchmark env.
+
+    Returns:
+        (tensors, header).
+
+    Raises:
+        PolicyFileError: naming the file and what is wrong with it.
+    """
+    from safetensors import SafetensorError, safe_open
+
+    path = Path(path)
+    if not path.is_file():
+        raise PolicyFileError(f"{path}: no such policy file")
+    try:
+        with safe_open(str(path), framework="numpy") as f:
+            metadata = f.metadata() or {}
+            tensors = {name: f.get_tensor(name) for name in f.keys()}
+    except (SafetensorError, OSError, ValueError) as err:
+        raise PolicyFileError(f"{path}: not a safetensors policy file ({err})") from None
+    if HEADER_KEY not in metadata:
+        raise PolicyFileError(f"{path}: a safetensors file without a socialzoo policy header")
+    try:
+        header = json.loads(metadata[HEADER_KEY])
+    except json.JSONDecodeError as err:
+        raise PolicyFileError(f"{path}: the policy header is not JSON ({err})") from None
+    if not isinstance(header, dict) or header.get("format") != POLICY_FORMAT:
+        found = header.get("format") if isinstance(header, dict) else type(header).__name__
+        raise PolicyFileError(f"{path}: format {found!r}, expected {POLICY_FORMAT!r}")
+    missing = [k for k in REQUIRED_KEYS if k not in header]
+    if missing:
+        raise PolicyFileError(f"{path}: the policy header lacks {missing}")
+    if check_env_version:
+        try:
+            theirs = env_version(str(header["env_id"]))
+        except ValueError as err:
+            raise PolicyFileError(f"{path}: {err}") from None
+        ours = current_env_version()
+        if theirs != ours:
+            raise PolicyFileError(
+                f"{path}: trained on {header['env_id']} (v{theirs}) but this socialzoo's benchmark env is "
+                f"v{ours}; retrain it (`socialzoo train {header['policy']}`) or use the socialzoo release "
+                f"it was made with"
+            )
+    return tensors, header
+
+
+def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The (weight (out, in), bias (out,)) pairs as float32 arrays, checked to chain.
+
+    Raises:
+        ValueError: naming `owner` and the layer, for no layers, a bad shape, or a layer that does
+            not take the previous layer's output.
+    """
+    if not weights:
+        raise ValueError(f"{owner}: the network has no layers")
+    layers = [(np.asarray(w, dtype=np.float32), np.asarray(b, dtype=np.float32)) for w, b in weights]
+    for i, (w, b) in enumerate(layers):
+        if w.ndim != 2 or b.shape != (w.shape[0],):
+            raise ValueError(f"{owner}: layer {i} has weight {w.shape} and bias {b.shape}")
+        if i and w.shape[1] != layers[i - 1][0].shape[0]:
+            raise ValueError(
+                f"{owner}: layer {i} takes {w.shape[1]} inputs, the layer before gives {layers[i - 1][0].shape[0]}"
+            )
+    return layers

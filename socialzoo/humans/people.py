@@ -1,0 +1,131 @@
+"""One step of every person of B worlds, whatever model drives each (WorldState.human_model):
+the social force (socialzoo.humans.social_force, with the group forces of socialzoo.humans.groups
+for people who walk in a group), ORCA (socialzoo.humans.orca), or a learned policy's desired
+velocity relaxed through the social force.
+
+The models meet in one step: social-force people feel every person (ORCA ones included) and the
+robots; ORCA people avoid every person and, unless the config hides them, the robots. Each model
+costs only where someone uses it, and with social-force people only the step is exactly the
+social-force step it always was.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.walls import WallIndex
+from socialzoo.humans.groups import add_group_accelerations
+from socialzoo.humans.models import ORCA, SOCIAL_FORCE
+from socialzoo.humans.motion import integrate_humans
+from socialzoo.humans.orca import orca_velocities
+from socialzoo.humans.social_force import human_acceleration
+
+_TINY = 1e-9
+
+
+def orca_people_velocities(
+    pos: np.ndarray,
+    vel: np.ndarray,
+    target: np.ndarray,
+    pref_speed: np.ndarray,
+    mask: np.ndarray,
+    drive: np.ndarray,
+    robot_pos: np.ndarray,
+    robot_vel: np.ndarray,
+    walls: WallIndex,
+    cfg: WorldConfig,
+) -> np.ndarray:
+    """(B, H, 2) ORCA velocities of the people `drive` marks (the others keep `vel`).
+
+    Each walks at its preferred speed straight to its waypoint unless someone or a wall is in the
+    way; every present person (radius cfg.orca.radius) and every robot given (its disc,
+    OrcaConfig.robot_disc) is avoided, robots only with cfg.orca.robot_visible.
+    """
+    orca = cfg.orca
+    batch, num = mask.shape
+    num_robots = robot_pos.shape[1] if orca.robot_visible else 0
+    to_target = target - pos
+    dist = np.sqrt(to_target[..., 0] ** 2 + to_target[..., 1] ** 2)
+    pref = to_target * (pref_speed / np.maximum(dist, _TINY))[..., None]
+    speed = pref_speed if orca.max_speed is None else np.full((batch, num), orca.max_speed)
+    agents = num + num_robots
+    a_pos = np.empty((batch, agents, 2))
+    a_vel = np.empty((batch, agents, 2))
+    a_pref = np.zeros((batch, agents, 2))
+    a_radius = np.empty((batch, agents))
+    a_speed = np.zeros((batch, agents))
+    a_present = np.ones((batch, agents), dtype=bool)
+    a_drive = np.zeros((batch, agents), dtype=bool)
+    a_pos[:, :num] = pos
+    a_vel[:, :num] = vel
+    a_pref[:, :num] = pref
+    a_radius[:, :num] = orca.radius
+    a_speed[:, :num] = speed
+    a_present[:, :num] = mask
+    a_drive[:, :num] = drive
+    if num_robots:
+        a_pos[:, num:] = robot_pos
+        a_vel[:, num:] = robot_vel
+        a_radius[:, num:] = orca.robot_disc(cfg.robot)
+    out = orca_velocities(
+        a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive, a_present, walls, orca, cfg.dt
+    )
+    return out[:, :num]
+
+
+def step_people(
+    pos: np.ndarray,
+    vel: np.ndarray,
+    target: np.ndarray,
+    pref_speed: np.ndarray,
+    mask: np.ndarray,
+    model: np.ndarray,
+    group: np.ndarray,
+    robot_pos: np.ndarray,
+    robot_vel: np.ndarray,
+    walls: WallIndex,
+    cfg: WorldConfig,
+    desired_vel: np.ndarray | None = None,
+    learned: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move every person one step of cfg.dt; walls stay solid (socialzoo.humans.motion).
+
+    Args:
+        pos: (B, H, 2) positions, world frame, m.
+        vel: (B, H, 2) velocities, world frame, m/s.
+        target: (B, H, 2) waypoints, world frame, m.
+        pref_speed: (B, H) preferred speeds, m/s (the social force's speed cap).
+        mask: (B, H) present people.
+        model: (B, H) SOCIAL_FORCE, ORCA or LEARNED (socialzoo.humans.models).
+        group: (B, H) walking group (its first member's slot), -1 for none.
+        robot_pos: (B, R, 2) robots the people react to, world frame, m (R = 0: none).
+        robot_vel: (B, R, 2) their velocity vectors, m/s.
+        walls: the map's wall index.
+        cfg: the world's parameters (human, orca, groups, robot, dt).
+        desired_vel: (B, H, 2) desired velocities of learned people, m/s.
+        learned: (B, H) people whose desired velocity is `desired_vel`.
+
+    Returns:
+        (pos, vel, blocked): the new positions and velocities, and the people a wall stopped.
+    """
+    orca = mask & (model == ORCA)
+    has_orca = bool(orca.any())
+    if has_orca and not (mask & ~orca).any():
+        # Nobody feels a force: only the wall distances of the motion step are needed.
+        accel = np.zeros(pos.shape)
+        _, wall_dist = walls.nearest(pos)
+    else:
+        accel, wall_dist = human_acceleration(
+            pos, vel, target, pref_speed, mask, robot_pos, robot_vel, walls, cfg.human, desired_vel, learned
+        )
+    if (group >= 0).any():
+        add_group_accelerations(pos, vel, target, group, mask & (model == SOCIAL_FORCE), cfg.groups, accel)
+    velocity = None
+    if has_orca:
+        velocity = orca_people_velocities(
+            pos, vel, target, pref_speed, mask, orca, robot_pos, robot_vel, walls, cfg
+        )
+    return integrate_humans(
+        pos, vel, accel, pref_speed, mask, walls, wall_dist, cfg.dt, velocity, orca if has_orca else None
+    )

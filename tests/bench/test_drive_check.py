@@ -1,0 +1,193 @@
+"""The map that checks itself by driving, on small synthetic plans: a door too narrow for the robot
+is reported, a 0.8 m door that used to wedge the robot is passed, a goal behind a crack is reported
+and repaired, and a robot stuck at a narrow door recovers over another edge."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from socialzoo.bench.drive_check import DRIVE_CAUSES, drive_map, pose_pairs
+from socialzoo.bench.map_repair import repair_by_driving
+from socialzoo.nav import floorplans
+from socialzoo.nav.maps import Map, validate_map
+
+
+def _map(name: str, walls: np.ndarray, nodes, edges, poses) -> Map:
+    m = Map(
+        name=name,
+        walls=np.asarray(walls, dtype=np.float64),
+        nodes=np.asarray(nodes, dtype=np.float64),
+        edges=np.asarray(edges, dtype=np.int64),
+        legal_poses=np.asarray(poses, dtype=np.float64),
+    )
+    validate_map(m)
+    return m
+
+
+def narrow_door_map(door: float = 0.6) -> Map:
+    """Two rooms joined by one door (0.6 m: too narrow for the robot's 0.74 m), two poses in each."""
+    plan = floorplans.two_rooms(door)
+    nodes = [(2.5, 2.0), (7.5, 2.0)]
+    poses = [(1.2, 1.0, 0.0), (3.5, 3.0, 0.0), (6.5, 1.0, 0.0), (8.8, 3.0, 0.0)]
+    return _map("narrow_door", plan.walls, nodes, [(0, 1)], poses)
+
+
+def test_a_door_too_narrow_is_reported_where_it_is():
+    m = narrow_door_map()
+    report = drive_map(m)
+    done = {(r.start, r.goal) for r in report.routes if r.reached}
+    assert done == {(0, 1), (1, 0), (2, 3), (3, 2)}  # within each room
+    assert len(report.failures) == 8 and set(report.counts()) == {"blocked_doorway"}
+    for r in report.failures:
+        assert np.hypot(*(r.where - (5.0, 2.0))) < 0.3  # the door
+        assert r.gap < report.wall_distance
+        assert r.describe().startswith(f"pose {r.start} -> pose {r.goal}: blocked doorway at (")
+    assert report.lines()[0].startswith("drive: 4 of 12 routes completed (33%)")
+    assert set(report.counts()) <= set(DRIVE_CAUSES)
+
+
+def test_map_check_drive_reports_the_door(tmp_path, capsys):
+    from socialzoo.cli import main
+
+    path = narrow_door_map().save(tmp_path / "narrow.json")
+    assert main(["map", "check", str(path), "--drive", "--no-picture"]) == 1
+    out = capsys.readouterr().out
+    assert "drive: 4 of 12 routes completed" in out and "blocked_doorway 8" in out
+    assert "blocked doorway at (" in out
+    assert main(["map", "check", str(path), "--drive", "3", "--seed", "1", "--no-picture"]) in (0, 1)
+    assert "of 3 routes completed" in capsys.readouterr().out
+
+
+def wedge_map() -> Map:
+    """An office floor with 0.8 m doors and a plan that turns into a door from the corridor and
+    sharply again just past it: the robot used to stop in the doorway pressed against the jamb,
+    turning to and fro (Sight's 2 cm tolerance let the carrot sit across the jamb)."""
+    plan = floorplans.office_corridor(1, num_offices=6, door_width=0.8, thickness=0.15)
+    nodes = [
+        (17.18, 1.95),
+        (16.95, 1.12),
+        (16.95, 0.0),
+        (18.05, 0.0),
+        (18.05, -1.0),
+        (18.05, -1.18),
+        (17.16, -3.02),
+    ]
+    edges = [(k, k + 1) for k in range(len(nodes) - 1)]
+    return _map("wedge", plan.walls, nodes, edges, [(16.9, 2.023, 1.22), (16.35, -2.63, 0.5)])
+
+
+def test_the_robot_passes_a_door_it_used_to_wedge_beside():
+    report = drive_map(wedge_map())
+    assert report.complete, report.lines()
+    assert max(r.time for r in report.routes) < 10.0  # straight through, no recovery needed
+
+
+def crack_map(outside_route: bool) -> Map:
+    """A room whose top wall has a 2 cm crack; a pose above the room sees the room's node only
+    through the crack (a wall-free line the robot cannot drive). With outside_route, the graph
+    also runs round the room outside, and the pose joins it there."""
+    box = [(0, 0, 10, 0), (10, 0, 10, 8), (10, 8, 0, 8), (0, 8, 0, 0)]
+    room = [(2, 2, 3.5, 2), (4.5, 2, 6, 2), (6, 2, 6, 5), (6, 5, 4.01, 5), (3.99, 5, 2, 5), (2, 5, 2, 2)]
+    nodes = [(4.0, 3.5), (4.0, 1.0), (8.0, 1.0)]
+    edges = [(0, 1), (1, 2)]
+    if outside_route:
+        nodes.append((8.0, 6.5))
+        edges.append((2, 3))
+    poses = [(4.0, 6.5, 0.0), (1.0, 1.0, 0.0), (8.8, 1.0, 0.0), (4.0, 3.0, 0.0)]
+    return _map("crack", box + room, nodes, edges, poses)
+
+
+def test_a_goal_behind_a_crack_is_reported_and_repaired():
+    m = crack_map(outside_route=False)
+    report = drive_map(m)
+    failed = {(r.start, r.goal): r for r in report.failures}
+    assert failed and all(0 in pair for pair in failed)  # only pose 0, above the room
+    causes = {r.cause for r in failed.values()}
+    assert causes <= {"goal_unreachable", "start_unleavable"} and "goal_unreachable" in causes
+    for r in failed.values():
+        assert np.hypot(*(r.where - (4.0, 5.0))) < 0.5  # at the crack
+    repaired, repairs, first = repair_by_driving(m, report=report)
+    assert first is report
+    assert [r.kind for r in repairs] == ["pose_dropped"]
+    assert "legal_poses[0] at (4.00, 6.50)" in repairs[0].message
+    assert len(repaired.legal_poses) == 3
+    assert repaired.provenance["drive"]["routes_completed"] == len(report.routes) - len(report.failures)
+    assert drive_map(repaired).complete
+
+
+def test_a_robot_joins_the_graph_by_a_line_it_can_drive():
+    # The same pose, with the graph also outside the room: its plans join there, not through the
+    # crack (NavGraph.attach with the robot's clearance), so every route is completed.
+    assert drive_map(crack_map(outside_route=True)).complete
+
+
+def two_doors_map() -> Map:
+    """Two rooms joined by a 0.6 m door on the short route and a 1.0 m door on a longer one."""
+    walls = [(0, 0, 10, 0), (10, 0, 10, 6), (10, 6, 0, 6), (0, 6, 0, 0)]
+    walls += [(5, 0, 5, 1.2), (5, 1.8, 5, 4.5), (5, 5.5, 5, 6)]
+    nodes = [(2.5, 1.5), (7.5, 1.5), (2.5, 5.0), (5.0, 5.0), (7.5, 5.0)]
+    edges = [(0, 1), (0, 2), (2, 3), (3, 4), (4, 1)]
+    return _map("two_doors", walls, nodes, edges, [(1.0, 1.0, 0.0), (9.0, 1.0, 0.0)])
+
+
+def test_a_stuck_robot_recovers_over_another_edge():
+    from socialzoo.bench.drive_check import _scenario, drive_config
+    from socialzoo.env.core import SocialNavCore
+
+    m = two_doors_map()
+    report = drive_map(m)
+    assert report.complete, report.lines()
+    # It drove to the narrow door first, backed off and went round by the wide one.
+    core = SocialNavCore(drive_config(m), 1, map_data=m)
+    core.reset_rows([0], [_scenario(m, m.legal_poses, 0, 1)])
+    ys = []
+    while not core.done[0, 0]:
+        core.step(np.zeros((1, 1), dtype=np.int64))
+        ys.append(core.state.robot_pose[0, 0, 1])
+    assert core.episode_summaries([0])[0]["reached"]
+    assert core.navigator.recoveries[0, 0] >= 1 and max(ys) > 4.0
+
+
+def test_pose_pairs_are_the_feasible_ones_or_a_seeded_sample():
+    m = narrow_door_map()
+    pairs = pose_pairs(m)
+    assert len(pairs) == 12 and (pairs[:, 0] != pairs[:, 1]).all()
+    sample = pose_pairs(m, 5, seed=3)
+    assert len(sample) == 5 and np.array_equal(sample, pose_pairs(m, 5, seed=3))
+    assert len(pose_pairs(m, max_route_length=3.0)) < 12  # only the short routes
+
+
+def test_import_drives_the_map_and_records_it(tmp_path, capsys):
+    import json
+
+    from socialzoo.cli import main
+    from socialzoo.nav.importers import write_vector_map
+    from socialzoo.nav.maps import read_map
+
+    m = crack_map(outside_route=False)
+    walls = write_vector_map(tmp_path / "crack.txt", m.walls)
+    graph = tmp_path / "crack.navigation.json"
+    nodes = [{"id": k, "loc": {"x": x, "y": y}} for k, (x, y) in enumerate(m.nodes.tolist())]
+    graph.write_text(
+        json.dumps({"nodes": nodes, "edges": [{"s0_id": i, "s1_id": j} for i, j in m.edges.tolist()]})
+    )
+    out = tmp_path / "crack.json"
+    args = ["map", "import", "--walls", str(walls), "--nav", str(graph), "--name", "crack", "--out", str(out)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "driving: the robot alone over" in text and "routes completed (100%)" in text
+    back = read_map(out)
+    # Generated poses join the graph by lines the robot can drive: none stands behind the crack.
+    drive = back.provenance["drive"]
+    assert drive["routes_completed"] == drive["routes_driven"] == drive["pairs_completed_after_repairs"] > 0
+    assert main([*args, "--no-drive", "--out", str(tmp_path / "quick.json")]) == 0
+    assert "driving" not in capsys.readouterr().out
+
+
+def test_strict_import_refuses_a_route_it_cannot_drive():
+    from socialzoo.cli.map_cmd import _drive_and_repair
+    from socialzoo.nav.maps import MapError
+
+    with pytest.raises(MapError, match=r"(?s)--strict: failed: .*pose 1 -> pose 0: goal unreachable"):
+        _drive_and_repair(crack_map(outside_route=False), strict=True)

@@ -1,0 +1,196 @@
+"""Mixed crowds in the env (EnvConfig.people): models per person in every interface, counterfactual
+rows without the robot and what the robot costs people, group intrusions, named errors."""
+
+import numpy as np
+import pytest
+
+from socialzoo.agents import make_policy
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore
+from socialzoo.env.metrics import SUMMARY_KEYS
+from socialzoo.env.people import COST_KEYS, _group_crossings, without_robots
+from socialzoo.env.registration import BENCHMARK_IDS
+from socialzoo.env.world import step_world
+from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE
+from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+
+SMALL = {"map": "open_room", "max_steps": 120, "scenario": {"min_humans": 6, "max_humans": 8}}
+BENCHMARK_ID = next(iter(BENCHMARK_IDS))  # the training map's id, at its current version
+ROOM_SET = TestSet("open_room", 5, 8, ScenarioConfig(min_humans=6, max_humans=8))
+
+
+def core_of(batch=3, **people):
+    config = EnvConfig().replace(**SMALL, people=people)
+    core = SocialNavCore(config, batch)
+    core.reset_rows(np.arange(batch), ROOM_SET.scenarios(range(batch), core.map))
+    return core
+
+
+def run(core, steps):
+    policy = make_policy("goalone")
+    for _ in range(steps):
+        core.step(policy.act(core.obs, core))
+
+
+def test_default_people_are_the_benchmarks_and_add_no_metrics():
+    core = core_of()
+    assert core.people.keys == ()
+    assert (core.state.human_model == SOCIAL_FORCE).all() and (core.state.human_group == -1).all()
+    run(core, 5)
+    assert list(core.episode_summaries([0])[0]) == list(SUMMARY_KEYS)
+
+
+def test_a_mix_assigns_models_per_scenario_seed():
+    core = core_of(batch=4, models="sf@0.5+orca@0.5")
+    state = core.state
+    for row in range(4):
+        present = state.human_model[row][state.human_mask[row]]
+        n = len(present)
+        assert sorted(np.bincount(present, minlength=2)[:2]) == sorted([(n + 1) // 2, n // 2])
+    again = core_of(batch=4, models="sf@0.5+orca@0.5")
+    assert np.array_equal(again.state.human_model, state.human_model)
+    run(core, 20)
+    assert np.isfinite(core.state.human_pos).all()
+
+
+def test_counterfactual_rows_step_as_the_scenario_without_its_robot():
+    core = core_of(models="sf@0.5+orca@0.5", counterfactual=True)
+    alone = without_robots(core.state)
+    run(core, 30)
+    cfg = core.config.world
+    for _ in range(30):
+        b = alone.batch_size
+        alone, _ = step_world(alone, core.walls, cfg, np.zeros((b, 0, 2)), np.zeros((b, 0), bool))
+    np.testing.assert_array_equal(core.people.ghost.human_pos, alone.human_pos)
+    np.testing.assert_array_equal(core.people.ghost.human_vel, alone.human_vel)
+    # With the robot the people walk otherwise (it is among them).
+    assert not np.array_equal(core.state.human_pos, alone.human_pos)
+
+
+def test_people_who_do_not_see_the_robot_lose_no_time():
+    config = EnvConfig().replace(
+        **SMALL, people={"models": "orca", "counterfactual": True}, world={"orca": {"robot_visible": False}}
+    )
+    core = SocialNavCore(config, 2)
+    core.reset_rows(np.arange(2), ROOM_SET.scenarios(range(2), core.map))
+    run(core, 120)
+    for summary in core.episode_summaries([0, 1]):
+        assert set(COST_KEYS) <= set(summary)
+        assert summary["people_time_lost"] == 0.0 and summary["people_extra_distance"] == 0.0
+
+
+def test_the_robot_costs_visible_people_time():
+    core = core_of(batch=4, models="sf", counterfactual=True)
+    run(core, 120)
+    summaries = core.episode_summaries(np.arange(4))
+    lost = [s["people_time_lost"] for s in summaries]
+    assert all(np.isfinite(lost)) and max(np.abs(lost)) > 0.0
+    assert all(s["people_time_lost_max"] >= s["people_time_lost"] for s in summaries)
+
+
+def test_group_intrusion_counts_a_robot_passing_between_two_members():
+    state = without_robots(core_of(batch=1).state)
+    before = state.copy()
+    before.human_mask[0, :2] = True
+    before.human_group[0, :2] = 0
+    before.human_pos[0, :2] = [[2.0, 1.0], [2.0, 2.0]]
+    before.robot_pose = np.array([[[1.5, 1.5, 0.0]]])
+    after = before.copy()
+    after.robot_pose = np.array([[[2.5, 1.5, 0.0]]])
+    assert _group_crossings(before, after).tolist() == [[1]]
+    after.robot_pose = np.array([[[2.5, 3.5, 0.0]]])  # beside the pair, not between
+    assert _group_crossings(before, after).tolist() == [[0]]
+    after.human_group[0, 1] = -1  # strangers
+    after.robot_pose = np.array([[[2.5, 1.5, 0.0]]])
+    assert _group_crossings(before, after).tolist() == [[0]]
+
+
+def test_groups_report_intrusions_and_survive_compaction():
+    from socialzoo.bench.compaction import compact_core
+
+    core = core_of(batch=3, models="groups", counterfactual=True)
+    assert (core.state.human_group[core.state.human_mask] >= 0).any()
+    run(core, 20)
+    small = compact_core(core, [2, 0])
+    run(core, 20)
+    run(small, 20)
+    np.testing.assert_equal(small.episode_summaries([0, 1]), core.episode_summaries([2, 0]))
+    assert "group_intrusions" in core.episode_summaries([0])[0]
+
+
+def learned_config(path, **changes):
+    return {**SMALL, "people": {"models": f"sf@0.5+learned:{path}@0.5"}, **changes}
+
+
+def test_learned_people_are_driven_by_the_env_in_every_interface(walker_policy_path, write_walker, tmp_path):
+    import gymnasium
+
+    import socialzoo  # noqa: F401  (registers the ids)
+    from socialzoo.env.parallel import parallel_env
+    from socialzoo.env.vector import ActionSelectionVectorEnv
+
+    kwargs = learned_config(walker_policy_path)
+    env = gymnasium.make(BENCHMARK_ID, **kwargs).unwrapped
+    env.reset(seed=3)
+    state = env.core.state
+    assert (state.human_model[state.human_mask] == LEARNED).sum() >= 3
+    for _ in range(3):
+        env.step(0)
+    vector = ActionSelectionVectorEnv(2, **kwargs)
+    vector.reset(seed=3)
+    vector.step(np.zeros(2, dtype=np.int64))
+    assert (vector.core.state.human_model == LEARNED).any()
+    parallel = parallel_env(**kwargs)
+    parallel.reset(seed=3)
+    parallel.step({agent: 0 for agent in parallel.agents})
+    assert (parallel.core.state.human_model == LEARNED).any()
+    # Slow walkers (actions tanh(0.5) of their preferred speed) walk slower than the others.
+    slow = write_walker(tmp_path / "slow.safetensors", speed=0.5)
+    core = core_of(batch=2, models=f"learned:{slow}")
+    run(core, 80)
+    speed = np.linalg.norm(core.state.human_vel, axis=-1)[core.state.human_mask]
+    assert speed.mean() < 0.7
+
+
+def test_learned_people_in_the_torchrl_env(walker_policy_path):
+    pytest.importorskip("torchrl")
+    from socialzoo.env.torchrl_env import SocialNavTorchEnv
+
+    env = SocialNavTorchEnv(batch_size=2, seed=0, **learned_config(walker_policy_path))
+    td = env.reset()
+    assert (env.core.state.human_model == LEARNED).any()
+    assert td is not None
+
+
+def test_orca_people_in_the_gymnasium_env():
+    import gymnasium
+
+    import socialzoo  # noqa: F401
+
+    env = gymnasium.make(BENCHMARK_ID, **SMALL, people={"models": "orca"}).unwrapped
+    env.reset(seed=0)
+    assert (env.core.state.human_model[env.core.state.human_mask] == ORCA).all()
+    _, _, _, _, info = env.step(0)
+    assert "reached" in info
+
+
+def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_path):
+    with pytest.raises(ValueError, match="unknown model 'ghosts'"):
+        EnvConfig().replace(people={"models": "ghosts"})
+    with pytest.raises(ValueError, match=r"the shares sum to 1\.2, not 1"):
+        EnvConfig().replace(people={"models": "sf@0.6+orca@0.6"})
+    with pytest.raises(ValueError, match=r"OrcaConfig\.radius must be > 0"):
+        EnvConfig().replace(world={"orca": {"radius": -0.1}})
+    with pytest.raises(ValueError, match="no such learned policy file"):
+        EnvConfig().replace(people={"models": f"learned:{tmp_path / 'none.safetensors'}"})
+    with pytest.raises(ValueError, match="counterfactual needs people the env drives itself"):
+        EnvConfig().replace(num_learned_humans=2, people={"counterfactual": True})
+    # A file of the wrong kind: a robot policy, not a learned human policy.
+    from socialzoo.agents.policy_file import PolicyFileError, current_env_version, save_policy_file
+
+    robot = tmp_path / "robot.safetensors"
+    header = {"policy": "ppo", "network": {}, "observation": {}, "training": {}}
+    save_policy_file(robot, {"w": np.zeros(1)}, {**header, "env_id": f"socialzoo/X-v{current_env_version()}"})
+    config = EnvConfig().replace(**SMALL, people={"models": f"learned:{robot}"})
+    with pytest.raises(PolicyFileError, match="not a learned human policy"):
+        SocialNavCore(config, 1)

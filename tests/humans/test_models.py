@@ -1,0 +1,60 @@
+"""People specs: parsing, named errors, and the seeded assignment of each scenario's people."""
+
+import numpy as np
+import pytest
+
+from socialzoo.humans.models import PeopleConfig, PeopleSpecError, assign_models, head_counts, parse_people
+
+
+def test_specs_name_models_and_shares():
+    assert [(p.model, p.share, p.path) for p in parse_people("sf")] == [("sf", 1.0, None)]
+    assert parse_people("social_force")[0].model == "sf"
+    mix = parse_people("sf@0.5 + orca@0.3 + learned:runs/h.safetensors@0.2")
+    assert [(p.model, p.share) for p in mix] == [("sf", 0.5), ("orca", 0.3), ("learned", 0.2)]
+    assert mix[2].path == "runs/h.safetensors" and mix[2].name == "learned:runs/h.safetensors"
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("robots", "unknown model 'robots'"),
+        ("sf@0.5+orca@0.4", "the shares sum to 0.9, not 1"),
+        ("sf@0.5+orca", "every model of a mix needs its share"),
+        ("sf@1.5", r"must be in \(0, 1\]"),
+        ("sf@half", "must be a number"),
+        ("orca@0.5+orca@0.5", "names a model twice"),
+        ("learned", "name the learned policy file as learned:PATH"),
+        ("orca:fast", "orca takes no file"),
+        ("", "non-empty string"),
+    ],
+)
+def test_bad_specs_fail_naming_what_is_wrong(spec, message):
+    with pytest.raises(PeopleSpecError, match=message):
+        parse_people(spec)
+    with pytest.raises(ValueError, match=f"PeopleConfig.models: .*{message}"):
+        PeopleConfig(models=spec)
+
+
+def test_bad_group_sizes_and_flags_are_refused():
+    with pytest.raises(ValueError, match=r"PeopleConfig.group_sizes\[1\] must be >= 0.0"):
+        PeopleConfig(group_sizes=(1.0, -1.0, 0.0))
+    with pytest.raises(ValueError, match="3 weights"):
+        PeopleConfig(group_sizes=(1.0, 1.0))
+    with pytest.raises(ValueError, match="counterfactual must be a bool"):
+        PeopleConfig(counterfactual="yes")
+    assert PeopleConfig(group_sizes=[1, 0, 0]).group_sizes == (1.0, 0.0, 0.0)
+
+
+def test_head_counts_follow_the_shares():
+    assert head_counts([0.5, 0.3, 0.2], 10).tolist() == [5, 3, 2]
+    assert head_counts([0.5, 0.5], 7).tolist() == [4, 3]
+    assert head_counts([1 / 3] * 3, 5).sum() == 5
+
+
+def test_assignment_is_seeded_per_scenario():
+    parts = parse_people("sf@0.6+orca@0.4")
+    a = assign_models(parts, 20, seed=11)
+    assert np.array_equal(a, assign_models(parts, 20, seed=11))
+    assert np.bincount(a).tolist() == [12, 8]
+    assert any(not np.array_equal(a, assign_models(parts, 20, seed=s)) for s in range(12, 20))
+    assert assign_models(parse_people("orca"), 5, seed=1).tolist() == [0] * 5

@@ -1,0 +1,48 @@
+"""Imports of plans with tight spaces: corridors narrower than 1.2 m get legal poses, a plan with
+no place for one is refused with a message naming the part of the plan and why, and a given
+graph that lies in a wing with an open outline keeps its free space."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from socialzoo.nav import floorplans
+from socialzoo.nav.maps import MapError
+from socialzoo.nav.repair import repair_map
+
+
+@pytest.mark.parametrize("width", [1.1, 0.95])
+def test_tight_corridors_get_legal_poses(width):
+    # No point is 0.6 m from the walls (the preferred pose clearance): the poses come down to
+    # the passable clearance plus a grid cell instead of refusing ("found 0 places" before).
+    m, _ = repair_map("tight", floorplans.long_corridor(20.0, width=width).walls)
+    clearance = m.wall_index.nearest(m.legal_poses[:, :2])[1]
+    assert len(m.legal_poses) >= 5
+    assert (clearance >= 0.44 - 1e-9).all() and (clearance < 0.6).all()
+
+
+def test_no_place_for_a_pose_is_refused_naming_the_part_and_why():
+    with pytest.raises(MapError) as err:
+        repair_map("too_tight", floorplans.long_corridor(20.0, width=0.85).walls)
+    message = str(err.value)
+    assert "found 0 places for legal poses with 0.44 m clearance" in message
+    assert "between (0.4, 0.4) and (19.6, 0.4)" in message and "at most 0.42 m from a wall" in message
+    assert "narrower than the 0.88 m a pose needs" in message
+
+
+def test_a_given_graph_in_a_wing_with_an_open_outline_keeps_its_free_space():
+    # A closed room (larger) and a wing whose west wall has a 3.5 m gap: the enclosed area used
+    # to be the room, the graph was dropped and no pose could join it (AHGM). Now the free space
+    # is where the graph lies, with the wing's outline closed up to 4 m.
+    closed = [(0, 0, 12, 0), (12, 0, 12, 12), (12, 12, 0, 12), (0, 12, 0, 0)]
+    wing = [(20, 0, 32, 0), (32, 0, 32, 6), (32, 6, 20, 6), (20, 6, 20, 4.75), (20, 1.25, 20, 0)]
+    wing += [(24, 0, 24, 2.5), (28, 6, 28, 3.5)]
+    nodes = np.array([[22.0, 3.0], [26.0, 3.0], [30.0, 3.0]])
+    m, report = repair_map(
+        "wing", np.array(closed + wing, float), nodes=nodes, edges=np.array([[0, 1], [1, 2]])
+    )
+    assert report.counts() == {"outline_closed": 1, "poses_generated": 1}
+    assert "openings in the building's outline up to 4 m wide count as closed" in report.lines()[0]
+    np.testing.assert_array_equal(m.nodes, nodes)
+    assert (m.legal_poses[:, 0] > 20.0).all() and len(m.legal_poses) >= 5

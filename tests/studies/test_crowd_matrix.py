@@ -1,0 +1,95 @@
+"""The policy x crowd-model matrix (`socialzoo benchmark --humans A,B,...`)."""
+
+import json
+
+import pytest
+
+from socialzoo.cli import main as socialzoo_main
+from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.studies.crowd_matrix import MatrixConfig, column_folder, column_label, crowd_matrix
+
+
+@pytest.fixture(scope="module")
+def rooms(rooms_map_path):
+    return {
+        "rooms": TestSet(
+            str(rooms_map_path), 7, 20, ScenarioConfig(min_humans=3, max_humans=5), name="rooms-test"
+        )
+    }
+
+
+def config(**changes):
+    base = dict(
+        policies=("goalone", "ref"),
+        humans=("sf", "orca"),
+        maps=("rooms",),
+        trials=2,
+        batch_size=4,
+        workers=1,
+        env_overrides={"max_steps": 80},
+    )
+    return MatrixConfig(**{**base, **changes})
+
+
+def test_matrix_runs_every_policy_among_every_crowd_model(rooms, tmp_path):
+    result = crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
+    assert [(r["policy"], r["humans"]) for r in result.rows] == [
+        ("goalone", "sf"),
+        ("ref", "sf"),
+        ("goalone", "orca"),
+        ("ref", "orca"),
+    ]
+    for row in result.rows:
+        assert row["trials"] == 2 and 0.0 <= row["success_mean"] <= 100.0
+        assert row["people_time_lost_mean"] == row["people_time_lost_mean"]  # measured, not NaN
+    text = (tmp_path / "matrix.md").read_text()
+    assert "people's time lost" in text and "| GoAlone |" in text
+    env = next(
+        iter(
+            json.loads((tmp_path / column_folder(1, "orca") / "config.json").read_text())[
+                "env_configs"
+            ].values()
+        )
+    )
+    assert env["people"] == {"models": "orca", "group_sizes": [0.6, 0.3, 0.1], "counterfactual": True}
+    # A rerun reads every trial back.
+    again = crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
+    assert again.rows == result.rows
+
+
+def test_matrix_labels_and_bad_configs(tmp_path):
+    assert column_label("sf@0.5+learned:/x/y/h.safetensors@0.5") == "sf@0.5+learned:h.safetensors@0.5"
+    assert column_folder(3, "learned:/x/h.safetensors") == "3-learned"
+    with pytest.raises(ValueError, match="unknown model 'robots'"):
+        config(humans=("sf", "robots"))
+    with pytest.raises(ValueError, match="no such learned policy file"):
+        config(humans=(f"learned:{tmp_path / 'none.safetensors'}",))
+    with pytest.raises(ValueError, match="must not set people"):
+        config(env_overrides={"people": {"models": "orca"}})
+
+
+def test_cli_benchmark_with_several_humans_writes_the_matrix(rooms_map_path, tmp_path, capsys):
+    out = tmp_path / "matrix"
+    argv = ["benchmark", "--policies", "goalone", "--maps", str(rooms_map_path), "--trials", "1"]
+    argv += ["--max-steps", "40", "--workers", "1", "--batch-size", "1", "--no-figures", "--no-progress"]
+    assert socialzoo_main([*argv, "--humans", "sf,groups", "--out", str(out)]) == 0
+    assert "# Robot policies x crowd models" in capsys.readouterr().out
+    assert (out / "matrix.csv").is_file() and (out / "0-sf").is_dir() and (out / "1-groups").is_dir()
+    assert socialzoo_main([*argv, "--humans", "sf,orca@0.5", "--out", str(out)]) == 2
+    assert "the shares sum to 0.5" in capsys.readouterr().err
+
+
+def test_benchmark_humans_name_the_runners_humans_or_the_envs_people(walker_policy_path):
+    from socialzoo.bench.experiment import BenchmarkConfig, human_env_overrides, people_spec, runner_humans
+    from socialzoo.nav.scenarios import get_test_set
+
+    assert people_spec("social_force") is None and people_spec(f"learned:{walker_policy_path}") is None
+    assert people_spec(f"learned:{walker_policy_path}@1") == f"learned:{walker_policy_path}@1"
+    assert people_spec("sf@0.5+orca@0.5") == "sf@0.5+orca@0.5"
+    test_set = get_test_set("gdc1-quick")
+    orca = BenchmarkConfig(humans="orca", counterfactual=True)
+    assert runner_humans(orca) == "social_force"
+    assert human_env_overrides(orca, test_set) == {"people": {"models": "orca", "counterfactual": True}}
+    assert human_env_overrides(BenchmarkConfig(), test_set) == {}
+    with pytest.raises(ValueError, match="counterfactual must be a bool"):
+        BenchmarkConfig(counterfactual=1)
