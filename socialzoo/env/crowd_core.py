@@ -32,7 +32,7 @@ from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import ORCA, SOCIAL_FORCE
-from socialzoo.nav.crowd_cases import ARENA_MAP, CrowdCase
+from socialzoo.nav.crowd_cases import CrowdCase, case_scenario
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
@@ -126,7 +126,7 @@ class CrowdNavCore:
             self._write_cases(rows, cases)  # type: ignore[arg-type]
             return self._after_reset(rows, [None] * len(rows), [c.seed for c in cases])
         if len(cases) and isinstance(cases[0], CrowdCase):
-            cases = [_scenario(c, self.config) for c in cases]  # type: ignore[arg-type]
+            cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
         fresh = scenarios_to_state(cases, num_robots=self.num_robots, max_humans=self.config.slots)
         fresh.human_model[:] = self._model
         if self.state is None:
@@ -380,20 +380,3 @@ def _map_walls(map_name: str | None) -> WallIndex:
     from socialzoo.nav.maps import load_map
 
     return load_map(map_name).wall_index
-
-
-def _scenario(case: CrowdCase, config: CrowdNavConfig) -> Scenario:
-    """An arena case as a Scenario (one-point routes to the people's goals)."""
-    n = case.human_starts.shape[0]
-    return Scenario(
-        map_name=ARENA_MAP,
-        seed=case.seed,
-        robot_starts=case.robot_starts,
-        robot_goals=case.robot_goals,
-        human_spawn=case.human_starts,
-        human_start_index=np.full(n, -1),
-        human_goal_index=np.full(n, -1),
-        human_routes=tuple(g[None, :] for g in case.human_goals),
-        human_speed=np.full(n, config.cases.human_speed),
-        family=config.cases.layout,
-    )

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from tensordict import TensorDict, TensorDictBase
+from tensordict import TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, OneHot, Unbounded
 from torchrl.envs import EnvBase
 
@@ -25,6 +25,7 @@ from socialzoo.env.crowd_core import CrowdNavCore
 from socialzoo.env.crowd_env import _one_robot, _resolve
 from socialzoo.env.crowd_observation import flat_size
 from socialzoo.env.crowd_source import CrowdCaseSource
+from socialzoo.env.torchrl_common import step_tensordict
 
 
 class CrowdNavTorchEnv(EnvBase):
@@ -93,18 +94,7 @@ class CrowdNavTorchEnv(EnvBase):
             rows = np.flatnonzero(mask.reshape(self.num_envs).cpu().numpy())
         observation = self.core.reset_rows(rows, self.source.next(rows))
         self._started = True
-        no = torch.zeros((self.num_envs, 1), dtype=torch.bool, device=self.device)
-        return TensorDict(
-            {
-                "observation": torch.tensor(observation.flat(), device=self.device),
-                "success": no.clone(),
-                "done": no.clone(),
-                "terminated": no.clone(),
-                "truncated": no,
-            },
-            batch_size=self.batch_size,
-            device=self.device,
-        )
+        return step_tensordict(observation.flat(), self.batch_size, self.device)
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         action = tensordict.get("action")
@@ -115,20 +105,13 @@ class CrowdNavTorchEnv(EnvBase):
         else:
             actions = action.reshape(self.num_envs, 2).cpu().numpy().astype(np.float64)
         result = self.core.step(actions)
-        outcome = result.outcome
-
-        def column(a: np.ndarray) -> torch.Tensor:
-            return torch.as_tensor(np.ascontiguousarray(a), device=self.device).reshape(self.num_envs, 1)
-
-        return TensorDict(
-            {
-                "observation": torch.tensor(result.observation.flat(), device=self.device),
-                "reward": column(outcome.reward.astype(np.float32)),
-                "success": column(outcome.success),
-                "done": column(outcome.terminated | outcome.truncated),
-                "terminated": column(outcome.terminated),
-                "truncated": column(outcome.truncated),
-            },
-            batch_size=self.batch_size,
-            device=self.device,
+        o = result.outcome
+        return step_tensordict(
+            result.observation.flat(),
+            self.batch_size,
+            self.device,
+            o.reward,
+            o.success,
+            o.terminated,
+            o.truncated,
         )

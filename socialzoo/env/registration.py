@@ -55,22 +55,16 @@ CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"variant": name} for name in 
 
 def register_envs() -> None:
     """Register every id (idempotent)."""
-    for env_id, kwargs in CROWD_IDS.items():
-        if env_id not in gym.registry:
-            gym.register(
-                id=env_id,
-                entry_point=CROWD_ENTRY,
-                vector_entry_point=CROWD_VECTOR_ENTRY,
-                kwargs=dict(kwargs),
-                disable_env_checker=False,
-            )
-    for env_id, kwargs in {**BENCHMARK_IDS, **FAMILY_IDS}.items():
-        if env_id in gym.registry:
-            continue
-        gym.register(
-            id=env_id,
-            entry_point=BENCHMARK_ENTRY,
-            vector_entry_point=VECTOR_ENTRY,
-            kwargs=dict(kwargs),
-            disable_env_checker=False,
-        )
+    for ids, entry, vector_entry in (
+        (CROWD_IDS, CROWD_ENTRY, CROWD_VECTOR_ENTRY),
+        ({**BENCHMARK_IDS, **FAMILY_IDS}, BENCHMARK_ENTRY, VECTOR_ENTRY),
+    ):
+        for env_id, kwargs in ids.items():
+            if env_id not in gym.registry:
+                gym.register(
+                    id=env_id,
+                    entry_point=entry,
+                    vector_entry_point=vector_entry,
+                    kwargs=dict(kwargs),
+                    disable_env_checker=False,
+                )

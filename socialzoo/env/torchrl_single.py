@@ -15,13 +15,14 @@ from typing import Any
 
 import numpy as np
 import torch
-from tensordict import TensorDict, TensorDictBase
+from tensordict import TensorDictBase
 from torchrl.data import Categorical, Composite, OneHot, Unbounded
 from torchrl.envs import EnvBase
 
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
 from socialzoo.env.scenario_source import ScenarioStream
+from socialzoo.env.torchrl_common import step_tensordict
 from socialzoo.nav.maps import Map
 from socialzoo.nav.subpolicies import NUM_ACTIONS
 
@@ -132,18 +133,7 @@ class ActionSelectionTorchEnv(EnvBase):
             rows = np.flatnonzero(mask.reshape(self.num_envs).cpu().numpy())
         self.core.reset_rows(rows, self.scenarios.next(rows))
         self._started = True
-        no = torch.zeros((self.num_envs, 1), dtype=torch.bool, device=self.device)
-        return TensorDict(
-            {
-                "observation": self._obs(),
-                "success": no.clone(),
-                "done": no.clone(),
-                "terminated": no.clone(),
-                "truncated": no,
-            },
-            batch_size=self.batch_size,
-            device=self.device,
-        )
+        return step_tensordict(self._obs(), self.batch_size, self.device)
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         action = tensordict.get("action")
@@ -157,19 +147,8 @@ class ActionSelectionTorchEnv(EnvBase):
         success = np.zeros(self.num_envs, dtype=bool)
         if len(ended):
             success[ended] = [bool(s["success"]) for s in self.core.episode_summaries(ended)]
-        column = lambda a: torch.as_tensor(a, device=self.device).reshape(self.num_envs, 1)  # noqa: E731
-        done = column(terminated | truncated)
-        return TensorDict(
-            {
-                "observation": self._obs(),
-                "reward": column(result.reward[:, 0].astype(np.float32)),
-                "success": column(success),
-                "done": done,
-                "terminated": column(terminated.copy()),
-                "truncated": column(truncated.copy()),
-            },
-            batch_size=self.batch_size,
-            device=self.device,
+        return step_tensordict(
+            self._obs(), self.batch_size, self.device, result.reward[:, 0], success, terminated, truncated
         )
 
     def _obs(self) -> torch.Tensor:

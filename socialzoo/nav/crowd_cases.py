@@ -203,11 +203,15 @@ def crowd_case(config: CrowdCaseConfig, seed: int, num_robots: int = 1) -> Scena
     """The case drawn from RandomState(seed): the robots (robot_poses; one robot: CrowdNav's, at
     (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
     routes to their goals, each drawn clear of the robots and of the people before it."""
-    case = crowd_case_arrays(config, seed, num_robots)
-    n = config.num_humans
+    return case_scenario(crowd_case_arrays(config, seed, num_robots), config)
+
+
+def case_scenario(case: CrowdCase, config: CrowdCaseConfig) -> Scenario:
+    """A case as a Scenario: one-point routes to the people's goals, at config.human_speed."""
+    n = case.human_starts.shape[0]
     return Scenario(
         map_name=ARENA_MAP,
-        seed=seed,
+        seed=case.seed,
         robot_starts=case.robot_starts,
         robot_goals=case.robot_goals,
         human_spawn=case.human_starts,

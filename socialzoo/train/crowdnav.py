@@ -210,7 +210,7 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
     from socialzoo.env.crowd_env import CrowdNavVectorEnv
     from socialzoo.env.sb3_vec import SB3VecEnv
     from socialzoo.train.crowd_attention import CrowdAttentionExtractor
-    from socialzoo.train.sb3_common import checkpoint_callback
+    from socialzoo.train.sb3_common import learn_with_checkpoints
 
     task = args.task()
     venv: Any = VecMonitor(SB3VecEnv(args.num_envs, vector_env=CrowdNavVectorEnv(args.num_envs, task)))
@@ -248,16 +248,7 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
     def save(path: Path, step: int) -> None:
         export_crowd_policy(model, task, run, step).save(path, crowd_tensors(model))
 
-    schedule = run.schedule(args.total_steps, args.checkpoint_every)
-    model.learn(
-        total_timesteps=args.total_steps,
-        callback=checkpoint_callback(run, schedule, save),
-        progress_bar=False,
-    )
-    steps = int(model.num_timesteps)
-    last = run.checkpoint_path(args.total_steps)
-    if not last.is_file():
-        run.checkpoint(args.total_steps, lambda path: save(path, steps))
+    steps, last = learn_with_checkpoints(run, model, args.total_steps, args.checkpoint_every, save)
     # Checkpoint choice by validation: with evaluated checkpoints the kept policy is the one of the
     # best validation success (the earliest among equals), never a test-set choice.
     best = run.best_evaluation()

@@ -197,6 +197,23 @@ def make_training_env(args: SB3Args, config: EnvConfig) -> tuple[Any, Any]:
 EPISODE_METRICS = ("success", "reached", "collision", "timeout", "average_step_reward", "navigation_time")
 
 
+def learn_with_checkpoints(
+    run: TrainingRun, model: Any, total_steps: int, every: int, save: Callable[[Path, int], None]
+) -> tuple[int, Path]:
+    """Train an SB3 model for total_steps env steps with the run's checkpoints (save(path, steps)
+    writes one; the last is written at the end if no rollout boundary fell on it); returns (the env
+    steps trained, the last checkpoint)."""
+    schedule = run.schedule(total_steps, every)
+    model.learn(
+        total_timesteps=total_steps, callback=checkpoint_callback(run, schedule, save), progress_bar=False
+    )
+    steps = int(model.num_timesteps)
+    last = run.checkpoint_path(total_steps, POLICY_SUFFIX)
+    if not last.is_file():
+        run.checkpoint(total_steps, lambda path: save(path, steps), POLICY_SUFFIX)
+    return steps, last
+
+
 def checkpoint_callback(
     run: TrainingRun, schedule: CheckpointSchedule, save: Callable[[Path, int], None]
 ) -> Any:
@@ -295,16 +312,7 @@ def _fit(run: TrainingRun, args: SB3Args) -> Mapping[str, Any]:
         }
         policy.save(path, header)
 
-    schedule = run.schedule(args.total_steps, args.checkpoint_every)
-    model.learn(
-        total_timesteps=args.total_steps,
-        callback=checkpoint_callback(run, schedule, save),
-        progress_bar=False,
-    )
-    steps = int(model.num_timesteps)
-    last = run.checkpoint_path(args.total_steps, POLICY_SUFFIX)
-    if not last.is_file():
-        run.checkpoint(args.total_steps, lambda path: save(path, steps), POLICY_SUFFIX)
+    steps, last = learn_with_checkpoints(run, model, args.total_steps, args.checkpoint_every, save)
     run.policy.write_bytes(last.read_bytes())
     model.get_env().close()
     return {"env_steps": steps, "env_steps_per_second": round(steps / run.seconds, 1)}
