@@ -79,3 +79,17 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
     assert page.stat().st_size > 10_000
     assert main(["crowdnav", "eval", "--policies", "wizard", "--out", str(tmp_path)]) == 2
     assert "unknown CrowdNav policy" in capsys.readouterr().err
+
+
+def test_the_shipped_learned_policy_crosses_the_crowd():
+    import json
+
+    from socialzoo.agents import SHIPPED_DIR
+
+    policy = make_crowd_policy("crowdnav")
+    record = json.loads((SHIPPED_DIR / "crowdnav.run.json").read_text())
+    assert record["command"].startswith("socialzoo train crowdnav ") and "--seed" in record["command"]
+    assert policy.header["training"]["seed"] == record["seed"] and record["finished"]
+    config = CrowdNavConfig.variant("", action=policy.action_kind)
+    result = evaluate_crowd(policy.act, config, "test", cases=40)
+    assert result.summary["success_rate"] >= 0.85  # 0.976 over all 500 test cases
