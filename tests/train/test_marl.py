@@ -16,6 +16,7 @@ pytest.importorskip("torchrl")
 
 from socialzoo.agents import make_policy  # noqa: E402
 from socialzoo.agents.learned_humans import LearnedHumanPolicy  # noqa: E402
+from socialzoo.env.registration import ENV_VERSION  # noqa: E402
 from socialzoo.env.torchrl_env import SocialNavTorchEnv  # noqa: E402
 from socialzoo.train.cotrain import CotrainArgs  # noqa: E402
 from socialzoo.train.cotrain import train as cotrain  # noqa: E402
@@ -230,7 +231,8 @@ def test_mirror_symmetric_humans_act_alike_on_the_left_and_the_right(tmp_path):
     policy = export_humans(actor, config)
     assert policy.mirror_symmetric
     np.testing.assert_allclose(policy.act(obs.numpy()), torch.tanh(mean).numpy(), atol=1e-5)
-    loaded = LearnedHumanPolicy.load(policy.save(tmp_path / "sym.safetensors", "socialzoo/MultiAgent-v1", {}))
+    env_id = f"socialzoo/MultiAgent-v{ENV_VERSION}"
+    loaded = LearnedHumanPolicy.load(policy.save(tmp_path / "sym.safetensors", env_id, {}))
     assert loaded.mirror_symmetric
     np.testing.assert_allclose(
         loaded.act(obs.numpy() * signs), loaded.act(obs.numpy()) * [1.0, -1.0], atol=1e-6
