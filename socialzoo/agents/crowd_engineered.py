@@ -12,7 +12,8 @@ Both read the world through the task's core (positions and velocities of everyon
 - Social force: the robot as one more social-force pedestrian (the benchmark's PedSim model)
   heading for its goal at its preferred speed; its velocity after one step of the force.
 
-A velocity is turned into the task's action: (vx, vy) / v_pref for a holonomic robot; for a
+A velocity is turned into the task's action: (vx, vy) / v_pref in the action frame (the goal
+frame by default) for a holonomic robot; for a
 unicycle, the turn towards the velocity's direction (at most pi/4) and its speed; for the
 discrete action set, the nearest of CrowdNav's 81 actions.
 """
@@ -39,8 +40,8 @@ def velocity_to_action(velocity: np.ndarray, core: Any) -> np.ndarray:
     v_pref = config.preferred_speed
     b, r = velocity.shape[:2]
     if robot.kinematics == "holonomic":
-        command = velocity
-        action = np.clip(velocity / v_pref, -1.0, 1.0)
+        command = core.to_action_frame(velocity)
+        action = np.clip(command / v_pref, -1.0, 1.0)
     else:
         heading = core.state.robot_pose[..., 2]
         turn = np.angle(np.exp(1j * (np.arctan2(velocity[..., 1], velocity[..., 0]) - heading)))
@@ -87,11 +88,17 @@ class CrowdOrcaRobot:
         pos = np.concatenate((s.robot_pose[..., :2], s.human_pos), axis=1)
         robot_vel = world_velocity(s.robot_pose, s.robot_vel, robot)
         vel = np.concatenate((robot_vel, s.human_vel), axis=1)
-        to_goal = s.robot_goal[..., :2] - s.robot_pose[..., :2]
+        target, left = core.seen_goal()
+        to_goal = target - s.robot_pose[..., :2]
         distance = np.hypot(to_goal[..., 0], to_goal[..., 1])[..., None]
         pref = np.zeros((b, r + h, 2))
-        # CrowdNav: the goal direction at the preferred speed, slower only within a metre.
-        pref[:, :r] = to_goal / np.maximum(distance, 1.0) * config.preferred_speed
+        # CrowdNav: the goal direction at the preferred speed, slower only within a metre of the
+        # goal (among walls: towards the carrot, slower within a metre of the route's end).
+        if core.navigator is None:
+            pref[:, :r] = to_goal / np.maximum(distance, 1.0) * config.preferred_speed
+        else:
+            scale = np.minimum(left[..., None], 1.0) / np.maximum(distance, 1e-9)
+            pref[:, :r] = to_goal * scale * config.preferred_speed
         radius = np.full((b, r + h), config.cases.human_radius + _ORCA_PADDING)
         radius[:, :r] = float(robot.radius) + _ORCA_PADDING + self.safety_space
         max_speed = np.full((b, r + h), config.preferred_speed)
@@ -142,7 +149,7 @@ class CrowdSocialForceRobot:
         pos = np.concatenate((s.robot_pose[..., :2], s.human_pos), axis=1)
         robot_vel = world_velocity(s.robot_pose, s.robot_vel, config.robot)
         vel = np.concatenate((robot_vel, s.human_vel), axis=1)
-        target = np.concatenate((s.robot_goal[..., :2], s.human_pos), axis=1)
+        target = np.concatenate((core.seen_goal()[0], s.human_pos), axis=1)
         speed = np.concatenate((np.full((b, r), config.preferred_speed), s.human_pref_speed), axis=1)
         mask = np.concatenate((np.ones((b, r), dtype=bool), s.human_mask), axis=1)
         no_robot = np.zeros((b, 0, 2))

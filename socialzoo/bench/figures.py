@@ -95,10 +95,14 @@ def _save(fig: Any, out_dir: Path, stem: str, formats: Sequence[str]) -> list[Pa
 
 
 def plot_success(
-    summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
+    summary: Sequence[Mapping[str, Any]],
+    out_dir: str | Path,
+    formats: Sequence[str] = FIGURE_FORMATS,
+    interval: str = "90% CI",
 ) -> list[Path]:
-    """success.{png,pdf}: success rate (%) per policy, one bar per map with its 90% Wilson interval,
-    and the paper's number as a black tick where the paper has one.
+    """success.{png,pdf}: success rate (%) per policy, one bar per map with its Wilson interval
+    (the benchmark's 90%; `interval` names the one given), and the paper's number as a black tick
+    where the paper has one.
 
     Returns:
         The files written.
@@ -124,7 +128,7 @@ def plot_success(
                 label=None if labelled else "paper",
             )
             labelled = True
-    ax.set_ylabel("success rate, % (90% CI)")
+    ax.set_ylabel(f"success rate, % ({interval})")
     ax.set_ylim(0, 105)
     ax.legend(loc="lower right", fontsize="small")
     ax.set_title("Success rate")

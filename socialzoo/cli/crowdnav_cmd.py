@@ -62,6 +62,7 @@ def register(subparsers: Any) -> None:
     evaluate, replay = sub.choices["eval"], sub.choices["replay"]
     evaluate.add_argument("--cases", type=positive_int, default=None, help="first N cases (default all)")
     evaluate.add_argument("--batch-size", type=positive_int, default=100, help="rows stepped together")
+    evaluate.add_argument("--no-figures", action="store_true", help="skip success.png/pdf")
     evaluate.set_defaults(func=run_eval)
     replay.add_argument("--case", type=int, default=0, help="the case to play")
     replay.set_defaults(func=run_replay)
@@ -115,6 +116,21 @@ def run_eval(args: argparse.Namespace) -> int:
             f"timeout {summary['timeout_rate']:.3f} time {summary['navigation_time']:.2f} s"
         )
     files = write_crowd_tables(rows, out, config, args.split)
+    if not args.no_figures:
+        from socialzoo.bench.figures import plot_success
+
+        task = f"CrowdNav{args.variant} {args.split}"
+        bars = [
+            {
+                "policy": r["policy"],
+                "map": task,
+                "success_rate": r["success_rate"],
+                "success_ci_low": r["success_ci"][0],
+                "success_ci_high": r["success_ci"][1],
+            }
+            for r in rows
+        ]
+        files += plot_success(bars, out, interval="95% CI")
     print(f"socialzoo crowdnav eval: wrote {', '.join(str(f) for f in files)}")
     return 0
 

@@ -28,6 +28,8 @@ CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
 # one world step).
 CrowdHumans = Literal["orca", "social_force"]
 CROWD_HUMANS: tuple[str, ...] = get_args(CrowdHumans)
+ActionFrame = Literal["goal", "world"]
+ACTION_FRAMES: tuple[str, ...] = get_args(ActionFrame)
 # CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
 SPEED_SAMPLES = 5
 ROTATION_SAMPLES = 16
@@ -60,7 +62,20 @@ class CrowdNavConfig:
         num_robots: robots per world (1: CrowdNav's task; more for the PettingZoo env, each seeing
             the others as people: socialzoo.nav.crowd_cases.robot_poses).
         map: None for CrowdNav's open arena; a building map ("gdc1", a path) for crowd navigation
-            among walls, with the benchmark's scenarios and social-force people.
+            among walls, with the benchmark's scenarios and social-force people. Among walls the
+            robot is guided as the benchmark's robot is: the goal it sees is its route's local
+            target on the map's navigation graph (the carrot, SPEC section 6) and its goal distance
+            is the length of route left.
+        wall_rays: rays of a scan around the robot whose wall hits within wall_range it sees as
+            still obstacles of radius 0, one slot per ray after the people (masked when the ray
+            hits nothing): an end-to-end robot among walls must see them. 0: none (the arena).
+        wall_range: the scan's range, m.
+        action_frame: the frame of a holonomic robot's velocity (continuous or discrete): "goal"
+            (x towards the goal the robot sees: the observation's own frame, so a policy acts in
+            the frame it observes; the default) or "world" (CrowdNav's ActionXY). In CrowdNav's
+            arena the goal lies straight ahead along +y, so the two differ by a fixed quarter
+            turn; with random layouts (CrowdNav++'s arena) or among walls only "goal" can be
+            learned from the observation.
     """
 
     cases: CrowdCaseConfig = field(default_factory=CrowdCaseConfig)
@@ -76,6 +91,9 @@ class CrowdNavConfig:
     max_humans: int | None = None
     num_robots: int = 1
     map: str | None = None
+    wall_rays: int = 0
+    wall_range: float = 4.0
+    action_frame: ActionFrame = "goal"
 
     def __post_init__(self) -> None:
         check_number("CrowdNavConfig", "time_step", self.time_step, low=0, low_open=True)
@@ -103,6 +121,12 @@ class CrowdNavConfig:
             )
         if self.map is not None and (not isinstance(self.map, str) or not self.map):
             raise ValueError(f"CrowdNavConfig.map must be None or a map name or path, got {self.map!r}")
+        check_int("CrowdNavConfig", "wall_rays", self.wall_rays, low=0)
+        check_number("CrowdNavConfig", "wall_range", self.wall_range, low=0, low_open=True)
+        if self.action_frame not in ACTION_FRAMES:
+            raise ValueError(
+                f"CrowdNavConfig.action_frame must be one of {ACTION_FRAMES}, got {self.action_frame!r}"
+            )
 
     @property
     def slots(self) -> int:
@@ -111,8 +135,8 @@ class CrowdNavConfig:
 
     @property
     def observed_slots(self) -> int:
-        """Slots of a robot's observation: the people, then the other robots."""
-        return self.slots + self.num_robots - 1
+        """Slots of a robot's observation: the people, the other robots, then the wall rays."""
+        return self.slots + self.num_robots - 1 + self.wall_rays
 
     @property
     def physics_dt(self) -> float:

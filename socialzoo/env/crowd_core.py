@@ -33,6 +33,7 @@ from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import ORCA, SOCIAL_FORCE
 from socialzoo.nav.crowd_cases import CrowdCase, case_scenario
+from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
@@ -76,6 +77,15 @@ class CrowdNavCore:
         self.batch_size = batch_size
         self.num_robots = config.num_robots
         self.walls = walls if walls is not None else _map_walls(config.map)
+        # Among walls the robot is guided along its route (the benchmark robot's navigator): it sees
+        # the route's carrot as its goal and the route left as its goal distance.
+        self.navigator = _route_navigator(config, batch_size) if config.map is not None else None
+        self.carrot = np.zeros((batch_size, config.num_robots, 2))
+        self.route_left = np.zeros((batch_size, config.num_robots))
+        self._ray_angles = np.linspace(0.0, 2.0 * np.pi, config.wall_rays, endpoint=False)
+        # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
+        # goal-frame velocity actions are turned by it into the world frame.
+        self.frame_angle = np.zeros(batch_size * config.num_robots)
         cases = config.cases
         radius = float(config.robot.radius)  # type: ignore[arg-type]
         self.world = WorldConfig(
@@ -109,7 +119,7 @@ class CrowdNavCore:
         )
         # Each row's case (a Scenario; None for an arena case written as arrays) and its seed.
         self.cases: list[Scenario | None] = [None] * batch_size
-        self.case_seed = np.zeros(batch_size, dtype=np.int64)
+        self.case_seed = np.zeros(batch_size, dtype=np.uint64)  # benchmark scenario seeds use all 64 bits
         self.observation: JointState | None = None
         self._blame_horizon = RewardConfig().blame_horizon
 
@@ -139,6 +149,11 @@ class CrowdNavCore:
     def _after_reset(self, rows: np.ndarray, cases: list[Scenario | None], seeds: list[int]) -> JointState:
         for row, case in zip(rows.tolist(), cases, strict=True):
             self.cases[row] = case
+        if self.navigator is not None:
+            s = self.state
+            assert s is not None
+            self.navigator.reset(rows, s.robot_pose[rows][..., :2], s.robot_goal[rows][..., :2])
+            self._follow_routes()
         self.case_seed[rows] = seeds
         self.time[rows] = 0.0
         self.robot_done[rows] = False
@@ -210,6 +225,8 @@ class CrowdNavCore:
             chosen = self.action_table[flat]
             if robot.kinematics == "unicycle":  # (speed, turn per step) -> (v, omega)
                 chosen = np.stack((chosen[:, 0], chosen[:, 1] / self.config.time_step), axis=-1)
+            else:
+                chosen = self._to_world(chosen)
             return chosen.reshape(b, r, 2)
         if action.shape not in ((b, r, 2),) + (((b, 2),) if r == 1 else ()):
             raise ValueError(
@@ -224,10 +241,30 @@ class CrowdNavCore:
             )
         v_pref = self.config.preferred_speed
         if robot.kinematics == "holonomic":
-            return (action * v_pref).reshape(b, r, 2)
+            return self._to_world(action * v_pref).reshape(b, r, 2)
         speed = (action[:, 0] + 1.0) * 0.5 * v_pref
         omega = action[:, 1] * robot.max_rotation / self.config.time_step
         return np.stack((speed, omega), axis=-1).reshape(b, r, 2)
+
+    def _to_world(self, velocity: np.ndarray) -> np.ndarray:
+        """(B R, 2) holonomic velocities in the action frame -> the world frame."""
+        if self.config.action_frame == "world":
+            return velocity
+        c, s = np.cos(self.frame_angle), np.sin(self.frame_angle)
+        return np.stack(
+            (c * velocity[:, 0] - s * velocity[:, 1], s * velocity[:, 0] + c * velocity[:, 1]), axis=-1
+        )
+
+    def to_action_frame(self, velocity: np.ndarray) -> np.ndarray:
+        """(B, R, 2) world-frame velocities -> the frame of the robots' velocity actions."""
+        if self.config.action_frame == "world":
+            return velocity
+        b, r = velocity.shape[:2]
+        flat = velocity.reshape(b * r, 2)
+        c, s = np.cos(self.frame_angle), np.sin(self.frame_angle)
+        return np.stack((c * flat[:, 0] + s * flat[:, 1], c * flat[:, 1] - s * flat[:, 0]), axis=-1).reshape(
+            b, r, 2
+        )
 
     def step(self, action: np.ndarray) -> CrowdStep:
         """Advance every row one decision step (rows whose episode ended wait to be reset)."""
@@ -261,6 +298,8 @@ class CrowdNavCore:
             wall |= events.robot_wall.reshape(b * r)
         self.state = state
         self.time += cfg.time_step
+        if self.navigator is not None:
+            self._follow_routes()
         goal = (state.robot_goal[..., :2] - state.robot_pose[..., :2]).reshape(b * r, 2)
         # A wall contact is a collision of the task (CrowdNav's arena has none).
         closest = np.where(wall, np.minimum(closest, -1e-9), closest)
@@ -288,6 +327,33 @@ class CrowdNavCore:
             metrics=dict(zip(ended.tolist(), summaries, strict=True)),
             row_done=self.robot_done.all(axis=1),
         )
+
+    def _follow_routes(self) -> None:
+        """Each robot's carrot and route left on its plan (replanned when it strayed)."""
+        assert self.navigator is not None and self.state is not None
+        self.carrot = self.navigator.update(self.state.robot_pose[..., :2])
+        self.route_left = self.navigator.route_left.copy()
+
+    def seen_goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """((B, R, 2) the goal each robot heads for, (B, R) its distance, m): the goal itself in the
+        arena; among walls the route's carrot and the route's length left."""
+        assert self.state is not None
+        pos = self.state.robot_pose[..., :2]
+        if self.navigator is not None:
+            return self.carrot, self.route_left
+        goal = self.state.robot_goal[..., :2]
+        return goal, np.hypot(goal[..., 0] - pos[..., 0], goal[..., 1] - pos[..., 1])
+
+    def _wall_points(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(points (N, K, 2), seen (N, K)): where each robot's K scan rays first hit a wall within
+        wall_range (world frame; a ray that hits nothing is not seen)."""
+        n, k = len(pos), len(self._ray_angles)
+        if k == 0 or self.walls.num_walls == 0:
+            return np.zeros((n, k, 2)), np.zeros((n, k), dtype=bool)
+        angles = np.broadcast_to(self._ray_angles, (n, k))
+        ranges = self.walls.cast_rays(pos, angles, self.config.wall_range)
+        points = pos[:, None, :] + ranges[..., None] * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
+        return points, ranges < self.config.wall_range
 
     def _arrive(self, s: WorldState) -> None:
         """CrowdNav's people slow down on their last metre and stop at their goal: the preferred
@@ -341,9 +407,25 @@ class CrowdNavCore:
         robot = self.config.robot
         velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
         pos, vel, mask = self._others_of(s, velocity)
-        return joint_state(
-            robot_pos=s.robot_pose[..., :2].reshape(b * r, 2),
-            robot_goal=s.robot_goal[..., :2].reshape(b * r, 2),
+        radius = np.broadcast_to(self.slot_radius, mask.shape)
+        robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        if self.config.wall_rays:
+            points, seen = self._wall_points(robot_pos)
+            pos = np.concatenate((pos, points), axis=1)
+            vel = np.concatenate((vel, np.zeros_like(points)), axis=1)
+            mask = np.concatenate((mask, seen), axis=1)
+            radius = np.concatenate((radius, np.zeros(seen.shape)), axis=1)
+        guided = self.navigator is not None
+        goal = (
+            (self.carrot if rows is None else self.carrot[rows]) if guided else s.robot_goal[..., :2]
+        ).reshape(b * r, 2)
+        offset = goal - robot_pos
+        self.frame_angle[slice(None) if rows is None else self._flat(rows)] = np.arctan2(
+            offset[:, 1], offset[:, 0]
+        )
+        observation = joint_state(
+            robot_pos=robot_pos,
+            robot_goal=goal,
             robot_vel=velocity.reshape(b * r, 2),
             robot_heading=s.robot_pose[..., 2].reshape(b * r),
             robot_radius=float(robot.radius),  # type: ignore[arg-type]
@@ -351,9 +433,13 @@ class CrowdNavCore:
             unicycle=robot.kinematics == "unicycle",
             human_pos=pos,
             human_vel=vel,
-            human_radius=np.broadcast_to(self.slot_radius, mask.shape),
+            human_radius=radius,
             human_mask=mask,
         )
+        if guided:  # the goal distance is the route's length left, not the carrot's distance
+            left = self.route_left if rows is None else self.route_left[rows]
+            observation.robot[:, 0] = left.reshape(b * r)
+        return observation
 
 
 def _mask_ended(outcome: CrowdOutcome, done: np.ndarray) -> CrowdOutcome:
@@ -371,6 +457,22 @@ def _mask_ended(outcome: CrowdOutcome, done: np.ndarray) -> CrowdOutcome:
         closest=outcome.closest,
         discomfort=outcome.discomfort & keep,
     )
+
+
+def _route_navigator(config: CrowdNavConfig, batch_size: int) -> Navigator:
+    """The benchmark robot's navigator on the config's map (its graph, sight and planner settings),
+    without recovery: the learner drives."""
+    from socialzoo.nav.distance_field import distance_field
+    from socialzoo.nav.graph import graph_of
+    from socialzoo.nav.local_planner import LocalPlannerConfig
+    from socialzoo.nav.maps import load_map
+    from socialzoo.nav.navigator import Sight
+
+    assert config.map is not None
+    m = load_map(config.map)
+    planner = LocalPlannerConfig()
+    field = distance_field(m.wall_index, planner.field_resolution, planner.field_range, planner.field_pad)
+    return Navigator(graph_of(m), batch_size, config.num_robots, sight=Sight(field, planner.wall_distance))
 
 
 def _map_walls(map_name: str | None) -> WallIndex:

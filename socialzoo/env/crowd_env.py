@@ -31,8 +31,8 @@ def _resolve(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdN
 
 
 def observation_space(config: CrowdNavConfig) -> spaces.Space:
-    """One row's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
-    h = config.slots
+    """One robot's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
+    h = config.observed_slots
     if config.observation == "flat":
         return spaces.Box(-np.inf, np.inf, (flat_size(h),), np.float32)
     return spaces.Dict(

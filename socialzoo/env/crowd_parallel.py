@@ -68,7 +68,7 @@ class CrowdNavParallelEnv(ParallelEnv):
     @functools.cache  # noqa: B019  (one space per agent, cached as PettingZoo asks)
     def observation_space(self, agent: str) -> spaces.Space:
         """Every agent's observation space."""
-        return observation_space(self.config.replace(max_humans=self.config.observed_slots, num_robots=1))
+        return observation_space(self.config)
 
     @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> spaces.Space:

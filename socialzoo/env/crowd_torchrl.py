@@ -65,7 +65,7 @@ class CrowdNavTorchEnv(EnvBase):
         b = num_envs
         flag = Categorical(2, shape=(b, 1), dtype=torch.bool, device=self.device)
         self.observation_spec = Composite(
-            observation=Unbounded((b, flat_size(self.config.slots)), dtype=torch.float32, device=self.device),
+            observation=Unbounded((b, flat_size(self.config.observed_slots)), dtype=torch.float32, device=self.device),
             success=flag.clone(),
             shape=(b,),
         )

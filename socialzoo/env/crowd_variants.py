@@ -36,13 +36,16 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
         {"humans": "social_force", "physics_substeps": 10},
     ),
     "Walls": (
-        "crowd navigation among walls: the velocity robot on gdc1 with the benchmark's scenarios and people",
+        "crowd navigation among walls: the velocity robot on gdc1 with the benchmark's scenarios and people, "
+        "guided along its nav-graph route and seeing walls through a 16-ray scan",
         {
             "map": "gdc1",
             "humans": "social_force",
+            "robot_visible": True,
             "physics_substeps": 10,
             "time_limit": 81.0,
             "max_humans": 25,
+            "wall_rays": 16,
         },
     ),
 }

@@ -233,7 +233,7 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
             "activation_fn": torch.nn.Tanh,
             "features_extractor_class": CrowdAttentionExtractor,
             "features_extractor_kwargs": {
-                "slots": task.slots,
+                "slots": task.observed_slots,
                 "embed": args.embed,
                 "value": args.value,
                 "attention": args.attention,
@@ -283,7 +283,7 @@ def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> A
     header = {
         "policy": POLICY_NAME,
         "env_id": crowd_env_id(args.variant),
-        "observation": {"kind": "flat", "slots": task.slots},
+        "observation": {"kind": "flat", "slots": task.observed_slots},
         "network": {
             "action": task.action,
             "activation": "tanh",

@@ -24,7 +24,9 @@ def test_every_case_is_played_once_whatever_the_batch():
     a = evaluate_crowd(_straight, CONFIG, "val", cases=7, batch_size=3)
     b = evaluate_crowd(_straight, CONFIG, "val", cases=7, batch_size=7)
     assert [e["case"] for e in a.episodes] == list(range(7))
-    np.testing.assert_equal(a.episodes, b.episodes)  # each case plays the same whatever the batch (NaN == NaN)
+    np.testing.assert_equal(
+        a.episodes, b.episodes
+    )  # each case plays the same whatever the batch (NaN == NaN)
     s = a.summary
     assert s["episodes"] == 7 and s["success_rate"] + s["collision_rate"] + s[
         "timeout_rate"
@@ -69,6 +71,7 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
     assert main(args) == 0
     record = json.loads((tmp_path / "episodes" / "orca.json").read_text())
     assert len(record["episodes"]) == 4 and (tmp_path / "crowdnav.md").read_text().count("| orca |") == 1
+    assert (tmp_path / "success.png").stat().st_size > 5_000
     stamp = (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns
     assert main(args) == 0 and (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns == stamp
     page = tmp_path / "case.html"
@@ -77,6 +80,25 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
         == 0
     )
     assert page.stat().st_size > 10_000
+    walls = tmp_path / "walls"
+    assert (
+        main(
+            [
+                "crowdnav",
+                "eval",
+                "--variant",
+                "Walls",
+                "--cases",
+                "2",
+                "--policies",
+                "orca",
+                "--out",
+                str(walls),
+            ]
+        )
+        == 0
+    )
+    assert len(json.loads((walls / "episodes" / "orca.json").read_text())["episodes"]) == 2
     assert main(["crowdnav", "eval", "--policies", "wizard", "--out", str(tmp_path)]) == 2
     assert "unknown CrowdNav policy" in capsys.readouterr().err
 
@@ -92,4 +114,4 @@ def test_the_shipped_learned_policy_crosses_the_crowd():
     assert policy.header["training"]["seed"] == record["seed"] and record["finished"]
     config = CrowdNavConfig.variant("", action=policy.action_kind)
     result = evaluate_crowd(policy.act, config, "test", cases=40)
-    assert result.summary["success_rate"] >= 0.85  # 0.976 over all 500 test cases
+    assert result.summary["success_rate"] >= 0.85  # 0.998 over all 500 test cases

@@ -90,6 +90,10 @@ def test_bad_actions_and_configs_are_refused_before_any_change():
         CrowdNavEnv(cases={"human_radius": -0.3})
     with pytest.raises(ValueError, match="humans"):
         CrowdNavEnv(humans="boids")
+    with pytest.raises(ValueError, match="action_frame"):
+        CrowdNavEnv(action_frame="robot")
+    with pytest.raises(ValueError, match="wall_rays"):
+        CrowdNavEnv(wall_rays=-1)
     discrete = CrowdNavEnv(action="discrete")
     discrete.reset(seed=0)
     with pytest.raises(ValueError, match=r"not in 0\.\.80"):
@@ -149,3 +153,48 @@ def test_several_robots_pass_pettingzoos_tests_and_repeat_over_many_steps():
     assert CrowdNavParallelEnv(num_robots=2).observation_space("robot_0").shape == (6 + 8 * 6,)
     with pytest.raises(ValueError, match="num_robots"):
         CrowdNavVectorEnv(2, num_robots=2)
+
+
+@pytest.mark.parametrize("frame", ["goal", "world"])
+def test_a_velocity_action_is_taken_in_its_frame(frame):
+    # CrowdNav++'s arena places start and goal at random: (1, 0) heads for the goal in the goal
+    # frame (the observation's), and along +x in the world frame.
+    env = CrowdNavEnv(variant="20", action_frame=frame)
+    obs, _ = env.reset(seed=2)
+    start = env.core.state.robot_pose[0, 0, :2].copy()
+    goal = env.core.state.robot_goal[0, 0, :2]
+    env.step(np.array([1.0, 0.0], dtype=np.float32))
+    moved = env.core.state.robot_pose[0, 0, :2] - start
+    expected = (goal - start) / np.linalg.norm(goal - start) if frame == "goal" else np.array([1.0, 0.0])
+    np.testing.assert_allclose(moved / np.linalg.norm(moved), expected, atol=1e-9)
+    assert obs[0] == pytest.approx(np.linalg.norm(goal - start), abs=1e-5)
+
+
+def test_among_walls_the_robot_sees_its_route_and_the_walls_its_scan_hits():
+    env = CrowdNavEnv(variant="Walls")
+    config = env.config
+    h, k = config.slots, config.wall_rays
+    assert env.observation_space.shape == (6 + 8 * (h + k),)
+    obs, _ = env.reset(seed=1)
+    core = env.core
+    for _ in range(12):
+        pos = core.state.robot_pose[0, 0, :2]
+        # The goal distance is the route's length left (at least the straight distance), the x
+        # axis points at the route's carrot.
+        straight = np.linalg.norm(core.state.robot_goal[0, 0, :2] - pos)
+        assert obs[0] == pytest.approx(core.route_left[0, 0], rel=1e-6) and obs[0] >= straight - 1e-6
+        carrot = core.carrot[0, 0] - pos
+        assert core.frame_angle[0] == pytest.approx(np.arctan2(carrot[1], carrot[0]))
+        # Every seen wall slot lies on a wall, within the scan's range, still and of radius 0.
+        slots = obs[6 : 6 + 7 * (h + k)].reshape(h + k, 7)[h:]
+        seen = obs[6 + 7 * (h + k) :][h:] == 1
+        assert seen.any()
+        c, s = np.cos(core.frame_angle[0]), np.sin(core.frame_angle[0])
+        world = pos + np.stack(
+            (c * slots[seen, 0] - s * slots[seen, 1], s * slots[seen, 0] + c * slots[seen, 1]), -1
+        )
+        _, distance = core.walls.nearest(world)
+        assert np.all(distance < 1e-3) and np.all(slots[seen, 5] <= config.wall_range)
+        assert np.all(slots[seen, 2:5] == 0)
+        obs, _, terminated, truncated, _ = env.step(np.array([0.5, 0.0], dtype=np.float32))
+        assert not (terminated or truncated)
