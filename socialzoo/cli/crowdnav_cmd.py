@@ -144,9 +144,14 @@ def write_crowd_tables(rows: list[dict[str, Any]], out: Path, config: Any, split
         writer.writerow(header)
         for r in rows:
             writer.writerow([r.get(c) for c in TABLE_COLUMNS] + list(r["success_ci"]))
+    where = (
+        f"{config.map} with the benchmark's scenarios, up to {config.slots} {config.humans} people"
+        if config.map is not None
+        else f"{config.cases.layout}, {config.cases.num_humans} {config.humans} people"
+    )
     lines = [
-        f"CrowdNav task ({config.cases.layout}, {config.cases.num_humans} {config.humans} people, "
-        f"{config.robot.kinematics} robot, {'visible' if config.robot_visible else 'invisible'}), {split} cases",
+        f"CrowdNav task ({where}, {config.robot.kinematics} robot, "
+        f"{'visible' if config.robot_visible else 'invisible'}), {split} cases",
         "",
         "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort "
         "| min sep. (m) | force |",
