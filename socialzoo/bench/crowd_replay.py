@@ -30,6 +30,7 @@ def record_crowd_episode(
     scenario = CrowdCaseSource(config, 1).fixed(split, [case])
     core.reset_rows([0], scenario)
     poses, vels, humans, human_vels, rewards, collisions = [], [], [], [], [], []
+    forces, blames, walls, carrots = [], [], [], []
     metrics: dict[str, float] = {}
 
     def snapshot() -> None:
@@ -44,12 +45,16 @@ def record_crowd_episode(
         vels.append([speed, 0.0])
         humans.append(s.human_pos[0][s.human_mask[0]].copy())
         human_vels.append(s.human_vel[0][s.human_mask[0]].copy())
+        carrots.append(core.seen_goal()[0][0, 0].copy())
 
     snapshot()
     while not metrics:
         step = core.step(act(core.observation.flat(), core))  # type: ignore[union-attr]
         rewards.append(float(step.outcome.reward[0]))
-        collisions.append(int(step.outcome.collision[0]))
+        collisions.append(int(step.outcome.collision[0] and not step.wall_collision[0]))
+        walls.append(bool(step.wall_collision[0]))
+        forces.append(float(core.step_force[0]))
+        blames.append(float(core.step_blame[0]))
         snapshot()
         metrics = step.metrics.get(0, {})
     outcome = "success" if metrics["success"] else "collision" if metrics["collision"] else "timeout"
@@ -66,7 +71,7 @@ def record_crowd_episode(
         goal=goal,
         human_pos=np.array(humans),
         human_vel=np.array(human_vels),
-        carrot=np.tile(goal[:2], (steps + 1, 1)),
+        carrot=np.array(carrots),
         plans=(np.array([start, goal[:2]]),),
         plan_index=np.zeros(steps + 1, dtype=np.int64),
         laser_angles=np.zeros(1),
@@ -76,10 +81,10 @@ def record_crowd_episode(
         action=np.full(steps, -1),
         target_human=np.full(steps, -1),
         reward=np.array(rewards),
-        force=np.zeros(steps),
-        blame=np.zeros(steps),
+        force=np.array(forces),
+        blame=np.array(blames),
         human_collisions=np.array(collisions),
-        wall_collision=np.zeros(steps, dtype=bool),
+        wall_collision=np.array(walls, dtype=bool),
         metrics=metrics,
         outcome=outcome,
     )

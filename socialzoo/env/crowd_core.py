@@ -86,6 +86,8 @@ class CrowdNavCore:
         # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
         # goal-frame velocity actions are turned by it into the world frame.
         self.frame_angle = np.zeros(batch_size * config.num_robots)
+        self.step_force = np.zeros(batch_size * config.num_robots)
+        self.step_blame = np.zeros(batch_size * config.num_robots)
         cases = config.cases
         radius = float(config.robot.radius)  # type: ignore[arg-type]
         self.world = WorldConfig(
@@ -313,7 +315,9 @@ class CrowdNavCore:
             cfg.time_step,
         )
         outcome = _mask_ended(outcome, self.robot_done.reshape(b * r))
-        self.metrics.update(outcome, moved, *self._force_and_blame(state))
+        # The step's social force and blame terms per robot (the viewer draws them).
+        self.step_force, self.step_blame = self._force_and_blame(state)
+        self.metrics.update(outcome, moved, self.step_force, self.step_blame)
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
         summaries = self.metrics.summaries(ended, outcome)
         for k, summary in zip(ended.tolist(), summaries, strict=True):

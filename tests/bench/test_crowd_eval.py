@@ -51,6 +51,9 @@ def test_an_episode_is_recorded_for_the_viewer():
     trace = record_crowd_episode(CrowdOrcaRobot().act, "orca", CONFIG, "test", 3)
     assert trace.outcome in ("success", "collision", "timeout") and trace.num_steps == trace.metrics["steps"]
     assert trace.num_humans == 5
+    # The charts draw the step's force and blame; their means are the episode's metrics.
+    assert trace.force.mean() == pytest.approx(trace.metrics["mean_force"])
+    assert trace.blame.mean() == pytest.approx(trace.metrics["mean_blame"]) and trace.force.max() > 0
     scene = crowd_scene(CONFIG, [trace], "case 3")
     assert scene.robot_length == pytest.approx(0.6)
 
