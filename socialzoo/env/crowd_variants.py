@@ -40,6 +40,8 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
         "guided along its nav-graph route and seeing walls through a 16-ray scan",
         {
             "map": "gdc1",
+            # The benchmark's people: radius 0.2 m (its HumanConfig), not CrowdNav's 0.3.
+            "cases": {"human_radius": 0.2},
             "humans": "social_force",
             "robot_visible": True,
             "physics_substeps": 10,
