@@ -80,7 +80,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help=(
             "comma-separated maps: shipped names or map JSON files (default gdc1,ghc3); a map without a "
             "registered test set gets one generated on first use, stored in DIR/test_sets/ with the "
-            "map's hash and reused by reruns"
+            "map's hash and reused by reruns; or CrowdNav task ids (socialzoo/CrowdNav-v1, "
+            "socialzoo/CrowdNav20-v1, ...: their fixed test cases, as `socialzoo crowdnav eval`)"
         ),
     )
     parser.add_argument(
@@ -183,7 +184,11 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from socialzoo.bench.experiment import BenchmarkConfig, quick_config, run_benchmark
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.tables import policy_label
+    from socialzoo.env.crowd_variants import variant_of
 
+    crowd = [m for m in args.maps or () if variant_of(m) is not None]
+    if crowd:
+        return run_crowd_benchmark(args, crowd)
     overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
     specs = [h.strip() for h in args.humans.split(",") if h.strip()]
     if len(specs) > 1:
@@ -219,6 +224,43 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             f"{100 * entry['success_ci_high']:.1f}] over {entry['trials']} trials"
         )
     print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
+    return 0
+
+
+def run_crowd_benchmark(args: argparse.Namespace, ids: list[str]) -> int:
+    """`socialzoo benchmark --maps socialzoo/CrowdNav...-v1`: the CrowdNav task's ids run through its
+    own evaluation on their fixed test cases (socialzoo crowdnav eval: the first --trials cases,
+    stored per policy and reused by reruns, 95% intervals, success figure), one folder per id."""
+    from socialzoo.cli.crowdnav_cmd import run_eval
+    from socialzoo.env.crowd_variants import variant_of
+
+    if len(ids) != len(args.maps):
+        others = sorted(set(args.maps) - set(ids))
+        return _fail(
+            "benchmark", ValueError(f"CrowdNav task ids cannot be mixed with benchmark maps {others}")
+        )
+    if args.humans != "social_force" or args.counterfactual or args.human_metrics or args.quick:
+        return _fail(
+            "benchmark",
+            ValueError(
+                "--humans, --counterfactual, --human-metrics and --quick are not options of the CrowdNav task"
+            ),
+        )
+    policies = ",".join(args.policies) if args.policies else "orca,social_force,crowdnav"
+    for env_id in ids:
+        out = Path(args.out) / env_id.split("/")[-1] if len(ids) > 1 else Path(args.out)
+        task = argparse.Namespace(
+            policies=policies,
+            variant=variant_of(env_id),
+            split="test",
+            out=out,
+            cases=args.trials,
+            batch_size=args.batch_size or 100,
+            no_figures=args.no_figures,
+        )
+        status = run_eval(task)
+        if status:
+            return status
     return 0
 
 

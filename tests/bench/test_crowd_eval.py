@@ -102,6 +102,12 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
         == 0
     )
     assert len(json.loads((walls / "episodes" / "orca.json").read_text())["episodes"]) == 2
+    ids = tmp_path / "ids"
+    both = "socialzoo/CrowdNav-v1,socialzoo/CrowdNavSquare-v1"
+    assert main(["benchmark", "--maps", both, "--policies", "orca", "--trials", "3", "--out", str(ids)]) == 0
+    assert "| orca |" in (ids / "CrowdNavSquare-v1" / "crowdnav.md").read_text()
+    assert main(["benchmark", "--maps", "socialzoo/CrowdNav-v1,gdc1", "--out", str(ids)]) == 2
+    assert "cannot be mixed" in capsys.readouterr().err
     assert main(["crowdnav", "eval", "--policies", "wizard", "--out", str(tmp_path)]) == 2
     assert "unknown CrowdNav policy" in capsys.readouterr().err
 
