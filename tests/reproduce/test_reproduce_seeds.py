@@ -6,6 +6,7 @@ import json
 import os
 import shutil
 import time
+from pathlib import Path
 
 import pytest
 
@@ -22,6 +23,19 @@ RUNS = ("ppo", "dqn", "ppo-s1", "dqn-s1")
 def pid_after_a_nap(_):
     time.sleep(1.0)
     return os.getpid()
+
+
+def pid_after_meeting(task):
+    """(pid, met): the task leaves its mark in a shared folder and waits for the other's; two tasks
+    run one after the other never meet (the first gives up), whatever the machine's load."""
+    folder, me, other = task
+    (Path(folder) / me).touch()
+    deadline = time.monotonic() + 120.0
+    while not (Path(folder) / other).exists():
+        if time.monotonic() > deadline:
+            return os.getpid(), False
+        time.sleep(0.05)
+    return os.getpid(), True
 
 
 def test_every_seed_trains_its_own_run_and_curve_and_resumes_alone(tmp_path, tiny_settings):
@@ -67,10 +81,13 @@ def test_ray_spreads_the_trainings_over_two_workers(tmp_path, tiny_settings):
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # tests are not importable there
     ray.init(num_cpus=2, include_dashboard=False)
     try:
-        start = time.perf_counter()
-        pids = run_tasks(pid_after_a_nap, [0, 1], backend="ray", workers=2)
+        meeting = tmp_path / "meeting"
+        meeting.mkdir()
+        tasks = [(str(meeting), "a", "b"), (str(meeting), "b", "a")]
+        results = run_tasks(pid_after_meeting, tasks, backend="ray", workers=2)
+        pids = [pid for pid, _ in results]
         assert len(set(pids)) == 2 and os.getpid() not in pids
-        assert time.perf_counter() - start < 1.9  # side by side, not one after the other
+        assert all(met for _, met in results)  # side by side, not one after the other
         settings = tiny_settings(seeds=2)
         reproduce(tmp_path, settings, parts="rl-curves", backend="ray", progress=False)
     finally:
