@@ -83,6 +83,7 @@ class CrowdNavCore:
         self.carrot = np.zeros((batch_size, config.num_robots, 2))
         self.route_left = np.zeros((batch_size, config.num_robots))
         self._ray_angles = np.linspace(0.0, 2.0 * np.pi, config.wall_rays, endpoint=False)
+        self._ray_directions = np.stack((np.cos(self._ray_angles), np.sin(self._ray_angles)), axis=-1)
         # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
         # goal-frame velocity actions are turned by it into the world frame.
         self.frame_angle = np.zeros(batch_size * config.num_robots)
@@ -356,7 +357,7 @@ class CrowdNavCore:
             return np.zeros((n, k, 2)), np.zeros((n, k), dtype=bool)
         angles = np.broadcast_to(self._ray_angles, (n, k))
         ranges = self.walls.cast_rays(pos, angles, self.config.wall_range)
-        points = pos[:, None, :] + ranges[..., None] * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
+        points = pos[:, None, :] + ranges[..., None] * self._ray_directions
         return points, ranges < self.config.wall_range
 
     def _arrive(self, s: WorldState) -> None:
