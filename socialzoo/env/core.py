@@ -26,7 +26,8 @@ from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.navigator import Navigator, RecoveryConfig, Sight, backoff_commands
+from socialzoo.nav.navigator import Navigator, Sight
+from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.nav.subpolicies import GO_ALONE, check_actions, subpolicy_commands

@@ -62,6 +62,9 @@ class ActionSelectionVectorEnv(VectorEnv):
         **overrides: EnvConfig fields as plain values.
 
     ## Version History
+    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
+      its carrot and plans keep its full wall distance; people in contact with the robot do not
+      press into it; episode metrics gain `stuck` and the failure causes (as `ActionSelectionEnv`).
     - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
       robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
       scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).

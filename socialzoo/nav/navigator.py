@@ -19,6 +19,7 @@ import numpy as np
 from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.nav.distance_field import DistanceField, field_distance
+from socialzoo.nav.recovery import RecoveryConfig, RecoveryState
 
 logger = logging.getLogger(__name__)
 
@@ -393,85 +394,13 @@ def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist, whe
         dist[m] = best
 
 
-def backoff_commands(
-    pose: np.ndarray,
-    field: DistanceField,
-    need: float,
-    cfg: RecoveryConfig,
-    human_pos: np.ndarray,
-    human_mask: np.ndarray,
-) -> np.ndarray:
-    """(N, 2) commands (v, omega) of backing-off robots: straight backwards at cfg.backoff_speed
-    where the line behind the robot (as long as the back-off drives) keeps min(need, the robot's
-    own wall distance) from walls and cfg.human_gap from every present human; else standing.
-
-    Args:
-        pose: (N, 3) robot poses x, y (m), theta (rad), world frame.
-        field: the map's wall distance field.
-        need: the wall distance wanted, m (the local planner's wall distance).
-        cfg: the recovery settings.
-        human_pos: (N, H, 2) human positions, world frame, m.
-        human_mask: (N, H) present humans.
-    """
-    n = len(pose)
-    out = np.zeros((n, 2))
-    if n == 0 or cfg.backoff_speed <= 0.0:
-        return out
-    reach = cfg.backoff_speed * cfg.backoff_time
-    dist = np.arange(1, max(1, math.ceil(reach / 0.05)) + 1) * min(0.05, reach)  # (M,)
-    back = -np.stack((np.cos(pose[:, 2]), np.sin(pose[:, 2])), axis=-1)  # (N, 2)
-    points = pose[:, None, :2] + dist[None, :, None] * back[:, None, :]  # (N, M, 2)
-    here = field.lookup(pose[:, :2])
-    clear = (field.lookup(points) >= np.minimum(need, here)[:, None] - 1e-3).all(axis=1)
-    if human_pos.shape[1]:
-        gap = np.sqrt(((points[:, :, None, :] - human_pos[:, None, :, :]) ** 2).sum(-1))  # (N, M, H)
-        clear &= ~((gap < cfg.human_gap) & human_mask[:, None, :]).any(axis=(1, 2))
-    out[:, 0] = np.where(clear, -cfg.backoff_speed, 0.0)
-    return out
-
-
-@dataclass(frozen=True, kw_only=True)
-class RecoveryConfig:
-    """How a robot that makes no progress recovers (see `Navigator`).
-
-    Attributes:
-        after: a robot driving its plan (GoAlone, not halted) that goes this long without
-            progress recovers, s. Progress: its route length left (`Navigator.route_left`)
-            coming `progress` below its least value since the episode's start or its last
-            recovery.
-        progress: m.
-        backoff_time: the robot backs off for this long, s.
-        backoff_speed: straight backwards at this speed, m/s, where the line behind it keeps
-            its wall distance and no human is within `human_gap` of it; else it stands.
-        human_gap: m.
-        crowd_radius: when a human is this close as the robot starts to recover, people block
-            it, not the building: it replans as usual; otherwise it replans avoiding the graph
-            edge where it stopped (at most `max_avoided` edges per episode, then none), m.
-        max_avoided: edges a robot avoids at most in one episode.
-    """
-
-    after: float = 3.0
-    progress: float = 0.25
-    backoff_time: float = 1.0
-    backoff_speed: float = 0.3
-    human_gap: float = 0.6
-    crowd_radius: float = 1.5
-    max_avoided: int = 4
-
-    def __post_init__(self) -> None:
-        for name in ("after", "progress", "backoff_time", "crowd_radius", "human_gap"):
-            check_number("RecoveryConfig", name, getattr(self, name), low=0, low_open=True)
-        check_number("RecoveryConfig", "backoff_speed", self.backoff_speed, low=0)
-        check_int("RecoveryConfig", "max_avoided", self.max_avoided, low=0)
-
-
 class Navigator:
     """Global plans of a batch of robots, replanned when a robot strays from its plan.
 
     Recovery: a robot that drives its plan (the caller says which robots do, `update`'s
     `moving`) without progress for `recovery.after` seconds backs off for
-    `recovery.backoff_time` (the caller drives it: `backoff_commands` while `backing_off`), then
-    replans; unless people stood around it, over another edge (the edge where it stopped is
+    `recovery.backoff_time` (the caller drives it: socialzoo.nav.recovery.backoff_commands while
+    `backing_off`), then replans; unless people stood around it, over another edge (the edge where it stopped is
     avoided for the rest of the episode: `socialzoo.nav.graph.NavGraph.plan_avoiding`). A robot
     wedged beside a door, in a crack of the plan, or pressed against a person gets out; the
     episode metric `stuck` counts the time it lost.
@@ -490,7 +419,7 @@ class Navigator:
             the wall between two doors of a U-turn and oscillates on paths that double back.
         tolerance: as `max_skip`.
         sight: keeps the carrot in sight (see `Sight`); None: the plain carrot.
-        recovery: the recovery behaviour; None: none.
+        recovery: the recovery behaviour (socialzoo.nav.recovery); None: none.
     """
 
     def __init__(
@@ -522,16 +451,10 @@ class Navigator:
         # (B, R) route length left after the latest update, m (see `update`).
         self.route_left = np.zeros((batch_size, num_robots))
         self.recovery = recovery
-        b, r = batch_size, num_robots
-        # Recovery state, per robot: least route left since the last recovery (m), time without
-        # progress (s), back-off time left (s), recoveries this episode, avoided edges (-1: none).
-        self.best_left = np.full((b, r), np.inf)
-        self.idle = np.zeros((b, r))
-        self.backoff_left = np.zeros((b, r))
-        self.recoveries = np.zeros((b, r), dtype=np.int64)
+        # Without a recovery config the state stays idle: nothing ever backs off or avoids an edge.
+        self._recovering = RecoveryState(recovery or RecoveryConfig(), batch_size, num_robots)
         # (B, R) robots given a new route by a recovery in the latest update.
-        self.rerouted = np.zeros((b, r), dtype=bool)
-        self.avoid = np.full((b, r, max(1, recovery.max_avoided if recovery else 1)), -1, dtype=np.int64)
+        self.rerouted = np.zeros((batch_size, num_robots), dtype=bool)
 
     @property
     def batch_size(self) -> int:
@@ -562,11 +485,7 @@ class Navigator:
         starts = np.asarray(starts, dtype=np.float64).reshape(num * r, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(num * r, 2)
         self.goals[rows] = goals.reshape(num, r, 2)
-        self.best_left[rows] = np.inf
-        self.idle[rows] = 0.0
-        self.backoff_left[rows] = 0.0
-        self.recoveries[rows] = 0
-        self.avoid[rows] = -1
+        self._recovering.reset(rows)
         if num == 0:
             return
         paths, lengths = self._plan(starts, goals)
@@ -580,8 +499,13 @@ class Navigator:
 
     @property
     def backing_off(self) -> np.ndarray:
-        """(B, R) bool: robots backing off (their commands: `backoff_commands`)."""
-        return self.backoff_left > 0.0
+        """(B, R) bool: robots backing off (their commands: socialzoo.nav.recovery.backoff_commands)."""
+        return self._recovering.backing_off
+
+    @property
+    def recoveries(self) -> np.ndarray:
+        """(B, R) int: recoveries of each robot this episode."""
+        return self._recovering.recoveries
 
     def update(
         self,
@@ -640,51 +564,26 @@ class Navigator:
         human_pos: np.ndarray | None,
         human_mask: np.ndarray | None,
     ) -> None:
-        """Progress bookkeeping on the route left of the last update; start and end back-offs."""
-        cfg = self.recovery
-        assert cfg is not None
-        left = self.route_left
-        progress = left <= self.best_left - cfg.progress
-        self.best_left = np.where(progress | ~np.isfinite(self.best_left), left, self.best_left)
-        self.idle = np.where(progress, 0.0, self.idle + np.where(moving, dt, 0.0))
-        was = self.backoff_left > 0.0
-        self.backoff_left = np.maximum(self.backoff_left - dt, 0.0)
-        ended = was & (self.backoff_left <= 0.0)
-        start = moving & ~was & (self.idle >= cfg.after - 1e-9)
-        if start.any():
-            rows, robots = np.nonzero(start)
-            self.backoff_left[rows, robots] = cfg.backoff_time
-            self.recoveries[rows, robots] += 1
-            crowd: np.ndarray = np.zeros(len(rows), dtype=bool)
-            if human_pos is not None and human_mask is not None and human_pos.shape[1]:
-                gap = np.hypot(*(human_pos[rows] - robot_pos[rows, robots][:, None, :]).transpose(2, 0, 1))
-                crowd = np.asarray((np.where(human_mask[rows], gap, np.inf) < cfg.crowd_radius).any(axis=1))
-            for row, robot in zip(rows[~crowd].tolist(), robots[~crowd].tolist(), strict=True):
-                self._avoid_edge_at(row, robot, robot_pos[row, robot])
+        """Recovery bookkeeping on the route left of the last update: a robot starting to back off
+        away from people avoids the edge where it stopped; one whose back-off ended is replanned."""
+        state = self._recovering
+        started, ended = state.step(self.route_left, moving, dt)
+        if started.any():
+            rows, robots = np.nonzero(started)
+            pos = robot_pos[rows, robots]
+            crowd = state.in_crowd(
+                pos,
+                None if human_pos is None else human_pos[rows],
+                None if human_mask is None else human_mask[rows],
+            )
+            nodes, edges = getattr(self.graph, "nodes", None), getattr(self.graph, "edges", None)
+            if nodes is not None and edges is not None:
+                for k in np.flatnonzero(~crowd).tolist():
+                    state.avoid_edge_at(nodes, edges, int(rows[k]), int(robots[k]), pos[k])
         if ended.any():
             rows, robots = np.nonzero(ended)
             self._replan_avoiding(rows, robots, robot_pos[rows, robots])
             self.rerouted[rows, robots] = True
-        # A recovery starts the count afresh: a detour is longer than the route it replaces.
-        reset = start | ended
-        self.idle[reset] = 0.0
-        self.best_left[reset] = np.inf
-
-    def _avoid_edge_at(self, row: int, robot: int, pos: np.ndarray) -> None:
-        """Add the graph edge nearest to pos (within 1 m) to the robot's avoided edges."""
-        graph = self.graph
-        nodes, edges = getattr(graph, "nodes", None), getattr(graph, "edges", None)
-        slots = np.flatnonzero(self.avoid[row, robot] < 0)
-        if nodes is None or edges is None or len(edges) == 0 or len(slots) == 0:
-            return
-        a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
-        ab = b - a
-        t = np.clip(((pos - a) * ab).sum(-1) / np.maximum((ab**2).sum(-1), 1e-12), 0.0, 1.0)
-        gap = np.hypot(*(a + t[:, None] * ab - pos).T)
-        gap[self.avoid[row, robot][self.avoid[row, robot] >= 0]] = np.inf
-        edge = int(np.argmin(gap))
-        if gap[edge] <= 1.0:
-            self.avoid[row, robot, slots[0]] = edge
 
     def _replan_avoiding(self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray) -> None:
         """New plans for robots whose back-off ended (avoiding their avoided edges, if any)."""
@@ -701,18 +600,17 @@ class Navigator:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Plans (paths (M, L, 2), lengths (M,)) with those of robots that avoid edges replaced by
         plans around them (where the graph has one; else the avoided edges are forgotten)."""
-        avoiding = np.flatnonzero((self.avoid[rows, robots] >= 0).any(axis=1))
+        avoid = self._recovering.avoid
+        avoiding = np.flatnonzero((avoid[rows, robots] >= 0).any(axis=1))
         plan_avoiding = getattr(self.graph, "plan_avoiding", None)
         if len(avoiding) == 0 or plan_avoiding is None:
             return paths, lengths
         found: dict[int, np.ndarray] = {}
         for k in avoiding.tolist():
             row, robot = int(rows[k]), int(robots[k])
-            path = plan_avoiding(
-                pos[k], self.goals[row, robot], self.avoid[row, robot], clearance=self.plan_clearance
-            )
+            path = plan_avoiding(pos[k], self.goals[row, robot], avoid[row, robot], clearance=self.plan_clearance)
             if path is None:
-                self.avoid[row, robot] = -1  # no way round: take the usual route again
+                avoid[row, robot] = -1  # no way round: take the usual route again
             else:
                 found[k] = path
         if not found:
