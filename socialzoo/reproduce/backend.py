@@ -5,7 +5,8 @@ trainings, every seed of every learner. Each training uses one CPU thread (the t
 `threads`), so on the local backend `workers` processes train `workers` policies at once (spawned,
 not forked: the parent may hold torch's threads). A Ray already initialised (a cluster, or
 `ray.init(num_cpus=2)` in a test) is used as it is; otherwise a local Ray with `workers` CPUs is
-started and shut down after.
+started and shut down after, its workers at the usual priority
+(socialzoo.bench.runner.start_local_ray).
 """
 
 from __future__ import annotations
@@ -47,7 +48,9 @@ def run_tasks(
 
     started = False
     if not ray.is_initialized():
-        ray.init(num_cpus=workers, include_dashboard=False, logging_level=logging.WARNING)
+        from socialzoo.bench.runner import start_local_ray
+
+        start_local_ray(workers)
         started = True
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(function)

@@ -5,11 +5,13 @@ Ray workers."""
 import json
 import os
 import shutil
+import sys
 import time
 from pathlib import Path
 
 import pytest
 
+from socialzoo.bench.runner import start_local_ray
 from socialzoo.reproduce.backend import run_tasks
 from socialzoo.reproduce.plan import settings_hash
 from socialzoo.reproduce.results import load
@@ -36,6 +38,10 @@ def pid_after_meeting(task):
             return os.getpid(), False
         time.sleep(0.05)
     return os.getpid(), True
+
+
+def niceness(_):
+    return os.nice(0)
 
 
 def test_every_seed_trains_its_own_run_and_curve_and_resumes_alone(tmp_path, tiny_settings):
@@ -74,12 +80,19 @@ def test_local_trainings_run_side_by_side_in_worker_processes():
     assert run_tasks(pid_after_a_nap, [0], backend="local", workers=2) == [os.getpid()]
 
 
+def test_a_local_ray_started_for_the_tasks_runs_them_at_the_usual_priority():
+    # Ray's default niceness (15) starved its tasks behind any other job on a shared machine.
+    ray = pytest.importorskip("ray")
+    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # tests are not importable there
+    assert not ray.is_initialized()
+    assert run_tasks(niceness, [0, 1], backend="ray", workers=2) == [os.nice(0)] * 2
+    assert not ray.is_initialized()  # the Ray started for the tasks is shut down after them
+
+
 def test_ray_spreads_the_trainings_over_two_workers(tmp_path, tiny_settings):
     ray = pytest.importorskip("ray")
-    import sys
-
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # tests are not importable there
-    ray.init(num_cpus=2, include_dashboard=False)
+    start_local_ray(2)
     try:
         meeting = tmp_path / "meeting"
         meeting.mkdir()
