@@ -11,7 +11,7 @@ with a Student-t interval over the cases (socialzoo.bench.stats).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -57,6 +57,9 @@ def evaluate_crowd(
     split: Split = "test",
     cases: int | None = None,
     batch_size: int = 100,
+    *,
+    indices: Sequence[int] | None = None,
+    on_episodes: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> CrowdEvaluation:
     """Run `act` on the first `cases` cases of a split (all of them by default).
 
@@ -66,9 +69,12 @@ def evaluate_crowd(
         split: "val" or "test".
         cases: how many cases (default the split's size: 100 or 500).
         batch_size: rows stepped together.
+        indices: play only these of the first `cases` cases (socialzoo.bench.crowd_store plays
+            the ones its store lacks); the result holds them in case order.
+        on_episodes: called with the episodes that ended at each step, as they end.
 
     Raises:
-        ValueError: a training split, or more cases than the split holds.
+        ValueError: a training split, more cases than the split holds, or an index outside them.
     """
     if config.num_robots != 1:
         raise ValueError(
@@ -81,10 +87,15 @@ def evaluate_crowd(
         raise ValueError(
             f"evaluate_crowd: {total} cases asked of the {split} split, which holds {SPLIT_SIZE[split]}"
         )
-    rows = min(batch_size, total)
+    todo = list(range(total)) if indices is None else sorted({int(k) for k in indices})
+    if any(not 0 <= k < total for k in todo):
+        raise ValueError(f"evaluate_crowd: case indices must lie in [0, {total}), got {todo}")
+    if not todo:
+        raise ValueError("evaluate_crowd: no case to play")
+    rows = min(batch_size, len(todo))
     core = CrowdNavCore(config, rows)
     source = CrowdCaseSource(config, rows)
-    playing = np.arange(rows)
+    playing = np.array(todo[:rows])
     core.reset_rows(np.arange(rows), source.fixed(split, playing))
     next_case = rows
     active = np.ones(rows, dtype=bool)
@@ -96,10 +107,12 @@ def evaluate_crowd(
         done = [r for r in step.metrics if active[r]]
         for row in done:
             episodes[int(playing[row])] = {"case": int(playing[row]), **step.metrics[row]}
+        if done and on_episodes is not None:
+            on_episodes([episodes[int(playing[row])] for row in done])
         refill = []
         for row in done:
-            if next_case < total:
-                playing[row] = next_case
+            if next_case < len(todo):
+                playing[row] = todo[next_case]
                 next_case += 1
                 refill.append(row)
             else:
@@ -107,7 +120,7 @@ def evaluate_crowd(
         if refill:
             core.reset_rows(refill, source.fixed(split, playing[refill]))
         # Finished rows keep stepping (their results are no longer read) until all are done.
-    ordered = [episodes[k] for k in range(total)]
+    ordered = [episodes[k] for k in todo]
     return CrowdEvaluation(split=split, episodes=ordered, summary=summarize_crowd(ordered, config.time_step))
 
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -87,8 +86,11 @@ def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    """Run `socialzoo crowdnav eval`; returns the exit status."""
-    from socialzoo.bench.crowd_eval import evaluate_crowd
+    """Run `socialzoo crowdnav eval`; returns the exit status. Episodes go to the benchmark's results
+    store (OUT/results.sqlite, socialzoo.bench.crowd_store) as they end: a rerun plays only the
+    cases it lacks for each policy."""
+    from socialzoo.bench.crowd_store import STORE_FILE, evaluate_crowd_stored
+    from socialzoo.bench.store import StoreError
 
     try:
         config, policies = _setup(args)
@@ -96,24 +98,22 @@ def run_eval(args: argparse.Namespace) -> int:
         print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
         return 2
     out = Path(args.out)
-    (out / "episodes").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     rows = []
     for spec, policy, acting in policies:
-        label = spec.replace("/", "_").replace(":", "_")
-        record = out / "episodes" / f"{label}.json"
-        key = {"policy": spec, "task": acting.to_dict(), "split": args.split, "cases": args.cases}
-        if record.is_file() and json.loads(record.read_text()).get("key") == key:
-            summary = json.loads(record.read_text())["summary"]  # a rerun reuses a finished policy
-        else:
-            result = evaluate_crowd(policy.act, acting, args.split, args.cases, args.batch_size)
-            summary = result.summary
-            record.write_text(
-                json.dumps({"key": key, "summary": summary, "episodes": result.episodes}, indent=1)
+        try:
+            result, played = evaluate_crowd_stored(
+                out / STORE_FILE, spec, policy, acting, args.split, args.cases, args.batch_size
             )
+        except StoreError as err:
+            print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
+            return 2
+        summary = result.summary
         rows.append({"policy": spec, **summary})
         print(
             f"{spec}: success {summary['success_rate']:.3f} collision {summary['collision_rate']:.3f} "
-            f"timeout {summary['timeout_rate']:.3f} time {summary['navigation_time']:.2f} s"
+            f"timeout {summary['timeout_rate']:.3f} time {summary['navigation_time']:.2f} s "
+            f"({played} of {summary['episodes']} episodes played now, the others read from the store)"
         )
     files = write_crowd_tables(rows, out, config, args.split)
     if not args.no_figures:

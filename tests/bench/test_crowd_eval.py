@@ -8,6 +8,7 @@ import pytest
 from socialzoo.agents.crowd_engineered import CrowdOrcaRobot, CrowdSocialForceRobot, make_crowd_policy
 from socialzoo.bench.crowd_eval import evaluate_crowd
 from socialzoo.bench.crowd_replay import crowd_scene, record_crowd_episode
+from socialzoo.bench.store import ResultsStore
 from socialzoo.cli import main
 from socialzoo.env.crowd_config import CrowdNavConfig
 
@@ -72,11 +73,17 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
         str(tmp_path),
     ]
     assert main(args) == 0
-    record = json.loads((tmp_path / "episodes" / "orca.json").read_text())
-    assert len(record["episodes"]) == 4 and (tmp_path / "crowdnav.md").read_text().count("| orca |") == 1
+    store = tmp_path / "results.sqlite"
+    with ResultsStore(store) as results:
+        assert sorted(r["scenario_index"] for r in results.rows(policy="orca")) == [0, 1, 2, 3]
+    assert (tmp_path / "crowdnav.md").read_text().count("| orca |") == 1
     assert (tmp_path / "success.png").stat().st_size > 5_000
-    stamp = (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns
-    assert main(args) == 0 and (tmp_path / "episodes" / "orca.json").stat().st_mtime_ns == stamp
+    table = (tmp_path / "crowdnav.csv").read_text()
+    capsys.readouterr()
+    assert main(args) == 0 and "0 of 4 episodes played now" in capsys.readouterr().out
+    assert (tmp_path / "crowdnav.csv").read_text() == table  # read back, the same numbers
+    # Two more cases: only those are played.
+    assert main([*args[:5], "6", *args[6:]]) == 0 and "2 of 6 episodes played now" in capsys.readouterr().out
     page = tmp_path / "case.html"
     assert (
         main(["crowdnav", "replay", "--variant", "SocialForce", "--policies", "orca", "--out", str(page)])
@@ -101,7 +108,8 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
         )
         == 0
     )
-    assert len(json.loads((walls / "episodes" / "orca.json").read_text())["episodes"]) == 2
+    with ResultsStore(walls / "results.sqlite") as results:
+        assert len(results.rows(policy="orca")) == 2
     ids = tmp_path / "ids"
     both = "socialzoo/CrowdNav-v1,socialzoo/CrowdNavSquare-v1"
     assert main(["benchmark", "--maps", both, "--policies", "orca", "--trials", "3", "--out", str(ids)]) == 0
@@ -113,7 +121,6 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
 
 
 def test_the_shipped_learned_policy_crosses_the_crowd():
-    import json
 
     from socialzoo.agents import SHIPPED_DIR
 
@@ -124,3 +131,45 @@ def test_the_shipped_learned_policy_crosses_the_crowd():
     config = CrowdNavConfig.variant("", action=policy.action_kind)
     result = evaluate_crowd(policy.act, config, "test", cases=40)
     assert result.summary["success_rate"] >= 0.85  # 0.998 over all 500 test cases
+
+
+def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_path):
+    from socialzoo.bench.crowd_store import crowd_config_hash, evaluate_crowd_stored
+
+    config = CrowdNavConfig.variant("")
+    fresh = evaluate_crowd(CrowdOrcaRobot().act, config, "val", cases=6, batch_size=2)
+
+    class Interrupted(CrowdOrcaRobot):
+        calls = 0
+
+        def act(self, obs, core):
+            Interrupted.calls += 1
+            if Interrupted.calls > 70:  # some episodes have ended by now, not all
+                raise KeyboardInterrupt
+            return super().act(obs, core)
+
+    store = tmp_path / "results.sqlite"
+    robot = Interrupted()
+    with pytest.raises(KeyboardInterrupt):
+        evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6, batch_size=2)
+    Interrupted.calls = -(10**6)
+    result, played = evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6, batch_size=2)
+    assert 0 < played < 6  # the episodes stored before the interruption were not played again
+    np.testing.assert_equal(result.episodes, fresh.episodes)
+    np.testing.assert_equal(result.summary, fresh.summary)
+    assert evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6)[1] == 0
+    # Other settings of the policy or of the task are other episodes; the spec alone is a name.
+    other = CrowdOrcaRobot(safety_space=0.1)
+    assert crowd_config_hash(config, "val", "orca", other) != crowd_config_hash(config, "val", "orca", robot)
+    assert crowd_config_hash(config.replace(time_limit=20.0), "val", "orca", robot) != crowd_config_hash(
+        config, "val", "orca", robot
+    )
+    assert evaluate_crowd_stored(store, "orca", other, config, "val", cases=2)[1] == 2
+
+
+def test_a_subset_of_cases_plays_as_in_the_full_run():
+    full = evaluate_crowd(_straight, CONFIG, "val", cases=5, batch_size=2)
+    part = evaluate_crowd(_straight, CONFIG, "val", cases=5, batch_size=2, indices=[4, 1])
+    np.testing.assert_equal(part.episodes, [full.episodes[1], full.episodes[4]])
+    with pytest.raises(ValueError, match="indices"):
+        evaluate_crowd(_straight, CONFIG, "val", cases=5, indices=[5])
