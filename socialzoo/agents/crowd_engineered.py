@@ -21,6 +21,7 @@ discrete action set, the nearest of CrowdNav's 81 actions.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -171,6 +172,17 @@ class CrowdSocialForceRobot:
 CROWD_POLICIES = ("orca", "social_force", "crowdnav")
 
 
+def crowd_policy_file(spec: str) -> Path | None:
+    """The policy file a spec names: PATH of "crowdnav:PATH", the shipped file for "crowdnav";
+    None for the engineered robots (and for names make_crowd_policy refuses)."""
+    name, _, path = str(spec).partition(":")
+    if name.strip().lower() != "crowdnav":
+        return None
+    from socialzoo.agents import SHIPPED_DIR
+
+    return Path(path) if path else SHIPPED_DIR / "crowdnav.safetensors"
+
+
 def make_crowd_policy(spec: str) -> Any:
     """The CrowdNav-task policy named by `spec`: an object with act(obs, core) and a name.
 
@@ -184,10 +196,9 @@ def make_crowd_policy(spec: str) -> Any:
         return CrowdOrcaRobot()
     if key == "social_force" and not path:
         return CrowdSocialForceRobot()
-    if key == "crowdnav":
-        from socialzoo.agents import SHIPPED_DIR
+    file = crowd_policy_file(spec)
+    if file is not None:
         from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
 
-        file = path or str(SHIPPED_DIR / "crowdnav.safetensors")
         return CrowdAttentionPolicy.load(file)
     raise ValueError(f"unknown CrowdNav policy {spec!r}; known: orca, social_force, crowdnav[:PATH]")

@@ -88,8 +88,9 @@ def evaluate_crowd(
             f"evaluate_crowd: {total} cases asked of the {split} split, which holds {SPLIT_SIZE[split]}"
         )
     todo = list(range(total)) if indices is None else sorted({int(k) for k in indices})
-    if any(not 0 <= k < total for k in todo):
-        raise ValueError(f"evaluate_crowd: case indices must lie in [0, {total}), got {todo}")
+    outside = [k for k in todo if not 0 <= k < total]
+    if outside:
+        raise ValueError(f"evaluate_crowd: case indices must lie in [0, {total}), got {outside}")
     if not todo:
         raise ValueError("evaluate_crowd: no case to play")
     rows = min(batch_size, len(todo))

@@ -4,21 +4,18 @@
 episode as it ends, so an interrupted evaluation resumes where it stopped and a repeated one reads
 instead of playing. An episode is keyed like a benchmark trial: (policy spec, split, case index,
 config hash), where the hash covers everything that decides the episode besides its case: the
-task's config, the simulation's source code and the policy's module, and the policy's parameters
-(a learned policy's tensors, an engineered one's settings). A retrained file under the same path
-therefore gets new episodes, never the old file's.
+task's config, the simulation's source code and the policy's module, the policy's parameters and
+its file's digest. A retrained file under the same path therefore gets new episodes, never the old
+file's.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import inspect
 import json
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from socialzoo.bench.crowd_eval import CrowdEvaluation, evaluate_crowd, summarize_crowd
 from socialzoo.env.crowd_config import CrowdNavConfig
@@ -27,46 +24,25 @@ from socialzoo.nav.crowd_cases import ARENA_MAP, SPLIT_SIZE, Split
 STORE_FILE = "results.sqlite"
 
 
-def _feed(digest: Any, value: Any) -> None:
-    """Add a policy's state to a running sha256: arrays by dtype, shape and bytes; containers and
-    dataclasses item by item; anything else by its repr."""
-    if isinstance(value, np.ndarray):
-        digest.update(f"array{value.dtype.str}{value.shape}".encode())
-        digest.update(np.ascontiguousarray(value).tobytes())
-    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-        _feed(digest, {f.name: getattr(value, f.name) for f in dataclasses.fields(value)})
-    elif isinstance(value, dict):
-        digest.update(b"{")
-        for key in sorted(value, key=str):
-            digest.update(repr(key).encode())
-            _feed(digest, value[key])
-        digest.update(b"}")
-    elif isinstance(value, list | tuple):
-        digest.update(b"[")
-        for item in value:
-            _feed(digest, item)
-        digest.update(b"]")
-    else:
-        digest.update(repr(value).encode())
-
-
-def policy_digest(policy: Any) -> str:
-    """sha256 of a CrowdNav policy's state (its attributes, arrays included)."""
-    digest = hashlib.sha256(type(policy).__qualname__.encode())
-    _feed(digest, {k: v for k, v in vars(policy).items() if not k.startswith("_")})
-    return digest.hexdigest()
-
-
 def crowd_config_hash(config: CrowdNavConfig, split: Split, spec: str, policy: Any) -> str:
-    """16 hex digits naming everything that decides an episode of `policy` besides its case."""
-    from socialzoo.bench.experiment import source_digest
+    """16 hex digits naming everything that decides an episode of `policy` besides its case, as
+    socialzoo.bench.experiment.config_hash does for a benchmark trial: the task, the simulation's
+    code and the policy's module, the policy's parameters (its config()) and its file's digest."""
+    from socialzoo.agents.base import policy_config
+    from socialzoo.agents.crowd_engineered import crowd_policy_file
+    from socialzoo.bench.experiment import file_digest, source_digest
 
     module_file = inspect.getsourcefile(type(policy))
+    policy_file = crowd_policy_file(spec)
     payload = {
         "task": config.to_dict(),
         "split": split,
         "code_sha256": source_digest((module_file,) if module_file else ()),
-        "policy": {"spec": spec, "state_sha256": policy_digest(policy)},
+        "policy": {
+            "spec": spec,
+            "config": policy_config(policy),
+            "file_sha256": file_digest(policy_file) if policy_file is not None else None,
+        },
     }
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -194,7 +194,8 @@ def env_id_for(map_name: str) -> str | None:
     return next((env_id for env_id, kw in BENCHMARK_IDS.items() if kw.get("map") == map_name), None)
 
 
-def _file_digest(path: str | Path) -> str | None:
+def file_digest(path: str | Path) -> str | None:
+    """sha256 of a file's bytes, or None when there is no such file."""
     p = Path(path)
     if not p.is_file():
         return None
@@ -258,7 +259,7 @@ def config_hash(
         "policy": {
             "name": policy,
             "config": policy_config(policy_object),
-            "file_sha256": _file_digest(kwargs["path"]) if "path" in kwargs else None,
+            "file_sha256": file_digest(kwargs["path"]) if "path" in kwargs else None,
         },
         "test_set": {
             "map": test_set.map_name,
@@ -362,7 +363,7 @@ def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
         return None
     return {
         "spec": config.humans.split(":", 1)[0] if people is None else people,
-        "file_sha256": _file_digest(path) if path is not None else None,
+        "file_sha256": file_digest(path) if path is not None else None,
         "human_metrics": config.human_metrics,
     }
 

@@ -165,6 +165,15 @@ def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_
         config, "val", "orca", robot
     )
     assert evaluate_crowd_stored(store, "orca", other, config, "val", cases=2)[1] == 2
+    # A learned policy's file is part of its key: a retrained file under the same path is new.
+    from socialzoo.agents import SHIPPED_DIR
+
+    file = tmp_path / "crowdnav.safetensors"
+    file.write_bytes((SHIPPED_DIR / "crowdnav.safetensors").read_bytes())
+    learned = make_crowd_policy(f"crowdnav:{file}")
+    before = crowd_config_hash(config, "val", f"crowdnav:{file}", learned)
+    file.write_bytes(file.read_bytes() + b" ")
+    assert crowd_config_hash(config, "val", f"crowdnav:{file}", learned) != before
 
 
 def test_a_subset_of_cases_plays_as_in_the_full_run():
