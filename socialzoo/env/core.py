@@ -318,7 +318,9 @@ class SocialNavCore:
             after.robot_pose[..., :2], moving, cfg.dt, after.human_pos, after.human_mask
         )
         if cfg.robot_action == "subpolicy":
-            self.prev_action = np.asarray(robot_action, dtype=np.int64).reshape(b, r)
+            # A copy: reset_rows zeroes rows of prev_action, which must never write into the
+            # caller's action array (a TorchRL rollout's recorded actions, a user's buffer).
+            self.prev_action = np.array(robot_action, dtype=np.int64).reshape(b, r)
         self.target_human = target
         visible = self._observe(np.arange(b))
 

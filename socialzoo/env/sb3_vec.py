@@ -129,9 +129,7 @@ class SB3VecEnv(VecEnv):
 
     def step_async(self, actions: np.ndarray) -> None:
         """Remember the (B,) actions for `step_wait`."""
-        # A copy: the core keeps the array it is given as its previous actions and zeroes the rows
-        # it resets, which would rewrite the caller's (SB3's rollout buffer's) actions.
-        self._actions = np.array(actions, copy=True)
+        self._actions = np.asarray(actions)
 
     def step_wait(self) -> VecEnvStepReturn:
         """Step every row; rows whose episode ended are reset (SB3's autoreset)."""

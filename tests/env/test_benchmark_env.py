@@ -108,6 +108,17 @@ def test_vector_env_autoresets_and_reports_metrics():
     assert vec.observation_space.contains(obs)
 
 
+def test_vector_env_leaves_the_callers_actions_alone_across_autoresets():
+    """The core keeps the previous actions and zeroes the rows it resets: never in the caller's array."""
+    vec = ActionSelectionVectorEnv(3, map="open_room", max_steps=4)
+    vec.reset(seed=0)
+    for _ in range(4):
+        actions = np.array([3, 2, 1], dtype=np.int64)
+        _, _, terminated, truncated, _ = vec.step(actions)
+    assert (terminated | truncated).all()
+    np.testing.assert_array_equal(actions, [3, 2, 1])
+
+
 def test_episode_end_info_and_step_after_end():
     env = ActionSelectionEnv(map="open_room", max_steps=20)
     env.reset(seed=0)

@@ -172,6 +172,20 @@ def test_robot_policy_drives_the_robots_inside_the_env():
     assert policy.calls > 20 and driven.shape == (2, 20)
 
 
+def test_a_rollout_records_the_actions_its_policy_gave_across_resets():
+    """On the CPU the env reads the action tensors as numpy views: the rows it resets must not
+    rewrite them (on a GPU the copy hid this; tools/gpu_torchrl_check.py compares both)."""
+    env = make(batch_size=2, max_steps=3)
+    given = torch.tensor([[3], [2]])
+
+    def constant(td):
+        td["robot", "action"] = given.clone()
+        return td
+
+    td = env.rollout(7, policy=constant, break_when_any_done=False)
+    assert (td["robot", "action"] == given[:, None]).all()  # rollouts are (B, T, R)
+
+
 def test_robots_that_left_are_masked_and_report_done():
     env = make(num_robots=2, num_learned_humans=1, robot_action="velocity", max_steps=200)
     td = env.reset()
