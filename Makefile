@@ -56,9 +56,10 @@ policies: $(STAMP)
 	$(VENV)/bin/socialzoo demos --episodes 125 --out $(SHIP)/ref_demos.npz --no-progress
 	$(VENV)/bin/socialzoo train bc --demos $(SHIP)/ref_demos.npz --steps 155400 --seed 0 --out $(SHIP)/bc --no-progress
 	$(VENV)/bin/socialzoo train gail --demos $(SHIP)/ref_demos.npz --steps 155400 --seed 0 --out $(SHIP)/gail --no-progress
+	$(VENV)/bin/socialzoo train dagger --demos $(SHIP)/ref_demos.npz --seed 0 --out $(SHIP)/dagger --no-progress
 	mkdir -p $(SHIP)/pips
 	$(VENV)/bin/socialzoo train pips --demos $(SHIP)/ref_demos.npz --out $(SHIP)/pips/pips.json
-	for algo in ppo dqn bc gail; do \
+	for algo in ppo dqn bc gail dagger; do \
 		cp $(SHIP)/$$algo/$$algo.safetensors socialzoo/agents/shipped/$$algo.safetensors && \
 		cp $(SHIP)/$$algo/run.json socialzoo/agents/shipped/$$algo.run.json || exit 1; \
 	done

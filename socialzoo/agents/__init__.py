@@ -39,6 +39,8 @@ POLICIES: dict[str, str] = {
     "dqn": "socialzoo.agents.mlp:MlpPolicy",
     "bc": "socialzoo.agents.mlp:MlpPolicy",
     "gail": "socialzoo.agents.mlp:MlpPolicy",
+    # BC with DAgger's rounds on its own states, labelled by Ref (`socialzoo train dagger`).
+    "dagger": "socialzoo.agents.mlp:MlpPolicy",
     # Robots co-trained with learned humans (`socialzoo train cotrain`, robot.safetensors).
     "mappo": "socialzoo.agents.mlp:MlpPolicy",
     # Program synthesis: a JSON program (socialzoo.agents.pips_program).

@@ -23,6 +23,7 @@ TRAINERS: dict[str, str] = {
     "dqn": "socialzoo.train.dqn:DQNArgs",
     "bc": "socialzoo.train.bc:Args",
     "gail": "socialzoo.train.gail:Args",
+    "dagger": "socialzoo.train.dagger:Args",
     "pips": "socialzoo.train.pips:PipsArgs",
     # Multi-agent: learned humans (MAPPO/IPPO), and robots and humans trained together.
     "humans": "socialzoo.train.humans:HumansArgs",

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from socialzoo.nav.subpolicies import NUM_ACTIONS
 from socialzoo.train.checks import check_int, check_number
 from socialzoo.train.imitation import ImitationArgs, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
@@ -81,63 +82,117 @@ def train(args: Args) -> Path:
     return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 
-def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
-    import torch
-    from tensordict import TensorDict
-    from torchrl.envs.utils import ExplorationType, set_exploration_type
+def bc_loss_module(net: Any) -> Any:
+    """TorchRL's BCLoss on a ProbabilisticActor over `net`'s logits (cross-entropy)."""
     from torchrl.objectives import BCLoss
 
-    from socialzoo.train.demo_data import load_demo_steps
     from socialzoo.train.policy_net import make_actor
 
-    parts = imitation_parts(run, args)
-    data, net = parts.data, parts.net
-    validation = load_demo_steps(args.validation) if args.validation is not None else None
     with warnings.catch_warnings():
         # TorchRL's LossModule warns about a target-network attribute that BCLoss never declares.
         warnings.filterwarnings(
             "ignore", message="The name target_actor_network_params", category=UserWarning
         )
-        loss_module = BCLoss(make_actor(net))
+        return BCLoss(make_actor(net))
+
+
+def update_count(steps: int, args: Args) -> int:
+    """Gradient updates of a fit to `steps` demonstration steps: args.epochs passes, at least
+    args.min_updates."""
+    return max(args.epochs * math.ceil(steps / args.batch_size), args.min_updates)
+
+
+def fit_actions(
+    loss_module: Any,
+    obs: np.ndarray,
+    action: np.ndarray,
+    args: Args,
+    generator: Any,
+    *,
+    after_update: Callable[[int, float], None] | None = None,
+    after_pass: Callable[[int, float], None] | None = None,
+) -> float:
+    """Fit the policy to (obs, action) pairs: update_count(len(obs), args) Adam updates of BCLoss
+    on minibatches of args.batch_size in a fresh `generator` order each pass.
+
+    Args:
+        loss_module: bc_loss_module(net).
+        obs: (N, D) float32 observations.
+        action: (N,) int64 sub-policy indices.
+        args: the optimiser settings (lr, weight_decay, batch_size, epochs, min_updates).
+        generator: the run's torch Generator (the minibatch order).
+        after_update: called with (updates done, loss) after each update.
+        after_pass: called with (updates done, loss) after each pass over the data.
+
+    Returns:
+        The last minibatch's loss.
+    """
+    import torch
+    from tensordict import TensorDict
+    from torchrl.envs.utils import ExplorationType, set_exploration_type
+
     optimizer = torch.optim.Adam(loss_module.parameters(), lr=args.lr, weight_decay=args.weight_decay)
-    obs = torch.as_tensor(data.obs)
-    actions = torch.as_tensor(data.one_hot())
-    n = len(data)
-    per_epoch = math.ceil(n / args.batch_size)
-    updates = max(args.epochs * per_epoch, args.min_updates)
-    schedule = run.schedule(updates, args.checkpoint_every)
-    bar = run.progress(updates, unit="update")
-    writer = run.writer
-    step = 0
+    obs_t = torch.as_tensor(obs)
+    one_hot = torch.as_tensor(np.eye(NUM_ACTIONS, dtype=np.float32)[action])
+    n = len(obs_t)
+    updates = update_count(n, args)
+    step, loss_value = 0, float("nan")
     with set_exploration_type(ExplorationType.DETERMINISTIC):
         while step < updates:
-            order = torch.randperm(n, generator=parts.generator)
+            order = torch.randperm(n, generator=generator)
             for lo in range(0, n, args.batch_size):
                 if step >= updates:
                     break
                 idx = order[lo : lo + args.batch_size]
-                batch = TensorDict(observation=obs[idx], action=actions[idx], batch_size=[len(idx)])
+                batch = TensorDict(observation=obs_t[idx], action=one_hot[idx], batch_size=[len(idx)])
                 loss = loss_module(batch)["loss_bc"]
                 optimizer.zero_grad()
                 loss.backward()
                 optimizer.step()
                 step += 1
-                bar.update(1)
-                if step % 50 == 0 or step == updates:
-                    writer.add_scalar("bc/loss", loss.item(), step)
-                for due in schedule.due(step):
-                    run.checkpoint(due, lambda path, due=due: parts.save(path, updates=due))
-            train_agreement = agreement(net, data.obs, data.action)
-            writer.add_scalar("bc/train_agreement", train_agreement, step)
-            bar.set_postfix(loss=f"{loss.item():.3f}", agree=f"{train_agreement:.3f}")
-            if validation is not None:
-                writer.add_scalar(
-                    "bc/validation_agreement", agreement(net, validation.obs, validation.action), step
-                )
-    parts.save(run.policy, updates=step)
+                loss_value = loss.item()
+                if after_update is not None:
+                    after_update(step, loss_value)
+            if after_pass is not None:
+                after_pass(step, loss_value)
+    return loss_value
+
+
+def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
+    from socialzoo.train.demo_data import load_demo_steps
+
+    parts = imitation_parts(run, args)
+    data, net = parts.data, parts.net
+    validation = load_demo_steps(args.validation) if args.validation is not None else None
+    updates = update_count(len(data), args)
+    schedule = run.schedule(updates, args.checkpoint_every)
+    bar = run.progress(updates, unit="update")
+    writer = run.writer
+
+    def after_update(step: int, loss: float) -> None:
+        bar.update(1)
+        if step % 50 == 0 or step == updates:
+            writer.add_scalar("bc/loss", loss, step)
+        for due in schedule.due(step):
+            run.checkpoint(due, lambda path, due=due: parts.save(path, updates=due))
+
+    def after_pass(step: int, loss: float) -> None:
+        train_agreement = agreement(net, data.obs, data.action)
+        writer.add_scalar("bc/train_agreement", train_agreement, step)
+        bar.set_postfix(loss=f"{loss:.3f}", agree=f"{train_agreement:.3f}")
+        if validation is not None:
+            writer.add_scalar(
+                "bc/validation_agreement", agreement(net, validation.obs, validation.action), step
+            )
+
+    fit_actions(
+        bc_loss_module(net), data.obs, data.action, args, parts.generator,
+        after_update=after_update, after_pass=after_pass,
+    )  # fmt: skip
+    parts.save(run.policy, updates=updates)
     results: dict[str, Any] = {
         "updates": updates,
-        "demonstration_steps": n,
+        "demonstration_steps": len(data),
         "train_agreement": agreement(net, data.obs, data.action),
     }
     if validation is not None:
