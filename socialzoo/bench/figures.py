@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import FAILURE_LABELS, MAP_ROLES, paper_success, policy_label
+from socialzoo.bench.tables import FAILURE_LABELS, MAP_ROLES, paper_success, policy_labels
 
 FIGURE_FORMATS = ("png", "pdf")
 # Panels of the metrics figure: (metric, axis label).
@@ -81,7 +81,7 @@ def _bars(
             label=_map_label(m),
         )
     ax.set_xticks(range(len(policies)))
-    ax.set_xticklabels([policy_label(p) for p in policies])
+    ax.set_xticklabels(list(policy_labels(policies).values()))
     return width
 
 
@@ -204,7 +204,7 @@ def plot_failures(
                 bottom += value
             ax.text(x, bottom, m, ha="center", va="bottom", fontsize=6, rotation=90)
     ax.set_xticks(range(len(policies)))
-    ax.set_xticklabels([policy_label(p) for p in policies])
+    ax.set_xticklabels(list(policy_labels(policies).values()))
     ax.set_ylabel("failed episodes, % (by cause)")
     ax.set_ylim(bottom=0)
     if labelled:

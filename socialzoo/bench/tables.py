@@ -13,6 +13,7 @@ import io
 import math
 import os
 import zlib
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -83,6 +84,7 @@ POLICY_LABELS: dict[str, str] = {
     "pips": "PIPS",
     "dqn": "DQN",
     "ppo": "PPO",
+    "dagger": "DAgger",
 }
 
 
@@ -104,6 +106,27 @@ def policy_label(policy: str) -> str:
     if sep:
         return f"{POLICY_LABELS.get(key.lower(), key)} ({Path(path).name})"
     return POLICY_LABELS.get(policy, policy)
+
+
+def policy_labels(policies: Sequence[str]) -> dict[str, str]:
+    """policy_label of each policy, told apart where two would read the same: files of one name in
+    different folders get as much of their paths as differs ("DAgger (s1/dagger.safetensors)",
+    "DAgger (s2/dagger.safetensors)")."""
+    labels = {p: policy_label(p) for p in policies}
+    counts = Counter(labels.values())
+    for label in [v for v, n in counts.items() if n > 1]:
+        same = [p for p in labels if labels[p] == label and ":" in p]
+        paths = {p: Path(p.partition(":")[2]).parts for p in same}
+        tails = {p: "/".join(parts) for p, parts in paths.items()}
+        for depth in range(2, max((len(v) for v in paths.values()), default=0) + 1):
+            shorter = {p: "/".join(parts[-depth:]) for p, parts in paths.items()}
+            if len(set(shorter.values())) == len(shorter):
+                tails = shorter
+                break
+        for p in same:
+            key = p.partition(":")[0]
+            labels[p] = f"{POLICY_LABELS.get(key.lower(), key)} ({tails[p]})"
+    return labels
 
 
 def paper_success(policy: str, map_name: str) -> float | None:
@@ -316,6 +339,7 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
     90% interval and, for the paper's maps, the paper's number beside it (SPEC section 10).
     """
     policies = list(dict.fromkeys(e["policy"] for e in summary))
+    labels = policy_labels(policies)
     maps = list(dict.fromkeys(e["map"] for e in summary))
     by_key = {(e["policy"], e["map"]): e for e in summary}
     paper_maps = [m for m in maps if m in MAP_ROLES]
@@ -335,7 +359,7 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
     lines.append("| " + " | ".join(header) + " |")
     lines.append("|" + "---|" * len(header))
     for p in policies:
-        cells = [policy_label(p)]
+        cells = [labels[p]]
         for m in maps:
             e = by_key.get((p, m))
             cells.append(
@@ -349,14 +373,14 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
                 paper = paper_success(p, m)
                 cells.append("-" if paper is None else f"{paper:.1f}")
         lines.append("| " + " | ".join(cells) + " |")
-    lines += _failure_table(summary)
+    lines += _failure_table(summary, labels)
     for name, description in TABLE_METRICS:
         lines += ["", f"## {description[0].upper() + description[1:]}", ""]
         header = ["policy", *(_map_header(m) for m in maps)]
         lines.append("| " + " | ".join(header) + " |")
         lines.append("|" + "---|" * len(header))
         for p in policies:
-            cells = [policy_label(p)]
+            cells = [labels[p]]
             for m in maps:
                 e = by_key.get((p, m))
                 if e is None:
@@ -371,7 +395,7 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
     return "\n".join(lines) + "\n"
 
 
-def _failure_table(summary: Sequence[Mapping[str, Any]]) -> list[str]:
+def _failure_table(summary: Sequence[Mapping[str, Any]], labels: Mapping[str, str]) -> list[str]:
     """Markdown lines of the failures by cause: one row per policy and map, each cause's share of
     the episodes (%), in the order of precedence of socialzoo.env.metrics.failure_cause."""
     lines = [
@@ -387,7 +411,7 @@ def _failure_table(summary: Sequence[Mapping[str, Any]]) -> list[str]:
     lines.append("| " + " | ".join(header) + " |")
     lines.append("|" + "---|" * len(header))
     for e in summary:
-        cells = [policy_label(e["policy"]), str(e["map"]), _fmt(100 * e["success_rate"], 1)]
+        cells = [labels[e["policy"]], str(e["map"]), _fmt(100 * e["success_rate"], 1)]
         cells += [_fmt(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
         lines.append("| " + " | ".join(cells) + " |")
     return lines

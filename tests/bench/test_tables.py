@@ -8,6 +8,7 @@ import pytest
 from socialzoo.bench.stats import mean_interval, rate_interval, student_t_cdf, student_t_ppf
 from socialzoo.bench.tables import (
     csv_columns,
+    policy_labels,
     read_summary_csv,
     summarize,
     summary_markdown,
@@ -186,3 +187,25 @@ def test_failures_by_cause_in_the_summary_and_markdown():
     text = summary_markdown(summary)
     assert "## Failures by cause (% of episodes)" in text
     assert "| GoAlone | gdc1 | 60.0 | 10.0 | 10.0 | 10.0 | 10.0 |" in text
+
+
+def test_files_of_one_name_get_labels_that_tell_them_apart():
+    one, two = "dagger:/runs/s1/dagger.safetensors", "dagger:runs/s2/dagger.safetensors"
+    labels = policy_labels(["ref", one, two, "bc:a.safetensors"])
+    assert labels == {
+        "ref": "Ref",
+        one: "DAgger (s1/dagger.safetensors)",
+        two: "DAgger (s2/dagger.safetensors)",
+        "bc:a.safetensors": "BC (a.safetensors)",
+    }
+    assert policy_labels(["dagger:x/a/p.safetensors", "dagger:y/a/p.safetensors"]) == {
+        "dagger:x/a/p.safetensors": "DAgger (x/a/p.safetensors)",
+        "dagger:y/a/p.safetensors": "DAgger (y/a/p.safetensors)",
+    }
+    # In the summary every table row names its file.
+    text = summary_markdown(summarize(rows_for(one, "gdc1", 8, 10) + rows_for(two, "gdc1", 6, 10)))
+    assert (
+        text.count("| DAgger (s1/dagger.safetensors) |")
+        == text.count("| DAgger (s2/dagger.safetensors) |")
+        > 3
+    )
