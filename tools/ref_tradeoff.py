@@ -50,6 +50,11 @@ def evaluate(map_name: str, trials: int, params: dict[str, float]) -> dict[str, 
     }
 
 
+def dominated(row: dict[str, Any], rows: list[dict[str, Any]]) -> bool:
+    """Whether another setting has at least `row`'s success with less blame."""
+    return any(o["success"] >= row["success"] and o["blame"] < row["blame"] for o in rows if o is not row)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--trials", type=int, default=400, help="validation scenarios per setting")
@@ -63,13 +68,11 @@ def main() -> None:
     print(f"| {' | '.join(GRID)} | success % | blame | human collision | not reached | dominated |")
     print("|" + "---|" * (len(GRID) + 5))
     for row in rows:
-        dominated = any(
-            o["success"] >= row["success"] and o["blame"] < row["blame"] for o in rows if o is not row
-        )
+        worse = dominated(row, rows)
         values = " | ".join(f"{row[name]:g}" for name in GRID)
         print(
             f"| {values} | {100 * row['success']:.1f} | {row['blame']:.4f} | {row['human_collision']} "
-            f"| {row['not_reached']} | {'yes' if dominated else 'no'} |"
+            f"| {row['not_reached']} | {'yes' if worse else 'no'} |"
         )
     print(
         f"\n{len(rows)} settings x {args.trials} {args.map}-val scenarios in {time.perf_counter() - start:.0f} s"
