@@ -25,9 +25,10 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.drive_check import DriveReport, drive_map, pose_pairs
-from socialzoo.nav.graph import NavGraph, segments_clear
+from socialzoo.nav.graph import NavGraph
 from socialzoo.nav.maps import Map, MapError, graph_components, validate_map
 from socialzoo.nav.repair import Repair
+from socialzoo.nav.segments import segments_clear
 
 # Farthest a pose is moved to a place whose join to the graph the robot can drive, m.
 MAX_MOVE = 1.5

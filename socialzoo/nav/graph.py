@@ -9,107 +9,21 @@ from __future__ import annotations
 import heapq
 import math
 import weakref
-from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
+from socialzoo.nav.attachment import ATTACH_CANDIDATES, Attachment, attach, take
 from socialzoo.nav.path_table import NoPathError, PathTable, floyd_warshall
+from socialzoo.nav.segments import segments_clear, segments_free
 
 if TYPE_CHECKING:
     from socialzoo.nav.maps import Map
 
 # Waypoints closer than this to the previous one are dropped from a plan (metres).
 DUPLICATE_EPS = 1e-9
-# Candidate attach points tested per query point before falling back to all of them.
-ATTACH_CANDIDATES = 8
-# A robot's join to the graph may pass this much closer to a wall than asked (the distance
-# field's lookup error, as the navigator's Sight allows), m.
-JOIN_TOLERANCE = 0.02
-# Upper bound on (points x candidates) pairs held in memory at once by `attach`.
-_ATTACH_CHUNK_PAIRS = 1 << 20
-
-
-class AttachError(NoPathError):
-    """An off-graph point reaches no graph edge or node by a wall-free straight line."""
-
-
-@dataclass(frozen=True)
-class Attachment:
-    """Where off-graph points join the navigation graph.
-
-    The attach point lies on the edge (node_a, node_b); cost_a and cost_b are the distances along
-    that edge from the attach point to its two end nodes. A point joined at a node has
-    node_a == node_b and both costs zero.
-
-    Attributes:
-        point: (N, 2) attach points, world frame, m.
-        dist: (N,) straight-line distance from each query point to its attach point, m.
-        edge: (N,) index into NavGraph.edges, or -1 when the point joins at a node.
-        node_a, node_b: (N,) end nodes of the attach edge.
-        cost_a, cost_b: (N,) distance along the edge from the attach point to node_a, node_b, m.
-        found: (N,) False for points that reach nothing (only with strict=False); their point is
-            the query point itself, their dist and costs inf, their nodes 0 and edge -1.
-    """
-
-    point: np.ndarray
-    dist: np.ndarray
-    edge: np.ndarray
-    node_a: np.ndarray
-    node_b: np.ndarray
-    cost_a: np.ndarray
-    cost_b: np.ndarray
-    found: np.ndarray
-
-
-def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """Whether straight segments [p0, p1] (N, 2) touch no wall; bool (N,).
-
-    `WallIndex.crosses` samples every segment of a call as finely as its longest one needs, so
-    segments are grouped by length (powers of two of the index reach) to keep short ones cheap.
-    """
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
-    free = np.ones(len(p0), dtype=bool)
-    if walls is None or walls.num_walls == 0 or len(p0) == 0:
-        return free
-    length = np.sqrt(((p1 - p0) ** 2).sum(-1))
-    group = np.ceil(np.log2(np.maximum(length / walls.fine.reach, 1.0))).astype(np.intp)
-    for g in np.unique(group):
-        rows = np.flatnonzero(group == g)
-        free[rows] = ~walls.crosses(p0[rows], p1[rows])
-    return free
-
-
-def segments_clear_of(walls: WallIndex, p0: np.ndarray, p1: np.ndarray, need: np.ndarray) -> np.ndarray:
-    """Whether straight segments [p0, p1] (N, 2) keep need (N,) (m, at most 0.5) from every wall;
-    bool (N,). Segments are grouped by length, as in `segments_free`."""
-    from socialzoo.nav.maps import segment_clearance
-
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
-    ok = np.ones(len(p0), dtype=bool)
-    if len(p0) == 0:
-        return ok
-    length = np.sqrt(((p1 - p0) ** 2).sum(-1))
-    group = np.ceil(np.log2(np.maximum(length / walls.fine.reach, 1.0))).astype(np.intp)
-    for g in np.unique(group):
-        rows = np.flatnonzero(group == g)
-        ok[rows] = segment_clearance(walls, p0[rows], p1[rows])[0] >= need[rows]
-    return ok
-
-
-def segments_clear(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray, clearance: float) -> np.ndarray:
-    """Whether straight segments [p0, p1] (N, 2) keep `clearance` (m, at most 0.5) from every wall;
-    bool (N,)."""
-    from socialzoo.nav.maps import segment_clearance
-
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-    if walls is None or walls.num_walls == 0 or len(p0) == 0:
-        return np.ones(len(p0), dtype=bool)
-    return np.asarray(segment_clearance(walls, p0, p1)[0] >= clearance)
 
 
 class NavGraph:
@@ -324,151 +238,9 @@ class NavGraph:
         clearance: float = 0.0,
         skip_edges: np.ndarray | None = None,
     ) -> Attachment:
-        """Join off-graph points to the graph at the nearest point they can reach in a straight line.
-
-        Candidates are the closest point of every edge and every node. For each query point the k
-        nearest candidates are tested first (one batched wall test for all points); points whose k
-        candidates are all blocked test every candidate, nearest first.
-
-        With clearance > 0 (a robot's plans), the nearest candidate whose line keeps
-        min(clearance, the point's own wall distance) - JOIN_TOLERANCE from every wall is taken,
-        and only a point with no such candidate at all joins by a merely wall-free line: a join
-        through a crack between two wall segments or grazing a door frame is a line the robot
-        cannot drive.
-
-        Args:
-            points: (N, 2) query points, world frame, m.
-            k: candidates per point in the first round.
-            strict: raise for a point that reaches nothing; else mark it not found.
-            clearance: the clearance a join should keep, m (0: any wall-free line).
-            skip_edges: edge indices whose points are no candidates (their end nodes still are).
-
-        Returns:
-            The attachment of every point.
-
-        Raises:
-            AttachError: with strict, a point reaches no edge and no node by a wall-free line (the
-                message names the first such point), or the graph has no nodes.
-        """
-        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        num = len(points)
-        if self.num_nodes == 0:
-            if strict:
-                raise AttachError(f"{self.name}: the navigation graph has no nodes to attach to")
-            return _not_found(points)
-        if not np.all(np.isfinite(points)):
-            raise ValueError(
-                f"{self.name}: attach points must be finite, got {points[~np.isfinite(points).all(1)][0]}"
-            )
-        num_cand = self.num_edges + self.num_nodes
-        chosen = np.full(num, -1, dtype=np.intp)
-        cand_point = np.empty((num, 2))
-        cand_t = np.empty(num)
-        chunk = max(1, _ATTACH_CHUNK_PAIRS // num_cand)
-        k = min(k, num_cand)
-        for lo in range(0, num, chunk):
-            rows = np.arange(lo, min(num, lo + chunk))
-            pts, ts, ds = self._candidates(points[rows])
-            if skip_edges is not None and len(skip_edges):
-                ds[:, np.asarray(skip_edges, dtype=np.intp)] = np.inf
-            order = np.argpartition(ds, k - 1, axis=1)[:, :k] if k < num_cand else np.argsort(ds, axis=1)
-            order = np.take_along_axis(
-                order, np.argsort(np.take_along_axis(ds, order, 1), 1, kind="stable"), 1
-            )
-            valid = np.isfinite(np.take_along_axis(ds, order, 1))
-            pick, clear = self._first_free(points[rows], pts, order, clearance, valid)
-            missing = np.flatnonzero((pick < 0) | ~clear)
-            if len(missing) and k < num_cand:
-                full = np.argsort(ds[missing], axis=1, kind="stable")
-                more_valid = np.isfinite(np.take_along_axis(ds[missing], full, 1))
-                more, more_clear = self._first_free(
-                    points[rows][missing], pts[missing], full, clearance, more_valid
-                )
-                better = (pick[missing] < 0) | more_clear
-                pick[missing] = np.where(better, more, pick[missing])
-            if strict and np.any(pick < 0):
-                bad = rows[int(np.flatnonzero(pick < 0)[0])]
-                raise AttachError(
-                    f"{self.name}: point {points[bad].tolist()} reaches no edge or node of the navigation "
-                    "graph by a wall-free straight line"
-                )
-            chosen[rows] = pick
-            r = np.arange(len(rows))
-            cand_point[rows] = np.where((pick >= 0)[:, None], pts[r, pick], points[rows])
-            cand_t[rows] = ts[r, pick]
-        found = chosen >= 0
-        chosen = np.where(found, chosen, self.num_edges)  # stand-in: node 0, overwritten below
-        is_edge = chosen < self.num_edges
-        edge = np.where(is_edge, chosen, -1)
-        node = chosen - self.num_edges
-        e = np.where(is_edge, chosen, 0)
-        node_a = np.where(is_edge, self.edges[e, 0] if self.num_edges else 0, node)
-        node_b = np.where(is_edge, self.edges[e, 1] if self.num_edges else 0, node)
-        length = self.edge_cost[e] if self.num_edges else np.zeros(num)
-        cost_a = np.where(is_edge, cand_t * length, 0.0)
-        cost_b = np.where(is_edge, (1.0 - cand_t) * length, 0.0)
-        dist = np.where(found, np.sqrt(((cand_point - points) ** 2).sum(-1)), np.inf)
-        return Attachment(
-            point=cand_point,
-            dist=dist,
-            edge=np.where(found, edge, -1),
-            node_a=np.where(found, node_a, 0).astype(np.intp),
-            node_b=np.where(found, node_b, 0).astype(np.intp),
-            cost_a=np.where(found, cost_a, np.inf),
-            cost_b=np.where(found, cost_b, np.inf),
-            found=found,
-        )
-
-    def _candidates(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(points (M, C, 2), edge parameter t (M, C), distance (M, C)) of all C = E + N candidates."""
-        a = self.nodes[self.edges[:, 0]]
-        b = self.nodes[self.edges[:, 1]]
-        ab = b - a
-        denom = np.where(self.edge_cost > 0, self.edge_cost**2, 1.0)
-        t = np.clip(np.einsum("mei,ei->me", points[:, None, :] - a[None], ab) / denom, 0.0, 1.0)
-        # Clamped ends are the node positions exactly, so duplicate waypoints compare equal.
-        on_edge = np.where(
-            (t <= 0.0)[..., None],
-            a[None],
-            np.where((t >= 1.0)[..., None], b[None], a[None] + t[..., None] * ab[None]),
-        )
-        pts = np.concatenate(
-            (on_edge, np.broadcast_to(self.nodes[None], (len(points), self.num_nodes, 2))), axis=1
-        )
-        ts = np.concatenate((t, np.zeros((len(points), self.num_nodes))), axis=1)
-        ds = np.sqrt(((pts - points[:, None, :]) ** 2).sum(-1))
-        return pts, ts, ds
-
-    def _first_free(
-        self,
-        points: np.ndarray,
-        cand: np.ndarray,
-        order: np.ndarray,
-        clearance: float = 0.0,
-        valid: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(index (M,) of the first candidate in `order` (M, K) reachable from each point, -1 if
-        none; (M,) bool, that line keeps the clearance asked for, see `attach`). Candidates where
-        `valid` (M, K) is False are skipped."""
-        m, kk = order.shape
-        targets = np.take_along_axis(cand, order[..., None], axis=1).reshape(-1, 2)  # (M * K, 2)
-        starts = np.repeat(points, kk, axis=0)
-        free = segments_free(self.walls, starts, targets)
-        if valid is not None:
-            free &= valid.reshape(-1)
-        use = free.reshape(m, kk)
-        clear: np.ndarray = np.ones(m, dtype=bool)
-        if clearance > 0 and self.walls is not None and self.walls.num_walls and free.any():
-            own = self.walls.nearest(points)[1]
-            need = np.repeat(np.minimum(clearance, own) - JOIN_TOLERANCE, kk)
-            good = free.copy()
-            good[free] = segments_clear_of(self.walls, starts[free], targets[free], need[free])
-            good = good.reshape(m, kk)
-            clear = np.asarray(good.any(axis=1))
-            use = np.where(clear[:, None], good, use)
-        first = np.argmax(use, axis=1)
-        found = use[np.arange(m), first]
-        return np.where(found, order[np.arange(m), first], -1), clear & found
+        """Join off-graph points to the graph at the nearest point they can reach in a straight
+        line: socialzoo.nav.attachment.attach on this graph (its arguments, result and errors)."""
+        return attach(self, points, k, strict=strict, clearance=clearance, skip_edges=skip_edges)
 
     # ---------------------------------------------------------------- planning
     def plan(self, start: np.ndarray, goal: np.ndarray, *, direct: bool = True) -> np.ndarray:
@@ -590,8 +362,8 @@ class NavGraph:
         if len(rows):
             att = self.attach(np.concatenate((starts[rows], goals[rows])), strict=strict, clearance=clearance)
             m = len(rows)
-            sa = _take(att, slice(0, m))
-            ga = _take(att, slice(m, 2 * m))
+            sa = take(att, slice(0, m))
+            ga = take(att, slice(m, 2 * m))
             dist = self.table.dist
             ends_s = np.stack((sa.node_a, sa.node_b), 1)  # (m, 2)
             ends_g = np.stack((ga.node_a, ga.node_b), 1)
@@ -653,35 +425,6 @@ class NavGraph:
         last = compact[idx, lengths - 1]
         paths = np.where(pad[..., None], last[:, None, :], compact)
         return paths, lengths.astype(np.intp), ok
-
-
-def _not_found(points: np.ndarray) -> Attachment:
-    """The attachment of points that reach nothing."""
-    num = len(points)
-    return Attachment(
-        point=points.copy(),
-        dist=np.full(num, np.inf),
-        edge=np.full(num, -1, dtype=np.intp),
-        node_a=np.zeros(num, dtype=np.intp),
-        node_b=np.zeros(num, dtype=np.intp),
-        cost_a=np.full(num, np.inf),
-        cost_b=np.full(num, np.inf),
-        found=np.zeros(num, dtype=bool),
-    )
-
-
-def _take(att: Attachment, sel: slice) -> Attachment:
-    """Rows `sel` of an attachment."""
-    return Attachment(
-        point=att.point[sel],
-        dist=att.dist[sel],
-        edge=att.edge[sel],
-        node_a=att.node_a[sel],
-        node_b=att.node_b[sel],
-        cost_a=att.cost_a[sel],
-        cost_b=att.cost_b[sel],
-        found=att.found[sel],
-    )
 
 
 _GRAPHS: weakref.WeakKeyDictionary[Map, NavGraph] = weakref.WeakKeyDictionary()

@@ -28,8 +28,9 @@ from socialzoo.nav.feasibility import (
     redraw_human_pairs,
     redraw_robot_pair,
 )
-from socialzoo.nav.graph import NoPathError, graph_of, segments_free
+from socialzoo.nav.graph import NoPathError, graph_of
 from socialzoo.nav.maps import Map
+from socialzoo.nav.segments import segments_free
 
 SCENARIO_FORMAT = "socialzoo-scenario/1"
 # Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).

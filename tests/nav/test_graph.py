@@ -13,8 +13,10 @@ from hypothesis import strategies as st
 
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav import maps
-from socialzoo.nav.graph import AttachError, NavGraph, NoPathError, graph_of, segments_free
+from socialzoo.nav.attachment import AttachError
+from socialzoo.nav.graph import NavGraph, NoPathError, graph_of
 from socialzoo.nav.maps import Map, segment_clearance
+from socialzoo.nav.segments import segments_free
 
 
 def gdc1() -> Map:

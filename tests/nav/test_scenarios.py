@@ -13,7 +13,6 @@ import pytest
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
 from socialzoo.nav import maps
-from socialzoo.nav.graph import segments_free
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenario_families import FAMILIES, make_family_scenario
 from socialzoo.nav.scenarios import (
@@ -26,6 +25,7 @@ from socialzoo.nav.scenarios import (
     noise_key,
     scenarios_to_state,
 )
+from socialzoo.nav.segments import segments_free
 
 
 def gdc1() -> Map:
