@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.attachment import ATTACH_CANDIDATES, Attachment, attach, take
+from socialzoo.nav.attachment import attach, take
 from socialzoo.nav.path_table import NoPathError, PathTable, floyd_warshall
 from socialzoo.nav.segments import segments_clear, segments_free
 
@@ -229,18 +229,8 @@ class NavGraph:
         ]
 
     # ---------------------------------------------------------------- joining off-graph points
-    def attach(
-        self,
-        points: np.ndarray,
-        k: int = ATTACH_CANDIDATES,
-        *,
-        strict: bool = True,
-        clearance: float = 0.0,
-        skip_edges: np.ndarray | None = None,
-    ) -> Attachment:
-        """Join off-graph points to the graph at the nearest point they can reach in a straight
-        line: socialzoo.nav.attachment.attach on this graph (its arguments, result and errors)."""
-        return attach(self, points, k, strict=strict, clearance=clearance, skip_edges=skip_edges)
+    # socialzoo.nav.attachment.attach, with this graph as its first argument.
+    attach = attach
 
     # ---------------------------------------------------------------- planning
     def plan(self, start: np.ndarray, goal: np.ndarray, *, direct: bool = True) -> np.ndarray:
