@@ -3,7 +3,8 @@
 A `Settings` is everything that decides what the run stores; its `settings_hash` names the folder
 DIR/<hash>/ that holds the run's items, so a rerun with other settings never reads items stored
 under different ones. How the run is carried out (parts chosen, backend, progress bars) is not a
-setting and does not change the hash.
+setting and does not change the hash, nor are the fields of VOLATILE_FIELDS (how fast, and how many
+test scenarios the later seeds play).
 """
 
 from __future__ import annotations
@@ -164,8 +165,12 @@ class Settings:
         return cls(**dict(data))
 
 
-# Fields that decide how fast, not what: evaluation results do not depend on how trials are split.
-VOLATILE_FIELDS: tuple[str, ...] = ("workers", "batch_size")
+# Fields left out of the hash. workers and batch_size decide how fast, not what: evaluation results
+# do not depend on how trials are split. seed_trials decides how far the later seeds' evaluation
+# goes, not what any stored item holds: each trial is stored once per scenario, so a rerun with a
+# larger value plays only the scenarios still missing (the trained seeds are reused), and one with
+# a smaller value reads the first ones (socialzoo.studies.seeds.benchmark_scores).
+VOLATILE_FIELDS: tuple[str, ...] = ("workers", "batch_size", "seed_trials")
 
 
 def settings_hash(settings: Settings) -> str:

@@ -55,6 +55,8 @@ def test_seeds_and_checkpoint_choice_settings():
     assert s.seed_list == (4, 5, 6) and full_settings().seed_list == (0,)
     assert (s.select_trials, s.select_every, s.batch_size) == (100, 12_000, 256)
     assert settings_hash(full_settings(seeds=3)) != settings_hash(full_settings())
+    # How many test scenarios the later seeds play extends a run, it does not start another.
+    assert settings_hash(full_settings(seeds=3, seed_trials=1000)) == settings_hash(full_settings(seeds=3))
     assert Settings.from_json(s.to_json()) == s
     with pytest.raises(ValueError, match="select_every"):
         full_settings(select_every=3_000)  # not a multiple of 2,000
