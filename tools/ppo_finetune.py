@@ -128,6 +128,9 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=400_000, help="PPO env steps after the warm-up")
     parser.add_argument("--lr", type=float, default=1e-5, help="Adam learning rate")
     parser.add_argument("--clip", type=float, default=0.1, help="PPO clip range")
+    parser.add_argument(
+        "--gamma", type=float, default=0.99, help="discount factor (SB3's and the paper's: 0.99)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="seeds PPO and the training scenarios")
     args = parser.parse_args()
     import torch
@@ -137,7 +140,7 @@ def main() -> None:
     config = EnvConfig().replace(reward={"w_blame": args.w_blame, "w_collision": args.w_collision})
     model = ppo_from_policy(
         source, config, seed=args.seed, n_steps=40, batch_size=500, n_epochs=4, learning_rate=args.lr,
-        clip_range=args.clip, ent_coef=0.0,
+        clip_range=args.clip, ent_coef=0.0, gamma=args.gamma,
     )  # fmt: skip
     probe = np.random.default_rng(0).normal(
         source.normalizer.mean, np.sqrt(source.normalizer.var), (512, source.input_size)
