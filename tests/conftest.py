@@ -1,5 +1,6 @@
 """Shared test fixtures."""
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -91,3 +92,13 @@ def small_demos(tmp_path_factory):
         env_overrides={"max_steps": DEMO_MAX_STEPS},
     )
     return record_demonstrations(path, config)
+
+
+def load_tool(name: str):
+    """The module of tools/<name>.py (the tools folder is not a package)."""
+    spec = importlib.util.spec_from_file_location(
+        name, Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

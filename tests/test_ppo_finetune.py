@@ -1,11 +1,11 @@
 """tools/ppo_finetune.py: the PPO model starts as the policy file acts, its observation statistics
 stay the file's, and the critic's warm-up leaves the actor as it was."""
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_tool
 
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
@@ -17,10 +17,7 @@ SHIPPED = ROOT / "socialzoo" / "agents" / "shipped" / "dagger.safetensors"
 
 @pytest.fixture(scope="module")
 def tool():
-    spec = importlib.util.spec_from_file_location("ppo_finetune", ROOT / "tools" / "ppo_finetune.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("ppo_finetune")
 
 
 def _probe(source):

@@ -1,21 +1,18 @@
 """tools/ref_tradeoff.py: a setting is dominated only by one with at least its success and less
 blame, and a setting's row is Ref's own metrics on validation scenarios."""
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
 def tool():
-    spec = importlib.util.spec_from_file_location("ref_tradeoff", ROOT / "tools" / "ref_tradeoff.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("ref_tradeoff")
 
 
 def test_dominated_needs_as_much_success_and_less_blame(tool):

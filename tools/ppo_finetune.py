@@ -151,11 +151,8 @@ def main() -> None:
     finetune(model, args.warmup, args.steps)
     seconds = time.perf_counter() - start
     header = dict(source.header)
-    header["training"] = {
-        **header.get("training", {}),
-        "finetune": {**vars(args), "seconds": round(seconds, 1)},
-    }
-    header["training"]["finetune"].update(init=str(args.init), out=str(args.out))
+    run = {**vars(args), "init": str(args.init), "out": str(args.out), "seconds": round(seconds, 1)}
+    header["training"] = {**header.get("training", {}), "finetune": run}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     exported(model, source).save(args.out, header)
     print(f"{args.out}: {args.warmup:,} + {args.steps:,} env steps in {seconds:.0f} s")
