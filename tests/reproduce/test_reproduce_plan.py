@@ -75,3 +75,15 @@ def test_seeds_on_the_command_line(tmp_path, capsys):
     assert "seed_trials" in capsys.readouterr().err and not any(tmp_path.iterdir())
     assert main(["reproduce", "--out", str(tmp_path), "--workers", "0"]) == 2
     assert "workers" in capsys.readouterr().err and not any(tmp_path.iterdir())
+
+
+def test_more_seed_trials_reuse_the_work_folder_and_record_the_new_count(tmp_path):
+    import json
+
+    from socialzoo.reproduce.ledger import Ledger
+
+    first = Ledger(tmp_path, full_settings(seeds=5, seed_trials=1000))
+    second = Ledger(tmp_path, full_settings(seeds=5))  # no SettingsMismatch: the same items
+    assert second.work == first.work
+    record = json.loads((second.work / "settings.json").read_text())
+    assert record["settings"]["seed_trials"] is None and record["settings"]["seeds"] == 5
