@@ -94,11 +94,16 @@ def small_demos(tmp_path_factory):
     return record_demonstrations(path, config)
 
 
-def load_tool(name: str):
+def _load_tool(name: str):
     """The module of tools/<name>.py (the tools folder is not a package)."""
-    spec = importlib.util.spec_from_file_location(
-        name, Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
-    )
+    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.fixture(scope="session")
+def load_tool():
+    """A function name -> the module of tools/<name>.py."""
+    return _load_tool

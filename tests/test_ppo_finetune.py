@@ -5,7 +5,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import load_tool
 
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
@@ -16,7 +15,7 @@ SHIPPED = ROOT / "socialzoo" / "agents" / "shipped" / "dagger.safetensors"
 
 
 @pytest.fixture(scope="module")
-def tool():
+def tool(load_tool):
     return load_tool("ppo_finetune")
 
 
