@@ -22,10 +22,10 @@ import numpy as np
 
 from socialzoo.nav.subpolicies import NUM_ACTIONS
 from socialzoo.train.checks import check_int, check_number
-from socialzoo.train.imitation import ImitationArgs, imitation_parts
+from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
-TRAINER = Trainer("bc", policy_file="bc.safetensors")
+TRAINER = Trainer("bc", policy_file="bc.safetensors", inputs=INPUT_FILES)
 POLICY_FILE = TRAINER.policy_file
 
 

@@ -21,10 +21,10 @@ from typing import Any, Literal
 import numpy as np
 
 from socialzoo.train.checks import Activation, check_int, check_number, check_sizes
-from socialzoo.train.imitation import ImitationArgs, imitation_parts
+from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
-TRAINER = Trainer("gail", policy_file="gail.safetensors")
+TRAINER = Trainer("gail", policy_file="gail.safetensors", inputs=INPUT_FILES)
 POLICY_FILE = TRAINER.policy_file
 GailReward = Literal["logit", "positive", "negative"]
 # The generator's reward is clipped to +-REWARD_CLIP (a saturated discriminator would give inf).

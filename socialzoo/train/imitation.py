@@ -13,6 +13,9 @@ from typing import Any
 from socialzoo.train.checks import Activation, check_int, check_number, check_sizes, owner
 from socialzoo.train.skeleton import TrainingRun
 
+# The imitation trainers' arguments that name input files (socialzoo.train.skeleton.Trainer.inputs).
+INPUT_FILES: tuple[str, ...] = ("demos", "validation")
+
 
 @dataclass(frozen=True, kw_only=True)
 class ImitationArgs:

@@ -119,7 +119,9 @@ class ProgramTrainer(Trainer):
 
 
 # The run's identity is every argument but the program's file name (its record is named after it).
-TRAINER = ProgramTrainer("pips", policy_file="pips.json", uses_torch=False, volatile=("out",))
+TRAINER = ProgramTrainer(
+    "pips", policy_file="pips.json", uses_torch=False, volatile=("out",), inputs=("demos",)
+)
 
 
 def window_mask(action: np.ndarray, prev: np.ndarray, episode: np.ndarray, window: int) -> np.ndarray:

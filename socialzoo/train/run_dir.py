@@ -9,7 +9,10 @@ Every trainer writes into one folder:
 
 A folder already holding a run of other arguments is refused, so two runs never mix; a finished
 run of the same arguments is reported as done, so a rerun repeats nothing. An argument added to a
-trainer after a run was recorded does not count against it while it has its default value.
+trainer after a run was recorded does not count against it while it has its default value. An
+input file argument (a trainer's `inputs`, such as imitation's demonstrations) that lies where it
+lay relative to the run's `out` names the same input, so a work folder moved or copied whole
+together with its inputs (a `socialzoo reproduce` folder) holds the same runs.
 Trainers use the folder through their skeleton (socialzoo.train.skeleton).
 """
 
@@ -67,6 +70,8 @@ class RunDir:
             named in `volatile` are recorded but do not count, e.g. the progress bar switch).
         volatile: argument names that do not change the result.
         record_name: the record's file name (run.json; PIPS keeps NAME.train.json beside its program).
+        inputs: argument names that name input files; one counts as unchanged when it lies at the
+            same place relative to `out` as in the record (the folder moved with its inputs).
 
     Raises:
         RunDirError: the folder holds a run of another algorithm or other arguments.
@@ -79,6 +84,7 @@ class RunDir:
         args: Any,
         volatile: tuple[str, ...] = (),
         record_name: str = RUN_FILE,
+        inputs: tuple[str, ...] = (),
     ) -> None:
         from socialzoo import __version__
 
@@ -89,7 +95,7 @@ class RunDir:
         resolved = plain(args)
         existing = self.read()
         if existing is not None:
-            changed = differing_args(existing, algo, args, volatile)
+            changed = differing_args(existing, algo, args, volatile, inputs)
             if changed is not None:
                 raise RunDirError(
                     f"{self.file}: {self.path} holds a {existing.get('algo')} run with other arguments "
@@ -155,16 +161,26 @@ class RunDir:
 
 
 def differing_args(
-    record: dict[str, Any], algo: str, args: Any, volatile: tuple[str, ...]
+    record: dict[str, Any],
+    algo: str,
+    args: Any,
+    volatile: tuple[str, ...],
+    inputs: tuple[str, ...] = (),
 ) -> list[str] | None:
-    """None when `record` is a run of `algo` with these arguments (fields in `volatile` aside, and
-    fields the record does not have yet at their defaults); else the differing argument names
-    (empty when only the algorithm differs)."""
-    identity = {k: v for k, v in plain(args).items() if k not in volatile}
-    theirs = {k: v for k, v in record.get("args", {}).items() if k not in volatile}
+    """None when `record` is a run of `algo` with these arguments (fields in `volatile` aside,
+    fields the record does not have yet at their defaults, and `inputs` files at the same place
+    relative to `out` as recorded); else the differing argument names (empty when only the
+    algorithm differs)."""
+    ours_all, theirs_all = plain(args), record.get("args", {})
+    identity = {k: v for k, v in ours_all.items() if k not in volatile}
+    theirs = {k: v for k, v in theirs_all.items() if k not in volatile}
     for name, default in _defaults(args).items():
         if name not in theirs and name in identity and identity[name] == default:
             theirs[name] = default
+    for name in inputs:
+        if name in theirs and name in identity and theirs[name] != identity[name]:
+            if _same_place(theirs[name], theirs_all.get("out"), identity[name], ours_all.get("out")):
+                theirs[name] = identity[name]
     if record.get("algo") == algo and theirs == identity:
         return None
     return sorted(k for k in set(theirs) | set(identity) if theirs.get(k) != identity.get(k))
@@ -182,6 +198,15 @@ def read_record(file: Path) -> dict[str, Any] | None:
     if not isinstance(record.get("algo"), str) or not isinstance(record.get("args"), dict):
         raise RunDirError(f"{file}: not a run record (no trainer name 'algo' and arguments 'args')")
     return record
+
+
+def _same_place(recorded: Any, recorded_out: Any, current: Any, current_out: Any) -> bool:
+    """Whether input path `current` lies where `recorded` lay, both seen from their run's `out`:
+    the run folder and its inputs were moved or copied together."""
+    values = (recorded, recorded_out, current, current_out)
+    if not all(isinstance(v, str) and v for v in values):
+        return False
+    return os.path.relpath(recorded, recorded_out) == os.path.relpath(current, current_out)
 
 
 def _defaults(args: Any) -> dict[str, Any]:

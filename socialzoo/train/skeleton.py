@@ -79,12 +79,15 @@ class Trainer:
         policy_file: the final policy's file name in the run folder.
         uses_torch: seed torch and set its threads around the run (False: a trainer without torch).
         volatile: argument names that do not change the result (not part of the run's identity).
+        inputs: argument names that name input files (socialzoo.train.run_dir.RunDir: the same
+            input when the run folder moved with it).
     """
 
     name: str
     policy_file: str
     uses_torch: bool = True
     volatile: tuple[str, ...] = VOLATILE
+    inputs: tuple[str, ...] = ()
 
     def folder(self, args: Any) -> Path:
         """The run folder of `args`: args.out."""
@@ -110,7 +113,7 @@ def finished_run(trainer: Trainer, args: Any) -> bool:
     return (
         record is not None
         and bool(record.get("finished"))
-        and differing_args(record, trainer.name, args, trainer.volatile) is None
+        and differing_args(record, trainer.name, args, trainer.volatile, trainer.inputs) is None
         and trainer.policy_path(args).is_file()
     )
 
@@ -154,6 +157,7 @@ class TrainingRun:
             args,
             volatile=trainer.volatile,
             record_name=trainer.record_name(args),
+            inputs=trainer.inputs,
         )
         self.policy = trainer.policy_path(args)
         self.evaluator = evaluator

@@ -70,6 +70,24 @@ def test_a_finished_run_is_not_repeated_and_other_arguments_are_refused(small_de
         train(Args(**{**json.loads((path.parent / "run.json").read_text())["args"], "seed": 1}))
 
 
+def test_a_work_folder_moved_with_its_demonstrations_is_not_trained_again(small_demos, tmp_path):
+    """`socialzoo reproduce` keeps the demonstrations beside the runs; a copied work folder holds
+    finished runs, since the demonstrations lie where they lay relative to the run."""
+    import shutil
+
+    work = tmp_path / "work"
+    (work / "demos").mkdir(parents=True)
+    shutil.copy(small_demos, work / "demos" / "ref.npz")
+    first = train(_args(work / "demos" / "ref.npz", work, min_updates=100, checkpoint_every=100))
+    shutil.copytree(work, tmp_path / "moved")
+    moved = tmp_path / "moved"
+    again = _args(moved / "demos" / "ref.npz", moved, min_updates=100, checkpoint_every=100)
+    stamp = (moved / "bc" / "bc.safetensors").stat().st_mtime_ns
+    assert train(again) == moved / "bc" / "bc.safetensors"
+    assert (moved / "bc" / "bc.safetensors").stat().st_mtime_ns == stamp  # not trained again
+    assert (moved / "bc" / "bc.safetensors").read_bytes() == first.read_bytes()
+
+
 def test_asking_for_more_steps_than_recorded_names_the_file(small_demos, tmp_path):
     with pytest.raises(ValueError, match=r"ref\.npz holds \d+ demonstration steps, 10000000 asked"):
         train(_args(small_demos, tmp_path, steps=10_000_000))

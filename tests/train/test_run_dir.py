@@ -35,6 +35,31 @@ def test_other_arguments_are_refused(tmp_path):
         RunDir(tmp_path, "dqn", Args())
 
 
+@dataclass(frozen=True, kw_only=True)
+class LfdArgs:
+    demos: Path
+    out: Path
+    seed: int = 0
+
+
+def test_a_folder_moved_with_its_inputs_holds_the_same_run(tmp_path):
+    """A work folder (run and demonstrations) moved elsewhere: the input at the same place
+    relative to `out` is the same input; one that moved on its own is not."""
+    old, new = tmp_path / "old", tmp_path / "new"
+    RunDir(old / "lfd/bc", "bc", LfdArgs(demos=old / "demos/d.npz", out=old / "lfd/bc")).finish()
+    old.rename(new)
+    moved = LfdArgs(demos=new / "demos/d.npz", out=new / "lfd/bc")
+    assert RunDir(new / "lfd/bc", "bc", moved, volatile=("out",), inputs=("demos",)).finished
+    elsewhere = replace(moved, demos=tmp_path / "other/d.npz")
+    with pytest.raises(RunDirError, match="demos differ"):
+        RunDir(new / "lfd/bc", "bc", elsewhere, volatile=("out",), inputs=("demos",))
+    # An argument not declared an input is compared as written, and the seed still counts.
+    with pytest.raises(RunDirError, match="demos differ"):
+        RunDir(new / "lfd/bc", "bc", moved, volatile=("out",))
+    with pytest.raises(RunDirError, match="seed differ"):
+        RunDir(new / "lfd/bc", "bc", replace(moved, seed=1), volatile=("out",), inputs=("demos",))
+
+
 def test_checkpoints_are_listed_by_step(tmp_path):
     run = RunDir(tmp_path, "ppo", Args())
     for step in (4000, 2000):
