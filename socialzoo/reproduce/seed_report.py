@@ -131,6 +131,17 @@ def seeds_section(results: Mapping[str, Any], figure: list[str]) -> list[str]:
     return [*lines, *figure, ""] if figure else lines
 
 
+def paper_outside_seeds(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> bool:
+    """True when several seeds ran and the paper's number lies below all of them or above all."""
+    for r in rows:
+        if r["experiment"] == experiment and r["policy"] == policy and int(r["seeds"]) > 1:
+            paper = r.get("paper_pct")
+            if paper is None or paper == "" or math.isnan(float(paper)):
+                return False
+            return not float(r["min_pct"]) <= float(paper) <= float(r["max_pct"])
+    return False
+
+
 def seed_note(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> str | None:
     """The measured seed spread of a policy in an experiment, for "Where we differ", or None."""
     for r in rows:
