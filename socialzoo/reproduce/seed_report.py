@@ -131,24 +131,30 @@ def seeds_section(results: Mapping[str, Any], figure: list[str]) -> list[str]:
     return [*lines, *figure, ""] if figure else lines
 
 
-def paper_outside_seeds(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> bool:
-    """True when several seeds ran and the paper's number lies below all of them or above all."""
+def _seeds_row(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> Mapping[str, Any] | None:
+    """The seeds row of a policy in an experiment when several seeds ran, or None."""
     for r in rows:
         if r["experiment"] == experiment and r["policy"] == policy and int(r["seeds"]) > 1:
-            paper = r.get("paper_pct")
-            if paper is None or paper == "" or math.isnan(float(paper)):
-                return False
-            return not float(r["min_pct"]) <= float(paper) <= float(r["max_pct"])
-    return False
+            return r
+    return None
+
+
+def paper_outside_seeds(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> bool:
+    """True when several seeds ran and the paper's number lies below all of them or above all."""
+    r = _seeds_row(rows, experiment, policy)
+    paper = None if r is None else r.get("paper_pct")
+    if paper is None or paper == "" or math.isnan(float(paper)):
+        return False
+    return not float(r["min_pct"]) <= float(paper) <= float(r["max_pct"])
 
 
 def seed_note(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> str | None:
     """The measured seed spread of a policy in an experiment, for "Where we differ", or None."""
-    for r in rows:
-        if r["experiment"] == experiment and r["policy"] == policy and int(r["seeds"]) > 1:
-            return (
-                f"Over {int(r['seeds'])} training seeds: {_pct(r['min_pct'])}% to {_pct(r['max_pct'])}%, "
-                f"mean {_pct(r['mean_pct'])}% [{_pct(r['mean_ci_low_pct'])}, {_pct(r['mean_ci_high_pct'])}]; "
-                f"the paper's number is {r['paper_where']}."
-            )
-    return None
+    r = _seeds_row(rows, experiment, policy)
+    if r is None:
+        return None
+    return (
+        f"Over {int(r['seeds'])} training seeds: {_pct(r['min_pct'])}% to {_pct(r['max_pct'])}%, "
+        f"mean {_pct(r['mean_pct'])}% [{_pct(r['mean_ci_low_pct'])}, {_pct(r['mean_ci_high_pct'])}]; "
+        f"the paper's number is {r['paper_where']}."
+    )

@@ -105,6 +105,7 @@ def test_load_refuses_a_folder_without_a_run_record(tmp_path):
 def test_a_paper_number_outside_the_seeds_range_is_explained(results_dir):
     """GoAlone's paper number is inside its one run's interval, but below every one of 5 seeds:
     "Where we differ" lists it with the seeds' spread; a paper number inside the range is not."""
+    from socialzoo.reproduce.report import _differences
     from socialzoo.reproduce.seed_report import paper_outside_seeds
 
     def row(low, high, paper=97.5):
@@ -115,8 +116,6 @@ def test_a_paper_number_outside_the_seeds_range_is_explained(results_dir):
     assert paper_outside_seeds([row(98.0, 99.0)], "performance", "goalone")
     assert not paper_outside_seeds([row(96.0, 99.0)], "performance", "goalone")
     assert not paper_outside_seeds([row(98.0, 99.0, math.nan)], "performance", "goalone")
-    from socialzoo.reproduce.report import _differences
-
     tables = build_tables(load(results_dir))
     listed = "\n".join(_differences(tables, [row(98.0, 99.0)]))
     assert "- performance (gdc1), GoAlone" in listed and "the paper's number is below all 5 seeds" in listed
