@@ -16,8 +16,14 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.agents.policy_file import PolicyFileError, env_version, read_policy_file, save_policy_file
 from socialzoo.env.crowd_variants import CROWD_ENV_VERSION
+from socialzoo.env.policy_file import (
+    PolicyFileError,
+    env_version,
+    mlp_forward,
+    read_policy_file,
+    save_policy_file,
+)
 
 POLICY_NAME = "crowdnav"
 # The CrowdNav task's env ids carry their own version (socialzoo.env.crowd_variants).
@@ -26,7 +32,8 @@ _LAYER = re.compile(r"(?P<group>.+)\.(?P<index>\d+)\.(?P<kind>weight|bias)$")
 
 
 def _layers(tensors: dict[str, np.ndarray], prefix: str, where: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The (W, b) pairs of a torch Sequential's Linear layers named prefix.<i>.weight, in order."""
+    """The float64 (W.T (in, out), b) pairs of a torch Sequential's Linear layers named
+    prefix.<i>.weight, in order: the layers of socialzoo.env.policy_file.mlp_forward."""
     found: dict[int, dict[str, np.ndarray]] = {}
     for name, value in tensors.items():
         match = _LAYER.fullmatch(name)
@@ -35,18 +42,8 @@ def _layers(tensors: dict[str, np.ndarray], prefix: str, where: str) -> list[tup
     if not found or any(set(v) != {"weight", "bias"} for v in found.values()):
         raise PolicyFileError(f"{where}: no complete layers {prefix}.<i>.weight/bias")
     return [
-        (found[i]["weight"].astype(np.float64), found[i]["bias"].astype(np.float64)) for i in sorted(found)
+        (found[i]["weight"].astype(np.float64).T, found[i]["bias"].astype(np.float64)) for i in sorted(found)
     ]
-
-
-def _run(
-    layers: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray, last_relu: bool, act: str = "relu"
-) -> np.ndarray:
-    for k, (w, b) in enumerate(layers):
-        x = x @ w.T + b
-        if k < len(layers) - 1 or last_relu:
-            x = np.maximum(x, 0.0) if act == "relu" else np.tanh(x)
-    return x
 
 
 class CrowdAttentionPolicy:
@@ -81,9 +78,12 @@ class CrowdAttentionPolicy:
         )
         if "action.weight" not in tensors or "action.bias" not in tensors:
             raise PolicyFileError(f"{where}: no action head (action.weight, action.bias)")
-        self.action = (tensors["action.weight"].astype(np.float64), tensors["action.bias"].astype(np.float64))
-        if self.embed[0][0].shape[1] != ROBOT_DIM + HUMAN_DIM:
-            raise PolicyFileError(f"{where}: the embedding takes {self.embed[0][0].shape[1]} inputs, not 13")
+        self.action = (
+            tensors["action.weight"].astype(np.float64).T,
+            tensors["action.bias"].astype(np.float64),
+        )
+        if self.embed[0][0].shape[0] != ROBOT_DIM + HUMAN_DIM:
+            raise PolicyFileError(f"{where}: the embedding takes {self.embed[0][0].shape[0]} inputs, not 13")
         self.header = header
 
     @property
@@ -98,25 +98,22 @@ class CrowdAttentionPolicy:
         humans = obs[:, ROBOT_DIM : ROBOT_DIM + h * HUMAN_DIM].reshape(n, h, HUMAN_DIM).astype(np.float64)
         mask = obs[:, ROBOT_DIM + h * HUMAN_DIM :] > 0.5
         pairs = np.concatenate((np.broadcast_to(robot[:, None, :], (n, h, ROBOT_DIM)), humans), axis=-1)
-        emb = _run(self.embed, pairs, last_relu=True)
+        emb = mlp_forward(pairs, self.embed, "relu", activate_last=True)
         present = mask[..., None].astype(np.float64)
         crowd = (emb * present).sum(1, keepdims=True) / np.maximum(present.sum(1, keepdims=True), 1.0)
-        scores = _run(self.score, np.concatenate((emb, np.broadcast_to(crowd, emb.shape)), axis=-1), False)[
-            ..., 0
-        ]
+        both = np.concatenate((emb, np.broadcast_to(crowd, emb.shape)), axis=-1)
+        scores = mlp_forward(both, self.score, "relu")[..., 0]
         scores = np.where(mask, scores, -np.inf)
         top = np.max(scores, axis=1, keepdims=True)
         exp = np.where(mask, np.exp(scores - np.where(np.isfinite(top), top, 0.0)), 0.0)
         weights = exp / np.maximum(exp.sum(1, keepdims=True), 1e-300)
-        pooled = (weights[..., None] * _run(self.value, emb, last_relu=False)).sum(1)
+        pooled = (weights[..., None] * mlp_forward(emb, self.value, "relu")).sum(1)
         return np.concatenate((robot, pooled), axis=-1)
 
     def action_output(self, obs: np.ndarray) -> np.ndarray:
         """(N, A) the action head's output: logits, or mean actions before clipping."""
-        x = self.features(np.asarray(obs))
-        if self.policy:
-            x = _run(self.policy, x, last_relu=True, act=self.activation)
-        return x @ self.action[0].T + self.action[1]
+        # The policy MLP's hidden layers, then the action head, which is not activated.
+        return mlp_forward(self.features(np.asarray(obs)), [*self.policy, self.action], self.activation)
 
     def act(self, obs: np.ndarray, core: Any = None) -> np.ndarray:
         """Greedy actions of (N, D) flat observations: (N,) action indices, or (N, 2) in [-1, 1]."""

@@ -1,7 +1,7 @@
 """Learned policies at inference: a multilayer perceptron read from a policy file, run in numpy.
 
 Every neural baseline (PPO and DQN trained with Stable-Baselines3, BC and GAIL trained with
-TorchRL) is saved as the same kind of file (socialzoo.agents.policy_file): the layers of the
+TorchRL) is saved as the same kind of file (socialzoo.env.policy_file): the layers of the
 network that maps an observation to one score per action (logits or Q-values), and the
 observation normalisation it was trained with. Acting is the greedy action: argmax of the scores.
 Evaluating needs neither torch nor the training library, and batches of any size cost one matrix
@@ -19,7 +19,13 @@ import numpy as np
 
 from socialzoo.agents.base import check_observations
 from socialzoo.env.policy_file import ACTIVATIONS as ACTIVATIONS
-from socialzoo.env.policy_file import PolicyFileError, checked_layers, read_policy_file, save_policy_file
+from socialzoo.env.policy_file import (
+    PolicyFileError,
+    checked_layers,
+    mlp_forward,
+    read_policy_file,
+    save_policy_file,
+)
 
 if TYPE_CHECKING:
     from socialzoo.env.core import SocialNavCore
@@ -117,12 +123,7 @@ class MlpPolicy:
                 f"{layout!r} layout of {self.input_size} numbers (observation {self.observation})"
             )
         x = self.normalizer(obs) if self.normalizer is not None else obs
-        act = ACTIVATIONS[self.activation]
-        for i, (w, b) in enumerate(self.layers):
-            x = x @ w.T + b
-            if i < len(self.layers) - 1:
-                x = act(x)
-        return x
+        return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
 
     def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
         """Greedy actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
@@ -169,7 +170,7 @@ class MlpPolicy:
 
     @classmethod
     def load(cls, path: str | Path) -> MlpPolicy:
-        """The policy saved at `path` (see socialzoo.agents.policy_file for the checks).
+        """The policy saved at `path` (see socialzoo.env.policy_file for the checks).
 
         Raises:
             PolicyFileError: not a policy file, or not an MLP policy, or an inconsistent one (naming

@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.agents.mlp import ACTIVATIONS, MlpPolicy
+from socialzoo.agents.mlp import MlpPolicy
+from socialzoo.env.policy_file import mlp_forward
 
 
 @contextlib.contextmanager
@@ -60,7 +61,7 @@ class MlpStack:
         if len(keys) != 1 or None in keys:
             raise ValueError(f"MlpStack: policies of one network shape and normalisation needed, got {keys}")
         first = policies[0]
-        self.activation = ACTIVATIONS[first.activation]
+        self.activation = first.activation
         self.weights = [np.stack([p.layers[i][0].T for p in policies]) for i in range(len(first.layers))]
         self.biases = [np.stack([p.layers[i][1] for p in policies]) for i in range(len(first.layers))]
         norm = first.normalizer
@@ -76,10 +77,7 @@ class MlpStack:
         x = np.asarray(obs, dtype=np.float32)
         if self.normalized:
             x = np.clip((x - self.mean[which]) / self.scale[which], -self.clip, self.clip).astype(np.float32)
-        h = x[:, None, :]
-        last = len(self.weights) - 1
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            h = np.matmul(h, w[which]) + b[which][:, None, :]
-            if i < last:
-                h = self.activation(h)
+        # Row j as a 1-row matrix times its policy's weights (n, in, out).
+        layers = [(w[which], b[which][:, None, :]) for w, b in zip(self.weights, self.biases, strict=True)]
+        h = mlp_forward(x[:, None, :], layers, self.activation)
         return np.argmax(h[:, 0, :], axis=1).astype(np.int64)

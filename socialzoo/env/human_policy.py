@@ -14,7 +14,7 @@ human_mirror_signs), as it was trained.
 Human policies are named by a spec: "social_force" (the scripted model, no learned humans) or
 "learned:PATH" (a file written by `socialzoo train humans` or `socialzoo train cotrain`).
 It lives in env so that the env can drive learned people itself (EnvConfig.people, the "learned"
-model of socialzoo.humans.models); socialzoo.agents.learned_humans re-exports it.
+model of socialzoo.humans.models).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from socialzoo.env.policy_file import (
     ACTIVATIONS,
     PolicyFileError,
     checked_layers,
+    mlp_forward,
     read_policy_file,
     save_policy_file,
 )
@@ -156,12 +157,7 @@ class LearnedHumanPolicy:
     def _mean(self, obs: np.ndarray) -> np.ndarray:
         """(N, 2) the network's pre-tanh mean for (N, D) raw observations."""
         x = (obs - self.obs_loc) / self.obs_scale
-        act = ACTIVATIONS[self.activation]
-        for i, (w, b) in enumerate(self.layers):
-            x = x @ w.T + b
-            if i < len(self.layers) - 1:
-                x = act(x)
-        return x
+        return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
 
     def config(self) -> dict[str, Any]:
         """What identifies this policy for the results store: the file's digest and training record."""

@@ -1,5 +1,5 @@
 """Policy files of the learned baselines and learned humans: weights as safetensors, plus a JSON
-header; and the numpy helpers that run the networks they hold.
+header; and the numpy forward pass of the networks they hold (mlp_forward, the only one).
 
 A policy file holds plain tensors (no pickled objects, so loading never executes code from the
 file) and, in the safetensors metadata, one JSON header that says what the tensors are and what
@@ -7,7 +7,7 @@ they were trained for: the network, the observation layout, the env id and versi
 normalisation statistics, and how the policy was made (algorithm, command, seed, steps).
 Loading checks all of it and refuses a file made for another observation layout or env version.
 It lives in env, beside the env versions it checks, so that the env itself can run a learned
-crowd model (socialzoo.env.human_policy); socialzoo.agents.policy_file re-exports it.
+crowd model (socialzoo.env.human_policy).
 """
 
 from __future__ import annotations
@@ -167,3 +167,41 @@ def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple
                 f"{owner}: layer {i} takes {w.shape[1]} inputs, the layer before gives {layers[i - 1][0].shape[0]}"
             )
     return layers
+
+
+def mlp_forward(
+    x: np.ndarray,
+    layers: Sequence[tuple[np.ndarray, np.ndarray]],
+    activation: str,
+    *,
+    activate_last: bool = False,
+) -> np.ndarray:
+    """The numpy forward pass of a multilayer perceptron: x @ w + b per layer, `activation` between.
+
+    Every network of a policy file runs through it (the learned robot policies, a stack of their
+    checkpoints, the learned humans, the CrowdNav attention network), so their arithmetic is the
+    same: the products and sums in the dtype of the arrays given, in this order.
+
+    Args:
+        x: (..., in) inputs.
+        layers: (w, b) per layer, w of shape (in, out) (a torch Linear's weight transposed: pass
+            `weight.T`), or (..., in, out) for a weight per row; b broadcastable to the output.
+        activation: a key of ACTIVATIONS.
+        activate_last: also apply the activation after the last layer (a hidden block whose output
+            feeds another network).
+
+    Returns:
+        (..., out) outputs of the last layer.
+
+    Raises:
+        ValueError: an unknown activation.
+    """
+    if activation not in ACTIVATIONS:
+        raise ValueError(f"mlp_forward: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}")
+    act = ACTIVATIONS[activation]
+    last = len(layers) - 1
+    for i, (w, b) in enumerate(layers):
+        x = x @ w + b
+        if i < last or activate_last:
+            x = act(x)
+    return x
