@@ -1,9 +1,12 @@
-"""The layering (DEVELOPERS.md, Layout): no module of socialzoo imports a layer above its own.
+"""The layering (DEVELOPERS.md, Layout): no module of socialzoo imports a layer above its own,
+and no two modules import each other, directly or round a longer loop.
 
 Every module under socialzoo/ is parsed (ast, never imported): imports at the top, inside
 functions and under `if TYPE_CHECKING:` all count, relative imports are resolved, and so are
 dotted module strings such as registry entries ("socialzoo.agents.engineered:GoAlone") that are
-imported by name at run time. Docstrings are not read.
+imported by name at run time. Docstrings are not read. The cycle check follows the import
+statements that run (at the top and inside functions; not those under `if TYPE_CHECKING:`, which
+never run, nor registry strings, which name the modules that register themselves there).
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ import ast
 import re
 from pathlib import Path
 
+import networkx as nx
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,6 +59,20 @@ def _docstrings(tree: ast.AST) -> set[int]:
     return found
 
 
+def _parse(module: str, source: str, is_package: bool) -> tuple[ast.Module, str]:
+    """The syntax tree of `source` and the package its relative imports start from."""
+    return ast.parse(source), module if is_package else module.rpartition(".")[0]
+
+
+def _from_target(package: str, node: ast.ImportFrom) -> str:
+    """The absolute module of `from X import ...` in `package` (relative imports resolved)."""
+    if not node.level:
+        return node.module or ""
+    parts = package.split(".")
+    base = ".".join(parts[: len(parts) - node.level + 1])
+    return f"{base}.{node.module}" if node.module else base
+
+
 def imported_modules(module: str, source: str, *, is_package: bool = False) -> list[tuple[str, int]]:
     """(absolute module name, line) of every socialzoo module that `source` imports or names.
 
@@ -63,20 +81,14 @@ def imported_modules(module: str, source: str, *, is_package: bool = False) -> l
         source: its Python source.
         is_package: the source is the package's __init__.py (relative imports start there).
     """
-    tree = ast.parse(source)
-    package = module if is_package else module.rpartition(".")[0]
+    tree, package = _parse(module, source, is_package)
     docstrings = _docstrings(tree)
     found: list[tuple[str, int]] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             found += [(alias.name, node.lineno) for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                parts = package.split(".")
-                base = ".".join(parts[: len(parts) - node.level + 1])
-                target = f"{base}.{node.module}" if node.module else base
-            else:
-                target = node.module or ""
+            target = _from_target(package, node)
             # `from socialzoo import env` imports the subpackage; `from socialzoo import __version__`
             # reads the top-level package only.
             if target == "socialzoo":
@@ -131,6 +143,70 @@ def upward_imports(module: str, source: str, *, is_package: bool = False) -> lis
     return problems
 
 
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    """ids of the nodes under `if TYPE_CHECKING:` (imports for annotations, never run)."""
+    found: set[int] = set()
+    for node in ast.walk(tree):
+        test = node.test if isinstance(node, ast.If) else None
+        if (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+            isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+        ):
+            found.update(id(inner) for child in node.body for inner in ast.walk(child))
+    return found
+
+
+def run_time_imports(module: str, source: str, *, is_package: bool = False) -> list[tuple[str, int]]:
+    """(dotted name, line) of what each import statement of `source` that runs names.
+
+    Statements at the top and inside functions count, those under `if TYPE_CHECKING:` do not;
+    `from a.b import c` names "a.b.c", which is module a.b.c or a name defined in module a.b.
+    The arguments are those of `imported_modules`.
+    """
+    tree, package = _parse(module, source, is_package)
+    skipped = _type_checking_nodes(tree)
+    found: list[tuple[str, int]] = []
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        if isinstance(node, ast.Import):
+            found += [(alias.name, node.lineno) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            target = _from_target(package, node)
+            found += [(f"{target}.{alias.name}", node.lineno) for alias in node.names]
+    return found
+
+
+def import_graph(sources: dict[str, tuple[str, bool]]) -> nx.DiGraph:
+    """Module -> the modules of `sources` it imports at run time (edge attribute `line`).
+
+    Args:
+        sources: dotted module name -> (its source, whether it is a package's __init__.py).
+    """
+    graph = nx.DiGraph()
+    graph.add_nodes_from(sources)
+    for module, (source, is_package) in sources.items():
+        for name, line in run_time_imports(module, source, is_package=is_package):
+            parts = name.split(".")
+            while parts and ".".join(parts) not in sources:
+                parts.pop()  # "a.b.c" names module a.b.c, or else something defined in a.b
+            target = ".".join(parts)
+            if target and target != module and not graph.has_edge(module, target):
+                graph.add_edge(module, target, line=line)
+    return graph
+
+
+def import_cycles(sources: dict[str, tuple[str, bool]]) -> list[str]:
+    """One loop of imports in each group of modules that import each other, as
+    "a:LINE imports b, b:LINE imports a" (empty when there is none)."""
+    graph = import_graph(sources)
+    loops = []
+    for group in nx.strongly_connected_components(graph):
+        if len(group) > 1:
+            edges = nx.find_cycle(graph.subgraph(group))
+            loops.append(", ".join(f"{a}:{graph.edges[a, b]['line']} imports {b}" for a, b, *_ in edges))
+    return sorted(loops)
+
+
 def _modules() -> list[tuple[str, Path]]:
     out = []
     for path in sorted(PACKAGE.rglob("*.py")):
@@ -158,6 +234,12 @@ def test_no_module_imports_a_higher_layer():
         for problem in upward_imports(module, path.read_text(), is_package=path.name == "__init__.py")
     ]
     assert problems == [], "\n".join(problems)
+
+
+def test_no_import_cycle():
+    sources = {module: (path.read_text(), path.name == "__init__.py") for module, path in _modules()}
+    cycles = import_cycles(sources)
+    assert cycles == [], "move what both modules need into a module of its own:\n" + "\n".join(cycles)
 
 
 # ------------------------------------------------------------------ the checker on small sources
@@ -214,3 +296,52 @@ def test_the_checker_catches_an_upward_import(module, source, expected):
 )
 def test_the_checker_accepts_downward_imports(module, source):
     assert upward_imports(module, source) == []
+
+
+@pytest.mark.parametrize(
+    ("sources", "expected"),
+    [
+        # a function-level import back closes the loop (socialzoo.reproduce.parts and seeds once)
+        (
+            {
+                "socialzoo.r.parts": "from socialzoo.r.seeds import write",
+                "socialzoo.r.seeds": "def f():\n    from socialzoo.r.parts import rl_items",
+            },
+            ["socialzoo.r.parts:1 imports socialzoo.r.seeds, socialzoo.r.seeds:2 imports socialzoo.r.parts"],
+        ),
+        # `from package import module` and relative imports reach the module; three make a loop too
+        (
+            {
+                "socialzoo.r": "from . import a",
+                "socialzoo.r.a": "from socialzoo.r import b",
+                "socialzoo.r.b": "import socialzoo.r.c as c",
+                "socialzoo.r.c": "from .a import X",
+            },
+            [
+                "socialzoo.r.a:1 imports socialzoo.r.b, socialzoo.r.b:1 imports socialzoo.r.c, "
+                "socialzoo.r.c:1 imports socialzoo.r.a"
+            ],
+        ),
+        # imports for annotations only never run
+        (
+            {
+                "socialzoo.n.graph": "from socialzoo.n.attach import attach",
+                "socialzoo.n.attach": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                "    from socialzoo.n.graph import Graph",
+            },
+            [],
+        ),
+        # a package that imports its modules, which import a name of another module of it
+        (
+            {
+                "socialzoo.t": "from socialzoo.t.ppo import Args",
+                "socialzoo.t.ppo": "from socialzoo.t.run import R",
+                "socialzoo.t.run": "import numpy",
+            },
+            [],
+        ),
+    ],
+)
+def test_the_checker_finds_import_cycles(sources, expected):
+    packages = {"socialzoo.r", "socialzoo.t"}
+    assert import_cycles({m: (src, m in packages) for m, src in sources.items()}) == expected

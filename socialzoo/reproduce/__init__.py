@@ -8,7 +8,8 @@ trainers (socialzoo.train), the RL curves (socialzoo.studies.rl_curves), the LfD
 - `plan`: the parts and the full and quick settings (a frozen dataclass) with their hash.
 - `ledger`: where a run's items live (DIR/<hash>/), and the wall time of each part.
 - `backend`: independent trainings run side by side, in local processes or as Ray tasks.
-- `parts`: the runner of each part (every seed of every learned policy).
+- `runs`: the training runs of every seed of every learned policy: arguments, folders, finished.
+- `parts`: the runner of each part.
 - `seeds`: which checkpoint each RL run kept (chosen on validation) and the aggregates over seeds.
 - `results`: the small result files every table and figure is drawn from.
 - `report`, `seed_report`: tables, figures and REPRODUCTION.md from those files.

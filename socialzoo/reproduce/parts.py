@@ -9,9 +9,9 @@ Every part composes pieces that store their items as they finish, so a part is r
 - performance / transfer: the seven policies on gdc1-test / ghc3-test (socialzoo.bench.experiment),
   and the other seeds' learned policies in <part>/seeds/.
 
-Every learned policy is trained with each of settings.seed_list (`--seeds K`): run folders
-"<name>" for the first seed (as with one seed) and "<name>-s<seed>" for the others, each with its
-own policy file and trials, so a part resumes seed by seed. Trainings run side by side
+Every learned policy is trained with each of settings.seed_list (`--seeds K`), each seed in its
+own run folder with its own policy file and trials (socialzoo.reproduce.runs), so a part resumes
+seed by seed. Trainings run side by side
 (socialzoo.reproduce.backend: `workers` local processes, or Ray tasks). A run that evaluated its
 checkpoints on validation scenarios (PPO and DQN, settings.select_trials) keeps its best one
 (socialzoo.train.validation.kept_policy): that is the policy of `performance` and `transfer`.
@@ -25,61 +25,25 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.reproduce.backend import Backend, run_tasks
-from socialzoo.reproduce.ledger import Ledger
+from socialzoo.reproduce.backend import run_tasks
 from socialzoo.reproduce.paper import PAPER_POLICIES
+from socialzoo.reproduce.runs import (
+    SEEDS_FOLDER,
+    Context,
+    demos_path,
+    finished,
+    lfd_eval_dir,
+    lfd_items,
+    rl_items,
+)
+from socialzoo.reproduce.seeds import write_seed_results
 
 logger = logging.getLogger(__name__)
 
-DEMOS_FILE = "ref_demos.npz"
-RL_ALGOS: tuple[str, ...] = ("ppo", "dqn")
-LFD_TRAINERS: tuple[str, ...] = ("bc", "gail")
-
-
-@dataclass(frozen=True)
-class Context:
-    """How the parts run.
-
-    Attributes:
-        ledger: the work folder and its settings.
-        backend: "local" or "ray".
-        progress: show progress bars.
-    """
-
-    ledger: Ledger
-    backend: Backend = "local"
-    progress: bool = True
-
-    @property
-    def settings(self) -> Any:
-        """The run's settings."""
-        return self.ledger.settings
-
-    @property
-    def ray(self) -> bool:
-        """True on the Ray backend."""
-        return self.backend == "ray"
-
-    @property
-    def pooled(self) -> bool:
-        """True when trainings run in other processes (Ray tasks, or several local workers), where
-        they show no progress bars."""
-        return self.ray or self.settings.workers > 1
-
-
 # ---------------------------------------------------------------------------- trainings
-
-
-def _finished(name: str, args: Any) -> bool:
-    """True when trainer `name`'s output already holds a finished run of these arguments."""
-    from socialzoo.train import trainer_spec
-    from socialzoo.train.skeleton import finished_run
-
-    return finished_run(trainer_spec(name), args)
 
 
 def train_task(item: tuple[str, Any]) -> str:
@@ -97,86 +61,12 @@ def _train(ctx: Context, items: list[tuple[str, Any]]) -> tuple[list[Path], int]
     validation scenarios keeps its best one (socialzoo.train.validation.kept_policy)."""
     from socialzoo.train.validation import kept_policy
 
-    todo = sum(not _finished(name, args) for name, args in items)
-    pending = [(name, args) for name, args in items if not _finished(name, args)]
+    todo = sum(not finished(name, args) for name, args in items)
+    pending = [(name, args) for name, args in items if not finished(name, args)]
     if pending:
         run_tasks(train_task, pending, backend=ctx.backend, workers=ctx.settings.workers)
     files = [train_task(item) for item in items]  # finished now: each returns its policy at once
     return [kept_policy(f) for f in files], todo
-
-
-def run_name(base: str, seed: int, settings: Any) -> str:
-    """The folder (and curve label) of one seed's run: `base` for the first seed, as with a single
-    seed, and "<base>-s<seed>" for the others."""
-    return base if seed == settings.seed else f"{base}-s{seed}"
-
-
-def rl_items(ctx: Context, seeds: tuple[int, ...] | None = None) -> list[tuple[str, Any]]:
-    """PPO and DQN of every seed: the paper's 84,000 steps with a checkpoint every 2,000 (or the
-    quick ones), checkpoints evaluated on validation scenarios when settings.select_trials > 0."""
-    from socialzoo.train import trainer_args
-
-    s = ctx.settings
-    select = {"eval_trials": s.select_trials, "eval_every": s.select_every} if s.select_trials else {}
-    return [
-        (
-            algo,
-            trainer_args(algo)(
-                out=ctx.ledger.path("rl", run_name(algo, seed, s)),
-                seed=seed,
-                total_steps=s.rl_total_steps,
-                checkpoint_every=s.rl_checkpoint_every,
-                progress=ctx.progress and not ctx.pooled,
-                **select,
-                **dict(s.rl_overrides.get(algo, {})),
-            ),
-        )
-        for seed in (seeds or s.seed_list)
-        for algo in RL_ALGOS
-    ]
-
-
-def demos_path(ctx: Context) -> Path:
-    """The demonstration file of this run."""
-    return ctx.ledger.path("demos", DEMOS_FILE)
-
-
-def lfd_items(
-    ctx: Context, sizes: tuple[int, ...] | None = None, seeds: tuple[int, ...] | None = None
-) -> list[tuple[str, Any]]:
-    """BC and GAIL at each demonstration size (all of them, or `sizes`), and PIPS, for every seed
-    (all of them, or `seeds`), seed by seed."""
-    import dataclasses
-
-    from socialzoo.studies.lfd_training import LfdTrainConfig
-    from socialzoo.train.pips import PipsArgs
-
-    s = ctx.settings
-    items: list[tuple[str, Any]] = []
-    for seed in seeds or s.seed_list:
-        config = LfdTrainConfig(
-            demos=demos_path(ctx),
-            root=ctx.ledger.path("lfd"),
-            algos=LFD_TRAINERS,
-            sizes=s.lfd_sizes,
-            seed=seed,
-            overrides={k: v for k, v in s.lfd_overrides.items() if k in LFD_TRAINERS},
-            progress=ctx.progress and not ctx.pooled,
-        )
-        for algo in LFD_TRAINERS:
-            for size in sizes or s.lfd_sizes:
-                folder = ctx.ledger.path("lfd", run_name(f"{algo}_{size}", seed, s))
-                items.append((algo, dataclasses.replace(config.args(algo, size), out=folder)))
-        pips_folder = run_name(f"pips_{s.pips_steps}", seed, s)
-        pips = PipsArgs(
-            demos=str(demos_path(ctx)),
-            out=str(ctx.ledger.path("lfd", pips_folder, "pips.json")),
-            steps=s.pips_steps,
-            seed=seed,
-            **dict(s.lfd_overrides.get("pips", {})),
-        )
-        items.append(("pips", pips))
-    return items
 
 
 # ---------------------------------------------------------------------------- parts
@@ -231,13 +121,8 @@ def run_rl_curves(ctx: Context) -> int:
         env_overrides=dict(s.eval_env_overrides),
         backend=ctx.backend,
     )
-    _write_seed_results(ctx)
+    write_seed_results(ctx)
     return trained + _store_size(out / STORE_NAME) - before
-
-
-def lfd_eval_dir(ctx: Context, seed: int) -> Path:
-    """The LfD evaluation folder of one seed's policies (lfd/eval for the first seed)."""
-    return ctx.ledger.path("lfd", run_name("eval", seed, ctx.settings))
 
 
 def run_lfd(ctx: Context) -> int:
@@ -266,7 +151,7 @@ def run_lfd(ctx: Context) -> int:
             backend=ctx.backend,
         )
         made += result.computed
-    _write_seed_results(ctx)
+    write_seed_results(ctx)
     return made + trained
 
 
@@ -283,9 +168,6 @@ def final_policies(ctx: Context) -> tuple[dict[int, dict[str, Path]], int]:
     for (name, args), path in zip(items, files, strict=True):
         out[int(args.seed)][name] = path
     return out, made + trained
-
-
-SEEDS_FOLDER = "seeds"
 
 
 def _benchmark(ctx: Context, map_name: str, trials: int, folder: str) -> int:
@@ -320,7 +202,7 @@ def _benchmark(ctx: Context, map_name: str, trials: int, folder: str) -> int:
             config, ctx.ledger.path(folder, SEEDS_FOLDER), progress=ctx.progress, figures=False
         )
         made += result.computed
-    _write_seed_results(ctx)
+    write_seed_results(ctx)
     return made
 
 
@@ -334,13 +216,6 @@ def run_transfer(ctx: Context) -> int:
     """The seven policies on the first `transfer_trials` ghc3-test scenarios (and the other seeds'
     learned policies)."""
     return _benchmark(ctx, "ghc3", ctx.settings.transfer_trials, "transfer")
-
-
-def _write_seed_results(ctx: Context) -> None:
-    """Rewrite the work folder's seed results (socialzoo.reproduce.seeds) from what is stored."""
-    from socialzoo.reproduce.seeds import write_seed_results
-
-    write_seed_results(ctx)
 
 
 PART_RUNNERS: dict[str, Callable[[Context], int]] = {

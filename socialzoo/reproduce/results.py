@@ -31,7 +31,7 @@ from typing import Any
 from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
-from socialzoo.reproduce.parts import DEMOS_FILE
+from socialzoo.reproduce.runs import DEMOS_FILE
 from socialzoo.reproduce.seeds import SEEDS_DIR
 
 RESULTS_DIR = "results"

@@ -14,10 +14,11 @@ from pathlib import Path
 
 from socialzoo.reproduce.backend import Backend, check_backend
 from socialzoo.reproduce.ledger import Ledger
-from socialzoo.reproduce.parts import PART_RUNNERS, Context
+from socialzoo.reproduce.parts import PART_RUNNERS
 from socialzoo.reproduce.plan import PARTS, Settings, parse_parts
 from socialzoo.reproduce.report import write_report
 from socialzoo.reproduce.results import collect
+from socialzoo.reproduce.runs import Context
 
 logger = logging.getLogger(__name__)
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.reproduce.paper import PAPER_SUCCESS, paper_lfd
+from socialzoo.reproduce.runs import SEEDS_FOLDER, Context, finished, lfd_eval_dir, lfd_items, rl_items
 
 SEEDS_DIR = "seeds"
 SELECTION_CSV = "selection.csv"
@@ -39,21 +40,19 @@ EXPERIMENTS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer
 ENGINEERED = ("goalone", "ref")
 
 
-def _kept_files(ctx: Any, items: list[tuple[str, Any]]) -> list[Path | None]:
+def _kept_files(ctx: Context, items: list[tuple[str, Any]]) -> list[Path | None]:
     """The kept policy of each finished item (None for a run not finished): no training here."""
-    from socialzoo.reproduce.parts import _finished
     from socialzoo.train import trainer_spec
     from socialzoo.train.validation import kept_policy
 
     out: list[Path | None] = []
     for name, args in items:
-        out.append(kept_policy(trainer_spec(name).policy_path(args)) if _finished(name, args) else None)
+        out.append(kept_policy(trainer_spec(name).policy_path(args)) if finished(name, args) else None)
     return out
 
 
-def _groups(ctx: Any) -> list[Any]:
+def _groups(ctx: Context) -> list[Any]:
     """SeedGroups of every experiment whose trials are stored for every seed."""
-    from socialzoo.reproduce.parts import SEEDS_FOLDER, lfd_eval_dir, lfd_items, rl_items
     from socialzoo.studies.seeds import SeedGroup, benchmark_scores
 
     s = ctx.settings
@@ -121,10 +120,9 @@ def _groups(ctx: Any) -> list[Any]:
     return groups
 
 
-def selection_rows(ctx: Any) -> list[dict[str, Any]]:
+def selection_rows(ctx: Context) -> list[dict[str, Any]]:
     """Every finished RL run that evaluated its checkpoints on validation scenarios: the kept
     checkpoint, its validation success, the last checkpoint's, and both on the curve scenarios."""
-    from socialzoo.reproduce.parts import rl_items
     from socialzoo.train.run_dir import RUN_FILE, read_record
 
     curves = _curve_success(ctx.ledger.path("rl", "curves", "rl_curves.csv"))
@@ -175,7 +173,7 @@ def _curve_success(path: Path) -> dict[tuple[str, int], float]:
     return out
 
 
-def write_seed_results(ctx: Any) -> list[Path]:
+def write_seed_results(ctx: Context) -> list[Path]:
     """selection.csv (runs that chose on validation), and with several seeds seeds.csv,
     improvement.csv and profiles.csv, into DIR/<hash>/seeds/; returns the files written."""
     from socialzoo.studies.seeds import write_rows, write_seed_study
