@@ -5,6 +5,9 @@ every subcommand sets `func(args) -> int` (the exit status). The command starts 
 --help` lists the subcommands from the table alone, and only the module of the subcommand asked for
 is imported and registered (with the heavy libraries each imports inside its functions), so no
 command pays for torch, ray or matplotlib unless it runs them.
+
+Commands group by noun (`socialzoo humans compare`, `socialzoo map check`); a former top-level name
+is kept in MOVED, so calling it fails with a usage error that names the command to call instead.
 """
 
 from __future__ import annotations
@@ -29,17 +32,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "socialzoo.cli.crowdnav_cmd",
         "the CrowdNav task: evaluate velocity policies on its fixed cases, replay an episode",
     ),
-    "compare-humans": (
-        "socialzoo.cli.humans_cmd",
-        "learned humans against social-force humans (reach rate, collisions, distances, speed)",
-    ),
-    "select-humans": (
-        "socialzoo.cli.humans_cmd",
-        "choose a learned-human checkpoint of a run on validation scenarios",
-    ),
     "humans": (
-        "socialzoo.cli.people_cmd",
-        "how each crowd model walks: speed, density, contacts, path length, time to goal (humans report)",
+        "socialzoo.cli.humans_cmd",
+        "the people: compare learned with social-force humans, select a learned checkpoint, "
+        "report how each crowd model walks",
     ),
     "map": ("socialzoo.cli.map_cmd", "list, show, validate, check and import maps"),
     "replay": (
@@ -60,6 +56,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
 }
 
+# Former subcommands -> the command that took their place; naming one is a usage error (exit 2).
+MOVED: dict[str, str] = {"compare-humans": "humans compare", "select-humans": "humans select"}
+
 
 def command_help(name: str) -> str:
     """The one-line help of subcommand `name` (COMMANDS)."""
@@ -69,6 +68,17 @@ def command_help(name: str) -> str:
 def _chosen_command(argv: Sequence[str]) -> str | None:
     """The subcommand named on the command line: its first word that is not an option."""
     return next((word for word in argv if not word.startswith("-")), None)
+
+
+def _refuse_moved(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
+    """Stop with a usage error (exit status 2) naming the new command when argv names a moved one."""
+    chosen = _chosen_command(argv)
+    if chosen in MOVED:
+        new = MOVED[chosen]
+        group = new.split()[0]
+        parser.error(
+            f"'{chosen}' is now 'socialzoo {new}' (`socialzoo {group} --help` lists its subcommands)"
+        )
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
@@ -101,7 +111,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     import sys
 
     words = list(sys.argv[1:] if argv is None else argv)
-    args = build_parser(words).parse_args(words)
+    parser = build_parser(words)
+    _refuse_moved(parser, words)
+    args = parser.parse_args(words)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(name)s: %(message)s"
     )

@@ -1,5 +1,9 @@
-"""`socialzoo compare-humans`: learned humans against social-force humans on the same scenarios;
-`socialzoo select-humans`: the checkpoint of a training run that compares best on validation scenarios."""
+"""`socialzoo humans compare|select|report`: the people of the worlds, one command.
+
+`compare` sets learned humans against social-force humans on the same scenarios, `select` picks the
+checkpoint of a training run that compares best on validation scenarios, and `report` (its options
+in socialzoo.cli.people_cmd) shows how each crowd model walks.
+"""
 
 from __future__ import annotations
 
@@ -10,19 +14,28 @@ from typing import Any
 
 from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.people_cmd import add_report
 
 
 def register(subparsers: Any) -> None:
-    """Add `compare-humans`."""
-    parser = subparsers.add_parser(
-        "compare-humans",
-        help=command_help("compare-humans"),
+    """Add `humans` and its subcommands `compare`, `select` and `report`."""
+    parser = subparsers.add_parser("humans", help=command_help("humans"), description=command_help("humans"))
+    commands = parser.add_subparsers(dest="humans_command", required=True, metavar="SUBCOMMAND")
+    _add_compare(commands)
+    _add_select(commands)
+    add_report(commands)
+
+
+def _add_compare(commands: Any) -> None:
+    """Add `humans compare`."""
+    parser = commands.add_parser(
+        "compare",
+        help="learned humans against social-force humans (reach rate, collisions, distances, speed)",
         description="Run the benchmark among social-force humans and among learned humans on the same "
         "scenarios (human metrics on), and write DIR/comparison.md, comparison.csv and comparison.png "
-        "with issue 13's targets (reach rate within 10%%, no more collisions).",
+        "with issue 13's targets (reach rate within 10%, no more collisions).",
     )
     parser.add_argument("--humans", required=True, help="learned:PATH, a learned human policy file")
-    parser.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
     parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
     parser.add_argument("--trials", type=positive_int, default=None, help="scenarios per map (default: all)")
     sets = parser.add_mutually_exclusive_group()
@@ -32,37 +45,47 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="each map's validation scenarios (<map>-val), never a test set: for choosing settings",
     )
-    parser.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
-    parser.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
-    parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
+    _add_run_options(parser)
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("--no-figures", action="store_true", help="skip comparison.png")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
-    parser.set_defaults(func=run_compare_humans)
+    parser.set_defaults(func=run_compare)
 
-    select = subparsers.add_parser(
-        "select-humans",
-        help=command_help("select-humans"),
+
+def _add_select(commands: Any) -> None:
+    """Add `humans select`."""
+    parser = commands.add_parser(
+        "select",
+        help="choose a learned-human checkpoint of a training run on validation scenarios",
         description="Compare every checkpoint of a `socialzoo train humans` run with the social-force "
         "humans on the training map's validation scenarios (never a test set), keep the most trained one "
         "that meets both targets (else the one missing them by the least), and write DIR/selection.md, "
         "selection.csv, selection.json and DIR/humans.safetensors (a copy of the chosen checkpoint).",
     )
-    select.add_argument("--run", type=Path, required=True, help="the training run folder")
-    select.add_argument("--out", type=Path, default=None, help="output folder (default RUN/selection)")
-    select.add_argument(
+    parser.add_argument("--run", type=Path, required=True, help="the training run folder")
+    parser.add_argument("--out", type=Path, default=None, help="output folder (default RUN/selection)")
+    parser.add_argument(
         "--trials", type=positive_int, default=100, help="validation scenarios per checkpoint"
     )
-    select.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
-    select.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
-    select.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
-    select.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
-    select.add_argument("--no-progress", action="store_true", help="no progress bars")
-    select.set_defaults(func=run_select_humans)
+    _add_run_options(parser)
+    parser.set_defaults(func=run_select)
 
 
-def run_compare_humans(args: argparse.Namespace) -> int:
-    """Run `socialzoo compare-humans`; returns the exit status."""
+def _add_run_options(parser: argparse.ArgumentParser) -> None:
+    """The options `compare` and `select` share: the robot, the time limit, the workers, progress."""
+    parser.add_argument("--policy", default="ref", help="the robot's policy spec (default ref)")
+    parser.add_argument("--max-steps", type=positive_int, default=None, help="episode time limit, steps")
+    parser.add_argument("--workers", type=positive_int, default=2, help="local processes (default 2)")
+    parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows per worker")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+
+
+def _env_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The env settings the command line overrides: the time limit, when given."""
+    return {} if args.max_steps is None else {"max_steps": args.max_steps}
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    """Run `socialzoo humans compare`; returns the exit status."""
     from socialzoo.studies.human_compare import ComparisonConfig, compare_humans
 
     try:
@@ -75,10 +98,10 @@ def run_compare_humans(args: argparse.Namespace) -> int:
             validation=args.validation,
             workers=args.workers,
             batch_size=args.batch_size,
-            env_overrides={} if args.max_steps is None else {"max_steps": args.max_steps},
+            env_overrides=_env_overrides(args),
         )
     except (ValueError, KeyError) as err:
-        print(f"socialzoo compare-humans: error: {err}", file=sys.stderr)
+        print(f"socialzoo humans compare: error: {err}", file=sys.stderr)
         return 2
     result = compare_humans(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     for map_name, target in result.targets.items():
@@ -90,8 +113,8 @@ def run_compare_humans(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_select_humans(args: argparse.Namespace) -> int:
-    """Run `socialzoo select-humans`; returns the exit status."""
+def run_select(args: argparse.Namespace) -> int:
+    """Run `socialzoo humans select`; returns the exit status."""
     from socialzoo.agents import check_policy_spec
     from socialzoo.studies.human_select import run_checkpoints, select_humans, training_map
 
@@ -100,7 +123,7 @@ def run_select_humans(args: argparse.Namespace) -> int:
         training_map(args.run)
         check_policy_spec(args.policy)
     except (FileNotFoundError, ValueError) as err:
-        print(f"socialzoo select-humans: error: {err}", file=sys.stderr)
+        print(f"socialzoo humans select: error: {err}", file=sys.stderr)
         return 2
     result = select_humans(
         args.run,
@@ -109,7 +132,7 @@ def run_select_humans(args: argparse.Namespace) -> int:
         policy=args.policy,
         workers=args.workers,
         batch_size=args.batch_size,
-        env_overrides={} if args.max_steps is None else {"max_steps": args.max_steps},
+        env_overrides=_env_overrides(args),
         progress=not args.no_progress,
     )
     status = "meets both targets" if result.met else "meets no target set; the closest"

@@ -1,5 +1,9 @@
 """`socialzoo humans report`: how each crowd model walks (speed, the fundamental diagram beside
-Weidmann's curve, contacts, path length, time to goal), one figure per model and one table."""
+Weidmann's curve, contacts, path length, time to goal), one figure per model and one table.
+
+The `humans` group (socialzoo.cli.humans_cmd) adds this subcommand; `socialzoo benchmark --humans`
+also reads "learned" alone as the shipped learned humans (shipped_humans).
+"""
 
 from __future__ import annotations
 
@@ -8,7 +12,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
 
 
@@ -27,10 +30,8 @@ def people_specs(text: str) -> tuple[str, ...]:
     return tuple(f"learned:{shipped_humans()}" if s == "learned" else s for s in specs)
 
 
-def register(subparsers: Any) -> None:
-    """Add `humans` and its subcommand `report`."""
-    parser = subparsers.add_parser("humans", help=command_help("humans"), description=command_help("humans"))
-    commands = parser.add_subparsers(dest="humans_command", required=True, metavar="SUBCOMMAND")
+def add_report(commands: Any) -> None:
+    """Add `report` to the subcommands of `humans` (`commands`, their subparsers)."""
     report = commands.add_parser(
         "report",
         help="how each crowd model walks, one figure per model and one table",

@@ -12,8 +12,8 @@ Modules, imported where used (`from socialzoo.studies.lfd import run_lfd_evaluat
 - `pips_study`, `pips_study_training`: PIPS over training-set sizes and windows, on validation
   scenarios.
 - `human_compare`: a learned human population against the social-force one (`socialzoo
-  compare-humans`); `human_select`: the checkpoint of a humans run chosen on validation
-  scenarios (`socialzoo select-humans`).
+  humans compare`); `human_select`: the checkpoint of a humans run chosen on validation
+  scenarios (`socialzoo humans select`).
 - `human_report`: how each crowd model walks (`socialzoo humans report`); `crowd_matrix`: every
   robot policy among every crowd model (`socialzoo benchmark --humans A,B,...`).
 - `seeds`: training seeds as an axis: each seed's success per policy and setting aggregated over

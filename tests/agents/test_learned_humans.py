@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import SHIPPED_DIR
-from socialzoo.agents.learned_humans import (
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore
+from socialzoo.env.human_policy import (
     LearnedHumanPolicy,
     check_human_spec,
     make_human_policy,
     split_human_spec,
 )
-from socialzoo.agents.policy_file import PolicyFileError, save_policy_file
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
+from socialzoo.env.policy_file import PolicyFileError, save_policy_file
 from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import HALT
 
@@ -126,7 +126,7 @@ def test_shipped_human_policy_loads_and_records_its_training():
         record["command"].startswith("socialzoo train humans") and record["args"]["seed"] == training["seed"]
     )
     assert record["finished"] and record["args"]["frames"] == record["results"]["frames"]
-    # The checkpoint was chosen by `socialzoo select-humans` on validation scenarios, never a test set,
+    # The checkpoint was chosen by `socialzoo humans select` on validation scenarios, never a test set,
     # among the checkpoints of that run.
     selection = json.loads((SHIPPED_DIR / "humans.selection.json").read_text())
     assert selection["scenarios"] == "gdc1-val" and selection["chosen"]["frames"] == training["frames"]

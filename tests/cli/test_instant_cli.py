@@ -39,6 +39,7 @@ def imported_modules(*words: str) -> set[str]:
         ("benchmark", "--help"),
         ("train", "--help"),
         ("replay", "--help"),
+        ("humans", "compare", "--help"),
     ],
     ids=" ".join,
 )

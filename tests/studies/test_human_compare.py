@@ -1,5 +1,5 @@
 """compare_humans: both populations on the same scenarios, the table, figure and targets; and
-`socialzoo compare-humans`."""
+`socialzoo humans compare`."""
 
 import pytest
 
@@ -66,9 +66,11 @@ def test_compare_humans_runs_both_populations_on_the_same_scenarios(
 
 
 def test_cli_rejects_social_force_and_names_bad_input(tmp_path, capsys):
-    assert socialzoo_main(["compare-humans", "--humans", "social_force", "--out", str(tmp_path)]) == 2
+    assert socialzoo_main(["humans", "compare", "--humans", "social_force", "--out", str(tmp_path)]) == 2
     assert "ComparisonConfig.humans must be 'learned:PATH'" in capsys.readouterr().err
-    assert socialzoo_main(["compare-humans", "--humans", "learned:nowhere.st", "--out", str(tmp_path)]) == 2
+    assert (
+        socialzoo_main(["humans", "compare", "--humans", "learned:nowhere.st", "--out", str(tmp_path)]) == 2
+    )
     assert "nowhere.st" in capsys.readouterr().err
 
 
@@ -85,7 +87,8 @@ def test_validation_scenarios_are_no_test_set(tmp_path, walker_policy_path, caps
     with pytest.raises(SystemExit):
         socialzoo_main(
             [
-                "compare-humans",
+                "humans",
+                "compare",
                 "--humans",
                 f"learned:{walker_policy_path}",
                 "--quick",

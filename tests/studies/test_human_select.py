@@ -72,5 +72,5 @@ def test_test_sets_and_empty_runs_are_refused(rooms_map_path, write_walker, tmp_
     empty.mkdir()
     with pytest.raises(FileNotFoundError, match="no learned-human checkpoints"):
         run_checkpoints(empty)
-    assert socialzoo_main(["select-humans", "--run", str(empty)]) == 2
+    assert socialzoo_main(["humans", "select", "--run", str(empty)]) == 2
     assert "no learned-human checkpoints" in capsys.readouterr().err

@@ -1,0 +1,48 @@
+"""`socialzoo humans compare|select|report`: one command for the people, its subcommands listed and
+run with small options, and the former top-level names refused with the command to call instead."""
+
+import json
+
+import pytest
+
+from socialzoo.cli import MOVED, main
+
+
+def test_humans_help_lists_its_subcommands(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["humans", "--help"])
+    assert exit_info.value.code == 0
+    listing = capsys.readouterr().out
+    for name in ("compare", "select", "report"):
+        assert f"\n    {name} " in listing
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_former_names_fail_naming_the_new_command(old, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([old, "--help"])
+    assert exit_info.value.code == 2
+    assert f"'{old}' is now 'socialzoo {MOVED[old]}'" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert old not in capsys.readouterr().out
+
+
+def test_humans_compare_runs(rooms_map_path, walker_policy_path, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    small = ["--trials", "2", "--max-steps", "60", "--workers", "1", "--batch-size", "2"]
+    argv = ["humans", "compare", "--humans", f"learned:{walker_policy_path}", "--maps", str(rooms_map_path)]
+    assert main([*argv, *small, "--no-figures", "--no-progress", "--out", str(out)]) == 0
+    assert "rooms: reach-rate target" in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} >= {"comparison.md", "comparison.csv"}
+
+
+def test_humans_select_runs(write_walker, tmp_path, capsys):
+    run = tmp_path / "run"
+    (run / "checkpoints").mkdir(parents=True)
+    (run / "run.json").write_text(json.dumps({"args": {"map": "open_room"}}))
+    write_walker(run / "checkpoints" / "step_000001000.humans.safetensors", speed=3.0)
+    small = ["--trials", "2", "--max-steps", "60", "--workers", "1", "--batch-size", "2"]
+    assert main(["humans", "select", "--run", str(run), *small, "--no-progress"]) == 0
+    assert "chose " in capsys.readouterr().out
+    assert (run / "selection" / "humans.safetensors").is_file()
