@@ -41,10 +41,10 @@ def write_walker_policy(path, *, speed: float = 3.0, hidden: int = 8):
     zero weights, so every human's action is tanh(speed) forward whatever it observes."""
     import numpy as np
 
-    from socialzoo.agents.learned_humans import LearnedHumanPolicy
-    from socialzoo.agents.policy_file import current_env_version
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.human_agents import human_observation_size
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+    from socialzoo.env.policy_file import current_env_version
 
     k = EnvConfig().num_human_neighbours
     size = human_observation_size(k)

@@ -27,13 +27,13 @@ from socialzoo.agents.demonstrations import (
     read_metadata,
     read_parts,
 )
-from socialzoo.agents.learned_humans import LearnedHumanPolicy
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.pips import PipsPolicy, ProgramError, load_program
-from socialzoo.agents.policy_file import PolicyFileError, read_policy_file
 from socialzoo.bench import test_sets
 from socialzoo.bench.store import ResultsStore, StoreError
 from socialzoo.bench.tables import SummaryError, csv_columns, read_summary_csv, write_summary_csv
+from socialzoo.env.human_policy import LearnedHumanPolicy
+from socialzoo.env.policy_file import PolicyFileError, read_policy_file
 from socialzoo.nav.importers import (
     read_amrl_nav_graph,
     read_pedsim_scene,

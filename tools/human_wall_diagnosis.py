@@ -19,9 +19,9 @@ import argparse
 
 import numpy as np
 
-from socialzoo.agents.learned_humans import LearnedHumanPolicy
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
+from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.nav.scenarios import validation_set
 from socialzoo.nav.subpolicies import GO_ALONE
 

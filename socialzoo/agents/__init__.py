@@ -34,7 +34,7 @@ SHIPPED_SUFFIXES = (".safetensors", ".json")
 POLICIES: dict[str, str] = {
     "goalone": "socialzoo.agents.engineered:GoAlone",
     "ref": "socialzoo.agents.engineered:Ref",
-    # Neural baselines, all saved as socialzoo.agents.policy_file files (see socialzoo.train).
+    # Neural baselines, all saved as socialzoo.env.policy_file files (see socialzoo.train).
     "ppo": "socialzoo.agents.mlp:MlpPolicy",
     "dqn": "socialzoo.agents.mlp:MlpPolicy",
     "bc": "socialzoo.agents.mlp:MlpPolicy",

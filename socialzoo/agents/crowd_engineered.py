@@ -188,7 +188,7 @@ def make_crowd_policy(spec: str) -> Any:
 
     Raises:
         ValueError: an unknown name (the message lists the known ones), or a learned policy with
-            no file; socialzoo.agents.policy_file.PolicyFileError: a bad policy file.
+            no file; socialzoo.env.policy_file.PolicyFileError: a bad policy file.
     """
     name, _, path = str(spec).partition(":")
     key = name.strip().lower()

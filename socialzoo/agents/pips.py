@@ -31,8 +31,8 @@ from socialzoo.agents.pips_features import (
     atom_values,
     paper_parts,
 )
-from socialzoo.agents.policy_file import PolicyFileError
 from socialzoo.core.files import read_json
+from socialzoo.env.policy_file import PolicyFileError
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 if TYPE_CHECKING:

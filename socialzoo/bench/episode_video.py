@@ -47,7 +47,7 @@ def animate_episode(
 
     One frame every `stride` steps (at the defaults 100 ms of simulated time per frame, played at
     twice real time); the episode stops after `max_frames` frames if it has not ended.
-    `human_policy` (socialzoo.agents.learned_humans.LearnedHumanPolicy) drives the env config's
+    `human_policy` (socialzoo.env.human_policy.LearnedHumanPolicy) drives the env config's
     learned human slots.
     """
     from socialzoo.env.core import SocialNavCore

@@ -278,7 +278,7 @@ def people_spec(humans: str) -> str | None:
     the humans the runner drives itself: "social_force", and "learned:PATH" alone (learned slots
     acting on their observations, socialzoo.bench.runner; "learned:PATH@1" is the people spec of
     the same file, driven by the env)."""
-    from socialzoo.agents.learned_humans import split_human_spec
+    from socialzoo.env.human_policy import split_human_spec
 
     # A mix, or a model with its share ("learned:PATH@1"), is a people spec.
     if "+" in humans or re.search(r"@\s*[0-9.]+\s*$", humans):
@@ -296,7 +296,7 @@ def check_humans(humans: str) -> str:
     Raises:
         ValueError: naming the spec: an unknown name, a bad people spec, a missing file.
     """
-    from socialzoo.agents.learned_humans import check_human_spec
+    from socialzoo.env.human_policy import check_human_spec
     from socialzoo.humans.models import PeopleConfig, PeopleSpecError
 
     if not isinstance(humans, str) or not humans:
@@ -330,7 +330,7 @@ def human_env_overrides(config: BenchmarkConfig, test_set: TestSet) -> dict[str,
     for a learned policy, every human slot learned (unless env_overrides names
     num_learned_humans) and the policy's observation and action settings; for a people spec
     or counterfactual rows, EnvConfig.people."""
-    from socialzoo.agents.learned_humans import make_human_policy
+    from socialzoo.env.human_policy import make_human_policy
 
     spec = people_spec(config.humans)
     out: dict[str, Any] = {}
@@ -346,7 +346,7 @@ def human_env_overrides(config: BenchmarkConfig, test_set: TestSet) -> dict[str,
 def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
     """What the config hash records about the humans: None for the default (social-force humans,
     no human metrics), so the hashes of such runs are as before."""
-    from socialzoo.agents.learned_humans import split_human_spec
+    from socialzoo.env.human_policy import split_human_spec
     from socialzoo.humans.models import PeopleConfig
 
     people = people_spec(config.humans)
@@ -624,8 +624,8 @@ def write_episode_gif(
     """Animate one episode of `policy` on scenario `index` of a test set as a GIF
     (socialzoo.bench.episode_video.animate_episode at its defaults), among `humans`."""
     from socialzoo.agents import make_policy
-    from socialzoo.agents.learned_humans import make_human_policy
     from socialzoo.bench.episode_video import animate_episode
+    from socialzoo.env.human_policy import make_human_policy
     from socialzoo.nav.maps import load_map
 
     scenario = test_set.scenario(index, load_map(env_config.map))

@@ -78,7 +78,7 @@ class RunSpec:
         env_configs: the env config of each test set, by test set name.
         policies: make_policy keyword arguments of each policy, by registry name.
         batch_size: env rows stepped together (B).
-        humans: the human policy spec (socialzoo.agents.learned_humans): "social_force", or
+        humans: the human policy spec (socialzoo.env.human_policy): "social_force", or
             "learned:PATH", whose policy drives the env config's learned human slots
             (EnvConfig.num_learned_humans) from their observations every step.
         human_metrics: add the humans' episode metrics (socialzoo.bench.human_metrics) to every
@@ -93,7 +93,7 @@ class RunSpec:
     human_metrics: bool = False
 
     def __post_init__(self) -> None:
-        from socialzoo.agents.learned_humans import split_human_spec
+        from socialzoo.env.human_policy import split_human_spec
 
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
             raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
@@ -182,7 +182,7 @@ class BatchedRunner:
     """
 
     def __init__(self, spec: RunSpec, *, compact_tail: bool = True, stack_policies: bool = True) -> None:
-        from socialzoo.agents.learned_humans import make_human_policy
+        from socialzoo.env.human_policy import make_human_policy
 
         self.spec = spec
         self.compact_tail = compact_tail

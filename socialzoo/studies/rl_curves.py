@@ -82,7 +82,7 @@ def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
 
 def _policy_key(path: Path) -> str:
     """The registry name a policy file was saved under (its header's "policy")."""
-    from socialzoo.agents.policy_file import read_policy_file
+    from socialzoo.env.policy_file import read_policy_file
 
     return str(read_policy_file(path)[1]["policy"])
 

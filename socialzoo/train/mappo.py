@@ -42,10 +42,10 @@ from torchrl.modules import MultiAgentMLP, ProbabilisticActor, TanhNormal
 from torchrl.objectives import IPPOLoss, MAPPOLoss
 
 from socialzoo.agents import make_policy
-from socialzoo.agents.learned_humans import LearnedHumanPolicy
 from socialzoo.agents.mlp import MlpPolicy
-from socialzoo.agents.policy_file import current_env_version
 from socialzoo.env.config import EnvConfig
+from socialzoo.env.human_policy import LearnedHumanPolicy
+from socialzoo.env.policy_file import current_env_version
 from socialzoo.env.torchrl_env import HUMAN, ROBOT, SocialNavTorchEnv
 from socialzoo.train.marl_args import Algo, CollectorKind
 

@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import SHIPPED_DIR
-from socialzoo.agents.learned_humans import (
+from socialzoo.env.config import EnvConfig
+from socialzoo.env.core import SocialNavCore
+from socialzoo.env.human_policy import (
     LearnedHumanPolicy,
     check_human_spec,
     make_human_policy,
     split_human_spec,
 )
-from socialzoo.agents.policy_file import PolicyFileError, save_policy_file
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
+from socialzoo.env.policy_file import PolicyFileError, save_policy_file
 from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import HALT
 

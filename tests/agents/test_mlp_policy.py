@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from socialzoo.agents.mlp import MlpPolicy, ObservationNormalizer
-from socialzoo.agents.policy_file import (
+from socialzoo.env.policy_file import (
     PolicyFileError,
     current_env_version,
     read_policy_file,

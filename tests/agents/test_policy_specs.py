@@ -6,7 +6,7 @@ import pytest
 import socialzoo.agents as agents
 from socialzoo.agents import check_policy_spec, make_policy, split_policy_spec
 from socialzoo.agents.mlp import MlpPolicy
-from socialzoo.agents.policy_file import current_env_version
+from socialzoo.env.policy_file import current_env_version
 
 
 def _save(path):

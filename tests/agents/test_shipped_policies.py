@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import SHIPPED_DIR, make_policy
-from socialzoo.agents.policy_file import read_policy_file
+from socialzoo.env.policy_file import read_policy_file
 
 
 @pytest.mark.parametrize("name", ["ppo", "dqn"])

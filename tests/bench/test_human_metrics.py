@@ -44,7 +44,7 @@ def run(s, walker, steps):
 
 @pytest.fixture(scope="module")
 def walker(walker_policy_path):
-    from socialzoo.agents.learned_humans import LearnedHumanPolicy
+    from socialzoo.env.human_policy import LearnedHumanPolicy
 
     return LearnedHumanPolicy.load(walker_policy_path)
 

@@ -145,7 +145,7 @@ def test_observation_only_policies_act_on_their_rows_with_the_same_results(test_
     import numpy as np
 
     from socialzoo.agents.mlp import MlpPolicy
-    from socialzoo.agents.policy_file import current_env_version
+    from socialzoo.env.policy_file import current_env_version
 
     specs = []
     for i in range(2):

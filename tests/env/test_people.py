@@ -186,7 +186,7 @@ def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_pa
     with pytest.raises(ValueError, match="counterfactual needs people the env drives itself"):
         EnvConfig().replace(num_learned_humans=2, people={"counterfactual": True})
     # A file of the wrong kind: a robot policy, not a learned human policy.
-    from socialzoo.agents.policy_file import PolicyFileError, current_env_version, save_policy_file
+    from socialzoo.env.policy_file import PolicyFileError, current_env_version, save_policy_file
 
     robot = tmp_path / "robot.safetensors"
     header = {"policy": "ppo", "network": {}, "observation": {}, "training": {}}

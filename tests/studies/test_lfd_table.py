@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from socialzoo.agents.mlp import MlpPolicy
-from socialzoo.agents.policy_file import current_env_version
+from socialzoo.env.policy_file import current_env_version
 from socialzoo.studies.lfd import (
     CSV_COLUMNS,
     PAPER_LFD,

@@ -9,8 +9,8 @@ import pytest
 
 import socialzoo.studies.rl_curves as rl
 from socialzoo.agents.mlp import MlpPolicy
-from socialzoo.agents.policy_file import current_env_version
 from socialzoo.bench.store import ResultsStore
+from socialzoo.env.policy_file import current_env_version
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
 
 FAST = {"max_steps": 150}

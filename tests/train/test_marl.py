@@ -15,7 +15,7 @@ torch = pytest.importorskip("torch")
 pytest.importorskip("torchrl")
 
 from socialzoo.agents import make_policy  # noqa: E402
-from socialzoo.agents.learned_humans import LearnedHumanPolicy  # noqa: E402
+from socialzoo.env.human_policy import LearnedHumanPolicy  # noqa: E402
 from socialzoo.env.registration import ENV_VERSION  # noqa: E402
 from socialzoo.env.torchrl_env import SocialNavTorchEnv  # noqa: E402
 from socialzoo.train.cotrain import CotrainArgs  # noqa: E402

@@ -13,7 +13,7 @@ from torchrl.envs.utils import ExplorationType, set_exploration_type  # noqa: E4
 
 from socialzoo.agents.demonstrations import load_demonstrations  # noqa: E402
 from socialzoo.agents.mlp import MlpPolicy  # noqa: E402
-from socialzoo.agents.policy_file import current_env_version  # noqa: E402
+from socialzoo.env.policy_file import current_env_version  # noqa: E402
 from socialzoo.train.policy_net import (  # noqa: E402
     Discriminator,
     init_linear,

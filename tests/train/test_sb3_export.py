@@ -7,7 +7,7 @@ from stable_baselines3 import A2C, DQN, PPO
 from stable_baselines3.common.vec_env import VecNormalize
 
 from socialzoo.agents import make_policy
-from socialzoo.agents.policy_file import read_policy_file
+from socialzoo.env.policy_file import read_policy_file
 from socialzoo.env.sb3_vec import SB3VecEnv
 from socialzoo.train.sb3_common import env_id_of
 from socialzoo.train.sb3_export import ExportError, export_policy

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import make_policy
-from socialzoo.agents.policy_file import read_policy_file
 from socialzoo.cli import main
+from socialzoo.env.policy_file import read_policy_file
 from socialzoo.env.sb3_vec import SB3VecEnv
 from socialzoo.train import TRAINERS, trainer_args, trainer_function
 from socialzoo.train.dqn import DQNArgs
