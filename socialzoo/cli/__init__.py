@@ -50,6 +50,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "socialzoo.cli.steps_cmd",
         "train PPO on past the paper's 84,000 steps until it matches Ref (validation scenarios)",
     ),
+    "study": ("socialzoo.cli.study_cmd", "single experiments with no other command (ref-tradeoff)"),
     "train": (
         "socialzoo.cli.train_cmd",
         "train a learned baseline (writes the policy, its run record, checkpoints and logs)",

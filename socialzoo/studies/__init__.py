@@ -16,6 +16,8 @@ Modules, imported where used (`from socialzoo.studies.lfd import run_lfd_evaluat
   scenarios (`socialzoo humans select`).
 - `human_report`: how each crowd model walks (`socialzoo humans report`); `crowd_matrix`: every
   robot policy among every crowd model (`socialzoo benchmark --humans A,B,...`).
+- `ref_tradeoff`: Ref's parameters against its success and blame, and learned policies with
+  their Halt score shifted beside them (`socialzoo study ref-tradeoff`).
 - `seeds`: training seeds as an axis: each seed's success per policy and setting aggregated over
   the seeds (mean and IQM with stratified bootstrap intervals, probability of improvement,
   performance profiles; socialzoo.bench.aggregates).

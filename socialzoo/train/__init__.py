@@ -24,6 +24,8 @@ TRAINERS: dict[str, str] = {
     "bc": "socialzoo.train.bc:Args",
     "gail": "socialzoo.train.gail:Args",
     "dagger": "socialzoo.train.dagger:Args",
+    # A learned policy file fine-tuned with PPO on the benchmark reward.
+    "ppo-finetune": "socialzoo.train.ppo_finetune:Args",
     "pips": "socialzoo.train.pips:PipsArgs",
     # Multi-agent: learned humans (MAPPO/IPPO), and robots and humans trained together.
     "humans": "socialzoo.train.humans:HumansArgs",

@@ -1,26 +1,27 @@
 """PPO fine-tuning from a learned policy file: does RL on the benchmark reward move an imitation
 policy past Ref's success-against-blame front?
 
-    python tools/ppo_finetune.py --init socialzoo/agents/shipped/dagger.safetensors \\
-        --w-blame -2 --w-collision 0 --steps 400000 --out runs/finetune/w2.safetensors
-    python tools/ref_tradeoff.py --halt-offsets 0 --learned dagger:runs/finetune/w2.safetensors
+    socialzoo train ppo-finetune --init FILE --w-blame -2 --w-collision 0 --steps 400000 --out runs/ft
+    socialzoo study ref-tradeoff --halt-offsets 0 --learned dagger:runs/ft/ppo_finetune.safetensors
 
-Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init`; a ReLU or tanh MLP with its
+Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init FILE`; a ReLU or tanh MLP with its
 observation normaliser, such as the shipped DAgger or BC): the actor's layers are copied from the
 file and the file's normaliser is kept fixed (VecNormalize's observation statistics never update),
 so the untrained model acts exactly as the file does (checked before training). The critic, new,
 first learns for `--warmup` steps with the actor frozen; then PPO trains both with a small learning
 rate for `--steps` steps on the benchmark env's own training scenarios (never a validation or
 test scenario) with the reward's blame and collision weights set by `--w-blame` and
-`--w-collision`. The result is written as a policy file of the same name as the source ("dagger"
-by default), so `tools/ref_tradeoff.py --learned` evaluates it beside Ref's settings.
-docs/reproduce.md ("A learned policy against Ref") gives the measurements.
+`--w-collision`. It writes DIR/ppo_finetune.safetensors, a policy of the same name as the source
+("dagger" for the shipped DAgger), so `socialzoo study ref-tradeoff --learned` evaluates it beside
+Ref's settings, and DIR/run.json. docs/reproduce.md ("A learned policy against Ref") gives the
+measurements.
 """
 
 from __future__ import annotations
 
-import argparse
 import time
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,13 +29,68 @@ import numpy as np
 
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
+from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
+TRAINER = Trainer("ppo-finetune", policy_file="ppo_finetune.safetensors", inputs=("init",))
 # torch activation class of an MlpPolicy activation.
 _TORCH_ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh"}
+# PPO's settings besides the arguments: 50 rows x 40 steps a rollout, minibatches of 500, 4 epochs.
+NUM_ENVS = 50
+PPO_SETTINGS: dict[str, Any] = {"n_steps": 40, "batch_size": 500, "n_epochs": 4, "ent_coef": 0.0}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Args:
+    """Fine-tune a learned policy file with PPO (Stable-Baselines3) on the benchmark reward.
+
+    Attributes:
+        init: the MlpPolicy file to start from (an MLP with an observation normaliser).
+        out: the run folder: run.json and the fine-tuned ppo_finetune.safetensors.
+        w_blame: reward weight of blame (benchmark: -0.1).
+        w_collision: reward weight of collisions (benchmark: 0).
+        warmup: critic-only env steps first (the actor frozen).
+        steps: PPO env steps after the warm-up.
+        lr: Adam learning rate.
+        clip: PPO clip range.
+        gamma: discount factor (SB3's and the paper's: 0.99).
+        seed: seeds PPO and the training scenarios.
+        threads: torch CPU threads.
+    """
+
+    init: Path
+    out: Path = Path("runs/ppo_finetune")
+    w_blame: float = -0.1
+    w_collision: float = 0.0
+    warmup: int = 40_000
+    steps: int = 400_000
+    lr: float = 1e-5
+    clip: float = 0.1
+    gamma: float = 0.99
+    seed: int = 0
+    threads: int = 1
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "init", Path(self.init))
+        object.__setattr__(self, "out", Path(self.out))
+        for name in ("warmup", "steps", "seed"):
+            check_int(self, name, 0)
+        check_int(self, "threads", 1)
+        check_number(self, "lr", 0.0, strict=True, high=1.0)
+        check_number(self, "clip", 0.0, strict=True, high=10.0)
+        check_number(self, "gamma", 0.0, high=1.0)
+        for name in ("w_blame", "w_collision"):
+            check_number(self, name, -1e6, high=1e6)
+
+
+def train(args: Args) -> Path:
+    """Fine-tune on the trainer skeleton; returns DIR/ppo_finetune.safetensors (a finished run of
+    the same arguments in args.out is reused)."""
+    return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 
 def ppo_from_policy(
-    source: MlpPolicy, config: EnvConfig, *, num_envs: int = 50, seed: int = 0, **ppo: Any
+    source: MlpPolicy, config: EnvConfig, *, num_envs: int = NUM_ENVS, seed: int = 0, **ppo: Any
 ) -> Any:
     """An SB3 PPO model on `config` whose actor is `source`'s network and whose observations are
     normalised by `source`'s fixed normaliser; `ppo`: PPO keyword arguments.
@@ -114,33 +170,12 @@ def exported(model: Any, source: MlpPolicy) -> MlpPolicy:
     return policy
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--init", type=Path, required=True, help="the MlpPolicy file to start from")
-    parser.add_argument("--out", type=Path, required=True, help="the fine-tuned policy file to write")
-    parser.add_argument(
-        "--w-blame", type=float, default=-0.1, help="reward weight of blame (benchmark: -0.1)"
-    )
-    parser.add_argument(
-        "--w-collision", type=float, default=0.0, help="reward weight of collisions (benchmark: 0)"
-    )
-    parser.add_argument("--warmup", type=int, default=40_000, help="critic-only env steps first")
-    parser.add_argument("--steps", type=int, default=400_000, help="PPO env steps after the warm-up")
-    parser.add_argument("--lr", type=float, default=1e-5, help="Adam learning rate")
-    parser.add_argument("--clip", type=float, default=0.1, help="PPO clip range")
-    parser.add_argument(
-        "--gamma", type=float, default=0.99, help="discount factor (SB3's and the paper's: 0.99)"
-    )
-    parser.add_argument("--seed", type=int, default=0, help="seeds PPO and the training scenarios")
-    args = parser.parse_args()
-    import torch
-
-    torch.set_num_threads(1)
+def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     source = MlpPolicy.load(args.init)
     config = EnvConfig().replace(reward={"w_blame": args.w_blame, "w_collision": args.w_collision})
     model = ppo_from_policy(
-        source, config, seed=args.seed, n_steps=40, batch_size=500, n_epochs=4, learning_rate=args.lr,
-        clip_range=args.clip, ent_coef=0.0, gamma=args.gamma,
+        source, config, seed=args.seed, learning_rate=args.lr, clip_range=args.clip, gamma=args.gamma,
+        **PPO_SETTINGS,
     )  # fmt: skip
     probe = np.random.default_rng(0).normal(
         source.normalizer.mean, np.sqrt(source.normalizer.var), (512, source.input_size)
@@ -149,14 +184,9 @@ def main() -> None:
         raise RuntimeError(f"{args.init}: the PPO actor does not act as the file does before training")
     start = time.perf_counter()
     finetune(model, args.warmup, args.steps)
-    seconds = time.perf_counter() - start
+    finetuned = {**run.record["args"], "seconds": round(time.perf_counter() - start, 1)}
     header = dict(source.header)
-    run = {**vars(args), "init": str(args.init), "out": str(args.out), "seconds": round(seconds, 1)}
-    header["training"] = {**header.get("training", {}), "finetune": run}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    exported(model, source).save(args.out, header)
-    print(f"{args.out}: {args.warmup:,} + {args.steps:,} env steps in {seconds:.0f} s")
-
-
-if __name__ == "__main__":
-    main()
+    header["training"] = {**header.get("training", {}), "finetune": finetuned}
+    exported(model, source).save(run.policy, header)
+    model.get_env().close()
+    return {"env_steps": args.warmup + args.steps, "source": source.name}
