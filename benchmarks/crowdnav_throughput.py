@@ -15,7 +15,7 @@ import json
 import numpy as np
 from _common import parser
 
-from socialzoo.env.crowd_env import CrowdNavVectorEnv
+from socialzoo.env.vector import CrowdNavVectorEnv
 
 CASES = ((1, 5), (256, 5), (1, 20), (256, 20))
 

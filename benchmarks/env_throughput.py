@@ -10,7 +10,7 @@ import numpy as np
 from _common import Figure, measure, parser, report, traced_peak_mib
 
 import socialzoo  # noqa: F401
-from socialzoo.env.benchmark_env import ActionSelectionEnv
+from socialzoo.env.gym_env import ActionSelectionEnv
 from socialzoo.env.parallel import parallel_env
 from socialzoo.env.vector import ActionSelectionVectorEnv
 

@@ -20,9 +20,8 @@ from tensordict import TensorDictBase
 from torchrl.envs import EnvBase
 from torchrl.envs.utils import check_env_specs
 
-from socialzoo.env.crowd_torchrl import CrowdNavTorchEnv
 from socialzoo.env.torchrl_env import SocialNavTorchEnv
-from socialzoo.env.torchrl_single import ActionSelectionTorchEnv
+from socialzoo.env.torchrl_single import ActionSelectionTorchEnv, CrowdNavTorchEnv
 
 
 def _action_selection(batch: int, device: str) -> EnvBase:

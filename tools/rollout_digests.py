@@ -213,8 +213,7 @@ def cases() -> dict[str, Callable[[], dict[str, str]]]:
     import gymnasium as gym
 
     import socialzoo  # noqa: F401
-    from socialzoo.env.crowd_parallel import parallel_crowd_env
-    from socialzoo.env.parallel import parallel_env
+    from socialzoo.env.parallel import parallel_crowd_env, parallel_env
 
     out: dict[str, Callable[[], dict[str, str]]] = {}
     ids = sorted(i for i in gym.registry if i.startswith("socialzoo/"))
@@ -267,9 +266,8 @@ def _torchrl_cases() -> dict[str, Callable[[], dict[str, str]]]:
         import torchrl  # noqa: F401
     except ImportError:
         return {}
-    from socialzoo.env.crowd_torchrl import CrowdNavTorchEnv
     from socialzoo.env.torchrl_env import SocialNavTorchEnv
-    from socialzoo.env.torchrl_single import ActionSelectionTorchEnv
+    from socialzoo.env.torchrl_single import ActionSelectionTorchEnv, CrowdNavTorchEnv
 
     return {
         "torchrl multi-agent": lambda: torchrl_rollout(

@@ -1,7 +1,9 @@
-"""Environment adapters over the batched core: Gymnasium single-agent and vector envs, PettingZoo.
+"""Robot tasks on the batched core (socialzoo.env.tasks) and one adapter per ecosystem, generic over
+the task: Gymnasium env and VectorEnv, PettingZoo ParallelEnv, SB3 VecEnv, TorchRL EnvBase.
 
     import gymnasium as gym, socialzoo
     env = gym.make("socialzoo/ActionSelection-v2")
+    env = TaskEnv(task="crowdnav", variant="Square")
 
 Heavy modules load on first use, so `import socialzoo` stays quick.
 """
@@ -10,25 +12,23 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = [
-    "ActionSelectionEnv",
-    "ActionSelectionVectorEnv",
-    "BlackDeath",
-    "EnvConfig",
-    "SocialNavCore",
-    "SocialNavParallelEnv",
-    "parallel_env",
-]
-
 _WHERE = {
-    "ActionSelectionEnv": "socialzoo.env.benchmark_env",
+    "ActionSelectionEnv": "socialzoo.env.gym_env",
     "ActionSelectionVectorEnv": "socialzoo.env.vector",
     "BlackDeath": "socialzoo.env.parallel",
+    "CrowdNavEnv": "socialzoo.env.gym_env",
+    "CrowdNavVectorEnv": "socialzoo.env.vector",
     "EnvConfig": "socialzoo.env.config",
     "SocialNavCore": "socialzoo.env.core",
     "SocialNavParallelEnv": "socialzoo.env.parallel",
+    "Task": "socialzoo.env.tasks.base",
+    "TaskEnv": "socialzoo.env.gym_env",
+    "TaskParallelEnv": "socialzoo.env.parallel",
+    "TaskVectorEnv": "socialzoo.env.vector",
+    "make_task": "socialzoo.env.tasks",
     "parallel_env": "socialzoo.env.parallel",
 }
+__all__ = sorted(_WHERE)
 
 
 def __getattr__(name: str) -> Any:

@@ -7,7 +7,7 @@ CrowdNav does (socialzoo.env.crowd_outcome: the closest approach along every sub
 the time limit), accumulates the episode metrics and builds each robot's joint-state observation.
 CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a
 robot whose episode ended stands still where it is, and the row's episode lasts until every
-robot's has ended. Rows are reset by the adapters (socialzoo.env.crowd_env, crowd_parallel) with
+robot's has ended. Rows are reset by the task (socialzoo.env.tasks.crowdnav) with
 cases from socialzoo.env.crowd_source.
 
 Per-robot arrays are flat over (B, R), row-major: robot r of row b is entry b * R + r (with R = 1,

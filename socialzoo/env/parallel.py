@@ -1,7 +1,11 @@
-"""The multi-agent environment: a PettingZoo ParallelEnv of R robots and L learned humans.
+"""The PettingZoo ParallelEnv of any task: R robots and, where the task has them, L learned humans.
 
-A thin adapter over SocialNavCore with a batch of one world: agent dicts in and out, agents that
-leave when their episode ends, per-agent spaces, a global state, rendering.
+A thin adapter over a Task (socialzoo.env.tasks) with a batch of one world: agent dicts in and
+out, agents that leave when their episode ends, per-agent spaces, a global state, rendering.
+
+    env = parallel_env(map="open_room", num_robots=2, num_learned_humans=3)   # action selection
+    env = parallel_crowd_env(num_robots=3)                                     # CrowdNav
+    env = TaskParallelEnv(task="crowdnav", num_robots=2, variant="Walls")      # any task
 """
 
 from __future__ import annotations
@@ -16,92 +20,62 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from socialzoo.core.state import WorldState
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore, StepResult
-from socialzoo.env.human_agents import human_observation_size
-from socialzoo.env.observation import observation_space
-from socialzoo.env.scenario_source import ScenarioStream, with_robots
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario
-from socialzoo.nav.subpolicies import NUM_ACTIONS
+from socialzoo.env.gym_env import robot_row
+from socialzoo.env.tasks import task_class
+from socialzoo.env.tasks.base import Task, TaskStep, agent_action
 
-# The sub-policy given to robots that already left (the core halts them anyway).
-_HALT = 1
 # Entries of the global state per robot: pose (x, y, theta), velocity (v, omega), goal (x, y, theta).
 STATE_ROBOT_SIZE = 8
 # Entries of the global state per human slot: position (x, y), velocity (vx, vy), present (0 or 1).
 STATE_HUMAN_SIZE = 5
-# Info key of a robot's episode metrics, present on the step it leaves (as in ActionSelectionEnv).
+# Info keys of a learned human (stable from reset on: TorchRL's PettingZooWrapper builds its specs
+# from the reset infos): within 0.4 m of anyone after the step, and the slot holds a person.
+HUMAN_INFO_KEYS = ("contact", "present")
+# Info key of a robot's episode metrics, present on the step it leaves (as in the single env).
 EPISODE_KEY = "metrics"
 
 
-class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
-    """R robots (and optionally L learned humans) navigating among social-force humans.
+class TaskParallelEnv(ParallelEnv[str, Any, Any]):
+    """The robots (and learned humans) of one world of a task as PettingZoo agents.
 
     ## Description
-    The PettingZoo view of the batched core (one world): several robots of the benchmark, and
-    human slots that a learner may drive.
-
-    Agents: "robot_0" .. "robot_{R-1}", then "human_0" .. "human_{L-1}" for the first L human
-    slots when config.num_learned_humans = L > 0. The other humans follow the scripted social-force
-    policy. A scenario may have fewer humans than L: the human agents of empty slots are still
-    agents (so that `agents` is the same at every reset), with an all-zero observation, reward 0,
-    actions ignored and info["present"] False.
+    Agents: "robot_0" .. "robot_{R-1}", then "human_0" .. "human_{L-1}" for the task's
+    learned-human slots (the action-selection task's config.num_learned_humans); the other
+    people follow their crowd model. A scenario may have fewer people than L: the human agents
+    of empty slots are still agents (so that `agents` is the same at every reset), with an
+    all-zero observation, reward 0, actions ignored and info["present"] False.
 
     ## Action Space
-    Robots Discrete(4) (GoAlone, Halt, Follow, Pass; SPEC section 7) or, with
-    robot_action="velocity", Box([-1, 1]^2) of (v, omega) scaled by the robot's maximum speeds;
-    learned humans Box([-1, 1]^2), a desired velocity scaled by the human's preferred speed, in the
-    world frame or the human's own frame (config.human_action_frame).
+    Robots: the task's action space; learned humans Box([-1, 1]^2), a desired velocity scaled
+    by the person's preferred speed.
 
     ## Observation Space
-    Robots get the benchmark observation (SPEC section 8; `observation`
-    config); learned humans get socialzoo.env.human_agents.human_observations (waypoint, velocity,
-    nearest wall and neighbours in their own frame).
+    Robots: the task's observation; learned humans the task's human observation
+    (socialzoo.env.human_agents). `state()` is the global state (`global_state`).
 
     ## Rewards
-    Robots the benchmark reward (SPEC section 9); learned humans the weighted terms of
-    config.human_reward (socialzoo.env.human_agents.HumanRewardConfig): by default progress towards
-    their waypoint minus 1 per step in contact with a human and 1 with a robot.
-
-    ## Starting State
-    `reset` draws the next scenario of the seeded stream: each robot at rest on its own legal
-    pose with a goal on another, 5 to 25 humans (the first L of them driven by learners) spawned
-    near their start poses (as in `ActionSelectionEnv`).
+    Robots: the task's reward; learned humans the weighted terms of config.human_reward.
 
     ## Episode End
-    A robot leaves `agents` the step it terminates (goal reached or wall touched) or
-    is truncated (config.max_steps, or max_cycles steps when set); it then stands still in the
-    world until the next reset. Learned humans never terminate (they shuttle forever); they are
-    truncated at the time limit and on the step the last robot leaves, which ends the episode
-    (`agents` empty).
+    A robot leaves `agents` the step it terminates (the task's end) or is truncated (its time
+    limit, or max_cycles steps when set); it then stands still in the world until the next
+    reset. Learned humans never terminate; they are truncated at the time limit and on the step
+    the last robot leaves, which ends the episode (`agents` empty).
 
-    Infos (plain dicts with stable keys): robots "reached", "wall_collision", "human_collisions",
-    "force", "blame", "progress", "target_human" (-1 for none), and on the step the robot leaves
-    "metrics" (socialzoo.env.metrics.SUMMARY_KEYS) unless episode_info=False; humans "contact"
-    (within 0.4 m of anyone after the step) and "present".
+    Infos (plain dicts with stable keys): robots the task's per-step info keys, and on the step
+    the robot leaves "metrics" unless episode_info=False; humans "contact" and "present".
 
     ## Arguments
     Args:
-        config: an EnvConfig (default: the benchmark's, on gdc1).
-        render_mode: None, "rgb_array" or "human".
+        config: the task's config object (None: its defaults).
+        render_mode: None, or one of the task's render modes.
         max_cycles: if set, every agent still alive is truncated after this many steps.
-        map_data: an already loaded Map instead of config.map.
         episode_info: put the "metrics" dict in the leaving robot's info. TorchRL's
             PettingZooWrapper needs False: it turns every info value into a tensor, and a key
             present only on the last step breaks its specs. The metrics stay available from
             `episode_summary(agent)`.
-        **overrides: EnvConfig fields as plain values (nested configs as dicts).
-
-    ## Version History
-    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
-      its carrot is in sight only along a line keeping its full wall distance; its plans join the
-      graph by lines it can drive; people in contact with the robot do not press into it;
-      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
-    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
-      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
-      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-    - v0: initial release.
+        task: the task's registry name, "module:Class" path or class (default: `default_task`).
+        **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -110,60 +84,59 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         "render_fps": 40,
         "is_parallelizable": True,
     }
+    default_task: ClassVar[str | None] = None
 
     def __init__(
         self,
-        config: EnvConfig | None = None,
+        config: Any = None,
         *,
         render_mode: str | None = None,
         max_cycles: int | None = None,
-        map_data: Map | None = None,
         episode_info: bool = True,
-        **overrides: Any,
+        task: Any = None,
+        **kwargs: Any,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
-            )
+        chosen = task if task is not None else self.default_task
+        if chosen is None:
+            raise ValueError(f"{type(self).__name__}: name a task (task='action_selection', 'crowdnav', ...)")
+        cls = task_class(chosen)
+        cls.check_render_mode(render_mode)
         if max_cycles is not None and (
             not isinstance(max_cycles, int) or isinstance(max_cycles, bool) or max_cycles < 1
         ):
             raise ValueError(f"max_cycles must be None or an int >= 1, got {max_cycles!r}")
-        self.config = EnvConfig.resolve(config, overrides)
+        self.task: Task = cls(config, 1, **kwargs)
+        self.config = self.task.config
+        self.metadata = {
+            **type(self).metadata,
+            "render_modes": list(cls.render_modes),
+            "render_fps": cls.render_fps,
+        }
         self.render_mode = render_mode
         self.max_cycles = max_cycles
         self.episode_info = bool(episode_info)
-        cfg = self.config
-        self.core = SocialNavCore(cfg, 1, map_data=map_data)
-        num_poses = len(self.core.map.legal_poses)
-        if cfg.num_robots > 1 and num_poses < cfg.num_robots + 1:
-            raise ValueError(
-                f"num_robots={cfg.num_robots} needs at least {cfg.num_robots + 1} legal poses for distinct "
-                f"starts; map {self.core.map.name!r} has {num_poses}"
-            )
-        self.scenarios = ScenarioStream.for_config(self.core.map, 1, cfg)
-        self.robots = [f"robot_{i}" for i in range(cfg.num_robots)]
-        self.humans = [f"human_{j}" for j in range(cfg.num_learned_humans)]
+        task_ = self.task
+        self.robots = [f"robot_{i}" for i in range(task_.num_robots)]
+        self.humans = [f"human_{j}" for j in range(task_.num_human_agents)]
         self.possible_agents = self.robots + self.humans
         self.agents: list[str] = []
-        self.observation_spaces = {a: observation_space(cfg.observation) for a in self.robots}
-        human_size = human_observation_size(cfg.num_human_neighbours)
+        self.observation_spaces = {a: task_.observation_space for a in self.robots}
+        self.action_spaces = {a: task_.action_space for a in self.robots}
         for a in self.humans:
-            self.observation_spaces[a] = spaces.Box(-np.inf, np.inf, (human_size,), dtype=np.float32)
-        self.action_spaces = {a: self._robot_action_space() for a in self.robots}
-        for a in self.humans:
-            self.action_spaces[a] = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
-        state_size = STATE_ROBOT_SIZE * cfg.num_robots + STATE_HUMAN_SIZE * cfg.max_humans
+            assert task_.human_observation_space is not None and task_.human_action_space is not None
+            self.observation_spaces[a] = task_.human_observation_space
+            self.action_spaces[a] = task_.human_action_space
+        state_size = STATE_ROBOT_SIZE * task_.num_robots + STATE_HUMAN_SIZE * task_.num_human_slots
         self.state_space = spaces.Box(-np.inf, np.inf, (state_size,), dtype=np.float32)
         self.stream_seed: int | None = None
-        self.scenario: Scenario | None = None
         self.num_cycles = 0
+        self._started = False
         self._renderer: Any = None
 
-    def _robot_action_space(self) -> spaces.Space:
-        if self.config.robot_action == "subpolicy":
-            return spaces.Discrete(NUM_ACTIONS)
-        return spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+    @property
+    def core(self) -> Any:
+        """The task's batched core (B = 1)."""
+        return self.task.core  # type: ignore[attr-defined]
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The observation space of `agent` (the same object at every call)."""
@@ -176,56 +149,46 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     # ------------------------------------------------------------------ reset
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[dict[str, np.ndarray], dict[str, dict[str, Any]]]:
+    ) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         """Start an episode with every possible agent alive.
 
         Args:
-            seed: seeds the scenario stream. None continues the stream; the first reset without
-                a seed draws fresh entropy, kept in `stream_seed` so the run can be replayed.
-            options: {"scenario": Scenario} replays that scenario (robots beyond its own get
-                poses as in ScenarioStream); other keys are ignored.
+            seed: seeds the task's training stream. None continues the stream; the first reset
+                without a seed draws fresh entropy, kept in `stream_seed` so the run can be replayed.
+            options: the task's reset options (a scenario to replay, a fixed case).
 
         Returns:
             (observations, infos) for every agent.
         """
-        scenario = (options or {}).get("scenario")
-        if scenario is not None and not isinstance(scenario, Scenario):
-            raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario).__name__}")
-        if scenario is not None:
-            scenario = with_robots(scenario, self.core.map, self.config.num_robots)
         if seed is not None or self.stream_seed is None:
             stream_seed = seed if seed is not None else int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
-            self.scenarios.seed(stream_seed)
+            self.task.seed(stream_seed)
             self.stream_seed = stream_seed
-        if scenario is None:
-            scenario = self.scenarios.next(np.array([0]))[0]
-        self.core.reset_rows(np.array([0]), [scenario])
-        self.scenario = scenario
+        self.task.reset(np.array([0]), dict(options or {}))
+        self._started = True
         self.num_cycles = 0
         self.agents = self.possible_agents[:]
         if self._renderer is not None:
             self._renderer.reset()
         if self.render_mode == "human":
             self.render()
-        infos: dict[str, dict[str, Any]] = {a: StepResult.initial_info() for a in self.robots}
-        present = self.core.state.human_mask[0, self.core.learned]  # type: ignore[union-attr]
+        infos: dict[str, dict[str, Any]] = {a: self.task.initial_info() for a in self.robots}
+        present = self.task.human_present()
         for j, a in enumerate(self.humans):
-            infos[a] = {"contact": False, "present": bool(present[j])}
+            infos[a] = {"contact": False, "present": bool(present[0, j])}
         return self._observations(self.agents), infos
 
     # ------------------------------------------------------------------ step
     def step(
         self, actions: Mapping[str, Any]
     ) -> tuple[
-        dict[str, np.ndarray],
+        dict[str, Any],
         dict[str, float],
         dict[str, bool],
         dict[str, bool],
         dict[str, dict[str, Any]],
     ]:
-        """Advance the world one step (0.025 s) with an action for every agent in `agents`.
-
-        Actions of agents that already left are ignored.
+        """Advance the world one step with an action for every agent in `agents`.
 
         Returns:
             (observations, rewards, terminations, truncations, infos), each keyed by the agents
@@ -237,10 +200,11 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             KeyError: an action missing for a live agent, or given for an unknown agent name.
             ValueError: an action outside its agent's space; nothing has changed then.
         """
-        if self.scenario is None:
-            raise RuntimeError("SocialNavParallelEnv: call reset() before step()")
+        name = type(self).__name__
+        if not self._started:
+            raise RuntimeError(f"{name}: call reset() before step()")
         if not self.agents:
-            raise RuntimeError("SocialNavParallelEnv: the episode has ended (no agents left); call reset()")
+            raise RuntimeError(f"{name}: the episode has ended (no agents left); call reset()")
         if not isinstance(actions, Mapping):
             raise TypeError(f"actions must be a dict of agent name -> action, got {type(actions).__name__}")
         unknown = [a for a in actions if a not in self.action_spaces]
@@ -251,12 +215,10 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             raise KeyError(f"no action for live agents {missing}")
         robot_action, human_action = self._action_arrays(actions)
         live = self.agents
-        result = self.core.step(robot_action, human_action)
-        after = self.core.state
-        assert after is not None
+        step = self.task.step(robot_action, human_action)
         self.num_cycles += 1
         out_of_cycles = self.max_cycles is not None and self.num_cycles >= self.max_cycles
-        out_of_time = out_of_cycles or bool(after.step_count[0] >= self.config.max_steps)
+        out_of_time = out_of_cycles or bool(step.time_up[0])
 
         observations = self._observations(live)
         rewards: dict[str, float] = {}
@@ -266,64 +228,75 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         for i, agent in enumerate(self.robots):
             if agent not in live:
                 continue
-            terminated = bool(result.terminated[0, i])
-            truncated = bool(result.truncated[0, i]) or (out_of_cycles and not terminated)
-            rewards[agent] = float(result.reward[0, i])
+            terminated = bool(step.terminated[0, i])
+            truncated = bool(step.truncated[0, i]) or (out_of_cycles and not terminated)
+            rewards[agent] = float(step.reward[0, i])
             terminations[agent] = terminated
             truncations[agent] = truncated
-            infos[agent] = result.info(0, i)
+            infos[agent] = self.task.robot_info(step, 0, i)
             if (terminated or truncated) and self.episode_info:
                 infos[agent][EPISODE_KEY] = self.episode_summary(agent)
         robots_left = all(a not in live or terminations[a] or truncations[a] for a in self.robots)
         if self.humans:
-            assert result.human_reward is not None and result.human is not None
-            present = after.human_mask[0, self.core.learned]
-            contact = result.human.contact[0]
-            for j, agent in enumerate(self.humans):
-                if agent not in live:
-                    continue
-                rewards[agent] = float(result.human_reward[0, j])
-                terminations[agent] = False
-                truncations[agent] = out_of_time or robots_left
-                infos[agent] = {"contact": bool(contact[j]), "present": bool(present[j])}
+            self._human_results(
+                step, live, out_of_time or robots_left, rewards, terminations, truncations, infos
+            )
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self.render_mode == "human":
             self.render()
         return observations, rewards, terminations, truncations, infos
 
+    def _human_results(
+        self,
+        step: TaskStep,
+        live: list[str],
+        truncated: bool,
+        rewards: dict[str, float],
+        terminations: dict[str, bool],
+        truncations: dict[str, bool],
+        infos: dict[str, dict[str, Any]],
+    ) -> None:
+        """Fill in the learned humans' rewards, flags and infos of a step."""
+        assert step.human_reward is not None and step.human_info is not None
+        for j, agent in enumerate(self.humans):
+            if agent not in live:
+                continue
+            rewards[agent] = float(step.human_reward[0, j])
+            terminations[agent] = False
+            truncations[agent] = truncated
+            infos[agent] = {key: bool(step.human_info[key][0, j]) for key in HUMAN_INFO_KEYS}
+
     def _action_arrays(self, actions: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray | None]:
-        """(robot actions (1, R) or (1, R, 2), human actions (1, L, 2) or None), validated."""
-        cfg = self.config
-        if cfg.robot_action == "subpolicy":
-            robot_action = np.full((1, cfg.num_robots), _HALT, dtype=np.int64)
-        else:
-            robot_action = np.zeros((1, cfg.num_robots, 2))
+        """(robot actions (1, R, ...), human actions (1, L, 2) or None), each checked."""
+        task = self.task
+        shape = tuple(task.action_space.shape or ())
+        discrete = isinstance(task.action_space, spaces.Discrete)
+        robot_action = np.zeros((1, task.num_robots) + shape, dtype=np.int64 if discrete else np.float64)
         for i, agent in enumerate(self.robots):
-            if agent in self.agents:
-                if cfg.robot_action == "subpolicy":
-                    robot_action[0, i] = _discrete_action(agent, actions[agent])
-                else:
-                    robot_action[0, i] = _box_action(agent, actions[agent])
+            value = actions[agent] if agent in self.agents else task.idle_action()
+            robot_action[0, i] = agent_action(task.action_space, value, agent)
         if not self.humans:
             return robot_action, None
+        assert task.human_action_space is not None
         human_action = np.zeros((1, len(self.humans), 2))
         for j, agent in enumerate(self.humans):
             if agent in self.agents:
-                human_action[0, j] = _box_action(agent, actions[agent])
+                human_action[0, j] = agent_action(task.human_action_space, actions[agent], agent)
         return robot_action, human_action
 
-    def _observations(self, agents: list[str]) -> dict[str, np.ndarray]:
+    def _observations(self, agents: list[str]) -> dict[str, Any]:
         """Current observations (copies) of `agents`."""
-        out: dict[str, np.ndarray] = {}
-        num_robots = self.config.num_robots
-        for i, agent in enumerate(self.possible_agents):
-            if agent not in agents:
-                continue
-            if i < num_robots:
-                out[agent] = self.core.obs[0, i].copy()
-            else:
-                assert self.core.human_obs is not None
-                out[agent] = self.core.human_obs[0, i - num_robots].copy()
+        robots = self.task.observations()
+        out: dict[str, Any] = {}
+        for i, agent in enumerate(self.robots):
+            if agent in agents:
+                out[agent] = robot_row(robots, 0, i)
+        if self.humans:
+            humans = self.task.human_observations()
+            assert humans is not None
+            for j, agent in enumerate(self.humans):
+                if agent in agents:
+                    out[agent] = humans[0, j].copy()
         return out
 
     # ------------------------------------------------------------------ state, metrics
@@ -331,21 +304,20 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         """The global state: float32 of length 8 R + 5 H (state_space), world frame, SI units.
 
         Per robot: pose x, y, theta; velocity v, omega; goal x, y, theta. Then per human slot
-        (H = scenario.max_humans, learned or scripted): position x, y; velocity vx, vy; present
-        (1.0) or empty (0.0, with zero position and velocity).
+        (learned or scripted): position x, y; velocity vx, vy; present (1.0) or empty (0.0, with
+        zero position and velocity).
         """
-        s = self.core.state
-        if s is None:
-            raise RuntimeError("SocialNavParallelEnv: call reset() before state()")
-        return global_state(s)[0]
+        if not self._started:
+            raise RuntimeError(f"{type(self).__name__}: call reset() before state()")
+        return global_state(self.task.world_state)[0]
 
     def episode_summary(self, agent: str) -> dict[str, Any]:
-        """The episode metrics of robot `agent` so far (socialzoo.env.metrics.SUMMARY_KEYS)."""
+        """The episode metrics of robot `agent` (the task's episode_metrics)."""
         if agent not in self.robots:
             raise KeyError(f"episode_summary needs a robot agent ({self.robots}), got {agent!r}")
-        if self.scenario is None:
-            raise RuntimeError("SocialNavParallelEnv: call reset() before episode_summary()")
-        return self.core.episode_summaries([0], robot=self.robots.index(agent))[0]
+        if not self._started:
+            raise RuntimeError(f"{type(self).__name__}: call reset() before episode_summary()")
+        return self.task.episode_metrics(np.array([0]), robot=self.robots.index(agent))[0]
 
     # ------------------------------------------------------------------ rendering
     def render(self) -> np.ndarray | None:
@@ -353,12 +325,10 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         if self.render_mode is None:
             gymnasium.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        if self.scenario is None:
-            raise RuntimeError("SocialNavParallelEnv: call reset() before render()")
+        if not self._started:
+            raise RuntimeError(f"{type(self).__name__}: call reset() before render()")
         if self._renderer is None:
-            from socialzoo.env.rendering import CoreRenderer
-
-            self._renderer = CoreRenderer(self.core, self.render_mode, view="map")
+            self._renderer = self.task.make_renderer(self.render_mode, view="map")
         return self._renderer.render()
 
     def close(self) -> None:
@@ -368,8 +338,22 @@ class SocialNavParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             self._renderer = None
 
 
+class SocialNavParallelEnv(TaskParallelEnv):
+    """The Social Action Selection task's robots and learned humans (socialzoo.env.tasks.action_selection)."""
+
+    default_task = "action_selection"
+
+
+class CrowdNavParallelEnv(TaskParallelEnv):
+    """Several robots of the CrowdNav task (socialzoo.env.tasks.crowdnav), each seeing the others
+    as people; a robot that left stands still where it is, still an obstacle to the others."""
+
+    metadata: ClassVar[dict[str, Any]] = {**TaskParallelEnv.metadata, "name": "socialzoo_crowdnav_v1"}
+    default_task = "crowdnav"
+
+
 def global_state(s: WorldState) -> np.ndarray:
-    """(B, 8 R + 5 H) float32: the global state of every world (SocialNavParallelEnv.state)."""
+    """(B, 8 R + 5 H) float32: the global state of every world (TaskParallelEnv.state)."""
     b = s.batch_size
     robots = np.concatenate((s.robot_pose, s.robot_vel, s.robot_goal), axis=-1).reshape(b, -1)
     humans = np.concatenate((s.human_pos, s.human_vel, s.human_mask[..., None]), axis=-1).reshape(b, -1)
@@ -377,27 +361,27 @@ def global_state(s: WorldState) -> np.ndarray:
 
 
 def parallel_env(
-    config: EnvConfig | None = None,
+    config: Any = None,
     *,
     render_mode: str | None = None,
     max_cycles: int | None = None,
-    map_data: Map | None = None,
     episode_info: bool = True,
-    **overrides: Any,
+    **kwargs: Any,
 ) -> SocialNavParallelEnv:
-    """A SocialNavParallelEnv (arguments as there); `overrides` are EnvConfig fields.
+    """The action-selection task's SocialNavParallelEnv (arguments as there); `kwargs` are EnvConfig
+    fields and map_data.
 
     Example:
         >>> env = parallel_env(map="open_room", num_robots=2, num_learned_humans=3, max_steps=400)
     """
     return SocialNavParallelEnv(
-        config,
-        render_mode=render_mode,
-        max_cycles=max_cycles,
-        map_data=map_data,
-        episode_info=episode_info,
-        **overrides,
+        config, render_mode=render_mode, max_cycles=max_cycles, episode_info=episode_info, **kwargs
     )
+
+
+def parallel_crowd_env(**kwargs: Any) -> CrowdNavParallelEnv:
+    """A CrowdNavParallelEnv of CrowdNavConfig overrides (num_robots=3, variant=NAME, ...)."""
+    return CrowdNavParallelEnv(**kwargs)
 
 
 class BlackDeath(BaseParallelWrapper):
@@ -448,28 +432,3 @@ class BlackDeath(BaseParallelWrapper):
         if ended:
             self.agents = []
         return observations, rewards, terminations, truncations, infos
-
-
-def _discrete_action(agent: str, action: Any) -> int:
-    """A sub-policy index from an int-like action; anything else raises naming the agent."""
-    value = np.asarray(action)
-    ok = value.size == 1 and (
-        np.issubdtype(value.dtype, np.integer) or np.issubdtype(value.dtype, np.floating)
-    )
-    if ok:
-        scalar = value.reshape(()).item()
-        ok = bool(np.isfinite(scalar)) and int(scalar) == scalar and 0 <= int(scalar) < NUM_ACTIONS
-    if not ok:
-        raise ValueError(f"{agent}: action must be one integer in 0..{NUM_ACTIONS - 1}, got {action!r}")
-    return int(scalar)
-
-
-def _box_action(agent: str, action: Any) -> np.ndarray:
-    """A (2,) float action in [-1, 1]; anything else raises naming the agent."""
-    try:
-        value = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        value = None
-    if value is None or value.shape != (2,) or not np.isfinite(value).all() or np.abs(value).max() > 1.0:
-        raise ValueError(f"{agent}: action must be 2 finite numbers in [-1, 1], got {action!r}")
-    return value

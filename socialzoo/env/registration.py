@@ -23,15 +23,16 @@ import gymnasium as gym
 from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
 from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
 
-BENCHMARK_ENTRY = "socialzoo.env.benchmark_env:ActionSelectionEnv"
-VECTOR_ENTRY = "socialzoo.env.vector:ActionSelectionVectorEnv"
+# Every id is a task's Gymnasium env and VectorEnv (the kwargs name the task and its config).
+ENTRY = "socialzoo.env.gym_env:TaskEnv"
+VECTOR_ENTRY = "socialzoo.env.vector:TaskVectorEnv"
 # The version of every id (see the module docstring's Version History).
 ENV_VERSION = 2
 
 # id -> kwargs for the single-agent benchmark envs.
 BENCHMARK_IDS: dict[str, dict] = {
-    f"socialzoo/ActionSelection-v{ENV_VERSION}": {"map": "gdc1"},
-    f"socialzoo/ActionSelectionTransfer-v{ENV_VERSION}": {"map": "ghc3"},
+    f"socialzoo/ActionSelection-v{ENV_VERSION}": {"task": "action_selection", "map": "gdc1"},
+    f"socialzoo/ActionSelectionTransfer-v{ENV_VERSION}": {"task": "action_selection", "map": "ghc3"},
 }
 
 
@@ -41,30 +42,35 @@ def _family_id(name: str) -> str:
 
 # Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v2; short episodes (60 s).
 FAMILY_IDS: dict[str, dict] = {
-    _family_id(name): {"map": map_name, "family": name, "max_steps": 2400}
+    _family_id(name): {"task": "action_selection", "map": map_name, "family": name, "max_steps": 2400}
     for name, (map_name, _) in FAMILY_CATALOGUE.items()
 }
 
 
-CROWD_ENTRY = "socialzoo.env.crowd_env:CrowdNavEnv"
-CROWD_VECTOR_ENTRY = "socialzoo.env.crowd_env:CrowdNavVectorEnv"
 # The CrowdNav task and its variants (socialzoo.env.crowd_variants), e.g. socialzoo/CrowdNav-v1; their
 # version is the task's own (CROWD_ENV_VERSION), apart from the benchmark's.
-CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"variant": name} for name in VARIANTS}
+CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"task": "crowdnav", "variant": name} for name in VARIANTS}
+
+
+def register_task(env_id: str, task: str, **kwargs: object) -> None:
+    """Register `env_id` as the Gymnasium env and VectorEnv of `task` (idempotent).
+
+    Args:
+        env_id: "namespace/Name-vN".
+        task: the task's registry name (socialzoo.env.tasks.TASKS) or its "module:Class" path.
+        **kwargs: the task's config fields as plain JSON values.
+    """
+    if env_id not in gym.registry:
+        gym.register(
+            id=env_id,
+            entry_point=ENTRY,
+            vector_entry_point=VECTOR_ENTRY,
+            kwargs={"task": task, **kwargs},
+            disable_env_checker=False,
+        )
 
 
 def register_envs() -> None:
-    """Register every id (idempotent)."""
-    for ids, entry, vector_entry in (
-        (CROWD_IDS, CROWD_ENTRY, CROWD_VECTOR_ENTRY),
-        ({**BENCHMARK_IDS, **FAMILY_IDS}, BENCHMARK_ENTRY, VECTOR_ENTRY),
-    ):
-        for env_id, kwargs in ids.items():
-            if env_id not in gym.registry:
-                gym.register(
-                    id=env_id,
-                    entry_point=entry,
-                    vector_entry_point=vector_entry,
-                    kwargs=dict(kwargs),
-                    disable_env_checker=False,
-                )
+    """Register every id of socialzoo's tasks (idempotent)."""
+    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS}.items():
+        register_task(env_id, **kwargs)

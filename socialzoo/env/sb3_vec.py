@@ -1,15 +1,16 @@
-"""A Stable-Baselines3 VecEnv over the batched core: B benchmark envs in one process, no env per row.
+"""A Stable-Baselines3 VecEnv of any task: B rows of a TaskVectorEnv in one process, no env per row.
 
-It adapts `socialzoo.env.vector.ActionSelectionVectorEnv` (same rows, same seeded episodes) to SB3's
+It adapts `socialzoo.env.vector.TaskVectorEnv` (same rows, same seeded episodes) to SB3's
 conventions: `step` returns (obs, rewards, dones, infos) with dones = terminated | truncated; a
 row whose episode ended is reset within the step and its info holds `terminal_observation` (the
 last observation of the ended episode), `TimeLimit.truncated` (True when the time limit, not the
-goal or a wall, ended it) and `metrics` (the episode's metrics). SB3 algorithms, VecNormalize and
+task's own end, ended it) and `metrics` (the episode's metrics). SB3 algorithms, VecNormalize and
 VecMonitor work on it unchanged:
 
     from stable_baselines3 import PPO
     from socialzoo.env.sb3_vec import SB3VecEnv
-    venv = SB3VecEnv(64, map="gdc1")
+    venv = SB3VecEnv(64, map="gdc1")                      # the action-selection task
+    venv = SB3VecEnv(64, task="crowdnav", variant="20")   # any task
     PPO("MlpPolicy", venv, n_steps=32).learn(100_000)
 """
 
@@ -23,77 +24,45 @@ import numpy as np
 from gymnasium.vector import VectorEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.vector import ActionSelectionVectorEnv
-from socialzoo.nav.maps import Map
+from socialzoo.env.vector import TaskVectorEnv
 
 
 class SB3VecEnv(VecEnv):
-    """num_envs Social Action Selection envs as one SB3 VecEnv.
+    """num_envs rows of a one-robot task as one SB3 VecEnv (see the module docstring).
 
-    Row 0 of a VecEnv seeded with s plays the same episodes as a single env
-    (`gymnasium.make("socialzoo/ActionSelection-v2")`) reset with seed s and then without a seed;
-    row i plays those of row i of an ActionSelectionVectorEnv seeded with s, whatever num_envs.
+    Row 0 of a VecEnv seeded with s plays the same episodes as the task's single env reset with
+    seed s and then without a seed; row i plays those of row i of a TaskVectorEnv seeded with s,
+    whatever num_envs.
 
     Seeding follows SB3: `seed(s)` (which SB3 algorithms call with their own seed) takes effect at
-    the next `reset()`; all rows draw their scenario streams from that one seed. Without a seed the
+    the next `reset()`; all rows draw their training streams from that one seed. Without a seed the
     first reset seeds from fresh entropy.
 
     Attributes and methods (`get_attr`, `set_attr`, `env_method`) are those of the one batched env
-    that every row shares (`self.vector_env`): `get_attr("config")` gives its EnvConfig once per
-    asked row.
+    that every row shares (`self.vector_env`): `get_attr("config")` gives its config once per
+    asked row. Spaces are the task's per row; rewards are float32.
 
-    ## Description
-    An SB3 `VecEnv` over `ActionSelectionVectorEnv` (self.vector_env): B benchmark rows stepped
-    by one batched core, for PPO, DQN, VecNormalize and VecMonitor.
-
-    ## Action Space
-    `Discrete(4)` per row (SB3 passes a (B,) array): 0 GoAlone, 1 Halt, 2 Follow, 3 Pass.
-
-    ## Observation Space
-    `Box((107,), float32)` per row (the paper layout; see `ActionSelectionEnv`); `reset` and
-    `step` return (B, 107).
-
-    ## Rewards
-    (B,) float32, the benchmark reward of each row (see `ActionSelectionEnv`).
-
-    ## Starting State
-    Every row starts on its next scenario at `reset()`, seeded by `seed(s)` (see Seeding above).
-
-    ## Episode End
-    `dones` = terminated | truncated; an ended row is reset within the step (SB3's autoreset) and
-    its info holds `terminal_observation`, `TimeLimit.truncated` and `metrics`.
-
-    ## Arguments
     Args:
         num_envs: B, the rows stepped together.
-        config: an EnvConfig (default: the benchmark on gdc1).
-        map_data: an already loaded Map instead of config.map.
-        **overrides: EnvConfig fields as plain values, e.g. map="ghc3", scenario={"repeats": 20}.
-
-    ## Version History
-    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
-      its carrot is in sight only along a line keeping its full wall distance; its plans join the
-      graph by lines it can drive; people in contact with the robot do not press into it;
-      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
-    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
-      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
-      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-    - v0: initial release.
+        config: the task's config object (None: its defaults).
+        task: the task's registry name, "module:Class" path or class (default: action selection).
+        vector_env: an already built TaskVectorEnv of num_envs rows instead of task and config.
+        **kwargs: the task's keyword arguments, e.g. map="ghc3", scenario={"repeats": 20}, map_data=.
     """
 
     def __init__(
         self,
         num_envs: int,
-        config: EnvConfig | None = None,
-        map_data: Map | None = None,
+        config: Any = None,
+        *,
+        task: Any = "action_selection",
         vector_env: VectorEnv | None = None,
-        **overrides: Any,
+        **kwargs: Any,
     ) -> None:
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"SB3VecEnv: num_envs must be an int >= 1, got {num_envs!r}")
         if vector_env is None:
-            vector_env = ActionSelectionVectorEnv(num_envs, config=config, map_data=map_data, **overrides)
+            vector_env = TaskVectorEnv(num_envs, config, task=task, **kwargs)
         elif vector_env.num_envs != num_envs:
             raise ValueError(
                 f"SB3VecEnv: num_envs {num_envs} but the vector env has {vector_env.num_envs} rows"
@@ -108,7 +77,6 @@ class SB3VecEnv(VecEnv):
         )
         self._actions: np.ndarray | None = None
         self._started = False
-        self._metric_types: dict[str, type] = {}
 
     # ----------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
@@ -118,11 +86,6 @@ class SB3VecEnv(VecEnv):
         self._started = True
         seeds = info.get("scenario_seed", info.get("case_seed", [None] * self.num_envs))
         self.reset_infos = [{"scenario_seed": None if s is None else int(s)} for s in seeds]
-        if not self._metric_types and hasattr(self.vector_env.core, "episode_summaries"):
-            # The vector env hands episode metrics over as float arrays; the core's typed summary
-            # (bool success, int counts) says what each one is, as a single env reports it.
-            summary = self.vector_env.core.episode_summaries([0])[0]
-            self._metric_types = {key: type(value) for key, value in summary.items()}
         self._reset_seeds()
         self._reset_options()
         return obs
@@ -136,11 +99,7 @@ class SB3VecEnv(VecEnv):
         if not self._started or self._actions is None:
             raise RuntimeError("SB3VecEnv: call reset() and step_async(actions) before step_wait()")
         actions, self._actions = self._actions, None
-        if (
-            actions.ndim == 2
-            and actions.shape[1] == 1
-            and isinstance(self.action_space, gym.spaces.Discrete)
-        ):
+        if actions.ndim == 2 and actions.shape[1] == 1 and isinstance(self.action_space, gym.spaces.Discrete):
             actions = actions[:, 0]  # SB3 gives (B, 1) discrete actions from some code paths
         obs, reward, terminated, truncated, info = self.vector_env.step(actions)
         dones = terminated | truncated
@@ -151,14 +110,14 @@ class SB3VecEnv(VecEnv):
         if len(ended):
             final_obs = info["final_obs"]
             metrics = info["final_info"]["metrics"]
+            # The vector env hands episode metrics over as float arrays; its metric_types (bool
+            # success, int counts) say what each one is, as a single env reports it.
+            types = getattr(self.vector_env, "metric_types", {})
             for row in ended.tolist():
                 infos[row] = {
                     "terminal_observation": final_obs[row],
                     "TimeLimit.truncated": bool(truncated[row] and not terminated[row]),
-                    "metrics": {
-                        key: self._metric_types.get(key, float)(values[row])
-                        for key, values in metrics.items()
-                    },
+                    "metrics": {key: types.get(key, float)(values[row]) for key, values in metrics.items()},
                 }
         return obs, reward.astype(np.float32), dones, infos
 

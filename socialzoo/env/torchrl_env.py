@@ -48,25 +48,18 @@ from typing import Any
 
 import numpy as np
 import torch
+from gymnasium import spaces
 from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore, StepResult
-from socialzoo.env.human_agents import human_observation_size
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
-from socialzoo.env.scenario_source import ScenarioStream
-from socialzoo.nav.maps import Map
-from socialzoo.nav.subpolicies import NUM_ACTIONS
+from socialzoo.env.tasks import task_class
+from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
+from socialzoo.env.tasks.base import Task, TaskStep
 
 ROBOT = "robot"
 HUMAN = "human"
-# Per-step info of the robots: StepResult.INFO_KEYS, as float32 (the PettingZooWrapper's dtype).
-ROBOT_INFO_KEYS = StepResult.INFO_KEYS
-# Per-step info of the learned humans: the ParallelEnv's "contact" and "present", then the other
-# reward terms of socialzoo.env.human_agents.HumanStep.
-HUMAN_INFO_KEYS = ("contact", "present", "wall_contact", "waypoint_reached", "speed_error")
 _DONE_KEYS = ("done", "terminated", "truncated")
 
 
@@ -126,14 +119,14 @@ class SocialNavTorchEnv(EnvBase):
 
     def __init__(
         self,
-        config: EnvConfig | None = None,
+        config: Any = None,
         *,
         batch_size: int = 1,
         robot_policy: Any = None,
         seed: int | None = None,
-        map_data: Map | None = None,
         device: str | torch.device = "cpu",
-        **overrides: Any,
+        task: Any = "action_selection",
+        **kwargs: Any,
     ) -> None:
         if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
             raise ValueError(f"SocialNavTorchEnv: batch_size must be an int >= 1, got {batch_size!r}")
@@ -142,21 +135,13 @@ class SocialNavTorchEnv(EnvBase):
                 f"SocialNavTorchEnv: robot_policy must have act(obs, core), got {type(robot_policy).__name__}"
             )
         super().__init__(device=device, batch_size=torch.Size([batch_size]))
-        self.config = EnvConfig.resolve(config, overrides)
-        cfg = self.config
-        self.core = SocialNavCore(cfg, batch_size, map_data=map_data)
-        num_poses = len(self.core.map.legal_poses)
-        if cfg.num_robots > 1 and num_poses < cfg.num_robots + 1:
-            raise ValueError(
-                f"num_robots={cfg.num_robots} needs at least {cfg.num_robots + 1} legal poses for distinct "
-                f"starts; map {self.core.map.name!r} has {num_poses}"
-            )
+        self.task: Task = task_class(task)(config, batch_size, **kwargs)
+        self.config = self.task.config
         self.robot_policy = robot_policy
-        self.num_robots = cfg.num_robots
-        self.num_humans = cfg.num_learned_humans
-        self.scenarios = ScenarioStream.for_config(self.core.map, batch_size, cfg)
+        self.num_robots = self.task.num_robots
+        self.num_humans = self.task.num_human_agents
         self.stream_seed: int | None = None
-        b, r = batch_size, cfg.num_robots
+        b, r = batch_size, self.num_robots
         # Agents still in their episode, per row: robots (B, R); humans leave with the episode (B,).
         self._robot_alive = np.zeros((b, r), dtype=bool)
         self._row_alive = np.zeros(b, dtype=bool)
@@ -171,9 +156,14 @@ class SocialNavTorchEnv(EnvBase):
             groups[HUMAN] = [f"human_{j}" for j in range(self.num_humans)]
         return groups
 
+    @property
+    def core(self) -> Any:
+        """The task's batched core."""
+        return self.task.core  # type: ignore[attr-defined]
+
     # ------------------------------------------------------------------ specs
     def _make_specs(self) -> None:
-        cfg = self.config
+        task = self.task
         b, r, h = self.batch_size[0], self.num_robots, self.num_humans
         obs = Composite(shape=(b,))
         action = Composite(shape=(b,))
@@ -189,24 +179,25 @@ class SocialNavTorchEnv(EnvBase):
             return Composite({k: Unbounded(shape=(b, n), dtype=torch.float32) for k in keys}, shape=(b, n))
 
         obs[ROBOT] = Composite(
-            observation=Unbounded(shape=(b, r, cfg.observation.size), dtype=torch.float32),
+            observation=Unbounded(shape=(b, r, *task.observation_space.shape), dtype=torch.float32),
             mask=Categorical(2, shape=(b, r), dtype=torch.bool),
-            info=info(ROBOT_INFO_KEYS, r),
+            info=info(task.info_keys, r),
             shape=(b, r),
         )
         reward[ROBOT] = Composite(reward=Unbounded(shape=(b, r, 1), dtype=torch.float32), shape=(b, r))
         done[ROBOT] = flags(r)
         if self.robot_policy is None:
-            if cfg.robot_action == "subpolicy":
-                robot_action: Any = Categorical(NUM_ACTIONS, shape=(b, r), dtype=torch.int64)
+            space = task.action_space
+            if isinstance(space, spaces.Discrete):
+                robot_action: Any = Categorical(int(space.n), shape=(b, r), dtype=torch.int64)
             else:
-                robot_action = Bounded(-1.0, 1.0, shape=(b, r, 2), dtype=torch.float32)
+                low, high = float(space.low.min()), float(space.high.max())  # type: ignore[attr-defined]
+                robot_action = Bounded(low, high, shape=(b, r, *space.shape), dtype=torch.float32)
             action[ROBOT] = Composite(action=robot_action, shape=(b, r))
         if h:
+            assert task.human_observation_space is not None
             obs[HUMAN] = Composite(
-                observation=Unbounded(
-                    shape=(b, h, human_observation_size(cfg.num_human_neighbours)), dtype=torch.float32
-                ),
+                observation=Unbounded(shape=(b, h, *task.human_observation_space.shape), dtype=torch.float32),
                 mask=Categorical(2, shape=(b, h), dtype=torch.bool),
                 info=info(HUMAN_INFO_KEYS, h),
                 shape=(b, h),
@@ -216,7 +207,7 @@ class SocialNavTorchEnv(EnvBase):
             )
             reward[HUMAN] = Composite(reward=Unbounded(shape=(b, h, 1), dtype=torch.float32), shape=(b, h))
             done[HUMAN] = flags(h)
-        state_size = STATE_ROBOT_SIZE * r + STATE_HUMAN_SIZE * cfg.max_humans
+        state_size = STATE_ROBOT_SIZE * r + STATE_HUMAN_SIZE * task.num_human_slots
         obs["state"] = Unbounded(shape=(b, state_size), dtype=torch.float32)
         for k in _DONE_KEYS:
             done[k] = Categorical(2, shape=(b, 1), dtype=torch.bool)
@@ -229,7 +220,7 @@ class SocialNavTorchEnv(EnvBase):
     def _set_seed(self, seed: int | None) -> None:
         if seed is None:
             seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
-        self.scenarios.seed(seed)
+        self.task.seed(seed)
         self.stream_seed = seed
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
@@ -239,27 +230,29 @@ class SocialNavTorchEnv(EnvBase):
             rows = np.arange(b)
         else:
             rows = np.flatnonzero(reset.reshape(b, -1).any(-1).cpu().numpy())
+        task = self.task
         if len(rows):
-            self.core.reset_rows(rows, self.scenarios.next(rows))
+            task.reset(rows, {})
             self._robot_alive[rows] = True
             self._row_alive[rows] = True
-        core = self.core
-        assert core.state is not None
         zeros_r = np.zeros((b, self.num_robots), dtype=bool)
         out: dict[str, Any] = {
             ROBOT: {
-                "observation": np.where(self._robot_alive[..., None], core.obs, 0.0).astype(np.float32),
+                "observation": np.where(self._robot_alive[..., None], task.observations(), 0.0).astype(
+                    np.float32
+                ),
                 "mask": self._robot_alive.copy(),
                 "info": self._robot_info(None),
                 **self._flags(zeros_r, zeros_r, zeros_r),
             },
-            "state": global_state(core.state),
+            "state": global_state(task.world_state),
         }
         if self.num_humans:
-            assert core.human_obs is not None
+            human_obs = task.human_observations()
+            assert human_obs is not None
             zeros_h = np.zeros((b, self.num_humans), dtype=bool)
             out[HUMAN] = {
-                "observation": core.human_obs.copy(),
+                "observation": human_obs.copy(),
                 "mask": self._human_mask(),
                 "info": self._human_info(None),
                 **self._flags(zeros_h, zeros_h, zeros_h),
@@ -270,54 +263,51 @@ class SocialNavTorchEnv(EnvBase):
 
     # ------------------------------------------------------------------ step
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        core = self.core
-        cfg = self.config
+        task = self.task
         b, r, h = self.batch_size[0], self.num_robots, self.num_humans
+        shape = (b, r) + tuple(task.action_space.shape or ())
         if self.robot_policy is not None:
-            robot_action = np.asarray(self.robot_policy.act(core.obs, core)).reshape(b, r)
+            robot_action = np.asarray(self.robot_policy.act(task.observations(), self.core)).reshape(shape)
         else:
-            robot_action = tensordict.get((ROBOT, "action")).detach().cpu().numpy()
-            if cfg.robot_action == "subpolicy":
-                robot_action = robot_action.reshape(b, r)
+            robot_action = tensordict.get((ROBOT, "action")).detach().cpu().numpy().reshape(shape)
         human_action = None
         if h:
             human_action = tensordict.get((HUMAN, "action")).detach().cpu().numpy().astype(np.float64)
         robot_was = self._robot_alive.copy()
         row_was = self._row_alive.copy()
-        result = core.step(robot_action, human_action)
-        assert core.state is not None
+        step = task.step(robot_action, human_action)
 
-        robot_term = result.terminated & robot_was
-        robot_trunc = result.truncated & robot_was
+        robot_term = step.terminated & robot_was
+        robot_trunc = step.truncated & robot_was
         leaving = robot_term | robot_trunc
         self._robot_alive = robot_was & ~leaving
         ended = row_was & ~self._robot_alive.any(axis=1)
         self._row_alive = row_was & ~ended
-        out_of_time = core.state.step_count >= cfg.max_steps
         dead_r = ~robot_was
         out: dict[str, Any] = {
             ROBOT: {
-                "observation": np.where(robot_was[..., None], core.obs, 0.0).astype(np.float32),
-                "reward": np.where(robot_was, result.reward, 0.0)[..., None].astype(np.float32),
+                "observation": np.where(robot_was[..., None], task.observations(), 0.0).astype(np.float32),
+                "reward": np.where(robot_was, step.reward, 0.0)[..., None].astype(np.float32),
                 "mask": self._robot_alive.copy(),
-                "info": self._robot_info(result, robot_was),
+                "info": self._robot_info(step, robot_was),
                 **self._flags(leaving | dead_r, robot_term | dead_r, robot_trunc | dead_r),
             },
-            "state": global_state(core.state),
+            "state": global_state(task.world_state),
         }
         all_done = out[ROBOT]["done"].all(axis=(1, 2))
         all_term = out[ROBOT]["terminated"].all(axis=(1, 2))
         all_trunc = out[ROBOT]["truncated"].all(axis=(1, 2))
         if h:
-            assert core.human_obs is not None and result.human is not None
+            human_obs = task.human_observations()
+            assert human_obs is not None and step.human_reward is not None
             live = row_was[:, None].repeat(h, axis=1)
-            trunc = live & (out_of_time | ended)[:, None]
+            trunc = live & (step.time_up | ended)[:, None]
             dead_h = ~live
             out[HUMAN] = {
-                "observation": np.where(live[..., None], core.human_obs, 0.0).astype(np.float32),
-                "reward": np.where(live, result.human.reward, 0.0)[..., None].astype(np.float32),
+                "observation": np.where(live[..., None], human_obs, 0.0).astype(np.float32),
+                "reward": np.where(live, step.human_reward, 0.0)[..., None].astype(np.float32),
                 "mask": self._human_mask(),
-                "info": self._human_info(result, live),
+                "info": self._human_info(step, live),
                 **self._flags(trunc | dead_h, dead_h, trunc | dead_h),
             }
             all_done &= out[HUMAN]["done"].all(axis=(1, 2))
@@ -331,8 +321,7 @@ class SocialNavTorchEnv(EnvBase):
     # ------------------------------------------------------------------ pieces
     def _human_mask(self) -> np.ndarray:
         """(B, L) learned humans that act: present in the scenario and their episode running."""
-        assert self.core.state is not None
-        return self.core.state.human_mask[:, self.core.learned] & self._row_alive[:, None]
+        return self.task.human_present() & self._row_alive[:, None]
 
     @staticmethod
     def _flags(done: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> dict[str, np.ndarray]:
@@ -342,30 +331,22 @@ class SocialNavTorchEnv(EnvBase):
             "truncated": truncated[..., None],
         }
 
-    def _robot_info(self, result: StepResult | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    def _robot_info(self, step: TaskStep | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
         b, r = self.batch_size[0], self.num_robots
-        if result is None:
-            neutral = StepResult.initial_info()
-            return {k: np.full((b, r), float(neutral[k]), dtype=np.float32) for k in ROBOT_INFO_KEYS}
+        keys = self.task.info_keys
+        if step is None:
+            neutral = self.task.initial_info()
+            return {k: np.full((b, r), float(neutral.get(k, 0.0)), dtype=np.float32) for k in keys}
         assert live is not None
-        return {k: np.where(live, getattr(result, k), 0.0).astype(np.float32) for k in ROBOT_INFO_KEYS}
+        return {k: np.where(live, step.info[k], 0.0).astype(np.float32) for k in keys}
 
-    def _human_info(self, result: StepResult | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
-        assert self.core.state is not None
-        present = self.core.state.human_mask[:, self.core.learned]
-        if result is None or result.human is None:
+    def _human_info(self, step: TaskStep | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        present = self.task.human_present()
+        if step is None or step.human_info is None:
             zeros = np.zeros(present.shape, dtype=np.float32)
             return {k: (present.astype(np.float32) if k == "present" else zeros) for k in HUMAN_INFO_KEYS}
         assert live is not None
-        step = result.human
-        values = {
-            "contact": step.contact,
-            "present": present,
-            "wall_contact": step.wall_contact,
-            "waypoint_reached": step.waypoint_reached,
-            "speed_error": step.speed_error,
-        }
-        return {k: np.where(live, values[k], 0.0).astype(np.float32) for k in HUMAN_INFO_KEYS}
+        return {k: np.where(live, step.human_info[k], 0.0).astype(np.float32) for k in HUMAN_INFO_KEYS}
 
     def _to_tensordict(self, data: dict[str, Any]) -> TensorDictBase:
         b = self.batch_size[0]

@@ -1,129 +1,118 @@
-"""The single-robot benchmark as a batched TorchRL environment (EnvBase) over the core.
+"""The TorchRL env of any one-robot task: B rows of a Task as one batched EnvBase.
 
-B rows of the Social Action Selection benchmark stepped by one SocialNavCore, with TorchRL's own
-conventions: a (B,) batch, "observation", "action", ("next", "reward"), done / terminated /
-truncated kept apart, and partial resets through the "_reset" mask (no auto-reset inside a step,
-so ("next", "observation") is always the true last observation of an episode). Row i plays the
-same scenarios as row i of the Gymnasium VectorEnv seeded alike.
+TorchRL's own conventions: a (B,) batch, "observation" (B, D) float32, "action" (one-hot (B, n) or
+integer indices (B,) for a discrete task with categorical_action_encoding=True; (B, ...) floats
+for a Box), ("next", "reward") (B, 1) float32, done / terminated / truncated kept apart, a
+"success" flag on the last step of a successful episode, and partial resets through the "_reset"
+mask (no autoreset inside a step, so ("next", "observation") is always the true last observation
+of an episode). Row i plays the same episodes as row i of the task's TaskVectorEnv seeded alike.
+Observations are copied into their tensors (the core rewrites reset rows of its arrays in place).
+The multi-agent view (robots and learned humans in groups) is socialzoo.env.torchrl_env.
 
 Imported lazily: TorchRL and torch are optional dependencies (the "train" extra).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
-from tensordict import TensorDictBase
-from torchrl.data import Categorical, Composite, OneHot, Unbounded
+from gymnasium import spaces
+from tensordict import TensorDict, TensorDictBase
+from torchrl.data import Bounded, Categorical, Composite, OneHot, Unbounded
 from torchrl.envs import EnvBase
 
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
-from socialzoo.env.scenario_source import ScenarioStream
-from socialzoo.env.torchrl_common import step_tensordict
-from socialzoo.nav.maps import Map
-from socialzoo.nav.subpolicies import NUM_ACTIONS
+from socialzoo.env.gym_env import one_robot
+from socialzoo.env.tasks import task_class
+from socialzoo.env.tasks.base import batch_actions
 
 
-def _num_learned_humans(config: EnvConfig) -> int:
-    # The field is being renamed (learned_humans -> num_learned_humans); accept either spelling.
-    return int(getattr(config, "num_learned_humans", getattr(config, "learned_humans", 0)))
+class TaskTorchEnv(EnvBase):
+    """B rows of a one-robot task as a batched TorchRL EnvBase (see the module docstring).
 
+    Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does.
 
-class ActionSelectionTorchEnv(EnvBase):
-    """Social Action Selection (one robot, Discrete(4) sub-policies) as a batched TorchRL env.
-
-    ## Description
-    B rows of the benchmark stepped by one `SocialNavCore`, with TorchRL's conventions: batch
-    size (B,), partial resets through the "_reset" mask, no autoreset inside a step.
-
-    ## Action Space
-    "action": (B, 4) one-hot (or (B,) int64 with categorical_action_encoding=True), 0 GoAlone,
-    1 Halt, 2 Follow, 3 Pass.
-
-    ## Observation Space
-    "observation": (B, D) float32, the env's observation layout (D = 107 for the paper layout;
-    see `ActionSelectionEnv`).
-
-    ## Rewards
-    ("next", "reward"): (B, 1) float32, the benchmark reward (see `ActionSelectionEnv`).
-
-    ## Starting State
-    As `ActionSelectionEnv`: each row starts on the next scenario of its seeded stream.
-
-    ## Episode End
-    "done", "terminated" (goal reached or wall collision), "truncated" (time limit), each (B, 1)
-    bool; "success" (B, 1) bool, True on the last step of an episode that the benchmark counts as
-    a success (goal reached, no human or wall collision).
-
-    Seeding: `set_seed(s)` seeds the rows' scenario streams as ActionSelectionVectorEnv.reset(seed=s)
-    does; each row runs a scenario config.scenario.repeats times before drawing the next.
-
-    ## Arguments
     Args:
         num_envs: B.
-        config: an EnvConfig (default: the benchmark on gdc1); num_robots must be 1.
-        map_data: an already loaded Map instead of config.map.
-        categorical_action_encoding: actions as integer indices instead of one-hot vectors.
+        config: the task's config object (None: its defaults).
+        task: the task's registry name, "module:Class" path or class (default: `default_task`).
+        categorical_action_encoding: discrete actions as integer indices instead of one-hot.
         device: torch device of the tensors (the simulation itself runs in numpy).
-        **overrides: EnvConfig fields as plain values, e.g. map="ghc3", scenario={"repeats": 20}.
+        **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
 
     Raises:
-        ValueError: a config with several robots, learned humans or velocity actions.
-
-    ## Version History
-    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
-      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
-      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-    - v0: initial release.
+        ValueError: a bad batch size, a task with several robots or learned humans, or an
+            observation that is not one Box (CrowdNav: observation="flat").
     """
+
+    default_task: ClassVar[str | None] = None
 
     def __init__(
         self,
         num_envs: int,
-        config: EnvConfig | None = None,
-        map_data: Map | None = None,
+        config: Any = None,
+        *,
+        task: Any = None,
         categorical_action_encoding: bool = False,
         device: str | torch.device = "cpu",
-        **overrides: Any,
+        **kwargs: Any,
     ) -> None:
+        name = type(self).__name__
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
-            raise ValueError(f"ActionSelectionTorchEnv: num_envs must be an int >= 1, got {num_envs!r}")
-        base = config if config is not None else EnvConfig()
-        self.config = base.replace(**overrides) if overrides else base
-        if self.config.num_robots != 1 or _num_learned_humans(self.config):
-            raise ValueError("ActionSelectionTorchEnv needs num_robots=1 and no learned humans")
-        if self.config.robot_action != "subpolicy":
+            raise ValueError(f"{name}: num_envs must be an int >= 1, got {num_envs!r}")
+        chosen = task if task is not None else self.default_task
+        if chosen is None:
+            raise ValueError(f"{name}: name a task (task='action_selection', 'crowdnav', ...)")
+        self.task = one_robot(task_class(chosen)(config, num_envs, **kwargs), name)
+        self.config = self.task.config
+        if not isinstance(self.task.observation_space, spaces.Box):
             raise ValueError(
-                f"ActionSelectionTorchEnv needs robot_action='subpolicy', got {self.config.robot_action!r}"
+                f"{name}: the task's observation must be one Box, got {self.task.observation_space}"
             )
         super().__init__(device=device, batch_size=torch.Size([num_envs]))
         self.num_envs = num_envs
         self.categorical_action_encoding = categorical_action_encoding
-        self.core = SocialNavCore(self.config, num_envs, map_data=map_data)
-        self.scenarios = ScenarioStream(self.core.map, num_envs, 1, self.config.scenario, self.config.family)
         self._started = False
-        b, d = num_envs, self.config.observation.size
+        b = num_envs
         flag = Categorical(2, shape=(b, 1), dtype=torch.bool, device=self.device)
         self.observation_spec = Composite(
-            observation=Unbounded((b, d), dtype=torch.float32, device=self.device),
+            observation=Unbounded(
+                (b, *self.task.observation_space.shape), dtype=torch.float32, device=self.device
+            ),
             success=flag.clone(),
             shape=(b,),
         )
-        if categorical_action_encoding:
-            self.action_spec = Categorical(NUM_ACTIONS, shape=(b,), device=self.device)
+        space = self.task.action_space
+        if isinstance(space, spaces.Discrete):
+            n = int(space.n)
+            self.action_spec = (
+                Categorical(n, shape=(b,), device=self.device)
+                if categorical_action_encoding
+                else OneHot(n, shape=(b, n), device=self.device)
+            )
         else:
-            self.action_spec = OneHot(NUM_ACTIONS, shape=(b, NUM_ACTIONS), device=self.device)
+            assert isinstance(space, spaces.Box)
+            self.action_spec = Bounded(
+                float(space.low.min()),
+                float(space.high.max()),
+                shape=(b, *space.shape),
+                dtype=torch.float32,
+                device=self.device,
+            )
         self.reward_spec = Unbounded((b, 1), dtype=torch.float32, device=self.device)
         self.done_spec = Composite(
             done=flag.clone(), terminated=flag.clone(), truncated=flag.clone(), shape=(b,)
         )
 
+    @property
+    def core(self) -> Any:
+        """The task's batched core."""
+        return self.task.core  # type: ignore[attr-defined]
+
     # ------------------------------------------------------------------ TorchRL hooks
     def _set_seed(self, seed: int | None) -> None:
-        self.scenarios.seed(seed)
+        self.task.seed(seed)
         self._started = False
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
@@ -131,25 +120,67 @@ class ActionSelectionTorchEnv(EnvBase):
         mask = tensordict.get("_reset", None) if tensordict is not None else None
         if mask is not None and self._started:
             rows = np.flatnonzero(mask.reshape(self.num_envs).cpu().numpy())
-        self.core.reset_rows(rows, self.scenarios.next(rows))
+        self.task.reset(rows, {})
         self._started = True
-        return step_tensordict(self._obs(), self.batch_size, self.device)
+        return self._tensordict()
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         action = tensordict.get("action")
-        if not self.categorical_action_encoding:
+        space = self.task.action_space
+        if isinstance(space, spaces.Discrete) and not self.categorical_action_encoding:
             action = action.to(torch.float32).argmax(-1)
-        actions = action.reshape(self.num_envs, 1).cpu().numpy().astype(np.int64)
-        result = self.core.step(actions)
-        terminated = result.terminated[:, 0]
-        truncated = result.truncated[:, 0]
+        values = action.reshape(self.num_envs, *space.shape).cpu().numpy()
+        if isinstance(space, spaces.Discrete):
+            values = values.astype(np.int64)
+        actions = batch_actions(space, values, (self.num_envs,), type(self).__name__)
+        step = self.task.step(actions.reshape((self.num_envs, 1) + tuple(space.shape or ())))
+        terminated = step.terminated[:, 0]
+        truncated = step.truncated[:, 0]
         ended = np.flatnonzero(terminated | truncated)
         success = np.zeros(self.num_envs, dtype=bool)
         if len(ended):
-            success[ended] = [bool(s["success"]) for s in self.core.episode_summaries(ended)]
-        return step_tensordict(
-            self._obs(), self.batch_size, self.device, result.reward[:, 0], success, terminated, truncated
-        )
+            success[ended] = [bool(s["success"]) for s in self.task.episode_metrics(ended)]
+        return self._tensordict(step.reward[:, 0], success, terminated, truncated)
 
-    def _obs(self) -> torch.Tensor:
-        return torch.as_tensor(self.core.obs[:, 0].copy(), device=self.device)
+    def _tensordict(
+        self,
+        reward: np.ndarray | None = None,
+        success: np.ndarray | None = None,
+        terminated: np.ndarray | None = None,
+        truncated: np.ndarray | None = None,
+    ) -> TensorDictBase:
+        """The tensordict of the rows: "observation" (a copy), "success", "done", "terminated",
+        "truncated" as (B, 1) flags (all False when not given, as after a reset) and "reward"
+        (B, 1) float32 when given."""
+        b, device = self.num_envs, self.device
+
+        def column(values: np.ndarray | None, dtype: torch.dtype = torch.bool) -> torch.Tensor:
+            if values is None:
+                return torch.zeros((b, 1), dtype=dtype, device=device)
+            return torch.tensor(np.ascontiguousarray(values), dtype=dtype, device=device).reshape(b, 1)
+
+        no_end = np.zeros(b, dtype=bool)
+        term = no_end if terminated is None else terminated
+        trunc = no_end if truncated is None else truncated
+        data = {
+            "observation": torch.tensor(np.asarray(self.task.observations()[:, 0]), device=device),
+            "success": column(success),
+            "done": column(term | trunc),
+            "terminated": column(term),
+            "truncated": column(trunc),
+        }
+        if reward is not None:
+            data["reward"] = column(np.asarray(reward, dtype=np.float32), torch.float32)
+        return TensorDict(data, batch_size=self.batch_size, device=device)
+
+
+class ActionSelectionTorchEnv(TaskTorchEnv):
+    """The Social Action Selection task as a batched TorchRL env (socialzoo.env.tasks.action_selection)."""
+
+    default_task = "action_selection"
+
+
+class CrowdNavTorchEnv(TaskTorchEnv):
+    """The CrowdNav task as a batched TorchRL env (socialzoo.env.tasks.crowdnav; flat observation)."""
+
+    default_task = "crowdnav"

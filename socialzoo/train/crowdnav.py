@@ -209,8 +209,8 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from socialzoo.env.crowd_env import CrowdNavVectorEnv
     from socialzoo.env.sb3_vec import SB3VecEnv
+    from socialzoo.env.vector import CrowdNavVectorEnv
     from socialzoo.train.crowd_attention import CrowdAttentionExtractor
     from socialzoo.train.sb3_common import learn_with_checkpoints
 

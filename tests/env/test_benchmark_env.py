@@ -6,7 +6,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import socialzoo  # noqa: F401  (registers the ids)
-from socialzoo.env.benchmark_env import ActionSelectionEnv
+from socialzoo.env.gym_env import ActionSelectionEnv
 from socialzoo.env.registration import BENCHMARK_IDS, FAMILY_IDS
 from socialzoo.env.vector import ActionSelectionVectorEnv
 

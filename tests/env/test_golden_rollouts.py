@@ -4,7 +4,12 @@ The digests (tests/env/golden_rollouts.json) come from tools/rollout_digests.py,
 task-interface refactor (commit 87ad9b0); a change that moves a seeded rollout on purpose bumps the
 ids' version and records the digests again (`python tools/rollout_digests.py --out
 tests/env/golden_rollouts.json`). Each case keeps the digests of its observations, rewards, end
-flags and infos apart, so a failure says which part moved.
+flags and infos apart, so a failure says which part moved. The one adapter per ecosystem changed
+infos only, and their digests were recorded again then (observations, rewards and flags of every
+case unchanged): CrowdNav's VectorEnv and ParallelEnv report the task's per-step "closest", its
+final_info metrics are zeros outside the ended rows (as the benchmark's were, not NaN) and its
+final_obs zeros outside them; the benchmark's VectorEnv final_info also carries the people's
+metrics (group intrusions, counterfactual costs) that the single env reports.
 """
 
 from __future__ import annotations

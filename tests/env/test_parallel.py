@@ -173,7 +173,7 @@ def test_unseeded_first_reset_is_recorded_and_replayable():
     again, _ = make(num_robots=2).reset(seed=env.stream_seed)
     assert same(obs, again)
     replay = make(num_robots=2)
-    replayed, _ = replay.reset(seed=999, options={"scenario": env.scenario})
+    replayed, _ = replay.reset(seed=999, options={"scenario": env.core.scenarios[0]})
     assert same(obs, replayed)
     with pytest.raises(TypeError, match="Scenario"):
         replay.reset(options={"scenario": "gdc1-0"})
@@ -181,7 +181,7 @@ def test_unseeded_first_reset_is_recorded_and_replayable():
 
 def test_one_robot_plays_the_single_agent_episode():
     """One world, one copy of the dynamics: R = 1 equals ActionSelectionEnv seed for seed."""
-    from socialzoo.env.benchmark_env import ActionSelectionEnv
+    from socialzoo.env.gym_env import ActionSelectionEnv
 
     single = ActionSelectionEnv(map="open_room", map_data=room(), **FAST)
     multi = make()

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from socialzoo.env.benchmark_env import ActionSelectionEnv
+from socialzoo.env.gym_env import ActionSelectionEnv
 from socialzoo.env.rendering import CoreRenderer
 from socialzoo.nav.subpolicies import ACTION_NAMES
 

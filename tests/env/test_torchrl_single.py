@@ -9,7 +9,7 @@ pytest.importorskip("torchrl")
 
 from torchrl.envs.utils import check_env_specs, step_mdp  # noqa: E402
 
-from socialzoo.env.torchrl_single import ActionSelectionTorchEnv  # noqa: E402
+from socialzoo.env.torchrl_single import ActionSelectionTorchEnv, CrowdNavTorchEnv  # noqa: E402
 from socialzoo.env.vector import ActionSelectionVectorEnv  # noqa: E402
 
 
@@ -84,9 +84,17 @@ def test_scenarios_repeat_as_configured():
 
 
 def test_configs_it_cannot_serve_are_refused():
-    with pytest.raises(ValueError, match="num_robots=1"):
+    with pytest.raises(ValueError, match="num_robots=2"):
         ActionSelectionTorchEnv(1, num_robots=2)
-    with pytest.raises(ValueError, match="subpolicy"):
-        ActionSelectionTorchEnv(1, robot_action="velocity")
     with pytest.raises(ValueError, match="num_envs"):
         ActionSelectionTorchEnv(0)
+    with pytest.raises(ValueError, match="one Box"):
+        CrowdNavTorchEnv(1, observation="dict")
+
+
+def test_velocity_actions_are_a_bounded_box_that_passes_the_spec_check():
+    from torchrl.envs.utils import check_env_specs
+
+    env = ActionSelectionTorchEnv(2, robot_action="velocity", max_steps=10)
+    assert tuple(env.action_spec.shape) == (2, 2)
+    check_env_specs(env, seed=0)

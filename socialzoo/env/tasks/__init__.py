@@ -1,0 +1,60 @@
+"""Robot tasks on the batched core, by name: each task is one class (socialzoo.env.tasks.base.Task).
+
+    from socialzoo.env.tasks import make_task
+    task = make_task("crowdnav", batch_size=8, variant="Square")
+
+A task is named by its registry name ("action_selection", "crowdnav"), by a "module:Class" path
+(how a registered Gymnasium id names a task defined outside the package), or given as its class.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from socialzoo.env.tasks.base import Task
+
+# Registry name -> "module:Class" of the task.
+TASKS: dict[str, str] = {
+    "action_selection": "socialzoo.env.tasks.action_selection:ActionSelectionTask",
+    "crowdnav": "socialzoo.env.tasks.crowdnav:CrowdNavTask",
+}
+
+
+def task_class(task: str | type[Task]) -> type[Task]:
+    """The Task class of a registry name, a "module:Class" path, or a class.
+
+    Raises:
+        ValueError: an unknown name or a path that names no Task class.
+    """
+    from socialzoo.env.tasks.base import Task
+
+    if isinstance(task, type):
+        if not issubclass(task, Task):
+            raise ValueError(f"task must be a Task subclass, got {task.__name__}")
+        return task
+    if not isinstance(task, str):
+        raise ValueError(f"task must be a task name, a 'module:Class' path or a Task class, got {task!r}")
+    path = TASKS.get(task, task)
+    if ":" not in path:
+        raise ValueError(f"unknown task {task!r}; known tasks: {sorted(TASKS)} (or a 'module:Class' path)")
+    module, _, name = path.partition(":")
+    try:
+        found = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as err:
+        raise ValueError(f"task {task!r}: cannot load {path!r} ({err})") from None
+    if not (isinstance(found, type) and issubclass(found, Task)):
+        raise ValueError(f"task {task!r}: {path!r} is not a Task class")
+    return found
+
+
+def make_task(task: str | type[Task], batch_size: int = 1, config: Any = None, **kwargs: Any) -> Task:
+    """A task of B = batch_size rows: `config` (the task's config class) with plain overrides.
+
+    Raises:
+        ValueError: an unknown task, a bad batch size, or a bad config field (naming it).
+    """
+    if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
+        raise ValueError(f"batch_size must be an int >= 1, got {batch_size!r}")
+    return task_class(task)(config, batch_size, **kwargs)

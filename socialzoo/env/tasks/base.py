@@ -1,0 +1,236 @@
+"""The task interface: what makes one robot task differ from another, over B worlds of R robots.
+
+A task owns its config, its action space and how an action becomes the robot's command, the
+observation, the reward and the episode's end (terminated, truncated, per-episode metrics), and
+where its episodes come from (a seeded training stream per row, fixed validation and test cases).
+Every adapter (socialzoo.env.gym_env, vector, parallel, sb3_vec) steps a Task and nothing else,
+so a new task is one class in one file plus one registration line (docs/architecture.md).
+
+Arrays are batched: (B, R) per robot, (B, L) per learned-human agent, rows independent.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+
+
+@dataclass(frozen=True)
+class TaskStep:
+    """One step of every robot (and learned-human agent) of the batch.
+
+    Attributes:
+        reward: (B, R) float64 rewards; 0 for robots whose episode had already ended.
+        terminated: (B, R) bool, the episode ended this step (goal, collision, ...).
+        truncated: (B, R) bool, the time limit ended the episode this step.
+        info: per-step info of each robot, key -> (B, R) array (Task.info_keys, in that order).
+        time_up: (B,) bool, the row's time limit has passed (learned-human agents leave).
+        human_reward: (B, L) float64 rewards of the learned-human agents, or None.
+        human_info: per-step info of each learned-human agent, key -> (B, L), or None.
+    """
+
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    info: dict[str, np.ndarray]
+    time_up: np.ndarray
+    human_reward: np.ndarray | None = None
+    human_info: dict[str, np.ndarray] | None = field(default=None)
+
+
+class Task(ABC):
+    """A robot task over B worlds with R robots each (see the module docstring).
+
+    Subclasses set `name`, build their config from `config` and plain-value `overrides` (what a
+    registered id's kwargs hold), and set `config`, `batch_size`, `num_robots`,
+    `observation_space` and `action_space` (one robot's) in `__init__`.
+
+    Class attributes:
+        name: the task's registry name (socialzoo.env.tasks.TASKS).
+        render_modes: the render modes the task can draw ("rgb_array", "human").
+        render_fps: frames per second of one step.
+        num_human_slots: H, person slots of each world (the global state's).
+        num_human_agents: L, human slots driven by learners (agents "human_0" ..); 0 for most tasks.
+        reset_info_key: the key of the reset info holding each row's scenario seed.
+    """
+
+    name: ClassVar[str]
+    render_modes: ClassVar[tuple[str, ...]] = ()
+    render_fps: ClassVar[int] = 4
+    reset_info_key: ClassVar[str] = "scenario_seed"
+
+    config: Any
+    batch_size: int
+    num_robots: int
+    observation_space: spaces.Space
+    action_space: spaces.Space
+    num_human_slots: int
+    num_human_agents: int = 0
+    human_observation_space: spaces.Space | None = None
+    human_action_space: spaces.Space | None = None
+
+    # ------------------------------------------------------------------ episodes
+    @abstractmethod
+    def seed(self, seed: int | None) -> None:
+        """Reseed every row's training stream (row i of any batch plays the same episodes)."""
+
+    @abstractmethod
+    def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
+        """Start new episodes in `rows`; returns each reset row's scenario seed (len(rows),).
+
+        `options` are the adapter's reset options less its own: the task reads those it knows
+        (fixed cases, a scenario to replay) and ignores any other, as Gymnasium's and
+        PettingZoo's envs may (PettingZoo's API test passes one).
+        """
+
+    @abstractmethod
+    def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
+        """Advance every row one step with (B, R, *action_space.shape) robot actions (and
+        (B, L, 2) learned-human actions). Robots whose episode ended stand still; their reward
+        is 0 until their row is reset.
+
+        Raises:
+            ValueError: an action outside its space, naming the value and its robot, before any
+                state changes.
+        """
+
+    @abstractmethod
+    def observations(self) -> Any:
+        """Every robot's current observation: (B, R, ...) array, or a dict of such arrays."""
+
+    @abstractmethod
+    def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
+        """The episode metrics of robot `robot` in each of `rows` (its episode so far, or the
+        one that just ended)."""
+
+    # ------------------------------------------------------------------ per-robot info
+    @property
+    @abstractmethod
+    def info_keys(self) -> tuple[str, ...]:
+        """The per-step info keys of a robot (TaskStep.info)."""
+
+    def initial_info(self) -> dict[str, Any]:
+        """A robot's info at reset: info_keys with neutral values."""
+        return {}
+
+    def robot_info(self, step: TaskStep, row: int, robot: int) -> dict[str, Any]:
+        """The per-step info dict of one robot: plain Python values under info_keys."""
+        return {key: plain(step.info[key][row, robot]) for key in self.info_keys}
+
+    def action_name(self, row: int = 0, robot: int = 0) -> str | None:
+        """A name for the action robot `robot` of `row` took last (for infos and frames), or None."""
+        return None
+
+    def idle_action(self) -> Any:
+        """The action given for robots that already left (the task halts them anyway)."""
+        return np.zeros(self.action_space.shape, dtype=np.float64)
+
+    # ------------------------------------------------------------------ learned-human agents
+    def human_observations(self) -> np.ndarray | None:
+        """(B, L, D_h) float32 observations of the learned-human agents, or None without them."""
+        return None
+
+    def human_present(self) -> np.ndarray:
+        """(B, L) bool: the scenario has a person in each learned-human slot."""
+        return np.zeros((self.batch_size, 0), dtype=bool)
+
+    # ------------------------------------------------------------------ world view
+    @property
+    @abstractmethod
+    def world_state(self) -> Any:
+        """The batched WorldState (socialzoo.core.state) of the worlds the task steps."""
+
+    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
+        """A renderer with `render(row=0)` and `close()` for one of `render_modes`."""
+        raise ValueError(f"task {self.name!r} cannot render (render_modes {self.render_modes})")
+
+    @classmethod
+    def check_render_mode(cls, render_mode: str | None) -> None:
+        """Refuse a render mode the task cannot draw, naming the ones it can."""
+        if render_mode is not None and render_mode not in cls.render_modes:
+            raise ValueError(
+                f"render_mode must be None or one of {list(cls.render_modes)} for task {cls.name!r}, "
+                f"got {render_mode!r}"
+            )
+
+
+def plain(value: Any) -> Any:
+    """A numpy scalar as the Python value of its kind (bool, int or float)."""
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    return float(value)
+
+
+def discrete_action(value: Any, n: int, who: str) -> int:
+    """One index of Discrete(n) from an int-like value; anything else raises naming `who`."""
+    array = np.asarray(value)
+    ok = array.size == 1 and (
+        np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
+    )
+    if ok:
+        scalar = array.reshape(()).item()
+        ok = bool(np.isfinite(scalar)) and int(scalar) == scalar and 0 <= int(scalar) < n
+    if not ok:
+        raise ValueError(f"{who}: action must be one integer in 0..{n - 1}, got {value!r}")
+    return int(scalar)
+
+
+def box_action(value: Any, space: spaces.Box, who: str) -> np.ndarray:
+    """A float64 action of a Box space; anything else raises naming `who`."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        array = None
+    if (
+        array is None
+        or array.shape != space.shape
+        or not np.isfinite(array).all()
+        or (array < space.low).any()
+        or (array > space.high).any()
+    ):
+        raise ValueError(
+            f"{who}: action must be {space.shape} finite numbers in [{space.low.min()}, {space.high.max()}], "
+            f"got {value!r}"
+        )
+    return array
+
+
+def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
+    """`value` checked against one agent's `space` (Discrete or Box), raising naming `who`."""
+    if isinstance(space, spaces.Discrete):
+        return discrete_action(value, int(space.n), who)
+    if isinstance(space, spaces.Box):
+        return box_action(value, space, who)
+    raise TypeError(f"{who}: no action check for space {space}")
+
+
+def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who: str) -> np.ndarray:
+    """A batch of actions of `space` with leading shape `batch` (int64 indices for Discrete,
+    float64 for Box); integral floats count as indices. Raises naming the first bad entry."""
+    array = np.asarray(values)
+    shape = batch + tuple(space.shape or ())
+    if isinstance(space, spaces.Discrete):
+        if array.shape != shape or not (
+            np.issubdtype(array.dtype, np.integer)
+            or (
+                np.issubdtype(array.dtype, np.floating)
+                and np.isfinite(array).all()
+                and (array == np.round(array)).all()
+            )
+        ):
+            raise ValueError(f"{who}: actions must be {shape} integers, got {values!r}")
+        array = array.astype(np.int64)
+        bad = np.argwhere((array < 0) | (array >= space.n))
+        if len(bad):
+            where = tuple(int(i) for i in bad[0])
+            raise ValueError(f"{who}: action {int(array[where])} at {where} is not in 0..{int(space.n) - 1}")
+        return array
+    if array.shape != shape:
+        raise ValueError(f"{who}: actions must have shape {shape}, got {array.shape}")
+    return array.astype(np.float64)

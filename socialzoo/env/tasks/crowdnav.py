@@ -1,0 +1,187 @@
+"""The CrowdNav velocity task (Chen et al. 2019, vita-epfl/CrowdNav) and its variants on the batched
+core, with CrowdNav's settings as the defaults (socialzoo.env.crowd_config.CrowdNavConfig).
+
+A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
+or a building among the benchmark's people (the Walls variant), judged as CrowdNav judges it
+(socialzoo.env.crowd_outcome). Training episodes are CrowdNav's training cases drawn per row;
+`reset` options {"split": "val"|"test", "case": k} or {"cases": [...]} play fixed cases.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+
+from socialzoo.core.state import WorldState
+from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
+from socialzoo.env.crowd_core import CrowdNavCore
+from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size
+from socialzoo.env.crowd_source import CrowdCaseSource
+from socialzoo.env.tasks.base import Task, TaskStep
+from socialzoo.nav.crowd_cases import SPLITS
+
+# The per-step info of a robot: its closest approach to anyone during the step, m (negative: overlap).
+INFO_KEYS = ("closest",)
+
+
+def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdNavConfig:
+    """The config of `config` (default CrowdNav's) with plain overrides; `variant=NAME` starts from
+    a registered variant (socialzoo.env.crowd_variants)."""
+    overrides = dict(overrides)
+    variant = overrides.pop("variant", None)
+    if config is not None and not isinstance(config, CrowdNavConfig):
+        raise TypeError(f"config must be a CrowdNavConfig or None, got {type(config).__name__}")
+    base = config or (CrowdNavConfig.variant(variant) if variant is not None else CrowdNavConfig())
+    return base.replace(**overrides) if overrides else base
+
+
+def observation_space(config: CrowdNavConfig) -> spaces.Space:
+    """One robot's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
+    h = config.observed_slots
+    if config.observation == "flat":
+        return spaces.Box(-np.inf, np.inf, (flat_size(h),), np.float32)
+    return spaces.Dict(
+        {
+            "robot": spaces.Box(-np.inf, np.inf, (len(ROBOT_FEATURES),), np.float32),
+            "humans": spaces.Box(-np.inf, np.inf, (h, len(HUMAN_FEATURES)), np.float32),
+            "mask": spaces.MultiBinary(h),
+        }
+    )
+
+
+def action_space(config: CrowdNavConfig) -> spaces.Space:
+    """One robot's action space: Box([-1, 1]^2) or Discrete(81)."""
+    if config.action == "discrete":
+        return spaces.Discrete(len(discrete_actions(config.robot)))
+    return spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+class CrowdNavTask(Task):
+    """The CrowdNav task over B rows of R robots (see the module docstring).
+
+    Args:
+        config: a CrowdNavConfig (default CrowdNav's task).
+        batch_size: B.
+        **overrides: CrowdNavConfig fields as plain values, or variant=NAME.
+    """
+
+    name: ClassVar[str] = "crowdnav"
+    render_fps: ClassVar[int] = 4
+    reset_info_key: ClassVar[str] = "case_seed"
+
+    def __init__(self, config: CrowdNavConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
+        self.config = resolve_config(config, overrides)
+        self.core = CrowdNavCore(self.config, batch_size)
+        self.source = CrowdCaseSource(self.config, batch_size)
+        self.batch_size = batch_size
+        self.num_robots = self.config.num_robots
+        self.num_human_slots = self.config.slots
+        self.observation_space = observation_space(self.config)
+        self.action_space = action_space(self.config)
+        # Metrics of the robots whose episode ended, by flat index (row * R + robot).
+        self._ended: dict[int, dict[str, Any]] = {}
+
+    # ------------------------------------------------------------------ episodes
+    def seed(self, seed: int | None) -> None:
+        """Reseed the rows' training streams (CrowdNav's training split only)."""
+        self.source.seed(seed)
+
+    def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
+        """Start the rows on their next training cases, or on fixed validation or test cases."""
+        rows = np.asarray(rows, dtype=np.intp)
+        options = dict(options)
+        split = options.pop("split", None)
+        cases = options.pop("cases", None)
+        if "case" in options:
+            cases = [options.pop("case")]
+        if split is not None or cases is not None:
+            split = "test" if split is None else split
+            if split not in SPLITS or split == "train":
+                raise ValueError(f"{self.name}: options split must be 'val' or 'test', got {split!r}")
+            if cases is None:
+                raise ValueError(f"{self.name}: options split {split!r} needs case (one row) or cases")
+            indices = np.asarray(cases, dtype=np.int64).reshape(-1)
+            if len(indices) != len(rows):
+                raise ValueError(f"{self.name}: {len(rows)} rows to reset but {len(indices)} cases")
+            scenarios = self.source.fixed(split, indices)
+        else:
+            scenarios = self.source.next(rows)
+        self.core.reset_rows(rows, scenarios)
+        for row in rows.tolist():
+            for robot in range(self.num_robots):
+                self._ended.pop(row * self.num_robots + robot, None)
+        return self.core.case_seed[rows].copy()
+
+    def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
+        """One decision step (CrowdNavCore.step)."""
+        if human_action is not None:
+            raise ValueError(
+                f"{self.name}: the task has no learned-human agents, but human actions were given"
+            )
+        b, r = self.batch_size, self.num_robots
+        result = self.core.step(action)
+        self._ended.update(result.metrics)
+        outcome = result.outcome
+        truncated = outcome.truncated.reshape(b, r)
+        return TaskStep(
+            reward=outcome.reward.reshape(b, r),
+            terminated=outcome.terminated.reshape(b, r),
+            truncated=truncated,
+            info={"closest": outcome.closest.reshape(b, r)},
+            time_up=truncated.any(axis=1),
+        )
+
+    def observations(self) -> Any:
+        """(B, R, D) float32 flat joint states, or the dict layout of (B, R, ...) arrays."""
+        observation = self.core.observation
+        assert observation is not None
+        return _per_robot(observation, self.config.observation, self.batch_size, self.num_robots)
+
+    def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
+        """The metrics of the episodes that ended (socialzoo.env.crowd_outcome.CrowdNavMetrics).
+
+        Raises:
+            ValueError: a robot whose episode has not ended yet.
+        """
+        out = []
+        for row in np.asarray(rows, dtype=np.intp).reshape(-1).tolist():
+            flat = row * self.num_robots + robot
+            if flat not in self._ended:
+                raise ValueError(f"{self.name}: robot {robot} of row {row} has not ended its episode")
+            out.append(self._ended[flat])
+        return out
+
+    # ------------------------------------------------------------------ per-robot info
+    @property
+    def info_keys(self) -> tuple[str, ...]:
+        """closest."""
+        return INFO_KEYS
+
+    def initial_info(self) -> dict[str, Any]:
+        """Nothing approached yet."""
+        return {}
+
+    def idle_action(self) -> Any:
+        """Stop: action 0, a zero velocity, or a unicycle's speed 0 (the lowest of its range)."""
+        if self.config.action == "discrete":
+            return 0
+        if self.config.robot.kinematics == "unicycle":
+            return np.array([-1.0, 0.0])
+        return np.zeros(2)
+
+    # ------------------------------------------------------------------ world view
+    @property
+    def world_state(self) -> WorldState:
+        """The core's WorldState."""
+        assert self.core.state is not None
+        return self.core.state
+
+
+def _per_robot(observation: JointState, kind: str, b: int, r: int) -> Any:
+    """A JointState of B R robots as (B, R, ...) arrays (flat, or the dict layout)."""
+    if kind == "flat":
+        flat = observation.flat()
+        return flat.reshape(b, r, flat.shape[-1])
+    return {k: v.reshape((b, r) + v.shape[1:]) for k, v in observation.as_dict().items()}
