@@ -1,8 +1,10 @@
-"""Policies of the benchmark, by registry name: `make_policy("ref")` builds one.
+"""Policies of every task, by registry name: `make_policy("ref")`, `make_policy("orca", task="crowdnav")`.
 
-Entries name their class as "module:Class" and are imported only when built. A policy is named by a
-spec: "ref" (an engineered policy, or a learned one's shipped file in socialzoo/agents/shipped/) or
-"ppo:PATH" (a learned policy loaded from PATH with its class's `load`).
+Entries name their class as "module:Class" and the task they act in (socialzoo.env.tasks.TASKS), and
+are imported only when built. A policy is named by a spec: "ref" (an engineered policy, or a learned
+one's shipped file in socialzoo/agents/shipped/) or "ppo:PATH" (a learned policy loaded from PATH
+with its class's `load`). make_policy refuses a policy of another task, and a learned policy whose
+observation size is not the task's (PolicyTaskError, naming both).
 """
 
 from __future__ import annotations
@@ -15,11 +17,14 @@ from socialzoo.agents.base import LoadablePolicy, Policy
 
 __all__ = [
     "POLICIES",
+    "POLICY_TASKS",
     "SHIPPED_DIR",
     "LoadablePolicy",
     "Policy",
+    "PolicyTaskError",
     "check_policy_spec",
     "make_policy",
+    "policy_file",
     "register_policy",
     "shipped_policy_file",
     "split_policy_spec",
@@ -47,27 +52,48 @@ POLICIES: dict[str, str] = {
     "pips": "socialzoo.agents.pips:PipsPolicy",
     # The CrowdNav task's learned velocity policy (`socialzoo train crowdnav`): PPO with attention.
     "crowdnav": "socialzoo.agents.crowd_policy:CrowdAttentionPolicy",
+    # The CrowdNav task's engineered robots: CrowdNav's ORCA robot, a social-force robot.
+    "orca": "socialzoo.agents.crowd_engineered:CrowdOrcaRobot",
+    "social_force": "socialzoo.agents.crowd_engineered:CrowdSocialForceRobot",
 }
+# Registry name -> the task its policy acts in (socialzoo.env.tasks.TASKS); the rest act in
+# "action_selection".
+POLICY_TASKS: dict[str, str] = {"crowdnav": "crowdnav", "orca": "crowdnav", "social_force": "crowdnav"}
+DEFAULT_TASK = "action_selection"
 
 
-def register_policy(name: str, target: str) -> None:
+class PolicyTaskError(ValueError):
+    """A policy asked for in a task it does not act in, or with another observation size."""
+
+
+def policy_task(name: str) -> str:
+    """The task the registered policy `name` acts in."""
+    return POLICY_TASKS.get(name, DEFAULT_TASK)
+
+
+def register_policy(name: str, target: str, task: str = DEFAULT_TASK) -> None:
     """Add a policy to the registry.
 
     Args:
         name: lower-case registry name.
         target: "module:Class"; the class is built with make_policy's keyword arguments, or
             through its `load(path)` classmethod when `path` is the only one.
+        task: the task the policy acts in (a socialzoo.env.tasks registry name or "module:Class").
 
     Raises:
-        ValueError: a bad name or target, or a name already taken by another target.
+        ValueError: a bad name or target, or a name already taken by another target or task.
     """
     if not isinstance(name, str) or not name or name != name.lower():
         raise ValueError(f"register_policy: name must be a non-empty lower-case string, got {name!r}")
     if not isinstance(target, str) or target.count(":") != 1:
         raise ValueError(f"register_policy: target must be 'module:Class', got {target!r}")
-    if POLICIES.get(name, target) != target:
-        raise ValueError(f"register_policy: {name!r} is already registered as {POLICIES[name]!r}")
+    if POLICIES.get(name, target) != target or (name in POLICIES and policy_task(name) != task):
+        raise ValueError(
+            f"register_policy: {name!r} is already registered as {POLICIES[name]!r} for task {policy_task(name)!r}"
+        )
     POLICIES[name] = target
+    if task != DEFAULT_TASK:
+        POLICY_TASKS[name] = task
 
 
 def split_policy_spec(spec: str) -> tuple[str, str | None]:
@@ -102,6 +128,19 @@ def shipped_policy_file(name: str) -> Path | None:
     return None
 
 
+def policy_file(spec: str) -> Path | None:
+    """The policy file a spec names: PATH of "name:PATH", the shipped file of a learned policy
+    named alone; None for an engineered policy.
+
+    Raises:
+        ValueError: an unknown name (see split_policy_spec).
+    """
+    key, path = split_policy_spec(spec)
+    if path is not None:
+        return Path(path)
+    return shipped_policy_file(key) if hasattr(_policy_class(key), "load") else None
+
+
 def check_policy_spec(spec: str) -> str:
     """Validate a policy spec without building the policy; returns it.
 
@@ -124,20 +163,38 @@ def check_policy_spec(spec: str) -> str:
     return spec
 
 
-def make_policy(name: str, **kwargs: Any) -> Policy:
-    """Build the policy named by a spec (case-insensitive registry name).
+def make_policy(
+    name: str, *, task: Any = DEFAULT_TASK, observation_space: Any = None, **kwargs: Any
+) -> Policy:
+    """Build the policy named by a spec (case-insensitive registry name) for a task.
 
     Args:
         name: "goalone", "ref", a learned policy's registry name (its shipped file), or
             "NAME:PATH" (a learned policy's file).
+        task: the task the policy is to act in: a task registry name (default the action-selection
+            task), or a Task object (socialzoo.env.tasks.base.Task), whose observation size a
+            learned policy must also match.
+        observation_space: the task's observation space (a gymnasium Box), when `task` is a name:
+            a learned policy must read observations of its size.
         **kwargs: an engineered policy's parameters; for a learned policy, path= its file (the
             same as "NAME:PATH").
 
     Raises:
         ValueError: an unknown name (the message lists the known ones), or a learned policy with
             neither a path nor a shipped file.
+        PolicyTaskError: a policy of another task, or a learned policy whose observations are not
+            the size of the task's.
     """
+    task_name = task if isinstance(task, str) else getattr(task, "name", None)
+    others = sorted(k for k in POLICIES if policy_task(k) == task_name)
+    if isinstance(name, str) and name.partition(":")[0].strip().lower() not in POLICIES:
+        raise ValueError(f"unknown policy {name!r}; policies of task {task_name!r}: {', '.join(others)}")
     key, path = split_policy_spec(name)
+    if task_name != policy_task(key):
+        raise PolicyTaskError(
+            f"policy {name!r} acts in task {policy_task(key)!r}, not {task_name!r}; "
+            f"policies of {task_name!r}: {', '.join(others) or 'none registered'}"
+        )
     cls = _policy_class(key)
     if path is not None:
         if kwargs:
@@ -145,8 +202,28 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
         kwargs = {"path": path}
     if hasattr(cls, "load"):
         if set(kwargs) == {"path"}:
-            return cls.load(kwargs["path"])
-        if not kwargs:
+            policy = cls.load(kwargs["path"])
+        elif not kwargs:
             check_policy_spec(key)
-            return cls.load(shipped_policy_file(key))
-    return cls(**kwargs)
+            policy = cls.load(shipped_policy_file(key))
+        else:
+            policy = cls(**kwargs)
+    else:
+        policy = cls(**kwargs)
+    space = getattr(task, "observation_space", observation_space)
+    if space is not None:
+        _check_observation_size(name, policy, task_name, space)
+    return policy
+
+
+def _check_observation_size(name: str, policy: Any, task: str, space: Any) -> None:
+    """Refuse a learned policy whose observations are not the size of the task's, naming both."""
+    size = getattr(policy, "observation_size", getattr(policy, "input_size", None))
+    shape = getattr(space, "shape", None)
+    if size is None or not shape or len(shape) != 1 or int(size) == int(shape[0]):
+        return
+    trained = getattr(policy, "header", {}).get("env_id", "another configuration")
+    raise PolicyTaskError(
+        f"policy {name!r} reads observations of {size} numbers (trained on {trained}), but this "
+        f"{task!r} task's observations have {int(shape[0])}; use a policy trained on this configuration"
+    )

@@ -21,7 +21,6 @@ discrete action set, the nearest of CrowdNav's 81 actions.
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -165,40 +164,3 @@ class CrowdSocialForceRobot:
     def config(self) -> dict[str, Any]:
         """The policy's parameters."""
         return {"human": dataclasses.asdict(self.human)}
-
-
-# The CrowdNav task's policies by name: engineered ones here, the learned one from a policy file
-# ("crowdnav" alone: the shipped file; "crowdnav:PATH": a file of `socialzoo train crowdnav`).
-CROWD_POLICIES = ("orca", "social_force", "crowdnav")
-
-
-def crowd_policy_file(spec: str) -> Path | None:
-    """The policy file a spec names: PATH of "crowdnav:PATH", the shipped file for "crowdnav";
-    None for the engineered robots (and for names make_crowd_policy refuses)."""
-    name, _, path = str(spec).partition(":")
-    if name.strip().lower() != "crowdnav":
-        return None
-    from socialzoo.agents import SHIPPED_DIR
-
-    return Path(path) if path else SHIPPED_DIR / "crowdnav.safetensors"
-
-
-def make_crowd_policy(spec: str) -> Any:
-    """The CrowdNav-task policy named by `spec`: an object with act(obs, core) and a name.
-
-    Raises:
-        ValueError: an unknown name (the message lists the known ones), or a learned policy with
-            no file; socialzoo.env.policy_file.PolicyFileError: a bad policy file.
-    """
-    name, _, path = str(spec).partition(":")
-    key = name.strip().lower()
-    if key == "orca" and not path:
-        return CrowdOrcaRobot()
-    if key == "social_force" and not path:
-        return CrowdSocialForceRobot()
-    file = crowd_policy_file(spec)
-    if file is not None:
-        from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
-
-        return CrowdAttentionPolicy.load(file)
-    raise ValueError(f"unknown CrowdNav policy {spec!r}; known: orca, social_force, crowdnav[:PATH]")

@@ -28,12 +28,12 @@ def crowd_config_hash(config: CrowdNavConfig, split: Split, spec: str, policy: A
     """16 hex digits naming everything that decides an episode of `policy` besides its case, as
     socialzoo.bench.experiment.config_hash does for a benchmark trial: the task, the simulation's
     code and the policy's module, the policy's parameters (its config()) and its file's digest."""
+    from socialzoo.agents import policy_file as file_of
     from socialzoo.agents.base import policy_config
-    from socialzoo.agents.crowd_engineered import crowd_policy_file
     from socialzoo.bench.experiment import file_digest, source_digest
 
     module_file = inspect.getsourcefile(type(policy))
-    policy_file = crowd_policy_file(spec)
+    policy_file = file_of(spec)
     payload = {
         "task": config.to_dict(),
         "split": split,

@@ -70,8 +70,9 @@ def register(subparsers: Any) -> None:
 def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
     """(the variant's config, [(spec, policy, the config it acts in)]): a learned policy acts with
     the action kind it was trained with, an engineered one with velocities (its own output)."""
-    from socialzoo.agents.crowd_engineered import make_crowd_policy
+    from socialzoo.agents import make_policy
     from socialzoo.env.crowd_config import CrowdNavConfig
+    from socialzoo.env.tasks.crowdnav import observation_space
 
     specs = [p.strip() for p in args.policies.split(",") if p.strip()]
     if not specs:
@@ -79,7 +80,7 @@ def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
     config = CrowdNavConfig.variant(args.variant)
     policies = []
     for spec in specs:
-        policy = make_crowd_policy(spec)
+        policy = make_policy(spec, task="crowdnav", observation_space=observation_space(config))
         kind = getattr(policy, "action_kind", "continuous")
         policies.append((spec, policy, config.replace(action=kind)))
     return config, policies

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from socialzoo.agents.crowd_engineered import CrowdOrcaRobot, CrowdSocialForceRobot, make_crowd_policy
+from socialzoo.agents import make_policy
+from socialzoo.agents.crowd_engineered import CrowdOrcaRobot, CrowdSocialForceRobot
 from socialzoo.bench.crowd_eval import evaluate_crowd
 from socialzoo.bench.crowd_replay import crowd_scene, record_crowd_episode
 from socialzoo.bench.store import ResultsStore
@@ -44,8 +45,8 @@ def test_engineered_robots_reach_the_goal_of_an_empty_arena():
         result = evaluate_crowd(robot.act, empty, "val", cases=3)
         assert result.summary["success_rate"] == 1.0, robot.name
         assert 8.0 <= result.summary["navigation_time"] <= 9.5  # 7.7 m at 1 m/s, then the last step
-    with pytest.raises(ValueError, match="unknown CrowdNav policy"):
-        make_crowd_policy("teleport")
+    with pytest.raises(ValueError, match="unknown policy"):
+        make_policy("teleport", task="crowdnav")
 
 
 def test_an_episode_is_recorded_for_the_viewer():
@@ -117,14 +118,14 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
     assert main(["benchmark", "--maps", "socialzoo/CrowdNav-v1,gdc1", "--out", str(ids)]) == 2
     assert "cannot be mixed" in capsys.readouterr().err
     assert main(["crowdnav", "eval", "--policies", "wizard", "--out", str(tmp_path)]) == 2
-    assert "unknown CrowdNav policy" in capsys.readouterr().err
+    assert "unknown policy 'wizard'; policies of task 'crowdnav'" in capsys.readouterr().err
 
 
 def test_the_shipped_learned_policy_crosses_the_crowd():
 
     from socialzoo.agents import SHIPPED_DIR
 
-    policy = make_crowd_policy("crowdnav")
+    policy = make_policy("crowdnav", task="crowdnav")
     record = json.loads((SHIPPED_DIR / "crowdnav.run.json").read_text())
     assert record["command"].startswith("socialzoo train crowdnav ") and "--seed" in record["command"]
     assert policy.header["training"]["seed"] == record["seed"] and record["finished"]
@@ -170,7 +171,7 @@ def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_
 
     file = tmp_path / "crowdnav.safetensors"
     file.write_bytes((SHIPPED_DIR / "crowdnav.safetensors").read_bytes())
-    learned = make_crowd_policy(f"crowdnav:{file}")
+    learned = make_policy(f"crowdnav:{file}", task="crowdnav")
     before = crowd_config_hash(config, "val", f"crowdnav:{file}", learned)
     file.write_bytes(file.read_bytes() + b" ")
     assert crowd_config_hash(config, "val", f"crowdnav:{file}", learned) != before

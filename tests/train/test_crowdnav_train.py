@@ -9,7 +9,7 @@ import pytest
 pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
 
-from socialzoo.agents.crowd_engineered import make_crowd_policy
+from socialzoo.agents import make_policy
 from socialzoo.bench.crowd_eval import evaluate_crowd
 from socialzoo.train.crowdnav import CrowdNavArgs, train
 
@@ -38,7 +38,7 @@ def test_a_tiny_run_keeps_its_best_validation_checkpoint(tmp_path):
     ]
     assert results["kept_checkpoint"] == results["best_checkpoint"]["file"]
     assert (tmp_path / "run" / "evaluations.csv").read_text().count("\n") == 3
-    policy = make_crowd_policy(f"crowdnav:{policy_file}")
+    policy = make_policy(f"crowdnav:{policy_file}", task="crowdnav")
     assert policy.header["training"]["seed"] == 0 and policy.action_kind == "discrete"
     result = evaluate_crowd(policy.act, args.task(), "val", cases=2)
     assert result.summary["episodes"] == 2

@@ -1,0 +1,74 @@
+"""make_policy resolves a policy for the task it is asked about and refuses, with a named error, a
+policy of another task or a learned policy whose observations are not the size of the task's."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from socialzoo.agents import POLICIES, PolicyTaskError, make_policy, policy_task, register_policy
+from socialzoo.env.crowd_config import CrowdNavConfig
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
+from socialzoo.env.tasks.crowdnav import CrowdNavTask, observation_space
+
+
+def test_every_registered_policy_names_a_known_task():
+    from socialzoo.env.tasks import TASKS
+
+    assert {policy_task(name) for name in POLICIES} <= set(TASKS)
+
+
+def test_a_policy_of_another_task_is_refused_naming_both_tasks():
+    with pytest.raises(PolicyTaskError, match=r"'orca' acts in task 'crowdnav', not 'action_selection'"):
+        make_policy("orca")
+    with pytest.raises(PolicyTaskError, match=r"policies of 'crowdnav': crowdnav, orca, social_force"):
+        make_policy("ref", task="crowdnav")
+    assert make_policy("orca", task="crowdnav").act is not None
+
+
+def test_a_learned_policy_of_another_observation_size_is_refused():
+    wide = observation_space(CrowdNavConfig.variant("20"))
+    with pytest.raises(PolicyTaskError, match=r"46 numbers \(trained on socialzoo/CrowdNav-v1\).* have 166"):
+        make_policy("crowdnav", task="crowdnav", observation_space=wide)
+    assert make_policy("crowdnav", task=CrowdNavTask()).observation_size == 46
+    assert make_policy("ppo", task=ActionSelectionTask(map="open_room")).input_size == 107
+    with pytest.raises(PolicyTaskError, match="244"):
+        make_policy("ppo", task=ActionSelectionTask(map="open_room", observation={"layout": "socialgym1"}))
+
+
+def test_a_registered_policy_keeps_its_task():
+    register_policy("orca_again", "socialzoo.agents.crowd_engineered:CrowdOrcaRobot", task="crowdnav")
+    try:
+        assert policy_task("orca_again") == "crowdnav"
+        with pytest.raises(ValueError, match="already registered"):
+            register_policy("orca_again", "socialzoo.agents.crowd_engineered:CrowdOrcaRobot")
+    finally:
+        POLICIES.pop("orca_again")
+        from socialzoo.agents import POLICY_TASKS
+
+        POLICY_TASKS.pop("orca_again")
+
+
+def test_the_crowdnav_replay_of_a_policy_on_another_variant_fails_with_the_named_error(tmp_path):
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "socialzoo",
+            "crowdnav",
+            "replay",
+            "--policies",
+            "crowdnav",
+            "--variant",
+            "20",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 2
+    assert "reads observations of 46 numbers" in done.stderr and "166" in done.stderr
