@@ -18,27 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_fields
 
 # Episode outcomes, as CrowdNav's info classes.
 SUCCESS, COLLISION, TIMEOUT = "success", "collision", "timeout"
-# The per-episode metrics of the task (CrowdNavMetrics.summaries keys).
-METRIC_KEYS: tuple[str, ...] = (
-    "success",
-    "collision",
-    "timeout",
-    "navigation_time",
-    "path_length",
-    "discomfort_steps",
-    "steps",
-    "discomfort_frequency",
-    "min_separation",
-    "intrusion_ratio",
-    "return",
-    "discounted_return",
-    "mean_force",
-    "mean_blame",
-)
+# The per-episode metrics of the task (CrowdNavMetrics.summaries keys, in order): the registry's
+# metrics of this task (socialzoo.core.metrics).
+METRIC_KEYS: tuple[str, ...] = metric_names("crowdnav")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_fields, check_int
 
 # Columns of the per-row running sums.
@@ -70,34 +71,10 @@ _SUM_COLUMNS = (
 )
 _S = {name: i for i, name in enumerate(_SUM_COLUMNS)}
 
-# Keys of a summary, in order.
-SUMMARY_KEYS = (
-    "success",
-    "reached",
-    "time_to_goal",
-    "distance_from_goal",
-    "distance_travelled",
-    "steps",
-    "duration",
-    "mean_force",
-    "max_force",
-    "mean_blame",
-    "max_blame",
-    "human_collisions",
-    "human_contacts",
-    "wall_collisions",
-    "average_step_reward",
-    "total_reward",
-    "min_human_distance",
-    "personal_space_intrusion_time",
-    "path_irregularity",
-    "path_length_ratio",
-    "jerk",
-    "stuck",
-    "max_time_without_progress",
-)
-_BOOL_KEYS = ("success", "reached", "stuck")
-_INT_KEYS = ("steps", "human_collisions", "human_contacts", "wall_collisions")
+# Keys of a summary, in order: the registry's metrics of this task (socialzoo.core.metrics).
+SUMMARY_KEYS = metric_names("action_selection")
+_BOOL_KEYS = metric_names("action_selection", kind="bool")
+_INT_KEYS = metric_names("action_selection", kind="int")
 
 
 @dataclass(frozen=True, kw_only=True)

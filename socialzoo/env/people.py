@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from socialzoo.core.metrics import names as metric_names
+from socialzoo.core.metrics import registered
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.env.human_agents import action_velocities, human_observations
 from socialzoo.env.world import step_world
@@ -40,10 +42,11 @@ if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.human_policy import LearnedHumanPolicy
 
-# Summary keys this module adds to a robot's episode metrics (only those its config asks for).
-GROUP_KEYS = ("group_intrusions",)
-COST_KEYS = ("people_time_lost", "people_time_lost_max", "people_extra_distance")
-PEOPLE_KEYS = GROUP_KEYS + COST_KEYS
+# Summary keys this module adds to a robot's episode metrics (only those its config asks for):
+# the registry's people metrics (socialzoo.core.metrics), the group intrusions and the costs.
+PEOPLE_KEYS = metric_names("people")
+GROUP_KEYS = registered("group_intrusions")
+COST_KEYS = tuple(key for key in PEOPLE_KEYS if key not in GROUP_KEYS)
 # Two members farther apart than this are not walking together: passing between them is no intrusion.
 GROUP_SPAN = 3.0
 

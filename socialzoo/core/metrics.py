@@ -1,0 +1,680 @@
+"""The episode metrics, in one registry: each metric's name, label, unit, direction, kind and
+description, read by the tasks' summaries, the results store, the tables, the figures and the viewer.
+
+Adding a metric is one `Metric` entry in `METRICS` (plus computing it in its source: the task's
+accumulator, socialzoo.env.people or socialzoo.bench.human_metrics). A task's summary keys are
+`names(source)`, in registry order; the entries are in the order the tasks report them, so the
+CrowdNav task's own metrics sit between the ones it shares with the action-selection task
+(success, steps, mean_force, mean_blame). Pure data: no numpy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+Kind = Literal["bool", "int", "float"]
+Direction = Literal["higher", "lower", "neither"]
+# Where a metric is computed: the two tasks' accumulators (socialzoo.env.metrics.EpisodeMetrics,
+# socialzoo.env.crowd_outcome.CrowdNavMetrics), the people's metrics a config adds to the
+# action-selection task's summaries (socialzoo.env.people) and the humans' metrics the benchmark
+# runner adds to a trial (socialzoo.bench.human_metrics).
+Source = Literal["action_selection", "crowdnav", "people", "humans"]
+SOURCES: tuple[str, ...] = get_args(Source)
+
+
+class UnknownMetricError(KeyError):
+    """A metric name that is not in the registry (socialzoo.core.metrics.METRICS)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else "unknown metric"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Metric:
+    """One episode metric.
+
+    Attributes:
+        name: the key of a summary, a trial row and a store column (an identifier).
+        label: a short lowercase phrase for tables, axes and the viewer, without the unit.
+        unit: the SI unit of a value ("s", "m", "m/s", "m/s^3", "rad", "1/min"); "" for a number
+            without one (flags, shares, ratios, counts, the reward's units).
+        better: "higher" or "lower" is better, or "neither" (a size, not a quality: steps,
+            distance travelled).
+        kind: the value's type: "bool" (a flag; the CrowdNav task reports 0.0 / 1.0), "int" (a
+            count) or "float" (NaN where it is undefined).
+        description: what it is and how it is computed, in one or two sentences.
+        sources: where it is computed (SOURCES), e.g. ("action_selection", "crowdnav").
+        success_only: defined for successful episodes only (NaN otherwise); means are taken over
+            the successful episodes.
+        count: a count of events per episode (skewed, mostly zero, never negative): means get a
+            bootstrap interval (socialzoo.bench.stats.count_interval).
+        digits: decimals to print a mean with (a flag's mean is a share between 0 and 1).
+    """
+
+    name: str
+    label: str
+    unit: str
+    better: Direction
+    kind: Kind
+    description: str
+    sources: tuple[str, ...]
+    success_only: bool = False
+    count: bool = False
+    digits: int = 4
+
+    def __post_init__(self) -> None:
+        problems = []
+        if not self.name.isidentifier():
+            problems.append(f"name must be an identifier, got {self.name!r}")
+        if not self.label or self.label != self.label.strip():
+            problems.append(f"label must be a non-empty phrase, got {self.label!r}")
+        if self.better not in get_args(Direction):
+            problems.append(f"better must be one of {get_args(Direction)}, got {self.better!r}")
+        if self.kind not in get_args(Kind):
+            problems.append(f"kind must be one of {get_args(Kind)}, got {self.kind!r}")
+        if not self.description.strip():
+            problems.append("description must not be empty")
+        if not self.sources or any(s not in SOURCES for s in self.sources):
+            problems.append(f"sources must be some of {SOURCES}, got {self.sources!r}")
+        if self.count and self.kind != "int":
+            problems.append(f"a count must be of kind 'int', got {self.kind!r}")
+        if self.kind == "bool" and self.unit:
+            problems.append(f"a flag has no unit, got {self.unit!r}")
+        if isinstance(self.digits, bool) or not isinstance(self.digits, int) or not 0 <= self.digits <= 6:
+            problems.append(f"digits must be an int in 0..6, got {self.digits!r}")
+        if problems:
+            raise ValueError(f"Metric {self.name!r}: " + "; ".join(problems))
+
+    @property
+    def higher_is_better(self) -> bool | None:
+        """True when a higher value is better, False when a lower one is, None for neither."""
+        return None if self.better == "neither" else self.better == "higher"
+
+    @property
+    def heading(self) -> str:
+        """The label with its unit: "time to goal, s", "force (mean per step)"."""
+        return f"{self.label}, {self.unit}" if self.unit else self.label
+
+
+_AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), ("humans",)
+_BOTH = ("action_selection", "crowdnav")
+
+_ENTRIES: tuple[Metric, ...] = (
+    # ---------------------------------------------------------------- the robot's episode
+    Metric(
+        name="success",
+        label="success",
+        unit="",
+        better="higher",
+        kind="bool",
+        digits=3,
+        sources=_BOTH,
+        description="The episode reached its goal without a collision. Action selection: the goal "
+        "was reached (within EnvConfig.goal_radius, 0.5 m) with no human collision step and no wall "
+        "collision; CrowdNav: the robot reached its goal before a collision or the time limit.",
+    ),
+    Metric(
+        name="reached",
+        label="goal reached",
+        unit="",
+        better="higher",
+        kind="bool",
+        digits=3,
+        sources=_AS,
+        description="The robot centre came within the goal radius of its goal (0.5 m), collisions or not.",
+    ),
+    Metric(
+        name="time_to_goal",
+        label="time to goal",
+        unit="s",
+        better="lower",
+        kind="float",
+        success_only=True,
+        digits=2,
+        sources=_AS,
+        description="Episode time when the goal was reached, NaN when it was not; means are over "
+        "the successful episodes (the paper's figure).",
+    ),
+    Metric(
+        name="distance_from_goal",
+        label="distance from goal",
+        unit="m",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_AS,
+        description="Distance between the robot centre and the goal at the end of the episode.",
+    ),
+    Metric(
+        name="distance_travelled",
+        label="distance travelled",
+        unit="m",
+        better="neither",
+        kind="float",
+        digits=2,
+        sources=_AS,
+        description="Sum of the robot's step displacements (short where it stopped early, so no "
+        "direction on its own).",
+    ),
+    Metric(
+        name="collision",
+        label="collision",
+        unit="",
+        better="lower",
+        kind="bool",
+        digits=3,
+        sources=_CN,
+        description="The episode ended in a collision: the robot's and a person's boundaries "
+        "overlapped during a step (their closest approach along the step below 0).",
+    ),
+    Metric(
+        name="timeout",
+        label="timeout",
+        unit="",
+        better="lower",
+        kind="bool",
+        digits=3,
+        sources=_CN,
+        description="The time limit ended the episode (a step starting 1 s or less before it).",
+    ),
+    Metric(
+        name="navigation_time",
+        label="navigation time",
+        unit="s",
+        better="lower",
+        kind="float",
+        success_only=True,
+        digits=2,
+        sources=_CN,
+        description="Episode time at the end of a successful episode (CrowdNav's success_times), "
+        "NaN otherwise.",
+    ),
+    Metric(
+        name="path_length",
+        label="path length",
+        unit="m",
+        better="neither",
+        kind="float",
+        digits=2,
+        sources=_CN,
+        description="Distance the robot moved during the episode.",
+    ),
+    Metric(
+        name="discomfort_steps",
+        label="discomfort steps",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_CN,
+        description="Steps in discomfort: a person's boundary within discomfort_dist (0.2 m) of "
+        "the robot's during the step, without a collision or the episode's end.",
+    ),
+    Metric(
+        name="steps",
+        label="steps",
+        unit="",
+        better="neither",
+        kind="int",
+        digits=1,
+        sources=_BOTH,
+        description="Steps of the episode.",
+    ),
+    Metric(
+        name="duration",
+        label="duration",
+        unit="s",
+        better="neither",
+        kind="float",
+        digits=2,
+        sources=_AS,
+        description="Episode time: steps x the step duration.",
+    ),
+    Metric(
+        name="discomfort_frequency",
+        label="discomfort frequency",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_CN,
+        description="Share of the episode's steps in discomfort (CrowdNav's frequency of being in danger).",
+    ),
+    Metric(
+        name="min_separation",
+        label="minimum separation",
+        unit="m",
+        better="higher",
+        kind="float",
+        sources=_CN,
+        description="Smallest boundary distance between the robot and a person during the episode "
+        "(negative: they overlapped); NaN with nobody.",
+    ),
+    Metric(
+        name="intrusion_ratio",
+        label="intrusion ratio",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_CN,
+        description="Share of the episode's steps with a person's boundary within discomfort_dist "
+        "of the robot's, a collision step included (CrowdNav++'s intrusion, on the real positions).",
+    ),
+    Metric(
+        name="return",
+        label="return",
+        unit="",
+        better="higher",
+        kind="float",
+        sources=_CN,
+        description="Sum of the episode's CrowdNav rewards.",
+    ),
+    Metric(
+        name="discounted_return",
+        label="discounted return",
+        unit="",
+        better="higher",
+        kind="float",
+        sources=_CN,
+        description="Sum over steps t of gamma ** (t dt v_pref) r_t, CrowdNav's total reward "
+        "(gamma 0.9 per second at the preferred speed).",
+    ),
+    Metric(
+        name="mean_force",
+        label="force (mean per step)",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_BOTH,
+        description="Mean over the episode's steps of the social force term f = exp(-d^4), d the "
+        "distance to the nearest visible human (SPEC section 9, socialzoo.env.reward).",
+    ),
+    Metric(
+        name="max_force",
+        label="force (max per episode)",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_AS,
+        description="Largest social force term f = exp(-d^4) of the episode's steps.",
+    ),
+    Metric(
+        name="mean_blame",
+        label="blame (mean per step)",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_BOTH,
+        description="Mean over the episode's steps of the blame b = 1 - erf(dist(h, S)), S the "
+        "robot's next 0.5 s of motion and h the nearest visible human (SPEC section 9).",
+    ),
+    Metric(
+        name="max_blame",
+        label="blame (max per episode)",
+        unit="",
+        better="lower",
+        kind="float",
+        sources=_AS,
+        description="Largest blame b = 1 - erf(dist(h, S)) of the episode's steps.",
+    ),
+    Metric(
+        name="human_collisions",
+        label="human collision steps",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_AS,
+        description="Steps with at least one human centre closer than the collision distance "
+        "(0.4 m) to the robot's (SPEC: counted each step); the episode goes on.",
+    ),
+    Metric(
+        name="human_contacts",
+        label="human contacts",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_AS,
+        description="Sum over the episode's steps of the humans in collision with the robot.",
+    ),
+    Metric(
+        name="wall_collisions",
+        label="wall collision steps",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_AS,
+        description="Steps with the robot's footprint touching a wall (the first ends the episode).",
+    ),
+    Metric(
+        name="average_step_reward",
+        label="average step reward",
+        unit="",
+        better="higher",
+        kind="float",
+        sources=_AS,
+        description="The episode's total reward divided by its steps.",
+    ),
+    Metric(
+        name="total_reward",
+        label="total reward",
+        unit="",
+        better="higher",
+        kind="float",
+        digits=2,
+        sources=_AS,
+        description="Sum of the episode's rewards (socialzoo.env.reward).",
+    ),
+    Metric(
+        name="min_human_distance",
+        label="minimum distance to a human",
+        unit="m",
+        better="higher",
+        kind="float",
+        sources=_AS,
+        description="Smallest centre distance between the robot and any present human (visible or "
+        "not) over the episode; NaN with nobody.",
+    ),
+    Metric(
+        name="personal_space_intrusion_time",
+        label="personal-space intrusion time",
+        unit="s",
+        better="lower",
+        kind="float",
+        sources=_AS,
+        description="Time with the robot centre inside a human's intimate zone: a centre distance "
+        "below personal_space + human_radius (0.45 + 0.2 m, MetricsConfig).",
+    ),
+    Metric(
+        name="path_irregularity",
+        label="path irregularity",
+        unit="rad",
+        better="lower",
+        kind="float",
+        sources=_AS,
+        description="Total rotation of the robot minus the rotation needed to face the goal from "
+        "the start, floored at 0 (Guzzi et al. 2013).",
+    ),
+    Metric(
+        name="path_length_ratio",
+        label="path length ratio",
+        unit="",
+        better="higher",
+        kind="float",
+        sources=_AS,
+        description="Straight start-goal distance over the distance travelled: 1 for a straight "
+        "drive (a little above 1 at most, the goal counting as reached 0.5 m short); NaN when the "
+        "robot did not move.",
+    ),
+    Metric(
+        name="jerk",
+        label="jerk",
+        unit="m/s^3",
+        better="lower",
+        kind="float",
+        sources=_AS,
+        description="Mean over the episode's steps of |a_t - a_(t-1)| / dt, a the linear "
+        "acceleration from the speed, the robot at rest before the first step.",
+    ),
+    Metric(
+        name="stuck",
+        label="episodes stuck (share; no progress for 10 s while not halting)",
+        unit="",
+        better="lower",
+        kind="bool",
+        sources=_AS,
+        description="The robot went MetricsConfig.stuck_time (10 s) of steps without its route "
+        "left falling by stuck_progress (0.25 m) below its least value while it was not halting.",
+    ),
+    Metric(
+        name="max_time_without_progress",
+        label="longest time without progress",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_AS,
+        description="The longest stretch without progress towards the goal while not halting (see stuck).",
+    ),
+    # ---------------------------------------------------------------- the people (socialzoo.env.people)
+    Metric(
+        name="group_intrusions",
+        label="group intrusions",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_PEOPLE,
+        description="Times the robot's centre crossed the line between two members of a walking "
+        "group (within 3 m of each other) between their positions.",
+    ),
+    Metric(
+        name="people_time_lost",
+        label="people's time lost (mean per person)",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_PEOPLE,
+        description="Mean over the people of the time they reach their route's goal end with the "
+        "robot minus without it (the counterfactual rows; by the robot's episode end plus the "
+        "route left at the preferred speed); NaN with nobody.",
+    ),
+    Metric(
+        name="people_time_lost_max",
+        label="people's time lost (max per person)",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_PEOPLE,
+        description="The largest time lost by a person of the episode (see people_time_lost).",
+    ),
+    Metric(
+        name="people_extra_distance",
+        label="people's extra distance (mean per person)",
+        unit="m",
+        better="lower",
+        kind="float",
+        digits=3,
+        sources=_PEOPLE,
+        description="Mean over the people of the distance walked with the robot minus without it, "
+        "each plus its route left (the counterfactual rows); NaN with nobody.",
+    ),
+    # ---------------------------------------------------------------- the humans (socialzoo.bench.human_metrics)
+    Metric(
+        name="humans_goal_rate",
+        label="route goal reach rate",
+        unit="",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Share of the humans with a route of two or more waypoints that reached its "
+        "goal end (turned back there) during the episode.",
+    ),
+    Metric(
+        name="humans_waypoints_per_min",
+        label="waypoints reached per human",
+        unit="1/min",
+        better="higher",
+        kind="float",
+        digits=2,
+        sources=_HUMANS,
+        description="Route waypoints reached per human and minute.",
+    ),
+    Metric(
+        name="humans_hh_collisions",
+        label="human-human collisions per episode",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_HUMANS,
+        description="Times two humans came within 0.4 m of each other (each pair once per contact, at its start).",
+    ),
+    Metric(
+        name="humans_hw_collisions",
+        label="human-wall collisions per episode",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_HUMANS,
+        description="Times a human's centre came within its radius (0.2 m) of a wall, or a wall stopped its move.",
+    ),
+    Metric(
+        name="humans_hr_collisions",
+        label="human-robot collisions per episode",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=3,
+        sources=_HUMANS,
+        description="Times a human came within the robot collision distance (0.4 m) of a robot.",
+    ),
+    Metric(
+        name="humans_min_human_distance",
+        label="min human-human distance",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Smallest centre distance between two humans over the episode; NaN with a single human.",
+    ),
+    Metric(
+        name="humans_min_wall_distance",
+        label="min human-wall distance",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Smallest distance between a human centre and a wall over the episode; NaN when "
+        "it never fell within the wall index's reach (1 m).",
+    ),
+    Metric(
+        name="humans_min_robot_distance",
+        label="min human-robot distance",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Smallest centre distance between a human and a robot over the episode.",
+    ),
+    Metric(
+        name="humans_mean_speed",
+        label="mean speed",
+        unit="m/s",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Mean speed over the humans and steps.",
+    ),
+    Metric(
+        name="humans_path_ratio",
+        label="path length / route length",
+        unit="",
+        better="lower",
+        kind="float",
+        digits=3,
+        sources=_HUMANS,
+        description="Distance walked until the route's goal end was first reached over the route's "
+        "length from the spawn (to the waypoint radius), mean over the humans that reached it: 1 "
+        "walks the route, more is a detour; NaN for none.",
+    ),
+)
+
+METRICS: dict[str, Metric] = {m.name: m for m in _ENTRIES}
+if len(METRICS) != len(_ENTRIES):
+    raise ValueError("socialzoo.core.metrics: two registry entries share a name")
+
+
+def metric(name: str) -> Metric:
+    """The registered metric `name`.
+
+    Raises:
+        UnknownMetricError: `name` is not registered (the message lists the registered names).
+    """
+    try:
+        return METRICS[name]
+    except (KeyError, TypeError):
+        raise UnknownMetricError(
+            f"unknown metric {name!r}: add it to socialzoo.core.metrics.METRICS (registered: {', '.join(METRICS)})"
+        ) from None
+
+
+def registered(*names: str) -> tuple[str, ...]:
+    """`names` as a tuple, each checked to be registered: a selection of metrics (a table's
+    columns, a figure's panels) that fails at import when a name is misspelt.
+
+    Raises:
+        UnknownMetricError: a name is not registered.
+    """
+    for name in names:
+        metric(name)
+    return names
+
+
+def names(source: str | None = None, *, kind: str | None = None) -> tuple[str, ...]:
+    """The registered names in registry order: those computed by `source` (SOURCES) and of
+    `kind`, where given. `names("action_selection")` is that task's summary keys, in order.
+
+    Raises:
+        ValueError: an unknown source or kind.
+    """
+    if source is not None and source not in SOURCES:
+        raise ValueError(f"source must be one of {SOURCES}, got {source!r}")
+    if kind is not None and kind not in get_args(Kind):
+        raise ValueError(f"kind must be one of {get_args(Kind)}, got {kind!r}")
+    return tuple(
+        m.name
+        for m in METRICS.values()
+        if (source is None or source in m.sources) and (kind is None or m.kind == kind)
+    )
+
+
+def table_heading(name: str) -> str:
+    """A table's heading of a metric's means: "time to goal, s (successful episodes only)"."""
+    m = metric(name)
+    return m.heading + (" (successful episodes only)" if m.success_only else "")
+
+
+def axis_label(name: str) -> str:
+    """A figure axis's label of a metric's means: flags as percentages ("success, %"), and
+    "(successes)" after a success-only metric ("time to goal, s (successes)")."""
+    m = metric(name)
+    if m.kind == "bool":
+        return f"{m.label}, %"
+    return m.heading + (" (successes)" if m.success_only else "")
+
+
+def describe(metric_names: Iterable[str] | None = None) -> str:
+    """A Markdown table of the metrics (default every registered one): name, unit, better, kind,
+    flags (successful episodes only, a count) and description.
+
+    Raises:
+        UnknownMetricError: a name is not registered.
+    """
+    chosen = [metric(n) for n in (METRICS if metric_names is None else metric_names)]
+    lines = ["| metric | unit | better | kind | flags | description |", "|---|---|---|---|---|---|"]
+    for m in chosen:
+        flags = [f for f, on in (("successful episodes only", m.success_only), ("a count", m.count)) if on]
+        lines.append(
+            f"| `{m.name}` | {m.unit or '-'} | {m.better} | {m.kind} | {', '.join(flags) or '-'} | {m.description} |"
+        )
+    return "\n".join(lines) + "\n"
