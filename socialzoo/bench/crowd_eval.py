@@ -1,6 +1,5 @@
 """Evaluation of CrowdNav-task policies on the task's fixed cases (CrowdNav's 100 validation and 500
-test cases), batched: every row plays one case at a time and takes the next pending case when its
-episode ends, so N cases cost about N / B episodes of wall time.
+test cases), batched by the evaluation loop of every task (socialzoo.bench.episodes.play_cases).
 
 The summary reports CrowdNav's test metrics (success, collision and timeout rates, navigation time
 of the successful episodes, the frequency of discomfort over all steps) and ours (path length,
@@ -18,12 +17,10 @@ from typing import Any
 import numpy as np
 
 from socialzoo.env.crowd_config import CrowdNavConfig
-from socialzoo.env.crowd_core import CrowdNavCore
-from socialzoo.env.crowd_source import CrowdCaseSource
 from socialzoo.nav.crowd_cases import SPLIT_SIZE, Split
 
 # A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
-CrowdActor = Callable[[np.ndarray, CrowdNavCore], np.ndarray]
+CrowdActor = Callable[[np.ndarray, Any], np.ndarray]
 RATES = ("success", "collision", "timeout")
 MEANS = (
     "navigation_time",
@@ -93,46 +90,17 @@ def evaluate_crowd(
         raise ValueError(f"evaluate_crowd: case indices must lie in [0, {total}), got {outside}")
     if not todo:
         raise ValueError("evaluate_crowd: no case to play")
-    rows = min(batch_size, len(todo))
-    core = CrowdNavCore(config, rows)
-    source = CrowdCaseSource(config, rows)
-    playing = np.array(todo[:rows])
-    core.reset_rows(np.arange(rows), source.fixed(split, playing))
-    next_case = rows
-    active = np.ones(rows, dtype=bool)
-    episodes: dict[int, dict[str, Any]] = {}
-    while active.any():
-        obs = core.observation.flat()  # type: ignore[union-attr]
-        actions = act(obs, core)
-        step = core.step(_idle(actions, active, config))
-        done = [r for r in step.metrics if active[r]]
-        for row in done:
-            episodes[int(playing[row])] = {"case": int(playing[row]), **step.metrics[row]}
-        if done and on_episodes is not None:
-            on_episodes([episodes[int(playing[row])] for row in done])
-        refill = []
-        for row in done:
-            if next_case < len(todo):
-                playing[row] = todo[next_case]
-                next_case += 1
-                refill.append(row)
-            else:
-                active[row] = False
-        if refill:
-            core.reset_rows(refill, source.fixed(split, playing[refill]))
-        # Finished rows keep stepping (their results are no longer read) until all are done.
-    ordered = [episodes[k] for k in todo]
+    from socialzoo.bench.episodes import play_cases
+
+    def forget_seed(episodes: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        return [{k: v for k, v in e.items() if k != "seed"} for e in episodes]
+
+    deliver = None if on_episodes is None else (lambda episodes: on_episodes(forget_seed(episodes)))
+    flat = config.replace(observation="flat")
+    ordered = forget_seed(
+        play_cases("crowdnav", act, split, todo, batch_size, config=flat, on_episodes=deliver)
+    )
     return CrowdEvaluation(split=split, episodes=ordered, summary=summarize_crowd(ordered, config.time_step))
-
-
-def _idle(actions: np.ndarray, active: np.ndarray, config: CrowdNavConfig) -> np.ndarray:
-    """The actions with finished rows standing still (they may be out of cases)."""
-    actions = np.array(actions, copy=True)
-    if config.action == "discrete":
-        actions[~active] = 0
-    else:
-        actions[~active] = 0.0 if config.robot.kinematics == "holonomic" else np.array([-1.0, 0.0])
-    return actions
 
 
 def summarize_crowd(

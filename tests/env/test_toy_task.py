@@ -1,4 +1,4 @@
-"""A task written in one file (tests/env/toy_task.py) and registered with one line runs through every
+"""A task written in one file (tests/toy_task.py) and registered with one line runs through every
 adapter and passes each ecosystem's checker: Gymnasium, SB3, the VectorEnv, PettingZoo, TorchRL."""
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from socialzoo.env.core import SocialNavCore, StepResult
 from socialzoo.env.human_agents import human_observation_size
 from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
-from socialzoo.env.tasks.base import Task, TaskStep
+from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
 from socialzoo.nav.maps import Map
 from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
@@ -43,7 +43,8 @@ class ActionSelectionTask(Task):
         map_data: an already loaded Map instead of config.map.
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
-    Reset options: {"scenario": Scenario} replays a scenario in the one row being reset (robots
+    Reset options: {"split": name, "cases": [k, ...]} the cases of a validation or test set
+    (case_splits); {"scenario": Scenario} replays a scenario in the one row being reset (robots
     beyond its own get poses as the stream gives them); {"scenarios": [...]} one per reset row.
     """
 
@@ -93,6 +94,13 @@ class ActionSelectionTask(Task):
         """Start the rows on their next scenarios, or on the scenarios the options give."""
         rows = np.asarray(rows, dtype=np.intp)
         options = dict(options)
+        chosen = fixed_cases(options, rows, self.case_splits(), self.name)
+        if chosen is not None:
+            test_set = self._case_sets()[chosen[0]]
+            if self.config.family is None:
+                options["scenarios"] = [test_set.scenario(int(k), self.core.map) for k in chosen[1]]
+            else:  # a family's cases: its own scenarios, drawn from the set's seeds
+                options["scenarios"] = [self.scenarios.make(test_set.seed(int(k))) for k in chosen[1]]
         scenarios = options.pop("scenarios", None)
         one = options.pop("scenario", None)
         if one is not None:
@@ -110,6 +118,22 @@ class ActionSelectionTask(Task):
             scenarios = [with_robots(s, self.core.map, self.num_robots) for s in scenarios]
         self.core.reset_rows(rows, scenarios)
         return np.array([int(s.seed) for s in scenarios], dtype=np.uint64)
+
+    def case_splits(self) -> dict[str, int]:
+        """The map's validation scenarios ("val", never a test set), and its registered test sets
+        ("test" for "<map>-test", and each by its own name, e.g. "gdc1-quick"); a scenario
+        family's cases are the family's scenarios of the same seeds."""
+        return {name: len(test_set) for name, test_set in self._case_sets().items()}
+
+    def _case_sets(self) -> dict[str, Any]:
+        from socialzoo.nav.scenarios import TEST_SETS, validation_set
+
+        name = self.core.map.name
+        sets: dict[str, Any] = {"val": validation_set(name)}
+        sets.update({k: v for k, v in TEST_SETS.items() if v.map_name == name})
+        if f"{name}-test" in TEST_SETS:
+            sets["test"] = TEST_SETS[f"{name}-test"]
+        return sets
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """One 0.025 s step of every row (SocialNavCore.step)."""

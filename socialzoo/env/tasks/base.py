@@ -83,9 +83,15 @@ class Task(ABC):
         """Start new episodes in `rows`; returns each reset row's scenario seed (len(rows),).
 
         `options` are the adapter's reset options less its own: the task reads those it knows
-        (fixed cases, a scenario to replay) and ignores any other, as Gymnasium's and
-        PettingZoo's envs may (PettingZoo's API test passes one).
+        (every task: {"split": name, "cases": [k, ...]} or {"split": name, "case": k}, cases of
+        case_splits(); a task may add its own, such as a scenario to replay) and ignores any
+        other, as Gymnasium's and PettingZoo's envs may (PettingZoo's API test passes one).
         """
+
+    def case_splits(self) -> dict[str, int]:
+        """The task's fixed case sets by name (validation and test cases), with their sizes: reset
+        options {"split": name, "cases": [k, ...]} start rows on cases k of a split."""
+        return {}
 
     @abstractmethod
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
@@ -156,6 +162,36 @@ class Task(ABC):
                 f"render_mode must be None or one of {list(cls.render_modes)} for task {cls.name!r}, "
                 f"got {render_mode!r}"
             )
+
+
+def fixed_cases(
+    options: dict[str, Any], rows: np.ndarray, splits: dict[str, int], task: str
+) -> tuple[str, np.ndarray] | None:
+    """(split, case indices) that reset options name for `rows`, or None when they name none;
+    the options' "split", "cases" and "case" are taken out of `options`.
+
+    Raises:
+        ValueError: an unknown split, a count of cases other than the rows', or a case outside
+            its split.
+    """
+    split = options.pop("split", None)
+    cases = options.pop("cases", None)
+    if "case" in options:
+        cases = [options.pop("case")]
+    if split is None and cases is None:
+        return None
+    split = "test" if split is None else split
+    if split not in splits:
+        raise ValueError(f"{task}: options split must be one of {sorted(splits)}, got {split!r}")
+    if cases is None:
+        raise ValueError(f"{task}: options split {split!r} needs case (one row) or cases (one per row)")
+    indices = np.asarray(cases, dtype=np.int64).reshape(-1)
+    if len(indices) != len(rows):
+        raise ValueError(f"{task}: {len(rows)} rows to reset but {len(indices)} cases")
+    outside = indices[(indices < 0) | (indices >= splits[split])]
+    if len(outside):
+        raise ValueError(f"{task}: the {split} split holds {splits[split]} cases; got {outside.tolist()}")
+    return split, indices
 
 
 def plain(value: Any) -> Any:

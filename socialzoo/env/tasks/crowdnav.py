@@ -4,7 +4,8 @@ core, with CrowdNav's settings as the defaults (socialzoo.env.crowd_config.Crowd
 A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
 or a building among the benchmark's people (the Walls variant), judged as CrowdNav judges it
 (socialzoo.env.crowd_outcome). Training episodes are CrowdNav's training cases drawn per row;
-`reset` options {"split": "val"|"test", "case": k} or {"cases": [...]} play fixed cases.
+`reset` options {"split": "val"|"test", "case": k} or {"cases": [...]} play fixed cases
+(case_splits).
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
 from socialzoo.env.crowd_core import CrowdNavCore
 from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size
 from socialzoo.env.crowd_source import CrowdCaseSource
-from socialzoo.env.tasks.base import Task, TaskStep
-from socialzoo.nav.crowd_cases import SPLITS
+from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
+from socialzoo.nav.crowd_cases import SPLIT_SIZE
 
 # The per-step info of a robot: its closest approach to anyone during the step, m (negative: overlap).
 INFO_KEYS = ("closest",)
@@ -91,21 +92,9 @@ class CrowdNavTask(Task):
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
         """Start the rows on their next training cases, or on fixed validation or test cases."""
         rows = np.asarray(rows, dtype=np.intp)
-        options = dict(options)
-        split = options.pop("split", None)
-        cases = options.pop("cases", None)
-        if "case" in options:
-            cases = [options.pop("case")]
-        if split is not None or cases is not None:
-            split = "test" if split is None else split
-            if split not in SPLITS or split == "train":
-                raise ValueError(f"{self.name}: options split must be 'val' or 'test', got {split!r}")
-            if cases is None:
-                raise ValueError(f"{self.name}: options split {split!r} needs case (one row) or cases")
-            indices = np.asarray(cases, dtype=np.int64).reshape(-1)
-            if len(indices) != len(rows):
-                raise ValueError(f"{self.name}: {len(rows)} rows to reset but {len(indices)} cases")
-            scenarios = self.source.fixed(split, indices)
+        chosen = fixed_cases(dict(options), rows, self.case_splits(), self.name)
+        if chosen is not None:
+            scenarios = self.source.fixed(chosen[0], chosen[1])  # type: ignore[arg-type]
         else:
             scenarios = self.source.next(rows)
         self.core.reset_rows(rows, scenarios)
@@ -113,6 +102,17 @@ class CrowdNavTask(Task):
             for robot in range(self.num_robots):
                 self._ended.pop(row * self.num_robots + robot, None)
         return self.core.case_seed[rows].copy()
+
+    def case_splits(self) -> dict[str, int]:
+        """CrowdNav's validation and test cases (100 and 500); among walls the map's validation
+        scenarios and its registered test set."""
+        if self.config.map is None:
+            return dict(SPLIT_SIZE)
+        from socialzoo.nav.maps import load_map
+        from socialzoo.nav.scenarios import get_test_set, validation_set
+
+        name = load_map(self.config.map).name
+        return {"val": len(validation_set(name)), "test": len(get_test_set(f"{name}-test"))}
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """One decision step (CrowdNavCore.step)."""

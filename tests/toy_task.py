@@ -17,7 +17,7 @@ from gymnasium import spaces
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
 from socialzoo.env.scenario_source import ScenarioStream
-from socialzoo.env.tasks.base import Task, TaskStep
+from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
 
 # (v, omega) of each action as a fraction of the robot's top speeds.
 COMMANDS = np.array([[1.0, 0.0], [0.3, 1.0], [0.3, -1.0], [0.0, 0.0]])
@@ -45,8 +45,15 @@ class ToyReachTask(Task):
     def seed(self, seed: int | None) -> None:
         self.scenarios.seed(seed)
 
+    def case_splits(self) -> dict[str, int]:
+        return {"test": 20}
+
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
-        scenarios = self.scenarios.next(rows)
+        cases = fixed_cases(dict(options), rows, self.case_splits(), self.name)
+        if cases is None:
+            scenarios = self.scenarios.next(rows)
+        else:  # test case k: the scenario of seed 10**6 + k, never drawn in training
+            scenarios = [self.scenarios.make(10**6 + int(k)) for k in cases[1]]
         self.core.reset_rows(rows, scenarios)
         return np.array([s.seed for s in scenarios], dtype=np.uint64)
 
