@@ -13,7 +13,6 @@ import hashlib
 import inspect
 import json
 import logging
-import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -68,16 +67,18 @@ class BenchmarkConfig:
             {"max_steps": 400}; plain JSON values.
         policy_kwargs: make_policy keyword arguments per policy name, e.g. {"ppo": {"path": ...}}.
         gif: also write one animated Ref episode (ref_episode.gif) on the first map.
-        humans: the humans: "social_force" (the scripted model), or "learned:PATH", a learned
-            human policy file (socialzoo train humans) that drives every human slot (or the
-            first env_overrides["num_learned_humans"], the rest staying social-force); or a
-            people spec of the env (socialzoo.humans.models: "sf", "orca", "groups", mixes such
-            as "sf@0.5+orca@0.5", learned files among them), set as EnvConfig.people.models.
+        humans: the people of every scenario, a people spec (socialzoo.humans.models):
+            "social_force" (or "sf", the default), "orca", "groups", "learned:PATH" (a learned
+            human policy file, `socialzoo train humans`), or a mix such as "sf@0.5+orca@0.5" or
+            "learned:PATH@0.4+sf@0.6". It is set as EnvConfig.people.models: the env drives
+            every person itself, learned ones included. Not EnvConfig.num_learned_humans: those
+            are human agents that a learner drives from outside (multi-agent training), which a
+            benchmark has none of.
         human_metrics: also record the humans' episode metrics (socialzoo.bench.human_metrics)
             with every trial, and write humans.csv and humans.md.
         counterfactual: also run every scenario without the robot and record what the robot
             costs the people (EnvConfig.people.counterfactual: people_time_lost,
-            people_extra_distance); not with learned humans driven by the runner.
+            people_extra_distance).
     """
 
     policies: tuple[str, ...] = DEFAULT_POLICIES
@@ -139,7 +140,14 @@ class BenchmarkConfig:
             raise ValueError(f"BenchmarkConfig.workers must be an int >= 1 or None, got {self.workers!r}")
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
             raise ValueError(f"BenchmarkConfig.batch_size must be an int >= 1, got {self.batch_size!r}")
-        EnvConfig().replace(**dict(self.env_overrides))  # fail early, naming a bad override
+        env = EnvConfig().replace(**dict(self.env_overrides))  # fail early, naming a bad override
+        if env.num_learned_humans:
+            raise ValueError(
+                f"BenchmarkConfig.env_overrides: num_learned_humans = {env.num_learned_humans} asks for human "
+                "agents that a learner drives (multi-agent training), and a benchmark has no learner; name "
+                "learned people in BenchmarkConfig.humans instead (a people spec: 'learned:PATH', or a mix "
+                "such as 'learned:PATH@0.4+sf@0.6')"
+            )
 
     def test_set_name(self, map_name: str) -> str:
         """The registry test set evaluated on a map."""
@@ -245,15 +253,18 @@ def config_hash(
     of changed code are never read back as current ones; the policy's parameters (and the digest
     of its file, for learned policies); the test set's generator (map, base seed, scenario
     config; not its length, so a longer run reuses a shorter one's trials); and, when given,
-    `humans`: the human policy (its spec and file digest) and whether human metrics are recorded.
+    `humans`: whether human metrics are recorded. A learned people model counts by the digest of
+    its file, not its path (hashed_people).
     """
     from socialzoo.agents.base import policy_config
 
     kwargs = dict(policy_kwargs or {})
     module_file = inspect.getsourcefile(type(policy_object))
+    env = env_config.to_dict()
+    env["people"]["models"] = hashed_people(env_config.people.models)
     payload = {
         "env_id": env_id_for(test_set.map_name),
-        "env": env_config.to_dict(),
+        "env": env,
         "map_sha256": _map_digest(env_config.map),
         "code_sha256": source_digest((module_file,) if module_file else ()),
         "policy": {
@@ -273,99 +284,51 @@ def config_hash(
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def people_spec(humans: str) -> str | None:
-    """The people spec (EnvConfig.people.models) that a benchmark's `humans` names, or None for
-    the humans the runner drives itself: "social_force", and "learned:PATH" alone (learned slots
-    acting on their observations, socialzoo.bench.runner; "learned:PATH@1" is the people spec of
-    the same file, driven by the env)."""
-    from socialzoo.env.human_policy import split_human_spec
+def hashed_people(models: str) -> str:
+    """A people spec as the config hash reads it: each learned model's file named by the sha256
+    of its bytes instead of its path, so the same file under another name reads its trials back
+    and another file runs again; specs without a learned model unchanged."""
+    from socialzoo.humans.models import parse_people
 
-    # A mix, or a model with its share ("learned:PATH@1"), is a people spec.
-    if "+" in humans or re.search(r"@\s*[0-9.]+\s*$", humans):
-        return humans
-    try:
-        split_human_spec(humans)
-    except ValueError:
-        return humans
-    return None
+    parts = parse_people(models)
+    if all(part.path is None for part in parts):
+        return models
+    return "+".join(
+        f"{part.model}{'' if part.path is None else ':sha256:' + str(file_digest(part.path))}@{part.share!r}"
+        for part in parts
+    )
 
 
 def check_humans(humans: str) -> str:
-    """Validate a benchmark's humans (the file of a learned model must exist); returns it.
+    """Validate a benchmark's humans, a people spec (the file of a learned model must exist);
+    returns it.
 
     Raises:
-        ValueError: naming the spec: an unknown name, a bad people spec, a missing file.
+        ValueError: naming the spec: an unknown model, a bad share, a missing file.
     """
-    from socialzoo.env.human_policy import check_human_spec
-    from socialzoo.humans.models import PeopleConfig, PeopleSpecError
+    from socialzoo.humans.models import parse_people
 
-    if not isinstance(humans, str) or not humans:
-        raise ValueError(f"the humans are named by a non-empty string, got {humans!r}")
-    if people_spec(humans) is None:
-        return check_human_spec(humans)
-    try:
-        path = PeopleConfig(models=humans).learned_path
-    except PeopleSpecError as err:
-        try:
-            check_human_spec(humans)
-        except ValueError as runner_error:
-            raise ValueError(
-                f"{runner_error}; or a people spec (sf, orca, groups, learned:PATH, mixes such as "
-                f"sf@0.5+orca@0.5): {err}"
-            ) from None
-        raise
-    if path is not None and not Path(path).is_file():
-        raise ValueError(f"humans {humans!r}: no such file {path!r}")
+    for part in parse_people(humans):
+        if part.path is not None and not Path(part.path).is_file():
+            raise ValueError(f"humans {humans!r}: no such learned policy file {part.path!r}")
     return humans
 
 
-def runner_humans(config: BenchmarkConfig) -> str:
-    """The human policy spec the runner drives (RunSpec.humans): social_force when the env
-    drives the people (a people spec)."""
-    return config.humans if people_spec(config.humans) is None else "social_force"
+def people_overrides(config: BenchmarkConfig) -> dict[str, Any]:
+    """EnvConfig overrides for the run's people: none for the benchmark's (social force, no
+    counterfactual rows), else EnvConfig.people with the spec and the counterfactual rows."""
+    from socialzoo.humans.models import PeopleConfig
 
-
-def human_env_overrides(config: BenchmarkConfig, test_set: TestSet) -> dict[str, Any]:
-    """EnvConfig overrides the run's humans need on a test set: none for social-force humans;
-    for a learned policy, every human slot learned (unless env_overrides names
-    num_learned_humans) and the policy's observation and action settings; for a people spec
-    or counterfactual rows, EnvConfig.people."""
-    from socialzoo.env.human_policy import make_human_policy
-
-    spec = people_spec(config.humans)
-    out: dict[str, Any] = {}
-    if spec is None:
-        policy = make_human_policy(config.humans)
-        if policy is not None:
-            out = {"num_learned_humans": test_set.cfg.max_humans, **policy.env_overrides()}
-    if spec is not None or config.counterfactual:
-        out["people"] = {"models": spec or "sf", "counterfactual": config.counterfactual}
-    return out
+    people = PeopleConfig(models=config.humans, counterfactual=config.counterfactual)
+    if people.is_default:
+        return {}
+    return {"people": {"models": config.humans, "counterfactual": config.counterfactual}}
 
 
 def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
-    """What the config hash records about the humans: None for the default (social-force humans,
-    no human metrics), so the hashes of such runs are as before."""
-    from socialzoo.env.human_policy import split_human_spec
-    from socialzoo.humans.models import PeopleConfig
-
-    people = people_spec(config.humans)
-    if people is None:
-        _, path = split_human_spec(config.humans)
-        # People set through env_overrides: their learned file's bytes count too.
-        models = dict(config.env_overrides.get("people") or {}).get("models")
-        if path is None and isinstance(models, str):
-            path = PeopleConfig(models=models).learned_path
-    else:
-        # The env config names the people spec; a learned file's bytes are recorded here.
-        path = PeopleConfig(models=people).learned_path
-    if path is None and not config.human_metrics:
-        return None
-    return {
-        "spec": config.humans.split(":", 1)[0] if people is None else people,
-        "file_sha256": file_digest(path) if path is not None else None,
-        "human_metrics": config.human_metrics,
-    }
+    """What the config hash records about the humans besides the env config: whether human
+    metrics are recorded; None without them, so the hashes of such runs are as before."""
+    return {"human_metrics": True} if config.human_metrics else None
 
 
 def _resolve_test_sets(
@@ -443,7 +406,7 @@ def run_benchmark(
         counts[m] = n
     set_names = {m: ts.name or m for m, ts in sets.items()}
     env_configs = {
-        set_names[m]: env_config_for(ts, **{**human_env_overrides(config, ts), **dict(config.env_overrides)})
+        set_names[m]: env_config_for(ts, **{**people_overrides(config), **dict(config.env_overrides)})
         for m, ts in sets.items()
     }
     policy_kwargs = {p: dict(config.policy_kwargs.get(p, {})) for p in config.policies}
@@ -454,7 +417,6 @@ def run_benchmark(
         env_configs=env_configs,
         policies=policy_kwargs,
         batch_size=config.batch_size,
-        humans=runner_humans(config),
         human_metrics=config.human_metrics,
     )
     humans = humans_record(config)
@@ -553,11 +515,7 @@ def run_benchmark(
         files += plot_summary(summary, out)
     if config.gif:
         first = config.maps[0]
-        files.append(
-            write_episode_gif(
-                out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref", runner_humans(config)
-            )
-        )
+        files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))
     return BenchmarkResult(out, summary, files, len(pending), reused, seconds)
 
 
@@ -619,18 +577,13 @@ def write_episode_gif(
     test_set: TestSet,
     index: int,
     policy: str,
-    humans: str = "social_force",
 ) -> Path:
     """Animate one episode of `policy` on scenario `index` of a test set as a GIF
-    (socialzoo.bench.episode_video.animate_episode at its defaults), among `humans`."""
+    (socialzoo.bench.episode_video.animate_episode at its defaults), among the env config's people."""
     from socialzoo.agents import make_policy
     from socialzoo.bench.episode_video import animate_episode
-    from socialzoo.env.human_policy import make_human_policy
     from socialzoo.nav.maps import load_map
 
     scenario = test_set.scenario(index, load_map(env_config.map))
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
-    human_policy = make_human_policy(humans)
-    return animate_episode(
-        path, env_config, scenario, make_policy(policy), label=label, human_policy=human_policy
-    ).path
+    return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path

@@ -78,9 +78,6 @@ class RunSpec:
         env_configs: the env config of each test set, by test set name.
         policies: make_policy keyword arguments of each policy, by registry name.
         batch_size: env rows stepped together (B).
-        humans: the human policy spec (socialzoo.env.human_policy): "social_force", or
-            "learned:PATH", whose policy drives the env config's learned human slots
-            (EnvConfig.num_learned_humans) from their observations every step.
         human_metrics: add the humans' episode metrics (socialzoo.bench.human_metrics) to every
             trial's metrics.
     """
@@ -89,23 +86,17 @@ class RunSpec:
     env_configs: Mapping[str, EnvConfig]
     policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     batch_size: int = 64
-    humans: str = "social_force"
     human_metrics: bool = False
 
     def __post_init__(self) -> None:
-        from socialzoo.env.human_policy import split_human_spec
-
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
             raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
-        try:
-            learned = split_human_spec(self.humans)[1] is not None
-        except ValueError as err:
-            raise ValueError(f"RunSpec.humans: {err}") from None
         for name, config in self.env_configs.items():
-            if learned != (config.num_learned_humans > 0):
+            if config.num_learned_humans:
                 raise ValueError(
-                    f"RunSpec: humans {self.humans!r} with env config {name!r} of num_learned_humans = "
-                    f"{config.num_learned_humans}; learned humans need learned slots and social-force humans none"
+                    f"RunSpec: env config {name!r} has num_learned_humans = {config.num_learned_humans}, human "
+                    "agents that a learner drives; the runner drives none. Learned people are the env's own: "
+                    "EnvConfig.people.models = 'learned:PATH' (or a mix)"
                 )
         missing = sorted(set(self.test_sets) - set(self.env_configs))
         if missing:
@@ -182,14 +173,11 @@ class BatchedRunner:
     """
 
     def __init__(self, spec: RunSpec, *, compact_tail: bool = True, stack_policies: bool = True) -> None:
-        from socialzoo.env.human_policy import make_human_policy
-
         self.spec = spec
         self.compact_tail = compact_tail
         self.stack_policies = stack_policies
         self.stats = RunStats()
         self._policies: dict[str, Policy] = {}
-        self.human_policy = make_human_policy(spec.humans)
 
     def policy(self, name: str) -> Policy:
         """The policy `name`, built once."""
@@ -292,7 +280,7 @@ class BatchedRunner:
                     actions[rows] = np.asarray(policy.act(core.obs[rows])).reshape(len(rows), -1)
             obs = core.obs.copy() if on_step is not None else core.obs
             before = core.state
-            result = core.step(actions, self._human_actions(core))
+            result = core.step(actions)
             if humans is not None:
                 humans.update(
                     before, core.state, result.events.human_blocked, config.dt, core.done.all(axis=1)
@@ -356,12 +344,6 @@ class BatchedRunner:
             for group in groups.values()
             if len(group) > 1
         ]
-
-    def _human_actions(self, core: Any) -> np.ndarray | None:
-        """(B, L, 2) actions of the learned humans from their observations, or None without."""
-        if self.human_policy is None:
-            return None
-        return self.human_policy.act(core.human_obs)
 
     def _human_tracker(self, core: Any) -> Any:
         """The humans' episode metrics for `core`, or None when the spec does not ask for them."""

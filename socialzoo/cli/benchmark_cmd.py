@@ -104,9 +104,9 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--humans",
         default="social_force",
-        help="the humans: social_force (default); learned:PATH, a learned human policy file "
-        "(socialzoo train humans) that replaces the social-force humans; or a people spec of the env: "
-        "sf, orca, groups, learned:PATH, or a mix such as sf@0.5+orca@0.5. Several, comma-separated "
+        help="the people, a people spec that the env drives: social_force (sf, the default), orca, groups, "
+        "learned:PATH (a learned human policy file, socialzoo train humans), or a mix such as "
+        "sf@0.5+orca@0.5 or learned:PATH@0.4+sf@0.6. Several, comma-separated "
         "(e.g. sf,orca,groups,learned:PATH), run every policy among every crowd model with counterfactual "
         "rows and write DIR/matrix.md, matrix.csv and matrix.png (success, collisions, force, blame, "
         "the people's time lost and extra distance), one folder per model",
@@ -116,13 +116,6 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         action="store_true",
         help="also run every scenario without the robot and record the people's time lost and extra "
         "distance walked because of it (people_time_lost, people_extra_distance)",
-    )
-    parser.add_argument(
-        "--learned-humans",
-        type=positive_int,
-        default=None,
-        help="with --humans learned:PATH, how many human slots it drives (default: all; the rest stay "
-        "social-force)",
     )
     parser.add_argument(
         "--human-metrics",
@@ -193,10 +186,6 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     specs = [h.strip() for h in args.humans.split(",") if h.strip()]
     if len(specs) > 1:
         return run_matrix_command(args, specs, overrides)
-    if args.learned_humans is not None:
-        if not args.humans.startswith("learned:"):
-            return _fail("benchmark", ValueError("--learned-humans needs --humans learned:PATH"))
-        overrides["num_learned_humans"] = args.learned_humans
     chosen: dict[str, Any] = {
         "backend": args.backend,
         "address": args.address,
@@ -272,10 +261,8 @@ def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: di
 
     # "learned" alone: the shipped learned humans.
     specs = [f"learned:{shipped_humans()}" if s == "learned" else s for s in specs]
-    if args.learned_humans is not None or args.quick:
-        return _fail(
-            "benchmark", ValueError("several --humans make a matrix: without --learned-humans or --quick")
-        )
+    if args.quick:
+        return _fail("benchmark", ValueError("several --humans make a matrix: without --quick"))
     chosen: dict[str, Any] = {
         "humans": tuple(specs),
         "batch_size": args.batch_size,

@@ -1,6 +1,6 @@
-"""Benchmarks among learned humans (`humans="learned:PATH"`): deterministic for a fixed seed, the
-same whatever the batching, stored under a config hash that holds the policy file's digest, and
-reachable from `socialzoo benchmark --humans`."""
+"""Benchmarks among learned humans (`humans="learned:PATH"`, a people spec the env drives):
+deterministic for a fixed seed, stored under a config hash that holds the policy file's digest,
+and reachable from `socialzoo benchmark --humans`."""
 
 import json
 import math
@@ -8,8 +8,15 @@ import shutil
 
 import pytest
 
-from socialzoo.bench.experiment import STORE_NAME, BenchmarkConfig, run_benchmark
+from socialzoo.bench.experiment import (
+    STORE_NAME,
+    BenchmarkConfig,
+    hashed_people,
+    people_overrides,
+    run_benchmark,
+)
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS
+from socialzoo.bench.runner import RunSpec, env_config_for
 from socialzoo.bench.store import ResultsStore
 from socialzoo.cli import main as socialzoo_main
 from socialzoo.nav.scenarios import ScenarioConfig, TestSet
@@ -71,7 +78,9 @@ def test_learned_humans_run_is_deterministic_and_batch_independent(
     rows = stored(learned_run)
     assert len(rows) == TRIALS
     assert all(set(HUMAN_METRIC_KEYS) <= set(r) for r in rows)
-    # Same seed, fresh store: the same rows, one episode at a time or four at once.
+    # Same seed, fresh store: the same rows, one episode at a time or four at once. (The walker's
+    # zero weights make every product exact; a trained network's actions can differ in the last bit
+    # with the number of people acted on together, BLAS's blocking, and its episodes then differ.)
     for batch in (1, 4):
         out = tmp_path / f"b{batch}"
         run(config(f"learned:{walker_policy_path}", batch_size=batch), out, rooms)
@@ -116,26 +125,46 @@ def test_config_hash_follows_the_policy_file_digest(
 
 
 def test_bad_human_specs_fail_naming_them(tmp_path):
-    with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*no such file"):
+    with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*no such learned policy file"):
         config(f"learned:{tmp_path / 'missing.safetensors'}")
-    with pytest.raises(ValueError, match="unknown human policy 'robots'"):
+    with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*unknown model 'robots'"):
         config("robots")
-    with pytest.raises(ValueError, match="name the file as learned:PATH"):
+    with pytest.raises(ValueError, match="name the learned policy file as learned:PATH"):
         config("learned")
+
+
+def test_the_people_spec_is_the_envs_and_learner_driven_humans_are_refused(walker_policy_path, rooms):
+    walker = f"learned:{walker_policy_path}"
+    assert people_overrides(config(walker)) == {"people": {"models": walker, "counterfactual": False}}
+    mix = f"{walker}@0.4+sf@0.6"
+    assert people_overrides(config(mix, counterfactual=True)) == {
+        "people": {"models": mix, "counterfactual": True}
+    }
+    assert people_overrides(config("social_force")) == people_overrides(config("sf")) == {}
+    # The hash names a learned file by its bytes; other specs as they are.
+    assert walker_policy_path.name not in hashed_people(mix) and "sha256:" in hashed_people(mix)
+    assert hashed_people("sf@0.5+orca@0.5") == "sf@0.5+orca@0.5"
+    # num_learned_humans are a learner's agents (multi-agent training): a benchmark has none.
+    with pytest.raises(
+        ValueError, match="num_learned_humans = 2 asks for human agents that a learner drives"
+    ):
+        config(walker, env_overrides={"num_learned_humans": 2})
+    learner_slots = env_config_for(rooms["rooms"], num_learned_humans=2)
+    with pytest.raises(ValueError, match="'rooms-test' has num_learned_humans = 2"):
+        RunSpec(test_sets=rooms, env_configs={"rooms-test": learner_slots})
 
 
 def test_cli_benchmark_with_learned_humans(rooms_map_path, walker_policy_path, tmp_path, capsys):
     out = tmp_path / "results"
     argv = ["benchmark", "--policies", "ref", "--maps", str(rooms_map_path), "--trials", "2"]
     argv += ["--max-steps", "60", "--workers", "1", "--batch-size", "2", "--no-figures", "--no-progress"]
-    argv += ["--humans", f"learned:{walker_policy_path}", "--learned-humans", "2", "--human-metrics"]
+    argv += ["--humans", f"learned:{walker_policy_path}@0.5+sf@0.5", "--human-metrics"]
     assert socialzoo_main([*argv, "--out", str(out)]) == 0
     assert "2 trials run, 0 read from the store" in capsys.readouterr().out
     assert (out / "humans.md").is_file() and (out / "humans.csv").is_file()
     env = next(iter(json.loads((out / "config.json").read_text())["env_configs"].values()))
-    assert env["num_learned_humans"] == 2 and env["human_action_frame"] == "human"
-    # --learned-humans needs learned humans; a missing file is named.
-    assert socialzoo_main(["benchmark", "--learned-humans", "2", "--out", str(out)]) == 2
-    assert "--learned-humans needs --humans learned:PATH" in capsys.readouterr().err
+    assert env["people"]["models"] == f"learned:{walker_policy_path}@0.5+sf@0.5"
+    assert env["num_learned_humans"] == 0
+    # A missing file is named.
     assert socialzoo_main(["benchmark", "--humans", "learned:nowhere.safetensors", "--out", str(out)]) == 2
     assert "nowhere.safetensors" in capsys.readouterr().err

@@ -77,19 +77,3 @@ def test_cli_benchmark_with_several_humans_writes_the_matrix(rooms_map_path, tmp
     assert (out / "matrix.csv").is_file() and (out / "0-sf").is_dir() and (out / "1-groups").is_dir()
     assert socialzoo_main([*argv, "--humans", "sf,orca@0.5", "--out", str(out)]) == 2
     assert "the shares sum to 0.5" in capsys.readouterr().err
-
-
-def test_benchmark_humans_name_the_runners_humans_or_the_envs_people(walker_policy_path):
-    from socialzoo.bench.experiment import BenchmarkConfig, human_env_overrides, people_spec, runner_humans
-    from socialzoo.nav.scenarios import get_test_set
-
-    assert people_spec("social_force") is None and people_spec(f"learned:{walker_policy_path}") is None
-    assert people_spec(f"learned:{walker_policy_path}@1") == f"learned:{walker_policy_path}@1"
-    assert people_spec("sf@0.5+orca@0.5") == "sf@0.5+orca@0.5"
-    test_set = get_test_set("gdc1-quick")
-    orca = BenchmarkConfig(humans="orca", counterfactual=True)
-    assert runner_humans(orca) == "social_force"
-    assert human_env_overrides(orca, test_set) == {"people": {"models": "orca", "counterfactual": True}}
-    assert human_env_overrides(BenchmarkConfig(), test_set) == {}
-    with pytest.raises(ValueError, match="counterfactual must be a bool"):
-        BenchmarkConfig(counterfactual=1)
