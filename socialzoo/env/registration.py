@@ -1,15 +1,22 @@
-"""Gymnasium ids of socialzoo's environments.
+"""Gymnasium ids of socialzoo's tasks, and the one Version History of every env.
 
-Registry kwargs are plain JSON values (EnvConfig overrides), so every env spec round-trips.
-Changing what a seeded rollout does bumps every id's version (ENV_VERSION) and adds a line to the
-Version History of the env docstrings; an old version is not registered, so gymnasium.make of it
-raises gymnasium's DeprecatedEnv naming the current id.
+Every id is `register_task(env_id, task, **config)`: the task's TaskEnv and TaskVectorEnv, with
+registry kwargs as plain JSON values (the task's name and config overrides), so every spec
+round-trips. Changing what a seeded rollout of the action-selection ids does bumps their version
+(ENV_VERSION) and adds a line below; an old version is not registered, so gymnasium.make of it
+raises gymnasium's DeprecatedEnv naming the current id. The CrowdNav ids have their own version
+(socialzoo.env.crowd_variants.CROWD_ENV_VERSION: v1, the initial release). This history is the
+only copy: the adapters' docstrings point here.
 
-Version History:
+Version History (action-selection ids, their ParallelEnv and TorchRL envs):
     v2: the robot recovers when it makes no progress (backs off, replans over another edge),
         its carrot is in sight only along a line keeping its full wall distance, its plans
         join the graph by lines it can drive; people in contact with the robot do not press
         into it; episode metrics gain `stuck` (and failure causes).
+        Within v2, default rollouts unchanged: learned people that the env drives
+        (people="learned:PATH") keep off a robot they touch as social-force people do (they
+        pressed into it); the adapters became one per ecosystem over the task interface, and
+        only infos changed (socialzoo.env.tasks; tests/env/test_golden_rollouts.py).
     v1: force and blame no longer skip the passed human (only the followed one, SPEC 9);
         the robot's carrot stays in sight of its wall distance and its plans keep clear
         of walls; scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).

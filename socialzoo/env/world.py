@@ -15,7 +15,7 @@ from socialzoo.core.config import RobotConfig, WorldConfig
 from socialzoo.core.robot import step_robot, world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.humans.models import SOCIAL_FORCE
+from socialzoo.humans.models import ORCA
 from socialzoo.humans.motion import keep_off_robots
 from socialzoo.humans.people import step_people
 from socialzoo.humans.routes import advance_waypoints
@@ -105,10 +105,11 @@ def step_world(
         human_learned,
     )
     if robot_visible:
-        # Social-force people in contact with a robot do not press deeper into it
-        # (socialzoo.humans.motion.keep_off_robots: the model has no body force).
+        # People the social force moves (its own and learned people, whose desired velocity it
+        # follows) do not press deeper into a robot they touch (socialzoo.humans.motion.
+        # keep_off_robots: the model has no body force); ORCA people keep off by construction.
         human_pos, human_vel = keep_off_robots(
-            state.human_pos, human_pos, human_vel, state.human_mask & (state.human_model == SOCIAL_FORCE),
+            state.human_pos, human_pos, human_vel, state.human_mask & (state.human_model != ORCA),
             state.robot_pose[..., :2], cfg.human_collision_distance, walls,
         )  # fmt: skip
     waypoint, direction = advance_waypoints(

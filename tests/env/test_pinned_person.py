@@ -10,12 +10,14 @@ import pytest
 import socialzoo.env.world as world
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.walls import WallIndex
+from socialzoo.humans.models import LEARNED
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
 
 
-def _meet_in_a_corridor(width: float, steps: int = 800) -> tuple[int, int, float]:
+def _meet_in_a_corridor(width: float, steps: int = 800, learned: bool = False) -> tuple[int, int, float]:
     """(contact steps, longest contact, least centre distance) of a person walking along a
-    corridor through a robot that halts in it."""
+    corridor through a robot that halts in it (a learned person: one whose desired velocity,
+    straight along the corridor, comes from outside, as an env-driven learned policy's does)."""
     walls = WallIndex(
         np.array([[0, 0, 10, 0], [0, width, 10, width], [0, 0, 0, width], [10, 0, 10, width]], float)
     )
@@ -25,11 +27,15 @@ def _meet_in_a_corridor(width: float, steps: int = 800) -> tuple[int, int, float
         human_routes=(np.array([[1.0, width / 2], [9.5, width / 2]]),), human_speed=[1.0],
     )  # fmt: skip
     state = scenarios_to_state([scenario])
+    desired = mask = None
+    if learned:
+        state.human_model[:] = LEARNED
+        desired, mask = np.array([[[1.0, 0.0]]]), np.ones((1, 1), bool)
     contact = longest = run = 0
     least = np.inf
     for _ in range(steps):
         state, events = world.step_world(
-            state, walls, WorldConfig(), np.zeros((1, 1, 2)), np.ones((1, 1), bool)
+            state, walls, WorldConfig(), np.zeros((1, 1, 2)), np.ones((1, 1), bool), desired, mask
         )
         touching = bool(events.robot_human[0, 0, 0])
         contact += touching
@@ -39,9 +45,10 @@ def _meet_in_a_corridor(width: float, steps: int = 800) -> tuple[int, int, float
     return contact, longest, least
 
 
+@pytest.mark.parametrize("learned", [False, True])
 @pytest.mark.parametrize("width", [1.0, 1.4])
-def test_a_person_does_not_press_into_a_standing_robot(width):
-    contact, longest, least = _meet_in_a_corridor(width)
+def test_a_person_does_not_press_into_a_standing_robot(width, learned):
+    contact, longest, least = _meet_in_a_corridor(width, learned=learned)
     assert longest <= 2 and contact <= 10  # a touch counts (as in the paper), pressing does not
     assert least > 0.38
 
