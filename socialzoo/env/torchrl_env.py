@@ -107,14 +107,7 @@ class SocialNavTorchEnv(EnvBase):
         ValueError: bad config overrides, batch size, or too few legal poses for the robots.
 
     ## Version History
-    - v2: the robot recovers when it makes no progress (backs off, replans over another edge);
-      its carrot is in sight only along a line keeping its full wall distance; its plans join the
-      graph by lines it can drive; people in contact with the robot do not press into it;
-      episode metrics gain `stuck` and the failure causes (socialzoo.env.metrics).
-    - v1: force and blame no longer skip the passed human (only the followed one, SPEC 9); the
-      robot's carrot stays in sight of its wall distance and its plans keep clear of walls;
-      scenarios draw only feasible start/goal pairs (unchanged on GDC1/GHC3).
-    - v0: initial release.
+    The action-selection ids' (socialzoo.env.registration's module docstring).
     """
 
     def __init__(
