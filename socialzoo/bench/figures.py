@@ -13,13 +13,12 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import FAILURE_LABELS, MAP_ROLES, paper_success, policy_labels
+from socialzoo.core.metrics import axis_label, registered
 
 FIGURE_FORMATS = ("png", "pdf")
-# Panels of the metrics figure: (metric, axis label).
-METRIC_PANELS: tuple[tuple[str, str], ...] = (
-    ("mean_force", "force (mean per step)"),
-    ("mean_blame", "blame (mean per step)"),
-    ("time_to_goal", "time to goal, s (successes)"),
+# Panels of the metrics figure: (metric, axis label), the labels from the metric registry.
+METRIC_PANELS: tuple[tuple[str, str], ...] = tuple(
+    (name, axis_label(name)) for name in registered("mean_force", "mean_blame", "time_to_goal")
 )
 _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
 

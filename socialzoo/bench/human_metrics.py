@@ -32,23 +32,15 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.metrics import metric
+from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.human_agents import CONTACT_DISTANCE
 
-# Keys of a summary, in order (the prefix keeps them apart from the robot's metrics).
-HUMAN_METRIC_KEYS = (
-    "humans_goal_rate",
-    "humans_waypoints_per_min",
-    "humans_hh_collisions",
-    "humans_hw_collisions",
-    "humans_hr_collisions",
-    "humans_min_human_distance",
-    "humans_min_wall_distance",
-    "humans_min_robot_distance",
-    "humans_mean_speed",
-    "humans_path_ratio",
-)
+# Keys of a summary, in order (the prefix keeps them apart from the robot's metrics): the
+# registry's humans' metrics (socialzoo.core.metrics).
+HUMAN_METRIC_KEYS = metric_names("humans")
 # A human's body radius, m: a wall closer than this to its centre touches it.
 HUMAN_RADIUS = 0.2
 
@@ -233,20 +225,12 @@ def _route_lengths(state: WorldState, rows: np.ndarray, radius: float) -> np.nda
 
 
 # ---------------------------------------------------------------------------- tables
-# Descriptions of the metrics in the tables, and their digits.
+# Descriptions of the metrics in the tables (with their units), their digits, and the counts
+# whose means get a bootstrap interval: from the metric registry.
 HUMAN_METRIC_LABELS: dict[str, tuple[str, int]] = {
-    "humans_goal_rate": ("route goal reach rate", 3),
-    "humans_waypoints_per_min": ("waypoints per human-minute", 2),
-    "humans_hh_collisions": ("human-human collisions per episode", 2),
-    "humans_hw_collisions": ("human-wall collisions per episode", 2),
-    "humans_hr_collisions": ("human-robot collisions per episode", 3),
-    "humans_min_human_distance": ("min human-human distance (m)", 3),
-    "humans_min_wall_distance": ("min human-wall distance (m)", 3),
-    "humans_min_robot_distance": ("min human-robot distance (m)", 3),
-    "humans_mean_speed": ("mean speed (m/s)", 3),
-    "humans_path_ratio": ("path length / route length", 3),
+    key: (metric(key).heading, metric(key).digits) for key in HUMAN_METRIC_KEYS
 }
-_COUNT_KEYS = ("humans_hh_collisions", "humans_hw_collisions", "humans_hr_collisions")
+_COUNT_KEYS = tuple(key for key in HUMAN_METRIC_KEYS if metric(key).count)
 
 
 def summarize_humans(

@@ -18,6 +18,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.metrics import METRICS
+
 logger = logging.getLogger(__name__)
 
 STORE_FORMAT = "socialzoo-results"
@@ -50,7 +52,27 @@ class StoreError(Exception):
     """A results file that cannot be used: not a socialzoo results store, corrupted, or too new."""
 
 
-def _kind(value: Any) -> str:
+def _kind(name: str, value: Any) -> str:
+    """The column kind of a new metric column: the metric registry's (socialzoo.core.metrics) for
+    a registered name, so a column has one type whichever task stores first (the CrowdNav task
+    reports its flags and counts as floats); else the type of the first value.
+
+    Raises:
+        TypeError: not a bool, int or float, or a value that a registered flag or count cannot
+            hold (the message names the metric).
+    """
+    kind = _value_kind(value)
+    registered = METRICS.get(name)
+    if registered is None:
+        return kind
+    if registered.kind == "bool" and value not in (0, 1):
+        raise TypeError(f"metric {name!r} is registered as a flag (bool), got {value!r}")
+    if registered.kind == "int" and not float(value).is_integer():
+        raise TypeError(f"metric {name!r} is registered as a count (int), got {value!r}")
+    return registered.kind
+
+
+def _value_kind(value: Any) -> str:
     if isinstance(value, bool):
         return "bool"
     if isinstance(value, int):
@@ -297,7 +319,7 @@ class ResultsStore:
         return {int(r[0]) for r in rows}
 
     def _ensure_columns(self, metrics: Mapping[str, Any]) -> None:
-        new = {k: _kind(v) for k, v in metrics.items() if k not in self._kinds}
+        new = {k: _kind(k, v) for k, v in metrics.items() if k not in self._kinds}
         if not new:
             return
         for name in new:
@@ -315,7 +337,9 @@ class ResultsStore:
 
         Args:
             rows: dicts with policy, map, test_set, scenario_index, seed, config_hash,
-                package_version and metrics (a dict of bool, int or float values).
+                package_version and metrics (a dict of bool, int or float values); a new
+                metric's column takes its kind from the metric registry where the name is
+                registered (socialzoo.core.metrics), else from its first value.
 
         Returns:
             The number of new rows.

@@ -28,26 +28,31 @@ from socialzoo.bench.stats import (
     rate_interval,
 )
 from socialzoo.core.files import read_text
+from socialzoo.core.metrics import metric, registered, table_heading
 from socialzoo.env.metrics import failure_cause
 
-# Metrics of the tables: (column, description). time_to_goal is averaged over successful
-# episodes only (the paper's figure); every other metric over all episodes with a finite value.
-TABLE_METRICS: tuple[tuple[str, str], ...] = (
-    ("mean_force", "force (mean per step)"),
-    ("mean_blame", "blame (mean per step)"),
-    ("time_to_goal", "time to goal, s (successful episodes only)"),
-    ("average_step_reward", "average step reward"),
-    ("human_collisions", "human collision steps"),
-    ("wall_collisions", "wall collision steps"),
-    ("min_human_distance", "minimum distance to a human, m"),
-    ("personal_space_intrusion_time", "personal-space intrusion time, s"),
-    ("path_irregularity", "path irregularity, rad"),
-    ("path_length_ratio", "path length ratio"),
-    ("jerk", "jerk, m/s^3"),
-    ("distance_travelled", "distance travelled, m"),
-    ("max_force", "force (max per episode)"),
-    ("max_blame", "blame (max per episode)"),
-    ("stuck", "episodes stuck (share; no progress for 10 s while not halting)"),
+# Metrics of the tables, in order: (column, heading), the headings from the metric registry
+# (socialzoo.core.metrics). time_to_goal is averaged over successful episodes only (the paper's
+# figure); every other metric over all episodes with a finite value.
+TABLE_METRICS: tuple[tuple[str, str], ...] = tuple(
+    (name, table_heading(name))
+    for name in registered(
+        "mean_force",
+        "mean_blame",
+        "time_to_goal",
+        "average_step_reward",
+        "human_collisions",
+        "wall_collisions",
+        "min_human_distance",
+        "personal_space_intrusion_time",
+        "path_irregularity",
+        "path_length_ratio",
+        "jerk",
+        "distance_travelled",
+        "max_force",
+        "max_blame",
+        "stuck",
+    )
 )
 # Why episodes fail (socialzoo.env.metrics.failure_cause), each a share of all episodes with a
 # Wilson interval: columns failure_<cause>_rate, _ci_low, _ci_high; labels for the tables.
@@ -57,9 +62,10 @@ FAILURE_LABELS: dict[str, str] = {
     "stuck": "stuck",
     "timeout": "timeout while moving",
 }
-SUCCESS_ONLY = ("time_to_goal",)
-# Counts per episode: skewed, mostly zero, never negative; their means get a bootstrap interval.
-COUNT_METRICS = ("human_collisions", "wall_collisions")
+# The table's metrics averaged over successful episodes only, and its counts per episode (skewed,
+# mostly zero, never negative: their means get a bootstrap interval), as the registry flags them.
+SUCCESS_ONLY = tuple(name for name, _ in TABLE_METRICS if metric(name).success_only)
+COUNT_METRICS = tuple(name for name, _ in TABLE_METRICS if metric(name).count)
 # Seed of the bootstrap resamples: with the cell's names it seeds one generator per table cell,
 # so a table is reproducible and a cell does not change when other policies or maps are added.
 BOOTSTRAP_SEED = 0
@@ -328,10 +334,6 @@ def _map_header(map_name: str) -> str:
     return f"{role} ({map_name})" if role else map_name
 
 
-def _digits(name: str) -> int:
-    return 2 if name in ("time_to_goal", "human_collisions", "wall_collisions", "distance_travelled") else 4
-
-
 def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benchmark results") -> str:
     """The Markdown report: the paper's success table, then one table per metric.
 
@@ -386,7 +388,9 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benc
                 if e is None:
                     cells.append("-")
                     continue
-                text = _fmt_ci(e[f"{name}_mean"], e[f"{name}_ci_low"], e[f"{name}_ci_high"], _digits(name))
+                text = _fmt_ci(
+                    e[f"{name}_mean"], e[f"{name}_ci_low"], e[f"{name}_ci_high"], metric(name).digits
+                )
                 if name in SUCCESS_ONLY:
                     text += f" (n={e[f'{name}_n']})"
                 cells.append(text)

@@ -1,4 +1,5 @@
-"""The batched world's lowest layer: state arrays, geometry, walls, robot kinematics, laser, configs.
+"""The batched world's lowest layer: state arrays, geometry, walls, robot kinematics, laser, configs,
+and the metric registry (socialzoo.core.metrics).
 
 numpy (and numba kernels) only; every other subpackage builds on it.
 """

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.metrics import metric, registered
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 REPLAY_FORMAT = "socialzoo-replay/1"
@@ -21,6 +22,26 @@ REPLAY_FORMAT = "socialzoo-replay/1"
 # Sub-policy colours of the timeline, in ACTION_NAMES order (GoAlone, Halt, Follow, Pass).
 ACTION_COLORS = ("#3a9d5d", "#d6404e", "#3f78d0", "#a25ad0")
 NO_ACTION_COLOR = "#9a9a9a"
+# The metrics the viewer's table shows under a panel, in order, where the episode has them (the
+# action-selection task's and the CrowdNav task's); their labels, units and digits come from the
+# metric registry (socialzoo.core.metrics).
+VIEWER_METRICS = registered(
+    "success",
+    "collision",
+    "time_to_goal",
+    "navigation_time",
+    "human_collisions",
+    "wall_collisions",
+    "mean_force",
+    "mean_blame",
+    "total_reward",
+    "return",
+    "min_human_distance",
+    "min_separation",
+    "distance_travelled",
+    "path_length",
+    "path_length_ratio",
+)
 
 
 def _array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) -> np.ndarray:
@@ -325,6 +346,11 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
     }
 
 
+def metric_rows(names: Sequence[str] = VIEWER_METRICS) -> list[list[Any]]:
+    """The viewer's metric table: [name, heading, digits, kind] per metric, from the registry."""
+    return [[m.name, m.heading, m.digits, m.kind] for m in map(metric, names)]
+
+
 def encode_replay(
     scene: ReplayScene,
     traces: Sequence[EpisodeTrace],
@@ -363,5 +389,6 @@ def encode_replay(
             "goalRadius": scene.goal_radius,
         },
         "actions": {"names": list(ACTION_NAMES), "colors": list(ACTION_COLORS), "none": NO_ACTION_COLOR},
+        "metricRows": metric_rows(),
         "episodes": [encode_episode(t, enc) for t in traces],
     }

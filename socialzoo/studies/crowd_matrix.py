@@ -29,17 +29,33 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, write_text_atomic
+from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.nav.scenarios import TestSet
 
+
+def _cell_format(name: str) -> tuple[str, str, int, float]:
+    """(trial metric, label, digits, scale) of a metric in the matrix, from the metric registry:
+    a flag as a percentage (its share's digits less 2), any other metric as its mean."""
+    m = metric(name)
+    if m.kind == "bool":
+        return name, axis_label(name), max(m.digits - 2, 0), 100.0
+    return name, m.heading, m.digits, 1.0
+
+
 # (trial metric, label, digits, scale): what a cell shows.
-METRICS: tuple[tuple[str, str, int, float], ...] = (
-    ("success", "success (%)", 1, 100.0),
-    ("human_collisions", "human collisions per episode", 2, 1.0),
-    ("mean_force", "force (mean per step)", 4, 1.0),
-    ("mean_blame", "blame (mean per step)", 4, 1.0),
-    ("people_time_lost", "people's time lost (s per person)", 2, 1.0),
-    ("people_extra_distance", "people's extra distance (m per person)", 3, 1.0),
+METRICS: tuple[tuple[str, str, int, float], ...] = tuple(
+    map(
+        _cell_format,
+        registered(
+            "success",
+            "human_collisions",
+            "mean_force",
+            "mean_blame",
+            "people_time_lost",
+            "people_extra_distance",
+        ),
+    )
 )
 
 
@@ -173,7 +189,7 @@ def crowd_matrix(
                 }
                 for key, _, _, scale in METRICS:
                     values = np.array([np.nan if t.get(key) is None else float(t[key]) for t in group])
-                    if key == "success":
+                    if metric(key).kind == "bool":
                         ci = rate_interval(int(np.nansum(values)), len(values), 0.9)  # Wilson
                     else:
                         ci = mean_interval(values, 0.9)
@@ -261,7 +277,9 @@ def plot_matrix(rows: list[dict[str, Any]], config: MatrixConfig, path: Path) ->
         grid = np.array(
             [[by.get((p, s), {}).get(f"{key}_mean", np.nan) for s in config.humans] for p in config.policies]
         )
-        image = ax.imshow(grid, cmap="viridis_r" if key != "success" else "viridis", aspect="auto")
+        # Better is brighter (viridis runs dark to bright), whichever way the metric improves.
+        better = metric(key).higher_is_better
+        image = ax.imshow(grid, cmap="viridis" if better else "viridis_r", aspect="auto")
         for (i, j), value in np.ndenumerate(grid):
             if np.isfinite(value):
                 red, green, blue, _ = image.cmap(image.norm(value))

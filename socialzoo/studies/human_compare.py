@@ -24,16 +24,27 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import write_text_atomic
+from socialzoo.core.metrics import metric, registered
 from socialzoo.nav.scenarios import TestSet, validation_set
 
 POPULATIONS = ("social_force", "learned")
-# The robot's metrics shown beside the humans' (summary keys of socialzoo.bench.tables.summarize).
-ROBOT_METRICS: tuple[tuple[str, str, int], ...] = (
-    ("success_rate", "robot success rate", 3),
-    ("mean_force_mean", "robot force (mean per step)", 4),
-    ("mean_blame_mean", "robot blame (mean per step)", 4),
+
+
+def _robot_row(name: str) -> tuple[str, str, int]:
+    """(summary key of socialzoo.bench.tables.summarize, label, digits) of a robot metric, from the
+    metric registry: a flag's rate ("success_rate"), any other metric's mean ("mean_force_mean")."""
+    m = metric(name)
+    if m.kind == "bool":
+        return f"{name}_rate", f"robot {m.label} rate", m.digits
+    return f"{name}_mean", f"robot {m.heading}", m.digits
+
+
+# The robot's metrics shown beside the humans'.
+ROBOT_METRICS: tuple[tuple[str, str, int], ...] = tuple(
+    map(_robot_row, registered("success", "mean_force", "mean_blame"))
 )
-COLLISION_KEYS = ("humans_hh_collisions", "humans_hw_collisions", "humans_hr_collisions")
+# The humans' collision counts (their targets: no more with learned humans).
+COLLISION_KEYS = tuple(key for key in HUMAN_METRIC_KEYS if metric(key).count)
 # Target: the learned reach rate is at least this fraction of the social-force one.
 REACH_TOLERANCE = 0.10
 

@@ -26,6 +26,7 @@ from typing import Any
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, summarize
+from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.nav.scenarios import TestSet, get_test_set, validation_set
 
 logger = logging.getLogger(__name__)
@@ -40,11 +41,10 @@ VALIDATION_SET = validation_set("gdc1")
 _CHECKPOINT = re.compile(r"step_(\d+)\.safetensors$")
 # The label of a run of another seed than the first: "<learner>-s<seed>" (socialzoo.reproduce).
 _SEED_SUFFIX = re.compile(r"-s\d+$")
-# Curves: (summary key, axis label, scale).
-CURVE_PANELS: tuple[tuple[str, str, float], ...] = (
-    ("success", "success, %", 100.0),
-    ("time_to_goal", "time to goal, s (successes)", 1.0),
-    ("average_step_reward", "average step reward", 1.0),
+# Curves: (metric, axis label, scale), the labels from the metric registry; flags as percentages.
+CURVE_PANELS: tuple[tuple[str, str, float], ...] = tuple(
+    (name, axis_label(name), 100.0 if metric(name).kind == "bool" else 1.0)
+    for name in registered("success", "time_to_goal", "average_step_reward")
 )
 CSV_COLUMNS = (
     "label",
@@ -224,7 +224,7 @@ def plot_curves(
     labels = list(dict.fromkeys(r["label"] for r in rows))
     bases = list(dict.fromkeys(_SEED_SUFFIX.sub("", label) for label in labels))
     colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
-    for ax, (key, axis_label, scale) in zip(axes, CURVE_PANELS, strict=True):
+    for ax, (key, ylabel, scale) in zip(axes, CURVE_PANELS, strict=True):
         mean_key = "success_rate" if key == "success" else f"{key}_mean"
         low_key, high_key = (
             ("success_ci_low", "success_ci_high") if key == "success" else (f"{key}_ci_low", f"{key}_ci_high")
@@ -253,7 +253,7 @@ def plot_curves(
                     label=policy_label(ref["label"]),
                 )
         ax.set_xlabel("training steps (thousands)")
-        ax.set_ylabel(axis_label)
+        ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()

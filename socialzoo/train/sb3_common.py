@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.metrics import registered
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.skeleton import CheckpointSchedule, Trainer, TrainingRun, run_training
@@ -194,7 +195,9 @@ def make_training_env(args: SB3Args, config: EnvConfig) -> tuple[Any, Any]:
 
 
 # Episode metrics every SB3 trainer logs to TensorBoard as episode/<key> (those its task reports).
-EPISODE_METRICS = ("success", "reached", "collision", "timeout", "average_step_reward", "navigation_time")
+EPISODE_METRICS = registered(
+    "success", "reached", "collision", "timeout", "average_step_reward", "navigation_time"
+)
 
 
 def learn_with_checkpoints(

@@ -13,11 +13,15 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.metrics import metric, registered
 from socialzoo.core.validation import check_int
 from socialzoo.train.skeleton import Evaluator
 
-# The metrics an evaluation reports, averaged over its scenarios.
-EVALUATION_METRICS = ("success", "reached", "time_to_goal", "average_step_reward", "mean_force", "mean_blame")
+# The metrics an evaluation reports, averaged over its scenarios (the success-only ones, as the
+# metric registry flags them, over the successful ones).
+EVALUATION_METRICS = registered(
+    "success", "reached", "time_to_goal", "average_step_reward", "mean_force", "mean_blame"
+)
 
 
 def validation_evaluator(
@@ -66,7 +70,9 @@ def validation_evaluator(
         out = {}
         for key in EVALUATION_METRICS:
             values = [
-                float(m[key]) for m in metrics if key in m and (key != "time_to_goal" or m.get("success"))
+                float(m[key])
+                for m in metrics
+                if key in m and (not metric(key).success_only or m.get("success"))
             ]
             out[key] = float(np.mean(values)) if values else float("nan")
         return out

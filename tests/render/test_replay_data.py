@@ -2,12 +2,15 @@
 rounded numbers, fewer laser rays)."""
 
 import json
+from importlib import resources
 
 import numpy as np
 import pytest
 
+from socialzoo.core.metrics import metric
 from socialzoo.render.replay_data import (
     REPLAY_FORMAT,
+    VIEWER_METRICS,
     Encoding,
     encode_episode,
     encode_replay,
@@ -108,3 +111,16 @@ def test_encode_replay(make_trace, make_scene):
         encode_replay(make_scene(), [])
     with pytest.raises(ValueError, match="view must be 'follow' or 'map', got 'top'"):
         encode_replay(make_scene(), [make_trace()], view="top")
+
+
+def test_the_viewer_reads_metric_labels_from_the_registry(make_trace, make_scene):
+    data = encode_replay(make_scene(), [make_trace()])
+    rows = data["metricRows"]
+    assert [r[0] for r in rows] == list(VIEWER_METRICS)
+    for name, heading, digits, kind in rows:
+        m = metric(name)
+        assert (heading, digits, kind) == (m.heading, m.digits, m.kind)
+    assert ["time_to_goal", "time to goal, s", 2, "float"] in rows
+    # The page's script has no list of its own: it shows the rows the data carries.
+    script = resources.files("socialzoo.render").joinpath("viewer", "replay.js").read_text(encoding="utf-8")
+    assert "DATA.metricRows" in script and '"time to goal' not in script

@@ -41,18 +41,9 @@
   const CHART_LABEL_SPACING = 18; // px between tick labels (10 px text): no two ever touch
   const MIN_RELATIVE_SPAN = 0.1; // a chart spans at least this fraction of its largest |value|
   const NICE_MANTISSAS = [1, 2, 2.5, 5];
-  const METRIC_ROWS = [
-    ["success", "success"],
-    ["time_to_goal", "time to goal, s"],
-    ["human_collisions", "human collisions"],
-    ["wall_collisions", "wall collisions"],
-    ["mean_force", "mean force"],
-    ["mean_blame", "mean blame"],
-    ["total_reward", "total reward"],
-    ["min_human_distance", "closest human, m"],
-    ["distance_travelled", "distance, m"],
-    ["path_length_ratio", "path length ratio"],
-  ];
+  // [metric, heading, digits, kind]: the metric registry's (socialzoo.core.metrics), written by
+  // socialzoo.render.replay_data.metric_rows.
+  const METRIC_ROWS = DATA.metricRows || [];
 
   const episodes = DATA.episodes;
   const dt = episodes[0].dt;
@@ -251,7 +242,7 @@
       const name = document.createElement("span");
       name.textContent = data.label;
       const outcome = document.createElement("span");
-      const ok = data.metrics && data.metrics.success === true;
+      const ok = Boolean(data.metrics && data.metrics.success); // true, or 1 from the CrowdNav task
       outcome.className = "outcome " + (ok ? "success" : "failure");
       outcome.textContent = (data.outcome || "") + ", " + (data.steps * dt).toFixed(2) + " s";
       title.append(name, outcome);
@@ -284,11 +275,13 @@
       const rows = METRIC_ROWS.filter(([key]) => metrics && key in metrics);
       for (let i = 0; i < rows.length; i += 2) {
         const tr = document.createElement("tr");
-        for (const [key, label] of rows.slice(i, i + 2)) {
+        for (const [key, label, digits, kind] of rows.slice(i, i + 2)) {
           const a = document.createElement("td");
           a.textContent = label;
           const b = document.createElement("td");
-          b.textContent = fmt(metrics[key], 3);
+          const value = metrics[key];
+          // A flag the CrowdNav task reports as 0.0 / 1.0 reads as one the other task reports as a bool.
+          b.textContent = fmt(kind === "bool" && typeof value === "number" ? value !== 0 : value, digits);
           tr.append(a, b);
         }
         table.append(tr);
