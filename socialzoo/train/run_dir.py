@@ -7,12 +7,16 @@ Every trainer writes into one folder:
     checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
     <policy file>     the final policy
 
-A folder already holding a run of other arguments is refused, so two runs never mix; a finished
-run of the same arguments is reported as done, so a rerun repeats nothing. An argument added to a
-trainer after a run was recorded does not count against it while it has its default value. An
-input file argument (a trainer's `inputs`, such as imitation's demonstrations) that lies where it
-lay relative to the run's `out` names the same input, so a work folder moved or copied whole
-together with its inputs (a `socialzoo reproduce` folder) holds the same runs.
+Paths in run.json are relative to the run folder, never the machine's absolute ones: the path
+arguments (those holding a Path, `out`, and the trainer's `inputs`), those same paths and any
+absolute path on the command line and in the results (`recorded`). A folder already holding a run
+of other arguments is refused, so two runs never mix; a finished run of the same arguments is
+reported as done, so a rerun repeats nothing. An argument added to a trainer after a run was
+recorded does not count against it while it has its default value. A path argument that lies
+where it lay relative to the run folder names the same file, so a work folder moved or copied
+whole together with its inputs (a `socialzoo reproduce` folder) holds the same runs; so does an
+input file (a trainer's `inputs`, such as imitation's demonstrations) of a record written before
+paths were relative, when it lies where it lay relative to the run's `out`.
 Trainers use the folder through their skeleton (socialzoo.train.skeleton).
 """
 
@@ -92,19 +96,20 @@ class RunDir:
         self.path.mkdir(parents=True, exist_ok=True)
         self.file = self.path / record_name
         self.algo = algo
-        resolved = plain(args)
+        self._paths = given_paths(args, inputs)
         existing = self.read()
         if existing is not None:
-            changed = differing_args(existing, algo, args, volatile, inputs)
+            changed = differing_args(existing, algo, args, volatile, inputs, self.path)
             if changed is not None:
                 raise RunDirError(
                     f"{self.file}: {self.path} holds a {existing.get('algo')} run with other arguments "
                     f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
                 )
+        resolved = recorded(plain(args), self.path, self._paths)
         self.record: dict[str, Any] = existing or {
             "algo": algo,
             "args": resolved,
-            "command": shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]]),
+            "command": recorded_command([Path(sys.argv[0]).name, *sys.argv[1:]], self.path, self._paths),
             "seed": resolved.get("seed"),
             "package_version": __version__,
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -124,7 +129,7 @@ class RunDir:
     def finish(self, **results: Any) -> None:
         """Mark the run finished and record `results` (plain JSON: wall time, final metrics, files)."""
         self.record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        self.record["results"] = plain(results)
+        self.record["results"] = recorded(plain(results), self.path, self._paths)
         _write_json(self.file, self.record)
 
     def checkpoint_path(self, step: int, suffix: str) -> Path:
@@ -166,20 +171,27 @@ def differing_args(
     args: Any,
     volatile: tuple[str, ...],
     inputs: tuple[str, ...] = (),
+    folder: str | Path | None = None,
 ) -> list[str] | None:
     """None when `record` is a run of `algo` with these arguments (fields in `volatile` aside,
-    fields the record does not have yet at their defaults, and `inputs` files at the same place
-    relative to `out` as recorded); else the differing argument names (empty when only the
-    algorithm differs)."""
-    ours_all, theirs_all = plain(args), record.get("args", {})
+    fields the record does not have yet at their defaults, path arguments at the same place
+    relative to the run folder as recorded, and, in a record of absolute or working-folder paths,
+    `inputs` files at the same place relative to `out`); else the differing argument names (empty
+    when only the algorithm differs). `folder`: the run folder (default args.out)."""
+    given = given_paths(args, inputs)
+    folder = Path(args.out) if folder is None else Path(folder)
+    as_given, theirs_all = plain(args), record.get("args", {})
+    ours_all = recorded(as_given, folder, given)
     identity = {k: v for k, v in ours_all.items() if k not in volatile}
     theirs = {k: v for k, v in theirs_all.items() if k not in volatile}
-    for name, default in _defaults(args).items():
+    for name, default in recorded(_defaults(args), folder, given).items():
         if name not in theirs and name in identity and identity[name] == default:
             theirs[name] = default
-    for name in inputs:
+    # A record of working-folder or absolute paths: its out is not as the run folder sees it.
+    old_record = theirs_all.get("out") != ours_all.get("out")
+    for name in inputs if old_record else ():
         if name in theirs and name in identity and theirs[name] != identity[name]:
-            if _same_place(theirs[name], theirs_all.get("out"), identity[name], ours_all.get("out")):
+            if _same_place(theirs[name], theirs_all.get("out"), as_given[name], as_given.get("out")):
                 theirs[name] = identity[name]
     if record.get("algo") == algo and theirs == identity:
         return None
@@ -200,13 +212,55 @@ def read_record(file: Path) -> dict[str, Any] | None:
     return record
 
 
-def _same_place(recorded: Any, recorded_out: Any, current: Any, current_out: Any) -> bool:
-    """Whether input path `current` lies where `recorded` lay, both seen from their run's `out`:
-    the run folder and its inputs were moved or copied together."""
-    values = (recorded, recorded_out, current, current_out)
+def _same_place(before: Any, before_out: Any, current: Any, current_out: Any) -> bool:
+    """Whether input path `current` lies where `before` lay, both seen from their run's `out`:
+    the run folder and its inputs were moved or copied together (records written before paths
+    were relative to the run folder)."""
+    values = (before, before_out, current, current_out)
     if not all(isinstance(v, str) and v for v in values):
         return False
-    return os.path.relpath(recorded, recorded_out) == os.path.relpath(current, current_out)
+    return os.path.relpath(before, before_out) == os.path.relpath(current, current_out)
+
+
+def given_paths(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
+    """The paths that argument dataclass `args` names, as given: the values of its fields that hold
+    a Path, of `out` and of the `inputs` fields (normalised; None and empty ones left out)."""
+    names = {"out", *inputs}
+    if dataclasses.is_dataclass(args):
+        names |= {f.name for f in dataclasses.fields(args) if isinstance(getattr(args, f.name), Path)}
+    values = (getattr(args, name, None) for name in names)
+    return {os.path.normpath(v) for v in values if isinstance(v, (str, Path)) and str(v)}
+
+
+def relative_path(path: str, folder: str | Path) -> str:
+    """`path` (absolute, or relative to the working folder) seen from `folder`."""
+    return os.path.relpath(os.path.abspath(path), os.path.abspath(folder))
+
+
+def recorded(value: Any, folder: str | Path, given: set[str]) -> Any:
+    """Plain JSON `value` as a run record holds it: every string that is one of the `given` paths
+    or an absolute path written relative to the run `folder`."""
+    if isinstance(value, dict):
+        return {k: recorded(v, folder, given) for k, v in value.items()}
+    if isinstance(value, list):
+        return [recorded(v, folder, given) for v in value]
+    if isinstance(value, str) and value and (os.path.isabs(value) or os.path.normpath(value) in given):
+        return relative_path(value, folder)
+    return value
+
+
+def recorded_command(argv: list[str], folder: str | Path, given: set[str]) -> str:
+    """The command line as a run record holds it: each word (or the value of a word
+    "--option=value") that is one of the `given` paths or an absolute path written relative to the
+    run `folder`."""
+    words = []
+    for word in argv:
+        option, equals, value = word.partition("=") if word.startswith("-") else ("", "", word)
+        if word.startswith("-") and not equals:
+            words.append(word)
+        else:
+            words.append(option + equals + recorded(value, folder, given))
+    return shlex.join(words)
 
 
 def _defaults(args: Any) -> dict[str, Any]:

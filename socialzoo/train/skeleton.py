@@ -113,7 +113,8 @@ def finished_run(trainer: Trainer, args: Any) -> bool:
     return (
         record is not None
         and bool(record.get("finished"))
-        and differing_args(record, trainer.name, args, trainer.volatile, trainer.inputs) is None
+        and differing_args(record, trainer.name, args, trainer.volatile, trainer.inputs, trainer.folder(args))
+        is None
         and trainer.policy_path(args).is_file()
     )
 

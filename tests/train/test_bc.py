@@ -2,6 +2,7 @@
 did, and its run folder holds what a run must record."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -63,11 +64,14 @@ def test_a_finished_run_is_not_repeated_and_other_arguments_are_refused(small_de
     from socialzoo.train.run_dir import RunDirError
 
     path, _, _ = trained
-    args = Args(**json.loads((path.parent / "run.json").read_text())["args"])
+    run = path.parent
+    recorded = json.loads((run / "run.json").read_text())["args"]
+    assert recorded["out"] == "." and not Path(recorded["demos"]).is_absolute()
+    given = {**recorded, "demos": run / recorded["demos"], "out": run}  # its paths: from the run folder
     stamp = path.stat().st_mtime_ns
-    assert train(args) == path and path.stat().st_mtime_ns == stamp
+    assert train(Args(**given)) == path and path.stat().st_mtime_ns == stamp
     with pytest.raises(RunDirError, match=r"seed"):
-        train(Args(**{**json.loads((path.parent / "run.json").read_text())["args"], "seed": 1}))
+        train(Args(**{**given, "seed": 1}))
 
 
 def test_a_work_folder_moved_with_its_demonstrations_is_not_trained_again(small_demos, tmp_path):

@@ -1,6 +1,8 @@
 """A training run's folder records its arguments and refuses to mix two runs."""
 
 import json
+import os
+import shlex
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -18,12 +20,12 @@ class Args:
 
 
 def test_run_json_records_args_command_and_seed(tmp_path):
-    run = RunDir(tmp_path, "ppo", Args(seed=5))
+    run = RunDir(tmp_path, "ppo", Args(seed=5, out=tmp_path))
     record = json.loads((tmp_path / "run.json").read_text())
-    assert record["algo"] == "ppo" and record["seed"] == 5 and record["args"]["out"] == "x"
+    assert record["algo"] == "ppo" and record["seed"] == 5 and record["args"]["out"] == "."
     assert record["command"] and record["finished"] is None and not run.finished
     run.finish(wall_seconds=1.5)
-    again = RunDir(tmp_path, "ppo", Args(seed=5, progress=False), volatile=("progress",))
+    again = RunDir(tmp_path, "ppo", Args(seed=5, out=tmp_path, progress=False), volatile=("progress",))
     assert again.finished and again.record["results"] == {"wall_seconds": 1.5}
 
 
@@ -53,11 +55,80 @@ def test_a_folder_moved_with_its_inputs_holds_the_same_run(tmp_path):
     elsewhere = replace(moved, demos=tmp_path / "other/d.npz")
     with pytest.raises(RunDirError, match="demos differ"):
         RunDir(new / "lfd/bc", "bc", elsewhere, volatile=("out",), inputs=("demos",))
-    # An argument not declared an input is compared as written, and the seed still counts.
-    with pytest.raises(RunDirError, match="demos differ"):
-        RunDir(new / "lfd/bc", "bc", moved, volatile=("out",))
+    # A Path argument is a path whether declared an input or not, and the seed still counts.
+    assert RunDir(new / "lfd/bc", "bc", moved, volatile=("out",)).finished
     with pytest.raises(RunDirError, match="seed differ"):
         RunDir(new / "lfd/bc", "bc", replace(moved, seed=1), volatile=("out",), inputs=("demos",))
+
+
+def test_a_record_of_working_folder_paths_still_names_its_inputs(tmp_path):
+    """A record written before paths were relative to the run folder (absolute ones, or relative to
+    the working folder, as the shipped records were): an input at the same place relative to
+    `out` is the same input."""
+    old, new = tmp_path / "old", tmp_path / "new"
+    (old / "lfd/bc").mkdir(parents=True)
+    args = {"demos": str(old / "demos/d.npz"), "out": str(old / "lfd/bc"), "seed": 0}
+    (old / "lfd/bc/run.json").write_text(json.dumps({"algo": "bc", "args": args, "finished": "yes"}))
+    old.rename(new)
+    moved = LfdArgs(demos=new / "demos/d.npz", out=new / "lfd/bc")
+    assert RunDir(new / "lfd/bc", "bc", moved, volatile=("out",), inputs=("demos",)).finished
+    with pytest.raises(RunDirError, match="demos differ"):
+        RunDir(
+            new / "lfd/bc",
+            "bc",
+            replace(moved, demos=tmp_path / "d.npz"),
+            volatile=("out",),
+            inputs=("demos",),
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class FileArgs:
+    demos: str
+    out: str
+    note: str = ""
+
+
+def test_a_fresh_run_record_holds_no_absolute_path(tmp_path, monkeypatch):
+    demos = tmp_path / "demos" / "d.npz"
+    program = tmp_path / "runs" / "p" / "prog.json"
+    demos.parent.mkdir()
+    argv = ["/usr/bin/socialzoo", "train", "x", "--demos", str(demos), f"--out={program}", "--note", "a b"]
+    monkeypatch.setattr("sys.argv", argv)
+    args = FileArgs(demos=str(demos), out=str(program), note="/etc/passwd")  # a str argument, yet absolute
+    run = RunDir(program.parent, "x", args, inputs=("demos",))
+    run.finish(data={"path": str(demos), "files": [str(tmp_path / "runs" / "p" / "log.txt")]})
+    record = json.loads((program.parent / "run.json").read_text())
+    note = os.path.relpath("/etc/passwd", program.parent)
+    assert record["args"] == {"demos": "../../demos/d.npz", "out": "prog.json", "note": note}
+    assert record["command"] == "socialzoo train x --demos ../../demos/d.npz --out=prog.json --note 'a b'"
+    assert record["results"] == {"data": {"path": "../../demos/d.npz", "files": ["log.txt"]}}
+    assert absolute_paths(record) == []
+    # Read back from another working folder, the run is the same run.
+    monkeypatch.chdir(tmp_path / "demos")
+    again = FileArgs(demos="d.npz", out="../runs/p/prog.json", note="/etc/passwd")
+    assert RunDir(program.parent, "x", again, inputs=("demos",)).finished
+
+
+def absolute_paths(value, where="record"):
+    """Every string in a JSON value (or word of a command line) that is an absolute path."""
+    if isinstance(value, dict):
+        return [p for k, v in value.items() for p in absolute_paths(v, f"{where}.{k}")]
+    if isinstance(value, list):
+        return [p for k, v in enumerate(value) for p in absolute_paths(v, f"{where}[{k}]")]
+    if isinstance(value, str):
+        words = shlex.split(value) if where.endswith(".command") else [value]
+        return [f"{where}: {w}" for w in words if os.path.isabs(w.partition("=")[2] or w)]
+    return []
+
+
+def test_no_shipped_run_record_holds_an_absolute_path():
+    from socialzoo.agents import SHIPPED_DIR
+
+    records = sorted([*SHIPPED_DIR.glob("*.run.json"), *SHIPPED_DIR.glob("*.train.json")])
+    assert len(records) >= 8
+    found = [p for file in records for p in absolute_paths(json.loads(file.read_text()), file.name)]
+    assert found == []
 
 
 def test_checkpoints_are_listed_by_step(tmp_path):

@@ -93,7 +93,9 @@ def test_run_folder_from_the_command_line(tmp_path, monkeypatch):
     assert main(argv) == 0
     record = json.loads((out / "run.json").read_text())
     assert record["algo"] == "ppo" and record["seed"] == 3 and record["finished"]
-    assert record["command"] == "socialzoo " + " ".join(argv)
+    # Paths as the run folder sees them.
+    assert record["command"] == "socialzoo " + " ".join(argv).replace(str(out), ".")
+    assert record["args"]["out"] == "."
     assert record["args"]["total_steps"] == 400 and record["results"]["env_steps"] == 400
     checkpoints = sorted(p.name for p in (out / "checkpoints").iterdir())
     assert checkpoints == ["step_000000200.safetensors", "step_000000400.safetensors"]
