@@ -120,3 +120,16 @@ class ToyReachTask(Task):
         from socialzoo.env.rendering import CoreRenderer
 
         return CoreRenderer(self.core, render_mode, view=view)
+
+
+class ToyHeadForGoal:
+    """An engineered policy of the toy task: turn towards the goal, then drive forward."""
+
+    reads_core = False
+
+    def act(self, obs: np.ndarray, core: Any = None) -> np.ndarray:
+        angle = np.arctan2(obs[..., 1], obs[..., 0])  # the goal's bearing in the robot frame
+        return np.where(angle > 0.3, 1, np.where(angle < -0.3, 2, 0)).astype(np.int64)
+
+    def config(self) -> dict[str, Any]:
+        return {}

@@ -87,6 +87,11 @@ class CrowdAttentionPolicy:
         self.header = header
 
     @property
+    def task_overrides(self) -> dict[str, Any]:
+        """The task config it acts in: CrowdNav's discrete or continuous actions, as it was trained."""
+        return {"action": self.action_kind}
+
+    @property
     def observation_size(self) -> int:
         """Length of the flat observation the policy reads."""
         return ROBOT_DIM + (HUMAN_DIM + 1) * self.slots

@@ -9,7 +9,6 @@ with a Student-t interval over the cases (socialzoo.bench.stats).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -21,16 +20,6 @@ from socialzoo.nav.crowd_cases import SPLIT_SIZE, Split
 
 # A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
 CrowdActor = Callable[[np.ndarray, Any], np.ndarray]
-RATES = ("success", "collision", "timeout")
-MEANS = (
-    "navigation_time",
-    "path_length",
-    "min_separation",
-    "intrusion_ratio",
-    "discounted_return",
-    "mean_force",
-    "mean_blame",
-)
 
 
 @dataclass(frozen=True)
@@ -66,7 +55,7 @@ def evaluate_crowd(
         split: "val" or "test".
         cases: how many cases (default the split's size: 100 or 500).
         batch_size: rows stepped together.
-        indices: play only these of the first `cases` cases (socialzoo.bench.crowd_store plays
+        indices: play only these of the first `cases` cases (socialzoo.bench.task_benchmark plays
             the ones its store lacks); the result holds them in case order.
         on_episodes: called with the episodes that ended at each step, as they end.
 
@@ -91,6 +80,7 @@ def evaluate_crowd(
     if not todo:
         raise ValueError("evaluate_crowd: no case to play")
     from socialzoo.bench.episodes import play_cases
+    from socialzoo.bench.task_benchmark import summarize
 
     def forget_seed(episodes: list[dict[str, Any]]) -> list[dict[str, Any]]:
         return [{k: v for k, v in e.items() if k != "seed"} for e in episodes]
@@ -100,26 +90,4 @@ def evaluate_crowd(
     ordered = forget_seed(
         play_cases("crowdnav", act, split, todo, batch_size, config=flat, on_episodes=deliver)
     )
-    return CrowdEvaluation(split=split, episodes=ordered, summary=summarize_crowd(ordered, config.time_step))
-
-
-def summarize_crowd(
-    episodes: list[dict[str, Any]], time_step: float, confidence: float = 0.95
-) -> dict[str, Any]:
-    """Rates with Wilson intervals and means with Student-t intervals over the episodes (NaN values,
-    e.g. the navigation time of a failed episode, left out of a mean)."""
-    from socialzoo.bench.stats import mean_interval, rate_interval
-
-    n = len(episodes)
-    out: dict[str, Any] = {"episodes": n}
-    for key in RATES:
-        rate = rate_interval(int(sum(e[key] for e in episodes)), n, confidence)
-        out[f"{key}_rate"], out[f"{key}_ci"] = rate.value, [rate.low, rate.high]
-    for key in MEANS:
-        mean = mean_interval([e[key] for e in episodes], confidence)
-        out[key], out[f"{key}_ci"] = mean.value, [mean.low, mean.high]
-    steps = sum(e["steps"] for e in episodes)
-    # CrowdNav's "frequency of being in danger": discomfort steps over all steps of all episodes.
-    out["discomfort_frequency"] = sum(e["discomfort_steps"] for e in episodes) / steps if steps else math.nan
-    out["time_step"] = time_step
-    return out
+    return CrowdEvaluation(split=split, episodes=ordered, summary=summarize(ordered))

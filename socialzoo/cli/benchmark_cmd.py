@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -80,8 +81,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help=(
             "comma-separated maps: shipped names or map JSON files (default gdc1,ghc3); a map without a "
             "registered test set gets one generated on first use, stored in DIR/test_sets/ with the "
-            "map's hash and reused by reruns; or CrowdNav task ids (socialzoo/CrowdNav-v1, "
-            "socialzoo/CrowdNav20-v1, ...: their fixed test cases, as `socialzoo crowdnav eval`)"
+            "map's hash and reused by reruns; or registered task ids (socialzoo/CrowdNav-v1, "
+            "socialzoo/CrowdNav20-v1, any task's NAMESPACE/Name-vN: their fixed test cases)"
         ),
     )
     parser.add_argument(
@@ -177,11 +178,10 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from socialzoo.bench.experiment import BenchmarkConfig, quick_config, run_benchmark
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.tables import policy_label
-    from socialzoo.env.crowd_variants import variant_of
 
-    crowd = [m for m in args.maps or () if variant_of(m) is not None]
-    if crowd:
-        return run_crowd_benchmark(args, crowd)
+    ids = [m for m in args.maps or () if ENV_ID.fullmatch(m)]
+    if ids:
+        return run_task_ids(args, ids)
     overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
     specs = [h.strip() for h in args.humans.split(",") if h.strip()]
     if len(specs) > 1:
@@ -216,41 +216,50 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_crowd_benchmark(args: argparse.Namespace, ids: list[str]) -> int:
-    """`socialzoo benchmark --maps socialzoo/CrowdNav...-v1`: the CrowdNav task's ids run through its
-    own evaluation on their fixed test cases (socialzoo crowdnav eval: the first --trials cases,
-    stored per policy and reused by reruns, 95% intervals, success figure), one folder per id."""
-    from socialzoo.cli.crowdnav_cmd import run_eval
-    from socialzoo.env.crowd_variants import variant_of
+def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
+    """`socialzoo benchmark --maps ID[,ID...]` with registered task ids (socialzoo/CrowdNav-v1, any
+    task's id): each id's policies on the first --trials cases of its test split, stored and reused
+    by reruns, with tables and the success figure (socialzoo.bench.task_benchmark), one folder per id."""
+    from socialzoo.bench.store import StoreError
+    from socialzoo.bench.task_benchmark import TaskId, run_task_benchmark
 
     if len(ids) != len(args.maps):
         others = sorted(set(args.maps) - set(ids))
-        return _fail(
-            "benchmark", ValueError(f"CrowdNav task ids cannot be mixed with benchmark maps {others}")
-        )
+        return _fail("benchmark", ValueError(f"task ids cannot be mixed with benchmark maps {others}"))
     if args.humans != "social_force" or args.counterfactual or args.human_metrics or args.quick:
         return _fail(
             "benchmark",
             ValueError(
-                "--humans, --counterfactual, --human-metrics and --quick are not options of the CrowdNav task"
+                "--humans, --counterfactual, --human-metrics and --quick are options of the benchmark maps, "
+                "not of a task id (its config says who walks)"
             ),
         )
-    policies = ",".join(args.policies) if args.policies else "orca,social_force,crowdnav"
-    for env_id in ids:
-        out = Path(args.out) / env_id.split("/")[-1] if len(ids) > 1 else Path(args.out)
-        task = argparse.Namespace(
-            policies=policies,
-            variant=variant_of(env_id),
-            split="test",
-            out=out,
-            cases=args.trials,
-            batch_size=args.batch_size or 100,
-            no_figures=args.no_figures,
-        )
-        status = run_eval(task)
-        if status:
-            return status
+    try:
+        for env_id in ids:
+            task = TaskId.of(env_id)
+            default = _DEFAULT_POLICIES.get(task.task, ())
+            policies = list(args.policies) if args.policies else list(default)
+            if not policies:
+                raise ValueError(f"{env_id}: name the policies to run (--policies)")
+            out = Path(args.out) / env_id.split("/")[-1] if len(ids) > 1 else Path(args.out)
+            _, files = run_task_benchmark(
+                env_id,
+                policies,
+                out,
+                cases=args.trials,
+                batch_size=args.batch_size or 100,
+                figures=not args.no_figures,
+            )
+            print(f"results in {out}: " + ", ".join(p.name for p in files))
+    except (ValueError, StoreError) as err:
+        return _fail("benchmark", err)
     return 0
+
+
+# A Gymnasium id (namespace/Name-vN), told apart from map names and map files.
+ENV_ID = re.compile(r"[A-Za-z0-9_.-]+/[A-Za-z0-9_.]+-v\d+")
+# The policies a task id's benchmark runs when --policies names none.
+_DEFAULT_POLICIES: dict[str, tuple[str, ...]] = {"crowdnav": ("orca", "social_force", "crowdnav")}
 
 
 def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: dict[str, Any]) -> int:

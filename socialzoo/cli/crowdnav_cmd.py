@@ -1,5 +1,8 @@
 """`socialzoo crowdnav eval|replay`: the CrowdNav task's policies on its fixed cases.
 
+Thin aliases: `eval` is `socialzoo benchmark --maps socialzoo/CrowdNav<variant>-v1` (any task id's
+benchmark, socialzoo.bench.task_benchmark), `replay` an episode page of the variant.
+
 socialzoo crowdnav eval --policies orca,social_force,crowdnav --out results/crowdnav
 socialzoo crowdnav replay --policies orca,crowdnav --case 3 --out crowdnav.html
 """
@@ -7,29 +10,12 @@ socialzoo crowdnav replay --policies orca,crowdnav --case 3 --out crowdnav.html
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help
 from socialzoo.cli.arg_types import positive_int
-
-TABLE_COLUMNS = (
-    "policy",
-    "episodes",
-    "success_rate",
-    "collision_rate",
-    "timeout_rate",
-    "navigation_time",
-    "path_length",
-    "discomfort_frequency",
-    "min_separation",
-    "intrusion_ratio",
-    "discounted_return",
-    "mean_force",
-    "mean_blame",
-)
 
 
 def register(subparsers: Any) -> None:
@@ -87,87 +73,31 @@ def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    """Run `socialzoo crowdnav eval`; returns the exit status. Episodes go to the benchmark's results
-    store (OUT/results.sqlite, socialzoo.bench.crowd_store) as they end: a rerun plays only the
-    cases it lacks for each policy."""
-    from socialzoo.bench.crowd_store import STORE_FILE, evaluate_crowd_stored
+    """Run `socialzoo crowdnav eval` (the variant's id through socialzoo.bench.task_benchmark);
+    returns the exit status. Episodes go to the results store (OUT/results.sqlite) as they end: a
+    rerun plays only the cases it lacks for each policy."""
     from socialzoo.bench.store import StoreError
+    from socialzoo.bench.task_benchmark import run_task_benchmark
+    from socialzoo.env.crowd_variants import crowd_env_id
 
+    specs = [p.strip() for p in args.policies.split(",") if p.strip()]
     try:
-        config, policies = _setup(args)
-    except ValueError as err:
+        if not specs:
+            raise ValueError("--policies names no policy")
+        _, files = run_task_benchmark(
+            crowd_env_id(args.variant),
+            specs,
+            args.out,
+            split=args.split,
+            cases=args.cases,
+            batch_size=args.batch_size,
+            figures=not args.no_figures,
+        )
+    except (ValueError, StoreError) as err:
         print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
         return 2
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for spec, policy, acting in policies:
-        try:
-            result, played = evaluate_crowd_stored(
-                out / STORE_FILE, spec, policy, acting, args.split, args.cases, args.batch_size
-            )
-        except StoreError as err:
-            print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
-            return 2
-        summary = result.summary
-        rows.append({"policy": spec, **summary})
-        print(
-            f"{spec}: success {summary['success_rate']:.3f} collision {summary['collision_rate']:.3f} "
-            f"timeout {summary['timeout_rate']:.3f} time {summary['navigation_time']:.2f} s "
-            f"({played} of {summary['episodes']} episodes played now, the others read from the store)"
-        )
-    files = write_crowd_tables(rows, out, config, args.split)
-    if not args.no_figures:
-        from socialzoo.bench.figures import plot_success
-
-        task = f"CrowdNav{args.variant} {args.split}"
-        bars = [
-            {
-                "policy": r["policy"],
-                "map": task,
-                "success_rate": r["success_rate"],
-                "success_ci_low": r["success_ci"][0],
-                "success_ci_high": r["success_ci"][1],
-            }
-            for r in rows
-        ]
-        files += plot_success(bars, out, interval="95% CI")
     print(f"socialzoo crowdnav eval: wrote {', '.join(str(f) for f in files)}")
     return 0
-
-
-def write_crowd_tables(rows: list[dict[str, Any]], out: Path, config: Any, split: str) -> list[Path]:
-    """crowdnav.csv (TABLE_COLUMNS and intervals) and crowdnav.md (a readable table)."""
-    csv_path = out / "crowdnav.csv"
-    with csv_path.open("w", newline="") as f:
-        writer = csv.writer(f)
-        header = [c for c in TABLE_COLUMNS] + ["success_ci_low", "success_ci_high"]
-        writer.writerow(header)
-        for r in rows:
-            writer.writerow([r.get(c) for c in TABLE_COLUMNS] + list(r["success_ci"]))
-    where = (
-        f"{config.map} with the benchmark's scenarios, up to {config.slots} {config.humans} people"
-        if config.map is not None
-        else f"{config.cases.layout}, {config.cases.num_humans} {config.humans} people"
-    )
-    lines = [
-        f"CrowdNav task ({where}, {config.robot.kinematics} robot, "
-        f"{'visible' if config.robot_visible else 'invisible'}), {split} cases",
-        "",
-        "| policy | success [95% CI] | collision | timeout | nav time (s) | path (m) | discomfort "
-        "| min sep. (m) | force |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in rows:
-        low, high = r["success_ci"]
-        lines.append(
-            f"| {r['policy']} | {r['success_rate']:.3f} [{low:.3f}, {high:.3f}] | {r['collision_rate']:.3f} | "
-            f"{r['timeout_rate']:.3f} | {r['navigation_time']:.2f} | {r['path_length']:.2f} | "
-            f"{r['discomfort_frequency']:.3f} | {r['min_separation']:.3f} | {r['mean_force']:.4f} |"
-        )
-    md_path = out / "crowdnav.md"
-    md_path.write_text("\n".join(lines) + "\n")
-    return [csv_path, md_path]
 
 
 def run_replay(args: argparse.Namespace) -> int:

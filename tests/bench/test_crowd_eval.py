@@ -135,9 +135,10 @@ def test_the_shipped_learned_policy_crosses_the_crowd():
 
 
 def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_path):
-    from socialzoo.bench.crowd_store import crowd_config_hash, evaluate_crowd_stored
+    from socialzoo.bench.task_benchmark import TaskId, config_hash, evaluate_stored, summarize
 
     config = CrowdNavConfig.variant("")
+    task = TaskId.of("socialzoo/CrowdNav-v1")
     fresh = evaluate_crowd(CrowdOrcaRobot().act, config, "val", cases=6, batch_size=2)
 
     class Interrupted(CrowdOrcaRobot):
@@ -152,29 +153,30 @@ def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_
     store = tmp_path / "results.sqlite"
     robot = Interrupted()
     with pytest.raises(KeyboardInterrupt):
-        evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6, batch_size=2)
+        evaluate_stored(store, task, "orca", robot, "val", cases=6, batch_size=2)
     Interrupted.calls = -(10**6)
-    result, played = evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6, batch_size=2)
+    episodes, played = evaluate_stored(store, task, "orca", robot, "val", cases=6, batch_size=2)
     assert 0 < played < 6  # the episodes stored before the interruption were not played again
-    np.testing.assert_equal(result.episodes, fresh.episodes)
-    np.testing.assert_equal(result.summary, fresh.summary)
-    assert evaluate_crowd_stored(store, "orca", robot, config, "val", cases=6)[1] == 0
+    np.testing.assert_equal(episodes, fresh.episodes)
+    np.testing.assert_equal(summarize(episodes), fresh.summary)
+    assert evaluate_stored(store, task, "orca", robot, "val", cases=6)[1] == 0
     # Other settings of the policy or of the task are other episodes; the spec alone is a name.
     other = CrowdOrcaRobot(safety_space=0.1)
-    assert crowd_config_hash(config, "val", "orca", other) != crowd_config_hash(config, "val", "orca", robot)
-    assert crowd_config_hash(config.replace(time_limit=20.0), "val", "orca", robot) != crowd_config_hash(
+    assert config_hash(config, "val", "orca", other) != config_hash(config, "val", "orca", robot)
+    assert config_hash(config.replace(time_limit=20.0), "val", "orca", robot) != config_hash(
         config, "val", "orca", robot
     )
-    assert evaluate_crowd_stored(store, "orca", other, config, "val", cases=2)[1] == 2
+    assert evaluate_stored(store, task, "orca", other, "val", cases=2)[1] == 2
+    assert evaluate_stored(store, task, "orca", robot, "val", cases=2, time_limit=20.0)[1] == 2
     # A learned policy's file is part of its key: a retrained file under the same path is new.
     from socialzoo.agents import SHIPPED_DIR
 
     file = tmp_path / "crowdnav.safetensors"
     file.write_bytes((SHIPPED_DIR / "crowdnav.safetensors").read_bytes())
     learned = make_policy(f"crowdnav:{file}", task="crowdnav")
-    before = crowd_config_hash(config, "val", f"crowdnav:{file}", learned)
+    before = config_hash(config, "val", f"crowdnav:{file}", learned)
     file.write_bytes(file.read_bytes() + b" ")
-    assert crowd_config_hash(config, "val", f"crowdnav:{file}", learned) != before
+    assert config_hash(config, "val", f"crowdnav:{file}", learned) != before
 
 
 def test_a_subset_of_cases_plays_as_in_the_full_run():

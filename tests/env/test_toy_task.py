@@ -7,11 +7,14 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from socialzoo.agents import POLICIES, register_policy
 from socialzoo.env.registration import register_task
 
 TOY = "toy_task:ToyReachTask"
 TOY_ID = "socialzoo-test/ToyReach-v0"
 register_task(TOY_ID, TOY, max_steps=120)
+if "toy_heading" not in POLICIES:
+    register_policy("toy_heading", "toy_task:ToyHeadForGoal", task="toy_reach")
 
 
 def test_gymnasium_check_env_passes_on_the_registered_id():
@@ -87,3 +90,27 @@ def test_seeded_rollouts_repeat_bit_for_bit_over_many_steps():
     a, b, c = rollout(5), rollout(5), rollout(6)
     assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
     assert not all(np.array_equal(x, y) for x, y in zip(a, c, strict=False))
+
+
+def test_socialzoo_benchmark_runs_the_registered_id_with_tables_and_a_figure(tmp_path, capsys):
+    from socialzoo.cli import main
+
+    args = [
+        "benchmark",
+        "--maps",
+        TOY_ID,
+        "--policies",
+        "toy_heading",
+        "--trials",
+        "6",
+        "--out",
+        str(tmp_path),
+    ]
+    assert main(args) == 0
+    table = (tmp_path / "toy_reach.md").read_text()
+    assert "| toy_heading |" in table and "success (rate)" in table
+    assert (tmp_path / "success.png").stat().st_size > 5_000
+    assert "0 of 6 episodes played now" not in capsys.readouterr().out
+    assert main(args) == 0 and "0 of 6 episodes played now" in capsys.readouterr().out  # read back
+    assert main([*args[:4], "ref", *args[5:]]) == 2
+    assert "acts in task 'action_selection', not 'toy_reach'" in capsys.readouterr().err

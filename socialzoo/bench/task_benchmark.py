@@ -1,0 +1,298 @@
+"""The benchmark of any registered task id on its fixed cases: episodes in the results store, a
+summary with intervals, one table writer and the success figure.
+
+    socialzoo benchmark --maps socialzoo/CrowdNav-v1 --policies orca,crowdnav --out DIR
+
+`evaluate_stored` plays (socialzoo.bench.episodes.play_cases) only the cases the store does not hold
+yet for a policy and writes each episode as it ends, so an interrupted run resumes where it stopped
+and a repeated one reads instead of playing. An episode is keyed like a benchmark trial: (policy
+spec, the task's split, case index, config hash), where the hash covers everything that decides the
+episode besides its case: the task's config, the simulation's source code and the policy's module,
+the policy's parameters and its file's digest. A retrained file under the same path therefore gets
+new episodes, never the old file's. Metrics are summarised from the metric registry
+(socialzoo.core.metrics): a flag's rate with a Wilson interval, a number's mean with a Student-t
+interval (NaN values, such as the time of a failed episode, left out).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import inspect
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from socialzoo.core.metrics import METRICS
+
+STORE_FILE = "results.sqlite"
+
+
+@dataclass(frozen=True)
+class TaskId:
+    """A registered id's task and config.
+
+    Attributes:
+        env_id: the Gymnasium id.
+        task: the task's registry name or "module:Class" path.
+        kwargs: the id's config fields (plain values).
+    """
+
+    env_id: str
+    task: str
+    kwargs: dict[str, Any]
+
+    @classmethod
+    def of(cls, env_id: str) -> TaskId:
+        """The task of a registered id.
+
+        Raises:
+            ValueError: an id that is not registered, or not a task's.
+        """
+        import gymnasium as gym
+
+        import socialzoo  # noqa: F401  (registers the ids)
+
+        if env_id not in gym.registry:
+            known = sorted(i for i in gym.registry if i.startswith("socialzoo"))
+            raise ValueError(f"unknown env id {env_id!r}; registered: {', '.join(known)}")
+        kwargs = dict(gym.spec(env_id).kwargs)
+        task = kwargs.pop("task", None)
+        if not isinstance(task, str):
+            raise ValueError(f"{env_id} is not a task's id (its kwargs name no task)")
+        return cls(env_id, task, kwargs)
+
+    def make(self, batch_size: int = 1, **overrides: Any) -> Any:
+        """The task of B = batch_size rows, with config overrides."""
+        from socialzoo.env.tasks import make_task
+
+        return make_task(self.task, batch_size, None, **{**self.kwargs, **overrides})
+
+
+def config_hash(config: Any, split: str, spec: str, policy: Any) -> str:
+    """16 hex digits naming everything that decides an episode of `policy` besides its case."""
+    from socialzoo.agents import policy_file
+    from socialzoo.agents.base import policy_config
+    from socialzoo.bench.experiment import file_digest, source_digest
+
+    module_file = inspect.getsourcefile(type(policy))
+    path = policy_file(spec)
+    payload = {
+        "task": config.to_dict(),
+        "split": split,
+        "code_sha256": source_digest((module_file,) if module_file else ()),
+        "policy": {
+            "spec": spec,
+            "config": policy_config(policy),
+            "file_sha256": file_digest(path) if path is not None else None,
+        },
+    }
+    text = json.dumps(payload, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def evaluate_stored(
+    store_path: Path,
+    task: TaskId,
+    spec: str,
+    policy: Any,
+    split: str = "test",
+    cases: int | None = None,
+    batch_size: int = 100,
+    **overrides: Any,
+) -> tuple[list[dict[str, Any]], int]:
+    """The episodes of `policy` (named `spec`) on the first `cases` cases of a split, playing only
+    those the store at store_path lacks and storing each as it ends.
+
+    Returns:
+        (every case's episode, stored and new, in case order; how many were played now).
+
+    Raises:
+        socialzoo.bench.store.StoreError: store_path is not a usable results store.
+        ValueError: a split the task lacks, or more cases than it holds.
+    """
+    from socialzoo import __version__
+    from socialzoo.bench.episodes import play_cases
+    from socialzoo.bench.store import TRIAL_COLUMNS, ResultsStore
+
+    probe = task.make(1, **overrides)
+    splits = probe.case_splits()
+    if split not in splits:
+        raise ValueError(f"{task.env_id}: split must be one of {sorted(splits)}, got {split!r}")
+    total = splits[split] if cases is None else cases
+    if not 1 <= total <= splits[split]:
+        raise ValueError(
+            f"{task.env_id}: {total} cases asked of the {split} split, which holds {splits[split]}"
+        )
+    config = probe.config
+    digest = config_hash(config, split, spec, policy)
+    test_set = f"{probe.name}-{split}"
+    where = str(getattr(config, "map", None) or probe.name)
+    with ResultsStore(store_path) as store:
+        store.register_config(digest, {"task": config.to_dict(), "split": split, "policy": spec})
+        have = store.stored_indices(spec, test_set, digest)
+        todo = [k for k in range(total) if k not in have]
+
+        def store_episodes(episodes: list[dict[str, Any]]) -> None:
+            store.add(
+                {
+                    "policy": spec,
+                    "map": where,
+                    "test_set": test_set,
+                    "scenario_index": e["case"],
+                    "seed": e["seed"],
+                    "config_hash": digest,
+                    "package_version": __version__,
+                    "metrics": {k: float(v) for k, v in e.items() if k not in ("case", "seed")},
+                }
+                for e in episodes
+            )
+
+        if todo:
+            play_cases(
+                task.task,
+                policy.act,
+                split,
+                todo,
+                batch_size,
+                config=config,
+                on_episodes=store_episodes,
+            )
+        rows = store.rows(policy=spec, test_set=test_set, config_hash=digest, indices=range(total))
+    episodes = [
+        {"case": int(r["scenario_index"]), **{k: float(v) for k, v in r.items() if k not in TRIAL_COLUMNS}}
+        for r in rows
+    ]
+    return episodes, len(todo)
+
+
+def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> dict[str, Any]:
+    """Every registered metric of the episodes: a flag's rate ("<name>_rate") with a Wilson
+    interval ("<name>_ci"), a number's mean ("<name>") with a Student-t interval, NaN values left
+    out; "episodes" counts them. With CrowdNav's discomfort steps, "discomfort_frequency" is
+    pooled over every step of every episode (its "frequency of being in danger")."""
+    from socialzoo.bench.stats import mean_interval, rate_interval
+
+    n = len(episodes)
+    out: dict[str, Any] = {"episodes": n}
+    keys = [k for k in METRICS if episodes and all(k in e for e in episodes)]
+    for key in keys:
+        if METRICS[key].kind == "bool":
+            rate = rate_interval(int(sum(bool(e[key]) for e in episodes)), n, confidence)
+            out[f"{key}_rate"], out[f"{key}_ci"] = rate.value, [rate.low, rate.high]
+        else:
+            mean = mean_interval([float(e[key]) for e in episodes], confidence)
+            out[key], out[f"{key}_ci"] = mean.value, [mean.low, mean.high]
+    if "discomfort_steps" in keys and "steps" in keys:
+        steps = sum(e["steps"] for e in episodes)
+        out["discomfort_frequency"] = (
+            sum(e["discomfort_steps"] for e in episodes) / steps if steps else math.nan
+        )
+        out.pop("discomfort_frequency_ci", None)
+    return out
+
+
+def write_tables(rows: Sequence[dict[str, Any]], out: Path, name: str, title: str) -> list[Path]:
+    """NAME.csv (every summary value and interval) and NAME.md (a table: each flag's rate and each
+    number's mean, labelled and with units from the metric registry, success with its interval)."""
+    columns = [k for k in rows[0] if k != "policy" and not k.endswith("_ci")] if rows else []
+    csv_path = out / f"{name}.csv"
+    with csv_path.open("w", newline="") as f:
+        writer = csv.writer(f)
+        intervals = [k for k in rows[0] if k.endswith("_ci")] if rows else []
+        writer.writerow(
+            ["policy", *columns] + [f"{k[:-3]}_ci_{side}" for k in intervals for side in ("low", "high")]
+        )
+        for r in rows:
+            writer.writerow(
+                [r["policy"], *(r.get(c) for c in columns)] + [v for k in intervals for v in r[k]]
+            )
+    shown = [c for c in columns if c.removesuffix("_rate") in METRICS]
+    header = ["policy"] + [_heading(c) for c in shown]
+    lines = [title, "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for r in rows:
+        cells = [str(r["policy"])] + [_cell(r, c) for c in shown]
+        lines.append("| " + " | ".join(cells) + " |")
+    md_path = out / f"{name}.md"
+    md_path.write_text("\n".join(lines) + "\n")
+    return [csv_path, md_path]
+
+
+def _heading(column: str) -> str:
+    metric = METRICS[column.removesuffix("_rate")]
+    return f"{metric.label} (rate)" if column.endswith("_rate") else metric.heading
+
+
+def _cell(row: dict[str, Any], column: str) -> str:
+    value = row[column]
+    digits = 3 if column.endswith("_rate") else METRICS[column].digits
+    text = f"{value:.{digits}f}"
+    if column == "success_rate" and "success_ci" in row:
+        low, high = row["success_ci"]
+        text += f" [{low:.{digits}f}, {high:.{digits}f}]"
+    return text
+
+
+def run_task_benchmark(
+    env_id: str,
+    policies: Sequence[str],
+    out: str | Path,
+    *,
+    split: str = "test",
+    cases: int | None = None,
+    batch_size: int = 100,
+    figures: bool = True,
+) -> tuple[list[dict[str, Any]], list[Path]]:
+    """Every policy on the first `cases` cases of a split of a registered task id, into out/: the
+    store (results.sqlite), NAME.csv and NAME.md (NAME: the task's name), success.png/pdf.
+
+    A policy acts in the task the id names (socialzoo.agents.make_policy refuses another task's,
+    or a learned one of another observation size); a learned policy that declares task overrides
+    (CrowdNav's learned policy: its discrete or continuous actions) acts with them.
+
+    Returns:
+        (one summary row per policy, the files written).
+
+    Raises:
+        ValueError, PolicyTaskError, StoreError: an unknown id, policy, split or count; a policy
+            of another task; an unusable store.
+    """
+    from socialzoo.agents import make_policy
+
+    task = TaskId.of(env_id)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    probe = task.make(1)
+    rows = []
+    for spec in policies:
+        policy = make_policy(spec, task=probe.name, observation_space=probe.observation_space)
+        overrides = dict(getattr(policy, "task_overrides", {}) or {})
+        episodes, played = evaluate_stored(
+            out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides
+        )
+        summary = summarize(episodes)
+        rows.append({"policy": spec, **summary})
+        print(
+            f"{spec}: success {summary.get('success_rate', math.nan):.3f} ({played} of {summary['episodes']} "
+            "episodes played now, the others read from the store)"
+        )
+    title = f"{env_id}, {split} cases ({probe.name} task)"
+    files = write_tables(rows, out, probe.name, title)
+    if figures and all("success_rate" in r for r in rows):
+        from socialzoo.bench.figures import plot_success
+
+        bars = [
+            {
+                "policy": r["policy"],
+                "map": f"{env_id.split('/')[-1]} {split}",
+                "success_rate": r["success_rate"],
+                "success_ci_low": r["success_ci"][0],
+                "success_ci_high": r["success_ci"][1],
+            }
+            for r in rows
+        ]
+        files += plot_success(bars, out, interval="95% CI")
+    return rows, files
