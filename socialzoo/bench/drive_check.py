@@ -20,6 +20,12 @@ reach its goal gets a cause, judged from where the robot stopped and the plan it
 
 socialzoo.bench.map_repair turns the report into repairs of an imported map; `socialzoo map check
 MAP --drive` prints it and draws it (socialzoo.render.map_plot.save_drive_check_png).
+
+Buildings with people (`socialzoo map drive [DIR]`): `drive_building` runs GoAlone on the first
+scenarios of an imported building's generated test set and counts each episode's outcome by cause
+(success, wall collision, human collision, stuck, timeout), drawing each failure where asked;
+`building_row` is its line of the table; `builtin_buildings` are the walls driven when no folder
+is given.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -353,3 +360,196 @@ def _narrowest_ahead(field: object, path: np.ndarray, pos: np.ndarray) -> tuple[
     d = field.lookup(samples)  # type: ignore[attr-defined]
     k = int(np.argmin(d))
     return int(leg_of[k]), samples[k].copy(), float(d[k])
+
+
+# ---------------------------------------------------------------------------- buildings with people
+
+# The built-in buildings' reference walls (the social_gym data beside the shipped maps, in a source
+# checkout; a wheel leaves it out, and those buildings with it).
+REFERENCE_WALLS = ("reference", "socialgym")
+# Sample the robot's position every this many steps for pictures and "never moved" (0.25 s).
+TRACE_EVERY = 10
+
+
+def builtin_buildings() -> dict[str, np.ndarray]:
+    """Walls (W, 4) of the built-in buildings, by name: the second floor plan in the social_gym
+    GDC1 data (below y = -5 m, which the benchmark never uses) and the raw GHC3 walls (where the
+    reference data is installed), then seeded synthetic plans (socialzoo.nav.floorplans: offices
+    along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
+    0.9-1.2 m doors, a 150 m corridor)."""
+    import importlib.resources
+
+    from socialzoo.nav import floorplans
+    from socialzoo.nav.importers import drop_zero_length, read_table
+    from socialzoo.nav.maps import MAPS_PACKAGE
+
+    out: dict[str, np.ndarray] = {}
+    reference = importlib.resources.files(MAPS_PACKAGE).joinpath(*REFERENCE_WALLS)
+    if reference.joinpath("gdc1_walls.txt").is_file():
+        gdc1 = read_table(reference.joinpath("gdc1_walls.txt"), 4, "x1 y1 x2 y2")
+        out["gdc1_floor2"] = drop_zero_length(gdc1[(gdc1[:, 1] < -5.0) & (gdc1[:, 3] < -5.0)])
+        out["ghc3_raw"] = read_table(reference.joinpath("ghc3_walls.txt"), 4, "x1 y1 x2 y2")
+    for seed in (1, 2):
+        out[f"office_corridor_{seed}"] = floorplans.office_corridor(seed, num_offices=10).walls
+        out[f"atrium_{seed}"] = floorplans.atrium(seed).walls
+        out[f"winding_corridor_{seed}"] = floorplans.winding_corridor(
+            seed, num_legs=8, leg_length=(3.0, 10.0)
+        ).walls
+        out[f"room_grid_{seed}"] = floorplans.room_grid(seed, rows=3, cols=4).walls
+    out["long_corridor"] = floorplans.long_corridor(150.0).walls
+    return out
+
+
+@dataclass(frozen=True)
+class BuildingEpisodes:
+    """GoAlone among people on one building (`drive_building`).
+
+    Attributes:
+        episodes: episodes run.
+        outcomes: episodes by outcome (socialzoo.env.metrics.FAILURE_CAUSES: success and every
+            failure cause).
+        stuck: episodes whose metric `stuck` is set (whatever ended them).
+        never_moved: episodes in which the robot stayed within 1 m of its start.
+        pictures: the failure pictures drawn.
+    """
+
+    episodes: int
+    outcomes: dict[str, int]
+    stuck: int
+    never_moved: int
+    pictures: tuple[Path, ...] = ()
+
+    @property
+    def success_rate(self) -> float:
+        """Share of successful episodes."""
+        return self.outcomes["success"] / self.episodes if self.episodes else 0.0
+
+
+def drive_building(
+    map_path: Path, out: Path, episodes: int, *, batch_size: int = 30, pictures: bool = False
+) -> BuildingEpisodes:
+    """GoAlone on the first `episodes` scenarios of the test set `socialzoo benchmark --maps
+    MAP_PATH` generates for the map (base seed 20220100, stored in OUT/test_sets), each episode's
+    outcome by cause; with `pictures`, each failure drawn to OUT/NAME-fail-K.png (walls, the
+    first plan, the robot's track, start and goal)."""
+    from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
+    from socialzoo.bench.test_sets import stored_test_set
+    from socialzoo.env.metrics import FAILURE_CAUSES, failure_cause
+    from socialzoo.nav.maps import read_map
+
+    test_set = stored_test_set(str(map_path), out, episodes)
+    spec = RunSpec(
+        test_sets={"eval": test_set},
+        env_configs={"eval": env_config_for(test_set)},
+        policies={"goalone": {}},
+        batch_size=batch_size,
+    )
+    traces: dict[int, list[np.ndarray]] = {}
+    plans: dict[int, np.ndarray] = {}
+
+    def on_step(core, row_trial, obs, actions, result) -> None:  # type: ignore[no-untyped-def]
+        pos = core.state.robot_pose[:, 0, :2]
+        for row, t in enumerate(row_trial):
+            if t is None:
+                continue
+            if t.index not in plans:
+                p = core.navigator.plans
+                plans[t.index] = p.paths[row, 0, : p.lengths[row, 0]].copy()
+            if core.state.step_count[row] % TRACE_EVERY == 0:
+                traces.setdefault(t.index, []).append(pos[row].copy())
+
+    results = BatchedRunner(spec).run([Trial("goalone", "eval", k) for k in range(episodes)], on_step=on_step)
+    outcomes = dict.fromkeys(FAILURE_CAUSES, 0)
+    never_moved = 0
+    drawn: list[Path] = []
+    m = read_map(map_path) if pictures else None
+    for r in results:
+        k = r.trial.index
+        cause = failure_cause(r.metrics)
+        outcomes[cause] += 1
+        scenario = test_set.scenario(k)
+        start = scenario.robot_start[:2]
+        trace = np.array(traces.get(k, [start]))
+        never_moved += bool(np.hypot(*(trace - start).T).max() < STILL_RADIUS)
+        if m is not None and cause != "success":
+            mt = r.metrics
+            title = (
+                f"{m.name} scenario {k}: {cause}; reached {mt['reached']}, {mt['distance_from_goal']:.1f} m "
+                f"from goal, travelled {mt['distance_travelled']:.0f} m, humans coll. "
+                f"{mt['human_collisions']}, wall {mt['wall_collisions']}"
+            )
+            drawn.append(draw_failure(m, scenario, trace, plans[k], title, out / f"{m.name}-fail-{k}.png"))
+    stuck = sum(bool(r.metrics.get("stuck")) for r in results)
+    return BuildingEpisodes(len(results), outcomes, stuck, never_moved, tuple(drawn))
+
+
+def draw_failure(
+    m: Map, scenario: Scenario, trace: np.ndarray, plan: np.ndarray, title: str, path: Path
+) -> Path:
+    """Walls around the episode, its first plan, the robot's track, start (green) and goal (red),
+    to `path`; returns it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    fig, ax = plt.subplots(figsize=(9, 8))
+    pts = np.concatenate((trace, plan, scenario.robot_start[None, :2], scenario.robot_goal[None, :2]))
+    lo, hi = pts.min(axis=0) - 3.0, pts.max(axis=0) + 3.0
+    walls = np.asarray(m.walls).reshape(-1, 2, 2)
+    ax.add_collection(LineCollection(walls, colors="0.1", linewidths=0.8))
+    if len(m.edges):
+        ax.add_collection(LineCollection(m.nodes[m.edges], colors="tab:blue", linewidths=0.5, alpha=0.4))
+    ax.plot(plan[:, 0], plan[:, 1], "--", color="tab:blue", lw=1)
+    ax.plot(trace[:, 0], trace[:, 1], "-", color="tab:orange", lw=1.2)
+    ax.plot(trace[-1, 0], trace[-1, 1], "x", color="k", ms=9)
+    ax.plot(*scenario.robot_start[:2], "o", color="tab:green", ms=7)
+    ax.plot(*scenario.robot_goal[:2], "o", color="tab:red", ms=7)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    ax.set_title(title, fontsize=9)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def building_table_head() -> list[str]:
+    """The two header lines of the buildings table (`building_row`)."""
+    from socialzoo.env.metrics import FAILURE_CAUSES
+
+    causes = [c.replace("_", " ") for c in FAILURE_CAUSES if c != "success"]
+    head = (
+        "| building | own graph | import | walls | nodes | poses | routes driven on import | repairs | "
+        "GoAlone success % | " + " | ".join(causes) + " | episodes stuck (metric) | never moved | s |"
+    )
+    return [head, "|" + "---|" * (len(causes) + 12)]
+
+
+def building_row(
+    name: str, own_graph: bool, status: str, m: Map | None, drive: BuildingEpisodes | None, seconds: float
+) -> str:
+    """One building's line of the table: its import (`status`: "ok" or why it was refused, and the
+    map's provenance: the routes its drive check completed, its repairs) and GoAlone's episodes."""
+    from socialzoo.env.metrics import FAILURE_CAUSES
+
+    causes = [c for c in FAILURE_CAUSES if c != "success"]
+    own = "yes" if own_graph else "no"
+    if m is None or drive is None:
+        return (
+            f"| {name} | {own} | {status} |"
+            + " |" * 5
+            + " 0 |"
+            + " |" * (len(causes) + 2)
+            + f" {seconds:.0f} |"
+        )
+    provenance = m.provenance or {}
+    record = provenance.get("drive", {})
+    driven = f"{record['routes_completed']}/{record['routes_driven']}" if record else "-"
+    outcomes = " | ".join(str(drive.outcomes[c]) for c in causes)
+    return (
+        f"| {name} | {own} | {status} | {m.num_walls} | {m.num_nodes} | {len(m.legal_poses)} | {driven} | "
+        f"{len(provenance.get('repairs', []))} | {100 * drive.success_rate:.0f} | {outcomes} | "
+        f"{drive.stuck} | {drive.never_moved} | {seconds:.0f} |"
+    )

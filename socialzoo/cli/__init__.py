@@ -37,7 +37,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "the people: compare learned with social-force humans, select a learned checkpoint, "
         "report how each crowd model walks",
     ),
-    "map": ("socialzoo.cli.map_cmd", "list, show, validate, check and import maps"),
+    "map": ("socialzoo.cli.map_cmd", "list, show, validate, check, import and drive maps"),
     "replay": (
         "socialzoo.cli.replay_cmd",
         "write an episode (several policies side by side) as an HTML viewer",

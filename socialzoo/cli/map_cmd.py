@@ -1,4 +1,4 @@
-"""`socialzoo map list|show|validate|check|import`: see, check and import building maps.
+"""`socialzoo map list|show|validate|check|import|drive`: see, check, import and drive building maps.
 
 `show` and `check` draw a picture only where asked (--picture PATH) or beside a map file, never
 into the current directory or the package's maps folder, and always say where it went.
@@ -16,7 +16,10 @@ from typing import Any
 import numpy as np
 
 from socialzoo.cli import command_help
+from socialzoo.cli.arg_types import positive_int
 
+# A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
+VECTOR_MAP, NAVIGATION = ".vectormap.txt", ".navigation.json"
 # Steps of an import that generate what the source lacks (the others repair what it has).
 GENERATED = ("graph_generated", "edges_built", "poses_generated")
 
@@ -97,25 +100,71 @@ def register(subparsers: Any) -> None:
             "and stored in the map's provenance. --strict refuses the source instead (exit 2)."
         ),
     )
-    source = imp.add_mutually_exclusive_group(required=True)
+    _add_import_arguments(imp)
+    imp.set_defaults(func=run_import)
+
+    drive = sub.add_parser(
+        "drive",
+        help="import buildings as `map import` does and report GoAlone's success among people on each",
+        description=(
+            "Import every NAME.vectormap.txt of DIR (with its navigation graph NAME.navigation.json "
+            "when there is one) as `socialzoo map import --walls NAME.vectormap.txt [--nav "
+            "NAME.navigation.json] --name NAME` does (repairs and the drive check included), to "
+            "OUT/NAME.json (what the import said: OUT/NAME.import.txt); without DIR, the built-in "
+            "buildings (the second floor plan in the social_gym GDC1 data and the raw GHC3 walls, "
+            "in a source checkout, and seeded synthetic plans), written to OUT/buildings/ first. "
+            "GoAlone then runs on the first --episodes scenarios of the test set `socialzoo "
+            "benchmark --maps OUT/NAME.json` generates (base seed 20220100, stored in "
+            "OUT/test_sets), and a Markdown table gives, per building, the import, GoAlone's "
+            "success and every failure by cause (wall collision, human collision, stuck, timeout), "
+            "the episodes whose metric stuck is set and those in which the robot never moved 1 m. "
+            "--pictures draws every failure to OUT/NAME-fail-K.png. Floor plans without a licence "
+            "stay outside the repository: pass their folder. Exit status 1 when an import was "
+            "refused or a building's success is below 90%%, 2 for bad arguments."
+        ),
+    )
+    drive.add_argument(
+        "buildings", type=Path, nargs="?", default=None, metavar="DIR",
+        help="folder of NAME.vectormap.txt [+ NAME.navigation.json] (default: the built-in buildings)",
+    )  # fmt: skip
+    drive.add_argument(
+        "--out", type=Path, required=True, help="folder of the imported maps, test sets, pictures"
+    )
+    drive.add_argument("--episodes", type=positive_int, default=30, help="episodes per building (default 30)")
+    drive.add_argument("--batch-size", type=positive_int, default=30, help="episodes stepped together")
+    drive.add_argument("--only", default=None, metavar="NAME,...", help="comma-separated building names")
+    drive.add_argument("--pictures", action="store_true", help="draw every failure to OUT/NAME-fail-K.png")
+    drive.add_argument(
+        "--spec-crowd",
+        action="store_true",
+        help="5 to 25 people on every building (drop the walkable area: no crowd-density cap)",
+    )
+    drive.set_defaults(func=run_drive)
+
+
+def _add_import_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of `map import` (its source, graph, repairs and output)."""
+    source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--walls", type=Path, help="AMRL vector map text file")
     source.add_argument("--pedsim", type=Path, help="pedsim scene XML file")
     source.add_argument("--png", type=Path, help="floor-plan image: dark pixels are walls (needs --scale)")
-    imp.add_argument("--scale", type=float, default=None, help="metres per pixel of --png")
-    imp.add_argument(
+    parser.add_argument("--scale", type=float, default=None, help="metres per pixel of --png")
+    parser.add_argument(
         "--origin", type=float, nargs=2, metavar=("X", "Y"), default=(0.0, 0.0),
         help="world position of the image's lower-left corner, m (default 0 0)",
     )  # fmt: skip
-    imp.add_argument(
+    parser.add_argument(
         "--threshold", type=float, default=0.5, help="pixels darker than this (0 black .. 1 white) are walls"
     )
-    imp.add_argument(
+    parser.add_argument(
         "--min-wall-area", type=float, default=0.0, help="drop wall specks smaller than this, m^2"
     )
-    imp.add_argument("--nav", type=Path, default=None, help="AMRL navigation graph JSON")
-    imp.add_argument("--name", required=True, help="map name")
-    imp.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"), default=None)
-    imp.add_argument(
+    parser.add_argument("--nav", type=Path, default=None, help="AMRL navigation graph JSON")
+    parser.add_argument("--name", required=True, help="map name")
+    parser.add_argument(
+        "--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"), default=None
+    )
+    parser.add_argument(
         "--seed-point",
         type=float,
         nargs=2,
@@ -123,20 +172,19 @@ def register(subparsers: Any) -> None:
         default=None,
         help="a point inside the building: the graph covers what is reachable from it",
     )
-    imp.add_argument(
+    parser.add_argument(
         "--strict",
         action="store_true",
         help="repair nothing: refuse a source that breaks a rule or a route the robot cannot drive",
     )
-    imp.add_argument(
+    parser.add_argument(
         "--no-drive",
         action="store_true",
         help="skip the drive check (the robot alone over every feasible pose pair) and its repairs",
     )
-    imp.add_argument("--source", default="", help="provenance text stored in the map")
-    imp.add_argument("--licence", default="", help="licence text stored in the map")
-    imp.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
-    imp.set_defaults(func=run_import)
+    parser.add_argument("--source", default="", help="provenance text stored in the map")
+    parser.add_argument("--licence", default="", help="licence text stored in the map")
+    parser.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
 
 
 def _fail(err: Exception) -> int:
@@ -446,3 +494,99 @@ def run_import(args: argparse.Namespace) -> int:
         f" ({num_repairs} repairs)"
     )
     return 0
+
+
+def run_drive(args: argparse.Namespace) -> int:
+    """Run `socialzoo map drive`; returns the exit status."""
+    import time
+
+    from socialzoo.bench.drive_check import building_row, building_table_head, drive_building
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        files = _building_files(args)
+    except (FileNotFoundError, ValueError) as err:
+        return _fail(err)
+    for line in building_table_head():
+        print(line)
+    worst = 100.0
+    for name, walls_file in files.items():
+        nav = walls_file.with_name(f"{name}{NAVIGATION}")
+        nav_file = nav if nav.is_file() else None
+        start = time.perf_counter()
+        m, status = _import_building(walls_file, nav_file, name, args.out, spec_crowd=args.spec_crowd)
+        drive = None
+        if m is not None:
+            drive = drive_building(
+                args.out / f"{name}.json", args.out, args.episodes, batch_size=args.batch_size,
+                pictures=args.pictures,
+            )  # fmt: skip
+        worst = min(worst, 100.0 * drive.success_rate if drive else 0.0)
+        print(
+            building_row(name, nav_file is not None, status, m, drive, time.perf_counter() - start),
+            flush=True,
+        )
+    return 0 if worst >= 90.0 else 1
+
+
+def _building_files(args: argparse.Namespace) -> dict[str, Path]:
+    """`map drive`'s buildings: name -> NAME.vectormap.txt of DIR (or of the built-in buildings,
+    written to OUT/buildings/), those of --only when given.
+
+    Raises:
+        FileNotFoundError: DIR is not a folder.
+        ValueError: DIR holds no building, or --only names one it does not hold.
+    """
+    folder = args.buildings
+    if folder is None:
+        from socialzoo.bench.drive_check import builtin_buildings
+        from socialzoo.nav.importers import write_vector_map
+
+        folder = args.out / "buildings"
+        folder.mkdir(exist_ok=True)
+        for name, walls in builtin_buildings().items():
+            write_vector_map(folder / f"{name}{VECTOR_MAP}", walls)
+    elif not folder.is_dir():
+        raise FileNotFoundError(f"{folder}: no such folder")
+    files = {f.name[: -len(VECTOR_MAP)]: f for f in sorted(folder.glob(f"*{VECTOR_MAP}"))}
+    if not files:
+        raise ValueError(f"{folder}: no NAME{VECTOR_MAP} file")
+    if args.only is None:
+        return files
+    wanted = args.only.split(",")
+    unknown = [name for name in wanted if name not in files]
+    if unknown:
+        raise ValueError(
+            f"--only: no building {', '.join(unknown)} in {folder} (buildings: {', '.join(files)})"
+        )
+    return {name: files[name] for name in files if name in wanted}
+
+
+def _import_building(
+    walls_file: Path, nav_file: Path | None, name: str, out: Path, *, spec_crowd: bool = False
+) -> tuple[Any, str]:
+    """(the map or None, "ok" or why the import refused it) of one building imported as `map
+    import --walls FILE [--nav FILE] --name NAME --out OUT/NAME.json` does; what the import said
+    goes to OUT/NAME.import.txt. With spec_crowd the map loses its walkable area."""
+    import contextlib
+    import io
+
+    from socialzoo.nav.maps import read_map
+
+    words = ["--walls", str(walls_file), "--name", name, "--out", str(out / f"{name}.json")]
+    if nav_file is not None:
+        words += ["--nav", str(nav_file)]
+    parser = argparse.ArgumentParser(prog="socialzoo map import")
+    _add_import_arguments(parser)
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+        status = run_import(parser.parse_args(words))
+    text = said.getvalue()
+    (out / f"{name}.import.txt").write_text(text)
+    if status != 0:
+        return None, text.strip().splitlines()[-1] if text.strip() else f"refused ({status})"
+    m = read_map(out / f"{name}.json")
+    if spec_crowd:
+        m = dataclasses.replace(m, walkable_area=None)
+        m.save(out / f"{name}.json")
+    return m, "ok"

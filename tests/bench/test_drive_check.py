@@ -191,3 +191,70 @@ def test_strict_import_refuses_a_route_it_cannot_drive():
 
     with pytest.raises(MapError, match=r"(?s)--strict: failed: .*pose 1 -> pose 0: goal unreachable"):
         _drive_and_repair(crack_map(outside_route=False), strict=True)
+
+
+# ------------------------------------------------------------------ buildings with people (map drive)
+
+
+def test_the_builtin_buildings_are_the_reference_floors_and_seeded_plans():
+    from socialzoo.bench.drive_check import builtin_buildings
+
+    buildings = builtin_buildings()
+    assert list(buildings)[:3] == ["gdc1_floor2", "ghc3_raw", "office_corridor_1"]
+    assert len(buildings) == 11 and "long_corridor" in buildings
+    assert all(w.ndim == 2 and w.shape[1] == 4 and len(w) >= 4 for w in buildings.values())
+    assert (buildings["gdc1_floor2"][:, [1, 3]] < -5.0).all()  # the floor the benchmark never uses
+    again = builtin_buildings()
+    assert all(np.array_equal(buildings[k], again[k]) for k in buildings)  # seeded
+
+
+def test_a_building_row_gives_the_import_and_every_outcome():
+    from socialzoo.bench.drive_check import BuildingEpisodes, building_row, building_table_head
+
+    head, rule = building_table_head()
+    columns = head.count("|") - 1
+    assert "human collision" in head and "never moved" in head and rule.count("---") == columns
+    m = narrow_door_map()
+    outcomes = {"success": 8, "wall_collision": 0, "human_collision": 1, "stuck": 1, "timeout": 0}
+    row = building_row("door", True, "ok", m, BuildingEpisodes(10, outcomes, 2, 1), 12.3)
+    assert row == f"| door | yes | ok | {m.num_walls} | 2 | 4 | - | 0 | 80 | 0 | 1 | 1 | 0 | 2 | 1 | 12 |"
+    refused = building_row("bad", False, "error: no walls", None, None, 1.0)
+    assert refused.startswith("| bad | no | error: no walls |") and refused.count("|") == columns + 1
+
+
+def test_a_failure_picture_shows_the_episode(tmp_path):
+    from socialzoo.bench.drive_check import draw_failure
+    from socialzoo.nav.maps import load_map
+    from socialzoo.nav.scenarios import validation_set
+
+    scenario = validation_set("gdc1").scenario(0)
+    start, goal = scenario.robot_start[:2], scenario.robot_goal[:2]
+    path = draw_failure(load_map("gdc1"), scenario, np.stack((start, start + 1.0)), np.stack((start, goal)),
+                        "gdc1 scenario 0", tmp_path / "fail.png")  # fmt: skip
+    assert path.is_file() and path.stat().st_size > 1000
+
+
+def test_map_drive_imports_a_folder_and_reports_goalone(tmp_path, capsys):
+    from socialzoo.cli import main
+    from socialzoo.nav.importers import write_vector_map
+
+    folder, out = tmp_path / "buildings", tmp_path / "out"
+    folder.mkdir()
+    plan = floorplans.winding_corridor(1, num_legs=8, leg_length=(3.0, 10.0))
+    write_vector_map(folder / "wind.vectormap.txt", plan.walls)
+    (folder / "empty.vectormap.txt").write_text("")
+    status = main(["map", "drive", str(folder), "--out", str(out), "--episodes", "3"])
+    lines = capsys.readouterr().out.splitlines()
+    assert status == 1  # the empty building's import was refused
+    rows = {line.split(" | ")[0][2:]: line.split(" | ") for line in lines[2:]}
+    assert set(rows) == {"empty", "wind"}
+    wind = rows["wind"]
+    assert wind[1:3] == ["no", "ok"]
+    # Every episode is a success or a failure of one cause.
+    assert sum(int(v) for v in wind[9:13]) == round(3 * (100 - int(wind[8])) / 100)
+    assert (out / "wind.json").is_file() and (out / "wind.import.txt").is_file()
+    assert (out / "test_sets" / "wind-test.json").is_file()
+    assert rows["empty"][2] != "ok"
+    assert main(["map", "drive", str(folder), "--out", str(out), "--only", "nope"]) == 2
+    assert "no building nope" in capsys.readouterr().err
+    assert main(["map", "drive", str(tmp_path / "missing"), "--out", str(out)]) == 2
