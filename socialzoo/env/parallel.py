@@ -79,7 +79,7 @@ class TaskParallelEnv(ParallelEnv[str, Any, Any]):
     """
 
     metadata: ClassVar[dict[str, Any]] = {
-        "name": "socialzoo_parallel_v1",
+        "name": "socialzoo_parallel_v2",
         "render_modes": ["human", "rgb_array"],
         "render_fps": 40,
         "is_parallelizable": True,
@@ -348,7 +348,7 @@ class CrowdNavParallelEnv(TaskParallelEnv):
     """Several robots of the CrowdNav task (socialzoo.env.tasks.crowdnav), each seeing the others
     as people; a robot that left stands still where it is, still an obstacle to the others."""
 
-    metadata: ClassVar[dict[str, Any]] = {**TaskParallelEnv.metadata, "name": "socialzoo_crowdnav_v1"}
+    metadata: ClassVar[dict[str, Any]] = {**TaskParallelEnv.metadata, "name": "socialzoo_crowdnav_v2"}
     default_task = "crowdnav"
 
 

@@ -9,6 +9,11 @@ raises gymnasium's DeprecatedEnv naming the current id. The CrowdNav ids have th
 only copy: the adapters' docstrings point here.
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    socialzoo_parallel_v2, socialzoo_crowdnav_v2 (the ParallelEnvs' metadata names; every id
+        keeps its version: the ids have one robot): robots after the first start at least 1 m
+        from every person and every other robot (scenario_source.with_robots; they could start
+        inside a person), and CrowdNav++'s random robots keep CrowdNav's spacing among
+        themselves. Only multi-robot rollouts change (ParallelEnv, TorchRL multi-agent).
     v2: the robot recovers when it makes no progress (backs off, replans over another edge),
         its carrot is in sight only along a line keeping its full wall distance, its plans
         join the graph by lines it can drive; people in contact with the robot do not press

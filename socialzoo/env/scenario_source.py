@@ -12,41 +12,105 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from socialzoo.nav.maps import Map
+from socialzoo.nav.maps import POSE_CLEARANCE, Map
 from socialzoo.nav.scenario_families import make_family_scenario
 from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario
+from socialzoo.nav.segments import segments_free
 
 if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig
 
 
-def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:
-    """The scenario with `num_robots` robots: extra robots get distinct legal start and goal poses.
+# An extra robot starts at least START_CLEARANCE (m) from every person's spawn and every other
+# robot's start: the largest robot-person collision distance of the registered tasks, 0.5 m
+# (CrowdNavWalls: robot radius 0.3 + person radius 0.2; the benchmark's
+# WorldConfig.human_collision_distance is 0.4), plus a margin of START_MARGIN, so no robot starts
+# inside a person and one walking straight at it at 1 m/s takes half a second to reach it.
+START_MARGIN = 0.5
+START_CLEARANCE = 0.5 + START_MARGIN
+# Where too few legal poses are clear (a small room crowded by its people: open_room's 9 poses
+# leave none clear in about 30% of the benchmark's scenarios), a robot starts at a spot drawn
+# within START_REACH of a legal pose (per axis), at least POSE_CLEARANCE from every wall and in
+# straight sight of that pose; the first clear one of START_TRIES draws.
+START_REACH = 1.5
+START_TRIES = 256
 
-    Robot 0 keeps the scenario's own start and goal. Extra robots are drawn from a generator
-    seeded by the scenario seed, so the result is as reproducible as the scenario itself.
+
+class RobotPlacementError(ValueError):
+    """No start for an extra robot keeps START_CLEARANCE from the people and the other robots."""
+
+
+def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:
+    """The scenario with `num_robots` robots: extra robots start clear of the people and each other.
+
+    Robot 0 keeps the scenario's own start and goal. Each extra robot starts on a legal pose at
+    least START_CLEARANCE from every person's spawn and every robot placed before it, drawn
+    uniformly among such poses; when none is left, on a spot near a legal pose (START_REACH,
+    START_TRIES) as clear. Its goal is a legal pose other than the one it starts on or near.
+    Every draw comes from a generator seeded by the scenario seed and the robot count, so the
+    result is as reproducible as the scenario itself.
 
     Raises:
-        ValueError: the map has too few legal poses for distinct robot starts.
+        RobotPlacementError: no clear start for an extra robot (names the map, the scenario seed
+            and the robot count).
     """
     have = scenario.num_robots
     if num_robots <= have:
         return scenario
-    poses = m.legal_poses
-    if len(poses) < num_robots + 1:
-        raise ValueError(
-            f"{m.where}: {num_robots} robots need at least {num_robots + 1} legal poses, the map has {len(poses)}"
-        )
+    poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
     rng = np.random.default_rng([int(scenario.seed), num_robots])
-    used = {tuple(np.round(p[:2], 6)) for p in scenario.robot_starts}
-    free = [i for i, p in enumerate(poses) if tuple(np.round(p[:2], 6)) not in used]
-    extra = rng.choice(free, size=num_robots - have, replace=False)
-    starts = np.vstack((scenario.robot_starts, poses[extra]))
+    taken = np.vstack((scenario.human_spawn.reshape(-1, 2), scenario.robot_starts[:, :2]))
+    starts, anchors = [scenario.robot_starts], []
+    for robot in range(have, num_robots):
+        clear = np.flatnonzero(_clearance(poses[:, :2], taken) >= START_CLEARANCE)
+        if len(clear):
+            anchor = int(rng.choice(clear))
+            start = poses[anchor]
+        else:
+            anchor, start = _spot_near_poses(rng, m, poses, taken, scenario, robot, num_robots)
+        starts.append(start[None, :])
+        anchors.append(anchor)
+        taken = np.vstack((taken, start[None, :2]))
     goals = [scenario.robot_goals]
-    for i in extra:
-        choices = [j for j in range(len(poses)) if j != i]
+    for anchor in anchors:
+        choices = [j for j in range(len(poses)) if j != anchor]
         goals.append(poses[[rng.choice(choices)]])
-    return dataclasses.replace(scenario, robot_starts=starts, robot_goals=np.vstack(goals))
+    return dataclasses.replace(scenario, robot_starts=np.vstack(starts), robot_goals=np.vstack(goals))
+
+
+def _clearance(points: np.ndarray, taken: np.ndarray) -> np.ndarray:
+    """(n,) distance from each of `points` (n, 2) to the nearest of `taken` (k, 2), m (inf if k = 0)."""
+    if len(taken) == 0:
+        return np.full(len(points), np.inf)
+    return np.sqrt(((points[:, None, :] - taken[None, :, :]) ** 2).sum(-1)).min(axis=1)
+
+
+def _spot_near_poses(
+    rng: np.random.Generator,
+    m: Map,
+    poses: np.ndarray,
+    taken: np.ndarray,
+    scenario: Scenario,
+    robot: int,
+    num_robots: int,
+) -> tuple[int, np.ndarray]:
+    """(legal-pose index, (3,) start) of a clear spot near a legal pose, with that pose's heading."""
+    anchor = rng.integers(len(poses), size=START_TRIES)
+    spot = poses[anchor, :2] + rng.uniform(-START_REACH, START_REACH, size=(START_TRIES, 2))
+    _, wall_dist = m.wall_index.nearest(spot)
+    good = (
+        (_clearance(spot, taken) >= START_CLEARANCE)
+        & (wall_dist >= POSE_CLEARANCE)
+        & segments_free(m.wall_index, spot, poses[anchor, :2])
+    )
+    if not good.any():
+        raise RobotPlacementError(
+            f"{m.where}: scenario seed {scenario.seed} with {num_robots} robots: no start for robot {robot} "
+            f"keeps {START_CLEARANCE:g} m from the scenario's {scenario.num_humans} people and the other robots "
+            f"(no clear legal pose, none of {START_TRIES} spots near one)"
+        )
+    k = int(np.argmax(good))
+    return int(anchor[k]), np.array([spot[k, 0], spot[k, 1], poses[anchor[k], 2]])
 
 
 class ScenarioStream:

@@ -153,8 +153,9 @@ def crowd_case_arrays(
     draws = rs.random_sample(256 * (n + 1) + 64 * num_robots)
     used = 0
     if config.robot_layout == "random":
+        gap = 2 * config.robot_radius + config.discomfort_dist
         robot_starts, robot_goals, used = _random_robots(
-            draws, num_robots, config.circle_radius, config.min_robot_route
+            draws, num_robots, config.circle_radius, config.min_robot_route, gap
         )
     else:
         robot_starts, robot_goals = robot_poses(num_robots, config.circle_radius)
@@ -182,10 +183,12 @@ def crowd_case_arrays(
 
 
 def _random_robots(
-    draws: np.ndarray, num_robots: int, half: float, min_route: float
+    draws: np.ndarray, num_robots: int, half: float, min_route: float, gap: float
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """CrowdNav++'s robots: start and goal uniform in [-half, half]^2 until at least min_route apart
-    (4 draws a try), heading pi / 2; returns (starts, goals, draws used)."""
+    (4 draws a try), heading pi / 2; returns (starts, goals, draws used). A robot after the first
+    is also drawn again while its start (goal) is closer than `gap` (two robot radii and the
+    discomfort distance, the people's spacing rule) to an earlier robot's start (goal)."""
     starts, goals, at = np.empty((num_robots, 3)), np.empty((num_robots, 3)), 0
     for k in range(num_robots):
         while True:
@@ -193,7 +196,11 @@ def _random_robots(
                 raise RuntimeError("crowd_case: the robots' draws ran out")  # ~never: each try succeeds often
             px, py, gx, gy = -half + 2 * half * draws[at : at + 4]
             at += 4
-            if math.hypot(px - gx, py - gy) >= min_route:
+            if math.hypot(px - gx, py - gy) >= min_route and all(
+                math.hypot(px - starts[j, 0], py - starts[j, 1]) >= gap
+                and math.hypot(gx - goals[j, 0], gy - goals[j, 1]) >= gap
+                for j in range(k)
+            ):
                 break
         starts[k], goals[k] = (px, py, math.pi / 2), (gx, gy, math.pi / 2)
     return starts, goals, at

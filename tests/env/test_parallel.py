@@ -117,7 +117,7 @@ def test_spaces_are_cached_and_typed():
     assert env.observation_space("human_0").shape == (8 + 5 * 6,)
     velocity = make(robot_action="velocity")
     assert velocity.action_space("robot_0").shape == (2,)
-    assert env.metadata["name"] == "socialzoo_parallel_v1" and env.metadata["is_parallelizable"]
+    assert env.metadata["name"] == "socialzoo_parallel_v2" and env.metadata["is_parallelizable"]
 
 
 def test_state_is_the_global_state():
