@@ -112,6 +112,9 @@ class ToyReachTask(Task):
     def idle_action(self) -> Any:
         return 3
 
+    def action_labels(self) -> tuple[str, ...]:
+        return ("forward", "left", "right", "stop")
+
     @property
     def world_state(self) -> Any:
         return self.core.state

@@ -22,7 +22,6 @@ from socialzoo.agents import Policy, make_policy
 from socialzoo.core.config import LaserConfig
 from socialzoo.core.laser import laser_scan, ray_angles
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore, StepResult
 from socialzoo.env.scenario_source import ScenarioStream
 from socialzoo.nav.maps import Map, load_map
 from socialzoo.nav.scenarios import Scenario
@@ -47,12 +46,12 @@ class PolicySpec:
 
     @classmethod
     def parse(cls, text: str) -> PolicySpec:
-        """The spec of "name" or "name=PATH" (a learned policy's saved file).
+        """The spec of "name", "name=PATH" or "name:PATH" (a learned policy's saved file).
 
         Raises:
             ValueError: an empty name.
         """
-        name, _, path = text.partition("=")
+        name, _, path = text.partition("=") if "=" in text else text.partition(":")
         name = name.strip().lower()
         if not name:
             raise ValueError(f"a policy must be NAME or NAME=PATH, got {text!r}")
@@ -89,6 +88,8 @@ def _outcome(metrics: dict[str, Any], wall: bool, truncated: bool) -> str:
         return "goal reached after a collision"
     if wall:
         return "wall collision"
+    if metrics.get("collision"):
+        return "collision"
     if truncated:
         return "time limit"
     return "ended"
@@ -105,7 +106,8 @@ def record_episode(
     laser_stride: int = 1,
     world_map: Map | None = None,
 ) -> EpisodeTrace:
-    """Run `policy` on `scenario` until the episode ends and keep every state and step.
+    """Run `policy` on `scenario` of the action-selection task until the episode ends and keep
+    every state and step (record_task_episode on an ActionSelectionTask of env_config).
 
     Args:
         env_config: the env (map, time limit, ...); robot 0 is recorded.
@@ -113,15 +115,58 @@ def record_episode(
         policy: a socialzoo.agents Policy.
         label: the panel's title (default: the policy's name).
         laser: the scan drawn in the viewer (default: env_config.world.laser, else LaserConfig()).
-        laser_rays: scan with this many rays over the same field of view (default: the laser's
-            own count; 0: no scan); every ray's range is exact, there are just fewer of them.
-        laser_stride: scan every `laser_stride` states (and the last one): a scan of gdc1 costs
-            about as much as a step.
+        laser_rays: as record_task_episode.
+        laser_stride: as record_task_episode.
         world_map: the already loaded map of env_config.map, if at hand.
 
     Returns:
         The EpisodeTrace, with the episode's metrics (the same as the benchmark's for this
         scenario, env config and policy).
+    """
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
+
+    task = ActionSelectionTask(env_config, 1, map_data=world_map)
+    task.reset(np.array([0]), {"scenario": scenario})
+    return record_task_episode(
+        task, policy, label=label, laser=laser, laser_rays=laser_rays, laser_stride=laser_stride
+    )
+
+
+def record_case(
+    env_id: str, policy: Policy, split: str, case: int, *, label: str | None = None, **overrides: Any
+) -> tuple[EpisodeTrace, Any]:
+    """(the trace, the task) of `policy` on case `case` of a split of any registered task id
+    (socialzoo.bench.task_benchmark.TaskId); `overrides` are the task's config fields."""
+    from socialzoo.bench.task_benchmark import TaskId
+
+    task = TaskId.of(env_id).make(1, **overrides)
+    task.reset(np.array([0]), {"split": split, "cases": [case]})
+    return record_task_episode(task, policy, label=label), task
+
+
+def record_task_episode(
+    task: Any,
+    policy: Policy,
+    *,
+    label: str | None = None,
+    laser: LaserConfig | None = None,
+    laser_rays: int | None = None,
+    laser_stride: int = 1,
+) -> EpisodeTrace:
+    """Run `policy` on row 0 of a task of one row (already reset) until robot 0's episode ends,
+    keeping every state and step: the world's bodies, the task's guides and scan for the viewer
+    (Task.viewer_guides, viewer_laser) and its per-step force, blame and collisions where its
+    info has them.
+
+    Args:
+        task: a socialzoo.env.tasks Task of batch size 1, reset.
+        policy: an object with act(observations, core).
+        label: the panel's title (default: the policy's name).
+        laser: the scan drawn in the viewer (default: the task's, if it has one).
+        laser_rays: scan with this many rays over the same field of view (default: the laser's
+            own count; 0: no scan); every ray's range is exact, there are just fewer of them.
+        laser_stride: scan every `laser_stride` states (and the last one): a scan of gdc1 costs
+            about as much as a step.
     """
     if not isinstance(laser_stride, int) or isinstance(laser_stride, bool) or laser_stride < 1:
         raise ValueError(f"record_episode: laser_stride must be an int >= 1, got {laser_stride!r}")
@@ -129,41 +174,42 @@ def record_episode(
         not isinstance(laser_rays, int) or isinstance(laser_rays, bool) or laser_rays < 0
     ):
         raise ValueError(f"record_episode: laser_rays must be None or an int >= 0, got {laser_rays!r}")
-    laser = laser or env_config.world.laser or LaserConfig()
-    if laser_rays:
-        laser = dataclasses.replace(laser, num_rays=laser_rays)
-    core = SocialNavCore(env_config, 1, map_data=world_map)
-    core.reset_rows(np.array([0]), [scenario])
-    recorder = _Recorder(core, None if laser_rays == 0 else laser)
+    scan = task.viewer_laser()
+    if scan is not None and laser is not None:
+        scan = (laser, *scan[1:])
+    if scan is not None and laser_rays:
+        scan = (dataclasses.replace(scan[0], num_rays=laser_rays), *scan[1:])
+    recorder = _Recorder(task, None if laser_rays == 0 else scan)
     recorder.keep_state(scan=True)
-    while not core.done[0, 0]:
-        action = np.asarray(policy.act(core.obs, core))
-        if env_config.robot_action == "subpolicy":
-            action = action.reshape(core.done.shape)
-            chosen = int(action[0, 0])
-        else:
-            action = action.reshape((*core.done.shape, 2))
-            chosen = -1
-        recorder.keep_step(chosen, core.step(action))
-        steps = len(recorder.actions)
-        recorder.keep_state(scan=steps % laser_stride == 0 or bool(core.done[0, 0]))
+    named = bool(task.action_labels())  # the timeline shows actions that have names
+    shape = (1, 1, *(task.action_space.shape or ()))
+    while True:
+        action = np.asarray(policy.act(task.observations(), task.core)).reshape(shape)
+        step = task.step(action)
+        recorder.keep_step(int(action.reshape(-1)[0]) if named else -1, step)
+        ended = bool(step.terminated[0, 0] or step.truncated[0, 0])
+        recorder.keep_state(scan=len(recorder.actions) % laser_stride == 0 or ended)
+        if ended:
+            break
     name = getattr(policy, "name", type(policy).__name__)
-    return recorder.trace(label or str(name), scenario)
+    return recorder.trace(label or str(name))
 
 
 class _Recorder:
-    """The lists one episode of a batch-of-one core fills, state by state and step by step."""
+    """The lists one episode of a batch-of-one task fills, state by state and step by step."""
 
-    def __init__(self, core: SocialNavCore, laser: LaserConfig | None) -> None:
-        state = core.state
-        assert state is not None
-        self.core = core
+    def __init__(self, task: Any, laser: tuple[Any, Any, float] | None) -> None:
+        state = task.world_state
+        self.task = task
         self.laser = laser
         self.present = np.flatnonzero(state.human_mask[0])
         # Human slot -> index among the present humans (the trace keeps only those); the extra
-        # last entry stays -1, so the core's "no target" (-1) maps to -1.
+        # last entry stays -1, so the task's "no target" (-1) maps to -1.
         self.slot_to_present = np.full(state.human_mask.shape[1] + 1, -1, dtype=np.int64)
         self.slot_to_present[self.present] = np.arange(len(self.present))
+        self.goal = np.asarray(state.robot_goal[0, 0], dtype=np.float64).copy()
+        self.start = np.asarray(state.robot_pose[0, 0, :2], dtype=np.float64).copy()
+        self.holonomic = getattr(getattr(task.config, "robot", None), "kinematics", None) == "holonomic"
         self.states: dict[str, list[np.ndarray]] = {
             k: [] for k in ("pose", "vel", "humans", "human_vel", "carrot")
         }
@@ -179,63 +225,79 @@ class _Recorder:
         self.truncated = False
 
     def keep_state(self, scan: bool) -> None:
-        """Keep the core's current state (and scan it when `scan`)."""
-        core = self.core
-        s = core.state
-        assert s is not None
+        """Keep the task's current state (and scan it when `scan`)."""
+        s = self.task.world_state
         kept = self.states
-        kept["pose"].append(s.robot_pose[0, 0].copy())
-        kept["vel"].append(s.robot_vel[0, 0].copy())
+        pose, vel = s.robot_pose[0, 0].copy(), s.robot_vel[0, 0].copy()
+        if self.holonomic:  # (vx, vy): the viewer shows the heading along the velocity, and the speed
+            from socialzoo.core.robot import world_velocity
+
+            velocity = world_velocity(s.robot_pose[0, 0], s.robot_vel[0, 0], self.task.config.robot)
+            speed = float(np.hypot(*velocity))
+            if speed > 1e-6:
+                pose[2] = np.arctan2(velocity[1], velocity[0])
+            vel = np.array([speed, 0.0])
+        kept["pose"].append(pose)
+        kept["vel"].append(vel)
         kept["humans"].append(s.human_pos[0, self.present].copy())
         kept["human_vel"].append(s.human_vel[0, self.present].copy())
-        kept["carrot"].append(core.carrot[0, 0].copy())
-        length = int(core.navigator.plans.lengths[0, 0])
-        path = core.navigator.plans.paths[0, 0, :length].copy()
+        carrot, path = self.task.viewer_guides(0)
+        kept["carrot"].append(self.goal[:2].copy() if carrot is None else carrot)
+        path = np.array([self.start, self.goal[:2]]) if path is None else path
         if not self.plans or self.plans[-1].shape != path.shape or not np.array_equal(self.plans[-1], path):
             self.plans.append(path)
         self.plan_index.append(len(self.plans) - 1)
         # Without a laser only the start state gets its (empty) scan.
         if (scan and self.laser is not None) or not self.scanned:
-            radius = core.config.world.human.radius
-            ranges = laser_scan(s, core.walls, self.laser, radius)[0, 0] if self.laser else np.zeros(0)
+            if self.laser is not None:
+                laser, walls, radius = self.laser
+                ranges = laser_scan(s, walls, laser, radius)[0, 0]
+            else:
+                ranges = np.zeros(0)
             self.scans.append(ranges)
             self.scanned.append(len(kept["pose"]) - 1)
 
-    def keep_step(self, action: int, result: StepResult) -> None:
-        """Keep the step's action and the values of its StepResult (row 0, robot 0)."""
+    def keep_step(self, action: int, step: Any) -> None:
+        """Keep the step's action and the values of its TaskStep (row 0, robot 0)."""
         self.actions.append(action)
-        steps = self.steps
-        steps["target"].append(int(self.slot_to_present[int(result.target_human[0, 0])]))
-        steps["reward"].append(float(result.reward[0, 0]))
-        steps["force"].append(float(result.force[0, 0]))
-        steps["blame"].append(float(result.blame[0, 0]))
-        steps["contacts"].append(int(result.human_collisions[0, 0]))
-        steps["wall"].append(bool(result.wall_collision[0, 0]))
-        self.wall_end = bool(
-            result.terminated[0, 0] and result.wall_collision[0, 0] and not result.reached[0, 0]
-        )
-        self.truncated = bool(result.truncated[0, 0])
+        steps, info = self.steps, step.info
 
-    def trace(self, label: str, scenario: Scenario) -> EpisodeTrace:
+        def value(key: str, default: Any) -> Any:
+            return info[key][0, 0] if key in info else default
+
+        steps["target"].append(int(self.slot_to_present[int(value("target_human", -1))]))
+        steps["reward"].append(float(step.reward[0, 0]))
+        steps["force"].append(float(value("force", 0.0)))
+        steps["blame"].append(float(value("blame", 0.0)))
+        steps["contacts"].append(int(value("human_collisions", 0)))
+        steps["wall"].append(bool(value("wall_collision", False)))
+        self.wall_end = bool(
+            step.terminated[0, 0] and value("wall_collision", False) and not value("reached", False)
+        )
+        self.truncated = bool(step.truncated[0, 0])
+
+    def trace(self, label: str) -> EpisodeTrace:
         """The EpisodeTrace of what was kept, with the episode's metrics."""
-        metrics = self.core.episode_summaries([0])[0]
+        metrics = self.task.episode_metrics(np.array([0]))[0]
         kept, steps = self.states, self.steps
         count, humans = len(kept["pose"]), len(self.present)
+        laser = self.laser[0] if self.laser is not None else None
+        dt = getattr(self.task.config, "dt", getattr(self.task.config, "time_step", None))
         return EpisodeTrace(
             label=label,
-            dt=self.core.config.dt,
+            dt=float(dt),  # type: ignore[arg-type]
             robot_pose=np.array(kept["pose"]),
             robot_vel=np.array(kept["vel"]),
-            goal=np.asarray(scenario.robot_goals[0], dtype=np.float64),
+            goal=self.goal,
             human_pos=np.array(kept["humans"]).reshape(count, humans, 2),
             human_vel=np.array(kept["human_vel"]).reshape(count, humans, 2),
             carrot=np.array(kept["carrot"]),
             plans=tuple(self.plans),
             plan_index=np.array(self.plan_index),
-            laser_angles=ray_angles(self.laser) if self.laser else np.zeros(0),
+            laser_angles=ray_angles(laser) if laser else np.zeros(0),
             laser_steps=np.array(self.scanned, dtype=np.int64),
             laser_ranges=np.array(self.scans).reshape(len(self.scanned), -1),
-            laser_max_range=self.laser.max_range if self.laser else LaserConfig().max_range,
+            laser_max_range=laser.max_range if laser else LaserConfig().max_range,
             action=np.array(self.actions, dtype=np.int64),
             target_human=np.array(steps["target"], dtype=np.int64),
             reward=np.array(steps["reward"], dtype=np.float64),
@@ -249,21 +311,10 @@ class _Recorder:
 
 
 def replay_scene(env_config: EnvConfig, world_map: Map, title: str, subtitle: str = "") -> ReplayScene:
-    """The scene every panel shares: the map's walls and view bounds, the bodies' sizes."""
-    from socialzoo.render.frames import map_bounds
+    """The scene every panel of the action-selection task shares (its Task.viewer_scene)."""
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
-    robot = env_config.world.robot
-    return ReplayScene(
-        title=title,
-        subtitle=subtitle,
-        map_name=world_map.name,
-        walls=world_map.walls,
-        bounds=map_bounds(world_map),
-        robot_length=robot.length,
-        robot_width=robot.width,
-        human_radius=env_config.world.human.radius,
-        goal_radius=env_config.goal_radius,
-    )
+    return ActionSelectionTask(env_config, 1, map_data=world_map).viewer_scene(title, subtitle, ())
 
 
 def record_policies(

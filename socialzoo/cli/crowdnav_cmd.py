@@ -53,25 +53,6 @@ def register(subparsers: Any) -> None:
     replay.set_defaults(func=run_replay)
 
 
-def _setup(args: argparse.Namespace) -> tuple[Any, list[tuple[str, Any, Any]]]:
-    """(the variant's config, [(spec, policy, the config it acts in)]): a learned policy acts with
-    the action kind it was trained with, an engineered one with velocities (its own output)."""
-    from socialzoo.agents import make_policy
-    from socialzoo.env.crowd_config import CrowdNavConfig
-    from socialzoo.env.tasks.crowdnav import observation_space
-
-    specs = [p.strip() for p in args.policies.split(",") if p.strip()]
-    if not specs:
-        raise ValueError("--policies names no policy")
-    config = CrowdNavConfig.variant(args.variant)
-    policies = []
-    for spec in specs:
-        policy = make_policy(spec, task="crowdnav", observation_space=observation_space(config))
-        kind = getattr(policy, "action_kind", "continuous")
-        policies.append((spec, policy, config.replace(action=kind)))
-    return config, policies
-
-
 def run_eval(args: argparse.Namespace) -> int:
     """Run `socialzoo crowdnav eval` (the variant's id through socialzoo.bench.task_benchmark);
     returns the exit status. Episodes go to the results store (OUT/results.sqlite) as they end: a
@@ -101,19 +82,22 @@ def run_eval(args: argparse.Namespace) -> int:
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    """Run `socialzoo crowdnav replay`; returns the exit status."""
-    from socialzoo.bench.crowd_replay import crowd_scene, record_crowd_episode
-    from socialzoo.render.replay_html import write_replay_html
+    """Run `socialzoo crowdnav replay`: `socialzoo replay --env socialzoo/CrowdNav<variant>-v1`;
+    returns the exit status."""
+    from socialzoo.cli import main
+    from socialzoo.env.crowd_variants import crowd_env_id
 
-    try:
-        config, policies = _setup(args)
-        traces = [
-            record_crowd_episode(p.act, spec, acting, args.split, args.case) for spec, p, acting in policies
-        ]
-    except ValueError as err:
-        print(f"socialzoo crowdnav replay: error: {err}", file=sys.stderr)
-        return 2
-    title = f"CrowdNav{args.variant} {args.split} case {args.case}"
-    path = write_replay_html(args.out, crowd_scene(config, traces, title), traces, view="map")
-    print(f"socialzoo crowdnav replay: wrote {path} ({', '.join(f'{t.label}: {t.outcome}' for t in traces)})")
-    return 0
+    argv = ["replay", "--env", crowd_env_id(args.variant), "--case", str(args.case), "--split", args.split]
+    argv += [
+        "--policy",
+        args.policies,
+        "--view",
+        "map",
+        "--laser-rays",
+        "0",
+        "--stride",
+        "1",
+        "--out",
+        str(args.out),
+    ]
+    return main(argv)

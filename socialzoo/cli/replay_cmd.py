@@ -64,6 +64,14 @@ def register(subparsers: Any) -> None:
         "--max-steps", type=_count(1), default=None, help="episode time limit override, steps"
     )
     parser.add_argument(
+        "--env",
+        default=None,
+        help="a registered task id (socialzoo/CrowdNav-v1, any task's id): play its fixed case --case of "
+        "--split instead of a benchmark map's scenario",
+    )
+    parser.add_argument("--case", type=_count(0), default=None, help="the case of --env to play (default 0)")
+    parser.add_argument("--split", default="test", help="the case split of --env (default test)")
+    parser.add_argument(
         "--results", type=Path, default=None, help="a socialzoo benchmark --out directory (with --trial)"
     )
     parser.add_argument(
@@ -119,6 +127,19 @@ def run_replay(args: argparse.Namespace) -> int:
     try:
         if args.out.suffix.lower() not in (".html", ".htm"):
             raise ValueError(f"--out {args.out} must end in .html")
+        if args.env is not None:
+            given = [
+                f"--{n}"
+                for n in ("map", "family", "seed", "results", "trial")
+                if getattr(args, n) is not None
+            ]
+            if given:
+                raise ValueError(
+                    f"{', '.join(given)} cannot be combined with --env: a task id plays its own cases"
+                )
+            return _replay_case(args)
+        if args.case is not None:
+            raise ValueError("--case goes with --env")
         if (args.results is None) != (args.trial is None):
             raise ValueError("--results and --trial go together")
         if args.results is not None:
@@ -141,6 +162,41 @@ def _encoding(args: argparse.Namespace) -> Any:
     from socialzoo.render.replay_data import Encoding
 
     return Encoding(stride=args.stride, laser_rays=args.laser_rays)
+
+
+def _replay_case(args: argparse.Namespace) -> int:
+    """`socialzoo replay --env ID --case K`: every policy on one fixed case of any task id."""
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.replay import record_case
+    from socialzoo.bench.task_benchmark import TaskId
+    from socialzoo.render.replay_html import write_replay_html
+
+    task_id = TaskId.of(args.env)
+    probe = task_id.make(1)
+    specs = _specs(args)
+    if not specs:
+        raise ValueError(f"name the policies to play on {args.env} (--policy)")
+    case = 0 if args.case is None else args.case
+    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    built = [
+        (
+            spec,
+            make_policy(spec.name, task=probe.name, observation_space=probe.observation_space, **spec.kwargs),
+        )
+        for spec in specs
+    ]
+    traces, task = [], probe
+    for spec, policy in built:
+        acting = {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
+        trace, task = record_case(args.env, policy, args.split, case, label=spec.label, **acting)
+        traces.append(trace)
+    title = f"{' vs '.join(t.label for t in traces)} on {args.env}, {args.split} case {case}"
+    scene = task.viewer_scene(title, f"the {probe.name} task", traces)
+    path = write_replay_html(args.out, scene, traces, encoding=_encoding(args), view=args.view)
+    print(f"{path}: {len(traces)} episode(s) on {args.env}, {args.split} case {case}; {_size(path)}")
+    for trace in traces:
+        print(f"  {trace.label}: {_describe(trace)}")
+    return 0
 
 
 def _replay_seed(args: argparse.Namespace) -> int:

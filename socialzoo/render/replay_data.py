@@ -85,7 +85,8 @@ class EpisodeTrace:
             part of recording, so a recorder may scan only the states a file keeps).
         laser_ranges: (K, M) ranges of the robot's scan in those states, m.
         laser_max_range: the scan's range, m (rays at this range hit nothing).
-        action: (T,) int sub-policy chosen at each step (ACTION_NAMES), -1 for velocity actions.
+        action: (T,) int action chosen at each step (an index into the scene's action_names: the
+            sub-policies of the action-selection task), -1 for actions without a name (velocities).
         target_human: (T,) int index into the H humans of the human followed or passed, -1 none.
         reward: (T,) reward of each step.
         force: (T,) social force term of each step, in [0, 1].
@@ -160,10 +161,9 @@ class EpisodeTrace:
         if not (isinstance(self.laser_max_range, (int, float)) and self.laser_max_range > 0):
             raise ValueError(f"EpisodeTrace.laser_max_range must be > 0, got {self.laser_max_range!r}")
         action = _array(self.action, np.int64, (steps,), "action")
-        if len(action) and (action.min() < -1 or action.max() >= len(ACTION_NAMES)):
+        if len(action) and action.min() < -1:
             raise ValueError(
-                f"EpisodeTrace.action values must be -1 or sub-policy indices 0..{len(ACTION_NAMES) - 1}, "
-                f"got {int(action.min())}..{int(action.max())}"
+                f"EpisodeTrace.action values must be -1 or action indices, got {int(action.min())}"
             )
         set_(self, "action", action)
         target = _array(self.target_human, np.int64, (steps,), "target_human")
@@ -204,6 +204,8 @@ class ReplayScene:
         human_radius: radius of a human's disc, m.
         goal_radius: success distance to the goal, m.
         subtitle: a second line (scenario, seed, env config), may be empty.
+        action_names: the names of the task's discrete actions, drawn on the action timeline and
+            in the legend (the sub-policies by default; empty for a velocity task: no legend).
     """
 
     title: str
@@ -215,8 +217,10 @@ class ReplayScene:
     human_radius: float
     goal_radius: float
     subtitle: str = ""
+    action_names: tuple[str, ...] = ACTION_NAMES
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "action_names", tuple(str(n) for n in self.action_names))
         walls = (
             np.array(self.walls, dtype=np.float64).reshape(-1, 4) if np.size(self.walls) else np.zeros((0, 4))
         )
@@ -374,6 +378,20 @@ def encode_replay(
     if view not in ("follow", "map"):
         raise ValueError(f"encode_replay: view must be 'follow' or 'map', got {view!r}")
     enc = encoding or Encoding()
+    names = scene.action_names
+    for t in traces:
+        if len(t.action) and t.action.max() >= len(names):
+            raise ValueError(
+                f"encode_replay: {t.label} took action {int(t.action.max())}, but the scene names "
+                f"{len(names)} actions {list(names)}"
+            )
+    # The legend shows what the page draws: the task's actions, the bodies, and the scan and the
+    # followed person only where an episode has them.
+    legend = ["robot", "humans", "goal", "carrot"]
+    if any(t.laser_ranges.shape[1] for t in traces):
+        legend.append("laser")
+    if any((t.target_human >= 0).any() for t in traces):
+        legend.append("followed / passed")
     return {
         "format": REPLAY_FORMAT,
         "title": scene.title,
@@ -388,7 +406,12 @@ def encode_replay(
             "humanRadius": scene.human_radius,
             "goalRadius": scene.goal_radius,
         },
-        "actions": {"names": list(ACTION_NAMES), "colors": list(ACTION_COLORS), "none": NO_ACTION_COLOR},
+        "actions": {
+            "names": list(names),
+            "colors": [ACTION_COLORS[i % len(ACTION_COLORS)] for i in range(len(names))],
+            "none": NO_ACTION_COLOR,
+        },
+        "legend": legend,
         "metricRows": metric_rows(),
         "episodes": [encode_episode(t, enc) for t in traces],
     }

@@ -8,7 +8,6 @@ import pytest
 from socialzoo.agents import make_policy
 from socialzoo.agents.crowd_engineered import CrowdOrcaRobot, CrowdSocialForceRobot
 from socialzoo.bench.crowd_eval import evaluate_crowd
-from socialzoo.bench.crowd_replay import crowd_scene, record_crowd_episode
 from socialzoo.bench.store import ResultsStore
 from socialzoo.cli import main
 from socialzoo.env.crowd_config import CrowdNavConfig
@@ -50,14 +49,16 @@ def test_engineered_robots_reach_the_goal_of_an_empty_arena():
 
 
 def test_an_episode_is_recorded_for_the_viewer():
-    trace = record_crowd_episode(CrowdOrcaRobot().act, "orca", CONFIG, "test", 3)
-    assert trace.outcome in ("success", "collision", "timeout") and trace.num_steps == trace.metrics["steps"]
+    from socialzoo.bench.replay import record_case
+
+    trace, task = record_case("socialzoo/CrowdNavSocialForce-v1", CrowdOrcaRobot(), "test", 3, label="orca")
+    assert trace.outcome in ("success", "collision", "time limit") and trace.num_steps == trace.metrics["steps"]
     assert trace.num_humans == 5
     # The charts draw the step's force and blame; their means are the episode's metrics.
     assert trace.force.mean() == pytest.approx(trace.metrics["mean_force"])
     assert trace.blame.mean() == pytest.approx(trace.metrics["mean_blame"]) and trace.force.max() > 0
-    scene = crowd_scene(CONFIG, [trace], "case 3")
-    assert scene.robot_length == pytest.approx(0.6)
+    scene = task.viewer_scene("case 3", "", [trace])
+    assert scene.robot_length == pytest.approx(0.6) and scene.map_name == "arena"
 
 
 def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys):

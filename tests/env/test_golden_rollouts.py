@@ -6,7 +6,8 @@ ids' version and records the digests again (`python tools/rollout_digests.py --o
 tests/env/golden_rollouts.json`). Each case keeps the digests of its observations, rewards, end
 flags and infos apart, so a failure says which part moved. The one adapter per ecosystem changed
 infos only, and their digests were recorded again then (observations, rewards and flags of every
-case unchanged): CrowdNav's VectorEnv and ParallelEnv report the task's per-step "closest", its
+case unchanged): CrowdNav's env, VectorEnv and ParallelEnv report the task's per-step "closest",
+"force", "blame", "human_collisions" and "wall_collision" (the viewer's charts), its
 final_info metrics are zeros outside the ended rows (as the benchmark's were, not NaN) and its
 final_obs zeros outside them; the benchmark's VectorEnv final_info also carries the people's
 metrics (group intrusions, counterfactual costs) that the single env reports.

@@ -114,3 +114,26 @@ def test_socialzoo_benchmark_runs_the_registered_id_with_tables_and_a_figure(tmp
     assert main(args) == 0 and "0 of 6 episodes played now" in capsys.readouterr().out  # read back
     assert main([*args[:4], "ref", *args[5:]]) == 2
     assert "acts in task 'action_selection', not 'toy_reach'" in capsys.readouterr().err
+
+
+def test_socialzoo_replay_writes_a_page_of_a_case_with_the_tasks_own_legend(tmp_path):
+    import json
+    import re
+
+    from socialzoo.cli import main
+
+    page = tmp_path / "toy.html"
+    assert (
+        main(["replay", "--env", TOY_ID, "--policy", "toy_heading", "--case", "2", "--out", str(page)]) == 0
+    )
+
+    def data(path):
+        found = re.search(r'id="replay-data"[^>]*>(.*?)</script>', path.read_text(), re.S)
+        return json.loads(found[1])
+
+    toy = data(page)
+    assert toy["actions"]["names"] == ["forward", "left", "right", "stop"]
+    assert "laser" not in toy["legend"] and "followed / passed" not in toy["legend"]
+    velocity = tmp_path / "crowd.html"
+    assert main(["replay", "--env", "socialzoo/CrowdNav-v1", "--policy", "orca", "--out", str(velocity)]) == 0
+    assert data(velocity)["actions"]["names"] == []  # a velocity task: no sub-policy legend

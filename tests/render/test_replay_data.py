@@ -33,8 +33,8 @@ def test_trace_checks_its_arrays(make_trace):
         make_trace(robot_vel=np.zeros((9, 2)))
     with pytest.raises(ValueError, match=r"EpisodeTrace.reward must have shape \(9,\)"):
         make_trace(reward=np.zeros(10))
-    with pytest.raises(ValueError, match=r"action values must be -1 or sub-policy indices 0..3, got 0..4"):
-        make_trace(action=np.arange(9) % 5)
+    with pytest.raises(ValueError, match=r"action values must be -1 or action indices, got -2"):
+        make_trace(action=np.full(9, -2))
     with pytest.raises(ValueError, match=r"target_human values must be -1 or human indices 0..1"):
         make_trace(target_human=np.full(9, 2))
     with pytest.raises(ValueError, match=r"plan_index must index the 2 plans"):
@@ -107,6 +107,14 @@ def test_encode_replay(make_trace, make_scene):
     assert [e["label"] for e in data["episodes"]] == ["ref", "goalone"]
     assert data["scene"]["walls"][:4] == [0, 0, 6, 0] and data["scene"]["robotWidth"] == 0.43
     assert data["actions"]["names"] == ["GoAlone", "Halt", "Follow", "Pass"]
+    # The scene names the task's actions; an action it does not name is refused, naming them.
+    with pytest.raises(ValueError, match=r"took action 4, but the scene names 4 actions"):
+        encode_replay(make_scene(), [make_trace(action=np.arange(len(make_trace().action)) % 5)])
+    named = encode_replay(
+        make_scene(action_names=("forward", "stop")),
+        [make_trace(action=np.full(len(make_trace().action), -1))],
+    )
+    assert named["actions"]["names"] == ["forward", "stop"] and len(named["actions"]["colors"]) == 2
     with pytest.raises(ValueError, match="at least one episode"):
         encode_replay(make_scene(), [])
     with pytest.raises(ValueError, match="view must be 'follow' or 'map', got 'top'"):

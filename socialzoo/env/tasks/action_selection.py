@@ -210,6 +210,43 @@ class ActionSelectionTask(Task):
         assert self.core.state is not None
         return self.core.state
 
+    # ------------------------------------------------------------------ the episode viewer
+    def action_labels(self) -> tuple[str, ...]:
+        """The sub-policies (GoAlone, Halt, Follow, Pass); none with velocity actions."""
+        return tuple(ACTION_NAMES) if self.config.robot_action == "subpolicy" else ()
+
+    def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The carrot and the global plan of robot 0 (the navigator's)."""
+        plans = self.core.navigator.plans
+        length = int(plans.lengths[row, 0])
+        return self.core.carrot[row, 0].copy(), plans.paths[row, 0, :length].copy()
+
+    def viewer_laser(self) -> tuple[Any, Any, float] | None:
+        """The config's laser (default LaserConfig()), the map's walls, the people's radius."""
+        from socialzoo.core.config import LaserConfig
+
+        world = self.config.world
+        return world.laser or LaserConfig(), self.core.walls, world.human.radius
+
+    def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
+        """The map's walls and bounds, the robot's footprint, the people's and goal's radii."""
+        from socialzoo.render.frames import map_bounds
+        from socialzoo.render.replay_data import ReplayScene
+
+        robot, m = self.config.world.robot, self.core.map
+        return ReplayScene(
+            title=title,
+            subtitle=subtitle,
+            map_name=m.name,
+            walls=m.walls,
+            bounds=map_bounds(m),
+            robot_length=robot.length,
+            robot_width=robot.width,
+            human_radius=self.config.world.human.radius,
+            goal_radius=self.config.goal_radius,
+            action_names=self.action_labels(),
+        )
+
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         """socialzoo.env.rendering.CoreRenderer of the core."""
         from socialzoo.env.rendering import CoreRenderer

@@ -150,6 +150,50 @@ class Task(ABC):
     def world_state(self) -> Any:
         """The batched WorldState (socialzoo.core.state) of the worlds the task steps."""
 
+    # ------------------------------------------------------------------ the episode viewer
+    def action_labels(self) -> tuple[str, ...]:
+        """Names of the task's discrete actions (the viewer's action timeline and legend); empty
+        when its actions have no names (velocities, or too many to name)."""
+        return ()
+
+    def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(carrot (2,), global plan (L, 2)) that robot 0 of `row` follows, for the episode viewer
+        (socialzoo.bench.replay); None for either: the recorder draws the goal and the straight
+        line from the start."""
+        return None, None
+
+    def viewer_laser(self) -> tuple[Any, Any, float] | None:
+        """(LaserConfig, WallIndex, person radius) of the scan the viewer draws, or None."""
+        return None
+
+    def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
+        """The viewer's ReplayScene (socialzoo.render.replay_data): walls, bounds, body sizes.
+        By default the world's walls around every trace's positions."""
+        from socialzoo.render.replay_data import ReplayScene
+
+        walls = getattr(getattr(self, "core", None), "walls", None)
+        segments = np.zeros((0, 4)) if walls is None else np.asarray(walls.walls).reshape(-1, 4)
+        points = np.concatenate(
+            [
+                np.concatenate((t.robot_pose[:, :2], t.human_pos.reshape(-1, 2), t.goal[None, :2]))
+                for t in traces
+            ]
+            + ([segments.reshape(-1, 2)] if len(segments) else [])
+        )
+        low, high = points.min(0) - 1.0, points.max(0) + 1.0
+        return ReplayScene(
+            title=title,
+            subtitle=subtitle,
+            map_name=self.name,
+            walls=segments,
+            bounds=(float(low[0]), float(low[1]), float(high[0]), float(high[1])),
+            robot_length=0.6,
+            robot_width=0.6,
+            human_radius=0.3,
+            goal_radius=0.5,
+            action_names=self.action_labels(),
+        )
+
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         """A renderer with `render(row=0)` and `close()` for one of `render_modes`."""
         raise ValueError(f"task {self.name!r} cannot render (render_modes {self.render_modes})")

@@ -23,8 +23,10 @@ from socialzoo.env.crowd_source import CrowdCaseSource
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
 from socialzoo.nav.crowd_cases import SPLIT_SIZE
 
-# The per-step info of a robot: its closest approach to anyone during the step, m (negative: overlap).
-INFO_KEYS = ("closest",)
+# The per-step info of a robot: its closest approach to anyone during the step (m, negative: an
+# overlap), the benchmark's social force and blame terms after it, whether it collided with a person
+# (or another robot) or with a wall.
+INFO_KEYS = ("closest", "force", "blame", "human_collisions", "wall_collision")
 
 
 def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdNavConfig:
@@ -129,7 +131,15 @@ class CrowdNavTask(Task):
             reward=outcome.reward.reshape(b, r),
             terminated=outcome.terminated.reshape(b, r),
             truncated=truncated,
-            info={"closest": outcome.closest.reshape(b, r)},
+            info={
+                "closest": outcome.closest.reshape(b, r),
+                "force": self.core.step_force.reshape(b, r),
+                "blame": self.core.step_blame.reshape(b, r),
+                "human_collisions": (outcome.collision & ~result.wall_collision)
+                .astype(np.int64)
+                .reshape(b, r),
+                "wall_collision": result.wall_collision.reshape(b, r),
+            },
             time_up=truncated.any(axis=1),
         )
 
@@ -156,12 +166,18 @@ class CrowdNavTask(Task):
     # ------------------------------------------------------------------ per-robot info
     @property
     def info_keys(self) -> tuple[str, ...]:
-        """closest."""
+        """closest, force, blame, human_collisions, wall_collision."""
         return INFO_KEYS
 
     def initial_info(self) -> dict[str, Any]:
-        """Nothing approached yet."""
-        return {}
+        """Nothing approached or touched yet."""
+        return {
+            "closest": float("inf"),
+            "force": 0.0,
+            "blame": 0.0,
+            "human_collisions": 0,
+            "wall_collision": False,
+        }
 
     def idle_action(self) -> Any:
         """Stop: action 0, a zero velocity, or a unicycle's speed 0 (the lowest of its range)."""
@@ -177,6 +193,30 @@ class CrowdNavTask(Task):
         """The core's WorldState."""
         assert self.core.state is not None
         return self.core.state
+
+    def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Among walls the route's carrot and plan; in the arena none (the goal, a straight line)."""
+        if self.core.navigator is None:
+            return None, None
+        plans = self.core.navigator.plans
+        length = int(plans.lengths[row, 0])
+        return self.core.seen_goal()[0][row, 0].copy(), plans.paths[row, 0, :length].copy()
+
+    def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
+        """The arena (or the map's walls) around every trace; the robot's disc as a square of its
+        diameter; the people's radius."""
+        import dataclasses
+
+        scene = super().viewer_scene(title, subtitle, traces)
+        diameter = 2.0 * float(self.config.robot.radius)  # type: ignore[arg-type]
+        return dataclasses.replace(
+            scene,
+            map_name=self.config.map or "arena",
+            robot_length=diameter,
+            robot_width=diameter,
+            human_radius=self.config.cases.human_radius,
+            goal_radius=float(self.config.robot.radius),  # type: ignore[arg-type]
+        )
 
 
 def _per_robot(observation: JointState, kind: str, b: int, r: int) -> Any:

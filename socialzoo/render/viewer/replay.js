@@ -676,8 +676,10 @@
   document.getElementById("subtitle").textContent = DATA.subtitle;
   const legend = document.getElementById("legend");
   const swatches = ACTIONS.names.map((name, i) => [name, ACTIONS.colors[i]]);
-  swatches.push(["robot", COLORS.robot], ["humans", COLORS.human], ["goal", COLORS.goal],
-    ["carrot", COLORS.carrot], ["laser", COLORS.laserHit], ["followed / passed", COLORS.highlight]);
+  const bodies = {robot: COLORS.robot, humans: COLORS.human, goal: COLORS.goal, carrot: COLORS.carrot,
+    laser: COLORS.laserHit, "followed / passed": COLORS.highlight};
+  // The task's own legend (no sub-policies on a velocity task, no laser where none was scanned).
+  for (const name of DATA.legend || Object.keys(bodies)) swatches.push([name, bodies[name]]);
   for (const [name, color] of swatches) {
     const item = document.createElement("span");
     const sw = document.createElement("span");
