@@ -227,7 +227,7 @@ def drive_map(
     Returns:
         The report; its routes are in the order of `pairs`.
     """
-    from socialzoo.bench.compaction import compact_core
+    from socialzoo.env.compaction import compact_core
     from socialzoo.env.core import SocialNavCore
 
     poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)

@@ -1,6 +1,7 @@
-"""Episodes of one policy on a task's fixed cases, batched: every row plays one case at a time and
-takes the next pending case when its episode ends, so N cases cost about N / B episodes of wall
-time. Any task (socialzoo.env.tasks) and any policy with act(obs, core) serve; the results are the
+"""Episodes of one policy on a task's fixed cases, through the evaluation runner of every task
+(socialzoo.bench.runner.BatchedRunner with a CaseSet): every row plays one case at a time and takes
+the next pending case when its episode ends, so N cases cost about N / B episodes of wall time.
+Any task (socialzoo.env.tasks) and any policy with act(obs, core) serve; the results are the
 task's episode metrics, per case.
 """
 
@@ -48,48 +49,53 @@ def play_cases(
         ValueError: no case, a case twice, a split the task lacks or a case outside it, a task
             with several robots.
     """
+    from socialzoo.bench.runner import BatchedRunner, CaseSet, RunSpec, Trial
+
     todo = [int(k) for k in indices]
     if not todo:
         raise ValueError("play_cases: no case to play")
     if len(set(todo)) != len(todo):
         raise ValueError("play_cases: a case is named twice")
-    rows = min(batch_size, len(todo))
-    env = make_task(task, rows, config, **task_kwargs)
-    if env.num_robots != 1:
-        raise ValueError(f"play_cases: fixed cases are played by one robot, got num_robots={env.num_robots}")
-    shape = (rows, 1) + tuple(env.action_space.shape or ())
-    idle = np.asarray(env.idle_action())
-    playing = np.array(todo[:rows])
-    seeds = np.zeros(rows, dtype=np.uint64)
-    seeds[:] = env.reset(np.arange(rows), {"split": split, "cases": playing})
-    next_case = rows
-    active = np.ones(rows, dtype=bool)
+    probe = make_task(task, 1, config, **task_kwargs)
+    if probe.num_robots != 1:
+        raise ValueError(
+            f"play_cases: fixed cases are played by one robot, got num_robots={probe.num_robots}"
+        )
+    splits = probe.case_splits()
+    if split not in splits:
+        raise ValueError(f"{probe.name}: options split must be one of {sorted(splits)}, got {split!r}")
+    outside = [k for k in todo if not 0 <= k < splits[split]]
+    if outside:
+        raise ValueError(f"{probe.name}: the {split} split holds {splits[split]} cases; got {outside}")
+    name = f"{probe.name}-{split}"
+    path = task if isinstance(task, str) else f"{task.__module__}:{task.__qualname__}"
+    spec = RunSpec(
+        test_sets={name: CaseSet(path, split, splits[split], name)},
+        env_configs={name: probe.config},
+        policies={"policy": {}},
+        batch_size=batch_size,
+    )
     episodes: dict[int, dict[str, Any]] = {}
-    while active.any():
-        observations = env.observations()
-        actions = np.array(act(observations[:, 0], env.core), copy=True)  # type: ignore[attr-defined]
-        actions = actions.reshape(shape)
-        actions[~active] = idle  # rows out of cases stand still
-        step = env.step(actions)
-        ended = np.flatnonzero(active & (step.terminated[:, 0] | step.truncated[:, 0]))
-        if len(ended) == 0:
-            continue
-        done = []
-        for row, summary in zip(ended.tolist(), env.episode_metrics(ended), strict=True):
-            case = int(playing[row])
-            episodes[case] = {"case": case, "seed": int(seeds[row]), **summary}
-            done.append(episodes[case])
+
+    def deliver(results: list[Any]) -> None:
+        done = [{"case": r.trial.index, "seed": r.seed, **r.metrics} for r in results]
+        episodes.update((e["case"], e) for e in done)
         if on_episodes is not None:
             on_episodes(done)
-        refill = []
-        for row in ended.tolist():
-            if next_case < len(todo):
-                playing[row] = todo[next_case]
-                next_case += 1
-                refill.append(row)
-            else:
-                active[row] = False
-        if refill:
-            seeds[refill] = env.reset(np.array(refill), {"split": split, "cases": playing[refill]})
-        # Finished rows keep stepping (their results are no longer read) until all are done.
+
+    runner = BatchedRunner(spec, stack_policies=False, given={"policy": _RobotZero(act)})
+    runner.run([Trial("policy", name, k) for k in todo], on_results=deliver)
     return [episodes[k] for k in todo]
+
+
+class _RobotZero:
+    """A policy of robot 0's observations (B, D) as the runner's policy of (B, R, D) ones."""
+
+    reads_core = True
+
+    def __init__(self, act: Actor) -> None:
+        self.act_zero = act
+
+    def act(self, observations: np.ndarray, core: Any = None) -> np.ndarray:
+        actions = np.asarray(self.act_zero(observations[:, 0], core))
+        return actions.reshape((actions.shape[0], 1) + actions.shape[1:])

@@ -15,16 +15,15 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from socialzoo.agents import Policy, make_policy
-from socialzoo.bench.compaction import RunStats, compact_core
+from socialzoo.bench.compaction import RunStats
 from socialzoo.bench.progress import progress_bar
 from socialzoo.env.config import EnvConfig
 from socialzoo.nav.scenarios import TestSet, get_test_set
-from socialzoo.nav.subpolicies import HALT
 
 logger = logging.getLogger(__name__)
 
@@ -69,21 +68,47 @@ class TrialResult:
     metrics: dict[str, Any]
 
 
+@dataclass(frozen=True)
+class CaseSet:
+    """A task's fixed cases as a test set of the runner (socialzoo.env.tasks: Task.case_splits).
+
+    Attributes:
+        task: the task's registry name or "module:Class" path.
+        split: the case split ("val", "test", ...).
+        count: how many of its cases (the first `count`).
+        name: the test set's name in results (default "<task>-<split>").
+        map_name: the name results give the world (default the task's).
+    """
+
+    __test__: ClassVar[bool] = False  # not a pytest test class
+
+    task: str
+    split: str
+    count: int
+    name: str = ""
+    map_name: str = ""
+
+    def __len__(self) -> int:
+        return self.count
+
+
 @dataclass(frozen=True, kw_only=True)
 class RunSpec:
     """Everything a worker needs to run trials; plain picklable values.
 
     Attributes:
-        test_sets: test sets by name.
-        env_configs: the env config of each test set, by test set name.
+        test_sets: test sets by name: the action-selection task's scenario lists (TestSet), or any
+            task's fixed cases (CaseSet).
+        env_configs: the task config of each test set, by test set name (an EnvConfig for a
+            TestSet; the task's config object, or None for its defaults, for a CaseSet).
         policies: make_policy keyword arguments of each policy, by registry name.
         batch_size: env rows stepped together (B).
         human_metrics: add the humans' episode metrics (socialzoo.bench.human_metrics) to every
             trial's metrics.
     """
 
-    test_sets: Mapping[str, TestSet]
-    env_configs: Mapping[str, EnvConfig]
+    test_sets: Mapping[str, TestSet | CaseSet]
+    env_configs: Mapping[str, Any]
     policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     batch_size: int = 64
     human_metrics: bool = False
@@ -92,7 +117,7 @@ class RunSpec:
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
             raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
         for name, config in self.env_configs.items():
-            if config.num_learned_humans:
+            if getattr(config, "num_learned_humans", 0):
                 raise ValueError(
                     f"RunSpec: env config {name!r} has num_learned_humans = {config.num_learned_humans}, human "
                     "agents that a learner drives; the runner drives none. Learned people are the env's own: "
@@ -157,10 +182,11 @@ StepHook = Callable[[Any, list[Trial | None], np.ndarray, np.ndarray, Any], None
 class BatchedRunner:
     """Runs trials in this process, B env rows at a time, refilling rows as episodes end.
 
-    Trials are run test set by test set (one core per map); within a test set, trials of several
+    Trials are run test set by test set (one task of B rows per test set: the action-selection
+    task's scenarios, or any task's fixed cases); within a test set, trials of several
     policies share the batch (each policy acts on the whole batch, its rows take its actions).
     Once no trial is left to start, the core is shrunk to the rows still running whenever a
-    quarter of its rows or more have finished (socialzoo.bench.compaction), so the tail steps
+    quarter of its rows or more have finished (Task.compact, where the task can), so the tail steps
     few finished rows; results are the same either way.
 
     Args:
@@ -170,20 +196,33 @@ class BatchedRunner:
         stack_policies: learned policies of one network shape (a run's checkpoints) act as one
             stack (socialzoo.bench.policy_stack.MlpStack: the same actions, one product per
             layer); off: each acts on its own rows.
+        given: policy objects by name (anything with act(obs, core)), used instead of building
+            those names from the registry (spec.policies must still name them).
     """
 
-    def __init__(self, spec: RunSpec, *, compact_tail: bool = True, stack_policies: bool = True) -> None:
+    def __init__(
+        self,
+        spec: RunSpec,
+        *,
+        compact_tail: bool = True,
+        stack_policies: bool = True,
+        given: Mapping[str, Any] | None = None,
+    ) -> None:
         self.spec = spec
         self.compact_tail = compact_tail
         self.stack_policies = stack_policies
         self.stats = RunStats()
-        self._policies: dict[str, Policy] = {}
+        # Policies given as objects (any act(obs, core)) instead of built from the registry.
+        self.given = dict(given or {})
+        self._policies: dict[tuple[str, str], Policy] = {}
 
-    def policy(self, name: str) -> Policy:
-        """The policy `name`, built once."""
-        if name not in self._policies:
-            self._policies[name] = make_policy(name, **self.spec.policies[name])
-        return self._policies[name]
+    def policy(self, name: str, task: str = "action_selection") -> Policy:
+        """The policy `name` for a task, built once (or the one given under that name)."""
+        if name in self.given:
+            return self.given[name]
+        if (name, task) not in self._policies:
+            self._policies[(name, task)] = make_policy(name, task=task, **self.spec.policies[name])
+        return self._policies[(name, task)]
 
     def run(
         self, trials: Sequence[Trial], on_results: ResultSink | None = None, on_step: StepHook | None = None
@@ -193,9 +232,10 @@ class BatchedRunner:
         Args:
             trials: the trials; each is run exactly once, in an order chosen for batching.
             on_results: called with the trials that finished at each step, as they finish.
-            on_step: called after every step with (core, trial of each row or None, the
-                observations (B, R, D) the actions were chosen on (a copy), actions (B, R),
-                StepResult), before finished rows are refilled. With a hook the core is never
+            on_step: called after every step with (the task's core, trial of each row or None,
+                the observations (B, R, D) the actions were chosen on (a copy), actions (B, R),
+                the task's own step record (TaskStep.detail: the action-selection task's
+                StepResult)), before finished rows are refilled. With a hook the batch is never
                 shrunk, so a row keeps its number for the whole test set.
 
         Returns:
@@ -226,24 +266,36 @@ class BatchedRunner:
     def _run_test_set(
         self, name: str, trials: list[Trial], collect: ResultSink, on_step: StepHook | None
     ) -> None:
-        from socialzoo.env.core import SocialNavCore
+        from socialzoo.env.tasks import make_task
 
         test_set = self.spec.test_sets[name]
         config = self.spec.env_configs[name]
         b = min(self.spec.batch_size, len(trials))
-        core = SocialNavCore(config, b)
+        task_name = test_set.task if isinstance(test_set, CaseSet) else "action_selection"
+        task = make_task(task_name, b, config)
+        world = (test_set.map_name or task.name) if isinstance(test_set, CaseSet) else task.core.map.name  # type: ignore[attr-defined]
         pending = deque(trials)
 
-        def scenario(t: Trial) -> Any:
-            return test_set.scenario(t.index, core.map)
+        def start(rows: list[int], started: list[Trial]) -> np.ndarray:
+            """Reset `rows` onto the trials' cases; their scenario seeds."""
+            indices = [t.index for t in started]
+            if isinstance(test_set, CaseSet):
+                options: dict[str, Any] = {"split": test_set.split, "cases": indices}
+            else:
+                options = {"scenarios": [test_set.scenario(k, task.core.map) for k in indices]}  # type: ignore[attr-defined]
+            return task.reset(np.asarray(rows), options)
 
         row_trial: list[Trial | None] = [pending.popleft() for _ in range(b)]
-        core.reset_rows(np.arange(b), [scenario(t) for t in row_trial if t is not None])
-        humans = self._human_tracker(core)
+        seeds = np.zeros(b, dtype=np.uint64)
+        seeds[:] = start(list(range(b)), [t for t in row_trial if t is not None])
+        humans = self._human_tracker(task)
         if humans is not None:
-            humans.reset(np.arange(b), core.state)
-        actions = np.full((b, core.num_robots), HALT, dtype=np.int64)
-        stacks = self._stacks(dict.fromkeys(t.policy for t in trials))
+            humans.reset(np.arange(b), task.world_state)
+        shape = tuple(task.action_space.shape or ())
+        idle = task.idle_action()
+        actions = np.empty((b, task.num_robots) + shape, dtype=np.asarray(idle).dtype)
+        done = np.zeros((b, task.num_robots), dtype=bool)
+        stacks = self._stacks(dict.fromkeys(t.policy for t in trials), task.name)
         stacked_names = {name for _, index in stacks for name in index}
         compact = self.compact_tail and on_step is None
         stats = self.stats
@@ -254,7 +306,8 @@ class BatchedRunner:
                     policy_rows.setdefault(t.policy, []).append(row)
             if not policy_rows:
                 break
-            actions.fill(HALT)
+            actions[...] = idle
+            observations = task.observations()
             for stack, index in stacks:
                 # Several learned policies of one network shape (checkpoints): one product per layer.
                 stacked = [(index[name], rows) for name, rows in policy_rows.items() if name in index]
@@ -262,42 +315,45 @@ class BatchedRunner:
                     continue
                 rows = np.concatenate([np.asarray(r) for _, r in stacked])
                 which = np.concatenate([np.full(len(r), i) for i, r in stacked])
-                obs_rows = core.obs[rows]
+                obs_rows = observations[rows]
                 chosen = stack.act(
-                    obs_rows.reshape(-1, obs_rows.shape[-1]), np.repeat(which, core.num_robots)
+                    obs_rows.reshape(-1, obs_rows.shape[-1]), np.repeat(which, task.num_robots)
                 )
-                actions[rows] = chosen.reshape(len(rows), -1)
+                actions[rows] = chosen.reshape((len(rows), task.num_robots) + shape)
             for policy_name, rows in policy_rows.items():
                 if policy_name in stacked_names:
                     continue
-                policy = self.policy(policy_name)
+                policy = self.policy(policy_name, task.name)
                 if getattr(policy, "reads_core", True):
-                    chosen = np.asarray(policy.act(core.obs, core)).reshape(actions.shape)
+                    chosen = np.asarray(policy.act(observations, task.core)).reshape(actions.shape)  # type: ignore[attr-defined]
                     actions[rows] = chosen[rows]
                 else:
                     # A policy of observations alone acts on its own rows only: many checkpoints can
                     # share a batch without each one computing every row.
-                    actions[rows] = np.asarray(policy.act(core.obs[rows])).reshape(len(rows), -1)
-            obs = core.obs.copy() if on_step is not None else core.obs
-            before = core.state
-            result = core.step(actions)
+                    actions[rows] = np.asarray(policy.act(observations[rows])).reshape(
+                        (len(rows), task.num_robots) + shape
+                    )
+            obs = observations.copy() if on_step is not None else observations
+            before = task.world_state
+            step = task.step(actions)
+            done |= step.terminated | step.truncated
             if humans is not None:
                 humans.update(
-                    before, core.state, result.events.human_blocked, config.dt, core.done.all(axis=1)
+                    before, task.world_state, step.detail.events.human_blocked, config.dt, done.all(axis=1)
                 )
             if pending:
                 stats.body_steps += 1
-                stats.body_row_steps += core.batch_size
+                stats.body_row_steps += task.batch_size
             else:
                 stats.tail_steps += 1
-                stats.tail_row_steps += core.batch_size
+                stats.tail_row_steps += task.batch_size
             if on_step is not None:
-                on_step(core, row_trial, obs, actions, result)
+                on_step(task.core, row_trial, obs, actions, step.detail if step.detail is not None else step)  # type: ignore[attr-defined]
             active = np.array([t is not None for t in row_trial])
-            finished = np.flatnonzero(active & core.done.all(axis=1))
+            finished = np.flatnonzero(active & done.all(axis=1))
             if len(finished) == 0:
                 continue
-            summaries = core.episode_summaries(finished)
+            summaries = task.episode_metrics(finished)
             if humans is not None:
                 for summary, extra in zip(summaries, humans.summaries(finished), strict=True):
                     summary.update(extra)
@@ -305,7 +361,7 @@ class BatchedRunner:
             for row, summary in zip(finished.tolist(), summaries, strict=True):
                 t = row_trial[row]
                 assert t is not None
-                done_batch.append(TrialResult(t, core.map.name, test_set.seed(t.index), summary))
+                done_batch.append(TrialResult(t, world, int(seeds[row]), summary))
             collect(done_batch)
             refill_rows, refill = [], []
             for row in finished.tolist():
@@ -313,21 +369,28 @@ class BatchedRunner:
                 row_trial[row] = t
                 if t is not None:
                     refill_rows.append(row)
-                    refill.append(scenario(t))
+                    refill.append(t)
             if refill_rows:
-                core.reset_rows(np.array(refill_rows), refill)
+                seeds[refill_rows] = start(refill_rows, refill)
+                done[refill_rows] = False
                 if humans is not None:
-                    humans.reset(np.array(refill_rows), core.state)
+                    humans.reset(np.array(refill_rows), task.world_state)
             live = [row for row, t in enumerate(row_trial) if t is not None]
             if compact and not pending and 0 < len(live) <= _SHRINK * len(row_trial):
-                core = compact_core(core, live)
+                smaller = task.compact(np.array(live))
+                if smaller is None:
+                    continue
+                task = smaller
                 if humans is not None:
                     humans = humans.rows(live)
                 row_trial = [row_trial[row] for row in live]
-                actions = np.full((len(live), core.num_robots), HALT, dtype=np.int64)
+                seeds, done = seeds[live], done[live]
+                actions = np.empty((len(live), task.num_robots) + shape, dtype=actions.dtype)
                 stats.compactions += 1
 
-    def _stacks(self, names: Iterable[str]) -> list[tuple[Any, dict[str, int]]]:
+    def _stacks(
+        self, names: Iterable[str], task: str = "action_selection"
+    ) -> list[tuple[Any, dict[str, int]]]:
         """(MlpStack, {policy name: index in it}) for each group of two or more of these policies
         that share a network shape (socialzoo.bench.policy_stack), unless `stack_policies` is off."""
         from socialzoo.bench.policy_stack import MlpStack, stack_key
@@ -336,21 +399,23 @@ class BatchedRunner:
             return []
         groups: dict[Any, list[str]] = {}
         for name in names:
-            key = stack_key(self.policy(name))
+            key = stack_key(self.policy(name, task))
             if key is not None:
                 groups.setdefault(key, []).append(name)
         return [
-            (MlpStack([self.policy(n) for n in group]), {n: i for i, n in enumerate(group)})  # type: ignore[misc]
+            (MlpStack([self.policy(n, task) for n in group]), {n: i for i, n in enumerate(group)})  # type: ignore[misc]
             for group in groups.values()
             if len(group) > 1
         ]
 
-    def _human_tracker(self, core: Any) -> Any:
-        """The humans' episode metrics for `core`, or None when the spec does not ask for them."""
+    def _human_tracker(self, task: Any) -> Any:
+        """The humans' episode metrics of an action-selection task's rows, or None when the spec
+        does not ask for them."""
         if not self.spec.human_metrics:
             return None
         from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 
+        core = task.core
         world = core.config.world
         return HumanEpisodeMetrics(
             core.batch_size,

@@ -106,7 +106,7 @@ def test_group_intrusion_counts_a_robot_passing_between_two_members():
 
 
 def test_groups_report_intrusions_and_survive_compaction():
-    from socialzoo.bench.compaction import compact_core
+    from socialzoo.env.compaction import compact_core
 
     core = core_of(batch=3, models="groups", counterfactual=True)
     assert (core.state.human_group[core.state.human_mask] >= 0).any()

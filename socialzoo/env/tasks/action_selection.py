@@ -162,6 +162,7 @@ class ActionSelectionTask(Task):
             time_up=state.step_count >= self.config.max_steps,
             human_reward=result.human_reward,
             human_info=human_info,
+            detail=result,
         )
 
     def observations(self) -> np.ndarray:
@@ -171,6 +172,17 @@ class ActionSelectionTask(Task):
     def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
         """The episode metrics (socialzoo.env.metrics.SUMMARY_KEYS and the people's)."""
         return self.core.episode_summaries(rows, robot)
+
+    def compact(self, rows: np.ndarray) -> ActionSelectionTask:
+        """A task over the core compacted to `rows` (socialzoo.env.compaction.compact_core: the
+        world, plans, carrots, flags, observations and metrics so far); it only finishes them."""
+        from socialzoo.env.compaction import compact_core
+
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.core = compact_core(self.core, rows)
+        new.batch_size = new.core.batch_size
+        return new
 
     # ------------------------------------------------------------------ per-robot info
     @property

@@ -31,6 +31,8 @@ class TaskStep:
         time_up: (B,) bool, the row's time limit has passed (learned-human agents leave).
         human_reward: (B, L) float64 rewards of the learned-human agents, or None.
         human_info: per-step info of each learned-human agent, key -> (B, L), or None.
+        detail: the task's own record of the step, for tools that know the task (the
+            action-selection task's socialzoo.env.core.StepResult), or None.
     """
 
     reward: np.ndarray
@@ -40,6 +42,7 @@ class TaskStep:
     time_up: np.ndarray
     human_reward: np.ndarray | None = None
     human_info: dict[str, np.ndarray] | None = field(default=None)
+    detail: Any = None
 
 
 class Task(ABC):
@@ -112,6 +115,11 @@ class Task(ABC):
     def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
         """The episode metrics of robot `robot` in each of `rows` (its episode so far, or the
         one that just ended)."""
+
+    def compact(self, rows: np.ndarray) -> Task | None:
+        """A task of len(rows) rows that continues the episodes of `rows`, in that order, for an
+        evaluation's tail; None when the task cannot (the caller keeps stepping every row)."""
+        return None
 
     # ------------------------------------------------------------------ per-robot info
     @property

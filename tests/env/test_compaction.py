@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from socialzoo.bench.compaction import compact_core
+from socialzoo.env.compaction import compact_core
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
 from socialzoo.env.scenario_source import with_robots
