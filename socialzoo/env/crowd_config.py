@@ -20,14 +20,15 @@ from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
+from socialzoo.humans.models import PeopleSpecError, parse_people
 from socialzoo.nav.crowd_cases import CrowdCaseConfig
 
 CrowdAction = Literal["continuous", "discrete"]
 CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
-# The people's motion models the task offers (socialzoo.env.crowd_core drives them through the
-# one world step).
-CrowdHumans = Literal["orca", "social_force"]
-CROWD_HUMANS: tuple[str, ...] = get_args(CrowdHumans)
+# The models of a people spec (socialzoo.humans.models) the task drives through the one world step
+# (socialzoo.env.crowd_core): its cases have no routes for walking groups, and it runs no learned
+# policy of its own.
+CROWD_MODELS: tuple[str, ...] = ("sf", "orca")
 ActionFrame = Literal["goal", "world"]
 ACTION_FRAMES: tuple[str, ...] = get_args(ActionFrame)
 # CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
@@ -53,7 +54,9 @@ class CrowdNavConfig:
         time_limit: s; a step that starts at time_limit - 1 s or later ends the episode (CrowdNav).
         robot: the robot (kinematics, radius, max_speed = its preferred speed).
         robot_visible: whether the people see and avoid the robot (CrowdNav: invisible).
-        humans: the people's model, "orca" or "social_force".
+        humans: who walks, as a people spec (socialzoo.humans.models, the one way every env and
+            the benchmark say it): "orca" (CrowdNav's), "sf" (also "social_force"), or a mix such
+            as "sf@0.5+orca@0.5", assigned from each case's seed.
         reward: the task's reward.
         action: "continuous" (Box [-1, 1]^2 scaled to the robot's speed: (vx, vy) for a holonomic
             robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
@@ -84,7 +87,7 @@ class CrowdNavConfig:
     time_limit: float = 25.0
     robot: RobotConfig = field(default_factory=crowdnav_robot)
     robot_visible: bool = False
-    humans: CrowdHumans = "orca"
+    humans: str = "orca"
     reward: CrowdRewardConfig = field(default_factory=CrowdRewardConfig)
     action: CrowdAction = "continuous"
     observation: ObservationKind = "flat"
@@ -105,8 +108,15 @@ class CrowdNavConfig:
             )
         if self.robot.radius is None:
             raise ValueError("CrowdNavConfig.robot.radius must be set (the task's robot is a disc)")
-        if self.humans not in CROWD_HUMANS:
-            raise ValueError(f"CrowdNavConfig.humans must be one of {CROWD_HUMANS}, got {self.humans!r}")
+        try:
+            models = {part.model for part in parse_people(self.humans)}
+        except PeopleSpecError as err:
+            raise ValueError(f"CrowdNavConfig.humans: {err}") from None
+        if not models <= set(CROWD_MODELS):
+            raise ValueError(
+                f"CrowdNavConfig.humans: the CrowdNav task's people walk by {CROWD_MODELS} (or a mix of them), "
+                f"got {self.humans!r}"
+            )
         if self.action not in CROWD_ACTIONS:
             raise ValueError(f"CrowdNavConfig.action must be one of {CROWD_ACTIONS}, got {self.action!r}")
         if self.observation not in OBSERVATION_KINDS:

@@ -31,7 +31,7 @@ from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_b
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
-from socialzoo.humans.models import ORCA, SOCIAL_FORCE
+from socialzoo.humans.models import MODEL_IDS, assign_models, parse_people
 from socialzoo.nav.crowd_cases import CrowdCase, case_scenario
 from socialzoo.nav.navigator import Navigator
 from socialzoo.nav.scenarios import Scenario, scenarios_to_state
@@ -104,7 +104,9 @@ class CrowdNavCore:
                 robot_visible=config.robot_visible,
             ),
         )
-        self._model = ORCA if config.humans == "orca" else SOCIAL_FORCE
+        # The people spec's models (config.humans): one for everyone, or a mix per case's seed.
+        self._parts = parse_people(config.humans)
+        self._model_ids = np.array([MODEL_IDS[p.model] for p in self._parts], dtype=np.int8)
         r = self.num_robots
         # Observation slots: the people, then the other robots (each robot's own slot left out).
         self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
@@ -141,7 +143,11 @@ class CrowdNavCore:
         if len(cases) and isinstance(cases[0], CrowdCase):
             cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
         fresh = scenarios_to_state(cases, num_robots=self.num_robots, max_humans=self.config.slots)
-        fresh.human_model[:] = self._model
+        fresh.human_model[:] = self._models(
+            [c.seed for c in cases],
+            [c.num_humans for c in cases],
+            fresh.human_model.shape[1],  # type: ignore[union-attr]
+        )
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
         if fresh.human_route.shape[2] > self.state.human_route.shape[2]:
@@ -194,8 +200,17 @@ class CrowdNavCore:
         s.human_direction[rows] = 1
         s.step_count[rows] = 0
         s.noise_key[rows] = [c.seed for c in cases]  # the task has no laser to draw noise for
-        s.human_model[rows] = self._model
+        s.human_model[rows] = self._models([c.seed for c in cases], [n] * len(cases), s.human_model.shape[1])
         s.human_group[rows] = -1
+
+    def _models(self, seeds: list[int], people: list[int], slots: int) -> np.ndarray:
+        """(len(seeds), slots) int8 model of every person slot: the people spec's one model, or
+        its mix over each case's people assigned from its seed (socialzoo.humans.models)."""
+        out = np.full((len(seeds), slots), self._model_ids[0], dtype=np.int8)
+        if len(self._parts) > 1:
+            for row, (seed, n) in enumerate(zip(seeds, people, strict=True)):
+                out[row, :n] = self._model_ids[assign_models(self._parts, n, int(seed))]
+        return out
 
     def _flat(self, rows: np.ndarray) -> np.ndarray:
         """The flat robot indices of `rows`."""

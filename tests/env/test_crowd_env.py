@@ -199,3 +199,25 @@ def test_among_walls_the_robot_sees_its_route_and_the_walls_its_scan_hits():
         assert np.all(slots[seen, 2:5] == 0)
         obs, _, terminated, truncated, _ = env.step(np.array([0.5, 0.0], dtype=np.float32))
         assert not (terminated or truncated)
+
+
+def test_the_crowdnav_task_takes_the_people_spec():
+    from socialzoo.humans.models import ORCA, SOCIAL_FORCE
+
+    mixed = CrowdNavVectorEnv(2, variant="20", humans="sf@0.5+orca@0.5", physics_substeps=1)
+    mixed.reset(seed=0)
+    state = mixed.core.state
+    for row in range(2):
+        models = state.human_model[row][state.human_mask[row]]
+        assert (models == SOCIAL_FORCE).sum() == 10 and (models == ORCA).sum() == 10
+    again = CrowdNavVectorEnv(2, variant="20", humans="sf@0.5+orca@0.5", physics_substeps=1)
+    again.reset(seed=0)
+    np.testing.assert_array_equal(again.core.state.human_model, state.human_model)  # from each case's seed
+    assert CrowdNavEnv(humans="social_force").core.config.humans == "social_force"  # the spec's alias of sf
+    for spec, match in (
+        ("groups", "walk by"),
+        ("learned:x.safetensors", "walk by"),
+        ("boids", "unknown model"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            CrowdNavEnv(humans=spec)
