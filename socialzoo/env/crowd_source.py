@@ -1,7 +1,9 @@
 """Where the CrowdNav task's episodes come from: a seeded training stream per batch row, or the fixed
 validation and test cases.
 
-Training cases are CrowdNav's training split (case seeds from 2000 up, socialzoo.nav.crowd_cases):
+Arena cases come from the task's CrowdNav scenario family (socialzoo.nav.crowd_cases.crowd_family:
+crowdnav_circle_crossing or crowdnav_square_crossing, for the task's CrowdCaseConfig), training
+cases from its training split (case seeds from 2000 up):
 row i of a batch reset with seed s draws its case seeds from its own Generator (row 0 from s
 itself, so a single env seeded with s plays row 0's episodes), never a validation or test case.
 On a building map (crowd navigation among walls) the cases are the benchmark's scenarios of that
@@ -13,14 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.env.crowd_config import CrowdNavConfig
-from socialzoo.nav.crowd_cases import (
-    SPLIT_SEED_OFFSET,
-    CrowdCase,
-    Split,
-    case_seed,
-    crowd_case,
-    crowd_case_arrays,
-)
+from socialzoo.nav.crowd_cases import CrowdCase, Split, crowd_family
 from socialzoo.nav.scenarios import Scenario
 
 # CrowdNav seeds numpy's legacy generator, whose seeds are below 2**32.
@@ -38,6 +33,7 @@ class CrowdCaseSource:
     def __init__(self, config: CrowdNavConfig, batch_size: int) -> None:
         self.config = config
         self.batch_size = batch_size
+        self.family = crowd_family(config.cases)
         self._rngs = [np.random.default_rng() for _ in range(batch_size)]
         # One case generator reseeded per case (CrowdNav's seeding; a fresh one costs ~0.6 ms).
         self._case_rs = np.random.RandomState()
@@ -64,17 +60,18 @@ class CrowdCaseSource:
         rows = np.asarray(rows, dtype=np.intp)
         if self._scenarios is not None:
             return self._scenarios.next(rows)
-        low = SPLIT_SEED_OFFSET["train"]
+        low = self.family.splits["train"].first
         seeds = [int(self._rngs[row].integers(low, _SEED_LIMIT)) for row in rows]
         r = self.config.num_robots
-        return [crowd_case_arrays(self.config.cases, seed, r, self._case_rs) for seed in seeds]
+        # The family's fast path: plain arrays, which the core's reset reads without a Scenario.
+        return [self.family.arrays(seed, r, self._case_rs) for seed in seeds]
 
     def fixed(self, split: Split, indices: list[int] | np.ndarray) -> list[Scenario]:
         """Cases `indices` of the validation or test split (CrowdNav's fixed cases; on a building
         map, the map's registered test set or validation scenarios)."""
         r = self.config.num_robots
         if self.config.map is None:
-            return [crowd_case(self.config.cases, case_seed(split, int(k)), r) for k in indices]
+            return [self.family.make(self.family.case_seed(split, int(k)), r) for k in indices]
         from socialzoo.nav.maps import load_map
         from socialzoo.nav.scenarios import get_test_set, validation_set
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 import gymnasium as gym
 
 from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
-from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
+from socialzoo.nav.family_catalogue import get_family
 
 # Every id is a task's Gymnasium env and VectorEnv (the kwargs name the task and its config).
 ENTRY = "socialzoo.env.gym_env:TaskEnv"
@@ -52,10 +52,24 @@ def _family_id(name: str) -> str:
     return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + f"-v{ENV_VERSION}"
 
 
-# Scenario families on the small maps, e.g. socialzoo/HallwayHeadOn-v2; short episodes (60 s).
+# The scenario families with ids of their own (socialzoo.nav.family_catalogue), e.g.
+# socialzoo/HallwayHeadOn-v2, each on the small map it is designed for; short episodes (60 s).
+FAMILY_ID_NAMES = (
+    "hallway_head_on",
+    "overtaking",
+    "crossing",
+    "doorway",
+    "circle_crossing",
+    "parallel_traffic",
+)
 FAMILY_IDS: dict[str, dict] = {
-    _family_id(name): {"task": "action_selection", "map": map_name, "family": name, "max_steps": 2400}
-    for name, (map_name, _) in FAMILY_CATALOGUE.items()
+    _family_id(name): {
+        "task": "action_selection",
+        "map": get_family(name).map_name,
+        "family": name,
+        "max_steps": 2400,
+    }
+    for name in FAMILY_ID_NAMES
 }
 
 

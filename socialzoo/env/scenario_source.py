@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from socialzoo.nav.family_catalogue import get_family
 from socialzoo.nav.maps import POSE_CLEARANCE, Map
-from socialzoo.nav.scenario_families import make_family_scenario
 from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario
 from socialzoo.nav.segments import segments_free
 
@@ -121,7 +121,8 @@ class ScenarioStream:
         batch_size: B.
         num_robots: robots per scenario.
         cfg: scenario generation parameters (cfg.repeats = N_r).
-        family: None for benchmark scenarios, else a scenario family name.
+        family: None for benchmark scenarios, else a registered scenario family's name
+            (socialzoo.nav.family_catalogue).
     """
 
     def __init__(
@@ -173,5 +174,5 @@ class ScenarioStream:
         if self.family is None:
             scenario = generate_scenario(self.map, seed, self.cfg)
         else:
-            scenario = make_family_scenario(self.family, self.map, seed)
+            scenario = get_family(self.family).make(seed, self.num_robots, m=self.map)
         return with_robots(scenario, self.map, self.num_robots)

@@ -10,7 +10,8 @@ again. Case k of a split is drawn with numpy's legacy RandomState seeded as Crow
 (validation k: k; test k: 1000 + k; training k: 2000 + k), consuming draws in CrowdNav's order,
 so our validation and test cases are CrowdNav's own (same positions, to float precision), apart
 from the training stream by construction. People get one-point routes: they walk to their goal
-and stay there, as CrowdNav's people do.
+and stay there, as CrowdNav's people do. The two layouts are scenario families
+(socialzoo.nav.family_catalogue): crowdnav_circle_crossing and crowdnav_square_crossing.
 """
 
 from __future__ import annotations
@@ -18,13 +19,18 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import TYPE_CHECKING, Literal, get_args
 
 import numpy as np
 
 from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_int, check_number
+from socialzoo.nav.family_catalogue import ScenarioFamily, SeedSplit
+from socialzoo.nav.scenario_families import antipode, circle_point
 from socialzoo.nav.scenarios import Scenario
+
+if TYPE_CHECKING:
+    from socialzoo.nav.maps import Map
 
 Layout = Literal["circle_crossing", "square_crossing"]
 LAYOUTS: tuple[str, ...] = get_args(Layout)
@@ -88,12 +94,7 @@ class CrowdCaseConfig:
 
 def case_seed(split: Split, index: int) -> int:
     """The seed of case `index` of a split (CrowdNav's np.random.seed for that case)."""
-    if split not in SPLITS:
-        raise ValueError(f"unknown split {split!r}; known: {SPLITS}")
-    check_int("case_seed", "index", index, low=0)
-    if split in SPLIT_SIZE and index >= SPLIT_SIZE[split]:
-        raise ValueError(f"the {split} split holds {SPLIT_SIZE[split]} cases; index {index} is outside it")
-    return SPLIT_SEED_OFFSET[split] + index
+    return _CROWDNAV.case_seed(split, index)
 
 
 @functools.lru_cache(maxsize=64)
@@ -102,11 +103,11 @@ def robot_poses(num_robots: int, radius: float) -> tuple[np.ndarray, np.ndarray]
     goal at (0, r), as CrowdNav's robot; robot k at angle -pi/2 + 2 pi k / R, heading for its
     antipode (our extension for several robots)."""
     angle = -math.pi / 2 + 2 * math.pi * np.arange(num_robots) / num_robots
-    start = radius * np.stack((np.cos(angle), np.sin(angle)), axis=1)
+    start = np.stack(circle_point(0.0, 0.0, radius, angle), axis=1)
     start[0] = (0.0, -radius)  # exactly CrowdNav's, not cos(-pi/2) ~ 6e-17
     heading = np.arctan2(-start[:, 1], -start[:, 0])
     starts = np.column_stack((start, heading))
-    goals = np.column_stack((0.0 - start, heading))  # 0.0 - x: no -0.0 in the goals
+    goals = np.column_stack((*antipode(0.0, 0.0, start[:, 0], start[:, 1]), heading))  # 2 * 0.0 - x: no -0.0
     starts.flags.writeable = False  # cached: shared by every case
     goals.flags.writeable = False
     return starts, goals
@@ -226,8 +227,78 @@ def case_scenario(case: CrowdCase, config: CrowdCaseConfig) -> Scenario:
         human_goal_index=np.full(n, -1),
         human_routes=tuple(g[None, :] for g in case.human_goals),
         human_speed=np.full(n, config.human_speed),
-        family=config.layout,
+        family=_BY_LAYOUT[config.layout].name,
     )
+
+
+class CrowdNavFamily(ScenarioFamily):
+    """CrowdNav's cases as a scenario family: drawn by CrowdNav's rules from its case seeds, in the
+    open arena, for a CrowdCaseConfig of the family's layout (default: CrowdNav's own).
+
+    Args:
+        cases: how cases are drawn; its layout must be the family's.
+    """
+
+    map_name = ARENA_MAP
+    layout: Layout = "circle_crossing"
+    splits = {split: SeedSplit(SPLIT_SEED_OFFSET[split], SPLIT_SIZE.get(split)) for split in SPLITS}
+
+    def __init__(self, cases: CrowdCaseConfig | None = None) -> None:
+        self.cases = CrowdCaseConfig(layout=self.layout) if cases is None else cases
+        if self.cases.layout != self.layout:
+            raise ValueError(
+                f"{type(self).__name__} draws {self.layout}, got a {self.cases.layout} CrowdCaseConfig"
+            )
+
+    def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
+        """The case of `seed` (crowd_case) in the arena; a map is refused (CrowdNav's cases are
+        drawn for the open arena: the CrowdNav task's ids, e.g. socialzoo/CrowdNav-v1, play them)."""
+        if m is not None:
+            raise ValueError(
+                f"scenario family {self.name!r} runs in CrowdNav's open arena, not on map {m.name!r}"
+            )
+        return case_scenario(self.arrays(seed, num_robots), self.cases)
+
+    def arrays(self, seed: int, num_robots: int = 1, rs: np.random.RandomState | None = None) -> CrowdCase:
+        """The case of `seed` as plain arrays (what a training reset writes; crowd_case_arrays)."""
+        return crowd_case_arrays(self.cases, seed, num_robots, rs)
+
+
+class CrowdNavCircleCrossing(CrowdNavFamily):
+    """CrowdNav's circle crossing."""
+
+    name = "crowdnav_circle_crossing"
+    description = "CrowdNav's circle crossing: people near a circle walk to the antipode, the robot across it"
+    layout = "circle_crossing"
+
+
+class CrowdNavSquareCrossing(CrowdNavFamily):
+    """CrowdNav's square crossing."""
+
+    name = "crowdnav_square_crossing"
+    description = (
+        "CrowdNav's square crossing: people cross a square from one half to a random point of the other"
+    )
+    layout = "square_crossing"
+
+
+def crowd_family(cases: CrowdCaseConfig) -> CrowdNavFamily:
+    """The CrowdNav family drawing the cases of `cases` (its layout picks the family)."""
+    return _BY_LAYOUT[cases.layout](cases)
+
+
+_BY_LAYOUT: dict[str, type[CrowdNavFamily]] = {
+    "circle_crossing": CrowdNavCircleCrossing,
+    "square_crossing": CrowdNavSquareCrossing,
+}
+
+
+_CROWDNAV = CrowdNavCircleCrossing()  # CrowdNav's splits, for case_seed
+
+
+# Circle crossing's geometry (socialzoo.nav.scenario_families), compiled for the rejection loop.
+_circle_point = kernel(circle_point)
+_antipode = kernel(antipode)
 
 
 @kernel
@@ -276,12 +347,13 @@ def _draw_people(  # type: ignore[no-untyped-def]
             while True:
                 if at + 3 > size:
                     return -1
-                angle = u[at] * np.pi * 2
-                x = circle_radius * np.cos(angle) + (u[at + 1] - 0.5) * speed
-                y = circle_radius * np.sin(angle) + (u[at + 2] - 0.5) * speed
+                x, y = _circle_point(0.0, 0.0, circle_radius, u[at] * np.pi * 2)
+                # CrowdNav's jitter moves the start off the circle; the goal is its antipode.
+                x += (u[at + 1] - 0.5) * speed
+                y += (u[at + 2] - 0.5) * speed
                 at += 3
                 if _clear(x, y, positions, radii, i, own, gap) and _clear(x, y, goals, radii, i, own, gap):
                     break
             positions[i, 0], positions[i, 1] = x, y
-            goals[i, 0], goals[i, 1] = -x, -y
+            goals[i, 0], goals[i, 1] = _antipode(0.0, 0.0, x, y)
     return at

@@ -1,17 +1,118 @@
-"""The scenario families by name: the small map each is designed for, and what happens in it.
+"""Scenario families: the interface every family implements, and the one registry of families by name.
 
 Free of numpy, so that the Gymnasium registration (socialzoo.env.registration) names every
-family's id without importing the world; socialzoo.nav.scenario_families gives each its layout.
+family's id without importing the world: the built-in families are "module:Class" paths loaded
+on first use (socialzoo.nav.scenario_families: six on small maps; socialzoo.nav.crowd_cases:
+CrowdNav's circle and square crossing in the open arena).
 """
 
 from __future__ import annotations
 
-# Family name -> (the small map it is designed for, one line saying what happens).
-FAMILY_CATALOGUE: dict[str, tuple[str, str]] = {
-    "hallway_head_on": ("hallway", "1-3 humans walk down the hallway towards the robot"),
-    "overtaking": ("hallway", "a slow human (0.4-0.6 m/s) walks ahead of the robot, same way"),
-    "crossing": ("intersection", "2-4 humans cross the robot's way along the other corridor"),
-    "doorway": ("doorway", "1-3 humans come through the door the robot must pass"),
-    "circle_crossing": ("open_room", "robot and 4-8 humans on a circle walk to the antipode"),
-    "parallel_traffic": ("hallway", "4-8 humans walk the robot's way at mixed speeds"),
+import importlib
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:
+    from socialzoo.nav.maps import Map
+    from socialzoo.nav.scenarios import Scenario
+
+
+class SeedSplit(NamedTuple):
+    """A split of a family's seeds: case k of the split has seed `first + k`, k < `size` (None: no end)."""
+
+    first: int
+    size: int | None = None
+
+
+class ScenarioFamily:
+    """A scenario family: one class that draws a Scenario from a seed.
+
+    A subclass sets the class attributes and writes `make`; `register_family` makes its name
+    known to `EnvConfig(family=...)`, the scenario streams and `get_family`.
+
+    Attributes:
+        name: the registry name (snake_case).
+        map_name: the map it is designed for ("arena": CrowdNav's open arena, no map).
+        description: one line saying what happens.
+        splits: fixed seed splits of its own ("val", "test", "train"), if any; a family without
+            them plays its map's validation and test seeds.
+    """
+
+    name: str = ""
+    map_name: str = ""
+    description: str = ""
+    splits: Mapping[str, SeedSplit] = {}
+
+    def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
+        """The scenario of `seed` with `num_robots` robots, on map m (default: the family's map)."""
+        raise NotImplementedError(f"{type(self).__name__}.make")
+
+    def case_seed(self, split: str, index: int) -> int:
+        """The seed of case `index` of one of the family's splits.
+
+        Raises:
+            ValueError: an unknown split, or an index outside it.
+        """
+        if split not in self.splits:
+            raise ValueError(f"unknown split {split!r}; known: {tuple(self.splits)}")
+        if not isinstance(index, int) or isinstance(index, bool) or index < 0:
+            raise ValueError(f"case index must be an int >= 0, got {index!r}")
+        first, size = self.splits[split]
+        if size is not None and index >= size:
+            raise ValueError(f"the {split} split holds {size} cases; index {index} is outside it")
+        return first + index
+
+
+# Family name -> the family: an instance, or the "module:Class" path of one (loaded on first use).
+FAMILIES: dict[str, ScenarioFamily | str] = {
+    "hallway_head_on": "socialzoo.nav.scenario_families:HallwayHeadOn",
+    "overtaking": "socialzoo.nav.scenario_families:Overtaking",
+    "crossing": "socialzoo.nav.scenario_families:Crossing",
+    "doorway": "socialzoo.nav.scenario_families:Doorway",
+    "circle_crossing": "socialzoo.nav.scenario_families:CircleCrossing",
+    "parallel_traffic": "socialzoo.nav.scenario_families:ParallelTraffic",
+    "crowdnav_circle_crossing": "socialzoo.nav.crowd_cases:CrowdNavCircleCrossing",
+    "crowdnav_square_crossing": "socialzoo.nav.crowd_cases:CrowdNavSquareCrossing",
 }
+
+
+def register_family(family: ScenarioFamily | type[ScenarioFamily]) -> ScenarioFamily:
+    """Register a family (an instance, or a class made with no arguments) under its name.
+
+    Raises:
+        ValueError: not a ScenarioFamily, no name, or the name is taken by another family.
+    """
+    if isinstance(family, type) and issubclass(family, ScenarioFamily):
+        family = family()
+    if not isinstance(family, ScenarioFamily):
+        raise ValueError(f"register_family needs a ScenarioFamily, got {family!r}")
+    if not family.name:
+        raise ValueError(f"{type(family).__name__}.name must be set to register it")
+    old = FAMILIES.get(family.name)
+    if old is not None and type(_load(family.name, old)) is not type(family):
+        raise ValueError(f"scenario family {family.name!r} is already registered ({old!r})")
+    FAMILIES[family.name] = family
+    return family
+
+
+def get_family(name: str) -> ScenarioFamily:
+    """The registered family `name` (a registry path is loaded and kept).
+
+    Raises:
+        KeyError: unknown family (the message lists the known ones).
+    """
+    if name not in FAMILIES:
+        raise KeyError(f"unknown scenario family {name!r}; known: {sorted(FAMILIES)}")
+    family = _load(name, FAMILIES[name])
+    FAMILIES[name] = family
+    return family
+
+
+def _load(name: str, entry: ScenarioFamily | str) -> ScenarioFamily:
+    if isinstance(entry, ScenarioFamily):
+        return entry
+    module, _, attr = entry.partition(":")
+    family = getattr(importlib.import_module(module), attr)()
+    if not isinstance(family, ScenarioFamily) or family.name != name:
+        raise ValueError(f"scenario family {name!r}: {entry!r} is not a ScenarioFamily named {name!r}")
+    return family

@@ -1,19 +1,24 @@
-"""Scenario families beyond the benchmark, each a few lines of layout on a small map: hallway
-head-on, overtaking, crossing at an intersection, doorway, circle crossing and parallel traffic
-(the scenario names of the social-navigation evaluation guidelines).
+"""Scenario families on small maps, each one class with a few lines of layout: hallway head-on,
+overtaking, crossing at an intersection, doorway, circle crossing and parallel traffic (the
+scenario names of the social-navigation evaluation guidelines). Their interface and registry are
+socialzoo.nav.family_catalogue; this module imports the world only when a scenario is made.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from socialzoo.nav.family_catalogue import FAMILY_CATALOGUE
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario, plan_routes, spawn_points, split_routes
+# FAMILIES: the registry, also read from here (socialzoo.env.config checks EnvConfig.family in it).
+from socialzoo.nav.family_catalogue import FAMILIES as FAMILIES
+from socialzoo.nav.family_catalogue import ScenarioFamily
+
+if TYPE_CHECKING:
+    from socialzoo.nav.maps import Map
+    from socialzoo.nav.scenarios import Scenario
 
 
 @dataclass(frozen=True)
@@ -33,18 +38,67 @@ class Layout:
     human_speed: np.ndarray
 
 
-@dataclass(frozen=True)
-class Family:
-    """A scenario family: a small layout rule, and the small map it is designed for.
+class LayoutFamily(ScenarioFamily):
+    """A family on a map, written as its layout rule: `layout(m, rng)` picks the starts, goals
+    and speeds from rng (numpy's default_rng(seed)); `make` plans everyone's route.
 
-    Families place people relative to the map's legal poses (its main axis is its farthest pair of
-    poses), so they also run on other maps of a similar shape.
+    Layouts place people relative to the map's legal poses (its main axis is its farthest pair of
+    poses), so they also run on other maps of a similar shape. They place one robot: the env's
+    scenario stream adds the others (socialzoo.env.scenario_source.with_robots).
     """
 
-    name: str
-    map_name: str
-    description: str
-    layout: Callable[[Map, np.random.Generator], Layout]
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """The layout drawn from rng on map m."""
+        raise NotImplementedError(f"{type(self).__name__}.layout")
+
+    def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
+        """The scenario of `seed` on map m (default: the family's map), drawn from default_rng(seed).
+
+        Routes are planned like the benchmark's (a straight line where wall-free); humans spawn on
+        their start points, and their pose indices are -1. One robot, whatever num_robots.
+
+        Raises:
+            ValueError: the map has fewer than 2 legal poses.
+            NoPathError: someone's goal cannot be reached.
+        """
+        from socialzoo.nav.maps import load_map
+        from socialzoo.nav.scenarios import Scenario, plan_routes, split_routes
+
+        m = load_map(self.map_name) if m is None else m
+        lay = self.layout(m, np.random.default_rng(seed))
+        n = len(lay.human_start)
+        starts = np.concatenate((lay.robot_start[None], lay.human_start))
+        goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
+        paths, lengths = plan_routes(m, starts, goals, f"{m.where}, family {self.name!r} seed {seed}")
+        # The robot faces along the first leg of its route.
+        first_leg = paths[0, min(1, int(lengths[0]) - 1)] - lay.robot_start
+        heading = math.atan2(float(first_leg[1]), float(first_leg[0]))
+        return Scenario(
+            map_name=m.name,
+            seed=seed,
+            family=self.name,
+            robot_starts=np.array([[*lay.robot_start, heading]]),
+            robot_goals=np.array([[*lay.robot_goal, heading]]),
+            human_spawn=lay.human_start,
+            human_start_index=np.full(n, -1),
+            human_goal_index=np.full(n, -1),
+            human_routes=split_routes(paths[1:], lengths[1:]),
+            human_speed=lay.human_speed,
+        )
+
+
+def circle_point(cx: Any, cy: Any, radius: Any, angle: Any) -> tuple[Any, Any]:
+    """The point at `angle` (rad) on the circle of `radius` (m) about (cx, cy): scalars or arrays.
+
+    Circle crossing's geometry, written once: the CircleCrossing family calls it on arrays (numpy's
+    cos and sin), CrowdNav's cases compile it into their rejection kernel (socialzoo.nav.crowd_cases).
+    """
+    return cx + radius * np.cos(angle), cy + radius * np.sin(angle)
+
+
+def antipode(cx: Any, cy: Any, x: Any, y: Any) -> tuple[Any, Any]:
+    """The point opposite (x, y) across the centre (cx, cy), where a circle-crossing walker heads."""
+    return 2.0 * cx - x, 2.0 * cy - y
 
 
 def _farthest_pair(m: Map) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +144,8 @@ def _near(
         t = rng.uniform(*lateral, size=(k, 1))
         return s * u + t * left
 
+    from socialzoo.nav.scenarios import spawn_points
+
     base = np.broadcast_to(anchor, (n, 2)).copy()
     return spawn_points(m.wall_index, base, base, draw, 0.3, 20)
 
@@ -98,137 +154,140 @@ def _speeds(rng: np.random.Generator, n: int, mean: float = 1.0, std: float = 0.
     return np.clip(rng.normal(mean, std, size=n), 0.5, 1.3)
 
 
-def _hallway_head_on(m: Map, rng: np.random.Generator) -> Layout:
-    a, b = _farthest_pair(m)
-    u, _ = _frame(a, b)
-    n = int(rng.integers(1, 3, endpoint=True))
-    return Layout(
-        a,
-        b,
-        _near(m, rng, b, n, (-2.0, 0.0), (-0.6, 0.6), u),
-        _near(m, rng, a, n, (0.0, 1.0), (-0.6, 0.6), u),
-        _speeds(rng, n),
-    )
+class Oncoming(LayoutFamily):
+    """1-3 people start near the robot's goal and walk to near its start (HallwayHeadOn, Doorway).
 
-
-def _overtaking(m: Map, rng: np.random.Generator) -> Layout:
-    a, b = _farthest_pair(m)
-    u, _ = _frame(a, b)
-    return Layout(
-        a,
-        b,
-        _near(m, rng, a, 1, (2.0, 3.0), (-0.3, 0.3), u),
-        _near(m, rng, b, 1, (-1.0, 0.0), (-0.3, 0.3), u),
-        rng.uniform(0.4, 0.6, size=1),
-    )
-
-
-def _crossing(m: Map, rng: np.random.Generator) -> Layout:
-    a, b = _farthest_pair(m)
-    c, d = _cross_pair(m, a, b)
-    v, _ = _frame(c, d)
-    n = int(rng.integers(2, 4, endpoint=True))
-    forward = rng.random(n) < 0.5
-    starts = np.where(
-        forward[:, None],
-        _near(m, rng, c, n, (0.0, 1.5), (-0.5, 0.5), v),
-        _near(m, rng, d, n, (-1.5, 0.0), (-0.5, 0.5), v),
-    )
-    goals = np.where(forward[:, None], d, c)
-    return Layout(a, b, starts, goals, _speeds(rng, n))
-
-
-def _doorway(m: Map, rng: np.random.Generator) -> Layout:
-    a, b = _farthest_pair(m)
-    u, _ = _frame(a, b)
-    n = int(rng.integers(1, 3, endpoint=True))
-    return Layout(
-        a,
-        b,
-        _near(m, rng, b, n, (-1.5, 0.0), (-0.8, 0.8), u),
-        _near(m, rng, a, n, (0.0, 1.0), (-0.8, 0.8), u),
-        _speeds(rng, n),
-    )
-
-
-def _circle_crossing(m: Map, rng: np.random.Generator) -> Layout:
-    if not m.num_walls and m.region is None:
-        raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
-    # The walls' bounding box, cut down to the region if there is one (a region may have margins).
-    lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
-    if m.num_walls:
-        ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
-        lo, hi = ends.min(0), ends.max(0)
-    if m.region is not None:
-        lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
-        hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
-    centre = (lo + hi) / 2.0
-    # One metre inside the smaller half-extent keeps everyone clear of the enclosing walls.
-    radius = max(0.5 * float(np.min(hi - lo)) - 1.0, 0.5)
-    n = int(rng.integers(4, 8, endpoint=True))
-    angle = rng.uniform(0.0, 2.0 * np.pi) + 2.0 * np.pi * (
-        np.arange(n + 1) + rng.uniform(-0.2, 0.2, n + 1)
-    ) / (n + 1)
-    ring = centre + radius * np.stack((np.cos(angle), np.sin(angle)), axis=-1)
-    return Layout(ring[0], 2.0 * centre - ring[0], ring[1:], 2.0 * centre - ring[1:], _speeds(rng, n))
-
-
-def _parallel_traffic(m: Map, rng: np.random.Generator) -> Layout:
-    a, b = _farthest_pair(m)
-    u, _ = _frame(a, b)
-    length = float(np.linalg.norm(b - a))
-    n = int(rng.integers(4, 8, endpoint=True))
-    starts = _near(m, rng, a, n, (1.0, 0.6 * length), (-1.0, 1.0), u)
-    goals = _near(m, rng, b, n, (-1.0, 0.0), (-1.0, 1.0), u)
-    return Layout(a, b, starts, goals, _speeds(rng, n, 1.0, 0.2))
-
-
-# Each family's layout rule; its map and description are in the catalogue.
-_LAYOUTS: dict[str, Callable[[Map, np.random.Generator], Layout]] = {
-    "hallway_head_on": _hallway_head_on,
-    "overtaking": _overtaking,
-    "crossing": _crossing,
-    "doorway": _doorway,
-    "circle_crossing": _circle_crossing,
-    "parallel_traffic": _parallel_traffic,
-}
-FAMILIES: dict[str, Family] = {
-    name: Family(name, map_name, description, _LAYOUTS[name])
-    for name, (map_name, description) in FAMILY_CATALOGUE.items()
-}
-
-
-def make_family_scenario(name: str, m: Map, seed: int) -> Scenario:
-    """A scenario of family `name` (a key of FAMILIES) on map m, drawn from default_rng(seed).
-
-    Routes are planned like the benchmark's (a straight line where wall-free); humans spawn on
-    their start points, and their pose indices are -1.
-
-    Raises:
-        KeyError: unknown family (the message lists the known ones).
-        ValueError: the map has fewer than 2 legal poses.
-        NoPathError: someone's goal cannot be reached.
+    Attributes:
+        spawn_along: where people start along the main axis, offsets from the robot's goal, m.
+        lateral: their lateral offsets, at the start and at the goal, m.
     """
-    if name not in FAMILIES:
-        raise KeyError(f"unknown scenario family {name!r}; known: {sorted(FAMILIES)}")
-    rng = np.random.default_rng(seed)
-    lay = FAMILIES[name].layout(m, rng)
-    n = len(lay.human_start)
-    starts = np.concatenate((lay.robot_start[None], lay.human_start))
-    goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
-    paths, lengths = plan_routes(m, starts, goals, f"{m.where}, family {name!r} seed {seed}")
-    # The robot faces along the first leg of its route.
-    first_leg = paths[0, min(1, int(lengths[0]) - 1)] - lay.robot_start
-    heading = math.atan2(float(first_leg[1]), float(first_leg[0]))
-    return Scenario(
-        map_name=m.name,
-        seed=seed,
-        family=name,
-        robot_starts=np.array([[*lay.robot_start, heading]]),
-        robot_goals=np.array([[*lay.robot_goal, heading]]),
-        human_spawn=lay.human_start,
-        human_start_index=np.full(n, -1),
-        human_goal_index=np.full(n, -1),
-        human_routes=split_routes(paths[1:], lengths[1:]),
-        human_speed=lay.human_speed,
-    )
+
+    spawn_along: tuple[float, float]
+    lateral: tuple[float, float]
+
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """Robot along the main axis; people start near its goal and walk to its start."""
+        a, b = _farthest_pair(m)
+        u, _ = _frame(a, b)
+        n = int(rng.integers(1, 3, endpoint=True))
+        return Layout(
+            a,
+            b,
+            _near(m, rng, b, n, self.spawn_along, self.lateral, u),
+            _near(m, rng, a, n, (0.0, 1.0), self.lateral, u),
+            _speeds(rng, n),
+        )
+
+
+class HallwayHeadOn(Oncoming):
+    """1-3 people walk down the hallway towards the robot."""
+
+    name = "hallway_head_on"
+    map_name = "hallway"
+    description = "1-3 humans walk down the hallway towards the robot"
+    spawn_along = (-2.0, 0.0)
+    lateral = (-0.6, 0.6)
+
+
+class Overtaking(LayoutFamily):
+    """A slow person walks ahead of the robot, the same way."""
+
+    name = "overtaking"
+    map_name = "hallway"
+    description = "a slow human (0.4-0.6 m/s) walks ahead of the robot, same way"
+
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """One person 2-3 m ahead of the robot at 0.4-0.6 m/s, to the robot's goal."""
+        a, b = _farthest_pair(m)
+        u, _ = _frame(a, b)
+        return Layout(
+            a,
+            b,
+            _near(m, rng, a, 1, (2.0, 3.0), (-0.3, 0.3), u),
+            _near(m, rng, b, 1, (-1.0, 0.0), (-0.3, 0.3), u),
+            rng.uniform(0.4, 0.6, size=1),
+        )
+
+
+class Crossing(LayoutFamily):
+    """People cross the robot's way along the other corridor of an intersection."""
+
+    name = "crossing"
+    map_name = "intersection"
+    description = "2-4 humans cross the robot's way along the other corridor"
+
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """Robot along the main axis; 2-4 people along the crossing axis, either way."""
+        a, b = _farthest_pair(m)
+        c, d = _cross_pair(m, a, b)
+        v, _ = _frame(c, d)
+        n = int(rng.integers(2, 4, endpoint=True))
+        forward = rng.random(n) < 0.5
+        starts = np.where(
+            forward[:, None],
+            _near(m, rng, c, n, (0.0, 1.5), (-0.5, 0.5), v),
+            _near(m, rng, d, n, (-1.5, 0.0), (-0.5, 0.5), v),
+        )
+        goals = np.where(forward[:, None], d, c)
+        return Layout(a, b, starts, goals, _speeds(rng, n))
+
+
+class Doorway(Oncoming):
+    """People come through the door the robot must pass."""
+
+    name = "doorway"
+    map_name = "doorway"
+    description = "1-3 humans come through the door the robot must pass"
+    spawn_along = (-1.5, 0.0)
+    lateral = (-0.8, 0.8)
+
+
+class CircleCrossing(LayoutFamily):
+    """The robot and 4-8 people on a circle walk to the antipode of their start."""
+
+    name = "circle_crossing"
+    map_name = "open_room"
+    description = "robot and 4-8 humans on a circle walk to the antipode"
+
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """n + 1 evenly spaced slots on the largest circle a metre inside the walls (or region),
+        turned by a uniform angle, each jittered by up to 0.2 of a slot; the robot takes the first."""
+        if not m.num_walls and m.region is None:
+            raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
+        # The walls' bounding box, cut down to the region if there is one (a region may have margins).
+        lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
+        if m.num_walls:
+            ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
+            lo, hi = ends.min(0), ends.max(0)
+        if m.region is not None:
+            lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
+            hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
+        centre = (lo + hi) / 2.0
+        # One metre inside the smaller half-extent keeps everyone clear of the enclosing walls.
+        radius = max(0.5 * float(np.min(hi - lo)) - 1.0, 0.5)
+        n = int(rng.integers(4, 8, endpoint=True))
+        angle = rng.uniform(0.0, 2.0 * np.pi) + 2.0 * np.pi * (
+            np.arange(n + 1) + rng.uniform(-0.2, 0.2, n + 1)
+        ) / (n + 1)
+        x, y = circle_point(centre[0], centre[1], radius, angle)
+        gx, gy = antipode(centre[0], centre[1], x, y)
+        start, goal = np.stack((x, y), axis=-1), np.stack((gx, gy), axis=-1)
+        return Layout(start[0], goal[0], start[1:], goal[1:], _speeds(rng, n))
+
+
+class ParallelTraffic(LayoutFamily):
+    """People walk the robot's way at mixed speeds."""
+
+    name = "parallel_traffic"
+    map_name = "hallway"
+    description = "4-8 humans walk the robot's way at mixed speeds"
+
+    def layout(self, m: Map, rng: np.random.Generator) -> Layout:
+        """4-8 people spread along the first 60% of the main axis, to its far end."""
+        a, b = _farthest_pair(m)
+        u, _ = _frame(a, b)
+        length = float(np.linalg.norm(b - a))
+        n = int(rng.integers(4, 8, endpoint=True))
+        starts = _near(m, rng, a, n, (1.0, 0.6 * length), (-1.0, 1.0), u)
+        goals = _near(m, rng, b, n, (-1.0, 0.0), (-1.0, 1.0), u)
+        return Layout(a, b, starts, goals, _speeds(rng, n, 1.0, 0.2))

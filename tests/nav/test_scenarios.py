@@ -13,8 +13,9 @@ import pytest
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
 from socialzoo.nav import maps
+from socialzoo.nav.family_catalogue import FAMILIES, get_family
 from socialzoo.nav.maps import Map
-from socialzoo.nav.scenario_families import FAMILIES, make_family_scenario
+from socialzoo.nav.scenario_families import LayoutFamily
 from socialzoo.nav.scenarios import (
     TEST_SETS,
     Scenario,
@@ -373,9 +374,22 @@ def test_scenarios_to_state_with_several_robots_and_errors() -> None:
 
 
 # ---------------------------------------------------------------------------- families
-@pytest.mark.parametrize("name", sorted(FAMILIES))
+def make_family_scenario(name: str, m: Map, seed: int) -> Scenario:
+    return get_family(name).make(seed, m=m)
+
+
+MAP_FAMILIES = [name for name in sorted(FAMILIES) if isinstance(get_family(name), LayoutFamily)]
+
+
+def test_the_six_map_families_are_registered() -> None:
+    assert MAP_FAMILIES == sorted(
+        ["hallway_head_on", "overtaking", "crossing", "doorway", "circle_crossing", "parallel_traffic"]
+    )
+
+
+@pytest.mark.parametrize("name", MAP_FAMILIES)
 def test_family_scenarios(name: str) -> None:
-    family = FAMILIES[name]
+    family = get_family(name)
     m = small_map(family.map_name)
     s = make_family_scenario(name, m, 7)
     assert s == make_family_scenario(name, m, 7)
