@@ -15,7 +15,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from socialzoo.core.state import WorldState, pad_to
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_agents import HumanStep, action_velocities, human_observations, human_step
 from socialzoo.env.metrics import EpisodeMetrics
@@ -23,12 +22,10 @@ from socialzoo.env.observation import build_observation
 from socialzoo.env.outcome import followed_human, robot_outcome
 from socialzoo.env.people import People
 from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
-from socialzoo.nav.distance_field import distance_field
-from socialzoo.nav.graph import graph_of
+from socialzoo.env.world_rows import BatchedWorld, route_navigator
 from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
-from socialzoo.nav.scenarios import Scenario, scenarios_to_state
+from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.nav.subpolicies import GO_ALONE, check_actions, subpolicy_commands
 
@@ -111,8 +108,8 @@ class StepResult:
         }
 
 
-class SocialNavCore:
-    """B social-navigation worlds stepped as one batch.
+class SocialNavCore(BatchedWorld):
+    """B social-navigation worlds stepped as one batch (the action-selection task's core).
 
     Args:
         config: the environment configuration.
@@ -123,32 +120,19 @@ class SocialNavCore:
     """
 
     def __init__(self, config: EnvConfig, batch_size: int, map_data: Map | None = None) -> None:
-        if not isinstance(batch_size, int) or batch_size < 1:
-            raise ValueError(f"batch_size must be an int >= 1, got {batch_size!r}")
+        super().__init__(batch_size, config.num_robots, config.max_humans)
         self.config = config
-        self.batch_size = batch_size
-        self.num_robots = config.num_robots
         self.map = map_data if map_data is not None else load_map(config.map)
         self.walls = self.map.wall_index
-        planner = config.planner
-        # The planner's wall distance field also clears sight lines far from walls (cached per map).
-        self.field = distance_field(
-            self.walls, planner.field_resolution, planner.field_range, planner.field_pad
+        self.field, self.navigator = route_navigator(
+            self.map, batch_size, config.num_robots, config.planner, RecoveryConfig()
         )
-        self.graph = graph_of(self.map)
-        self.navigator = Navigator(
-            self.graph,
-            batch_size,
-            config.num_robots,
-            sight=Sight(self.field, planner.wall_distance),
-            recovery=RecoveryConfig(),
-        )
+        self.graph = self.navigator.graph
         self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
         # Which model drives each person, counterfactual rows, the people's metrics.
         self.people = People(config, batch_size, self.map)
         self.learned = np.arange(config.num_learned_humans)
         b, r = batch_size, config.num_robots
-        self.state: WorldState | None = None
         self.carrot = np.zeros((b, r, 2))
         self.prev_action = np.zeros((b, r), dtype=np.int64)
         self.target_human = np.full((b, r), -1, dtype=np.intp)
@@ -167,20 +151,12 @@ class SocialNavCore:
     # ------------------------------------------------------------------ reset
     def reset_rows(self, rows: np.ndarray | list[int], scenarios: list[Scenario]) -> None:
         """Start new episodes in `rows` from `scenarios` (one per row)."""
-        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
-        if len(rows) != len(scenarios):
-            raise ValueError(f"reset_rows got {len(rows)} rows but {len(scenarios)} scenarios")
+        rows = self.check_rows(rows, len(scenarios))
         if len(rows) == 0:
             return
-        if np.any((rows < 0) | (rows >= self.batch_size)):
-            raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
         scenarios, models = self.people.prepare(list(scenarios))
-        fresh = scenarios_to_state(scenarios, num_robots=self.num_robots, max_humans=self.config.max_humans)
-        fresh.human_model[:] = models
-        if self.state is None:
-            self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
-        self._grow_routes(fresh.human_route.shape[2])
-        self.state.set_rows(rows, fresh)
+        fresh = self.write_rows(rows, scenarios, models)
+        assert self.state is not None
         self.people.reset(rows, fresh)
         for row, scenario in zip(rows, scenarios, strict=True):
             self.scenarios[row] = scenario
@@ -191,21 +167,13 @@ class SocialNavCore:
         self.prev_action[rows] = 0
         self.target_human[rows] = -1
         self.done[rows] = False
-        robot_rows = (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
+        robot_rows = self.robot_rows(rows)
         if self.sight is not None:
             self.sight.forget(robot_rows)
         self.metrics.reset(robot_rows, pose.reshape(-1, 3), goal.reshape(-1, 2))
         carrot = self.navigator.update(self.state.robot_pose[..., :2])
         self.carrot[rows] = carrot[rows]
         self._observe(rows)
-
-    def _grow_routes(self, length: int) -> None:
-        """Widen the route axis of the state when a new scenario has a longer route."""
-        assert self.state is not None
-        have = self.state.human_route.shape[2]
-        if length > have:
-            route = self.state.human_route
-            self.state.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
 
     # ------------------------------------------------------------------ step
     @cached_property

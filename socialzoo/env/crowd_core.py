@@ -31,10 +31,11 @@ from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_b
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
+from socialzoo.env.world_rows import BatchedWorld, route_navigator
 from socialzoo.humans.models import MODEL_IDS, assign_models, parse_people
 from socialzoo.nav.crowd_cases import CrowdCase, case_scenario
 from socialzoo.nav.navigator import Navigator
-from socialzoo.nav.scenarios import Scenario, scenarios_to_state
+from socialzoo.nav.scenarios import Scenario
 
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
 # to the goal per this time, capped at their preferred speed (s).
@@ -61,7 +62,7 @@ class CrowdStep:
     row_done: np.ndarray
 
 
-class CrowdNavCore:
+class CrowdNavCore(BatchedWorld):
     """B rows of the CrowdNav task.
 
     Args:
@@ -71,11 +72,8 @@ class CrowdNavCore:
     """
 
     def __init__(self, config: CrowdNavConfig, batch_size: int, walls: WallIndex | None = None) -> None:
-        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
-            raise ValueError(f"CrowdNavCore: batch_size must be an int >= 1, got {batch_size!r}")
+        super().__init__(batch_size, config.num_robots, config.slots)
         self.config = config
-        self.batch_size = batch_size
-        self.num_robots = config.num_robots
         self.walls = walls if walls is not None else _map_walls(config.map)
         # Among walls the robot is guided along its route (the benchmark robot's navigator): it sees
         # the route's carrot as its goal and the route left as its goal distance.
@@ -116,7 +114,6 @@ class CrowdNavCore:
         self.slot_radius = np.concatenate((np.full(slots, cases.human_radius), np.full(r - 1, radius)))
         self.radius_sum = radius + self.slot_radius
         self.action_table = np.array(discrete_actions(config.robot)) if config.action == "discrete" else None
-        self.state: WorldState | None = None
         self.time = np.zeros(batch_size)
         self.robot_done = np.zeros((batch_size, r), dtype=bool)
         self.metrics = CrowdNavMetrics(
@@ -132,27 +129,14 @@ class CrowdNavCore:
     def reset_rows(self, rows: np.ndarray | list[int], cases: list[Scenario] | list[CrowdCase]) -> JointState:
         """Start new episodes in `rows` from `cases` (one per row: Scenarios, or the arena's
         CrowdCases, written straight into the state); returns every robot's observation."""
-        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
-        if len(rows) != len(cases):
-            raise ValueError(f"reset_rows got {len(rows)} rows but {len(cases)} cases")
-        if np.any((rows < 0) | (rows >= self.batch_size)):
-            raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
+        rows = self.check_rows(rows, len(cases))
         if len(cases) and isinstance(cases[0], CrowdCase) and self.state is not None:
             self._write_cases(rows, cases)  # type: ignore[arg-type]
             return self._after_reset(rows, [None] * len(rows), [c.seed for c in cases])
         if len(cases) and isinstance(cases[0], CrowdCase):
             cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
-        fresh = scenarios_to_state(cases, num_robots=self.num_robots, max_humans=self.config.slots)
-        fresh.human_model[:] = self._models(
-            [c.seed for c in cases],
-            [c.num_humans for c in cases],
-            fresh.human_model.shape[1],  # type: ignore[union-attr]
-        )
-        if self.state is None:
-            self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
-        if fresh.human_route.shape[2] > self.state.human_route.shape[2]:
-            self.state = WorldState.concatenate([self.state, fresh.rows(0)]).rows(slice(0, self.batch_size))
-        self.state.set_rows(rows, fresh)
+        models = self._models([c.seed for c in cases], [c.num_humans for c in cases], self.config.slots)  # type: ignore[union-attr]
+        self.write_rows(rows, cases, models)  # type: ignore[arg-type]
         return self._after_reset(rows, cases, [c.seed for c in cases])  # type: ignore[arg-type]
 
     def _after_reset(self, rows: np.ndarray, cases: list[Scenario | None], seeds: list[int]) -> JointState:
@@ -166,13 +150,13 @@ class CrowdNavCore:
         self.case_seed[rows] = seeds
         self.time[rows] = 0.0
         self.robot_done[rows] = False
-        self.metrics.reset_rows(self._flat(rows))
+        self.metrics.reset_rows(self.robot_rows(rows))
         if self.observation is None or len(rows) == self.batch_size:
             self.observation = self._observe()
         else:
             # Only the reset rows' robots see anything new.
             fresh = self._observe(rows)
-            robots = self._flat(rows)
+            robots = self.robot_rows(rows)
             self.observation.buffer[robots] = fresh.flat()  # type: ignore[index]
             self.observation.mask[robots] = fresh.mask
         return self.observation
@@ -211,10 +195,6 @@ class CrowdNavCore:
             for row, (seed, n) in enumerate(zip(seeds, people, strict=True)):
                 out[row, :n] = self._model_ids[assign_models(self._parts, n, int(seed))]
         return out
-
-    def _flat(self, rows: np.ndarray) -> np.ndarray:
-        """The flat robot indices of `rows`."""
-        return (rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
 
     # ------------------------------------------------------------------ step
     def commands(self, action: np.ndarray) -> np.ndarray:
@@ -440,7 +420,7 @@ class CrowdNavCore:
             (self.carrot if rows is None else self.carrot[rows]) if guided else s.robot_goal[..., :2]
         ).reshape(b * r, 2)
         offset = goal - robot_pos
-        self.frame_angle[slice(None) if rows is None else self._flat(rows)] = np.arctan2(
+        self.frame_angle[slice(None) if rows is None else self.robot_rows(rows)] = np.arctan2(
             offset[:, 1], offset[:, 0]
         )
         observation = joint_state(
@@ -482,17 +462,11 @@ def _mask_ended(outcome: CrowdOutcome, done: np.ndarray) -> CrowdOutcome:
 def _route_navigator(config: CrowdNavConfig, batch_size: int) -> Navigator:
     """The benchmark robot's navigator on the config's map (its graph, sight and planner settings),
     without recovery: the learner drives."""
-    from socialzoo.nav.distance_field import distance_field
-    from socialzoo.nav.graph import graph_of
     from socialzoo.nav.local_planner import LocalPlannerConfig
     from socialzoo.nav.maps import load_map
-    from socialzoo.nav.navigator import Sight
 
     assert config.map is not None
-    m = load_map(config.map)
-    planner = LocalPlannerConfig()
-    field = distance_field(m.wall_index, planner.field_resolution, planner.field_range, planner.field_pad)
-    return Navigator(graph_of(m), batch_size, config.num_robots, sight=Sight(field, planner.wall_distance))
+    return route_navigator(load_map(config.map), batch_size, config.num_robots, LocalPlannerConfig())[1]
 
 
 def _map_walls(map_name: str | None) -> WallIndex:
