@@ -20,8 +20,9 @@ import csv
 import hashlib
 import inspect
 import json
+import logging
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from typing import Any
 from socialzoo.core.metrics import METRICS
 
 STORE_FILE = "results.sqlite"
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -245,13 +247,15 @@ def run_task_benchmark(
     cases: int | None = None,
     batch_size: int = 100,
     figures: bool = True,
+    say: Callable[[str], None] | None = None,
 ) -> tuple[list[dict[str, Any]], list[Path]]:
     """Every policy on the first `cases` cases of a split of a registered task id, into out/: the
     store (results.sqlite), NAME.csv and NAME.md (NAME: the task's name), success.png/pdf.
 
     A policy acts in the task the id names (socialzoo.agents.make_policy refuses another task's,
     or a learned one of another observation size); a learned policy that declares task overrides
-    (CrowdNav's learned policy: its discrete or continuous actions) acts with them.
+    (CrowdNav's learned policy: its discrete or continuous actions) acts with them. `say` gets
+    one line per policy (success, episodes played now and read from the store), as the CLI prints.
 
     Returns:
         (one summary row per policy, the files written).
@@ -275,10 +279,13 @@ def run_task_benchmark(
         )
         summary = summarize(episodes)
         rows.append({"policy": spec, **summary})
-        print(
+        line = (
             f"{spec}: success {summary.get('success_rate', math.nan):.3f} ({played} of {summary['episodes']} "
             "episodes played now, the others read from the store)"
         )
+        logger.info(line)
+        if say is not None:
+            say(line)
     title = f"{env_id}, {split} cases ({probe.name} task)"
     files = write_tables(rows, out, probe.name, title)
     if figures and all("success_rate" in r for r in rows):

@@ -249,6 +249,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
                 cases=args.trials,
                 batch_size=args.batch_size or 100,
                 figures=not args.no_figures,
+                say=print,
             )
             print(f"results in {out}: " + ", ".join(p.name for p in files))
     except (ValueError, StoreError) as err:

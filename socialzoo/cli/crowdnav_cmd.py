@@ -73,6 +73,7 @@ def run_eval(args: argparse.Namespace) -> int:
             cases=args.cases,
             batch_size=args.batch_size,
             figures=not args.no_figures,
+            say=print,
         )
     except (ValueError, StoreError) as err:
         print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
