@@ -15,7 +15,10 @@ import json
 import numpy as np
 from _common import parser
 
-from socialzoo.env.vector import CrowdNavVectorEnv
+try:
+    from socialzoo.env.vector import CrowdNavVectorEnv
+except ImportError:  # a tree before the task interface (benchmarks/compare_commits.py)
+    from socialzoo.env.crowd_env import CrowdNavVectorEnv  # type: ignore[no-redef]
 
 CASES = ((1, 5), (256, 5), (1, 20), (256, 20))
 

@@ -10,9 +10,7 @@ import numpy as np
 from _common import Figure, measure, parser, report, traced_peak_mib
 
 import socialzoo  # noqa: F401
-from socialzoo.env.gym_env import ActionSelectionEnv
-from socialzoo.env.parallel import parallel_env
-from socialzoo.env.vector import ActionSelectionVectorEnv
+from socialzoo.env import ActionSelectionEnv, ActionSelectionVectorEnv, parallel_env
 
 CROWD = {"scenario": {"min_humans": 25, "max_humans": 25}}
 

@@ -23,8 +23,9 @@ from dataclasses import asdict, dataclass
 from _common import parser
 
 import socialzoo  # noqa: F401  (registers the ids)
+from socialzoo.env.registration import ENV_VERSION
 
-GDC1_ID = "socialzoo/ActionSelection-v2"
+GDC1_ID = f"socialzoo/ActionSelection-v{ENV_VERSION}"
 
 
 @dataclass

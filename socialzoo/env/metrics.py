@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.jit import kernel
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_fields, check_int
 
@@ -70,6 +71,70 @@ _SUM_COLUMNS = (
     "jerk",
 )
 _S = {name: i for i, name in enumerate(_SUM_COLUMNS)}
+
+
+@kernel
+def _accumulate(
+    live, pose, speed, travelled, rotation, force, blame, reward, contacts, wall, min_dist, reached, done,
+    left, halted, rerouted, dt, intrusion_distance, stuck_progress,
+    sums, max_force, max_blame, min_human_distance, time_to_goal, is_reached, finished, last_pose,
+    last_speed, last_accel, best_route_left, without_progress, max_without_progress,
+):  # fmt: skip
+    """`EpisodeMetrics.update` of every row (B,) in place, from the step's values (travelled: the
+    step's length, rotation: its absolute heading change). Each value is computed as the numpy
+    expressions it replaces computed it (np.where of the row's live flag, NaN-propagating
+    np.maximum / np.minimum), so the sums and extremes are the same bit for bit."""
+    for i in range(live.shape[0]):
+        accel = (speed[i] - last_speed[i]) / dt
+        best = left[i] if (rerouted[i] and live[i]) else best_route_left[i]
+        progress = left[i] <= best - stuck_progress
+        clock = 0.0 if progress else without_progress[i] + (0.0 if halted[i] else 1.0) * dt
+        if not live[i]:
+            best_route_left[i] = best
+            continue
+        c = contacts[i]
+        row = sums[i]
+        row[0] += 1.0
+        row[1] += 1.0 * dt
+        row[2] += travelled[i]
+        row[3] += force[i]
+        row[4] += blame[i]
+        row[5] += reward[i]
+        row[6] += 1.0 if c > 0 else 0.0
+        row[7] += c
+        row[8] += wall[i]
+        row[9] += (1.0 if min_dist[i] < intrusion_distance else 0.0) * dt
+        row[10] += rotation[i]
+        row[11] += abs(accel - last_accel[i]) / dt
+        best_route_left[i] = left[i] if progress else best
+        without_progress[i] = clock
+        max_without_progress[i] = _maximum(max_without_progress[i], clock)
+        max_force[i] = _maximum(max_force[i], force[i])
+        max_blame[i] = _maximum(max_blame[i], blame[i])
+        min_human_distance[i] = _minimum(min_human_distance[i], min_dist[i])
+        if reached[i] and not is_reached[i]:
+            time_to_goal[i] = row[1]
+            is_reached[i] = True
+        last_pose[i, 0] = pose[i, 0]
+        last_pose[i, 1] = pose[i, 1]
+        last_pose[i, 2] = pose[i, 2]
+        last_speed[i] = speed[i]
+        last_accel[i] = accel
+        if done[i]:
+            finished[i] = True
+
+
+@kernel
+def _maximum(a, b):
+    """np.maximum of two scalars (a NaN wins)."""
+    return a if (a >= b or a != a) else b
+
+
+@kernel
+def _minimum(a, b):
+    """np.minimum of two scalars (a NaN wins)."""
+    return a if (a <= b or a != a) else b
+
 
 # Keys of a summary, in order: the registry's metrics of this task (socialzoo.core.metrics).
 SUMMARY_KEYS = metric_names("action_selection")
@@ -220,57 +285,45 @@ class EpisodeMetrics:
         """
         live = ~self.finished if active is None else np.asarray(active, dtype=bool) & ~self.finished
         pose = np.asarray(robot_pose, dtype=np.float64)
-        speed = np.asarray(robot_vel, dtype=np.float64)[:, 0]
         step = pose[:, :2] - self.last_pose[:, :2]
-        accel = (speed - self.last_speed) / dt
-        contacts = np.asarray(human_collisions, dtype=np.float64)
-        min_dist = np.asarray(min_human_distance, dtype=np.float64)
         if route_left is None:
             route_left = np.hypot(*(self.goal - pose[:, :2]).T)
-        left = np.asarray(route_left, dtype=np.float64)
-        if rerouted is not None:
-            self.best_route_left = np.where(
-                np.asarray(rerouted, dtype=bool) & live, left, self.best_route_left
-            )
-        progress = left <= self.best_route_left - self.config.stuck_progress
-        moving = np.ones(self.batch_size, dtype=bool) if halted is None else ~np.asarray(halted, dtype=bool)
-        clock = np.where(progress, 0.0, self.without_progress + moving * dt)
-        ones = np.ones(self.batch_size)
-        contrib = np.stack(
-            (
-                ones,
-                ones * dt,
-                np.hypot(step[:, 0], step[:, 1]),
-                force,
-                blame,
-                reward,
-                contacts > 0,
-                contacts,
-                wall_collision,
-                (min_dist < self.config.intrusion_distance) * dt,
-                np.abs(wrap_angle(pose[:, 2] - self.last_pose[:, 2])),
-                np.abs(accel - self.last_accel) / dt,
-            ),
-            axis=1,
+        none = np.zeros(self.batch_size, dtype=bool)
+        # numpy's hypot and the angle wrap stay numpy's; the rest is one compiled pass.
+        _accumulate(
+            live,
+            pose,
+            np.asarray(robot_vel, dtype=np.float64)[:, 0],
+            np.hypot(step[:, 0], step[:, 1]),
+            np.abs(wrap_angle(pose[:, 2] - self.last_pose[:, 2])),
+            np.asarray(force, dtype=np.float64),
+            np.asarray(blame, dtype=np.float64),
+            np.asarray(reward, dtype=np.float64),
+            np.asarray(human_collisions, dtype=np.float64),
+            np.asarray(wall_collision, dtype=np.float64),
+            np.asarray(min_human_distance, dtype=np.float64),
+            np.asarray(reached, dtype=bool),
+            np.asarray(done, dtype=bool),
+            np.asarray(route_left, dtype=np.float64),
+            none if halted is None else np.asarray(halted, dtype=bool),
+            none if rerouted is None else np.asarray(rerouted, dtype=bool),
+            dt,
+            self.config.intrusion_distance,
+            self.config.stuck_progress,
+            self.sums,
+            self.max_force,
+            self.max_blame,
+            self.min_human_distance,
+            self.time_to_goal,
+            self.reached,
+            self.finished,
+            self.last_pose,
+            self.last_speed,
+            self.last_accel,
+            self.best_route_left,
+            self.without_progress,
+            self.max_without_progress,
         )
-        self.sums += np.where(live[:, None], contrib, 0.0)
-        self.best_route_left = np.where(live & progress, left, self.best_route_left)
-        self.without_progress = np.where(live, clock, self.without_progress)
-        self.max_without_progress = np.where(
-            live, np.maximum(self.max_without_progress, clock), self.max_without_progress
-        )
-        self.max_force = np.where(live, np.maximum(self.max_force, force), self.max_force)
-        self.max_blame = np.where(live, np.maximum(self.max_blame, blame), self.max_blame)
-        self.min_human_distance = np.where(
-            live, np.minimum(self.min_human_distance, min_dist), self.min_human_distance
-        )
-        newly_reached = live & np.asarray(reached, dtype=bool) & ~self.reached
-        self.time_to_goal = np.where(newly_reached, self.sums[:, _S["duration"]], self.time_to_goal)
-        self.reached |= newly_reached
-        self.last_pose = np.where(live[:, None], pose, self.last_pose)
-        self.last_speed = np.where(live, speed, self.last_speed)
-        self.last_accel = np.where(live, accel, self.last_accel)
-        self.finished |= live & np.asarray(done, dtype=bool)
 
     def arrays(self, rows: np.ndarray | slice | None = None) -> dict[str, np.ndarray]:
         """Every summary metric of `rows` (default all) as arrays, keyed as in SUMMARY_KEYS."""

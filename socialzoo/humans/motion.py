@@ -7,8 +7,11 @@ A human already in contact with a robot does not press deeper into it (`keep_off
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 
 
@@ -43,24 +46,82 @@ def integrate_humans(
         (pos, vel, blocked): new position and velocity, and (B, H) bool for humans whose move a
         wall stopped this step.
     """
-    new_vel = vel + dt * accel
-    speed = np.sqrt(new_vel[..., 0] * new_vel[..., 0] + new_vel[..., 1] * new_vel[..., 1])
-    scale = np.where(speed > max_speed, max_speed / np.maximum(speed, 1e-12), 1.0)
-    new_vel = np.where(mask[..., None], new_vel * scale[..., None], 0.0)
-    # A wall can only be crossed by a move at least as long as the distance to it.
-    step_len = dt * np.minimum(speed, max_speed)
-    if direct is not None and velocity is not None:
-        chosen = mask & direct
-        new_vel = np.where(chosen[..., None], velocity, new_vel)
-        step_len = np.where(chosen, dt * np.sqrt(velocity[..., 0] ** 2 + velocity[..., 1] ** 2), step_len)
-    new_pos = pos + dt * new_vel
-    near = mask & (wall_dist <= step_len)
+    batch, num = mask.shape
+    new_pos = np.empty((batch, num, 2))
+    new_vel = np.empty((batch, num, 2))
+    near = np.empty((batch, num), dtype=bool)
+    chosen = direct is not None and velocity is not None
+    num_near = _euler(
+        pos, vel, accel, max_speed, mask, wall_dist, dt,
+        velocity if chosen else vel, direct if chosen else mask, chosen, new_pos, new_vel, near,
+    )  # fmt: skip
     blocked = np.zeros(mask.shape, dtype=bool)
-    if near.any():
+    if num_near:
         blocked[near] = walls.crosses(pos[near], new_pos[near])
         new_pos = np.where(blocked[..., None], pos, new_pos)
         new_vel = np.where(blocked[..., None], 0.0, new_vel)
     return new_pos, new_vel, blocked
+
+
+@kernel
+def _euler(
+    pos, vel, accel, max_speed, mask, wall_dist, dt, velocity, direct, use_direct, new_pos, new_vel, near,
+):  # fmt: skip
+    """`integrate_humans` up to the wall test, in one pass: fills new_pos, new_vel (B, H, 2) and
+    near (B, H) (present humans whose step is at least their distance to a wall); returns how
+    many are near. The operations are numpy's, in its order (a speed is capped as
+    np.where(speed > cap, cap / np.maximum(speed, 1e-12), 1.0) scales it, a NaN propagates as in
+    np.minimum), so the results are the same bit for bit."""
+    count = 0
+    for b in range(mask.shape[0]):
+        for h in range(mask.shape[1]):
+            vx = vel[b, h, 0] + dt * accel[b, h, 0]
+            vy = vel[b, h, 1] + dt * accel[b, h, 1]
+            speed = math.sqrt(vx * vx + vy * vy)
+            cap = max_speed[b, h]
+            if speed > cap:
+                scale = cap / max(speed, 1e-12)
+                vx, vy = vx * scale, vy * scale
+            capped = speed if (speed < cap or math.isnan(speed)) else cap
+            step_len = dt * capped
+            if not mask[b, h]:
+                vx, vy = 0.0, 0.0
+            elif use_direct and direct[b, h]:
+                vx, vy = velocity[b, h, 0], velocity[b, h, 1]
+                step_len = dt * math.sqrt(vx * vx + vy * vy)
+            new_vel[b, h, 0] = vx
+            new_vel[b, h, 1] = vy
+            new_pos[b, h, 0] = pos[b, h, 0] + dt * vx
+            new_pos[b, h, 1] = pos[b, h, 1] + dt * vy
+            near[b, h] = mask[b, h] and wall_dist[b, h] <= step_len
+            if near[b, h]:
+                count += 1
+    return count
+
+
+@kernel
+def _pressing(prev_pos, pos, mask, robot_pos, distance, nearest):
+    """The robot each human presses into (`keep_off_robots`): nearest (B, H) is the index of the
+    nearest robot (at the start of the step) among those it began closer than `distance` to and
+    came closer still, -1 for none; returns how many humans press into one."""
+    count = 0
+    for b in range(mask.shape[0]):
+        for h in range(mask.shape[1]):
+            nearest[b, h] = -1
+            if not mask[b, h]:
+                continue
+            best = math.inf
+            for r in range(robot_pos.shape[1]):
+                rx, ry = prev_pos[b, h, 0] - robot_pos[b, r, 0], prev_pos[b, h, 1] - robot_pos[b, r, 1]
+                d0 = math.sqrt(rx * rx + ry * ry)
+                qx, qy = pos[b, h, 0] - robot_pos[b, r, 0], pos[b, h, 1] - robot_pos[b, r, 1]
+                d1 = math.sqrt(qx * qx + qy * qy)
+                if d0 < distance and d1 < d0 and d0 > 1e-9 and d0 < best:
+                    best = d0
+                    nearest[b, h] = r
+            if nearest[b, h] >= 0:
+                count += 1
+    return count
 
 
 def keep_off_robots(
@@ -98,19 +159,13 @@ def keep_off_robots(
     """
     if robot_pos.shape[1] == 0 or pos.shape[1] == 0:
         return pos, vel
-    rel = prev_pos[:, :, None, :] - robot_pos[:, None, :, :]  # (B, H, R, 2)
-    d0 = np.sqrt((rel**2).sum(-1))
-    d1 = np.sqrt(((pos[:, :, None, :] - robot_pos[:, None, :, :]) ** 2).sum(-1))
-    pressing = mask[..., None] & (d0 < distance) & (d1 < d0) & (d0 > 1e-9)
-    if not pressing.any():
+    nearest = np.empty(mask.shape, dtype=np.int64)
+    if _pressing(prev_pos, pos, mask, robot_pos, distance, nearest) == 0:
         return pos, vel
     # The robot the human presses into most (the nearest one) decides its bounce.
-    d0_pressing = np.where(pressing, d0, np.inf)
-    nearest = np.argmin(d0_pressing, axis=-1)  # (B, H)
-    rows = np.flatnonzero(np.isfinite(d0_pressing.min(axis=-1)).ravel())
-    b, h = np.unravel_index(rows, mask.shape)
-    r = nearest[b, h]
-    n = rel[b, h, r] / d0[b, h, r][:, None]
+    b, h = np.nonzero(nearest >= 0)
+    rel = prev_pos[b, h] - robot_pos[b, nearest[b, h]]
+    n = rel / np.sqrt((rel**2).sum(-1))[:, None]
     step = pos[b, h] - prev_pos[b, h]
     into = np.minimum((step * n).sum(-1), 0.0)
     new_pos = prev_pos[b, h] + step - 2.0 * into[:, None] * n

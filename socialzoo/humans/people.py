@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.core.config import WorldConfig
+from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 from socialzoo.humans.groups import add_group_accelerations
 from socialzoo.humans.models import ORCA, SOCIAL_FORCE
@@ -74,6 +75,23 @@ def orca_people_velocities(
     return out[:, :num]
 
 
+@kernel
+def _census(mask, model, group, orca):
+    """(any present ORCA person, any present person of another model, anyone in a walking group)
+    of people (B, H) in one pass: a step with social-force people only skips the others' code."""
+    has_orca = has_other = has_group = False
+    for b in range(mask.shape[0]):
+        for h in range(mask.shape[1]):
+            if mask[b, h]:
+                if model[b, h] == orca:
+                    has_orca = True
+                else:
+                    has_other = True
+            if group[b, h] >= 0:
+                has_group = True
+    return has_orca, has_other, has_group
+
+
 def step_people(
     pos: np.ndarray,
     vel: np.ndarray,
@@ -109,9 +127,9 @@ def step_people(
     Returns:
         (pos, vel, blocked): the new positions and velocities, and the people a wall stopped.
     """
-    orca = mask & (model == ORCA)
-    has_orca = bool(orca.any())
-    if has_orca and not (mask & ~orca).any():
+    has_orca, has_other, has_group = _census(mask, model, group, ORCA)
+    orca = mask & (model == ORCA) if has_orca else None
+    if has_orca and not has_other:
         # Nobody feels a force: only the wall distances of the motion step are needed.
         accel = np.zeros(pos.shape)
         _, wall_dist = walls.nearest(pos)
@@ -119,13 +137,11 @@ def step_people(
         accel, wall_dist = human_acceleration(
             pos, vel, target, pref_speed, mask, robot_pos, robot_vel, walls, cfg.human, desired_vel, learned
         )
-    if (group >= 0).any():
+    if has_group:
         add_group_accelerations(pos, vel, target, group, mask & (model == SOCIAL_FORCE), cfg.groups, accel)
     velocity = None
-    if has_orca:
+    if orca is not None:
         velocity = orca_people_velocities(
             pos, vel, target, pref_speed, mask, orca, robot_pos, robot_vel, walls, cfg
         )
-    return integrate_humans(
-        pos, vel, accel, pref_speed, mask, walls, wall_dist, cfg.dt, velocity, orca if has_orca else None
-    )
+    return integrate_humans(pos, vel, accel, pref_speed, mask, walls, wall_dist, cfg.dt, velocity, orca)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
+
 
 def advance_waypoints(
     pos: np.ndarray,
@@ -30,9 +32,25 @@ def advance_waypoints(
     Returns:
         (waypoint, direction), new arrays of the same shapes.
     """
-    reached = ((pos - target) ** 2).sum(-1) < radius * radius
-    last = route_len - 1
-    turn_back = reached & (((direction > 0) & (waypoint >= last)) | ((direction < 0) & (waypoint <= 0)))
-    new_direction = np.where(turn_back, -direction, direction)
-    new_waypoint = np.where(reached, waypoint + new_direction, waypoint)
-    return np.minimum(np.maximum(new_waypoint, 0), last), new_direction
+    dtype = np.result_type(waypoint, direction, route_len)
+    new_waypoint = np.empty(np.shape(waypoint), dtype=dtype)
+    new_direction = np.empty(np.shape(direction), dtype=np.asarray(direction).dtype)
+    _advance(pos, target, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction)
+    return new_waypoint, new_direction
+
+
+@kernel
+def _advance(pos, target, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
+    """`advance_waypoints` in one pass over (B, H)."""
+    for b in range(waypoint.shape[0]):
+        for h in range(waypoint.shape[1]):
+            dx, dy = pos[b, h, 0] - target[b, h, 0], pos[b, h, 1] - target[b, h, 1]
+            reached = dx * dx + dy * dy < radius2
+            last = route_len[b, h] - 1
+            d, w = direction[b, h], waypoint[b, h]
+            if reached and ((d > 0 and w >= last) or (d < 0 and w <= 0)):
+                d = -d
+            if reached:
+                w = w + d
+            new_direction[b, h] = d
+            new_waypoint[b, h] = min(max(w, 0), last)

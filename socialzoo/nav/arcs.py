@@ -97,14 +97,24 @@ def arc_table(cfg: LocalPlannerConfig) -> ArcTable:
 
 
 @kernel
-def arc_wall_codes(x, y, cos, sin, offsets, field_shape, field_codes, here, codes):  # type: ignore[no-untyped-def]
-    """Distance-field codes along every arc of every row, as running minima.
+def arc_wall_codes(
+    x, y, cos, sin, offsets, field_shape, field_codes, stop_code, lengths, trim, here, codes, num_free,
+):  # fmt: skip
+    """Distance-field codes along every arc of every row, as running minima, as far as they count.
 
     codes (S, A, N) gets, for sample j of arc a of row i, the smallest field code over samples
     0..j; sample 0 (the robot's own position) reads 255, because it never blocks an arc: the
     robot is where it is, and an arc leading away from a wall it is too close to must stay open.
     here (N,) gets the code at the robot. offsets (K >= S, A, 2) are the arc samples in field
     cells (ArcTable.cell_offsets), rotated by each row's heading in float32.
+
+    An arc is sampled only while it counts: up to its first blocked sample (a code below
+    stop_code[here[i]], stop_code (256,) being the blocking code for each code at the robot) and
+    while the previous sample's length (lengths (>= S,), m) is below its trimmed length trim
+    (N, A), m. Later samples repeat the last code read: the free length, the first blocked
+    sample or the trimmed length, whichever comes first, and the clearance read at a sample
+    within it are those of a full sampling (about 60% of the lookups are skipped on gdc1).
+    num_free (A, N) gets the number of samples whose code does not block.
     """
     ox, oy, res, num_x, num_y, _ = field_shape
     num_samples, num_arcs, n = codes.shape
@@ -112,20 +122,31 @@ def arc_wall_codes(x, y, cos, sin, offsets, field_shape, field_codes, here, code
     s = sin.astype(np.float32)
     sx = ((x - ox) / res).astype(np.float32)
     sy = ((y - oy) / res).astype(np.float32)
+    stop = np.empty(n, dtype=np.uint8)
     for i in range(n):
         ix = min(max(int(sx[i]), 0), num_x - 1)
         iy = min(max(int(sy[i]), 0), num_y - 1)
         here[i] = field_codes[ix * num_y + iy]
+        stop[i] = stop_code[here[i]]
         for a in range(num_arcs):
             codes[0, a, i] = 255
+            num_free[a, i] = num_samples
     for j in range(1, num_samples):
+        before = lengths[j - 1]
         for a in range(num_arcs):
             off_x, off_y = offsets[j, a, 0], offsets[j, a, 1]
             for i in range(n):
+                prev = codes[j - 1, a, i]
+                if prev < stop[i] or before >= trim[i, a]:
+                    codes[j, a, i] = prev
+                    continue
                 # Truncation is the floor on the grid, then rows near its border are clamped.
                 ix = min(max(int(off_x * c[i] - off_y * s[i] + sx[i]), 0), num_x - 1)
                 iy = min(max(int(off_x * s[i] + off_y * c[i] + sy[i]), 0), num_y - 1)
-                codes[j, a, i] = min(field_codes[ix * num_y + iy], codes[j - 1, a, i])
+                code = min(field_codes[ix * num_y + iy], prev)
+                codes[j, a, i] = code
+                if code < stop[i]:
+                    num_free[a, i] = j
 
 
 @dataclass(frozen=True)

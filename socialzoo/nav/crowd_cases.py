@@ -169,14 +169,16 @@ def crowd_case_arrays(
         config.robot_radius,
     )
     square = config.layout == "square_crossing"
+    person, at = num_robots, used
     while True:
-        taken = _draw_people(
-            draws[used:], square, num_robots, n, config.circle_radius, config.square_width, config.human_speed,
-            config.human_radius, config.discomfort_dist, positions, goals, radii,
+        person, at = _draw_people(
+            draws, at, square, person, num_robots + n, config.circle_radius, config.square_width,
+            config.human_speed, config.human_radius, config.discomfort_dist, positions, goals, radii,
         )  # fmt: skip
-        if taken >= 0:
+        if person == num_robots + n:
             break
-        # The draws ran out before every person found a place: the same stream, longer.
+        # The draws ran out before every person found a place: the same stream, longer, from the
+        # person whose draws ran out (the people before keep their places).
         draws = np.concatenate((draws, rs.random_sample(len(draws))))
     return CrowdCase(
         seed, robot_starts, robot_goals, positions[num_robots:].copy(), goals[num_robots:].copy()
@@ -312,22 +314,23 @@ def _clear(x, y, points, radii, count, own, gap):  # type: ignore[no-untyped-def
 
 @kernel
 def _draw_people(  # type: ignore[no-untyped-def]
-    u, square, first, n, circle_radius, width, speed, own, gap, positions, goals, radii
+    u, at, square, first, end, circle_radius, width, speed, own, gap, positions, goals, radii
 ):
-    """CrowdNav's rejection loops for people first .. first + n - 1 (agents before `first` are
-    placed), reading the uniform draws `u` in CrowdNav's order; fills positions and goals and
-    returns the draws used, or -1 when `u` ran out."""
-    at = 0
+    """CrowdNav's rejection loops for people first .. end - 1 (agents before `first` are placed),
+    reading the uniform draws `u` from index `at` in CrowdNav's order; fills positions and goals.
+    Returns (end, draws used) when everyone is placed, else (i, where person i's draws began)
+    when `u` ran out during person i: a call with more draws goes on from there."""
     size = len(u)
-    for i in range(first, first + n):
+    for i in range(first, end):
+        begin = at
         if square:
             if at >= size:
-                return -1
+                return i, begin
             sign = -1.0 if u[at] > 0.5 else 1.0
             at += 1
             while True:
                 if at + 2 > size:
-                    return -1
+                    return i, begin
                 x = u[at] * width * 0.5 * sign
                 y = (u[at + 1] - 0.5) * width
                 at += 2
@@ -336,7 +339,7 @@ def _draw_people(  # type: ignore[no-untyped-def]
             positions[i, 0], positions[i, 1] = x, y
             while True:
                 if at + 2 > size:
-                    return -1
+                    return i, begin
                 x = u[at] * width * 0.5 * -sign
                 y = (u[at + 1] - 0.5) * width
                 at += 2
@@ -346,7 +349,7 @@ def _draw_people(  # type: ignore[no-untyped-def]
         else:
             while True:
                 if at + 3 > size:
-                    return -1
+                    return i, begin
                 x, y = _circle_point(0.0, 0.0, circle_radius, u[at] * np.pi * 2)
                 # CrowdNav's jitter moves the start off the circle; the goal is its antipode.
                 x += (u[at + 1] - 0.5) * speed
@@ -356,4 +359,4 @@ def _draw_people(  # type: ignore[no-untyped-def]
                     break
             positions[i, 0], positions[i, 1] = x, y
             goals[i, 0], goals[i, 1] = _antipode(0.0, 0.0, x, y)
-    return at
+    return end, at

@@ -54,6 +54,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, fields
+from functools import lru_cache
 
 import numpy as np
 
@@ -91,6 +92,16 @@ def _escape_limit(here: np.ndarray, required: float, floor: float, slack: float)
     distance field's lookups scatter by a centimetre or two; never less than `floor`.
     """
     return np.minimum(np.maximum(here - slack, floor), required)
+
+
+@lru_cache(maxsize=16)
+def _limit_codes(quantum: float, required: float, floor: float, slack: float) -> np.ndarray:
+    """(256,) uint8: for each distance-field code at the robot, the smallest code an arc sample
+    may read without blocking (the escape limit, `_escape_limit`, rounded up to codes). Read-only."""
+    here = np.arange(256, dtype=np.uint8) * quantum
+    codes = np.ceil(_escape_limit(here, required, floor, slack) / quantum - 1e-9).astype(np.uint8)
+    codes.flags.writeable = False
+    return codes
 
 
 _SCRATCH = threading.local()
@@ -272,11 +283,14 @@ def _evaluate(
     num_samples = min(int(np.searchsorted(table.lengths, longest)) + 1, len(table.lengths))
     codes = _scratch("codes", (num_samples, len(k), n), np.uint8)
     here_code = np.empty(n, dtype=np.uint8)
-    arc_wall_codes(x, y, cos, sin, table.cell_offsets, field.shape_args, field.codes, here_code, codes)
+    num_free = np.empty((len(k), n), dtype=np.uint8)  # (A, n) unblocked samples
+    stop_code = _limit_codes(field.quantum, cfg.wall_distance, cfg.min_wall_distance, cfg.escape_slack)
+    arc_wall_codes(
+        x, y, cos, sin, table.cell_offsets, field.shape_args, field.codes, stop_code, table.lengths, trim,
+        here_code, codes, num_free,
+    )  # fmt: skip
     here = here_code * field.quantum
     limit = _escape_limit(here, cfg.wall_distance, cfg.min_wall_distance, cfg.escape_slack)
-    limit_code = np.ceil(limit / field.quantum - 1e-9).astype(np.uint8)
-    num_free = (codes >= limit_code).sum(axis=0, dtype=np.uint8)  # (A, n) unblocked samples
     free = np.minimum(table.free_at[np.minimum(num_free, num_samples)].T, trim)
     free = np.where(num_free.T >= num_samples, trim, free)
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.nav.distance_field import DistanceField
 
@@ -92,6 +93,37 @@ def backoff_commands(
     return out
 
 
+@kernel
+def _recovery_step(
+    left, moving, dt, progress, after, backoff_time, best_left, idle, backoff_left, recoveries, started, ended,
+):  # fmt: skip
+    """`RecoveryState.step` of every robot (B, R) in place; the numpy expressions it replaces,
+    value for value (np.maximum's NaN included)."""
+    for b in range(left.shape[0]):
+        for r in range(left.shape[1]):
+            best = best_left[b, r]
+            gained = left[b, r] <= best - progress
+            if gained or not math.isfinite(best):
+                best = left[b, r]
+            count = 0.0 if gained else idle[b, r] + (dt if moving[b, r] else 0.0)
+            was = backoff_left[b, r] > 0.0
+            rest = backoff_left[b, r] - dt
+            rest = rest if (rest >= 0.0 or rest != rest) else 0.0
+            end = was and rest <= 0.0
+            start = moving[b, r] and not was and count >= after
+            if start:
+                rest = backoff_time
+                recoveries[b, r] += 1
+            if start or end:  # a recovery starts the count afresh: a detour is longer
+                count = 0.0
+                best = math.inf
+            best_left[b, r] = best
+            idle[b, r] = count
+            backoff_left[b, r] = rest
+            started[b, r] = start
+            ended[b, r] = end
+
+
 class RecoveryState:
     """Per-robot recovery bookkeeping of a batch: progress, back-offs, avoided graph edges.
 
@@ -144,19 +176,13 @@ class RecoveryState:
             back-off ended (they need a new plan).
         """
         cfg = self.cfg
-        progress = left <= self.best_left - cfg.progress
-        self.best_left = np.where(progress | ~np.isfinite(self.best_left), left, self.best_left)
-        self.idle = np.where(progress, 0.0, self.idle + np.where(moving, dt, 0.0))
-        was = self.backoff_left > 0.0
-        self.backoff_left = np.maximum(self.backoff_left - dt, 0.0)
-        ended = was & (self.backoff_left <= 0.0)
-        started = moving & ~was & (self.idle >= cfg.after - 1e-9)
-        self.backoff_left[started] = cfg.backoff_time
-        self.recoveries[started] += 1
-        # A recovery starts the count afresh: a detour is longer than the route it replaces.
-        reset = started | ended
-        self.idle[reset] = 0.0
-        self.best_left[reset] = np.inf
+        started = np.empty(self.idle.shape, dtype=bool)
+        ended = np.empty(self.idle.shape, dtype=bool)
+        _recovery_step(
+            np.asarray(left, dtype=np.float64), np.asarray(moving, dtype=bool), dt, cfg.progress,
+            cfg.after - 1e-9, cfg.backoff_time, self.best_left, self.idle, self.backoff_left,
+            self.recoveries, started, ended,
+        )  # fmt: skip
         return started, ended
 
     def in_crowd(

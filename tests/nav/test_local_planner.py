@@ -328,3 +328,47 @@ def test_lines_up_with_a_doorway_instead_of_facing_the_frame():
     assert not ev.turn[0]
     cmd = plan1(pose, target, walls)
     assert cmd[0] > 0.0
+
+
+def test_wall_sampling_stops_only_where_nothing_reads_it():
+    # arc_wall_codes stops sampling an arc at its first blocked sample and at its trimmed length;
+    # the free length and the running minima up to it are those of a full sampling.
+    from socialzoo.nav.arcs import arc_wall_codes
+    from socialzoo.nav.distance_field import distance_field
+    from socialzoo.nav.local_planner import _limit_codes
+    from socialzoo.nav.maps import load_map
+
+    walls = load_map("gdc1").wall_index
+    field = distance_field(walls, CFG.field_resolution, CFG.field_range, CFG.field_pad)
+    table = arc_table(CFG)
+    rng = np.random.default_rng(0)
+    n, num_arcs, num_samples = 400, len(table.curvature), len(table.lengths)
+    lo, hi = walls.wall_a.min(axis=0), walls.wall_a.max(axis=0)
+    x, y = rng.uniform(lo[0], hi[0], n), rng.uniform(lo[1], hi[1], n)
+    heading = rng.uniform(-math.pi, math.pi, n)
+    trim = rng.uniform(0.0, CFG.max_arc_length, (n, num_arcs))
+    trim[:, ::7] = 0.0
+    stop = _limit_codes(field.quantum, CFG.wall_distance, CFG.min_wall_distance, CFG.escape_slack)
+
+    def sample(stop_code, trim):
+        here, num_free = np.empty(n, np.uint8), np.empty((num_arcs, n), np.uint8)
+        codes = np.empty((num_samples, num_arcs, n), np.uint8)
+        arc_wall_codes(
+            x, y, np.cos(heading), np.sin(heading), table.cell_offsets, field.shape_args, field.codes,
+            stop_code, table.lengths, trim, here, codes, num_free,
+        )  # fmt: skip
+        return here, codes, num_free
+
+    here, codes, num_free = sample(stop, trim)
+    full_here, full, _ = sample(np.zeros(256, np.uint8), np.full((n, num_arcs), np.inf))
+    np.testing.assert_array_equal(here, full_here)
+    limit = stop[full_here]
+    full_free = (full >= limit).sum(axis=0)
+    free = np.minimum(table.free_at[num_free].T, trim)
+    want = np.minimum(table.free_at[full_free].T, trim)
+    np.testing.assert_array_equal(free, want)
+    last = np.searchsorted(table.lengths, free, side="right") - 1
+    rows = np.arange(n)[:, None]
+    arcs = np.arange(num_arcs)
+    np.testing.assert_array_equal(codes[last, arcs, rows], full[last, arcs, rows])
+    assert (codes != full).any()  # something was skipped
