@@ -608,7 +608,9 @@ class Navigator:
         found: dict[int, np.ndarray] = {}
         for k in avoiding.tolist():
             row, robot = int(rows[k]), int(robots[k])
-            path = plan_avoiding(pos[k], self.goals[row, robot], avoid[row, robot], clearance=self.plan_clearance)
+            path = plan_avoiding(
+                pos[k], self.goals[row, robot], avoid[row, robot], clearance=self.plan_clearance
+            )
             if path is None:
                 avoid[row, robot] = -1  # no way round: take the usual route again
             else:
