@@ -11,13 +11,13 @@ from _common import Figure, measure, parser, report, traced_peak_mib
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
+from socialzoo.maps.map_file import load_map
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.graph import graph_of
 from socialzoo.nav.local_planner import LocalPlannerConfig
-from socialzoo.nav.maps import load_map
 from socialzoo.nav.navigator import Navigator, Sight
-from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
 from socialzoo.nav.subpolicies import SubPolicyConfig, subpolicy_commands
+from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
 
 HUMANS = 25
 

@@ -17,10 +17,10 @@ import numpy as np
 from socialzoo.core.config import LaserConfig, WorldConfig
 from socialzoo.core.laser import laser_scan
 from socialzoo.env.world import step_world
+from socialzoo.maps.map_file import load_map
 from socialzoo.nav.graph import NavGraph
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
 from socialzoo.render.frames import FrameRenderer, Overlay
+from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
 
 HUMANS = 25
 ACTIONS = ("GoAlone", "Follow", "Pass", "Halt")

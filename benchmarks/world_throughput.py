@@ -20,10 +20,10 @@ from _common import Figure, measure, parser, report, traced_peak_mib
 
 from socialzoo.core.config import OrcaConfig, WorldConfig
 from socialzoo.env.world import step_world
+from socialzoo.humans.group_formation import with_groups
 from socialzoo.humans.models import MODEL_IDS, PeopleConfig, assign_models
-from socialzoo.nav.groups import with_groups
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
 
 HUMANS = 25
 

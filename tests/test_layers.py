@@ -26,16 +26,18 @@ PACKAGE = ROOT / "socialzoo"
 # given a rank here (and in DEVELOPERS.md).
 RANKS: dict[str, int] = {
     "core": 0,
-    "humans": 1,
-    "nav": 1,
-    "render": 2,
-    "env": 3,
-    "agents": 4,
-    "bench": 5,
-    "train": 6,
-    "studies": 7,
-    "reproduce": 8,
-    "cli": 9,
+    "maps": 1,
+    "nav": 2,
+    "scenarios": 3,
+    "humans": 4,
+    "render": 4,
+    "env": 5,
+    "agents": 6,
+    "bench": 7,
+    "train": 8,
+    "studies": 9,
+    "reproduce": 10,
+    "cli": 11,
 }
 # Subpackages that hold data only: anyone may name them.
 DATA = {"_maps"}
@@ -246,30 +248,30 @@ def test_no_import_cycle():
 @pytest.mark.parametrize(
     ("module", "source", "expected"),
     [
-        ("socialzoo.core.world", "from socialzoo.humans.motion import step", "humans (rank 1) is above core"),
-        ("socialzoo.core.world", "import socialzoo.env.core as c", "env (rank 3) is above core"),
-        ("socialzoo.agents.demos", "def f():\n    from socialzoo.bench import runner", "bench (rank 5)"),
+        ("socialzoo.core.world", "from socialzoo.humans.motion import step", "humans (rank 4) is above core"),
+        ("socialzoo.core.world", "import socialzoo.env.core as c", "env (rank 5) is above core"),
+        ("socialzoo.agents.demos", "def f():\n    from socialzoo.bench import runner", "bench (rank 7)"),
         (
             "socialzoo.agents.base",
             "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from socialzoo.train.ppo import Args",
-            "train (rank 6) is above agents",
+            "train (rank 8) is above agents",
         ),
-        ("socialzoo.nav.graph", "from ..env import core", "imports socialzoo.env: env (rank 3)"),
-        ("socialzoo.nav.graph", "from socialzoo.humans import routes", "humans and nav are peers"),
-        ("socialzoo.humans.motion", "from socialzoo.nav.maps import Map", "nav and humans are peers"),
+        ("socialzoo.nav.graph", "from ..env import core", "imports socialzoo.env: env (rank 5)"),
+        ("socialzoo.nav.graph", "from socialzoo.humans import routes", "humans (rank 4) is above nav"),
+        ("socialzoo.humans.motion", "from socialzoo.render.frames import draw", "render and humans are peers"),
         ("socialzoo.env.parallel", "from socialzoo import bench", "imports socialzoo.bench"),
-        ("socialzoo.agents.reg", 'POLICIES = {"ppo": "socialzoo.train.ppo:PPOPolicy"}', "train (rank 6)"),
+        ("socialzoo.agents.reg", 'POLICIES = {"ppo": "socialzoo.train.ppo:PPOPolicy"}', "train (rank 8)"),
         # Studies sit above the harness and the trainers they compose, below reproduce.
         (
             "socialzoo.bench.runner",
             "from socialzoo.studies.rl_curves import X",
-            "studies (rank 7) is above bench",
+            "studies (rank 9) is above bench",
         ),
-        ("socialzoo.train.ppo", "from socialzoo.studies import lfd", "studies (rank 7) is above train"),
+        ("socialzoo.train.ppo", "from socialzoo.studies import lfd", "studies (rank 9) is above train"),
         (
             "socialzoo.studies.lfd",
             "from socialzoo.reproduce import plan",
-            "reproduce (rank 8) is above studies",
+            "reproduce (rank 10) is above studies",
         ),
         ("socialzoo.core.state", "from socialzoo.sim import step", "'sim' has no rank"),
         ("socialzoo.sim.step", "import numpy", "'sim' has no rank"),
@@ -285,10 +287,10 @@ def test_the_checker_catches_an_upward_import(module, source, expected):
 @pytest.mark.parametrize(
     ("module", "source"),
     [
-        ("socialzoo.env.core", "from socialzoo.core.state import WorldState\nfrom socialzoo.nav import maps"),
+        ("socialzoo.env.core", "from socialzoo.core.state import WorldState\nfrom socialzoo.maps import map_file"),
         ("socialzoo.env.core", "from . import reward\nfrom .world import step_world"),
         ("socialzoo.core.config", "from socialzoo import __version__\nimport socialzoo"),
-        ("socialzoo.nav.maps", 'MAPS_PACKAGE = "socialzoo._maps"'),
+        ("socialzoo.maps.map_file", 'MAPS_PACKAGE = "socialzoo._maps"'),
         ("socialzoo.core.jit", '"""Used by socialzoo.env.world and socialzoo.bench.runner."""'),
         ("socialzoo.cli.main", "from socialzoo.train import ppo\nfrom socialzoo.bench import runner"),
         ("socialzoo", "from socialzoo.env.registration import register_envs"),

@@ -34,18 +34,18 @@ from socialzoo.bench.store import ResultsStore, StoreError
 from socialzoo.bench.tables import SummaryError, csv_columns, read_summary_csv, write_summary_csv
 from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.env.policy_file import PolicyFileError, read_policy_file
-from socialzoo.nav.importers import (
+from socialzoo.maps.importers import (
     read_amrl_nav_graph,
     read_pedsim_scene,
     read_table,
     read_vector_map,
     write_vector_map,
 )
-from socialzoo.nav.maps import MapError, load_map, read_map
-from socialzoo.nav.scenarios import Scenario, ScenarioError, generate_scenario
+from socialzoo.maps.map_file import MapError, load_map, read_map
 from socialzoo.reproduce import results
 from socialzoo.reproduce.ledger import Ledger, LedgerError
 from socialzoo.reproduce.plan import quick_settings, settings_hash
+from socialzoo.scenarios.scenario import Scenario, ScenarioError, generate_scenario
 from socialzoo.train.demo_data import load_demo_steps
 from socialzoo.train.run_dir import RunDir, RunDirError
 

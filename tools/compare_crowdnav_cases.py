@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from socialzoo.nav.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
 
 
 def _stub_imports() -> None:

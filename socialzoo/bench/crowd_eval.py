@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.env.crowd_config import CrowdNavConfig
-from socialzoo.nav.crowd_cases import SPLIT_SIZE, Split
+from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, Split
 
 # A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
 CrowdActor = Callable[[np.ndarray, Any], np.ndarray]

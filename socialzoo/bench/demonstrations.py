@@ -39,8 +39,8 @@ from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
-from socialzoo.nav.scenarios import TestSet
 from socialzoo.nav.subpolicies import ACTION_NAMES
+from socialzoo.scenarios.scenario import TestSet
 
 logger = logging.getLogger(__name__)
 

@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig
+from socialzoo.maps.map_file import Map
 from socialzoo.nav.subpolicies import GO_ALONE
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig
 
 # The causes of a route that was not completed, in the order the report lists them.
 DRIVE_CAUSES = (
@@ -172,8 +172,8 @@ def pose_pairs(
     m: Map, sample: int | None = None, seed: int = 0, max_route_length: float | None = None
 ) -> np.ndarray:
     """The pose pairs scenarios may draw for the robot (M, 2): every ordered pair of distinct legal
-    poses with a feasible route (socialzoo.nav.feasibility), or a seeded sample of `sample` of them."""
-    from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, feasible_pairs
+    poses with a feasible route (socialzoo.scenarios.feasibility), or a seeded sample of `sample` of them."""
+    from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH, feasible_pairs
 
     limit = MAX_ROUTE_LENGTH if max_route_length is None else max_route_length
     first, second = np.nonzero(feasible_pairs(m, limit))
@@ -374,14 +374,14 @@ TRACE_EVERY = 10
 def builtin_buildings() -> dict[str, np.ndarray]:
     """Walls (W, 4) of the built-in buildings, by name: the second floor plan in the social_gym
     GDC1 data (below y = -5 m, which the benchmark never uses) and the raw GHC3 walls (where the
-    reference data is installed), then seeded synthetic plans (socialzoo.nav.floorplans: offices
+    reference data is installed), then seeded synthetic plans (socialzoo.maps.floorplans: offices
     along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
     0.9-1.2 m doors, a 150 m corridor)."""
     import importlib.resources
 
-    from socialzoo.nav import floorplans
-    from socialzoo.nav.importers import drop_zero_length, read_table
-    from socialzoo.nav.maps import MAPS_PACKAGE
+    from socialzoo.maps import floorplans
+    from socialzoo.maps.importers import drop_zero_length, read_table
+    from socialzoo.maps.map_file import MAPS_PACKAGE
 
     out: dict[str, np.ndarray] = {}
     reference = importlib.resources.files(MAPS_PACKAGE).joinpath(*REFERENCE_WALLS)
@@ -435,7 +435,7 @@ def drive_building(
     from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
     from socialzoo.bench.test_sets import stored_test_set
     from socialzoo.env.metrics import FAILURE_CAUSES, failure_cause
-    from socialzoo.nav.maps import read_map
+    from socialzoo.maps.map_file import read_map
 
     test_set = stored_test_set(str(map_path), out, episodes)
     spec = RunSpec(

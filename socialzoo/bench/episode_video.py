@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.scenarios.scenario import Scenario
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from socialzoo.bench.tables import (
     write_text_atomic,
 )
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.scenarios import TEST_SETS, TestSet
+from socialzoo.scenarios.scenario import TEST_SETS, TestSet
 
 logger = logging.getLogger(__name__)
 
@@ -232,7 +232,7 @@ def source_digest(files: tuple[str, ...] = ()) -> str:
 
 
 def _map_digest(name: str) -> str:
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
 
     text = json.dumps(load_map(name).to_json(), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
@@ -521,7 +521,7 @@ def run_benchmark(
 
 def _display_name(test_set: TestSet) -> str:
     """The map's own name, as trials record it (a map file names its map inside)."""
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
 
     return load_map(test_set.map_name).name
 
@@ -582,7 +582,7 @@ def write_episode_gif(
     (socialzoo.bench.episode_video.animate_episode at its defaults), among the env config's people."""
     from socialzoo.agents import make_policy
     from socialzoo.bench.episode_video import animate_episode
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
 
     scenario = test_set.scenario(index, load_map(env_config.map))
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"

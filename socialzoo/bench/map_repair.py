@@ -10,7 +10,7 @@ dropped or rerouted, so that every start/goal pair a scenario may draw has been 
   dropped when the graph stays connected without it;
 - the changed routes are driven again; then, while some route still fails, the pose in most of
   the failed routes is dropped (never below two poses).
-Every change is a Repair (socialzoo.nav.repair) and the map's provenance records the drive
+Every change is a Repair (socialzoo.maps.repair) and the map's provenance records the drive
 ("drive": routes driven, completed, failures by cause, the repairs' count), so a map file says
 that its pairs were driven. `socialzoo map import` runs this by default; `--strict` refuses a
 source with any failed route instead.
@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.drive_check import DriveReport, drive_map, pose_pairs
+from socialzoo.maps.map_file import Map, MapError, graph_components, validate_map
+from socialzoo.maps.repair import Repair
+from socialzoo.maps.segments import segments_clear
 from socialzoo.nav.graph import NavGraph
-from socialzoo.nav.maps import Map, MapError, graph_components, validate_map
-from socialzoo.nav.repair import Repair
-from socialzoo.nav.segments import segments_clear
 
 # Farthest a pose is moved to a place whose join to the graph the robot can drive, m.
 MAX_MOVE = 1.5

@@ -23,9 +23,9 @@ from socialzoo.core.config import LaserConfig
 from socialzoo.core.laser import laser_scan, ray_angles
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.scenario_source import ScenarioStream
-from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.maps.map_file import Map, load_map
 from socialzoo.render.replay_data import EpisodeTrace, ReplayScene
+from socialzoo.scenarios.scenario import Scenario
 
 logger = logging.getLogger(__name__)
 

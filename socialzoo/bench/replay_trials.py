@@ -23,9 +23,9 @@ from socialzoo.bench.replay import record_episode
 from socialzoo.bench.store import ResultsStore
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, TestSet, generate_scenario
+from socialzoo.maps.map_file import Map, load_map
 from socialzoo.render.replay_data import EpisodeTrace
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, TestSet, generate_scenario
 
 # Relative tolerance of the metric check. Replays are bit-identical in practice (the runner's
 # results do not depend on the batch); the tolerance only keeps the check from failing on a

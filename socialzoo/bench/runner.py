@@ -23,7 +23,7 @@ from socialzoo.agents import Policy, make_policy
 from socialzoo.bench.compaction import RunStats
 from socialzoo.bench.progress import progress_bar
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.scenarios import TestSet, get_test_set
+from socialzoo.scenarios.scenario import TestSet, get_test_set
 
 logger = logging.getLogger(__name__)
 

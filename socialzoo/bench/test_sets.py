@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.nav.maps import Map, load_map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, ScenarioError, TestSet, generate_scenario
+from socialzoo.maps.map_file import Map, load_map
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, ScenarioError, TestSet, generate_scenario
 
 logger = logging.getLogger(__name__)
 

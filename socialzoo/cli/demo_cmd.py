@@ -36,7 +36,7 @@ def run_demo(args: argparse.Namespace) -> int:
     from socialzoo.bench.episode_video import animate_episode
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.scenario_source import ScenarioStream
-    from socialzoo.nav.maps import MapError, load_map
+    from socialzoo.maps.map_file import MapError, load_map
 
     try:
         config = EnvConfig(map=args.map, family=args.family)

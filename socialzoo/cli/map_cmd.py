@@ -211,7 +211,7 @@ def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_pic
 
 
 def _map_file(name_or_path: str) -> Path | None:
-    """MAP's file when it is a path (socialzoo.nav.maps.load_map's rule), None for a shipped name."""
+    """MAP's file when it is a path (socialzoo.maps.map_file.load_map's rule), None for a shipped name."""
     if name_or_path.endswith(".json") or "/" in name_or_path or os.sep in name_or_path:
         return Path(name_or_path)
     return None
@@ -259,7 +259,7 @@ def _save_picture(save: Any, out: Path) -> None:
 
 def run_list(args: argparse.Namespace) -> int:
     """Run `socialzoo map list`; returns the exit status."""
-    from socialzoo.nav.maps import list_maps, load_map
+    from socialzoo.maps.map_file import list_maps, load_map
 
     for name in list_maps():
         m = load_map(name)
@@ -272,7 +272,7 @@ def run_list(args: argparse.Namespace) -> int:
 
 def run_show(args: argparse.Namespace) -> int:
     """Run `socialzoo map show`; returns the exit status."""
-    from socialzoo.nav.maps import MapError, load_map
+    from socialzoo.maps.map_file import MapError, load_map
     from socialzoo.render.map_plot import save_map_png
 
     try:
@@ -294,7 +294,7 @@ def run_show(args: argparse.Namespace) -> int:
 
 def run_validate(args: argparse.Namespace) -> int:
     """Run `socialzoo map validate`; returns the exit status."""
-    from socialzoo.nav.maps import MapError, load_map, validate_map
+    from socialzoo.maps.map_file import MapError, load_map, validate_map
 
     try:
         validate_map(load_map(args.map))
@@ -306,9 +306,9 @@ def run_validate(args: argparse.Namespace) -> int:
 
 def run_check(args: argparse.Namespace) -> int:
     """Run `socialzoo map check`; returns the exit status."""
-    from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH
-    from socialzoo.nav.map_check import check_map
-    from socialzoo.nav.maps import MapError, load_map
+    from socialzoo.maps.map_file import MapError, load_map
+    from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH
+    from socialzoo.scenarios.map_check import check_map
 
     try:
         out, why_none = _picture_path(args)
@@ -361,14 +361,14 @@ def _drive_progress(total: int) -> Any:
 
 def _read_unvalidated(path: str | Path) -> Any:
     """A map file read without validation (`map check` lists the problems instead)."""
-    from socialzoo.nav.maps import read_map
+    from socialzoo.maps.map_file import read_map
 
     return read_map(path, validate=False)
 
 
 def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict]:
     """Walls, nodes and edges of the import's source, and its provenance inputs."""
-    from socialzoo.nav.importers import (
+    from socialzoo.maps.importers import (
         drop_zero_length,
         read_amrl_nav_graph,
         read_pedsim_scene,
@@ -404,7 +404,7 @@ def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str
     """
     from socialzoo.bench.drive_check import drive_map, pose_pairs
     from socialzoo.bench.map_repair import repair_by_driving
-    from socialzoo.nav.maps import MapError
+    from socialzoo.maps.map_file import MapError
 
     pairs = pose_pairs(m)
     print(f"driving: the robot alone over {len(pairs)} pose pairs", flush=True)
@@ -422,7 +422,7 @@ def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str
 
 
 def _png_walls(args: argparse.Namespace) -> np.ndarray:
-    from socialzoo.nav.occupancy import wall_pixels, walls_from_occupancy
+    from socialzoo.maps.occupancy import wall_pixels, walls_from_occupancy
 
     if args.scale is None:
         raise ValueError("--png needs --scale (metres per pixel)")
@@ -447,9 +447,9 @@ def _png_walls(args: argparse.Namespace) -> np.ndarray:
 def run_import(args: argparse.Namespace) -> int:
     """Run `socialzoo map import`; returns the exit status."""
     from socialzoo import __version__
-    from socialzoo.nav.map_completion import complete_map
-    from socialzoo.nav.maps import MapError
-    from socialzoo.nav.repair import repair_map
+    from socialzoo.maps.map_completion import complete_map
+    from socialzoo.maps.map_file import MapError
+    from socialzoo.maps.repair import repair_map
 
     try:
         walls, nodes, edges, inputs = _read_source(args)
@@ -540,7 +540,7 @@ def _building_files(args: argparse.Namespace) -> dict[str, Path]:
     folder = args.buildings
     if folder is None:
         from socialzoo.bench.drive_check import builtin_buildings
-        from socialzoo.nav.importers import write_vector_map
+        from socialzoo.maps.importers import write_vector_map
 
         folder = args.out / "buildings"
         folder.mkdir(exist_ok=True)
@@ -571,7 +571,7 @@ def _import_building(
     import contextlib
     import io
 
-    from socialzoo.nav.maps import read_map
+    from socialzoo.maps.map_file import read_map
 
     words = ["--walls", str(walls_file), "--name", name, "--out", str(out / f"{name}.json")]
     if nav_file is not None:

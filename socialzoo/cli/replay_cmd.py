@@ -122,7 +122,7 @@ def _describe(trace: Any) -> str:
 def run_replay(args: argparse.Namespace) -> int:
     """Run `socialzoo replay`; returns the exit status (1 when a stored trial is not reproduced)."""
     from socialzoo.bench.store import StoreError
-    from socialzoo.nav.maps import MapError
+    from socialzoo.maps.map_file import MapError
 
     try:
         if args.out.suffix.lower() not in (".html", ".htm"):
@@ -202,7 +202,7 @@ def _replay_case(args: argparse.Namespace) -> int:
 def _replay_seed(args: argparse.Namespace) -> int:
     from socialzoo.bench.replay import PolicySpec, benchmark_scenario, record_policies, replay_scene
     from socialzoo.env.config import EnvConfig
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
     from socialzoo.render.replay_html import write_replay_html
 
     specs = _specs(args) or [PolicySpec.parse("ref")]
@@ -242,7 +242,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
 def _replay_stored(args: argparse.Namespace) -> int:
     from socialzoo.bench.replay import record_episode, replay_scene
     from socialzoo.bench.replay_trials import find_trials, replay_trial
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
     from socialzoo.render.replay_html import write_replay_html
 
     specs = _specs(args)

@@ -21,9 +21,9 @@ from socialzoo.env.observation import ObservationConfig
 from socialzoo.env.reward import RewardConfig
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.nav.local_planner import LocalPlannerConfig
-from socialzoo.nav.scenario_families import FAMILIES
-from socialzoo.nav.scenarios import ScenarioConfig
 from socialzoo.nav.subpolicies import SubPolicyConfig
+from socialzoo.scenarios.families import FAMILIES
+from socialzoo.scenarios.scenario import ScenarioConfig
 
 RobotAction = Literal["subpolicy", "velocity"]
 HumanActionFrame = Literal["world", "human"]
@@ -81,7 +81,7 @@ class EnvConfig:
         human_reward: the learned humans' reward weights (socialzoo.env.human_agents).
             (human_collision_penalty before; the old name is refused.)
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
-            family name (socialzoo.nav.scenario_families.FAMILIES).
+            family name (socialzoo.scenarios.families.FAMILIES).
         world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
         people: which models drive the people of each scenario (social force, ORCA, walking
             groups, a learned policy file, or a mix), and whether each scenario also runs

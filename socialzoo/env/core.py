@@ -23,11 +23,11 @@ from socialzoo.env.outcome import followed_human, robot_outcome
 from socialzoo.env.people import People
 from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
 from socialzoo.env.world_rows import BatchedWorld, route_navigator
-from socialzoo.nav.maps import Map, load_map
+from socialzoo.maps.map_file import Map, load_map
 from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
-from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.nav.subpolicies import GO_ALONE, check_actions, subpolicy_commands
+from socialzoo.scenarios.scenario import Scenario
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
 from socialzoo.humans.models import PeopleSpecError, parse_people
-from socialzoo.nav.crowd_cases import CrowdCaseConfig
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 CrowdAction = Literal["continuous", "discrete"]
 CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
@@ -63,7 +63,7 @@ class CrowdNavConfig:
         observation: "flat" or "dict" (socialzoo.env.crowd_observation).
         max_humans: person slots of the observation and the state (default: cases.num_humans).
         num_robots: robots per world (1: CrowdNav's task; more for the PettingZoo env, each seeing
-            the others as people: socialzoo.nav.crowd_cases.robot_poses).
+            the others as people: socialzoo.scenarios.crowd_cases.robot_poses).
         map: None for CrowdNav's open arena; a building map ("gdc1", a path) for crowd navigation
             among walls, with the benchmark's scenarios and social-force people. Among walls the
             robot is guided as the benchmark's robot is: the goal it sees is its route's local

@@ -33,9 +33,9 @@ from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.world import step_world
 from socialzoo.env.world_rows import BatchedWorld, route_navigator
 from socialzoo.humans.models import MODEL_IDS, assign_models, parse_people
-from socialzoo.nav.crowd_cases import CrowdCase, case_scenario
 from socialzoo.nav.navigator import Navigator
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.scenarios.crowd_cases import CrowdCase, case_scenario
+from socialzoo.scenarios.scenario import Scenario
 
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
 # to the goal per this time, capped at their preferred speed (s).
@@ -462,8 +462,8 @@ def _mask_ended(outcome: CrowdOutcome, done: np.ndarray) -> CrowdOutcome:
 def _route_navigator(config: CrowdNavConfig, batch_size: int) -> Navigator:
     """The benchmark robot's navigator on the config's map (its graph, sight and planner settings),
     without recovery: the learner drives."""
+    from socialzoo.maps.map_file import load_map
     from socialzoo.nav.local_planner import LocalPlannerConfig
-    from socialzoo.nav.maps import load_map
 
     assert config.map is not None
     return route_navigator(load_map(config.map), batch_size, config.num_robots, LocalPlannerConfig())[1]
@@ -473,6 +473,6 @@ def _map_walls(map_name: str | None) -> WallIndex:
     """The open arena's empty wall index, or the map's."""
     if map_name is None:
         return WallIndex(np.zeros((0, 4)))
-    from socialzoo.nav.maps import load_map
+    from socialzoo.maps.map_file import load_map
 
     return load_map(map_name).wall_index

@@ -1,7 +1,7 @@
 """Where the CrowdNav task's episodes come from: a seeded training stream per batch row, or the fixed
 validation and test cases.
 
-Arena cases come from the task's CrowdNav scenario family (socialzoo.nav.crowd_cases.crowd_family:
+Arena cases come from the task's CrowdNav scenario family (socialzoo.scenarios.crowd_cases.crowd_family:
 crowdnav_circle_crossing or crowdnav_square_crossing, for the task's CrowdCaseConfig), training
 cases from its training split (case seeds from 2000 up):
 row i of a batch reset with seed s draws its case seeds from its own Generator (row 0 from s
@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.env.crowd_config import CrowdNavConfig
-from socialzoo.nav.crowd_cases import CrowdCase, Split, crowd_family
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.scenarios.crowd_cases import CrowdCase, Split, crowd_family
+from socialzoo.scenarios.scenario import Scenario
 
 # CrowdNav seeds numpy's legacy generator, whose seeds are below 2**32.
 _SEED_LIMIT = 2**32
@@ -40,8 +40,8 @@ class CrowdCaseSource:
         self._scenarios = None
         if config.map is not None:
             from socialzoo.env.scenario_source import ScenarioStream
-            from socialzoo.nav.maps import load_map
-            from socialzoo.nav.scenarios import ScenarioConfig
+            from socialzoo.maps.map_file import load_map
+            from socialzoo.scenarios.scenario import ScenarioConfig
 
             scenario = ScenarioConfig(max_humans=config.slots, min_humans=min(5, config.slots))
             self._scenarios = ScenarioStream(load_map(config.map), batch_size, config.num_robots, scenario)
@@ -72,8 +72,8 @@ class CrowdCaseSource:
         r = self.config.num_robots
         if self.config.map is None:
             return [self.family.make(self.family.case_seed(split, int(k)), r) for k in indices]
-        from socialzoo.nav.maps import load_map
-        from socialzoo.nav.scenarios import get_test_set, validation_set
+        from socialzoo.maps.map_file import load_map
+        from socialzoo.scenarios.scenario import get_test_set, validation_set
 
         m = load_map(self.config.map)
         test_set = validation_set(m.name) if split == "val" else get_test_set(f"{m.name}-test")

@@ -4,7 +4,7 @@ metrics of what the robot costs the people.
 
 - Models: each scenario's people are assigned to the models of the people spec from the
   scenario's seed (socialzoo.humans.models.assign_models); people of the "groups" model walk in
-  groups (socialzoo.nav.groups.with_groups); the world reads WorldState.human_model and
+  groups (socialzoo.humans.group_formation.with_groups); the world reads WorldState.human_model and
   human_group.
 - Learned people: the policy file of a "learned:PATH" model acts on each learned person's
   observation (socialzoo.env.human_agents) every step; its desired velocity drives that person
@@ -33,10 +33,10 @@ from socialzoo.core.metrics import registered
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.env.human_agents import action_velocities, human_observations
 from socialzoo.env.world import step_world
+from socialzoo.humans.group_formation import with_groups
 from socialzoo.humans.models import LEARNED, MODEL_IDS, PeopleConfig, assign_models
-from socialzoo.nav.groups import with_groups
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.maps.map_file import Map
+from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig

@@ -33,7 +33,7 @@ from __future__ import annotations
 import gymnasium as gym
 
 from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
-from socialzoo.nav.family_catalogue import get_family
+from socialzoo.scenarios.catalogue import get_family
 
 # Every id is a task's Gymnasium env and VectorEnv (the kwargs name the task and its config).
 ENTRY = "socialzoo.env.gym_env:TaskEnv"
@@ -52,7 +52,7 @@ def _family_id(name: str) -> str:
     return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + f"-v{ENV_VERSION}"
 
 
-# The scenario families with ids of their own (socialzoo.nav.family_catalogue), e.g.
+# The scenario families with ids of their own (socialzoo.scenarios.catalogue), e.g.
 # socialzoo/HallwayHeadOn-v2, each on the small map it is designed for; short episodes (60 s).
 FAMILY_ID_NAMES = (
     "hallway_head_on",

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from socialzoo.nav.family_catalogue import get_family
-from socialzoo.nav.maps import POSE_CLEARANCE, Map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario
-from socialzoo.nav.segments import segments_free
+from socialzoo.maps.map_file import POSE_CLEARANCE, Map
+from socialzoo.maps.segments import segments_free
+from socialzoo.scenarios.catalogue import get_family
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, generate_scenario
 
 if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig
@@ -122,7 +122,7 @@ class ScenarioStream:
         num_robots: robots per scenario.
         cfg: scenario generation parameters (cfg.repeats = N_r).
         family: None for benchmark scenarios, else a registered scenario family's name
-            (socialzoo.nav.family_catalogue).
+            (socialzoo.scenarios.catalogue).
     """
 
     def __init__(

@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.state import WorldState, pad_to
-from socialzoo.nav.maps import Map
+from socialzoo.maps.map_file import Map
 from socialzoo.nav.navigator import Navigator, Sight
-from socialzoo.nav.scenarios import Scenario, scenarios_to_state
+from socialzoo.scenarios.scenario import Scenario, scenarios_to_state
 
 
 class BatchedWorld:

@@ -1,4 +1,3 @@
-"""Navigation: maps, the navigation graph and A*, the local planner, the four sub-policies, scenarios.
-
-Also the map importers, repairs and the feasibility rule for imported buildings. numpy and scipy only.
+"""Navigation: the navigation graph and A*, the distance field, sight and visibility, the local
+planner and its arcs, recovery, and the four sub-policies. Above maps; numpy, scipy and numba only.
 """

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from socialzoo.maps.segments import segments_clear_of, segments_free
 from socialzoo.nav.path_table import NoPathError
-from socialzoo.nav.segments import segments_clear_of, segments_free
 
 if TYPE_CHECKING:
     from socialzoo.nav.graph import NavGraph

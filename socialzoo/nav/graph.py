@@ -15,12 +15,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
+from socialzoo.maps.segments import segments_clear, segments_free
 from socialzoo.nav.attachment import attach, take
 from socialzoo.nav.path_table import NoPathError, PathTable, floyd_warshall
-from socialzoo.nav.segments import segments_clear, segments_free
 
 if TYPE_CHECKING:
-    from socialzoo.nav.maps import Map
+    from socialzoo.maps.map_file import Map
 
 # Waypoints closer than this to the previous one are dropped from a plan (metres).
 DUPLICATE_EPS = 1e-9

@@ -17,7 +17,7 @@ from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig
 from socialzoo.core.laser import ray_angles
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_number
-from socialzoo.nav.maps import Map
+from socialzoo.maps.map_file import Map
 
 if TYPE_CHECKING:
     from PIL import Image, ImageDraw, ImageFont

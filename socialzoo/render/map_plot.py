@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.nav.maps import Map
+from socialzoo.maps.map_file import Map
 
 
 def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: bool = True) -> Any:
@@ -80,7 +80,7 @@ DRIVE_COLOURS = {
 
 
 def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) -> Path:
-    """Draw a map with what `socialzoo.nav.map_check.check_map` found, to a PNG; returns the path.
+    """Draw a map with what `socialzoo.scenarios.map_check.check_map` found, to a PNG; returns the path.
 
     Graph edges closer to a wall than the robot's wall distance are red, the others blue; legal
     poses with no feasible route to any other pose are red, the others orange; the title sums up

@@ -25,7 +25,7 @@ from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import write_text_atomic
 from socialzoo.core.metrics import metric, registered
-from socialzoo.nav.scenarios import TestSet, validation_set
+from socialzoo.scenarios.scenario import TestSet, validation_set
 
 POPULATIONS = ("social_force", "learned")
 
@@ -60,7 +60,7 @@ class ComparisonConfig:
         trials: scenarios per map (the first of each test set); None: all.
         quick: use the quick test sets.
         validation: use each map's validation scenarios ("<map>-val",
-            socialzoo.nav.scenarios.validation_set) instead of a test set: for choosing training
+            socialzoo.scenarios.scenario.validation_set) instead of a test set: for choosing training
             settings or checkpoints without looking at a test set.
         workers: local processes.
         batch_size: env rows stepped together per worker.

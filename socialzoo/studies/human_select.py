@@ -5,7 +5,7 @@ Why: the learned humans' reward is a proxy for what the comparison measures, and
 not always closer to the targets (with the default reward, wall contacts grow after the first
 100,000-200,000 frames). `select_humans` runs the comparison for each checkpoint of a run folder
 (`socialzoo train humans`) on the validation scenarios of the training map
-(socialzoo.nav.scenarios.validation_set) and keeps the most trained checkpoint that meets both of
+(socialzoo.scenarios.scenario.validation_set) and keeps the most trained checkpoint that meets both of
 issue 13's targets there (reach rate within 10% of the social-force humans', no more collisions of
 any kind); when none does, the one that misses them by the least (the largest relative excess of
 collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv and selection.md
@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import write_text_atomic
-from socialzoo.nav.scenarios import TestSet
+from socialzoo.scenarios.scenario import TestSet
 from socialzoo.studies.human_compare import (
     COLLISION_KEYS,
     POPULATIONS,

@@ -22,7 +22,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import policy_label
-from socialzoo.nav.scenarios import TestSet
+from socialzoo.scenarios.scenario import TestSet
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
@@ -152,7 +152,7 @@ def run_pips_study(
             demonstrations' own scenarios.
     """
     from socialzoo.bench.demonstrations import DEMO_BASE_SEED
-    from socialzoo.nav.scenarios import TEST_SETS
+    from socialzoo.scenarios.scenario import TEST_SETS
 
     if not programs:
         raise ValueError("run_pips_study: no programs to evaluate")

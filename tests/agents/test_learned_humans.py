@@ -16,8 +16,8 @@ from socialzoo.env.human_policy import (
     split_human_spec,
 )
 from socialzoo.env.policy_file import PolicyFileError, save_policy_file
-from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import HALT
+from socialzoo.scenarios.scenario import Scenario
 
 SHIPPED = SHIPPED_DIR / "humans.safetensors"
 

@@ -9,8 +9,8 @@ import pytest
 
 from socialzoo.bench.drive_check import DRIVE_CAUSES, drive_map, pose_pairs
 from socialzoo.bench.map_repair import repair_by_driving
-from socialzoo.nav import floorplans
-from socialzoo.nav.maps import Map, validate_map
+from socialzoo.maps import floorplans
+from socialzoo.maps.map_file import Map, validate_map
 
 
 def _map(name: str, walls: np.ndarray, nodes, edges, poses) -> Map:
@@ -162,8 +162,8 @@ def test_import_drives_the_map_and_records_it(tmp_path, capsys):
     import json
 
     from socialzoo.cli import main
-    from socialzoo.nav.importers import write_vector_map
-    from socialzoo.nav.maps import read_map
+    from socialzoo.maps.importers import write_vector_map
+    from socialzoo.maps.map_file import read_map
 
     m = crack_map(outside_route=False)
     walls = write_vector_map(tmp_path / "crack.txt", m.walls)
@@ -187,7 +187,7 @@ def test_import_drives_the_map_and_records_it(tmp_path, capsys):
 
 def test_strict_import_refuses_a_route_it_cannot_drive():
     from socialzoo.cli.map_cmd import _drive_and_repair
-    from socialzoo.nav.maps import MapError
+    from socialzoo.maps.map_file import MapError
 
     with pytest.raises(MapError, match=r"(?s)--strict: failed: .*pose 1 -> pose 0: goal unreachable"):
         _drive_and_repair(crack_map(outside_route=False), strict=True)
@@ -224,8 +224,8 @@ def test_a_building_row_gives_the_import_and_every_outcome():
 
 def test_a_failure_picture_shows_the_episode(tmp_path):
     from socialzoo.bench.drive_check import draw_failure
-    from socialzoo.nav.maps import load_map
-    from socialzoo.nav.scenarios import validation_set
+    from socialzoo.maps.map_file import load_map
+    from socialzoo.scenarios.scenario import validation_set
 
     scenario = validation_set("gdc1").scenario(0)
     start, goal = scenario.robot_start[:2], scenario.robot_goal[:2]
@@ -236,7 +236,7 @@ def test_a_failure_picture_shows_the_episode(tmp_path):
 
 def test_map_drive_imports_a_folder_and_reports_goalone(tmp_path, capsys):
     from socialzoo.cli import main
-    from socialzoo.nav.importers import write_vector_map
+    from socialzoo.maps.importers import write_vector_map
 
     folder, out = tmp_path / "buildings", tmp_path / "out"
     folder.mkdir()

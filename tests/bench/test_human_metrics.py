@@ -6,8 +6,8 @@ import pytest
 from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
-from socialzoo.nav.scenarios import Scenario
 from socialzoo.nav.subpolicies import HALT
+from socialzoo.scenarios.scenario import Scenario
 
 
 def scene(spawn, goals, robot=(9.0, 1.0, 0.0)):

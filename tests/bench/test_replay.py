@@ -18,8 +18,8 @@ from socialzoo.bench.runner import BatchedRunner, Trial, make_spec
 from socialzoo.core.config import LaserConfig
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 MAX_STEPS = 160
 

@@ -8,7 +8,7 @@ import pytest
 
 from socialzoo.bench.runner import BatchedRunner, Trial, evaluate, make_spec, split_trials
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 MAX_STEPS = 150
 

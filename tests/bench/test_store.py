@@ -10,7 +10,7 @@ import pytest
 
 from socialzoo.bench.experiment import STORE_NAME, BenchmarkConfig, run_benchmark
 from socialzoo.bench.store import ResultsStore, StoreError
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 TRIALS = 6
 

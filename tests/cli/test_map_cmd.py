@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from socialzoo.cli import main
-from socialzoo.nav.importers import write_vector_map
-from socialzoo.nav.maps import load_map
+from socialzoo.maps.importers import write_vector_map
+from socialzoo.maps.map_file import load_map
 
 
 def test_map_show_writes_a_png_where_asked(tmp_path, capsys):

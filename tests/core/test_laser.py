@@ -5,8 +5,8 @@ import numpy as np
 from socialzoo.core.config import LaserConfig
 from socialzoo.core.geometry import ray_circle_hit, ray_segment_hit
 from socialzoo.core.laser import laser_scan, ray_angles
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
 
 CROWD = ScenarioConfig(min_humans=25, max_humans=25)
 

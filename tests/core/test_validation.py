@@ -8,7 +8,7 @@ import pytest
 
 from socialzoo.core.config import HumanConfig, LaserConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_fields, check_int, check_number
-from socialzoo.nav.maps import MapError
+from socialzoo.maps.map_file import MapError
 
 
 @pytest.mark.parametrize(

@@ -287,8 +287,8 @@ def test_infos_share_one_set_of_keys():
 
 
 def test_gym_make_on_an_imported_map_file(tmp_path):
-    from socialzoo.nav.floorplans import long_corridor
-    from socialzoo.nav.repair import repair_map
+    from socialzoo.maps.floorplans import long_corridor
+    from socialzoo.maps.repair import repair_map
 
     plan = long_corridor(120.0)
     m, _ = repair_map("corridor", plan.walls, seed_point=plan.inside)

@@ -8,7 +8,7 @@ import pytest
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import SocialNavCore
 from socialzoo.env.human_agents import HumanRewardConfig, action_velocities, human_frames
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.scenarios.scenario import Scenario
 
 
 def scenario(spawn: list[list[float]], goals: list[list[float]], robot=(5.0, 1.0, 0.0)) -> Scenario:

@@ -12,9 +12,9 @@ from pettingzoo.test import max_cycles_test, parallel_api_test
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from socialzoo.env.parallel import BlackDeath, SocialNavParallelEnv, parallel_env
-from socialzoo.nav import maps
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.maps import map_file as maps
+from socialzoo.maps.map_file import Map
+from socialzoo.scenarios.scenario import Scenario
 
 
 def _box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:

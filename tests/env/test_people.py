@@ -12,7 +12,7 @@ from socialzoo.env.people import COST_KEYS, _group_crossings, without_robots
 from socialzoo.env.registration import BENCHMARK_IDS
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 SMALL = {"map": "open_room", "max_steps": 120, "scenario": {"min_humans": 6, "max_humans": 8}}
 BENCHMARK_ID = next(iter(BENCHMARK_IDS))  # the training map's id, at its current version

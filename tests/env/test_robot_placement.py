@@ -23,9 +23,9 @@ from socialzoo.env.scenario_source import (
     RobotPlacementError,
     with_robots,
 )
-from socialzoo.nav.crowd_cases import CrowdCaseConfig, crowd_case_arrays
-from socialzoo.nav.maps import POSE_CLEARANCE, load_map
-from socialzoo.nav.scenarios import Scenario, generate_scenario
+from socialzoo.maps.map_file import POSE_CLEARANCE, load_map
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, crowd_case_arrays
+from socialzoo.scenarios.scenario import Scenario, generate_scenario
 
 MAPS = {name: load_map(name) for name in ("gdc1", "open_room")}
 

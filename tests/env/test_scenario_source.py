@@ -8,9 +8,9 @@ import pytest
 
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.scenario_source import ScenarioStream
-from socialzoo.nav.family_catalogue import FAMILIES, register_family
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenario_families import Layout, LayoutFamily
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.catalogue import FAMILIES, register_family
+from socialzoo.scenarios.families import Layout, LayoutFamily
 
 
 def test_for_config_follows_robots_family_and_scenario_settings():

@@ -12,7 +12,7 @@ from socialzoo.env.core import SocialNavCore
 from socialzoo.env.crowd_outcome import METRIC_KEYS, CrowdNavMetrics, CrowdRewardConfig, judge_step
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.env.people import COST_KEYS, GROUP_KEYS, PEOPLE_KEYS
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 ROOM_SET = TestSet("open_room", 5, 8, ScenarioConfig(min_humans=6, max_humans=8))
 

@@ -8,8 +8,8 @@ from hypothesis import strategies as st
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.geometry import segments_intersect
 from socialzoo.env.world import step_world
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
 
 FULL = ScenarioConfig(min_humans=25, max_humans=25)
 WORLD = WorldConfig()

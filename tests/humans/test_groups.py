@@ -7,10 +7,10 @@ import numpy as np
 
 from socialzoo.core.config import GroupConfig, WorldConfig
 from socialzoo.env.world import step_world
+from socialzoo.humans.group_formation import draw_group_sizes, with_groups
 from socialzoo.humans.groups import add_group_accelerations
-from socialzoo.nav.groups import draw_group_sizes, with_groups
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenarios import Scenario, ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, generate_scenario, scenarios_to_state
 
 
 def forces(pos, target, group, cfg=None, vel=None):

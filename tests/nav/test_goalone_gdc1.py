@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.nav import maps
+from socialzoo.maps import map_file as maps
+from socialzoo.maps.map_file import Map
 from socialzoo.nav.graph import NavGraph, graph_of
-from socialzoo.nav.maps import Map
 
 TIME_LIMIT = 3200  # steps (SPEC section 2)
 SUCCESS_DISTANCE = 0.5  # m

@@ -12,11 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav import maps
+from socialzoo.maps import map_file as maps
+from socialzoo.maps.map_file import Map, segment_clearance
+from socialzoo.maps.segments import segments_free
 from socialzoo.nav.attachment import AttachError
 from socialzoo.nav.graph import NavGraph, NoPathError, graph_of
-from socialzoo.nav.maps import Map, segment_clearance
-from socialzoo.nav.segments import segments_free
 
 
 def gdc1() -> Map:

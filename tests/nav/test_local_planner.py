@@ -333,10 +333,10 @@ def test_lines_up_with_a_doorway_instead_of_facing_the_frame():
 def test_wall_sampling_stops_only_where_nothing_reads_it():
     # arc_wall_codes stops sampling an arc at its first blocked sample and at its trimmed length;
     # the free length and the running minima up to it are those of a full sampling.
+    from socialzoo.maps.map_file import load_map
     from socialzoo.nav.arcs import arc_wall_codes
     from socialzoo.nav.distance_field import distance_field
     from socialzoo.nav.local_planner import _limit_codes
-    from socialzoo.nav.maps import load_map
 
     walls = load_map("gdc1").wall_index
     field = distance_field(walls, CFG.field_resolution, CFG.field_range, CFG.field_pad)

@@ -10,7 +10,7 @@ import pytest
 
 from socialzoo.core.config import LaserConfig
 from socialzoo.core.state import WorldState
-from socialzoo.nav.maps import Map
+from socialzoo.maps.map_file import Map
 from socialzoo.render import frames
 from socialzoo.render.frames import FrameRenderer, HumanWindow, Overlay, map_bounds
 

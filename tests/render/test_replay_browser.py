@@ -19,7 +19,7 @@ import pytest
 from socialzoo.agents import make_policy
 from socialzoo.bench.replay import benchmark_scenario, record_episode, replay_scene
 from socialzoo.env.config import EnvConfig
-from socialzoo.nav.maps import load_map
+from socialzoo.maps.map_file import load_map
 from socialzoo.render.replay_data import Encoding
 from socialzoo.render.replay_html import write_replay_html
 

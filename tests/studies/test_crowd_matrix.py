@@ -5,7 +5,7 @@ import json
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 from socialzoo.studies.crowd_matrix import MatrixConfig, column_folder, column_label, crowd_matrix
 
 

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.nav.scenarios import ScenarioConfig, TestSet
+from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 from socialzoo.studies.human_select import miss_score, run_checkpoints, select_humans
 
 

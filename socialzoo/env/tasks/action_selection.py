@@ -22,9 +22,9 @@ from socialzoo.env.human_agents import human_observation_size
 from socialzoo.env.observation import observation_space
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.maps.map_file import Map
 from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
+from socialzoo.scenarios.scenario import Scenario
 
 # The sub-policy given to robots that already left (the core halts them anyway).
 HALT = 1
@@ -126,7 +126,7 @@ class ActionSelectionTask(Task):
         return {name: len(test_set) for name, test_set in self._case_sets().items()}
 
     def _case_sets(self) -> dict[str, Any]:
-        from socialzoo.nav.scenarios import TEST_SETS, validation_set
+        from socialzoo.scenarios.scenario import TEST_SETS, validation_set
 
         name = self.core.map.name
         sets: dict[str, Any] = {"val": validation_set(name)}

@@ -21,7 +21,7 @@ from socialzoo.env.crowd_core import CrowdNavCore
 from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size
 from socialzoo.env.crowd_source import CrowdCaseSource
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
-from socialzoo.nav.crowd_cases import SPLIT_SIZE
+from socialzoo.scenarios.crowd_cases import SPLIT_SIZE
 
 # The per-step info of a robot: its closest approach to anyone during the step (m, negative: an
 # overlap), the benchmark's social force and blame terms after it, whether it collided with a person
@@ -110,8 +110,8 @@ class CrowdNavTask(Task):
         scenarios and its registered test set."""
         if self.config.map is None:
             return dict(SPLIT_SIZE)
-        from socialzoo.nav.maps import load_map
-        from socialzoo.nav.scenarios import get_test_set, validation_set
+        from socialzoo.maps.map_file import load_map
+        from socialzoo.scenarios.scenario import get_test_set, validation_set
 
         name = load_map(self.config.map).name
         return {"val": len(validation_set(name)), "test": len(get_test_set(f"{name}-test"))}

@@ -12,11 +12,12 @@ import pytest
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
-from socialzoo.nav import maps
-from socialzoo.nav.family_catalogue import FAMILIES, get_family
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenario_families import LayoutFamily
-from socialzoo.nav.scenarios import (
+from socialzoo.maps import map_file as maps
+from socialzoo.maps.map_file import Map
+from socialzoo.maps.segments import segments_free
+from socialzoo.scenarios.catalogue import FAMILIES, get_family
+from socialzoo.scenarios.families import LayoutFamily
+from socialzoo.scenarios.scenario import (
     TEST_SETS,
     Scenario,
     ScenarioConfig,
@@ -26,7 +27,6 @@ from socialzoo.nav.scenarios import (
     noise_key,
     scenarios_to_state,
 )
-from socialzoo.nav.segments import segments_free
 
 
 def gdc1() -> Map:

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from socialzoo.nav.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
 
 
 def _agents(case):

@@ -1,7 +1,7 @@
 """A complete Map from walls and whatever of its graph and legal poses a source provides.
 
-The missing parts are generated: a roadmap (socialzoo.nav.roadmap) when there are no nodes,
-edges between given nodes, and legal poses (socialzoo.nav.legal_poses).
+The missing parts are generated: a roadmap (socialzoo.maps.roadmap) when there are no nodes,
+edges between given nodes, and legal poses (socialzoo.maps.legal_poses).
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.legal_poses import generate_legal_poses
-from socialzoo.nav.maps import Map, graph_components, validate_map
-from socialzoo.nav.roadmap import (
+from socialzoo.maps.legal_poses import generate_legal_poses
+from socialzoo.maps.map_file import Map, graph_components, validate_map
+from socialzoo.maps.roadmap import (
     Box,
     FreeSpace,
     RoadmapConfig,

@@ -2,7 +2,7 @@
 
 Free of numpy, so that the Gymnasium registration (socialzoo.env.registration) names every
 family's id without importing the world: the built-in families are "module:Class" paths loaded
-on first use (socialzoo.nav.scenario_families: six on small maps; socialzoo.nav.crowd_cases:
+on first use (socialzoo.scenarios.families: six on small maps; socialzoo.scenarios.crowd_cases:
 CrowdNav's circle and square crossing in the open arena).
 """
 
@@ -13,8 +13,8 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
-    from socialzoo.nav.maps import Map
-    from socialzoo.nav.scenarios import Scenario
+    from socialzoo.maps.map_file import Map
+    from socialzoo.scenarios.scenario import Scenario
 
 
 class SeedSplit(NamedTuple):
@@ -65,14 +65,14 @@ class ScenarioFamily:
 
 # Family name -> the family: an instance, or the "module:Class" path of one (loaded on first use).
 FAMILIES: dict[str, ScenarioFamily | str] = {
-    "hallway_head_on": "socialzoo.nav.scenario_families:HallwayHeadOn",
-    "overtaking": "socialzoo.nav.scenario_families:Overtaking",
-    "crossing": "socialzoo.nav.scenario_families:Crossing",
-    "doorway": "socialzoo.nav.scenario_families:Doorway",
-    "circle_crossing": "socialzoo.nav.scenario_families:CircleCrossing",
-    "parallel_traffic": "socialzoo.nav.scenario_families:ParallelTraffic",
-    "crowdnav_circle_crossing": "socialzoo.nav.crowd_cases:CrowdNavCircleCrossing",
-    "crowdnav_square_crossing": "socialzoo.nav.crowd_cases:CrowdNavSquareCrossing",
+    "hallway_head_on": "socialzoo.scenarios.families:HallwayHeadOn",
+    "overtaking": "socialzoo.scenarios.families:Overtaking",
+    "crossing": "socialzoo.scenarios.families:Crossing",
+    "doorway": "socialzoo.scenarios.families:Doorway",
+    "circle_crossing": "socialzoo.scenarios.families:CircleCrossing",
+    "parallel_traffic": "socialzoo.scenarios.families:ParallelTraffic",
+    "crowdnav_circle_crossing": "socialzoo.scenarios.crowd_cases:CrowdNavCircleCrossing",
+    "crowdnav_square_crossing": "socialzoo.scenarios.crowd_cases:CrowdNavSquareCrossing",
 }
 
 

@@ -42,7 +42,7 @@ def segments_free(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray) -> np
 def segments_clear_of(walls: WallIndex, p0: np.ndarray, p1: np.ndarray, need: np.ndarray) -> np.ndarray:
     """Whether straight segments [p0, p1] (N, 2) keep need (N,) (m, at most 0.5) from every wall;
     bool (N,)."""
-    from socialzoo.nav.maps import segment_clearance
+    from socialzoo.maps.map_file import segment_clearance
 
     p0, p1 = _points(p0), _points(p1)
     ok = np.ones(len(p0), dtype=bool)
@@ -56,7 +56,7 @@ def segments_clear_of(walls: WallIndex, p0: np.ndarray, p1: np.ndarray, need: np
 def segments_clear(walls: WallIndex | None, p0: np.ndarray, p1: np.ndarray, clearance: float) -> np.ndarray:
     """Whether straight segments [p0, p1] (N, 2) keep `clearance` (m, at most 0.5) from every wall;
     bool (N,)."""
-    from socialzoo.nav.maps import segment_clearance
+    from socialzoo.maps.map_file import segment_clearance
 
     p0 = _points(p0)
     if walls is None or walls.num_walls == 0 or len(p0) == 0:

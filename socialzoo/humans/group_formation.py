@@ -14,8 +14,8 @@ import dataclasses
 
 import numpy as np
 
-from socialzoo.nav.maps import Map
-from socialzoo.nav.scenarios import Scenario, spawn_points
+from socialzoo.maps.map_file import Map
+from socialzoo.scenarios.scenario import Scenario, spawn_points
 
 # Sizes a group may have, and the spacing of members walking abreast, m.
 GROUP_SIZES = (2, 3, 4)

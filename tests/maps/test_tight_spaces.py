@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from socialzoo.nav import floorplans
-from socialzoo.nav.maps import MapError
-from socialzoo.nav.repair import repair_map
+from socialzoo.maps import floorplans
+from socialzoo.maps.map_file import MapError
+from socialzoo.maps.repair import repair_map
 
 
 @pytest.mark.parametrize("width", [1.1, 0.95])

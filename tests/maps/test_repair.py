@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, route_lengths
-from socialzoo.nav.floorplans import atrium, long_corridor, winding_corridor
-from socialzoo.nav.map_completion import complete_map
-from socialzoo.nav.maps import MapError, load_map, nearest_walls, validate_map
-from socialzoo.nav.repair import repair_map
-from socialzoo.nav.scenarios import generate_scenario
+from socialzoo.maps.floorplans import atrium, long_corridor, winding_corridor
+from socialzoo.maps.map_completion import complete_map
+from socialzoo.maps.map_file import MapError, load_map, nearest_walls, validate_map
+from socialzoo.maps.repair import repair_map
+from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH, route_lengths
+from socialzoo.scenarios.scenario import generate_scenario
 
 
 def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:

@@ -75,10 +75,10 @@ class Map:
         region: optional (xmin, ymin, xmax, ymax) area of interest, m.
         walkable_area: optional floor area the robot can drive in, m^2 (cells at least the
             passable clearance from walls, measured by the importer); scenario generation caps
-            the head count at the benchmark's crowd density (socialzoo.nav.feasibility). None
+            the head count at the benchmark's crowd density (socialzoo.scenarios.feasibility). None
             for the shipped maps: the SPEC's head count.
         provenance: optional JSON object saying how the map was made: the importer, its options
-            and every repair it made to the source data (socialzoo.nav.repair); None for maps
+            and every repair it made to the source data (socialzoo.maps.repair); None for maps
             written by hand.
         path: file the map was loaded from, if any (used in error messages).
     """

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav import floorplans
-from socialzoo.nav.roadmap import free_space
+from socialzoo.maps import floorplans
+from socialzoo.maps.roadmap import free_space
 
 
 @pytest.mark.parametrize("name", sorted(floorplans.PLANS))

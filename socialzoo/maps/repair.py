@@ -32,8 +32,8 @@ from scipy import ndimage
 from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.legal_poses import generate_legal_poses
-from socialzoo.nav.maps import (
+from socialzoo.maps.legal_poses import generate_legal_poses
+from socialzoo.maps.map_file import (
     POSE_CLEARANCE,
     Map,
     graph_components,
@@ -42,7 +42,7 @@ from socialzoo.nav.maps import (
     segment_clearance,
     validate_map,
 )
-from socialzoo.nav.roadmap import (
+from socialzoo.maps.roadmap import (
     Box,
     FreeSpace,
     RoadmapConfig,

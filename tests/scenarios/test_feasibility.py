@@ -5,15 +5,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from socialzoo.nav.feasibility import (
+from socialzoo.maps.map_file import Map, load_map
+from socialzoo.scenarios.feasibility import (
     MAX_ROUTE_LENGTH,
     feasible_pairs,
     feasible_route_length,
     route_lengths,
     route_stats,
 )
-from socialzoo.nav.map_check import check_map
-from socialzoo.nav.maps import Map, load_map
+from socialzoo.scenarios.map_check import check_map
 
 
 def corridor(length: float = 60.0) -> Map:
@@ -70,8 +70,8 @@ def test_benchmark_maps_have_every_pair_feasible():
 
 
 def test_crowd_keeps_the_benchmark_density_on_maps_with_a_walkable_area(tmp_path):
-    from socialzoo.nav.feasibility import CROWD_DENSITY, max_humans_for
-    from socialzoo.nav.scenarios import generate_scenario
+    from socialzoo.scenarios.feasibility import CROWD_DENSITY, max_humans_for
+    from socialzoo.scenarios.scenario import generate_scenario
 
     m = corridor()
     assert max_humans_for(m, 5, 25) == 25  # no area: the SPEC's head count

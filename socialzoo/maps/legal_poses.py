@@ -1,6 +1,6 @@
 """Legal start/goal poses for a wall map that comes without them.
 
-Candidates are cells on the free space's clearance ridge (socialzoo.nav.roadmap.free_space);
+Candidates are cells on the free space's clearance ridge (socialzoo.maps.roadmap.free_space);
 poses are picked among them by farthest-point sampling in walking distance along the navigation
 graph, and each faces the most open direction. Deterministic given the seed.
 """
@@ -12,8 +12,8 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.maps import POSE_CLEARANCE, MapError, segment_clearance
-from socialzoo.nav.roadmap import GRID_STEPS, Box, FreeSpace, RoadmapConfig, free_space
+from socialzoo.maps.map_file import POSE_CLEARANCE, MapError, segment_clearance
+from socialzoo.maps.roadmap import GRID_STEPS, Box, FreeSpace, RoadmapConfig, free_space
 
 
 def _ridge(clearance: np.ndarray) -> np.ndarray:

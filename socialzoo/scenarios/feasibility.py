@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from socialzoo.maps.map_file import Map
 from socialzoo.nav.graph import graph_of
-from socialzoo.nav.maps import Map
 
 # Share of the episode's time limit that a feasible route may take at cruise speed.
 ROUTE_TIME_SHARE = 0.75
@@ -44,7 +44,7 @@ def feasible_route_length(
 
 # The default rule: 0.75 x 80 s x 1.5 m/s.
 MAX_ROUTE_LENGTH = feasible_route_length()
-# GDC1's walkable floor (cells at least 0.39 m from walls, 5 cm grid, socialzoo.nav.roadmap) and
+# GDC1's walkable floor (cells at least 0.39 m from walls, 5 cm grid, socialzoo.maps.roadmap) and
 # the benchmark's largest crowd on it: the density the crowd keeps on other maps.
 GDC1_WALKABLE_AREA = 1352.0
 CROWD_DENSITY = 25 / GDC1_WALKABLE_AREA

@@ -1,7 +1,7 @@
 """Scenario families on small maps, each one class with a few lines of layout: hallway head-on,
 overtaking, crossing at an intersection, doorway, circle crossing and parallel traffic (the
 scenario names of the social-navigation evaluation guidelines). Their interface and registry are
-socialzoo.nav.family_catalogue; this module imports the world only when a scenario is made.
+socialzoo.scenarios.catalogue; this module imports the world only when a scenario is made.
 """
 
 from __future__ import annotations
@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 # FAMILIES: the registry, also read from here (socialzoo.env.config checks EnvConfig.family in it).
-from socialzoo.nav.family_catalogue import FAMILIES as FAMILIES
-from socialzoo.nav.family_catalogue import ScenarioFamily
+from socialzoo.scenarios.catalogue import FAMILIES as FAMILIES
+from socialzoo.scenarios.catalogue import ScenarioFamily
 
 if TYPE_CHECKING:
-    from socialzoo.nav.maps import Map
-    from socialzoo.nav.scenarios import Scenario
+    from socialzoo.maps.map_file import Map
+    from socialzoo.scenarios.scenario import Scenario
 
 
 @dataclass(frozen=True)
@@ -61,8 +61,8 @@ class LayoutFamily(ScenarioFamily):
             ValueError: the map has fewer than 2 legal poses.
             NoPathError: someone's goal cannot be reached.
         """
-        from socialzoo.nav.maps import load_map
-        from socialzoo.nav.scenarios import Scenario, plan_routes, split_routes
+        from socialzoo.maps.map_file import load_map
+        from socialzoo.scenarios.scenario import Scenario, plan_routes, split_routes
 
         m = load_map(self.map_name) if m is None else m
         lay = self.layout(m, np.random.default_rng(seed))
@@ -91,7 +91,7 @@ def circle_point(cx: Any, cy: Any, radius: Any, angle: Any) -> tuple[Any, Any]:
     """The point at `angle` (rad) on the circle of `radius` (m) about (cx, cy): scalars or arrays.
 
     Circle crossing's geometry, written once: the CircleCrossing family calls it on arrays (numpy's
-    cos and sin), CrowdNav's cases compile it into their rejection kernel (socialzoo.nav.crowd_cases).
+    cos and sin), CrowdNav's cases compile it into their rejection kernel (socialzoo.scenarios.crowd_cases).
     """
     return cx + radius * np.cos(angle), cy + radius * np.sin(angle)
 
@@ -144,7 +144,7 @@ def _near(
         t = rng.uniform(*lateral, size=(k, 1))
         return s * u + t * left
 
-    from socialzoo.nav.scenarios import spawn_points
+    from socialzoo.scenarios.scenario import spawn_points
 
     base = np.broadcast_to(anchor, (n, 2)).copy()
     return spawn_points(m.wall_index, base, base, draw, 0.3, 20)

@@ -6,11 +6,11 @@ import pytest
 
 from socialzoo.core.geometry import segments_intersect
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.importers import read_table, read_vector_map
-from socialzoo.nav.legal_poses import generate_legal_poses
-from socialzoo.nav.map_completion import complete_map
-from socialzoo.nav.maps import load_map, nearest_walls, reaches_graph, segment_clearance, validate_map
-from socialzoo.nav.roadmap import (
+from socialzoo.maps.importers import read_table, read_vector_map
+from socialzoo.maps.legal_poses import generate_legal_poses
+from socialzoo.maps.map_completion import complete_map
+from socialzoo.maps.map_file import load_map, nearest_walls, reaches_graph, segment_clearance, validate_map
+from socialzoo.maps.roadmap import (
     RoadmapConfig,
     build_edges,
     build_roadmap,

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from socialzoo.nav.importers import read_amrl_nav_graph, read_pedsim_scene, read_vector_map, write_vector_map
-from socialzoo.nav.maps import MapError, load_map
+from socialzoo.maps.importers import read_amrl_nav_graph, read_pedsim_scene, read_vector_map, write_vector_map
+from socialzoo.maps.map_file import MapError, load_map
 
 
 def test_vector_map_round_trip_and_formats(tmp_path):

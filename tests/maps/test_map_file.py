@@ -6,7 +6,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from socialzoo.nav.maps import MapError, list_maps, load_map, validate_map
+from socialzoo.maps.map_file import MapError, list_maps, load_map, validate_map
 
 SHIPPED = ["gdc1", "ghc3", "open_room", "hallway", "doorway", "intersection"]
 

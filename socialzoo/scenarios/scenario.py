@@ -1,6 +1,6 @@
 """Seeded scenarios: the benchmark's generator (SPEC section 5), its fixed test sets, and the
 conversion of scenarios into a batched WorldState (scenario families for the small maps:
-socialzoo.nav.scenario_families).
+socialzoo.scenarios.families).
 
 A scenario is a plain record of where everyone starts, where they go and how fast the humans walk;
 it is a pure function of (map, seed, config) and saves to JSON exactly, so a saved scenario replays
@@ -21,16 +21,16 @@ from socialzoo.core.files import read_json
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.feasibility import (
+from socialzoo.maps.map_file import Map
+from socialzoo.maps.segments import segments_free
+from socialzoo.nav.graph import NoPathError, graph_of
+from socialzoo.scenarios.feasibility import (
     MAX_ROUTE_LENGTH,
     feasible_pairs,
     max_humans_for,
     redraw_human_pairs,
     redraw_robot_pair,
 )
-from socialzoo.nav.graph import NoPathError, graph_of
-from socialzoo.nav.maps import Map
-from socialzoo.nav.segments import segments_free
 
 SCENARIO_FORMAT = "socialzoo-scenario/1"
 # Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).
@@ -54,7 +54,7 @@ class ScenarioConfig:
         spawn_clearance: a jittered spawn closer than this to a wall is re-drawn, m.
         spawn_tries: jitter draws per human before it spawns on its start pose itself.
         max_route_length: the feasibility rule: a robot or human start/goal pair whose planned
-            route is longer than this is drawn again, m (socialzoo.nav.feasibility: by default
+            route is longer than this is drawn again, m (socialzoo.scenarios.feasibility: by default
             75% of the 80 s time limit at GoAlone's 1.5 m/s cruise speed, 90 m).
     """
 
@@ -121,7 +121,7 @@ class Scenario:
         human_speed: (n,) preferred walking speed, m/s.
         family: "benchmark" for the SPEC generator, else the scenario family's name.
         human_group: (n,) the walking group of each human (the index of its first member), -1
-            for none (socialzoo.nav.groups); default none. Saved only when someone walks in a group.
+            for none (socialzoo.humans.group_formation); default none. Saved only when someone walks in a group.
     """
 
     map_name: str
@@ -358,7 +358,7 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
     Draws, in this order, from np.random.default_rng(seed): robot start and goal (two distinct
     legal poses, both drawn again while their route is infeasible); the head count n, uniform in
     [min_humans, max_humans] (max_humans lowered to the benchmark's crowd density on a map with
-    a walkable_area, see socialzoo.nav.feasibility); n human starts, each any legal pose but the
+    a walkable_area, see socialzoo.scenarios.feasibility); n human starts, each any legal pose but the
     robot's start; n human goals, each any legal pose but that human's start (infeasible human pairs are drawn again,
     row by row); n preferred speeds N(speed_mean, speed_std) clipped to [min_speed, max_speed]; spawn jitter,
     uniform in +-spawn_jitter per axis, re-drawn for bad spawns (see `spawn_points`). Humans may
@@ -366,7 +366,7 @@ def generate_scenario(m: Map, seed: int, cfg: ScenarioConfig | None = None) -> S
     goal: the benchmark needs up to 25 humans on maps with few poses (GDC1 has 26). Every route
     is planned with NavGraph.plan_batch (A*-equal shortest paths, start and goal joined to the
     nearest reachable edge, a straight line where wall-free). Feasible: a route at most
-    cfg.max_route_length long (socialzoo.nav.feasibility); a pair still infeasible after 256
+    cfg.max_route_length long (socialzoo.scenarios.feasibility); a pair still infeasible after 256
     draws is replaced by a uniform pick among the feasible pairs.
 
     Args:
@@ -476,7 +476,7 @@ class TestSet:
 
     def _map(self, m: Map | None) -> Map:
         if m is None:
-            from socialzoo.nav import maps
+            from socialzoo.maps import map_file as maps
 
             return maps.load_map(self.map_name)
         if self.map_name not in (m.name, m.path):

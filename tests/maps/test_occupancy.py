@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.occupancy import wall_pixels, walls_from_occupancy
+from socialzoo.maps.occupancy import wall_pixels, walls_from_occupancy
 
 
 def plan_image() -> np.ndarray:

@@ -9,10 +9,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from socialzoo.nav.feasibility import MAX_ROUTE_LENGTH, RouteStats, max_humans_for, route_stats
-from socialzoo.nav.maps import Map, MapError, graph_components, nearest_walls, segment_clearance, validate_map
+from socialzoo.maps.map_file import (
+    Map,
+    MapError,
+    graph_components,
+    nearest_walls,
+    segment_clearance,
+    validate_map,
+)
 from socialzoo.nav.planner_config import LocalPlannerConfig
-from socialzoo.nav.scenarios import ScenarioConfig
+from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH, RouteStats, max_humans_for, route_stats
+from socialzoo.scenarios.scenario import ScenarioConfig
 
 # The benchmark's scenario settings (head count 5 to 25, SPEC section 4).
 DEFAULT_SCENARIO = ScenarioConfig()

@@ -5,16 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from socialzoo.nav.crowd_cases import (
+from socialzoo.maps.map_file import load_map
+from socialzoo.scenarios.catalogue import FAMILIES, ScenarioFamily, SeedSplit, get_family, register_family
+from socialzoo.scenarios.crowd_cases import (
     CrowdCaseConfig,
     CrowdNavCircleCrossing,
     case_seed,
     crowd_case,
     crowd_family,
 )
-from socialzoo.nav.family_catalogue import FAMILIES, ScenarioFamily, SeedSplit, get_family, register_family
-from socialzoo.nav.maps import load_map
-from socialzoo.nav.scenario_families import antipode, circle_point
+from socialzoo.scenarios.families import antipode, circle_point
 
 
 def test_every_registered_family_loads_under_its_own_name():

@@ -11,7 +11,7 @@ again. Case k of a split is drawn with numpy's legacy RandomState seeded as Crow
 so our validation and test cases are CrowdNav's own (same positions, to float precision), apart
 from the training stream by construction. People get one-point routes: they walk to their goal
 and stay there, as CrowdNav's people do. The two layouts are scenario families
-(socialzoo.nav.family_catalogue): crowdnav_circle_crossing and crowdnav_square_crossing.
+(socialzoo.scenarios.catalogue): crowdnav_circle_crossing and crowdnav_square_crossing.
 """
 
 from __future__ import annotations
@@ -25,12 +25,12 @@ import numpy as np
 
 from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_int, check_number
-from socialzoo.nav.family_catalogue import ScenarioFamily, SeedSplit
-from socialzoo.nav.scenario_families import antipode, circle_point
-from socialzoo.nav.scenarios import Scenario
+from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
+from socialzoo.scenarios.families import antipode, circle_point
+from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
-    from socialzoo.nav.maps import Map
+    from socialzoo.maps.map_file import Map
 
 Layout = Literal["circle_crossing", "square_crossing"]
 LAYOUTS: tuple[str, ...] = get_args(Layout)
@@ -298,7 +298,7 @@ _BY_LAYOUT: dict[str, type[CrowdNavFamily]] = {
 _CROWDNAV = CrowdNavCircleCrossing()  # CrowdNav's splits, for case_seed
 
 
-# Circle crossing's geometry (socialzoo.nav.scenario_families), compiled for the rejection loop.
+# Circle crossing's geometry (socialzoo.scenarios.families), compiled for the rejection loop.
 _circle_point = kernel(circle_point)
 _antipode = kernel(antipode)
 

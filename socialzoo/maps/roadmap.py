@@ -4,7 +4,7 @@ The free space is rasterised (exact wall clearance per grid cell), the building 
 by flood fill from a seed point, graph nodes are spread over it (most clearance first, one per
 room, a few metres apart along corridors) and joined by straight lines that keep clear of walls.
 Everything is deterministic given the seed. Legal poses are picked on the same free space by
-socialzoo.nav.legal_poses, and socialzoo.nav.map_completion puts the pieces together into a Map.
+socialzoo.maps.legal_poses, and socialzoo.maps.map_completion puts the pieces together into a Map.
 Uses scipy (ndimage and sparse.csgraph), which the map tools need but the simulator does not.
 """
 
@@ -21,7 +21,7 @@ from scipy.sparse import csgraph
 
 from socialzoo.core.validation import check_fields, check_int, check_number
 from socialzoo.core.walls import WallIndex
-from socialzoo.nav.maps import (
+from socialzoo.maps.map_file import (
     NODE_CLEARANCE,
     POSE_CLEARANCE,
     graph_components,
@@ -58,7 +58,7 @@ class RoadmapConfig:
             local planner's 0.37 m wall distance, so the robot can follow its edges).
         keep_clearance: paths that join components are straightened only where the straight
             line keeps the walking path's own wall distance, up to this (minus 5 cm): through
-            the middle of doorways, off the corners (socialzoo.nav.roadmap.pull_string); 0 lets
+            the middle of doorways, off the corners (socialzoo.maps.roadmap.pull_string); 0 lets
             them pass as close as edge_clearance allows.
         max_edge_length: longest edge considered.
         detour_tolerance: an edge i-j is dropped when some node k gives a path i-k-j at most this

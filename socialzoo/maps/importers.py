@@ -23,7 +23,7 @@ import numpy as np
 
 from socialzoo.core.files import read_text
 from socialzoo.core.validation import check_number
-from socialzoo.nav.maps import MapError
+from socialzoo.maps.map_file import MapError
 
 logger = logging.getLogger(__name__)
 
