@@ -25,8 +25,7 @@ from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import (
     policy_label,
     summarize,
-    write_summary_csv,
-    write_summary_md,
+    write_tables,
     write_text_atomic,
 )
 from socialzoo.env.config import EnvConfig
@@ -499,8 +498,7 @@ def run_benchmark(
     finally:
         store.close()
     summary = summarize(rows, policies=config.policies, maps=[_display_name(sets[m]) for m in config.maps])
-    files.append(write_summary_csv(summary, out / "summary.csv"))
-    files.append(write_summary_md(summary, out / "summary.md", title=_title(config, counts)))
+    files += write_tables(summary, out, title=_title(config, counts))
     if config.human_metrics:
         from socialzoo.bench.human_metrics import summarize_humans, write_humans_tables
 

@@ -1,6 +1,7 @@
-"""Benchmark tables: per policy and map, the success rate, the failures by cause and every
-metric's mean with its 90% confidence interval, as summary.csv and summary.md (the paper's success
-table, a failure table and metric tables).
+"""Benchmark tables, one writer (`write_tables`) for every benchmark: summary entries (per policy
+and map, the success rate, the failures by cause and every metric's mean with its confidence
+interval) as NAME.csv and NAME.md, in a `TableLayout`: the paper's (summary.md: the success table,
+a failure table and metric tables) or a task id's (one table, a column per metric).
 
 Intervals: Wilson score for success rates, bootstrap (BCa) for mean counts per episode
 (COUNT_METRICS), Student-t for every other mean (socialzoo.bench.stats).
@@ -15,6 +16,7 @@ import os
 import zlib
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +30,7 @@ from socialzoo.bench.stats import (
     rate_interval,
 )
 from socialzoo.core.files import read_text
-from socialzoo.core.metrics import metric, registered, table_heading
+from socialzoo.core.metrics import METRICS, metric, registered, table_heading
 from socialzoo.env.metrics import failure_cause
 
 # Metrics of the tables, in order: (column, heading), the headings from the metric registry
@@ -144,16 +146,57 @@ def paper_success(policy: str, map_name: str) -> float | None:
     return numbers[0] if role == "test" else numbers[1]
 
 
+@dataclass(frozen=True)
+class TableLayout:
+    """What a benchmark's tables show, for the one writer (`write_tables`): the metrics, in order,
+    and how they are laid out. Headings, units and digits come from the metric registry
+    (socialzoo.core.metrics); every layout reads the same summary entries (`value_key`).
+
+    Attributes:
+        metrics: registered metric names, in the tables' order.
+        paper: the paper's layout (`PAPER_LAYOUT`, summary.md): a success table with the paper's
+            numbers beside ours, the failures by cause, one table per metric with a column per
+            map, and a note on the intervals. Otherwise one table with a column per metric, as a
+            task id's benchmark writes (`task_layout`).
+    """
+
+    metrics: tuple[str, ...]
+    paper: bool = False
+
+    def csv_columns(self) -> list[str]:
+        """Columns of the CSV, in order: the entry's names, then each metric's value and interval
+        (the paper's layout: success, the failures by cause, and n where a metric is averaged over
+        successful episodes only)."""
+        columns = ["policy", "map", "test_set", "trials", "success_rate", "success_ci_low", "success_ci_high"]
+        if self.paper:
+            for cause in FAILURE_LABELS:
+                columns += [f"failure_{cause}_rate", f"failure_{cause}_ci_low", f"failure_{cause}_ci_high"]
+        for name in self.metrics:
+            if name != "success":
+                columns += [value_key(name), f"{name}_ci_low", f"{name}_ci_high"]
+            if self.paper and name in SUCCESS_ONLY:
+                columns.append(f"{name}_n")
+        return columns
+
+
+def value_key(name: str) -> str:
+    """The key of a metric's value in a summary entry: "success_rate", else "<name>_mean" (a
+    flag's mean is its rate); its interval is "<name>_ci_low", "<name>_ci_high"."""
+    return "success_rate" if name == "success" else f"{name}_mean"
+
+
+PAPER_LAYOUT = TableLayout(tuple(name for name, _ in TABLE_METRICS), paper=True)
+
+
+def task_layout(summary: Sequence[Mapping[str, Any]]) -> TableLayout:
+    """The layout of a task id's benchmark: every registered metric its entries all hold, in
+    registry order, one table with a column per metric."""
+    return TableLayout(tuple(n for n in METRICS if summary and all(value_key(n) in e for e in summary)))
+
+
 def csv_columns() -> list[str]:
     """Columns of summary.csv, in order."""
-    columns = ["policy", "map", "test_set", "trials", "success_rate", "success_ci_low", "success_ci_high"]
-    for cause in FAILURE_LABELS:
-        columns += [f"failure_{cause}_rate", f"failure_{cause}_ci_low", f"failure_{cause}_ci_high"]
-    for name, _ in TABLE_METRICS:
-        columns += [f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high"]
-        if name in SUCCESS_ONLY:
-            columns.append(f"{name}_n")
-    return columns
+    return PAPER_LAYOUT.csv_columns()
 
 
 def cell_rng(seed: int, policy: str, map_name: str, metric: str) -> np.random.Generator:
@@ -236,14 +279,16 @@ def summarize(
     return out
 
 
-def write_summary_csv(summary: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write `summarize` output as CSV (columns `csv_columns()`, NaN written as an empty cell)."""
-    columns = csv_columns()
+def write_summary_csv(
+    summary: Sequence[Mapping[str, Any]], path: str | Path, layout: TableLayout = PAPER_LAYOUT
+) -> Path:
+    """Write summary entries as CSV (columns `layout.csv_columns()`, NaN written as an empty cell)."""
+    columns = layout.csv_columns()
     text = io.StringIO(newline="")
     writer = csv.DictWriter(text, fieldnames=columns)
     writer.writeheader()
     for entry in summary:
-        writer.writerow({c: _csv_value(entry.get(c)) for c in columns})
+        writer.writerow({c: _csv_value(entry.get(c, math.nan)) for c in columns})
     return write_text_atomic(path, text.getvalue())
 
 
@@ -334,75 +379,106 @@ def _map_header(map_name: str) -> str:
     return f"{role} ({map_name})" if role else map_name
 
 
-def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Benchmark results") -> str:
-    """The Markdown report: the paper's success table, then one table per metric.
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """The lines of a Markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return lines + ["| " + " | ".join(cells) + " |" for cells in rows]
 
-    The success table has one row per policy and, for each map, our success rate (%) with its
-    90% interval and, for the paper's maps, the paper's number beside it (SPEC section 10).
+
+def _interval(entry: Mapping[str, Any] | None, name: str, digits: int, scale: float = 1.0) -> str:
+    """A metric's value in an entry with its interval ("-" where the table has no entry)."""
+    if entry is None:
+        return "-"
+    value, low, high = (
+        scale * entry.get(k, math.nan) for k in (value_key(name), f"{name}_ci_low", f"{name}_ci_high")
+    )
+    return _fmt_ci(value, low, high, digits)
+
+
+def summary_markdown(
+    summary: Sequence[Mapping[str, Any]],
+    *,
+    title: str = "Benchmark results",
+    layout: TableLayout = PAPER_LAYOUT,
+) -> str:
+    """The Markdown report of summary entries in a layout.
+
+    The paper's layout: the success table, with one row per policy and, for each map, our success
+    rate (%) with its 90% interval and, for the paper's maps, the paper's number beside it (SPEC
+    section 10); the failures by cause; one table per metric; the intervals. Otherwise the title
+    and one table: each flag's rate and each number's mean, success with its interval.
     """
     policies = list(dict.fromkeys(e["policy"] for e in summary))
     labels = policy_labels(policies)
+    if not layout.paper:
+        header = ["policy"] + [_column_heading(n) for n in layout.metrics]
+        rows = [[labels[e["policy"]]] + [_column_cell(e, n) for n in layout.metrics] for e in summary]
+        return "\n".join([title, "", *markdown_table(header, rows)]) + "\n"
     maps = list(dict.fromkeys(e["map"] for e in summary))
     by_key = {(e["policy"], e["map"]): e for e in summary}
     paper_maps = [m for m in maps if m in MAP_ROLES]
-    lines = [f"# {title}", ""]
     trials = sorted({int(e["trials"]) for e in summary})
-    lines.append(
+    lines = [
+        f"# {title}",
+        "",
         f"Trials per policy and map: {', '.join(map(str, trials))}. Success: goal reached within the "
         "time limit with no human and no wall collision. Values in brackets are two-sided 90% "
-        "confidence intervals (which ones: see the end)."
-    )
-    lines += ["", "## Success rate (%)", ""]
+        "confidence intervals (which ones: see the end).",
+        "",
+        "## Success rate (%)",
+        "",
+    ]
     header = ["policy"]
     for m in maps:
-        header.append(_map_header(m))
-        if m in paper_maps:
-            header.append(f"paper {MAP_ROLES[m]}")
-    lines.append("| " + " | ".join(header) + " |")
-    lines.append("|" + "---|" * len(header))
+        header += [_map_header(m)] + ([f"paper {MAP_ROLES[m]}"] if m in paper_maps else [])
+    rows = []
     for p in policies:
         cells = [labels[p]]
         for m in maps:
-            e = by_key.get((p, m))
-            cells.append(
-                "-"
-                if e is None
-                else _fmt_ci(
-                    100 * e["success_rate"], 100 * e["success_ci_low"], 100 * e["success_ci_high"], 1
-                )
-            )
+            cells.append(_interval(by_key.get((p, m)), "success", 1, 100.0))
             if m in paper_maps:
                 paper = paper_success(p, m)
                 cells.append("-" if paper is None else f"{paper:.1f}")
-        lines.append("| " + " | ".join(cells) + " |")
+        rows.append(cells)
+    lines += markdown_table(header, rows)
     lines += _failure_table(summary, labels)
-    for name, description in TABLE_METRICS:
-        lines += ["", f"## {description[0].upper() + description[1:]}", ""]
-        header = ["policy", *(_map_header(m) for m in maps)]
-        lines.append("| " + " | ".join(header) + " |")
-        lines.append("|" + "---|" * len(header))
+    for name in layout.metrics:
+        heading = table_heading(name)
+        lines += ["", f"## {heading[0].upper() + heading[1:]}", ""]
+        rows = []
         for p in policies:
             cells = [labels[p]]
             for m in maps:
                 e = by_key.get((p, m))
-                if e is None:
-                    cells.append("-")
-                    continue
-                text = _fmt_ci(
-                    e[f"{name}_mean"], e[f"{name}_ci_low"], e[f"{name}_ci_high"], metric(name).digits
-                )
-                if name in SUCCESS_ONLY:
-                    text += f" (n={e[f'{name}_n']})"
-                cells.append(text)
-            lines.append("| " + " | ".join(cells) + " |")
+                n = f" (n={e[f'{name}_n']})" if e is not None and name in SUCCESS_ONLY else ""
+                cells.append(_interval(e, name, metric(name).digits) + n)
+            rows.append(cells)
+        lines += markdown_table(["policy", *(_map_header(m) for m in maps)], rows)
     lines += ["", "## Intervals", "", INTERVALS_NOTE]
     return "\n".join(lines) + "\n"
+
+
+def _column_heading(name: str) -> str:
+    m = metric(name)
+    return f"{m.label} (rate)" if m.kind == "bool" else m.heading
+
+
+def _column_cell(entry: Mapping[str, Any], name: str) -> str:
+    digits = 3 if metric(name).kind == "bool" else metric(name).digits
+    if name == "success":
+        return _interval(entry, name, digits)
+    return _fmt(entry[value_key(name)], digits)
 
 
 def _failure_table(summary: Sequence[Mapping[str, Any]], labels: Mapping[str, str]) -> list[str]:
     """Markdown lines of the failures by cause: one row per policy and map, each cause's share of
     the episodes (%), in the order of precedence of socialzoo.env.metrics.failure_cause."""
-    lines = [
+    rows = [
+        [labels[e["policy"]], str(e["map"]), _fmt(100 * e["success_rate"], 1)]
+        + [_fmt(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
+        for e in summary
+    ]
+    return [
         "",
         "## Failures by cause (% of episodes)",
         "",
@@ -410,19 +486,22 @@ def _failure_table(summary: Sequence[Mapping[str, Any]], labels: Mapping[str, st
         "episode), human collision, stuck (no progress for 10 s while not halting), else timeout while "
         "moving (socialzoo.env.metrics).",
         "",
+        *markdown_table(["policy", "map", "success", *FAILURE_LABELS.values()], rows),
     ]
-    header = ["policy", "map", "success", *FAILURE_LABELS.values()]
-    lines.append("| " + " | ".join(header) + " |")
-    lines.append("|" + "---|" * len(header))
-    for e in summary:
-        cells = [labels[e["policy"]], str(e["map"]), _fmt(100 * e["success_rate"], 1)]
-        cells += [_fmt(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
 
 
-def write_summary_md(
-    summary: Sequence[Mapping[str, Any]], path: str | Path, *, title: str = "Benchmark results"
-) -> Path:
-    """Write `summary_markdown` to a file."""
-    return write_text_atomic(path, summary_markdown(summary, title=title))
+def write_tables(
+    summary: Sequence[Mapping[str, Any]],
+    out: str | Path,
+    *,
+    name: str = "summary",
+    title: str = "Benchmark results",
+    layout: TableLayout = PAPER_LAYOUT,
+) -> list[Path]:
+    """The one table writer: out/NAME.csv (`write_summary_csv`) and out/NAME.md
+    (`summary_markdown`) of summary entries in a layout, each written whole or not at all."""
+    out = Path(out)
+    return [
+        write_summary_csv(summary, out / f"{name}.csv", layout),
+        write_text_atomic(out / f"{name}.md", summary_markdown(summary, title=title, layout=layout)),
+    ]

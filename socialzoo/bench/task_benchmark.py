@@ -1,5 +1,5 @@
 """The benchmark of any registered task id on its fixed cases: episodes in the results store, a
-summary with intervals, one table writer and the success figure.
+summary with intervals, its tables (the benchmark's one writer) and the success figure.
 
     socialzoo benchmark --maps socialzoo/CrowdNav-v1 --policies orca,crowdnav --out DIR
 
@@ -16,7 +16,6 @@ interval (NaN values, such as the time of a failed episode, left out).
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import inspect
 import json
@@ -197,45 +196,21 @@ def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> d
     return out
 
 
-def write_tables(rows: Sequence[dict[str, Any]], out: Path, name: str, title: str) -> list[Path]:
-    """NAME.csv (every summary value and interval) and NAME.md (a table: each flag's rate and each
-    number's mean, labelled and with units from the metric registry, success with its interval)."""
-    columns = [k for k in rows[0] if k != "policy" and not k.endswith("_ci")] if rows else []
-    csv_path = out / f"{name}.csv"
-    with csv_path.open("w", newline="") as f:
-        writer = csv.writer(f)
-        intervals = [k for k in rows[0] if k.endswith("_ci")] if rows else []
-        writer.writerow(
-            ["policy", *columns] + [f"{k[:-3]}_ci_{side}" for k in intervals for side in ("low", "high")]
-        )
-        for r in rows:
-            writer.writerow(
-                [r["policy"], *(r.get(c) for c in columns)] + [v for k in intervals for v in r[k]]
+def table_entry(policy: str, map_name: str, test_set: str, summary: dict[str, Any]) -> dict[str, Any]:
+    """A policy's `summarize` as an entry of the benchmark tables (socialzoo.bench.tables): its
+    names, "trials", and each metric's value ("success_rate", "<name>_mean") and interval
+    ("<name>_ci_low", "<name>_ci_high"; NaN where it has none)."""
+    from socialzoo.bench.tables import value_key
+
+    entry: dict[str, Any] = {"policy": policy, "map": map_name, "test_set": test_set}
+    entry["trials"] = summary["episodes"]
+    for name in METRICS:
+        if name in summary or f"{name}_rate" in summary:
+            entry[value_key(name)] = summary.get(f"{name}_rate", summary.get(name))
+            entry[f"{name}_ci_low"], entry[f"{name}_ci_high"] = summary.get(
+                f"{name}_ci", (math.nan, math.nan)
             )
-    shown = [c for c in columns if c.removesuffix("_rate") in METRICS]
-    header = ["policy"] + [_heading(c) for c in shown]
-    lines = [title, "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    for r in rows:
-        cells = [str(r["policy"])] + [_cell(r, c) for c in shown]
-        lines.append("| " + " | ".join(cells) + " |")
-    md_path = out / f"{name}.md"
-    md_path.write_text("\n".join(lines) + "\n")
-    return [csv_path, md_path]
-
-
-def _heading(column: str) -> str:
-    metric = METRICS[column.removesuffix("_rate")]
-    return f"{metric.label} (rate)" if column.endswith("_rate") else metric.heading
-
-
-def _cell(row: dict[str, Any], column: str) -> str:
-    value = row[column]
-    digits = 3 if column.endswith("_rate") else METRICS[column].digits
-    text = f"{value:.{digits}f}"
-    if column == "success_rate" and "success_ci" in row:
-        low, high = row["success_ci"]
-        text += f" [{low:.{digits}f}, {high:.{digits}f}]"
-    return text
+    return entry
 
 
 def run_task_benchmark(
@@ -250,7 +225,8 @@ def run_task_benchmark(
     say: Callable[[str], None] | None = None,
 ) -> tuple[list[dict[str, Any]], list[Path]]:
     """Every policy on the first `cases` cases of a split of a registered task id, into out/: the
-    store (results.sqlite), NAME.csv and NAME.md (NAME: the task's name), success.png/pdf.
+    store (results.sqlite), NAME.csv and NAME.md (NAME: the task's name; the benchmark's one table
+    writer, socialzoo.bench.tables.write_tables, in a task's layout), success.png/pdf.
 
     A policy acts in the task the id names (socialzoo.agents.make_policy refuses another task's,
     or a learned one of another observation size); a learned policy that declares task overrides
@@ -258,13 +234,14 @@ def run_task_benchmark(
     one line per policy (success, episodes played now and read from the store), as the CLI prints.
 
     Returns:
-        (one summary row per policy, the files written).
+        (one table entry per policy, `table_entry`; the files written).
 
     Raises:
         ValueError, PolicyTaskError, StoreError: an unknown id, policy, split or count; a policy
             of another task; an unusable store.
     """
     from socialzoo.agents import make_policy
+    from socialzoo.bench.tables import task_layout, write_tables
 
     task = TaskId.of(env_id)
     out = Path(out)
@@ -278,7 +255,7 @@ def run_task_benchmark(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides
         )
         summary = summarize(episodes)
-        rows.append({"policy": spec, **summary})
+        rows.append(table_entry(spec, env_id.split("/")[-1], f"{probe.name}-{split}", summary))
         line = (
             f"{spec}: success {summary.get('success_rate', math.nan):.3f} ({played} of {summary['episodes']} "
             "episodes played now, the others read from the store)"
@@ -287,19 +264,9 @@ def run_task_benchmark(
         if say is not None:
             say(line)
     title = f"{env_id}, {split} cases ({probe.name} task)"
-    files = write_tables(rows, out, probe.name, title)
+    files = write_tables(rows, out, name=probe.name, title=title, layout=task_layout(rows))
     if figures and all("success_rate" in r for r in rows):
         from socialzoo.bench.figures import plot_success
 
-        bars = [
-            {
-                "policy": r["policy"],
-                "map": f"{env_id.split('/')[-1]} {split}",
-                "success_rate": r["success_rate"],
-                "success_ci_low": r["success_ci"][0],
-                "success_ci_high": r["success_ci"][1],
-            }
-            for r in rows
-        ]
-        files += plot_success(bars, out, interval="95% CI")
+        files += plot_success(rows, out, interval="95% CI")
     return rows, files

@@ -209,3 +209,28 @@ def test_files_of_one_name_get_labels_that_tell_them_apart():
         == text.count("| DAgger (s2/dagger.safetensors) |")
         > 3
     )
+
+
+def test_one_writer_writes_a_task_ids_tables_in_its_layout(tmp_path):
+    from socialzoo.bench.tables import read_summary_csv, task_layout, write_tables
+    from socialzoo.bench.task_benchmark import summarize as summarize_task
+    from socialzoo.bench.task_benchmark import table_entry
+
+    episodes = [
+        {
+            "success": float(i < 3),
+            "collision": float(i >= 3),
+            "navigation_time": 9.0 + i if i < 3 else math.nan,
+        }
+        for i in range(5)
+    ]
+    entry = table_entry("orca", "CrowdNav-v1", "crowdnav-test", summarize_task(episodes))
+    layout = task_layout([entry])
+    assert layout.metrics == ("success", "collision", "navigation_time") and not layout.paper
+    csv_path, md_path = write_tables([entry], tmp_path, name="crowdnav", title="t", layout=layout)
+    (back,) = read_summary_csv(csv_path)  # the summary's columns, read by the same reader
+    assert back["trials"] == 5 and back["success_rate"] == 0.6 and back["collision_mean"] == 0.4
+    assert back["navigation_time_mean"] == 10.0 and back["success_ci_low"] < 0.6 < back["success_ci_high"]
+    lines = md_path.read_text().splitlines()
+    assert lines[:3] == ["t", "", "| policy | success (rate) | collision (rate) | navigation time, s |"]
+    assert lines[4].startswith("| orca | 0.600 [0.") and lines[4].endswith("| 0.400 | 10.00 |")
