@@ -38,6 +38,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "report how each crowd model walks",
     ),
     "map": ("socialzoo.cli.map_cmd", "list, show, validate, check, import and drive maps"),
+    "metrics": (
+        "socialzoo.cli.metrics_cmd",
+        "score episode logs (JSON, any simulator) with the evaluation guidelines' Table I metrics",
+    ),
     "replay": (
         "socialzoo.cli.replay_cmd",
         "write an episode (several policies side by side) as an HTML viewer",

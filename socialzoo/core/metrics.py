@@ -19,8 +19,9 @@ Direction = Literal["higher", "lower", "neither"]
 # Where a metric is computed: the two tasks' accumulators (socialzoo.env.metrics.EpisodeMetrics,
 # socialzoo.env.crowd_outcome.CrowdNavMetrics), the people's metrics a config adds to the
 # action-selection task's summaries (socialzoo.env.people) and the humans' metrics the benchmark
-# runner adds to a trial (socialzoo.bench.human_metrics).
-Source = Literal["action_selection", "crowdnav", "people", "humans"]
+# runner adds to a trial (socialzoo.bench.human_metrics), and the evaluation guidelines' Table I
+# (socialzoo.bench.guideline_metrics, from any trajectory: an env episode or an episode log).
+Source = Literal["action_selection", "crowdnav", "people", "humans", "guidelines"]
 SOURCES: tuple[str, ...] = get_args(Source)
 
 
@@ -99,6 +100,7 @@ class Metric:
 
 
 _AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), ("humans",)
+_GL = ("guidelines",)
 _BOTH = ("action_selection", "crowdnav")
 
 _ENTRIES: tuple[Metric, ...] = (
@@ -596,6 +598,298 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Distance walked until the route's goal end was first reached over the route's "
         "length from the spawn (to the waypoint radius), mean over the humans that reached it: 1 "
         "walks the route, more is a detour; NaN for none.",
+    ),
+    # ---------------------------------------------------------------- Table I of the evaluation guidelines
+    # (Francis et al., ACM THRI 2025; socialzoo.bench.guideline_metrics, from any trajectory)
+    Metric(
+        name="gl_success",
+        label="success (guidelines)",
+        unit="",
+        better="higher",
+        kind="bool",
+        digits=3,
+        sources=_GL,
+        description="Table I's S: the robot centre came within the goal radius of its goal with no contact "
+        "(wall, person or other robot) up to that sample.",
+    ),
+    Metric(
+        name="gl_collisions",
+        label="collisions (guidelines)",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's C: the episode's collisions of every kind, wall, human and other robot "
+        "(gl_wall_collisions + gl_human_collisions + gl_robot_collisions).",
+    ),
+    Metric(
+        name="gl_wall_collisions",
+        label="wall collisions (guidelines)",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's WC: starts of a wall contact (the robot's disc overlapping a wall, or the "
+        "simulator's wall flag), a contact lasting several steps counted once.",
+    ),
+    Metric(
+        name="gl_human_collisions",
+        label="human collisions (guidelines)",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's HC: starts of a contact with a person (discs overlapping, or the simulator's "
+        "flag), per person, a contact lasting several steps counted once.",
+    ),
+    Metric(
+        name="gl_robot_collisions",
+        label="robot collisions (guidelines)",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's AC: starts of a contact with another robot (discs overlapping, or the "
+        "simulator's flag), per robot.",
+    ),
+    Metric(
+        name="gl_timeout",
+        label="timeout (guidelines)",
+        unit="",
+        better="lower",
+        kind="bool",
+        digits=3,
+        sources=_GL,
+        description="Table I's TO: the episode reached its time limit with neither the goal nor a collision "
+        "(without a time limit: it ended with neither).",
+    ),
+    Metric(
+        name="gl_failure_to_progress",
+        label="failures to progress (guidelines)",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's FP: stretches in which some window of 10 s (GuidelineParams.progress_time) "
+        "never brought the robot 0.25 m (progress_distance) closer to its goal than at the "
+        "window's start.",
+    ),
+    Metric(
+        name="gl_stalled_time",
+        label="stalled time (guidelines)",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_GL,
+        description="Table I's ST: time of the steps whose robot speed was below 0.05 m/s "
+        "(GuidelineParams.stall_speed).",
+    ),
+    Metric(
+        name="gl_time_to_goal",
+        label="time to goal (guidelines)",
+        unit="s",
+        better="lower",
+        kind="float",
+        success_only=True,
+        digits=2,
+        sources=_GL,
+        description="Table I's T: time of the first sample within the goal radius, NaN unless the episode "
+        "succeeded.",
+    ),
+    Metric(
+        name="gl_path_length",
+        label="path length (guidelines)",
+        unit="m",
+        better="neither",
+        kind="float",
+        digits=2,
+        sources=_GL,
+        description="Table I's PL: sum of the robot's displacements between samples, up to the goal.",
+    ),
+    Metric(
+        name="gl_spl",
+        label="success weighted by path length",
+        unit="",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), l the shortest path's length (the "
+        "straight line unless the log gives it) and p the path length.",
+    ),
+    Metric(
+        name="gl_velocity_min",
+        label="velocity (min, guidelines)",
+        unit="m/s",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's V_min: the smallest robot speed over the episode's steps.",
+    ),
+    Metric(
+        name="gl_velocity_avg",
+        label="velocity (avg, guidelines)",
+        unit="m/s",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's V_avg: the mean robot speed over the episode's steps.",
+    ),
+    Metric(
+        name="gl_velocity_max",
+        label="velocity (max, guidelines)",
+        unit="m/s",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's V_max: the largest robot speed over the episode's steps.",
+    ),
+    Metric(
+        name="gl_acceleration_min",
+        label="acceleration (min, guidelines)",
+        unit="m/s^2",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's A_min: the smallest linear acceleration, the change of speed per step over dt "
+        "(negative: braking).",
+    ),
+    Metric(
+        name="gl_acceleration_avg",
+        label="acceleration (avg, guidelines)",
+        unit="m/s^2",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's A_avg: the mean linear acceleration, the change of speed per step over dt "
+        "(negative: braking).",
+    ),
+    Metric(
+        name="gl_acceleration_max",
+        label="acceleration (max, guidelines)",
+        unit="m/s^2",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's A_max: the largest linear acceleration, the change of speed per step over dt "
+        "(negative: braking).",
+    ),
+    Metric(
+        name="gl_jerk_min",
+        label="jerk (min, guidelines)",
+        unit="m/s^3",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's J_min: the smallest linear jerk, the change of linear acceleration per step "
+        "over dt.",
+    ),
+    Metric(
+        name="gl_jerk_avg",
+        label="jerk (avg, guidelines)",
+        unit="m/s^3",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's J_avg: the mean linear jerk, the change of linear acceleration per step over "
+        "dt.",
+    ),
+    Metric(
+        name="gl_jerk_max",
+        label="jerk (max, guidelines)",
+        unit="m/s^3",
+        better="neither",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's J_max: the largest linear jerk, the change of linear acceleration per step "
+        "over dt.",
+    ),
+    Metric(
+        name="gl_clearing_distance_min",
+        label="clearing distance (min, guidelines)",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's CD_min: the smallest gap between the robot's disc and a wall over the episode "
+        "(negative: overlap); NaN without walls.",
+    ),
+    Metric(
+        name="gl_clearing_distance_avg",
+        label="clearing distance (mean, guidelines)",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's CD_avg: the mean over the episode's samples of the gap between the robot's "
+        "disc and the nearest wall; NaN without walls.",
+    ),
+    Metric(
+        name="gl_personal_space_compliance",
+        label="personal space compliance (guidelines)",
+        unit="",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's SC (PSC, Pérez-D'Arpino et al. 2021): share of the episode's samples with "
+        "every person's disc at least 0.5 m (GuidelineParams.personal_space) from the robot's.",
+    ),
+    Metric(
+        name="gl_min_distance_to_human",
+        label="minimum distance to a human (guidelines)",
+        unit="m",
+        better="higher",
+        kind="float",
+        digits=3,
+        sources=_GL,
+        description="Table I's DH_min: the smallest gap between the robot's disc and a person's over the "
+        "episode (negative: overlap); NaN with nobody.",
+    ),
+    Metric(
+        name="gl_min_time_to_collision",
+        label="minimum time to collision (guidelines)",
+        unit="s",
+        better="higher",
+        kind="float",
+        digits=2,
+        sources=_GL,
+        description="Table I's TTC: the least time, over samples and people, until the robot's and a person's "
+        "discs would touch if both kept their velocities; inf when never on a collision course, "
+        "NaN with nobody.",
+    ),
+    Metric(
+        name="gl_aggregated_time",
+        label="aggregated time (guidelines)",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_GL,
+        description="Table I's AT: time when the last of the cooperative set (the robot and the other robots "
+        "with goals) first reached its goal; NaN when one never did.",
     ),
 )
 

@@ -18,7 +18,7 @@ from socialzoo.core.metrics import (
     table_heading,
 )
 
-UNITS = {"", "s", "m", "m/s", "m/s^3", "rad", "1/min"}
+UNITS = {"", "s", "m", "m/s", "m/s^2", "m/s^3", "rad", "1/min"}
 
 
 @pytest.mark.parametrize("name", list(METRICS))

@@ -1,0 +1,158 @@
+"""`socialzoo metrics LOG.json [LOG2.json ...] [--out table.csv]`: the metrics of Table I of the
+evaluation guidelines (socialzoo.bench.guideline_metrics) of episode logs in socialzoo's schema
+(socialzoo.bench.episode_log), from this simulator or any other: one table (metric, value, unit)
+per log, and all of them in one CSV when asked."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from socialzoo.cli import command_help
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add `metrics`."""
+    parser = subparsers.add_parser(
+        "metrics",
+        help=command_help("metrics"),
+        description="Score episode logs (JSON in socialzoo's episode-log schema, "
+        "socialzoo/bench/schemas/episode_log.schema.json; docs/guideline_metrics.md) with the metrics "
+        "of Table I of the social-navigation evaluation guidelines (Francis et al., ACM THRI 2025): "
+        "one table of metric, value and unit per log. Every log is checked first; a log that breaks "
+        "the schema stops the command with its file and field, and nothing is written.",
+    )
+    parser.add_argument("logs", nargs="+", type=Path, metavar="LOG.json", help="episode logs")
+    parser.add_argument(
+        "--out", type=Path, help="also write every log's table to this CSV (log, metric, value, unit)"
+    )
+    parser.add_argument(
+        "--personal-space", type=_non_negative, default=0.5, help="personal space, m (default 0.5)"
+    )
+    parser.add_argument(
+        "--stall-speed", type=_non_negative, default=0.05, help="stalled below this speed, m/s (default 0.05)"
+    )
+    parser.add_argument(
+        "--progress-time", type=_non_negative, default=10.0, help="failure-to-progress window, s (default 10)"
+    )
+    parser.add_argument(
+        "--progress-distance",
+        type=_non_negative,
+        default=0.25,
+        help="progress needed within the window, m (default 0.25)",
+    )
+    parser.set_defaults(func=run_metrics)
+
+
+def _value(value: Any, digits: int) -> str:
+    """A metric's value as text: yes/no for a flag, an integer, a float to `digits` decimals."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    if math.isnan(value):
+        return "nan"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return f"{value:.{digits}f}"
+
+
+def metric_rows(found: dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """(name, label, value, unit) of each metric of a log, in registry order."""
+    from socialzoo.core.metrics import metric
+
+    rows = []
+    for name, value in found.items():
+        m = metric(name)
+        rows.append((name, m.label, _value(value, m.digits), m.unit or "-"))
+    return rows
+
+
+def format_table(title: str, found: dict[str, Any]) -> str:
+    """A log's metrics as a plain-text table under its title."""
+    rows = [("metric", "", "value", "unit"), *metric_rows(found)]
+    width = [max(len(r[i]) for r in rows) for i in (0, 2, 3)]
+    lines = [title]
+    for name, _, value, unit in rows:
+        lines.append(f"  {name:<{width[0]}}  {value:>{width[1]}}  {unit}")
+    return "\n".join(lines)
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    """The CSV, whole or not at all (a temporary file renamed into place)."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(
+        buffer, fieldnames=["log", "label", "metric", "value", "unit"], lineterminator="\n"
+    )
+    writer.writeheader()
+    writer.writerows(rows)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            f.write(buffer.getvalue())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def run_metrics(args: argparse.Namespace) -> int:
+    """Read and check every log, then print (and write) their tables; 2 on a bad log or option."""
+    from socialzoo.bench.episode_log import EpisodeLogError, log_metrics, read_episode_log
+    from socialzoo.bench.guideline_metrics import GuidelineParams
+
+    try:
+        params = GuidelineParams(
+            personal_space=args.personal_space,
+            stall_speed=args.stall_speed,
+            progress_time=args.progress_time,
+            progress_distance=args.progress_distance,
+        )
+    except ValueError as err:
+        print(f"socialzoo metrics: {err}", file=sys.stderr)
+        return 2
+    scored = []
+    try:
+        for path in args.logs:  # every log is read and checked before anything is printed or written
+            log = read_episode_log(path)
+            scored.append((path, log, log_metrics(log, params, str(path))))
+    except EpisodeLogError as err:
+        print(f"socialzoo metrics: invalid episode log: {err}", file=sys.stderr)
+        return 2
+    rows: list[dict[str, Any]] = []
+    for path, log, found in scored:
+        title = f"{path}" + (f" ({log['label']})" if log.get("label") else "")
+        print(format_table(title, found))
+        for name, _, _shown, unit in metric_rows(found):
+            raw = found[name]
+            rows.append(
+                {
+                    "log": str(path),
+                    "label": log.get("label", ""),
+                    "metric": name,
+                    "value": repr(raw) if isinstance(raw, float) else str(int(raw)),
+                    "unit": "" if unit == "-" else unit,
+                }
+            )
+    if args.out is not None:
+        _write_csv(args.out, rows)
+        print(f"wrote {args.out}")
+    return 0
