@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -36,7 +36,7 @@ from socialzoo.env.policy_file import PolicyFileError
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 if TYPE_CHECKING:
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.base import Task
 
 PROGRAM_FORMAT = "socialzoo-pips/1"
 # Binary operators that need both sides in the same unit, then those that combine units.
@@ -494,8 +494,8 @@ class PipsPolicy:
         """
         return cls(load_program(path))
 
-    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
-        """Actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act); the core is
+    def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
+        """Actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act); the task is
         not read (a program sees the observation only)."""
         obs = check_observations(obs, "PipsPolicy.act")
         lead = obs.shape[:-1]
@@ -508,11 +508,3 @@ class PipsPolicy:
     def rules(self) -> list[str]:
         """The program as readable rules."""
         return self.program.rules()
-
-
-def transitions_from_pairs(pairs: Sequence[tuple[int, int, Predicate]]) -> Program:
-    """A program from (state, target, guard) triples, transitions kept in the order given."""
-    transitions: dict[int, list[Transition]] = {}
-    for state, target, guard in pairs:
-        transitions.setdefault(state, []).append(Transition(target, guard))
-    return Program({s: tuple(ts) for s, ts in transitions.items()})

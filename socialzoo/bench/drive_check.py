@@ -141,15 +141,6 @@ class DriveReport:
             out[r.cause] = out.get(r.cause, 0) + 1
         return {c: out[c] for c in DRIVE_CAUSES if c in out}
 
-    def failed_pairs(self) -> np.ndarray:
-        """(F, 2) int (start, goal) pose indices of the routes not completed."""
-        return np.array([(r.start, r.goal) for r in self.failures], dtype=np.int64).reshape(-1, 2)
-
-    def driven_pairs(self) -> np.ndarray:
-        """(D, 2) int (start, goal) pose indices of the routes completed."""
-        done = [(r.start, r.goal) for r in self.routes if r.reached]
-        return np.array(done, dtype=np.int64).reshape(-1, 2)
-
     def lines(self, limit: int | None = 50) -> list[str]:
         """The report as text lines: a summary, then every failed route (at most `limit`)."""
         n = len(self.routes)
@@ -488,11 +479,10 @@ def draw_failure(
 ) -> Path:
     """Walls around the episode, its first plan, the robot's track, start (green) and goal (red),
     to `path`; returns it."""
-    import matplotlib
+    from socialzoo.bench.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
+    plt = pyplot()
+    from matplotlib.collections import LineCollection  # after pyplot() chose the Agg backend
 
     fig, ax = plt.subplots(figsize=(9, 8))
     pts = np.concatenate((trace, plan, scenario.robot_start[None, :2], scenario.robot_goal[None, :2]))

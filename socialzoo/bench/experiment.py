@@ -42,11 +42,6 @@ QUICK_POLICIES = ("goalone", "ref", "ppo", "dqn", "bc", "gail", "pips")
 QUICK_MAPS = ("gdc1", "ghc3")
 
 
-def benchmark_maps() -> list[str]:
-    """Maps with benchmark test sets ("<map>-test" and "<map>-quick")."""
-    return sorted({ts.map_name for ts in TEST_SETS.values()})
-
-
 @dataclass(frozen=True, kw_only=True)
 class BenchmarkConfig:
     """What a benchmark run evaluates, and how.

@@ -23,7 +23,8 @@ METRIC_PANELS: tuple[tuple[str, str], ...] = tuple(
 _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib.pyplot with the non-interactive Agg backend (matplotlib imported on first use)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -84,12 +85,17 @@ def _bars(
     return width
 
 
-def _save(fig: Any, out_dir: Path, stem: str, formats: Sequence[str]) -> list[Path]:
-    paths = []
-    for fmt in formats:
-        path = out_dir / f"{stem}.{fmt}"
-        fig.savefig(path, dpi=150, bbox_inches="tight")
-        paths.append(path)
+def save_figure(
+    fig: Any, out_dir: str | Path, stem: str, formats: Sequence[str] = FIGURE_FORMATS, dpi: int = 150
+) -> list[Path]:
+    """Save a figure as out_dir/STEM.FORMAT for each format (the folder made if missing), close
+    it, and return the files."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / f"{stem}.{fmt}" for fmt in formats]
+    for path in paths:
+        fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    pyplot().close(fig)
     return paths
 
 
@@ -106,9 +112,7 @@ def plot_success(
     Returns:
         The files written.
     """
-    plt = _pyplot()
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) + 2.0), 3.6))
     width = _bars(ax, policies, maps, by_key, "success_rate", "success_ci_low", "success_ci_high", 100.0)
@@ -131,9 +135,7 @@ def plot_success(
     ax.set_ylim(0, 105)
     ax.legend(loc="lower right", fontsize="small")
     ax.set_title("Success rate")
-    paths = _save(fig, out_dir, "success", formats)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, "success", formats)
 
 
 def plot_metrics(
@@ -145,9 +147,7 @@ def plot_metrics(
     Returns:
         The files written.
     """
-    plt = _pyplot()
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(4.2 * len(METRIC_PANELS), 3.4))
     for ax, (name, label) in zip(axes, METRIC_PANELS, strict=True):
@@ -156,9 +156,7 @@ def plot_metrics(
         ax.set_ylim(bottom=0)
     axes[0].legend(fontsize="small")
     fig.tight_layout()
-    paths = _save(fig, out_dir, "metrics", formats)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, "metrics", formats)
 
 
 # Colours of the failure causes (success is white) in failures.{png,pdf}.
@@ -179,9 +177,7 @@ def plot_failures(
     Returns:
         The files written.
     """
-    plt = _pyplot()
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) * max(len(maps), 1) / 2 + 2.5), 3.6))
     width = 0.8 / max(len(maps), 1)
@@ -209,9 +205,7 @@ def plot_failures(
     if labelled:
         ax.legend(fontsize="small")
     ax.set_title("Failures by cause")
-    paths = _save(fig, out_dir, "failures", formats)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, "failures", formats)
 
 
 def plot_summary(

@@ -284,21 +284,15 @@ def _ordered(values: list[str], order: tuple[str, ...] | list[str]) -> list[str]
 
 def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: str) -> list[Any]:
     """humans.csv (every column) and humans.md (a table per map, metrics as rows) in out_dir."""
-    import csv
-    import io
     from pathlib import Path
 
-    from socialzoo.bench.tables import write_text_atomic
+    from socialzoo.bench.tables import write_csv, write_text_atomic
 
     out = Path(out_dir)
     columns = ["policy", "map", "trials"] + [
         f"{k}_{s}" for k in HUMAN_METRIC_KEYS for s in ("mean", "ci_low", "ci_high")
     ]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(summary)
-    files = [write_text_atomic(out / "humans.csv", text.getvalue())]
+    files = [write_csv(summary, out / "humans.csv", columns, blank_nan=False, lineterminator="\n")]
     lines = [f"# {title}", "", "Means over trials with 90% intervals (bootstrap for collision counts).", ""]
     for map_name in dict.fromkeys(e["map"] for e in summary):
         entries = [e for e in summary if e["map"] == map_name]

@@ -27,7 +27,6 @@ SCHEMA_VERSION = 1
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 # Columns every trial row has, before its metrics.
-KEY_COLUMNS = ("policy", "test_set", "scenario_index", "config_hash")
 TRIAL_COLUMNS = (
     "policy",
     "map",

@@ -15,7 +15,7 @@ import math
 import os
 import zlib
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -284,11 +284,38 @@ def write_summary_csv(
 ) -> Path:
     """Write summary entries as CSV (columns `layout.csv_columns()`, NaN written as an empty cell)."""
     columns = layout.csv_columns()
+    rows = [{c: _csv_value(entry.get(c, math.nan)) for c in columns} for entry in summary]
+    return write_csv(rows, path, columns)
+
+
+def write_csv(
+    rows: Iterable[Mapping[str, Any]],
+    path: str | Path,
+    columns: Sequence[str] | None = None,
+    *,
+    blank_nan: bool = True,
+    lineterminator: str = "\r\n",
+) -> Path:
+    """Write rows as CSV, whole or not at all (`write_text_atomic`): the CSV writer of every table.
+
+    Args:
+        rows: dicts; keys outside `columns` are left out, a missing key is an empty cell.
+        path: the file.
+        columns: the columns, in order; None: every key of the rows, in order of appearance.
+        blank_nan: write None and NaN as an empty cell (else NaN as "nan").
+        lineterminator: the line ending (the csv module's CR LF by default, or a newline).
+    """
+    rows = list(rows)
+    if columns is None:
+        columns = list(dict.fromkeys(k for row in rows for k in row))
     text = io.StringIO(newline="")
-    writer = csv.DictWriter(text, fieldnames=columns)
+    writer = csv.DictWriter(text, fieldnames=columns, lineterminator=lineterminator)
     writer.writeheader()
-    for entry in summary:
-        writer.writerow({c: _csv_value(entry.get(c, math.nan)) for c in columns})
+    for row in rows:
+        cells = {c: row.get(c) for c in columns}
+        if blank_nan:
+            cells = {c: "" if isinstance(v, float) and math.isnan(v) else v for c, v in cells.items()}
+        writer.writerow(cells)
     return write_text_atomic(path, text.getvalue())
 
 
@@ -385,13 +412,14 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list
     return lines + ["| " + " | ".join(cells) + " |" for cells in rows]
 
 
-def _interval(entry: Mapping[str, Any] | None, name: str, digits: int, scale: float = 1.0) -> str:
-    """A metric's value in an entry with its interval ("-" where the table has no entry)."""
+def interval_text(entry: Mapping[str, Any] | None, name: str, digits: int, scale: float = 1.0) -> str:
+    """A metric's value in a summary entry (`value_key`) with its interval, times `scale`:
+    "0.12 [0.10, 0.14]"; the value alone where the interval is missing, "n/a" where the value is,
+    "-" where the table has no entry."""
     if entry is None:
         return "-"
-    value, low, high = (
-        scale * entry.get(k, math.nan) for k in (value_key(name), f"{name}_ci_low", f"{name}_ci_high")
-    )
+    keys = (value_key(name), f"{name}_ci_low", f"{name}_ci_high")
+    value, low, high = (math.nan if entry.get(k) is None else scale * float(entry[k]) for k in keys)
     return _fmt_ci(value, low, high, digits)
 
 
@@ -435,7 +463,7 @@ def summary_markdown(
     for p in policies:
         cells = [labels[p]]
         for m in maps:
-            cells.append(_interval(by_key.get((p, m)), "success", 1, 100.0))
+            cells.append(interval_text(by_key.get((p, m)), "success", 1, 100.0))
             if m in paper_maps:
                 paper = paper_success(p, m)
                 cells.append("-" if paper is None else f"{paper:.1f}")
@@ -451,7 +479,7 @@ def summary_markdown(
             for m in maps:
                 e = by_key.get((p, m))
                 n = f" (n={e[f'{name}_n']})" if e is not None and name in SUCCESS_ONLY else ""
-                cells.append(_interval(e, name, metric(name).digits) + n)
+                cells.append(interval_text(e, name, metric(name).digits) + n)
             rows.append(cells)
         lines += markdown_table(["policy", *(_map_header(m) for m in maps)], rows)
     lines += ["", "## Intervals", "", INTERVALS_NOTE]
@@ -466,7 +494,7 @@ def _column_heading(name: str) -> str:
 def _column_cell(entry: Mapping[str, Any], name: str) -> str:
     digits = 3 if metric(name).kind == "bool" else metric(name).digits
     if name == "success":
-        return _interval(entry, name, digits)
+        return interval_text(entry, name, digits)
     return _fmt(entry[value_key(name)], digits)
 
 

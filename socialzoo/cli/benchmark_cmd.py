@@ -17,18 +17,6 @@ from socialzoo.cli.arg_types import positive_int
 logger = logging.getLogger(__name__)
 
 
-def _names(text: str) -> tuple[str, ...]:
-    # Lower-case names, but not the file of a "NAME:PATH" policy.
-    names = tuple(
-        key.lower() + sep + path
-        for key, sep, path in (n.strip().partition(":") for n in text.split(","))
-        if key
-    )
-    if not names:
-        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
-    return names
-
-
 def _policy_specs(text: str) -> tuple[str, ...]:
     """Comma-separated policy specs; the registry name is lower-cased, a ':PATH' kept as written."""
     specs = []

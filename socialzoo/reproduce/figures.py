@@ -24,9 +24,9 @@ FORMATS: tuple[str, ...] = ("png", "pdf")
 def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Path]:
     """lfd.{png,pdf}: success % of each LfD policy against its demonstration steps (log scale),
     with 90% intervals, and the paper's numbers as black crosses."""
-    from socialzoo.bench.figures import _pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
     colors = ("#4477aa", "#ee6677", "#228833")
     for i, policy in enumerate(dict.fromkeys(str(r["policy"]) for r in rows)):
@@ -49,14 +49,7 @@ def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Pat
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    out = Path(out_dir)
-    paths = []
-    for fmt in FORMATS:
-        path = out / f"lfd.{fmt}"
-        fig.savefig(path, dpi=150, bbox_inches="tight")
-        paths.append(path)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, "lfd", FORMATS)
 
 
 def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, list[Path]]:

@@ -24,10 +24,10 @@ import json
 import math
 import os
 import shutil
-from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from socialzoo.bench.tables import write_csv
 from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
@@ -229,17 +229,6 @@ def _read_text(path: Path) -> str:
 def _read_json(path: Path, kind: type) -> Any:
     """The JSON value of `path`, which must be a `kind` (dict or list)."""
     return read_json(path, "results file", ResultsError, kind=kind)
-
-
-def write_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write rows as CSV (columns of the first row; NaN as an empty cell)."""
-    path = Path(path)
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: "" if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()})
-    return path
 
 
 def load(results_dir: str | Path) -> dict[str, Any]:

@@ -176,14 +176,15 @@ def _curve_success(path: Path) -> dict[tuple[str, int], float]:
 def write_seed_results(ctx: Context) -> list[Path]:
     """selection.csv (runs that chose on validation), and with several seeds seeds.csv,
     improvement.csv and profiles.csv, into DIR/<hash>/seeds/; returns the files written."""
-    from socialzoo.studies.seeds import write_rows, write_seed_study
+    from socialzoo.bench.tables import write_csv
+    from socialzoo.studies.seeds import write_seed_study
 
     out = ctx.ledger.path(SEEDS_DIR)
     out.mkdir(parents=True, exist_ok=True)
     files = []
     selection = selection_rows(ctx)
     if selection:
-        files.append(write_rows(selection, out / SELECTION_CSV))
+        files.append(write_csv(selection, out / SELECTION_CSV))
     else:
         (out / SELECTION_CSV).unlink(missing_ok=True)
     groups = _groups(ctx) if ctx.settings.seeds > 1 else []

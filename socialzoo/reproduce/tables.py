@@ -11,9 +11,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import policy_label
+from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.reproduce.paper import PAPER_POLICIES, PAPER_SUCCESS
-from socialzoo.reproduce.results import write_csv
 
 # Paper's success on the training map (index 0) or the transfer map (index 1).
 EXPERIMENT_MAPS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer": ("ghc3", 1)}
@@ -23,15 +22,6 @@ def _num(value: Any, digits: int, scale: float = 1.0) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
     return f"{scale * float(value):.{digits}f}"
-
-
-def _interval(row: Mapping[str, Any], key: str, digits: int, scale: float = 1.0) -> str:
-    mean_key = "success_rate" if key == "success" else f"{key}_mean"
-    low, high = row.get(f"{key}_ci_low", math.nan), row.get(f"{key}_ci_high", math.nan)
-    text = _num(row.get(mean_key), digits, scale)
-    if isinstance(low, float) and isinstance(high, float) and math.isfinite(low) and math.isfinite(high):
-        text += f" [{_num(low, digits, scale)}, {_num(high, digits, scale)}]"
-    return text
 
 
 def outside(paper: float | None, low: float, high: float) -> bool:
@@ -78,9 +68,10 @@ def experiment_markdown(table: Sequence[Mapping[str, Any]]) -> str:
     for t in table:
         r = t["_row"]
         lines.append(
-            f"| {policy_label(t['policy'])} | {t['trials']:,} | {_interval(r, 'success', 1, 100.0)} "
-            f"| {t['paper_success_pct']:.1f} | {_interval(r, 'mean_force', 4)} | {_interval(r, 'mean_blame', 4)} "
-            f"| {_interval(r, 'time_to_goal', 1)} | {'yes' if t['differs'] else ''} |"
+            f"| {policy_label(t['policy'])} | {t['trials']:,} | {interval_text(r, 'success', 1, 100.0)} "
+            f"| {t['paper_success_pct']:.1f} | {interval_text(r, 'mean_force', 4)} "
+            f"| {interval_text(r, 'mean_blame', 4)} "
+            f"| {interval_text(r, 'time_to_goal', 1)} | {'yes' if t['differs'] else ''} |"
         )
     return "\n".join(lines)
 
@@ -175,8 +166,8 @@ def curves_markdown(table: Sequence[Mapping[str, Any]]) -> str:
         step = f"{t['step']:,}" if t["step"] is not None else ""
         lines.append(
             f"| {policy_label(str(t['policy']))} | {t['checkpoint']} | {step} | {t['trials']} "
-            f"| {_interval(r, 'success', 1, 100.0)} | {_interval(r, 'time_to_goal', 1)} "
-            f"| {_interval(r, 'average_step_reward', 4)} |"
+            f"| {interval_text(r, 'success', 1, 100.0)} | {interval_text(r, 'time_to_goal', 1)} "
+            f"| {interval_text(r, 'average_step_reward', 4)} |"
         )
     return "\n".join(lines)
 

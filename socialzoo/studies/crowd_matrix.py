@@ -15,8 +15,6 @@ because of the robot (socialzoo.env.people), means per person.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -28,7 +26,7 @@ import numpy as np
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, write_text_atomic
+from socialzoo.bench.tables import policy_label, write_csv, write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario import TestSet
@@ -222,11 +220,7 @@ def write_matrix_csv(rows: list[dict[str, Any]], path: Path) -> Path:
     columns = ["policy", "humans", "map", "trials"] + [
         f"{key}_{s}" for key, _, _, _ in METRICS for s in ("mean", "low", "high")
     ]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return write_text_atomic(path, text.getvalue())
+    return write_csv(rows, path, columns, blank_nan=False, lineterminator="\n")
 
 
 def _cell(row: dict[str, Any] | None, key: str, digits: int) -> str:
@@ -264,10 +258,9 @@ def write_matrix_md(rows: list[dict[str, Any]], config: MatrixConfig, path: Path
 
 def plot_matrix(rows: list[dict[str, Any]], config: MatrixConfig, path: Path) -> Path:
     """A heatmap per metric (the first map): policies as rows, crowd models as columns."""
-    import matplotlib
+    from socialzoo.bench.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     map_name = rows[0]["map"] if rows else ""
     by = {(r["policy"], r["humans"]): r for r in rows if r["map"] == map_name}

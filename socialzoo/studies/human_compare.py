@@ -13,8 +13,6 @@ human-robot, means per episode).
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +21,7 @@ from typing import Any
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import write_text_atomic
+from socialzoo.bench.tables import write_csv, write_text_atomic
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario import TestSet, validation_set
 
@@ -198,14 +196,7 @@ def check_targets(rows: list[dict[str, Any]]) -> dict[str, dict[str, bool]]:
 
 def write_comparison_csv(rows: list[dict[str, Any]], path: Path) -> Path:
     """Every column of the comparison rows."""
-    columns: list[str] = []
-    for row in rows:
-        columns += [k for k in row if k not in columns]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return write_text_atomic(path, text.getvalue())
+    return write_csv(rows, path, blank_nan=False, lineterminator="\n")
 
 
 def _cell(row: dict[str, Any], key: str, digits: int) -> str:
@@ -258,12 +249,11 @@ def write_comparison_md(
 def plot_comparison(rows: list[dict[str, Any]], path: Path) -> Path:
     """Bars of every human metric and the robot's success, force and blame: one panel per metric,
     maps along x, the two populations side by side, 90% intervals as error bars."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
+    from socialzoo.bench.figures import pyplot
+
+    plt = pyplot()
     panels = [(k, HUMAN_METRIC_LABELS[k][0], True) for k in HUMAN_METRIC_KEYS]
     panels += [(k, label, False) for k, label, _ in ROBOT_METRICS]
     maps = list(dict.fromkeys(r["map"] for r in rows))

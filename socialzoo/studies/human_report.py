@@ -22,9 +22,7 @@ goal) and config.json.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
 import json
 import math
 import re
@@ -36,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.human_metrics import HumanEpisodeMetrics
-from socialzoo.bench.tables import write_text_atomic
+from socialzoo.bench.tables import write_csv, write_text_atomic
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.people import People, without_robots
@@ -233,11 +231,7 @@ def targets(rows: list[dict[str, Any]]) -> dict[str, dict[str, bool]]:
 def write_report(results: list[WalkResult], cfg: HumanReportConfig, out_dir: Path) -> list[Path]:
     """report.csv and report.md in out_dir."""
     rows = [r.row for r in results]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=list(COLUMNS), lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    files = [write_text_atomic(out_dir / "report.csv", text.getvalue())]
+    files = [write_csv(rows, out_dir / "report.csv", COLUMNS, blank_nan=False, lineterminator="\n")]
     lines = [
         f"# How each crowd model walks ({cfg.map}, {cfg.scenarios} validation scenarios, {cfg.seconds:g} s, no robot)",
         "",
@@ -271,10 +265,9 @@ def write_report(results: list[WalkResult], cfg: HumanReportConfig, out_dir: Pat
 def plot_walk(result: WalkResult, out_dir: Path) -> Path:
     """walk_<model>.png: speed histogram, speed against local density with Weidmann's curve, time
     to goal."""
-    import matplotlib
+    from socialzoo.bench.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
     ax = axes[0]

@@ -11,7 +11,6 @@ interrupted evaluation resumes and a repeated one is read back.
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 from collections.abc import Mapping, Sequence
@@ -21,7 +20,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.runner import Backend
-from socialzoo.bench.tables import policy_label
+from socialzoo.bench.tables import policy_label, write_csv
 
 logger = logging.getLogger(__name__)
 
@@ -181,7 +180,10 @@ def run_lfd_evaluation(
                 "policy_file": str(policies[(name, size)]),
             }
         )
-    files = [write_lfd_csv(rows, out / TABLE_CSV), write_lfd_md(rows, out / TABLE_MD, trials)]
+    files = [
+        write_csv(rows, out / TABLE_CSV, CSV_COLUMNS, blank_nan=False),
+        write_lfd_md(rows, out / TABLE_MD, trials),
+    ]
     return LfdResult(rows, files + list(result.files), result.computed, result.reused)
 
 
@@ -194,18 +196,6 @@ def _cell(value: Any, digits: int) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
     return f"{value:.{digits}f}"
-
-
-def write_lfd_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write the LfD rows as CSV (columns CSV_COLUMNS; missing values as empty cells)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: "" if row.get(k) is None else row[k] for k in CSV_COLUMNS})
-    return path
 
 
 def write_lfd_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: int) -> Path:

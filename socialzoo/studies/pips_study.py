@@ -12,7 +12,6 @@ with its 90% interval, the synthesis time and the program's size) and pips_study
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 from collections.abc import Mapping, Sequence
@@ -21,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
-from socialzoo.bench.tables import policy_label
+from socialzoo.bench.tables import policy_label, write_csv
 from socialzoo.scenarios.scenario import TestSet
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
@@ -32,11 +31,8 @@ logger = logging.getLogger(__name__)
 STUDY_STEPS: tuple[int, ...] = (500, 1_000, 3_500, 10_000)
 STUDY_WINDOWS: tuple[int, ...] = (20, 0)
 STUDY_TRIALS = 200
-STUDY_MAP = "gdc1"
 # Policies evaluated on the same scenarios for reference: the demonstrator.
 STUDY_BASELINES: tuple[str, ...] = ("ref",)
-# What socialzoo.train.pips writes beside a program NAME.json (its record).
-RECORD_SUFFIX = ".train.json"
 TABLE_CSV = "pips_study.csv"
 TABLE_MD = "pips_study.md"
 FIGURE = "pips_study.png"
@@ -215,24 +211,12 @@ def run_pips_study(
     ]
     name = test_set.name or test_set.map_name
     files = [
-        write_study_csv([*rows, *base_rows], out / TABLE_CSV),
+        write_csv([*rows, *base_rows], out / TABLE_CSV, CSV_COLUMNS, blank_nan=False),
         write_study_md(rows, out / TABLE_MD, trials, name, base_rows),
     ]
     if figure:
         files.append(plot_study(rows, out / FIGURE, trials, name, base_rows))
     return StudyResult(rows, base_rows, files + list(result.files), result.computed, result.reused)
-
-
-def write_study_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write the study's rows as CSV (columns CSV_COLUMNS; missing values as empty cells)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: "" if row.get(k) is None else row[k] for k in CSV_COLUMNS})
-    return path
 
 
 def _window_label(window: int) -> str:
@@ -297,10 +281,9 @@ def plot_study(
     baselines: Sequence[Mapping[str, Any]] = (),
 ) -> Path:
     """Success (with 90% intervals) against demonstration steps, one line per window (PNG)."""
-    import matplotlib
+    from socialzoo.bench.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6.0, 3.8))
     windows = sorted({r["window"] for r in rows}, reverse=True)

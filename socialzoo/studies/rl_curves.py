@@ -14,7 +14,6 @@ reads. Training runs are folders written by `socialzoo train ppo|dqn` (checkpoin
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 import re
@@ -25,7 +24,7 @@ from typing import Any
 
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, summarize
+from socialzoo.bench.tables import policy_label, summarize, write_csv
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.scenarios.scenario import TestSet, get_test_set, validation_set
 
@@ -198,13 +197,7 @@ def curve_rows(rows: Sequence[Mapping[str, Any]], steps: Mapping[str, int]) -> l
 
 def write_curves_csv(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
     """Write curve rows (curve_rows) as CSV."""
-    path = Path(path)
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS, extrasaction="ignore")
-        writer.writeheader()
-        for row in rows:
-            writer.writerow(row)
-    return path
+    return write_csv(rows, path, CSV_COLUMNS, blank_nan=False)
 
 
 def plot_curves(
@@ -217,9 +210,9 @@ def plot_curves(
     """<stem>.{png,pdf} (default rl_curves): success, time to goal and average step reward against
     training steps, one line per run with its 90% band; `references` (curve rows without steps,
     e.g. Ref) as horizontal lines."""
-    from socialzoo.bench.figures import _pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(CURVE_PANELS), figsize=(4.2 * len(CURVE_PANELS), 3.4))
     labels = list(dict.fromkeys(r["label"] for r in rows))
     bases = list(dict.fromkeys(_SEED_SUFFIX.sub("", label) for label in labels))
@@ -257,14 +250,7 @@ def plot_curves(
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    out = Path(out_dir)
-    paths = []
-    for fmt in formats:
-        path = out / f"{stem}.{fmt}"
-        fig.savefig(path, dpi=150, bbox_inches="tight")
-        paths.append(path)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, stem, formats)
 
 
 @dataclass(frozen=True)

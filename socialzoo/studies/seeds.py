@@ -15,7 +15,6 @@ per map) and profiles.csv with profiles.{png,pdf} (performance profiles per map)
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -33,6 +32,7 @@ from socialzoo.bench.aggregates import (
     score_matrix,
     where_in,
 )
+from socialzoo.bench.tables import write_csv
 
 SEEDS_CSV = "seeds.csv"
 IMPROVEMENT_CSV = "improvement.csv"
@@ -224,20 +224,6 @@ def profile_rows(
     return rows
 
 
-def write_rows(rows: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
-    """Rows as CSV (the first row's columns; NaN as an empty cell), written atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: "" if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()})
-    tmp.replace(path)
-    return path
-
-
 def _no_size(value: Any) -> bool:
     """True for an empty demonstration-size cell (as written, or NaN as read back)."""
     return value in ("", None) or (isinstance(value, float) and math.isnan(value))
@@ -248,14 +234,14 @@ def plot_profiles(
 ) -> list[Path]:
     """profiles.{png,pdf}: one panel per (experiment, map): each policy's share of seeds whose
     success exceeds tau, against tau, with its bootstrap band."""
-    from socialzoo.bench.figures import _pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
     from socialzoo.bench.tables import policy_label
 
     rows = [r for r in rows if _no_size(r["demonstration_steps"])]  # the LfD sizes are not drawn
     panels = list(dict.fromkeys((str(r["experiment"]), str(r["map"])) for r in rows))
     if not panels:
         return []
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(panels), figsize=(4.4 * len(panels), 3.4), squeeze=False)
     colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377", "#bbbbbb")
     for ax, (experiment, map_name) in zip(axes[0], panels, strict=True):
@@ -280,15 +266,7 @@ def plot_profiles(
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for fmt in formats:
-        path = out / f"{PROFILES_STEM}.{fmt}"
-        fig.savefig(path, dpi=150, bbox_inches="tight")
-        paths.append(path)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, out_dir, PROFILES_STEM, formats)
 
 
 def write_seed_study(
@@ -311,4 +289,4 @@ def write_seed_study(
         improvement_rows(groups, pairs, resamples=resamples),
         profile_rows(groups, resamples=resamples),
     )
-    return [write_rows(rows, out / name) for rows, name in zip(tables, names, strict=True)]
+    return [write_csv(rows, out / name) for rows, name in zip(tables, names, strict=True)]

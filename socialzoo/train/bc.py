@@ -26,7 +26,6 @@ from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_part
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("bc", policy_file="bc.safetensors", inputs=INPUT_FILES)
-POLICY_FILE = TRAINER.policy_file
 
 
 @dataclass(frozen=True, kw_only=True)

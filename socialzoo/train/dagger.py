@@ -31,7 +31,6 @@ from socialzoo.train.imitation import INPUT_FILES, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("dagger", policy_file="dagger.safetensors", inputs=INPUT_FILES)
-POLICY_FILE = TRAINER.policy_file
 # Base seeds of the rollout scenarios: round k drives scenarios of TestSet(map, ROLLOUT_BASE_SEED +
 # k, episodes). Their own seeds, like the demonstrations' (socialzoo.bench.demonstrations), so no
 # validation or test scenario is ever driven in training.

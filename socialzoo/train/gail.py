@@ -25,7 +25,6 @@ from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_part
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("gail", policy_file="gail.safetensors", inputs=INPUT_FILES)
-POLICY_FILE = TRAINER.policy_file
 GailReward = Literal["logit", "positive", "negative"]
 # The generator's reward is clipped to +-REWARD_CLIP (a saturated discriminator would give inf).
 REWARD_CLIP = 10.0

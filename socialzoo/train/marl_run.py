@@ -19,6 +19,7 @@ from typing import Any
 import torch
 from tensordict.nn import TensorDictSequential
 
+from socialzoo.bench.tables import write_csv
 from socialzoo.env.human_agents import human_mirror_signs
 from socialzoo.nav.subpolicies import NUM_ACTIONS
 from socialzoo.train.mappo import (
@@ -38,7 +39,7 @@ from socialzoo.train.mappo import (
 )
 from socialzoo.train.marl_args import HUMANS_POLICY_FILE, ROBOT_POLICY_FILE
 from socialzoo.train.run_dir import checkpoint_steps
-from socialzoo.train.skeleton import Trainer, TrainingRun, run_training, write_csv_rows
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 logger = logging.getLogger(__name__)
 
@@ -219,7 +220,7 @@ def _fit(
 
 def write_history(path: Path, history: list[dict[str, float]]) -> Path:
     """The training curves: one CSV row per collected batch (frames, seconds, stats, losses)."""
-    return write_csv_rows(path, history)
+    return write_csv(history, path, blank_nan=False)
 
 
 def read_history(path: str | Path) -> list[dict[str, float]]:

@@ -40,15 +40,15 @@ through the `TrainingRun` it is given:
 from __future__ import annotations
 
 import contextlib
-import csv
 import logging
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.progress import progress_bar
+from socialzoo.bench.tables import write_csv
 from socialzoo.train.run_dir import (
     RUN_FILE,
     RunDir,
@@ -235,7 +235,7 @@ class TrainingRun:
         self.evaluations.append(row)
         for key, value in metrics.items():
             self.writer.add_scalar(f"eval/{key}", value, step)
-        write_csv_rows(self.path / EVALUATIONS_FILE, self.evaluations)
+        write_csv(self.evaluations, self.path / EVALUATIONS_FILE, blank_nan=False)
         logger.info("%s: checkpoint %d evaluated: %s", self.trainer.name, step, metrics)
 
     def best_evaluation(self, key: str = "success") -> dict[str, Any] | None:
@@ -308,18 +308,3 @@ def run_training(
     run.finish(results)
     logger.info("%s: %s in %.1f s", trainer.name, run.policy, run.seconds)
     return run.policy
-
-
-def write_csv_rows(path: Path, rows: Sequence[Mapping[str, Any]]) -> Path:
-    """Rows of a run (checkpoint evaluations, training history) as CSV with the union of their
-    keys as columns, written atomically (a reader never sees half a file)."""
-    keys: list[str] = []
-    for row in rows:
-        keys += [k for k in row if k not in keys]
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("w", newline="") as f:
-        out = csv.DictWriter(f, fieldnames=keys)
-        out.writeheader()
-        out.writerows(rows)
-    tmp.replace(path)
-    return path

@@ -45,7 +45,7 @@ def test_figures_take_axis_labels_from_the_registry(tmp_path, monkeypatch):
     assert figures.METRIC_PANELS == tuple((n, axis_label(n)) for n, _ in figures.METRIC_PANELS)
     seen = []
     monkeypatch.setattr(
-        figures, "_save", lambda fig, *a: seen.extend(ax.get_ylabel() for ax in fig.axes) or []
+        figures, "save_figure", lambda fig, *a: seen.extend(ax.get_ylabel() for ax in fig.axes) or []
     )
     figures.plot_metrics(tables.summarize(_rows()), tmp_path)
     assert seen == [axis_label(n) for n, _ in figures.METRIC_PANELS]
