@@ -87,7 +87,9 @@ def register(subparsers: Any) -> None:
             "scene XML or a floor-plan image (PNG occupancy grid: dark pixels are walls, --scale "
             "metres per pixel), take the navigation graph from --nav (AMRL navigation JSON) or the "
             "scene's waypoints, or build one inside the building (from --seed-point, within "
-            "--region; default the largest enclosed area), generate legal poses, and write a "
+            "--region; default the largest enclosed area; openings of the outline to space the plan "
+            "does not map, such as doorways to nowhere wider than 3 m, are closed by virtual walls "
+            "where nothing else is enclosed, and reported), generate legal poses, and write a "
             "socialzoo map JSON. What the source gets wrong is repaired and reported: nodes on or "
             "in walls are moved to the nearest clear point (or dropped), edges through walls are "
             "rerouted along walking paths (or dropped), stray graph components are joined where the "
@@ -450,6 +452,7 @@ def run_import(args: argparse.Namespace) -> int:
     from socialzoo.maps.map_completion import complete_map
     from socialzoo.maps.map_file import MapError
     from socialzoo.maps.repair import repair_map
+    from socialzoo.maps.roadmap import describe_closures
 
     try:
         walls, nodes, edges, inputs = _read_source(args)
@@ -473,8 +476,13 @@ def run_import(args: argparse.Namespace) -> int:
         }
         if args.strict:
             m = complete_map(args.name, walls, **common)
-            m = dataclasses.replace(m, provenance={**provenance, "repairs": []})
+            # Openings of the outline closed by virtual walls are no repair of the source, but
+            # how its open outline was read: kept and said.
+            closed = {k: v for k, v in (m.provenance or {}).items() if k == "outline_closed"}
+            m = dataclasses.replace(m, provenance={**provenance, **closed, "repairs": []})
             steps: list[tuple[str, str]] = []
+            if closed:
+                print(f"closed: {describe_closures(np.array(closed['outline_closed']))}")
         else:
             m, report = repair_map(args.name, walls, provenance=provenance, **common)
             steps = [(r.kind, r.message) for r in report.repairs]

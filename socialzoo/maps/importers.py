@@ -5,6 +5,10 @@ Each importer returns plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2)); m
 turns them into a Map, generating what a source lacks. Zero-length wall segments (both end points
 equal) are dropped on import: they block nothing and only cost time in every wall query.
 Parse errors raise MapError naming the file and line (or entry).
+
+Walls are read as drawn: an outline with gaps (doorways to space the plan does not map) is
+closed when the free space is found (socialzoo.maps.roadmap.free_space: virtual walls across the
+openings, reported by the import, never added to the walls).
 """
 
 from __future__ import annotations

@@ -6,6 +6,8 @@ edges between given nodes, and legal poses (socialzoo.maps.legal_poses).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from socialzoo.core.walls import WallIndex
@@ -40,7 +42,9 @@ def complete_map(
     """A Map from walls, generating whatever of graph and legal poses is missing.
 
     Without nodes a roadmap is built; nodes without edges (or with none) are joined by build_edges
-    and, if still disconnected, by walking paths; missing legal poses are generated.
+    and, if still disconnected, by walking paths; missing legal poses are generated. Where the
+    free space had to close openings of the outline to unmapped space (roadmap.free_space), the
+    map's provenance lists their virtual walls as "outline_closed".
 
     Raises:
         MapError: when validate is set and the result breaks a rule of validate_map.
@@ -78,6 +82,9 @@ def complete_map(
         if region is None
         else (float(region[0]), float(region[1]), float(region[2]), float(region[3])),
     )
+    if space is not None and len(space.closures):
+        # Openings of the outline closed by virtual walls (roadmap.free_space): say so.
+        m = dataclasses.replace(m, provenance={"outline_closed": space.closures.round(6).tolist()})
     if validate:
         validate_map(m)
     return m

@@ -14,7 +14,9 @@ and records every change in a RepairReport, which importers store in the map's p
 - a legal pose too close to a wall moves to the nearest cell with the pose clearance, a pose that
   cannot reach the graph is dropped, and with fewer than two left the poses are generated afresh.
 With a given graph the free space is where that graph lies (`_graph_free_space`): the enclosed
-area holding most of its nodes, with wider openings of the outline closed where needed.
+area holding most of its nodes, with wider openings of the outline closed where needed. Without
+one, openings of the outline to unmapped space that leave no enclosed room are closed by virtual
+walls (socialzoo.maps.roadmap.free_space), reported as "outline_closed" with their ends.
 What only driving shows (a pose the robot cannot reach, a gap too narrow) is repaired afterwards
 by socialzoo.bench.map_repair.
 """
@@ -43,12 +45,14 @@ from socialzoo.maps.map_file import (
     validate_map,
 )
 from socialzoo.maps.roadmap import (
+    CLOSING_RADII,
     Box,
     FreeSpace,
     RoadmapConfig,
     build_edges,
     build_roadmap,
     connect_components,
+    describe_closures,
     free_space,
     grid_graph,
     pull_string,
@@ -60,9 +64,6 @@ logger = logging.getLogger(__name__)
 MAX_MOVE = 1.5
 # A rerouted edge's walking path may be at most this many times the edge's length (plus 2 m).
 MAX_DETOUR = 2.0
-# Closing radii tried, in order, when most of a given graph's nodes lie outside every enclosed
-# area found with config.closing_radius (an outline drawn with wide gaps), m.
-CLOSING_RADII = (2.0, 2.5, 3.0, 4.0, 5.0)
 
 
 @dataclass(frozen=True)
@@ -388,6 +389,7 @@ def repair_map(
         space = _graph_free_space(walls, given, region, config, index, report)
     else:
         space = free_space(walls, region, seed_point, config, index)
+        _report_closures(space, report)
     if nodes is None or len(nodes) == 0:
         roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
         nodes, edges = roadmap.nodes, roadmap.edges
@@ -441,6 +443,12 @@ def repair_map(
     )
     validate_map(m)
     return m, report
+
+
+def _report_closures(space: FreeSpace, report: RepairReport) -> None:
+    """Report the virtual walls that closed the outline's openings to unmapped space, if any."""
+    if len(space.closures):
+        report.add("outline_closed", describe_closures(space.closures))
 
 
 def _graph_free_space(

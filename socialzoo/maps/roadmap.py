@@ -34,6 +34,9 @@ Box = tuple[float, float, float, float]
 
 # 8-neighbourhood steps on the grid (cells) used for geodesic distances.
 GRID_STEPS = ((1, 0), (0, 1), (1, 1), (1, -1))
+# Wider closing radii tried, in order, where the usual one finds no enclosed room (an outline
+# drawn with wide gaps: doorways to space the plan does not map), m.
+CLOSING_RADII = (2.0, 2.5, 3.0, 4.0, 5.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -122,12 +125,16 @@ class FreeSpace:
             a grid estimate beyond).
         interior: (nx, ny) bool, the passable cells of the area being mapped: connected to the seed
             point, inside the building outline, at least free_clearance from walls.
+        closures: (K, 4) virtual walls x1, y1, x2, y2 that closed openings of the outline to
+            unmapped space when the interior was found (see free_space); they bound the interior
+            but are not walls of the map.
     """
 
     origin: np.ndarray
     resolution: float
     clearance: np.ndarray
     interior: np.ndarray
+    closures: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -258,6 +265,11 @@ def free_space(
     are not outside and are connected to the seed point (without one: to the area holding the
     most anchors, or the largest area when no anchor lies in any).
     A seed point outside every closed outline is allowed: its connected free space is used.
+    Without region, seed point and anchors, an outline open to space the plan does not map (a
+    room whose doorways lead nowhere) is closed: where no enclosed area has room for a legal
+    pose, nothing is enclosed, or wider closing encloses twice the largest area, the openings
+    (up to 10 m) get virtual walls (FreeSpace.closures) and the interior ends at them; the walls
+    themselves are not changed. Closed outlines give the same interior as before.
 
     Args:
         walls: (W, 4) wall segments, m.
@@ -282,13 +294,8 @@ def free_space(
     clearance = _grid_clearance(index, origin, shape, res)
     passable = clearance >= config.free_clearance
 
-    roomy = clearance >= config.closing_radius
-    labels, _ = ndimage.label(roomy)
-    border = np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1]))
-    outside = np.isin(labels, np.unique(border[border > 0]))
-    # Grow the outside back by the radius it was shrunk by, so it reaches the outer walls again.
-    outside = ndimage.distance_transform_edt(~outside) * res <= config.closing_radius + res
-    inside = passable & ~outside
+    inside = passable & ~_outside(clearance, config.closing_radius, res)
+    closures = np.zeros((0, 4))
 
     if seed_point is not None:
         seed = np.asarray(seed_point, dtype=np.float64).reshape(2)
@@ -325,7 +332,134 @@ def free_space(
                 # Most anchors first, the larger area among equals.
                 pick = int(np.lexsort((sizes, held))[-1])
         interior = labels == pick
-    return FreeSpace(origin=origin, resolution=res, clearance=clearance, interior=interior)
+        if region is None and (anchors is None or len(anchors) == 0):
+            closed = _close_openings(index, origin, clearance, passable, inside, interior, config)
+            if closed is not None:
+                interior, closures = closed
+    return FreeSpace(origin=origin, resolution=res, clearance=clearance, interior=interior, closures=closures)
+
+
+def describe_closures(closures: np.ndarray) -> str:
+    """The virtual walls of FreeSpace.closures in words, for an import's report."""
+    closures = np.asarray(closures, dtype=np.float64).reshape(-1, 4)
+    width = np.hypot(closures[:, 2] - closures[:, 0], closures[:, 3] - closures[:, 1])
+    where = ", ".join(
+        f"{w:.1f} m from ({c[0]:.2f}, {c[1]:.2f}) to ({c[2]:.2f}, {c[3]:.2f})"
+        for c, w in zip(closures, width, strict=True)
+    )
+    return (
+        f"the building's outline is open to space the plan does not map (no enclosed area has room "
+        f"for the robot): {len(closures)} opening(s) closed by virtual walls ({where}); the map's "
+        f"walls are unchanged, its graph and poses stay inside"
+    )
+
+
+def _outside(clearance: np.ndarray, radius: float, res: float) -> np.ndarray:
+    """Cells outside the building: what a flood fill from the grid border reaches through cells
+    at least `radius` from walls (openings narrower than 2 x radius stop it), grown back by the
+    radius so that it reaches the outer walls again."""
+    labels, _ = ndimage.label(clearance >= radius)
+    border = np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1]))
+    outside = np.isin(labels, np.unique(border[border > 0]))
+    return ndimage.distance_transform_edt(~outside) * res <= radius + res
+
+
+def _largest(area: np.ndarray) -> np.ndarray:
+    """The largest 4-connected component of a bool grid (all False when there is none)."""
+    labels, count = ndimage.label(area)
+    if count == 0:
+        return area.copy()
+    sizes = np.bincount(labels.ravel(), minlength=count + 1)
+    sizes[0] = 0
+    return labels == int(np.argmax(sizes))
+
+
+def _has_room(interior: np.ndarray, clearance: np.ndarray, config: RoadmapConfig) -> bool:
+    """Whether an area holds a place for a legal pose (the tight-space clearance of legal_poses)."""
+    tight = max(POSE_CLEARANCE, config.free_clearance + config.resolution)
+    return bool((interior & (clearance >= tight)).any())
+
+
+def _close_openings(
+    index: WallIndex,
+    origin: np.ndarray,
+    clearance: np.ndarray,
+    passable: np.ndarray,
+    inside: np.ndarray,
+    interior: np.ndarray,
+    config: RoadmapConfig,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The interior of a plan whose outline is open to unmapped space, and the virtual walls that
+    close it; None when the outline needs no closing or closing finds no room either.
+
+    Needed when no enclosed area holds a place for a legal pose (openings wider than
+    2 x closing_radius let the outside in: a room whose doorways lead to space the plan does not
+    map), when nothing is enclosed at all (the outside then reaches every passable cell), or when
+    closing the openings encloses an area at least twice the largest one found (a closet was
+    enclosed, the building beside it was open). The
+    openings are found with the wider CLOSING_RADII, one at a time: where the area they enclose
+    meets the outside, a virtual wall joins the nearest wall points (snapped to a wall's end
+    within 0.5 m) across the opening. The outside is then found again with the usual
+    closing_radius and these virtual walls, so the interior ends at them (no wider erosion); the
+    map's walls stay as drawn.
+    """
+    # With room already, only an opening that hides a much larger area (the building beside the
+    # closet that alone was closed) is worth closing.
+    need = 2 * int(interior.sum()) if inside.any() and _has_room(interior, clearance, config) else 0
+    res = config.resolution
+    for radius in CLOSING_RADII:
+        if radius <= config.closing_radius:
+            continue
+        enclosed = _largest(passable & ~_outside(clearance, radius, res))
+        if enclosed.sum() < need or not _has_room(enclosed, clearance, config):
+            continue
+        closures = _openings(index, origin, res, passable, enclosed)
+        if len(closures) == 0:
+            continue
+        centres = origin + (np.argwhere(np.ones(clearance.shape, dtype=bool)) + 0.5) * res
+        virtual = _segment_distance(centres, closures).reshape(clearance.shape)
+        closed = _largest(passable & ~_outside(np.minimum(clearance, virtual), config.closing_radius, res))
+        if closed.sum() >= need and _has_room(closed, clearance, config):
+            logger.debug("outline open to unmapped space: %d openings closed by virtual walls", len(closures))
+            return closed, closures
+    return None
+
+
+def _segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(K,) distance of points (K, 2) to the nearest of segments (S, 4)."""
+    out = np.full(len(points), np.inf)
+    for x1, y1, x2, y2 in segments:
+        a, d = np.array([x1, y1]), np.array([x2 - x1, y2 - y1])
+        t = np.clip((points - a) @ d / max(float(d @ d), 1e-12), 0.0, 1.0)
+        out = np.minimum(out, np.hypot(*(points - a - t[:, None] * d).T))
+    return out
+
+
+def _openings(
+    index: WallIndex, origin: np.ndarray, res: float, passable: np.ndarray, enclosed: np.ndarray
+) -> np.ndarray:
+    """Virtual walls (K, 4) across the openings where an enclosed area meets the outside: each
+    run of passable cells beside it (the opening's mouth) joins the wall points nearest its two
+    ends."""
+    cross = ndimage.generate_binary_structure(2, 1)
+    mouth = passable & ~enclosed & ndimage.binary_dilation(enclosed, structure=cross)
+    labels, count = ndimage.label(mouth, structure=np.ones((3, 3), dtype=bool))
+    ends = index.walls.reshape(-1, 2)
+    closures = []
+    for k in range(1, count + 1):
+        points = origin + (np.argwhere(labels == k) + 0.5) * res
+        a = points[np.argmax(np.hypot(*(points - points.mean(axis=0)).T))]
+        b = points[np.argmax(np.hypot(*(points - a).T))]
+        near, dist = index.nearest(np.stack((a, b)))
+        if not np.isfinite(dist).all():
+            continue
+        for m in range(2):
+            gap = np.hypot(*(ends - near[m]).T)
+            if gap.min() <= 0.5:
+                near[m] = ends[int(np.argmin(gap))]
+        if np.hypot(*(near[1] - near[0])) > 2 * res:
+            closures.append(near.reshape(4))
+    return np.array(closures, dtype=np.float64).reshape(-1, 4)
 
 
 def _anchor_cells(
