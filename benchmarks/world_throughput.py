@@ -56,30 +56,30 @@ def build(batch: int, map_name: str = "gdc1", humans: str = "sf", orca: str = "s
 
 
 def episodes(batch: int, map_name: str, humans: str, counterfactual: bool, orca: str = "socialzoo"):
-    """A stepping closure over the env core of `batch` rows driven by GoAlone, rows reset with the
+    """A stepping closure over the action-selection task of `batch` rows driven by GoAlone, rows reset with the
     next scenario of a pool drawn beforehand (25 humans each; drawing one costs more than many
     steps, and belongs to no episode) as their episodes end."""
     from socialzoo.agents import make_policy
     from socialzoo.env.config import EnvConfig
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
     config = EnvConfig(map=map_name).replace(
         scenario={"min_humans": HUMANS, "max_humans": HUMANS},
         people={"models": humans, "counterfactual": counterfactual},
         world={"orca": dataclasses.asdict(OrcaConfig.preset(orca))},
     )
-    core = SocialNavCore(config, batch)
-    m, cfg = core.map, config.scenario
+    task = ActionSelectionTask(config, batch)
+    m, cfg = task.map, config.scenario
     pool = [generate_scenario(m, seed, cfg) for seed in range(2 * batch)]
     drawn = iter(range(10**9))
-    core.reset_rows(np.arange(batch), [pool[next(drawn) % len(pool)] for _ in range(batch)])
+    task.reset_rows(np.arange(batch), [pool[next(drawn) % len(pool)] for _ in range(batch)])
     policy = make_policy("goalone")
 
     def step() -> None:
-        core.step(policy.act(core.obs, core))
-        ended = np.flatnonzero(core.done.all(axis=1))
+        task.step(policy.act(task.obs, task))
+        ended = np.flatnonzero(task.core.done.all(axis=1))
         if len(ended):
-            core.reset_rows(ended, [pool[next(drawn) % len(pool)] for _ in ended])
+            task.reset_rows(ended, [pool[next(drawn) % len(pool)] for _ in ended])
 
     return step
 

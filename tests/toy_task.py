@@ -1,9 +1,10 @@
 """A toy robot task in one file, to show (and test) that a new task needs nothing but its own class.
 
 Reach a goal among people with four discrete actions (forward, turn left, turn right, stop) on the
-shared batched core: the core steps the world, the people and the time limit; this class says how an
-action becomes a command, what the robot observes (its goal and the three nearest people in its own
-frame) and what it is rewarded for (metres gained, 10 at the goal, -1 per step touching someone).
+shared batched core (socialzoo.env.core.BatchedCore): the core steps the world and the people; this
+class says how an action becomes a command, what the robot observes (its goal and the three nearest
+people in its own frame), what it is rewarded for (metres gained, 10 at the goal, -1 per step
+touching someone), when its episode ends (the goal, a wall, the time limit) and its metrics.
 Registered with one line: `register_task("socialzoo-test/ToyReach-v0", "toy_task:ToyReachTask")`.
 """
 
@@ -15,9 +16,10 @@ import numpy as np
 from gymnasium import spaces
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
+from socialzoo.env.core import BatchedCore
 from socialzoo.env.scenario_source import ScenarioStream
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
+from socialzoo.maps.map_file import load_map
 
 # (v, omega) of each action as a fraction of the robot's top speeds.
 COMMANDS = np.array([[1.0, 0.0], [0.3, 1.0], [0.3, -1.0], [0.0, 0.0]])
@@ -32,13 +34,18 @@ class ToyReachTask(Task):
     render_fps: ClassVar[int] = 40
 
     def __init__(self, config: EnvConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
-        defaults = {"map": "open_room", "max_steps": 300, "robot_action": "velocity"}
-        self.config = EnvConfig.resolve(config, {**defaults, **overrides})
-        self.core = SocialNavCore(self.config, batch_size)
-        self.scenarios = ScenarioStream.for_config(self.core.map, batch_size, self.config)
+        self.config = cfg = EnvConfig.resolve(config, {"map": "open_room", "max_steps": 300, **overrides})
+        m = load_map(cfg.map)
+        self.core = BatchedCore(batch_size, cfg.num_robots, cfg.max_humans, cfg.world, m.wall_index, m=m)
+        self.scenarios = ScenarioStream.for_config(m, batch_size, cfg)
         self.batch_size = batch_size
-        self.num_robots = self.config.num_robots
-        self.num_human_slots = self.config.max_humans
+        self.num_robots = cfg.num_robots
+        self.num_human_slots = cfg.max_humans
+        self.speeds = np.array([cfg.world.robot.max_speed, cfg.world.robot.max_angular_speed])
+        # Per robot, in the episode so far: steps, the goal reached, anyone touched.
+        self.steps = np.zeros((batch_size, self.num_robots), dtype=np.int64)
+        self.reached = np.zeros((batch_size, self.num_robots), dtype=bool)
+        self.touched = np.zeros((batch_size, self.num_robots), dtype=bool)
         self.observation_space = spaces.Box(-np.inf, np.inf, (4 + 4 * NEAREST,), np.float32)
         self.action_space = spaces.Discrete(len(COMMANDS))
 
@@ -55,20 +62,31 @@ class ToyReachTask(Task):
         else:  # test case k: the scenario of seed 10**6 + k, never drawn in training
             scenarios = [self.scenarios.make(10**6 + int(k)) for k in cases[1]]
         self.core.reset_rows(rows, scenarios)
+        self.steps[rows], self.reached[rows], self.touched[rows] = 0, False, False
         return np.array([s.seed for s in scenarios], dtype=np.uint64)
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         index = np.asarray(action).reshape(self.batch_size, self.num_robots)
         if ((index < 0) | (index >= len(COMMANDS))).any():
             raise ValueError(f"toy_reach: actions must be in 0..{len(COMMANDS) - 1}, got {index.tolist()}")
-        result = self.core.step(COMMANDS[index])
-        reward = result.progress + 10.0 * result.reached - 1.0 * (result.human_collisions > 0)
+        live, before = ~self.core.done, self.core.goal_distance()
+        events = self.core.step(COMMANDS[index] * self.speeds)
+        after, contacts = self.core.goal_distance(), events.robot_human.sum(-1)
+        reached = after < self.config.goal_radius
+        terminated = (reached | events.robot_wall) & live
+        time_up = self.core.state.step_count >= self.config.max_steps
+        truncated = time_up[:, None] & live & ~terminated
+        self.core.end_episodes(terminated | truncated)
+        self.steps += live
+        self.reached |= reached & live
+        self.touched |= (contacts > 0) & live
+        reward = before - after + 10.0 * reached - 1.0 * (contacts > 0)
         return TaskStep(
-            reward=np.where(result.terminated | result.truncated | ~self.core.done, reward, 0.0),
-            terminated=result.terminated,
-            truncated=result.truncated,
-            info={"reached": result.reached, "human_collisions": result.human_collisions},
-            time_up=self.core.state.step_count >= self.config.max_steps,
+            reward=np.where(live, reward, 0.0),
+            terminated=terminated,
+            truncated=truncated,
+            info={"reached": reached, "human_collisions": contacts},
+            time_up=time_up,
         )
 
     def observations(self) -> np.ndarray:
@@ -100,7 +118,9 @@ class ToyReachTask(Task):
         return np.concatenate((goal, s.robot_vel, people), axis=-1).astype(np.float32)
 
     def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
-        return self.core.episode_summaries(rows, robot)
+        rows = np.asarray(rows).reshape(-1)
+        steps, success = self.steps[rows, robot], self.reached[rows, robot] & ~self.touched[rows, robot]
+        return [{"success": bool(s), "steps": int(n)} for s, n in zip(success, steps, strict=True)]
 
     @property
     def info_keys(self) -> tuple[str, ...]:
@@ -122,7 +142,7 @@ class ToyReachTask(Task):
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         from socialzoo.env.rendering import CoreRenderer
 
-        return CoreRenderer(self.core, render_mode, view=view)
+        return CoreRenderer(self, render_mode, view=view)
 
 
 class ToyHeadForGoal:

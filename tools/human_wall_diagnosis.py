@@ -20,8 +20,8 @@ import argparse
 import numpy as np
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.human_policy import LearnedHumanPolicy
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.nav.subpolicies import GO_ALONE
 from socialzoo.scenarios.scenario import validation_set
 
@@ -38,8 +38,9 @@ def diagnose(spec: str, map_name: str, scenarios: int, steps: int) -> dict[str, 
         if policy is None
         else {"num_learned_humans": scenario_set.cfg.max_humans, **policy.env_overrides()}
     )
-    core = SocialNavCore(EnvConfig(map=map_name, **overrides), len(chosen))
-    core.reset_rows(np.arange(len(chosen)), chosen)
+    task = ActionSelectionTask(EnvConfig(map=map_name, **overrides), len(chosen))
+    task.reset_rows(np.arange(len(chosen)), chosen)
+    core = task.core
     robot_action = np.full((len(chosen), 1), GO_ALONE)
     touching = np.zeros(core.state.human_mask.shape, dtype=bool)
     events = contact_steps = human_steps = 0
@@ -48,9 +49,9 @@ def diagnose(spec: str, map_name: str, scenarios: int, steps: int) -> dict[str, 
     for _ in range(steps):
         action = None
         if policy is not None:
-            action = policy.act(core.human_obs)
+            action = policy.act(task.human_obs)
             lateral.append(float(action[..., 1][core.state.human_mask].mean()))
-        result = core.step(robot_action, action)
+        result = task.step(robot_action, action).detail
         mask = core.state.human_mask
         _, dist = core.walls.nearest(core.state.human_pos)
         touch = ((dist < WALL_CONTACT) | result.events.human_blocked) & mask

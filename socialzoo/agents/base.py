@@ -1,7 +1,7 @@
 """The Policy protocol every baseline implements: a name, and actions for a batch of observations.
 
-Engineered policies may also read the batched core's world state (what the robot may see);
-learned policies act on observations alone and load themselves from a file.
+Engineered policies may also read the task they act in (its core's world state: what the robot
+may see); learned policies act on observations alone and load themselves from a file.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 if TYPE_CHECKING:
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.base import Task
 
 
 @runtime_checkable
@@ -28,13 +28,14 @@ class Policy(Protocol):
 
     name: str
 
-    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
         """Actions for a batch of observations.
 
         Args:
             obs: (B, D) or (B, R, D) float32 robot observations (socialzoo.env.observation).
-            core: the batched core the observations come from, or None. Engineered policies may
-                read what the robots are allowed to see from it; learned policies ignore it.
+            task: the task the observations come from (socialzoo.env.tasks), or None. Engineered
+                policies may read what the robots are allowed to see from it (its core's world
+                state, sight and carrots); learned policies ignore it.
 
         Returns:
             int64 actions of shape obs.shape[:-1]: (B,) or (B, R).

@@ -1,7 +1,7 @@
 """Engineered robots of the CrowdNav task: ORCA (CrowdNav's own baseline) and social force.
 
-Both read the world through the task's core (positions and velocities of everyone, as CrowdNav's
-"coordinates" sensor gives them) and answer with the task's action for every row.
+Both read the world through the task (its core's positions and velocities of everyone, as
+CrowdNav's "coordinates" sensor gives them) and answer with the task's action for every row.
 
 - ORCA (CrowdNav's crowd_sim/envs/policy/orca.py): the robot and the people in one ORCA step in
   which only the robot is driven; the robot prefers its goal direction at its preferred speed, the
@@ -32,28 +32,28 @@ from socialzoo.core.robot import world_velocity
 _ORCA_PADDING = 0.01
 
 
-def velocity_to_action(velocity: np.ndarray, core: Any) -> np.ndarray:
+def velocity_to_action(velocity: np.ndarray, task: Any) -> np.ndarray:
     """The task's actions that come closest to world-frame velocities (B, R, 2): (B, R, 2) or
     (B, R) (with one robot (B, 2) or (B,))."""
-    config = core.config
+    config = task.config
     robot = config.robot
     v_pref = config.preferred_speed
     b, r = velocity.shape[:2]
     if robot.kinematics == "holonomic":
-        command = core.to_action_frame(velocity)
+        command = task.to_action_frame(velocity)
         action = np.clip(command / v_pref, -1.0, 1.0)
     else:
-        heading = core.state.robot_pose[..., 2]
+        heading = task.core.state.robot_pose[..., 2]
         turn = np.angle(np.exp(1j * (np.arctan2(velocity[..., 1], velocity[..., 0]) - heading)))
         turn = np.clip(turn, -robot.max_rotation, robot.max_rotation)
         speed = np.minimum(np.hypot(velocity[..., 0], velocity[..., 1]), v_pref)
         command = np.stack((speed, turn), axis=-1)
         action = np.stack((2.0 * speed / v_pref - 1.0, turn / robot.max_rotation), axis=-1)
-    if core.action_table is None:
+    if task.action_table is None:
         out = action.astype(np.float32)
         return out[:, 0] if r == 1 else out
     # The nearest of the discrete actions, in the same terms as the command.
-    table = core.action_table
+    table = task.action_table
     distance = ((command.reshape(b * r, 1, 2) - table[None, :, :]) ** 2).sum(-1)
     index = np.argmin(distance, axis=1).astype(np.int64).reshape(b, r)
     return index[:, 0] if r == 1 else index
@@ -76,12 +76,13 @@ class CrowdOrcaRobot:
         self.safety_space = float(safety_space)
         self.orca = orca or OrcaConfig.preset("crowdnav")
 
-    def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Any) -> np.ndarray:
         """The ORCA velocity of every robot, as the task's actions (each robot driven, the other
         robots seen like the people)."""
         from socialzoo.humans.orca import orca_velocities
 
-        s, config = core.state, core.config
+        core, config = task.core, task.config
+        s = core.state
         robot = config.robot
         b, h = s.human_mask.shape
         r = s.robot_pose.shape[1]
@@ -118,7 +119,7 @@ class CrowdOrcaRobot:
             self.orca,
             config.time_step,
         )
-        return velocity_to_action(new[:, :r], core)
+        return velocity_to_action(new[:, :r], task)
 
     def config(self) -> dict[str, Any]:
         """The policy's parameters."""
@@ -138,12 +139,13 @@ class CrowdSocialForceRobot:
     def __init__(self, human: HumanConfig | None = None) -> None:
         self.human = human or HumanConfig()
 
-    def act(self, obs: np.ndarray, core: Any) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Any) -> np.ndarray:
         """Each robot's velocity after one step of the social force, as the task's actions (the
         other robots push like people)."""
         from socialzoo.humans.social_force import human_acceleration
 
-        s, config = core.state, core.config
+        core, config = task.core, task.config
+        s = core.state
         b = s.human_mask.shape[0]
         r = s.robot_pose.shape[1]
         pos = np.concatenate((s.robot_pose[..., :2], s.human_pos), axis=1)
@@ -159,7 +161,7 @@ class CrowdSocialForceRobot:
         new = robot_vel + accel[:, :r] * config.time_step
         norm = np.hypot(new[..., 0], new[..., 1])
         new *= np.minimum(1.0, config.preferred_speed / np.maximum(norm, 1e-12))[..., None]
-        return velocity_to_action(new, core)
+        return velocity_to_action(new, task)
 
     def config(self) -> dict[str, Any]:
         """The policy's parameters."""

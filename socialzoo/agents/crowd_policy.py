@@ -120,7 +120,7 @@ class CrowdAttentionPolicy:
         # The policy MLP's hidden layers, then the action head, which is not activated.
         return mlp_forward(self.features(np.asarray(obs)), [*self.policy, self.action], self.activation)
 
-    def act(self, obs: np.ndarray, core: Any = None) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Any = None) -> np.ndarray:
         """Greedy actions of (N, D) flat observations: (N,) action indices, or (N, 2) in [-1, 1]."""
         obs = np.asarray(obs)
         if obs.ndim != 2 or obs.shape[1] != self.observation_size:

@@ -2,8 +2,8 @@
 (GoAlone while the corridor ahead is clear, Follow a human walking our way, else Halt).
 
 Ref's decision is a pure, batched function of what the robot sees in its own frame (`ref_actions`);
-the Ref policy feeds it from the paper observation, or from the core's world state for layouts that
-lack the robot's velocity.
+the Ref policy feeds it from the paper observation, or from the task's core (world state, sight and
+carrots) for layouts that lack the robot's velocity.
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ from socialzoo.env.observation import (
 from socialzoo.nav.subpolicies import FOLLOW, GO_ALONE, HALT
 
 if TYPE_CHECKING:
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.env.tasks.base import Task
 
 
 class GoAlone:
@@ -36,7 +37,7 @@ class GoAlone:
 
     name = "goalone"
 
-    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
         """Zeros of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
         obs = check_observations(obs, "GoAlone.act")
         return np.zeros(obs.shape[:-1], dtype=np.int64)
@@ -131,16 +132,16 @@ def ref_inputs_from_paper_obs(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     try:
         paper_num_slots(obs.shape[-1])
     except ValueError as err:
-        raise ValueError(f"Ref: {err}; for another layout pass the core (Ref.act(obs, core))") from None
+        raise ValueError(f"Ref: {err}; for another layout pass the task (Ref.act(obs, task))") from None
     obs = obs.astype(np.float64)
     xy = paper_slots(obs)[..., SLOT_POS]
     return xy, paper_human_velocity(obs), paper_slot_seen(obs), obs[:, PAPER_TARGET]
 
 
-def ref_inputs_from_core(core: SocialNavCore) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """`ref_actions`' inputs for all B*R robots of a core, from its world state and carrots.
+def ref_inputs_from_core(core: BatchedCore) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`ref_actions`' inputs for all B*R robots of a task's core, from its world state and carrots.
 
-    Visibility is the one the core computed for its latest observation.
+    Visibility is the one the core computed for the task's latest observation.
     """
     state = core.state
     if state is None:
@@ -164,7 +165,7 @@ class Ref:
     """The engineered reference policy (SPEC section 10); see `ref_actions`.
 
     With the paper observation layout Ref acts on the observation alone (so its demonstrations
-    are a function of what a learner sees); with another layout it needs the core.
+    are a function of what a learner sees); with another layout it needs the task.
 
     Args:
         config: Ref's parameters; keyword arguments build one when config is None.
@@ -177,15 +178,15 @@ class Ref:
             raise ValueError("Ref: give either config or keyword parameters, not both")
         self.cfg = config if config is not None else RefConfig(**kwargs)
 
-    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
         """Actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
         obs = check_observations(obs, "Ref.act")
         lead = obs.shape[:-1]
-        layout = "paper" if core is None else core.config.observation.layout
+        layout = "paper" if task is None else task.config.observation.layout
         if layout == "paper":
             inputs = ref_inputs_from_paper_obs(obs.reshape(-1, obs.shape[-1]))
         else:
-            inputs = ref_inputs_from_core(core)  # type: ignore[arg-type]
+            inputs = ref_inputs_from_core(task.core)  # type: ignore[union-attr, attr-defined]
             if inputs[0].shape[0] != math.prod(lead):
                 raise ValueError(f"Ref.act: observations of shape {obs.shape} do not match the core's batch")
         return ref_actions(*inputs, self.cfg).reshape(lead)

@@ -28,7 +28,7 @@ from socialzoo.env.policy_file import (
 )
 
 if TYPE_CHECKING:
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.base import Task
 
 # What the network's last layer gives: one score per action either way; the greedy action is its argmax.
 OUTPUTS = ("logits", "q_values")
@@ -125,7 +125,7 @@ class MlpPolicy:
         x = self.normalizer(obs) if self.normalizer is not None else obs
         return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
 
-    def act(self, obs: np.ndarray, core: SocialNavCore | None = None) -> np.ndarray:
+    def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
         """Greedy actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
         obs = check_observations(obs, f"{self.name}.act")
         lead = obs.shape[:-1]

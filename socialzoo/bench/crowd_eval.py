@@ -18,7 +18,7 @@ import numpy as np
 from socialzoo.env.crowd_config import CrowdNavConfig
 from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, Split
 
-# A CrowdNav policy: (flat observations (B, D), the core) -> actions (B,) or (B, 2).
+# A CrowdNav policy: (flat observations (B, D), the task) -> actions (B,) or (B, 2).
 CrowdActor = Callable[[np.ndarray, Any], np.ndarray]
 
 
@@ -50,7 +50,7 @@ def evaluate_crowd(
     """Run `act` on the first `cases` cases of a split (all of them by default).
 
     Args:
-        act: the policy: flat observations and the core -> actions.
+        act: the policy: flat observations and the task -> actions.
         config: the task (its observation is read in the flat layout whatever config.observation).
         split: "val" or "test".
         cases: how many cases (default the split's size: 100 or 500).

@@ -142,7 +142,7 @@ class _Recorder:
         self.episodes: dict[int, dict[str, np.ndarray]] = {}
 
     def __call__(
-        self, core: Any, row_trial: list[Any], obs: np.ndarray, actions: np.ndarray, result: Any
+        self, task: Any, row_trial: list[Any], obs: np.ndarray, actions: np.ndarray, result: Any
     ) -> None:
         for row, trial in enumerate(row_trial):
             if trial is None:
@@ -158,7 +158,7 @@ class _Recorder:
                     bool(result.truncated[row, 0]),
                 )
             )
-            if core.done[row].all():
+            if task.core.done[row].all():
                 steps = self.rows.pop(row)
                 self.episodes[trial.index] = {
                     "obs": np.stack([s[0] for s in steps]).astype(np.float32),

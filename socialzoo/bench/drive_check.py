@@ -1,8 +1,8 @@
 """A map that checks itself by driving: GoAlone, alone (no people), over pose pairs in one batched
 world, and a report of every route it cannot complete, where it stopped and why.
 
-`drive_map` runs the benchmark's robot (the env core with GoAlone on every row, the same
-navigator, local planner and motion model as every episode) from each legal pose to each other
+`drive_map` runs the benchmark's robot (the action-selection task with GoAlone on every row, the
+same navigator, local planner and motion model as every episode) from each legal pose to each other
 one (or a seeded sample of the ordered pairs) within the benchmark's 80 s. A route that does not
 reach its goal gets a cause, judged from where the robot stopped and the plan it was following:
 
@@ -35,6 +35,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -218,8 +219,7 @@ def drive_map(
     Returns:
         The report; its routes are in the order of `pairs`.
     """
-    from socialzoo.env.compaction import compact_core
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
     poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)
     todo = pose_pairs(m) if pairs is None else np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
@@ -227,7 +227,7 @@ def drive_map(
     if len(todo) == 0:
         return DriveReport(m.name, len(poses), (), config.planner.wall_distance, config.max_steps * config.dt)
     b = min(batch_size, len(todo))
-    core = SocialNavCore(config, b, map_data=m)
+    task = ActionSelectionTask(config, b, map_data=m)
     # Positions once a second over the last stuck_time seconds (for the oscillation test), per row.
     every = max(1, round(1.0 / config.dt))
     window = max(2, math.ceil(config.metrics.stuck_time) + 1)
@@ -240,25 +240,25 @@ def drive_map(
         jobs = [pending.popleft() for _ in range(min(len(rows), len(pending)))]
         rows = rows[: len(jobs)]
         if jobs:
-            core.reset_rows(rows, [_scenario(m, poses, int(todo[j, 0]), int(todo[j, 1])) for j in jobs])
+            task.reset_rows(rows, [_scenario(m, poses, int(todo[j, 0]), int(todo[j, 1])) for j in jobs])
             row_job[rows] = jobs
             trace[rows] = poses[todo[jobs, 0], None, :2]
 
     start_rows(np.arange(b))
     while (row_job >= 0).any():
-        core.step(np.full((core.batch_size, 1), GO_ALONE, dtype=np.int64))
-        count = core.state.step_count
+        task.step(np.full((task.batch_size, 1), GO_ALONE, dtype=np.int64))
+        count = task.core.state.step_count
         sample = np.flatnonzero(count % every == 0)
-        trace[sample, (count[sample] // every) % window] = core.state.robot_pose[sample, 0, :2]
+        trace[sample, (count[sample] // every) % window] = task.core.state.robot_pose[sample, 0, :2]
         # A route without progress for stuck_time is judged at once: it has failed (`stuck`).
-        stuck = core.metrics.without_progress >= config.metrics.stuck_time - 1e-9
-        finished = np.flatnonzero((row_job >= 0) & (core.done[:, 0] | stuck))
+        stuck = task.metrics.without_progress >= config.metrics.stuck_time - 1e-9
+        finished = np.flatnonzero((row_job >= 0) & (task.core.done[:, 0] | stuck))
         if len(finished) == 0:
             continue
-        summaries = core.episode_summaries(finished)
+        summaries = task.episode_metrics(finished)
         for row, summary in zip(finished.tolist(), summaries, strict=True):
             job = int(row_job[row])
-            results[job] = _judge(core, row, int(todo[job, 0]), int(todo[job, 1]), summary, trace[row])
+            results[job] = _judge(task, row, int(todo[job, 0]), int(todo[job, 1]), summary, trace[row])
         row_job[finished] = -1
         start_rows(finished)
         if progress is not None:
@@ -266,7 +266,7 @@ def drive_map(
         live = np.flatnonzero(row_job >= 0)
         if not pending and 0 < len(live) <= _SHRINK * len(row_job):
             # The tail: step only the routes still driving (each continues exactly as before).
-            core = compact_core(core, live)
+            task = task.compact(live)
             row_job, trace = row_job[live], trace[live]
     return DriveReport(
         map_name=m.name,
@@ -277,24 +277,25 @@ def drive_map(
     )
 
 
-def _judge(core: object, row: int, start: int, goal: int, summary: dict, trace: np.ndarray) -> RouteDrive:
-    """The RouteDrive of a finished row of `core` (a SocialNavCore)."""
-    state = core.state  # type: ignore[attr-defined]
+def _judge(task: Any, row: int, start: int, goal: int, summary: dict, trace: np.ndarray) -> RouteDrive:
+    """The RouteDrive of a finished row of `task` (an ActionSelectionTask)."""
+    core = task.core
+    state = core.state
     stop = state.robot_pose[row, 0, :2].copy()
     time = float(summary["duration"])
     if summary["reached"]:
         return RouteDrive(start, goal, True, time, stop)
     if summary["wall_collisions"]:
         return RouteDrive(start, goal, False, time, stop, "wall_collision", stop.copy(), 0.0)
-    wall_distance = core.config.planner.wall_distance  # type: ignore[attr-defined]
-    plans = core.navigator.plans  # type: ignore[attr-defined]
+    wall_distance = task.config.planner.wall_distance
+    plans = core.navigator.plans
     length = int(plans.lengths[row, 0])
     path = plans.paths[row, 0, :length]
-    _, where, gap = _narrowest_ahead(core.field, path, stop)  # type: ignore[attr-defined]
+    _, where, gap = _narrowest_ahead(core.field, path, stop)
     narrow = gap < wall_distance
     # The joins of the start and goal poses to the graph, as the robot's plans make them.
-    poses = core.scenarios[row].robot_starts[0, :2], core.scenarios[row].robot_goals[0, :2]  # type: ignore[attr-defined]
-    att = core.graph.attach(np.stack(poses), strict=False, clearance=wall_distance)  # type: ignore[attr-defined]
+    poses = core.scenarios[row].robot_starts[0, :2], core.scenarios[row].robot_goals[0, :2]
+    att = core.navigator.graph.attach(np.stack(poses), strict=False, clearance=wall_distance)
     on_join = [bool(att.found[k]) and _segment_gap(where, poses[k], att.point[k]) < 0.25 for k in (0, 1)]
     if not summary["stuck"]:
         cause = "timeout"
@@ -438,7 +439,8 @@ def drive_building(
     traces: dict[int, list[np.ndarray]] = {}
     plans: dict[int, np.ndarray] = {}
 
-    def on_step(core, row_trial, obs, actions, result) -> None:  # type: ignore[no-untyped-def]
+    def on_step(task, row_trial, obs, actions, result) -> None:  # type: ignore[no-untyped-def]
+        core = task.core
         pos = core.state.robot_pose[:, 0, :2]
         for row, t in enumerate(row_trial):
             if t is None:

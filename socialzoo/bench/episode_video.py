@@ -50,14 +50,14 @@ def animate_episode(
     `human_policy` (socialzoo.env.human_policy.LearnedHumanPolicy) drives the env config's
     learned human slots.
     """
-    from socialzoo.env.core import SocialNavCore
     from socialzoo.env.rendering import CoreRenderer
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
     from socialzoo.render.animation import write_animation
 
-    core = SocialNavCore(env_config, 1)
-    core.reset_rows(np.array([0]), [scenario])
+    task = ActionSelectionTask(env_config, 1)
+    task.reset_rows(np.array([0]), [scenario])
     renderer = CoreRenderer(
-        core, "rgb_array", view, width=size[0], height=size[1], info=(label,) if label else ()
+        task, "rgb_array", view, width=size[0], height=size[1], info=(label,) if label else ()
     )
     count = 0
 
@@ -65,13 +65,13 @@ def animate_episode(
         nonlocal count
         yield renderer.frame(0)
         count, step = 1, 0
-        while not core.done.all() and count < max_frames:
-            action = np.asarray(policy.act(core.obs, core)).reshape(core.done.shape)
-            core.step(action, None if human_policy is None else human_policy.act(core.human_obs))
+        while not task.core.done.all() and count < max_frames:
+            action = np.asarray(policy.act(task.obs, task)).reshape(task.core.done.shape)
+            task.step(action, None if human_policy is None else human_policy.act(task.human_obs))
             step += 1
-            if step % stride == 0 or core.done.all():
+            if step % stride == 0 or task.core.done.all():
                 count += 1
                 yield renderer.frame(0)
 
     written = write_animation(frames(), path, fps=fps)
-    return EpisodeVideo(path=Path(written), frames=count, metrics=core.episode_summaries([0])[0])
+    return EpisodeVideo(path=Path(written), frames=count, metrics=task.episode_metrics([0])[0])

@@ -1,7 +1,7 @@
 """Episodes of one policy on a task's fixed cases, through the evaluation runner of every task
 (socialzoo.bench.runner.BatchedRunner with a CaseSet): every row plays one case at a time and takes
 the next pending case when its episode ends, so N cases cost about N / B episodes of wall time.
-Any task (socialzoo.env.tasks) and any policy with act(obs, core) serve; the results are the
+Any task (socialzoo.env.tasks) and any policy with act(obs, task) serve; the results are the
 task's episode metrics, per case.
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 
 from socialzoo.env.tasks import make_task
 
-# A policy: (robot 0's observations (B, D), the task's core) -> actions (B,) or (B, ...).
+# A policy: (robot 0's observations (B, D), the task) -> actions (B,) or (B, ...).
 Actor = Callable[[np.ndarray, Any], np.ndarray]
 
 
@@ -96,6 +96,6 @@ class _RobotZero:
     def __init__(self, act: Actor) -> None:
         self.act_zero = act
 
-    def act(self, observations: np.ndarray, core: Any = None) -> np.ndarray:
-        actions = np.asarray(self.act_zero(observations[:, 0], core))
+    def act(self, observations: np.ndarray, task: Any = None) -> np.ndarray:
+        actions = np.asarray(self.act_zero(observations[:, 0], task))
         return actions.reshape((actions.shape[0], 1) + actions.shape[1:])

@@ -160,7 +160,7 @@ def record_task_episode(
 
     Args:
         task: a socialzoo.env.tasks Task of batch size 1, reset.
-        policy: an object with act(observations, core).
+        policy: an object with act(observations, task).
         label: the panel's title (default: the policy's name).
         laser: the scan drawn in the viewer (default: the task's, if it has one).
         laser_rays: scan with this many rays over the same field of view (default: the laser's
@@ -184,7 +184,7 @@ def record_task_episode(
     named = bool(task.action_labels())  # the timeline shows actions that have names
     shape = (1, 1, *(task.action_space.shape or ()))
     while True:
-        action = np.asarray(policy.act(task.observations(), task.core)).reshape(shape)
+        action = np.asarray(policy.act(task.observations(), task)).reshape(shape)
         step = task.step(action)
         recorder.keep_step(int(action.reshape(-1)[0]) if named else -1, step)
         ended = bool(step.terminated[0, 0] or step.truncated[0, 0])

@@ -196,7 +196,7 @@ class BatchedRunner:
         stack_policies: learned policies of one network shape (a run's checkpoints) act as one
             stack (socialzoo.bench.policy_stack.MlpStack: the same actions, one product per
             layer); off: each acts on its own rows.
-        given: policy objects by name (anything with act(obs, core)), used instead of building
+        given: policy objects by name (anything with act(obs, task)), used instead of building
             those names from the registry (spec.policies must still name them).
     """
 
@@ -212,7 +212,7 @@ class BatchedRunner:
         self.compact_tail = compact_tail
         self.stack_policies = stack_policies
         self.stats = RunStats()
-        # Policies given as objects (any act(obs, core)) instead of built from the registry.
+        # Policies given as objects (any act(obs, task)) instead of built from the registry.
         self.given = dict(given or {})
         self._policies: dict[tuple[str, str], Policy] = {}
 
@@ -232,7 +232,7 @@ class BatchedRunner:
         Args:
             trials: the trials; each is run exactly once, in an order chosen for batching.
             on_results: called with the trials that finished at each step, as they finish.
-            on_step: called after every step with (the task's core, trial of each row or None,
+            on_step: called after every step with (the task, trial of each row or None,
                 the observations (B, R, D) the actions were chosen on (a copy), actions (B, R),
                 the task's own step record (TaskStep.detail: the action-selection task's
                 StepResult)), before finished rows are refilled. With a hook the batch is never
@@ -325,7 +325,7 @@ class BatchedRunner:
                     continue
                 policy = self.policy(policy_name, task.name)
                 if getattr(policy, "reads_core", True):
-                    chosen = np.asarray(policy.act(observations, task.core)).reshape(actions.shape)  # type: ignore[attr-defined]
+                    chosen = np.asarray(policy.act(observations, task)).reshape(actions.shape)
                     actions[rows] = chosen[rows]
                 else:
                     # A policy of observations alone acts on its own rows only: many checkpoints can
@@ -348,7 +348,7 @@ class BatchedRunner:
                 stats.tail_steps += 1
                 stats.tail_row_steps += task.batch_size
             if on_step is not None:
-                on_step(task.core, row_trial, obs, actions, step.detail if step.detail is not None else step)  # type: ignore[attr-defined]
+                on_step(task, row_trial, obs, actions, step.detail if step.detail is not None else step)
             active = np.array([t is not None for t in row_trial])
             finished = np.flatnonzero(active & done.all(axis=1))
             if len(finished) == 0:
@@ -416,10 +416,10 @@ class BatchedRunner:
         from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 
         core = task.core
-        world = core.config.world
+        world = core.world
         return HumanEpisodeMetrics(
             core.batch_size,
-            core.config.max_humans,
+            core.max_humans,
             core.num_robots,
             core.walls,
             world.human_collision_distance,

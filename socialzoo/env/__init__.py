@@ -15,11 +15,11 @@ from typing import Any
 _WHERE = {
     "ActionSelectionEnv": "socialzoo.env.gym_env",
     "ActionSelectionVectorEnv": "socialzoo.env.vector",
+    "BatchedCore": "socialzoo.env.core",
     "BlackDeath": "socialzoo.env.parallel",
     "CrowdNavEnv": "socialzoo.env.gym_env",
     "CrowdNavVectorEnv": "socialzoo.env.vector",
     "EnvConfig": "socialzoo.env.config",
-    "SocialNavCore": "socialzoo.env.core",
     "SocialNavParallelEnv": "socialzoo.env.parallel",
     "Task": "socialzoo.env.tasks.base",
     "TaskEnv": "socialzoo.env.gym_env",

@@ -1,446 +1,260 @@
-"""The batched environment core: B worlds with R robots each, stepped together.
+"""The batched core below every task: B rows of R robots and H person slots in one WorldState,
+stepped through the one world step (socialzoo.env.world.step_world).
 
-Every adapter steps this one class: the Gymnasium benchmark env (B = 1), the Gymnasium VectorEnv,
-the PettingZoo ParallelEnv and the evaluation runner. It turns actions into robot commands (the
-sub-policies), steps the world, tracks global plans, and computes observations, rewards,
-terminations and episode metrics, all as arrays over (B, R). The reward and the episode end are
-socialzoo.env.outcome's; StepResult carries them and the per-step info every adapter reports.
+The core is task-agnostic: it holds the world (the state, the walls, the map), the people and the
+model that drives each (socialzoo.env.people, the learned people the env drives included), the
+robots' navigator on the map's graph (plans, carrots, route left) and their sight (who each robot
+sees, kept from step to step); it resets rows from scenarios and advances the world one step given
+the robots' commands. What a step means belongs to the task (socialzoo.env.tasks): how an action
+becomes a command, the observation, the reward, the episode's end and its metrics. A task reads
+the world's facts here (the step's collision events, goal distances, who is seen) and tells the
+core whose episode ended (`end_episodes`): those robots stand still, exactly where they stopped,
+until their row is reset.
+
+Per-robot arrays are (B, R); flat ones are (B R, ...), row-major: robot r of row b is b * R + r.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cached_property
-from typing import Any, ClassVar
+from collections.abc import Sequence
 
 import numpy as np
 
-from socialzoo.env.config import EnvConfig
-from socialzoo.env.human_agents import HumanStep, action_velocities, human_observations, human_step
-from socialzoo.env.metrics import EpisodeMetrics
-from socialzoo.env.observation import build_observation
-from socialzoo.env.outcome import followed_human, robot_outcome
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.state import WorldState, pad_to
+from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
-from socialzoo.env.world import StepEvents, robot_velocity_vectors, step_world
-from socialzoo.env.world_rows import BatchedWorld, route_navigator
-from socialzoo.maps.map_file import Map, load_map
-from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
+from socialzoo.env.world import StepEvents, step_world
+from socialzoo.humans.models import PeopleConfig
+from socialzoo.maps.map_file import Map
+from socialzoo.nav.distance_field import DistanceField, distance_field
+from socialzoo.nav.graph import graph_of
+from socialzoo.nav.local_planner import LocalPlannerConfig
+from socialzoo.nav.navigator import Navigator, Sight
+from socialzoo.nav.recovery import RecoveryConfig
 from socialzoo.nav.sight_cache import SightCache
-from socialzoo.nav.subpolicies import GO_ALONE, check_actions, subpolicy_commands
-from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.scenario import Scenario, scenarios_to_state
 
 
-@dataclass(frozen=True)
-class StepResult:
-    """One step of every robot (and learned human) of the batch.
-
-    Attributes:
-        obs: (B, R, D) float32 robot observations after the step.
-        reward: (B, R) rewards; 0 for robots whose episode had already ended.
-        terminated: (B, R) the episode ended this step: goal reached or wall collision.
-        truncated: (B, R) the time limit ended the episode this step.
-        reached: (B, R) goal within goal_radius after the step.
-        wall_collision: (B, R) footprint touches a wall after the step.
-        human_collisions: (B, R) int number of humans within the collision distance.
-        force, blame, progress: (B, R) reward terms before weighting (SPEC section 9); force
-            and blame leave out the followed human during Follow only.
-        target_human: (B, R) human followed or passed this step, -1 for none.
-        human_obs: (B, L, D_h) learned-human observations, or None without learned humans.
-        human_reward: (B, L) learned-human rewards, or None.
-        events: the world's collision events of the step.
-        human: the learned humans' reward terms and contacts (HumanStep), or None.
-    """
-
-    obs: np.ndarray
-    reward: np.ndarray
-    terminated: np.ndarray
-    truncated: np.ndarray
-    reached: np.ndarray
-    wall_collision: np.ndarray
-    human_collisions: np.ndarray
-    force: np.ndarray
-    blame: np.ndarray
-    progress: np.ndarray
-    target_human: np.ndarray
-    human_obs: np.ndarray | None
-    human_reward: np.ndarray | None
-    events: StepEvents
-    human: HumanStep | None = None
-
-    # The per-step info keys of a robot, in the order `info` gives them.
-    INFO_KEYS: ClassVar[tuple[str, ...]] = (
-        "reached",
-        "wall_collision",
-        "human_collisions",
-        "force",
-        "blame",
-        "progress",
-        "target_human",
-    )
-
-    def info(self, row: int = 0, robot: int = 0) -> dict[str, Any]:
-        """The per-step info dict of one robot: plain Python values under INFO_KEYS."""
-        return {
-            "reached": bool(self.reached[row, robot]),
-            "wall_collision": bool(self.wall_collision[row, robot]),
-            "human_collisions": int(self.human_collisions[row, robot]),
-            "force": float(self.force[row, robot]),
-            "blame": float(self.blame[row, robot]),
-            "progress": float(self.progress[row, robot]),
-            "target_human": int(self.target_human[row, robot]),
-        }
-
-    def info_arrays(self, robot: int = 0) -> dict[str, np.ndarray]:
-        """The per-step info of robot `robot` of every row: (B,) array copies under INFO_KEYS."""
-        return {key: getattr(self, key)[:, robot].copy() for key in self.INFO_KEYS}
-
-    @classmethod
-    def initial_info(cls) -> dict[str, Any]:
-        """A robot's info at reset: INFO_KEYS with neutral values (no target: -1)."""
-        return {
-            "reached": False,
-            "wall_collision": False,
-            "human_collisions": 0,
-            "force": 0.0,
-            "blame": 0.0,
-            "progress": 0.0,
-            "target_human": -1,
-        }
-
-
-class SocialNavCore(BatchedWorld):
-    """B social-navigation worlds stepped as one batch (the action-selection task's core).
+class BatchedCore:
+    """B rows of R robots and H person slots, stepped together (see the module docstring).
 
     Args:
-        config: the environment configuration.
         batch_size: B.
-        map_data: an already loaded map (default: load config.map).
+        num_robots: R.
+        max_humans: H.
+        world: the world's parameters (robot, people, collision distance, dt).
+        walls: the wall index (an empty one for an open arena).
+        m: the map, where there is one (the navigator's graph; walking groups' routes).
+        people: the models that drive the people (default: social force only).
+        planner: with a planner config, a navigator on the map's graph plans each robot's route
+            and keeps its carrot in sight of the planner's wall distance; None: no navigator.
+        recovery: the navigator's recovery of robots that make no progress; None: none.
+        sight_lines: sight lines hide people behind walls (`see`; needs a planner); without
+            them every present person is seen.
+        robot_visible: whether the people see and avoid the robots.
 
-    Call `reset_rows` for every row before the first `step`.
+    Raises:
+        ValueError: a batch size that is not an int >= 1.
+        PolicyFileError: the learned people's file is not a learned human policy file.
     """
 
-    def __init__(self, config: EnvConfig, batch_size: int, map_data: Map | None = None) -> None:
-        super().__init__(batch_size, config.num_robots, config.max_humans)
-        self.config = config
-        self.map = map_data if map_data is not None else load_map(config.map)
-        self.walls = self.map.wall_index
-        self.field, self.navigator = route_navigator(
-            self.map, batch_size, config.num_robots, config.planner, RecoveryConfig()
-        )
-        self.graph = self.navigator.graph
-        self.metrics = EpisodeMetrics(batch_size * config.num_robots, config.metrics)
-        # Which model drives each person, counterfactual rows, the people's metrics.
-        self.people = People(config, batch_size, self.map)
-        self.learned = np.arange(config.num_learned_humans)
-        b, r = batch_size, config.num_robots
-        self.carrot = np.zeros((b, r, 2))
-        self.prev_action = np.zeros((b, r), dtype=np.int64)
-        self.target_human = np.full((b, r), -1, dtype=np.intp)
-        self.done = np.zeros((b, r), dtype=bool)
-        self.obs = np.zeros((b, r, config.observation.size), dtype=np.float32)
-        self.human_obs: np.ndarray | None = None
-        # (B*R, H) which humans each robot saw in its latest observation.
-        self.visible = np.zeros((b * r, config.max_humans), dtype=bool)
+    def __init__(
+        self,
+        batch_size: int,
+        num_robots: int,
+        max_humans: int,
+        world: WorldConfig,
+        walls: WallIndex,
+        *,
+        m: Map | None = None,
+        people: PeopleConfig | None = None,
+        planner: LocalPlannerConfig | None = None,
+        recovery: RecoveryConfig | None = None,
+        sight_lines: bool = False,
+        robot_visible: bool = True,
+    ) -> None:
+        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
+            raise ValueError(f"BatchedCore: batch_size must be an int >= 1, got {batch_size!r}")
+        b, r = batch_size, num_robots
+        self.batch_size, self.num_robots, self.max_humans = b, r, max_humans
+        self.world, self.walls, self.map = world, walls, m
+        self.planner, self.robot_visible = planner, robot_visible
+        self.people = People(people or PeopleConfig(), world, b, r, max_humans, walls, m)
+        self.field: DistanceField | None = None
+        self.navigator: Navigator | None = None
+        if planner is not None:
+            assert m is not None, "a navigator plans on a map's graph"
+            # The map's wall distance field (cached per map, as its graph) keeps carrots in sight
+            # of the planner's wall distance and clears sight lines far from walls.
+            self.field = distance_field(
+                m.wall_index, planner.field_resolution, planner.field_range, planner.field_pad
+            )
+            sight = Sight(self.field, planner.wall_distance)
+            self.navigator = Navigator(graph_of(m), b, r, sight=sight, recovery=recovery)
         # Sight lines are re-tested only when they may have changed since the last step.
         self.sight = (
-            SightCache(self.walls, self.field, b * r, config.max_humans) if self.walls.num_walls else None
+            SightCache(walls, self.field, b * r, max_humans)
+            if sight_lines and self.field is not None and walls.num_walls
+            else None
         )
+        self.state: WorldState | None = None
+        # The state before the latest step.
+        self.before: WorldState | None = None
+        self.carrot = np.zeros((b, r, 2))
+        self.visible = np.zeros((b * r, max_humans), dtype=bool)
+        self.done = np.zeros((b, r), dtype=bool)
         self.scenarios: list[Scenario | None] = [None] * b
         self._ever_reset = np.zeros(b, dtype=bool)
 
     # ------------------------------------------------------------------ reset
-    def reset_rows(self, rows: np.ndarray | list[int], scenarios: list[Scenario]) -> None:
-        """Start new episodes in `rows` from `scenarios` (one per row)."""
+    def check_rows(self, rows: np.ndarray | Sequence[int], count: int) -> np.ndarray:
+        """`rows` as an index array, refused (ValueError) unless one per scenario and in 0..B-1."""
+        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+        if len(rows) != count:
+            raise ValueError(f"reset_rows got {len(rows)} rows but {count} scenarios")
+        if np.any((rows < 0) | (rows >= self.batch_size)):
+            raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
+        return rows
+
+    def robot_rows(self, rows: np.ndarray) -> np.ndarray:
+        """The flat robot indices (row * R + robot) of `rows`."""
+        return (np.asarray(rows)[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
+
+    def reset_rows(self, rows: np.ndarray | Sequence[int], scenarios: Sequence[Scenario]) -> None:
+        """Start new episodes in `rows` from `scenarios` (one per row), their people driven by the
+        models the people config assigns from each scenario's seed (walking groups formed)."""
         rows = self.check_rows(rows, len(scenarios))
         if len(rows) == 0:
             return
         scenarios, models = self.people.prepare(list(scenarios))
-        fresh = self.write_rows(rows, scenarios, models)
-        assert self.state is not None
-        self.people.reset(rows, fresh)
-        for row, scenario in zip(rows, scenarios, strict=True):
+        fresh = scenarios_to_state(scenarios, num_robots=self.num_robots, max_humans=self.max_humans)
+        fresh.human_model[:] = models
+        if self.state is None:
+            self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
+        have, length = self.state.human_route.shape[2], fresh.human_route.shape[2]
+        if length > have:  # the route axis widens for a longer route
+            route = self.state.human_route
+            self.state.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
+        self.state.set_rows(rows, fresh)
+        self.start_rows(rows, scenarios)
+
+    def start_rows(self, rows: np.ndarray, scenarios: Sequence[Scenario | None]) -> None:
+        """Start new episodes in `rows` whose state is written (by `reset_rows`, or by a task's own
+        faster writer: CrowdNav's arena cases, with None for their scenarios): the people's
+        bookkeeping, the robots' plans and carrots, their sight lines and done flags."""
+        state = self.state
+        assert state is not None
+        for row, scenario in zip(rows.tolist(), scenarios, strict=True):
             self.scenarios[row] = scenario
         self._ever_reset[rows] = True
-        pose = fresh.robot_pose
-        goal = fresh.robot_goal[..., :2]
-        self.navigator.reset(rows, pose[..., :2], goal)
-        self.prev_action[rows] = 0
-        self.target_human[rows] = -1
         self.done[rows] = False
-        robot_rows = self.robot_rows(rows)
+        self.people.reset(rows, state)
+        if self.navigator is not None:
+            self.navigator.reset(rows, state.robot_pose[rows][..., :2], state.robot_goal[rows][..., :2])
+            self.carrot[rows] = self.navigator.update(state.robot_pose[..., :2])[rows]
         if self.sight is not None:
-            self.sight.forget(robot_rows)
-        self.metrics.reset(robot_rows, pose.reshape(-1, 3), goal.reshape(-1, 2))
-        carrot = self.navigator.update(self.state.robot_pose[..., :2])
-        self.carrot[rows] = carrot[rows]
-        self._observe(rows)
+            self.sight.forget(self.robot_rows(rows))
 
     # ------------------------------------------------------------------ step
-    @cached_property
-    def _speeds(self) -> np.ndarray:
-        robot = self.config.world.robot
-        return np.array([robot.max_speed, robot.max_angular_speed])
+    def check_reset(self) -> None:
+        """Raise RuntimeError unless every row has been reset."""
+        if self.state is None or not self._ever_reset.all():
+            raise RuntimeError("reset every row (reset_rows) before calling step")
 
-    def robot_commands(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(command (B, R, 2), halt (B, R), target_human (B, R)) for robot actions.
-
-        Raises:
-            ValueError: an action outside the action space, naming the value and its row.
-        """
-        assert self.state is not None
-        b, r = self.batch_size, self.num_robots
-        state = self.state
-        if self.config.robot_action == "velocity":
-            action = np.asarray(action, dtype=np.float64)
-            if action.shape != (b, r, 2):
-                raise ValueError(f"velocity actions must have shape {(b, r, 2)}, got {action.shape}")
-            bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
-            if bad.any():
-                where = tuple(int(i) for i in np.argwhere(bad)[0])
-                raise ValueError(f"velocity action {action[where]!r} at index {where} is not in [-1, 1]")
-            command = action * self._speeds
-            halt = np.zeros((b, r), dtype=bool)
-            return command, halt, np.full((b, r), -1, dtype=np.intp)
-        flat = check_actions(np.asarray(action).reshape(-1), b * r)
-        human_pos, human_vel, human_mask = self._robot_obstacles()
-        # The latest observation saw this very state: its visibility serves target selection.
-        # Other robots (appended after the humans) are never Follow or Pass targets.
-        visible = np.zeros(human_mask.shape, dtype=bool)
-        visible[:, : self.visible.shape[1]] = self.visible
-        command, halt, target = subpolicy_commands(
-            flat,
-            state.robot_pose.reshape(b * r, 3),
-            state.robot_vel.reshape(b * r, 2),
-            self.carrot.reshape(b * r, 2),
-            human_pos,
-            human_vel,
-            human_mask,
-            self.walls,
-            self.config.subpolicy,
-            self.config.planner,
-            self.config.world.robot,
-            self.config.dt,
-            visible,
-        )
-        return command.reshape(b, r, 2), halt.reshape(b, r), target.reshape(b, r)
-
-    def _robot_obstacles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per robot (B*R rows): the humans, and with several robots the other robots too.
-
-        Other robots are appended after the humans, so human indices keep their meaning.
-        """
-        assert self.state is not None
-        s = self.state
-        r = self.num_robots
-        if r == 1:
-            return s.human_pos, s.human_vel, s.human_mask
-        b, h = s.human_pos.shape[:2]
-        pos = np.concatenate((s.human_pos, s.robot_pose[..., :2]), axis=1)
-        vel = np.concatenate((s.human_vel, robot_velocity_vectors(s)), axis=1)
-        mask = np.concatenate((s.human_mask, np.ones((b, r), dtype=bool)), axis=1)
-        mask = np.repeat(mask, r, axis=0)
-        own = np.tile(np.arange(r), b)
-        mask[np.arange(b * r), h + own] = False
-        return np.repeat(pos, r, axis=0), np.repeat(vel, r, axis=0), mask
-
-    def step(self, robot_action: np.ndarray, human_action: np.ndarray | None = None) -> StepResult:
-        """Advance every row one step.
+    def step(
+        self,
+        command: np.ndarray,
+        halt: np.ndarray | None = None,
+        desired: np.ndarray | None = None,
+        learned: np.ndarray | None = None,
+    ) -> StepEvents:
+        """Advance every row one world step (world.dt); `state` is then the world after it.
 
         Args:
-            robot_action: (B, R) int sub-policy indices, or (B, R, 2) floats in [-1, 1] with
-                robot_action="velocity".
-            human_action: (B, L, 2) desired velocities in [-1, 1] (times the preferred speed and
-                config.human_action_scale) for the L learned humans, in the frame config.human_action_frame names;
-                required when config.num_learned_humans > 0.
+            command: (B, R, 2) robot commands (socialzoo.env.world.step_world).
+            halt: (B, R) robots stopped at once (default none). Robots whose episode ended halt
+                anyway and stay exactly where they stopped.
+            desired: (B, H, 2) desired velocities of people a task's learners drive, m/s, or None.
+            learned: (B, H) the people `desired` drives, or None.
 
         Returns:
-            The StepResult. Robots whose episode ended halt and keep their final pose; their
-            reward is 0 until their row is reset.
+            The step's collision events.
 
         Raises:
             RuntimeError: a row was never reset.
-            ValueError: an action outside its space (naming the value and index), before any
-                state changes.
         """
-        if self.state is None or not self._ever_reset.all():
-            raise RuntimeError("reset every row (reset_rows) before calling step")
-        cfg = self.config
+        self.check_reset()
         before = self.state
-        b, r = self.batch_size, self.num_robots
-        desired, learned = self._human_drive(human_action)
+        assert before is not None
         desired, learned = self.people.drive(before, desired, learned)
-        command, halt, target = self.robot_commands(robot_action)
-        halt = halt | self.done
-        # Robots driving their plan (GoAlone, not halted): the navigator's recovery watches them.
-        moving = np.zeros((b, r), dtype=bool)
-        if cfg.robot_action == "subpolicy":
-            moving = (np.asarray(robot_action).reshape(b, r) == GO_ALONE) & ~halt
-        command = self._backoff(command, moving)
-        command = np.where(self.done[..., None], 0.0, command)
-        after, events = step_world(before, self.walls, cfg.world, command, halt, desired, learned)
-        # A robot whose episode ended stays exactly where it stopped (the halting step's motion
-        # model would still carry it half a step).
-        after.robot_pose = np.where(self.done[..., None], before.robot_pose, after.robot_pose)
-        self.state = after
-        self.carrot = self.navigator.update(
-            after.robot_pose[..., :2], moving, cfg.dt, after.human_pos, after.human_mask
+        done = self.done if self.done.any() else None
+        if done is not None:
+            halt = done if halt is None else halt | done
+            command = np.where(done[..., None], 0.0, command)
+        after, events = step_world(
+            before, self.walls, self.world, command, halt, desired, learned, self.robot_visible
         )
-        if cfg.robot_action == "subpolicy":
-            # A copy: reset_rows zeroes rows of prev_action, which must never write into the
-            # caller's action array (a TorchRL rollout's recorded actions, a user's buffer).
-            self.prev_action = np.array(robot_action, dtype=np.int64).reshape(b, r)
-        self.target_human = target
-        visible = self._observe(np.arange(b))
+        if done is not None:
+            # The halting step's motion model would still carry a differential robot half a step.
+            after.robot_pose = np.where(done[..., None], before.robot_pose, after.robot_pose)
+        self.before, self.state = before, after
+        return events
 
-        skip = followed_human(robot_action, target, cfg.robot_action)
-        out = robot_outcome(before, after, events, visible, skip, halt, self.done, cfg)
-        self.metrics.update(
-            robot_pose=after.robot_pose.reshape(b * r, 3),
-            robot_vel=after.robot_vel.reshape(b * r, 2),
-            reward=out.reward.reshape(-1),
-            force=out.force.reshape(-1),
-            blame=out.blame.reshape(-1),
-            human_collisions=out.human_collisions.reshape(-1),
-            wall_collision=out.wall_collision.reshape(-1),
-            min_human_distance=self._min_human_distance(),
-            reached=out.reached.reshape(-1),
-            done=(out.terminated | out.truncated).reshape(-1),
-            dt=cfg.dt,
-            route_left=self.navigator.route_left.reshape(-1),
-            halted=self._halted(halt, command).reshape(-1),
-            rerouted=self.navigator.rerouted.reshape(-1),
-        )
-        was_done = self.done
-        self.done = self.done | out.terminated | out.truncated
-        self.people.step(before, after, was_done, self.done)
-        human = None
-        if len(self.learned):
-            human = human_step(
-                before, after, self.learned, self.walls, events.human_blocked, cfg.human_reward
-            )
-        return StepResult(
-            obs=self.obs,
-            reward=out.reward,
-            terminated=out.terminated,
-            truncated=out.truncated,
-            reached=out.reached,
-            wall_collision=out.wall_collision,
-            human_collisions=out.human_collisions,
-            force=out.force,
-            blame=out.blame,
-            progress=out.progress,
-            target_human=target,
-            human_obs=self.human_obs,
-            human_reward=None if human is None else human.reward,
-            events=events,
-            human=human,
-        )
-
-    def _backoff(self, command: np.ndarray, moving: np.ndarray) -> np.ndarray:
-        """Commands (B, R, 2) with those of recovering robots (the navigator's back-off) in place
-        of their planner's, for robots still driving their plan."""
-        rows, robots = np.nonzero(self.navigator.backing_off & moving)
-        if len(rows) == 0:
-            return command
-        assert self.state is not None
-        human_pos, _, human_mask = self._robot_obstacles()
-        flat = rows * self.num_robots + robots
-        command = command.copy()
-        command[rows, robots] = backoff_commands(
-            self.state.robot_pose[rows, robots],
-            self.field,
-            self.config.planner.wall_distance,
-            self.navigator.recovery or RecoveryConfig(),
-            human_pos[flat],
-            human_mask[flat],
-        )
-        return command
-
-    def _halted(self, halt: np.ndarray, command: np.ndarray) -> np.ndarray:
-        """(B, R) robots the policy halted this step: the sub-policies' halt, or with velocity
-        actions a zero command (the stuck metric's clock pauses for them)."""
-        if self.config.robot_action == "velocity":
-            return halt | ~np.any(command != 0.0, axis=-1)
-        return halt
-
-    def _human_drive(self, human_action: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """(desired velocity (B, H, 2), learned mask (B, H)) for the learned humans, or (None, None)."""
-        assert self.state is not None
-        num = len(self.learned)
-        if num == 0:
-            if human_action is not None:
-                raise ValueError("human actions given, but config.num_learned_humans is 0")
-            return None, None
-        if human_action is None:
-            raise ValueError(
-                f"config.num_learned_humans = {num}: human_action of shape (B, {num}, 2) is required"
-            )
-        action = np.asarray(human_action, dtype=np.float64)
-        if action.shape != (self.batch_size, num, 2):
-            raise ValueError(f"human_action must have shape {(self.batch_size, num, 2)}, got {action.shape}")
-        bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
-        if bad.any():
-            where = tuple(int(i) for i in np.argwhere(bad)[0])
-            raise ValueError(f"human action {action[where]!r} at index {where} is not in [-1, 1]")
+    def follow_routes(self, moving: np.ndarray | None = None) -> None:
+        """Each robot's carrot on its plan after a step (a robot that strayed is replanned); with
+        `moving` (B, R), the robots that drove their plan this step, the recovery watches them."""
+        assert self.navigator is not None and self.state is not None
         s = self.state
-        desired = np.zeros(s.human_pos.shape)
-        desired[:, self.learned] = action_velocities(
-            s, self.learned, action, self.config.human_action_frame, self.config.human_action_scale
-        )
-        learned = np.zeros(s.human_mask.shape, dtype=bool)
-        learned[:, self.learned] = True
-        return desired, learned & s.human_mask
-
-    # ------------------------------------------------------------------ observe
-    def _observe(self, rows: np.ndarray) -> np.ndarray:
-        """Recompute observations (all rows are computed; `rows` are stored). Returns visibility (B*R, H)."""
-        assert self.state is not None
-        s = self.state
-        b, r = self.batch_size, self.num_robots
-        pose = s.robot_pose.reshape(b * r, 3)
-        human_pos = np.repeat(s.human_pos, r, axis=0) if r > 1 else s.human_pos
-        human_vel = np.repeat(s.human_vel, r, axis=0) if r > 1 else s.human_vel
-        human_mask = np.repeat(s.human_mask, r, axis=0) if r > 1 else s.human_mask
-        if self.sight is None:
-            visible = np.array(human_mask, dtype=bool)
+        if moving is None:
+            self.carrot = self.navigator.update(s.robot_pose[..., :2])
         else:
-            visible = self.sight.visible(pose[:, :2], human_pos, human_mask)
-        self.visible = visible
-        obs = build_observation(
-            self.config.observation,
-            pose,
-            s.robot_vel.reshape(b * r, 2),
-            s.robot_goal[..., :2].reshape(b * r, 2),
-            self.carrot.reshape(b * r, 2),
-            self.prev_action.reshape(-1),
-            human_pos,
-            human_vel,
-            visible,
-        ).reshape(b, r, -1)
-        self.obs[rows] = obs[rows]
-        if len(self.learned):
-            human_obs = human_observations(s, self.walls, self.learned, self.config.num_human_neighbours)
-            if self.human_obs is None:
-                self.human_obs = human_obs
-            else:
-                self.human_obs[rows] = human_obs[rows]
-        return visible
+            self.carrot = self.navigator.update(
+                s.robot_pose[..., :2], moving, self.world.dt, s.human_pos, s.human_mask
+            )
 
-    def _min_human_distance(self) -> np.ndarray:
-        """(B*R,) centre distance from each robot to the nearest present human, inf for none."""
-        assert self.state is not None
+    def end_episodes(self, ended: np.ndarray) -> None:
+        """Mark the robots (B, R) whose episode ended on the latest step: they stand still until their
+        row is reset. The people's bookkeeping (group intrusions, counterfactual rows) counts the step."""
+        assert self.before is not None and self.state is not None
+        was_done = self.done
+        self.done = self.done | ended
+        self.people.step(self.before, self.state, was_done, self.done)
+
+    # ------------------------------------------------------------------ world facts
+    def per_robot(self, array: np.ndarray) -> np.ndarray:
+        """A per-row array (B, ...) once for each robot: (B R, ...) (the array itself when R = 1)."""
+        return np.repeat(array, self.num_robots, axis=0) if self.num_robots > 1 else array
+
+    def see(self) -> np.ndarray:
+        """(B R, H) the people each robot sees now (kept as `visible`): every present person, less
+        those behind a wall with sight lines."""
         s = self.state
-        diff = s.robot_pose[:, :, None, :2] - s.human_pos[:, None, :, :]
-        dist2 = np.where(s.human_mask[:, None, :], (diff**2).sum(-1), np.inf)
-        return np.sqrt(dist2.min(axis=-1, initial=np.inf)).reshape(-1)
+        assert s is not None
+        mask = self.per_robot(s.human_mask)
+        if self.sight is None:
+            self.visible = np.array(mask, dtype=bool)
+        else:
+            pos = s.robot_pose[..., :2].reshape(-1, 2)
+            self.visible = self.sight.visible(pos, self.per_robot(s.human_pos), mask)
+        return self.visible
 
-    # ------------------------------------------------------------------ results
-    def episode_summaries(self, rows: np.ndarray | list[int], robot: int = 0) -> list[dict]:
-        """Episode metrics (socialzoo.env.metrics.SUMMARY_KEYS) of `rows` for one robot, and the
-        people's metrics the config asks for (socialzoo.env.people.People.keys)."""
-        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
-        summaries = self.metrics.summaries(rows * self.num_robots + robot)
-        if self.people.keys:
-            for summary, extra in zip(summaries, self.people.summaries(rows, robot), strict=True):
-                summary.update(extra)
-        return summaries
+    def goal_distance(self) -> np.ndarray:
+        """(B, R) each robot's straight distance to its goal, m."""
+        assert self.state is not None
+        pos, goal = self.state.robot_pose[..., :2], self.state.robot_goal[..., :2]
+        return np.hypot(goal[..., 0] - pos[..., 0], goal[..., 1] - pos[..., 1])
+
+    @property
+    def route_left(self) -> np.ndarray:
+        """(B, R) each robot's route length left at its latest carrot, m (the navigator's)."""
+        assert self.navigator is not None
+        return self.navigator.route_left
+
+    def seen_goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """((B, R, 2) the goal each robot heads for, (B, R) its distance, m): with a navigator the
+        route's carrot and the route's length left, else the goal itself and its straight distance."""
+        assert self.state is not None
+        if self.navigator is not None:
+            return self.carrot, self.route_left
+        return self.state.robot_goal[..., :2], self.goal_distance()

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
-from socialzoo.core.config import RobotConfig
+from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
@@ -26,7 +26,7 @@ from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 CrowdAction = Literal["continuous", "discrete"]
 CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
 # The models of a people spec (socialzoo.humans.models) the task drives through the one world step
-# (socialzoo.env.crowd_core): its cases have no routes for walking groups, and it runs no learned
+# (socialzoo.env.core): its cases have no routes for walking groups, and it runs no learned
 # policy of its own.
 CROWD_MODELS: tuple[str, ...] = ("sf", "orca")
 ActionFrame = Literal["goal", "world"]
@@ -157,6 +157,24 @@ class CrowdNavConfig:
     def preferred_speed(self) -> float:
         """The robot's preferred speed v_pref, m/s (its largest)."""
         return self.robot.max_speed
+
+    @property
+    def world(self) -> WorldConfig:
+        """The world's parameters: the physics step, the robot, and CrowdNav's people (ORCA with its
+        parameters, at the people's own radius and speed)."""
+        cases = self.cases
+        return WorldConfig(
+            dt=self.physics_dt,
+            robot=self.robot,
+            human=HumanConfig(radius=cases.human_radius),
+            human_collision_distance=float(self.robot.radius) + cases.human_radius,  # type: ignore[arg-type]
+            orca=dataclasses.replace(
+                OrcaConfig.preset("crowdnav"),
+                radius=cases.human_radius,
+                max_speed=cases.human_speed,
+                robot_visible=self.robot_visible,
+            ),
+        )
 
     def replace(self, **changes: Any) -> CrowdNavConfig:
         """A copy with `changes`; nested configs may be given as dicts of their fields."""

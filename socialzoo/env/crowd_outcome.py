@@ -14,6 +14,7 @@ A step is judged as CrowdNav judges it, in CrowdNav's order:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,6 +109,17 @@ class CrowdOutcome:
     truncated: np.ndarray
     closest: np.ndarray
     discomfort: np.ndarray
+
+    def masked(self, done: np.ndarray) -> CrowdOutcome:
+        """The outcome with the rows `done` (B,) (their episode had already ended) cleared: no
+        reward, no flags."""
+        if not done.any():
+            return self
+        keep = ~done
+        flags = ("success", "collision", "timeout", "terminated", "truncated", "discomfort")
+        return dataclasses.replace(
+            self, reward=np.where(keep, self.reward, 0.0), **{k: getattr(self, k) & keep for k in flags}
+        )
 
 
 def judge_step(

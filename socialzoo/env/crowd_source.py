@@ -12,8 +12,11 @@ map, drawn by the benchmark's training stream (socialzoo.env.scenario_source).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
+from socialzoo.core.state import WorldState
 from socialzoo.env.crowd_config import CrowdNavConfig
 from socialzoo.scenarios.crowd_cases import CrowdCase, Split, crowd_family
 from socialzoo.scenarios.scenario import Scenario
@@ -80,3 +83,32 @@ class CrowdCaseSource:
         from socialzoo.env.scenario_source import with_robots
 
         return [with_robots(test_set.scenario(int(k), m), m, r) for k in indices]
+
+
+def write_cases(
+    s: WorldState, rows: np.ndarray, cases: Sequence[CrowdCase], human_speed: float, models: np.ndarray
+) -> None:
+    """Write arena cases into rows of the state: robots on their starts, people on theirs with a
+    one-point route to their goals at `human_speed`, everyone still, each person driven by its
+    model (len(rows), H), as scenarios_to_state writes their Scenarios (the noise key is the case's
+    seed: the task has no laser to draw noise for)."""
+    n = cases[0].human_starts.shape[0]
+    s.robot_pose[rows] = np.stack([c.robot_starts for c in cases])
+    s.robot_goal[rows] = np.stack([c.robot_goals for c in cases])
+    s.robot_vel[rows] = 0.0
+    s.human_pos[rows] = 0.0
+    s.human_pos[rows, :n] = np.stack([c.human_starts for c in cases])
+    s.human_vel[rows] = 0.0
+    s.human_route[rows] = 0.0
+    s.human_route[rows, :n] = np.stack([c.human_goals for c in cases])[:, :, None, :]
+    s.human_mask[rows] = False
+    s.human_mask[rows, :n] = True
+    s.human_pref_speed[rows] = 0.0
+    s.human_pref_speed[rows, :n] = human_speed
+    s.human_route_len[rows] = 1
+    s.human_waypoint[rows] = 0
+    s.human_direction[rows] = 1
+    s.step_count[rows] = 0
+    s.noise_key[rows] = [c.seed for c in cases]
+    s.human_model[rows] = models
+    s.human_group[rows] = -1

@@ -1,7 +1,8 @@
-"""The robot's outcome of one step: reward terms, reward, goal reached, terminated and truncated.
+"""The action-selection task's outcome of one step for each robot: reward terms, reward, goal
+reached, terminated and truncated.
 
-The task's rules in one place: SocialNavCore.step calls `robot_outcome` once per step, so a new
-task or reward variant is a change here (and in the pure terms of socialzoo.env.reward).
+The task's rules in one place: ActionSelectionTask.step calls `robot_outcome` once per step, so a
+reward variant is a change here (and in the pure terms of socialzoo.env.reward).
 """
 
 from __future__ import annotations

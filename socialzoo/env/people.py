@@ -1,4 +1,4 @@
-"""The env's side of its people (EnvConfig.people): which model drives each person of a scenario,
+"""The core's side of its people (a PeopleConfig): which model drives each person of a scenario,
 the learned people the env drives itself, the counterfactual rows without the robot, and the
 metrics of what the robot costs the people.
 
@@ -24,13 +24,16 @@ the default config (social force only, no counterfactual) nothing here runs.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from socialzoo.core.config import WorldConfig
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.metrics import registered
 from socialzoo.core.state import WorldState, pad_to
+from socialzoo.core.walls import WallIndex
 from socialzoo.env.human_agents import action_velocities, human_observations
 from socialzoo.env.world import step_world
 from socialzoo.humans.group_formation import with_groups
@@ -39,7 +42,6 @@ from socialzoo.maps.map_file import Map
 from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
-    from socialzoo.env.config import EnvConfig
     from socialzoo.env.human_policy import LearnedHumanPolicy
 
 # Summary keys this module adds to a robot's episode metrics (only those its config asks for):
@@ -52,25 +54,40 @@ GROUP_SPAN = 3.0
 
 
 class People:
-    """The people of a SocialNavCore of B rows and R robots per row.
+    """The people of a batched core (socialzoo.env.core.BatchedCore) of B rows and R robots per row.
 
     Args:
-        config: the env config (its people, world and learned-human settings).
+        config: the people's models, walking groups and counterfactual rows.
+        world: the world's parameters.
         batch_size: B.
-        m: the map.
+        num_robots: R.
+        max_humans: H.
+        walls: the wall index.
+        m: the map (None without one: no walking groups then).
 
     Raises:
         PolicyFileError: the learned model's file is not a learned human policy file.
     """
 
-    def __init__(self, config: EnvConfig, batch_size: int, m: Map) -> None:
-        self.config: PeopleConfig = config.people
-        self.world = config.world
+    def __init__(
+        self,
+        config: PeopleConfig,
+        world: WorldConfig,
+        batch_size: int,
+        num_robots: int,
+        max_humans: int,
+        walls: WallIndex,
+        m: Map | None = None,
+    ) -> None:
+        self.config = config
+        self.world = world
+        self.walls = walls
         self.map = m
         self.batch_size = batch_size
-        self.num_robots = config.num_robots
-        self.max_humans = config.max_humans
+        self.num_robots = num_robots
+        self.max_humans = max_humans
         self.parts = self.config.parts
+        self.ids = np.array([MODEL_IDS[p.model] for p in self.parts], dtype=np.int8)
         self.policy: LearnedHumanPolicy | None = None
         path = self.config.learned_path
         if path is not None:
@@ -101,26 +118,33 @@ class People:
         return (GROUP_KEYS if self.groups else ()) + (COST_KEYS if self.counterfactual else ())
 
     # ------------------------------------------------------------------ reset
+    def models(self, seeds: Sequence[int], counts: Sequence[int]) -> np.ndarray:
+        """(len(seeds), H) int8 model of every person slot of rows with these seeds and head counts
+        (socialzoo.humans.models.assign_models); social force in empty slots."""
+        models = np.zeros((len(seeds), self.max_humans), dtype=np.int8)
+        if len(self.parts) > 1 or self.parts[0].model != "sf":
+            for row, (seed, n) in enumerate(zip(seeds, counts, strict=True)):
+                models[row, :n] = self.ids[assign_models(self.parts, n, seed)]
+        return models
+
     def prepare(self, scenarios: list[Scenario]) -> tuple[list[Scenario], np.ndarray]:
         """The scenarios as the config's people walk them, and (len, H) int8 model of each slot."""
-        models = np.zeros((len(scenarios), self.max_humans), dtype=np.int8)
-        if len(self.parts) == 1 and self.parts[0].model == "sf":
+        models = self.models([s.seed for s in scenarios], [s.num_humans for s in scenarios])
+        if not self.groups:
             return scenarios, models
-        ids = np.array([MODEL_IDS[p.model] for p in self.parts], dtype=np.int8)
+        assert self.map is not None, "walking groups form on a map"
         grouped = np.array([p.model == "groups" for p in self.parts])
         out = []
-        for row, scenario in enumerate(scenarios):
+        for scenario in scenarios:
             kinds = assign_models(self.parts, scenario.num_humans, scenario.seed)
-            models[row, : scenario.num_humans] = ids[kinds]
-            if grouped.any():
-                scenario = with_groups(scenario, self.map, grouped[kinds], self.config.group_sizes)
-            out.append(scenario)
+            out.append(with_groups(scenario, self.map, grouped[kinds], self.config.group_sizes))
         return out, models
 
-    def reset(self, rows: np.ndarray, fresh: WorldState) -> None:
-        """Start the episodes of `rows` from `fresh` (their rows of the state, in order)."""
+    def reset(self, rows: np.ndarray, state: WorldState) -> None:
+        """Start the episodes of `rows`, whose rows of `state` were just written."""
         if not (self.groups or self.counterfactual):
             return
+        fresh = state.rows(rows)
         self.intrusions[(rows[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)] = 0
         if not self.counterfactual:
             return
@@ -164,7 +188,7 @@ class People:
             return desired, learned
         policy = self.policy
         slots = np.arange(state.max_humans)
-        obs = human_observations(state, self.map.wall_index, slots, policy.num_neighbours)
+        obs = human_observations(state, self.walls, slots, policy.num_neighbours)
         action = np.zeros(state.human_pos.shape)
         action[mine] = policy.act(obs[mine])
         velocity = action_velocities(state, slots, action, policy.action_frame, policy.action_scale)
@@ -193,7 +217,7 @@ class People:
         desired, learned = self.drive(ghost_before, None, None)
         b = self.batch_size
         ghost_after, _ = step_world(
-            ghost_before, self.map.wall_index, self.world, np.zeros((b, 0, 2)), np.zeros((b, 0), bool),
+            ghost_before, self.walls, self.world, np.zeros((b, 0, 2)), np.zeros((b, 0), bool),
             desired, learned,
         )  # fmt: skip
         self.ghost = ghost_after

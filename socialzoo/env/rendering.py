@@ -1,4 +1,4 @@
-"""Rendering of an env core's row: the frame renderer plus the overlay the env knows about.
+"""Rendering of a task's row: the frame renderer plus the overlay the task knows about.
 
 Kept apart from the envs so that stepping never pays for drawing; the renderer is built on the
 first render() call only.
@@ -6,21 +6,16 @@ first render() call only.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-from socialzoo.nav.subpolicies import ACTION_NAMES
-
-if TYPE_CHECKING:
-    from socialzoo.env.core import SocialNavCore
-
 
 class CoreRenderer:
-    """Draws one row of a SocialNavCore, for render_mode "rgb_array" or "human".
+    """Draws one row of a task's core (a map's world), for render_mode "rgb_array" or "human".
 
     Args:
-        core: the env core.
+        task: the task (socialzoo.env.tasks) whose core has a map.
         render_mode: "rgb_array" or "human".
         view: "follow" (centred on the robot) or "map" (the whole map).
         width: frame width, pixels.
@@ -30,7 +25,7 @@ class CoreRenderer:
 
     def __init__(
         self,
-        core: SocialNavCore,
+        task: Any,
         render_mode: str,
         view: str = "follow",
         *,
@@ -42,17 +37,18 @@ class CoreRenderer:
 
         if render_mode not in ("rgb_array", "human"):
             raise ValueError(f"render_mode must be 'rgb_array' or 'human', got {render_mode!r}")
-        self.core = core
+        self.task = task
+        world = task.core.world
         self.render_mode = render_mode
         self.info = tuple(info)
         self.frames = FrameRenderer(
-            core.map,
+            task.core.map,
             width=width,
             height=height,
             view=view,  # type: ignore[arg-type]
-            robot_config=core.config.world.robot,
-            human_radius=core.config.world.human.radius,
-            dt=core.config.dt,
+            robot_config=world.robot,
+            human_radius=world.human.radius,
+            dt=world.dt,
         )
         self.window = None
 
@@ -63,26 +59,22 @@ class CoreRenderer:
     def frame(self, row: int = 0, robot: int = 0) -> np.ndarray:
         """(H, W, 3) uint8 frame of `row`, following robot `robot`.
 
-        The overlay shows the robot's global path, carrot and the human it follows or passes, and
-        (sub-policy actions) the action it chose last; no action before its first step.
+        The overlay shows the robot's global path and carrot (where the core has a navigator), the
+        human it follows or passes (the task's `target_human`, where it has one) and the action it
+        chose last (Task.action_name; none before its first step).
         """
         from socialzoo.render.frames import Overlay
 
-        core = self.core
-        assert core.state is not None
-        plans = core.navigator.plans
-        length = int(plans.lengths[row, robot])
-        target = int(core.target_human[row, robot])
-        action = None
-        if core.config.robot_action == "subpolicy" and core.state.step_count[row] > 0:
-            action = ACTION_NAMES[int(core.prev_action[row, robot])]
-        overlay = Overlay(
-            path=plans.paths[row, robot, :length],
-            carrot=core.carrot[row, robot],
-            action=action,
-            highlight=target if target >= 0 else None,
-            info=self.info,
-        )
+        task, core = self.task, self.task.core
+        navigator = core.navigator
+        path = carrot = None
+        if navigator is not None:
+            path = navigator.plans.paths[row, robot, : int(navigator.plans.lengths[row, robot])]
+            carrot = core.carrot[row, robot]
+        target = getattr(task, "target_human", None)
+        highlight = None if target is None or target[row, robot] < 0 else int(target[row, robot])
+        action = task.action_name(row, robot) if core.state.step_count[row] > 0 else None
+        overlay = Overlay(path=path, carrot=carrot, action=action, highlight=highlight, info=self.info)
         return self.frames.render(core.state, row=row, robot=robot, overlay=overlay)
 
     def render(self, row: int = 0, robot: int = 0) -> np.ndarray | None:
@@ -93,7 +85,7 @@ class CoreRenderer:
         from socialzoo.render.frames import HumanWindow
 
         if self.window is None:
-            self.window = HumanWindow(fps=1.0 / self.core.config.dt)
+            self.window = HumanWindow(fps=1.0 / self.task.core.world.dt)
         self.window.show(frame)
         return None
 

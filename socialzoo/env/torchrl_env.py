@@ -1,6 +1,6 @@
 """A native TorchRL multi-agent environment: B worlds of the batched core stepped as one EnvBase.
 
-SocialNavTorchEnv steps SocialNavCore directly (no PettingZoo, no per-agent Python loop), with
+SocialNavTorchEnv steps a task directly (no PettingZoo, no per-agent Python loop), with
 batch_size [B] and the agents stacked in two groups by their name prefix, as TorchRL's
 PettingZooWrapper groups the ParallelEnv's "robot_i" and "human_j":
 
@@ -38,7 +38,7 @@ TorchRL conventions followed:
 - A row whose episode ended and was not reset keeps stepping with every agent dead.
 
 The robot group may instead be driven inside the env by `robot_policy` (anything with the
-Policy protocol's `act(obs, core)`, e.g. socialzoo.agents.make_policy("ref")); the robots then have
+Policy protocol's `act(obs, task)`, e.g. socialzoo.agents.make_policy("ref")); the robots then have
 no action entry but still report observations, rewards and flags.
 """
 
@@ -97,7 +97,7 @@ class SocialNavTorchEnv(EnvBase):
         config: an EnvConfig (default: the benchmark's, on gdc1); overrides as keyword arguments.
         batch_size: B, the worlds stepped together.
         robot_policy: None (robot actions come in the tensordict), or an object with
-            `act(obs (B, R, D), core) -> (B, R)` that drives the robots inside the env.
+            `act(obs (B, R, D), task) -> (B, R)` that drives the robots inside the env.
         seed: seeds the scenario streams (None: fresh entropy, kept in `stream_seed`).
         map_data: an already loaded Map instead of config.map.
         device: torch device of the tensors (the simulation runs in numpy on the CPU).
@@ -125,7 +125,7 @@ class SocialNavTorchEnv(EnvBase):
             raise ValueError(f"SocialNavTorchEnv: batch_size must be an int >= 1, got {batch_size!r}")
         if robot_policy is not None and not callable(getattr(robot_policy, "act", None)):
             raise ValueError(
-                f"SocialNavTorchEnv: robot_policy must have act(obs, core), got {type(robot_policy).__name__}"
+                f"SocialNavTorchEnv: robot_policy must have act(obs, task), got {type(robot_policy).__name__}"
             )
         super().__init__(device=device, batch_size=torch.Size([batch_size]))
         self.task: Task = task_class(task)(config, batch_size, **kwargs)
@@ -260,7 +260,7 @@ class SocialNavTorchEnv(EnvBase):
         b, r, h = self.batch_size[0], self.num_robots, self.num_humans
         shape = (b, r) + tuple(task.action_space.shape or ())
         if self.robot_policy is not None:
-            robot_action = np.asarray(self.robot_policy.act(task.observations(), self.core)).reshape(shape)
+            robot_action = np.asarray(self.robot_policy.act(task.observations(), task)).reshape(shape)
         else:
             robot_action = tensordict.get((ROBOT, "action")).detach().cpu().numpy().reshape(shape)
         human_action = None

@@ -151,7 +151,7 @@ def walk(spec: str, cfg: HumanReportConfig) -> WalkResult:
     walls = m.wall_index
     test_set = dataclasses.replace(validation_set(cfg.map), cfg=cfg.scenario)
     n = cfg.scenarios
-    people = People(config, n, m)
+    people = People(config.people, config.world, n, config.num_robots, config.max_humans, walls, m)
     scenarios, models = people.prepare(test_set.scenarios(range(n), m))
     state = without_robots(scenarios_to_state(scenarios, num_robots=1, max_humans=config.max_humans))
     state.human_model[:] = models

@@ -129,19 +129,19 @@ def test_goalone_and_registry():
 def test_observation_and_world_state_give_the_same_decisions(rooms_map_path):
     """On a real env, Ref from the paper observation equals Ref from the core's world state."""
     from socialzoo.env.config import EnvConfig
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
     from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario
 
     path = rooms_map_path
     scenarios = ScenarioConfig(min_humans=4, max_humans=8)
-    core = SocialNavCore(EnvConfig(map=str(path), max_steps=200, scenario=scenarios), 6)
-    core.reset_rows(np.arange(6), [generate_scenario(core.map, seed, scenarios) for seed in range(6)])
+    task = ActionSelectionTask(EnvConfig(map=str(path), max_steps=200, scenario=scenarios), 6)
+    task.reset_rows(np.arange(6), [generate_scenario(task.map, seed, scenarios) for seed in range(6)])
     ref = Ref()
     chosen = []
     for _ in range(200):
-        from_obs = ref.act(core.obs)
-        from_state = ref_actions(*ref_inputs_from_core(core), ref.cfg).reshape(from_obs.shape)
+        from_obs = ref.act(task.obs)
+        from_state = ref_actions(*ref_inputs_from_core(task.core), ref.cfg).reshape(from_obs.shape)
         np.testing.assert_array_equal(from_obs, from_state)
         chosen += from_obs.ravel().tolist()
-        core.step(from_obs)
+        task.step(from_obs)
     assert {GO_ALONE, HALT, FOLLOW} <= set(chosen)

@@ -8,7 +8,6 @@ import pytest
 
 from socialzoo.agents import SHIPPED_DIR
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.human_policy import (
     LearnedHumanPolicy,
     check_human_spec,
@@ -16,6 +15,7 @@ from socialzoo.env.human_policy import (
     split_human_spec,
 )
 from socialzoo.env.policy_file import PolicyFileError, save_policy_file
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.nav.subpolicies import HALT
 from socialzoo.scenarios.scenario import Scenario
 
@@ -106,12 +106,12 @@ def test_mixed_population_learned_slots_follow_the_policy_the_rest_their_social_
         human_speed=[1.0] * 5,
     )
     config = EnvConfig(map="open_room", num_learned_humans=2, **slow.env_overrides())
-    core = SocialNavCore(config, 1)
-    core.reset_rows([0], [scenario])
-    assert core.human_obs.shape == (1, 2, slow.input_size)
+    task = ActionSelectionTask(config, 1)
+    task.reset_rows([0], [scenario])
+    assert task.human_obs.shape == (1, 2, slow.input_size)
     for _ in range(120):  # 3 s
-        core.step(np.array([[HALT]]), slow.act(core.human_obs))
-    speed = np.linalg.norm(core.state.human_vel[0, :5], axis=-1)
+        task.step(np.array([[HALT]]), slow.act(task.human_obs))
+    speed = np.linalg.norm(task.core.state.human_vel[0, :5], axis=-1)
     assert np.all(np.abs(speed[:2] - np.tanh(0.5)) < 0.05)
     assert np.all(speed[2:] > 0.9)
 

@@ -133,20 +133,20 @@ def two_doors_map() -> Map:
 
 def test_a_stuck_robot_recovers_over_another_edge():
     from socialzoo.bench.drive_check import _scenario, drive_config
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
     m = two_doors_map()
     report = drive_map(m)
     assert report.complete, report.lines()
     # It drove to the narrow door first, backed off and went round by the wide one.
-    core = SocialNavCore(drive_config(m), 1, map_data=m)
-    core.reset_rows([0], [_scenario(m, m.legal_poses, 0, 1)])
+    task = ActionSelectionTask(drive_config(m), 1, map_data=m)
+    task.reset_rows([0], [_scenario(m, m.legal_poses, 0, 1)])
     ys = []
-    while not core.done[0, 0]:
-        core.step(np.zeros((1, 1), dtype=np.int64))
-        ys.append(core.state.robot_pose[0, 0, 1])
-    assert core.episode_summaries([0])[0]["reached"]
-    assert core.navigator.recoveries[0, 0] >= 1 and max(ys) > 4.0
+    while not task.core.done[0, 0]:
+        task.step(np.zeros((1, 1), dtype=np.int64))
+        ys.append(task.core.state.robot_pose[0, 0, 1])
+    assert task.episode_metrics([0])[0]["reached"]
+    assert task.core.navigator.recoveries[0, 0] >= 1 and max(ys) > 4.0
 
 
 def test_pose_pairs_are_the_feasible_ones_or_a_seeded_sample():

@@ -5,7 +5,7 @@ import pytest
 
 from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.nav.subpolicies import HALT
 from socialzoo.scenarios.scenario import Scenario
 
@@ -28,17 +28,17 @@ def scene(spawn, goals, robot=(9.0, 1.0, 0.0)):
 def run(s, walker, steps):
     """Step the scene with every human learned (the walker) and the robot halted; the summary."""
     config = EnvConfig(map="open_room", num_learned_humans=len(s.human_spawn), human_action_frame="human")
-    core = SocialNavCore(config, 1)
-    core.reset_rows([0], [s])
+    task = ActionSelectionTask(config, 1)
+    task.reset_rows([0], [s])
     world = config.world
     metrics = HumanEpisodeMetrics(
-        1, config.max_humans, 1, core.walls, world.human_collision_distance, world.human.waypoint_radius
+        1, config.max_humans, 1, task.core.walls, world.human_collision_distance, world.human.waypoint_radius
     )
-    metrics.reset(np.array([0]), core.state)
+    metrics.reset(np.array([0]), task.core.state)
     for _ in range(steps):
-        before = core.state
-        result = core.step(np.array([[HALT]]), walker.act(core.human_obs))
-        metrics.update(before, core.state, result.events.human_blocked, config.dt, np.array([False]))
+        before = task.core.state
+        result = task.step(np.array([[HALT]]), walker.act(task.human_obs)).detail
+        metrics.update(before, task.core.state, result.events.human_blocked, config.dt, np.array([False]))
     return metrics.summaries([0])[0]
 
 
@@ -73,15 +73,15 @@ def test_distances_to_walls_and_between_humans_and_an_unreached_goal(walker):
 
 def test_rows_keep_apart_and_a_compacted_tracker_keeps_its_rows(walker):
     config = EnvConfig(map="open_room", num_learned_humans=1, human_action_frame="human")
-    core = SocialNavCore(config, 2)
+    task = ActionSelectionTask(config, 2)
     near, far = scene([[3.0, 5.0]], [[7.0, 5.0]]), scene([[3.0, 5.0]], [[3.0, 9.5]])
-    core.reset_rows([0, 1], [near, far])
-    metrics = HumanEpisodeMetrics(2, config.max_humans, 1, core.walls, 0.4, 1.0)
-    metrics.reset(np.array([0, 1]), core.state)
+    task.reset_rows([0, 1], [near, far])
+    metrics = HumanEpisodeMetrics(2, config.max_humans, 1, task.core.walls, 0.4, 1.0)
+    metrics.reset(np.array([0, 1]), task.core.state)
     for _ in range(40):
-        before = core.state
-        result = core.step(np.full((2, 1), HALT), walker.act(core.human_obs))
-        metrics.update(before, core.state, result.events.human_blocked, config.dt, np.zeros(2, bool))
+        before = task.core.state
+        result = task.step(np.full((2, 1), HALT), walker.act(task.human_obs)).detail
+        metrics.update(before, task.core.state, result.events.human_blocked, config.dt, np.zeros(2, bool))
     both = metrics.summaries([0, 1])
     assert both[0]["humans_min_robot_distance"] != both[1]["humans_min_robot_distance"]
     assert metrics.rows([1]).summaries([0]) == [both[1]] or str(metrics.rows([1]).summaries([0])) == str(

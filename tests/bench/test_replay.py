@@ -81,11 +81,13 @@ def test_laser_is_scanned_every_stride_and_at_the_end(rooms, ref_trace):
     assert trace.laser_ranges.max() < 15.0
     # The scan is the laser's own: a robot's first scan ends on the walls around it.
     from socialzoo.core.laser import laser_scan
-    from socialzoo.env.core import SocialNavCore
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
-    core = SocialNavCore(config, 1)
-    core.reset_rows([0], [benchmark_scenario(config, 4)])
-    ranges = laser_scan(core.state, core.walls, LaserConfig(num_rays=30), config.world.human.radius)[0, 0]
+    task = ActionSelectionTask(config, 1)
+    task.reset_rows([0], [benchmark_scenario(config, 4)])
+    ranges = laser_scan(
+        task.core.state, task.core.walls, LaserConfig(num_rays=30), config.world.human.radius
+    )[0, 0]
     np.testing.assert_array_equal(trace.laser_ranges[0], ranges)
 
 

@@ -49,9 +49,9 @@ def test_every_trial_once_and_the_batch_stays_full(test_set):
     batch = 4
     delivered, active = [], []
 
-    def on_step(core, row_trial, obs, actions, result):
+    def on_step(task, row_trial, obs, actions, result):
         active.append(sum(t is not None for t in row_trial))
-        assert obs.shape == core.obs.shape and actions.shape == (batch, 1)
+        assert obs.shape == task.obs.shape and actions.shape == (batch, 1)
 
     results = BatchedRunner(spec_for(test_set, batch)).run(
         trials, on_results=delivered.extend, on_step=on_step

@@ -271,18 +271,18 @@ def test_old_env_versions_are_refused_naming_the_new_one():
 
 
 def test_infos_share_one_set_of_keys():
-    from socialzoo.env.core import StepResult
+    from socialzoo.env.tasks.action_selection import INITIAL_INFO
 
     env = ActionSelectionEnv(map="open_room", max_steps=5)
     env.reset(seed=0)
     _, _, _, _, info = env.step(0)
-    assert set(StepResult.INFO_KEYS) <= set(info)
-    assert list(StepResult.initial_info()) == list(StepResult.INFO_KEYS)
+    assert set(INITIAL_INFO) <= set(info)
+    assert list(env.task.initial_info()) == list(env.task.info_keys) == list(INITIAL_INFO)
     vec = ActionSelectionVectorEnv(2, map="open_room", max_steps=5)
     vec.reset(seed=0)
     *_, vinfo = vec.step(np.zeros(2, dtype=np.int64))
-    assert set(StepResult.INFO_KEYS) <= set(vinfo)
-    assert all(vinfo[key].shape == (2,) for key in StepResult.INFO_KEYS)
+    assert set(INITIAL_INFO) <= set(vinfo)
+    assert all(vinfo[key].shape == (2,) for key in INITIAL_INFO)
     assert vinfo["force"][0] == info["force"] and vinfo["target_human"][0] == info["target_human"]
 
 

@@ -1,6 +1,6 @@
-"""Compacting a core: every per-row array is carried over (a new one added to the core, its plans,
-metrics or state and forgotten here fails this test), and the kept rows step on exactly as they
-would have in the full batch, with two robots per row."""
+"""Compacting a task and its core: every per-row array is carried over (a new one added to the task,
+the core, its plans, metrics or state and forgotten here fails this test), and the kept rows step on
+exactly as they would have in the full batch, with two robots per row."""
 
 import dataclasses
 
@@ -9,8 +9,8 @@ import pytest
 
 from socialzoo.env.compaction import compact_core
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.scenario_source import with_robots
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario
 
 B, R = 5, 2
@@ -18,20 +18,20 @@ KEEP = [4, 1, 3]
 
 
 @pytest.fixture(scope="module")
-def stepped_core(rooms_map_path):
-    """A core of B rows and R robots, stepped 40 times with seeded random actions."""
+def stepped_task(rooms_map_path):
+    """A task of B rows and R robots, stepped 40 times with seeded random actions."""
     config = EnvConfig(
         map=str(rooms_map_path), scenario=ScenarioConfig(min_humans=2, max_humans=6), num_robots=R
     )
-    core = SocialNavCore(config, B)
+    task = ActionSelectionTask(config, B)
     scenarios = [
-        with_robots(generate_scenario(core.map, 100 + i, config.scenario), core.map, R) for i in range(B)
+        with_robots(generate_scenario(task.map, 100 + i, config.scenario), task.map, R) for i in range(B)
     ]
-    core.reset_rows(np.arange(B), scenarios)
+    task.reset_rows(np.arange(B), scenarios)
     rng = np.random.default_rng(0)
     for _ in range(40):
-        core.step(rng.integers(0, 4, (B, R)))
-    return core
+        task.step(rng.integers(0, 4, (B, R)))
+    return task
 
 
 def plain(summaries):
@@ -44,17 +44,18 @@ def arrays_of(obj):
     return {k: v for k, v in vars(obj).items() if isinstance(v, np.ndarray)}
 
 
-def test_every_per_row_array_is_carried_over(stepped_core):
-    old = stepped_core
-    new = compact_core(old, KEEP)
+def test_every_per_row_array_is_carried_over(stepped_task):
+    old = stepped_task
+    new = old.compact(KEEP)
     robot_rows = [row * R + k for row in KEEP for k in range(R)]
-    assert new.batch_size == len(KEEP)
+    assert new.batch_size == new.core.batch_size == len(KEEP)
     pairs = [
-        ("core", old, new),
-        ("navigator", old.navigator, new.navigator),
-        ("plans", old.navigator.plans, new.navigator.plans),
+        ("task", old, new),
+        ("core", old.core, new.core),
+        ("navigator", old.core.navigator, new.core.navigator),
+        ("plans", old.core.navigator.plans, new.core.navigator.plans),
         ("metrics", old.metrics, new.metrics),
-        ("state", old.state, new.state),
+        ("state", old.core.state, new.core.state),
     ]
     checked = 0
     for where, a, b in pairs:
@@ -68,30 +69,30 @@ def test_every_per_row_array_is_carried_over(stepped_core):
                 want = value  # shared by every row (e.g. the learned-human slots)
             np.testing.assert_array_equal(got, want, err_msg=f"{where}.{name}")
             checked += 1
-    assert checked >= 30
-    assert new.scenarios == [old.scenarios[i] for i in KEEP]
-    assert dataclasses.fields(new.state) == dataclasses.fields(old.state)
-    assert new.sight is not old.sight  # a fresh cache: it only saves work
+    assert checked >= 35
+    assert new.core.scenarios == [old.core.scenarios[i] for i in KEEP]
+    assert dataclasses.fields(new.core.state) == dataclasses.fields(old.core.state)
+    assert new.core.sight is not old.core.sight  # a fresh cache: it only saves work
 
 
-def test_kept_rows_step_on_as_in_the_full_batch(stepped_core):
-    full = compact_core(stepped_core, range(B))  # a copy: the fixture stays as it is
-    small = compact_core(stepped_core, KEEP)
+def test_kept_rows_step_on_as_in_the_full_batch(stepped_task):
+    full = stepped_task.compact(range(B))  # a copy: the fixture stays as it is
+    small = stepped_task.compact(KEEP)
     rng = np.random.default_rng(1)
     robot_rows = [row * R + k for row in KEEP for k in range(R)]
     for _ in range(60):
         actions = rng.integers(0, 4, (B, R))
-        a = full.step(actions)
-        b = small.step(actions[KEEP])
+        a = full.step(actions).detail
+        b = small.step(actions[KEEP]).detail
         for field in ("obs", "reward", "terminated", "truncated", "force", "blame", "human_collisions"):
             np.testing.assert_array_equal(getattr(b, field), getattr(a, field)[KEEP], err_msg=field)
     assert plain(small.metrics.summaries()) == plain(full.metrics.summaries(robot_rows))
 
 
-def test_bad_rows(stepped_core):
+def test_bad_rows(stepped_task):
     for rows in ([], [1, 1], [B]):
         with pytest.raises(ValueError, match=r"distinct rows of 0\.\.4"):
-            compact_core(stepped_core, rows)
-    fresh = SocialNavCore(stepped_core.config, 2, map_data=stepped_core.map)
+            compact_core(stepped_task.core, rows)
+    fresh = ActionSelectionTask(stepped_task.config, 2, map_data=stepped_task.map)
     with pytest.raises(RuntimeError, match="never reset"):
-        compact_core(fresh, [0])
+        compact_core(fresh.core, [0])

@@ -185,12 +185,12 @@ def test_among_walls_the_robot_sees_its_route_and_the_walls_its_scan_hits():
         straight = np.linalg.norm(core.state.robot_goal[0, 0, :2] - pos)
         assert obs[0] == pytest.approx(core.route_left[0, 0], rel=1e-6) and obs[0] >= straight - 1e-6
         carrot = core.carrot[0, 0] - pos
-        assert core.frame_angle[0] == pytest.approx(np.arctan2(carrot[1], carrot[0]))
+        assert env.task.frame_angle[0] == pytest.approx(np.arctan2(carrot[1], carrot[0]))
         # Every seen wall slot lies on a wall, within the scan's range, still and of radius 0.
         slots = obs[6 : 6 + 7 * (h + k)].reshape(h + k, 7)[h:]
         seen = obs[6 + 7 * (h + k) :][h:] == 1
         assert seen.any()
-        c, s = np.cos(core.frame_angle[0]), np.sin(core.frame_angle[0])
+        c, s = np.cos(env.task.frame_angle[0]), np.sin(env.task.frame_angle[0])
         world = pos + np.stack(
             (c * slots[seen, 0] - s * slots[seen, 1], s * slots[seen, 0] + c * slots[seen, 1]), -1
         )
@@ -213,7 +213,7 @@ def test_the_crowdnav_task_takes_the_people_spec():
     again = CrowdNavVectorEnv(2, variant="20", humans="sf@0.5+orca@0.5", physics_substeps=1)
     again.reset(seed=0)
     np.testing.assert_array_equal(again.core.state.human_model, state.human_model)  # from each case's seed
-    assert CrowdNavEnv(humans="social_force").core.config.humans == "social_force"  # the spec's alias of sf
+    assert CrowdNavEnv(humans="social_force").task.config.humans == "social_force"  # the spec's alias of sf
     for spec, match in (
         ("groups", "walk by"),
         ("learned:x.safetensors", "walk by"),

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.human_agents import HumanRewardConfig, action_velocities, human_frames
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.scenarios.scenario import Scenario
 
 
@@ -27,11 +27,11 @@ def scenario(spawn: list[list[float]], goals: list[list[float]], robot=(5.0, 1.0
     )
 
 
-def core_for(s: Scenario, **reward) -> SocialNavCore:
+def task_for(s: Scenario, **reward) -> ActionSelectionTask:
     config = EnvConfig(map="open_room", num_learned_humans=4, human_reward=HumanRewardConfig(**reward))
-    core = SocialNavCore(config, 1)
-    core.reset_rows([0], [s])
-    return core
+    task = ActionSelectionTask(config, 1)
+    task.reset_rows([0], [s])
+    return task
 
 
 def test_contact_terms_name_who_is_touched():
@@ -39,8 +39,8 @@ def test_contact_terms_name_who_is_touched():
     s = scenario(
         [[3.0, 5.0], [3.3, 5.0], [0.15, 7.0], [5.2, 1.2]], [[3.0, 9.0], [3.3, 9.0], [0.15, 9.0], [5.2, 9.0]]
     )
-    core = core_for(s, human_contact=1.0, robot_contact=10.0, wall_contact=100.0, progress=0.0)
-    result = core.step(np.array([[1]]), np.zeros((1, 4, 2)))
+    task = task_for(s, human_contact=1.0, robot_contact=10.0, wall_contact=100.0, progress=0.0)
+    result = task.step(np.array([[1]]), np.zeros((1, 4, 2))).detail
     step = result.human
     assert step.human_contact[0].tolist() == [True, True, False, False]
     assert step.robot_contact[0].tolist() == [False, False, False, True]
@@ -48,17 +48,17 @@ def test_contact_terms_name_who_is_touched():
     assert step.contact[0].tolist() == [True, True, False, True]
     np.testing.assert_allclose(result.human_reward[0], [-1.0, -1.0, -100.0, -10.0])
     # Standing still but pushed by the social forces: the speed term is the relative deviation.
-    speed = np.linalg.norm(core.state.human_vel[0, :4], axis=-1)
+    speed = np.linalg.norm(task.core.state.human_vel[0, :4], axis=-1)
     np.testing.assert_allclose(step.speed_error[0], np.abs(speed - 1.0))
     assert (step.speed_error[0] > 0.5).all()
 
 
 def test_progress_waypoint_bonus_and_speed_penalty_add_up():
     s = scenario([[2.0, 5.0]], [[2.6, 5.0]])  # the goal is within the 1 m waypoint radius: reached at once
-    core = core_for(s, progress=2.0, waypoint_bonus=3.0, speed=0.5, human_contact=0.0, robot_contact=0.0)
+    task = task_for(s, progress=2.0, waypoint_bonus=3.0, speed=0.5, human_contact=0.0, robot_contact=0.0)
     toward = np.zeros((1, 4, 2))
     toward[0, 0] = [1.0, 0.0]
-    result = core.step(np.array([[1]]), toward)
+    result = task.step(np.array([[1]]), toward).detail
     step = result.human
     assert step.waypoint_reached[0, 0] and not step.waypoint_reached[0, 1:].any()
     expected = 2.0 * step.progress[0, 0] + 3.0 - 0.5 * step.speed_error[0, 0]
@@ -70,8 +70,8 @@ def test_progress_waypoint_bonus_and_speed_penalty_add_up():
 
 def test_human_frame_actions_point_at_the_waypoint():
     s = scenario([[2.0, 2.0], [8.0, 8.0]], [[2.0, 8.0], [2.0, 2.0]])
-    core = core_for(s)
-    state = core.state
+    task = task_for(s)
+    state = task.core.state
     learned = np.arange(2)
     forward = np.array([[[1.0, 0.0], [1.0, 0.0]]])
     vel = action_velocities(state, learned, forward, "human")
@@ -114,12 +114,12 @@ def test_action_scale_lets_a_learner_ask_for_more_but_never_walk_faster_than_its
     speeds = {}
     for scale in (1.0, 1.5):
         config = EnvConfig(map="open_room", num_learned_humans=1, human_action_scale=scale)
-        core = SocialNavCore(config, 1)
-        core.reset_rows([0], [s])
+        task = ActionSelectionTask(config, 1)
+        task.reset_rows([0], [s])
         trace = []
         for _ in range(80):
-            core.step(np.array([[1]]), np.array([[[0.0, 1.0]]]))
-            trace.append(float(np.linalg.norm(core.state.human_vel[0, 0])))
+            task.step(np.array([[1]]), np.array([[[0.0, 1.0]]]))
+            trace.append(float(np.linalg.norm(task.core.state.human_vel[0, 0])))
         speeds[scale] = np.array(trace)
     assert (speeds[1.5][:10] > speeds[1.0][:10] + 1e-6).all()
     assert speeds[1.5].max() <= 1.0 + 1e-9 and speeds[1.0].max() <= 1.0 + 1e-9
@@ -131,9 +131,9 @@ def test_wall_clearance_warns_before_the_contact():
     # full penalty in contact, half at 0.3 m (halfway from the 0.4 m margin to the 0.2 m contact),
     # none beyond the margin. The humans drift a little in the step, so compare with their distance after it.
     s = scenario([[0.15, 3.0], [0.3, 5.0], [0.6, 7.0]], [[0.15, 3.5], [0.3, 5.5], [0.6, 7.5]])
-    core = core_for(s, progress=0.0, human_contact=0.0, robot_contact=0.0, wall_clearance=2.0)
-    result = core.step(np.array([[1]]), np.zeros((1, 4, 2)))
-    x = core.state.human_pos[0, :3, 0]
+    task = task_for(s, progress=0.0, human_contact=0.0, robot_contact=0.0, wall_clearance=2.0)
+    result = task.step(np.array([[1]]), np.zeros((1, 4, 2))).detail
+    x = task.core.state.human_pos[0, :3, 0]
     expected = np.clip((0.4 - x) / 0.2, 0.0, 1.0)
     np.testing.assert_allclose(result.human.wall_clearance[0, :3], expected, atol=1e-9)
     assert result.human.wall_clearance[0, 0] == 1.0 and 0.3 < result.human.wall_clearance[0, 1] < 0.7
@@ -151,10 +151,12 @@ def test_mirror_signs_give_the_observation_of_the_mirror_image():
     obs = []
     for side in (4.0, 6.0):
         s = scenario([[5.0, 2.0], [side, 3.0]], [[5.0, 8.0], [side, 8.0]], robot=(5.0, 9.0, np.pi / 2))
-        core = core_for(s)
+        task = task_for(s)
         obs.append(
-            human_observations(core.state, core.walls, np.arange(1), core.config.num_human_neighbours)[0, 0]
+            human_observations(
+                task.core.state, task.core.walls, np.arange(1), task.config.num_human_neighbours
+            )[0, 0]
         )
-    signs = human_mirror_signs(core.config.num_human_neighbours)
-    assert obs[0][9] != 0 and (signs == -1).sum() == 3 + 2 * core.config.num_human_neighbours
+    signs = human_mirror_signs(task.config.num_human_neighbours)
+    assert obs[0][9] != 0 and (signs == -1).sum() == 3 + 2 * task.config.num_human_neighbours
     np.testing.assert_allclose(obs[1], obs[0] * signs, atol=1e-6)

@@ -6,10 +6,10 @@ import pytest
 
 from socialzoo.agents import make_policy
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.env.people import COST_KEYS, _group_crossings, without_robots
 from socialzoo.env.registration import BENCHMARK_IDS
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE
 from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
@@ -19,77 +19,77 @@ BENCHMARK_ID = next(iter(BENCHMARK_IDS))  # the training map's id, at its curren
 ROOM_SET = TestSet("open_room", 5, 8, ScenarioConfig(min_humans=6, max_humans=8))
 
 
-def core_of(batch=3, **people):
+def task_of(batch=3, **people):
     config = EnvConfig().replace(**SMALL, people=people)
-    core = SocialNavCore(config, batch)
-    core.reset_rows(np.arange(batch), ROOM_SET.scenarios(range(batch), core.map))
-    return core
+    task = ActionSelectionTask(config, batch)
+    task.reset_rows(np.arange(batch), ROOM_SET.scenarios(range(batch), task.map))
+    return task
 
 
-def run(core, steps):
+def run(task, steps):
     policy = make_policy("goalone")
     for _ in range(steps):
-        core.step(policy.act(core.obs, core))
+        task.step(policy.act(task.obs, task))
 
 
 def test_default_people_are_the_benchmarks_and_add_no_metrics():
-    core = core_of()
-    assert core.people.keys == ()
-    assert (core.state.human_model == SOCIAL_FORCE).all() and (core.state.human_group == -1).all()
-    run(core, 5)
-    assert list(core.episode_summaries([0])[0]) == list(SUMMARY_KEYS)
+    task = task_of()
+    assert task.core.people.keys == ()
+    assert (task.core.state.human_model == SOCIAL_FORCE).all() and (task.core.state.human_group == -1).all()
+    run(task, 5)
+    assert list(task.episode_metrics([0])[0]) == list(SUMMARY_KEYS)
 
 
 def test_a_mix_assigns_models_per_scenario_seed():
-    core = core_of(batch=4, models="sf@0.5+orca@0.5")
-    state = core.state
+    task = task_of(batch=4, models="sf@0.5+orca@0.5")
+    state = task.core.state
     for row in range(4):
         present = state.human_model[row][state.human_mask[row]]
         n = len(present)
         assert sorted(np.bincount(present, minlength=2)[:2]) == sorted([(n + 1) // 2, n // 2])
-    again = core_of(batch=4, models="sf@0.5+orca@0.5")
-    assert np.array_equal(again.state.human_model, state.human_model)
-    run(core, 20)
-    assert np.isfinite(core.state.human_pos).all()
+    again = task_of(batch=4, models="sf@0.5+orca@0.5")
+    assert np.array_equal(again.core.state.human_model, state.human_model)
+    run(task, 20)
+    assert np.isfinite(task.core.state.human_pos).all()
 
 
 def test_counterfactual_rows_step_as_the_scenario_without_its_robot():
-    core = core_of(models="sf@0.5+orca@0.5", counterfactual=True)
-    alone = without_robots(core.state)
-    run(core, 30)
-    cfg = core.config.world
+    task = task_of(models="sf@0.5+orca@0.5", counterfactual=True)
+    alone = without_robots(task.core.state)
+    run(task, 30)
+    cfg = task.config.world
     for _ in range(30):
         b = alone.batch_size
-        alone, _ = step_world(alone, core.walls, cfg, np.zeros((b, 0, 2)), np.zeros((b, 0), bool))
-    np.testing.assert_array_equal(core.people.ghost.human_pos, alone.human_pos)
-    np.testing.assert_array_equal(core.people.ghost.human_vel, alone.human_vel)
+        alone, _ = step_world(alone, task.core.walls, cfg, np.zeros((b, 0, 2)), np.zeros((b, 0), bool))
+    np.testing.assert_array_equal(task.core.people.ghost.human_pos, alone.human_pos)
+    np.testing.assert_array_equal(task.core.people.ghost.human_vel, alone.human_vel)
     # With the robot the people walk otherwise (it is among them).
-    assert not np.array_equal(core.state.human_pos, alone.human_pos)
+    assert not np.array_equal(task.core.state.human_pos, alone.human_pos)
 
 
 def test_people_who_do_not_see_the_robot_lose_no_time():
     config = EnvConfig().replace(
         **SMALL, people={"models": "orca", "counterfactual": True}, world={"orca": {"robot_visible": False}}
     )
-    core = SocialNavCore(config, 2)
-    core.reset_rows(np.arange(2), ROOM_SET.scenarios(range(2), core.map))
-    run(core, 120)
-    for summary in core.episode_summaries([0, 1]):
+    task = ActionSelectionTask(config, 2)
+    task.reset_rows(np.arange(2), ROOM_SET.scenarios(range(2), task.map))
+    run(task, 120)
+    for summary in task.episode_metrics([0, 1]):
         assert set(COST_KEYS) <= set(summary)
         assert summary["people_time_lost"] == 0.0 and summary["people_extra_distance"] == 0.0
 
 
 def test_the_robot_costs_visible_people_time():
-    core = core_of(batch=4, models="sf", counterfactual=True)
-    run(core, 120)
-    summaries = core.episode_summaries(np.arange(4))
+    task = task_of(batch=4, models="sf", counterfactual=True)
+    run(task, 120)
+    summaries = task.episode_metrics(np.arange(4))
     lost = [s["people_time_lost"] for s in summaries]
     assert all(np.isfinite(lost)) and max(np.abs(lost)) > 0.0
     assert all(s["people_time_lost_max"] >= s["people_time_lost"] for s in summaries)
 
 
 def test_group_intrusion_counts_a_robot_passing_between_two_members():
-    state = without_robots(core_of(batch=1).state)
+    state = without_robots(task_of(batch=1).core.state)
     before = state.copy()
     before.human_mask[0, :2] = True
     before.human_group[0, :2] = 0
@@ -106,16 +106,14 @@ def test_group_intrusion_counts_a_robot_passing_between_two_members():
 
 
 def test_groups_report_intrusions_and_survive_compaction():
-    from socialzoo.env.compaction import compact_core
-
-    core = core_of(batch=3, models="groups", counterfactual=True)
-    assert (core.state.human_group[core.state.human_mask] >= 0).any()
-    run(core, 20)
-    small = compact_core(core, [2, 0])
-    run(core, 20)
+    task = task_of(batch=3, models="groups", counterfactual=True)
+    assert (task.core.state.human_group[task.core.state.human_mask] >= 0).any()
+    run(task, 20)
+    small = task.compact([2, 0])
+    run(task, 20)
     run(small, 20)
-    np.testing.assert_equal(small.episode_summaries([0, 1]), core.episode_summaries([2, 0]))
-    assert "group_intrusions" in core.episode_summaries([0])[0]
+    np.testing.assert_equal(small.episode_metrics([0, 1]), task.episode_metrics([2, 0]))
+    assert "group_intrusions" in task.episode_metrics([0])[0]
 
 
 def learned_config(path, **changes):
@@ -146,9 +144,9 @@ def test_learned_people_are_driven_by_the_env_in_every_interface(walker_policy_p
     assert (parallel.core.state.human_model == LEARNED).any()
     # Slow walkers (actions tanh(0.5) of their preferred speed) walk slower than the others.
     slow = write_walker(tmp_path / "slow.safetensors", speed=0.5)
-    core = core_of(batch=2, models=f"learned:{slow}")
-    run(core, 80)
-    speed = np.linalg.norm(core.state.human_vel, axis=-1)[core.state.human_mask]
+    task = task_of(batch=2, models=f"learned:{slow}")
+    run(task, 80)
+    speed = np.linalg.norm(task.core.state.human_vel, axis=-1)[task.core.state.human_mask]
     assert speed.mean() < 0.7
 
 
@@ -193,4 +191,4 @@ def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_pa
     save_policy_file(robot, {"w": np.zeros(1)}, {**header, "env_id": f"socialzoo/X-v{current_env_version()}"})
     config = EnvConfig().replace(**SMALL, people={"models": f"learned:{robot}"})
     with pytest.raises(PolicyFileError, match="not a learned human policy"):
-        SocialNavCore(config, 1)
+        ActionSelectionTask(config, 1)

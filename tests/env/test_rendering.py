@@ -1,4 +1,4 @@
-"""CoreRenderer: the one renderer of an env core's row (envs' render() and the episode videos)."""
+"""CoreRenderer: the one renderer of a task's row (envs' render() and the episode videos)."""
 
 import numpy as np
 import pytest
@@ -26,8 +26,8 @@ def _overlays(renderer):
 def test_size_info_and_the_last_action():
     env = ActionSelectionEnv(map="open_room", max_steps=10)
     env.reset(seed=0)
-    core = env.unwrapped.core
-    renderer = CoreRenderer(core, "rgb_array", width=320, height=200, info=("Ref",))
+    task = env.unwrapped.task
+    renderer = CoreRenderer(task, "rgb_array", width=320, height=200, info=("Ref",))
     overlays = _overlays(renderer)
     first = renderer.frame(0)
     assert first.shape == (200, 320, 3) and first.dtype == np.uint8
@@ -36,8 +36,8 @@ def test_size_info_and_the_last_action():
     # No action has been chosen before the first step; after it, the one chosen (Halt).
     assert [o.action for o in overlays] == [None, ACTION_NAMES[1]]
     assert all(o.info == ("Ref",) for o in overlays)
-    labelled = CoreRenderer(core, "rgb_array", width=320, height=200, info=("Ref",)).frame(0)
-    plain = CoreRenderer(core, "rgb_array", width=320, height=200).frame(0)
+    labelled = CoreRenderer(task, "rgb_array", width=320, height=200, info=("Ref",)).frame(0)
+    plain = CoreRenderer(task, "rgb_array", width=320, height=200).frame(0)
     assert not np.array_equal(plain, labelled)  # the info line is drawn
 
 
@@ -45,4 +45,4 @@ def test_bad_render_mode_is_refused():
     env = ActionSelectionEnv(map="open_room", max_steps=10)
     env.reset(seed=0)
     with pytest.raises(ValueError, match="render_mode must be 'rgb_array' or 'human', got 'ansi'"):
-        CoreRenderer(env.unwrapped.core, "ansi")
+        CoreRenderer(env.unwrapped.task, "ansi")

@@ -8,10 +8,10 @@ import numpy as np
 from socialzoo.agents import make_policy
 from socialzoo.core.metrics import METRICS, metric, names
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.core import SocialNavCore
 from socialzoo.env.crowd_outcome import METRIC_KEYS, CrowdNavMetrics, CrowdRewardConfig, judge_step
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.env.people import COST_KEYS, GROUP_KEYS, PEOPLE_KEYS
+from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
 
 ROOM_SET = TestSet("open_room", 5, 8, ScenarioConfig(min_humans=6, max_humans=8))
@@ -35,12 +35,12 @@ def test_action_selection_summaries_are_registered():
         scenario={"min_humans": 6, "max_humans": 8},
         people={"models": "groups", "counterfactual": True},
     )
-    core = SocialNavCore(config, 2)
-    core.reset_rows(np.arange(2), ROOM_SET.scenarios(range(2), core.map))
+    task = ActionSelectionTask(config, 2)
+    task.reset_rows(np.arange(2), ROOM_SET.scenarios(range(2), task.map))
     policy = make_policy("goalone")
     for _ in range(20):
-        core.step(policy.act(core.obs, core))
-    summaries = core.episode_summaries([0, 1])
+        task.step(policy.act(task.obs, task))
+    summaries = task.episode_metrics([0, 1])
     assert list(summaries[0]) == list(SUMMARY_KEYS) + list(PEOPLE_KEYS)
     assert SUMMARY_KEYS == names("action_selection") and PEOPLE_KEYS == GROUP_KEYS + COST_KEYS
     for summary in summaries:

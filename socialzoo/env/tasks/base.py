@@ -32,7 +32,7 @@ class TaskStep:
         human_reward: (B, L) float64 rewards of the learned-human agents, or None.
         human_info: per-step info of each learned-human agent, key -> (B, L), or None.
         detail: the task's own record of the step, for tools that know the task (the
-            action-selection task's socialzoo.env.core.StepResult), or None.
+            action-selection task's socialzoo.env.tasks.action_selection.StepResult), or None.
     """
 
     reward: np.ndarray

@@ -1,11 +1,19 @@
 """The CrowdNav velocity task (Chen et al. 2019, vita-epfl/CrowdNav) and its variants on the batched
-core, with CrowdNav's settings as the defaults (socialzoo.env.crowd_config.CrowdNavConfig).
+core (socialzoo.env.core.BatchedCore), with CrowdNav's settings as the defaults
+(socialzoo.env.crowd_config.CrowdNavConfig).
 
 A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
-or a building among the benchmark's people (the Walls variant), judged as CrowdNav judges it
-(socialzoo.env.crowd_outcome). Training episodes are CrowdNav's training cases drawn per row;
-`reset` options {"split": "val"|"test", "case": k} or {"cases": [...]} play fixed cases
-(case_splits).
+or a building among the benchmark's people (the Walls variant). The task turns each action into the
+robot's command, advances the core `physics_substeps` world steps per decision, judges the step as
+CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach along every substep, the goal,
+the time limit), accumulates the episode metrics and builds each robot's joint-state observation
+(socialzoo.env.crowd_observation). Training episodes are CrowdNav's training cases drawn per row
+(socialzoo.env.crowd_source); `reset` options {"split": "val"|"test", "case": k} or {"cases": [...]}
+play fixed cases (case_splits).
+
+CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a robot
+whose episode ended stands still where it is, and the row's episode lasts until every robot's has
+ended. Per-robot arrays are flat over (B, R), row-major: robot r of row b is entry b * R + r.
 """
 
 from __future__ import annotations
@@ -15,18 +23,30 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium import spaces
 
+from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
+from socialzoo.core.walls import WallIndex
+from socialzoo.env.core import BatchedCore
 from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
-from socialzoo.env.crowd_core import CrowdNavCore
-from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size
-from socialzoo.env.crowd_source import CrowdCaseSource
+from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size, joint_state
+from socialzoo.env.crowd_outcome import CrowdNavMetrics, closest_boundary_distance, judge_step
+from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
+from socialzoo.env.outcome import STILL_SPEED
+from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
-from socialzoo.scenarios.crowd_cases import SPLIT_SIZE
+from socialzoo.humans.models import PeopleConfig
+from socialzoo.maps.map_file import load_map
+from socialzoo.nav.local_planner import LocalPlannerConfig
+from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, CrowdCase, case_scenario
+from socialzoo.scenarios.scenario import Scenario
 
 # The per-step info of a robot: its closest approach to anyone during the step (m, negative: an
 # overlap), the benchmark's social force and blame terms after it, whether it collided with a person
 # (or another robot) or with a wall.
 INFO_KEYS = ("closest", "force", "blame", "human_collisions", "wall_collision")
+# CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
+# to the goal per this time, capped at their preferred speed (s).
+_ARRIVAL_TIME = 1.0
 
 
 def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdNavConfig:
@@ -75,14 +95,48 @@ class CrowdNavTask(Task):
     reset_info_key: ClassVar[str] = "case_seed"
 
     def __init__(self, config: CrowdNavConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
-        self.config = resolve_config(config, overrides)
-        self.core = CrowdNavCore(self.config, batch_size)
-        self.source = CrowdCaseSource(self.config, batch_size)
+        self.config = cfg = resolve_config(config, overrides)
+        m = load_map(cfg.map) if cfg.map is not None else None
+        # Among walls the robot is guided along its route (the benchmark robot's navigator, without
+        # recovery: the learner drives): it sees the route's carrot as its goal and the route left
+        # as its goal distance.
+        self.core = BatchedCore(
+            batch_size,
+            cfg.num_robots,
+            cfg.slots,
+            cfg.world,
+            WallIndex(np.zeros((0, 4))) if m is None else m.wall_index,
+            m=m,
+            people=PeopleConfig(models=cfg.humans),
+            planner=LocalPlannerConfig() if m is not None else None,
+            robot_visible=cfg.robot_visible,
+        )
+        self.source = CrowdCaseSource(cfg, batch_size)
         self.batch_size = batch_size
-        self.num_robots = self.config.num_robots
-        self.num_human_slots = self.config.slots
-        self.observation_space = observation_space(self.config)
-        self.action_space = action_space(self.config)
+        self.num_robots = r = cfg.num_robots
+        self.num_human_slots = cfg.slots
+        self.observation_space = observation_space(cfg)
+        self.action_space = action_space(cfg)
+        self.action_table = np.array(discrete_actions(cfg.robot)) if cfg.action == "discrete" else None
+        self._ray_angles = np.linspace(0.0, 2.0 * np.pi, cfg.wall_rays, endpoint=False)
+        self._ray_directions = np.stack((np.cos(self._ray_angles), np.sin(self._ray_angles)), axis=-1)
+        # Observation slots: the people, then the other robots (each robot's own slot left out).
+        self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
+            r, r - 1
+        )
+        radius = float(cfg.robot.radius)  # type: ignore[arg-type]
+        self.slot_radius = np.concatenate(
+            (np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius))
+        )
+        self.radius_sum = radius + self.slot_radius
+        self._blame_horizon = RewardConfig().blame_horizon
+        # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
+        # goal-frame velocity actions are turned by it into the world frame.
+        self.frame_angle = np.zeros(batch_size * r)
+        self.time = np.zeros(batch_size)
+        self.case_seed = np.zeros(batch_size, dtype=np.uint64)  # benchmark scenario seeds use all 64 bits
+        self.metrics = CrowdNavMetrics(batch_size * r, cfg.time_step, cfg.preferred_speed, cfg.reward)
+        self.observation: JointState | None = None
         # Metrics of the robots whose episode ended, by flat index (row * R + robot).
         self._ended: dict[int, dict[str, Any]] = {}
 
@@ -96,14 +150,41 @@ class CrowdNavTask(Task):
         rows = np.asarray(rows, dtype=np.intp)
         chosen = fixed_cases(dict(options), rows, self.case_splits(), self.name)
         if chosen is not None:
-            scenarios = self.source.fixed(chosen[0], chosen[1])  # type: ignore[arg-type]
+            cases: list[Scenario] | list[CrowdCase] = self.source.fixed(chosen[0], chosen[1])  # type: ignore[arg-type]
         else:
-            scenarios = self.source.next(rows)
-        self.core.reset_rows(rows, scenarios)
+            cases = self.source.next(rows)
+        self.reset_rows(rows, cases)
         for row in rows.tolist():
             for robot in range(self.num_robots):
                 self._ended.pop(row * self.num_robots + robot, None)
-        return self.core.case_seed[rows].copy()
+        return self.case_seed[rows].copy()
+
+    def reset_rows(self, rows: np.ndarray, cases: list[Scenario] | list[CrowdCase]) -> None:
+        """Start new episodes in `rows` from `cases` (one per row: Scenarios, or the arena's
+        CrowdCases, written straight into the state once it exists)."""
+        core = self.core
+        rows = core.check_rows(rows, len(cases))
+        seeds = [c.seed for c in cases]
+        if len(cases) and isinstance(cases[0], CrowdCase) and core.state is not None:
+            n = cases[0].human_starts.shape[0]
+            models = core.people.models(seeds, [n] * len(cases))
+            write_cases(core.state, rows, cases, self.config.cases.human_speed, models)  # type: ignore[arg-type]
+            core.start_rows(rows, [None] * len(rows))
+        else:
+            if len(cases) and isinstance(cases[0], CrowdCase):
+                cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
+            core.reset_rows(rows, cases)  # type: ignore[arg-type]
+        self.case_seed[rows] = seeds
+        self.time[rows] = 0.0
+        self.metrics.reset_rows(core.robot_rows(rows))
+        if self.observation is None or len(rows) == self.batch_size:
+            self.observation = self._observe()
+        else:
+            # Only the reset rows' robots see anything new.
+            fresh = self._observe(rows)
+            robots = core.robot_rows(rows)
+            self.observation.buffer[robots] = fresh.flat()  # type: ignore[index]
+            self.observation.mask[robots] = fresh.mask
 
     def case_splits(self) -> dict[str, int]:
         """CrowdNav's validation and test cases (100 and 500); among walls the map's validation
@@ -117,15 +198,62 @@ class CrowdNavTask(Task):
         return {"val": len(validation_set(name)), "test": len(get_test_set(f"{name}-test"))}
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
-        """One decision step (CrowdNavCore.step)."""
+        """One decision step: the actions become commands, the world advances `physics_substeps`
+        steps, and each robot's step is judged as CrowdNav judges it (socialzoo.env.crowd_outcome:
+        the closest approach along every substep, the goal, the time limit; a wall contact is a
+        collision). Robots whose episode ended stand still until their row is reset."""
         if human_action is not None:
             raise ValueError(
                 f"{self.name}: the task has no learned-human agents, but human actions were given"
             )
+        core, cfg = self.core, self.config
+        core.check_reset()
+        command = self.commands(action)
         b, r = self.batch_size, self.num_robots
-        result = self.core.step(action)
-        self._ended.update(result.metrics)
-        outcome = result.outcome
+        closest = np.full(b * r, np.inf)
+        wall = np.zeros(b * r, dtype=bool)
+        moved = np.zeros(b * r)
+        start_time = np.repeat(self.time, r)
+        dt = cfg.physics_dt
+        for _ in range(cfg.physics_substeps):
+            before = core.state
+            assert before is not None
+            if cfg.map is None:
+                self._arrive(before)
+            events = core.step(command)
+            after = core.state
+            shift = (after.robot_pose[..., :2] - before.robot_pose[..., :2]).reshape(b * r, 2)
+            moved += np.hypot(shift[:, 0], shift[:, 1])
+            pos, vel, mask = self._others_of(before, shift.reshape(b, r, 2) / dt)
+            gap = closest_boundary_distance(
+                before.robot_pose[..., :2].reshape(b * r, 2), shift / dt, pos, vel, self.radius_sum, mask, dt
+            )
+            closest = np.minimum(closest, gap)
+            wall |= events.robot_wall.reshape(b * r)
+        self.time += cfg.time_step
+        if core.navigator is not None:
+            core.follow_routes()
+        # A wall contact is a collision of the task (CrowdNav's arena has none).
+        closest = np.where(wall, np.minimum(closest, -1e-9), closest)
+        outcome = judge_step(
+            closest,
+            core.goal_distance().reshape(b * r),
+            float(cfg.robot.radius),  # type: ignore[arg-type]
+            start_time,
+            cfg.time_limit,
+            cfg.reward,
+            cfg.time_step,
+        ).masked(core.done.reshape(b * r))
+        # The step's social force and blame terms per robot (the viewer draws them).
+        force, blame = self._force_and_blame()
+        self.metrics.update(outcome, moved, force, blame)
+        ended = np.flatnonzero(outcome.terminated | outcome.truncated)
+        for k, summary in zip(ended.tolist(), self.metrics.summaries(ended, outcome), strict=True):
+            summary["wall_collision"] = float(wall[k] and outcome.collision[k])
+            self._ended[k] = summary
+        core.end_episodes((outcome.terminated | outcome.truncated).reshape(b, r))
+        self.observation = self._observe()
+        wall_collision = wall & outcome.collision
         truncated = outcome.truncated.reshape(b, r)
         return TaskStep(
             reward=outcome.reward.reshape(b, r),
@@ -133,19 +261,184 @@ class CrowdNavTask(Task):
             truncated=truncated,
             info={
                 "closest": outcome.closest.reshape(b, r),
-                "force": self.core.step_force.reshape(b, r),
-                "blame": self.core.step_blame.reshape(b, r),
-                "human_collisions": (outcome.collision & ~result.wall_collision)
-                .astype(np.int64)
-                .reshape(b, r),
-                "wall_collision": result.wall_collision.reshape(b, r),
+                "force": force.reshape(b, r),
+                "blame": blame.reshape(b, r),
+                "human_collisions": (outcome.collision & ~wall_collision).astype(np.int64).reshape(b, r),
+                "wall_collision": wall_collision.reshape(b, r),
             },
             time_up=truncated.any(axis=1),
         )
 
+    def commands(self, action: np.ndarray) -> np.ndarray:
+        """(B, R, 2) robot commands of the actions, checked before anything changes. Actions are
+        (B, R, 2) velocities or (B, R) indices; with one robot also (B, 2) or (B,).
+
+        Raises:
+            ValueError: a wrong shape, a NaN or infinite value, a velocity outside [-1, 1], or an
+                index outside the discrete actions; the message names the row.
+        """
+        b, r = self.batch_size, self.num_robots
+        action = np.asarray(action)
+        robot = self.config.robot
+        if self.action_table is not None:
+            if action.size != b * r or not np.issubdtype(action.dtype, np.integer):
+                raise ValueError(
+                    f"CrowdNav: discrete actions must be {b} x {r} integers, got {action.dtype} {action.shape}"
+                )
+            flat = action.reshape(b * r)
+            bad = np.flatnonzero((flat < 0) | (flat >= len(self.action_table)))
+            if len(bad):
+                top = len(self.action_table) - 1
+                raise ValueError(
+                    f"CrowdNav: action {int(flat[bad[0]])} of robot {int(bad[0])} is not in 0..{top}"
+                )
+            chosen = self.action_table[flat]
+            if robot.kinematics == "unicycle":  # (speed, turn per step) -> (v, omega)
+                chosen = np.stack((chosen[:, 0], chosen[:, 1] / self.config.time_step), axis=-1)
+            else:
+                chosen = self._to_world(chosen)
+            return chosen.reshape(b, r, 2)
+        if action.shape not in ((b, r, 2),) + (((b, 2),) if r == 1 else ()):
+            raise ValueError(
+                f"CrowdNav: velocity actions must have shape {(b, r, 2)}, got {np.shape(action)}"
+            )
+        action = np.asarray(action, dtype=np.float64).reshape(b * r, 2)
+        bad = ~np.isfinite(action).all(axis=1) | (np.abs(action) > 1.0).any(axis=1)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise ValueError(
+                f"CrowdNav: velocity action {action[k].tolist()} of robot {k} is not finite in [-1, 1]"
+            )
+        v_pref = self.config.preferred_speed
+        if robot.kinematics == "holonomic":
+            return self._to_world(action * v_pref).reshape(b, r, 2)
+        speed = (action[:, 0] + 1.0) * 0.5 * v_pref
+        omega = action[:, 1] * robot.max_rotation / self.config.time_step
+        return np.stack((speed, omega), axis=-1).reshape(b, r, 2)
+
+    def _to_world(self, velocity: np.ndarray) -> np.ndarray:
+        """(B R, 2) holonomic velocities in the action frame -> the world frame."""
+        return velocity if self.config.action_frame == "world" else self._turn(velocity, 1.0)
+
+    def to_action_frame(self, velocity: np.ndarray) -> np.ndarray:
+        """(B, R, 2) world-frame velocities -> the frame of the robots' velocity actions."""
+        if self.config.action_frame == "world":
+            return velocity
+        b, r = velocity.shape[:2]
+        return self._turn(velocity.reshape(b * r, 2), -1.0).reshape(b, r, 2)
+
+    def _turn(self, velocity: np.ndarray, sign: float) -> np.ndarray:
+        """(B R, 2) velocities turned by `sign` times each robot's frame angle."""
+        c, s = np.cos(self.frame_angle), sign * np.sin(self.frame_angle)
+        return np.stack(
+            (c * velocity[:, 0] - s * velocity[:, 1], s * velocity[:, 0] + c * velocity[:, 1]), axis=-1
+        )
+
+    def _arrive(self, s: WorldState) -> None:
+        """CrowdNav's people slow down on their last metre and stop at their goal: the preferred
+        velocity is the goal's offset per second, capped at the preferred speed (its ORCA policy's
+        `velocity / speed if speed > 1 else velocity` at v_pref 1). Written into the state's
+        preferred speeds before each step; the arena's routes are one point, the goal."""
+        offset = s.human_route[:, :, 0] - s.human_pos
+        distance = np.sqrt(offset[..., 0] ** 2 + offset[..., 1] ** 2)
+        s.human_pref_speed[...] = np.where(
+            s.human_mask, np.minimum(self.config.cases.human_speed, distance / _ARRIVAL_TIME), 0.0
+        )
+
+    def _force_and_blame(self) -> tuple[np.ndarray, np.ndarray]:
+        """(B R,) the benchmark's social force and blame terms of each robot after the step
+        (SPEC section 9; every person counts: the task's robot sees everyone)."""
+        s = self.core.state
+        assert s is not None
+        b, r = self.batch_size, self.num_robots
+        velocity = world_velocity(s.robot_pose, s.robot_vel, self.config.robot)
+        pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        people = np.repeat(s.human_pos, r, axis=0)
+        seen = np.repeat(s.human_mask, r, axis=0)
+        skip = np.full(b * r, -1)
+        force = social_force_term(pos, people, seen, skip)
+        vel = velocity.reshape(b * r, 2)
+        still = np.hypot(vel[:, 0], vel[:, 1]) < STILL_SPEED
+        blame = blame_term(pos, vel, still, people, seen, skip, self._blame_horizon)
+        return force, blame
+
+    # ------------------------------------------------------------------ the joint state
+    def _others_of(self, s: WorldState, robot_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(pos, vel, mask) of what each robot must keep clear of, (B R, slots + R - 1, ...): the
+        people (at their velocity at the start of the step), then the other robots (at theirs)."""
+        b, r = s.batch_size, self.num_robots
+        people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
+        people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
+        people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
+        if r == 1:
+            return people_pos.reshape(b, -1, 2), people_vel.reshape(b, -1, 2), people_mask.reshape(b, -1)
+        robot_pos = s.robot_pose[..., :2][:, self._others]
+        other_vel = robot_vel[:, self._others]
+        pos = np.concatenate((people_pos, robot_pos), axis=2).reshape(b * r, -1, 2)
+        vel = np.concatenate((people_vel, other_vel), axis=2).reshape(b * r, -1, 2)
+        mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2).reshape(b * r, -1)
+        return pos, vel, mask
+
+    def _wall_points(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(points (N, K, 2), seen (N, K)): where each robot's K scan rays first hit a wall within
+        wall_range (world frame; a ray that hits nothing is not seen)."""
+        n, k = len(pos), len(self._ray_angles)
+        walls = self.core.walls
+        if k == 0 or walls.num_walls == 0:
+            return np.zeros((n, k, 2)), np.zeros((n, k), dtype=bool)
+        angles = np.broadcast_to(self._ray_angles, (n, k))
+        ranges = walls.cast_rays(pos, angles, self.config.wall_range)
+        points = pos[:, None, :] + ranges[..., None] * self._ray_directions
+        return points, ranges < self.config.wall_range
+
+    def _observe(self, rows: np.ndarray | None = None) -> JointState:
+        """The joint state of every robot (of `rows` only, when given)."""
+        core = self.core
+        s = core.state
+        assert s is not None
+        if rows is not None:
+            s = s.rows(rows)
+        b, r = s.batch_size, self.num_robots
+        robot = self.config.robot
+        velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
+        pos, vel, mask = self._others_of(s, velocity)
+        radius = np.broadcast_to(self.slot_radius, mask.shape)
+        robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        if self.config.wall_rays:
+            points, seen = self._wall_points(robot_pos)
+            pos = np.concatenate((pos, points), axis=1)
+            vel = np.concatenate((vel, np.zeros_like(points)), axis=1)
+            mask = np.concatenate((mask, seen), axis=1)
+            radius = np.concatenate((radius, np.zeros(seen.shape)), axis=1)
+        guided = core.navigator is not None
+        goal = (
+            (core.carrot if rows is None else core.carrot[rows]) if guided else s.robot_goal[..., :2]
+        ).reshape(b * r, 2)
+        offset = goal - robot_pos
+        self.frame_angle[slice(None) if rows is None else core.robot_rows(rows)] = np.arctan2(
+            offset[:, 1], offset[:, 0]
+        )
+        observation = joint_state(
+            robot_pos=robot_pos,
+            robot_goal=goal,
+            robot_vel=velocity.reshape(b * r, 2),
+            robot_heading=s.robot_pose[..., 2].reshape(b * r),
+            robot_radius=float(robot.radius),  # type: ignore[arg-type]
+            preferred_speed=self.config.preferred_speed,
+            unicycle=robot.kinematics == "unicycle",
+            human_pos=pos,
+            human_vel=vel,
+            human_radius=radius,
+            human_mask=mask,
+        )
+        if guided:  # the goal distance is the route's length left, not the carrot's distance
+            left = core.route_left if rows is None else core.route_left[rows]
+            observation.robot[:, 0] = left.reshape(b * r)
+        return observation
+
     def observations(self) -> Any:
         """(B, R, D) float32 flat joint states, or the dict layout of (B, R, ...) arrays."""
-        observation = self.core.observation
+        observation = self.observation
         assert observation is not None
         return _per_robot(observation, self.config.observation, self.batch_size, self.num_robots)
 
@@ -200,7 +493,7 @@ class CrowdNavTask(Task):
             return None, None
         plans = self.core.navigator.plans
         length = int(plans.lengths[row, 0])
-        return self.core.seen_goal()[0][row, 0].copy(), plans.paths[row, 0, :length].copy()
+        return self.core.carrot[row, 0].copy(), plans.paths[row, 0, :length].copy()
 
     def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
         """The arena (or the map's walls) around every trace; the robot's disc as a square of its
