@@ -12,11 +12,13 @@ other humans, robots and walls.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from socialzoo.core.geometry import rotate
+from socialzoo.core.jit import kernel
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_fields
 from socialzoo.core.walls import WallIndex
@@ -184,46 +186,96 @@ def human_observations(
         (B, L, 8 + 5K) float32, human frame (x towards its waypoint), SI units. Slots of absent
         humans are all zero.
     """
-    b = state.batch_size
+    humans = np.asarray(humans, dtype=np.int64)
     pos = state.human_pos[:, humans]
-    vel = state.human_vel[:, humans]
     heading = human_frames(state, humans)
-    obs = np.zeros((b, len(humans), human_observation_size(num_neighbours)), dtype=np.float32)
-    obs[..., 0:2] = rotate(state.human_target[:, humans] - pos, -heading)
-    obs[..., 2:4] = rotate(vel, -heading)
-    obs[..., 4] = state.human_pref_speed[:, humans]
+    # numpy's cos and sin (those `rotate` takes) of the frames and of the robots' headings; the
+    # rest is one compiled pass (_fill_human_observations) with numpy's operations in its order.
+    cos, sin = np.cos(-heading), np.sin(-heading)
+    robot_theta = state.robot_pose[..., 2]
+    robot_dir = np.stack((np.cos(robot_theta), np.sin(robot_theta)), axis=-1)
     closest, dist = walls.nearest(pos)
-    near = np.isfinite(dist)
-    obs[..., 5:7] = np.where(near[..., None], rotate(closest - pos, -heading), 0.0)
-    obs[..., 7] = near
-    if num_neighbours:
-        others = np.concatenate((state.human_pos, state.robot_pose[..., :2]), axis=1)
-        robot_vel = state.robot_vel[..., :1] * np.stack(
-            (np.cos(state.robot_pose[..., 2]), np.sin(state.robot_pose[..., 2])), axis=-1
-        )
-        others_vel = np.concatenate((state.human_vel, robot_vel), axis=1)
-        present = np.concatenate((state.human_mask, np.ones(state.robot_pose.shape[:2], bool)), axis=1)
-        is_robot = np.arange(others.shape[1]) >= state.max_humans
-        rel = others[:, None, :, :] - pos[:, :, None, :]  # (B, L, N, 2)
-        dist2 = (rel**2).sum(-1)
-        self_slot = np.arange(others.shape[1])[None, None, :] == humans[None, :, None]
-        dist2 = np.where(present[:, None, :] & ~self_slot, dist2, np.inf)
-        k = min(num_neighbours, others.shape[1])
-        order = np.argsort(dist2, axis=-1, kind="stable")[..., :k]
-        valid = np.isfinite(np.take_along_axis(dist2, order, axis=-1))
-        rel_pos = np.take_along_axis(rel, order[..., None], axis=2)
-        rel_vel = np.take_along_axis(others_vel[:, None, :, :] - vel[:, :, None, :], order[..., None], axis=2)
-        neighbours = np.concatenate(
-            (
-                rotate(rel_pos, -heading[..., None]),
-                rotate(rel_vel, -heading[..., None]),
-                is_robot[order][..., None].astype(np.float64),
-            ),
-            axis=-1,
-        )
-        neighbours = np.where(valid[..., None], neighbours, 0.0)
-        obs[..., OWN_SIZE : OWN_SIZE + NEIGHBOUR_SIZE * k] = neighbours.reshape(b, len(humans), -1)
-    return np.where(state.human_mask[:, humans, None], obs, 0.0).astype(np.float32)
+    obs = np.zeros((state.batch_size, len(humans), human_observation_size(num_neighbours)), dtype=np.float32)
+    _fill_human_observations(
+        state.human_pos, state.human_vel, state.human_target, state.human_pref_speed, state.human_mask,
+        state.robot_pose, state.robot_vel, robot_dir, humans, cos, sin, closest, dist,
+        min(num_neighbours, state.max_humans + state.robot_pose.shape[1]), obs,
+    )  # fmt: skip
+    return obs
+
+
+@kernel
+def _fill_human_observations(
+    human_pos, human_vel, human_target, pref_speed, mask, robot_pose, robot_vel, robot_dir, humans,
+    cos, sin, closest, dist, k, obs,
+):  # fmt: skip
+    """`human_observations` after the frames' cos and sin and the nearest walls: fills obs
+    (B, L, D) of present learned humans (absent ones stay zero). The neighbours are the k nearest
+    present agents (people, then robots, by slot; ties to the lower slot, as a stable argsort),
+    each rotated into the human's frame as `rotate` does (c * x - s * y, s * x + c * y)."""
+    batch, num = human_pos.shape[0], human_pos.shape[1]
+    robots = robot_pose.shape[1]
+    agents = num + robots
+    dist2 = np.empty(agents)
+    taken = np.empty(agents, dtype=np.bool_)
+    for b in range(batch):
+        for i in range(humans.shape[0]):
+            h = humans[i]
+            if not mask[b, h]:
+                continue
+            c, s = cos[b, i], sin[b, i]
+            px, py = human_pos[b, h, 0], human_pos[b, h, 1]
+            vx, vy = human_vel[b, h, 0], human_vel[b, h, 1]
+            tx, ty = human_target[b, h, 0] - px, human_target[b, h, 1] - py
+            obs[b, i, 0] = c * tx - s * ty
+            obs[b, i, 1] = s * tx + c * ty
+            obs[b, i, 2] = c * vx - s * vy
+            obs[b, i, 3] = s * vx + c * vy
+            obs[b, i, 4] = pref_speed[b, h]
+            if math.isfinite(dist[b, i]):
+                wx, wy = closest[b, i, 0] - px, closest[b, i, 1] - py
+                obs[b, i, 5] = c * wx - s * wy
+                obs[b, i, 6] = s * wx + c * wy
+                obs[b, i, 7] = 1.0
+            if k == 0:
+                continue
+            for j in range(agents):
+                taken[j] = False
+                if j < num:
+                    present = mask[b, j] and j != h
+                    rx, ry = human_pos[b, j, 0] - px, human_pos[b, j, 1] - py
+                else:
+                    present = True
+                    rx, ry = robot_pose[b, j - num, 0] - px, robot_pose[b, j - num, 1] - py
+                dist2[j] = rx * rx + ry * ry if present else math.inf
+            for n in range(k):
+                # The nearest agent not yet listed; NaN sorts last, as in numpy.
+                best = -1
+                for j in range(agents):
+                    if taken[j]:
+                        continue
+                    d = dist2[j]
+                    if best < 0 or d < dist2[best] or (math.isnan(dist2[best]) and not math.isnan(d)):
+                        best = j
+                taken[best] = True
+                if not math.isfinite(dist2[best]):
+                    continue
+                if best < num:
+                    rx, ry = human_pos[b, best, 0] - px, human_pos[b, best, 1] - py
+                    ux, uy = human_vel[b, best, 0] - vx, human_vel[b, best, 1] - vy
+                    robot = 0.0
+                else:
+                    r = best - num
+                    rx, ry = robot_pose[b, r, 0] - px, robot_pose[b, r, 1] - py
+                    ux = robot_vel[b, r, 0] * robot_dir[b, r, 0] - vx
+                    uy = robot_vel[b, r, 0] * robot_dir[b, r, 1] - vy
+                    robot = 1.0
+                start = OWN_SIZE + NEIGHBOUR_SIZE * n
+                obs[b, i, start] = c * rx - s * ry
+                obs[b, i, start + 1] = s * rx + c * ry
+                obs[b, i, start + 2] = c * ux - s * uy
+                obs[b, i, start + 3] = s * ux + c * uy
+                obs[b, i, start + 4] = robot
 
 
 def human_step(
@@ -247,48 +299,98 @@ def human_step(
         blocked: (B, H) humans whose move a wall stopped this step (StepEvents.human_blocked).
         config: the reward weights and contact distances.
     """
-    present = after.human_mask[:, humans]
-    target = before.human_target[:, humans]
-    pos = after.human_pos[:, humans]
-    gained = np.linalg.norm(target - before.human_pos[:, humans], axis=-1) - np.linalg.norm(
-        target - pos, axis=-1
-    )
-    reached = after.human_waypoint[:, humans] != before.human_waypoint[:, humans]
-    limit = config.contact_distance**2
-    others = after.human_pos[:, None, :, :] - pos[:, :, None, :]  # (B, L, H, 2)
-    self_slot = np.arange(after.max_humans)[None, None, :] == humans[None, :, None]
-    near_human = ((others**2).sum(-1) < limit) & after.human_mask[:, None, :] & ~self_slot
-    robots = after.robot_pose[:, None, :, :2] - pos[:, :, None, :]  # (B, L, R, 2)
-    near_robot = (robots**2).sum(-1) < limit
-    _, wall_dist = walls.nearest(pos)
-    wall = (wall_dist < config.wall_distance) | blocked[:, humans]
-    # Beyond the wall index's reach the distance is inf: no penalty.
-    clearance = np.clip(
-        (config.wall_margin - wall_dist) / (config.wall_margin - config.wall_distance), 0.0, 1.0
-    )
-    clearance = np.where(wall, 1.0, clearance)
-    speed = np.linalg.norm(after.human_vel[:, humans], axis=-1)
-    pref = after.human_pref_speed[:, humans]
-    speed_error = np.abs(speed - pref) / np.maximum(pref, 1e-9)
-    human_contact = near_human.any(-1) & present
-    robot_contact = near_robot.any(-1) & present
-    wall_contact = wall & present
-    reward = (
-        config.progress * gained
-        + config.waypoint_bonus * reached
-        - config.speed * speed_error
-        - config.human_contact * human_contact
-        - config.robot_contact * robot_contact
-        - config.wall_contact * wall_contact
-        - config.wall_clearance * np.where(present, clearance, 0.0)
-    )
+    humans = np.asarray(humans, dtype=np.int64)
+    _, wall_dist = walls.nearest(after.human_pos[:, humans])
+    shape = (after.batch_size, len(humans))
+    terms = np.empty((4,) + shape)  # reward, progress, wall clearance, speed error
+    flags = np.empty((4,) + shape, dtype=bool)  # waypoint reached, human, robot and wall contact
+    weights = np.array(
+        [
+            config.progress, config.waypoint_bonus, config.speed, config.human_contact,
+            config.robot_contact, config.wall_contact, config.wall_clearance,
+            config.contact_distance**2, config.wall_distance, config.wall_margin,
+        ]
+    )  # fmt: skip
+    _human_step_terms(
+        before.human_pos, before.human_target, before.human_waypoint, after.human_pos, after.human_vel,
+        after.human_waypoint, after.human_pref_speed, after.human_mask, after.robot_pose, humans,
+        wall_dist, blocked, weights, terms, flags,
+    )  # fmt: skip
     return HumanStep(
-        reward=np.where(present, reward, 0.0),
-        progress=np.where(present, gained, 0.0),
-        waypoint_reached=reached & present,
-        human_contact=human_contact,
-        robot_contact=robot_contact,
-        wall_contact=wall_contact,
-        wall_clearance=np.where(present, clearance, 0.0),
-        speed_error=np.where(present, speed_error, 0.0),
+        reward=terms[0],
+        progress=terms[1],
+        waypoint_reached=flags[0],
+        human_contact=flags[1],
+        robot_contact=flags[2],
+        wall_contact=flags[3],
+        wall_clearance=terms[2],
+        speed_error=terms[3],
     )
+
+
+@kernel
+def _human_step_terms(
+    pos0, target0, waypoint0, pos, vel, waypoint, pref_speed, mask, robot_pose, humans, wall_dist,
+    blocked, weights, terms, flags,
+):  # fmt: skip
+    """`human_step`'s terms in one pass over (B, L): terms (reward, progress, wall clearance,
+    speed error) and flags (waypoint reached, human, robot and wall contact), zero and
+    False for absent humans. The operations are numpy's in its order (a norm is the square root
+    of x * x + y * y; the reward's terms are added and subtracted left to right), so the results
+    are the same bit for bit."""
+    w_progress, w_bonus, w_speed, w_human = weights[0], weights[1], weights[2], weights[3]
+    w_robot, w_wall, w_clearance = weights[4], weights[5], weights[6]
+    limit, wall_distance, wall_margin = weights[7], weights[8], weights[9]
+    for b in range(pos.shape[0]):
+        for i in range(humans.shape[0]):
+            h = humans[i]
+            present = mask[b, h]
+            tx, ty = target0[b, h, 0], target0[b, h, 1]
+            ax, ay = tx - pos0[b, h, 0], ty - pos0[b, h, 1]
+            px, py = pos[b, h, 0], pos[b, h, 1]
+            cx, cy = tx - px, ty - py
+            gained = math.sqrt(ax * ax + ay * ay) - math.sqrt(cx * cx + cy * cy)
+            reached = waypoint[b, h] != waypoint0[b, h]
+            near_human = False
+            for j in range(pos.shape[1]):
+                dx, dy = pos[b, j, 0] - px, pos[b, j, 1] - py
+                if dx * dx + dy * dy < limit and mask[b, j] and j != h:
+                    near_human = True
+                    break
+            near_robot = False
+            for r in range(robot_pose.shape[1]):
+                dx, dy = robot_pose[b, r, 0] - px, robot_pose[b, r, 1] - py
+                if dx * dx + dy * dy < limit:
+                    near_robot = True
+                    break
+            d = wall_dist[b, i]
+            wall = d < wall_distance or blocked[b, h]
+            clearance = (wall_margin - d) / (wall_margin - wall_distance)
+            if not math.isnan(clearance):
+                clearance = min(max(clearance, 0.0), 1.0)
+            if wall:
+                clearance = 1.0
+            vx, vy = vel[b, h, 0], vel[b, h, 1]
+            speed = math.sqrt(vx * vx + vy * vy)
+            pref = pref_speed[b, h]
+            speed_error = abs(speed - pref) / max(pref, 1e-9)
+            human_contact = near_human and present
+            robot_contact = near_robot and present
+            wall_contact = wall and present
+            reward = (
+                w_progress * gained
+                + w_bonus * (1.0 if reached else 0.0)
+                - w_speed * speed_error
+                - w_human * (1.0 if human_contact else 0.0)
+                - w_robot * (1.0 if robot_contact else 0.0)
+                - w_wall * (1.0 if wall_contact else 0.0)
+                - w_clearance * (clearance if present else 0.0)
+            )
+            terms[0, b, i] = reward if present else 0.0
+            terms[1, b, i] = gained if present else 0.0
+            terms[2, b, i] = clearance if present else 0.0
+            terms[3, b, i] = speed_error if present else 0.0
+            flags[0, b, i] = reached and present
+            flags[1, b, i] = human_contact
+            flags[2, b, i] = robot_contact
+            flags[3, b, i] = wall_contact
