@@ -14,6 +14,7 @@ import numpy as np
 
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_fields
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import distance_field
@@ -127,32 +128,71 @@ def select_target_human(
     """
     cfg = cfg or SubPolicyConfig()
     n, num_humans = visible.shape
-    rel = human_pos - robot_pose[:, None, :2]
-    cos, sin = np.cos(robot_pose[:, 2]), np.sin(robot_pose[:, 2])
-    ahead = cos[:, None] * rel[..., 0] + sin[:, None] * rel[..., 1] > 0.0
-    dist2 = np.where(visible & ahead, rel[..., 0] ** 2 + rel[..., 1] ** 2, np.inf)
     count = min(cfg.num_candidates, num_humans)
     if count == 0:
         return np.full(n, -1, dtype=np.intp)
-    order = np.argsort(dist2, axis=1, kind="stable")[:, :count]  # (N, count), nearest first
-    rows = np.arange(n)[:, None]
-    present = np.isfinite(dist2[rows, order])
+    # numpy's atan2, cos and sin and the angle wrap, on every human (their values do not depend
+    # on which are candidates); the choice is one compiled pass (_choose_target_human).
     to_target = carrot - robot_pose[:, :2]
     target_dir = np.arctan2(to_target[:, 1], to_target[:, 0])
-    vel = human_vel[rows, order]
-    moving = vel[..., 0] ** 2 + vel[..., 1] ** 2 > cfg.still_speed**2
-    mismatch = np.abs(wrap_angle(np.arctan2(vel[..., 1], vel[..., 0]) - target_dir[:, None]))
-    mismatch = np.where(moving, mismatch, np.pi)
-    mismatch = np.where(present, mismatch, np.inf)
-    # Keep the first candidate that no farther one beats by the threshold (the last always
-    # qualifies): with three, a unless b or c beats it, then b unless c beats it, else c.
-    threshold = math.radians(cfg.heading_match_deg)
-    with np.errstate(invalid="ignore"):  # inf - inf between absent candidates
-        beaten = mismatch[:, :, None] - mismatch[:, None, :] >= threshold  # (N, i, j)
-    later = np.triu(np.ones((count, count), dtype=bool), k=1)
-    keep = ~(beaten & later).any(axis=2)
-    chosen = order[np.arange(n), np.argmax(keep, axis=1)]
-    return np.where(present[:, 0], chosen, -1)
+    mismatch = np.abs(wrap_angle(np.arctan2(human_vel[..., 1], human_vel[..., 0]) - target_dir[:, None]))
+    chosen = np.empty(n, dtype=np.intp)
+    _choose_target_human(
+        robot_pose, np.cos(robot_pose[:, 2]), np.sin(robot_pose[:, 2]), human_pos, human_vel, visible,
+        mismatch, count, cfg.still_speed**2, math.radians(cfg.heading_match_deg), chosen,
+    )  # fmt: skip
+    return chosen
+
+
+@kernel
+def _choose_target_human(
+    robot_pose, cos, sin, human_pos, human_vel, visible, mismatch_all, count, still2, threshold, chosen
+):  # fmt: skip
+    """`select_target_human`'s choice per row, numpy's operations in its order: the `count`
+    nearest visible humans ahead (ties to the lower slot, as a stable argsort), their mismatches
+    (pi for a human slower than the still speed), and the first candidate that no farther one
+    beats by `threshold`; -1 where no human is ahead."""
+    num = human_pos.shape[1]
+    dist2 = np.empty(num)
+    taken = np.empty(num, dtype=np.bool_)
+    order = np.empty(count, dtype=np.intp)
+    mismatch = np.empty(count)
+    for b in range(human_pos.shape[0]):
+        c, s = cos[b], sin[b]
+        for h in range(num):
+            rx, ry = human_pos[b, h, 0] - robot_pose[b, 0], human_pos[b, h, 1] - robot_pose[b, 1]
+            ahead = c * rx + s * ry > 0.0
+            dist2[h] = rx * rx + ry * ry if visible[b, h] and ahead else math.inf
+            taken[h] = False
+        for k in range(count):
+            best = -1
+            for h in range(num):
+                if taken[h]:
+                    continue
+                d = dist2[h]
+                if best < 0 or d < dist2[best] or (math.isnan(dist2[best]) and not math.isnan(d)):
+                    best = h
+            taken[best] = True
+            order[k] = best
+            if not math.isfinite(dist2[best]):
+                mismatch[k] = math.inf
+            else:
+                vx, vy = human_vel[b, best, 0], human_vel[b, best, 1]
+                mismatch[k] = mismatch_all[b, best] if vx * vx + vy * vy > still2 else math.pi
+        if not math.isfinite(dist2[order[0]]):
+            chosen[b] = -1
+            continue
+        pick = 0
+        for i in range(count):
+            beaten = False
+            for j in range(i + 1, count):
+                if mismatch[i] - mismatch[j] >= threshold:  # False for inf - inf (NaN)
+                    beaten = True
+                    break
+            if not beaten:
+                pick = i
+                break
+        chosen[b] = order[pick]
 
 
 def subpolicy_targets(
