@@ -42,6 +42,8 @@ def vector(map_name: str, batch: int):
 def parallel(map_name: str):
     env = parallel_env(map=map_name, num_robots=4, num_learned_humans=8, episode_info=False, **CROWD)
     env.reset(seed=0)
+    for k, agent in enumerate(env.possible_agents):  # the same random actions in every run
+        env.action_space(agent).seed(k)
     rng = np.random.default_rng(0)
 
     def step() -> None:
