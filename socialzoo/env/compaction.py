@@ -9,6 +9,7 @@ task compacts its own per-row arrays beside it (Task.compact).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -59,20 +60,28 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     new.reset_rows(np.arange(len(index)), scenarios)
     new.state = core.state.rows(index)
     if navigator is not None:
-        assert new.navigator is not None
         plans = navigator.plans
         new.navigator.plans = GlobalPlans(
             paths=plans.paths[index].copy(), lengths=plans.lengths[index].copy()
         )
-        # The navigator's other per-row state (goals, route length left, rerouted).
-        for name, value in vars(navigator).items():
-            if isinstance(value, np.ndarray):
-                if value.shape[:1] != (b,):
-                    raise RuntimeError(f"compact_core: Navigator.{name} is not a per-row array")
-                setattr(new.navigator, name, value[index].copy())
+        copy_rows(navigator, new.navigator, index, b)  # goals, route length left, rerouted
     new.carrot = core.carrot[index].copy()
     new.done = core.done[index].copy()
     new.visible = core.visible[core.robot_rows(index)].copy()
     # The people's side: counterfactual rows and the people's metrics so far.
     new.people = core.people.rows(index)
     return new
+
+
+def copy_rows(source: Any, target: Any, index: np.ndarray, size: int) -> None:
+    """Set every array attribute of `target` to rows `index` (copies) of `source`'s, each of which
+    must have `size` rows: reading them all keeps a new per-row array from being forgotten here.
+
+    Raises:
+        RuntimeError: an array attribute that is not per row, naming it.
+    """
+    for name, value in vars(source).items():
+        if isinstance(value, np.ndarray):
+            if value.shape[:1] != (size,):
+                raise RuntimeError(f"compaction: {type(source).__name__}.{name} is not a per-row array")
+            setattr(target, name, value[index].copy())

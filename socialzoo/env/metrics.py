@@ -363,23 +363,6 @@ class EpisodeMetrics:
             "max_time_without_progress": self.max_without_progress[r].copy(),
         }
 
-    def rows(self, index: np.ndarray) -> EpisodeMetrics:
-        """The metrics so far of robot rows `index` (copies), for a task compacted to those rows.
-
-        Raises:
-            RuntimeError: an array that is not per row (every one must be: reading them all keeps
-                a new running metric from being forgotten here).
-        """
-        new = object.__new__(EpisodeMetrics)
-        new.__dict__.update(self.__dict__)
-        new.batch_size = len(index)
-        for name, value in vars(self).items():
-            if isinstance(value, np.ndarray):
-                if value.shape[:1] != (self.batch_size,):
-                    raise RuntimeError(f"EpisodeMetrics.{name} is not a per-row array")
-                setattr(new, name, value[index].copy())
-        return new
-
     def summaries(self, rows: np.ndarray | list[int] | None = None) -> list[dict[str, Any]]:
         """One plain dict of Python scalars per row of `rows` (index array; default all)."""
         index = np.arange(self.batch_size) if rows is None else np.asarray(rows, dtype=np.intp).reshape(-1)

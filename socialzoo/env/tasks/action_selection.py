@@ -15,6 +15,7 @@ seeded scenario stream (socialzoo.env.scenario_source). Learned-human agents
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -468,18 +469,19 @@ class ActionSelectionTask(Task):
         """A task over the core compacted to `rows` (socialzoo.env.compaction.compact_core: the
         world, plans, carrots, sight, flags and the people so far) with the task's own rows of
         them (previous actions, followed humans, observations, metrics); it only finishes them."""
-        from socialzoo.env.compaction import compact_core
+        from socialzoo.env.compaction import compact_core, copy_rows
 
         index = np.asarray(rows, dtype=np.intp).reshape(-1)
-        new = object.__new__(type(self))
-        new.__dict__.update(self.__dict__)
+        new = copy.copy(self)
         new.core = compact_core(self.core, index)
         new.batch_size = new.core.batch_size
         for name in ("prev_action", "target_human", "obs"):
             setattr(new, name, getattr(self, name)[index].copy())
         if self.human_obs is not None:
             new.human_obs = self.human_obs[index].copy()
-        new.metrics = self.metrics.rows(self.core.robot_rows(index))
+        new.metrics = copy.copy(self.metrics)
+        new.metrics.batch_size = len(index) * self.num_robots
+        copy_rows(self.metrics, new.metrics, self.core.robot_rows(index), self.metrics.batch_size)
         return new
 
     # ------------------------------------------------------------------ per-robot info
