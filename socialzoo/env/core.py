@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from socialzoo.core.config import WorldConfig
+from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
@@ -106,6 +107,10 @@ class BatchedCore:
         self.done = np.zeros((b, r), dtype=bool)
         self.scenarios: list[Scenario | None] = [None] * b
         self._ever_reset = np.zeros(b, dtype=bool)
+        # For each robot, the other robots of its row.
+        self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
+            r, r - 1
+        )
 
     # ------------------------------------------------------------------ reset
     def check_rows(self, rows: np.ndarray | Sequence[int], count: int) -> np.ndarray:
@@ -238,6 +243,25 @@ class BatchedCore:
             pos = s.robot_pose[..., :2].reshape(-1, 2)
             self.visible = self.sight.visible(pos, self.per_robot(s.human_pos), mask)
         return self.visible
+
+    def others(
+        self, s: WorldState, robot_vel: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(pos, vel, mask) of who each robot keeps clear of in the state `s` (B rows): the people,
+        then the other robots at `robot_vel` (B, R, 2) (default: their velocity in `s`), (B R,
+        H + R - 1, ...) with each robot's own slot left out; the people's (B, H, ...) when R = 1."""
+        b, r = s.batch_size, self.num_robots
+        if r == 1:
+            return s.human_pos, s.human_vel, s.human_mask
+        if robot_vel is None:
+            robot_vel = world_velocity(s.robot_pose, s.robot_vel, self.world.robot)
+        people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
+        people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
+        people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
+        pos = np.concatenate((people_pos, s.robot_pose[..., :2][:, self._others]), axis=2)
+        vel = np.concatenate((people_vel, robot_vel[:, self._others]), axis=2)
+        mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2)
+        return pos.reshape(b * r, -1, 2), vel.reshape(b * r, -1, 2), mask.reshape(b * r, -1)
 
     def goal_distance(self) -> np.ndarray:
         """(B, R) each robot's straight distance to its goal, m."""

@@ -37,7 +37,7 @@ from socialzoo.env.observation import build_observation, observation_space
 from socialzoo.env.outcome import RobotOutcome, followed_human, robot_outcome
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
-from socialzoo.env.world import StepEvents, robot_velocity_vectors
+from socialzoo.env.world import StepEvents
 from socialzoo.maps.map_file import Map, load_map
 from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS, check_actions, subpolicy_commands
@@ -329,7 +329,7 @@ class ActionSelectionTask(Task):
                 raise ValueError(f"velocity action {action[where]!r} at index {where} is not in [-1, 1]")
             return action * self.speeds, np.zeros((b, r), dtype=bool), np.full((b, r), -1, dtype=np.intp)
         flat = check_actions(np.asarray(action).reshape(-1), b * r)
-        human_pos, human_vel, human_mask = self._robot_obstacles()
+        human_pos, human_vel, human_mask = core.others(state)
         # The latest observation saw this very state: its visibility serves target selection.
         # Other robots (appended after the humans) are never Follow or Pass targets.
         visible = np.zeros(human_mask.shape, dtype=bool)
@@ -351,24 +351,6 @@ class ActionSelectionTask(Task):
         )
         return command.reshape(b, r, 2), halt.reshape(b, r), target.reshape(b, r)
 
-    def _robot_obstacles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per robot (B*R rows): the humans, and with several robots the other robots too.
-
-        Other robots are appended after the humans, so human indices keep their meaning.
-        """
-        s = self.core.state
-        r = self.num_robots
-        if r == 1:
-            return s.human_pos, s.human_vel, s.human_mask
-        b, h = s.human_pos.shape[:2]
-        pos = np.concatenate((s.human_pos, s.robot_pose[..., :2]), axis=1)
-        vel = np.concatenate((s.human_vel, robot_velocity_vectors(s)), axis=1)
-        mask = np.concatenate((s.human_mask, np.ones((b, r), dtype=bool)), axis=1)
-        mask = np.repeat(mask, r, axis=0)
-        own = np.tile(np.arange(r), b)
-        mask[np.arange(b * r), h + own] = False
-        return np.repeat(pos, r, axis=0), np.repeat(vel, r, axis=0), mask
-
     def _backoff(self, command: np.ndarray, moving: np.ndarray) -> np.ndarray:
         """Commands (B, R, 2) with those of recovering robots (the navigator's back-off) in place
         of their planner's, for robots still driving their plan."""
@@ -376,7 +358,7 @@ class ActionSelectionTask(Task):
         rows, robots = np.nonzero(core.navigator.backing_off & moving)
         if len(rows) == 0:
             return command
-        human_pos, _, human_mask = self._robot_obstacles()
+        human_pos, _, human_mask = core.others(core.state)
         flat = rows * self.num_robots + robots
         command = command.copy()
         command[rows, robots] = backoff_commands(

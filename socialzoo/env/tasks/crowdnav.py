@@ -121,9 +121,6 @@ class CrowdNavTask(Task):
         self._ray_angles = np.linspace(0.0, 2.0 * np.pi, cfg.wall_rays, endpoint=False)
         self._ray_directions = np.stack((np.cos(self._ray_angles), np.sin(self._ray_angles)), axis=-1)
         # Observation slots: the people, then the other robots (each robot's own slot left out).
-        self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
-            r, r - 1
-        )
         radius = float(cfg.robot.radius)  # type: ignore[arg-type]
         self.slot_radius = np.concatenate(
             (np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius))
@@ -224,7 +221,7 @@ class CrowdNavTask(Task):
             after = core.state
             shift = (after.robot_pose[..., :2] - before.robot_pose[..., :2]).reshape(b * r, 2)
             moved += np.hypot(shift[:, 0], shift[:, 1])
-            pos, vel, mask = self._others_of(before, shift.reshape(b, r, 2) / dt)
+            pos, vel, mask = core.others(before, shift.reshape(b, r, 2) / dt)
             gap = closest_boundary_distance(
                 before.robot_pose[..., :2].reshape(b * r, 2), shift / dt, pos, vel, self.radius_sum, mask, dt
             )
@@ -363,22 +360,6 @@ class CrowdNavTask(Task):
         return force, blame
 
     # ------------------------------------------------------------------ the joint state
-    def _others_of(self, s: WorldState, robot_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(pos, vel, mask) of what each robot must keep clear of, (B R, slots + R - 1, ...): the
-        people (at their velocity at the start of the step), then the other robots (at theirs)."""
-        b, r = s.batch_size, self.num_robots
-        people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
-        people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
-        people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
-        if r == 1:
-            return people_pos.reshape(b, -1, 2), people_vel.reshape(b, -1, 2), people_mask.reshape(b, -1)
-        robot_pos = s.robot_pose[..., :2][:, self._others]
-        other_vel = robot_vel[:, self._others]
-        pos = np.concatenate((people_pos, robot_pos), axis=2).reshape(b * r, -1, 2)
-        vel = np.concatenate((people_vel, other_vel), axis=2).reshape(b * r, -1, 2)
-        mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2).reshape(b * r, -1)
-        return pos, vel, mask
-
     def _wall_points(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(points (N, K, 2), seen (N, K)): where each robot's K scan rays first hit a wall within
         wall_range (world frame; a ray that hits nothing is not seen)."""
@@ -401,7 +382,7 @@ class CrowdNavTask(Task):
         b, r = s.batch_size, self.num_robots
         robot = self.config.robot
         velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
-        pos, vel, mask = self._others_of(s, velocity)
+        pos, vel, mask = core.others(s, velocity)
         radius = np.broadcast_to(self.slot_radius, mask.shape)
         robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
         if self.config.wall_rays:
