@@ -255,12 +255,10 @@ class BatchedCore:
             return s.human_pos, s.human_vel, s.human_mask
         if robot_vel is None:
             robot_vel = world_velocity(s.robot_pose, s.robot_vel, self.world.robot)
-        people_pos = np.broadcast_to(s.human_pos[:, None], (b, r) + s.human_pos.shape[1:])
-        people_vel = np.broadcast_to(s.human_vel[:, None], (b, r) + s.human_vel.shape[1:])
-        people_mask = np.broadcast_to(s.human_mask[:, None], (b, r, s.human_mask.shape[1]))
-        pos = np.concatenate((people_pos, s.robot_pose[..., :2][:, self._others]), axis=2)
-        vel = np.concatenate((people_vel, robot_vel[:, self._others]), axis=2)
-        mask = np.concatenate((people_mask, np.ones((b, r, r - 1), dtype=bool)), axis=2)
+        others = self._others
+        pos = np.concatenate((np.repeat(s.human_pos[:, None], r, 1), s.robot_pose[:, others, :2]), 2)
+        vel = np.concatenate((np.repeat(s.human_vel[:, None], r, 1), robot_vel[:, others]), 2)
+        mask = np.concatenate((np.repeat(s.human_mask[:, None], r, 1), np.ones((b, r, r - 1), dtype=bool)), 2)
         return pos.reshape(b * r, -1, 2), vel.reshape(b * r, -1, 2), mask.reshape(b * r, -1)
 
     def goal_distance(self) -> np.ndarray:
