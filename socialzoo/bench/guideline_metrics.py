@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.geometry import wall_distances
 from socialzoo.core.metrics import names
 
 # Registry order is the order of the table `socialzoo metrics` prints.
 GUIDELINE_KEYS: tuple[str, ...] = names("guidelines")
-_PAIRS_PER_BLOCK = 1 << 21  # (point, wall) pairs per block of the wall-distance query (bounded memory)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -182,27 +182,6 @@ def _first(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(any, index of the first True) along axis 1 (index N where none)."""
     hit = np.asarray(flags.any(axis=1), dtype=bool)
     return hit, np.where(hit, flags.argmax(axis=1), flags.shape[1])
-
-
-def wall_distances(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """Distance from each point (..., 2) to the nearest of the wall segments (W, 4), m (inf
-    without walls); blocks of points bound the (points, W) temporaries."""
-    pts = np.asarray(points, dtype=np.float64)
-    segs = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
-    flat = pts.reshape(-1, 2)
-    out = np.full(len(flat), np.inf)
-    if len(segs) == 0 or len(flat) == 0:
-        return out.reshape(pts.shape[:-1])
-    a, d = segs[:, :2], segs[:, 2:] - segs[:, :2]
-    len2 = (d * d).sum(axis=1)
-    inv = np.divide(1.0, len2, out=np.zeros_like(len2), where=len2 > 0)
-    block = max(1, _PAIRS_PER_BLOCK // len(segs))
-    for lo in range(0, len(flat), block):  # blocks of points, not steps: one block for a log
-        r = flat[lo : lo + block, None, :] - a[None]
-        t = np.clip((r * d[None]).sum(axis=2) * inv[None], 0.0, 1.0)
-        gap = r - t[..., None] * d[None]
-        out[lo : lo + block] = np.sqrt((gap * gap).sum(axis=2).min(axis=1))
-    return out.reshape(pts.shape[:-1])
 
 
 def time_to_collision(rel_pos: np.ndarray, rel_vel: np.ndarray, reach: np.ndarray) -> np.ndarray:

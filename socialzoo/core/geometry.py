@@ -227,3 +227,28 @@ def segment_hits_box(a: np.ndarray, b: np.ndarray, half_length: float, half_widt
         t0 = np.maximum(t0, lo)
         t1 = np.minimum(t1, hi)
     return inside & (t0 <= t1)
+
+
+# (point, wall) pairs per block of wall_distances' query: bounded memory for long trajectories.
+_WALL_PAIRS_PER_BLOCK = 1 << 21
+
+
+def wall_distances(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance from each point (..., 2) to the nearest of the wall segments (W, 4), m (inf
+    without walls); blocks of points bound the (points, W) temporaries."""
+    pts = np.asarray(points, dtype=np.float64)
+    segs = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    flat = pts.reshape(-1, 2)
+    out = np.full(len(flat), np.inf)
+    if len(segs) == 0 or len(flat) == 0:
+        return out.reshape(pts.shape[:-1])
+    a, d = segs[:, :2], segs[:, 2:] - segs[:, :2]
+    len2 = (d * d).sum(axis=1)
+    inv = np.divide(1.0, len2, out=np.zeros_like(len2), where=len2 > 0)
+    block = max(1, _WALL_PAIRS_PER_BLOCK // len(segs))
+    for lo in range(0, len(flat), block):  # blocks of points: a log or a grid is one or a few blocks
+        r = flat[lo : lo + block, None, :] - a[None]
+        t = np.clip((r * d[None]).sum(axis=2) * inv[None], 0.0, 1.0)
+        gap = r - t[..., None] * d[None]
+        out[lo : lo + block] = np.sqrt((gap * gap).sum(axis=2).min(axis=1))
+    return out.reshape(pts.shape[:-1])

@@ -19,6 +19,7 @@ import numpy as np
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
+from socialzoo.core.geometry import wall_distances
 from socialzoo.core.validation import check_fields, check_int, check_number
 from socialzoo.core.walls import WallIndex
 from socialzoo.maps.map_file import (
@@ -417,22 +418,12 @@ def _close_openings(
         if len(closures) == 0:
             continue
         centres = origin + (np.argwhere(np.ones(clearance.shape, dtype=bool)) + 0.5) * res
-        virtual = _segment_distance(centres, closures).reshape(clearance.shape)
+        virtual = wall_distances(centres, closures).reshape(clearance.shape)
         closed = _largest(passable & ~_outside(np.minimum(clearance, virtual), config.closing_radius, res))
         if closed.sum() >= need and _has_room(closed, clearance, config):
             logger.debug("outline open to unmapped space: %d openings closed by virtual walls", len(closures))
             return closed, closures
     return None
-
-
-def _segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    """(K,) distance of points (K, 2) to the nearest of segments (S, 4)."""
-    out = np.full(len(points), np.inf)
-    for x1, y1, x2, y2 in segments:
-        a, d = np.array([x1, y1]), np.array([x2 - x1, y2 - y1])
-        t = np.clip((points - a) @ d / max(float(d @ d), 1e-12), 0.0, 1.0)
-        out = np.minimum(out, np.hypot(*(points - a - t[:, None] * d).T))
-    return out
 
 
 def _openings(
