@@ -16,6 +16,7 @@ Per-robot arrays are (B, R); flat ones are (B R, ...), row-major: robot r of row
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
@@ -25,6 +26,7 @@ from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
+from socialzoo.env.script import ScriptRunner
 from socialzoo.env.world import StepEvents, step_world
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import Map
@@ -82,6 +84,10 @@ class BatchedCore:
         self.world, self.walls, self.map = world, walls, m
         self.planner, self.robot_visible = planner, robot_visible
         self.people = People(people or PeopleConfig(), world, b, r, max_humans, walls, m)
+        robot = world.robot
+        door_reach = robot.radius if robot.radius is not None else robot.half_width
+        # Who waits, signals or follows a robot, whom each robot escorts, doors (socialzoo.env.script).
+        self.script = ScriptRunner(b, r, max_humans, world.dt, float(door_reach))
         self.field: DistanceField | None = None
         self.navigator: Navigator | None = None
         if planner is not None:
@@ -155,6 +161,7 @@ class BatchedCore:
         self._ever_reset[rows] = True
         self.done[rows] = False
         self.people.reset(rows, state)
+        self.script.reset(rows, scenarios, state)
         if self.navigator is not None:
             self.navigator.reset(rows, state.robot_pose[rows][..., :2], state.robot_goal[rows][..., :2])
             self.carrot[rows] = self.navigator.update(state.robot_pose[..., :2])[rows]
@@ -197,9 +204,19 @@ class BatchedCore:
         if done is not None:
             halt = done if halt is None else halt | done
             command = np.where(done[..., None], 0.0, command)
+        scripted = self.script.active
+        stepping = before
+        if scripted:
+            speeds = self.script.speeds(before)
+            if speeds is not before.human_pref_speed:
+                stepping = dataclasses.replace(before, human_pref_speed=speeds)
         after, events = step_world(
-            before, self.walls, self.world, command, halt, desired, learned, self.robot_visible
+            stepping, self.walls, self.world, command, halt, desired, learned, self.robot_visible
         )
+        if scripted:
+            at_door = self.script.settle(before, after)
+            if at_door.any():
+                events = dataclasses.replace(events, robot_wall=events.robot_wall | at_door)
         if done is not None:
             # The halting step's motion model would still carry a differential robot half a step.
             after.robot_pose = np.where(done[..., None], before.robot_pose, after.robot_pose)
@@ -260,6 +277,12 @@ class BatchedCore:
         vel = np.concatenate((np.repeat(s.human_vel[:, None], r, 1), robot_vel[:, others]), 2)
         mask = np.concatenate((np.repeat(s.human_mask[:, None], r, 1), np.ones((b, r, r - 1), dtype=bool)), 2)
         return pos.reshape(b * r, -1, 2), vel.reshape(b * r, -1, 2), mask.reshape(b * r, -1)
+
+    def escort_ok(self) -> np.ndarray:
+        """(B, R) whether each robot's goal may count as reached now: the person it escorts (if any)
+        is within its band (socialzoo.scenarios.script)."""
+        assert self.state is not None
+        return self.script.escort_ok(self.state)
 
     def goal_distance(self) -> np.ndarray:
         """(B, R) each robot's straight distance to its goal, m."""

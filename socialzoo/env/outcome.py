@@ -94,6 +94,7 @@ def robot_outcome(
     halted: np.ndarray,
     was_done: np.ndarray,
     config: EnvConfig,
+    may_arrive: np.ndarray | None = None,
 ) -> RobotOutcome:
     """Reward terms, reward and episode end of every robot for the step before -> after.
 
@@ -106,6 +107,8 @@ def robot_outcome(
         halted: (B, R) bool, robots that were told to halt this step (Halt, no target, or done).
         was_done: (B, R) bool, robots whose episode had ended before this step.
         config: the env's configuration (reward weights, goal radius, time limit).
+        may_arrive: (B, R) bool, robots whose goal may count as reached now (a robot escorting a
+            person arrives only with that person: socialzoo.env.script); None: all.
 
     Returns:
         The RobotOutcome.
@@ -122,6 +125,8 @@ def robot_outcome(
     vel_world = robot_velocity_vectors(after).reshape(b * r, 2)
     blame = blame_term(pos, vel_world, still, human_pos, visible, skip, config.reward.blame_horizon)
     reached = goal_reached(pos, goal, config.goal_radius)
+    if may_arrive is not None:
+        reached &= np.asarray(may_arrive, dtype=bool).reshape(-1)
     wall = events.robot_wall.reshape(-1)
     contacts = events.robot_human.sum(-1).reshape(-1)
     # The success bonus is paid on the step the goal is reached (collision-free or not); the

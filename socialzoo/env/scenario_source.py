@@ -75,7 +75,18 @@ def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:
     for anchor in anchors:
         choices = [j for j in range(len(poses)) if j != anchor]
         goals.append(poses[[rng.choice(choices)]])
-    return dataclasses.replace(scenario, robot_starts=np.vstack(starts), robot_goals=np.vstack(goals))
+    script = scenario.script
+    if script is not None:  # the extra robots reach their goals alone
+        extra = num_robots - have
+        script = dataclasses.replace(
+            script,
+            escort=np.concatenate((script.escort, np.full(extra, -1))),
+            escort_kind=np.concatenate((script.escort_kind, np.zeros(extra, dtype=np.int64))),
+            band=np.concatenate((script.band, np.zeros((extra, 2)))),
+        )
+    return dataclasses.replace(
+        scenario, robot_starts=np.vstack(starts), robot_goals=np.vstack(goals), script=script
+    )
 
 
 def _clearance(points: np.ndarray, taken: np.ndarray) -> np.ndarray:
@@ -135,6 +146,8 @@ class ScenarioStream:
         self._rngs: list[np.random.Generator] = [np.random.default_rng() for _ in range(batch_size)]
         self._current: list[Scenario | None] = [None] * batch_size
         self._uses = np.zeros(batch_size, dtype=np.intp)
+        splits = {} if family is None else get_family(family).splits
+        self._first_training_seed = splits["train"].first if "train" in splits else 0
 
     @classmethod
     def for_config(cls, m: Map, batch_size: int, config: EnvConfig) -> ScenarioStream:
@@ -162,6 +175,8 @@ class ScenarioStream:
             current = self._current[row]
             if current is None or self._uses[row] >= self.cfg.repeats:
                 seed = int(self._rngs[row].integers(0, 2**63 - 1))
+                while seed < self._first_training_seed:  # never a family's validation or test case
+                    seed = int(self._rngs[row].integers(0, 2**63 - 1))
                 current = self.make(seed)
                 self._current[row] = current
                 self._uses[row] = 0

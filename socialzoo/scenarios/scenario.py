@@ -31,6 +31,7 @@ from socialzoo.scenarios.feasibility import (
     redraw_human_pairs,
     redraw_robot_pair,
 )
+from socialzoo.scenarios.script import Script
 
 SCENARIO_FORMAT = "socialzoo-scenario/1"
 # Mixed with a scenario's seed to derive its counter-based noise key (see core.noise).
@@ -122,6 +123,8 @@ class Scenario:
         family: "benchmark" for the SPEC generator, else the scenario family's name.
         human_group: (n,) the walking group of each human (the index of its first member), -1
             for none (socialzoo.humans.group_formation); default none. Saved only when someone walks in a group.
+        script: who waits, signals or follows a robot, whom each robot escorts, and doors
+            (socialzoo.scenarios.script); None: people walk their routes, robots reach their goals.
     """
 
     map_name: str
@@ -135,6 +138,7 @@ class Scenario:
     human_speed: np.ndarray
     family: str = "benchmark"
     human_group: np.ndarray = None  # type: ignore[assignment]
+    script: Script | None = None
 
     def __post_init__(self) -> None:
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
@@ -168,6 +172,11 @@ class Scenario:
         if np.any((group < -1) | (group >= n)) or np.any((group >= 0) & (group > np.arange(n))):
             raise ValueError("Scenario.human_group must hold -1 or the index of a group's first member")
         object.__setattr__(self, "human_group", group)
+        if self.script is not None and (self.script.num_humans, self.script.num_robots) != (n, len(starts)):
+            raise ValueError(
+                f"Scenario.script is for {self.script.num_humans} people and {self.script.num_robots} robots, "
+                f"the scenario has {n} and {len(starts)}"
+            )
 
     @property
     def robot_start(self) -> np.ndarray:
@@ -207,6 +216,8 @@ class Scenario:
         return (
             same_arrays
             and (self.map_name, self.seed, self.family) == (other.map_name, other.seed, other.family)
+            and (self.script is None) == (other.script is None)
+            and (self.script is None or self.script == other.script)
             and len(self.human_routes) == len(other.human_routes)
             and all(_same(a, b) for a, b in zip(self.human_routes, other.human_routes, strict=True))
         )
@@ -228,6 +239,7 @@ class Scenario:
             "human_routes": [r.tolist() for r in self.human_routes],
             "human_speed": self.human_speed.tolist(),
             **({"human_group": self.human_group.tolist()} if np.any(self.human_group >= 0) else {}),
+            **({"script": self.script.to_json()} if self.script is not None else {}),
         }
 
     @classmethod
@@ -263,6 +275,7 @@ class Scenario:
                 ),
                 human_speed=data["human_speed"],
                 human_group=data.get("human_group"),  # type: ignore[arg-type]
+                script=None if data.get("script") is None else Script.from_json(data["script"]),
             )
         except KeyError as err:
             raise ScenarioError(f"{where}: scenario JSON lacks key {err.args[0]!r}") from None

@@ -41,6 +41,7 @@ from socialzoo.env.world import StepEvents
 from socialzoo.maps.map_file import Map, load_map
 from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS, check_actions, subpolicy_commands
+from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.scenario import Scenario
 
 # The sub-policy given to robots that already left (the core halts them anyway).
@@ -170,6 +171,10 @@ class ActionSelectionTask(Task):
             test_set = self._case_sets()[chosen[0]]
             if self.config.family is None:
                 options["scenarios"] = [test_set.scenario(int(k), m) for k in chosen[1]]
+            elif isinstance(test_set, str):  # a family's own split
+                family = get_family(self.config.family)
+                seeds = [family.case_seed(test_set, int(k)) for k in chosen[1]]
+                options["scenarios"] = [self.scenarios.make(seed) for seed in seeds]
             else:  # a family's cases: its own scenarios, drawn from the set's seeds
                 options["scenarios"] = [self.scenarios.make(test_set.seed(int(k))) for k in chosen[1]]
         scenarios = options.pop("scenarios", None)
@@ -207,11 +212,21 @@ class ActionSelectionTask(Task):
         """The map's validation scenarios ("val", never a test set), and its registered test sets
         ("test" for "<map>-test", and each by its own name, e.g. "gdc1-quick"); a scenario
         family's cases are the family's scenarios of the same seeds."""
-        return {name: len(test_set) for name, test_set in self._case_sets().items()}
+        family = None if self.config.family is None else get_family(self.config.family)
+        return {
+            name: family.splits[name].size if isinstance(cases, str) else len(cases)  # type: ignore[union-attr,misc]
+            for name, cases in self._case_sets().items()
+        }
 
     def _case_sets(self) -> dict[str, Any]:
+        """Split name -> its TestSet, or for a family with fixed splits of its own the split's name
+        (its "val" and "test"; "train" is the training stream's)."""
         from socialzoo.scenarios.scenario import TEST_SETS, validation_set
 
+        if self.config.family is not None:
+            splits = get_family(self.config.family).splits
+            if splits:
+                return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
         name = self.map.name
         sets: dict[str, Any] = {"val": validation_set(name)}
         sets.update({k: v for k, v in TEST_SETS.items() if v.map_name == name})
@@ -262,7 +277,8 @@ class ActionSelectionTask(Task):
         self.target_human = target
         visible = self._observe(np.arange(b))
         skip = followed_human(action, target, cfg.robot_action)
-        out = robot_outcome(before, after, events, visible, skip, halt, was_done, cfg)
+        may_arrive = core.escort_ok() if core.script.active else None
+        out = robot_outcome(before, after, events, visible, skip, halt, was_done, cfg, may_arrive)
         self.metrics.update(
             robot_pose=after.robot_pose.reshape(b * r, 3),
             robot_vel=after.robot_vel.reshape(b * r, 2),

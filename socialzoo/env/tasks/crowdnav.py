@@ -232,9 +232,12 @@ class CrowdNavTask(Task):
             core.follow_routes()
         # A wall contact is a collision of the task (CrowdNav's arena has none).
         closest = np.where(wall, np.minimum(closest, -1e-9), closest)
+        goal_distance = core.goal_distance()
+        if core.script.active:  # a robot escorting a person arrives only with that person
+            goal_distance = np.where(core.escort_ok(), goal_distance, np.inf)
         outcome = judge_step(
             closest,
-            core.goal_distance().reshape(b * r),
+            goal_distance.reshape(b * r),
             float(cfg.robot.radius),  # type: ignore[arg-type]
             start_time,
             cfg.time_limit,

@@ -1,0 +1,218 @@
+"""The world's side of scenario scripts (socialzoo.scenarios.script): people who wait at a point
+until a time or a robot's passing and signal meanwhile, people who walk after a robot, robots that
+escort a person, and doors that open and close on a schedule.
+
+The core (socialzoo.env.core.BatchedCore) asks `ScriptRunner` for the preferred speeds of a step
+(`speeds`), lets the world step, then `settle`s the step: waiting people keep heading for their
+stop point, releases and signals are updated, and a robot touching a closed door collides.
+Rows without a script cost nothing; with no script in the batch nothing here runs, so unscripted
+episodes are the world's exact steps.
+
+A waiting person slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled by
+the distance left) and stands within STOP_RADIUS of it; a person following a robot slows the same
+way within SLOW_DISTANCE of its gap and stands inside the gap. People's speed is capped at their
+preferred speed (socialzoo.humans.motion), so a standing person is not pushed about.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from socialzoo.core.state import WorldState
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.script import REACH, Script
+
+SLOW_DISTANCE = 1.0
+STOP_RADIUS = 0.15
+# A person within this distance of its stop point has reached it (its signal starts).
+ARRIVE_RADIUS = 0.5
+
+
+class ScriptRunner:
+    """The scripts of B rows of R robots and H person slots (see the module docstring).
+
+    Args:
+        batch_size: B.
+        num_robots: R.
+        max_humans: H.
+        dt: the world step, s.
+        door_reach: a robot whose centre is nearer than this to a closed door touches it, m (its
+            disc radius, or the half-width of a rectangular footprint).
+    """
+
+    def __init__(
+        self, batch_size: int, num_robots: int, max_humans: int, dt: float, door_reach: float
+    ) -> None:
+        b, r, h = batch_size, num_robots, max_humans
+        self.dt, self.door_reach = dt, door_reach
+        self.scripted = np.zeros(b, dtype=bool)
+        self.stop = np.full((b, h), -1, dtype=np.int64)
+        self.release = np.full((b, h), np.inf)
+        self.gate = np.full((b, h, 4), np.nan)
+        self.gesture = np.zeros((b, h), dtype=np.int8)
+        self.follow = np.full((b, h), -1, dtype=np.int64)
+        self.gap = np.zeros((b, h))
+        self.released = np.zeros((b, h), dtype=bool)
+        self.reached = np.zeros((b, h), dtype=bool)
+        self.escort = np.full((b, r), -1, dtype=np.int64)
+        self.escort_kind = np.zeros((b, r), dtype=np.int64)
+        self.band = np.zeros((b, r, 2))
+        self.doors = np.zeros((b, 0, 6))
+        # (B, H) the gesture each person shows now (0: none), observed by the robots.
+        self.signal = np.zeros((b, h), dtype=np.int8)
+        # (B, D) each door closed now.
+        self.closed = np.zeros((b, 0), dtype=bool)
+
+    @property
+    def active(self) -> bool:
+        """Whether any row has a script."""
+        return bool(self.scripted.any())
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, rows: np.ndarray, scenarios: Sequence[Scenario | None], state: WorldState) -> None:
+        """Load the scripts of `rows` (None or unscripted: nothing scripted) into their slots."""
+        h = self.stop.shape[1]
+        most_doors = max(
+            [len(s.script.doors) for s in scenarios if s is not None and s.script is not None] + [0]
+        )
+        if most_doors > self.doors.shape[1]:
+            grown = np.zeros((len(self.doors), most_doors, 6))
+            grown[..., 4:] = np.inf  # padding doors are never closed: open from 0 to forever
+            grown[..., 4] = -np.inf
+            grown[:, : self.doors.shape[1]] = self.doors
+            self.doors = grown
+            self.closed = np.zeros(grown.shape[:2], dtype=bool)
+        for row, scenario in zip(rows.tolist(), scenarios, strict=True):
+            script = None if scenario is None else scenario.script
+            self.scripted[row] = script is not None
+            self.released[row] = False
+            self.reached[row] = False
+            self.signal[row] = 0
+            if script is None:
+                script = Script.plain(0, self.escort.shape[1])
+            n = script.num_humans
+            for name, fill in (("stop", -1), ("release", np.inf), ("gate", np.nan), ("gesture", 0),
+                               ("follow", -1), ("gap", 0.0)):  # fmt: skip
+                array = getattr(self, name)
+                array[row] = fill
+                array[row, :n] = getattr(script, name)
+            self.escort[row], self.escort_kind[row], self.band[row] = -1, REACH, 0.0
+            r = min(script.num_robots, self.escort.shape[1])
+            self.escort[row, :r] = script.escort[:r]
+            self.escort_kind[row, :r] = script.escort_kind[:r]
+            self.band[row, :r] = script.band[:r]
+            self.doors[row] = 0.0
+            self.doors[row, :, 4], self.doors[row, :, 5] = -np.inf, np.inf
+            self.doors[row, : len(script.doors)] = script.doors
+            if h and n:
+                self._hold_waypoints(state, np.array([row]))
+                self._follow_routes(state, np.array([row]))
+        if self.active:
+            self._update(state, rows)
+
+    # ------------------------------------------------------------------ step
+    def speeds(self, state: WorldState) -> np.ndarray:
+        """(B, H) the preferred speeds of the next step: slowed or zero for waiting people near their
+        stop point and following people near their robot (the state's own where nothing waits)."""
+        pref = state.human_pref_speed
+        waiting = self._waiting(state)
+        following = (self.follow >= 0) & state.human_mask & self.scripted[:, None]
+        if not (waiting.any() or following.any()):
+            return pref
+        target = state.human_target
+        dist = np.hypot(*(target - state.human_pos).transpose(2, 0, 1))
+        factor = np.ones(pref.shape)
+        at_stop = np.clip(dist / SLOW_DISTANCE, 0.0, 1.0) * (dist >= STOP_RADIUS)
+        factor = np.where(waiting & (state.human_waypoint == self.stop), at_stop, factor)
+        at_gap = np.clip((dist - self.gap) / SLOW_DISTANCE, 0.0, 1.0)
+        factor = np.where(following, at_gap, factor)
+        return pref * factor
+
+    def settle(self, before: WorldState, after: WorldState) -> np.ndarray:
+        """After a world step from `before`: keep the step's true preferred speeds, hold waiting people
+        on their stop point, move followers' routes to their robots, update releases and signals.
+
+        Returns:
+            (B, R) robots touching a closed door after the step.
+        """
+        after.human_pref_speed = before.human_pref_speed
+        rows = np.flatnonzero(self.scripted)
+        self._update(after, rows)
+        self._hold_waypoints(after, rows)
+        self._follow_routes(after, rows)
+        return self.door_contacts(after)
+
+    def door_contacts(self, state: WorldState) -> np.ndarray:
+        """(B, R) robots whose centre is within door_reach of a door closed now."""
+        if self.doors.shape[1] == 0:
+            return np.zeros(state.robot_pose.shape[:2], dtype=bool)
+        pos = state.robot_pose[:, :, None, :2]  # (B, R, 1, 2)
+        a, b = self.doors[:, None, :, 0:2], self.doors[:, None, :, 2:4]  # (B, 1, D, 2)
+        ab = b - a
+        t = np.clip(((pos - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0)
+        near = np.hypot(*(a + t[..., None] * ab - pos).transpose(3, 0, 1, 2)) < self.door_reach
+        return (near & self.closed[:, None, :]).any(-1)
+
+    # ------------------------------------------------------------------ robots
+    def escort_distance(self, state: WorldState) -> np.ndarray:
+        """(B, R) each escorting robot's distance to its person, m; NaN for robots that escort no one."""
+        person = np.maximum(self.escort, 0)
+        where = np.take_along_axis(state.human_pos, person[..., None], axis=1)  # (B, R, 2)
+        dist = np.hypot(*(where - state.robot_pose[..., :2]).transpose(2, 0, 1))
+        return np.where(self.escort >= 0, dist, np.nan)
+
+    def escort_ok(self, state: WorldState) -> np.ndarray:
+        """(B, R) whether each robot may count its goal as reached: its escorted person within the
+        band (robots that escort no one: always)."""
+        dist = self.escort_distance(state)
+        inside = (dist >= self.band[..., 0]) & (dist <= self.band[..., 1])
+        return (self.escort < 0) | inside
+
+    # ------------------------------------------------------------------ internals
+    def _waiting(self, state: WorldState) -> np.ndarray:
+        """(B, H) people of scripted rows who wait at their stop, not released yet."""
+        return (self.stop >= 0) & ~self.released & state.human_mask & self.scripted[:, None]
+
+    def _update(self, state: WorldState, rows: np.ndarray) -> None:
+        """Releases (time, gates), arrivals at stop points, signals and door states of `rows`."""
+        if len(rows) == 0:
+            return
+        now = state.step_count[rows, None] * self.dt  # (k, 1)
+        gate = self.gate[rows]  # (k, H, 4)
+        robots = state.robot_pose[rows, :, :2]  # (k, R, 2)
+        side = ((robots[:, None, :, :] - gate[:, :, None, :2]) * gate[:, :, None, 2:]).sum(-1)  # (k, H, R)
+        passed = np.nan_to_num(side, nan=-1.0).max(-1) > 0
+        self.released[rows] |= (now >= self.release[rows]) | passed
+        stop = np.maximum(self.stop[rows], 0)
+        route = state.human_route[rows]  # (k, H, L, 2)
+        stop_point = np.take_along_axis(route, stop[..., None, None].repeat(2, -1), axis=2)[:, :, 0]
+        close = np.hypot(*(stop_point - state.human_pos[rows]).transpose(2, 0, 1)) < ARRIVE_RADIUS
+        self.reached[rows] |= (
+            close & (self.stop[rows] >= 0) & (state.human_waypoint[rows] <= self.stop[rows] + 1)
+        )
+        showing = (
+            self.reached[rows] & (state.human_waypoint[rows] <= self.stop[rows] + 1) & state.human_mask[rows]
+        )
+        self.signal[rows] = np.where(showing, self.gesture[rows], 0)
+        doors = self.doors[rows]
+        self.closed[rows] = (now < doors[..., 4]) | (now >= doors[..., 5])
+
+    def _hold_waypoints(self, state: WorldState, rows: np.ndarray) -> None:
+        """Waiting people who reached their stop keep heading for it (the world advances a waypoint
+        within its reach radius, short of the stop point itself)."""
+        waiting = self._waiting(state)[rows] & (state.human_waypoint[rows] > self.stop[rows])
+        if waiting.any():
+            state.human_waypoint[rows] = np.where(waiting, self.stop[rows], state.human_waypoint[rows])
+
+    def _follow_routes(self, state: WorldState, rows: np.ndarray) -> None:
+        """The route of each person who follows a robot: the robot's position (every route point)."""
+        follow = self.follow[rows]
+        if not (follow >= 0).any():
+            return
+        k, p = np.nonzero(follow >= 0)
+        row = rows[k]
+        state.human_route[row, p] = state.robot_pose[row, follow[k, p], None, :2]
+        state.human_route_len[row, p] = 1
+        state.human_waypoint[row, p] = 0

@@ -1,0 +1,173 @@
+"""Scenario scripts (socialzoo.scenarios.script) as the world runs them (socialzoo.env.script):
+waiting, release by time and by a robot's passing, signals, people following a robot, escorts and
+doors, on hand-made scenarios in the hallway map."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from socialzoo.env.tasks import make_task
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.script import PROCEED, WAIT, Script
+
+DT = 0.025
+
+
+def _scenario(
+    script_fields: dict, robot=(2.0, 4.5), goal=(27.0, 4.5), people=((15.0, 4.5, 25.0, 4.5),), speed=1.0
+):
+    """One robot and straight-line people in the hallway map (its corridor runs y = 4.5, x 8..22)."""
+    routes = tuple(
+        np.array([[x0, y0], [(x0 + x1) / 2, (y0 + y1) / 2], [x1, y1]]) for x0, y0, x1, y1 in people
+    )
+    n = len(people)
+    return Scenario(
+        map_name="hallway",
+        seed=1,
+        family="test",
+        robot_starts=np.array([[*robot, 0.0]]),
+        robot_goals=np.array([[*goal, 0.0]]),
+        human_spawn=np.array([r[0] for r in routes]).reshape(n, 2),
+        human_start_index=np.full(n, -1),
+        human_goal_index=np.full(n, -1),
+        human_routes=routes,
+        human_speed=np.full(n, speed),
+        script=Script.plain(n, 1, **script_fields),
+    )
+
+
+def _task():
+    return make_task("action_selection", 1, None, map="hallway", max_steps=4000)
+
+
+def _run(task, scenario, steps, action=0, record=None):
+    task.reset(np.array([0]), {"scenario": scenario})
+    out = []
+    for _ in range(steps):
+        task.step(np.full((1, 1), action, dtype=np.int64))
+        if record is not None:
+            out.append(record(task.core))
+    return out
+
+
+def test_a_person_waits_at_its_stop_until_its_release_time_and_signals_meanwhile():
+    task = _task()
+    s = _scenario({"stop": [1], "release": [9.0], "gesture": [WAIT]})
+    rec = _run(
+        task, s, 440, action=1, record=lambda c: (c.state.human_pos[0, 0].copy(), int(c.script.signal[0, 0]))
+    )
+    pos = np.array([p for p, _ in rec])
+    signal = np.array([g for _, g in rec])
+    stop = np.array([20.0, 4.5])
+    # It reaches its stop (5 m at 1 m/s from rest, slowing over the last metre) and stands there until 9 s.
+    at_8s = pos[int(8.0 / DT)]
+    assert np.linalg.norm(at_8s - stop) < 0.2
+    assert np.linalg.norm(pos[int(8.9 / DT)] - at_8s) < 0.02
+    assert signal[int(8.0 / DT)] == WAIT
+    # After 9 s it walks on towards its goal.
+    assert pos[-1, 0] > at_8s[0] + 0.3
+    # Before reaching its stop it showed no signal.
+    assert signal[int(1.0 / DT)] == 0
+
+
+def test_a_gate_releases_a_waiting_person_when_the_robot_passes_it():
+    task = _task()
+    # The person waits at x = 20 until the robot is past x = 6 (the robot drives from x = 2).
+    s = _scenario(
+        {"stop": [1], "gate": [[6.0, 4.5, 1.0, 0.0]], "gesture": [PROCEED]},
+        people=((15.0, 4.5, 25.0, 4.5),),
+    )
+    rec = _run(task, s, 600, record=lambda c: (c.state.robot_pose[0, 0, 0], bool(c.script.released[0, 0])))
+    robot_x = np.array([x for x, _ in rec])
+    released = np.array([r for _, r in rec])
+    first = int(np.argmax(released))
+    assert released.any() and robot_x[first] > 6.0 and robot_x[first - 1] <= 6.0 + 0.1
+
+
+def test_a_person_following_the_robot_keeps_its_gap():
+    task = _task()
+    # It walks faster than the robot's cruise (1.5 m/s), as the suite's led people do.
+    s = _scenario({"follow": [0], "gap": [1.2]}, people=((0.8, 2.0, 0.8, 2.0),), speed=1.7)
+    rec = _run(
+        task, s, 400, record=lambda c: np.linalg.norm(c.state.human_pos[0, 0] - c.state.robot_pose[0, 0, :2])
+    )
+    gaps = np.array(rec)
+    assert gaps[-1] < 2.2  # it kept up with the robot along the corridor
+    assert gaps.min() > 0.9  # and kept its distance
+
+
+def test_an_escorting_robot_arrives_only_with_its_person():
+    task = _task()
+    # The person stands at its spawn far from the robot's goal; the robot's goal needs it within 2 m.
+    alone = _scenario(
+        {"stop": [0], "escort": [0], "escort_kind": [2], "band": [[0.0, 2.0]]},
+        robot=(10.0, 4.5),
+        goal=(11.0, 4.5),
+        people=((3.0, 2.0, 3.0, 2.5),),
+    )
+    task.reset(np.array([0]), {"scenario": alone})
+    for _ in range(200):
+        step = task.step(np.zeros((1, 1), dtype=np.int64))
+    assert not bool(np.asarray(step.detail.reached).any())
+    together = dataclasses.replace(
+        alone, human_spawn=np.array([[11.5, 4.0]]), human_routes=(np.array([[11.5, 4.0], [11.5, 4.2]]),)
+    )
+    task.reset(np.array([0]), {"scenario": together})
+    reached = False
+    for _ in range(200):
+        step = task.step(np.zeros((1, 1), dtype=np.int64))
+        reached |= bool(np.asarray(step.detail.reached).any())
+    assert reached
+
+
+def test_a_closed_door_is_a_collision_and_an_open_one_is_not():
+    task = _task()
+    door = [8.0, 3.5, 8.0, 5.5]
+    closed = _scenario({"doors": [[*door, 100.0, 200.0]]}, people=((25.0, 2.0, 25.0, 2.5),))
+    opened = _scenario({"doors": [[*door, 0.0, 200.0]]}, people=((25.0, 2.0, 25.0, 2.5),))
+    for scenario, collides in ((closed, True), (opened, False)):
+        task.reset(np.array([0]), {"scenario": scenario})
+        hit = False
+        for _ in range(400):
+            step = task.step(np.zeros((1, 1), dtype=np.int64))
+            hit |= bool(np.asarray(step.detail.wall_collision).any())
+            if np.asarray(step.terminated).any():
+                break
+        assert hit == collides
+
+
+def test_a_script_round_trips_through_json_with_its_infinities_and_gaps():
+    s = _scenario(
+        {
+            "stop": [1],
+            "release": [np.inf],
+            "gate": [[1.0, 2.0, 0.0, 1.0]],
+            "doors": [[0, 0, 1, 0, 2.0, np.inf]],
+        }
+    )
+    back = Scenario.from_json(s.to_json())
+    assert back == s and back.script == s.script
+    assert back != dataclasses.replace(s, script=None)
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"gesture": [7]}, "gesture"),
+        ({"escort": [0]}, "escort_kind"),
+        ({"follow": [3]}, "follow"),
+        ({"band": [[2.0, 1.0]]}, "band"),
+        ({"stop": [1, 2]}, "shape"),
+    ],
+)
+def test_a_malformed_script_is_a_named_error(fields, message):
+    with pytest.raises(ValueError, match=message):
+        Script.plain(1, 1, **fields)
+
+
+def test_a_script_for_another_head_count_is_refused():
+    with pytest.raises(ValueError, match="script is for 2 people"):
+        dataclasses.replace(_scenario({}), script=Script.plain(2, 1))
