@@ -28,6 +28,8 @@ SLOW_DISTANCE = 1.0
 STOP_RADIUS = 0.15
 # A person within this distance of its stop point has reached it (its signal starts).
 ARRIVE_RADIUS = 0.5
+# A released person keeps signalling until it is this far from its stop point, m.
+SIGNAL_RADIUS = 3.0
 
 
 class ScriptRunner:
@@ -192,9 +194,8 @@ class ScriptRunner:
         self.reached[rows] |= (
             close & (self.stop[rows] >= 0) & (state.human_waypoint[rows] <= self.stop[rows] + 1)
         )
-        showing = (
-            self.reached[rows] & (state.human_waypoint[rows] <= self.stop[rows] + 1) & state.human_mask[rows]
-        )
+        near = np.hypot(*(stop_point - state.human_pos[rows]).transpose(2, 0, 1)) < SIGNAL_RADIUS
+        showing = self.reached[rows] & (~self.released[rows] | near) & state.human_mask[rows]
         self.signal[rows] = np.where(showing, self.gesture[rows], 0)
         doors = self.doors[rows]
         self.closed[rows] = (now < doors[..., 4]) | (now >= doors[..., 5])

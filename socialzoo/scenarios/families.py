@@ -15,6 +15,7 @@ import numpy as np
 # FAMILIES: the registry, also read from here (socialzoo.env.config checks EnvConfig.family in it).
 from socialzoo.scenarios.catalogue import FAMILIES as FAMILIES
 from socialzoo.scenarios.catalogue import ScenarioFamily
+from socialzoo.scenarios.suite import SUITE_SPLITS
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
@@ -29,6 +30,13 @@ class Layout:
         robot_start, robot_goal: (2,) positions; headings point from start to goal.
         human_start, human_goal: (n, 2).
         human_speed: (n,).
+        human_stop: (n, 2) the point where each person waits (its route goes start -> stop -> goal),
+            NaN rows for people who do not stop; None: nobody stops.
+        script: the other fields of the scenario's script (socialzoo.scenarios.script.Script:
+            release, gate, gesture, follow, gap, escort, escort_kind, band, doors) for one robot;
+            None with no stops: no script.
+        human_group: (n,) walking or standing group of each person (the index of its first
+            member), -1 for none; None: none.
     """
 
     robot_start: np.ndarray
@@ -36,6 +44,9 @@ class Layout:
     human_start: np.ndarray
     human_goal: np.ndarray
     human_speed: np.ndarray
+    human_stop: np.ndarray | None = None
+    script: dict[str, Any] | None = None
+    human_group: np.ndarray | None = None
 
 
 class LayoutFamily(ScenarioFamily):
@@ -63,13 +74,33 @@ class LayoutFamily(ScenarioFamily):
         """
         from socialzoo.maps.map_file import load_map
         from socialzoo.scenarios.scenario import Scenario, plan_routes, split_routes
+        from socialzoo.scenarios.script import Script
 
         m = load_map(self.map_name) if m is None else m
         lay = self.layout(m, np.random.default_rng(seed))
         n = len(lay.human_start)
+        context = f"{m.where}, family {self.name!r} seed {seed}"
         starts = np.concatenate((lay.robot_start[None], lay.human_start))
         goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
-        paths, lengths = plan_routes(m, starts, goals, f"{m.where}, family {self.name!r} seed {seed}")
+        stops = (
+            np.full((n, 2), np.nan)
+            if lay.human_stop is None
+            else np.asarray(lay.human_stop, dtype=np.float64)
+        )
+        stopping = ~np.isnan(stops[:, 0])
+        # People who stop walk start -> stop, then stop -> goal: their goals are their stops first.
+        goals[1:][stopping] = stops[stopping]
+        paths, lengths = plan_routes(m, starts, goals, context)
+        routes = list(split_routes(paths[1:], lengths[1:]))
+        stop_index = np.full(n, -1)
+        if stopping.any():
+            rest, rest_len = plan_routes(m, stops[stopping], lay.human_goal[stopping], context)
+            for k, i in enumerate(np.flatnonzero(stopping)):
+                stop_index[i] = len(routes[i]) - 1
+                routes[i] = np.concatenate((routes[i], rest[k, 1 : rest_len[k]]))
+        script = None
+        if lay.script is not None or stopping.any():
+            script = Script.plain(n, 1, stop=stop_index, **(lay.script or {}))
         # The robot faces along the first leg of its route.
         first_leg = paths[0, min(1, int(lengths[0]) - 1)] - lay.robot_start
         heading = math.atan2(float(first_leg[1]), float(first_leg[0]))
@@ -82,9 +113,18 @@ class LayoutFamily(ScenarioFamily):
             human_spawn=lay.human_start,
             human_start_index=np.full(n, -1),
             human_goal_index=np.full(n, -1),
-            human_routes=split_routes(paths[1:], lengths[1:]),
+            human_routes=tuple(routes),
             human_speed=lay.human_speed,
+            human_group=lay.human_group,  # type: ignore[arg-type]
+            script=script,
         )
+
+
+class SuiteFamily(LayoutFamily):
+    """A scenario of the guidelines' suite (socialzoo.scenarios.suite): a layout family with the
+    suite's seed splits (validation 0-99, test 100-599, training from 1000)."""
+
+    splits = SUITE_SPLITS
 
 
 def circle_point(cx: Any, cy: Any, radius: Any, angle: Any) -> tuple[Any, Any]:

@@ -6,9 +6,8 @@ Per person:
 - stop, release, gate: the person walks its route to route point `stop` and waits there until
   released: at world time `release` (s), or once any robot is past the gate line, whichever comes
   first (a person released before it reaches its stop does not wait).
-- gesture: what the person signals while it waits and until it reaches the route point after its
-  stop (0 none, 1 WAIT: the robot should wait, 2 PROCEED: the robot may go first); the robot
-  observes it.
+- gesture: what the person signals from reaching its stop until, released, it is 3 m past it
+  (0 none, 1 WAIT: the robot should wait, 2 PROCEED: the robot may go first); the robot observes it.
 - follow, gap: the person walks after robot `follow` (its route is the robot's position) and stops
   within `gap` of it: a person the robot leads, or a crowd pressing on the robot.
 
