@@ -9,6 +9,7 @@ File format ("socialzoo-map/1"), all coordinates in metres, world frame:
       "licence": "licence and attribution of the data",
       "region": [xmin, ymin, xmax, ymax],          # optional area of interest
       "walls": [[x1, y1, x2, y2], ...],
+      "doors": [[x1, y1, x2, y2], ...],           # optional: doorway openings a scenario may close
       "graph": {"nodes": [[x, y], ...], "edges": [[i, j], ...]},   # undirected, node indices
       "legal_poses": [[x, y, theta], ...],        # robot and human start/goal poses, theta in rad
       "walkable_area": 821.5,                     # optional: m^2 the robot can drive (importers)
@@ -19,6 +20,11 @@ Shipped maps live in the top-level maps/ folder, installed as the package social
 them by name with load_map("gdc1"), or load any file with load_map("path/to/map.json"). Every
 loaded map is checked by validate_map (see its docstring for the rules and clearances). A file that
 is not such a map (random bytes, a truncated copy, another kind of file) raises MapError naming it.
+
+Doors are segments across openings in the walls (an elevator's doors, a room's door), not walls:
+people and the robot pass through them while they are open. A scenario may close one for a while
+(its doors); the map only says where they are. A file without the field has no doors, and to_json
+writes it only when there are some, so files without doors round-trip byte for byte.
 """
 
 from __future__ import annotations
@@ -60,6 +66,13 @@ class MapError(ValueError):
     """A map file or map data is malformed; the message names the file and the entry."""
 
 
+def _no_doors() -> np.ndarray:
+    """The doors of a map without any: a read-only (0, 4) array."""
+    doors = np.zeros((0, 4), dtype=np.float64)
+    doors.setflags(write=False)
+    return doors
+
+
 @dataclass(frozen=True, eq=False)
 class Map:
     """A building map.
@@ -70,6 +83,8 @@ class Map:
         nodes: (N, 2) navigation-graph node positions, m.
         edges: (E, 2) int node index pairs, undirected.
         legal_poses: (P, 3) start/goal poses x, y (m), theta (rad).
+        doors: (D, 4) door segments x1, y1, x2, y2 across doorway openings, m (world frame); (0, 4)
+            for a map without doors. Not walls: open unless a scenario closes them.
         source: provenance of the data.
         licence: licence and attribution of the data.
         region: optional (xmin, ymin, xmax, ymax) area of interest, m.
@@ -88,6 +103,7 @@ class Map:
     nodes: np.ndarray
     edges: np.ndarray
     legal_poses: np.ndarray
+    doors: np.ndarray = field(default_factory=_no_doors)
     source: str = ""
     licence: str = ""
     region: tuple[float, float, float, float] | None = None
@@ -111,6 +127,11 @@ class Map:
         return len(self.nodes)
 
     @property
+    def num_doors(self) -> int:
+        """D, the number of doors."""
+        return len(self.doors)
+
+    @property
     def where(self) -> str:
         """How errors refer to this map: its file if it has one, else its name."""
         return self.path or f"map {self.name!r}"
@@ -126,6 +147,8 @@ class Map:
         if self.region is not None:
             data["region"] = [float(v) for v in self.region]
         data["walls"] = [[round(float(v), 6) for v in w] for w in self.walls]
+        if len(self.doors):
+            data["doors"] = [[round(float(v), 6) for v in d] for d in self.doors]
         data["graph"] = {
             "nodes": [[round(float(v), 6) for v in n] for n in self.nodes],
             "edges": [[int(i), int(j)] for i, j in self.edges],
@@ -196,6 +219,7 @@ _KNOWN_FIELDS = {
     "licence",
     "region",
     "walls",
+    "doors",
     "graph",
     "legal_poses",
     "walkable_area",
@@ -216,8 +240,8 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
 
     Raises:
         MapError: invalid JSON text, a wrong or missing format tag, a missing field, or an entry of
-            the wrong type or shape or with a NaN or infinite coordinate. Run `validate_map` for the
-            geometric checks.
+            the wrong type or shape or with a NaN or infinite coordinate, or a door of zero length.
+            Run `validate_map` for the geometric checks.
     """
     if isinstance(data, str):
         try:
@@ -255,13 +279,20 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
     nodes = _number_rows(graph["nodes"], 2, where, "graph.nodes", "[x, y]")
     edges = _edge_rows(graph["edges"], where)
     poses = _number_rows(data["legal_poses"], 3, where, "legal_poses", "[x, y, theta]")
+    doors = _number_rows(data.get("doors", []), 4, where, "doors", "[x1, y1, x2, y2]")
+    point_doors = np.flatnonzero((doors[:, :2] == doors[:, 2:]).all(axis=1))
+    if len(point_doors):
+        k = int(point_doors[0])
+        raise _fail(
+            where, f"doors[{k}]: zero length, both ends at {doors[k, :2].tolist()} (a door spans an opening)"
+        )
     walkable = data.get("walkable_area")
     if walkable is not None and not (_is_number(walkable) and math.isfinite(walkable) and walkable > 0):
         raise _fail(where, f"walkable_area must be a positive number of m^2, got {walkable!r}")
     provenance = data.get("provenance")
     if provenance is not None and not isinstance(provenance, dict):
         raise _fail(where, f"provenance must be an object, got {type(provenance).__name__}")
-    for arr in (walls, nodes, edges, poses):
+    for arr in (walls, nodes, edges, poses, doors):
         arr.setflags(write=False)
     return Map(
         name=name,
@@ -269,6 +300,7 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
         nodes=nodes,
         edges=edges,
         legal_poses=poses,
+        doors=doors,
         source=_text_field(data, "source", where, required=False),
         licence=_text_field(data, "licence", where, required=False),
         region=region,
@@ -489,15 +521,25 @@ def _index_list(indices: np.ndarray, limit: int = 20) -> str:
 def _array_problems(m: Map) -> list[str]:
     """Shape, dtype and finiteness problems of a map's arrays (checked before any geometry)."""
     problems: list[str] = []
-    shapes = {"walls": (m.walls, 4), "graph.nodes": (m.nodes, 2), "legal_poses": (m.legal_poses, 3)}
+    shapes = {
+        "walls": (m.walls, 4),
+        "graph.nodes": (m.nodes, 2),
+        "legal_poses": (m.legal_poses, 3),
+        "doors": (m.doors, 4),
+    }
     for name, (arr, width) in shapes.items():
         a = np.asarray(arr)
+        if name == "doors" and a.size == 0 and np.issubdtype(a.dtype, np.number):
+            continue
         if a.ndim != 2 or a.shape[1] != width or not np.issubdtype(a.dtype, np.number):
             problems.append(f"{name} must be a numeric array of shape (n, {width}), got shape {a.shape}")
             continue
         bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
         for k in bad[:MAX_REPORTED]:
             problems.append(f"{name}[{k}]: coordinate is {'NaN' if np.isnan(a[k]).any() else 'infinite'}")
+        if name == "doors" and not len(bad):
+            for k in np.flatnonzero((a[:, :2] == a[:, 2:]).all(axis=1))[:MAX_REPORTED]:
+                problems.append(f"doors[{k}]: zero length, both ends at {a[k, :2].tolist()}")
     e = np.asarray(m.edges)
     if e.ndim != 2 or e.shape[1] != 2 or not np.issubdtype(e.dtype, np.integer):
         if not (e.size == 0 and np.issubdtype(e.dtype, np.number)):
@@ -515,8 +557,9 @@ def validate_map(
     """Check a map's geometry; raise MapError naming the file and every offending entry.
 
     Rules:
-        - walls (W, 4), nodes (N, 2), legal poses (P, 3) are finite numbers; at least one node and two
-          legal poses (a scenario needs a distinct start and goal);
+        - walls (W, 4), nodes (N, 2), legal poses (P, 3) and doors (D, 4) are finite numbers; at least
+          one node and two legal poses (a scenario needs a distinct start and goal); no door of zero
+          length;
         - edges (E, 2) name existing nodes, never a node to itself;
         - every node is at least `node_clearance` (0.25 m) from every wall, every legal pose at least
           `pose_clearance` (0.35 m: the robot footprint fits at any heading); a point inside a
