@@ -27,6 +27,7 @@ def play_cases(
     *,
     config: Any = None,
     on_episodes: Callable[[list[dict[str, Any]]], None] | None = None,
+    guideline_metrics: bool = False,
     **task_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Play `act` on cases `indices` of a split of a one-robot task; the episodes in case order.
@@ -39,6 +40,7 @@ def play_cases(
         batch_size: rows stepped together (at most one per case).
         config: the task's config (None: its defaults).
         on_episodes: called with the episodes that ended at each step, as they end.
+        guideline_metrics: add the guidelines' Table I metrics (`gl_*`) to every episode.
         **task_kwargs: the task's plain config overrides.
 
     Returns:
@@ -74,6 +76,7 @@ def play_cases(
         env_configs={name: probe.config},
         policies={"policy": {}},
         batch_size=batch_size,
+        guideline_metrics=guideline_metrics,
     )
     episodes: dict[int, dict[str, Any]] = {}
 

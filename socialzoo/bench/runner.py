@@ -105,6 +105,8 @@ class RunSpec:
         batch_size: env rows stepped together (B).
         human_metrics: add the humans' episode metrics (socialzoo.bench.human_metrics) to every
             trial's metrics.
+        guideline_metrics: add the guidelines' Table I metrics (socialzoo.bench.guideline_recorder,
+            the `gl_*` names) to every trial's metrics.
     """
 
     test_sets: Mapping[str, TestSet | CaseSet]
@@ -112,6 +114,7 @@ class RunSpec:
     policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     batch_size: int = 64
     human_metrics: bool = False
+    guideline_metrics: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
@@ -291,6 +294,7 @@ class BatchedRunner:
         humans = self._human_tracker(task)
         if humans is not None:
             humans.reset(np.arange(b), task.world_state)
+        table_one = self._guideline_recorder(task)
         shape = tuple(task.action_space.shape or ())
         idle = task.idle_action()
         actions = np.empty((b, task.num_robots) + shape, dtype=np.asarray(idle).dtype)
@@ -337,6 +341,8 @@ class BatchedRunner:
             before = task.world_state
             step = task.step(actions)
             done |= step.terminated | step.truncated
+            if table_one is not None:
+                table_one.record(task)
             if humans is not None:
                 humans.update(
                     before, task.world_state, step.detail.events.human_blocked, config.dt, done.all(axis=1)
@@ -357,6 +363,9 @@ class BatchedRunner:
             if humans is not None:
                 for summary, extra in zip(summaries, humans.summaries(finished), strict=True):
                     summary.update(extra)
+            if table_one is not None:
+                for summary, extra in zip(summaries, table_one.summaries(finished), strict=True):
+                    summary.update(extra)
             done_batch = []
             for row, summary in zip(finished.tolist(), summaries, strict=True):
                 t = row_trial[row]
@@ -375,7 +384,11 @@ class BatchedRunner:
                 done[refill_rows] = False
                 if humans is not None:
                     humans.reset(np.array(refill_rows), task.world_state)
+                if table_one is not None:
+                    table_one.reset(np.array(refill_rows), task)
             live = [row for row, t in enumerate(row_trial) if t is not None]
+            if table_one is not None:
+                table_one.forget(np.array(live, dtype=np.intp))
             if compact and not pending and 0 < len(live) <= _SHRINK * len(row_trial):
                 smaller = task.compact(np.array(live))
                 if smaller is None:
@@ -383,6 +396,8 @@ class BatchedRunner:
                 task = smaller
                 if humans is not None:
                     humans = humans.rows(live)
+                if table_one is not None:
+                    table_one = table_one.rows(live)
                 row_trial = [row_trial[row] for row in live]
                 seeds, done = seeds[live], done[live]
                 actions = np.empty((len(live), task.num_robots) + shape, dtype=actions.dtype)
@@ -407,6 +422,17 @@ class BatchedRunner:
             for group in groups.values()
             if len(group) > 1
         ]
+
+    def _guideline_recorder(self, task: Any) -> Any:
+        """The Table I recorder of the task's rows (their episodes just started), or None when the
+        spec does not ask for the metrics."""
+        if not self.spec.guideline_metrics:
+            return None
+        from socialzoo.bench.guideline_recorder import GuidelineRecorder
+
+        recorder = GuidelineRecorder(task)
+        recorder.reset(np.arange(task.batch_size), task)
+        return recorder
 
     def _human_tracker(self, task: Any) -> Any:
         """The humans' episode metrics of an action-selection task's rows, or None when the spec

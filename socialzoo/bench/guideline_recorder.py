@@ -1,0 +1,193 @@
+"""The live path of the guidelines' Table I metrics: the world states of B rows recorded step by
+step, and each episode's metrics computed (socialzoo.bench.guideline_metrics.guideline_metrics) from
+its own samples when it ends, the same function the episode logs (socialzoo.bench.episode_log) go
+through.
+
+What is recorded per sample: robot 0's centre, world velocity and distance to the nearest wall, the people's centres,
+velocities and presence, the other robots' centres, and the world's own contact flags (the world
+step's collision rules, socialzoo.env.world.robot_collisions: a person's centre within the collision
+distance, the footprint touching a wall; a robot touching a closed door of a scenario script
+collides as with a wall). The samples between a row's reset and its end are its episode (sample 0
+is the start). Samples that no running episode needs any more are dropped, so memory stays within
+the longest running episode.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from socialzoo.bench.guideline_metrics import GuidelineParams, Trajectories, guideline_metrics
+from socialzoo.core.geometry import wall_distances
+from socialzoo.core.state import WorldState
+from socialzoo.env.world import robot_collisions, robot_velocity_vectors
+
+
+@dataclass(frozen=True)
+class EpisodeFrame:
+    """The constants of the episodes of a task that the metrics need.
+
+    Attributes:
+        dt: time between samples (one task step), s.
+        robot_radius: the robot's disc for the gaps, m (a box footprint: its circumscribed circle).
+        people_radius: m.
+        goal_radius: the goal is reached within this centre distance, m.
+        time_limit: s, or None.
+    """
+
+    dt: float
+    robot_radius: float
+    people_radius: float
+    goal_radius: float
+    time_limit: float | None
+
+    @classmethod
+    def of(cls, task: Any) -> EpisodeFrame:
+        """The frame of an action-selection or CrowdNav task (its config names the constants)."""
+        core, config = task.core, task.config
+        world = core.world
+        robot = world.robot
+        radius = robot.radius if robot.radius is not None else math.hypot(robot.length, robot.width) / 2
+        dt = float(getattr(config, "time_step", world.dt))
+        if hasattr(config, "goal_radius"):  # the action-selection task
+            goal_radius, limit = float(config.goal_radius), config.max_steps * world.dt
+        else:  # the CrowdNav task: the goal within the robot's radius, its time limit
+            goal_radius, limit = float(radius), float(config.time_limit)
+        return cls(dt, float(radius), float(world.human.radius), goal_radius, limit)
+
+
+class GuidelineRecorder:
+    """Records B rows of a task's core and gives the Table I metrics of finished episodes.
+
+    Args:
+        task: the task (its `core` holds the world state).
+        params: Table I's thresholds.
+    """
+
+    def __init__(self, task: Any, params: GuidelineParams | None = None) -> None:
+        self.frame = EpisodeFrame.of(task)
+        self.params = params or GuidelineParams()
+        core = task.core
+        self.walls = np.asarray(core.walls.walls, dtype=np.float64).reshape(-1, 4)
+        b = core.batch_size
+        self.samples: list[dict[str, np.ndarray]] = []
+        self.first = 0  # the global index of samples[0]
+        self.start = np.zeros(b, dtype=np.int64)  # each row's sample 0, global index
+        self.goal = np.zeros((b, 2))
+        self.shortest = np.full(b, np.nan)
+
+    def reset(self, rows: np.ndarray, task: Any) -> None:
+        """Rows whose episodes start now (their state just reset): their sample 0 is the current state."""
+        rows = np.asarray(rows, dtype=np.intp)
+        core = task.core
+        if not self.samples:
+            self.record(task)
+        self.start[rows] = self.first + len(self.samples) - 1
+        self._restate(rows, core)
+        state = core.state
+        self.goal[rows] = state.robot_goal[rows, 0, :2]
+        route = core.route_left[rows, 0] if core.navigator is not None else None
+        straight = np.hypot(*(state.robot_goal[rows, 0, :2] - state.robot_pose[rows, 0, :2]).T)
+        self.shortest[rows] = straight if route is None else np.maximum(route, straight)
+
+    def _restate(self, rows: np.ndarray, core: Any) -> None:
+        """Overwrite the latest sample's rows with the state now (a reset after the sample was taken)."""
+        fresh = self._sample(core)
+        latest = self.samples[-1]
+        for key, value in fresh.items():
+            if latest[key].shape[1:] != value.shape[1:]:
+                latest[key] = _pad_like(latest[key], value)
+            latest[key][rows] = value[rows]
+
+    def record(self, task: Any) -> None:
+        """Take a sample of every row after a step."""
+        self.samples.append(self._sample(task.core))
+
+    def _sample(self, core: Any) -> dict[str, np.ndarray]:
+        s: WorldState = core.state
+        robot = core.world.robot
+        wall, human = robot_collisions(s, core.walls, core.world)
+        wall = wall | core.script.door_contacts(s) if core.script.active else wall
+        return {
+            "robot_pos": s.robot_pose[:, 0, :2].copy(),
+            "robot_vel": robot_velocity_vectors(s, robot)[:, 0].copy(),
+            "people_pos": s.human_pos.copy(),
+            "people_vel": s.human_vel.copy(),
+            "people_mask": s.human_mask.copy(),
+            "others_pos": s.robot_pose[:, 1:, :2].copy(),
+            # Measured as it is sampled: one pass over the walls per step, not per episode and sample.
+            "wall_distance": wall_distances(s.robot_pose[:, 0, :2], self.walls),
+            "wall_contact": wall[:, 0].copy(),
+            "human_contact": human[:, 0].copy(),
+        }
+
+    def summaries(self, rows: np.ndarray) -> list[dict[str, Any]]:
+        """The Table I metrics of the episodes of `rows`, which end at the latest sample."""
+        rows = np.asarray(rows, dtype=np.intp)
+        if len(rows) == 0:
+            return []
+        end = self.first + len(self.samples)
+        lengths = end - self.start[rows]
+        n = int(lengths.max())
+        stacked = {key: np.stack([s[key] for s in self.samples[-n:]], axis=1) for key in self.samples[-1]}
+        # Row i's episode is its last lengths[i] samples: shift each to start at 0 (pad at the end).
+        offset = n - lengths
+        index = np.minimum(offset[:, None] + np.arange(n)[None, :], n - 1)
+        fields = {
+            key: np.take_along_axis(value[rows], _expand(index, value.ndim), axis=1)
+            for key, value in stacked.items()
+        }
+        f = self.frame
+        traj = Trajectories(
+            dt=f.dt,
+            robot_pos=fields["robot_pos"],
+            goal=self.goal[rows],
+            length=lengths,
+            robot_vel=fields["robot_vel"],
+            robot_radius=f.robot_radius,
+            goal_radius=f.goal_radius,
+            people_pos=fields["people_pos"],
+            people_vel=fields["people_vel"],
+            people_mask=fields["people_mask"],
+            people_radius=f.people_radius,
+            wall_distance=fields["wall_distance"],
+            others_pos=fields["others_pos"] if fields["others_pos"].shape[2] else None,
+            shortest_path=self.shortest[rows],
+            time_limit=f.time_limit,
+            wall_contact=fields["wall_contact"],
+            human_contact=fields["human_contact"],
+        )
+        found = guideline_metrics(traj, self.params)
+        return [{name: values[i].item() for name, values in found.items()} for i in range(len(rows))]
+
+    def forget(self, live: np.ndarray) -> None:
+        """Drop the samples no episode of the `live` rows needs (call after refilling rows)."""
+        live = np.asarray(live, dtype=np.intp)
+        keep_from = int(self.start[live].min()) if len(live) else self.first + len(self.samples) - 1
+        drop = keep_from - self.first
+        if drop > 0:
+            del self.samples[:drop]
+            self.first = keep_from
+
+    def rows(self, live: list[int]) -> GuidelineRecorder:
+        """The recorder of the task compacted to rows `live` (socialzoo.env.compaction)."""
+        out = object.__new__(GuidelineRecorder)
+        out.frame, out.params, out.walls = self.frame, self.params, self.walls
+        out.samples = [{key: value[live] for key, value in s.items()} for s in self.samples]
+        out.first = self.first
+        out.start, out.goal, out.shortest = self.start[live], self.goal[live], self.shortest[live]
+        return out
+
+
+def _expand(index: np.ndarray, ndim: int) -> np.ndarray:
+    """(k, n) sample indices shaped to gather along axis 1 of a (k, n, ...) array."""
+    return index.reshape(index.shape + (1,) * (ndim - 2))
+
+
+def _pad_like(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    out = np.zeros(old.shape[:1] + new.shape[1:], dtype=old.dtype)
+    out[(slice(None),) + tuple(slice(0, s) for s in old.shape[1:])] = old
+    return out
