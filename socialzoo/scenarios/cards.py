@@ -12,6 +12,7 @@ Free of numpy, like the catalogue: a card is plain text and numbers.
 from __future__ import annotations
 
 import json
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -181,7 +182,10 @@ def load_card(path_or_name: str | Path) -> ScenarioCard:
     is_file = isinstance(path_or_name, Path) or str(path_or_name).endswith(".toml")
     path = Path(path_or_name) if is_file else card_path(str(path_or_name))
     source = str(path)
-    import tomllib  # the standard library's from Python 3.11
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # the same parser, a dependency before Python 3.11
+        import tomli as tomllib
 
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
