@@ -1,0 +1,117 @@
+"""Several batched VectorEnvs of one task side by side as one VectorEnv: rows 0..B_0-1 are the first
+env's, the next B_1 the second's, and so on. Each part keeps its own world, so the parts may play
+different maps: the suite's families, one part each, train one policy (`socialzoo train crowdnav
+--families`).
+
+Every part must have the same single observation and action spaces and reset in the same step
+(AutoresetMode.SAME_STEP, as socialzoo's TaskVectorEnv does); their infos are joined key by key,
+row arrays end to end (a key a part lacks is zeros, or False for a mask, in its rows).
+
+    from socialzoo.env.concat_vector import ConcatVectorEnv
+    venv = ConcatVectorEnv([TaskVectorEnv(8, task="crowdnav", family=f, ...) for f in families])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+
+class ConcatVectorEnv(VectorEnv):
+    """The parts' rows end to end (see the module docstring).
+
+    Args:
+        parts: the VectorEnvs, at least one.
+
+    Raises:
+        ValueError: no part, or parts whose single spaces differ (naming the first that does).
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, parts: Sequence[VectorEnv]) -> None:
+        if not parts:
+            raise ValueError("ConcatVectorEnv needs at least one part")
+        first = parts[0]
+        for i, part in enumerate(parts[1:], start=1):
+            if part.single_observation_space != first.single_observation_space:
+                raise ValueError(f"ConcatVectorEnv: part {i}'s observation space differs from part 0's")
+            if part.single_action_space != first.single_action_space:
+                raise ValueError(f"ConcatVectorEnv: part {i}'s action space differs from part 0's")
+        self.parts = list(parts)
+        self.sizes = [part.num_envs for part in parts]
+        self.bounds = np.cumsum([0, *self.sizes])
+        self.num_envs = int(self.bounds[-1])
+        self.single_observation_space = first.single_observation_space
+        self.single_action_space = first.single_action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.config = getattr(first, "config", None)
+        self.render_mode = None
+
+    @property
+    def metric_types(self) -> dict[str, type]:
+        """Every part's episode metric types (socialzoo.env.vector.TaskVectorEnv.metric_types)."""
+        types: dict[str, type] = {}
+        for part in self.parts:
+            types.update(getattr(part, "metric_types", {}))
+        return types
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
+        """Reset every part; part i is seeded from (seed, i), so the parts draw different episodes."""
+        results = []
+        for i, part in enumerate(self.parts):
+            part_seed = None if seed is None else int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
+            results.append(part.reset(seed=part_seed, options=options))
+        return self._join([o for o, _ in results]), self._join_info([info for _, info in results])
+
+    def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step every part with its rows' actions."""
+        actions = np.asarray(actions)
+        out = [
+            part.step(actions[lo:hi])
+            for part, lo, hi in zip(self.parts, self.bounds, self.bounds[1:], strict=False)
+        ]
+        obs, reward, terminated, truncated, infos = zip(*out, strict=True)
+        return (
+            self._join(list(obs)),
+            np.concatenate(reward),
+            np.concatenate(terminated),
+            np.concatenate(truncated),
+            self._join_info(list(infos)),
+        )
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close every part."""
+        for part in self.parts:
+            part.close()
+
+    # ------------------------------------------------------------------ joining
+    def _join(self, values: list[Any]) -> Any:
+        if isinstance(values[0], dict):
+            return {k: np.concatenate([v[k] for v in values]) for k in values[0]}
+        return np.concatenate(values)
+
+    def _join_info(self, infos: list[dict[str, Any]]) -> dict[str, Any]:
+        keys: list[str] = []
+        for info in infos:
+            keys.extend(k for k in info if k not in keys)
+        out: dict[str, Any] = {}
+        for key in keys:
+            present = [info[key] for info in infos if key in info]
+            if isinstance(present[0], dict):
+                out[key] = self._join_info([info.get(key, {}) for info in infos])
+                continue
+            example = np.asarray(present[0])
+            pieces = []
+            for info, size in zip(infos, self.sizes, strict=True):
+                if key in info:
+                    pieces.append(np.asarray(info[key]))
+                else:
+                    pieces.append(np.zeros((size, *example.shape[1:]), dtype=example.dtype))
+            out[key] = np.concatenate(pieces)
+        return out
