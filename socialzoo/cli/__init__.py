@@ -55,6 +55,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "train PPO on past the paper's 84,000 steps until it matches Ref (validation scenarios)",
     ),
     "study": ("socialzoo.cli.study_cmd", "single experiments with no other command (ref-tradeoff)"),
+    "suite": (
+        "socialzoo.cli.suite_cmd",
+        "policies x the scenario suite's 25 scenarios x seeds: tables, heatmaps, a results page",
+    ),
     "train": (
         "socialzoo.cli.train_cmd",
         "train a learned baseline (writes the policy, its run record, checkpoints and logs)",

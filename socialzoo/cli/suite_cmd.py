@@ -1,0 +1,137 @@
+"""`socialzoo suite`: policies x the scenario suite's scenarios x seeds into a results store, with a
+policy x scenario table and heatmap per metric, replay pages and a static results page."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from socialzoo.cli import command_help
+from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.benchmark_cmd import _policy_specs
+
+
+def _names(text: str) -> tuple[str, ...]:
+    """Comma-separated names, stripped and lower-cased."""
+    names = tuple(n.strip().lower() for n in text.split(",") if n.strip())
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
+    return names
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add `suite`."""
+    parser = subparsers.add_parser(
+        "suite",
+        help=command_help("suite"),
+        description=(
+            "Evaluate policies on the scenario suite (the 25 scenarios of Francis et al. 2025, Fig. 7): each "
+            "policy on cases 0..N-1 of each scenario family's test split (its val split where the task has no "
+            "test split for it yet). Episodes go to DIR/results.sqlite as they finish; a rerun reads them and "
+            "an interrupted run resumes. Writes, per metric, DIR/tables/METRIC.csv and .md (policy x "
+            "scenario, mean with its 95% interval) and DIR/heatmaps/METRIC.png; DIR/suite.csv, suite.md, "
+            "config.json, replay pages in DIR/replays/ and the static page DIR/results.html."
+        ),
+    )
+    parser.add_argument(
+        "--policies",
+        type=_policy_specs,
+        default=None,
+        help="comma-separated policies: registry names or NAME:PATH for a policy file (default goalone,ref; "
+        "with --task crowdnav: orca,social_force)",
+    )
+    parser.add_argument(
+        "--scenarios",
+        type=_names,
+        default=None,
+        help="comma-separated scenarios: Fig. 7 letters (a-y), suite names (frontal_approach, ...) or any "
+        "registered scenario family's name (default: all 25 of the suite)",
+    )
+    parser.add_argument(
+        "--task",
+        choices=("action_selection", "crowdnav"),
+        default="action_selection",
+        help="the task that plays them: action_selection (sub-policies, the default) or crowdnav "
+        "(velocity control)",
+    )
+    parser.add_argument(
+        "--seeds", type=positive_int, default=30, help="cases per policy and scenario (default 30)"
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where episodes run")
+    parser.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
+    parser.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        help="local processes (default 2), or Ray chunks (default: one per cluster CPU)",
+    )
+    parser.add_argument(
+        "--batch-size", type=positive_int, default=64, help="env rows stepped together per worker"
+    )
+    parser.add_argument(
+        "--replays",
+        type=_count,
+        default=1,
+        help="replay pages per scenario and policy: its first K failed and first K successful episodes "
+        "(default 1; 0: none)",
+    )
+    parser.add_argument(
+        "--metrics",
+        type=_names,
+        default=None,
+        help="comma-separated metrics of the tables and heatmaps (default: every metric the episodes hold)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run_suite_command)
+
+
+def run_suite_command(args: argparse.Namespace) -> int:
+    """Run `socialzoo suite`; returns the exit status (2 for a bad name or option)."""
+    from socialzoo.bench.store import StoreError
+    from socialzoo.bench.suite import SuiteConfig, SuiteError, run_suite
+    from socialzoo.bench.tables import interval_text, policy_labels
+
+    chosen: dict[str, Any] = {
+        "task": args.task,
+        "seeds": args.seeds,
+        "backend": args.backend,
+        "address": args.address,
+        "batch_size": args.batch_size,
+        "replays": args.replays,
+        "workers": args.workers if args.workers is not None or args.backend == "ray" else 2,
+    }
+    for key in ("policies", "scenarios", "metrics"):
+        if getattr(args, key) is not None:
+            chosen[key] = getattr(args, key)
+    try:
+        config = SuiteConfig(**chosen)
+        result = run_suite(config, args.out, progress=not args.no_progress, say=print)
+    except (SuiteError, StoreError) as err:
+        print(f"socialzoo suite: error: {err}", file=sys.stderr)
+        return 2
+    print(
+        f"{result.played} episodes played, {result.reused} read from the store, in {result.seconds:.1f} s "
+        f"({len(result.policies)} policies x {len(result.scenarios)} scenarios x {config.seeds} seeds)"
+    )
+    labels = policy_labels(result.policies)
+    if "success" in result.metrics:
+        width = max(len(s.label) for s in result.scenarios)
+        print(f"  {'success, %':<{width}}  " + "  ".join(f"{labels[p]:>22}" for p in result.policies))
+        for s in result.scenarios:
+            cells = [interval_text(result.entry(p, s.name), "success", 1, 100.0) for p in result.policies]
+            print(f"  {s.label:<{width}}  " + "  ".join(f"{c:>22}" for c in cells))
+    print(f"results in {args.out}: {args.out / 'results.html'}")
+    return 0

@@ -1,0 +1,211 @@
+"""The scenario suite's evaluation (socialzoo.bench.suite): scenarios by letter or name, the task of a
+family, episodes stored under a task id benchmark's keys and read back on a rerun, tables, replays.
+
+Stand-ins: the suite's families are being written; these tests register shipped families under
+suite names (monkeypatch), or name them on their own (a registered family outside the suite).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from socialzoo.bench.suite import (
+    SuiteConfig,
+    SuiteError,
+    plan_suite,
+    replay_choices,
+    resolve_scenarios,
+    run_suite,
+    suite_env_id,
+    suite_metrics,
+    suite_task,
+)
+from socialzoo.bench.suite_page import card_html
+from socialzoo.bench.task_benchmark import TaskId
+from socialzoo.scenarios import catalogue
+from socialzoo.scenarios.families import Crossing, Doorway
+from socialzoo.scenarios.suite import SUITE_NAMES
+
+FAST = ("crossing", "doorway")  # about 400-480 steps per episode
+
+
+class FrontalStandIn(Doorway):
+    """The doorway family under suite scenario (a)'s name."""
+
+    name = "frontal_approach"
+
+
+class ObstructionStandIn(Crossing):
+    """The crossing family under suite scenario (b)'s name."""
+
+    name = "pedestrian_obstruction"
+
+
+@pytest.fixture
+def stand_ins(monkeypatch):
+    """Suite scenarios a and b registered as stand-ins (shipped families renamed)."""
+    monkeypatch.setitem(catalogue.FAMILIES, "frontal_approach", FrontalStandIn())
+    monkeypatch.setitem(catalogue.FAMILIES, "pedestrian_obstruction", ObstructionStandIn())
+
+
+def test_scenarios_by_letter_suite_name_or_family_in_order_once(stand_ins):
+    chosen = resolve_scenarios(["B", "a", "frontal_approach", "doorway"])
+    assert [s.name for s in chosen] == ["pedestrian_obstruction", "frontal_approach", "doorway"]
+    assert [s.label for s in chosen] == ["b. Pedestrian obstruction", "a. Frontal approach", "doorway"]
+    assert chosen[1].map_name == "doorway" and chosen[2].letter == ""
+
+
+def test_an_unknown_scenario_is_named_with_what_is_known(stand_ins):
+    with pytest.raises(SuiteError) as err:
+        resolve_scenarios(["a", "narnia", "zz"])
+    text = str(err.value)
+    assert "'narnia', 'zz'" in text and "a frontal_approach" in text and "hallway_head_on" in text
+
+
+def test_a_suite_scenario_not_registered_yet_is_named(monkeypatch):
+    monkeypatch.delitem(catalogue.FAMILIES, "blind_corner", raising=False)
+    with pytest.raises(SuiteError, match=r"i\. blind_corner not registered .*registered: .*doorway"):
+        resolve_scenarios(["doorway", "i"])
+
+
+def test_the_task_of_a_family():
+    import gymnasium as gym
+
+    (scenario,) = resolve_scenarios(["doorway"])
+    for name, fallback in (
+        ("action_selection", {"map": "doorway", "family": "doorway", "max_steps": 2400}),
+        ("crowdnav", {"family": "doorway"}),
+    ):
+        task = suite_task(name, scenario)
+        assert task.env_id == suite_env_id(name) and task.task == name
+        if task.env_id in gym.registry:  # the registered id's config, with the family
+            assert task.kwargs == {**TaskId.of(task.env_id).kwargs, "family": "doorway"}
+        else:
+            assert task.kwargs == fallback
+    assert suite_env_id("action_selection").startswith("socialzoo/Suite-v")
+    assert suite_env_id("crowdnav").startswith("socialzoo/CrowdNavSuite-v")
+    assert suite_task("action_selection", scenario).make(1).config.family == "doorway"
+
+
+def test_crowdnav_plays_families_or_says_clearly_that_it_cannot_yet():
+    from dataclasses import fields
+
+    from socialzoo.env.crowd_config import CrowdNavConfig
+
+    config = SuiteConfig(task="crowdnav", scenarios=("crossing",), seeds=2)
+    if "family" not in {f.name for f in fields(CrowdNavConfig)}:
+        with pytest.raises(SuiteError, match="no `family` field yet"):
+            plan_suite(config)
+        return
+    units, _ = plan_suite(config)
+    assert [(u.spec, u.task.task, u.config.family) for u in units] == [
+        ("orca", "crowdnav", "crossing"),
+        ("social_force", "crowdnav", "crossing"),
+    ]
+
+
+def test_bad_configs_are_named():
+    with pytest.raises(SuiteError, match=r"SuiteConfig\.seeds must be an int >= 1, got 0"):
+        SuiteConfig(seeds=0)
+    with pytest.raises(SuiteError, match="unknown policy 'robocop'"):
+        SuiteConfig(policies=("ref", "robocop"))
+    with pytest.raises(SuiteError, match="unknown metric 'happiness'"):
+        SuiteConfig(metrics=("happiness",))
+    with pytest.raises(SuiteError, match="duplicates"):
+        SuiteConfig(scenarios=("a", "a"))
+    with pytest.raises(
+        SuiteError, match="the action_selection task's episodes hold no metric navigation_time"
+    ):
+        plan_suite(SuiteConfig(metrics=("success", "navigation_time"), scenarios=("doorway",)))
+    with pytest.raises(SuiteError, match="policy 'orca' acts in task 'crowdnav'"):
+        plan_suite(SuiteConfig(policies=("orca",), scenarios=("doorway",)))
+
+
+def test_more_seeds_than_the_split_holds_write_nothing(tmp_path):
+    out = tmp_path / "suite"
+    with pytest.raises(
+        SuiteError, match=r"doorway: 100000 seeds asked of the (val|test) split, which holds \d+"
+    ):
+        run_suite(SuiteConfig(scenarios=("doorway",), seeds=100_000), out)
+    assert not out.exists()
+
+
+def test_run_stores_resumes_and_equals_the_task_benchmarks_episodes(tmp_path):
+    from socialzoo.bench.task_benchmark import evaluate_stored
+
+    config = SuiteConfig(
+        policies=("goalone", "ref"),
+        scenarios=FAST,
+        seeds=2,
+        workers=1,
+        batch_size=4,
+        replays=0,
+        metrics=("success", "time_to_goal"),
+    )
+    said: list[str] = []
+    first = run_suite(config, tmp_path / "suite", say=said.append)
+    assert (first.played, first.reused) == (8, 0)
+    assert [(e["policy"], e["map"], e["trials"]) for e in first.entries] == [
+        (p, s, 2) for p in ("goalone", "ref") for s in FAST
+    ]
+    assert first.metrics == ["success", "time_to_goal"]
+    for unit in first.units:  # the test split, else the task's first split, said so
+        note = f"{unit.scenario.name}: the action_selection task has no test split for it yet; played on its "
+        assert unit.split == "test" or f"{note}{unit.split} cases 0-1" in said
+    again = run_suite(config, tmp_path / "suite")
+    assert (again.played, again.reused) == (0, 8)
+    assert again.entries == first.entries
+    # The backend's episodes are those the task benchmark plays itself, under the same keys.
+    for unit in first.units:
+        mine, _ = evaluate_stored(
+            tmp_path / "suite" / "results.sqlite", unit.task, unit.spec, unit.policy, unit.split, 2
+        )
+        alone, played = evaluate_stored(
+            tmp_path / "alone.sqlite", unit.task, unit.spec, unit.policy, unit.split, 2
+        )
+        assert played == 2
+        np.testing.assert_equal(mine, alone)
+    # More seeds play only the new cases.
+    more = run_suite(SuiteConfig(**{**config.to_json(), "seeds": 3}), tmp_path / "suite")
+    assert (more.played, more.reused) == (4, 8)
+
+
+def test_replays_are_the_first_failures_and_successes_in_case_order():
+    episodes = [{"case": k, "success": s} for k, s in enumerate([True, False, True, False, False])]
+    assert [e["case"] for e in replay_choices(episodes, 1)] == [0, 1]
+    assert [e["case"] for e in replay_choices(episodes, 2)] == [0, 1, 2, 3]
+    assert replay_choices(episodes, 0) == []
+
+
+def test_metrics_are_those_every_entry_holds_or_those_chosen():
+    entries = [
+        {"policy": "ref", "map": "a", "success_rate": 1.0, "time_to_goal_mean": 9.0, "jerk_mean": 1.0},
+        {"policy": "ref", "map": "b", "success_rate": 0.5, "time_to_goal_mean": math.nan},
+    ]
+    assert suite_metrics(entries) == ["success", "time_to_goal"]
+    assert suite_metrics(entries, ("time_to_goal",)) == ["time_to_goal"]
+    with pytest.raises(SuiteError, match="no metric jerk; they hold success, time_to_goal"):
+        suite_metrics(entries, ("jerk",))
+
+
+def test_a_card_renders_as_html_whatever_its_shape():
+    assert card_html(None) == ""
+    assert "&lt;b&gt;" in card_html("<b>text</b>")
+    assert "<dt>map</dt><dd>hallway</dd>" in card_html({"map": "hallway"})
+    cards = pytest.importorskip("socialzoo.scenarios.cards")
+    try:
+        card = cards.load_card("frontal_approach")
+    except ValueError as err:
+        pytest.skip(f"the card does not load: {err}")
+    text = card_html(card)
+    assert "<dt>defining event</dt>" in text and "oncoming pedestrian" in text
+
+
+def test_every_suite_scenario_has_a_task_once_registered(stand_ins):
+    # The ids are built from the names alone: every suite name is a valid env id kwarg.
+    assert len(SUITE_NAMES) == 25
+    for scenario in resolve_scenarios(["a", "b"]):
+        assert suite_task("action_selection", scenario).kwargs["family"] == scenario.name
