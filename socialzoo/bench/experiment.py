@@ -204,14 +204,15 @@ def file_digest(path: str | Path) -> str | None:
     return hashlib.sha256(p.read_bytes()).hexdigest()
 
 
-# Subpackages whose code decides a rollout (with the policy's own module).
-_ROLLOUT_PACKAGES = ("core", "humans", "nav", "env")
+# Subpackages whose code decides a rollout (with the policy's own module): the world, its people, maps,
+# navigation, scenario families and scripts, and the tasks.
+_ROLLOUT_PACKAGES = ("core", "humans", "maps", "nav", "scenarios", "env")
 
 
 @functools.cache
 def source_digest(files: tuple[str, ...] = ()) -> str:
-    """sha256 of the source code that decides a rollout (socialzoo.core, humans, nav, env) plus
-    `files`, e.g. a policy's module (paths and contents)."""
+    """sha256 of the source code that decides a rollout (socialzoo.core, humans, maps, nav, scenarios,
+    env) plus `files`, e.g. a policy's module (paths and contents)."""
     import socialzoo
 
     root = Path(socialzoo.__file__).resolve().parent

@@ -334,9 +334,10 @@ class BatchedRunner:
                 else:
                     # A policy of observations alone acts on its own rows only: many checkpoints can
                     # share a batch without each one computing every row.
-                    actions[rows] = np.asarray(policy.act(observations[rows])).reshape(
-                        (len(rows), task.num_robots) + shape
-                    )
+                    own = observations[rows]
+                    if isinstance(own, np.ndarray) and own.ndim == 3:  # (rows, R, D): one (rows R, D) batch
+                        own = own.reshape(-1, own.shape[-1])
+                    actions[rows] = np.asarray(policy.act(own)).reshape((len(rows), task.num_robots) + shape)
             obs = observations.copy() if on_step is not None else observations
             before = task.world_state
             step = task.step(actions)
