@@ -17,11 +17,12 @@ from socialzoo.core.config import GroupConfig, HumanConfig, LaserConfig, OrcaCon
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
-from socialzoo.env.observation import ObservationConfig
+from socialzoo.env.observation import ObservationConfig, observation_size
 from socialzoo.env.reward import RewardConfig
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.subpolicies import SubPolicyConfig
+from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.families import FAMILIES
 from socialzoo.scenarios.scenario import ScenarioConfig
 
@@ -61,7 +62,9 @@ class EnvConfig:
     """Everything an environment needs.
 
     Attributes:
-        map: a shipped map name ("gdc1", "ghc3", "open_room", ...) or a path to a map JSON file.
+        map: a shipped map name ("gdc1", "ghc3", "open_room", ...) or a path to a map JSON file;
+            None with a family: the family's map (`map` is then its name). A config that changes
+            its family with `replace` keeps its map unless map=None is given too.
         num_robots: robots per world (R); the single-agent benchmark uses 1.
         max_steps: episode time limit in steps (SPEC: 3200 = 80 s); reaching it truncates.
         goal_radius: success distance between robot centre and goal, m (SPEC: 0.5).
@@ -82,6 +85,9 @@ class EnvConfig:
             (human_collision_penalty before; the old name is refused.)
         family: None for the benchmark's scenario generation (SPEC section 5), or a scenario
             family name (socialzoo.scenarios.families.FAMILIES).
+        signals: the robot also observes the scenario script's signals: each human slot's
+            gesture and the nearest door (socialzoo.env.observation's signal block). Off: the
+            observation layout is exactly the benchmark's.
         world, scenario, observation, reward, subpolicy, planner, metrics: the parts' configs.
         people: which models drive the people of each scenario (social force, ORCA, walking
             groups, a learned policy file, or a mix), and whether each scenario also runs
@@ -89,7 +95,7 @@ class EnvConfig:
             socialzoo.env.people). The default is the benchmark's social-force people.
     """
 
-    map: str = "gdc1"
+    map: str | None = "gdc1"
     num_robots: int = 1
     max_steps: int = 3200
     goal_radius: float = 0.5
@@ -99,6 +105,7 @@ class EnvConfig:
     human_action_frame: HumanActionFrame = "world"
     human_action_scale: float = 1.0
     family: str | None = None
+    signals: bool = False
     world: WorldConfig = field(default_factory=WorldConfig)
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
@@ -110,8 +117,20 @@ class EnvConfig:
     people: PeopleConfig = field(default_factory=PeopleConfig)
 
     def __post_init__(self) -> None:
+        if self.family is not None and self.family not in FAMILIES:
+            raise ValueError(
+                f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
+            )
+        if self.family is not None:
+            home = family_map(self.family, "EnvConfig.family")  # refuses a family that cannot load
+            if self.map is None:
+                object.__setattr__(self, "map", home)
         if not isinstance(self.map, str) or not self.map:
-            raise ValueError(f"EnvConfig.map must be a map name or path, got {self.map!r}")
+            raise ValueError(
+                f"EnvConfig.map must be a map name or path (None only with a family), got {self.map!r}"
+            )
+        if not isinstance(self.signals, bool):
+            raise ValueError(f"EnvConfig.signals must be a bool, got {self.signals!r}")
         for name, low in (
             ("num_robots", 1),
             ("max_steps", 1),
@@ -135,10 +154,6 @@ class EnvConfig:
                 f"EnvConfig.human_action_frame must be one of {get_args(HumanActionFrame)}, "
                 f"got {self.human_action_frame!r}"
             )
-        if self.family is not None and self.family not in FAMILIES:
-            raise ValueError(
-                f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
-            )
         self._check_people()
         for name, cls in _NESTED.items():
             if not isinstance(getattr(self, name), cls):
@@ -161,6 +176,11 @@ class EnvConfig:
     def max_humans(self) -> int:
         """Human slots per world (H): the scenario generator's maximum head count."""
         return self.scenario.max_humans
+
+    @property
+    def observation_size(self) -> int:
+        """Length of one robot observation: the layout's, with the signal block if `signals`."""
+        return observation_size(self.observation, self.signals)
 
     @property
     def dt(self) -> float:
@@ -228,6 +248,18 @@ class EnvConfig:
             else:
                 resolved[key] = value
         return dataclasses.replace(self, **resolved)
+
+
+def family_map(name: str, where: str) -> str:
+    """The map registered family `name` is designed for (its map_name).
+
+    Raises:
+        ValueError: the family cannot be loaded (naming `where`, the family and why).
+    """
+    try:
+        return get_family(name).map_name
+    except (ImportError, AttributeError, KeyError, ValueError) as err:
+        raise ValueError(f"{where}: scenario family {name!r} cannot be loaded ({err})") from None
 
 
 def _refuse_renamed(keys: Iterable[str]) -> None:

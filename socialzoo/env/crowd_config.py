@@ -17,10 +17,12 @@ from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_int, check_number
+from socialzoo.env.config import family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
 from socialzoo.humans.models import PeopleSpecError, parse_people
+from socialzoo.scenarios.catalogue import FAMILIES
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 CrowdAction = Literal["continuous", "discrete"]
@@ -34,6 +36,8 @@ ACTION_FRAMES: tuple[str, ...] = get_args(ActionFrame)
 # CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
 SPEED_SAMPLES = 5
 ROTATION_SAMPLES = 16
+# The map_name of the families of CrowdNav's open arena (socialzoo.scenarios.catalogue).
+ARENA = "arena"
 
 
 def crowdnav_robot(kinematics: str = "holonomic") -> RobotConfig:
@@ -68,7 +72,18 @@ class CrowdNavConfig:
             among walls, with the benchmark's scenarios and social-force people. Among walls the
             robot is guided as the benchmark's robot is: the goal it sees is its route's local
             target on the map's navigation graph (the carrot, SPEC section 6) and its goal distance
-            is the length of route left.
+            is the length of route left. None with a family: the family's map (`map` is then its
+            name; a config that changes its family with `replace` keeps its map unless map=None
+            is given too).
+        family: None, or a registered scenario family on a map (socialzoo.scenarios.catalogue,
+            e.g. the guidelines' suite, socialzoo.scenarios.suite): the task plays that family's
+            scenarios, training cases from its training seeds and fixed cases from its own "val"
+            and "test" splits (a family without splits: its map's validation and test sets' seeds).
+            CrowdNav's arena families are cases.layout, not a family here.
+        signals: each person slot also carries the gesture its person shows (0 none, 1 wait,
+            2 proceed; socialzoo.scenarios.script) and the robot part the nearest door (its point
+            nearest the robot in the observation frame, and closed 0/1)
+            (socialzoo.env.crowd_observation). Off: the observation is CrowdNav's joint state.
         wall_rays: rays of a scan around the robot whose wall hits within wall_range it sees as
             still obstacles of radius 0, one slot per ray after the people (masked when the ray
             hits nothing): an end-to-end robot among walls must see them. 0: none (the arena).
@@ -97,8 +112,11 @@ class CrowdNavConfig:
     wall_rays: int = 0
     wall_range: float = 4.0
     action_frame: ActionFrame = "goal"
+    family: str | None = None
+    signals: bool = False
 
     def __post_init__(self) -> None:
+        self._resolve_family()
         check_number("CrowdNavConfig", "time_step", self.time_step, low=0, low_open=True)
         check_int("CrowdNavConfig", "physics_substeps", self.physics_substeps, low=1)
         check_number("CrowdNavConfig", "time_limit", self.time_limit, low=1, low_open=True)
@@ -137,6 +155,25 @@ class CrowdNavConfig:
             raise ValueError(
                 f"CrowdNavConfig.action_frame must be one of {ACTION_FRAMES}, got {self.action_frame!r}"
             )
+        if not isinstance(self.signals, bool):
+            raise ValueError(f"CrowdNavConfig.signals must be a bool, got {self.signals!r}")
+
+    def _resolve_family(self) -> None:
+        """Refuse a family that is unknown, cannot load or is CrowdNav's arena; map None: its map."""
+        if self.family is None:
+            return
+        if not isinstance(self.family, str) or self.family not in FAMILIES:
+            raise ValueError(
+                f"CrowdNavConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
+            )
+        home = family_map(self.family, "CrowdNavConfig.family")
+        if home == ARENA:
+            raise ValueError(
+                f"CrowdNavConfig.family: {self.family!r} is a family of CrowdNav's open arena; choose the "
+                "arena's cases with cases.layout (and map=None, no family)"
+            )
+        if self.map is None:
+            object.__setattr__(self, "map", home)
 
     @property
     def slots(self) -> int:

@@ -10,6 +10,12 @@ otherwise, as in CrowdNav (a holonomic robot's heading does not matter).
 
 Two layouts of the same numbers: "dict" ({"robot": (6,), "humans": (H, 7), "mask": (H,)}) and
 "flat" (one (6 + 8 H,) vector: robot, then the people row by row, then the mask as 0/1).
+
+With signals (CrowdNavConfig.signals) each person slot also carries the gesture its person shows
+(SIGNAL_HUMAN_FEATURES: "signal", 0 none, 1 wait, 2 proceed; 0 for other robots, wall rays and
+empty slots) and the robot part the nearest door (SIGNAL_ROBOT_FEATURES: its point nearest the
+robot, x and y in the same frame, and closed 0/1; zeros without doors): "dict" {"robot": (9,),
+"humans": (H, 8), "mask": (H,)}, "flat" (9 + 9 H,) in the same order (`with_signals`).
 """
 
 from __future__ import annotations
@@ -24,6 +30,9 @@ from socialzoo.core.jit import kernel
 
 ROBOT_FEATURES: tuple[str, ...] = ("goal_distance", "preferred_speed", "heading", "radius", "vx", "vy")
 HUMAN_FEATURES: tuple[str, ...] = ("px", "py", "vx", "vy", "radius", "distance", "radius_sum")
+# With signals: the robot part gains the nearest door, each person slot its gesture.
+SIGNAL_ROBOT_FEATURES: tuple[str, ...] = (*ROBOT_FEATURES, "door_x", "door_y", "door_closed")
+SIGNAL_HUMAN_FEATURES: tuple[str, ...] = (*HUMAN_FEATURES, "signal")
 ObservationKind = Literal["flat", "dict"]
 OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
 
@@ -33,8 +42,9 @@ class JointState:
     """The joint state of B rows, robot-centred (x towards the goal), metres and m/s.
 
     Attributes:
-        robot: (B, 6) float32, ROBOT_FEATURES.
-        humans: (B, H, 7) float32, HUMAN_FEATURES per person slot (zeros for an empty slot).
+        robot: (B, 6) float32, ROBOT_FEATURES (with signals (B, 9), SIGNAL_ROBOT_FEATURES).
+        humans: (B, H, 7) float32, HUMAN_FEATURES per person slot (zeros for an empty slot; with
+            signals (B, H, 8), SIGNAL_HUMAN_FEATURES).
         mask: (B, H) bool, the slot holds a person.
         buffer: the flat layout that robot and humans are views of, when built that way.
     """
@@ -45,7 +55,7 @@ class JointState:
     buffer: np.ndarray | None = None
 
     def flat(self) -> np.ndarray:
-        """(B, 6 + 8 H) float32: robot, people row by row, then the mask as 0/1."""
+        """(B, robot + (features + 1) H) float32: robot, people row by row, then the mask as 0/1."""
         if self.buffer is not None:
             return self.buffer
         b = self.robot.shape[0]
@@ -58,9 +68,40 @@ class JointState:
         return {"robot": self.robot, "humans": self.humans, "mask": self.mask.astype(np.int8)}
 
 
-def flat_size(max_humans: int) -> int:
-    """The length of the flat layout with `max_humans` slots."""
-    return len(ROBOT_FEATURES) + (len(HUMAN_FEATURES) + 1) * max_humans
+def robot_features(signals: bool = False) -> tuple[str, ...]:
+    """The names of the robot part's features (with signals: and the nearest door's)."""
+    return SIGNAL_ROBOT_FEATURES if signals else ROBOT_FEATURES
+
+
+def human_features(signals: bool = False) -> tuple[str, ...]:
+    """The names of a person slot's features (with signals: and its gesture)."""
+    return SIGNAL_HUMAN_FEATURES if signals else HUMAN_FEATURES
+
+
+def flat_size(max_humans: int, signals: bool = False) -> int:
+    """The length of the flat layout with `max_humans` slots (with signals, if `signals`)."""
+    return len(robot_features(signals)) + (len(human_features(signals)) + 1) * max_humans
+
+
+def with_signals(state: JointState, signal: np.ndarray, door: np.ndarray) -> JointState:
+    """The joint state with signals (module docstring): each slot's gesture and the nearest door.
+
+    Args:
+        state: the joint state of N robots with H slots.
+        signal: (N, H) the gesture each slot's person shows (0 none, 1 wait, 2 proceed).
+        door: (N, 3) the nearest door's point nearest the robot (x, y, in the joint state's frame,
+            m) and closed (0/1); zeros without a door.
+    """
+    n, h, f = state.humans.shape
+    robot_dim = len(SIGNAL_ROBOT_FEATURES)
+    flat = np.empty((n, flat_size(h, signals=True)), dtype=np.float32)
+    flat[:, : state.robot.shape[1]] = state.robot
+    flat[:, state.robot.shape[1] : robot_dim] = door
+    humans = flat[:, robot_dim : robot_dim + (f + 1) * h].reshape(n, h, f + 1)
+    humans[..., :f] = state.humans
+    humans[..., f] = np.where(state.mask, signal, 0)
+    flat[:, robot_dim + (f + 1) * h :] = state.mask
+    return JointState(robot=flat[:, :robot_dim], humans=humans, mask=state.mask, buffer=flat)
 
 
 def joint_state(

@@ -7,18 +7,22 @@ cases from its training split (case seeds from 2000 up):
 row i of a batch reset with seed s draws its case seeds from its own Generator (row 0 from s
 itself, so a single env seeded with s plays row 0's episodes), never a validation or test case.
 On a building map (crowd navigation among walls) the cases are the benchmark's scenarios of that
-map, drawn by the benchmark's training stream (socialzoo.env.scenario_source).
+map, drawn by the benchmark's training stream (socialzoo.env.scenario_source); with a scenario
+family (CrowdNavConfig.family) that family's scenarios, drawn by the same stream (which skips the
+family's validation and test seeds), and its fixed cases from the family's own splits.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.env.crowd_config import CrowdNavConfig
-from socialzoo.scenarios.crowd_cases import CrowdCase, Split, crowd_family
+from socialzoo.scenarios.catalogue import get_family
+from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, CrowdCase, Split, crowd_family
 from socialzoo.scenarios.scenario import Scenario
 
 # CrowdNav seeds numpy's legacy generator, whose seeds are below 2**32.
@@ -47,7 +51,9 @@ class CrowdCaseSource:
             from socialzoo.scenarios.scenario import ScenarioConfig
 
             scenario = ScenarioConfig(max_humans=config.slots, min_humans=min(5, config.slots))
-            self._scenarios = ScenarioStream(load_map(config.map), batch_size, config.num_robots, scenario)
+            self._scenarios = ScenarioStream(
+                load_map(config.map), batch_size, config.num_robots, scenario, config.family
+            )
 
     def seed(self, seed: int | None) -> None:
         """Reseed every row's training stream (row 0 with the seed itself)."""
@@ -71,18 +77,57 @@ class CrowdCaseSource:
 
     def fixed(self, split: Split, indices: list[int] | np.ndarray) -> list[Scenario]:
         """Cases `indices` of the validation or test split (CrowdNav's fixed cases; on a building
-        map, the map's registered test set or validation scenarios)."""
+        map, the map's registered test set or validation scenarios; with a scenario family, the
+        family's scenarios of its split's seeds, or of the map's sets' seeds for a family without
+        splits of its own)."""
         r = self.config.num_robots
         if self.config.map is None:
             return [self.family.make(self.family.case_seed(split, int(k)), r) for k in indices]
-        from socialzoo.maps.map_file import load_map
-        from socialzoo.scenarios.scenario import get_test_set, validation_set
-
-        m = load_map(self.config.map)
-        test_set = validation_set(m.name) if split == "val" else get_test_set(f"{m.name}-test")
+        cases = self.case_sets()[split]
+        stream = self._scenarios
+        assert stream is not None
+        if isinstance(cases, str):  # the family's own split
+            family = get_family(stream.family)  # type: ignore[arg-type]
+            return [stream.make(family.case_seed(cases, int(k))) for k in indices]
+        if stream.family is not None:
+            return [stream.make(cases.seed(int(k))) for k in indices]
         from socialzoo.env.scenario_source import with_robots
 
-        return [with_robots(test_set.scenario(int(k), m), m, r) for k in indices]
+        m = stream.map
+        return [with_robots(cases.scenario(int(k), m), m, r) for k in indices]
+
+    def case_sets(self) -> dict[str, Any]:
+        """Among walls, split name -> its TestSet, or for a family with splits of its own the
+        split's name ("val" and "test"): a family's own splits, else the map's validation
+        scenarios and its registered test set (where it has one)."""
+        from socialzoo.scenarios.scenario import TEST_SETS, validation_set
+
+        stream = self._scenarios
+        assert stream is not None
+        if stream.family is not None:
+            splits = get_family(stream.family).splits
+            if splits:
+                return {k: k for k in ("val", "test") if k in splits and splits[k].size is not None}
+        name = stream.map.name
+        sets: dict[str, Any] = {"val": validation_set(name)}
+        if f"{name}-test" in TEST_SETS:
+            sets["test"] = TEST_SETS[f"{name}-test"]
+        return sets
+
+    def case_splits(self) -> dict[str, int]:
+        """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, else those
+        of `case_sets`."""
+        if self.config.map is None:
+            return dict(SPLIT_SIZE)
+        return {
+            name: self._split_size(cases) if isinstance(cases, str) else len(cases)
+            for name, cases in self.case_sets().items()
+        }
+
+    def _split_size(self, split: str) -> int:
+        size = get_family(self._scenarios.family).splits[split].size  # type: ignore[union-attr,arg-type]
+        assert size is not None
+        return size
 
 
 def write_cases(

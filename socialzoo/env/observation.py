@@ -18,6 +18,13 @@ Conventions shared by both layouts:
   velocity difference seen from a non-rotating frame aligned with the robot.
 - The previous action is the sub-policy index (SPEC section 7) as a float; adapters pass 0
   (GoAlone) before the first step, as the reference code did.
+
+With signals (EnvConfig.signals, off by default: the layouts above are then exactly as they are), a
+signal block follows the layout: the gesture of each human slot's person (0 none, 1 wait,
+2 proceed; socialzoo.scenarios.script; 0 for an empty slot), then the nearest door's point
+(x, y) in the robot frame and whether it is closed (0/1) (`nearest_door`; all zero without doors).
+`signal_block` reads it; `observation_size`, `observation_space` and `describe_observation` take
+`signals` and count it.
 """
 
 from __future__ import annotations
@@ -64,6 +71,11 @@ SOCIALGYM1_NUM_SLOTS = 40
 SOCIALGYM1_SIZE = 6 * SOCIALGYM1_NUM_SLOTS + 4
 # Largest sub-policy index (SPEC section 7: Discrete(4)).
 MAX_ACTION_INDEX = 3
+# The signal block's tail after its K slot signals: the nearest door's point and closed flag.
+DOOR_FEATURES: tuple[str, ...] = ("door_x", "door_y", "door_closed")
+"""The nearest door in the signal block: its point nearest the robot (x, y), m, and closed (0/1)."""
+# Largest gesture index (socialzoo.scenarios.script: NO_GESTURE 0, WAIT 1, PROCEED 2).
+MAX_GESTURE = 2
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -108,7 +120,7 @@ def _robot_frame_slots(
     human_vel: np.ndarray,
     visible: np.ndarray,
     num_slots: int,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """World points and the visible humans, nearest first, in the robot frame.
 
     Args:
@@ -121,19 +133,21 @@ def _robot_frame_slots(
         num_slots: K, the number of human slots.
 
     Returns:
-        (points_r, slots): points_r (B, P, 2) in the robot frame; slots (B, min(K, H), 4) of
-        (x, y, vx, vy) relative to the robot in robot axes, zero past the last visible human.
+        (points_r, slots, people): points_r (B, P, 2) in the robot frame; slots (B, min(K, H), 4)
+        of (x, y, vx, vy) relative to the robot in robot axes, zero past the last visible human;
+        people (B, min(K, H)) the human index in each slot, -1 past the last visible human.
     """
     batch, num_humans = visible.shape
     points_r = np.empty(points.shape)
     slots = np.zeros((batch, min(num_slots, num_humans), 4))
-    _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots)
-    return points_r, slots
+    people = np.full(slots.shape[:2], -1, dtype=np.intp)
+    _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots, people)
+    return points_r, slots, people
 
 
 @kernel
-def _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots):  # type: ignore[no-untyped-def]
-    """_robot_frame_slots into points_r (B, P, 2) and zeroed slots (B, K, 4)."""
+def _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visible, points_r, slots, people):  # type: ignore[no-untyped-def]
+    """_robot_frame_slots into points_r (B, P, 2), zeroed slots (B, K, 4) and people (B, K) of -1."""
     batch, num_humans = visible.shape
     taken = np.zeros(num_humans, dtype=np.bool_)
     for b in range(batch):
@@ -155,6 +169,7 @@ def _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visib
             if pick < 0:
                 break
             taken[pick] = True
+            people[b, k] = pick
             x, y = human_pos[b, pick, 0] - x0, human_pos[b, pick, 1] - y0
             vx, vy = human_vel[b, pick, 0], human_vel[b, pick, 1]
             slots[b, k, 0] = c * x + s * y
@@ -196,9 +211,26 @@ def paper_observation(
     Returns:
         (B, 7 + 4K) float32.
     """
+    return _paper(robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, num_slots)[
+        0
+    ]
+
+
+def _paper(
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    goal: np.ndarray,
+    carrot: np.ndarray,
+    prev_action: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+    num_slots: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(paper_observation, (B, min(K, H)) the human index in each slot, -1 for an empty one)."""
     batch = robot_pose.shape[0]
     points = np.stack((goal, carrot), axis=1)
-    points_r, slots = _robot_frame_slots(
+    points_r, slots, people = _robot_frame_slots(
         robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots
     )
     out = np.zeros((batch, PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
@@ -207,7 +239,7 @@ def paper_observation(
     out[:, PAPER_ROBOT_VEL] = robot_vel
     out[:, PAPER_PREV_ACTION] = prev_action
     paper_slots(out)[:, : slots.shape[1]] = slots
-    return out
+    return out, people
 
 
 def socialgym1_observation(
@@ -240,9 +272,22 @@ def socialgym1_observation(
     Returns:
         (B, 244) float32.
     """
+    return _socialgym1(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)[0]
+
+
+def _socialgym1(
+    robot_pose: np.ndarray,
+    robot_vel: np.ndarray,
+    carrot: np.ndarray,
+    prev_action: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    visible: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(socialgym1_observation, (B, min(40, H)) the human index in each slot, -1 for an empty one)."""
     batch = robot_pose.shape[0]
     n = SOCIALGYM1_NUM_SLOTS
-    points_r, slots = _robot_frame_slots(
+    points_r, slots, people = _robot_frame_slots(
         robot_pose, robot_vel, carrot[:, None, :], human_pos, human_vel, visible, n
     )
     k = slots.shape[1]
@@ -253,7 +298,52 @@ def socialgym1_observation(
     out[:, 3 * n + 1 : 3 * n + 3 * k : 3] = slots[..., 3]
     out[:, 6 * n : 6 * n + 2] = points_r[:, 0]
     out[:, 6 * n + 3] = prev_action
-    return out
+    return out, people
+
+
+@dataclass(frozen=True)
+class Signals:
+    """What the robots observe of their scenario's script (socialzoo.env.script), for B robots.
+
+    Attributes:
+        gesture: (B, H) int, the gesture each person shows now (0 none, 1 wait, 2 proceed).
+        door_offset: (B, 2) the nearest door's point nearest the robot minus the robot's centre,
+            world axes, m; zeros where there is no door (`nearest_door`).
+        door_closed: (B,) bool, that door is closed now (False where there is none).
+    """
+
+    gesture: np.ndarray
+    door_offset: np.ndarray
+    door_closed: np.ndarray
+
+
+def nearest_door(pos: np.ndarray, doors: np.ndarray, closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The door nearest each robot: (offset (N, 2), closed (N,) bool).
+
+    The offset is the door segment's point nearest the robot minus the robot's centre, world axes,
+    m; a robot without doors gets zeros and False. Padding door slots (a zero segment open from
+    -inf to inf, socialzoo.env.script.ScriptRunner) never count.
+
+    Args:
+        pos: (N, 2) robot centres, world frame, m.
+        doors: (N, D, 6) x1, y1, x2, y2, t_open, t_close per door, m and s.
+        closed: (N, D) bool, each door closed now.
+    """
+    n = len(pos)
+    offset, shut = np.zeros((n, 2)), np.zeros(n, dtype=bool)
+    if doors.shape[1] == 0:
+        return offset, shut
+    a, ab = doors[..., 0:2], doors[..., 2:4] - doors[..., 0:2]  # (N, D, 2)
+    along = ((pos[:, None, :] - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12)
+    rel = a + np.clip(along, 0.0, 1.0)[..., None] * ab - pos[:, None, :]
+    padding = (doors[..., :4] == 0.0).all(-1) & (doors[..., 4] == -np.inf) & (doors[..., 5] == np.inf)
+    dist2 = np.where(padding, np.inf, (rel * rel).sum(-1))
+    k = np.argmin(dist2, axis=1)
+    rows = np.arange(n)
+    found = np.isfinite(dist2[rows, k])
+    offset[found] = rel[rows, k][found]
+    shut[found] = closed[rows, k][found]
+    return offset, shut
 
 
 def build_observation(
@@ -266,24 +356,58 @@ def build_observation(
     human_pos: np.ndarray,
     human_vel: np.ndarray,
     visible: np.ndarray,
+    signals: Signals | None = None,
 ) -> np.ndarray:
-    """The observation of `cfg.layout`; arguments as in `paper_observation`.
+    """The observation of `cfg.layout`; arguments as in `paper_observation`. With `signals`, the
+    signal block follows (module docstring): each slot's person's gesture, then the nearest door.
 
     Returns:
-        (B, observation_size(cfg)) float32.
+        (B, observation_size(cfg, signals is not None)) float32.
     """
     if cfg.layout == "paper":
-        return paper_observation(
+        out, people = _paper(
             robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, cfg.num_slots
         )
-    return socialgym1_observation(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)
+    else:
+        out, people = _socialgym1(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)
+    if signals is None:
+        return out
+    k = cfg.num_slots
+    block = np.zeros((len(out), k + len(DOOR_FEATURES)), dtype=np.float32)
+    shown = np.take_along_axis(np.asarray(signals.gesture), np.maximum(people, 0), axis=1)
+    block[:, : people.shape[1]] = np.where(people >= 0, shown, 0)
+    c, s = np.cos(robot_pose[:, 2]), np.sin(robot_pose[:, 2])
+    dx, dy = signals.door_offset[:, 0], signals.door_offset[:, 1]
+    block[:, k] = c * dx + s * dy
+    block[:, k + 1] = c * dy - s * dx
+    block[:, k + 2] = signals.door_closed
+    return np.concatenate((out, block), axis=1)
 
 
-def observation_size(cfg: ObservationConfig) -> int:
-    """Length of one observation vector of `cfg`'s layout."""
-    if cfg.layout == "socialgym1":
-        return SOCIALGYM1_SIZE
-    return PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * cfg.num_human_slots
+def observation_size(cfg: ObservationConfig, signals: bool = False) -> int:
+    """Length of one observation vector of `cfg`'s layout (with the signal block, if `signals`)."""
+    size = (
+        SOCIALGYM1_SIZE
+        if cfg.layout == "socialgym1"
+        else PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * cfg.num_human_slots
+    )
+    return size + (cfg.num_slots + len(DOOR_FEATURES) if signals else 0)
+
+
+def signal_block(obs: np.ndarray, cfg: ObservationConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The signal block of observations with signals: ((..., K) each human slot's gesture,
+    (..., 3) the nearest door's DOOR_FEATURES), views of `obs`.
+
+    Raises:
+        ValueError: the last axis is not observation_size(cfg, signals=True) long.
+    """
+    width, base = obs.shape[-1], observation_size(cfg)
+    if width != observation_size(cfg, signals=True):
+        raise ValueError(
+            f"an observation with signals of this layout has {observation_size(cfg, signals=True)} numbers, "
+            f"got {width}"
+        )
+    return obs[..., base : base + cfg.num_slots], obs[..., base + cfg.num_slots :]
 
 
 def paper_num_slots(width: int) -> int:
@@ -335,30 +459,37 @@ def paper_human_velocity(obs: np.ndarray) -> np.ndarray:
     return vel
 
 
-def observation_space(cfg: ObservationConfig) -> spaces.Box:
-    """The float32 Box of one observation (no batch axis).
+def observation_space(cfg: ObservationConfig, signals: bool = False) -> spaces.Box:
+    """The float32 Box of one observation (no batch axis), with the signal block if `signals`.
 
     Positions and velocities are unbounded (maps have no fixed size, and the robot's limits are
-    configuration); the previous action lies in [0, 3]. A fresh Box each call: an env caches its
-    own, so that seeding one env's space does not seed another's.
+    configuration); the previous action lies in [0, 3], a gesture in [0, 2], a door's closed flag
+    in [0, 1]. A fresh Box each call: an env caches its own, so that seeding one env's space does
+    not seed another's.
     """
-    size = observation_size(cfg)
+    size = observation_size(cfg, signals)
     low = np.full(size, -np.inf, dtype=np.float32)
     high = np.full(size, np.inf, dtype=np.float32)
     action = PAPER_PREV_ACTION if cfg.layout == "paper" else SOCIALGYM1_SIZE - 1
     low[action] = 0.0
     high[action] = MAX_ACTION_INDEX
+    if signals:
+        base, k = observation_size(cfg), cfg.num_slots
+        low[base : base + k], high[base : base + k] = 0.0, MAX_GESTURE
+        low[size - 1], high[size - 1] = 0.0, 1.0
     return spaces.Box(low=low, high=high, dtype=np.float32)
 
 
-def describe_observation(cfg: ObservationConfig) -> list[str]:
-    """Name of every entry of an observation, in order (e.g. "goal_x", "human_3_vy")."""
+def describe_observation(cfg: ObservationConfig, signals: bool = False) -> list[str]:
+    """Name of every entry of an observation, in order (e.g. "goal_x", "human_3_vy"); with
+    `signals`, then "human_i_signal" per slot and DOOR_FEATURES."""
+    extra = [f"human_{i}_signal" for i in range(cfg.num_slots)] + list(DOOR_FEATURES) if signals else []
     if cfg.layout == "paper":
         names = ["goal_x", "goal_y", "target_x", "target_y", "robot_v", "robot_omega", "prev_action"]
         for i in range(cfg.num_human_slots):
             names += [f"human_{i}_x", f"human_{i}_y", f"human_{i}_vx", f"human_{i}_vy"]
-        return names
+        return names + extra
     n = SOCIALGYM1_NUM_SLOTS
     names = [f"human_{i}_{c}" for i in range(n) for c in ("x", "y", "theta")]
     names += [f"human_{i}_{c}" for i in range(n) for c in ("vx", "vy", "omega")]
-    return [*names, "target_x", "target_y", "target_theta", "prev_action"]
+    return [*names, "target_x", "target_y", "target_theta", "prev_action", *extra]

@@ -8,7 +8,15 @@ raises gymnasium's DeprecatedEnv naming the current id. The CrowdNav ids have th
 (socialzoo.env.crowd_variants.CROWD_ENV_VERSION: v1, the initial release). This history is the
 only copy: the adapters' docstrings point here.
 
+The scenario suite's ids (SUITE_IDS) play one registered scenario family with the signals in the
+observation: `gymnasium.make("socialzoo/Suite-v2", family="blind_corner")` (the action-selection
+task) and `gymnasium.make("socialzoo/CrowdNavSuite-v1", family="blind_corner")` (the CrowdNav task
+among walls). Their kwargs hold map=None, so the map is the family's whichever family a call
+names (socialzoo.env.config.EnvConfig.map, socialzoo.env.crowd_config.CrowdNavConfig.map).
+
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within v2, the ids socialzoo/Suite-v2 and socialzoo/CrowdNavSuite-v1 (CrowdNav's v1) are new;
+        the observation's signal block is opt-in (signals=True), so no other id's rollouts change.
     socialzoo_parallel_v2, socialzoo_crowdnav_v2 (the ParallelEnvs' metadata names; every id
         keeps its version: the ids have one robot): robots after the first start at least 1 m
         from every person and every other robot (scenario_source.with_robots; they could start
@@ -78,6 +86,32 @@ FAMILY_IDS: dict[str, dict] = {
 CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"task": "crowdnav", "variant": name} for name in VARIANTS}
 
 
+# The guidelines' scenario suite (socialzoo.scenarios.suite): any registered family by the `family`
+# keyword (default its scenario a, frontal_approach) on that family's map (map=None), with the
+# people's gestures and the nearest door in the observation. The action-selection task with the
+# family ids' 60 s episodes; the CrowdNav task as its Walls variant runs among walls (social-force
+# people of radius 0.2 m, a visible robot, 10 physics substeps, 16 wall rays), 60 s, 20 person slots.
+SUITE_DEFAULT_FAMILY = "frontal_approach"
+SUITE_IDS: dict[str, dict] = {
+    f"socialzoo/Suite-v{ENV_VERSION}": {
+        "task": "action_selection",
+        "map": None,
+        "family": SUITE_DEFAULT_FAMILY,
+        "max_steps": 2400,
+        "signals": True,
+    },
+    crowd_env_id("Suite"): {
+        "task": "crowdnav",
+        "variant": "Walls",
+        "map": None,
+        "family": SUITE_DEFAULT_FAMILY,
+        "time_limit": 60.0,
+        "max_humans": 20,
+        "signals": True,
+    },
+}
+
+
 def register_task(env_id: str, task: str, **kwargs: object) -> None:
     """Register `env_id` as the Gymnasium env and VectorEnv of `task` (idempotent).
 
@@ -98,5 +132,5 @@ def register_task(env_id: str, task: str, **kwargs: object) -> None:
 
 def register_envs() -> None:
     """Register every id of socialzoo's tasks (idempotent)."""
-    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS}.items():
+    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS, **SUITE_IDS}.items():
         register_task(env_id, **kwargs)

@@ -8,7 +8,9 @@ action into the robot's command (socialzoo.nav.subpolicies, the navigator's back
 recovering robot), builds the observation (socialzoo.env.observation), judges the step
 (socialzoo.env.outcome: reward, goal, episode end) and keeps the episode metrics
 (socialzoo.env.metrics, and the people's, socialzoo.env.people). The episodes come from the map's
-seeded scenario stream (socialzoo.env.scenario_source). Learned-human agents
+seeded scenario stream (socialzoo.env.scenario_source), or a scenario family's (EnvConfig.family);
+with EnvConfig.signals the observation also carries what the scenario's script shows (each human
+slot's gesture and the nearest door, socialzoo.env.observation's signal block). Learned-human agents
 (EnvConfig.num_learned_humans) are human slots a learner drives, for the multi-agent adapters
 (socialzoo.env.human_agents).
 """
@@ -33,7 +35,7 @@ from socialzoo.env.human_agents import (
     human_step,
 )
 from socialzoo.env.metrics import EpisodeMetrics
-from socialzoo.env.observation import build_observation, observation_space
+from socialzoo.env.observation import Signals, build_observation, nearest_door, observation_space
 from socialzoo.env.outcome import RobotOutcome, followed_human, robot_outcome
 from socialzoo.env.scenario_source import ScenarioStream, with_robots
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
@@ -139,7 +141,7 @@ class ActionSelectionTask(Task):
         self.num_robots = r
         self.num_human_slots = cfg.max_humans
         self.num_human_agents = cfg.num_learned_humans
-        self.observation_space = observation_space(cfg.observation)
+        self.observation_space = observation_space(cfg.observation, cfg.signals)
         if cfg.robot_action == "subpolicy":
             self.action_space: spaces.Space = spaces.Discrete(NUM_ACTIONS)
         else:
@@ -153,7 +155,7 @@ class ActionSelectionTask(Task):
         self.speeds = np.array([cfg.world.robot.max_speed, cfg.world.robot.max_angular_speed])
         self.prev_action = np.zeros((b, r), dtype=np.int64)
         self.target_human = np.full((b, r), -1, dtype=np.intp)
-        self.obs = np.zeros((b, r, cfg.observation.size), dtype=np.float32)
+        self.obs = np.zeros((b, r, cfg.observation_size), dtype=np.float32)
         self.human_obs: np.ndarray | None = None
 
     # ------------------------------------------------------------------ episodes
@@ -431,6 +433,7 @@ class ActionSelectionTask(Task):
             core.per_robot(s.human_pos),
             core.per_robot(s.human_vel),
             visible,
+            self._signals() if self.config.signals else None,
         ).reshape(b, r, -1)
         self.obs[rows] = obs[rows]
         if len(self.learned):
@@ -440,6 +443,13 @@ class ActionSelectionTask(Task):
             else:
                 self.human_obs[rows] = human_obs[rows]
         return visible
+
+    def _signals(self) -> Signals:
+        """What each robot (B R) observes of the scripts: the people's gestures, the nearest door."""
+        core, script = self.core, self.core.script
+        pos = core.state.robot_pose[..., :2].reshape(-1, 2)
+        offset, closed = nearest_door(pos, core.per_robot(script.doors), core.per_robot(script.closed))
+        return Signals(core.per_robot(script.signal), offset, closed)
 
     def _min_human_distance(self) -> np.ndarray:
         """(B*R,) centre distance from each robot to the nearest present human, inf for none."""

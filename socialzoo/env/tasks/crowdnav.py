@@ -3,13 +3,15 @@ core (socialzoo.env.core.BatchedCore), with CrowdNav's settings as the defaults
 (socialzoo.env.crowd_config.CrowdNavConfig).
 
 A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
-or a building among the benchmark's people (the Walls variant). The task turns each action into the
-robot's command, advances the core `physics_substeps` world steps per decision, judges the step as
-CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach along every substep, the goal,
-the time limit), accumulates the episode metrics and builds each robot's joint-state observation
-(socialzoo.env.crowd_observation). Training episodes are CrowdNav's training cases drawn per row
-(socialzoo.env.crowd_source); `reset` options {"split": "val"|"test", "case": k} or {"cases": [...]}
-play fixed cases (case_splits).
+a building among the benchmark's people (the Walls variant), or a scenario family's map among its
+scripted people (CrowdNavConfig.family: the guidelines' suite, socialzoo/CrowdNavSuite-v1). The task
+turns each action into the robot's command, advances the core `physics_substeps` world steps per
+decision, judges the step as CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach
+along every substep, the goal, the time limit), accumulates the episode metrics and builds each
+robot's joint-state observation (socialzoo.env.crowd_observation; with CrowdNavConfig.signals also
+each person's gesture and the nearest door). Training episodes are CrowdNav's training cases drawn
+per row (socialzoo.env.crowd_source); `reset` options {"split": "val"|"test", "case": k} or
+{"cases": [...]} play fixed cases (case_splits).
 
 CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a robot
 whose episode ended stands still where it is, and the row's episode lasts until every robot's has
@@ -28,16 +30,24 @@ from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.core import BatchedCore
 from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
-from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES, JointState, flat_size, joint_state
+from socialzoo.env.crowd_observation import (
+    JointState,
+    flat_size,
+    human_features,
+    joint_state,
+    robot_features,
+    with_signals,
+)
 from socialzoo.env.crowd_outcome import CrowdNavMetrics, closest_boundary_distance, judge_step
 from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
+from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import load_map
 from socialzoo.nav.local_planner import LocalPlannerConfig
-from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, CrowdCase, case_scenario
+from socialzoo.scenarios.crowd_cases import CrowdCase, case_scenario
 from socialzoo.scenarios.scenario import Scenario
 
 # The per-step info of a robot: its closest approach to anyone during the step (m, negative: an
@@ -62,13 +72,13 @@ def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> 
 
 def observation_space(config: CrowdNavConfig) -> spaces.Space:
     """One robot's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
-    h = config.observed_slots
+    h, signals = config.observed_slots, config.signals
     if config.observation == "flat":
-        return spaces.Box(-np.inf, np.inf, (flat_size(h),), np.float32)
+        return spaces.Box(-np.inf, np.inf, (flat_size(h, signals),), np.float32)
     return spaces.Dict(
         {
-            "robot": spaces.Box(-np.inf, np.inf, (len(ROBOT_FEATURES),), np.float32),
-            "humans": spaces.Box(-np.inf, np.inf, (h, len(HUMAN_FEATURES)), np.float32),
+            "robot": spaces.Box(-np.inf, np.inf, (len(robot_features(signals)),), np.float32),
+            "humans": spaces.Box(-np.inf, np.inf, (h, len(human_features(signals))), np.float32),
             "mask": spaces.MultiBinary(h),
         }
     )
@@ -185,14 +195,9 @@ class CrowdNavTask(Task):
 
     def case_splits(self) -> dict[str, int]:
         """CrowdNav's validation and test cases (100 and 500); among walls the map's validation
-        scenarios and its registered test set."""
-        if self.config.map is None:
-            return dict(SPLIT_SIZE)
-        from socialzoo.maps.map_file import load_map
-        from socialzoo.scenarios.scenario import get_test_set, validation_set
-
-        name = load_map(self.config.map).name
-        return {"val": len(validation_set(name)), "test": len(get_test_set(f"{name}-test"))}
+        scenarios and its registered test set; with a scenario family the family's own "val" and
+        "test" splits (socialzoo.env.crowd_source.CrowdCaseSource.case_sets)."""
+        return self.source.case_splits()
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """One decision step: the actions become commands, the world advances `physics_substeps`
@@ -418,7 +423,28 @@ class CrowdNavTask(Task):
         if guided:  # the goal distance is the route's length left, not the carrot's distance
             left = core.route_left if rows is None else core.route_left[rows]
             observation.robot[:, 0] = left.reshape(b * r)
+        if self.config.signals:
+            observation = self._with_signals(observation, robot_pos, offset, rows)
         return observation
+
+    def _with_signals(
+        self, observation: JointState, robot_pos: np.ndarray, goal_offset: np.ndarray, rows: np.ndarray | None
+    ) -> JointState:
+        """The joint state with each person slot's gesture and the nearest door, in the frame of
+        each robot (x towards the goal it sees; socialzoo.env.crowd_observation.with_signals)."""
+        core, script = self.core, self.core.script
+        pick = slice(None) if rows is None else rows
+        signal = np.zeros(observation.mask.shape)
+        signal[:, : core.max_humans] = core.per_robot(script.signal[pick])  # the people's slots come first
+        offset, closed = nearest_door(
+            robot_pos, core.per_robot(script.doors[pick]), core.per_robot(script.closed[pick])
+        )
+        angle = np.arctan2(goal_offset[:, 1], goal_offset[:, 0])
+        c, s = np.cos(angle), np.sin(angle)
+        door = np.stack(
+            (c * offset[:, 0] + s * offset[:, 1], c * offset[:, 1] - s * offset[:, 0], closed), axis=-1
+        )
+        return with_signals(observation, signal, door)
 
     def observations(self) -> Any:
         """(B, R, D) float32 flat joint states, or the dict layout of (B, R, ...) arrays."""
