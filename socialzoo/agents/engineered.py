@@ -20,6 +20,7 @@ from socialzoo.core.validation import check_fields, check_number
 from socialzoo.env.observation import (
     PAPER_TARGET,
     SLOT_POS,
+    observation_size,
     paper_human_velocity,
     paper_num_slots,
     paper_slot_seen,
@@ -183,6 +184,9 @@ class Ref:
         obs = check_observations(obs, "Ref.act")
         lead = obs.shape[:-1]
         layout = "paper" if task is None else task.config.observation.layout
+        if task is not None and getattr(task.config, "signals", False):
+            # Ref reads no signals: the layout's own numbers, before the signal block.
+            obs = obs[..., : observation_size(task.config.observation)]
         if layout == "paper":
             inputs = ref_inputs_from_paper_obs(obs.reshape(-1, obs.shape[-1]))
         else:

@@ -95,8 +95,8 @@ class SuiteConfig:
         batch_size: env rows stepped together per worker.
         replays: replay pages per scenario and policy of its first failed and of its first
             successful episodes, `replays` of each (0: none).
-        metrics: the tables' and heatmaps' metrics (registered names); empty: every registered
-            metric the episodes hold.
+        metrics: the tables' and heatmaps' metrics (registered names); empty: those of
+            HEADLINE_METRICS the episodes hold.
     """
 
     policies: tuple[str, ...] = ()
@@ -301,7 +301,6 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
             config refuses the family; a policy that does not act in the task; more seeds than the
             split holds.
     """
-    from socialzoo.agents import make_policy
     from socialzoo.bench.task_benchmark import config_hash
     from socialzoo.core.metrics import metric
 
@@ -312,6 +311,7 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
     units: list[SuiteUnit] = []
     notes: list[str] = []
     policies: dict[str, Any] = {}
+    blind: dict[str, bool] = {}
     for scenario in scenarios:
         task = suite_task(config.task, scenario)
         probe = _probe(task, scenario, {})
@@ -328,14 +328,17 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
             )
         for spec in config.policy_specs:
             if spec not in policies:
-                try:
-                    policies[spec] = make_policy(
-                        spec, task=probe.name, observation_space=probe.observation_space
+                policies[spec], blind[spec] = _suite_policy(spec, config.task, task, scenario, probe)
+                if blind[spec]:
+                    notes.append(
+                        f"{spec}: its observations have no signal block (it was trained without the "
+                        "suite's signals), so it plays with signals off: it does not see gestures or doors"
                     )
-                except ValueError as err:  # PolicyTaskError included
-                    raise SuiteError(f"--task {config.task}: {err}") from None
             policy = policies[spec]
-            overrides = dict(getattr(policy, "task_overrides", {}) or {})
+            overrides = {
+                **({"signals": False} if blind[spec] else {}),
+                **(getattr(policy, "task_overrides", {}) or {}),
+            }
             acting = _probe(task, scenario, overrides) if overrides else probe
             runner_set = scenario.name + (f" {json.dumps(overrides, sort_keys=True)}" if overrides else "")
             units.append(
@@ -356,6 +359,30 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
                 )
             )
     return units, notes
+
+
+def _suite_policy(
+    spec: str, task_name: str, task: TaskId, scenario: SuiteScenario, probe: Any
+) -> tuple[Any, bool]:
+    """(the policy of `spec` for the task, whether it plays with signals off): a learned policy whose
+    observations lack the suite ids' signal block (trained on a task without it) acts in the task
+    with signals off, where its observations are the ones it learned on.
+
+    Raises:
+        SuiteError: the policy acts in neither (named by make_policy's message).
+    """
+    from socialzoo.agents import make_policy
+
+    try:
+        return make_policy(spec, task=probe.name, observation_space=probe.observation_space), False
+    except ValueError as err:  # PolicyTaskError included
+        if not getattr(probe.config, "signals", False):
+            raise SuiteError(f"--task {task_name}: {err}") from None
+        plain = _probe(task, scenario, {"signals": False})
+        try:
+            return make_policy(spec, task=plain.name, observation_space=plain.observation_space), True
+        except ValueError:
+            raise SuiteError(f"--task {task_name}: {err}") from None
 
 
 def _probe(task: TaskId, scenario: SuiteScenario, overrides: Mapping[str, Any]) -> Any:
@@ -588,6 +615,7 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
             env_configs={name: u.config for name, u in sets.items()},
             policies={u.spec: {} for u in units},
             batch_size=config.batch_size,
+            guideline_metrics=True,  # every suite episode gets the guidelines' Table I metrics
         )
 
         def store_results(results: list[TrialResult]) -> None:
@@ -621,6 +649,27 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
     return len(trials)
 
 
+# The tables' and heatmaps' metrics unless chosen: the task's success and the guidelines' Table I
+# core (collisions, time, path, SPL, personal space, closest approach, time to collision, clearance).
+HEADLINE_METRICS = (
+    "success",
+    "collision",
+    "timeout",
+    "gl_success",
+    "gl_collisions",
+    "gl_timeout",
+    "gl_time_to_goal",
+    "gl_path_length",
+    "gl_spl",
+    "gl_stalled_time",
+    "gl_personal_space_compliance",
+    "gl_min_distance_to_human",
+    "gl_min_time_to_collision",
+    "gl_clearing_distance_min",
+    "gl_jerk_avg",
+)
+
+
 def suite_metrics(entries: Sequence[Mapping[str, Any]], chosen: Sequence[str] = ()) -> list[str]:
     """The metrics of the tables and heatmaps: `chosen` (in registry order), else every registered
     metric that every entry holds.
@@ -630,9 +679,10 @@ def suite_metrics(entries: Sequence[Mapping[str, Any]], chosen: Sequence[str] = 
     """
     from socialzoo.bench.tables import task_layout
 
-    held = list(task_layout(entries).metrics)
+    held = list(task_layout(entries, guidelines=True).metrics)
     if not chosen:
-        return held
+        headline = [m for m in held if m in HEADLINE_METRICS]
+        return headline or held
     missing = [m for m in chosen if m not in held]
     if missing:
         raise SuiteError(f"the episodes hold no metric {', '.join(missing)}; they hold {', '.join(held)}")

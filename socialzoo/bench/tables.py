@@ -188,10 +188,19 @@ def value_key(name: str) -> str:
 PAPER_LAYOUT = TableLayout(tuple(name for name, _ in TABLE_METRICS), paper=True)
 
 
-def task_layout(summary: Sequence[Mapping[str, Any]]) -> TableLayout:
+def task_layout(summary: Sequence[Mapping[str, Any]], guidelines: bool = False) -> TableLayout:
     """The layout of a task id's benchmark: every registered metric its entries all hold, in
-    registry order, one table with a column per metric."""
-    return TableLayout(tuple(n for n in METRICS if summary and all(value_key(n) in e for e in summary)))
+    registry order, one table with a column per metric; the guidelines' Table I metrics (`gl_*`,
+    in the store and its CSVs) only with `guidelines` (they would double the table's width)."""
+    return TableLayout(
+        tuple(
+            n
+            for n in METRICS
+            if summary
+            and all(value_key(n) in e for e in summary)
+            and (guidelines or "guidelines" not in METRICS[n].sources)
+        )
+    )
 
 
 def csv_columns() -> list[str]:

@@ -161,6 +161,7 @@ def evaluate_stored(
                 batch_size,
                 config=config,
                 on_episodes=store_episodes,
+                guideline_metrics=True,
             )
         rows = store.rows(policy=spec, test_set=test_set, config_hash=digest, indices=range(total))
     episodes = [

@@ -185,7 +185,10 @@ def test_metrics_are_those_every_entry_holds_or_those_chosen():
         {"policy": "ref", "map": "a", "success_rate": 1.0, "time_to_goal_mean": 9.0, "jerk_mean": 1.0},
         {"policy": "ref", "map": "b", "success_rate": 0.5, "time_to_goal_mean": math.nan},
     ]
-    assert suite_metrics(entries) == ["success", "time_to_goal"]
+    # Unless chosen: the headline metrics the entries hold, else everything they hold.
+    assert suite_metrics(entries) == ["success"]
+    without_headline = [{k: v for k, v in e.items() if k != "success_rate"} for e in entries]
+    assert suite_metrics(without_headline) == ["time_to_goal"]
     assert suite_metrics(entries, ("time_to_goal",)) == ["time_to_goal"]
     with pytest.raises(SuiteError, match="no metric jerk; they hold success, time_to_goal"):
         suite_metrics(entries, ("jerk",))
