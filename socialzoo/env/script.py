@@ -9,9 +9,10 @@ Rows without a script cost nothing; with no script in the batch nothing here run
 episodes are the world's exact steps.
 
 A waiting person slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled by
-the distance left) and stands within STOP_RADIUS of it; a person following a robot slows the same
-way within SLOW_DISTANCE of its gap and stands inside the gap. People's speed is capped at their
-preferred speed (socialzoo.humans.motion), so a standing person is not pushed about.
+the distance left) and stands within STOP_RADIUS of it (socialzoo.scenarios.script's constants); a
+person following a robot slows the same way within SLOW_DISTANCE of its gap and stands inside the
+gap. People's speed is capped at their preferred speed (socialzoo.humans.motion), so a standing
+person is not pushed about.
 """
 
 from __future__ import annotations
@@ -22,12 +23,8 @@ import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.scenarios.scenario import Scenario
-from socialzoo.scenarios.script import REACH, Script
+from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP_RADIUS, Script
 
-SLOW_DISTANCE = 1.0
-STOP_RADIUS = 0.15
-# A person within this distance of its stop point has reached it (its signal starts).
-ARRIVE_RADIUS = 0.5
 # A released person keeps signalling until it is this far from its stop point, m.
 SIGNAL_RADIUS = 3.0
 
@@ -52,6 +49,9 @@ class ScriptRunner:
         self.scripted = np.zeros(b, dtype=bool)
         self.stop = np.full((b, h), -1, dtype=np.int64)
         self.release = np.full((b, h), np.inf)
+        self.wait = np.full((b, h), np.inf)
+        # (B, H) when each person came to stand at its stop, s (inf: not yet).
+        self.reached_at = np.full((b, h), np.inf)
         self.gate = np.full((b, h, 4), np.nan)
         self.gesture = np.zeros((b, h), dtype=np.int8)
         self.follow = np.full((b, h), -1, dtype=np.int64)
@@ -91,12 +91,13 @@ class ScriptRunner:
             self.scripted[row] = script is not None
             self.released[row] = False
             self.reached[row] = False
+            self.reached_at[row] = np.inf
             self.signal[row] = 0
             if script is None:
                 script = Script.plain(0, self.escort.shape[1])
             n = script.num_humans
-            for name, fill in (("stop", -1), ("release", np.inf), ("gate", np.nan), ("gesture", 0),
-                               ("follow", -1), ("gap", 0.0)):  # fmt: skip
+            for name, fill in (("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
+                               ("gesture", 0), ("follow", -1), ("gap", 0.0)):  # fmt: skip
                 array = getattr(self, name)
                 array[row] = fill
                 array[row, :n] = getattr(script, name)
@@ -191,9 +192,13 @@ class ScriptRunner:
         route = state.human_route[rows]  # (k, H, L, 2)
         stop_point = np.take_along_axis(route, stop[..., None, None].repeat(2, -1), axis=2)[:, :, 0]
         close = np.hypot(*(stop_point - state.human_pos[rows]).transpose(2, 0, 1)) < ARRIVE_RADIUS
-        self.reached[rows] |= (
-            close & (self.stop[rows] >= 0) & (state.human_waypoint[rows] <= self.stop[rows] + 1)
-        )
+        at_stop = (self.stop[rows] >= 0) & (state.human_waypoint[rows] <= self.stop[rows] + 1)
+        self.reached[rows] |= close & at_stop
+        # The wait clock runs from when the person stands (within STOP_RADIUS, where it stops).
+        dist = np.hypot(*(stop_point - state.human_pos[rows]).transpose(2, 0, 1))
+        standing = (dist < STOP_RADIUS) & at_stop & np.isinf(self.reached_at[rows])
+        self.reached_at[rows] = np.where(standing, now, self.reached_at[rows])
+        self.released[rows] |= now >= self.reached_at[rows] + self.wait[rows]
         near = np.hypot(*(stop_point - state.human_pos[rows]).transpose(2, 0, 1)) < SIGNAL_RADIUS
         showing = self.reached[rows] & (~self.released[rows] | near) & state.human_mask[rows]
         self.signal[rows] = np.where(showing, self.gesture[rows], 0)

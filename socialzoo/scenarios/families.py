@@ -62,6 +62,12 @@ class LayoutFamily(ScenarioFamily):
         """The layout drawn from rng on map m."""
         raise NotImplementedError(f"{type(self).__name__}.layout")
 
+    def start_heading(self, route: np.ndarray, start: np.ndarray, goal: np.ndarray) -> float:
+        """The robot's start heading, rad: along the first leg of its planned route (however short:
+        the older families' rule, kept so that their seeded episodes stay as they were)."""
+        first_leg = route[min(1, len(route) - 1)] - start
+        return math.atan2(float(first_leg[1]), float(first_leg[0]))
+
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
         """The scenario of `seed` on map m (default: the family's map), drawn from default_rng(seed).
 
@@ -102,8 +108,7 @@ class LayoutFamily(ScenarioFamily):
         if lay.script is not None or stopping.any():
             script = Script.plain(n, 1, stop=stop_index, **(lay.script or {}))
         # The robot faces along the first leg of its route.
-        first_leg = paths[0, min(1, int(lengths[0]) - 1)] - lay.robot_start
-        heading = math.atan2(float(first_leg[1]), float(first_leg[0]))
+        heading = self.start_heading(paths[0, : int(lengths[0])], lay.robot_start, lay.robot_goal)
         return Scenario(
             map_name=m.name,
             seed=seed,
@@ -120,11 +125,23 @@ class LayoutFamily(ScenarioFamily):
         )
 
 
+# A first route leg shorter than this does not set a suite robot's start heading, m.
+MIN_LEG = 0.2
+
+
 class SuiteFamily(LayoutFamily):
     """A scenario of the guidelines' suite (socialzoo.scenarios.suite): a layout family with the
     suite's seed splits (validation 0-99, test 100-599, training from 1000)."""
 
     splits = SUITE_SPLITS
+
+    def start_heading(self, route: np.ndarray, start: np.ndarray, goal: np.ndarray) -> float:
+        """Along the route's first point at least MIN_LEG away (a leg of a few millimetres onto the
+        navigation graph says nothing of the way), else towards the goal."""
+        legs = route[1:] - start
+        long_enough = np.flatnonzero(np.hypot(legs[:, 0], legs[:, 1]) >= MIN_LEG)
+        way = legs[long_enough[0]] if len(long_enough) else goal - start
+        return math.atan2(float(way[1]), float(way[0]))
 
 
 def circle_point(cx: Any, cy: Any, radius: Any, angle: Any) -> tuple[Any, Any]:

@@ -3,9 +3,12 @@ robots, and doors that open and close on a schedule (the behaviours of the guide
 socialzoo.scenarios.suite). The world runs it (socialzoo.env.script).
 
 Per person:
-- stop, release, gate: the person walks its route to route point `stop` and waits there until
-  released: at world time `release` (s), or once any robot is past the gate line, whichever comes
-  first (a person released before it reaches its stop does not wait).
+- stop, release, wait, gate: the person walks its route to route point `stop` and waits there until
+  released: at world time `release` (s), `wait` seconds after it came to stand there, or once any
+  robot is past the gate line, whichever comes first (a person released before it reaches its stop
+  does not wait). It slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled
+  by the distance left) and stands within STOP_RADIUS of it; it has reached its stop within
+  ARRIVE_RADIUS.
 - gesture: what the person signals from reaching its stop until, released, it is 3 m past it
   (0 none, 1 WAIT: the robot should wait, 2 PROCEED: the robot may go first); the robot observes it.
 - follow, gap: the person walks after robot `follow` (its route is the robot's position) and stops
@@ -31,7 +34,12 @@ GESTURES = {"none": NO_GESTURE, "wait": WAIT, "proceed": PROCEED}
 REACH, FOLLOW, LEAD, ACCOMPANY = 0, 1, 2, 3
 ESCORT_KINDS = {"reach": REACH, "follow": FOLLOW, "lead": LEAD, "accompany": ACCOMPANY}
 
-_PERSON = ("stop", "release", "gate", "gesture", "follow", "gap")
+_PERSON = ("stop", "release", "wait", "gate", "gesture", "follow", "gap")
+
+# How a waiting (or following) person comes to a stop, m (see the module docstring).
+SLOW_DISTANCE = 1.0
+STOP_RADIUS = 0.15
+ARRIVE_RADIUS = 0.5
 _ROBOT = ("escort", "escort_kind", "band")
 
 
@@ -52,6 +60,7 @@ class Script:
     Attributes:
         stop: (n,) int route point where each person waits, -1 none.
         release: (n,) world time at which a waiting person walks on, s; inf: not by time.
+        wait: (n,) how long a person stands at its stop before walking on, s; inf: not by its own clock.
         gate: (n, 4) x, y, nx, ny: the person walks on once a robot is past this line
             (dot(robot - (x, y), (nx, ny)) > 0); NaN: no gate.
         gesture: (n,) int signal while waiting (NO_GESTURE, WAIT, PROCEED).
@@ -65,6 +74,7 @@ class Script:
 
     stop: np.ndarray
     release: np.ndarray
+    wait: np.ndarray
     gate: np.ndarray
     gesture: np.ndarray
     follow: np.ndarray
@@ -79,6 +89,7 @@ class Script:
         for name, dtype, shape in (
             ("stop", np.int64, (n,)),
             ("release", np.float64, (n,)),
+            ("wait", np.float64, (n,)),
             ("gate", np.float64, (n, 4)),
             ("gesture", np.int64, (n,)),
             ("follow", np.int64, (n,)),
@@ -91,11 +102,17 @@ class Script:
             object.__setattr__(self, name, _array(getattr(self, name), dtype, shape, name))
         if np.any(np.isnan(self.release)) or np.any(np.isnan(self.gap)) or np.any(self.gap < 0):
             raise ValueError("Script.release must not be NaN and Script.gap must be >= 0")
+        if np.any(np.isnan(self.wait)) or np.any(self.wait < 0):
+            raise ValueError("Script.wait must be >= 0 (inf: no waiting time of its own)")
         if not np.all(np.isin(self.gesture, list(GESTURES.values()))):
             raise ValueError(
                 f"Script.gesture must hold {sorted(GESTURES.values())}, got {self.gesture.tolist()}"
             )
-        if np.any(self.stop < -1) or np.any(self.follow < -1) or np.any((self.escort < -1) | (self.escort >= n)):
+        if (
+            np.any(self.stop < -1)
+            or np.any(self.follow < -1)
+            or np.any((self.escort < -1) | (self.escort >= n))
+        ):
             raise ValueError("Script.stop, follow and escort must be -1 or an index (escort: of a person)")
         if np.any(self.follow >= r):
             raise ValueError(f"Script.follow names robot {int(self.follow.max())}, the script has {r} robots")
@@ -116,6 +133,7 @@ class Script:
         base: dict[str, Any] = {
             "stop": np.full(n, -1),
             "release": np.full(n, np.inf),
+            "wait": np.full(n, np.inf),
             "gate": np.full((n, 4), np.nan),
             "gesture": np.zeros(n, dtype=np.int64),
             "follow": np.full(n, -1),

@@ -27,7 +27,7 @@ from socialzoo.scenarios.families import (
     _near,
     _speeds,
 )
-from socialzoo.scenarios.script import PROCEED, WAIT
+from socialzoo.scenarios.script import PROCEED, SLOW_DISTANCE, STOP_RADIUS, WAIT
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
@@ -472,8 +472,6 @@ def _signaller(
     before the robot's way, arriving when the robot is `robot_left` (uniform range) m from the
     centre, then crosses to the other end. Returns (the crossroads, the layout without its script,
     the time the person stands at its stop, nominally, s)."""
-    from socialzoo.env.script import SLOW_DISTANCE, STOP_RADIUS
-
     x = crossroads(m)
     cruise, lag = nominal_timing()
     to_centre = float(np.linalg.norm(x.centre - x.robot_start))
@@ -502,10 +500,10 @@ class IntersectionWait(SuiteFamily):
     def layout(self, m: Map, rng: np.random.Generator) -> Layout:
         """The robot along the main way; the person along the crossing way stops 1.2 m before the
         robot's way as the robot comes within 4-6 m of the centre, signals WAIT, and walks on 2-4 s
-        after its (nominal) arrival, released by time."""
-        _, lay, arrive = _signaller(self, m, rng, (4.0, 6.0))
-        release = arrive + rng.uniform(2.0, 4.0, size=1)
-        return _scripted(lay, {"release": release, "gesture": np.array([WAIT])})
+        after reaching its stop (the script's `wait`)."""
+        _, lay, _ = _signaller(self, m, rng, (4.0, 6.0))
+        wait = rng.uniform(2.0, 4.0, size=1)
+        return _scripted(lay, {"wait": wait, "gesture": np.array([WAIT])})
 
 
 class IntersectionProceed(SuiteFamily):

@@ -171,3 +171,19 @@ def test_a_malformed_script_is_a_named_error(fields, message):
 def test_a_script_for_another_head_count_is_refused():
     with pytest.raises(ValueError, match="script is for 2 people"):
         dataclasses.replace(_scenario({}), script=Script.plain(2, 1))
+
+
+def test_a_person_with_a_waiting_time_stands_that_long_at_its_stop_then_walks_on():
+    task = _task()
+    s = _scenario({"stop": [1], "wait": [2.0]})
+    rec = _run(
+        task, s, 600, action=1,
+        record=lambda c: (np.hypot(*c.state.human_vel[0, 0]), bool(c.script.released[0, 0])),
+    )  # fmt: skip
+    speed = np.array([v for v, _ in rec])
+    released = np.array([r for _, r in rec])
+    standing = np.flatnonzero(speed == 0.0)
+    first_still, walks_on = int(standing[0]), int(np.argmax(released))
+    # It stands from its arrival until 2 s later (the clock starts when it stands), then walks on.
+    assert abs((walks_on - first_still) * DT - 2.0) <= 2 * DT
+    assert speed[walks_on + 40] > 0.3

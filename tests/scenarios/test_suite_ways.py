@@ -246,7 +246,7 @@ def test_intersection_wait_the_person_stops_signals_wait_before_the_crossing_the
     # It crosses first where the robot waits: the robot is still short of the crossing.
     robot_along = x.along(rec.robot[crossed, np.arange(len(CASES)), :2])
     assert (robot_along[polite] < -x.cross_half_width).all()
-    assert all(0.0 < s.script.release[0] < 10.0 and s.script.gesture[0] == WAIT for s in rec.scenarios)
+    assert all(2.0 <= s.script.wait[0] <= 4.0 and s.script.gesture[0] == WAIT for s in rec.scenarios)
 
 
 def test_intersection_proceed_the_person_signals_proceed_and_crosses_only_after_the_robot_passed():
