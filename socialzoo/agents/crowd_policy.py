@@ -5,7 +5,9 @@ a JSON header), greedy: the most likely of CrowdNav's discrete actions, or the m
 The file's tensors: `attention.embed.*`, `attention.value.*`, `attention.score.*` (the pooling
 network), `policy.*` (the policy MLP on its features) and `action.weight`, `action.bias` (the
 action head: logits, or the mean action in [-1, 1]). Its header says the observation's person
-slots, the activation of the policy MLP, the action kind and the task's env id.
+slots and layout (header["observation"]["signals"]: true for the task's signals, 9 robot and 8
+person features, socialzoo.env.crowd_observation; a file without the key has CrowdNav's joint
+state, 6 and 7), the activation of the policy MLP, the action kind and the task's env id.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.env.crowd_observation import human_features, robot_features
 from socialzoo.env.crowd_variants import CROWD_ENV_VERSION
 from socialzoo.env.policy_file import (
     PolicyFileError,
@@ -27,7 +30,6 @@ from socialzoo.env.policy_file import (
 
 POLICY_NAME = "crowdnav"
 # The CrowdNav task's env ids carry their own version (socialzoo.env.crowd_variants).
-ROBOT_DIM, HUMAN_DIM = 6, 7
 _LAYER = re.compile(r"(?P<group>.+)\.(?P<index>\d+)\.(?P<kind>weight|bias)$")
 
 
@@ -62,10 +64,18 @@ class CrowdAttentionPolicy:
         network = header.get("network", {})
         try:
             self.slots = int(header["observation"]["slots"])
+            signals = header["observation"].get("signals", False)
             self.action_kind = str(network["action"])
             self.activation = str(network["activation"])
-        except (KeyError, TypeError, ValueError) as err:
+        except (AttributeError, KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{where}: the header lacks the crowd policy's shape ({err})") from None
+        if not isinstance(signals, bool):
+            raise PolicyFileError(
+                f"{where}: header observation.signals must be true or false, got {signals!r}"
+            )
+        self.signals = signals
+        self.robot_dim = len(robot_features(signals))
+        self.human_dim = len(human_features(signals))
         if self.action_kind not in ("discrete", "continuous") or self.activation not in ("tanh", "relu"):
             raise PolicyFileError(
                 f"{where}: unknown action {self.action_kind!r} or activation {self.activation!r}"
@@ -82,27 +92,34 @@ class CrowdAttentionPolicy:
             tensors["action.weight"].astype(np.float64).T,
             tensors["action.bias"].astype(np.float64),
         )
-        if self.embed[0][0].shape[0] != ROBOT_DIM + HUMAN_DIM:
-            raise PolicyFileError(f"{where}: the embedding takes {self.embed[0][0].shape[0]} inputs, not 13")
+        pair = self.robot_dim + self.human_dim
+        if self.embed[0][0].shape[0] != pair:
+            layout = "with" if signals else "without"
+            raise PolicyFileError(
+                f"{where}: the embedding takes {self.embed[0][0].shape[0]} inputs, not {pair} (the layout "
+                f"{layout} signals, header observation.signals)"
+            )
         self.header = header
 
     @property
     def task_overrides(self) -> dict[str, Any]:
-        """The task config it acts in: CrowdNav's discrete or continuous actions, as it was trained."""
-        return {"action": self.action_kind}
+        """The task config it acts in: CrowdNav's discrete or continuous actions, as it was trained
+        (and the signals, for a policy trained with them)."""
+        return {"action": self.action_kind, **({"signals": True} if self.signals else {})}
 
     @property
     def observation_size(self) -> int:
         """Length of the flat observation the policy reads."""
-        return ROBOT_DIM + (HUMAN_DIM + 1) * self.slots
+        return self.robot_dim + (self.human_dim + 1) * self.slots
 
     def features(self, obs: np.ndarray) -> np.ndarray:
-        """(N, 6 + value size) [robot state, attention-pooled crowd feature] of flat observations."""
-        n, h = obs.shape[0], self.slots
-        robot = obs[:, :ROBOT_DIM].astype(np.float64)
-        humans = obs[:, ROBOT_DIM : ROBOT_DIM + h * HUMAN_DIM].reshape(n, h, HUMAN_DIM).astype(np.float64)
-        mask = obs[:, ROBOT_DIM + h * HUMAN_DIM :] > 0.5
-        pairs = np.concatenate((np.broadcast_to(robot[:, None, :], (n, h, ROBOT_DIM)), humans), axis=-1)
+        """(N, R + value size) [robot state, attention-pooled crowd feature] of flat observations
+        (R: the robot's features, 6, with signals 9)."""
+        n, h, r, p = obs.shape[0], self.slots, self.robot_dim, self.human_dim
+        robot = obs[:, :r].astype(np.float64)
+        humans = obs[:, r : r + h * p].reshape(n, h, p).astype(np.float64)
+        mask = obs[:, r + h * p :] > 0.5
+        pairs = np.concatenate((np.broadcast_to(robot[:, None, :], (n, h, r)), humans), axis=-1)
         emb = mlp_forward(pairs, self.embed, "relu", activate_last=True)
         present = mask[..., None].astype(np.float64)
         crowd = (emb * present).sum(1, keepdims=True) / np.maximum(present.sum(1, keepdims=True), 1.0)

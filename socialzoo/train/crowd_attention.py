@@ -2,12 +2,13 @@
 as a Stable-Baselines3 features extractor.
 
 Each person's row of the joint state is paired with the robot's (a (6 + 7,) vector, SARL's rotated
-joint state), embedded by `embed` (an MLP), turned into a feature by `value`; an attention score
-comes from the embedding and the mean embedding of the crowd (SARL's global state); the scores are
-softmaxed over the present people only (the observation's mask) and weigh the features into one
-crowd feature; the extractor outputs [robot state, crowd feature]. With nobody present the crowd
-feature is 0. The network is permutation-invariant over the people and takes any head count up to
-the observation's slots.
+joint state; with the task's signals (9 + 8,): the nearest door in the robot part, the gesture in the
+person's, socialzoo.env.crowd_observation), embedded by `embed` (an MLP), turned into a feature by
+`value`; an attention score comes from the embedding and the mean embedding of the crowd (SARL's
+global state); the scores are softmaxed over the present people only (the observation's mask) and
+weigh the features into one crowd feature; the extractor outputs [robot state, crowd feature]. With
+nobody present the crowd feature is 0. The network is permutation-invariant over the people and
+takes any head count up to the observation's slots.
 
 socialzoo.agents.crowd_policy runs the same network in numpy from the exported weights.
 """
@@ -22,10 +23,7 @@ from gymnasium import spaces
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
-from socialzoo.env.crowd_observation import HUMAN_FEATURES, ROBOT_FEATURES
-
-ROBOT_DIM = len(ROBOT_FEATURES)
-HUMAN_DIM = len(HUMAN_FEATURES)
+from socialzoo.env.crowd_observation import human_features, robot_features
 
 
 def _mlp(sizes: Sequence[int], last_relu: bool) -> nn.Sequential:
@@ -45,25 +43,41 @@ class CrowdAttention(nn.Module):
         embed: hidden sizes of the embedding MLP (ReLU after every layer).
         value: hidden sizes of the feature MLP on the embedding (ReLU between layers).
         attention: hidden sizes of the score MLP (ReLU between layers; one score out).
+        signals: the observation's layout has the task's signals (CrowdNavConfig.signals: 9 robot
+            and 8 person features), else CrowdNav's joint state (6 and 7).
     """
 
     def __init__(
-        self, slots: int, embed: Sequence[int], value: Sequence[int], attention: Sequence[int]
+        self,
+        slots: int,
+        embed: Sequence[int],
+        value: Sequence[int],
+        attention: Sequence[int],
+        signals: bool = False,
     ) -> None:
         super().__init__()
         self.slots = slots
-        self.embed = _mlp([ROBOT_DIM + HUMAN_DIM, *embed], last_relu=True)
+        self.signals = signals
+        self.robot_dim = len(robot_features(signals))
+        self.human_dim = len(human_features(signals))
+        self.embed = _mlp([self.robot_dim + self.human_dim, *embed], last_relu=True)
         self.value = _mlp([embed[-1], *value], last_relu=False)
         self.score = _mlp([2 * embed[-1], *attention, 1], last_relu=False)
-        self.features_dim = ROBOT_DIM + value[-1]
+        self.features_dim = self.robot_dim + value[-1]
+
+    @property
+    def observation_size(self) -> int:
+        """Length of the flat observation it reads: robot, people row by row, mask."""
+        return self.robot_dim + (self.human_dim + 1) * self.slots
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        """(N, 6 + 8 H) flat observations -> (N, 6 + value[-1]) features."""
-        n, h = obs.shape[0], self.slots
-        robot = obs[:, :ROBOT_DIM]
-        humans = obs[:, ROBOT_DIM : ROBOT_DIM + h * HUMAN_DIM].reshape(n, h, HUMAN_DIM)
-        mask = obs[:, ROBOT_DIM + h * HUMAN_DIM :] > 0.5
-        pairs = torch.cat((robot[:, None, :].expand(n, h, ROBOT_DIM), humans), dim=-1)
+        """(N, R + (P + 1) H) flat observations -> (N, R + value[-1]) features (R, P: the robot's and
+        a person's features, 6 and 7, with signals 9 and 8)."""
+        n, h, r, p = obs.shape[0], self.slots, self.robot_dim, self.human_dim
+        robot = obs[:, :r]
+        humans = obs[:, r : r + h * p].reshape(n, h, p)
+        mask = obs[:, r + h * p :] > 0.5
+        pairs = torch.cat((robot[:, None, :].expand(n, h, r), humans), dim=-1)
         emb = self.embed(pairs)
         present = mask.to(emb.dtype)[..., None]
         count = present.sum(1, keepdim=True)
@@ -77,7 +91,7 @@ class CrowdAttention(nn.Module):
 
 class CrowdAttentionExtractor(BaseFeaturesExtractor):
     """SB3 features extractor around CrowdAttention (features_extractor_kwargs: slots, embed,
-    value, attention)."""
+    value, attention, signals)."""
 
     def __init__(
         self,
@@ -86,14 +100,15 @@ class CrowdAttentionExtractor(BaseFeaturesExtractor):
         embed: Sequence[int] = (64, 64),
         value: Sequence[int] = (64, 32),
         attention: Sequence[int] = (64,),
+        signals: bool = False,
     ) -> None:
-        expected = ROBOT_DIM + (HUMAN_DIM + 1) * slots
-        if observation_space.shape != (expected,):
+        net = CrowdAttention(slots, embed, value, attention, signals)
+        if observation_space.shape != (net.observation_size,):
+            layout = "with signals" if signals else "without signals"
             raise ValueError(
-                f"CrowdAttentionExtractor: {slots} slots need a flat ({expected},) observation, "
-                f"got {observation_space.shape}"
+                f"CrowdAttentionExtractor: {slots} slots {layout} need a flat ({net.observation_size},) "
+                f"observation, got {observation_space.shape}"
             )
-        net = CrowdAttention(slots, embed, value, attention)
         super().__init__(observation_space, net.features_dim)
         self.net = net
 

@@ -14,7 +14,15 @@ and a collision costing `collision_penalty` instead of the task's -0.25 (CrowdNa
 against +10 for the goal). Episodes are judged, and every reported metric computed, on the task's
 reward and outcomes alone.
 
+With --families (the guidelines' suite, socialzoo.scenarios.suite, or some of its scenarios) one
+learner trains on several scenario families at once: the task is the suite id's
+(socialzoo/CrowdNavSuite-v1, its kwargs read from Gymnasium's registry, so the learner trains on what
+the suite evaluates: among walls, signals on), one CrowdNavVectorEnv per family on the family's own
+map, side by side as one env (socialzoo.env.concat_vector.ConcatVectorEnv); each draws only its
+family's training seeds, and checkpoints are chosen on the families' validation splits.
+
     socialzoo train crowdnav --out runs/crowdnav --seed 0
+    socialzoo train crowdnav --families suite --out runs/suite_crowdnav --seed 0
 """
 
 from __future__ import annotations
@@ -27,9 +35,14 @@ from typing import Any, Literal
 import numpy as np
 
 from socialzoo.core.validation import check_int, check_number
+from socialzoo.env.crowd_variants import crowd_env_id
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
+# The id whose task --families trains on (socialzoo.env.registration.SUITE_IDS).
+SUITE_ID = crowd_env_id("Suite")
+# The CrowdNavConfig fields --families decides (each family on its own map).
+FAMILY_FIELDS = ("family", "map")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,8 +53,15 @@ class CrowdNavArgs:
         out: the run folder: run.json, checkpoints/, tensorboard/, crowdnav.safetensors.
         seed: seeds the network, SB3's sampling and the training cases.
         variant: the task's variant ("" CrowdNav's own; "20", "Unicycle", "Square", "Visible",
-            "SocialForce", "Walls": socialzoo.env.crowd_variants).
-        env_overrides: other CrowdNavConfig fields, as a JSON object.
+            "SocialForce", "Walls": socialzoo.env.crowd_variants); "" with families.
+        families: "" (the variant's own cases), "suite" (the guidelines' 25 scenarios) or a comma
+            list of suite names or Fig. 7 letters (socialzoo.scenarios.suite; any other registered
+            family by name): train on the suite id's task (socialzoo/CrowdNavSuite-v1: among walls,
+            signals on, 60 s, 20 person slots), one part of num_envs' rows per family, each on its
+            family's training seeds; checkpoints evaluated on eval_trials of the families'
+            validation cases, spread over them.
+        env_overrides: other CrowdNavConfig fields, as a JSON object (with families: on top of the
+            suite id's, except family and map).
         action: "discrete" (CrowdNav's 81 actions) or "continuous" (a velocity).
         total_steps: env steps (decisions) of training (CrowdNav's 5-person task: the default; the
             20-person arena, --variant 20: 8,192,000 passed 0.90 test success over three seeds,
@@ -67,7 +87,9 @@ class CrowdNavArgs:
             -1 here learned to collide about half as often in the same steps).
         eval_trials: evaluate every checkpoint on this many of the task's validation cases
             (evaluations.csv, TensorBoard eval/*) and keep the best one as the policy; 0: none
-            (the policy is the last checkpoint).
+            (the policy is the last checkpoint). With families: cases 0, 1, ... of each family's
+            validation split, eval_trials in all (at most 100 per family), spread as evenly as
+            possible (the first families take one more).
         threads: torch CPU threads.
         progress: show progress.
     """
@@ -75,6 +97,7 @@ class CrowdNavArgs:
     out: Path = Path("runs/crowdnav")
     seed: int = 0
     variant: str = ""
+    families: str = ""
     env_overrides: dict[str, Any] = field(default_factory=dict)
     action: Literal["discrete", "continuous"] = "discrete"
     total_steps: int = 2_048_000
@@ -118,7 +141,13 @@ class CrowdNavArgs:
         ):
             check_int("CrowdNavArgs", name, getattr(self, name), low=1)
         check_int("CrowdNavArgs", "seed", self.seed, low=0)
-        check_int("CrowdNavArgs", "eval_trials", self.eval_trials, low=0, high=100)
+        families = self.family_names()
+        check_int("CrowdNavArgs", "eval_trials", self.eval_trials, low=0, high=100 * max(1, len(families)))
+        if families and self.num_envs < len(families):
+            raise ValueError(
+                f"CrowdNavArgs.num_envs ({self.num_envs}) must be at least the number of families "
+                f"({len(families)}): each family's part needs a row"
+            )
         for name, low, high in (
             ("learning_rate", 0.0, 1.0),
             ("gamma", 0.0, 1.0),
@@ -141,16 +170,101 @@ class CrowdNavArgs:
                     f"num_envs * n_steps ({rollout})"
                 )
         try:
-            self.task()
+            self.tasks()
         except (TypeError, ValueError) as err:
             raise ValueError(f"CrowdNavArgs: bad task ({err})") from None
 
-    def task(self) -> Any:
-        """The task's CrowdNavConfig: the variant, the overrides, the action kind, a flat observation."""
+    def family_names(self) -> tuple[str, ...]:
+        """The families of --families, registry names in the order given (() without).
+
+        Raises:
+            ValueError: an unknown or repeated name, or families with a variant.
+        """
+        if not isinstance(self.families, str):
+            raise ValueError(f"CrowdNavArgs.families must be a string, got {self.families!r}")
+        spec = self.families.strip()
+        if not spec:
+            return ()
+        from socialzoo.scenarios.catalogue import FAMILIES
+        from socialzoo.scenarios.suite import SUITE_NAMES, suite_entry
+
+        if self.variant:
+            raise ValueError(
+                f"CrowdNavArgs.families: the families play the suite id's task ({SUITE_ID}); "
+                f"leave variant empty (got {self.variant!r}) and change its fields with env_overrides"
+            )
+        if spec == "suite":
+            return SUITE_NAMES
+        names: list[str] = []
+        for word in (w.strip() for w in spec.split(",")):
+            try:
+                name = suite_entry(word).family
+            except KeyError:
+                if word not in FAMILIES:
+                    raise ValueError(
+                        f"CrowdNavArgs.families: unknown family {word!r}; give 'suite' or suite names or "
+                        f"letters ({', '.join(SUITE_NAMES)}) or registered families"
+                    ) from None
+                name = word
+            if name in names:
+                raise ValueError(f"CrowdNavArgs.families names {name!r} twice")
+            names.append(name)
+        return tuple(names)
+
+    @property
+    def env_id(self) -> str:
+        """The id of the task trained on: the variant's, or with families the suite id."""
+        return SUITE_ID if self.family_names() else crowd_env_id(self.variant)
+
+    def task(self, family: str | None = None) -> Any:
+        """The task's CrowdNavConfig: the variant, the overrides, the action kind, a flat observation;
+        with families the suite id's task playing `family` (default the first).
+
+        Raises:
+            ValueError: a family without families, or one not among them.
+        """
         from socialzoo.env.crowd_config import CrowdNavConfig
 
         overrides = {**dict(self.env_overrides), "action": self.action, "observation": "flat"}
-        return CrowdNavConfig.variant(self.variant, **overrides)
+        families = self.family_names()
+        if not families:
+            if family is not None:
+                raise ValueError(f"CrowdNavArgs.task: family {family!r} asked of a run without families")
+            return CrowdNavConfig.variant(self.variant, **overrides)
+        if family is None:
+            family = families[0]
+        if family not in families:
+            raise ValueError(f"CrowdNavArgs.task: {family!r} is not one of the run's families {families}")
+        taken = sorted(set(FAMILY_FIELDS) & set(self.env_overrides))
+        if taken:
+            raise ValueError(
+                f"CrowdNavArgs.env_overrides: {taken} are decided by the families (each plays on its own map)"
+            )
+        kwargs = suite_kwargs()
+        variant = kwargs.pop("variant", "")
+        return CrowdNavConfig.variant(variant, **{**kwargs, **overrides, "family": family, "map": None})
+
+    def tasks(self) -> list[Any]:
+        """The config of each family (the one task without families)."""
+        return [self.task(f) for f in self.family_names()] or [self.task()]
+
+    def rows(self) -> list[int]:
+        """The training env's rows of each family: num_envs split as evenly as possible, the first
+        families taking one more ([num_envs] without families)."""
+        k = max(1, len(self.family_names()))
+        return [self.num_envs // k + (i < self.num_envs % k) for i in range(k)]
+
+
+def suite_kwargs() -> dict[str, Any]:
+    """The CrowdNavConfig fields of the suite id (SUITE_ID) as Gymnasium's registry holds them
+    (`variant` among them; without `task`)."""
+    import gymnasium as gym
+
+    import socialzoo  # noqa: F401  (registers the ids)
+
+    kwargs = dict(gym.spec(SUITE_ID).kwargs)
+    kwargs.pop("task", None)
+    return kwargs
 
 
 def training_reward(venv: Any, progress: float, collision_extra: float) -> Any:
@@ -187,16 +301,31 @@ def train(args: CrowdNavArgs) -> Path:
     return run_training(TRAINER, args, lambda run: _fit(run, args), evaluator=evaluator)
 
 
+def validation_cases(args: CrowdNavArgs) -> list[tuple[Any, int]]:
+    """(task config, cases) of each checkpoint evaluation: the first eval_trials validation cases,
+    or with families eval_trials cases spread over the families' validation splits (cases 0, 1, ...
+    of each; the first families take one more; a family left with none is skipped)."""
+    tasks = args.tasks()
+    k, n = len(tasks), args.eval_trials
+    counts = [n // k + (i < n % k) for i in range(k)]
+    return [(task, count) for task, count in zip(tasks, counts, strict=True) if count]
+
+
 def _validation(args: CrowdNavArgs) -> Any:
-    """A checkpoint evaluator on the first eval_trials validation cases (success first)."""
+    """A checkpoint evaluator on the validation cases of `validation_cases` (success first), the
+    metrics over all of them."""
+    plan = validation_cases(args)
 
     def evaluate(path: Path) -> dict[str, float]:
         from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
         from socialzoo.bench.crowd_eval import evaluate_crowd
+        from socialzoo.bench.task_benchmark import summarize
 
         policy = CrowdAttentionPolicy.load(path)
-        result = evaluate_crowd(lambda obs, core: policy.act(obs), args.task(), "val", args.eval_trials)
-        s = result.summary
+        episodes = []
+        for task, cases in plan:
+            episodes += evaluate_crowd(lambda obs, core: policy.act(obs), task, "val", cases).episodes
+        s = summarize(episodes)
         keys = ("success_rate", "collision_rate", "timeout_rate", "navigation_time", "discounted_return")
         return {k.removesuffix("_rate"): float(s[k]) for k in keys}
 
@@ -209,13 +338,21 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
 
+    from socialzoo.env.concat_vector import ConcatVectorEnv
     from socialzoo.env.sb3_vec import SB3VecEnv
     from socialzoo.env.vector import CrowdNavVectorEnv
     from socialzoo.train.crowd_attention import CrowdAttentionExtractor
     from socialzoo.train.sb3_common import learn_with_checkpoints
 
     task = args.task()
-    venv: Any = VecMonitor(SB3VecEnv(args.num_envs, vector_env=CrowdNavVectorEnv(args.num_envs, task)))
+    families = args.family_names()
+    if families:
+        # One part per family, each its own world on its own map; the rows end to end.
+        parts = [CrowdNavVectorEnv(n, config) for n, config in zip(args.rows(), args.tasks(), strict=True)]
+        vector_env: Any = ConcatVectorEnv(parts)
+    else:
+        vector_env = CrowdNavVectorEnv(args.num_envs, task)
+    venv: Any = VecMonitor(SB3VecEnv(args.num_envs, vector_env=vector_env))
     venv = training_reward(venv, args.progress_reward, args.collision_penalty - task.reward.collision_penalty)
     model = PPO(
         "MlpPolicy",
@@ -239,6 +376,7 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
                 "embed": args.embed,
                 "value": args.value,
                 "attention": args.attention,
+                "signals": task.signals,
             },
         },
         seed=args.seed,
@@ -261,8 +399,18 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
         "env_steps": steps,
         "env_steps_per_second": round(steps / run.seconds, 1),
         "kept_checkpoint": str(kept.relative_to(run.path)),
+        "env_id": args.env_id,
         "task": task.to_dict(),
+        **_family_record(args),
     }
+
+
+def _family_record(args: CrowdNavArgs) -> dict[str, Any]:
+    """What the run record and the policy header say of --families (nothing without)."""
+    families = args.family_names()
+    if not families:
+        return {}
+    return {"families": list(families), "family_rows": dict(zip(families, args.rows(), strict=True))}
 
 
 def crowd_tensors(model: Any) -> dict[str, Any]:
@@ -278,14 +426,13 @@ def crowd_tensors(model: Any) -> dict[str, Any]:
 def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> Any:
     """The numpy policy (header and all) of an SB3 PPO model trained on `task`."""
     from socialzoo.agents.crowd_policy import POLICY_NAME, CrowdAttentionPolicy
-    from socialzoo.env.crowd_variants import crowd_env_id
 
     tensors = {k: v.detach().cpu().numpy() for k, v in crowd_tensors(model).items()}
     args = run.args
     header = {
         "policy": POLICY_NAME,
-        "env_id": crowd_env_id(args.variant),
-        "observation": {"kind": "flat", "slots": task.observed_slots},
+        "env_id": args.env_id,
+        "observation": {"kind": "flat", "slots": task.observed_slots, "signals": task.signals},
         "network": {
             "action": task.action,
             "activation": "tanh",
@@ -302,6 +449,7 @@ def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> A
             "command": run.record["command"],
             "args": run.record["args"],
             "task": task.to_dict(),
+            **_family_record(args),
         },
     }
     return CrowdAttentionPolicy(tensors, header)

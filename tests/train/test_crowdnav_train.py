@@ -59,3 +59,64 @@ def test_bad_arguments_are_refused():
     assert np.isclose(
         CrowdNavArgs(**TINY).task().reward.collision_penalty, -0.25
     )  # the task keeps CrowdNav's
+
+
+def test_a_tiny_run_on_two_suite_families_acts_on_the_suite_ids_observations(tmp_path):
+    import gymnasium as gym
+
+    from socialzoo.env.policy_file import read_policy_file
+    from socialzoo.train.crowdnav import SUITE_ID
+
+    args = CrowdNavArgs(
+        out=tmp_path / "run",
+        families="a,narrow_doorway",
+        total_steps=64,
+        checkpoint_every=64,
+        eval_trials=2,
+        progress=False,
+        **{**TINY, "n_steps": 8},
+    )
+    assert args.family_names() == ("frontal_approach", "narrow_doorway") and args.rows() == [2, 2]
+    policy_file = train(args)
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["results"]["families"] == ["frontal_approach", "narrow_doorway"]
+    assert record["results"]["env_id"] == SUITE_ID and record["args"]["families"] == "a,narrow_doorway"
+    _, header = read_policy_file(policy_file, check_env_version=False)
+    assert header["env_id"] == SUITE_ID and header["observation"]["signals"] is True
+    assert header["training"]["families"] == ["frontal_approach", "narrow_doorway"]
+    for family in args.family_names():
+        env = gym.make(SUITE_ID, family=family, action="discrete")
+        policy = make_policy(
+            f"crowdnav:{policy_file}", task="crowdnav", observation_space=env.observation_space
+        )
+        obs, _ = env.reset(seed=0)
+        for _ in range(3):
+            action = policy.act(obs[None])
+            assert action.shape == (1,) and 0 <= action[0] < 81
+            obs, *_ = env.step(int(action[0]))
+        env.close()
+
+
+def test_families_are_resolved_split_and_checked():
+    from socialzoo.scenarios.suite import SUITE_NAMES
+    from socialzoo.train.crowdnav import validation_cases
+
+    suite = CrowdNavArgs(families="suite", num_envs=64, **{k: v for k, v in TINY.items() if k != "num_envs"})
+    assert suite.family_names() == SUITE_NAMES and suite.env_id == "socialzoo/CrowdNavSuite-v1"
+    assert sum(suite.rows()) == 64 and set(suite.rows()) == {2, 3} and suite.rows()[0] == 3
+    counts = [cases for _, cases in validation_cases(suite)]
+    assert sum(counts) == 100 and set(counts) == {4}
+    task = suite.task("blind_corner")
+    assert task.family == "blind_corner" and task.signals and task.max_humans == 20 and task.time_limit == 60
+    few = CrowdNavArgs(families="a, b ,c", eval_trials=2, **TINY)
+    assert [t.family for t, _ in validation_cases(few)] == ["frontal_approach", "pedestrian_obstruction"]
+    with pytest.raises(ValueError, match=r"num_envs \(4\) must be at least the number of families \(25\)"):
+        CrowdNavArgs(families="suite", **TINY)
+    with pytest.raises(ValueError, match="unknown family 'moon'"):
+        CrowdNavArgs(families="a,moon", **TINY)
+    with pytest.raises(ValueError, match="twice"):
+        CrowdNavArgs(families="a,frontal_approach", **TINY)
+    with pytest.raises(ValueError, match="leave variant empty"):
+        CrowdNavArgs(families="a", variant="Walls", **TINY)
+    with pytest.raises(ValueError, match="decided by the families"):
+        CrowdNavArgs(families="a", env_overrides={"map": "gdc1"}, **TINY)
