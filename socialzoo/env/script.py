@@ -50,6 +50,7 @@ class ScriptRunner:
         self.stop = np.full((b, h), -1, dtype=np.int64)
         self.release = np.full((b, h), np.inf)
         self.wait = np.full((b, h), np.inf)
+        self.stay = np.zeros((b, h), dtype=bool)
         # (B, H) when each person came to stand at its stop, s (inf: not yet).
         self.reached_at = np.full((b, h), np.inf)
         self.gate = np.full((b, h, 4), np.nan)
@@ -97,7 +98,7 @@ class ScriptRunner:
                 script = Script.plain(0, self.escort.shape[1])
             n = script.num_humans
             for name, fill in (("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
-                               ("gesture", 0), ("follow", -1), ("gap", 0.0)):  # fmt: skip
+                               ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False)):  # fmt: skip
                 array = getattr(self, name)
                 array[row] = fill
                 array[row, :n] = getattr(script, name)
@@ -121,14 +122,16 @@ class ScriptRunner:
         stop point and following people near their robot (the state's own where nothing waits)."""
         pref = state.human_pref_speed
         waiting = self._waiting(state)
+        staying = self.stay & state.human_mask & self.scripted[:, None]
         following = (self.follow >= 0) & state.human_mask & self.scripted[:, None]
-        if not (waiting.any() or following.any()):
+        if not (waiting.any() or staying.any() or following.any()):
             return pref
         target = state.human_target
         dist = np.hypot(*(target - state.human_pos).transpose(2, 0, 1))
         factor = np.ones(pref.shape)
         at_stop = np.clip(dist / SLOW_DISTANCE, 0.0, 1.0) * (dist >= STOP_RADIUS)
-        factor = np.where(waiting & (state.human_waypoint == self.stop), at_stop, factor)
+        at_end = staying & ~waiting & (state.human_waypoint == state.human_route_len - 1)
+        factor = np.where((waiting & (state.human_waypoint == self.stop)) | at_end, at_stop, factor)
         at_gap = np.clip((dist - self.gap) / SLOW_DISTANCE, 0.0, 1.0)
         factor = np.where(following, at_gap, factor)
         return pref * factor
@@ -143,7 +146,7 @@ class ScriptRunner:
         after.human_pref_speed = before.human_pref_speed
         rows = np.flatnonzero(self.scripted)
         self._update(after, rows)
-        self._hold_waypoints(after, rows)
+        self._hold_waypoints(after, rows, before)
         self._follow_routes(after, rows)
         return self.door_contacts(after)
 
@@ -205,12 +208,22 @@ class ScriptRunner:
         doors = self.doors[rows]
         self.closed[rows] = (now < doors[..., 4]) | (now >= doors[..., 5])
 
-    def _hold_waypoints(self, state: WorldState, rows: np.ndarray) -> None:
+    def _hold_waypoints(self, state: WorldState, rows: np.ndarray, before: WorldState | None = None) -> None:
         """Waiting people who reached their stop keep heading for it (the world advances a waypoint
-        within its reach radius, short of the stop point itself)."""
-        waiting = self._waiting(state)[rows] & (state.human_waypoint[rows] > self.stop[rows])
-        if waiting.any():
-            state.human_waypoint[rows] = np.where(waiting, self.stop[rows], state.human_waypoint[rows])
+        within its reach radius, short of the stop point itself, and turns a person round at its
+        route's end), and people who stay keep heading for their route's end."""
+        waypoint, direction = state.human_waypoint[rows], state.human_direction[rows]
+        stop = self.stop[rows]
+        left = waypoint > stop
+        if before is not None:  # it headed for its stop before the step (the world moved it on, or back)
+            left |= (before.human_waypoint[rows] == stop) & (waypoint != stop)
+        waiting = self._waiting(state)[rows] & left
+        last = state.human_route_len[rows] - 1
+        staying = self.stay[rows] & ~self._waiting(state)[rows] & ((direction < 0) | (waypoint > last))
+        if waiting.any() or staying.any():
+            target = np.where(waiting, stop, np.where(staying, last, waypoint))
+            state.human_waypoint[rows] = target
+            state.human_direction[rows] = np.where(waiting | staying, 1, direction)
 
     def _follow_routes(self, state: WorldState, rows: np.ndarray) -> None:
         """The route of each person who follows a robot: the robot's position (every route point)."""

@@ -9,6 +9,8 @@ Per person:
   does not wait). It slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled
   by the distance left) and stands within STOP_RADIUS of it; it has reached its stop within
   ARRIVE_RADIUS.
+- stay: the person stays at the end of its route once there (instead of walking it back), as it
+  stands at a stop (after a stop too: someone who waits in a lobby, then enters a car and stays).
 - gesture: what the person signals from reaching its stop until, released, it is 3 m past it
   (0 none, 1 WAIT: the robot should wait, 2 PROCEED: the robot may go first); the robot observes it.
 - follow, gap: the person walks after robot `follow` (its route is the robot's position) and stops
@@ -34,7 +36,7 @@ GESTURES = {"none": NO_GESTURE, "wait": WAIT, "proceed": PROCEED}
 REACH, FOLLOW, LEAD, ACCOMPANY = 0, 1, 2, 3
 ESCORT_KINDS = {"reach": REACH, "follow": FOLLOW, "lead": LEAD, "accompany": ACCOMPANY}
 
-_PERSON = ("stop", "release", "wait", "gate", "gesture", "follow", "gap")
+_PERSON = ("stop", "release", "wait", "gate", "gesture", "follow", "gap", "stay")
 
 # How a waiting (or following) person comes to a stop, m (see the module docstring).
 SLOW_DISTANCE = 1.0
@@ -66,6 +68,7 @@ class Script:
         gesture: (n,) int signal while waiting (NO_GESTURE, WAIT, PROCEED).
         follow: (n,) int robot the person walks after, -1 none.
         gap: (n,) distance a following person keeps to its robot, m.
+        stay: (n,) bool, the person stays at its route's end once there.
         escort: (R,) int person each robot escorts, -1 none.
         escort_kind: (R,) int REACH (no escort), FOLLOW, LEAD or ACCOMPANY.
         band: (R, 2) the escorted person's distance band at the goal, m.
@@ -79,6 +82,7 @@ class Script:
     gesture: np.ndarray
     follow: np.ndarray
     gap: np.ndarray
+    stay: np.ndarray
     escort: np.ndarray
     escort_kind: np.ndarray
     band: np.ndarray
@@ -94,6 +98,7 @@ class Script:
             ("gesture", np.int64, (n,)),
             ("follow", np.int64, (n,)),
             ("gap", np.float64, (n,)),
+            ("stay", np.bool_, (n,)),
             ("escort", np.int64, (r,)),
             ("escort_kind", np.int64, (r,)),
             ("band", np.float64, (r, 2)),
@@ -138,6 +143,7 @@ class Script:
             "gesture": np.zeros(n, dtype=np.int64),
             "follow": np.full(n, -1),
             "gap": np.zeros(n),
+            "stay": np.zeros(n, dtype=bool),
             "escort": np.full(r, -1),
             "escort_kind": np.zeros(r, dtype=np.int64),
             "band": np.zeros((r, 2)),
@@ -171,7 +177,7 @@ class Script:
     def to_json(self) -> dict[str, Any]:
         """JSON-ready lists; JSON has no inf or NaN, so they are the strings "inf" and "nan"."""
         arrays = {k: getattr(self, k) for k in (*_PERSON, *_ROBOT, "doors")}
-        return {k: a.tolist() if a.dtype.kind == "i" else _floats(a) for k, a in arrays.items()}
+        return {k: a.tolist() if a.dtype.kind in "ib" else _floats(a) for k, a in arrays.items()}
 
     @classmethod
     def from_json(cls, data: Any) -> Script:

@@ -187,3 +187,17 @@ def test_a_person_with_a_waiting_time_stands_that_long_at_its_stop_then_walks_on
     # It stands from its arrival until 2 s later (the clock starts when it stands), then walks on.
     assert abs((walks_on - first_still) * DT - 2.0) <= 2 * DT
     assert speed[walks_on + 40] > 0.3
+
+
+def test_a_stop_at_the_routes_end_holds_and_a_person_who_stays_stays():
+    task = _task()
+    pos = lambda c: c.state.human_pos[0, 0].copy()  # noqa: E731
+    # A stop at the last route point (index 2): the world would turn the person back there.
+    held = _run(task, _scenario({"stop": [2]}), 900, action=1, record=pos)
+    assert abs(held[-1][0] - 25.0) < 0.3 and abs(held[600][0] - 25.0) < 0.3
+    # Released at its start after 1 s, it walks to its route's end and stays there.
+    stays = _run(task, _scenario({"stop": [0], "release": [1.0], "stay": [True]}), 900, action=1, record=pos)
+    assert abs(stays[-1][0] - 25.0) < 0.3
+    # Without stay it walks its route back.
+    back = _run(task, _scenario({"stop": [0], "release": [1.0]}), 900, action=1, record=pos)
+    assert back[-1][0] < 24.0
