@@ -395,6 +395,7 @@ class EnteringRoom(SuiteFamily):
             script={
                 "release": np.concatenate((release, np.full(n - 1, np.inf))),
                 "gate": np.vstack((gate, np.full((n - 1, 4), np.nan))),
+                "stay": np.ones(n, dtype=bool),  # the leaver stays out in the corridor
             },
         )
 
@@ -573,7 +574,12 @@ class EnteringElevator(SuiteFamily):
             np.vstack((leave_goal, back[corner])),
             speed,
             human_stop=starts.copy(),
-            script={"release": np.concatenate((release_out, release_in)), "doors": doors},
+            # Those leaving stay in the lobby, those entering in the car.
+            script={
+                "release": np.concatenate((release_out, release_in)),
+                "doors": doors,
+                "stay": np.ones(len(speed), dtype=bool),
+            },
         )
 
 
@@ -617,5 +623,9 @@ class ExitingElevator(SuiteFamily):
             goals,
             _speeds(rng, n),
             human_stop=waiting.copy(),
-            script={"release": t_open + rng.uniform(2.0, 3.0, n), "doors": doors},
+            script={
+                "release": t_open + rng.uniform(2.0, 3.0, n),
+                "doors": doors,
+                "stay": np.ones(n, dtype=bool),
+            },
         )
