@@ -376,3 +376,20 @@ def test_a_partial_reset_keeps_the_other_rows_signals_layout():
     again, _ = vec.reset(options={"reset_mask": np.array([True, False])})
     np.testing.assert_array_equal(again[1], obs[1])
     assert again.shape == obs.shape
+
+
+@pytest.mark.parametrize("env_id", ["socialzoo/Suite-v2", "socialzoo/CrowdNavSuite-v1"])
+def test_both_tasks_play_every_suite_scenario(env_id):
+    """25 of 25: each family's first test case resets and steps in both tasks, with signals."""
+    from socialzoo.scenarios.suite import SUITE_NAMES
+
+    for name in SUITE_NAMES:
+        env = gym.make(env_id, family=name)
+        obs, info = env.reset(seed=0, options={"split": "test", "cases": [0]})
+        assert env.observation_space.contains(obs), name
+        for _ in range(5):
+            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            assert np.all(np.isfinite(reward)), name
+            if terminated or truncated:
+                break
+        env.close()
