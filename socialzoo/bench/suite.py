@@ -93,8 +93,8 @@ class SuiteConfig:
         address: Ray cluster address (Ray backend); None starts a local Ray.
         workers: local processes, or Ray chunks (None: one per cluster CPU).
         batch_size: env rows stepped together per worker.
-        replays: replay pages per scenario and policy of its first failed and of its first
-            successful episodes, `replays` of each (0: none).
+        replays: replay pages per scenario and policy: its first failed episodes, then its first
+            successful ones, `replays` in all (0: none).
         metrics: the tables' and heatmaps' metrics (registered names); empty: those of
             HEADLINE_METRICS the episodes hold.
     """
@@ -690,11 +690,11 @@ def suite_metrics(entries: Sequence[Mapping[str, Any]], chosen: Sequence[str] = 
 
 
 def replay_choices(episodes: Sequence[Mapping[str, Any]], count: int) -> list[Mapping[str, Any]]:
-    """The episodes to replay: the first `count` failed and the first `count` successful ones, in
-    case order."""
-    failed = [e for e in episodes if not bool(e["success"])][:count]
-    succeeded = [e for e in episodes if bool(e["success"])][:count]
-    return sorted(failed + succeeded, key=lambda e: int(e["case"]))
+    """The `count` episodes to replay: the failed ones first (the policy's mistakes are what a reader
+    looks for), then successful ones to make up the count; in case order."""
+    failed = [e for e in episodes if not bool(e["success"])]
+    succeeded = [e for e in episodes if bool(e["success"])]
+    return sorted((failed + succeeded)[:count], key=lambda e: int(e["case"]))
 
 
 def _slug(text: str) -> str:

@@ -85,14 +85,14 @@ def register(subparsers: Any) -> None:
         "--replays",
         type=_count,
         default=1,
-        help="replay pages per scenario and policy: its first K failed and first K successful episodes "
+        help="replay pages per scenario and policy: its first K episodes, failed ones first "
         "(default 1; 0: none)",
     )
     parser.add_argument(
         "--metrics",
         type=_names,
         default=None,
-        help="comma-separated metrics of the tables and heatmaps (default: every metric the episodes hold)",
+        help="comma-separated metrics of the tables and heatmaps (default: the headline metrics the episodes hold)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run_suite_command)

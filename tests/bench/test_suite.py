@@ -173,10 +173,12 @@ def test_run_stores_resumes_and_equals_the_task_benchmarks_episodes(tmp_path):
     assert (more.played, more.reused) == (4, 8)
 
 
-def test_replays_are_the_first_failures_and_successes_in_case_order():
+def test_replays_are_the_failures_first_then_successes_in_case_order():
     episodes = [{"case": k, "success": s} for k, s in enumerate([True, False, True, False, False])]
-    assert [e["case"] for e in replay_choices(episodes, 1)] == [0, 1]
-    assert [e["case"] for e in replay_choices(episodes, 2)] == [0, 1, 2, 3]
+    assert [e["case"] for e in replay_choices(episodes, 1)] == [1]
+    assert [e["case"] for e in replay_choices(episodes, 2)] == [1, 3]
+    assert [e["case"] for e in replay_choices(episodes, 4)] == [0, 1, 3, 4]
+    assert [e["case"] for e in replay_choices(episodes[:1], 3)] == [0]
     assert replay_choices(episodes, 0) == []
 
 
