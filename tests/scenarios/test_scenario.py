@@ -381,10 +381,11 @@ def make_family_scenario(name: str, m: Map, seed: int) -> Scenario:
 MAP_FAMILIES = [name for name in sorted(FAMILIES) if isinstance(get_family(name), LayoutFamily)]
 
 
-def test_the_six_map_families_are_registered() -> None:
-    assert MAP_FAMILIES == sorted(
-        ["hallway_head_on", "overtaking", "crossing", "doorway", "circle_crossing", "parallel_traffic"]
-    )
+def test_the_map_families_are_the_six_older_ones_and_the_suites_25() -> None:
+    from socialzoo.scenarios.suite import SUITE_NAMES
+
+    older = ["hallway_head_on", "overtaking", "crossing", "doorway", "circle_crossing", "parallel_traffic"]
+    assert MAP_FAMILIES == sorted(older + list(SUITE_NAMES))
 
 
 @pytest.mark.parametrize("name", MAP_FAMILIES)
