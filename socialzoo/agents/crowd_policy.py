@@ -5,7 +5,7 @@ a JSON header), greedy: the most likely of CrowdNav's discrete actions, or the m
 The file's tensors: `attention.embed.*`, `attention.value.*`, `attention.score.*` (the pooling
 network), `policy.*` (the policy MLP on its features) and `action.weight`, `action.bias` (the
 action head: logits, or the mean action in [-1, 1]). Its header says the observation's person
-slots and layout (header["observation"]["signals"]: true for the task's signals, 9 robot and 8
+slots and layout (`header["observation"]["signals"]` true for the task's signals, 9 robot and 8
 person features, socialzoo.env.crowd_observation; a file without the key has CrowdNav's joint
 state, 6 and 7), the activation of the policy MLP, the action kind and the task's env id.
 """
