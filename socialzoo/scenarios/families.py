@@ -144,6 +144,37 @@ class SuiteFamily(LayoutFamily):
         return math.atan2(float(way[1]), float(way[0]))
 
 
+def interior(m: Map, margin: float, who: str) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) the walls' bounding box, cut down to the map's region if there is one (a region may
+    have margins), `margin` inside it, m.
+
+    Raises:
+        ValueError: the map has no walls and no region, or the box is gone at that margin.
+    """
+    if not m.num_walls and m.region is None:
+        raise ValueError(f"{m.where}: family {who!r} needs walls or a region to bound its open area")
+    lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
+    if m.num_walls:
+        ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
+        lo, hi = ends.min(0), ends.max(0)
+    if m.region is not None:
+        lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
+        hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
+    lo, hi = lo + margin, hi - margin
+    if np.any(hi <= lo):
+        raise ValueError(f"{m.where}: family {who!r} needs an open area wider than {2 * margin:g} m")
+    return lo, hi
+
+
+def nominal_timing() -> tuple[float, float]:
+    """(the robot's nominal speed: GoAlone's cruise, m/s; a person's start-up lag from rest: the
+    social force's relaxation time, s), the defaults the suite's timed encounters are laid out with."""
+    from socialzoo.core.config import HumanConfig
+    from socialzoo.nav.subpolicies import SubPolicyConfig
+
+    return SubPolicyConfig().go_alone_speed, HumanConfig().relaxation_time
+
+
 def circle_point(cx: Any, cy: Any, radius: Any, angle: Any) -> tuple[Any, Any]:
     """The point at `angle` (rad) on the circle of `radius` (m) about (cx, cy): scalars or arrays.
 
@@ -309,16 +340,7 @@ class CircleCrossing(LayoutFamily):
     def layout(self, m: Map, rng: np.random.Generator) -> Layout:
         """n + 1 evenly spaced slots on the largest circle a metre inside the walls (or region),
         turned by a uniform angle, each jittered by up to 0.2 of a slot; the robot takes the first."""
-        if not m.num_walls and m.region is None:
-            raise ValueError(f"{m.where}: circle_crossing needs walls or a region to size its circle")
-        # The walls' bounding box, cut down to the region if there is one (a region may have margins).
-        lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
-        if m.num_walls:
-            ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
-            lo, hi = ends.min(0), ends.max(0)
-        if m.region is not None:
-            lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
-            hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
+        lo, hi = interior(m, 0.0, self.name)
         centre = (lo + hi) / 2.0
         # One metre inside the smaller half-extent keeps everyone clear of the enclosing walls.
         radius = max(0.5 * float(np.min(hi - lo)) - 1.0, 0.5)

@@ -18,7 +18,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from socialzoo.scenarios.families import Layout, SuiteFamily, _farthest_pair, _frame, _near, _speeds
+from socialzoo.scenarios.families import (
+    Layout,
+    SuiteFamily,
+    _farthest_pair,
+    _frame,
+    _near,
+    _speeds,
+    nominal_timing,
+)
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
@@ -35,15 +43,6 @@ OUT_OF_DOOR = 1.6
 DOORWAY_PACE = 0.6
 # Clearance from walls of every spot a family draws, m (a legal pose needs 0.35).
 SPOT_CLEARANCE = 0.4
-
-
-def nominal_timing() -> tuple[float, float]:
-    """(the robot's nominal speed: GoAlone's speed limit, m/s; a person's start-up lag from rest:
-    the social force's relaxation time, s), the defaults encounters are timed with."""
-    from socialzoo.core.config import HumanConfig
-    from socialzoo.nav.subpolicies import SubPolicyConfig
-
-    return SubPolicyConfig().go_alone_speed, HumanConfig().relaxation_time
 
 
 def _clear_of_walls(m: Map, points: np.ndarray, clearance: float = SPOT_CLEARANCE) -> np.ndarray:

@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from socialzoo.scenarios.families import Layout, SuiteFamily, _speeds, circle_point
+from socialzoo.scenarios.families import Layout, SuiteFamily, _speeds, circle_point, interior, nominal_timing
 from socialzoo.scenarios.script import ACCOMPANY, FOLLOW, LEAD
-from socialzoo.scenarios.suite_places import ROBOT_LAG, draw_spots, nominal_timing
+from socialzoo.scenarios.suite_places import ROBOT_LAG, draw_spots
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
@@ -20,31 +20,6 @@ if TYPE_CHECKING:
 # Standing groups: members on a circle of this radius, m (facing its centre, as a conversation
 # stands; the world's people have no heading of their own, so only the circle is laid out).
 GROUP_RADIUS = (0.8, 1.0)
-# A person who stops for good at the end of its walk has its route go on this far past the stop, m:
-# the world holds a waiting person on a stop inside its route, but one at the route's very end
-# turns back (socialzoo.env.script holds waypoints past the stop, and the turn leaves it before).
-STOP_AHEAD = 0.5
-
-
-def interior(m: Map, margin: float, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) the walls' bounding box (cut to the map's region), `margin` inside it, m.
-
-    Raises:
-        ValueError: the map has no walls and no region, or the box is gone at that margin.
-    """
-    if not m.num_walls and m.region is None:
-        raise ValueError(f"{m.where}: family {who!r} needs walls or a region to bound its open area")
-    lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
-    if m.num_walls:
-        ends = np.asarray(m.walls, dtype=np.float64).reshape(-1, 2)
-        lo, hi = ends.min(0), ends.max(0)
-    if m.region is not None:
-        lo = np.maximum(lo, np.asarray(m.region[:2], dtype=np.float64))
-        hi = np.minimum(hi, np.asarray(m.region[2:], dtype=np.float64))
-    lo, hi = lo + margin, hi - margin
-    if np.any(hi <= lo):
-        raise ValueError(f"{m.where}: family {who!r} needs an open area wider than {2 * margin:g} m")
-    return lo, hi
 
 
 def _segment(
@@ -205,7 +180,7 @@ class FollowingPerson(SuiteFamily):
     """(r) The robot follows a person who walks 12-20 m across the area and stops.
 
     The person walks a straight line (any direction that fits 1 m inside the walls) and stops at
-    its end for ever (its route goes on STOP_AHEAD past the stop); the robot starts 1.5-2.5 m
+    its end for ever; the robot starts 1.5-2.5 m
     behind it and its goal is 1.0-1.5 m short of the person's stop on the same line. The robot
     escorts the person (FOLLOW): its goal counts only with the person 0.5-3.0 m away.
     """
@@ -223,7 +198,7 @@ class FollowingPerson(SuiteFamily):
             start - behind * u,
             goal - rng.uniform(1.0, 1.5) * u,
             start[None],
-            (goal + STOP_AHEAD * u)[None],
+            goal[None],
             _speeds(rng, 1),
             human_stop=goal[None],
             script={"escort": [0], "escort_kind": [FOLLOW], "band": [[0.5, 3.0]]},
@@ -269,7 +244,7 @@ class AccompanyingPeer(SuiteFamily):
 
     The robot's route is a straight 12-20 m line (any direction that fits 2 m inside the walls);
     the person walks the parallel line 1 m to its left or right and stops at its end for ever (its
-    route goes on STOP_AHEAD past the stop). The robot escorts the person (ACCOMPANY): its goal
+    route ends at its stop). The robot escorts the person (ACCOMPANY): its goal
     counts only with the person 0.5-2.0 m away.
     """
 
@@ -286,7 +261,7 @@ class AccompanyingPeer(SuiteFamily):
             start,
             goal,
             (start + side)[None],
-            (goal + side + STOP_AHEAD * u)[None],
+            (goal + side)[None],
             _speeds(rng, 1),
             human_stop=(goal + side)[None],
             script={"escort": [0], "escort_kind": [ACCOMPANY], "band": [[0.5, 2.0]]},

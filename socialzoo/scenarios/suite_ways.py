@@ -26,6 +26,7 @@ from socialzoo.scenarios.families import (
     _farthest_pair,
     _near,
     _speeds,
+    nominal_timing,
 )
 from socialzoo.scenarios.script import PROCEED, SLOW_DISTANCE, STOP_RADIUS, WAIT
 
@@ -44,15 +45,6 @@ CLEARANCE = 0.3
 STOP_BEFORE = 1.2
 # A gate is this far past the crossing way's far edge: the robot's centre is past its footprint, m.
 GATE_PAST = 0.5
-
-
-def nominal_timing() -> tuple[float, float]:
-    """(the robot's nominal speed: GoAlone's cruise, m/s; a person's start-up lag from rest: the
-    social force's relaxation time, s), the defaults the timed encounters are laid out with."""
-    from socialzoo.core.config import HumanConfig
-    from socialzoo.nav.subpolicies import SubPolicyConfig
-
-    return SubPolicyConfig().go_alone_speed, HumanConfig().relaxation_time
 
 
 def _walls(m: Map) -> np.ndarray:

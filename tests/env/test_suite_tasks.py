@@ -388,7 +388,7 @@ def test_both_tasks_play_every_suite_scenario(env_id):
         obs, info = env.reset(seed=0, options={"split": "test", "cases": [0]})
         assert env.observation_space.contains(obs), name
         for _ in range(5):
-            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
             assert np.all(np.isfinite(reward)), name
             if terminated or truncated:
                 break
