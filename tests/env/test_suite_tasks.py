@@ -385,7 +385,7 @@ def test_both_tasks_play_every_suite_scenario(env_id):
 
     for name in SUITE_NAMES:
         env = gym.make(env_id, family=name)
-        obs, info = env.reset(seed=0, options={"split": "test", "cases": [0]})
+        obs, _ = env.reset(seed=0, options={"split": "test", "cases": [0]})
         assert env.observation_space.contains(obs), name
         for _ in range(5):
             obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
