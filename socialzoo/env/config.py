@@ -63,8 +63,9 @@ class EnvConfig:
 
     Attributes:
         map: a shipped map name ("gdc1", "ghc3", "open_room", ...) or a path to a map JSON file;
-            None with a family: the family's map (`map` is then its name). A config that changes
-            its family with `replace` keeps its map unless map=None is given too.
+            None (the default): the family's map with a family, else "gdc1" (`map` is then that
+            name). A config that changes its family with `replace` keeps its map unless map=None
+            is given too.
         num_robots: robots per world (R); the single-agent benchmark uses 1.
         max_steps: episode time limit in steps (SPEC: 3200 = 80 s); reaching it truncates.
         goal_radius: success distance between robot centre and goal, m (SPEC: 0.5).
@@ -95,7 +96,7 @@ class EnvConfig:
             socialzoo.env.people). The default is the benchmark's social-force people.
     """
 
-    map: str | None = "gdc1"
+    map: str | None = None
     num_robots: int = 1
     max_steps: int = 3200
     goal_radius: float = 0.5
@@ -121,14 +122,13 @@ class EnvConfig:
             raise ValueError(
                 f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
             )
+        home = "gdc1"  # the benchmark's map
         if self.family is not None:
             home = family_map(self.family, "EnvConfig.family")  # refuses a family that cannot load
-            if self.map is None:
-                object.__setattr__(self, "map", home)
+        if self.map is None:
+            object.__setattr__(self, "map", home)
         if not isinstance(self.map, str) or not self.map:
-            raise ValueError(
-                f"EnvConfig.map must be a map name or path (None only with a family), got {self.map!r}"
-            )
+            raise ValueError(f"EnvConfig.map must be a map name or path, or None, got {self.map!r}")
         if not isinstance(self.signals, bool):
             raise ValueError(f"EnvConfig.signals must be a bool, got {self.signals!r}")
         for name, low in (

@@ -212,10 +212,11 @@ def test_a_family_that_cannot_load_and_an_arena_family_are_named_errors(monkeypa
         ValueError, match=r"CrowdNavConfig\.family: .crowdnav_circle_crossing. is a family of"
     ):
         CrowdNavConfig(family="crowdnav_circle_crossing")
-    with pytest.raises(
-        ValueError, match=r"EnvConfig.map must be a map name or path \(None only with a family\)"
-    ):
-        EnvConfig(map=None)
+    with pytest.raises(ValueError, match=r"EnvConfig.map must be a map name or path, or None"):
+        EnvConfig(map="")
+    # No map given: the family's own map, else the benchmark's.
+    assert EnvConfig(map=None).map == EnvConfig().map == "gdc1"
+    assert EnvConfig(family="crossing").map == "intersection"
     for config in (EnvConfig, CrowdNavConfig):
         with pytest.raises(ValueError, match="signals must be a bool"):
             config(signals=1)
