@@ -211,8 +211,9 @@ class EnvConfig:
         """
         if config is not None and not isinstance(config, EnvConfig):
             raise TypeError(f"config must be an EnvConfig or None, got {type(config).__name__}")
-        base = config if config is not None else cls()
-        return base.replace(**overrides) if overrides else base
+        if config is None:  # the defaults: with a family and no map, the family's own map
+            return cls().replace(**{"map": None, **overrides}) if overrides else cls()
+        return config.replace(**overrides) if overrides else config
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> EnvConfig:

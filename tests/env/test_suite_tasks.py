@@ -217,6 +217,8 @@ def test_a_family_that_cannot_load_and_an_arena_family_are_named_errors(monkeypa
     # No map given: the family's own map, else the benchmark's.
     assert EnvConfig(map=None).map == EnvConfig().map == "gdc1"
     assert EnvConfig(family="crossing").map == "intersection"
+    assert EnvConfig.resolve(None, {"family": "crossing"}).map == "intersection"
+    assert EnvConfig.resolve(None, {"family": "crossing", "map": "hallway"}).map == "hallway"
     for config in (EnvConfig, CrowdNavConfig):
         with pytest.raises(ValueError, match="signals must be a bool"):
             config(signals=1)
