@@ -52,13 +52,20 @@ POLICIES: dict[str, str] = {
     "pips": "socialzoo.agents.pips:PipsPolicy",
     # The CrowdNav task's learned velocity policy (`socialzoo train crowdnav`): PPO with attention.
     "crowdnav": "socialzoo.agents.crowd_policy:CrowdAttentionPolicy",
+    # The same learner trained on the scenario suite's 25 families (`socialzoo train crowdnav --families suite`).
+    "suite_crowdnav": "socialzoo.agents.crowd_policy:CrowdAttentionPolicy",
     # The CrowdNav task's engineered robots: CrowdNav's ORCA robot, a social-force robot.
     "orca": "socialzoo.agents.crowd_engineered:CrowdOrcaRobot",
     "social_force": "socialzoo.agents.crowd_engineered:CrowdSocialForceRobot",
 }
 # Registry name -> the task its policy acts in (socialzoo.env.tasks.TASKS); the rest act in
 # "action_selection".
-POLICY_TASKS: dict[str, str] = {"crowdnav": "crowdnav", "orca": "crowdnav", "social_force": "crowdnav"}
+POLICY_TASKS: dict[str, str] = {
+    "crowdnav": "crowdnav",
+    "suite_crowdnav": "crowdnav",
+    "orca": "crowdnav",
+    "social_force": "crowdnav",
+}
 DEFAULT_TASK = "action_selection"
 
 

@@ -1,0 +1,60 @@
+"""The learned CrowdNav policies that ship: crowdnav (CrowdNav's joint state) acts as it always has,
+and suite_crowdnav (trained on the scenario suite, with signals) loads and acts on the suite id's
+observations, its run record beside it."""
+
+import json
+
+import gymnasium as gym
+import numpy as np
+
+from socialzoo.agents import SHIPPED_DIR, make_policy
+from socialzoo.env.policy_file import read_policy_file
+
+SUITE_ID = "socialzoo/CrowdNavSuite-v1"
+
+
+def test_the_shipped_crowdnav_policy_reads_the_old_layout_and_acts_as_before():
+    policy = make_policy("crowdnav", task="crowdnav")
+    assert "signals" not in policy.header["observation"] and not policy.signals
+    assert policy.observation_size == 6 + 8 * 5 and policy.task_overrides == {"action": "discrete"}
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(256, 46)).astype(np.float32)
+    obs[:, 6 + 7 * 5 :] = rng.random((256, 5)) > 0.4
+    # The actions of the file before the network learned the signal layout.
+    expected = [10, 5, 5, 5, 50, 5, 5, 50, 50, 5, 5, 50, 50, 24, 5, 5, 30, 24, 75, 5]
+    assert policy.act(obs)[:20].tolist() == expected
+
+
+def test_the_shipped_suite_policy_acts_on_the_suite_ids_observations_with_its_run_record():
+    path = SHIPPED_DIR / "suite_crowdnav.safetensors"
+    assert path.stat().st_size < 2**20
+    _, header = read_policy_file(path, check_env_version=False)
+    assert header["env_id"] == SUITE_ID and header["observation"]["signals"] is True
+    record = json.loads((SHIPPED_DIR / "suite_crowdnav.run.json").read_text())
+    command = record["command"]
+    assert (
+        command.startswith("socialzoo train crowdnav ")
+        and "--families suite" in command
+        and "--seed" in command
+    )
+    assert record["finished"] and record["seed"] == header["training"]["seed"]
+    assert (
+        record["results"]["families"] == header["training"]["families"]
+        and len(header["training"]["families"]) == 25
+    )
+    assert record["results"]["env_id"] == SUITE_ID
+    # The file is the kept checkpoint, chosen on the families' validation cases.
+    assert (
+        record["results"]["kept_checkpoint"]
+        == f"checkpoints/step_{header['training']['steps']:09d}.safetensors"
+    )
+    for family in ("frontal_approach", "narrow_doorway"):
+        env = gym.make(SUITE_ID, family=family, action="discrete")
+        policy = make_policy("suite_crowdnav", task="crowdnav", observation_space=env.observation_space)
+        assert policy.task_overrides == {"action": "discrete", "signals": True}
+        obs, _ = env.reset(seed=0)
+        for _ in range(3):
+            action = policy.act(obs[None])
+            assert action.shape == (1,) and 0 <= action[0] < 81
+            obs, *_ = env.step(int(action[0]))
+        env.close()
