@@ -183,8 +183,14 @@ def record_task_episode(
     recorder.keep_state(scan=True)
     named = bool(task.action_labels())  # the timeline shows actions that have names
     shape = (1, 1, *(task.action_space.shape or ()))
+    reads_core = getattr(policy, "reads_core", True)
     while True:
-        action = np.asarray(policy.act(task.observations(), task)).reshape(shape)
+        obs = task.observations()
+        if reads_core:
+            action = np.asarray(policy.act(obs, task)).reshape(shape)
+        else:  # a policy of observations alone takes a (N, D) batch (the runner gives it the same)
+            flat = obs.reshape(-1, obs.shape[-1]) if isinstance(obs, np.ndarray) and obs.ndim == 3 else obs
+            action = np.asarray(policy.act(flat)).reshape(shape)
         step = task.step(action)
         recorder.keep_step(int(action.reshape(-1)[0]) if named else -1, step)
         ended = bool(step.terminated[0, 0] or step.truncated[0, 0])
