@@ -170,3 +170,22 @@ def test_bad_recorder_arguments(rooms):
         record_episode(config, scenario, make_policy("ref"), laser_stride=0)
     with pytest.raises(ValueError, match="laser_rays must be None or an int >= 0, got -1"):
         record_episode(config, scenario, make_policy("ref"), laser_rays=-1)
+
+
+def test_a_policy_of_observations_alone_is_recorded_with_its_flat_batch():
+    """The learned CrowdNav policies take (N, D) observations: the recorder gives them that, as the
+    runner does (the suite's replay pages of suite_crowdnav)."""
+    import numpy as np
+
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.replay import record_task_episode
+    from socialzoo.bench.task_benchmark import TaskId
+
+    task_id = TaskId.of("socialzoo/CrowdNavSuite-v1")
+    probe = task_id.make(1, family="frontal_approach")
+    policy = make_policy("suite_crowdnav", task=probe.name, observation_space=probe.observation_space)
+    assert not policy.reads_core
+    task = task_id.make(1, family="frontal_approach", **policy.task_overrides)
+    task.reset(np.array([0]), {"split": "test", "cases": [0]})
+    trace = record_task_episode(task, policy, label="suite_crowdnav")
+    assert trace.outcome in ("success", "collision", "timeout") and len(trace.robot_pose) > 1
