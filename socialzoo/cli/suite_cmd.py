@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.arg_types import count, positive_int
 from socialzoo.cli.benchmark_cmd import _policy_specs
 
 
@@ -19,16 +19,6 @@ def _names(text: str) -> tuple[str, ...]:
     if not names:
         raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
     return names
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
 
 
 def register(subparsers: Any) -> None:
@@ -83,7 +73,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--replays",
-        type=_count,
+        type=count,
         default=1,
         help="replay pages per scenario and policy: its first K episodes, failed ones first "
         "(default 1; 0: none)",
