@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.arg_types import add_backend_arguments, positive_int
 
 logger = logging.getLogger(__name__)
 
@@ -76,17 +76,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--trials", type=positive_int, default=None, help="scenarios per policy and map (default: all)"
     )
-    parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where trials run")
-    parser.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
-    parser.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        help="local processes (default 2), or Ray chunks (default: one per cluster CPU)",
-    )
-    parser.add_argument(
-        "--batch-size", type=positive_int, default=64, help="env rows stepped together per worker"
-    )
+    add_backend_arguments(parser, "trials")
     parser.add_argument(
         "--max-steps", type=positive_int, default=None, help="episode time limit override, steps"
     )

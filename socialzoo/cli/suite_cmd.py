@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import count, positive_int
+from socialzoo.cli.arg_types import add_backend_arguments, count, positive_int
 from socialzoo.cli.benchmark_cmd import _policy_specs
 
 
@@ -60,17 +60,7 @@ def register(subparsers: Any) -> None:
         "--seeds", type=positive_int, default=30, help="cases per policy and scenario (default 30)"
     )
     parser.add_argument("--out", type=Path, required=True, help="output directory")
-    parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where episodes run")
-    parser.add_argument("--address", default=None, help="Ray cluster address (with --backend ray)")
-    parser.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        help="local processes (default 2), or Ray chunks (default: one per cluster CPU)",
-    )
-    parser.add_argument(
-        "--batch-size", type=positive_int, default=64, help="env rows stepped together per worker"
-    )
+    add_backend_arguments(parser, "episodes")
     parser.add_argument(
         "--replays",
         type=count,

@@ -166,6 +166,14 @@ def interior(m: Map, margin: float, who: str) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
+def planned_route(m: Map, start: np.ndarray, goal: np.ndarray, context: str) -> np.ndarray:
+    """(k, 2) the route from start to goal, planned as people's routes are; errors begin with `context`."""
+    from socialzoo.scenarios.scenario import plan_routes
+
+    paths, lengths = plan_routes(m, start[None], goal[None], context)
+    return np.asarray(paths[0, : int(lengths[0])])
+
+
 def nominal_timing() -> tuple[float, float]:
     """(the robot's nominal speed: GoAlone's cruise, m/s; a person's start-up lag from rest: the
     social force's relaxation time, s), the defaults the suite's timed encounters are laid out with."""

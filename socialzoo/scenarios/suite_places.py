@@ -26,6 +26,7 @@ from socialzoo.scenarios.families import (
     _near,
     _speeds,
     nominal_timing,
+    planned_route,
 )
 
 if TYPE_CHECKING:
@@ -51,14 +52,6 @@ def _clear_of_walls(m: Map, points: np.ndarray, clearance: float = SPOT_CLEARANC
         return np.ones(len(points), dtype=bool)
     _, dist = m.wall_index.nearest(np.asarray(points, dtype=np.float64).reshape(-1, 2))
     return np.asarray(dist >= clearance)
-
-
-def _route(m: Map, start: np.ndarray, goal: np.ndarray, who: str) -> np.ndarray:
-    """(k, 2) the walking route from start to goal (planned as people's routes are)."""
-    from socialzoo.scenarios.scenario import plan_routes
-
-    paths, lengths = plan_routes(m, start[None], goal[None], f"{m.where}, family {who!r}")
-    return np.asarray(paths[0, : int(lengths[0])])
 
 
 def _arc_lengths(path: np.ndarray) -> np.ndarray:
@@ -269,7 +262,7 @@ class BlindCorner(SuiteFamily):
         a, b = _farthest_pair(m)
         if rng.random() < 0.5:
             a, b = b, a
-        path = _route(m, a, b, self.name)
+        path = planned_route(m, a, b, f"{m.where}, family {self.name!r}")
         k, turn = _sharpest_turn(path)
         if turn < math.radians(45.0):
             raise ValueError(f"{m.where}: family {self.name!r} needs a corner on the route between its ends")
@@ -302,7 +295,7 @@ class NarrowHallway(SuiteFamily):
         a, b = _farthest_pair(m)
         if rng.random() < 0.5:
             a, b = b, a
-        path = _route(m, a, b, self.name)
+        path = planned_route(m, a, b, f"{m.where}, family {self.name!r}")
         s0, s1 = _narrow_section(m, path, self.name)
         arc = _arc_lengths(path)
         meet = (s0 + s1) / 2.0 + rng.uniform(-0.25, 0.25) * (s1 - s0)
@@ -344,7 +337,7 @@ class EnteringRoom(SuiteFamily):
         direct = _direct(m, door, outside, np.broadcast_to(robot_goal, outside.shape), self.name)
         near = (out_dist >= 3.0) & (out_dist <= 9.0)
         robot_start = _pick(rng, outside, near & direct, "robot's start outside", m)
-        path = _route(m, robot_start, robot_goal, self.name)
+        path = planned_route(m, robot_start, robot_goal, f"{m.where}, family {self.name!r}")
         s_door = _crossing(path, door.centre, door.inward)
         if math.isnan(s_door):
             raise ValueError(f"{m.where}: family {self.name!r}: the robot's route does not pass the door")
@@ -446,7 +439,7 @@ class ExitingRoom(SuiteFamily):
         out_dist = np.linalg.norm(outside - door.centre, axis=1)
         direct = _direct(m, door, np.broadcast_to(robot_start, outside.shape), outside, self.name)
         robot_goal = _pick(rng, outside, (out_dist >= 3.0) & direct, "robot's goal outside", m)
-        path = _route(m, robot_start, robot_goal, self.name)
+        path = planned_route(m, robot_start, robot_goal, f"{m.where}, family {self.name!r}")
         s_door = _crossing(path, door.centre, door.inward)
         if math.isnan(s_door):
             raise ValueError(f"{m.where}: family {self.name!r}: the robot's route does not pass the door")

@@ -27,6 +27,7 @@ from socialzoo.scenarios.families import (
     _near,
     _speeds,
     nominal_timing,
+    planned_route,
 )
 from socialzoo.scenarios.script import PROCEED, SLOW_DISTANCE, STOP_RADIUS, WAIT
 
@@ -62,14 +63,6 @@ def _ray(m: Map, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
         np.asarray(origin)[..., None, :], np.asarray(direction)[..., None, :], w[:, :2], w[:, 2:]
     )
     return np.asarray(hit.min(-1))
-
-
-def _route(m: Map, start: np.ndarray, goal: np.ndarray, context: str) -> np.ndarray:
-    """The planned route from start to goal, (k, 2) points, m."""
-    from socialzoo.scenarios.scenario import plan_routes
-
-    paths, lengths = plan_routes(m, start[None], goal[None], context)
-    return np.asarray(paths[0, : int(lengths[0])])
 
 
 def _nearest_on(route: np.ndarray, point: np.ndarray) -> tuple[float, float]:
@@ -148,7 +141,7 @@ def corridor(m: Map) -> Corridor:
         ValueError: the route has no such stretch CORRIDOR_LENGTH long (naming the map).
     """
     a, b = _farthest_pair(m)
-    route = _route(m, a, b, f"{m.where}, the corridor")
+    route = planned_route(m, a, b, f"{m.where}, the corridor")
     pts, dirs = [], []
     for p, q in itertools.pairwise(route):
         n = max(int(np.ceil(np.linalg.norm(q - p) / 0.05)), 1)
@@ -542,7 +535,7 @@ class NarrowDoorway(SuiteFamily):
         if m.num_doors == 0:
             raise ValueError(f"{m.where}: {self.name} needs a door (the map lists none)")
         a, b = _farthest_pair(m)
-        route = _route(m, a, b, f"{m.where}, family {self.name!r}")
+        route = planned_route(m, a, b, f"{m.where}, family {self.name!r}")
         doors = np.asarray(m.doors, dtype=np.float64)
         mids = (doors[:, :2] + doors[:, 2:]) / 2.0
         k = int(np.argmin([_nearest_on(route, q)[0] for q in mids]))
