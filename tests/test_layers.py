@@ -27,6 +27,7 @@ PACKAGE = ROOT / "socialzoo"
 RANKS: dict[str, int] = {
     "core": 0,
     "maps": 1,
+    "data": 1,
     "nav": 2,
     "scenarios": 3,
     "humans": 4,

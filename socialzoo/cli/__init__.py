@@ -32,6 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "socialzoo.cli.crowdnav_cmd",
         "the CrowdNav task: evaluate velocity policies on its fixed cases, replay an episode",
     ),
+    "data": ("socialzoo.cli.data_cmd", "fetch the recorded ETH/UCY pedestrian trajectories, list the cache"),
     "humans": (
         "socialzoo.cli.humans_cmd",
         "the people: compare learned with social-force humans, select a learned checkpoint, "

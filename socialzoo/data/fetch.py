@@ -1,0 +1,265 @@
+"""The ETH/UCY pedestrian recordings: fetched from a pinned public copy (or a local folder) into a
+cache outside the repository, every file checked against its SHA-256, and read as Recordings.
+
+The copy is the one Trajectron++ distributes (StanfordASL/Trajectron-plus-plus at commit COMMIT,
+experiments/pedestrians/raw/SCENE/test/), which Social GAN prepared. Credit: CREDIT.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import NamedTuple
+
+from socialzoo.data.tracks import Recording, join, read_tracks
+
+logger = logging.getLogger(__name__)
+
+COMMIT = "1031c7bd1a444273af378c1ec1dcca907ba59830"
+BASE_URL = f"https://raw.githubusercontent.com/StanfordASL/Trajectron-plus-plus/{COMMIT}/experiments/pedestrians/raw/"
+# The cache folder when SOCIALZOO_DATA_DIR is not set: platformdirs.user_cache_dir("socialzoo")/CACHE_NAME.
+ENV_VAR, CACHE_NAME = "SOCIALZOO_DATA_DIR", "eth-ucy"
+# Empty frames between the files of a scene made of several (univ).
+JOIN_GAP_FRAMES = 10
+CREDIT = (
+    "ETH (BIWI): S. Pellegrini, A. Ess, K. Schindler, L. van Gool, \"You'll never walk alone: modeling "
+    'social behavior for multi-target tracking", ICCV 2009.\n'
+    'UCY (univ, zara): A. Lerner, Y. Chrysanthou, D. Lischinski, "Crowds by example", Computer Graphics '
+    "Forum (Eurographics) 2007.\n"
+    "Files as prepared by Trajectron++ (T. Salzmann, B. Ivanovic, P. Chakravarty, M. Pavone, ECCV 2020) "
+    "and Social GAN (A. Gupta et al., CVPR 2018)."
+)
+
+
+class SceneFile(NamedTuple):
+    """One file of a scene: its path below BASE_URL (its name is the last part) and its SHA-256."""
+
+    path: str
+    sha256: str
+
+    @property
+    def name(self) -> str:
+        """The file name, which it keeps in the cache."""
+        return self.path.rpartition("/")[2]
+
+
+# Scene -> its files, in the order they are joined.
+SCENES: dict[str, tuple[SceneFile, ...]] = {
+    "eth": (
+        SceneFile(
+            "eth/test/biwi_eth.txt", "cf8d3fd342a15f409ebc2a1fc76b91a0f06390bd21f1e11410f3859331ab082b"
+        ),
+    ),
+    "hotel": (
+        SceneFile(
+            "hotel/test/biwi_hotel.txt", "9caa771bb9153d6b809dd0916b6f86761b641e6bbb15e766c1de3133fbbb7fcf"
+        ),
+    ),
+    "univ": (
+        SceneFile(
+            "univ/test/students001.txt", "a6d87f278d94136fe39b8be91555487a29ac77259ae403b9dba2d5c18caf7b5b"
+        ),
+        SceneFile(
+            "univ/test/students003.txt", "e25798b660634330aa89f8bb259425de720e84d0873902726c1d1f4ccff21d6c"
+        ),
+    ),
+    "zara1": (
+        SceneFile(
+            "zara1/test/crowds_zara01.txt", "1147a1962a09abfb86f28c6cddcac862e095a0cf129b3016385b69eacdd09d85"
+        ),
+    ),
+    "zara2": (
+        SceneFile(
+            "zara2/test/crowds_zara02.txt", "8a649d0f8c9ae75c87c4d23a85f892786b0aa30266e996c7be03e69dafff22ff"
+        ),
+    ),
+}
+
+
+class UnknownSceneError(ValueError):
+    """A scene name that is not in SCENES (the message lists the known ones)."""
+
+
+class ChecksumError(ValueError):
+    """A file whose SHA-256 is not the pinned one (the message names the file, both hashes)."""
+
+
+class DownloadError(OSError):
+    """A file that could not be downloaded (the message names the URL and the cause)."""
+
+
+def data_dir() -> Path:
+    """The cache folder: $SOCIALZOO_DATA_DIR, else platformdirs.user_cache_dir("socialzoo")/eth-ucy."""
+    if os.environ.get(ENV_VAR):
+        return Path(os.environ[ENV_VAR])
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("socialzoo")) / CACHE_NAME
+
+
+def sha256(path: str | Path) -> str:
+    """The hex SHA-256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def check_scenes(scenes: Iterable[str] | None) -> list[str]:
+    """The scene names asked for (all of SCENES when None), in SCENES order.
+
+    Raises:
+        UnknownSceneError: a name not in SCENES.
+    """
+    if scenes is None:
+        return list(SCENES)
+    asked = list(scenes)
+    unknown = [s for s in asked if s not in SCENES]
+    if unknown:
+        raise UnknownSceneError(
+            f"unknown scene(s) {', '.join(map(repr, unknown))}; known: {', '.join(SCENES)}"
+        )
+    return [s for s in SCENES if s in asked]
+
+
+def fetch_scenes(
+    scenes: Iterable[str] | None = None,
+    *,
+    source_dir: str | Path | None = None,
+    base_url: str | None = None,
+    cache: str | Path | None = None,
+    progress: bool = True,
+) -> dict[str, list[Path]]:
+    """Bring the files of the scenes into the cache, each checked against its pinned SHA-256.
+
+    A file already in the cache with the right checksum is kept. All-or-nothing: the files are
+    gathered in a temporary folder inside the cache and moved in only when every one is right, so
+    an error leaves nothing new in the cache (a cache folder made by this call is removed again).
+
+    Args:
+        scenes: scene names (default: all of SCENES).
+        source_dir: copy the files from this local folder, each found by its name anywhere below it
+            (for machines without internet), instead of downloading them.
+        base_url: download from here instead of BASE_URL (files at BASE/SCENE/test/NAME).
+        cache: the cache folder (default: data_dir()).
+        progress: log a line per file (INFO).
+
+    Returns:
+        scene -> the paths of its files in the cache, in joining order.
+
+    Raises:
+        UnknownSceneError: an unknown scene name (before anything is fetched).
+        ChecksumError: a file with another SHA-256 than the pinned one.
+        FileNotFoundError: source_dir is not a folder, or holds no file of a needed name.
+        DownloadError: a download failed.
+    """
+    chosen = check_scenes(scenes)
+    source = None if source_dir is None else Path(source_dir)
+    if source is not None and not source.is_dir():
+        raise FileNotFoundError(f"--from {source}: not a folder")
+    folder = data_dir() if cache is None else Path(cache)
+    made = not folder.exists()
+    folder.mkdir(parents=True, exist_ok=True)
+    result: dict[str, list[Path]] = {}
+    try:
+        with tempfile.TemporaryDirectory(prefix=".fetching-", dir=folder) as staging:
+            ready: list[tuple[Path, Path]] = []
+            for scene in chosen:
+                for file in SCENES[scene]:
+                    target = folder / file.name
+                    result.setdefault(scene, []).append(target)
+                    if target.is_file() and sha256(target) == file.sha256:
+                        if progress:
+                            logger.info("%s: %s already in %s", scene, file.name, folder)
+                        continue
+                    staged = Path(staging) / file.name
+                    if source is not None:
+                        _copy(scene, file, source, staged, progress)
+                    else:
+                        _download(scene, file, base_url or BASE_URL, staged, progress)
+                    ready.append((staged, target))
+            for staged, target in ready:
+                os.replace(staged, target)
+    except BaseException:
+        if made:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return result
+
+
+def load_scene(name: str, cache: str | Path | None = None) -> Recording:
+    """The recording of a fetched scene (a scene of several files joined, JOIN_GAP_FRAMES apart).
+
+    Args:
+        name: a scene of SCENES.
+        cache: the cache folder (default: data_dir()).
+
+    Raises:
+        UnknownSceneError: an unknown scene (a ValueError listing the known ones).
+        FileNotFoundError: the scene is not fetched.
+        ChecksumError: a cached file was changed since it was fetched.
+        TrackFileError: a file cannot be read.
+    """
+    (scene,) = check_scenes([name])
+    folder = data_dir() if cache is None else Path(cache)
+    recordings = []
+    for file in SCENES[scene]:
+        path = folder / file.name
+        if not path.is_file():
+            hint = "" if cache is None else f" --cache {folder}"
+            raise FileNotFoundError(
+                f"scene {scene!r} is not fetched ({path} is missing): run `socialzoo data fetch eth-ucy{hint}`"
+            )
+        _verify(path, file, f"{path} (scene {scene}; fetch it again)")
+        recordings.append(read_tracks(path, layout="trajectron", name=scene))
+    return recordings[0] if len(recordings) == 1 else join(recordings, scene, JOIN_GAP_FRAMES)
+
+
+def _verify(path: Path, file: SceneFile, what: str) -> None:
+    """Raise ChecksumError when the file at `path` is not `file`."""
+    found = sha256(path)
+    if found != file.sha256:
+        raise ChecksumError(f"{what}: SHA-256 {found}, expected {file.sha256} ({file.name})")
+
+
+def _copy(scene: str, file: SceneFile, source: Path, staged: Path, progress: bool) -> None:
+    """Copy `file` from the first file of its name below `source` with the right checksum."""
+    candidates = sorted(p for p in source.rglob(file.name) if p.is_file())
+    if not candidates:
+        raise FileNotFoundError(f"{file.name} (scene {scene}) is nowhere below {source}")
+    for candidate in candidates:
+        if sha256(candidate) == file.sha256:
+            if progress:
+                logger.info("%s: copying %s", scene, candidate)
+            shutil.copyfile(candidate, staged)
+            _verify(staged, file, f"{candidate} (copied)")
+            return
+    found = ", ".join(f"{p} ({sha256(p)})" for p in candidates)
+    raise ChecksumError(
+        f"no {file.name} below {source} has the pinned SHA-256 {file.sha256} (scene {scene}): found {found}"
+    )
+
+
+def _download(scene: str, file: SceneFile, base_url: str, staged: Path, progress: bool) -> None:
+    """Download `file` from base_url into `staged` with pooch, checking its checksum."""
+    import pooch
+
+    url = base_url.rstrip("/") + "/" + file.path
+    if progress:
+        logger.info("%s: downloading %s", scene, url)
+    pooch_logger = pooch.get_logger()
+    level = pooch_logger.level
+    pooch_logger.setLevel(logging.WARNING)  # its INFO line repeats ours
+    try:
+        pooch.retrieve(url, known_hash=None, fname=staged.name, path=staged.parent, progressbar=False)
+    except Exception as exc:
+        raise DownloadError(f"could not download {url}: {exc}") from exc
+    finally:
+        pooch_logger.setLevel(level)
+    _verify(staged, file, f"{url} (scene {scene})")

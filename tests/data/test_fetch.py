@@ -1,0 +1,186 @@
+"""The ETH/UCY fetcher (socialzoo.data.fetch) on small synthetic scenes: downloads from a local HTTP
+server, copies from a folder, checksums (a wrong one leaves nothing in the cache), the cache folder,
+and load_scene. Never touches the internet."""
+
+import functools
+import hashlib
+import http.server
+import threading
+
+import numpy as np
+import pytest
+
+from socialzoo.data import fetch
+from socialzoo.data.fetch import (
+    SCENES,
+    ChecksumError,
+    DownloadError,
+    SceneFile,
+    UnknownSceneError,
+    data_dir,
+    fetch_scenes,
+    load_scene,
+)
+
+# Synthetic stand-ins for the real files: one scene of one file, one of two (joined, as univ).
+FILES = {
+    "one/test/one.txt": "0\t1\t0.0\t0.0\n10\t1\t1.0\t0.0\n10\t2\t5.0\t5.0\n",
+    "two/test/two_a.txt": "0\t1\t0.0\t0.0\n10\t1\t0.5\t0.0\n",
+    "two/test/two_b.txt": "0\t1\t3.0\t3.0\n10\t1\t3.5\t3.0\n20\t1\t4.0\t3.0\n",
+}
+
+
+def _scenes(files=FILES):
+    def entry(path):
+        return SceneFile(path, hashlib.sha256(files[path].encode()).hexdigest())
+
+    return {
+        "one": (entry("one/test/one.txt"),),
+        "two": (entry("two/test/two_a.txt"), entry("two/test/two_b.txt")),
+    }
+
+
+@pytest.fixture
+def scenes(monkeypatch):
+    """SCENES replaced by the synthetic scenes."""
+    table = _scenes()
+    monkeypatch.setattr(fetch, "SCENES", table)
+    return table
+
+
+def _write_tree(root, files=FILES):
+    for path, text in files.items():
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text(text)
+    return root
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture
+def server(tmp_path, monkeypatch):
+    """Base URL of a local HTTP server serving tmp_path/served (the synthetic files), stopped after."""
+    for name in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY", "ALL_PROXY", "all_proxy"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("NO_PROXY", "127.0.0.1,localhost")
+    served = _write_tree(tmp_path / "served")
+    handler = functools.partial(_QuietHandler, directory=str(served))
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=httpd.serve_forever, kwargs={"poll_interval": 0.02}, daemon=True)
+    thread.start()
+    yield f"http://127.0.0.1:{httpd.server_address[1]}/"
+    httpd.shutdown()
+    httpd.server_close()
+
+
+def test_the_pinned_scenes():
+    assert list(SCENES) == ["eth", "hotel", "univ", "zara1", "zara2"]
+    assert [f.name for f in SCENES["univ"]] == ["students001.txt", "students003.txt"]
+    for files in SCENES.values():
+        for file in files:
+            assert len(file.sha256) == 64 and int(file.sha256, 16) >= 0
+            assert file.path.endswith(f"/test/{file.name}")
+    assert fetch.COMMIT in fetch.BASE_URL and fetch.BASE_URL.startswith("https://")
+    assert "Pellegrini" in fetch.CREDIT and "Lerner" in fetch.CREDIT and "Trajectron++" in fetch.CREDIT
+
+
+def test_download_from_a_server(scenes, server, tmp_path):
+    cache = tmp_path / "cache"
+    got = fetch_scenes(base_url=server, cache=cache, progress=False)
+    assert got == {"one": [cache / "one.txt"], "two": [cache / "two_a.txt", cache / "two_b.txt"]}
+    assert sorted(p.name for p in cache.iterdir()) == ["one.txt", "two_a.txt", "two_b.txt"]
+    assert (cache / "two_b.txt").read_text() == FILES["two/test/two_b.txt"]
+    # Fetched files with the right checksum are kept: no server needed the second time.
+    assert fetch_scenes(["two"], base_url="http://127.0.0.1:9/", cache=cache, progress=False) == {
+        "two": got["two"]
+    }
+
+
+def test_a_wrong_checksum_leaves_the_cache_empty(scenes, server, tmp_path, monkeypatch):
+    wrong = dict(scenes)
+    wrong["two"] = (scenes["two"][0], SceneFile("two/test/two_b.txt", "0" * 64))
+    monkeypatch.setattr(fetch, "SCENES", wrong)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    with pytest.raises(ChecksumError, match=r"two_b.txt \(scene two\): SHA-256 [0-9a-f]{64}, expected 0{64}"):
+        fetch_scenes(base_url=server, cache=cache, progress=False)
+    assert list(cache.iterdir()) == []  # not even the right files fetched before it, nor a partial one
+    made = tmp_path / "made" / "cache"
+    with pytest.raises(ChecksumError):
+        fetch_scenes(["two"], base_url=server, cache=made, progress=False)
+    assert not made.exists()  # the folder this call made is gone too
+
+
+def test_a_missing_file_on_the_server(scenes, server, tmp_path, monkeypatch):
+    monkeypatch.setattr(fetch, "SCENES", {"gone": (SceneFile("gone/test/gone.txt", "0" * 64),)})
+    cache = tmp_path / "cache"
+    with pytest.raises(
+        DownloadError, match=r"could not download http://127\.0\.0\.1:\d+/gone/test/gone\.txt"
+    ):
+        fetch_scenes(base_url=server, cache=cache, progress=False)
+    assert not cache.exists()
+
+
+def test_an_unknown_scene_fetches_nothing(scenes, tmp_path):
+    cache = tmp_path / "cache"
+    with pytest.raises(UnknownSceneError, match=r"unknown scene\(s\) 'three'; known: one, two"):
+        fetch_scenes(["one", "three"], base_url="http://127.0.0.1:9/", cache=cache)
+    assert not cache.exists()
+    with pytest.raises(ValueError, match="known: one, two"):
+        load_scene("three", cache=cache)
+
+
+def test_copy_from_a_folder(scenes, tmp_path):
+    source = tmp_path / "elsewhere"
+    # Found by name anywhere below the folder; a same-named file with other bytes is passed over.
+    (source / "deep" / "er").mkdir(parents=True)
+    (source / "a").mkdir()
+    (source / "a" / "one.txt").write_text("not it\n")
+    (source / "deep" / "er" / "one.txt").write_text(FILES["one/test/one.txt"])
+    cache = tmp_path / "cache"
+    assert fetch_scenes(["one"], source_dir=source, cache=cache, progress=False) == {
+        "one": [cache / "one.txt"]
+    }
+    assert (cache / "one.txt").read_text() == FILES["one/test/one.txt"]
+
+
+def test_copy_checks_checksums_and_presence(scenes, tmp_path):
+    source = tmp_path / "elsewhere"
+    source.mkdir()
+    (source / "one.txt").write_text("0\t1\t0.0\t0.0\n")
+    cache = tmp_path / "cache"
+    with pytest.raises(ChecksumError, match=f"no one.txt below {source} has the pinned SHA-256"):
+        fetch_scenes(["one"], source_dir=source, cache=cache)
+    with pytest.raises(FileNotFoundError, match=f"two_a.txt \\(scene two\\) is nowhere below {source}"):
+        fetch_scenes(["two"], source_dir=source, cache=cache)
+    with pytest.raises(FileNotFoundError, match="not a folder"):
+        fetch_scenes(source_dir=source / "absent", cache=cache)
+    assert not cache.exists()
+
+
+def test_load_scene_reads_and_joins(scenes, tmp_path):
+    cache = tmp_path / "cache"
+    with pytest.raises(FileNotFoundError, match=r"scene 'one' is not fetched .*socialzoo data fetch eth-ucy"):
+        load_scene("one", cache=cache)
+    fetch_scenes(source_dir=_write_tree(tmp_path / "src"), cache=cache, progress=False)
+    one = load_scene("one", cache=cache)
+    assert (one.name, one.dt, one.num_frames, len(one.tracks)) == ("one", 0.4, 2, 2)
+    two = load_scene("two", cache=cache)
+    # two_a: frames 0..1; 10 empty frames; two_b: frames 12..14, its person 1 renumbered 2
+    assert (two.name, two.num_frames) == ("two", 15)
+    assert [(t.person, t.first_frame, t.last_frame) for t in two.tracks] == [(1, 0, 1), (2, 12, 14)]
+    np.testing.assert_array_equal(two.grid([1], first=12, last=12), [[[3.0, 3.0]]])
+    (cache / "two_b.txt").write_text("0\t1\t0\t0\n")
+    with pytest.raises(ChecksumError, match="fetch it again"):
+        load_scene("two", cache=cache)
+
+
+def test_data_dir(monkeypatch, tmp_path):
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "mine"))
+    assert data_dir() == tmp_path / "mine"
+    monkeypatch.delenv("SOCIALZOO_DATA_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert data_dir().parts[-2:] == ("socialzoo", "eth-ucy")
