@@ -289,7 +289,8 @@ def hashed_people(models: str) -> str:
     if all(part.path is None for part in parts):
         return models
     return "+".join(
-        f"{part.model}{'' if part.path is None else ':sha256:' + str(file_digest(part.path))}@{part.share!r}"
+        f"{part.name if part.path is None else dataclasses.replace(part, path='sha256:' + str(file_digest(part.path))).name}"
+        f"@{part.share!r}"
         for part in parts
     )
 

@@ -20,8 +20,10 @@ Direction = Literal["higher", "lower", "neither"]
 # socialzoo.env.crowd_outcome.CrowdNavMetrics), the people's metrics a config adds to the
 # action-selection task's summaries (socialzoo.env.people) and the humans' metrics the benchmark
 # runner adds to a trial (socialzoo.bench.human_metrics), and the evaluation guidelines' Table I
-# (socialzoo.bench.guideline_metrics, from any trajectory: an env episode or an episode log).
-Source = Literal["action_selection", "crowdnav", "people", "humans", "guidelines"]
+# (socialzoo.bench.guideline_metrics, from any trajectory: an env episode or an episode log), and
+# on recorded scenes, the robot against the person it replaced and the reacting people against
+# their tracks (socialzoo.env.replay).
+Source = Literal["action_selection", "crowdnav", "people", "humans", "guidelines", "recorded"]
 SOURCES: tuple[str, ...] = get_args(Source)
 
 
@@ -101,6 +103,7 @@ class Metric:
 
 _AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), ("humans",)
 _GL = ("guidelines",)
+_REC = ("recorded",)
 _BOTH = ("action_selection", "crowdnav")
 
 _ENTRIES: tuple[Metric, ...] = (
@@ -490,6 +493,83 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_PEOPLE,
         description="Mean over the people of the distance walked with the robot minus without it, "
         "each plus its route left (the counterfactual rows); NaN with nobody.",
+    ),
+    # ---------------------------------------------------------------- recorded scenes (socialzoo.env.replay)
+    Metric(
+        name="person_time",
+        label="replaced person's time",
+        unit="s",
+        better="neither",
+        kind="float",
+        digits=2,
+        sources=_REC,
+        description="The recorded time of the person the robot took the place of, from its entry to its exit.",
+    ),
+    Metric(
+        name="person_time_ratio",
+        label="time against the replaced person",
+        unit="",
+        better="lower",
+        kind="float",
+        digits=3,
+        success_only=True,
+        sources=_REC,
+        description="The robot's time to its goal over the replaced person's recorded time (success only).",
+    ),
+    Metric(
+        name="person_path_deviation",
+        label="deviation from the replaced person's path",
+        unit="m",
+        better="lower",
+        kind="float",
+        digits=3,
+        sources=_REC,
+        description="Mean over the robot's steps of its distance to the replaced person's recorded path (a "
+        "polyline through its positions).",
+    ),
+    Metric(
+        name="people_reacting",
+        label="people who left their tracks",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        sources=_REC,
+        description="Recorded people of a hybrid crowd who left their tracks because the robot came near.",
+    ),
+    Metric(
+        name="reacting_time_lost",
+        label="reacting people's time lost (mean)",
+        unit="s",
+        better="lower",
+        kind="float",
+        digits=2,
+        sources=_REC,
+        description="Mean over the people who left their tracks of the time they left the scene minus their "
+        "recorded exit (by the robot's episode end plus the straight distance left at their speed); NaN "
+        "with nobody.",
+    ),
+    Metric(
+        name="reacting_extra_distance",
+        label="reacting people's extra distance (mean)",
+        unit="m",
+        better="lower",
+        kind="float",
+        digits=3,
+        sources=_REC,
+        description="Mean over the people who left their tracks of the distance they walked from there "
+        "(plus the straight distance left) minus their recorded path from there; NaN with nobody.",
+    ),
+    Metric(
+        name="people_walked_into_robot",
+        label="collisions people walked into",
+        unit="",
+        better="lower",
+        kind="int",
+        count=True,
+        sources=_REC,
+        description="Contacts with a person that began with the person closing in on the robot faster than "
+        "the robot on the person (their velocities along the line between them).",
     ),
     # ---------------------------------------------------------------- the humans (socialzoo.bench.human_metrics)
     Metric(

@@ -68,8 +68,9 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     new.carrot = core.carrot[index].copy()
     new.done = core.done[index].copy()
     new.visible = core.visible[core.robot_rows(index)].copy()
-    # The people's side: counterfactual rows and the people's metrics so far.
+    # The people's side: counterfactual rows and the people's metrics so far; recorded people.
     new.people = core.people.rows(index)
+    copy_rows(core.replay, new.replay, index, b)
     return new
 
 

@@ -26,8 +26,9 @@ from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState, pad_to
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
+from socialzoo.env.replay import ReplayRunner
 from socialzoo.env.script import ScriptRunner
-from socialzoo.env.world import StepEvents, step_world
+from socialzoo.env.world import StepEvents, robot_collisions, step_world
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import Map
 from socialzoo.nav.distance_field import DistanceField, distance_field
@@ -88,6 +89,11 @@ class BatchedCore:
         door_reach = robot.radius if robot.radius is not None else robot.half_width
         # Who waits, signals or follows a robot, whom each robot escorts, doors (socialzoo.env.script).
         self.script = ScriptRunner(b, r, max_humans, world.dt, float(door_reach))
+        # Recorded people: tracks, hybrid people's reactions, the measures against the recording
+        # (socialzoo.env.replay).
+        self.replay = ReplayRunner(
+            self.people.config, b, r, max_humans, world.dt, world.human_collision_distance
+        )
         self.field: DistanceField | None = None
         self.navigator: Navigator | None = None
         if planner is not None:
@@ -162,6 +168,12 @@ class BatchedCore:
         self.done[rows] = False
         self.people.reset(rows, state)
         self.script.reset(rows, scenarios, state)
+        if self.replay.wanted(scenarios):
+            counts = [0 if s is None else s.num_humans for s in scenarios]
+            seeds = [0 if s is None else s.seed for s in scenarios]
+            self.replay.reset(rows, scenarios, state, self.people.kinds(seeds, counts))
+        else:
+            self.replay.recorded[rows] = False
         if self.navigator is not None:
             self.navigator.reset(rows, state.robot_pose[rows][..., :2], state.robot_goal[rows][..., :2])
             self.carrot[rows] = self.navigator.update(state.robot_pose[..., :2])[rows]
@@ -220,6 +232,14 @@ class BatchedCore:
         if done is not None:
             # The halting step's motion model would still carry a differential robot half a step.
             after.robot_pose = np.where(done[..., None], before.robot_pose, after.robot_pose)
+        if self.replay.active:
+            robot_vel = world_velocity(after.robot_pose, after.robot_vel, self.world.robot)
+            self.replay.settle(after, robot_vel)
+            # Contacts with the people where the recording put them.
+            events = dataclasses.replace(
+                events, robot_human=robot_collisions(after, self.walls, self.world)[1]
+            )
+            self.replay.account(before, after, robot_vel, self.done)
         self.before, self.state = before, after
         return events
 
@@ -283,6 +303,11 @@ class BatchedCore:
         is within its band (socialzoo.scenarios.script)."""
         assert self.state is not None
         return self.script.escort_ok(self.state)
+
+    @property
+    def time_limit(self) -> np.ndarray:
+        """(B,) each row's own time budget, s (a recorded scene's; inf: the task's)."""
+        return self.replay.time_limit
 
     def goal_distance(self) -> np.ndarray:
         """(B, R) each robot's straight distance to its goal, m."""

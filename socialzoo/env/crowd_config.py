@@ -22,7 +22,7 @@ from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
 from socialzoo.humans.models import PeopleSpecError, parse_people
-from socialzoo.scenarios.catalogue import FAMILIES
+from socialzoo.scenarios.catalogue import FAMILIES, get_family
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 CrowdAction = Literal["continuous", "discrete"]
@@ -30,7 +30,9 @@ CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
 # The models of a people spec (socialzoo.humans.models) the task drives through the one world step
 # (socialzoo.env.core): its cases have no routes for walking groups, and it runs no learned
 # policy of its own.
-CROWD_MODELS: tuple[str, ...] = ("sf", "orca")
+# Recorded people (a recorded scene's) may also replay their tracks or react by one of these
+# ("replay", "hybrid:sf", "hybrid:orca").
+CROWD_MODELS: tuple[str, ...] = ("sf", "orca", "replay")
 ActionFrame = Literal["goal", "world"]
 ACTION_FRAMES: tuple[str, ...] = get_args(ActionFrame)
 # CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
@@ -38,6 +40,8 @@ SPEED_SAMPLES = 5
 ROTATION_SAMPLES = 16
 # The map_name of the families of CrowdNav's open arena (socialzoo.scenarios.catalogue).
 ARENA = "arena"
+# CrowdNav's own arena families, chosen by cases.layout (not CrowdNavConfig.family).
+ARENA_LAYOUTS = ("crowdnav_circle_crossing", "crowdnav_square_crossing")
 
 
 def crowdnav_robot(kinematics: str = "holonomic") -> RobotConfig:
@@ -79,7 +83,9 @@ class CrowdNavConfig:
             e.g. the guidelines' suite, socialzoo.scenarios.suite): the task plays that family's
             scenarios, training cases from its training seeds and fixed cases from its own "val"
             and "test" splits (a family without splits: its map's validation and test sets' seeds).
-            CrowdNav's arena families are cases.layout, not a family here.
+            CrowdNav's arena families are cases.layout, not a family here. A family in the open
+            (map "arena", a recorded scene's: socialzoo.scenarios.recorded) plays without walls,
+            its person slots (max_humans None) sized to its largest scenario.
         signals: each person slot also carries the gesture its person shows (0 none, 1 wait,
             2 proceed; socialzoo.scenarios.script) and the robot part the nearest door (its point
             nearest the robot in the observation frame, and closed 0/1)
@@ -127,7 +133,7 @@ class CrowdNavConfig:
         if self.robot.radius is None:
             raise ValueError("CrowdNavConfig.robot.radius must be set (the task's robot is a disc)")
         try:
-            models = {part.model for part in parse_people(self.humans)}
+            models = {part.walks_as for part in parse_people(self.humans)}
         except PeopleSpecError as err:
             raise ValueError(f"CrowdNavConfig.humans: {err}") from None
         if not models <= set(CROWD_MODELS):
@@ -167,13 +173,19 @@ class CrowdNavConfig:
                 f"CrowdNavConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
             )
         home = family_map(self.family, "CrowdNavConfig.family")
-        if home == ARENA:
+        if self.family in ARENA_LAYOUTS:
             raise ValueError(
                 f"CrowdNavConfig.family: {self.family!r} is a family of CrowdNav's open arena; choose the "
                 "arena's cases with cases.layout (and map=None, no family)"
             )
-        if self.map is None:
+        if self.map is None and home != ARENA:
             object.__setattr__(self, "map", home)
+        if self.max_humans is None:
+            # A family whose scenarios hold more people than the cases' count (a recorded scene's)
+            # sizes the person slots.
+            most = getattr(get_family(self.family), "max_people", None)
+            if most is not None and most > self.cases.num_humans:
+                object.__setattr__(self, "max_humans", int(most))
 
     @property
     def slots(self) -> int:

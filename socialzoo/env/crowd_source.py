@@ -9,7 +9,9 @@ itself, so a single env seeded with s plays row 0's episodes), never a validatio
 On a building map (crowd navigation among walls) the cases are the benchmark's scenarios of that
 map, drawn by the benchmark's training stream (socialzoo.env.scenario_source); with a scenario
 family (CrowdNavConfig.family) that family's scenarios, drawn by the same stream (which skips the
-family's validation and test seeds), and its fixed cases from the family's own splits.
+family's validation and test seeds), and its fixed cases from the family's own splits. A family
+in the open (map "arena": a recorded scene, socialzoo.scenarios.recorded) draws its training seeds
+like the arena's cases, from its training split's first seed up.
 """
 
 from __future__ import annotations
@@ -45,6 +47,10 @@ class CrowdCaseSource:
         # One case generator reseeded per case (CrowdNav's seeding; a fresh one costs ~0.6 ms).
         self._case_rs = np.random.RandomState()
         self._scenarios = None
+        # A family in the open (a recorded scene's): its scenarios, no map.
+        self.open_family = (
+            get_family(config.family) if config.family is not None and config.map is None else None
+        )
         if config.map is not None:
             from socialzoo.env.scenario_source import ScenarioStream
             from socialzoo.maps.map_file import load_map
@@ -69,6 +75,10 @@ class CrowdCaseSource:
         rows = np.asarray(rows, dtype=np.intp)
         if self._scenarios is not None:
             return self._scenarios.next(rows)
+        if self.open_family is not None:
+            low = self.open_family.splits["train"].first
+            seeds = [int(self._rngs[row].integers(low, _SEED_LIMIT)) for row in rows]
+            return [self.open_family.make(seed, self.config.num_robots) for seed in seeds]
         low = self.family.splits["train"].first
         seeds = [int(self._rngs[row].integers(low, _SEED_LIMIT)) for row in rows]
         r = self.config.num_robots
@@ -82,7 +92,8 @@ class CrowdCaseSource:
         splits of its own)."""
         r = self.config.num_robots
         if self.config.map is None:
-            return [self.family.make(self.family.case_seed(split, int(k)), r) for k in indices]
+            family = self.open_family or self.family
+            return [family.make(family.case_seed(split, int(k)), r) for k in indices]
         cases = self.case_sets()[split]
         stream = self._scenarios
         assert stream is not None
@@ -117,6 +128,9 @@ class CrowdCaseSource:
     def case_splits(self) -> dict[str, int]:
         """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, else those
         of `case_sets`."""
+        if self.open_family is not None:
+            splits = self.open_family.splits
+            return {k: int(splits[k].size or 0) for k in ("val", "test") if k in splits}
         if self.config.map is None:
             return dict(SPLIT_SIZE)
         return {

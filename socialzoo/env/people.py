@@ -118,13 +118,21 @@ class People:
         return (GROUP_KEYS if self.groups else ()) + (COST_KEYS if self.counterfactual else ())
 
     # ------------------------------------------------------------------ reset
+    def kinds(self, seeds: Sequence[int], counts: Sequence[int]) -> np.ndarray:
+        """(len(seeds), H) each person slot's index into the spec's parts for rows with these seeds
+        and head counts (socialzoo.humans.models.assign_models); -1 in empty slots."""
+        kinds = np.full((len(seeds), self.max_humans), -1, dtype=np.int64)
+        for row, (seed, n) in enumerate(zip(seeds, counts, strict=True)):
+            kinds[row, :n] = assign_models(self.parts, n, seed)
+        return kinds
+
     def models(self, seeds: Sequence[int], counts: Sequence[int]) -> np.ndarray:
         """(len(seeds), H) int8 model of every person slot of rows with these seeds and head counts
         (socialzoo.humans.models.assign_models); social force in empty slots."""
         models = np.zeros((len(seeds), self.max_humans), dtype=np.int8)
         if len(self.parts) > 1 or self.parts[0].model != "sf":
-            for row, (seed, n) in enumerate(zip(seeds, counts, strict=True)):
-                models[row, :n] = self.ids[assign_models(self.parts, n, seed)]
+            kinds = self.kinds(seeds, counts)
+            models[:] = np.where(kinds >= 0, self.ids[kinds], 0)
         return models
 
     def prepare(self, scenarios: list[Scenario]) -> tuple[list[Scenario], np.ndarray]:

@@ -6,7 +6,13 @@ A people spec names one model, or a mix of models with the share of the crowd ea
 scenario assigns its people to the models from its own seed, the same way every time: the head
 counts by largest remainder of share x people, the people by a seeded permutation.
 
-The world reads the result from WorldState.human_model (SOCIAL_FORCE, ORCA, LEARNED) and
+Recorded people (a scene's scenarios, socialzoo.scenarios.recorded) take two more: "replay" (they
+follow their recorded tracks and ignore the robot) and "hybrid:MODEL" with MODEL one of sf, orca
+or learned:PATH (they follow their tracks until a robot comes near, then MODEL walks them along the
+rest of their recorded path; the rule is socialzoo.env.replay's). On a recorded scene the other
+models walk each person from where and when it enters towards where it leaves.
+
+The world reads the result from WorldState.human_model (SOCIAL_FORCE, ORCA, LEARNED, REPLAY) and
 WorldState.human_group (walking groups are social-force people with a group).
 """
 
@@ -23,8 +29,21 @@ from socialzoo.core.validation import check_number
 SOCIAL_FORCE = 0
 ORCA = 1
 LEARNED = 2
+# A recorded person on its track (socialzoo.env.replay writes where it is; no model moves it).
+REPLAY = 3
 # The models of a people spec, and the WorldState.human_model each one sets.
-MODEL_IDS: dict[str, int] = {"sf": SOCIAL_FORCE, "orca": ORCA, "groups": SOCIAL_FORCE, "learned": LEARNED}
+MODEL_IDS: dict[str, int] = {
+    "sf": SOCIAL_FORCE,
+    "orca": ORCA,
+    "groups": SOCIAL_FORCE,
+    "learned": LEARNED,
+    "replay": REPLAY,
+    "hybrid": REPLAY,
+}
+# The models a hybrid person may switch to.
+REACTING_MODELS = ("sf", "orca", "learned")
+# Models only recorded people can have.
+RECORDED_MODELS = ("replay", "hybrid")
 ALIASES: dict[str, str] = {"social_force": "sf"}
 # Shares of a mix must sum to 1 within this.
 _SUM_TOLERANCE = 1e-9
@@ -42,19 +61,29 @@ class PeoplePart:
     """One model of a people spec.
 
     Attributes:
-        model: "sf", "orca", "groups" or "learned".
+        model: "sf", "orca", "groups", "learned", "replay" or "hybrid".
         share: the share of each scenario's people it drives, in (0, 1].
-        path: the policy file of a learned model, else None.
+        path: the policy file of a learned model (a hybrid one's included), else None.
+        reacts_as: the model a hybrid person switches to ("sf", "orca" or "learned"), else None.
     """
 
     model: str
     share: float
     path: str | None = None
+    reacts_as: str | None = None
 
     @property
     def name(self) -> str:
-        """The part as a spec names it ("learned:PATH" for a learned model)."""
-        return self.model if self.path is None else f"{self.model}:{self.path}"
+        """The part as a spec names it ("learned:PATH", "hybrid:sf", "hybrid:learned:PATH")."""
+        inner = self.model if self.reacts_as is None else self.reacts_as
+        inner = inner if self.path is None else f"{inner}:{self.path}"
+        return inner if self.reacts_as is None else f"{self.model}:{inner}"
+
+    @property
+    def walks_as(self) -> str:
+        """The model that moves the person when it is not on its track: reacts_as for a hybrid
+        person, the model itself otherwise ("replay": none, it never leaves its track)."""
+        return self.reacts_as or self.model
 
 
 def parse_people(spec: str) -> tuple[PeoplePart, ...]:
@@ -94,16 +123,33 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
         model = ALIASES.get(model.strip().lower(), model.strip().lower())
         if model not in MODEL_IDS:
             raise PeopleSpecError(
-                f"people spec {spec!r}: unknown model {name!r}; known: sf (social_force), orca, groups, learned:PATH"
+                f"people spec {spec!r}: unknown model {name!r}; known: sf (social_force), orca, groups, "
+                "learned:PATH, and for recorded people replay and hybrid:MODEL"
             )
-        if model == "learned" and not path:
+        reacts_as = None
+        if model == "hybrid":
+            inner, _, path = path.partition(":")
+            reacts_as = ALIASES.get(inner.strip().lower(), inner.strip().lower())
+            if reacts_as not in REACTING_MODELS:
+                raise PeopleSpecError(
+                    f"people spec {spec!r}: a hybrid person reacts as one of {REACTING_MODELS} "
+                    f"(hybrid:sf, hybrid:orca, hybrid:learned:PATH), got {name!r}"
+                )
+            sep = ":" if reacts_as == "learned" else ""
+        learned = (reacts_as or model) == "learned"
+        if learned and not path:
             raise PeopleSpecError(f"people spec {spec!r}: name the learned policy file as learned:PATH")
-        if model != "learned" and sep:
+        if not learned and sep:
             raise PeopleSpecError(f"people spec {spec!r}: {model} takes no file")
-        parts.append(PeoplePart(model, share, path or None))
+        parts.append(PeoplePart(model, share, path or None, reacts_as))
     names = [p.model for p in parts]
     if len(set(names)) != len(names):
         raise PeopleSpecError(f"people spec {spec!r} names a model twice")
+    files = {p.path for p in parts if p.path is not None}
+    if len(files) > 1:
+        raise PeopleSpecError(
+            f"people spec {spec!r}: learned people share one policy file, got {sorted(files)}"
+        )
     total = math.fsum(p.share for p in parts)
     if abs(total - 1.0) > _SUM_TOLERANCE:
         raise PeopleSpecError(f"people spec {spec!r}: the shares sum to {total:g}, not 1")
@@ -122,11 +168,16 @@ class PeopleConfig:
             (pairs most common, as Moussaid et al. 2010 observed).
         counterfactual: run each scenario also without the robot, beside it in the same batch,
             and report each person's time lost and extra distance walked because of the robot.
+        react_radius: a hybrid person leaves its track when a robot's centre comes this near, m.
+        react_time: ... or when it would meet a robot (their centres within the world's
+            collision distance) within this many seconds, both keeping their velocities, s.
     """
 
     models: str = "sf"
     group_sizes: tuple[float, ...] = (0.6, 0.3, 0.1)
     counterfactual: bool = False
+    react_radius: float = 1.5
+    react_time: float = 2.0
 
     def __post_init__(self) -> None:
         try:
@@ -145,6 +196,8 @@ class PeopleConfig:
         object.__setattr__(self, "group_sizes", tuple(float(w) for w in sizes))
         if not isinstance(self.counterfactual, bool):
             raise ValueError(f"PeopleConfig.counterfactual must be a bool, got {self.counterfactual!r}")
+        check_number("PeopleConfig", "react_radius", self.react_radius, low=0.0)
+        check_number("PeopleConfig", "react_time", self.react_time, low=0.0)
 
     @property
     def parts(self) -> tuple[PeoplePart, ...]:
@@ -154,7 +207,12 @@ class PeopleConfig:
     @property
     def learned_path(self) -> str | None:
         """The learned policy file of the spec, or None."""
-        return next((p.path for p in self.parts if p.model == "learned"), None)
+        return next((p.path for p in self.parts if p.path is not None), None)
+
+    @property
+    def recorded(self) -> bool:
+        """Some people follow recorded tracks (replay or hybrid): only recorded scenes have them."""
+        return any(p.model in RECORDED_MODELS for p in self.parts)
 
     @property
     def has_groups(self) -> bool:

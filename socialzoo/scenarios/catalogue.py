@@ -99,6 +99,11 @@ FAMILIES: dict[str, ScenarioFamily | str] = {
     "perpendicular_flow": "socialzoo.scenarios.suite_social:PerpendicularFlow",
     "circular_crossing": "socialzoo.scenarios.suite_ways:CircularCrossing",
     "robot_crowding": "socialzoo.scenarios.suite_social:RobotCrowding",
+    # Recorded scenes (socialzoo.scenarios.recorded): the robot in a recorded person's place.
+    **{
+        f"recorded_{scene}": f"socialzoo.scenarios.recorded:Recorded{scene.capitalize()}"
+        for scene in ("eth", "hotel", "univ", "zara1", "zara2")
+    },
 }
 
 

@@ -31,6 +31,7 @@ from socialzoo.scenarios.feasibility import (
     redraw_human_pairs,
     redraw_robot_pair,
 )
+from socialzoo.scenarios.recorded_people import RecordedPeople
 from socialzoo.scenarios.script import Script
 
 SCENARIO_FORMAT = "socialzoo-scenario/1"
@@ -125,6 +126,8 @@ class Scenario:
             for none (socialzoo.humans.group_formation); default none. Saved only when someone walks in a group.
         script: who waits, signals or follows a robot, whom each robot escorts, and doors
             (socialzoo.scenarios.script); None: people walk their routes, robots reach their goals.
+        recorded: the people's recorded tracks and the person the robot replaced
+            (socialzoo.scenarios.recorded); None: nobody is recorded.
     """
 
     map_name: str
@@ -139,6 +142,7 @@ class Scenario:
     family: str = "benchmark"
     human_group: np.ndarray = None  # type: ignore[assignment]
     script: Script | None = None
+    recorded: RecordedPeople | None = None
 
     def __post_init__(self) -> None:
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
@@ -176,6 +180,11 @@ class Scenario:
             raise ValueError(
                 f"Scenario.script is for {self.script.num_humans} people and {self.script.num_robots} robots, "
                 f"the scenario has {n} and {len(starts)}"
+            )
+
+        if self.recorded is not None and self.recorded.num_people != n:
+            raise ValueError(
+                f"Scenario.recorded holds {self.recorded.num_people} tracks, the scenario has {n} people"
             )
 
     @property
@@ -218,6 +227,8 @@ class Scenario:
             and (self.map_name, self.seed, self.family) == (other.map_name, other.seed, other.family)
             and (self.script is None) == (other.script is None)
             and (self.script is None or self.script == other.script)
+            and (self.recorded is None) == (other.recorded is None)
+            and (self.recorded is None or self.recorded == other.recorded)
             and len(self.human_routes) == len(other.human_routes)
             and all(_same(a, b) for a, b in zip(self.human_routes, other.human_routes, strict=True))
         )
@@ -240,6 +251,7 @@ class Scenario:
             "human_speed": self.human_speed.tolist(),
             **({"human_group": self.human_group.tolist()} if np.any(self.human_group >= 0) else {}),
             **({"script": self.script.to_json()} if self.script is not None else {}),
+            **({"recorded": self.recorded.to_json()} if self.recorded is not None else {}),
         }
 
     @classmethod
@@ -276,6 +288,7 @@ class Scenario:
                 human_speed=data["human_speed"],
                 human_group=data.get("human_group"),  # type: ignore[arg-type]
                 script=None if data.get("script") is None else Script.from_json(data["script"]),
+                recorded=None if data.get("recorded") is None else RecordedPeople.from_json(data["recorded"]),
             )
         except KeyError as err:
             raise ScenarioError(f"{where}: scenario JSON lacks key {err.args[0]!r}") from None

@@ -220,7 +220,7 @@ class CrowdNavTask(Task):
         for _ in range(cfg.physics_substeps):
             before = core.state
             assert before is not None
-            if cfg.map is None:
+            if cfg.map is None and cfg.family is None:
                 self._arrive(before)
             events = core.step(command)
             after = core.state
@@ -245,7 +245,7 @@ class CrowdNavTask(Task):
             goal_distance.reshape(b * r),
             float(cfg.robot.radius),  # type: ignore[arg-type]
             start_time,
-            cfg.time_limit,
+            np.minimum(cfg.time_limit, core.per_robot(core.time_limit)),
             cfg.reward,
             cfg.time_step,
         ).masked(core.done.reshape(b * r))
@@ -255,6 +255,8 @@ class CrowdNavTask(Task):
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
         for k, summary in zip(ended.tolist(), self.metrics.summaries(ended, outcome), strict=True):
             summary["wall_collision"] = float(wall[k] and outcome.collision[k])
+            if core.replay.recorded[k // r]:  # against the recording (socialzoo.env.replay)
+                summary.update(core.replay.summaries([k // r], [summary["navigation_time"]], k % r)[0])
             self._ended[k] = summary
         core.end_episodes((outcome.terminated | outcome.truncated).reshape(b, r))
         self.observation = self._observe()

@@ -1,0 +1,265 @@
+"""Recorded people in scenarios: a recorded scene's episodes, in which the robot takes one recorded
+person's place and everyone else walks as recorded (socialzoo.data reads the recordings).
+
+An episode of a scene starts when the replaced person enters. The robot starts where that person
+entered, heading along its first metre, and its goal is where the person left; its time budget is
+TIME_FACTOR times the person's recorded time, at least MIN_TIME_LIMIT. Everyone else seen during
+that budget is one person slot of the scenario with its track on the recording's frames (NaN
+before it enters and after it leaves), its route the track's points every ROUTE_STRIDE frames
+(what a model walks along when it moves the person, socialzoo.env.replay), and its preferred speed
+its mean recorded speed.
+
+A scene's tracks are split once, by a permutation drawn from the scene's name: of the eligible
+tracks (at least MIN_DURATION s and MIN_DISTANCE m from entry to exit), the first TEST_TRACKS (at
+most half) are the test cases, the next VAL_TRACKS (at most 15%) the validation cases, the rest
+train (seeds from TRAIN_FIRST on cycle through them). A robot never trains on a person it is tested
+in place of (it may meet that person as one of the crowd).
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from collections.abc import Sequence
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
+from socialzoo.scenarios.recorded_people import RecordedPeople, route_frames
+from socialzoo.scenarios.scenario import Scenario
+
+if TYPE_CHECKING:
+    from socialzoo.data.tracks import Recording
+    from socialzoo.maps.map_file import Map
+
+# The robot's time budget: this many times the replaced person's time, and at least MIN_TIME_LIMIT s.
+TIME_FACTOR = 2.0
+MIN_TIME_LIMIT = 10.0
+# Eligible tracks for the robot to take the place of.
+MIN_DURATION = 4.0
+MIN_DISTANCE = 2.0
+# The split of a scene's eligible tracks (seeds: val 0.., test 100.., train 1000..).
+VAL_TRACKS = 50
+TEST_TRACKS = 100
+TEST_FIRST = 100
+TRAIN_FIRST = 1000
+# Mixed with the scene's name for the permutation of its tracks.
+_SPLIT_STREAM = 0x7265636F7264  # "record"
+# The robot's start heading points at its track's first point this far from the start, m.
+_HEADING_REACH = 1.0
+# A recorded person's preferred speed is at least this, m/s (people who stand still, should a
+# model move them).
+MIN_SPEED = 0.3
+
+
+# ---------------------------------------------------------------------------- episodes of a scene
+def track_length(points: np.ndarray) -> float:
+    """The length of a path of points (k, 2), m."""
+    return float(np.sqrt((np.diff(points, axis=0) ** 2).sum(-1)).sum()) if len(points) > 1 else 0.0
+
+
+def heading_along(points: np.ndarray, reach: float = _HEADING_REACH) -> float:
+    """The heading from a path's first point to its first point at least `reach` away (its last
+    point if none is), rad."""
+    away = np.flatnonzero(np.hypot(*(points - points[0]).T) >= reach)
+    target = points[away[0]] if len(away) else points[-1]
+    d = target - points[0]
+    return float(math.atan2(d[1], d[0]))
+
+
+def eligible_tracks(recording: Recording) -> np.ndarray:
+    """Indices of the tracks a robot may take the place of (MIN_DURATION, MIN_DISTANCE)."""
+    keep = [
+        k
+        for k, t in enumerate(recording.tracks)
+        if (len(t.positions) - 1) * recording.dt >= MIN_DURATION
+        and float(np.hypot(*(t.positions[-1] - t.positions[0]))) >= MIN_DISTANCE
+    ]
+    return np.array(keep, dtype=np.int64)
+
+
+def split_tracks(recording: Recording) -> dict[str, np.ndarray]:
+    """The scene's eligible tracks split into "test", "val" and "train" (see the module docstring)."""
+    eligible = eligible_tracks(recording)
+    rng = np.random.default_rng([zlib.crc32(recording.name.encode()), _SPLIT_STREAM])
+    order = eligible[rng.permutation(len(eligible))]
+    test = min(TEST_TRACKS, len(order) // 2)
+    val = min(VAL_TRACKS, (len(order) * 3) // 20)
+    return {"test": order[:test], "val": order[test : test + val], "train": order[test + val :]}
+
+
+def replaced_scenario(
+    recording: Recording,
+    track: int,
+    *,
+    seed: int,
+    family: str,
+    map_name: str = "arena",
+) -> Scenario:
+    """The episode in which the robot takes the place of track `track` of `recording` (see the
+    module docstring): the others seen during the robot's budget are the scenario's people."""
+    me = recording.tracks[track]
+    duration = (len(me.positions) - 1) * recording.dt
+    limit = max(TIME_FACTOR * duration, MIN_TIME_LIMIT)
+    first = me.first_frame
+    last = min(recording.num_frames - 1, first + math.ceil(limit / recording.dt))
+    others = [
+        k
+        for k, t in enumerate(recording.tracks)
+        if k != track and t.first_frame <= last and t.last_frame >= first
+    ]
+    grid = recording.grid(others, first, last) if others else np.zeros((0, last - first + 1, 2))
+    start, goal = me.positions[0], me.positions[-1]
+    starts = np.array([[start[0], start[1], heading_along(me.positions)]])
+    goals = np.array([[goal[0], goal[1], heading_along(me.positions[::-1]) + math.pi]])
+    recorded = RecordedPeople(
+        dt=recording.dt,
+        tracks=grid,
+        time_limit=limit,
+        robot_track=me.positions,
+        scene=recording.name,
+        first_frame=first,
+        persons=np.array([recording.tracks[k].person for k in others], dtype=np.int64),
+    )
+    return people_scenario(recorded, starts, goals, seed=seed, family=family, map_name=map_name)
+
+
+def people_scenario(
+    recorded: RecordedPeople,
+    robot_starts: np.ndarray,
+    robot_goals: np.ndarray,
+    *,
+    seed: int,
+    family: str,
+    map_name: str = "arena",
+) -> Scenario:
+    """A scenario of recorded people: each one's spawn is its first recorded position, its route
+    its track's points every ROUTE_STRIDE frames and its last, its speed its mean recorded speed."""
+    spawn, routes, speed = [], [], []
+    for track in recorded.tracks:
+        on = np.flatnonzero(~np.isnan(track[:, 0]))
+        points = track[route_frames(track)]
+        spawn.append(points[0])
+        routes.append(points)
+        seen = track[on[0] : on[-1] + 1]
+        seen = seen[~np.isnan(seen[:, 0])]
+        time = (on[-1] - on[0]) * recorded.dt
+        speed.append(max(track_length(seen) / time, MIN_SPEED) if time > 0 else MIN_SPEED)
+    n = recorded.num_people
+    return Scenario(
+        map_name=map_name,
+        seed=seed,
+        family=family,
+        robot_starts=robot_starts,
+        robot_goals=robot_goals,
+        human_spawn=np.array(spawn).reshape(n, 2),
+        human_start_index=np.full(n, -1),
+        human_goal_index=np.full(n, -1),
+        human_routes=tuple(routes),
+        human_speed=np.array(speed),
+        recorded=recorded,
+    )
+
+
+class RecordedScene(ScenarioFamily):
+    """The episodes of one recording (see the module docstring): case k of a split is the robot in
+    the place of that split's k-th track.
+
+    Args:
+        recording: the scene, or None to load `scene` from the data cache on first use
+            (socialzoo.data.fetch.load_scene: `socialzoo data fetch eth-ucy` first).
+        name: the family's registry name (default "recorded_<scene>").
+        map_name: "arena" (open space: the recordings' own) or a map file in the scene's frame.
+    """
+
+    scene: str = ""
+    map_name = "arena"
+
+    def __init__(
+        self, recording: Recording | None = None, name: str | None = None, map_name: str = "arena"
+    ) -> None:
+        self._recording = recording
+        if recording is not None:
+            self.scene = recording.name
+        self.name = name or f"recorded_{self.scene}"
+        self.map_name = map_name
+        self.description = (
+            f"the robot in the place of a recorded person of the {self.scene} scene, the others as recorded"
+        )
+
+    @cached_property
+    def recording(self) -> Recording:
+        """The scene's recording (loaded on first use)."""
+        if self._recording is None:
+            from socialzoo.data.fetch import load_scene
+
+            self._recording = load_scene(self.scene)
+        return self._recording
+
+    @cached_property
+    def track_splits(self) -> dict[str, np.ndarray]:
+        """The scene's tracks of each split (split_tracks)."""
+        return split_tracks(self.recording)
+
+    @property
+    def splits(self) -> dict[str, SeedSplit]:  # type: ignore[override]
+        """The seeds of the scene's splits: val 0.., test TEST_FIRST.., train TRAIN_FIRST.. (no end)."""
+        sizes = {k: len(v) for k, v in self.track_splits.items()}
+        return {
+            "val": SeedSplit(0, sizes["val"]),
+            "test": SeedSplit(TEST_FIRST, sizes["test"]),
+            "train": SeedSplit(TRAIN_FIRST),
+        }
+
+    @cached_property
+    def max_people(self) -> int:
+        """The most people of any episode of the scene (its scenarios' person slots)."""
+        rec = self.recording
+        first = np.array([t.first_frame for t in rec.tracks])
+        last = np.array([t.last_frame for t in rec.tracks])
+        most = 0
+        for k in eligible_tracks(rec).tolist():
+            duration = (last[k] - first[k]) * rec.dt
+            end = first[k] + math.ceil(max(TIME_FACTOR * duration, MIN_TIME_LIMIT) / rec.dt)
+            most = max(most, int(((first <= end) & (last >= first[k])).sum()) - 1)
+        return most
+
+    def track_of(self, seed: int) -> int:
+        """The track the robot replaces in the episode of `seed`."""
+        splits = self.track_splits
+        if seed >= TRAIN_FIRST:
+            pool, k = splits["train"], seed - TRAIN_FIRST
+            if len(pool) == 0:
+                raise ValueError(f"{self.name}: the scene has no training tracks")
+            return int(pool[k % len(pool)])
+        pool, k = (splits["test"], seed - TEST_FIRST) if seed >= TEST_FIRST else (splits["val"], seed)
+        if k >= len(pool):
+            raise ValueError(f"{self.name}: seed {seed} names no track (the split holds {len(pool)})")
+        return int(pool[k])
+
+    def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
+        """The episode of `seed`: the robot in the place of track_of(seed)."""
+        if num_robots != 1:
+            raise ValueError(f"{self.name}: a recorded scene's episode has one robot, {num_robots} asked")
+        map_name = self.map_name if m is None else m.name
+        return replaced_scenario(
+            self.recording, self.track_of(seed), seed=seed, family=self.name, map_name=map_name
+        )
+
+
+def _scene_family(scene: str) -> type[RecordedScene]:
+    return type(f"Recorded{scene.capitalize()}", (RecordedScene,), {"scene": scene})
+
+
+RecordedEth = _scene_family("eth")
+RecordedHotel = _scene_family("hotel")
+RecordedUniv = _scene_family("univ")
+RecordedZara1 = _scene_family("zara1")
+RecordedZara2 = _scene_family("zara2")
+
+
+def scenes_in(scenarios: Sequence[Scenario]) -> bool:
+    """Whether any scenario has recorded people."""
+    return any(s.recorded is not None for s in scenarios)
