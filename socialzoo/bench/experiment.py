@@ -288,11 +288,11 @@ def hashed_people(models: str) -> str:
     parts = parse_people(models)
     if all(part.path is None for part in parts):
         return models
-    return "+".join(
-        f"{part.name if part.path is None else dataclasses.replace(part, path='sha256:' + str(file_digest(part.path))).name}"
-        f"@{part.share!r}"
+    named = (
+        part if part.path is None else dataclasses.replace(part, path=f"sha256:{file_digest(part.path)}")
         for part in parts
     )
+    return "+".join(f"{part.name}@{part.share!r}" for part in named)
 
 
 def check_humans(humans: str) -> str:

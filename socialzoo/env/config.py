@@ -125,6 +125,14 @@ class EnvConfig:
         home = "gdc1"  # the benchmark's map
         if self.family is not None:
             home = family_map(self.family, "EnvConfig.family")  # refuses a family that cannot load
+        if self.map is None and home == OPEN:
+            # The task plans on a map's graph: a family in the open gives its open area as one.
+            opening = getattr(get_family(self.family), "open_map", None)  # type: ignore[arg-type]
+            if opening is None:
+                raise ValueError(
+                    f"EnvConfig.family: {self.family!r} plays in the open arena, with no map of its own; give map=PATH"
+                )
+            home = opening()
         if self.map is None:
             object.__setattr__(self, "map", home)
         if not isinstance(self.map, str) or not self.map:
@@ -174,8 +182,10 @@ class EnvConfig:
 
     @property
     def max_humans(self) -> int:
-        """Human slots per world (H): the scenario generator's maximum head count."""
-        return self.scenario.max_humans
+        """Human slots per world (H): the scenario generator's maximum head count, or a family's
+        largest scenario where that is larger (a recorded scene's: socialzoo.scenarios.recorded)."""
+        most = getattr(get_family(self.family), "max_people", None) if self.family is not None else None
+        return self.scenario.max_humans if most is None else max(self.scenario.max_humans, int(most))
 
     @property
     def observation_size(self) -> int:
@@ -249,6 +259,10 @@ class EnvConfig:
             else:
                 resolved[key] = value
         return dataclasses.replace(self, **resolved)
+
+
+# A family's map_name for the open (no walls): CrowdNav's arena, a recorded scene.
+OPEN = "arena"
 
 
 def family_map(name: str, where: str) -> str:

@@ -95,6 +95,7 @@ def robot_outcome(
     was_done: np.ndarray,
     config: EnvConfig,
     may_arrive: np.ndarray | None = None,
+    max_steps: np.ndarray | None = None,
 ) -> RobotOutcome:
     """Reward terms, reward and episode end of every robot for the step before -> after.
 
@@ -109,6 +110,8 @@ def robot_outcome(
         config: the env's configuration (reward weights, goal radius, time limit).
         may_arrive: (B, R) bool, robots whose goal may count as reached now (a robot escorting a
             person arrives only with that person: socialzoo.env.script); None: all.
+        max_steps: (B,) each row's own step limit (a recorded scene's time budget), below the
+            config's; None: the config's for all.
 
     Returns:
         The RobotOutcome.
@@ -133,7 +136,8 @@ def robot_outcome(
     # benchmark's success metric additionally requires zero collisions (EpisodeMetrics).
     reward, _ = compute_reward(d_g, blame, force, reached, contacts, config.reward)
     done = np.asarray(was_done, dtype=bool).reshape(-1)
-    out_of_time = np.repeat(after.step_count >= config.max_steps, r)
+    limit = config.max_steps if max_steps is None else np.minimum(config.max_steps, max_steps)
+    out_of_time = np.repeat(after.step_count >= limit, r)
     terminated, truncated = episode_end(reached, wall, out_of_time, done)
     shape = (b, r)
     return RobotOutcome(

@@ -15,6 +15,8 @@ among walls). Their kwargs hold map=None, so the map is the family's whichever f
 names (socialzoo.env.config.EnvConfig.map, socialzoo.env.crowd_config.CrowdNavConfig.map).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within v2, the ids socialzoo/Recorded-v2 and socialzoo/CrowdNavRecorded-v1 (recorded scenes) are
+        new, and no other id's rollouts change.
     Within v2, the ids socialzoo/Suite-v2 and socialzoo/CrowdNavSuite-v1 (CrowdNav's v1) are new;
         the observation's signal block is opt-in (signals=True), so no other id's rollouts change.
     socialzoo_parallel_v2, socialzoo_crowdnav_v2 (the ParallelEnvs' metadata names; every id
@@ -112,6 +114,31 @@ SUITE_IDS: dict[str, dict] = {
 }
 
 
+# Recorded scenes (socialzoo.scenarios.recorded): the robot in a recorded person's place, by the
+# `family` keyword (recorded_eth, recorded_hotel, recorded_univ, recorded_zara1, recorded_zara2;
+# `socialzoo data fetch eth-ucy` first), the people replaying their tracks by default (people
+# "hybrid:sf", "hybrid:orca" react). Each episode's time budget is its scene's (twice the replaced
+# person's time). The CrowdNav task in the open with a visible robot and person slots for the
+# scene's largest episode; the action-selection task on the scene's open area as a map.
+RECORDED_DEFAULT_FAMILY = "recorded_eth"
+RECORDED_IDS: dict[str, dict] = {
+    f"socialzoo/Recorded-v{ENV_VERSION}": {
+        "task": "action_selection",
+        "map": None,
+        "family": RECORDED_DEFAULT_FAMILY,
+        "people": {"models": "replay"},
+    },
+    crowd_env_id("Recorded"): {
+        "task": "crowdnav",
+        "map": None,
+        "family": RECORDED_DEFAULT_FAMILY,
+        "humans": "replay",
+        "robot_visible": True,
+        "time_limit": 200.0,
+    },
+}
+
+
 def register_task(env_id: str, task: str, **kwargs: object) -> None:
     """Register `env_id` as the Gymnasium env and VectorEnv of `task` (idempotent).
 
@@ -132,5 +159,5 @@ def register_task(env_id: str, task: str, **kwargs: object) -> None:
 
 def register_envs() -> None:
     """Register every id of socialzoo's tasks (idempotent)."""
-    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS, **SUITE_IDS}.items():
+    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS, **SUITE_IDS, **RECORDED_IDS}.items():
         register_task(env_id, **kwargs)

@@ -367,15 +367,15 @@ class ReplayRunner:
                 out.append({})
                 continue
             person = (
-                (self.robot_track_len[row] - 1) * self.frame_dt[row]
+                float((self.robot_track_len[row] - 1) * self.frame_dt[row])
                 if self.robot_track_len[row]
                 else math.nan
             )
             reacted = ~np.isnan(self.reacted_at[row])
             entry: dict[str, Any] = {
-                "person_time": float(person),
+                "person_time": person,
                 "person_time_ratio": float(reached) / person
-                if person > 0 and math.isfinite(reached)
+                if person > 0 and math.isfinite(float(reached))
                 else math.nan,
                 "person_path_deviation": float(self.deviation[row, robot] / self.moves[row, robot])
                 if self.moves[row, robot] and self.robot_track_len[row] > 1

@@ -47,6 +47,10 @@ TEST_FIRST = 100
 TRAIN_FIRST = 1000
 # Mixed with the scene's name for the permutation of its tracks.
 _SPLIT_STREAM = 0x7265636F7264  # "record"
+# The open area of a scene as a map (for tasks that need one): its walls stand this far beyond
+# every recorded position, its graph is a grid of this spacing, m.
+OPEN_MARGIN = 3.0
+OPEN_SPACING = 2.0
 # The robot's start heading points at its track's first point this far from the start, m.
 _HEADING_REACH = 1.0
 # A recorded person's preferred speed is at least this, m/s (people who stand still, should a
@@ -239,6 +243,17 @@ class RecordedScene(ScenarioFamily):
             raise ValueError(f"{self.name}: seed {seed} names no track (the split holds {len(pool)})")
         return int(pool[k])
 
+    def open_map(self) -> str:
+        """The path of the scene's open area as a map file (open_area_map), written once into the
+        data cache (socialzoo.data.fetch.data_dir) beside the recordings."""
+        from socialzoo.data.fetch import data_dir
+
+        path = data_dir() / "maps" / f"{self.name}.json"
+        if not path.exists():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            open_area_map(self.recording, self.name).save(path)
+        return str(path)
+
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
         """The episode of `seed`: the robot in the place of track_of(seed)."""
         if num_robots != 1:
@@ -247,6 +262,40 @@ class RecordedScene(ScenarioFamily):
         return replaced_scenario(
             self.recording, self.track_of(seed), seed=seed, family=self.name, map_name=map_name
         )
+
+
+def open_area_map(recording: Recording, name: str) -> Map:
+    """The scene's open area as a map: four walls OPEN_MARGIN beyond every recorded position, a
+    grid graph (8-neighbour) of OPEN_SPACING inside them, and its nodes as legal poses. The
+    recordings have no walls of their own; a task that plans on a map's graph (the action-selection
+    task's sub-policies) plans straight lines here."""
+    from socialzoo.maps.map_file import Map
+
+    points = np.concatenate([t.positions for t in recording.tracks])
+    low, high = points.min(0) - OPEN_MARGIN, points.max(0) + OPEN_MARGIN
+    x0, y0, x1, y1 = float(low[0]), float(low[1]), float(high[0]), float(high[1])
+    walls = np.array([[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]])
+    xs = np.arange(x0 + OPEN_SPACING / 2, x1 - OPEN_SPACING / 4, OPEN_SPACING)
+    ys = np.arange(y0 + OPEN_SPACING / 2, y1 - OPEN_SPACING / 4, OPEN_SPACING)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    nodes = np.stack((gx.ravel(), gy.ravel()), -1)
+    index = np.arange(len(nodes)).reshape(len(xs), len(ys))
+    ii, jj = np.meshgrid(np.arange(len(xs)), np.arange(len(ys)), indexing="ij")
+    pairs = []
+    for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
+        ok = (ii + dx < len(xs)) & (jj + dy >= 0) & (jj + dy < len(ys))
+        pairs.append(np.stack((index[ii[ok], jj[ok]], index[ii[ok] + dx, jj[ok] + dy]), -1))
+    edges = np.concatenate(pairs)
+    poses = np.concatenate((nodes, np.zeros((len(nodes), 1))), 1)
+    return Map(
+        name=name,
+        walls=walls,
+        nodes=nodes,
+        edges=edges,
+        legal_poses=poses,
+        source=f"the open area of the recorded scene {recording.name} ({recording.source})",
+        licence="derived from the recording's positions; no walls of its own",
+    )
 
 
 def _scene_family(scene: str) -> type[RecordedScene]:

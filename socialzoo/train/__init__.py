@@ -32,6 +32,8 @@ TRAINERS: dict[str, str] = {
     "cotrain": "socialzoo.train.cotrain:CotrainArgs",
     # The CrowdNav task: PPO with attention over people (velocity control).
     "crowdnav": "socialzoo.train.crowdnav:CrowdNavArgs",
+    # Learned people cloned from recorded ETH/UCY tracks.
+    "people-bc": "socialzoo.train.people_bc:Args",
 }
 
 

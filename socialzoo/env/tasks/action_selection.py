@@ -280,7 +280,12 @@ class ActionSelectionTask(Task):
         visible = self._observe(np.arange(b))
         skip = followed_human(action, target, cfg.robot_action)
         may_arrive = core.escort_ok() if core.script.active else None
-        out = robot_outcome(before, after, events, visible, skip, halt, was_done, cfg, may_arrive)
+        # A recorded scene's episode has its own time budget (socialzoo.scenarios.recorded).
+        budget = core.time_limit
+        max_steps = (
+            np.ceil(budget / cfg.dt - 1e-9) if core.replay.active and np.isfinite(budget).any() else None
+        )
+        out = robot_outcome(before, after, events, visible, skip, halt, was_done, cfg, may_arrive, max_steps)
         self.metrics.update(
             robot_pose=after.robot_pose.reshape(b * r, 3),
             robot_vel=after.robot_vel.reshape(b * r, 2),
@@ -470,6 +475,11 @@ class ActionSelectionTask(Task):
         people = self.core.people
         if people.keys:
             for summary, extra in zip(summaries, people.summaries(rows, robot), strict=True):
+                summary.update(extra)
+        replay = self.core.replay
+        if replay.recorded[rows].any():  # against the recording (socialzoo.env.replay)
+            arrival = [s["time_to_goal"] if s["success"] else float("nan") for s in summaries]
+            for summary, extra in zip(summaries, replay.summaries(rows, arrival, robot), strict=True):
                 summary.update(extra)
         return summaries
 

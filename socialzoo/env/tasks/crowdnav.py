@@ -38,7 +38,7 @@ from socialzoo.env.crowd_observation import (
     robot_features,
     with_signals,
 )
-from socialzoo.env.crowd_outcome import CrowdNavMetrics, closest_boundary_distance, judge_step
+from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_boundary_distance, judge_step
 from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
 from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
@@ -455,18 +455,38 @@ class CrowdNavTask(Task):
         return _per_robot(observation, self.config.observation, self.batch_size, self.num_robots)
 
     def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
-        """The metrics of the episodes that ended (socialzoo.env.crowd_outcome.CrowdNavMetrics).
-
-        Raises:
-            ValueError: a robot whose episode has not ended yet.
-        """
+        """The metrics of each robot's episode (socialzoo.env.crowd_outcome.CrowdNavMetrics): the
+        one that ended, or the one running so far (neither success, collision nor timeout yet; an
+        adapter that cuts it short, a ParallelEnv's max_cycles, reads it)."""
         out = []
         for row in np.asarray(rows, dtype=np.intp).reshape(-1).tolist():
             flat = row * self.num_robots + robot
             if flat not in self._ended:
-                raise ValueError(f"{self.name}: robot {robot} of row {row} has not ended its episode")
+                out.append(self._running(flat))
+                continue
             out.append(self._ended[flat])
         return out
+
+    def _running(self, flat: int) -> dict[str, Any]:
+        """The metrics so far of robot `flat` (row * R + robot), whose episode has not ended."""
+        size = self.batch_size * self.num_robots
+        clear = np.zeros(size, dtype=bool)
+        running = CrowdOutcome(
+            reward=np.zeros(size),
+            success=clear,
+            collision=clear,
+            timeout=clear,
+            terminated=clear,
+            truncated=clear,
+            closest=np.full(size, np.inf),
+            discomfort=clear,
+        )
+        summary = self.metrics.summaries(np.array([flat]), running)[0]
+        summary["wall_collision"] = 0.0
+        row, robot = divmod(flat, self.num_robots)
+        if self.core.replay.recorded[row]:
+            summary.update(self.core.replay.summaries([row], [float("nan")], robot)[0])
+        return summary
 
     # ------------------------------------------------------------------ per-robot info
     @property

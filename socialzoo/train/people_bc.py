@@ -1,0 +1,468 @@
+"""`socialzoo train people-bc`: learned people cloned from recorded people (ETH/UCY tracks).
+
+Each training scene is replayed in the batched core (socialzoo.env.core.BatchedCore, everyone a
+follower of its track, socialzoo.env.replay; one row per time window of `window` frames; a robot
+parked far away that nobody sees). At every recorded frame each person present on the frame before,
+the frame and the frame after gives one demonstration:
+
+- the observation a learned person has there (socialzoo.env.human_agents.human_observations): its
+  route is its entry and its recorded exit (the last point of its whole track), its preferred speed
+  its mean recorded speed, its own velocity the one it walked into the frame with (frame - 1 ->
+  frame; the replay's is the next segment's, which would give the answer away), the others' as the
+  replay has them; neighbour rows of the parked robot are zeroed (absent), as it is not there;
+- the action that walks it to its recorded position on the next frame: the desired velocity v_d
+  that, through the social force every learned person walks by (dv/dt = (v_d - v) / tau + F, F
+  the other people's and walls' forces at the frame, held over the frame, the speed cap aside),
+  covers the recorded displacement over the frame period, expressed as an action of the policy's
+  frame and scale (the inverse of socialzoo.env.human_agents.action_velocities), clipped to
+  [-ACTION_LIMIT, ACTION_LIMIT].
+
+An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
+`val_fraction` of each scene's windows (in time) are held out for early stopping. The run folder
+holds run.json and people_bc.safetensors, a learned human policy file (socialzoo.env.human_policy)
+that `learned:PATH` walks anywhere. `held_out_ade` measures it on a scene it never saw.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
+
+if TYPE_CHECKING:
+    from socialzoo.core.config import WorldConfig
+    from socialzoo.core.state import WorldState
+    from socialzoo.data.tracks import Recording
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+    from socialzoo.scenarios.scenario import Scenario
+
+logger = logging.getLogger(__name__)
+
+TRAINER = Trainer("people-bc", policy_file="people_bc.safetensors")
+# The world step of the replay, s (4 steps per 0.4 s frame).
+WORLD_DT = 0.1
+# Demonstrated actions are clipped to this (tanh reaches it at a finite mean).
+ACTION_LIMIT = 0.98
+# The parked robot's distance from the scene, m.
+_PARKED = 1.0e4
+# A person's preferred speed is at least this, m/s (socialzoo.scenarios.recorded.MIN_SPEED).
+MIN_SPEED = 0.3
+# The prediction literature's horizon: 12 frames (4.8 s) after a start frame.
+HORIZON_FRAMES = 12
+
+
+@dataclass(frozen=True, kw_only=True)
+class Args:
+    """Behaviour cloning of learned people on recorded ETH/UCY tracks.
+
+    Attributes:
+        scenes: the training scenes, comma-separated (socialzoo.data.fetch.SCENES).
+        out: run folder: people_bc.safetensors, run.json.
+        seed: seed of the network's initialisation and the batches' order.
+        cache: the scenes' cache folder (None: socialzoo.data.fetch.data_dir()).
+        window: recorded frames per batch row of the replay.
+        val_fraction: the last share of each scene's windows held out for early stopping.
+        num_neighbours: neighbours in the observation (EnvConfig.num_human_neighbours).
+        action_frame: the action's frame (EnvConfig.human_action_frame).
+        action_scale: the action times this times the preferred speed is the desired velocity.
+        hidden: hidden units per layer.
+        depth: hidden layers.
+        lr: Adam learning rate.
+        batch_size: demonstrations per gradient step.
+        max_epochs: passes over the training demonstrations at most.
+        patience: stop after this many passes without a better validation loss.
+        threads: torch CPU threads.
+        progress: show progress.
+    """
+
+    scenes: str = "eth,hotel,univ,zara1"
+    out: Path = Path("runs/people_bc")
+    seed: int = 0
+    cache: Path | None = None
+    window: int = 40
+    val_fraction: float = 0.15
+    num_neighbours: int = 6
+    action_frame: Literal["world", "human"] = "human"
+    action_scale: float = 2.0
+    hidden: int = 128
+    depth: int = 2
+    lr: float = 1e-3
+    batch_size: int = 512
+    max_epochs: int = 200
+    patience: int = 15
+    threads: int = 1
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        from socialzoo.data.fetch import check_scenes
+
+        names = tuple(s.strip() for s in str(self.scenes).split(",") if s.strip())
+        if not names:
+            raise ValueError(f"Args.scenes must name at least one scene, got {self.scenes!r}")
+        object.__setattr__(self, "scenes", ",".join(check_scenes(list(names))))
+        object.__setattr__(self, "out", Path(self.out))
+        if self.cache is not None:
+            object.__setattr__(self, "cache", Path(self.cache))
+        check_int(self, "window", 2)
+        for name in ("hidden", "depth", "batch_size", "max_epochs", "patience", "threads"):
+            check_int(self, name, 1)
+        check_int(self, "num_neighbours", 0)
+        check_number(self, "val_fraction", 0.0, high=1.0, low_open=True, high_open=True)
+        check_number(self, "action_scale", 0.0, low_open=True)
+        check_number(self, "lr", 0.0, low_open=True)
+
+    @property
+    def scene_names(self) -> tuple[str, ...]:
+        """The training scenes."""
+        return tuple(self.scenes.split(","))
+
+
+def replay_world(dt: float = WORLD_DT) -> WorldConfig:
+    """The world of the replay: the default people at `dt` s per step."""
+    from socialzoo.core.config import WorldConfig
+
+    return WorldConfig(dt=dt)
+
+
+# ---------------------------------------------------------------------------- scenes
+def mean_speeds(recording: Recording) -> np.ndarray:
+    """(N,) each track's mean recorded speed, at least MIN_SPEED, m/s."""
+    out = np.full(len(recording.tracks), MIN_SPEED)
+    for k, t in enumerate(recording.tracks):
+        if len(t.positions) > 1:
+            length = float(np.sqrt((np.diff(t.positions, axis=0) ** 2).sum(-1)).sum())
+            out[k] = max(length / ((len(t.positions) - 1) * recording.dt), MIN_SPEED)
+    return out
+
+
+def window_scenario(
+    recording: Recording, first: int, last: int, speeds: np.ndarray, *, subject: int | None = None
+) -> tuple[Scenario, np.ndarray]:
+    """The scenario of frames first..last of a recording: everyone seen on them follows its track
+    (but `subject`, in slot 0, whom a model walks), each one's route its entry and its recorded exit,
+    its speed its mean recorded speed; a robot parked far away. Returns it and the slots' tracks."""
+    from socialzoo.scenarios.recorded import people_scenario
+    from socialzoo.scenarios.recorded_people import RecordedPeople
+
+    seen = [k for k, t in enumerate(recording.tracks) if t.first_frame <= last and t.last_frame >= first]
+    if subject is not None:
+        seen = [subject] + [k for k in seen if k != subject]
+    order = np.array(seen, dtype=np.int64)
+    grid = recording.grid(seen, first, last)
+    follow = np.ones(len(order), dtype=bool)
+    if subject is not None:
+        follow[0] = False
+    recorded = RecordedPeople(
+        dt=recording.dt, tracks=grid, follow=follow, scene=recording.name, first_frame=first, persons=order
+    )
+    robot = np.array([[_PARKED, _PARKED, 0.0]])
+    scenario = people_scenario(
+        recorded, robot, robot + [[1.0, 0.0, 0.0]], seed=0, family=f"people_bc_{recording.name}"
+    )
+    # The exit repeated to the length of the recorded route (the replay sizes its route frames by it).
+    routes = tuple(
+        np.concatenate((route[:1], np.repeat(recording.tracks[k].positions[-1:], max(len(route) - 1, 1), 0)))
+        for route, k in zip(scenario.human_routes, seen, strict=True)
+    )
+    return dataclasses.replace(scenario, human_routes=routes, human_speed=speeds[order]), order
+
+
+def windows(num_frames: int, window: int) -> list[tuple[int, int]]:
+    """The replay's rows: frames (first, last) with first = start - 1 (the frame before the first
+    demonstrated one) and last = start + window (the frame after the last), starts every `window`."""
+    return [(max(s - 1, 0), min(s + window, num_frames - 1)) for s in range(0, num_frames - 1, window)]
+
+
+# ---------------------------------------------------------------------------- demonstrations
+def inverse_action(
+    state: WorldState, desired: np.ndarray, frame: str, scale: float
+) -> np.ndarray:
+    """(B, H, 2) the actions whose desired velocities (socialzoo.env.human_agents.action_velocities
+    of every slot) are `desired` (B, H, 2), m/s, world frame; 0 for slots of no preferred speed."""
+    from socialzoo.core.geometry import rotate
+    from socialzoo.env.human_agents import human_frames
+
+    slots = np.arange(state.max_humans)
+    if frame == "human":
+        desired = rotate(desired, -human_frames(state, slots))
+    speed = scale * state.human_pref_speed[:, :, None]
+    return np.where(speed > 0, desired / np.where(speed > 0, speed, 1.0), 0.0)
+
+
+def reaching_velocity(
+    v0: np.ndarray, displacement: np.ndarray, other: np.ndarray, period: float, world: WorldConfig
+) -> np.ndarray:
+    """The desired velocity (..., 2) that carries a person of velocity v0 over `displacement` in
+    `period` s under dv/dt = c (v_d - v) / tau + other (the social force, c its desired_factor),
+    other held constant. With u = v_d + tau other / c: v(t) = u + exp(-c t / tau) (v0 - u), so
+    displacement = u T + (v0 - u) s with s = tau / c (1 - exp(-c T / tau))."""
+    rate = world.human.desired_factor / world.human.relaxation_time
+    s = (1.0 - math.exp(-rate * period)) / rate
+    u = (displacement - s * v0) / (period - s)
+    return u - other / rate
+
+
+@dataclass(frozen=True)
+class Demonstrations:
+    """Observations and actions of recorded people.
+
+    Attributes:
+        obs: (N, D) float32 observations (socialzoo.env.human_agents.human_observations).
+        action: (N, 2) float32 actions in [-ACTION_LIMIT, ACTION_LIMIT].
+        window: (N,) the replay row (time window) of each, numbered within its scene.
+        clipped: (N,) bool, the action was clipped.
+    """
+
+    obs: np.ndarray
+    action: np.ndarray
+    window: np.ndarray
+    clipped: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.obs)
+
+    def take(self, index: np.ndarray) -> Demonstrations:
+        """The demonstrations at `index`."""
+        return Demonstrations(self.obs[index], self.action[index], self.window[index], self.clipped[index])
+
+    @staticmethod
+    def concatenate(parts: Sequence[Demonstrations]) -> Demonstrations:
+        """One set of several."""
+        return Demonstrations(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(Demonstrations)))
+
+
+def zero_robot_neighbours(obs: np.ndarray, num_neighbours: int) -> np.ndarray:
+    """`obs` (..., D) with each neighbour row of a robot zeroed (absent): the parked robot is not there."""
+    from socialzoo.env.human_agents import NEIGHBOUR_SIZE, OWN_SIZE
+
+    if num_neighbours == 0:
+        return obs
+    rows = obs[..., OWN_SIZE:].reshape(obs.shape[:-1] + (num_neighbours, NEIGHBOUR_SIZE))
+    rows = np.where(rows[..., 4:5] > 0.5, 0.0, rows)
+    return np.concatenate((obs[..., :OWN_SIZE], rows.reshape(obs.shape[:-1] + (-1,))), -1).astype(obs.dtype)
+
+
+def demonstrations(
+    recording: Recording,
+    *,
+    window: int = 40,
+    num_neighbours: int = 6,
+    action_frame: str = "human",
+    action_scale: float = 2.0,
+    world: WorldConfig | None = None,
+) -> Demonstrations:
+    """Every demonstration of a recording (module docstring), replayed in one batched core.
+
+    Raises:
+        ValueError: a world step that does not divide the recording's frame period.
+    """
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.env.human_agents import human_observations
+    from socialzoo.humans.social_force import human_acceleration
+
+    world = world or replay_world()
+    steps = round(recording.dt / world.dt)
+    if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
+        raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
+    speeds = mean_speeds(recording)
+    rows = windows(recording.num_frames, window)
+    built = [window_scenario(recording, a, b, speeds) for a, b in rows]
+    scenarios = [s for s, _ in built]
+    slots = max(s.num_humans for s in scenarios)
+    grids = np.full((len(rows), slots, window + 2, 2), np.nan)
+    for i, (scenario, _) in enumerate(built):
+        assert scenario.recorded is not None
+        t = scenario.recorded.tracks
+        grids[i, : len(t), : t.shape[1]] = t
+    walls = WallIndex(np.zeros((0, 4)))
+    core = BatchedCore(len(rows), 1, slots, world, walls, robot_visible=False)
+    core.reset_rows(np.arange(len(rows)), scenarios)
+    command = np.zeros((len(rows), 1, 2))
+    every = np.arange(slots)
+    out: list[Demonstrations] = []
+    for f in range(1, window + 1):
+        for _ in range(steps):
+            core.step(command)
+        state = core.state
+        assert state is not None
+        prev, here, nxt = grids[:, :, f - 1], grids[:, :, f], grids[:, :, f + 1]
+        usable = ~np.isnan(prev[..., 0]) & ~np.isnan(here[..., 0]) & ~np.isnan(nxt[..., 0])
+        usable &= state.human_mask & np.isclose(state.human_pos, np.nan_to_num(here)).all(-1)
+        # Near its exit a person's target turns back to its entry (the waypoint radius).
+        exit_dist = np.hypot(*(state.human_route[:, :, 1] - state.human_pos).transpose(2, 0, 1))
+        usable &= exit_dist > world.human.waypoint_radius
+        if not usable.any():
+            continue
+        v_in = np.where(usable[..., None], (here - prev) / recording.dt, state.human_vel)
+        seen = dataclasses.replace(state, human_vel=v_in)
+        obs = zero_robot_neighbours(human_observations(seen, walls, every, num_neighbours), num_neighbours)
+        other, _ = human_acceleration(
+            seen.human_pos, v_in, seen.human_target, seen.human_pref_speed, seen.human_mask,
+            seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
+            seen.human_mask,
+        )  # fmt: skip
+        desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, recording.dt, world)
+        action = inverse_action(seen, desired, action_frame, action_scale)
+        clipped = (np.abs(action) > ACTION_LIMIT).any(-1)
+        row, slot = np.nonzero(usable)
+        out.append(
+            Demonstrations(
+                obs[row, slot],
+                np.clip(action[row, slot], -ACTION_LIMIT, ACTION_LIMIT).astype(np.float32),
+                row.astype(np.int64),
+                clipped[row, slot],
+            )
+        )
+    if not out:
+        size = num_neighbours * 5 + 8
+        return Demonstrations(
+            np.zeros((0, size), np.float32), np.zeros((0, 2), np.float32), np.zeros(0, np.int64), np.zeros(0, bool)
+        )
+    return Demonstrations.concatenate(out)
+
+
+# ---------------------------------------------------------------------------- training
+def train(args: Args) -> Path:
+    """Clone recorded people on the trainer skeleton; returns people_bc.safetensors."""
+    return run_training(TRAINER, args, fit)
+
+
+def fit(run: TrainingRun) -> dict[str, Any]:
+    """Collect the demonstrations, fit the network with early stopping, save the policy."""
+    import torch
+
+    from socialzoo.data.fetch import load_scene
+
+    args: Args = run.args
+    train_parts, val_parts, per_scene = [], [], {}
+    for name in args.scene_names:
+        recording = load_scene(name, cache=args.cache)
+        demos = demonstrations(
+            recording, window=args.window, num_neighbours=args.num_neighbours,
+            action_frame=args.action_frame, action_scale=args.action_scale,
+        )  # fmt: skip
+        count = int(demos.window.max()) + 1 if len(demos) else 0
+        cut = count - max(1, round(args.val_fraction * count))
+        train_parts.append(demos.take(np.flatnonzero(demos.window < cut)))
+        val_parts.append(demos.take(np.flatnonzero(demos.window >= cut)))
+        per_scene[name] = {
+            "demonstrations": len(demos),
+            "clipped": round(float(demos.clipped.mean()), 4) if len(demos) else 0.0,
+        }
+        logger.info("people-bc: %s: %d demonstrations", name, len(demos))
+    train_set, val_set = Demonstrations.concatenate(train_parts), Demonstrations.concatenate(val_parts)
+    if len(train_set) == 0 or len(val_set) == 0:
+        raise ValueError(f"people-bc: no demonstrations to train on or validate with in {args.scenes}")
+    loc = train_set.obs.mean(0)
+    scale = train_set.obs.std(0)
+    scale = np.where(scale > 1e-6, scale, 1.0).astype(np.float32)
+    net = mlp(train_set.obs.shape[1], args.hidden, args.depth)
+    optimiser = torch.optim.Adam(net.parameters(), lr=args.lr)
+    x = torch.as_tensor((train_set.obs - loc) / scale)
+    y = torch.as_tensor(train_set.action)
+    xv = torch.as_tensor((val_set.obs - loc) / scale)
+    yv = torch.as_tensor(val_set.action)
+    best, best_state, best_epoch, epoch = math.inf, None, 0, 0
+    bar = run.progress(args.max_epochs, unit="epoch")
+    history = []
+    for epoch in range(1, args.max_epochs + 1):
+        order = torch.randperm(len(x))
+        total = 0.0
+        for lo in range(0, len(x), args.batch_size):
+            idx = order[lo : lo + args.batch_size]
+            loss = ((torch.tanh(net(x[idx])) - y[idx]) ** 2).mean()
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+            total += float(loss) * len(idx)
+        with torch.no_grad():
+            val = float(((torch.tanh(net(xv)) - yv) ** 2).mean())
+        history.append((total / len(x), val))
+        run.writer.add_scalar("loss/train", total / len(x), epoch)
+        run.writer.add_scalar("loss/val", val, epoch)
+        bar.update(1)
+        if val < best:
+            best, best_epoch = val, epoch
+            best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
+        elif epoch - best_epoch >= args.patience:
+            break
+    assert best_state is not None
+    net.load_state_dict(best_state)
+    policy = to_policy(net, loc, scale, args)
+    policy.save(run.policy, env_id(), training_record(args, per_scene, len(train_set), len(val_set), best, best_epoch))
+    with torch.no_grad():
+        baseline = float((yv**2).mean())
+    return {
+        "train_demonstrations": len(train_set),
+        "val_demonstrations": len(val_set),
+        "scenes": per_scene,
+        "epochs": epoch,
+        "best_epoch": best_epoch,
+        "val_mse": round(best, 6),
+        "val_mse_zero_action": round(baseline, 6),
+        "train_mse_last": round(history[-1][0], 6),
+    }
+
+
+def mlp(inputs: int, hidden: int, depth: int) -> Any:
+    """The network: `depth` tanh layers of `hidden` units, then the 2 pre-tanh action means."""
+    import torch
+
+    layers: list[Any] = []
+    width = inputs
+    for _ in range(depth):
+        layers += [torch.nn.Linear(width, hidden), torch.nn.Tanh()]
+        width = hidden
+    layers.append(torch.nn.Linear(width, 2))
+    return torch.nn.Sequential(*layers)
+
+
+def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> LearnedHumanPolicy:
+    """The trained network as a learned human policy."""
+    import torch
+
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+
+    linear = [m for m in net if isinstance(m, torch.nn.Linear)]
+    weights = [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy()) for m in linear]
+    return LearnedHumanPolicy(
+        weights, "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale
+    )
+
+
+def env_id() -> str:
+    """The env id recorded in the policy file (that of the multi-agent trainers' learned humans)."""
+    from socialzoo.train.mappo import env_id as multi_agent_env_id
+
+    return multi_agent_env_id()
+
+
+def training_record(
+    args: Args, scenes: dict[str, Any], num_train: int, num_val: int, val_mse: float, best_epoch: int
+) -> dict[str, Any]:
+    """The policy file's training record (plain JSON)."""
+    return {
+        "algorithm": "people-bc",
+        "scenes": list(args.scene_names),
+        "seed": args.seed,
+        "world_dt": WORLD_DT,
+        "window": args.window,
+        "per_scene": scenes,
+        "train_demonstrations": num_train,
+        "val_demonstrations": num_val,
+        "val_mse": round(val_mse, 6),
+        "best_epoch": best_epoch,
+        "command": (
+            f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"
+        ),
+    }

@@ -1,0 +1,222 @@
+"""Recorded people in the batched world (socialzoo.env.replay): replayed positions at the
+recording's frames, entering and leaving, the hybrid people's reaction rule, the measures against
+the recording, and both tasks with every adapter on a recorded scene."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.walls import WallIndex
+from socialzoo.data.tracks import Recording, Track
+from socialzoo.env.core import BatchedCore
+from socialzoo.env.replay import RecordingError
+from socialzoo.humans.models import REPLAY, SOCIAL_FORCE, PeopleConfig
+from socialzoo.scenarios.catalogue import FAMILIES, register_family
+from socialzoo.scenarios.recorded import RecordedScene, people_scenario, replaced_scenario
+from socialzoo.scenarios.recorded_people import RecordedPeople
+from socialzoo.scenarios.scenario import Scenario
+
+DT = 0.4
+
+
+def _walker(person: int, first: int, a, b, speed: float = 1.2) -> Track:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    n = int(np.ceil(np.hypot(*(b - a)) / speed / DT)) + 1
+    return Track(person, first, np.linspace(a, b, n))
+
+
+def _recording(count: int = 160, seed: int = 0) -> Recording:
+    rng = np.random.default_rng(seed)
+    tracks = [
+        _walker(
+            p, int(rng.integers(0, 300)), rng.uniform(-8, 8, 2), rng.uniform(-8, 8, 2), rng.uniform(0.8, 1.5)
+        )
+        for p in range(count)
+    ]
+    tracks.sort(key=lambda t: (t.first_frame, t.person))
+    return Recording(
+        name="synthetic",
+        dt=DT,
+        num_frames=max(t.last_frame for t in tracks) + 1,
+        tracks=tuple(tracks),
+        source="test",
+    )
+
+
+@pytest.fixture(scope="module")
+def family() -> RecordedScene:
+    name = "recorded_test_synthetic"
+    fam = FAMILIES.get(name)
+    if not isinstance(fam, RecordedScene):
+        fam = register_family(RecordedScene(_recording(), name=name))
+    return fam  # type: ignore[return-value]
+
+
+def _core(scenarios: list[Scenario], models: str, dt: float = 0.1, **people) -> BatchedCore:
+    world = WorldConfig(dt=dt)
+    core = BatchedCore(
+        len(scenarios),
+        1,
+        max(s.num_humans for s in scenarios),
+        world,
+        WallIndex(np.zeros((0, 4))),
+        people=PeopleConfig(models=models, **people),
+    )
+    core.reset_rows(np.arange(len(scenarios)), scenarios)
+    return core
+
+
+def _two_walkers(robot_start=(50.0, 50.0)) -> Scenario:
+    """A person walking +x from (0, 0) from frame 0, another entering at frame 5 and leaving at 15."""
+    tracks = np.full((2, 30, 2), np.nan)
+    tracks[0, :25] = np.stack((np.arange(25) * 0.5, np.zeros(25)), -1)
+    tracks[1, 5:16] = np.stack((np.full(11, 3.0), 5.0 - np.arange(11) * 0.4), -1)
+    recorded = RecordedPeople(dt=DT, tracks=tracks)
+    start = np.array([[*robot_start, 0.0]])
+    return people_scenario(recorded, start, start + [[1.0, 0.0, 0.0]], seed=3, family="test")
+
+
+def test_replay_is_the_recording_at_every_frame() -> None:
+    scenario = _two_walkers()
+    core = _core([scenario], "replay")
+    tracks = scenario.recorded.tracks
+    for step in range(1, 30 * 4):
+        core.step(np.zeros((1, 1, 2)))
+        if step % 4:
+            continue
+        frame = step // 4
+        present = ~np.isnan(tracks[:, frame, 0])
+        s = core.state
+        assert np.array_equal(s.human_mask[0, :2], present), frame
+        err = np.abs(s.human_pos[0, :2][present] - tracks[present, frame]).max(initial=0.0)
+        assert err < 0.01, (frame, err)  # within 1 cm of the file (here exact)
+        assert (s.human_model[0, :2] == REPLAY).all()
+    # Between frames: linear interpolation, with the segment's velocity.
+    core = _core([scenario], "replay")
+    for _ in range(2):
+        core.step(np.zeros((1, 1, 2)))
+    np.testing.assert_allclose(core.state.human_pos[0, 0], [0.25, 0.0], atol=1e-12)
+    np.testing.assert_allclose(core.state.human_vel[0, 0], [1.25, 0.0], atol=1e-12)
+
+
+def test_a_modelled_person_enters_when_recorded_and_leaves_at_its_route_end() -> None:
+    scenario = _two_walkers()
+    core = _core([scenario], "sf")
+    assert not core.state.human_mask[0, 1]
+    seen = []
+    for _ in range(300):
+        core.step(np.zeros((1, 1, 2)))
+        seen.append(bool(core.state.human_mask[0, 1]))
+    first = seen.index(True)
+    assert first + 1 == 5 * 4  # frame 5 at 0.1 s steps
+    np.testing.assert_allclose(core.replay.exit_at[0, 1] > 0, True)
+    assert not seen[-1]  # left at its route's end
+    assert core.state.human_model[0, 1] == SOCIAL_FORCE
+
+
+def test_hybrid_people_leave_their_track_only_when_a_robot_comes_near() -> None:
+    far = _core([_two_walkers((50.0, 50.0))], "hybrid:sf")
+    near = _core([_two_walkers((6.0, 0.0))], "hybrid:sf")  # on the first walker's line
+    for _ in range(40):
+        far.step(np.zeros((1, 1, 2)))
+        near.step(np.zeros((1, 1, 2)))
+    assert (far.state.human_model[0, :2] == REPLAY).all()
+    assert np.isnan(far.replay.reacted_at[0]).all()
+    reacted = near.replay.reacted_at[0, 0]
+    # The walker meets the robot's disc within react_time (2 s) of reaching ~2.4 m before it.
+    assert 0.0 < reacted < 10.0
+    assert near.state.human_model[0, 0] == SOCIAL_FORCE
+    # The rule: a robot within react_radius or a meeting within react_time.
+    walker_at = reacted * 1.25
+    assert 6.0 - walker_at <= 1.25 * 2.0 + 0.6 + 1e-6
+    with pytest.raises(ValueError, match="react_radius"):
+        PeopleConfig(models="hybrid:sf", react_radius=-1.0)
+
+
+def test_replay_needs_recorded_people() -> None:
+    from socialzoo.scenarios.catalogue import get_family
+
+    plain = get_family("frontal_approach").make(100)
+    with pytest.raises(RecordingError, match="recorded"):
+        _core([plain], "replay")
+
+
+def test_the_replaced_scenario_and_its_json(family: RecordedScene) -> None:
+    seed = family.case_seed("test", 0)
+    scenario = family.make(seed)
+    track = family.recording.tracks[family.track_of(seed)]
+    np.testing.assert_array_equal(scenario.robot_starts[0, :2], track.positions[0])
+    np.testing.assert_array_equal(scenario.robot_goals[0, :2], track.positions[-1])
+    assert scenario.recorded.time_limit >= 10.0
+    assert Scenario.from_json(scenario.to_json()) == scenario
+    again = replaced_scenario(family.recording, family.track_of(seed), seed=seed, family=family.name)
+    assert again == scenario
+    test, val, train = (set(family.track_splits[k].tolist()) for k in ("test", "val", "train"))
+    assert not (test & val or test & train or val & train) and train
+
+
+@pytest.mark.parametrize("humans", ["replay", "hybrid:sf", "orca"])
+def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene, humans: str) -> None:
+    from gymnasium.utils.env_checker import check_env
+
+    def rollout() -> tuple[np.ndarray, dict]:
+        env = gym.make("socialzoo/CrowdNavRecorded-v1", family=family.name, humans=humans)
+        check_env(env.unwrapped, skip_render_check=True)
+        obs, _ = env.reset(seed=4)
+        trace = [obs]
+        info: dict = {}
+        for _ in range(60):
+            obs, _, term, trunc, info = env.step(env.action_space.sample())
+            trace.append(obs)
+            if term or trunc:
+                obs, _ = env.reset()
+        env.action_space.seed(0)
+        return np.stack(trace), info
+
+    a, _ = rollout()
+    b, _ = rollout()
+    assert np.array_equal(a, b)
+
+
+def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
+    env = gym.make("socialzoo/Recorded-v2", family=family.name, people={"models": "hybrid:sf"})
+    env.reset(seed=0, options={"split": "test", "case": 0})
+    for _ in range(5000):
+        _, _, term, trunc, info = env.step(0)  # GoAlone
+        if term or trunc:
+            break
+    metrics = info["metrics"]
+    for key in ("person_time", "person_time_ratio", "person_path_deviation", "people_reacting"):
+        assert key in metrics
+    assert metrics["person_time"] > 0
+    crowd = gym.make("socialzoo/CrowdNavRecorded-v1", family=family.name)
+    crowd.reset(seed=0, options={"split": "test", "case": 0})
+    for _ in range(500):
+        _, _, term, trunc, info = crowd.step(np.zeros(2, dtype=np.float32))
+        if term or trunc:
+            break
+    assert term or trunc
+    assert info["episode"]["person_time"] > 0 if "episode" in info else True
+
+
+def test_vector_parallel_and_torchrl_adapters_run_a_recorded_scene(family: RecordedScene) -> None:
+    from pettingzoo.test import parallel_api_test
+
+    from socialzoo.env.parallel import TaskParallelEnv
+    from socialzoo.env.vector import TaskVectorEnv
+
+    vec = TaskVectorEnv(4, task="crowdnav", family=family.name, humans="hybrid:orca", robot_visible=True)
+    vec.reset(seed=1)
+    for _ in range(20):
+        vec.step(vec.action_space.sample())
+    par = TaskParallelEnv(task="crowdnav", family=family.name, humans="replay", robot_visible=True)
+    parallel_api_test(par, num_cycles=20)
+    pytest.importorskip("torchrl")
+    from torchrl.envs.utils import check_env_specs
+
+    from socialzoo.env.torchrl_single import TaskTorchEnv
+
+    check_env_specs(TaskTorchEnv(2, task="crowdnav", family=family.name, humans="replay"))
