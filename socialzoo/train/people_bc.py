@@ -92,7 +92,7 @@ class Args:
     val_fraction: float = 0.15
     num_neighbours: int = 6
     action_frame: Literal["world", "human"] = "human"
-    action_scale: float = 2.0
+    action_scale: float = 4.0
     hidden: int = 128
     depth: int = 2
     lr: float = 1e-3
@@ -116,9 +116,9 @@ class Args:
         for name in ("hidden", "depth", "batch_size", "max_epochs", "patience", "threads"):
             check_int(self, name, 1)
         check_int(self, "num_neighbours", 0)
-        check_number(self, "val_fraction", 0.0, high=1.0, low_open=True, high_open=True)
-        check_number(self, "action_scale", 0.0, low_open=True)
-        check_number(self, "lr", 0.0, low_open=True)
+        check_number(self, "val_fraction", 0.0, strict=True, high=0.5)
+        check_number(self, "action_scale", 0.0, strict=True)
+        check_number(self, "lr", 0.0, strict=True)
 
     @property
     def scene_names(self) -> tuple[str, ...]:
@@ -183,9 +183,7 @@ def windows(num_frames: int, window: int) -> list[tuple[int, int]]:
 
 
 # ---------------------------------------------------------------------------- demonstrations
-def inverse_action(
-    state: WorldState, desired: np.ndarray, frame: str, scale: float
-) -> np.ndarray:
+def inverse_action(state: WorldState, desired: np.ndarray, frame: str, scale: float) -> np.ndarray:
     """(B, H, 2) the actions whose desired velocities (socialzoo.env.human_agents.action_velocities
     of every slot) are `desired` (B, H, 2), m/s, world frame; 0 for slots of no preferred speed."""
     from socialzoo.core.geometry import rotate
@@ -237,7 +235,9 @@ class Demonstrations:
     @staticmethod
     def concatenate(parts: Sequence[Demonstrations]) -> Demonstrations:
         """One set of several."""
-        return Demonstrations(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(Demonstrations)))
+        return Demonstrations(
+            *(np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(Demonstrations))
+        )
 
 
 def zero_robot_neighbours(obs: np.ndarray, num_neighbours: int) -> np.ndarray:
@@ -257,7 +257,7 @@ def demonstrations(
     window: int = 40,
     num_neighbours: int = 6,
     action_frame: str = "human",
-    action_scale: float = 2.0,
+    action_scale: float = 4.0,
     world: WorldConfig | None = None,
 ) -> Demonstrations:
     """Every demonstration of a recording (module docstring), replayed in one batched core.
@@ -326,7 +326,10 @@ def demonstrations(
     if not out:
         size = num_neighbours * 5 + 8
         return Demonstrations(
-            np.zeros((0, size), np.float32), np.zeros((0, 2), np.float32), np.zeros(0, np.int64), np.zeros(0, bool)
+            np.zeros((0, size), np.float32),
+            np.zeros((0, 2), np.float32),
+            np.zeros(0, np.int64),
+            np.zeros(0, bool),
         )
     return Demonstrations.concatenate(out)
 
@@ -384,7 +387,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
-            total += float(loss) * len(idx)
+            total += loss.item() * len(idx)
         with torch.no_grad():
             val = float(((torch.tanh(net(xv)) - yv) ** 2).mean())
         history.append((total / len(x), val))
@@ -399,7 +402,9 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     assert best_state is not None
     net.load_state_dict(best_state)
     policy = to_policy(net, loc, scale, args)
-    policy.save(run.policy, env_id(), training_record(args, per_scene, len(train_set), len(val_set), best, best_epoch))
+    policy.save(
+        run.policy, env_id(), training_record(args, per_scene, len(train_set), len(val_set), best, best_epoch)
+    )
     with torch.no_grad():
         baseline = float((yv**2).mean())
     return {
@@ -462,7 +467,5 @@ def training_record(
         "val_demonstrations": num_val,
         "val_mse": round(val_mse, 6),
         "best_epoch": best_epoch,
-        "command": (
-            f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"
-        ),
+        "command": (f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"),
     }

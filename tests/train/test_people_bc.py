@@ -1,0 +1,127 @@
+"""People cloned from recorded people: the demonstrations' actions give back the recorded motion,
+and a tiny run writes a learned human policy file that walks a person in the batched core."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from socialzoo.data.tracks import Recording, Track
+from socialzoo.env.human_agents import action_velocities, human_observation_size
+from socialzoo.env.human_policy import LearnedHumanPolicy
+from socialzoo.train import people_bc
+from socialzoo.train.people_bc import (
+    ACTION_LIMIT,
+    Args,
+    demonstrations,
+    inverse_action,
+    reaching_velocity,
+    replay_world,
+    window_scenario,
+)
+
+
+def _recording() -> Recording:
+    """Four people walking straight lines at 1.0-1.3 m/s for 30 frames (12 s), two of them crossing."""
+    tracks = []
+    for k, (start, vel, first) in enumerate(
+        [
+            ((0.0, 0.0), (1.0, 0.0), 0),
+            ((0.0, 3.0), (1.2, 0.0), 2),
+            ((6.0, -6.0), (0.0, 1.1), 4),
+            ((20.0, 8.0), (-1.3, 0.0), 0),
+        ]
+    ):
+        t = np.arange(30)[:, None] * 0.4
+        tracks.append(Track(person=k, first_frame=first, positions=np.array(start) + t * np.array(vel)))
+    return Recording(name="straight", dt=0.4, num_frames=40, tracks=tuple(tracks), source="test")
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    import torch
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+def test_actions_invert_action_velocities():
+    rec = _recording()
+    scenario, _ = window_scenario(rec, 0, 10, people_bc.mean_speeds(rec))
+    from socialzoo.scenarios.scenario import scenarios_to_state
+
+    state = scenarios_to_state([scenario])
+    rng = np.random.default_rng(0)
+    desired = rng.normal(size=state.human_pos.shape)
+    slots = np.arange(state.max_humans)
+    for frame in ("world", "human"):
+        action = inverse_action(state, desired, frame, 1.7)
+        back = action_velocities(state, slots, action, frame, 1.7)
+        np.testing.assert_allclose(back[state.human_mask], desired[state.human_mask], atol=1e-12)
+
+
+def test_reaching_velocity_walks_the_recorded_displacement():
+    """The social force's relaxation from v0 towards the desired velocity covers the displacement."""
+    world = dataclasses.replace(replay_world(), dt=0.001)
+    v0, disp, other = np.array([0.3, -0.2]), np.array([0.5, 0.1]), np.array([0.4, 0.7])
+    vd = reaching_velocity(v0, disp, other, 0.4, world)
+    rate = world.human.desired_factor / world.human.relaxation_time
+    v, p = v0.copy(), np.zeros(2)
+    for _ in range(400):
+        v = v + world.dt * (rate * (vd - v) + other)
+        p = p + world.dt * v
+    np.testing.assert_allclose(p, disp, atol=2e-3)
+
+
+def test_demonstrations_of_straight_walkers():
+    rec = _recording()
+    demos = demonstrations(rec, window=12, num_neighbours=2, action_frame="human", action_scale=4.0)
+    assert len(demos) > 50
+    assert demos.obs.shape[1] == human_observation_size(2)
+    assert np.abs(demos.action).max() <= ACTION_LIMIT
+    # Own velocity is the recorded one walked into the frame (1.0 .. 1.3 m/s), never the parked robot's.
+    speed = np.hypot(demos.obs[:, 2], demos.obs[:, 3])
+    assert speed.min() > 0.99 and speed.max() < 1.31
+    assert (demos.obs[:, 8 + 4 :: 5] == 0).all()  # no robot among the neighbours
+    # Alone and straight, a walker's action (own frame, towards its exit) is forward: its speed over
+    # scale x preferred speed, with no social force to undo.
+    first = np.hypot(demos.obs[:, 8], demos.obs[:, 9])
+    lone = (first > 10.0) | (demos.obs[:, 8:13] == 0).all(1)
+    assert lone.any()
+    np.testing.assert_allclose(demos.action[lone, 0], 0.25, atol=0.02)
+    np.testing.assert_allclose(demos.action[lone, 1], 0.0, atol=0.02)
+
+
+def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
+    rec = _recording()
+    monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: rec)
+    args = Args(
+        scenes="eth,hotel", out=tmp_path / "run", seed=0, window=8, num_neighbours=2, hidden=16,
+        max_epochs=3, patience=2, progress=False,
+    )  # fmt: skip
+    path = people_bc.train(args)
+    policy = LearnedHumanPolicy.load(path)
+    assert policy.num_neighbours == 2 and policy.action_frame == "human" and policy.action_scale == 4.0
+    assert policy.header["training"]["algorithm"] == "people-bc"
+    # `learned:PATH` drives the first person of a recorded window; the others replay.
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.humans.models import LEARNED, PeopleConfig
+
+    scenario, _ = window_scenario(rec, 2, 14, people_bc.mean_speeds(rec), subject=0)
+    core = BatchedCore(
+        1, 1, scenario.num_humans, replay_world(), WallIndex(np.zeros((0, 4))),
+        people=PeopleConfig(models=f"learned:{path}"), robot_visible=False,
+    )  # fmt: skip
+    core.reset_rows([0], [scenario])
+    assert core.state.human_model[0, 0] == LEARNED
+    start = core.state.human_pos[0, 0].copy()
+    for _ in range(8):
+        core.step(np.zeros((1, 1, 2)))
+    assert np.isfinite(core.state.human_pos).all()
+    assert not np.allclose(core.state.human_pos[0, 0], start)
+    # The others walk exactly their tracks: 0.8 s after frame 2 is frame 4.
+    other = rec.tracks[1]
+    np.testing.assert_allclose(core.state.human_pos[0, 1], other.positions[4 - other.first_frame], atol=1e-9)
