@@ -1,8 +1,9 @@
 """`socialzoo humans compare|select|report`: the people of the worlds, one command.
 
 `compare` sets learned humans against social-force humans on the same scenarios, `select` picks the
-checkpoint of a training run that compares best on validation scenarios, and `report` (its options
-in socialzoo.cli.people_cmd) shows how each crowd model walks.
+checkpoint of a training run that compares best on validation scenarios, `report` (its options
+in socialzoo.cli.people_cmd) shows how each crowd model walks, `realism` measures each model against
+the recorded ETH/UCY people and `calibrate` fits the social force's or ORCA's parameters to them.
 """
 
 from __future__ import annotations
@@ -18,12 +19,14 @@ from socialzoo.cli.people_cmd import add_report
 
 
 def register(subparsers: Any) -> None:
-    """Add `humans` and its subcommands `compare`, `select` and `report`."""
+    """Add `humans` and its subcommands `compare`, `select`, `report`, `realism` and `calibrate`."""
     parser = subparsers.add_parser("humans", help=command_help("humans"), description=command_help("humans"))
     commands = parser.add_subparsers(dest="humans_command", required=True, metavar="SUBCOMMAND")
     _add_compare(commands)
     _add_select(commands)
     add_report(commands)
+    _add_realism(commands)
+    _add_calibrate(commands)
 
 
 def _add_compare(commands: Any) -> None:
@@ -68,6 +71,119 @@ def _add_select(commands: Any) -> None:
     )
     _add_run_options(parser)
     parser.set_defaults(func=run_select)
+
+
+def _add_realism(commands: Any) -> None:
+    """Add `humans realism`."""
+    parser = commands.add_parser(
+        "realism",
+        help="which crowd model walks most like the recorded ETH/UCY people (ADE/FDE, speeds, contacts)",
+        description="Walk each recorded person of the scenes by each model among the others replayed "
+        "(socialzoo.studies.realism), and write DIR/realism.csv, realism.md, realism.json, ade.png and "
+        "speeds.png. The scenes come from the data cache (`socialzoo data fetch eth-ucy`).",
+    )
+    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help="comma-separated scenes")
+    parser.add_argument(
+        "--models",
+        default="cv,sf,orca,groups",
+        help="comma-separated: cv, sf, orca, groups, learned:PATH, sf-eth-ucy, orca-eth-ucy",
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
+    parser.add_argument("--tracks", type=positive_int, default=None, help="persons per scene (default all)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the persons' sample (default 0)")
+    parser.add_argument("--no-figures", action="store_true", help="skip the figures")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run_realism)
+
+
+def _add_calibrate(commands: Any) -> None:
+    """Add `humans calibrate`."""
+    parser = commands.add_parser(
+        "calibrate",
+        help="fit the social force's or ORCA's parameters to the recorded ETH/UCY people (CMA-ES)",
+        description="Fit a model's parameters to the 4.8 s ADE of recorded people, leave-one-scene-out "
+        "and on all scenes (socialzoo.studies.calibration; needs the `cma` package, the train extra), "
+        "and write DIR/calibration.md, calibration.csv, calibration.json and the preset fitted on all "
+        "scenes, DIR/<model>-eth-ucy.json.",
+    )
+    parser.add_argument("--model", required=True, choices=("sf", "orca"), help="the model to fit")
+    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help="comma-separated scenes")
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
+    parser.add_argument(
+        "--persons", type=positive_int, default=40, help="persons sampled per scene for the fit (default 40)"
+    )
+    parser.add_argument("--windows", type=positive_int, default=3, help="windows per person (default 3)")
+    parser.add_argument("--generations", type=positive_int, default=6, help="CMA-ES generations (default 6)")
+    parser.add_argument("--popsize", type=positive_int, default=6, help="CMA-ES population (default 6)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the samples and CMA-ES (default 0)")
+    parser.add_argument("--no-folds", action="store_true", help="fit on all scenes only")
+    parser.add_argument("--no-progress", action="store_true", help="no progress output")
+    parser.set_defaults(func=run_calibrate)
+
+
+def _split(text: str) -> tuple[str, ...]:
+    return tuple(t.strip() for t in text.split(",") if t.strip())
+
+
+def run_realism(args: argparse.Namespace) -> int:
+    """Run `socialzoo humans realism`; returns the exit status."""
+    from socialzoo.data.fetch import UnknownSceneError, check_scenes
+    from socialzoo.studies.realism import RealismConfig
+    from socialzoo.studies.realism import run_realism as run
+
+    try:
+        check_scenes(_split(args.scenes))
+        config = RealismConfig(
+            scenes=_split(args.scenes),
+            models=_split(args.models),
+            tracks=args.tracks,
+            seed=args.seed,
+            cache=args.cache,
+        )
+        results = run(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
+    except (ValueError, UnknownSceneError, FileNotFoundError) as err:
+        print(f"socialzoo humans realism: error: {err}", file=sys.stderr)
+        return 2
+    for r in results:
+        if r.scene == "overall" and r.model != "recorded":
+            print(
+                f"{r.model}: ADE {r.metrics['ade']:.3f} m, FDE {r.metrics['fde']:.3f} m over 4.8 s (mean of scenes)"
+            )
+    print(f"results in {args.out}: realism.md, realism.csv, realism.json")
+    return 0
+
+
+def run_calibrate(args: argparse.Namespace) -> int:
+    """Run `socialzoo humans calibrate`; returns the exit status."""
+    from socialzoo.data.fetch import UnknownSceneError, check_scenes
+    from socialzoo.studies.calibration import CalibrationConfig, calibrate
+
+    try:
+        check_scenes(_split(args.scenes))
+        config = CalibrationConfig(
+            model=args.model,
+            scenes=_split(args.scenes),
+            persons=args.persons,
+            windows=args.windows,
+            generations=args.generations,
+            popsize=args.popsize,
+            seed=args.seed,
+            folds=not args.no_folds,
+            cache=args.cache,
+        )
+        result = calibrate(config, args.out, progress=not args.no_progress)
+    except (ValueError, UnknownSceneError, FileNotFoundError, ImportError) as err:
+        print(f"socialzoo humans calibrate: error: {err}", file=sys.stderr)
+        return 2
+    for fold in result["folds"]:
+        print(
+            f"held out {fold['held_out']}: ADE {fold['default_ade']:.3f} m default, "
+            f"{fold['fitted_ade']:.3f} m fitted"
+        )
+    print(f"results in {args.out}: calibration.md, calibration.csv, calibration.json")
+    return 0
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:

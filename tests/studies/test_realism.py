@@ -1,0 +1,153 @@
+"""The realism study (socialzoo.studies.realism) and the calibration (socialzoo.studies.calibration)
+on synthetic recordings of a few straight-line walkers: the protocol where the answer is known, the
+metrics, and the commands on a synthetic cache."""
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+from socialzoo.data import fetch
+from socialzoo.data.fetch import SceneFile
+from socialzoo.data.tracks import Recording, Track
+from socialzoo.studies import calibration, realism
+from socialzoo.studies.realism import (
+    COLLISION_DISTANCE,
+    OBS_FRAMES,
+    PRED_FRAMES,
+    SceneTracks,
+    constant_velocity,
+    displacement,
+    evaluate_model,
+    model_spec,
+    simulate,
+    track_cases,
+    truth,
+    wasserstein,
+    window_cases,
+)
+
+DT = 0.4
+
+
+def _walkers(frames=30, lanes=((0.0, 0.0, 1.0, 0.0), (0.0, 20.0, 1.2, 0.0)), start=(0, 2)):
+    """A recording of straight walkers: (x0, y0, vx, vy) per lane, entering at `start` frames."""
+    tracks = []
+    for person, ((x0, y0, vx, vy), first) in enumerate(zip(lanes, start, strict=True), start=1):
+        t = np.arange(frames - first) * DT
+        tracks.append(Track(person, first, np.stack((x0 + vx * t, y0 + vy * t), 1)))
+    return Recording("synthetic", DT, frames, tuple(tracks), "test")
+
+
+def test_windows_follow_the_prediction_protocol():
+    scene = SceneTracks.of(_walkers(frames=30))
+    cases = window_cases(scene)
+    # Person 0 seen on frames 0..29: windows at t0 = 7 .. 17 (8 observed, 12 predicted).
+    mine = cases.start[cases.person == 0]
+    assert mine.min() == OBS_FRAMES - 1 and mine.max() == 29 - PRED_FRAMES
+    assert (cases.frames == PRED_FRAMES).all()
+
+
+def test_constant_velocity_on_a_straight_walk_is_exact():
+    scene = SceneTracks.of(_walkers())
+    for cases in (window_cases(scene), track_cases(scene)):
+        ade, fde = displacement(constant_velocity(scene, cases), truth(scene, cases))
+        assert ade == pytest.approx(0.0, abs=1e-9) and fde == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("model", ["sf", "orca"])
+def test_a_model_person_alone_walks_near_its_track(model):
+    # Two walkers 20 m apart: nobody in the way, each walks straight to its exit.
+    scene = SceneTracks.of(_walkers())
+    cases = window_cases(scene)
+    ade, fde = displacement(simulate(scene, cases, model_spec(model)).pos, truth(scene, cases))
+    assert ade < 0.15 and fde < 0.3
+
+
+def test_a_model_person_avoids_a_replayed_one_coming_at_it():
+    # Head on along one line: constant velocity walks through the other, the models step aside.
+    rec = _walkers(frames=30, lanes=((0.0, 0.0, 1.0, 0.0), (20.0, 0.0, -1.0, 0.0)), start=(0, 0))
+    scene = SceneTracks.of(rec)
+    tracks = track_cases(scene)
+    cv = evaluate_model(scene, window_cases(scene), tracks, model_spec("cv"))
+    orca = evaluate_model(scene, window_cases(scene), tracks, model_spec("orca"))
+    assert cv.metrics["contact_rate"] == 1.0
+    assert orca.metrics["contact_rate"] == 0.0
+
+
+def test_metrics():
+    pred = np.zeros((2, 3, 2))
+    true = np.zeros((2, 3, 2))
+    true[0, 1:, 0] = [1.0, 2.0]  # ADE 1.5, FDE 2
+    ade, fde = displacement(pred, true)
+    assert ade == pytest.approx(0.75) and fde == pytest.approx(1.0)
+    assert wasserstein(np.array([0.0, 1.0]), np.array([1.0, 2.0])) == pytest.approx(1.0)
+    assert realism.contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, True]])) == 1.0
+    assert realism.contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, False]])) == 0.0
+
+
+def test_model_names_and_presets():
+    assert model_spec("groups").groups and model_spec("groups").people == "sf"
+    with pytest.raises(ValueError, match="unknown realism model"):
+        model_spec("nope")
+    values = calibration.from_unit("sf", [0.5] * len(calibration.PARAMETERS["sf"]))
+    assert calibration.to_unit("sf", values) == pytest.approx([0.5] * len(values))
+    spec = calibration.spec_of(
+        "orca", {"orca.radius": 0.2, "orca.time_horizon": 1.0, "orca.neighbor_dist": 3.0}
+    )
+    world = spec.world(realism.realism_world())
+    assert world.orca.radius == 0.2 and world.orca.time_horizon == 1.0
+    for name, preset in calibration.PRESETS.items():
+        assert model_spec(name).people == preset["model"]
+
+
+def _trajectron(rec):
+    rows = [
+        f"{(t.first_frame + i) * 10}\t{t.person}\t{p[0]:.3f}\t{p[1]:.3f}"
+        for t in rec.tracks
+        for i, p in enumerate(t.positions)
+    ]
+    return "\n".join(sorted(rows, key=lambda r: int(r.split("\t")[0]))) + "\n"
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A synthetic cache of two scenes in the trajectron layout, SCENES replaced by them."""
+    table = {}
+    for name, lanes in (
+        ("one", ((0.0, 0.0, 1.0, 0.0), (0.0, 20.0, 1.2, 0.0))),
+        ("two", ((0.0, 0.0, 0.0, 1.0),)),
+    ):
+        text = _trajectron(_walkers(lanes=lanes, start=(0, 2)[: len(lanes)]))
+        path = f"{name}/test/{name}.txt"
+        (tmp_path / f"{name}.txt").write_text(text)  # the cache keeps the file's name only
+        table[name] = (SceneFile(path, hashlib.sha256(text.encode()).hexdigest()),)
+    monkeypatch.setattr(fetch, "SCENES", table)
+    return tmp_path
+
+
+def test_realism_command_on_a_synthetic_cache(cache, tmp_path, capsys):
+    from socialzoo.cli import main
+
+    out = tmp_path / "out"
+    args = ["humans", "realism", "--scenes", "one,two", "--models", "cv,orca", "--cache", str(cache)]
+    assert main([*args, "--out", str(out), "--no-progress", "--no-figures"]) == 0
+    table = (out / "realism.md").read_text()
+    assert "| one | cv |" in table and "| overall | orca |" in table
+    record = json.loads((out / "realism.json").read_text())
+    assert record["seed"] == 0 and "numpy" in record["versions"]
+    assert main(["humans", "realism", "--scenes", "nowhere", "--cache", str(cache), "--out", str(out)]) == 2
+
+
+def test_calibrate_command_on_a_synthetic_cache(cache, tmp_path):
+    pytest.importorskip("cma")
+    from socialzoo.cli import main
+
+    out = tmp_path / "cal"
+    args = ["humans", "calibrate", "--model", "orca", "--scenes", "one,two", "--cache", str(cache)]
+    tiny = ["--persons", "2", "--windows", "1", "--generations", "1", "--popsize", "2", "--no-progress"]
+    assert main([*args, *tiny, "--out", str(out)]) == 0
+    record = json.loads((out / "calibration.json").read_text())
+    assert [f["held_out"] for f in record["folds"]] == ["one", "two"]
+    assert json.loads((out / "orca-eth-ucy.json").read_text())["model"] == "orca"
