@@ -469,3 +469,105 @@ def training_record(
         "best_epoch": best_epoch,
         "command": (f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"),
     }
+
+
+# ---------------------------------------------------------------------------- evaluation
+def window_starts(recording: Recording, observed: int = 8, horizon: int = HORIZON_FRAMES) -> np.ndarray:
+    """(n, 2) every (track, start frame) seen `observed` frames up to the start and `horizon` after."""
+    out = [
+        (k, t0)
+        for k, t in enumerate(recording.tracks)
+        for t0 in range(t.first_frame + observed - 1, t.last_frame - horizon + 1)
+    ]
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+def held_out_ade(
+    recording: Recording,
+    models: Sequence[str],
+    *,
+    cases: int | None = 300,
+    seed: int = 0,
+    horizon: int = HORIZON_FRAMES,
+    batch_rows: int = 256,
+) -> dict[str, float]:
+    """Average displacement error, m, of a person walked by each model over `horizon` frames after a
+    start frame, everyone else replaying, against its recorded track (the prediction literature's
+    windows: seen 8 frames up to the start). The subject starts at its recorded position with its
+    observed velocity (start - 1 -> start), walks towards its recorded exit at its mean recorded
+    speed; models: "cv" (that velocity kept), "sf", "learned:PATH" (the policy acts on the
+    subject's observation with the parked robot's neighbour rows zeroed, as in training).
+
+    Args:
+        recording: the scene.
+        models: the models to measure.
+        cases: windows drawn with `seed` (None: all).
+        seed: the draw's seed.
+        horizon: frames after the start.
+        batch_rows: rows per batched core.
+    """
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.env.human_agents import action_velocities, human_observations
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+    from socialzoo.humans.models import PeopleConfig
+
+    starts = window_starts(recording, horizon=horizon)
+    if cases is not None and cases < len(starts):
+        rng = np.random.default_rng([seed, 0x616465])  # "ade"
+        starts = starts[np.sort(rng.choice(len(starts), size=cases, replace=False))]
+    grid = recording.grid()
+    truth = np.stack([grid[k, t0 : t0 + horizon + 1] for k, t0 in starts.tolist()])
+    v0 = (truth[:, 0] - np.stack([grid[k, t0 - 1] for k, t0 in starts.tolist()])) / recording.dt
+    speeds = mean_speeds(recording)
+    world = replay_world()
+    steps = round(recording.dt / world.dt)
+    walls = WallIndex(np.zeros((0, 4)))
+    out: dict[str, float] = {}
+    for name in models:
+        if name == "cv":
+            pred = truth[:, :1] + v0[:, None] * (np.arange(horizon + 1) * recording.dt)[None, :, None]
+            out[name] = float(np.hypot(*(pred - truth)[:, 1:].transpose(2, 0, 1)).mean())
+            continue
+        policy = LearnedHumanPolicy.load(name.split(":", 1)[1]) if name.startswith("learned:") else None
+        if policy is None and name != "sf":
+            raise ValueError(f"held_out_ade: unknown model {name!r} (cv, sf, learned:PATH)")
+        pred = np.full(truth.shape, np.nan)
+        for lo in range(0, len(starts), batch_rows):
+            part = starts[lo : lo + batch_rows]
+            scenarios = [
+                window_scenario(recording, t0, t0 + horizon, speeds, subject=k)[0] for k, t0 in part.tolist()
+            ]
+            b = len(part)
+            core = BatchedCore(
+                b, 1, max(s.num_humans for s in scenarios), world, walls, people=PeopleConfig(models="sf"),
+                robot_visible=False,
+            )  # fmt: skip
+            core.reset_rows(np.arange(b), scenarios)
+            assert core.state is not None
+            core.state.human_vel[:, 0] = v0[lo : lo + b]
+            pred[lo : lo + b, 0] = core.state.human_pos[:, 0]
+            subject = np.zeros(core.state.human_mask.shape, dtype=bool)
+            subject[:, 0] = True
+            for f in range(1, horizon + 1):
+                for _ in range(steps):
+                    desired = None
+                    if policy is not None:
+                        state = core.state
+                        obs = human_observations(state, walls, np.array([0]), policy.num_neighbours)
+                        action = np.zeros(state.human_pos.shape)
+                        action[:, :1] = policy.act(zero_robot_neighbours(obs, policy.num_neighbours))
+                        desired = action_velocities(
+                            state,
+                            np.arange(state.max_humans),
+                            action,
+                            policy.action_frame,
+                            policy.action_scale,
+                        )
+                    core.step(
+                        np.zeros((b, 1, 2)), desired=desired, learned=subject if desired is not None else None
+                    )
+                pred[lo : lo + b, f] = core.state.human_pos[:, 0]
+        out[name] = float(np.hypot(*(pred - truth)[:, 1:].transpose(2, 0, 1)).mean())
+    out["windows"] = float(len(starts))
+    return out
