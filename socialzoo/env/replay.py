@@ -37,7 +37,6 @@ import numpy as np
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
-from socialzoo.scenarios.recorded_people import route_frames
 from socialzoo.scenarios.scenario import Scenario
 
 # The metrics of recorded scenes (socialzoo.core.metrics, source "recorded").
@@ -159,10 +158,9 @@ class ReplayRunner:
             self.track_vel[row] = 0.0
             self.track_vel[row, :n, :frames] = _segment_velocities(rec.tracks, rec.dt)
             self.route_frame[row] = 0
-            for k in range(n):
-                fr = route_frames(rec.tracks[k])
-                self.route_frame[row, k, : len(fr)] = fr
-                self.route_frame[row, k, len(fr) :] = fr[-1]
+            frames_of = rec.route_frames
+            self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
+            self.route_frame[row, :n, frames_of.shape[1] :] = frames_of[:, -1:]
             kind = slot_kind[:n]
             follow = rec.follow | recorded_part[kind]
             self.on_track[row] = False
@@ -200,6 +198,7 @@ class ReplayRunner:
         """Grow the frame, route and robot-track axes to hold a longer recording."""
         have = self.tracks.shape[2]
         if frames > have:
+            frames = max(frames, 2 * have)  # grow by doubling: a reset rarely reallocates
             self.tracks = np.concatenate(
                 (self.tracks, np.full(self.tracks.shape[:2] + (frames - have, 2), np.nan)), 2
             )
@@ -208,11 +207,13 @@ class ReplayRunner:
             )
         have = self.route_frame.shape[2]
         if route > have:
+            route = max(route, 2 * have)
             self.route_frame = np.concatenate(
                 (self.route_frame, np.repeat(self.route_frame[:, :, -1:], route - have, axis=2)), 2
             )
         have = self.robot_track.shape[1]
         if robot_track > have:
+            robot_track = max(robot_track, 2 * have)
             self.robot_track = np.concatenate(
                 (self.robot_track, np.zeros((len(self.robot_track), robot_track - have, 2))), 1
             )
@@ -238,17 +239,17 @@ class ReplayRunner:
         returns (len(rows),) the frame each row is on."""
         t = state.step_count[rows] * self.dt
         frame = t / self.frame_dt[rows]
-        tracks = self.tracks[rows]
-        last = tracks.shape[2] - 1
+        h, frames = self.tracks.shape[1], self.tracks.shape[2]
+        last = frames - 1
         i0 = np.minimum(np.floor(frame + _ON_FRAME).astype(np.int64), last)
         w = np.where(frame - i0 > _ON_FRAME, frame - i0, 0.0)
         i1 = np.minimum(i0 + 1, last)
-        take = (slice(None), None, None, None)
-        p0 = np.take_along_axis(tracks, np.broadcast_to(i0[take], tracks.shape[:2] + (1, 2)), 2)[:, :, 0]
-        p1 = np.take_along_axis(tracks, np.broadcast_to(i1[take], tracks.shape[:2] + (1, 2)), 2)[:, :, 0]
-        velocity = np.take_along_axis(
-            self.track_vel[rows], np.broadcast_to(i0[take], tracks.shape[:2] + (1, 2)), 2
-        )[:, :, 0]
+        # One flat gather per frame: copying the rows' whole tracks would cost more than the step.
+        base = (rows[:, None] * h + np.arange(h)[None, :]) * frames  # (n, H)
+        flat_tracks = self.tracks.reshape(-1, 2)
+        p0 = flat_tracks[base + i0[:, None]]
+        p1 = flat_tracks[base + i1[:, None]]
+        velocity = self.track_vel.reshape(-1, 2)[base + i0[:, None]]
         on_frame = (w == 0.0)[:, None]
         present = ~np.isnan(p0[..., 0]) & (on_frame | ~np.isnan(p1[..., 0]))
         where = np.where(on_frame[..., None], p0, p0 + w[:, None, None] * (p1 - p0))

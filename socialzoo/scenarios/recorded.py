@@ -18,6 +18,7 @@ in place of (it may meet that person as one of the crowd).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import zlib
 from collections.abc import Sequence
@@ -185,6 +186,7 @@ class RecordedScene(ScenarioFamily):
         self, recording: Recording | None = None, name: str | None = None, map_name: str = "arena"
     ) -> None:
         self._recording = recording
+        self._made: dict[tuple[int, str], Scenario] = {}
         if recording is not None:
             self.scene = recording.name
         self.name = name or f"recorded_{self.scene}"
@@ -255,13 +257,18 @@ class RecordedScene(ScenarioFamily):
         return str(path)
 
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
-        """The episode of `seed`: the robot in the place of track_of(seed)."""
+        """The episode of `seed`: the robot in the place of track_of(seed) (each track's episode is
+        made once and kept; a seed only renames it)."""
         if num_robots != 1:
             raise ValueError(f"{self.name}: a recorded scene's episode has one robot, {num_robots} asked")
         map_name = self.map_name if m is None else m.name
-        return replaced_scenario(
-            self.recording, self.track_of(seed), seed=seed, family=self.name, map_name=map_name
-        )
+        track = self.track_of(seed)
+        key = (track, map_name)
+        if key not in self._made:
+            self._made[key] = replaced_scenario(
+                self.recording, track, seed=seed, family=self.name, map_name=map_name
+            )
+        return dataclasses.replace(self._made[key], seed=seed)
 
 
 def open_area_map(recording: Recording, name: str) -> Map:

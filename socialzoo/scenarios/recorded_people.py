@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -103,6 +104,17 @@ class RecordedPeople:
     def present(self) -> np.ndarray:
         """(n, T) whether each person is on the scene at each frame."""
         return ~np.isnan(self.tracks[..., 0])
+
+    @cached_property
+    def route_frames(self) -> np.ndarray:
+        """(n, L) the frames of each person's route points (route_frames), padded by repeating its last."""
+        frames = [route_frames(track) for track in self.tracks]
+        width = max((len(f) for f in frames), default=1)
+        out = np.zeros((len(frames), width), dtype=np.int64)
+        for k, f in enumerate(frames):
+            out[k, : len(f)] = f
+            out[k, len(f) :] = f[-1]
+        return out
 
     @property
     def robot_time(self) -> float:
