@@ -150,7 +150,7 @@ class ReplayRunner:
                 self.on_track[row] = False
                 continue
             n, frames = rec.num_people, rec.num_frames
-            self._widen(frames, max((len(r) for r in scenario.human_routes), default=1), len(rec.robot_track))
+            self._widen(frames, rec.route_frames.shape[1], len(rec.robot_track))
             self.recorded[row] = True
             self.frame_dt[row] = rec.dt
             self.tracks[row] = np.nan
