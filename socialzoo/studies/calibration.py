@@ -30,7 +30,23 @@ import numpy as np
 
 # Fitted on all five scenes (eth, hotel, univ, zara1, zara2) by `socialzoo humans calibrate`
 # (docs/humans.md, "Calibration").
-PRESETS: dict[str, dict[str, Any]] = {}
+PRESETS: dict[str, dict[str, Any]] = {
+    # socialzoo humans calibrate --model sf --persons 30 --windows 2 --generations 5 --popsize 6 --seed 0
+    "sf-eth-ucy": {
+        "model": "sf",
+        "human": {
+            "relaxation_time": 2.0752,
+            "social_strength": 0.3168,
+            "social_lambda": 4.6222,
+            "social_gamma": 0.2099,
+        },
+    },
+    # socialzoo humans calibrate --model orca (the same options)
+    "orca-eth-ucy": {
+        "model": "orca",
+        "orca": {"neighbor_dist": 5.4781, "time_horizon": 4.1022, "radius": 0.2296},
+    },
+}
 
 # The fitted parameters of each model: (config section, field, low, high).
 PARAMETERS: dict[str, tuple[tuple[str, str, float, float], ...]] = {
@@ -266,7 +282,7 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
         sec, name = key.split(".", 1)
         preset.setdefault(sec, {})[name] = round(v, 4)  # type: ignore[index]
     record = {
-        "command": " ".join(sys.argv),
+        "command": " ".join(["socialzoo", *sys.argv[1:]]),
         "config": dataclasses.asdict(config),
         "seed": config.seed,
         "parameters": {f"{s}.{n}": [lo, hi] for s, n, lo, hi in PARAMETERS[config.model]},

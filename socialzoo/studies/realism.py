@@ -639,7 +639,7 @@ def run_realism(
     if figures:
         write_figures(results, out)
     record = {
-        "command": " ".join(argv) if argv is not None else " ".join(sys.argv),
+        "command": " ".join(["socialzoo", *(sys.argv[1:] if argv is None else argv)]),
         "config": dataclasses.asdict(config),
         "seed": config.seed,
         "world": dataclasses.asdict(realism_world()),
