@@ -211,3 +211,30 @@ class MlpPolicy:
         policy.path = Path(path)
         policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
         return policy
+
+
+def without_normalisation(path: str | Path, out: str | Path) -> Path:
+    """The policy file at `path` written to `out` without its observation normalisation: the
+    network fed raw observations, as the reference code evaluated PPO (SPEC section 11,
+    socialzoo.env.quirks.ReferenceQuirks.ppo_eval_without_normalisation). The header records it
+    ("evaluated_without_normalisation": true); a file without normalisation is copied as it is.
+
+    Raises:
+        PolicyFileError: `path` is not an MLP policy file.
+    """
+    policy = MlpPolicy.load(path)
+    header = {**policy.header, "evaluated_without_normalisation": True}
+    policy.normalizer = None
+    return policy.save(out, header)
+
+
+def evaluation_file(name: str, path: str | Path, quirks: Any, folder: str | Path) -> Path:
+    """The file to evaluate learned policy `name` from under an env config's `quirks`
+    (socialzoo.env.quirks.ReferenceQuirks): `path` itself, or, for PPO with
+    ppo_eval_without_normalisation on, its copy without normalisation in `folder`
+    (<stem>.unnormalised.safetensors)."""
+    path = Path(path)
+    if name != "ppo" or not getattr(quirks, "ppo_eval_without_normalisation", False):
+        return path
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    return without_normalisation(path, Path(folder) / f"{path.stem}.unnormalised{path.suffix}")

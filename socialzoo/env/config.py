@@ -18,6 +18,7 @@ from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig, observation_size
+from socialzoo.env.quirks import ReferenceQuirks
 from socialzoo.env.reward import RewardConfig
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.nav.local_planner import LocalPlannerConfig
@@ -40,6 +41,7 @@ _NESTED: dict[str, type] = {
     "metrics": MetricsConfig,
     "human_reward": HumanRewardConfig,
     "people": PeopleConfig,
+    "quirks": ReferenceQuirks,
 }
 _WORLD_NESTED: dict[str, type] = {
     "robot": RobotConfig,
@@ -94,6 +96,10 @@ class EnvConfig:
             groups, a learned policy file, or a mix), and whether each scenario also runs
             without the robot to measure what it costs them (socialzoo.humans.models.PeopleConfig,
             socialzoo.env.people). The default is the benchmark's social-force people.
+        quirks: the reference code's behaviour where it departed from the paper (SPEC section
+            11; socialzoo.env.quirks.ReferenceQuirks), each switch off by default;
+            `ReferenceQuirks.reference()` (every one on) is the preset of the
+            socialzoo/ActionSelectionReference-v2 ids.
     """
 
     map: str | None = None
@@ -116,6 +122,7 @@ class EnvConfig:
     metrics: MetricsConfig = field(default_factory=MetricsConfig)
     human_reward: HumanRewardConfig = field(default_factory=HumanRewardConfig)
     people: PeopleConfig = field(default_factory=PeopleConfig)
+    quirks: ReferenceQuirks = field(default_factory=ReferenceQuirks)
 
     def __post_init__(self) -> None:
         if self.family is not None and self.family not in FAMILIES:

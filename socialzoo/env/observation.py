@@ -250,12 +250,14 @@ def socialgym1_observation(
     human_pos: np.ndarray,
     human_vel: np.ndarray,
     visible: np.ndarray,
+    theta_index: bool = False,
 ) -> np.ndarray:
     """The reference code's 244-number observation, robot frame.
 
     Layout: [3i : 3i + 3] for i < 40, human i's (x, y, theta); [120 + 3i : 123 + 3i] its
     (vx, vy, omega); [240:243] local target (x, y, 0); [243] previous action index. theta and
-    omega are always 0 (the reference stored a constant index there, SPEC section 11). Human
+    omega are 0 (the reference stored a constant index in theta, SPEC section 11; `theta_index`
+    writes it: ReferenceQuirks.human_theta_index). Human
     slots follow the module's conventions (visible humans nearest first, relative position and
     velocity in robot axes), the same values as the paper layout. The goal and the robot's
     velocity are not part of this layout.
@@ -268,11 +270,15 @@ def socialgym1_observation(
         human_pos: (B, H, 2) m, world frame.
         human_vel: (B, H, 2) m/s, world frame.
         visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
+        theta_index: each filled slot's theta is its person's index in the world's person
+            arrays (the reference code's quirk), else 0.
 
     Returns:
         (B, 244) float32.
     """
-    return _socialgym1(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)[0]
+    return _socialgym1(
+        robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible, theta_index
+    )[0]
 
 
 def _socialgym1(
@@ -283,8 +289,10 @@ def _socialgym1(
     human_pos: np.ndarray,
     human_vel: np.ndarray,
     visible: np.ndarray,
+    theta_index: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(socialgym1_observation, (B, min(40, H)) the human index in each slot, -1 for an empty one)."""
+    """(socialgym1_observation, (B, min(40, H)) the human index in each slot, -1 for an empty one).
+    With `theta_index`, each filled slot's theta is its person's index (the reference's quirk)."""
     batch = robot_pose.shape[0]
     n = SOCIALGYM1_NUM_SLOTS
     points_r, slots, people = _robot_frame_slots(
@@ -294,6 +302,8 @@ def _socialgym1(
     out = np.zeros((batch, SOCIALGYM1_SIZE), dtype=np.float32)
     out[:, 0 : 3 * k : 3] = slots[..., 0]
     out[:, 1 : 3 * k : 3] = slots[..., 1]
+    if theta_index:
+        out[:, 2 : 3 * k : 3] = np.maximum(people, 0)
     out[:, 3 * n : 3 * n + 3 * k : 3] = slots[..., 2]
     out[:, 3 * n + 1 : 3 * n + 3 * k : 3] = slots[..., 3]
     out[:, 6 * n : 6 * n + 2] = points_r[:, 0]
@@ -357,9 +367,12 @@ def build_observation(
     human_vel: np.ndarray,
     visible: np.ndarray,
     signals: Signals | None = None,
+    theta_index: bool = False,
 ) -> np.ndarray:
     """The observation of `cfg.layout`; arguments as in `paper_observation`. With `signals`, the
     signal block follows (module docstring): each slot's person's gesture, then the nearest door.
+    `theta_index`: the socialgym1 layout's theta holds each person's index (the reference code's
+    quirk, socialzoo.env.quirks); the paper layout has no theta and ignores it.
 
     Returns:
         (B, observation_size(cfg, signals is not None)) float32.
@@ -369,7 +382,9 @@ def build_observation(
             robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, cfg.num_slots
         )
     else:
-        out, people = _socialgym1(robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible)
+        out, people = _socialgym1(
+            robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible, theta_index
+        )
     if signals is None:
         return out
     k = cfg.num_slots

@@ -107,7 +107,8 @@ def robot_outcome(
         skip: (B, R) human left out of force and blame (`followed_human`), -1 for none.
         halted: (B, R) bool, robots that were told to halt this step (Halt, no target, or done).
         was_done: (B, R) bool, robots whose episode had ended before this step.
-        config: the env's configuration (reward weights, goal radius, time limit).
+        config: the env's configuration (reward weights, goal radius, time limit, the reference
+            code's quirks: socialzoo.env.quirks).
         may_arrive: (B, R) bool, robots whose goal may count as reached now (a robot escorting a
             person arrives only with that person: socialzoo.env.script); None: all.
         max_steps: (B,) each row's own step limit (a recorded scene's time budget), below the
@@ -121,7 +122,8 @@ def robot_outcome(
     goal = after.robot_goal[..., :2].reshape(b * r, 2)
     human_pos = np.repeat(after.human_pos, r, axis=0) if r > 1 else after.human_pos
     skip = np.asarray(skip).reshape(-1)
-    d_g = progress(before.robot_pose[..., :2].reshape(b * r, 2), pos, goal)
+    quirks = config.quirks
+    d_g = progress(before.robot_pose[..., :2].reshape(b * r, 2), pos, goal, quirks.goal_distance_x_only)
     force = social_force_term(pos, human_pos, visible, skip)
     speed = after.robot_vel[..., 0].reshape(-1)
     still = np.asarray(halted, dtype=bool).reshape(-1) | (np.abs(speed) < STILL_SPEED)
@@ -134,7 +136,7 @@ def robot_outcome(
     contacts = events.robot_human.sum(-1).reshape(-1)
     # The success bonus is paid on the step the goal is reached (collision-free or not); the
     # benchmark's success metric additionally requires zero collisions (EpisodeMetrics).
-    reward, _ = compute_reward(d_g, blame, force, reached, contacts, config.reward)
+    reward, _ = compute_reward(d_g, blame, force, reached, contacts, config.reward, quirks)
     done = np.asarray(was_done, dtype=bool).reshape(-1)
     limit = config.max_steps if max_steps is None else np.minimum(config.max_steps, max_steps)
     out_of_time = np.repeat(after.step_count >= limit, r)

@@ -14,7 +14,16 @@ task) and `gymnasium.make("socialzoo/CrowdNavSuite-v1", family="blind_corner")` 
 among walls). Their kwargs hold map=None, so the map is the family's whichever family a call
 names (socialzoo.env.config.EnvConfig.map, socialzoo.env.crowd_config.CrowdNavConfig.map).
 
+The reference ids (REFERENCE_IDS) are the benchmark's with every quirk of the reference code on
+(SPEC section 11, socialzoo.env.quirks.ReferenceQuirks.reference()): x-only goal distance, the
+reward "distance gained + bonus", no collision term, the person's index as the socialgym1 layout's
+theta, PPO evaluated without its normalisation. `socialzoo reproduce --reference` trains and
+evaluates the learned rows on them.
+
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within v2, the ids socialzoo/ActionSelectionReference-v2 and
+        socialzoo/ActionSelectionTransferReference-v2 (the reference code's quirks on, EnvConfig.quirks)
+        are new; with the quirks off (the default) no other id's rollouts change.
     Within v2, the ids socialzoo/Recorded-v2 and socialzoo/CrowdNavRecorded-v1 (recorded scenes) are
         new, and no other id's rollouts change.
     Within v2, the ids socialzoo/Suite-v2 and socialzoo/CrowdNavSuite-v1 (CrowdNav's v1) are new;
@@ -40,9 +49,12 @@ Version History (action-selection ids, their ParallelEnv and TorchRL envs):
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 
 from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
+from socialzoo.env.quirks import REFERENCE_QUIRKS
 from socialzoo.scenarios.catalogue import get_family
 
 # Every id is a task's Gymnasium env and VectorEnv (the kwargs name the task and its config).
@@ -56,6 +68,33 @@ BENCHMARK_IDS: dict[str, dict] = {
     f"socialzoo/ActionSelection-v{ENV_VERSION}": {"task": "action_selection", "map": "gdc1"},
     f"socialzoo/ActionSelectionTransfer-v{ENV_VERSION}": {"task": "action_selection", "map": "ghc3"},
 }
+
+
+# The benchmark ids with the reference code's quirks (SPEC section 11) on, one per map.
+REFERENCE_IDS: dict[str, dict] = {
+    f"socialzoo/ActionSelectionReference-v{ENV_VERSION}": {
+        "task": "action_selection",
+        "map": "gdc1",
+        "quirks": dataclasses.asdict(REFERENCE_QUIRKS),
+    },
+    f"socialzoo/ActionSelectionTransferReference-v{ENV_VERSION}": {
+        "task": "action_selection",
+        "map": "ghc3",
+        "quirks": dataclasses.asdict(REFERENCE_QUIRKS),
+    },
+}
+
+
+def reference_env_id(map_name: str) -> str:
+    """The reference id of a benchmark map ("gdc1" -> socialzoo/ActionSelectionReference-v2).
+
+    Raises:
+        ValueError: a map without a reference id.
+    """
+    for env_id, kwargs in REFERENCE_IDS.items():
+        if kwargs["map"] == map_name:
+            return env_id
+    raise ValueError(f"no reference id for map {map_name!r}; maps with one: gdc1, ghc3")
 
 
 def _family_id(name: str) -> str:
@@ -159,5 +198,12 @@ def register_task(env_id: str, task: str, **kwargs: object) -> None:
 
 def register_envs() -> None:
     """Register every id of socialzoo's tasks (idempotent)."""
-    for env_id, kwargs in {**CROWD_IDS, **BENCHMARK_IDS, **FAMILY_IDS, **SUITE_IDS, **RECORDED_IDS}.items():
+    for env_id, kwargs in {
+        **CROWD_IDS,
+        **BENCHMARK_IDS,
+        **REFERENCE_IDS,
+        **FAMILY_IDS,
+        **SUITE_IDS,
+        **RECORDED_IDS,
+    }.items():
         register_task(env_id, **kwargs)

@@ -11,6 +11,7 @@ import numpy as np
 
 from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.core.validation import check_fields
+from socialzoo.env.quirks import ReferenceQuirks
 
 try:
     from scipy.special import erf as _scipy_erf
@@ -138,17 +139,21 @@ def blame_term(
     return np.where(counted, 1.0 - erf(dist), 0.0)
 
 
-def progress(prev_pos: np.ndarray, pos: np.ndarray, goal: np.ndarray) -> np.ndarray:
+def progress(prev_pos: np.ndarray, pos: np.ndarray, goal: np.ndarray, x_only: bool = False) -> np.ndarray:
     """Distance gained towards the goal d_g = |p_{t-1} - g| - |p_t - g|, Euclidean (SPEC 11).
 
     Args:
         prev_pos: (B, 2) robot position before the step, m, world frame.
         pos: (B, 2) after the step.
         goal: (B, 2) goal position.
+        x_only: the reference code's distance, |x - x_g| along the world x axis only
+            (ReferenceQuirks.goal_distance_x_only).
 
     Returns:
         (B,) m; negative when the robot moved away.
     """
+    if x_only:
+        return np.abs(prev_pos[:, 0] - goal[:, 0]) - np.abs(pos[:, 0] - goal[:, 0])
     before = prev_pos - goal
     after = pos - goal
     return np.sqrt(before[:, 0] ** 2 + before[:, 1] ** 2) - np.sqrt(after[:, 0] ** 2 + after[:, 1] ** 2)
@@ -161,8 +166,13 @@ def compute_reward(
     success: np.ndarray,
     collisions: np.ndarray,
     cfg: RewardConfig,
+    quirks: ReferenceQuirks | None = None,
 ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """r = w1 * d_g + w_blame * b + w_force * f + (c if success) + w_collision * collisions.
+
+    With `quirks` (socialzoo.env.quirks), the reference code's reward: collision_penalty_dropped
+    leaves the collision term out, reward_distance_plus_bonus leaves out every term but progress
+    and success. A term left out is 0 in `terms`, so the terms still sum to the reward.
 
     Args:
         d_g: (B,) distance gained, m (from `progress`).
@@ -171,6 +181,7 @@ def compute_reward(
         success: (B,) bool, the episode succeeds on this step.
         collisions: (B,) int, humans in collision with the robot this step.
         cfg: weights.
+        quirks: the reference code's quirks (None: none).
 
     Returns:
         (reward, terms): reward (B,) float64, and the weighted terms (B,) each, keyed "progress",
@@ -183,5 +194,10 @@ def compute_reward(
         "success": np.where(success, cfg.success_bonus, 0.0),
         "collision": cfg.w_collision * np.asarray(collisions, dtype=np.float64),
     }
+    if quirks is not None and quirks.reward_distance_plus_bonus:
+        for name in ("blame", "force"):
+            terms[name] = np.zeros_like(terms[name])
+    if quirks is not None and quirks.drops_collision:
+        terms["collision"] = np.zeros_like(terms["collision"])
     reward = terms["progress"] + terms["blame"] + terms["force"] + terms["success"] + terms["collision"]
     return reward, terms

@@ -171,9 +171,14 @@ class SB3Args:
 
 def env_id_of(config: EnvConfig) -> str:
     """The registered Gymnasium id a policy trained on `config` records (its version is checked when
-    the policy loads): the benchmark id of the map, the family's id, else the benchmark's id."""
-    from socialzoo.env.registration import BENCHMARK_IDS, FAMILY_IDS
+    the policy loads): the benchmark id of the map (its reference id with the reference code's
+    quirks on), the family's id, else the benchmark's id."""
+    from socialzoo.env.registration import BENCHMARK_IDS, FAMILY_IDS, REFERENCE_IDS
 
+    if config.quirks.any and not config.family:
+        for env_id, kwargs in REFERENCE_IDS.items():
+            if kwargs["map"] == config.map:
+                return env_id
     for env_id, kwargs in FAMILY_IDS.items() if config.family else BENCHMARK_IDS.items():
         if kwargs.get("family") == config.family and kwargs.get("map") == config.map:
             return env_id

@@ -439,6 +439,7 @@ class ActionSelectionTask(Task):
             core.per_robot(s.human_vel),
             visible,
             self._signals() if self.config.signals else None,
+            theta_index=self.config.quirks.human_theta_index,
         ).reshape(b, r, -1)
         self.obs[rows] = obs[rows]
         if len(self.learned):
