@@ -28,7 +28,10 @@ through the `TrainingRun` it is given:
   the optimiser, replay buffer or env state, and a run continued from one would not equal an
   uninterrupted run of the same seed;
 - the seed: torch's global generator seeded from args.seed for the run only (the caller's state is
-  given back), torch CPU threads from args.threads (restored after);
+  given back), torch CPU threads from args.threads and torch's deterministic algorithms (both
+  restored after);
+- the machine facts that decide torch-trained numbers (socialzoo.train.machine: CPU model and
+  flags, torch and BLAS builds, thread counts, numpy, Python) in run.json's "machine";
 - checkpoints on a fixed schedule (`schedule`), each one evaluated by the run's evaluator when it
   has one (`evaluations.csv`, TensorBoard `eval/*`, the best one named in run.json); with
   args.eval_every > 0 only the checkpoints at multiples of it and the last one are evaluated;
@@ -49,6 +52,7 @@ from typing import Any
 
 from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.tables import write_csv
+from socialzoo.train.machine import machine_facts
 from socialzoo.train.run_dir import (
     RUN_FILE,
     RunDir,
@@ -259,19 +263,28 @@ class TrainingRun:
 
 @contextlib.contextmanager
 def seeded_torch(seed: int, threads: int | None) -> Iterator[None]:
-    """Seed torch's global generator with `seed` and use `threads` CPU threads inside the block;
-    the caller's generator state and thread count are given back after it."""
+    """Seed torch's global generator with `seed`, use `threads` CPU threads and torch's
+    deterministic algorithms (warn only, where an operation has none) inside the block; the
+    caller's generator state, thread count and determinism setting are given back after it.
+
+    The deterministic switch costs nothing measurable on the CPU trainers (a 2,000-update BC run:
+    the same time within the machine's noise, docs/reproduce.md) and keeps any operation with a
+    nondeterministic kernel from entering a trainer unnoticed."""
     import torch
 
     before = torch.get_num_threads()
+    deterministic = torch.are_deterministic_algorithms_enabled()
+    warn_only = torch.is_deterministic_algorithms_warn_only_enabled()
     if threads is not None:
         torch.set_num_threads(threads)
+    torch.use_deterministic_algorithms(True, warn_only=True)
     try:
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(seed)
             yield
     finally:
         torch.set_num_threads(before)
+        torch.use_deterministic_algorithms(deterministic, warn_only=warn_only)
 
 
 def run_training(
@@ -300,6 +313,8 @@ def run_training(
     context = seeded_torch(args.seed, threads) if trainer.uses_torch else contextlib.nullcontext()
     try:
         with context:
+            # Inside the run's torch settings, so the threads recorded are the run's.
+            run.record["machine"] = machine_facts()
             results = fit(run)
     finally:
         run.close()
