@@ -1,4 +1,4 @@
-"""`socialzoo reproduce --out DIR [--quick] [--seeds K] [--only PARTS] [--backend local|ray] [--no-progress]`:
+"""`socialzoo reproduce --out DIR [--quick] [--seeds K] [--only PARTS] [--reference] [--backend B] [--no-progress]`:
 the paper's experiments, their tables and figures, and DIR/REPRODUCTION.md (socialzoo.reproduce)."""
 
 from __future__ import annotations
@@ -49,6 +49,13 @@ def register(subparsers: Any) -> None:
         metavar="N",
         help="trainings side by side and evaluation processes (or Ray CPUs of a local Ray); default 2 "
         "(--quick: 1); changes no result",
+    )
+    parser.add_argument(
+        "--reference",
+        action="store_true",
+        help="then train PPO and DQN with the reference code's quirks (SPEC section 11: x-only goal "
+        "distance, the reward 'distance gained + bonus'; PPO evaluated without its normalisation) "
+        "and evaluate them on the reference ids, reported as their own columns",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     parser.add_argument(
@@ -109,6 +116,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
             backend=args.backend,
             progress=not args.no_progress,
             on_part=report,
+            reference=args.reference,
         )
     except LedgerError as err:  # mixed settings, an unreadable settings or timings file
         print(f"socialzoo reproduce: error: {err}", file=sys.stderr)

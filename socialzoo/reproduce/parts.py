@@ -8,6 +8,8 @@ Every part composes pieces that store their items as they finish, so a part is r
 - lfd: BC and GAIL at each demonstration size and PIPS, then the LfD table (socialzoo.studies.lfd).
 - performance / transfer: the seven policies on gdc1-test / ghc3-test (socialzoo.bench.experiment),
   and the other seeds' learned policies in <part>/seeds/.
+- reference (only with `--reference`, REFERENCE_PART): PPO and DQN trained and evaluated with the
+  reference code's quirks (socialzoo.env.quirks), in reference/.
 
 Every learned policy is trained with each of settings.seed_list (`--seeds K`), each seed in its
 own run folder with its own policy file and trials (socialzoo.reproduce.runs), so a part resumes
@@ -30,13 +32,17 @@ from typing import Any
 
 from socialzoo.reproduce.backend import run_tasks
 from socialzoo.reproduce.paper import PAPER_POLICIES
+from socialzoo.reproduce.plan import REFERENCE_PART
 from socialzoo.reproduce.runs import (
+    REFERENCE_FILE,
+    REFERENCE_FOLDER,
     SEEDS_FOLDER,
     Context,
     demos_path,
     finished,
     lfd_eval_dir,
     lfd_items,
+    reference_rl_items,
     rl_items,
 )
 from socialzoo.reproduce.seeds import write_seed_results
@@ -218,10 +224,71 @@ def run_transfer(ctx: Context) -> int:
     return _benchmark(ctx, "ghc3", ctx.settings.transfer_trials, "transfer")
 
 
+def run_reference(ctx: Context) -> int:
+    """`--reference`: PPO and DQN of every seed trained with the reference code's quirks
+    (socialzoo.env.quirks.REFERENCE_QUIRKS: x-only goal distance, the reward "distance gained +
+    bonus"), PPO evaluated without its normalisation, both on gdc1-test and ghc3-test with the
+    quirks on, into reference/; then reference/reference.csv, one row per experiment, policy and
+    seed. BC, GAIL and PIPS are not retrained: their training reads Ref's actions, never the
+    reward, and the quirks change no success. Returns the trainings and trials made."""
+    import dataclasses
+
+    from socialzoo.agents.mlp import evaluation_file
+    from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
+    from socialzoo.bench.tables import write_csv
+    from socialzoo.env.quirks import REFERENCE_QUIRKS
+    from socialzoo.reproduce.results import read_csv
+
+    s = ctx.settings
+    items = reference_rl_items(ctx)
+    files, made = _train(ctx, items)
+    specs: dict[int, dict[str, str]] = {seed: {} for seed in s.seed_list}
+    for (name, args), path in zip(items, files, strict=True):
+        folder = ctx.ledger.path(REFERENCE_FOLDER, "evaluated", Path(args.out).name)
+        specs[int(args.seed)][name] = f"{name}:{evaluation_file(name, path, REFERENCE_QUIRKS, folder)}"
+    env = {**dict(s.eval_env_overrides), "quirks": dataclasses.asdict(REFERENCE_QUIRKS)}
+    rows = []
+    for experiment, map_name, trials in (
+        ("performance", "gdc1", s.performance_trials),
+        ("transfer", "ghc3", s.transfer_trials),
+    ):
+        for seed in s.seed_list:
+            n = trials if seed == s.seed else min(trials, s.seed_trials or trials)
+            folder = ctx.ledger.path(REFERENCE_FOLDER, experiment, *([] if seed == s.seed else [f"s{seed}"]))
+            config = BenchmarkConfig(
+                policies=tuple(specs[seed].values()),
+                trials=n,
+                maps=(map_name,),
+                backend=ctx.backend,
+                workers=s.workers,
+                batch_size=s.batch_size,
+                env_overrides=env,
+            )
+            made += run_benchmark(config, folder, progress=ctx.progress, figures=False).computed
+            by_spec = {str(r["policy"]): r for r in read_csv(folder / "summary.csv")}
+            for name, spec in specs[seed].items():
+                r = by_spec[spec]
+                rows.append(
+                    {
+                        "experiment": experiment,
+                        "policy": name,
+                        "seed": seed,
+                        "trials": int(r["trials"]),
+                        "success_rate": r["success_rate"],
+                        "success_ci_low": r["success_ci_low"],
+                        "success_ci_high": r["success_ci_high"],
+                        "average_step_reward_mean": r["average_step_reward_mean"],
+                    }
+                )
+    write_csv(rows, ctx.ledger.path(REFERENCE_FOLDER, REFERENCE_FILE))
+    return made
+
+
 PART_RUNNERS: dict[str, Callable[[Context], int]] = {
     "demos": run_demos,
     "rl-curves": run_rl_curves,
     "lfd": run_lfd,
     "performance": run_performance,
     "transfer": run_transfer,
+    REFERENCE_PART: run_reference,
 }

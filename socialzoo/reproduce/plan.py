@@ -22,6 +22,9 @@ from socialzoo.studies.lfd import LFD_SIZES
 
 # The parts, in the order they run (later parts reuse what earlier ones trained).
 PARTS: tuple[str, ...] = ("demos", "rl-curves", "lfd", "performance", "transfer")
+# The part that `--reference` adds after the chosen ones (socialzoo.reproduce.parts.run_reference):
+# the learned rows with the reference code's quirks; never run unless asked for.
+REFERENCE_PART = "reference"
 # Bumped when the layout of DIR/<hash>/ changes, so old items are never read as current ones.
 LAYOUT_VERSION = 1
 

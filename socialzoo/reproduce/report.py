@@ -13,11 +13,11 @@ from typing import Any
 
 from socialzoo.bench.tables import policy_label
 from socialzoo.reproduce.figures import draw_figures
-from socialzoo.reproduce.paper import PAPER_PROTOCOL, SPEC_REFERENCE
-from socialzoo.reproduce.plan import PARTS
+from socialzoo.reproduce.paper import PAPER_PROTOCOL, PAPER_SUCCESS, SPEC_REFERENCE
+from socialzoo.reproduce.plan import PARTS, REFERENCE_PART
 from socialzoo.reproduce.results import RESULTS_DIR, load
 from socialzoo.reproduce.seed_report import paper_outside_seeds, seed_note, seeds_section, selection_section
-from socialzoo.reproduce.tables import build_tables, write_tables
+from socialzoo.reproduce.tables import EXPERIMENT_MAPS, build_tables, write_tables
 
 REPORT_NAME = "REPRODUCTION.md"
 FIGURES_DIR = "figures"
@@ -40,6 +40,17 @@ EXPLANATIONS: dict[str, str] = {
     "normalisation (SPEC section 11: the reference evaluated without it); the paper's short "
     "budget, one seed.",
 }
+# The machine facts of a training run the report lists (socialzoo.reproduce.results.machine_summary).
+MACHINE_COLUMNS = (
+    "cpu",
+    "kernel_flags",
+    "torch",
+    "cpu_capability",
+    "blas",
+    "threads",
+    "deterministic",
+    "env",
+)
 QUICK_NOTE = (
     "- Everything: these are the `--quick` settings (tiny trainings, a few scenarios, a shorter "
     "time limit), so no difference here says anything about the paper."
@@ -50,6 +61,7 @@ PART_TITLES: dict[str, str] = {
     "lfd": "LfD data efficiency (BC and GAIL at every size, PIPS, the table)",
     "performance": "performance on gdc1-test (trains what is missing)",
     "transfer": "transfer on ghc3-test (trains what is missing)",
+    REFERENCE_PART: "PPO and DQN with the reference code's quirks (`--reference`)",
 }
 
 
@@ -123,6 +135,14 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
             f"| {part} | {PART_TITLES[part]} | {_duration(seconds)} | {len(entry['sessions'])} "
             f"| {'yes' if entry['finished'] else 'no'} |"
         )
+    entry = timings.get(REFERENCE_PART)
+    if entry is not None:
+        seconds = entry.get("work_seconds", entry["seconds"])
+        total += seconds
+        lines.append(
+            f"| {REFERENCE_PART} | {PART_TITLES[REFERENCE_PART]} | {_duration(seconds)} "
+            f"| {len(entry['sessions'])} | {'yes' if entry['finished'] else 'no'} |"
+        )
     lines.append(f"| all | | {_duration(total)} | | |")
     return lines
 
@@ -167,6 +187,94 @@ def _differences(
             "- No paper number lies outside our 90% interval (or our seeds' range) in the tables that have run."
         )
     return lines
+
+
+def _reference_section(results: Mapping[str, Any], tables: Mapping[str, Any]) -> list[str]:
+    """The learned rows trained and evaluated with the reference code's quirks (`--reference`),
+    beside ours and the paper's."""
+    rows = results.get("reference", [])
+    lines = [
+        "## The reference code's quirks (`--reference`)",
+        "",
+        "SPEC section 11 lists where the reference code (social_gym 1.0) departed from the paper; each "
+        "departure is a switch of the env config (`socialzoo.env.quirks.ReferenceQuirks`), all on in the "
+        "ids `socialzoo/ActionSelectionReference-v2` (gdc1) and `socialzoo/ActionSelectionTransferReference-v2` "
+        "(ghc3). `socialzoo reproduce --reference` trains PPO and DQN on them (goal distance along x only, "
+        'the reward "distance gained + bonus") and evaluates PPO without its observation normalisation. '
+        "BC, GAIL and PIPS are not retrained: they learn from Ref's actions, never from the reward, and "
+        "no quirk changes whether an episode succeeds.",
+        "",
+    ]
+    if not rows:
+        return [*lines, "*Not run yet (`socialzoo reproduce --out DIR --reference`).*", ""]
+    first = min(int(r["seed"]) for r in rows)
+    lines += [
+        "| experiment | policy | ours success % | reference quirks success % [90% CI] | reference, seeds | paper % |",
+        "|---|---|---:|---|---|---:|",
+    ]
+    for experiment in ("performance", "transfer"):
+        ours = {str(t["policy"]): t for t in tables.get(experiment, ([], ""))[0]}
+        _, index = EXPERIMENT_MAPS[experiment]
+        for policy in ("dqn", "ppo"):
+            mine = [r for r in rows if r["experiment"] == experiment and r["policy"] == policy]
+            if not mine:
+                continue
+            head = next((r for r in mine if int(r["seed"]) == first), mine[0])
+            rates = sorted(100 * r["success_rate"] for r in mine)
+            spread = f"{rates[0]:.1f} to {rates[-1]:.1f} ({len(rates)} seeds)" if len(rates) > 1 else ""
+            our = f"{ours[policy]['success_pct']:.1f}" if policy in ours else "n/a"
+            lines.append(
+                f"| {experiment} | {policy_label(policy)} | {our} | {100 * head['success_rate']:.1f} "
+                f"[{100 * head['success_ci_low']:.1f}, {100 * head['success_ci_high']:.1f}] | {spread} "
+                f"| {PAPER_SUCCESS[policy][index]:.1f} |"
+            )
+    return [*lines, ""]
+
+
+def _rerun_section(results: Mapping[str, Any]) -> list[str]:
+    """What a re-run elsewhere may differ by, with the machine facts of the stored training runs."""
+    lines = [
+        "## What a re-run may differ by",
+        "",
+        "What runs on the simulator alone (GoAlone, Ref, PIPS's synthesis, every evaluation of a "
+        "policy file) is numpy and numba in float64; re-run on another 2-core machine of the same kind, "
+        "GoAlone, Ref and PIPS came out bit for bit (issue 38). The torch-trained policies (BC, GAIL, "
+        "DQN, PPO) are deterministic on one machine (one seed, one torch thread per training, torch's "
+        "deterministic algorithms: two trainings give the same weights, tests/train/test_determinism.py), "
+        "but torch picks its CPU kernels at run time from the CPU's instruction sets and its BLAS/oneDNN "
+        "build (an AVX-512 path of MKL or oneDNN sums in another order than an AVX2 one), so on another "
+        "CPU or torch build the weights may part after a few updates and a policy's success may move "
+        "by as much as the spread between seeds (issue 38 saw BC, GAIL and DQN move, PPO by one "
+        "episode in 2,000). Every run record (run.json's `machine`, socialzoo.train.machine) names "
+        "what decides it: CPU model and flags, torch's version, CPU capability and BLAS, thread counts, "
+        "numpy's BLAS, Python; the table below lists those of the stored runs. `MKL_CBWR` (MKL's "
+        "reproducible code path) and `ATEN_CPU_CAPABILITY` / `ONEDNN_MAX_CPU_ISA` set to one "
+        "instruction set on both machines are the knobs that pin the kernels (not measured here); the "
+        "records name them when set.",
+        "",
+    ]
+    seen: dict[tuple[Any, ...], list[str]] = {}
+    for t in results.get("training", []):
+        m = t.get("machine")
+        if not isinstance(m, dict):
+            continue
+        key = tuple(m.get(k) for k in MACHINE_COLUMNS)
+        seen.setdefault(key, []).append(str(t.get("run")))
+    if not seen:
+        return [
+            *lines,
+            "The stored training runs were made before run records named their machine; a re-run "
+            "records it in every run.json.",
+            "",
+        ]
+    lines += [
+        "| runs | CPU | kernel flags | torch | CPU capability | BLAS | threads | deterministic | variables |",
+        "|---:|---|---|---|---|---|---:|---|---|",
+    ]
+    for key, runs in seen.items():
+        cells = " | ".join("" if v is None else str(v) for v in key)
+        lines.append(f"| {len(runs)} | {cells} |")
+    return [*lines, ""]
 
 
 def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: set[str] | None = None) -> str:
@@ -253,6 +361,8 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
         f"policies evaluated with their saved normalisation. {runs}",
         "",
     ]
+    lines += _reference_section(results, tables)
+    lines += _rerun_section(results)
     training = results.get("training", [])
     if training:
         lines += [

@@ -11,6 +11,8 @@ number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
     selection.csv     the checkpoint each RL run kept, chosen on validation scenarios
     seeds.csv, improvement.csv, profiles.csv    with several training seeds: the aggregates over
                       them (socialzoo.reproduce.seeds)
+    reference.csv     with `--reference`: PPO and DQN with the reference code's quirks, per
+                      experiment and seed (socialzoo.reproduce.parts.run_reference)
 
 `collect` copies them out of the work folder DIR/<hash>/ (where the stores and runs are); `load`
 reads them back with numbers as floats, so the report never needs the big stores.
@@ -31,7 +33,7 @@ from socialzoo.bench.tables import write_csv
 from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
-from socialzoo.reproduce.runs import DEMOS_FILE
+from socialzoo.reproduce.runs import DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
 from socialzoo.reproduce.seeds import SEEDS_DIR
 
 RESULTS_DIR = "results"
@@ -46,6 +48,7 @@ CSV_FILES: dict[str, str] = {
     "seeds": "seeds.csv",
     "improvement": "improvement.csv",
     "profiles": "profiles.csv",
+    "reference": "reference.csv",
 }
 # Columns that hold text; every other CSV cell is read as a number (empty: NaN).
 TEXT_COLUMNS = frozenset(
@@ -91,7 +94,8 @@ def _write_json(path: Path, data: Any) -> None:
 def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
     """Each finished training run under the work folder: what it was and how long it took."""
     out = []
-    for record in sorted(ledger.work.glob("*/*/run.json")):
+    records = [*ledger.work.glob("*/*/run.json"), *ledger.work.glob(f"{REFERENCE_FOLDER}/rl/*/run.json")]
+    for record in sorted(records):
         data = _read_json(record, dict)
         if not data.get("finished"):
             continue
@@ -104,6 +108,7 @@ def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
                 "env_steps": res.get("env_steps"),
                 "wall_seconds": res.get("wall_seconds"),
                 "seed": data.get("seed"),
+                "machine": machine_summary(data.get("machine")),
             }
         )
     from socialzoo.train.pips import read_program_record
@@ -123,6 +128,26 @@ def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
             }
         )
     return out
+
+
+def machine_summary(facts: Any) -> dict[str, Any] | None:
+    """What of a run record's machine facts (socialzoo.train.machine) decides torch-trained numbers:
+    CPU model and kernel flags, torch's version, CPU capability and BLAS, its threads, the thread
+    and ISA variables set; None for a record without facts (written before they were recorded)."""
+    if not isinstance(facts, dict):
+        return None
+    cpu, torch = facts.get("cpu") or {}, facts.get("torch") or {}
+    build = torch.get("build") or {}
+    return {
+        "cpu": cpu.get("model"),
+        "kernel_flags": " ".join(cpu.get("kernel_flags") or ()),
+        "torch": torch.get("version"),
+        "cpu_capability": build.get("cpu_capability"),
+        "blas": " ".join(str(build[k]) for k in ("blas", "mkl", "onednn") if build.get(k)),
+        "threads": torch.get("threads"),
+        "deterministic": torch.get("deterministic_algorithms"),
+        "env": " ".join(f"{k}={v}" for k, v in sorted((facts.get("env") or {}).items())),
+    }
 
 
 def _demo_steps(ledger: Ledger) -> int | None:
@@ -173,6 +198,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
         "lfd": ledger.path("lfd", "eval", "lfd.csv"),
         "performance": ledger.path("performance", "summary.csv"),
         "transfer": ledger.path("transfer", "summary.csv"),
+        "reference": ledger.path(REFERENCE_FOLDER, REFERENCE_FILE),
         **{
             key: ledger.path(SEEDS_DIR, CSV_FILES[key])
             for key in ("selection", "seeds", "improvement", "profiles")

@@ -3,6 +3,7 @@ the small results out and write the tables, figures and REPRODUCTION.md.
 
     reproduce("out/repro", quick_settings())                     # everything, small
     reproduce("out/repro", full_settings(), parts=("lfd",))      # one part of the paper's protocol
+    reproduce("out/repro", quick_settings(), reference=True)     # and the reference code's quirks
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 from socialzoo.reproduce.backend import Backend, check_backend
 from socialzoo.reproduce.ledger import Ledger
 from socialzoo.reproduce.parts import PART_RUNNERS
-from socialzoo.reproduce.plan import PARTS, Settings, parse_parts
+from socialzoo.reproduce.plan import PARTS, REFERENCE_PART, Settings, parse_parts
 from socialzoo.reproduce.report import write_report
 from socialzoo.reproduce.results import collect
 from socialzoo.reproduce.runs import Context
@@ -48,6 +49,7 @@ def reproduce(
     backend: Backend = "local",
     progress: bool = True,
     on_part: Callable[[str, int], None] | None = None,
+    reference: bool = False,
 ) -> ReproduceResult:
     """Run `parts` (default: all, in PARTS order) of the reproduction into out_dir.
 
@@ -58,6 +60,8 @@ def reproduce(
         backend: "local" or "ray" (trainings and evaluations as Ray tasks).
         progress: show progress bars.
         on_part: called with (part, items made) after each part.
+        reference: then run the reference part (REFERENCE_PART): PPO and DQN trained and
+            evaluated with the reference code's quirks, reported beside ours and the paper's.
 
     Raises:
         ValueError: an unknown part or backend.
@@ -68,8 +72,8 @@ def reproduce(
     ledger = Ledger(out_dir, settings)
     ctx = Context(ledger, backend=backend, progress=progress)
     made = {}
-    for part in PARTS:
-        if part not in chosen:
+    for part in (*PARTS, REFERENCE_PART):
+        if part not in chosen and not (reference and part == REFERENCE_PART):
             continue
         logger.info("reproduce: part %s (%s)", part, ledger.work)
         with ledger.timed(part, backend) as session:

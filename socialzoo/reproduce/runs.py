@@ -91,6 +91,31 @@ def rl_items(ctx: Context, seeds: tuple[int, ...] | None = None) -> list[tuple[s
     ]
 
 
+# The folder of the reference part (`socialzoo reproduce --reference`) in the work folder, and its
+# table of every reference-quirks policy's success (one row per experiment, policy and seed).
+REFERENCE_FOLDER = "reference"
+REFERENCE_FILE = "reference.csv"
+# The trainers whose training reads the env's reward, retrained with the reference code's quirks;
+# BC, GAIL (its reward is the discriminator's) and PIPS learn from Ref's actions alone.
+REFERENCE_TRAINERS: tuple[str, ...] = RL_ALGOS
+
+
+def reference_rl_items(ctx: Context, seeds: tuple[int, ...] | None = None) -> list[tuple[str, Any]]:
+    """PPO and DQN of every seed as `rl_items`, trained on the reference code's quirks (the env
+    config's `quirks`: socialzoo.env.quirks.REFERENCE_QUIRKS) in reference/rl/<run>/."""
+    import dataclasses
+
+    from socialzoo.env.quirks import REFERENCE_QUIRKS
+
+    quirks = dataclasses.asdict(REFERENCE_QUIRKS)
+    items = []
+    for algo, args in rl_items(ctx, seeds):
+        env = {**dict(args.env_overrides), "quirks": quirks}
+        out = ctx.ledger.path(REFERENCE_FOLDER, "rl", Path(args.out).name)
+        items.append((algo, dataclasses.replace(args, out=out, env_overrides=env)))
+    return items
+
+
 def demos_path(ctx: Context) -> Path:
     """The demonstration file of this run."""
     return ctx.ledger.path("demos", DEMOS_FILE)
