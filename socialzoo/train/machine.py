@@ -72,7 +72,10 @@ def cpu_facts(cpuinfo: str | None = None) -> dict[str, Any]:
         fields.setdefault(key.strip(), value.strip())
     flags = set((fields.get("flags") or fields.get("Features") or "").split())
     return {
-        "model": fields.get("model name") or fields.get("Model") or platform.processor() or platform.machine(),
+        "model": fields.get("model name")
+        or fields.get("Model")
+        or platform.processor()
+        or platform.machine(),
         "vendor": fields.get("vendor_id", ""),
         "machine": platform.machine(),
         "logical_cpus": os.cpu_count(),
@@ -118,15 +121,16 @@ def numpy_facts() -> dict[str, Any]:
 
     facts: dict[str, Any] = {"version": np.__version__}
     try:
-        config = np.show_config(mode="dicts")  # numpy >= 1.26
+        shown: Any = np.show_config(mode="dicts")  # numpy >= 1.26
     except TypeError:
         return facts
-    deps = (config or {}).get("Build Dependencies", {}) if isinstance(config, dict) else {}
+    config: dict[str, Any] = shown if isinstance(shown, dict) else {}
+    deps: dict[str, Any] = config.get("Build Dependencies") or {}
     for key in ("blas", "lapack"):
-        dep = deps.get(key) or {}
+        dep: dict[str, Any] = deps.get(key) or {}
         if dep:
             facts[key] = {k: dep.get(k) for k in ("name", "version", "openblas configuration") if dep.get(k)}
-    simd = (config or {}).get("SIMD Extensions", {}) if isinstance(config, dict) else {}
+    simd: dict[str, Any] = config.get("SIMD Extensions") or {}
     if simd:
         facts["simd_found"] = list(simd.get("found", []))
     return facts

@@ -35,7 +35,16 @@ def weights_digest(path) -> str:
 def test_cpu_facts_from_cpuinfo():
     facts = cpu_facts(CPUINFO)
     assert facts["model"] == "Intel(R) Xeon(R) Platinum 8480+" and facts["vendor"] == "GenuineIntel"
-    assert facts["kernel_flags"] == ["sse4_2", "avx", "avx2", "fma", "avx512f", "avx512bw", "avx512_vnni", "amx_tile"]
+    assert facts["kernel_flags"] == [
+        "sse4_2",
+        "avx",
+        "avx2",
+        "fma",
+        "avx512f",
+        "avx512bw",
+        "avx512_vnni",
+        "amx_tile",
+    ]
     assert set(facts["kernel_flags"]) <= set(KERNEL_FLAGS)
 
 
