@@ -52,12 +52,16 @@ def _write_json(path: Path, data: Any) -> None:
 
 
 def machine() -> dict[str, Any]:
-    """A description of this machine for the report (CPU count, platform, Python)."""
+    """A description of this machine for the report (CPU count, platform, Python), with the facts
+    that decide torch-trained numbers (socialzoo.train.machine.machine_facts) under "facts"."""
+    from socialzoo.train.machine import machine_facts
+
     return {
         "cpus": os.cpu_count(),
         "platform": platform.platform(),
         "processor": platform.processor() or platform.machine(),
         "python": platform.python_version(),
+        "facts": machine_facts(),
     }
 
 
