@@ -30,6 +30,7 @@ from socialzoo.env.replay import ReplayRunner
 from socialzoo.env.script import ScriptRunner
 from socialzoo.env.world import StepEvents, robot_collisions, step_world
 from socialzoo.humans.models import PeopleConfig
+from socialzoo.humans.presets import with_presets
 from socialzoo.maps.map_file import Map
 from socialzoo.nav.distance_field import DistanceField, distance_field
 from socialzoo.nav.graph import graph_of
@@ -81,10 +82,13 @@ class BatchedCore:
         if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
             raise ValueError(f"BatchedCore: batch_size must be an int >= 1, got {batch_size!r}")
         b, r = batch_size, num_robots
+        people = people or PeopleConfig()
+        # A fitted preset of the people spec replaces its model's parameters (socialzoo.humans.presets).
+        world = with_presets(world, people.presets)
         self.batch_size, self.num_robots, self.max_humans = b, r, max_humans
         self.world, self.walls, self.map = world, walls, m
         self.planner, self.robot_visible = planner, robot_visible
-        self.people = People(people or PeopleConfig(), world, b, r, max_humans, walls, m)
+        self.people = People(people, world, b, r, max_humans, walls, m)
         robot = world.robot
         door_reach = robot.radius if robot.radius is not None else robot.half_width
         # Who waits, signals or follows a robot, whom each robot escorts, doors (socialzoo.env.script).
@@ -223,8 +227,9 @@ class BatchedCore:
             if speeds is not before.human_pref_speed:
                 stepping = dataclasses.replace(before, human_pref_speed=speeds)
         after, events = step_world(
-            stepping, self.walls, self.world, command, halt, desired, learned, self.robot_visible
-        )
+            stepping, self.walls, self.world, command, halt, desired, learned, self.robot_visible,
+            sparse_people=self.replay.active,
+        )  # fmt: skip
         if scripted:
             at_door = self.script.settle(before, after)
             if at_door.any():

@@ -37,6 +37,7 @@ import numpy as np
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
+from socialzoo.scenarios.recorded_people import NEVER
 from socialzoo.scenarios.scenario import Scenario
 
 # The metrics of recorded scenes (socialzoo.core.metrics, source "recorded").
@@ -81,27 +82,38 @@ class ReplayRunner:
         self.track_vel = np.zeros((b, h, 1, 2))
         # (B, H, L) the frame of each route point (socialzoo.scenarios.recorded_people.route_frames).
         self.route_frame = np.zeros((b, h, 1), dtype=np.int64)
-        self.on_track = np.zeros((b, h), dtype=bool)
+        # (B, H, K) each slot's people, one after another (socialzoo.scenarios.recorded_people.Occupants).
+        self.entry = np.full((b, h, 1), NEVER, dtype=np.int64)
+        self.exit = np.full((b, h, 1), NEVER, dtype=np.int64)
+        self.first = np.zeros((b, h, 1), dtype=np.int64)
+        self.last = np.zeros((b, h, 1), dtype=np.int64)
+        self.occupant_speed = np.ones((b, h, 1))
+        self.shared = np.zeros((b, h), dtype=bool)  # a slot of more than one person
+        self.occupant = np.full((b, h), -1, dtype=np.int64)  # who is in each slot now (-1: nobody yet)
+        # Per slot, from the people spec: follows its track from entry; may react; the model after.
+        self.follows = np.zeros((b, h), dtype=bool)
         self.reacts = np.zeros((b, h), dtype=bool)
         self.then = np.zeros((b, h), dtype=np.int8)
-        self.entered = np.zeros((b, h), dtype=bool)
+        # The person in each slot now: on its track; walked by a model and gone.
+        self.on_track = np.zeros((b, h), dtype=bool)
         self.gone = np.zeros((b, h), dtype=bool)
         self.time_limit = np.full(b, np.inf)
-        # Measures of the episode (until the robot's episode ends).
+        # Measures of the episode (until the robot's episode ends), the person in each slot now...
         self.elapsed = np.zeros(b)
         self.reacted_at = np.full((b, h), np.nan)
         self.exit_at = np.full((b, h), np.nan)
         self.walked = np.zeros((b, h))
         self.recorded_left = np.zeros((b, h))
         self.recorded_exit = np.zeros((b, h))
+        self.rest = np.zeros((b, h))
+        # ... and the reacting people who already left their slot: count, time lost, extra distance.
+        self.folded = np.zeros((b, 3))
         self.robot_track = np.zeros((b, 1, 2))
         self.robot_track_len = np.zeros(b, dtype=np.int64)
         self.deviation = np.zeros((b, r))
         self.moves = np.zeros((b, r), dtype=np.int64)
         self.contact = np.zeros((b, r, h), dtype=bool)
         self.walked_into = np.zeros((b, r), dtype=np.int64)
-        self.rest = np.zeros((b, h))
-        self.speed = np.ones((b, h))
 
     @property
     def active(self) -> bool:
@@ -150,7 +162,8 @@ class ReplayRunner:
                 self.on_track[row] = False
                 continue
             n, frames = rec.num_people, rec.num_frames
-            self._widen(frames, rec.route_frames.shape[1], len(rec.robot_track))
+            occupants = rec.occupants
+            self._widen(frames, rec.route_frames.shape[1], len(rec.robot_track), occupants.entry.shape[1])
             self.recorded[row] = True
             self.frame_dt[row] = rec.dt
             self.tracks[row] = np.nan
@@ -161,15 +174,26 @@ class ReplayRunner:
             frames_of = rec.route_frames
             self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
             self.route_frame[row, :n, frames_of.shape[1] :] = frames_of[:, -1:]
+            k = occupants.entry.shape[1]
+            for name, fill in (
+                ("entry", NEVER),
+                ("exit", NEVER),
+                ("first", 0),
+                ("last", 0),
+                ("occupant_speed", 1.0),
+            ):
+                array = getattr(self, name)
+                array[row] = fill
+                array[row, :n, :k] = getattr(occupants, "speed" if name == "occupant_speed" else name)
+            self.shared[row] = False
+            self.shared[row, :n] = (occupants.entry < NEVER).sum(1) > 1
             kind = slot_kind[:n]
-            follow = rec.follow | recorded_part[kind]
-            self.on_track[row] = False
-            self.on_track[row, :n] = follow
+            self.follows[row] = False
+            self.follows[row, :n] = rec.follow | recorded_part[kind]
             self.reacts[row] = False
             self.reacts[row, :n] = hybrid_part[kind] & ~rec.follow
             self.then[row] = 0
             self.then[row, :n] = np.where(rec.follow, REPLAY, walks_as[kind])
-            state.human_model[row, :n] = np.where(follow, REPLAY, state.human_model[row, :n])
             self.time_limit[row] = rec.time_limit
             self.robot_track[row] = 0.0
             self.robot_track[row, : len(rec.robot_track)] = rec.robot_track
@@ -177,7 +201,8 @@ class ReplayRunner:
         fresh = rows[self.recorded[rows]]
         if len(fresh) == 0:
             return
-        for name in ("entered", "gone", "contact"):
+        self.occupant[fresh] = -1
+        for name in ("on_track", "gone", "contact"):
             getattr(self, name)[fresh] = False
         for name in (
             "elapsed",
@@ -187,15 +212,31 @@ class ReplayRunner:
             "walked_into",
             "recorded_left",
             "recorded_exit",
+            "rest",
+            "folded",
         ):
             getattr(self, name)[fresh] = 0
         self.reacted_at[fresh] = np.nan
         self.exit_at[fresh] = np.nan
         assert b == state.batch_size
+        state.human_model[fresh] = np.where(self.follows[fresh], REPLAY, state.human_model[fresh])
         self._place(state, fresh, state.human_mask[fresh].copy())
 
-    def _widen(self, frames: int, route: int, robot_track: int) -> None:
-        """Grow the frame, route and robot-track axes to hold a longer recording."""
+    def _widen(self, frames: int, route: int, robot_track: int, occupants: int) -> None:
+        """Grow the frame, route, robot-track and occupant axes to hold a longer recording."""
+        have = self.entry.shape[2]
+        if occupants > have:
+            grow = max(occupants, 2 * have) - have
+            for name, fill in (
+                ("entry", NEVER),
+                ("exit", NEVER),
+                ("first", 0),
+                ("last", 0),
+                ("occupant_speed", 1.0),
+            ):
+                array = getattr(self, name)
+                pad = np.full(array.shape[:2] + (grow,), fill, dtype=array.dtype)
+                setattr(self, name, np.concatenate((array, pad), 2))
         have = self.tracks.shape[2]
         if frames > have:
             frames = max(frames, 2 * have)  # grow by doubling: a reset rarely reallocates
@@ -229,8 +270,8 @@ class ReplayRunner:
             robot_vel: (B, R, 2) the robots' velocity vectors after it, m/s.
         """
         rows = np.flatnonzero(self.recorded)
-        after.human_mask = after.human_mask.copy()
-        after.human_model = after.human_model.copy()
+        for name in ("human_mask", "human_model", "human_route_len", "human_pref_speed"):
+            setattr(after, name, getattr(after, name).copy())
         frame = self._place(after, rows, after.human_mask[rows].copy())
         self._react(after, rows, frame, robot_vel)
 
@@ -253,41 +294,87 @@ class ReplayRunner:
         on_frame = (w == 0.0)[:, None]
         present = ~np.isnan(p0[..., 0]) & (on_frame | ~np.isnan(p1[..., 0]))
         where = np.where(on_frame[..., None], p0, p0 + w[:, None, None] * (p1 - p0))
+        # Who is in each slot now; a slot's next person takes it at its entry frame.
+        now = (self.entry[rows] <= i0[:, None, None]).sum(-1) - 1  # (n, H)
+        new = (now >= 0) & (now != self.occupant[rows])
+        if new.any():
+            self._enter(state, rows, new, now, t)
         follow = self.on_track[rows]
         # Followers: where their tracks are, present while recorded.
         pos = np.where((follow & present)[..., None], where, state.human_pos[rows])
         vel = np.where((follow & present)[..., None], velocity, state.human_vel[rows])
         mask = np.where(follow, present, mask_before)
-        # People a model walks: they enter at their first frame, on their track.
-        entering = ~follow & ~self.entered[rows] & present
+        # People a model walks: they enter at their first frame, on their track ...
+        entering = new & ~follow
         pos = np.where(entering[..., None], where, pos)
         vel = np.where(entering[..., None], velocity, vel)
-        waypoint = state.human_waypoint[rows]
         direction = state.human_direction[rows]
-        waypoint = np.where(entering, np.minimum(1, state.human_route_len[rows] - 1), waypoint)
-        direction = np.where(entering, 1, direction)
-        walked = ~follow & (self.entered[rows] | entering)
+        walking = ~follow & (now >= 0) & ~self.gone[rows]
         # ... and leave where their route ends (the route turned them back there).
-        leaving = walked & ~self.gone[rows] & (direction < 0)
+        leaving = walking & (direction < 0)
         gone = self.gone[rows] | leaving
-        mask = np.where(~follow, walked & ~gone, mask)
-        left_track = follow & self.entered[rows] & ~present & np.isnan(self.exit_at[rows])
+        mask = np.where(~follow, walking & ~leaving, mask)
         exit_at = self.exit_at[rows]
-        exit_at = np.where((leaving | left_track) & np.isnan(exit_at), t[:, None], exit_at)
-        self.exit_at[rows] = exit_at
-        self.entered[rows] |= present | entering
+        left_track = follow & (now >= 0) & ~present & np.isnan(exit_at)
+        self.exit_at[rows] = np.where((leaving | left_track) & np.isnan(exit_at), t[:, None], exit_at)
         self.gone[rows] = gone
         state.human_pos[rows] = pos
         state.human_vel[rows] = vel
         state.human_mask[rows] = mask
-        state.human_waypoint[rows] = waypoint
-        state.human_direction[rows] = direction
         return i0
+
+    def _enter(
+        self, state: WorldState, rows: np.ndarray, new: np.ndarray, now: np.ndarray, t: np.ndarray
+    ) -> None:
+        """The people who take their slot now (new (n, H); now: who is in each slot): the one they
+        follow is folded into the measures (a person a model still walks leaves here), and the slot
+        follows its track or is walked from its entry along its own part of the slot's route."""
+        local, slot = np.nonzero(new)
+        row = rows[local]
+        self._fold(row, slot, t[local])
+        k = now[local, slot]
+        self.occupant[row, slot] = k
+        follow = self.follows[row, slot]
+        self.on_track[row, slot] = follow
+        self.gone[row, slot] = False
+        self.reacted_at[row, slot] = np.nan
+        self.exit_at[row, slot] = np.nan
+        self.walked[row, slot] = 0.0
+        state.human_model[row, slot] = np.where(follow, REPLAY, self.then[row, slot])
+        first, last = self.first[row, slot, k], self.last[row, slot, k]
+        shared = self.shared[row, slot]
+        # A slot of one person keeps the scenario's route; in a shared slot each person walks its own part.
+        route_len = np.where(shared, last + 1, state.human_route_len[row, slot])
+        state.human_route_len[row, slot] = route_len
+        state.human_waypoint[row, slot] = np.where(
+            shared, np.minimum(first + 1, last), np.minimum(1, route_len - 1)
+        )
+        state.human_direction[row, slot] = 1
+        state.human_pref_speed[row, slot] = np.where(
+            shared, self.occupant_speed[row, slot, k], state.human_pref_speed[row, slot]
+        )
+
+    def _fold(self, row: np.ndarray, slot: np.ndarray, t: np.ndarray) -> None:
+        """Add the reacting people leaving slots (row, slot) at times t to the row's measures."""
+        reacted = ~np.isnan(self.reacted_at[row, slot])
+        if not reacted.any():
+            return
+        row, slot, t = row[reacted], slot[reacted], t[reacted]
+        exit_at = self.exit_at[row, slot]
+        cut = np.isnan(exit_at)
+        lost = np.where(cut, t, exit_at) - self.recorded_exit[row, slot]
+        extra = (
+            self.walked[row, slot] + np.where(cut, self.rest[row, slot], 0.0) - self.recorded_left[row, slot]
+        )
+        np.add.at(self.folded, (row, 0), 1.0)
+        np.add.at(self.folded, (row, 1), lost)
+        np.add.at(self.folded, (row, 2), extra)
+        self.reacted_at[row, slot] = np.nan
 
     def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
         """Hybrid people a robot came near leave their tracks (see the module docstring); frame:
         (len(rows),) the frame each row is on."""
-        watch = self.reacts[rows] & self.on_track[rows] & state.human_mask[rows]
+        watch = self.reacts[rows] & self.on_track[rows] & state.human_mask[rows] & (self.occupant[rows] >= 0)
         if not watch.any() or state.num_robots == 0:
             return
         d = state.robot_pose[rows, :, None, :2] - state.human_pos[rows][:, None]  # (n, R, H, 2)
@@ -306,20 +393,22 @@ class ReplayRunner:
         self.on_track[row, slot] = False
         state.human_model[row, slot] = self.then[row, slot]
         # The rest of its recorded route: the first route point after its current frame.
-        frames = self.route_frame[row, slot]  # (k, L)
+        k = self.occupant[row, slot]
+        first, last = self.first[row, slot, k], self.last[row, slot, k]
+        frames = self.route_frame[row, slot]  # (m, L)
         ahead = (frames <= frame[local][:, None]).sum(-1)
-        state.human_waypoint[row, slot] = np.minimum(ahead, state.human_route_len[row, slot] - 1)
+        shared = self.shared[row, slot]
+        end = np.where(shared, last, state.human_route_len[row, slot] - 1)
+        state.human_waypoint[row, slot] = np.clip(ahead, np.where(shared, first, 0), end)
         state.human_direction[row, slot] = 1
-        self.entered[row, slot] = True
         self.reacted_at[row, slot] = t
-        track = self.tracks[row, slot]  # (k, T, 2)
-        on = ~np.isnan(track[..., 0])
-        last_frame = track.shape[1] - 1 - np.argmax(on[:, ::-1], axis=1)
-        self.recorded_exit[row, slot] = last_frame * self.frame_dt[row]
+        exit_frame = self.exit[row, slot, k]
+        self.recorded_exit[row, slot] = exit_frame * self.frame_dt[row]
+        track = self.tracks[row, slot]  # (m, T, 2)
         seg = np.sqrt((np.diff(track, axis=1) ** 2).sum(-1))  # NaN where absent
-        after = np.arange(track.shape[1] - 1)[None, :] >= frame[local][:, None]
-        ahead_len = np.where(after & ~np.isnan(seg), seg, 0.0).sum(-1)
-        self.recorded_left[row, slot] = ahead_len
+        span = np.arange(track.shape[1] - 1)[None, :]
+        mine = (span >= frame[local][:, None]) & (span < exit_frame[:, None])
+        self.recorded_left[row, slot] = np.where(mine & ~np.isnan(seg), seg, 0.0).sum(-1)
 
     # ------------------------------------------------------------------ measures
     def account(
@@ -333,8 +422,15 @@ class ReplayRunner:
         live = ~was_done[rows]
         self.elapsed[rows] += self.dt
         off_track = ~np.isnan(self.reacted_at[rows]) & ~self.gone[rows]
-        step = after.human_pos[rows] - before.human_pos[rows]
-        self.walked[rows] += np.where(off_track, np.sqrt((step**2).sum(-1)), 0.0)
+        if off_track.any():
+            step = after.human_pos[rows] - before.human_pos[rows]
+            self.walked[rows] += np.where(off_track, np.sqrt((step**2).sum(-1)), 0.0)
+            # What the measures read of a reacting person who has not left: the straight way left
+            # to its route's end.
+            end = np.take_along_axis(
+                after.human_route[rows], (after.human_route_len[rows] - 1)[..., None, None].repeat(2, -1), 2
+            )[:, :, 0]
+            self.rest[rows] = np.where(off_track, np.sqrt(((end - after.human_pos[rows]) ** 2).sum(-1)), 0.0)
         robot = after.robot_pose[rows, :, :2]  # (n, R, 2)
         has_track = self.robot_track_len[rows] > 1
         if has_track.any():
@@ -351,13 +447,6 @@ class ReplayRunner:
             robot_in = (robot_vel[rows][:, :, None] * unit).sum(-1)
             self.walked_into[rows] += (onset & (person_in > robot_in) & live[..., None]).sum(-1)
         self.contact[rows] = close
-        # What summaries read of an episode that has not ended: the straight way left to each
-        # person's route end, and its speed.
-        end = np.take_along_axis(
-            after.human_route[rows], (after.human_route_len[rows] - 1)[..., None, None].repeat(2, -1), 2
-        )[:, :, 0]
-        self.rest[rows] = np.sqrt(((end - after.human_pos[rows]) ** 2).sum(-1))
-        self.speed[rows] = after.human_pref_speed[rows]
 
     def summaries(self, rows: np.ndarray, arrival: Sequence[float], robot: int = 0) -> list[dict[str, Any]]:
         """The recorded metrics (RECORDED_KEYS) of `rows` for robot `robot`; arrival: each row's
@@ -373,6 +462,20 @@ class ReplayRunner:
                 else math.nan
             )
             reacted = ~np.isnan(self.reacted_at[row])
+            count, lost, extra = self.folded[row]
+            if reacted.any():
+                # Not gone yet: the episode's time plus the straight way left at its speed.
+                exit_at, rest = self.exit_at[row], self.rest[row]
+                done = ~np.isnan(exit_at)
+                speed = np.maximum(
+                    self.occupant_speed[row, np.arange(len(rest)), np.maximum(self.occupant[row], 0)], 1e-9
+                )
+                at = np.where(done, exit_at, self.elapsed[row] + rest / speed)
+                count += reacted.sum()
+                lost += (at - self.recorded_exit[row])[reacted].sum()
+                extra += (self.walked[row] + np.where(done, 0.0, rest) - self.recorded_left[row])[
+                    reacted
+                ].sum()
             entry: dict[str, Any] = {
                 "person_time": person,
                 "person_time_ratio": float(reached) / person
@@ -381,22 +484,11 @@ class ReplayRunner:
                 "person_path_deviation": float(self.deviation[row, robot] / self.moves[row, robot])
                 if self.moves[row, robot] and self.robot_track_len[row] > 1
                 else math.nan,
-                "people_reacting": int(reacted.sum()),
+                "people_reacting": int(count),
                 "people_walked_into_robot": int(self.walked_into[row, robot]),
+                "reacting_time_lost": float(lost / count) if count else math.nan,
+                "reacting_extra_distance": float(extra / count) if count else math.nan,
             }
-            if reacted.any():
-                # Not gone yet: the episode's time plus the straight way left to its exit at its speed.
-                exit_at, speed, rest = self.exit_at[row], self.speed[row], self.rest[row]
-                done = ~np.isnan(exit_at)
-                at = np.where(done, exit_at, self.elapsed[row] + rest / np.maximum(speed, 1e-9))
-                extra = np.where(done, 0.0, rest)
-                entry["reacting_time_lost"] = float((at - self.recorded_exit[row])[reacted].mean())
-                entry["reacting_extra_distance"] = float(
-                    (self.walked[row] + extra - self.recorded_left[row])[reacted].mean()
-                )
-            else:
-                entry["reacting_time_lost"] = math.nan
-                entry["reacting_extra_distance"] = math.nan
             out.append(entry)
         return out
 

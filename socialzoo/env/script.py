@@ -17,6 +17,7 @@ person is not pushed about.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -27,6 +28,12 @@ from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP
 
 # A released person keeps signalling until it is this far from its stop point, m.
 SIGNAL_RADIUS = 3.0
+
+
+@functools.cache
+def _plain(num_robots: int) -> Script:
+    """The empty script of `num_robots` robots (read-only, so one serves every unscripted row)."""
+    return Script.plain(0, num_robots)
 
 
 class ScriptRunner:
@@ -95,7 +102,7 @@ class ScriptRunner:
             self.reached_at[row] = np.inf
             self.signal[row] = 0
             if script is None:
-                script = Script.plain(0, self.escort.shape[1])
+                script = _plain(self.escort.shape[1])
             n = script.num_humans
             for name, fill in (("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
                                ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False)):  # fmt: skip

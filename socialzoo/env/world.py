@@ -7,7 +7,9 @@ the human model (humans), so it lives above both, in env.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -15,9 +17,9 @@ from socialzoo.core.config import RobotConfig, WorldConfig
 from socialzoo.core.robot import step_robot, world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
-from socialzoo.humans.models import ORCA
+from socialzoo.humans.models import ORCA, REPLAY
 from socialzoo.humans.motion import keep_off_robots
-from socialzoo.humans.people import step_people
+from socialzoo.humans.people import step_people, step_people_packed
 from socialzoo.humans.routes import advance_waypoints
 
 _DIFFERENTIAL = RobotConfig()
@@ -64,6 +66,7 @@ def step_world(
     human_desired_vel: np.ndarray | None = None,
     human_learned: np.ndarray | None = None,
     robot_visible: bool = True,
+    sparse_people: bool = False,
 ) -> tuple[WorldState, StepEvents]:
     """Advance every world by one step of cfg.dt.
 
@@ -79,6 +82,9 @@ def step_world(
         human_learned: (B, H) bool; humans driven by `human_desired_vel` instead of their route.
         robot_visible: False: the humans neither see nor avoid the robots (CrowdNav's invisible
             robot); collisions with them still count.
+        sparse_people: step only the rows where a model moves someone, each with only its present
+            people (socialzoo.humans.people.step_people_packed; the same steps, for recorded scenes
+            whose slots are mostly empty and whose replayed people no model moves).
 
     Returns:
         (new_state, events).
@@ -89,7 +95,10 @@ def step_world(
     target = state.human_target
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
-    human_pos, human_vel, blocked = step_people(
+    people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
+    if sparse_people:
+        people_step = partial(step_people_packed, moved=state.human_model != REPLAY)
+    human_pos, human_vel, blocked = people_step(
         state.human_pos,
         state.human_vel,
         target,

@@ -2,7 +2,8 @@
 
 A people spec names one model, or a mix of models with the share of the crowd each drives:
 "sf" (the social force, also "social_force"), "orca", "groups" (social force in walking groups),
-"learned:PATH" (a learned human policy file), or e.g. "sf@0.5+orca@0.3+groups@0.2". Every
+"learned:PATH" (a learned human policy file), a fitted preset of a model ("sf-eth-ucy",
+"orca-eth-ucy": socialzoo.humans.presets), or e.g. "sf@0.5+orca@0.3+groups@0.2". Every
 scenario assigns its people to the models from its own seed, the same way every time: the head
 counts by largest remainder of share x people, the people by a seeded permutation.
 
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from socialzoo.core.validation import check_number
+from socialzoo.humans.presets import PRESETS
 
 # WorldState.human_model values.
 SOCIAL_FORCE = 0
@@ -65,17 +67,21 @@ class PeoplePart:
         share: the share of each scenario's people it drives, in (0, 1].
         path: the policy file of a learned model (a hybrid one's included), else None.
         reacts_as: the model a hybrid person switches to ("sf", "orca" or "learned"), else None.
+        preset: the fitted parameters its model walks with (socialzoo.humans.presets: "sf-eth-ucy",
+            "orca-eth-ucy"), else None (the world's own).
     """
 
     model: str
     share: float
     path: str | None = None
     reacts_as: str | None = None
+    preset: str | None = None
 
     @property
     def name(self) -> str:
-        """The part as a spec names it ("learned:PATH", "hybrid:sf", "hybrid:learned:PATH")."""
+        """The part as a spec names it ("learned:PATH", "hybrid:sf", "sf-eth-ucy", "hybrid:learned:PATH")."""
         inner = self.model if self.reacts_as is None else self.reacts_as
+        inner = self.preset or inner
         inner = inner if self.path is None else f"{inner}:{self.path}"
         return inner if self.reacts_as is None else f"{self.model}:{inner}"
 
@@ -121,15 +127,19 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
             )
         model, sep, path = name.partition(":")
         model = ALIASES.get(model.strip().lower(), model.strip().lower())
+        preset = model if model in PRESETS else None
+        model = PRESETS[model]["model"] if preset else model
         if model not in MODEL_IDS:
             raise PeopleSpecError(
                 f"people spec {spec!r}: unknown model {name!r}; known: sf (social_force), orca, groups, "
-                "learned:PATH, and for recorded people replay and hybrid:MODEL"
+                f"learned:PATH, the presets {', '.join(PRESETS)}, and for recorded people replay and hybrid:MODEL"
             )
         reacts_as = None
         if model == "hybrid":
             inner, _, path = path.partition(":")
             reacts_as = ALIASES.get(inner.strip().lower(), inner.strip().lower())
+            preset = reacts_as if reacts_as in PRESETS else None
+            reacts_as = PRESETS[reacts_as]["model"] if preset else reacts_as
             if reacts_as not in REACTING_MODELS:
                 raise PeopleSpecError(
                     f"people spec {spec!r}: a hybrid person reacts as one of {REACTING_MODELS} "
@@ -141,7 +151,7 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
             raise PeopleSpecError(f"people spec {spec!r}: name the learned policy file as learned:PATH")
         if not learned and sep:
             raise PeopleSpecError(f"people spec {spec!r}: {model} takes no file")
-        parts.append(PeoplePart(model, share, path or None, reacts_as))
+        parts.append(PeoplePart(model, share, path or None, reacts_as, preset))
     names = [p.model for p in parts]
     if len(set(names)) != len(names):
         raise PeopleSpecError(f"people spec {spec!r} names a model twice")
@@ -208,6 +218,11 @@ class PeopleConfig:
     def learned_path(self) -> str | None:
         """The learned policy file of the spec, or None."""
         return next((p.path for p in self.parts if p.path is not None), None)
+
+    @property
+    def presets(self) -> tuple[str, ...]:
+        """The fitted parameter sets the spec names (socialzoo.humans.presets)."""
+        return tuple(p.preset for p in self.parts if p.preset is not None)
 
     @property
     def recorded(self) -> bool:

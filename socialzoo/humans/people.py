@@ -145,3 +145,59 @@ def step_people(
             pos, vel, target, pref_speed, mask, orca, robot_pos, robot_vel, walls, cfg
         )
     return integrate_humans(pos, vel, accel, pref_speed, mask, walls, wall_dist, cfg.dt, velocity, orca)
+
+
+def step_people_packed(
+    pos: np.ndarray,
+    vel: np.ndarray,
+    target: np.ndarray,
+    pref_speed: np.ndarray,
+    mask: np.ndarray,
+    model: np.ndarray,
+    group: np.ndarray,
+    robot_pos: np.ndarray,
+    robot_vel: np.ndarray,
+    walls: WallIndex,
+    cfg: WorldConfig,
+    desired_vel: np.ndarray | None = None,
+    learned: np.ndarray | None = None,
+    moved: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`step_people` over the rows where some present person is `moved` (B, H), each with only its
+    present people, packed in slot order into as many slots as the fullest of those rows has.
+
+    For sparse crowds (recorded scenes, whose slots hold people who have not entered yet or have
+    left, and whose replayed people no model moves). Every kernel loops per world over present
+    people in slot order (pairs of an absent person add nothing), so each stepped person moves
+    exactly as unpacked; the others keep their position and velocity.
+    """
+    new_pos, new_vel = pos.copy(), vel.copy()
+    blocked = np.zeros(mask.shape, dtype=bool)
+    moving = mask if moved is None else mask & moved
+    rows = np.flatnonzero(moving.any(axis=1))
+    if len(rows) == 0:
+        return new_pos, new_vel, blocked
+    present = mask[rows]
+    width = int(present.sum(axis=1).max())
+    order = np.argsort(~present, axis=1, kind="stable")[:, :width]  # present slots first, in order
+
+    def packed(array: np.ndarray) -> np.ndarray:
+        index = order.reshape(order.shape + (1,) * (array.ndim - 2))
+        return np.take_along_axis(array[rows], index, axis=1)
+
+    inside = packed(mask)
+    # Walking groups name their first member's slot: renumber to the packed slots.
+    where = np.full(present.shape, -1, dtype=np.int64)
+    np.put_along_axis(where, order, np.broadcast_to(np.arange(width), order.shape), axis=1)
+    old_group = packed(group)
+    new_group = np.where(old_group >= 0, np.take_along_axis(where, np.maximum(old_group, 0), axis=1), -1)
+    p, v, b = step_people(
+        packed(pos), packed(vel), packed(target), packed(pref_speed), inside, packed(model), new_group,
+        robot_pos[rows], robot_vel[rows], walls, cfg,
+        None if desired_vel is None else packed(desired_vel), None if learned is None else packed(learned),
+    )  # fmt: skip
+    slots = (rows[:, None], order)
+    new_pos[slots] = np.where(inside[..., None], p, new_pos[slots])
+    new_vel[slots] = np.where(inside[..., None], v, new_vel[slots])
+    blocked[slots] = b & inside
+    return new_pos, new_vel, blocked

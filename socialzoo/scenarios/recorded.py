@@ -4,10 +4,11 @@ person's place and everyone else walks as recorded (socialzoo.data reads the rec
 An episode of a scene starts when the replaced person enters. The robot starts where that person
 entered, heading along its first metre, and its goal is where the person left; its time budget is
 TIME_FACTOR times the person's recorded time, at least MIN_TIME_LIMIT. Everyone else seen during
-that budget is one person slot of the scenario with its track on the recording's frames (NaN
-before it enters and after it leaves), its route the track's points every ROUTE_STRIDE frames
-(what a model walks along when it moves the person, socialzoo.env.replay), and its preferred speed
-its mean recorded speed.
+that budget walks in a person slot of the scenario, their track on the recording's frames (NaN
+before they enter and after they leave); people never there at once share a slot, SLOT_REST frames
+apart (pack_slots). A person's route is its track's points every ROUTE_STRIDE frames (what a model
+walks along when it moves the person, socialzoo.env.replay), and its preferred speed its mean
+recorded speed.
 
 A scene's tracks are split once, by a permutation drawn from the scene's name: of the eligible
 tracks (at least MIN_DURATION s and MIN_DISTANCE m from entry to exit), the first TEST_TRACKS (at
@@ -18,7 +19,7 @@ in place of (it may meet that person as one of the crowd).
 
 from __future__ import annotations
 
-import dataclasses
+import copy
 import math
 import zlib
 from collections.abc import Sequence
@@ -46,6 +47,9 @@ VAL_TRACKS = 50
 TEST_TRACKS = 100
 TEST_FIRST = 100
 TRAIN_FIRST = 1000
+# A person slot takes a new person this many frames after its last one left (10 s): a person a
+# model walks (hybrid, after reacting) has that long to finish before the slot's next person enters.
+SLOT_REST = 25
 # Mixed with the scene's name for the permutation of its tracks.
 _SPLIT_STREAM = 0x7265636F7264  # "record"
 # The open area of a scene as a map (for tasks that need one): its walls stand this far beyond
@@ -54,17 +58,9 @@ OPEN_MARGIN = 3.0
 OPEN_SPACING = 2.0
 # The robot's start heading points at its track's first point this far from the start, m.
 _HEADING_REACH = 1.0
-# A recorded person's preferred speed is at least this, m/s (people who stand still, should a
-# model move them).
-MIN_SPEED = 0.3
 
 
 # ---------------------------------------------------------------------------- episodes of a scene
-def track_length(points: np.ndarray) -> float:
-    """The length of a path of points (k, 2), m."""
-    return float(np.sqrt((np.diff(points, axis=0) ** 2).sum(-1)).sum()) if len(points) > 1 else 0.0
-
-
 def heading_along(points: np.ndarray, reach: float = _HEADING_REACH) -> float:
     """The heading from a path's first point to its first point at least `reach` away (its last
     point if none is), rad."""
@@ -116,17 +112,26 @@ def replaced_scenario(
         if k != track and t.first_frame <= last and t.last_frame >= first
     ]
     grid = recording.grid(others, first, last) if others else np.zeros((0, last - first + 1, 2))
+    # People who are never there at once share a person slot (pack_slots): fewer, fuller slots.
+    begin = np.array([recording.tracks[k].first_frame for k in others], dtype=np.int64) - first
+    end = np.array([recording.tracks[k].last_frame for k in others], dtype=np.int64) - first
+    slot = pack_slots(begin, end)
+    slots = np.full((int(slot.max(initial=-1)) + 1, grid.shape[1], 2), np.nan)
+    for k, s in enumerate(slot.tolist()):
+        on = ~np.isnan(grid[k, :, 0])
+        slots[s, on] = grid[k, on]
+    persons = [recording.tracks[others[k]].person for k in np.lexsort((begin, slot)).tolist()]
     start, goal = me.positions[0], me.positions[-1]
     starts = np.array([[start[0], start[1], heading_along(me.positions)]])
     goals = np.array([[goal[0], goal[1], heading_along(me.positions[::-1]) + math.pi]])
     recorded = RecordedPeople(
         dt=recording.dt,
-        tracks=grid,
+        tracks=slots,
         time_limit=limit,
         robot_track=me.positions,
         scene=recording.name,
         first_frame=first,
-        persons=np.array([recording.tracks[k].person for k in others], dtype=np.int64),
+        persons=np.array(persons, dtype=np.int64),
     )
     return people_scenario(recorded, starts, goals, seed=seed, family=family, map_name=map_name)
 
@@ -140,18 +145,15 @@ def people_scenario(
     family: str,
     map_name: str = "arena",
 ) -> Scenario:
-    """A scenario of recorded people: each one's spawn is its first recorded position, its route
-    its track's points every ROUTE_STRIDE frames and its last, its speed its mean recorded speed."""
-    spawn, routes, speed = [], [], []
+    """A scenario of recorded people, one person slot per track of `recorded`: each slot spawns at
+    its first recorded position, its route is its people's route points one after another
+    (route_frames), its speed its first person's mean recorded speed (the world takes each later
+    person's own when it enters: socialzoo.env.replay)."""
+    spawn, routes = [], []
     for track in recorded.tracks:
-        on = np.flatnonzero(~np.isnan(track[:, 0]))
         points = track[route_frames(track)]
         spawn.append(points[0])
         routes.append(points)
-        seen = track[on[0] : on[-1] + 1]
-        seen = seen[~np.isnan(seen[:, 0])]
-        time = (on[-1] - on[0]) * recorded.dt
-        speed.append(max(track_length(seen) / time, MIN_SPEED) if time > 0 else MIN_SPEED)
     n = recorded.num_people
     return Scenario(
         map_name=map_name,
@@ -163,9 +165,28 @@ def people_scenario(
         human_start_index=np.full(n, -1),
         human_goal_index=np.full(n, -1),
         human_routes=tuple(routes),
-        human_speed=np.array(speed),
+        human_speed=recorded.occupants.speed[:, 0].copy() if n else np.zeros(0),
         recorded=recorded,
     )
+
+
+def pack_slots(first: np.ndarray, last: np.ndarray, rest: int = SLOT_REST) -> np.ndarray:
+    """(n,) a person slot for each of n people present on frames first..last, reusing a slot once
+    its person left `rest` frames before the next one enters (the earliest-free slot, people in
+    order of entry)."""
+    order = np.lexsort((last, first))
+    free_at: list[int] = []  # per slot, the first frame it may take a new person
+    slot = np.zeros(len(first), dtype=np.int64)
+    for k in order.tolist():
+        ready = [s for s, at in enumerate(free_at) if at <= first[k]]
+        if ready:
+            s = min(ready, key=lambda j: free_at[j])
+        else:
+            s = len(free_at)
+            free_at.append(0)
+        slot[k] = s
+        free_at[s] = int(last[k]) + rest + 1
+    return slot
 
 
 class RecordedScene(ScenarioFamily):
@@ -221,15 +242,20 @@ class RecordedScene(ScenarioFamily):
 
     @cached_property
     def max_people(self) -> int:
-        """The most people of any episode of the scene (its scenarios' person slots)."""
+        """The most person slots of any episode of the scene (pack_slots)."""
         rec = self.recording
         first = np.array([t.first_frame for t in rec.tracks])
         last = np.array([t.last_frame for t in rec.tracks])
         most = 0
         for k in eligible_tracks(rec).tolist():
             duration = (last[k] - first[k]) * rec.dt
-            end = first[k] + math.ceil(max(TIME_FACTOR * duration, MIN_TIME_LIMIT) / rec.dt)
-            most = max(most, int(((first <= end) & (last >= first[k])).sum()) - 1)
+            end = min(
+                rec.num_frames - 1, first[k] + math.ceil(max(TIME_FACTOR * duration, MIN_TIME_LIMIT) / rec.dt)
+            )
+            seen = (first <= end) & (last >= first[k])
+            seen[k] = False
+            if seen.any():
+                most = max(most, int(pack_slots(first[seen], last[seen]).max()) + 1)
         return most
 
     def track_of(self, seed: int) -> int:
@@ -268,7 +294,10 @@ class RecordedScene(ScenarioFamily):
             self._made[key] = replaced_scenario(
                 self.recording, track, seed=seed, family=self.name, map_name=map_name
             )
-        return dataclasses.replace(self._made[key], seed=seed)
+        # The kept scenario under this seed: a shallow copy (its arrays are read-only), not re-checked.
+        scenario = copy.copy(self._made[key])
+        object.__setattr__(scenario, "seed", int(seed))
+        return scenario
 
 
 def open_area_map(recording: Recording, name: str) -> Map:

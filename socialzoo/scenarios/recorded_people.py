@@ -15,14 +15,48 @@ from socialzoo.core.validation import check_number
 
 # A recorded person's route: its track's points this many frames apart (1.6 s at 2.5 Hz), and its last.
 ROUTE_STRIDE = 4
+# A person below this mean speed is given this speed should a model walk it, m/s.
+MIN_SPEED = 0.3
+# Unused occupant entries (Occupants) hold this frame.
+NEVER = np.iinfo(np.int64).max // 4
+
+
+def runs(track: np.ndarray) -> list[tuple[int, int]]:
+    """The (first, last) frames of each run of frames on which a slot's track is recorded (one
+    run per person who occupies the slot; track: (T, 2), NaN absent)."""
+    on = ~np.isnan(track[:, 0])
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], on.astype(np.int8), [0]))))
+    return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
 def route_frames(track: np.ndarray) -> np.ndarray:
-    """The frames of a recorded person's route points: its first present frame, every ROUTE_STRIDE
-    frames on, and its last present frame, those where it is present (track: (T, 2), NaN absent)."""
-    on = np.flatnonzero(~np.isnan(track[:, 0]))
-    frames = np.unique(np.concatenate((on[0] + np.arange(0, on[-1] - on[0] + 1, ROUTE_STRIDE), on[-1:])))
-    return frames[~np.isnan(track[frames, 0])]
+    """The frames of the route points of everyone in a slot, one person after another: each
+    person's first frame, every ROUTE_STRIDE frames on, and its last (track: (T, 2), NaN absent)."""
+    parts = [np.unique(np.concatenate((np.arange(a, b + 1, ROUTE_STRIDE), [b]))) for a, b in runs(track)]
+    return np.concatenate(parts).astype(np.int64)
+
+
+def path_length(points: np.ndarray) -> float:
+    """The length of a path of points (k, 2), m."""
+    return float(np.sqrt((np.diff(points, axis=0) ** 2).sum(-1)).sum()) if len(points) > 1 else 0.0
+
+
+@dataclass(frozen=True)
+class Occupants:
+    """Who occupies each slot of a RecordedPeople, one after another: (S, K) arrays, K the most
+    people of one slot (unused entries at frame NEVER).
+
+    Attributes:
+        entry, exit: each person's first and last recorded frame.
+        first, last: the indices of its first and last point in its slot's route (route_frames).
+        speed: its mean recorded speed (at least MIN_SPEED), m/s.
+    """
+
+    entry: np.ndarray
+    exit: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    speed: np.ndarray
 
 
 def _frozen(value: Any, dtype: type, ndim: int, what: str) -> np.ndarray:
@@ -39,8 +73,9 @@ class RecordedPeople:
 
     Attributes:
         dt: seconds between the tracks' frames.
-        tracks: (n, T, 2) each person's position on frames 0..T-1 (frame 0 at the episode's start),
-            m, NaN while absent; one track per person of the scenario, in its order.
+        tracks: (n, T, 2) the position of each person slot's occupant on frames 0..T-1 (frame 0 at
+            the episode's start), m, NaN while absent; a slot holds people one after another
+            (each run of recorded frames is one person: Occupants).
         follow: (n,) people who follow their track whatever the people spec says (the recorded
             others when one person's model is measured against its track); default none.
         time_limit: the robot's time budget, s (inf: the task's own).
@@ -48,7 +83,7 @@ class RecordedPeople:
             m; (0, 2) when the robot replaced nobody.
         scene: the recording's name.
         first_frame: the recording's frame at the episode's start.
-        persons: (n,) each person's id in the recording.
+        persons: each person's id in the recording, slot by slot and in each slot in order.
     """
 
     dt: float
@@ -78,11 +113,8 @@ class RecordedPeople:
         object.__setattr__(self, "follow", _frozen(follow, bool, 1, "follow"))
         persons = np.arange(n) if self.persons is None else self.persons
         object.__setattr__(self, "persons", _frozen(persons, np.int64, 1, "persons"))
-        for name in ("follow", "persons"):
-            if len(getattr(self, name)) != n:
-                raise ValueError(
-                    f"RecordedPeople.{name} must hold {n} values, got {len(getattr(self, name))}"
-                )
+        if len(self.follow) != n:
+            raise ValueError(f"RecordedPeople.follow must hold {n} values, got {len(self.follow)}")
         robot_track = _frozen(np.reshape(self.robot_track, (-1, 2)), np.float64, 2, "robot_track")
         if not np.isfinite(robot_track).all():
             raise ValueError("RecordedPeople.robot_track must be finite")
@@ -107,7 +139,7 @@ class RecordedPeople:
 
     @cached_property
     def route_frames(self) -> np.ndarray:
-        """(n, L) the frames of each person's route points (route_frames), padded by repeating its last."""
+        """(S, L) the frames of each slot's route points (route_frames), padded by repeating its last."""
         frames = [route_frames(track) for track in self.tracks]
         width = max((len(f) for f in frames), default=1)
         out = np.zeros((len(frames), width), dtype=np.int64)
@@ -115,6 +147,27 @@ class RecordedPeople:
             out[k, : len(f)] = f
             out[k, len(f) :] = f[-1]
         return out
+
+    @cached_property
+    def occupants(self) -> Occupants:
+        """Who occupies each slot, one after another (Occupants)."""
+        per_slot = [runs(track) for track in self.tracks]
+        width = max((len(r) for r in per_slot), default=1)
+        shape = (len(per_slot), width)
+        entry, exit_ = np.full(shape, NEVER, dtype=np.int64), np.full(shape, NEVER, dtype=np.int64)
+        first, last = np.zeros(shape, dtype=np.int64), np.zeros(shape, dtype=np.int64)
+        speed = np.full(shape, MIN_SPEED)
+        for s, (track, slot_runs) in enumerate(zip(self.tracks, per_slot, strict=True)):
+            index = 0
+            for k, (a, b) in enumerate(slot_runs):
+                points = len(np.unique(np.concatenate((np.arange(a, b + 1, ROUTE_STRIDE), [b]))))
+                entry[s, k], exit_[s, k] = a, b
+                first[s, k], last[s, k] = index, index + points - 1
+                index += points
+                time = (b - a) * self.dt
+                if time > 0:
+                    speed[s, k] = max(path_length(track[a : b + 1]) / time, MIN_SPEED)
+        return Occupants(entry, exit_, first, last, speed)
 
     @property
     def robot_time(self) -> float:

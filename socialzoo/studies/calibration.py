@@ -7,11 +7,9 @@ parameters of PARAMETERS (searched in [0, 1] per parameter, mapped log-uniformly
 from the study's defaults). A fold fits on all scenes but one and reports the held-out scene's
 ADE, defaults against fitted, on a larger sample of its windows (`eval_persons`, another seed).
 
-PRESETS are the parameter sets fitted on all five scenes (`socialzoo humans calibrate`, the
-numbers and the command in docs/humans.md); socialzoo.studies.realism applies them as WorldConfig
-overrides (`--models sf-eth-ucy,orca-eth-ucy`). To use them in an env's people spec, a spec name
-such as "sf-eth-ucy" would map to its model plus these HumanConfig/OrcaConfig overrides of the
-env's WorldConfig (socialzoo.humans.models.parse_people and the env's world).
+The parameter sets fitted on all five scenes are socialzoo.humans.presets.PRESETS (the numbers and
+the command in docs/humans.md): socialzoo.studies.realism applies them (`--models
+sf-eth-ucy,orca-eth-ucy`), and every env takes them by name in its people spec.
 """
 
 from __future__ import annotations
@@ -28,25 +26,8 @@ from typing import Any
 
 import numpy as np
 
-# Fitted on all five scenes (eth, hotel, univ, zara1, zara2) by `socialzoo humans calibrate`
-# (docs/humans.md, "Calibration").
-PRESETS: dict[str, dict[str, Any]] = {
-    # socialzoo humans calibrate --model sf --persons 30 --windows 2 --generations 5 --popsize 6 --seed 0
-    "sf-eth-ucy": {
-        "model": "sf",
-        "human": {
-            "relaxation_time": 2.0752,
-            "social_strength": 0.3168,
-            "social_lambda": 4.6222,
-            "social_gamma": 0.2099,
-        },
-    },
-    # socialzoo humans calibrate --model orca (the same options)
-    "orca-eth-ucy": {
-        "model": "orca",
-        "orca": {"neighbor_dist": 5.4781, "time_horizon": 4.1022, "radius": 0.2296},
-    },
-}
+# The shipped presets (fitted on all five scenes) live with the crowd models.
+from socialzoo.humans.presets import PRESETS as PRESETS
 
 # The fitted parameters of each model: (config section, field, low, high).
 PARAMETERS: dict[str, tuple[tuple[str, str, float, float], ...]] = {

@@ -107,12 +107,12 @@ class ModelSpec:
 
 def model_spec(name: str) -> ModelSpec:
     """The model of a command-line name: cv, sf, orca, groups, learned:PATH, or a fitted preset
-    (socialzoo.studies.calibration.PRESETS: sf-eth-ucy, orca-eth-ucy).
+    (socialzoo.humans.presets.PRESETS: sf-eth-ucy, orca-eth-ucy).
 
     Raises:
         ValueError: an unknown name, listing the known ones.
     """
-    from socialzoo.studies.calibration import PRESETS
+    from socialzoo.humans.presets import PRESETS
 
     name = name.strip()
     if name == "cv":

@@ -220,3 +220,44 @@ def test_vector_parallel_and_torchrl_adapters_run_a_recorded_scene(family: Recor
     from socialzoo.env.torchrl_single import TaskTorchEnv
 
     check_env_specs(TaskTorchEnv(2, task="crowdnav", family=family.name, humans="replay"))
+
+
+def _shared_slot() -> Scenario:
+    """One slot holding two people one after another (frames 0-10, then 40-60), another slot alone."""
+    tracks = np.full((2, 70, 2), np.nan)
+    tracks[0, 0:11] = np.stack((np.arange(11) * 0.5, np.zeros(11)), -1)
+    tracks[0, 40:61] = np.stack((np.full(21, -3.0), np.arange(21) * 0.4), -1)
+    tracks[1, 0:70] = np.stack((np.full(70, 8.0), np.arange(70) * 0.1), -1)
+    start = np.array([[50.0, 50.0, 0.0]])
+    return people_scenario(
+        RecordedPeople(dt=DT, tracks=tracks), start, start + [[1.0, 0.0, 0.0]], seed=5, family="test"
+    )
+
+
+def test_a_shared_slot_replays_each_person_at_their_frames() -> None:
+    scenario = _shared_slot()
+    assert scenario.recorded.occupants.entry[0, :2].tolist() == [0, 40]
+    core = _core([scenario], "replay")
+    tracks = scenario.recorded.tracks
+    for step in range(1, 69 * 4):
+        core.step(np.zeros((1, 1, 2)))
+        if step % 4 == 0:
+            frame = step // 4
+            present = ~np.isnan(tracks[:, frame, 0])
+            assert np.array_equal(core.state.human_mask[0, :2], present), frame
+            assert (
+                np.abs(core.state.human_pos[0, :2][present] - tracks[present, frame]).max(initial=0.0) < 0.01
+            )
+
+
+def test_the_second_person_of_a_shared_slot_walks_its_own_route() -> None:
+    core = _core([_shared_slot()], "sf")
+    mask = []
+    for _ in range(65 * 4):
+        core.step(np.zeros((1, 1, 2)))
+        mask.append(bool(core.state.human_mask[0, 0]))
+        if len(mask) == 45 * 4:  # the second person walks up from (-3, 0) towards (-3, 8)
+            assert core.state.human_pos[0, 0, 0] == pytest.approx(-3.0, abs=0.5)
+            assert core.state.human_pos[0, 0, 1] > 0.5
+    assert mask[40 * 4 - 1] and mask[4]  # both entered
+    assert not mask[35 * 4]  # the first had left before the second entered

@@ -58,3 +58,25 @@ def test_assignment_is_seeded_per_scenario():
     assert np.bincount(a).tolist() == [12, 8]
     assert any(not np.array_equal(a, assign_models(parts, 20, seed=s)) for s in range(12, 20))
     assert assign_models(parse_people("orca"), 5, seed=1).tolist() == [0] * 5
+
+
+def test_fitted_presets_name_their_model_and_set_its_parameters() -> None:
+    import numpy as np
+
+    from socialzoo.core.config import WorldConfig
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.humans.models import MODEL_IDS, ORCA, PeopleConfig, parse_people
+    from socialzoo.humans.presets import PRESETS
+
+    (part,) = parse_people("orca-eth-ucy")
+    assert (part.model, part.preset, part.name) == ("orca", "orca-eth-ucy", "orca-eth-ucy")
+    assert MODEL_IDS[part.model] == ORCA
+    assert parse_people("hybrid:sf-eth-ucy")[0].name == "hybrid:sf-eth-ucy"
+    world = WorldConfig()
+    core = BatchedCore(1, 1, 2, world, WallIndex(np.zeros((0, 4))), people=PeopleConfig(models="sf-eth-ucy"))
+    for field, value in PRESETS["sf-eth-ucy"]["human"].items():
+        assert getattr(core.world.human, field) == value
+    assert core.world.orca == world.orca
+    plain = BatchedCore(1, 1, 2, world, WallIndex(np.zeros((0, 4))))
+    assert plain.world == world

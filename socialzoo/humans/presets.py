@@ -1,0 +1,52 @@
+"""Fitted parameter sets of the crowd models, usable by name in a people spec ("sf-eth-ucy",
+"orca-eth-ucy", or "hybrid:sf-eth-ucy"; socialzoo.humans.models): a preset is its model with some of
+the world's HumanConfig (social force) or OrcaConfig fields replaced.
+
+The ETH/UCY presets were fitted on all five recorded scenes (eth, hotel, univ, zara1, zara2) by
+`socialzoo humans calibrate` (socialzoo.studies.calibration; the leave-one-scene-out folds and
+the command in docs/humans.md, "Calibration"). A preset sets its model's parameters for everyone
+that model drives in the world (walking groups share the social force's).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from typing import Any
+
+from socialzoo.core.config import WorldConfig
+
+PRESETS: dict[str, dict[str, Any]] = {
+    # socialzoo humans calibrate --model sf --persons 30 --windows 2 --generations 5 --popsize 6 --seed 0
+    "sf-eth-ucy": {
+        "model": "sf",
+        "human": {
+            "relaxation_time": 2.0752,
+            "social_strength": 0.3168,
+            "social_lambda": 4.6222,
+            "social_gamma": 0.2099,
+        },
+    },
+    # socialzoo humans calibrate --model orca (the same options)
+    "orca-eth-ucy": {
+        "model": "orca",
+        "orca": {"neighbor_dist": 5.4781, "time_horizon": 4.1022, "radius": 0.2296},
+    },
+}
+
+
+def with_presets(world: WorldConfig, presets: Iterable[str]) -> WorldConfig:
+    """The world with each named preset's parameters in place of its own.
+
+    Raises:
+        KeyError: an unknown preset (the message lists the known ones).
+    """
+    for name in presets:
+        if name not in PRESETS:
+            raise KeyError(f"unknown people preset {name!r}; known: {sorted(PRESETS)}")
+        preset = PRESETS[name]
+        if "human" in preset:
+            world = dataclasses.replace(world, human=dataclasses.replace(world.human, **preset["human"]))
+        if "orca" in preset:
+            world = dataclasses.replace(world, orca=dataclasses.replace(world.orca, **preset["orca"]))
+    return world

@@ -1,0 +1,44 @@
+"""step_people_packed: the rows where someone is moved, with only their present people, step
+exactly as the full step_people steps them (recorded scenes' sparse crowds)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from socialzoo.core.config import WorldConfig
+from socialzoo.core.walls import WallIndex
+from socialzoo.humans.models import ORCA, REPLAY, SOCIAL_FORCE
+from socialzoo.humans.people import step_people, step_people_packed
+
+
+def _crowd(seed: int):
+    rng = np.random.default_rng(seed)
+    b, h = 6, 15
+    model = rng.choice(np.array([SOCIAL_FORCE, ORCA, REPLAY], dtype=np.int8), size=(b, h))
+    group = np.full((b, h), -1)
+    group[0, [3, 5]] = 3  # a walking pair in slots 3 and 5
+    model[0, [3, 5]] = SOCIAL_FORCE
+    mask = rng.random((b, h)) < 0.45
+    mask[0, [3, 5]] = True
+    mask[4] = False  # an empty row
+    return (
+        rng.uniform(-4, 4, (b, h, 2)), rng.normal(0, 1, (b, h, 2)), rng.uniform(-6, 6, (b, h, 2)),
+        rng.uniform(0.8, 1.4, (b, h)), mask, model, group, rng.uniform(-4, 4, (b, 1, 2)), rng.normal(0, 1, (b, 1, 2)),
+    )  # fmt: skip
+
+
+def test_packed_people_step_exactly_as_unpacked() -> None:
+    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
+    cfg = WorldConfig(dt=0.1)
+    for seed in range(3):
+        args = _crowd(seed)
+        mask, model = args[4], args[5]
+        moved = model != REPLAY
+        full = step_people(*args, walls, cfg)
+        packed = step_people_packed(*args, walls, cfg, moved=moved)
+        stepped = mask & moved.any(axis=1, where=mask, keepdims=True)
+        for whole, part in zip(full[:2], packed[:2], strict=True):
+            assert np.array_equal(whole[stepped], part[stepped])
+        # Rows where no present person is moved are not stepped at all.
+        idle = ~(mask & moved).any(axis=1)
+        assert np.array_equal(packed[0][idle], args[0][idle])
