@@ -88,7 +88,7 @@ class BatchedCore:
         self.batch_size, self.num_robots, self.max_humans = b, r, max_humans
         self.world, self.walls, self.map = world, walls, m
         self.planner, self.robot_visible = planner, robot_visible
-        self.people = People(people, world, b, r, max_humans, walls, m)
+        self.people = People(people, world, b, r, max_humans, walls, m, robot_visible)
         robot = world.robot
         door_reach = robot.radius if robot.radius is not None else robot.half_width
         # Who waits, signals or follows a robot, whom each robot escorts, doors (socialzoo.env.script).

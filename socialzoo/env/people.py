@@ -64,6 +64,7 @@ class People:
         max_humans: H.
         walls: the wall index.
         m: the map (None without one: no walking groups then).
+        robot_visible: whether the people see the robots (learned people observe them only then).
 
     Raises:
         PolicyFileError: the learned model's file is not a learned human policy file.
@@ -78,8 +79,10 @@ class People:
         max_humans: int,
         walls: WallIndex,
         m: Map | None = None,
+        robot_visible: bool = True,
     ) -> None:
         self.config = config
+        self.robot_visible = robot_visible
         self.world = world
         self.walls = walls
         self.map = m
@@ -196,7 +199,9 @@ class People:
             return desired, learned
         policy = self.policy
         slots = np.arange(state.max_humans)
-        obs = human_observations(state, self.walls, slots, policy.num_neighbours)
+        # People who do not see the robots do not observe them either.
+        seen = state if self.robot_visible else without_robots(state)
+        obs = human_observations(seen, self.walls, slots, policy.num_neighbours)
         action = np.zeros(state.human_pos.shape)
         action[mine] = policy.act(obs[mine])
         velocity = action_velocities(state, slots, action, policy.action_frame, policy.action_scale)

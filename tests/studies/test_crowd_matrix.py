@@ -51,7 +51,13 @@ def test_matrix_runs_every_policy_among_every_crowd_model(rooms, tmp_path):
             ].values()
         )
     )
-    assert env["people"] == {"models": "orca", "group_sizes": [0.6, 0.3, 0.1], "counterfactual": True}
+    assert env["people"] == {
+        "models": "orca",
+        "group_sizes": [0.6, 0.3, 0.1],
+        "counterfactual": True,
+        "react_radius": 1.5,
+        "react_time": 2.0,
+    }
     # A rerun reads every trial back.
     again = crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
     assert again.rows == result.rows
