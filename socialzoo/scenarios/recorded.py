@@ -3,7 +3,8 @@ person's place and everyone else walks as recorded (socialzoo.data reads the rec
 
 An episode of a scene starts when the replaced person enters. The robot starts where that person
 entered, heading along its first metre, and its goal is where the person left; its time budget is
-TIME_FACTOR times the person's recorded time, at least MIN_TIME_LIMIT. Everyone else seen during
+TIME_FACTOR times the person's recorded time or its path at REFERENCE_SPEED (1 m/s), whichever is
+longer, at least MIN_TIME_LIMIT. Everyone else seen during
 that budget walks in a person slot of the scenario, their track on the recording's frames (NaN
 before they enter and after they leave); people never there at once share a slot, SLOT_REST frames
 apart (pack_slots). A person's route is its track's points every ROUTE_STRIDE frames (what a model
@@ -11,7 +12,8 @@ walks along when it moves the person, socialzoo.env.replay), and its preferred s
 recorded speed.
 
 A scene's tracks are split once, by a permutation drawn from the scene's name: of the eligible
-tracks (at least MIN_DURATION s and MIN_DISTANCE m from entry to exit), the first TEST_TRACKS (at
+tracks (at least MIN_DURATION s and MIN_DISTANCE m from entry to exit, nobody within
+START_CLEARANCE of the entry then), the first TEST_TRACKS (at
 most half) are the test cases, the next VAL_TRACKS (at most 15%) the validation cases, the rest
 train (seeds from TRAIN_FIRST on cycle through them). A robot never trains on a person it is tested
 in place of (it may meet that person as one of the crowd).
@@ -29,16 +31,20 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
-from socialzoo.scenarios.recorded_people import RecordedPeople, route_frames
+from socialzoo.scenarios.recorded_people import RecordedPeople, path_length, route_frames
 from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
     from socialzoo.data.tracks import Recording
     from socialzoo.maps.map_file import Map
 
-# The robot's time budget: this many times the replaced person's time, and at least MIN_TIME_LIMIT s.
+# The robot's time budget: this many times the replaced person's time (or its path at
+# REFERENCE_SPEED, if longer), and at least MIN_TIME_LIMIT s.
 TIME_FACTOR = 2.0
+REFERENCE_SPEED = 1.0
 MIN_TIME_LIMIT = 10.0
+# A track is eligible only if nobody stands this near its entry when it enters, m.
+START_CLEARANCE = 0.7
 # Eligible tracks for the robot to take the place of.
 MIN_DURATION = 4.0
 MIN_DISTANCE = 2.0
@@ -70,14 +76,31 @@ def heading_along(points: np.ndarray, reach: float = _HEADING_REACH) -> float:
     return float(math.atan2(d[1], d[0]))
 
 
+def time_budget(positions: np.ndarray, dt: float) -> float:
+    """The robot's time budget in the place of a person with these positions (T, 2) every dt s:
+    TIME_FACTOR times the longer of the person's time and its path at REFERENCE_SPEED, at least
+    MIN_TIME_LIMIT (people of the scenes often walk faster than a robot's 1 m/s)."""
+    need = max((len(positions) - 1) * dt, path_length(positions) / REFERENCE_SPEED)
+    return max(TIME_FACTOR * need, MIN_TIME_LIMIT)
+
+
 def eligible_tracks(recording: Recording) -> np.ndarray:
-    """Indices of the tracks a robot may take the place of (MIN_DURATION, MIN_DISTANCE)."""
-    keep = [
-        k
-        for k, t in enumerate(recording.tracks)
-        if (len(t.positions) - 1) * recording.dt >= MIN_DURATION
-        and float(np.hypot(*(t.positions[-1] - t.positions[0]))) >= MIN_DISTANCE
-    ]
+    """Indices of the tracks a robot may take the place of: at least MIN_DURATION s and
+    MIN_DISTANCE m from entry to exit, and nobody within START_CLEARANCE of the entry when the
+    person enters (the robot would start inside a walking companion)."""
+    first = np.array([t.first_frame for t in recording.tracks])
+    last = np.array([t.last_frame for t in recording.tracks])
+    keep = []
+    for k, t in enumerate(recording.tracks):
+        if (len(t.positions) - 1) * recording.dt < MIN_DURATION:
+            continue
+        if float(np.hypot(*(t.positions[-1] - t.positions[0]))) < MIN_DISTANCE:
+            continue
+        there = np.flatnonzero((first <= t.first_frame) & (last >= t.first_frame))
+        others = [recording.tracks[j].positions[t.first_frame - first[j]] for j in there.tolist() if j != k]
+        if others and float(np.hypot(*(np.array(others) - t.positions[0]).T).min()) < START_CLEARANCE:
+            continue
+        keep.append(k)
     return np.array(keep, dtype=np.int64)
 
 
@@ -102,8 +125,7 @@ def replaced_scenario(
     """The episode in which the robot takes the place of track `track` of `recording` (see the
     module docstring): the others seen during the robot's budget are the scenario's people."""
     me = recording.tracks[track]
-    duration = (len(me.positions) - 1) * recording.dt
-    limit = max(TIME_FACTOR * duration, MIN_TIME_LIMIT)
+    limit = time_budget(me.positions, recording.dt)
     first = me.first_frame
     last = min(recording.num_frames - 1, first + math.ceil(limit / recording.dt))
     others = [
@@ -248,9 +270,9 @@ class RecordedScene(ScenarioFamily):
         last = np.array([t.last_frame for t in rec.tracks])
         most = 0
         for k in eligible_tracks(rec).tolist():
-            duration = (last[k] - first[k]) * rec.dt
             end = min(
-                rec.num_frames - 1, first[k] + math.ceil(max(TIME_FACTOR * duration, MIN_TIME_LIMIT) / rec.dt)
+                rec.num_frames - 1,
+                first[k] + math.ceil(time_budget(rec.tracks[k].positions, rec.dt) / rec.dt),
             )
             seen = (first <= end) & (last >= first[k])
             seen[k] = False
