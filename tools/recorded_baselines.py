@@ -25,6 +25,8 @@ POLICIES = {
     "goalone": "action_selection",
     "ref": "action_selection",
     "ppo": "action_selection",
+    "dqn": "action_selection",
+    "pips": "action_selection",
     "orca": "crowdnav",
     "social_force": "crowdnav",
 }

@@ -27,10 +27,10 @@ PRESETS: dict[str, dict[str, Any]] = {
             "social_gamma": 0.2099,
         },
     },
-    # socialzoo humans calibrate --model orca (the same options)
+    # socialzoo humans calibrate --model orca --persons 30 --windows 2 --generations 10 --popsize 8 --seed 0
     "orca-eth-ucy": {
         "model": "orca",
-        "orca": {"neighbor_dist": 5.4781, "time_horizon": 4.1022, "radius": 0.2296},
+        "orca": {"neighbor_dist": 3.7357, "time_horizon": 4.9835, "radius": 0.2292},
     },
 }
 
