@@ -16,7 +16,10 @@ a model walks is the people spec's (socialzoo.humans.models):
 - any other model: the person enters at its first recorded frame and position and MODEL walks it
   along its route; it leaves where the route ends.
 
-People marked `follow` in the scenario follow their tracks in every case. Each step the runner
+A person slot may hold several people one after another (socialzoo.scenarios.recorded_people.
+Occupants): each takes the slot at its entry frame with the slot's way of walking, and a model
+walks it along its own part of the slot's route; a person a model still walks when the slot's next
+person enters leaves there. People marked `follow` in the scenario follow their tracks in every case. Each step the runner
 writes the followers' positions, velocities and presence after the world step (the models'
 computations for them are discarded), switches reacting people, and lets people leave.
 
@@ -42,6 +45,8 @@ from socialzoo.scenarios.scenario import Scenario
 
 # The metrics of recorded scenes (socialzoo.core.metrics, source "recorded").
 RECORDED_KEYS = metric_names("recorded")
+# The runner's per-occupant arrays and the value of an unused entry (Occupants' fields).
+_OCCUPANT_FIELDS = (("entry", NEVER), ("exit", NEVER), ("first", 0), ("last", 0), ("occupant_speed", 1.0))
 # A time within this of a frame is on it, in frames.
 _ON_FRAME = 1e-9
 
@@ -175,13 +180,7 @@ class ReplayRunner:
             self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
             self.route_frame[row, :n, frames_of.shape[1] :] = frames_of[:, -1:]
             k = occupants.entry.shape[1]
-            for name, fill in (
-                ("entry", NEVER),
-                ("exit", NEVER),
-                ("first", 0),
-                ("last", 0),
-                ("occupant_speed", 1.0),
-            ):
+            for name, fill in _OCCUPANT_FIELDS:
                 array = getattr(self, name)
                 array[row] = fill
                 array[row, :n, :k] = getattr(occupants, "speed" if name == "occupant_speed" else name)
@@ -227,13 +226,7 @@ class ReplayRunner:
         have = self.entry.shape[2]
         if occupants > have:
             grow = max(occupants, 2 * have) - have
-            for name, fill in (
-                ("entry", NEVER),
-                ("exit", NEVER),
-                ("first", 0),
-                ("last", 0),
-                ("occupant_speed", 1.0),
-            ):
+            for name, fill in _OCCUPANT_FIELDS:
                 array = getattr(self, name)
                 pad = np.full(array.shape[:2] + (grow,), fill, dtype=array.dtype)
                 setattr(self, name, np.concatenate((array, pad), 2))
