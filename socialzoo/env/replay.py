@@ -19,9 +19,10 @@ a model walks is the people spec's (socialzoo.humans.models):
 A person slot may hold several people one after another (socialzoo.scenarios.recorded_people.
 Occupants): each takes the slot at its entry frame with the slot's way of walking, and a model
 walks it along its own part of the slot's route; a person a model still walks when the slot's next
-person enters leaves there. People marked `follow` in the scenario follow their tracks in every case. Each step the runner
-writes the followers' positions, velocities and presence after the world step (the models'
-computations for them are discarded), switches reacting people, and lets people leave.
+person enters leaves there. People marked `follow` in the scenario follow their tracks in every
+case. Each step the runner writes the followers' positions, velocities and presence after the
+world step (the models' computations for them are discarded), switches reacting people, and lets
+people leave.
 
 It also measures the episode against the recording: the robot against the person it replaced
 (its time over the person's, its mean distance to the person's path), the reacting people against
