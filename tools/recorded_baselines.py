@@ -17,6 +17,7 @@ import numpy as np
 
 from socialzoo.agents import make_policy
 from socialzoo.bench.episodes import play_cases
+from socialzoo.bench.tables import markdown_table
 from socialzoo.env.registration import RECORDED_IDS
 from socialzoo.scenarios.catalogue import get_family
 
@@ -96,11 +97,8 @@ def main() -> int:
                 print(json.dumps(row), flush=True)
     (args.out / "recorded_baselines.json").write_text(json.dumps(rows, indent=1))
     head = ["scene", "people", "policy", "episodes", *KEYS]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for r in rows:
-        lines.append(
-            "| " + " | ".join(f"{r[k]:.3f}" if isinstance(r[k], float) else str(r[k]) for k in head) + " |"
-        )
+    cells = [[f"{r[k]:.3f}" if isinstance(r[k], float) else str(r[k]) for k in head] for r in rows]
+    lines = markdown_table(head, cells)
     (args.out / "recorded_baselines.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

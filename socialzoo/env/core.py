@@ -28,7 +28,7 @@ from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
 from socialzoo.env.replay import ReplayRunner
 from socialzoo.env.script import ScriptRunner
-from socialzoo.env.world import StepEvents, robot_collisions, step_world
+from socialzoo.env.world import StepEvents, robot_human_contacts, step_world
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.humans.presets import with_presets
 from socialzoo.maps.map_file import Map
@@ -241,9 +241,7 @@ class BatchedCore:
             robot_vel = world_velocity(after.robot_pose, after.robot_vel, self.world.robot)
             self.replay.settle(after, robot_vel)
             # Contacts with the people where the recording put them.
-            events = dataclasses.replace(
-                events, robot_human=robot_collisions(after, self.walls, self.world)[1]
-            )
+            events = dataclasses.replace(events, robot_human=robot_human_contacts(after, self.world))
             self.replay.account(before, after, robot_vel, self.done)
         self.before, self.state = before, after
         return events

@@ -79,6 +79,13 @@ class ReplayRunner:
     ) -> None:
         b, r, h = batch_size, num_robots, max_humans
         self.parts: tuple[PeoplePart, ...] = config.parts
+        # Per part of the spec (and a last entry for empty slots, kind -1): follows its track, may
+        # react, the model that walks it off its track (not per row: compaction leaves them be).
+        self._per_part: dict[str, np.ndarray] = {
+            "follows": np.array([p.model in RECORDED_MODELS for p in self.parts] + [False]),
+            "reacts": np.array([p.model == "hybrid" for p in self.parts] + [False]),
+            "model": np.array([MODEL_IDS[p.walks_as] for p in self.parts] + [0], dtype=np.int8),
+        }
         self._recorded_spec = config.recorded
         self.radius, self.react_time = config.react_radius, config.react_time
         self.dt, self.collision_distance = dt, collision_distance
@@ -146,9 +153,6 @@ class ReplayRunner:
         Raises:
             RecordingError: a replay or hybrid spec on a scenario without recorded people.
         """
-        recorded_part = np.array([p.model in RECORDED_MODELS for p in self.parts] + [False])
-        hybrid_part = np.array([p.model == "hybrid" for p in self.parts] + [False])
-        walks_as = np.array([MODEL_IDS[p.walks_as] for p in self.parts] + [0], dtype=np.int8)
         b = len(self.recorded)
         for i, (row, scenario) in enumerate(zip(rows.tolist(), scenarios, strict=True)):
             rec = None if scenario is None else scenario.recorded
@@ -175,7 +179,7 @@ class ReplayRunner:
             self.tracks[row] = np.nan
             self.tracks[row, :n, :frames] = rec.tracks
             self.track_vel[row] = 0.0
-            self.track_vel[row, :n, :frames] = _segment_velocities(rec.tracks, rec.dt)
+            self.track_vel[row, :n, :frames] = rec.velocities
             self.route_frame[row] = 0
             frames_of = rec.route_frames
             self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
@@ -189,11 +193,11 @@ class ReplayRunner:
             self.shared[row, :n] = (occupants.entry < NEVER).sum(1) > 1
             kind = slot_kind[:n]
             self.follows[row] = False
-            self.follows[row, :n] = rec.follow | recorded_part[kind]
+            self.follows[row, :n] = rec.follow | self._per_part["follows"][kind]
             self.reacts[row] = False
-            self.reacts[row, :n] = hybrid_part[kind] & ~rec.follow
+            self.reacts[row, :n] = self._per_part["reacts"][kind] & ~rec.follow
             self.then[row] = 0
-            self.then[row, :n] = np.where(rec.follow, REPLAY, walks_as[kind])
+            self.then[row, :n] = np.where(rec.follow, REPLAY, self._per_part["model"][kind])
             self.time_limit[row] = rec.time_limit
             self.robot_track[row] = 0.0
             self.robot_track[row, : len(rec.robot_track)] = rec.robot_track
@@ -485,19 +489,6 @@ class ReplayRunner:
             }
             out.append(entry)
         return out
-
-
-def _segment_velocities(tracks: np.ndarray, dt: float) -> np.ndarray:
-    """(n, T, 2) velocity on the segment from each frame to the next (the one before it at a
-    track's last frame; 0 for a person seen on one frame only), m/s."""
-    vel = np.zeros(tracks.shape)
-    forward = (tracks[:, 1:] - tracks[:, :-1]) / dt  # NaN where either end is absent
-    vel[:, :-1] = np.where(np.isnan(forward), 0.0, forward)
-    ends = ~np.isnan(tracks[:, :, 0]) & np.concatenate(
-        (np.isnan(forward[..., 0]), np.ones((len(tracks), 1), dtype=bool)), 1
-    )
-    back = np.concatenate((np.zeros((len(tracks), 1, 2)), np.where(np.isnan(forward), 0.0, forward)), 1)
-    return np.where(ends[..., None], back, vel)
 
 
 def _polyline_distance(points: np.ndarray, lines: np.ndarray, lengths: np.ndarray) -> np.ndarray:

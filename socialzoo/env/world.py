@@ -52,9 +52,14 @@ def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> t
         robot_wall = walls.nearest(state.robot_pose[..., :2])[1] < cfg.robot.radius
     else:
         robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
+    return robot_wall, robot_human_contacts(state, cfg)
+
+
+def robot_human_contacts(state: WorldState, cfg: WorldConfig) -> np.ndarray:
+    """(B, R, H) robot-person centre distances below the collision distance, present people only."""
     diff = state.robot_pose[:, :, None, :2] - state.human_pos[:, None, :, :]
     close = (diff**2).sum(-1) < cfg.human_collision_distance**2
-    return robot_wall, close & state.human_mask[:, None, :]
+    return close & state.human_mask[:, None, :]
 
 
 def step_world(

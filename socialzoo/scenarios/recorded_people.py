@@ -41,6 +41,13 @@ def path_length(points: np.ndarray) -> float:
     return float(np.sqrt((np.diff(points, axis=0) ** 2).sum(-1)).sum()) if len(points) > 1 else 0.0
 
 
+def mean_speed(positions: np.ndarray, dt: float) -> float:
+    """A recorded person's mean speed over its positions (k, 2) every dt s, at least MIN_SPEED, m/s:
+    the speed a model walks it at."""
+    time = (len(positions) - 1) * dt
+    return max(path_length(positions) / time, MIN_SPEED) if time > 0 else MIN_SPEED
+
+
 @dataclass(frozen=True)
 class Occupants:
     """Who occupies each slot of a RecordedPeople, one after another: (S, K) arrays, K the most
@@ -149,6 +156,20 @@ class RecordedPeople:
         return out
 
     @cached_property
+    def velocities(self) -> np.ndarray:
+        """(n, T, 2) each slot's velocity on the segment from each frame to the next (the one before
+        it at a person's last frame; 0 for a person seen on one frame only), m/s: what a replayed
+        person moves at between frames."""
+        tracks = self.tracks
+        forward = np.nan_to_num((tracks[:, 1:] - tracks[:, :-1]) / self.dt)  # 0 where an end is absent
+        gap = np.isnan(tracks[:, 1:, 0]) | np.isnan(tracks[:, :-1, 0])
+        vel = np.zeros(tracks.shape)
+        vel[:, :-1] = forward
+        last = ~np.isnan(tracks[:, :, 0]) & np.concatenate((gap, np.ones((len(tracks), 1), dtype=bool)), 1)
+        back = np.concatenate((np.zeros((len(tracks), 1, 2)), forward), 1)
+        return np.where(last[..., None], back, vel)
+
+    @cached_property
     def occupants(self) -> Occupants:
         """Who occupies each slot, one after another (Occupants)."""
         per_slot = [runs(track) for track in self.tracks]
@@ -164,9 +185,7 @@ class RecordedPeople:
                 entry[s, k], exit_[s, k] = a, b
                 first[s, k], last[s, k] = index, index + points - 1
                 index += points
-                time = (b - a) * self.dt
-                if time > 0:
-                    speed[s, k] = max(path_length(track[a : b + 1]) / time, MIN_SPEED)
+                speed[s, k] = mean_speed(track[a : b + 1], self.dt)
         return Occupants(entry, exit_, first, last, speed)
 
     @property

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 import math
 import sys
 import time
@@ -28,6 +29,8 @@ import numpy as np
 
 # The shipped presets (fitted on all five scenes) live with the crowd models.
 from socialzoo.humans.presets import PRESETS as PRESETS
+
+_LOG = logging.getLogger(__name__)
 
 # The fitted parameters of each model: (config section, field, low, high).
 PARAMETERS: dict[str, tuple[tuple[str, str, float, float], ...]] = {
@@ -223,7 +226,7 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
 
     def log(text: str) -> None:
         if progress:
-            print(f"[{time.perf_counter() - started:6.0f} s] {text}", file=sys.stderr, flush=True)
+            _LOG.info("[%6.0f s] %s", time.perf_counter() - started, text)
 
     scenes = {s: load_tracks(s, config.cache) for s in config.scenes}
     fit_samples = {

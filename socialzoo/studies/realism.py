@@ -39,6 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.bench.progress import progress_bar
+from socialzoo.bench.tables import markdown_table as table_lines
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
 
 # The world step, s, and world steps per recorded frame (0.4 s at 2.5 Hz).
@@ -53,8 +55,6 @@ COLLISION_DISTANCE = 2 * HUMAN_RADIUS
 # velocity within GROUP_SPEED of the subject's, m/s.
 GROUP_DISTANCE = 1.2
 GROUP_SPEED = 0.5
-# The least preferred speed of a modelled person, m/s (socialzoo.scenarios.recorded.MIN_SPEED).
-MIN_SPEED = 0.3
 # Batch rows per core.
 BATCH_ROWS = 512
 # The robot every row must have, parked far away, invisible, still.
@@ -161,12 +161,10 @@ class SceneTracks:
         )
 
     def mean_speed(self, k: int) -> float:
-        """Track k's mean recorded speed, at least MIN_SPEED, m/s."""
-        p = self.grid[k, self.first[k] : self.last[k] + 1]
-        time_span = (len(p) - 1) * self.dt
-        if time_span <= 0:
-            return MIN_SPEED
-        return max(float(np.sqrt((np.diff(p, axis=0) ** 2).sum(-1)).sum()) / time_span, MIN_SPEED)
+        """Track k's mean recorded speed, at least MIN_SPEED, m/s (socialzoo.scenarios.recorded_people)."""
+        from socialzoo.scenarios.recorded_people import mean_speed
+
+        return mean_speed(self.grid[k, self.first[k] : self.last[k] + 1], self.dt)
 
 
 @dataclass(frozen=True)
@@ -625,13 +623,13 @@ def run_realism(
         persons = sample_persons(scene, config.tracks, config.seed)
         plan.append((scene, window_cases(scene, persons), track_cases(scene, persons)))
     total = sum((len(w) + len(t)) * len(specs) for _, w, t in plan)
-    bar = _bar(total, progress)
+    bar = progress_bar(total, "realism", enabled=progress, unit="case")
     results: list[SceneResult] = []
     started = time.perf_counter()
     for scene, windows, tracks in plan:
         results.append(recorded_reference(scene, tracks))
         for spec in specs:
-            bar.set_description(f"{scene.name} {spec.name}")
+            bar.set_postfix_str(f"{scene.name} {spec.name}")
             results.append(evaluate_model(scene, windows, tracks, spec, progress=bar.update))
     bar.close()
     results.extend(overall(results, [p[0].name for p in plan]))
@@ -690,16 +688,16 @@ def overall(results: Sequence[SceneResult], scenes: Sequence[str]) -> list[Scene
 
 def markdown_table(results: Sequence[SceneResult]) -> str:
     """One Markdown table: a row per scene and model (the overall rows last)."""
-    head = "| scene | model | " + " | ".join(h for _, h, _ in METRICS) + " |"
-    rule = "|---|---|" + "---:|" * len(METRICS)
-    rows = [head, rule]
-    for r in results:
-        cells = []
-        for name, _, digits in METRICS:
-            v = r.metrics[name]
-            cells.append("" if not math.isfinite(v) else f"{v:.{digits}f}")
-        rows.append(f"| {r.scene} | {r.model} | " + " | ".join(cells) + " |")
-    return "\n".join(rows) + "\n"
+    header = ["scene", "model", *(h for _, h, _ in METRICS)]
+    rows = [
+        [r.scene, r.model]
+        + [
+            "" if not math.isfinite(r.metrics[name]) else f"{r.metrics[name]:.{digits}f}"
+            for name, _, digits in METRICS
+        ]
+        for r in results
+    ]
+    return "\n".join(table_lines(header, rows)) + "\n"
 
 
 def write_tables(results: Sequence[SceneResult], out: Path) -> None:
@@ -754,22 +752,3 @@ def write_figures(results: Sequence[SceneResult], out: Path) -> None:
     fig.tight_layout()
     fig.savefig(out / "speeds.png", dpi=120)
     plt.close(fig)
-
-
-class _NoBar:
-    def update(self, n: int = 1) -> None:
-        pass
-
-    def set_description(self, text: str) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
-def _bar(total: int, show: bool) -> Any:
-    if not show:
-        return _NoBar()
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit="case", dynamic_ncols=True)

@@ -20,7 +20,8 @@ the frame and the frame after gives one demonstration:
 An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
 `val_fraction` of each scene's windows (in time) are held out for early stopping. The run folder
 holds run.json and people_bc.safetensors, a learned human policy file (socialzoo.env.human_policy)
-that `learned:PATH` walks anywhere. `held_out_ade` measures it on a scene it never saw.
+that `learned:PATH` walks anywhere; `socialzoo humans realism --models learned:PATH` measures it on a
+scene it never saw (socialzoo.studies.realism).
 """
 
 from __future__ import annotations
@@ -54,10 +55,6 @@ WORLD_DT = 0.1
 ACTION_LIMIT = 0.98
 # The parked robot's distance from the scene, m.
 _PARKED = 1.0e4
-# A person's preferred speed is at least this, m/s (socialzoo.scenarios.recorded.MIN_SPEED).
-MIN_SPEED = 0.3
-# The prediction literature's horizon: 12 frames (4.8 s) after a start frame.
-HORIZON_FRAMES = 12
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -135,13 +132,11 @@ def replay_world(dt: float = WORLD_DT) -> WorldConfig:
 
 # ---------------------------------------------------------------------------- scenes
 def mean_speeds(recording: Recording) -> np.ndarray:
-    """(N,) each track's mean recorded speed, at least MIN_SPEED, m/s."""
-    out = np.full(len(recording.tracks), MIN_SPEED)
-    for k, t in enumerate(recording.tracks):
-        if len(t.positions) > 1:
-            length = float(np.sqrt((np.diff(t.positions, axis=0) ** 2).sum(-1)).sum())
-            out[k] = max(length / ((len(t.positions) - 1) * recording.dt), MIN_SPEED)
-    return out
+    """(N,) each track's mean recorded speed, at least MIN_SPEED, m/s (as a recorded scene's people
+    walk: socialzoo.scenarios.recorded_people)."""
+    from socialzoo.scenarios.recorded_people import mean_speed
+
+    return np.array([mean_speed(t.positions, recording.dt) for t in recording.tracks])
 
 
 def window_scenario(
@@ -240,17 +235,6 @@ class Demonstrations:
         )
 
 
-def zero_robot_neighbours(obs: np.ndarray, num_neighbours: int) -> np.ndarray:
-    """`obs` (..., D) with each neighbour row of a robot zeroed (absent): the parked robot is not there."""
-    from socialzoo.env.human_agents import NEIGHBOUR_SIZE, OWN_SIZE
-
-    if num_neighbours == 0:
-        return obs
-    rows = obs[..., OWN_SIZE:].reshape(obs.shape[:-1] + (num_neighbours, NEIGHBOUR_SIZE))
-    rows = np.where(rows[..., 4:5] > 0.5, 0.0, rows)
-    return np.concatenate((obs[..., :OWN_SIZE], rows.reshape(obs.shape[:-1] + (-1,))), -1).astype(obs.dtype)
-
-
 def demonstrations(
     recording: Recording,
     *,
@@ -268,6 +252,7 @@ def demonstrations(
     from socialzoo.core.walls import WallIndex
     from socialzoo.env.core import BatchedCore
     from socialzoo.env.human_agents import human_observations
+    from socialzoo.env.people import without_robots
     from socialzoo.humans.social_force import human_acceleration
 
     world = world or replay_world()
@@ -305,7 +290,8 @@ def demonstrations(
             continue
         v_in = np.where(usable[..., None], (here - prev) / recording.dt, state.human_vel)
         seen = dataclasses.replace(state, human_vel=v_in)
-        obs = zero_robot_neighbours(human_observations(seen, walls, every, num_neighbours), num_neighbours)
+        # The parked robot is seen by nobody: observed without it, as the env's people observe it.
+        obs = human_observations(without_robots(seen), walls, every, num_neighbours)
         other, _ = human_acceleration(
             seen.human_pos, v_in, seen.human_target, seen.human_pref_speed, seen.human_mask,
             seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
@@ -469,105 +455,3 @@ def training_record(
         "best_epoch": best_epoch,
         "command": (f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"),
     }
-
-
-# ---------------------------------------------------------------------------- evaluation
-def window_starts(recording: Recording, observed: int = 8, horizon: int = HORIZON_FRAMES) -> np.ndarray:
-    """(n, 2) every (track, start frame) seen `observed` frames up to the start and `horizon` after."""
-    out = [
-        (k, t0)
-        for k, t in enumerate(recording.tracks)
-        for t0 in range(t.first_frame + observed - 1, t.last_frame - horizon + 1)
-    ]
-    return np.array(out, dtype=np.int64).reshape(-1, 2)
-
-
-def held_out_ade(
-    recording: Recording,
-    models: Sequence[str],
-    *,
-    cases: int | None = 300,
-    seed: int = 0,
-    horizon: int = HORIZON_FRAMES,
-    batch_rows: int = 256,
-) -> dict[str, float]:
-    """Average displacement error, m, of a person walked by each model over `horizon` frames after a
-    start frame, everyone else replaying, against its recorded track (the prediction literature's
-    windows: seen 8 frames up to the start). The subject starts at its recorded position with its
-    observed velocity (start - 1 -> start), walks towards its recorded exit at its mean recorded
-    speed; models: "cv" (that velocity kept), "sf", "learned:PATH" (the policy acts on the
-    subject's observation with the parked robot's neighbour rows zeroed, as in training).
-
-    Args:
-        recording: the scene.
-        models: the models to measure.
-        cases: windows drawn with `seed` (None: all).
-        seed: the draw's seed.
-        horizon: frames after the start.
-        batch_rows: rows per batched core.
-    """
-    from socialzoo.core.walls import WallIndex
-    from socialzoo.env.core import BatchedCore
-    from socialzoo.env.human_agents import action_velocities, human_observations
-    from socialzoo.env.human_policy import LearnedHumanPolicy
-    from socialzoo.humans.models import PeopleConfig
-
-    starts = window_starts(recording, horizon=horizon)
-    if cases is not None and cases < len(starts):
-        rng = np.random.default_rng([seed, 0x616465])  # "ade"
-        starts = starts[np.sort(rng.choice(len(starts), size=cases, replace=False))]
-    grid = recording.grid()
-    truth = np.stack([grid[k, t0 : t0 + horizon + 1] for k, t0 in starts.tolist()])
-    v0 = (truth[:, 0] - np.stack([grid[k, t0 - 1] for k, t0 in starts.tolist()])) / recording.dt
-    speeds = mean_speeds(recording)
-    world = replay_world()
-    steps = round(recording.dt / world.dt)
-    walls = WallIndex(np.zeros((0, 4)))
-    out: dict[str, float] = {}
-    for name in models:
-        if name == "cv":
-            pred = truth[:, :1] + v0[:, None] * (np.arange(horizon + 1) * recording.dt)[None, :, None]
-            out[name] = float(np.hypot(*(pred - truth)[:, 1:].transpose(2, 0, 1)).mean())
-            continue
-        policy = LearnedHumanPolicy.load(name.split(":", 1)[1]) if name.startswith("learned:") else None
-        if policy is None and name != "sf":
-            raise ValueError(f"held_out_ade: unknown model {name!r} (cv, sf, learned:PATH)")
-        pred = np.full(truth.shape, np.nan)
-        for lo in range(0, len(starts), batch_rows):
-            part = starts[lo : lo + batch_rows]
-            scenarios = [
-                window_scenario(recording, t0, t0 + horizon, speeds, subject=k)[0] for k, t0 in part.tolist()
-            ]
-            b = len(part)
-            core = BatchedCore(
-                b, 1, max(s.num_humans for s in scenarios), world, walls, people=PeopleConfig(models="sf"),
-                robot_visible=False,
-            )  # fmt: skip
-            core.reset_rows(np.arange(b), scenarios)
-            assert core.state is not None
-            core.state.human_vel[:, 0] = v0[lo : lo + b]
-            pred[lo : lo + b, 0] = core.state.human_pos[:, 0]
-            subject = np.zeros(core.state.human_mask.shape, dtype=bool)
-            subject[:, 0] = True
-            for f in range(1, horizon + 1):
-                for _ in range(steps):
-                    desired = None
-                    if policy is not None:
-                        state = core.state
-                        obs = human_observations(state, walls, np.array([0]), policy.num_neighbours)
-                        action = np.zeros(state.human_pos.shape)
-                        action[:, :1] = policy.act(zero_robot_neighbours(obs, policy.num_neighbours))
-                        desired = action_velocities(
-                            state,
-                            np.arange(state.max_humans),
-                            action,
-                            policy.action_frame,
-                            policy.action_scale,
-                        )
-                    core.step(
-                        np.zeros((b, 1, 2)), desired=desired, learned=subject if desired is not None else None
-                    )
-                pred[lo : lo + b, f] = core.state.human_pos[:, 0]
-        out[name] = float(np.hypot(*(pred - truth)[:, 1:].transpose(2, 0, 1)).mean())
-    out["windows"] = float(len(starts))
-    return out
