@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -222,6 +223,14 @@ def atom_spec(name: str) -> AtomSpec:
         f"SELECTOR near, ahead or laneCM ({LANE_CM_RANGE[0]} <= CM <= {LANE_CM_RANGE[1]}) and ATTRIBUTE "
         f"one of {', '.join(_ATTRIBUTES)}"
     )
+
+
+def human_present(atoms: Mapping[str, np.ndarray], name: str) -> np.ndarray | None:
+    """Where the human an atomic feature reads was found ((N,) bool), or None for a feature of
+    the robot, its goal or target (always there). Absent humans read as FAR away (see FAR)."""
+    if "." not in name:
+        return None
+    return atoms[f"{name.split('.', 1)[0]}.dist"] < FAR
 
 
 def lane_cm(name: str) -> int | None:

@@ -13,11 +13,12 @@ from typing import Any
 
 from socialzoo.bench.tables import policy_label
 from socialzoo.reproduce.figures import draw_figures
-from socialzoo.reproduce.paper import PAPER_PROTOCOL, PAPER_SUCCESS, SPEC_REFERENCE
+from socialzoo.reproduce.paper import PAPER_PROTOCOL, SPEC_REFERENCE
 from socialzoo.reproduce.plan import PARTS, REFERENCE_PART
+from socialzoo.reproduce.quirk_report import quirk_note, reference_section
 from socialzoo.reproduce.results import RESULTS_DIR, load
 from socialzoo.reproduce.seed_report import paper_outside_seeds, seed_note, seeds_section, selection_section
-from socialzoo.reproduce.tables import EXPERIMENT_MAPS, build_tables, write_tables
+from socialzoo.reproduce.tables import build_tables, write_tables
 
 REPORT_NAME = "REPRODUCTION.md"
 FIGURES_DIR = "figures"
@@ -40,6 +41,15 @@ EXPLANATIONS: dict[str, str] = {
     "normalisation (SPEC section 11: the reference evaluated without it); the paper's short "
     "budget, one seed.",
 }
+# Said of PIPS when its stored seeds all score alike: runs of the synthesiser from before issue 38,
+# whose seed was z3's alone (one program), and which accepted thresholds only the absent-person
+# stand-in reaches (socialzoo.train.pips_search.physical_thresholds).
+PIPS_BEFORE_SAMPLES = (
+    "Its seeds scored alike: these runs predate issue 38, when a PIPS seed was z3's seed alone (one "
+    "program); a seed is now a demonstration sample, and the synthesiser no longer takes a threshold "
+    "that only an absent person's 1000 m stand-in reaches, which the stored program halts on "
+    "(docs/pips.md, \"Env v2 and five seeds\", measures the five programs it makes now)."
+)
 # The machine facts of a training run the report lists (socialzoo.reproduce.results.machine_summary).
 MACHINE_COLUMNS = (
     "cpu",
@@ -154,8 +164,21 @@ def _figure(name: str, prefix: str, caption: str, figures: set[str]) -> list[str
     return [f"![{caption}]({link}.png)", "", f"*{caption}* ([PDF]({link}.pdf))"]
 
 
+def _one_program(seeds: list[dict[str, Any]], experiment: str) -> bool:
+    """True when PIPS ran with several seeds in an experiment and every seed scored the same."""
+    return any(
+        r["experiment"] == experiment
+        and r["policy"] == "pips"
+        and int(r["seeds"]) > 1
+        and float(r["min_pct"]) == float(r["max_pct"])
+        for r in seeds
+    )
+
+
 def _differences(
-    tables: Mapping[str, tuple[list[dict[str, Any]], str]], seeds: list[dict[str, Any]] | None = None
+    tables: Mapping[str, tuple[list[dict[str, Any]], str]],
+    seeds: list[dict[str, Any]] | None = None,
+    reference: list[dict[str, Any]] | None = None,
 ) -> list[str]:
     lines = []
     for name, what in (
@@ -177,6 +200,11 @@ def _differences(
                     ", one seed", ""
                 )
                 why = f"{why} {note}"
+            if r["policy"] == "pips" and name != "lfd" and _one_program(seeds or [], name):
+                why = f"{why} {PIPS_BEFORE_SAMPLES}"
+            quirks = quirk_note(reference or [], seeds or [], name, str(r["policy"])) if name != "lfd" else None
+            if quirks:
+                why = f"{why} {quirks}"
             lines.append(
                 f"- {what}, {policy_label(str(r['policy']))}{size}: ours {r['success_pct']:.1f}% "
                 f"[{r['success_ci_low_pct']:.1f}, {r['success_ci_high_pct']:.1f}], paper "
@@ -187,48 +215,6 @@ def _differences(
             "- No paper number lies outside our 90% interval (or our seeds' range) in the tables that have run."
         )
     return lines
-
-
-def _reference_section(results: Mapping[str, Any], tables: Mapping[str, Any]) -> list[str]:
-    """The learned rows trained and evaluated with the reference code's quirks (`--reference`),
-    beside ours and the paper's."""
-    rows = results.get("reference", [])
-    lines = [
-        "## The reference code's quirks (`--reference`)",
-        "",
-        "SPEC section 11 lists where the reference code (social_gym 1.0) departed from the paper; each "
-        "departure is a switch of the env config (`socialzoo.env.quirks.ReferenceQuirks`), all on in the "
-        "ids `socialzoo/ActionSelectionReference-v2` (gdc1) and `socialzoo/ActionSelectionTransferReference-v2` "
-        "(ghc3). `socialzoo reproduce --reference` trains PPO and DQN on them (goal distance along x only, "
-        'the reward "distance gained + bonus") and evaluates PPO without its observation normalisation. '
-        "BC, GAIL and PIPS are not retrained: they learn from Ref's actions, never from the reward, and "
-        "no quirk changes whether an episode succeeds.",
-        "",
-    ]
-    if not rows:
-        return [*lines, "*Not run yet (`socialzoo reproduce --out DIR --reference`).*", ""]
-    first = min(int(r["seed"]) for r in rows)
-    lines += [
-        "| experiment | policy | ours success % | reference quirks success % [90% CI] | reference, seeds | paper % |",
-        "|---|---|---:|---|---|---:|",
-    ]
-    for experiment in ("performance", "transfer"):
-        ours = {str(t["policy"]): t for t in tables.get(experiment, ([], ""))[0]}
-        _, index = EXPERIMENT_MAPS[experiment]
-        for policy in ("dqn", "ppo"):
-            mine = [r for r in rows if r["experiment"] == experiment and r["policy"] == policy]
-            if not mine:
-                continue
-            head = next((r for r in mine if int(r["seed"]) == first), mine[0])
-            rates = sorted(100 * r["success_rate"] for r in mine)
-            spread = f"{rates[0]:.1f} to {rates[-1]:.1f} ({len(rates)} seeds)" if len(rates) > 1 else ""
-            our = f"{ours[policy]['success_pct']:.1f}" if policy in ours else "n/a"
-            lines.append(
-                f"| {experiment} | {policy_label(policy)} | {our} | {100 * head['success_rate']:.1f} "
-                f"[{100 * head['success_ci_low']:.1f}, {100 * head['success_ci_high']:.1f}] | {spread} "
-                f"| {PAPER_SUCCESS[policy][index]:.1f} |"
-            )
-    return [*lines, ""]
 
 
 def _rerun_section(results: Mapping[str, Any]) -> list[str]:
@@ -347,7 +333,7 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     )
     lines += seeds_section(results, profiles)
     seeds = results.get("seeds", [])
-    differences = [QUICK_NOTE] if quick else _differences(tables, seeds)
+    differences = [QUICK_NOTE] if quick else _differences(tables, seeds, results.get("reference", []))
     lines += ["## Where we differ", "", *differences, ""]
     runs = (
         "The paper's RL curves and LfD numbers come from one training run each, as ours do."
@@ -361,7 +347,7 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
         f"policies evaluated with their saved normalisation. {runs}",
         "",
     ]
-    lines += _reference_section(results, tables)
+    lines += reference_section(results, tables)
     lines += _rerun_section(results)
     training = results.get("training", [])
     if training:

@@ -1,11 +1,13 @@
 """PIPS: synthesise a readable action-selection program from demonstrations (SPEC section 10).
 
-The demonstrations' first `steps` steps are cut into examples (observation, previous action,
-action), windowed around the changes of action; for each current action the synthesiser learns
-the guards of its transitions one target at a time (most frequent first, each on the examples the
-earlier guards leave), with the layered search of socialzoo.train.pips_search. The program is
-written as JSON (socialzoo.agents.pips) with a sidecar recording the arguments, the seed, the
-command, the synthesis time and the program's agreement with the demonstrator.
+The demonstrations' first `steps` steps (in the file's episode order for seed 0, in a seeded
+order of whole episodes for other seeds: a seed is a demonstration sample) are cut into examples
+(observation, previous action, action), windowed around the changes of action; for each current
+action the synthesiser learns the guards of its transitions one target at a time (each on the
+examples the earlier guards leave), with the layered search of socialzoo.train.pips_search, and
+drops the transitions into a state the program could never leave. The program is written as
+JSON (socialzoo.agents.pips) with a sidecar recording the arguments, the seed, the command, the
+synthesis time and the program's agreement with the demonstrator.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 from socialzoo.agents.demonstrations import load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
-from socialzoo.nav.subpolicies import ACTION_NAMES, NUM_ACTIONS
+from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
 from socialzoo.train.run_dir import read_record
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
@@ -49,7 +51,11 @@ class PipsArgs(SearchOptions):
         sampling: "prefix": the examples are the windowed steps among the first `steps` steps
             of the file; "windows": they are the first `steps` windowed steps of the file.
         min_positives: a transition is learned only if the examples show it at least this often.
-        seed: z3's random seed (the search itself is deterministic).
+        seed: the demonstration sample, as a seed is for BC and GAIL what their data is drawn in:
+            seed 0 reads the file's episodes in their order (the paper's set-up: the first `steps`
+            steps), seed k > 0 in the order of a permutation of the episodes drawn from k
+            (`episode_order`), so that k seeds are k samples of `steps` steps; also z3's random
+            seed (the search itself is deterministic).
         time_budget_s: no deeper expressions are started after this much synthesis time, s.
         heldout_steps: demonstration steps after the used ones on which the agreement with the
             demonstrator is measured (0: none).
@@ -143,6 +149,21 @@ def window_mask(action: np.ndarray, prev: np.ndarray, episode: np.ndarray, windo
     return mask
 
 
+def episode_order(episode: np.ndarray, seed: int) -> np.ndarray:
+    """The demonstration steps in the order the seed reads them ((N,) indices): seed 0 the file's
+    order; seed k > 0 whole episodes in the order of a permutation drawn from k (each episode's
+    steps stay in order, so windows and previous actions keep their meaning)."""
+    if seed == 0:
+        return np.arange(len(episode))
+    ids, first = np.unique(episode, return_index=True)
+    ids = ids[np.argsort(first)]  # the file's episode order
+    shuffled = ids[np.random.default_rng(seed).permutation(len(ids))]
+    rank = np.empty(len(ids), dtype=np.int64)
+    rank[np.searchsorted(np.sort(ids), shuffled)] = np.arange(len(ids))
+    key = rank[np.searchsorted(np.sort(ids), episode)]
+    return np.argsort(key, kind="stable")
+
+
 def select_examples(
     action: np.ndarray, prev: np.ndarray, episode: np.ndarray, steps: int, window: int, sampling: str
 ) -> tuple[int, np.ndarray]:
@@ -219,6 +240,24 @@ def _decision_list(
     return learned, reports, merit
 
 
+def without_dead_ends(transitions: dict[int, tuple[Transition, ...]]) -> dict[int, tuple[Transition, ...]]:
+    """The transitions less those into a state the program could never leave.
+
+    Only GoAlone, the state that drives to the goal, may have no way out: a program that enters
+    Halt or Follow with no guard out of it (too few examples of leaving it paid for one) halts
+    or follows until the time limit. Removing the way in can leave another state without a way
+    out, so this repeats until nothing changes.
+    """
+    kept = {s: tuple(ts) for s, ts in transitions.items()}
+    while True:
+        dead = {s for s in range(NUM_ACTIONS) if s != GO_ALONE and not kept.get(s)}
+        pruned = {s: tuple(t for t in ts if t.target not in dead) for s, ts in kept.items()}
+        pruned = {s: ts for s, ts in pruned.items() if ts}
+        if pruned == kept:
+            return kept
+        kept = pruned
+
+
 def synthesize(
     obs: np.ndarray, action: np.ndarray, settings: SearchSettings, *, min_positives: int = 1
 ) -> tuple[Program, list[GuardReport]]:
@@ -226,7 +265,8 @@ def synthesize(
     ordered list of guarded transitions. Each order of the targets is tried (sequential covering:
     a guard is learned on the examples the earlier guards leave, as first-guard-fires reads
     them), and the order whose list decides the most examples right, less the price of its
-    complexity, is kept.
+    complexity, is kept. Transitions into a state with no way out are dropped
+    (`without_dead_ends`).
 
     Args:
         obs: (N, D) paper-layout observations.
@@ -267,7 +307,14 @@ def synthesize(
                 r.examples,
                 r.positives,
             )
-    return Program(transitions), reports
+    live = without_dead_ends(transitions)
+    for s, ts in transitions.items():
+        for t in ts:
+            if t not in live.get(s, ()):
+                to = ACTION_NAMES[t.target]
+                logger.info("%s -> %s dropped: %s has no way out", ACTION_NAMES[s], to, to)
+    kept = {(s, t.target) for s, ts in live.items() for t in ts}
+    return Program(live), [r for r in reports if (r.state, r.target) in kept]
 
 
 def agreement(program: Program, obs: np.ndarray, action: np.ndarray) -> dict[str, Any]:
@@ -337,16 +384,19 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     layout = meta.get("env_config", {}).get("observation", {}).get("layout", "paper")
     if layout != "paper":
         raise ValueError(f"{demos}: PIPS reads the paper observation layout, the file has {layout!r}")
-    obs_all, act_all, ep_all = arrays["obs"], arrays["action"].astype(np.int64), arrays["episode"]
+    order = episode_order(arrays["episode"], args.seed)
+    obs_all, act_all, ep_all = arrays["obs"][order], arrays["action"].astype(np.int64)[order], arrays["episode"][order]
     prev_all = paper_parts(obs_all).prev_action
     used, mask = select_examples(act_all, prev_all, ep_all, args.steps, args.window, args.sampling)
     obs, action, episode, prev = obs_all[:used], act_all[:used], ep_all[:used], prev_all[:used]
     logger.info(
-        "PIPS: %d examples (window %d, %s) from the first %d demonstration steps (%d episodes, %d changes of action)",
+        "PIPS: %d examples (window %d, %s) from the first %d demonstration steps in seed %d's episode order "
+        "(%d episodes, %d changes of action)",
         int(mask.sum()),
         args.window,
         args.sampling,
         used,
+        args.seed,
         len(np.unique(episode)),
         int((action != prev).sum()),
     )
@@ -386,6 +436,7 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
             "steps_in_file": len(act_all),
             "steps_spanned": used,
             "episodes_used": len(np.unique(episode)),
+            "episode_ids": [int(e) for e in dict.fromkeys(episode.tolist())],
             "changes_of_action": int((action != prev).sum()),
             "examples": int(mask.sum()),
         },

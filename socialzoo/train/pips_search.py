@@ -2,7 +2,8 @@
 (only unit-consistent ones), fill predicate sketches of one or two comparisons with the exact
 threshold search, extend the best ones, and solve the final candidates' thresholds with z3.
 
-The expressions come from socialzoo.train.pips_enumerate; the thresholds from
+A threshold that only the absent-person stand-in (socialzoo.agents.pips_features.FAR) reaches is
+refused (`physical_thresholds`). The expressions come from socialzoo.train.pips_enumerate; the thresholds from
 socialzoo.train.pips_thresholds. The search widens (deeper expressions) only while that improves
 the guard by more than the price of complexity.
 """
@@ -29,7 +30,7 @@ from socialzoo.agents.pips import (
     expr_eval,
     predicate_eval,
 )
-from socialzoo.agents.pips_features import ATOMS, LANE_CM_RANGE, PaperParts, UnitError, lane_cm
+from socialzoo.agents.pips_features import ATOMS, LANE_CM_RANGE, PaperParts, UnitError, human_present, lane_cm
 from socialzoo.train.pips_enumerate import (
     AtomCache,
     FeatureBank,
@@ -96,9 +97,38 @@ def _gap(pred: Predicate, atoms: Mapping[str, np.ndarray]) -> float:
     return min(gaps)
 
 
+def physical_thresholds(pred: Predicate, atoms: Mapping[str, np.ndarray]) -> bool:
+    """True when every comparison of an expression over people compares it with a value it takes
+    where those people are there.
+
+    An absent person reads as FAR (1000 m) away, which an atomic feature compares with sensibly
+    ("lane62.dist >= 2.5 m" holds when the lane is empty) but arithmetic does not: in
+    "ahead.absy - lane37.x <= -999.4 m" the stand-in turns "nobody in the lane" into a guard that
+    fires on a person 0.6 m to the side at any distance. Such a threshold lies outside the
+    expression's values on the examples where its people are present; the search drops it.
+    """
+    for leaf in _leaves(pred):
+        if isinstance(leaf.expr, Atom):
+            continue
+        masks = [m for name in expr_atoms(leaf.expr) if (m := human_present(atoms, name)) is not None]
+        if not masks:
+            continue
+        present = np.logical_and.reduce(masks)
+        if not present.any():
+            return False
+        values = expr_eval(leaf.expr, atoms)[present]
+        if not values.min() <= leaf.threshold <= values.max():
+            return False
+    return True
+
+
 def _candidate(
     pred: Predicate, score: float, atoms: Mapping[str, np.ndarray], solver: str = "exact"
 ) -> Candidate:
+    """A scored guard; one with a threshold only the absent-person stand-in reaches scores -inf
+    (`physical_thresholds`)."""
+    if not physical_thresholds(pred, atoms):
+        score = -np.inf
     return Candidate(pred, float(score), _complexity(pred), _gap(pred, atoms), solver)
 
 
@@ -306,6 +336,8 @@ def _solve_with_z3(
         )
         return cand
     found = _candidate(_fill(pred, thresholds, [0]), score, atoms, "z3")
+    if not np.isfinite(found.score):  # z3's thresholds lean on the absent-person stand-in
+        return cand
     if score > exact:
         logger.info("z3 improved a guard from %.0f to %.0f correct", exact, score)
         return found

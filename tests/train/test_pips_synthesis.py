@@ -11,6 +11,7 @@ from socialzoo.agents.pips import (
     SAME_UNIT_OPS,
     Atom,
     Compare,
+    Junction,
     Op,
     PipsPolicy,
     Program,
@@ -21,13 +22,22 @@ from socialzoo.agents.pips import (
 from socialzoo.agents.pips_features import (
     ATOMS,
     COMPARABLE_UNITS,
+    FAR,
     METRE,
     METRE_PER_SECOND,
 )
 from socialzoo.nav.subpolicies import GO_ALONE, HALT
-from socialzoo.train.pips import PipsArgs, read_program_record, synthesize, train, window_mask
+from socialzoo.train.pips import (
+    PipsArgs,
+    episode_order,
+    read_program_record,
+    synthesize,
+    train,
+    window_mask,
+    without_dead_ends,
+)
 from socialzoo.train.pips_enumerate import combine, enumerate_depth
-from socialzoo.train.pips_search import SearchSettings
+from socialzoo.train.pips_search import SearchSettings, physical_thresholds
 from socialzoo.train.pips_thresholds import PairSearch, fit_single, solve_z3
 
 pytest.importorskip("z3")
@@ -208,6 +218,79 @@ def test_train_writes_the_program_and_its_record(tmp_path):
     assert record["agreement"]["held_out"]["agreement"] > 0.98
     policy = PipsPolicy.load(out)
     assert np.array_equal(policy.act(obs), load_program(out).decide(obs))
+
+
+def test_thresholds_only_the_absent_person_stand_in_reaches_are_refused():
+    """Env v2's first program halted on "(ahead.absy - lane37.x) <= -999.4 m": with nobody in the
+    0.37 m lane (read as FAR away) it fires on anyone 0.6 m to the side at any distance. Such a
+    threshold lies outside the expression's values where its people are there."""
+    present = np.array([True, True, False, False])
+    atoms = {
+        "ahead.dist": np.array([3.0, 5.0, 4.0, 6.0]),
+        "ahead.absy": np.array([0.2, 0.5, 0.5, 1.0]),
+        "lane37.dist": np.where(present, [3.0, 5.0, 0, 0], FAR),
+        "lane37.x": np.where(present, [2.9, 4.9, 0, 0], FAR),
+    }
+    gap = Op("-", (Atom("ahead.absy"), Atom("lane37.x")))
+    assert not physical_thresholds(Compare(gap, "<=", -999.4), atoms)
+    assert physical_thresholds(Compare(gap, "<=", -3.0), atoms)  # among the present values
+    # Either comparison of a junction can be the artefact.
+    both = Junction("or", (Compare(Atom("ahead.absy"), "<=", 0.3), Compare(gap, "<=", -999.4)))
+    assert not physical_thresholds(both, atoms)
+    # An atomic feature compares with the stand-in as it reads: "nobody within 500 m of the lane".
+    assert physical_thresholds(Compare(Atom("lane37.dist"), ">=", 500.0), atoms)
+    # Features of the robot alone have no people to be absent.
+    assert physical_thresholds(Compare(Op("-", (Atom("goal_dist"), Atom("target_dist"))), ">=", 1e4),
+                               {"goal_dist": np.ones(4), "target_dist": np.ones(4)})  # fmt: skip
+
+
+def test_no_transition_into_a_state_the_program_cannot_leave():
+    """Env v2's seed-4 sample taught GoAlone -> Follow but no way out of Follow: the robot followed
+    until the time limit. Only GoAlone, which drives to the goal, may have no way out."""
+    FOLLOW = 2
+    near = Compare(Atom("lane62.dist"), "<=", 2.4)
+    far = Compare(Atom("lane62.dist"), ">=", 2.5)
+    program = {
+        GO_ALONE: (Transition(HALT, near), Transition(FOLLOW, near)),
+        HALT: (Transition(GO_ALONE, far),),
+    }
+    assert without_dead_ends(program) == {GO_ALONE: (Transition(HALT, near),), HALT: (Transition(GO_ALONE, far),)}
+    # Halt's only way out leads into a dead end: Halt becomes one, and the way into it goes too.
+    chain = {GO_ALONE: (Transition(HALT, near),), HALT: (Transition(FOLLOW, far),)}
+    assert without_dead_ends(chain) == {}
+    assert without_dead_ends({HALT: (Transition(GO_ALONE, far),)}) == {HALT: (Transition(GO_ALONE, far),)}
+
+
+def test_a_seed_reads_whole_episodes_in_its_own_order():
+    episode = np.array([7, 7, 7, 2, 2, 9, 9, 9, 9, 4])
+    assert episode_order(episode, 0).tolist() == list(range(10))
+    orders = {tuple(episode[episode_order(episode, seed)].tolist()) for seed in range(1, 6)}
+    for order in orders:
+        steps = np.asarray(order)
+        runs = steps[np.r_[True, steps[1:] != steps[:-1]]]
+        assert sorted(runs.tolist()) == [2, 4, 7, 9]  # each episode whole, once
+    assert len(orders) > 1
+    picked = episode_order(episode, 3)
+    assert sorted(picked.tolist()) == list(range(10))
+    for e in (7, 2, 9, 4):  # steps keep their order inside an episode
+        inside = picked[episode[picked] == e]
+        assert np.all(np.diff(inside) == 1)
+
+
+def test_seeds_are_samples_of_the_demonstrations(tmp_path):
+    """Seed 0 learns from the file's first steps, another seed from other episodes: the record
+    names them, and the programs are trained on different examples."""
+    obs, action, episode = synthetic_episodes(np.random.default_rng(6), KNOWN, 12)
+    demos = tmp_path / "demos.npz"
+    write_demos(demos, obs, action, episode)
+    used = {}
+    for seed in (0, 1, 2):
+        args = PipsArgs(
+            demos=str(demos), out=str(tmp_path / f"p{seed}.json"), steps=720, max_depth=1, solver="exact", seed=seed
+        )
+        used[seed] = read_program_record(train(args))["demonstrations"]["episode_ids"]
+    assert used[0] == [0, 1, 2]
+    assert len({tuple(v) for v in used.values()}) == 3 and all(len(v) == 3 for v in used.values())
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,131 @@
+"""REPRODUCTION.md's account of the reference code's quirks (SPEC section 11; `--reference`): the
+table of PPO and DQN trained and evaluated with every quirk on, and for each learned row of
+"Where we differ" the measured effect of the quirks on it, read from the stored runs.
+
+Which policies the quirks can reach is a fact of the code, not of a run: the quirks change the
+env's reward (socialzoo.env.quirks), the socialgym1 layout's theta entry and PPO's evaluation, so
+only the trainers that read the reward (socialzoo.reproduce.runs.REFERENCE_TRAINERS) are retrained;
+BC, GAIL and PIPS learn from Ref's actions in the paper layout, which no quirk changes
+(tests/reproduce/test_quirk_report.py records Ref's demonstrations both ways and compares them).
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from socialzoo.bench.tables import policy_label
+from socialzoo.reproduce.paper import PAPER_SUCCESS
+from socialzoo.reproduce.runs import REFERENCE_TRAINERS
+from socialzoo.reproduce.tables import EXPERIMENT_MAPS
+
+
+def _rates(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> dict[int, float]:
+    """Seed -> success % of the reference-quirks runs of a policy in an experiment."""
+    return {
+        int(r["seed"]): 100 * float(r["success_rate"])
+        for r in rows
+        if r["experiment"] == experiment and r["policy"] == policy
+    }
+
+
+def _where(paper: float, rates: Sequence[float]) -> str:
+    if paper < min(rates):
+        return f"below all {len(rates)}"
+    if paper > max(rates):
+        return f"above all {len(rates)}"
+    return "inside that range"
+
+
+def quirk_note(
+    reference: Sequence[Mapping[str, Any]], seeds: Sequence[Mapping[str, Any]], experiment: str, policy: str
+) -> str | None:
+    """The measured effect of the reference code's quirks on one learned row, for "Where we
+    differ"; None for an engineered policy or an experiment the quirks are not run on.
+
+    Args:
+        reference: the `--reference` rows (reference.csv: experiment, policy, seed, success_rate).
+        seeds: the seeds rows of our default runs (seeds.csv), for our mean over the same seeds.
+        experiment: "performance" or "transfer".
+        policy: the row's policy name.
+    """
+    if experiment not in EXPERIMENT_MAPS or policy in ("goalone", "ref"):
+        return None
+    if policy not in REFERENCE_TRAINERS:
+        return (
+            "The reference quirks cannot explain it: they change the reward, the socialgym1 layout "
+            f"and PPO's evaluation, and {policy_label(policy)} learns from Ref's actions in the paper "
+            "layout, which are the same with every quirk on."
+        )
+    rates = _rates(reference, experiment, policy)
+    if not rates:
+        return "Not yet measured with the reference quirks on (`socialzoo reproduce --out DIR --reference`)."
+    paper = PAPER_SUCCESS[policy][EXPERIMENT_MAPS[experiment][1]]
+    values = [rates[s] for s in sorted(rates)]
+    mean = statistics.fmean(values)
+    ours = next(
+        (r for r in seeds if r["experiment"] == experiment and r["policy"] == policy),
+        None,
+    )
+    shift = ""
+    if ours is not None:
+        base = float(ours["mean_pct"])
+        shift = f" against our {base:.1f}% ({mean - base:+.1f} points)"
+    explains = min(values) <= paper <= max(values)
+    verdict = "so the quirks can explain it" if explains else "so the quirks do not explain it"
+    return (
+        f"With every reference quirk on (`--reference`, {len(values)} seeds): {min(values):.1f}% to "
+        f"{max(values):.1f}%, mean {mean:.1f}%{shift}; the paper's {paper:.1f}% lies "
+        f"{_where(paper, values)}, {verdict}."
+    )
+
+
+def reference_section(results: Mapping[str, Any], tables: Mapping[str, Any]) -> list[str]:
+    """The learned rows trained and evaluated with the reference code's quirks (`--reference`),
+    beside ours and the paper's."""
+    rows = results.get("reference", [])
+    lines = [
+        "## The reference code's quirks (`--reference`)",
+        "",
+        "SPEC section 11 lists where the reference code (social_gym 1.0) departed from the paper; each "
+        "departure is a switch of the env config (`socialzoo.env.quirks.ReferenceQuirks`), all on in the "
+        "ids `socialzoo/ActionSelectionReference-v2` (gdc1) and `socialzoo/ActionSelectionTransferReference-v2` "
+        "(ghc3). `socialzoo reproduce --reference` trains PPO and DQN on them (goal distance along x only, "
+        'the reward "distance gained + bonus") and evaluates PPO without its observation normalisation. '
+        "BC, GAIL and PIPS are not retrained: they learn from Ref's actions in the paper layout, never "
+        "from the reward, and Ref's demonstrations are the same with every quirk on.",
+        "",
+    ]
+    if not rows:
+        return [*lines, "*Not run yet (`socialzoo reproduce --out DIR --reference`).*", ""]
+    first = min(int(r["seed"]) for r in rows)
+    head_trials = sorted({int(r["trials"]) for r in rows if int(r["seed"]) == first})
+    other_trials = sorted({int(r["trials"]) for r in rows if int(r["seed"]) != first})
+    if other_trials and other_trials != head_trials:
+        lines[-2] += (
+            f" Seed {first} played the first {' / '.join(f'{n:,}' for n in head_trials)} scenarios of each "
+            f"test set, the other seeds the first {' / '.join(f'{n:,}' for n in other_trials)} "
+            "(`--seed-trials`)."
+        )
+    lines += [
+        "| experiment | policy | ours success % | reference quirks success % [90% CI] | reference, seeds | paper % |",
+        "|---|---|---:|---|---|---:|",
+    ]
+    for experiment in ("performance", "transfer"):
+        ours = {str(t["policy"]): t for t in tables.get(experiment, ([], ""))[0]}
+        _, index = EXPERIMENT_MAPS[experiment]
+        for policy in REFERENCE_TRAINERS:
+            mine = [r for r in rows if r["experiment"] == experiment and r["policy"] == policy]
+            if not mine:
+                continue
+            head = next((r for r in mine if int(r["seed"]) == first), mine[0])
+            rates = sorted(100 * r["success_rate"] for r in mine)
+            spread = f"{rates[0]:.1f} to {rates[-1]:.1f} ({len(rates)} seeds)" if len(rates) > 1 else ""
+            our = f"{ours[policy]['success_pct']:.1f}" if policy in ours else "n/a"
+            lines.append(
+                f"| {experiment} | {policy_label(policy)} | {our} | {100 * head['success_rate']:.1f} "
+                f"[{100 * head['success_ci_low']:.1f}, {100 * head['success_ci_high']:.1f}] | {spread} "
+                f"| {PAPER_SUCCESS[policy][index]:.1f} |"
+            )
+    return [*lines, ""]
