@@ -258,23 +258,23 @@ def without_dead_ends(transitions: dict[int, tuple[Transition, ...]]) -> dict[in
         kept = pruned
 
 
-def synthesize(
-    obs: np.ndarray, action: np.ndarray, settings: SearchSettings, *, min_positives: int = 1
-) -> tuple[Program, list[GuardReport]]:
-    """A program from examples: for each current action (the observations' previous action), an
-    ordered list of guarded transitions. Each order of the targets is tried (sequential covering:
-    a guard is learned on the examples the earlier guards leave, as first-guard-fires reads
-    them), and the order whose list decides the most examples right, less the price of its
-    complexity, is kept. Transitions into a state with no way out are dropped
-    (`without_dead_ends`).
+def oscillations(program: Program, parts: PaperParts) -> list[tuple[int, int]]:
+    """(observation row, state) for every state of a flip: observations on which the program
+    would go from a to b and from b back to a (a robot halting and going on alternate steps),
+    each with both a and b. A demonstrator that decides from what it sees never does this."""
+    n = len(parts.prev_action)
+    decided = [program.decide_parts(parts._replace(prev_action=np.full(n, s))) for s in range(NUM_ACTIONS)]
+    found: list[tuple[int, int]] = []
+    for a, b in itertools.combinations(range(NUM_ACTIONS), 2):
+        for row in np.flatnonzero((decided[a] == b) & (decided[b] == a)).tolist():
+            found += [(row, a), (row, b)]
+    return found
 
-    Args:
-        obs: (N, D) paper-layout observations.
-        action: (N,) the demonstrator's actions.
-        settings: the guard search's settings.
-        min_positives: fewest examples of a transition for it to be learned.
-    """
-    parts = paper_parts(obs)
+
+def _learn_states(
+    parts: PaperParts, action: np.ndarray, settings: SearchSettings, min_positives: int
+) -> tuple[dict[int, tuple[Transition, ...]], list[GuardReport]]:
+    """Each state's decision list, learned on the examples in that state (see `synthesize`)."""
     state = parts.prev_action
     transitions: dict[int, tuple[Transition, ...]] = {}
     reports: list[GuardReport] = []
@@ -297,24 +297,82 @@ def synthesize(
             continue
         transitions[s] = tuple(best[0])
         reports += best[1]
-        for r, t in zip(best[1], best[0], strict=True):
-            logger.info(
-                "%s -> %s if %s  (%d/%d examples right, %d positive)",
-                ACTION_NAMES[s],
-                ACTION_NAMES[t.target],
-                predicate_str(t.guard),
-                r.correct,
-                r.examples,
-                r.positives,
-            )
-    live = without_dead_ends(transitions)
+    return transitions, reports
+
+
+def synthesize(
+    obs: np.ndarray,
+    action: np.ndarray,
+    settings: SearchSettings,
+    *,
+    min_positives: int = 1,
+    sample: tuple[np.ndarray, np.ndarray] | None = None,
+    repairs: int = 3,
+) -> tuple[Program, list[GuardReport]]:
+    """A program from examples: for each current action (the observations' previous action), an
+    ordered list of guarded transitions. Each order of the targets is tried (sequential covering:
+    a guard is learned on the examples the earlier guards leave, as first-guard-fires reads
+    them), and the order whose list decides the most examples right, less the price of its
+    complexity, is kept. Transitions into a state with no way out are dropped
+    (`without_dead_ends`).
+
+    With `sample` (every demonstration step the examples come from, windowed or not), the program
+    is checked for `oscillations` on those steps; where it would flip between two states, the
+    demonstrator's own action there becomes an example from each state of the flip (the action to
+    settle on, whichever state the program is in), and the guards are learned again, at most
+    `repairs` times.
+
+    Args:
+        obs: (N, D) paper-layout observations.
+        action: (N,) the demonstrator's actions.
+        settings: the guard search's settings.
+        min_positives: fewest examples of a transition for it to be learned.
+        sample: (observations, actions) of the demonstration steps the examples come from.
+        repairs: most rounds of learning again where the program oscillates.
+    """
+    parts, labels = paper_parts(obs), action
+    sample_parts = paper_parts(sample[0]) if sample is not None else None
+    added: set[tuple[int, int]] = set()
+    for round_ in range(repairs + 1):
+        transitions, reports = _learn_states(parts, labels, settings, min_positives)
+        live = without_dead_ends(transitions)
+        program = Program(live)
+        if sample is None or sample_parts is None or round_ == repairs:
+            break
+        flips = oscillations(program, sample_parts)
+        new = [f for f in flips if f not in added]
+        if not new:
+            break
+        logger.info(
+            "PIPS: the program flips between two states on %d of %d sample steps; learning again with "
+            "the demonstrator's action there as an example from each state of the flip",
+            len({row for row, _ in flips}),
+            len(sample_parts.prev_action),
+        )
+        added.update(new)
+        rows = np.array([row for row, _ in new])
+        extra = PaperParts(*(p[rows] for p in sample_parts))._replace(
+            prev_action=np.array([state for _, state in new], dtype=np.int64)
+        )
+        parts = PaperParts(*(np.concatenate([a, b]) for a, b in zip(parts, extra, strict=True)))
+        labels = np.concatenate([labels, sample[1][rows]])
     for s, ts in transitions.items():
         for t in ts:
+            to = ACTION_NAMES[t.target]
             if t not in live.get(s, ()):
-                to = ACTION_NAMES[t.target]
                 logger.info("%s -> %s dropped: %s has no way out", ACTION_NAMES[s], to, to)
+    for r, (s, t) in zip(reports, [(s, t) for s, ts in transitions.items() for t in ts], strict=True):
+        logger.info(
+            "%s -> %s if %s  (%d/%d examples right, %d positive)",
+            ACTION_NAMES[s],
+            ACTION_NAMES[t.target],
+            predicate_str(t.guard),
+            r.correct,
+            r.examples,
+            r.positives,
+        )
     kept = {(s, t.target) for s, ts in live.items() for t in ts}
-    return Program(live), [r for r in reports if (r.state, r.target) in kept]
+    return program, [r for r in reports if (r.state, r.target) in kept]
 
 
 def agreement(program: Program, obs: np.ndarray, action: np.ndarray) -> dict[str, Any]:
@@ -385,7 +443,11 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     if layout != "paper":
         raise ValueError(f"{demos}: PIPS reads the paper observation layout, the file has {layout!r}")
     order = episode_order(arrays["episode"], args.seed)
-    obs_all, act_all, ep_all = arrays["obs"][order], arrays["action"].astype(np.int64)[order], arrays["episode"][order]
+    obs_all, act_all, ep_all = (
+        arrays["obs"][order],
+        arrays["action"].astype(np.int64)[order],
+        arrays["episode"][order],
+    )
     prev_all = paper_parts(obs_all).prev_action
     used, mask = select_examples(act_all, prev_all, ep_all, args.steps, args.window, args.sampling)
     obs, action, episode, prev = obs_all[:used], act_all[:used], ep_all[:used], prev_all[:used]
@@ -402,7 +464,9 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     )
     settings = SearchSettings.of(args, seed=args.seed, deadline=time.monotonic() + args.time_budget_s)
     search_started = time.perf_counter()
-    program, reports = synthesize(obs[mask], action[mask], settings, min_positives=args.min_positives)
+    program, reports = synthesize(
+        obs[mask], action[mask], settings, min_positives=args.min_positives, sample=(obs, action)
+    )
     synthesis_s = time.perf_counter() - search_started
     program.save(run.policy)
     rules = program.rules()

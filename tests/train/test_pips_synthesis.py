@@ -25,11 +25,13 @@ from socialzoo.agents.pips_features import (
     FAR,
     METRE,
     METRE_PER_SECOND,
+    paper_parts,
 )
 from socialzoo.nav.subpolicies import GO_ALONE, HALT
 from socialzoo.train.pips import (
     PipsArgs,
     episode_order,
+    oscillations,
     read_program_record,
     synthesize,
     train,
@@ -254,11 +256,52 @@ def test_no_transition_into_a_state_the_program_cannot_leave():
         GO_ALONE: (Transition(HALT, near), Transition(FOLLOW, near)),
         HALT: (Transition(GO_ALONE, far),),
     }
-    assert without_dead_ends(program) == {GO_ALONE: (Transition(HALT, near),), HALT: (Transition(GO_ALONE, far),)}
+    assert without_dead_ends(program) == {
+        GO_ALONE: (Transition(HALT, near),),
+        HALT: (Transition(GO_ALONE, far),),
+    }
     # Halt's only way out leads into a dead end: Halt becomes one, and the way into it goes too.
     chain = {GO_ALONE: (Transition(HALT, near),), HALT: (Transition(FOLLOW, far),)}
     assert without_dead_ends(chain) == {}
     assert without_dead_ends({HALT: (Transition(GO_ALONE, far),)}) == {HALT: (Transition(GO_ALONE, far),)}
+
+
+def _ahead(dist, prev):
+    """A paper-layout observation with one person straight ahead at `dist`, in state `prev`."""
+    obs = np.zeros((len(dist), 7 + 4 * 3))
+    obs[:, 0:2] = (8.0, 0.0)
+    obs[:, 2:4] = (1.5, 0.0)
+    obs[:, 4] = 1.0
+    obs[:, 6] = prev
+    obs[:, 7] = dist
+    return obs
+
+
+def test_a_program_that_would_halt_and_go_on_alternate_steps_is_learned_again():
+    """The demonstrator halts for anyone within 3 m. The windowed examples leave a gap, so the
+    guards come out as "halt within 3.25 m" and "go again beyond 2.5 m": between them the robot
+    would flip every step (seeds 1 and 3 of env v2's samples did, on 13% and 7% of their steps).
+    The sample's own steps in the gap, with the demonstrator's action from both states, close it."""
+    go_alone = [(d, GO_ALONE, HALT) for d in np.linspace(0.5, 3.0, 12)] + [
+        (d, GO_ALONE, GO_ALONE) for d in np.linspace(3.5, 8.0, 12)
+    ]
+    halted = [(d, HALT, HALT) for d in np.linspace(0.5, 1.5, 12)] + [
+        (d, HALT, GO_ALONE) for d in np.linspace(3.5, 8.0, 12)
+    ]
+    rows = go_alone + halted
+    obs = np.concatenate([_ahead(np.array([d]), prev) for d, prev, _ in rows])
+    action = np.array([a for _, _, a in rows])
+    gap = np.linspace(2.6, 3.0, 9)
+    sample_obs = np.concatenate([obs, _ahead(gap, HALT)])
+    sample_action = np.concatenate([action, np.full(len(gap), HALT)])
+    settings = SearchSettings(max_depth=0, max_pred_size=1, solver="exact")
+    plain, _ = synthesize(obs, action, settings)
+    assert oscillations(plain, paper_parts(sample_obs))  # the gap: halt from GoAlone, go from Halt
+    repaired, _ = synthesize(obs, action, settings, sample=(sample_obs, sample_action))
+    assert oscillations(repaired, paper_parts(sample_obs)) == []
+    # It still halts for the person within 3 m and goes again once they are farther than 3.5 m.
+    assert repaired.decide(_ahead(np.array([2.8, 1.0]), GO_ALONE)).tolist() == [HALT, HALT]
+    assert repaired.decide(_ahead(np.array([2.8, 4.0]), HALT)).tolist() == [HALT, GO_ALONE]
 
 
 def test_a_seed_reads_whole_episodes_in_its_own_order():
@@ -286,7 +329,12 @@ def test_seeds_are_samples_of_the_demonstrations(tmp_path):
     used = {}
     for seed in (0, 1, 2):
         args = PipsArgs(
-            demos=str(demos), out=str(tmp_path / f"p{seed}.json"), steps=720, max_depth=1, solver="exact", seed=seed
+            demos=str(demos),
+            out=str(tmp_path / f"p{seed}.json"),
+            steps=720,
+            max_depth=1,
+            solver="exact",
+            seed=seed,
         )
         used[seed] = read_program_record(train(args))["demonstrations"]["episode_ids"]
     assert used[0] == [0, 1, 2]
