@@ -21,8 +21,9 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     """A new core of len(rows) rows that continues the episodes of `core`'s `rows`, in that order.
 
     Carried over, per row: the world state, the global plans and goals, the carrot, the done
-    flags, visibility and the people's bookkeeping so far. The sight-line cache starts empty: it
-    only saves work (a full test gives the same answers). `core` itself is left as it was.
+    flags, visibility, the people's bookkeeping so far, recorded people and the scripts' state.
+    The sight-line cache starts empty: it only saves work (a full test gives the same answers).
+    `core` itself is left as it was.
 
     Args:
         core: a core whose rows have all been reset from scenarios.
@@ -68,9 +69,11 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     new.carrot = core.carrot[index].copy()
     new.done = core.done[index].copy()
     new.visible = core.visible[core.robot_rows(index)].copy()
-    # The people's side: counterfactual rows and the people's metrics so far; recorded people.
+    # The people's side: counterfactual rows and the people's metrics so far; recorded people;
+    # scripted people and doors (who was released, which doors closed).
     new.people = core.people.rows(index)
     copy_rows(core.replay, new.replay, index, b)
+    copy_rows(core.script, new.script, index, b)
     return new
 
 

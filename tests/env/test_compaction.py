@@ -96,3 +96,35 @@ def test_bad_rows(stepped_task):
     fresh = ActionSelectionTask(stepped_task.config, 2, map_data=stepped_task.map)
     with pytest.raises(RuntimeError, match="never reset"):
         compact_core(fresh.core, [0])
+
+
+def same(a, b):
+    """Equal arrays, NaN equal to NaN."""
+    return np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")
+
+
+def test_scripted_rows_are_carried_over():
+    """A suite family's scripts (people who stop, wait at a door, stay) live in the core's script
+    runner: compacting keeps each kept row's script where it was, and the rows step on alike."""
+    from socialzoo.scenarios.catalogue import get_family
+
+    family = get_family("entering_elevator")  # the doors close, people are released
+    task = ActionSelectionTask(EnvConfig(map=None, family=family.name), 3)
+    task.reset_rows(np.arange(3), [family.make(seed, m=task.map) for seed in (1, 2, 3)])
+    rng = np.random.default_rng(0)
+    script = task.core.script
+    at_reset = {name: value.copy() for name, value in arrays_of(script).items()}
+    for _ in range(400):  # until the scripts' own state has moved on from the reset's
+        task.step(rng.integers(0, 4, (3, 1)))
+        moved = [name for name, value in arrays_of(script).items() if not same(value, at_reset[name])]
+        if moved:
+            break
+    assert script.scripted.all() and moved
+    keep = [2, 0]
+    full, small = task.compact(range(3)), task.compact(keep)
+    for name, value in arrays_of(task.core.script).items():
+        np.testing.assert_array_equal(getattr(small.core.script, name), value[keep], err_msg=f"script.{name}")
+    for _ in range(80):
+        actions = rng.integers(0, 4, (3, 1))
+        a, b = full.step(actions).detail, small.step(actions[keep]).detail
+        np.testing.assert_array_equal(b.obs, a.obs[keep])
