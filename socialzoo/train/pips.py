@@ -155,13 +155,12 @@ def episode_order(episode: np.ndarray, seed: int) -> np.ndarray:
     steps stay in order, so windows and previous actions keep their meaning)."""
     if seed == 0:
         return np.arange(len(episode))
-    ids, first = np.unique(episode, return_index=True)
-    ids = ids[np.argsort(first)]  # the file's episode order
-    shuffled = ids[np.random.default_rng(seed).permutation(len(ids))]
+    ids, first, inverse = np.unique(episode, return_index=True, return_inverse=True)
+    # The file's episodes (indices into the sorted ids, in file order), permuted by the seed.
+    shuffled = np.argsort(first)[np.random.default_rng(seed).permutation(len(ids))]
     rank = np.empty(len(ids), dtype=np.int64)
-    rank[np.searchsorted(np.sort(ids), shuffled)] = np.arange(len(ids))
-    key = rank[np.searchsorted(np.sort(ids), episode)]
-    return np.argsort(key, kind="stable")
+    rank[shuffled] = np.arange(len(ids))
+    return np.argsort(rank[inverse], kind="stable")
 
 
 def select_examples(
