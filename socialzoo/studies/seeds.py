@@ -70,9 +70,10 @@ class SeedGroup:
         return (self.experiment, self.policy, self.map, str(self.demonstration_steps or ""))
 
 
-def benchmark_scores(folder: str | Path, policy: str, key: str = "success") -> dict[int, float]:
-    """{scenario index: score} of `policy` in a benchmark folder (socialzoo.bench.experiment's
-    config.json and results.sqlite), the trials of the config hashes the folder's last run used.
+def benchmark_rows(folder: str | Path, policy: str) -> list[dict[str, Any]]:
+    """The stored trials (ResultsStore.rows) of `policy` in a benchmark folder
+    (socialzoo.bench.experiment's config.json and results.sqlite): those of the config hashes the
+    folder's last run used, its first `trials` scenarios of each test set.
 
     Raises:
         FileNotFoundError: the folder holds no benchmark run.
@@ -84,7 +85,7 @@ def benchmark_scores(folder: str | Path, policy: str, key: str = "success") -> d
 
     folder = Path(folder)
     config = read_json(folder / CONFIG_NAME, "benchmark record", ValueError, kind=dict)
-    out: dict[int, float] = {}
+    out: list[dict[str, Any]] = []
     found = False
     with ResultsStore(folder / STORE_NAME) as store:
         for name, config_hash in config.get("config_hashes", {}).items():
@@ -93,14 +94,24 @@ def benchmark_scores(folder: str | Path, policy: str, key: str = "success") -> d
                 continue
             found = True
             trials = int(config["test_sets"][test_set]["trials"])
-            for row in store.rows(
-                policy=spec, test_set=test_set, config_hash=config_hash, indices=range(trials)
-            ):
-                value = row[key]
-                out[int(row["scenario_index"])] = float(bool(value)) if key == "success" else float(value)
+            out += store.rows(policy=spec, test_set=test_set, config_hash=config_hash, indices=range(trials))
     if not found:
         raise KeyError(f"{folder}: policy {policy!r} is not in its benchmark run")
     return out
+
+
+def benchmark_scores(folder: str | Path, policy: str, key: str = "success") -> dict[int, float]:
+    """{scenario index: score} of `policy` in a benchmark folder (`benchmark_rows`); success as
+    0 or 1.
+
+    Raises:
+        FileNotFoundError: the folder holds no benchmark run.
+        KeyError: the policy was not in its last run.
+    """
+    return {
+        int(row["scenario_index"]): float(bool(row[key])) if key == "success" else float(row[key])
+        for row in benchmark_rows(folder, policy)
+    }
 
 
 def _pct(value: float) -> float:
