@@ -1,7 +1,8 @@
 """Where two torch trainings of one seed part: the same BC training under several CPU kernel paths.
 
     python tools/kernel_paths.py --demos DEMOS.npz --out DIR [--steps 155400] [--every 10]
-        [--trials 500] [--paths as-is,again,aten-default,mkl-compatible,threads-2]
+        [--trials 500] [--paths as-is,again,aten-default,mkl-compatible,threads-2] [--csv FILE]
+        [--trainer-args "--epochs 1 --min-updates 10"]
 
 Issue 38 saw the torch-trained rows (BC, GAIL, DQN) move when the protocol was re-run on another
 machine of the same kind, while one machine trains one seed to the same weights twice. The likely
@@ -11,12 +12,15 @@ one seed, checkpoints every --every updates) once per kernel path, each in its o
 path's environment (torch reads ATEN_CPU_CAPABILITY and MKL reads MKL_CBWR when they load), then
 reports, against the first path, the first checkpoint whose weights differ, the largest weight
 difference at the end, and each final policy's success on the first --trials gdc1-test scenarios
-(`socialzoo benchmark`). Finished trainings and stored trials are reused on a rerun.
+(`socialzoo benchmark`). Finished trainings and stored trials are reused on a rerun. --csv writes
+the table as a reproduction results file (results/reproduction/results/kernel_paths.csv), which
+REPRODUCTION.md's "What a re-run may differ by" shows.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -41,7 +45,9 @@ KERNEL_PATHS: dict[str, tuple[dict[str, str], tuple[str, ...]]] = {
 }
 
 
-def train(name: str, demos: Path, steps: int, every: int, out: Path) -> Path:
+def train(
+    name: str, demos: Path, steps: int, every: int, out: Path, trainer_args: tuple[str, ...] = ()
+) -> Path:
     """One BC training under kernel path `name` into out/<name>/ (skipped when finished)."""
     env_vars, extra = KERNEL_PATHS[name]
     folder = out / name
@@ -65,6 +71,7 @@ def train(name: str, demos: Path, steps: int, every: int, out: Path) -> Path:
         "--checkpoint-every",
         str(every),
         "--no-progress",
+        *trainer_args,
         *extra,
     ]
     print(f"{name}: {' '.join(f'{k}={v}' for k, v in env_vars.items())} {' '.join(command[3:])}", flush=True)
@@ -126,23 +133,57 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=10, help="checkpoint every this many updates")
     parser.add_argument("--trials", type=int, default=500, help="gdc1-test scenarios per policy (0: none)")
     parser.add_argument("--paths", default=",".join(KERNEL_PATHS))
+    parser.add_argument("--csv", type=Path, help="also write the table here")
+    parser.add_argument(
+        "--trainer-args",
+        default="",
+        help='more `socialzoo train bc` arguments, e.g. "--epochs 1 --min-updates 10"',
+    )
     args = parser.parse_args()
     names = [n for n in args.paths.split(",") if n]
     unknown = [n for n in names if n not in KERNEL_PATHS]
     if unknown:
         parser.error(f"unknown kernel path(s) {unknown}; known: {list(KERNEL_PATHS)}")
-    policies = {name: train(name, args.demos, args.steps, args.every, args.out) for name in names}
+    more = tuple(args.trainer_args.split())
+    policies = {name: train(name, args.demos, args.steps, args.every, args.out, more) for name in names}
     success = evaluate(policies, args.trials, args.out) if args.trials else {}
     base = args.out / names[0]
-    print(f"\nBC, {args.steps} demonstration steps, seed 0; against {names[0]}:\n")
-    print(
-        f"| kernel path | first checkpoint that differs (updates) | largest weight difference | "
-        f"gdc1-test success % ({args.trials}) |"
-    )
-    print("|---|---|---:|---:|")
+    rows = []
     for name, policy in policies.items():
         first, largest = compare(base, policy.parent)
-        print(f"| {name} | {first} | {largest:.3g} | {success.get(name, float('nan')):.1f} |")
+        env_vars, extra = KERNEL_PATHS[name]
+        record = json.loads((policy.parent / "run.json").read_text())
+        rows.append(
+            {
+                "kernel_path": name,
+                "settings": " ".join([*(f"{k}={v}" for k, v in env_vars.items()), *extra]),
+                "demonstration_steps": args.steps,
+                "updates": record["results"]["updates"],
+                "checkpoint_every": args.every,
+                "first_differing_update": first,
+                "largest_weight_difference": largest,
+                "trials": args.trials,
+                "success_pct": success.get(name, float("nan")),
+            }
+        )
+    print(f"\nBC, {args.steps} demonstration steps, seed 0; against {names[0]}:\n")
+    print(
+        "| kernel path | settings | updates | first checkpoint that differs (updates) | largest weight "
+        f"difference | gdc1-test success % ({args.trials}) |"
+    )
+    print("|---|---|---:|---|---:|---:|")
+    for r in rows:
+        print(
+            f"| {r['kernel_path']} | {r['settings']} | {r['updates']} | {r['first_differing_update']} | "
+            f"{r['largest_weight_difference']:.3g} | {r['success_pct']:.1f} |"
+        )
+    if args.csv:  # appended to the rows of other runs (other sizes) already there
+        from socialzoo.bench.tables import write_csv
+        from socialzoo.reproduce.results import read_csv
+
+        old = read_csv(args.csv) if args.csv.is_file() else []
+        old = [r for r in old if int(r["demonstration_steps"]) != args.steps]
+        write_csv([*old, *rows], args.csv)
 
 
 if __name__ == "__main__":

@@ -41,15 +41,6 @@ EXPLANATIONS: dict[str, str] = {
     "normalisation (SPEC section 11: the reference evaluated without it); the paper's short "
     "budget, one seed.",
 }
-# Said of PIPS when its stored seeds all score alike: runs of the synthesiser from before issue 38,
-# whose seed was z3's alone (one program), and which accepted thresholds only the absent-person
-# stand-in reaches (socialzoo.train.pips_search.physical_thresholds).
-PIPS_BEFORE_SAMPLES = (
-    "Its seeds scored alike: these runs predate issue 38, when a PIPS seed was z3's seed alone (one "
-    "program); a seed is now a demonstration sample, and the synthesiser no longer takes a threshold "
-    "that only an absent person's 1000 m stand-in reaches, which the stored program halts on "
-    "(docs/pips.md, \"Env v2 and five seeds\", measures the five programs it makes now)."
-)
 # The machine facts of a training run the report lists (socialzoo.reproduce.results.machine_summary).
 MACHINE_COLUMNS = (
     "cpu",
@@ -164,15 +155,25 @@ def _figure(name: str, prefix: str, caption: str, figures: set[str]) -> list[str
     return [f"![{caption}]({link}.png)", "", f"*{caption}* ([PDF]({link}.pdf))"]
 
 
-def _one_program(seeds: list[dict[str, Any]], experiment: str) -> bool:
-    """True when PIPS ran with several seeds in an experiment and every seed scored the same."""
-    return any(
-        r["experiment"] == experiment
-        and r["policy"] == "pips"
-        and int(r["seeds"]) > 1
-        and float(r["min_pct"]) == float(r["max_pct"])
-        for r in seeds
-    )
+def _reruns_section(run: Mapping[str, Any]) -> list[str]:
+    """The policies whose rows were re-run after the full run (socialzoo.reproduce.rerun_rows)."""
+    reruns = run.get("reruns") or []
+    if not reruns:
+        return []
+    lines = [
+        "## Rows re-run after the full run",
+        "",
+        "These policies' rows (every table, the seed aggregates and the training records) come from "
+        "a later run of their seeds alone, put in place by `socialzoo.reproduce.rerun_rows`; every "
+        "other row is the full run's.",
+        "",
+    ]
+    for r in reruns:
+        commands = "; ".join(f"`{c}`" for c in r.get("commands", []))
+        lines.append(
+            f"- {policy_label(str(r['policy']))}: {r.get('why', '')} At commit `{r.get('commit', '')}`: {commands}"
+        )
+    return [*lines, ""]
 
 
 def _differences(
@@ -200,9 +201,9 @@ def _differences(
                     ", one seed", ""
                 )
                 why = f"{why} {note}"
-            if r["policy"] == "pips" and name != "lfd" and _one_program(seeds or [], name):
-                why = f"{why} {PIPS_BEFORE_SAMPLES}"
-            quirks = quirk_note(reference or [], seeds or [], name, str(r["policy"])) if name != "lfd" else None
+            quirks = (
+                quirk_note(reference or [], seeds or [], name, str(r["policy"])) if name != "lfd" else None
+            )
             if quirks:
                 why = f"{why} {quirks}"
             lines.append(
@@ -225,18 +226,22 @@ def _rerun_section(results: Mapping[str, Any]) -> list[str]:
         "What runs on the simulator alone (GoAlone, Ref, PIPS's synthesis, every evaluation of a "
         "policy file) is numpy and numba in float64; re-run on another 2-core machine of the same kind, "
         "GoAlone, Ref and PIPS came out bit for bit (issue 38). The torch-trained policies (BC, GAIL, "
-        "DQN, PPO) are deterministic on one machine (one seed, one torch thread per training, torch's "
-        "deterministic algorithms: two trainings give the same weights, tests/train/test_determinism.py), "
-        "but torch picks its CPU kernels at run time from the CPU's instruction sets and its BLAS/oneDNN "
-        "build (an AVX-512 path of MKL or oneDNN sums in another order than an AVX2 one), so on another "
-        "CPU or torch build the weights may part after a few updates and a policy's success may move "
-        "by as much as the spread between seeds (issue 38 saw BC, GAIL and DQN move, PPO by one "
-        "episode in 2,000). Every run record (run.json's `machine`, socialzoo.train.machine) names "
-        "what decides it: CPU model and flags, torch's version, CPU capability and BLAS, thread counts, "
-        "numpy's BLAS, Python; the table below lists those of the stored runs. `MKL_CBWR` (MKL's "
-        "reproducible code path) and `ATEN_CPU_CAPABILITY` / `ONEDNN_MAX_CPU_ISA` set to one "
-        "instruction set on both machines are the knobs that pin the kernels (not measured here); the "
-        "records name them when set.",
+        "DQN, PPO) are deterministic on one machine and one kernel path (one seed, one torch thread per "
+        "training, torch's deterministic algorithms: two trainings give the same weights, "
+        "tests/train/test_determinism.py). They part wherever torch or MKL takes another CPU code path "
+        "(ATen's scalar kernels instead of its AVX2 ones, another MKL code path, two threads instead of "
+        "one): `tools/kernel_paths.py` trains one BC under several paths on one machine and finds where "
+        "the weights part and what that does to success (its table, where published, closes this "
+        "section). Another CPU (one with AVX-512, or of another vendor, on which MKL picks "
+        "another path) or another torch or MKL build takes another path unasked: that is how the "
+        "re-run's BC, GAIL and DQN moved while PPO moved by one episode in 2,000. Every run record "
+        "(run.json's `machine`, socialzoo.train.machine) names what decides the path: CPU model and "
+        "flags, torch's version, CPU capability and BLAS, thread counts, numpy's BLAS, Python, and "
+        "`ATEN_CPU_CAPABILITY`, `MKL_CBWR` and `ONEDNN_MAX_CPU_ISA` when set; the first table below "
+        "lists those of the stored runs. Setting the same paths on two machines (for example "
+        "`ATEN_CPU_CAPABILITY=default MKL_CBWR=COMPATIBLE`, one thread, the same torch build) is what "
+        "can make them train alike; a path that needs an instruction set the CPU lacks is not there "
+        "to pin.",
         "",
     ]
     seen: dict[tuple[Any, ...], list[str]] = {}
@@ -260,6 +265,31 @@ def _rerun_section(results: Mapping[str, Any]) -> list[str]:
     for key, runs in seen.items():
         cells = " | ".join("" if v is None else str(v) for v in key)
         lines.append(f"| {len(runs)} | {cells} |")
+    return [*lines, "", *_kernel_paths_table(results.get("kernel_paths", []))]
+
+
+def _kernel_paths_table(rows: list[dict[str, Any]]) -> list[str]:
+    """tools/kernel_paths.py's measurement: BC (seed 0) trained once per CPU kernel path."""
+    if not rows:
+        return []
+    lines = [
+        "Where the runs part, measured on this machine (`python tools/kernel_paths.py`): BC on the "
+        "first demonstration steps of the recording, seed 0, one thread unless named, trained once per "
+        "CPU kernel path, each in its own process; weights compared with the first path's at every "
+        "checkpoint, and the final policies' success on the first gdc1-test scenarios.",
+        "",
+        "| kernel path | settings | demonstration steps | updates (checkpoint every) | first checkpoint "
+        "that differs | largest weight difference at the end | success % (scenarios) |",
+        "|---|---|---:|---:|---|---:|---|",
+    ]
+    for r in rows:
+        trials = int(r["trials"])
+        success = f"{r['success_pct']:.1f} ({trials:,})" if trials else ""
+        lines.append(
+            f"| {r['kernel_path']} | {r['settings'] or 'as installed'} | {int(r['demonstration_steps']):,} | "
+            f"{int(r['updates']):,} ({int(r['checkpoint_every'])}) | {r['first_differing_update']} | "
+            f"{r['largest_weight_difference']:.3g} | {success} |"
+        )
     return [*lines, ""]
 
 
@@ -298,7 +328,7 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
             "with the paper's.",
             "",
         ]
-    lines += ["## Settings", "", *_settings_section(run), ""]
+    lines += ["## Settings", "", *_settings_section(run), "", *_reruns_section(run)]
     lines += [
         "## Time on this machine",
         "",

@@ -13,6 +13,8 @@ number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
                       them (socialzoo.reproduce.seeds)
     reference.csv     with `--reference`: PPO and DQN with the reference code's quirks, per
                       experiment and seed (socialzoo.reproduce.parts.run_reference)
+    kernel_paths.csv  one BC training under several CPU kernel paths (tools/kernel_paths.py
+                      --csv; not made by a reproduction, so `collect` leaves it as it is)
 
 `collect` copies them out of the work folder DIR/<hash>/ (where the stores and runs are); `load`
 reads them back with numbers as floats, so the report never needs the big stores.
@@ -49,6 +51,7 @@ CSV_FILES: dict[str, str] = {
     "improvement": "improvement.csv",
     "profiles": "profiles.csv",
     "reference": "reference.csv",
+    "kernel_paths": "kernel_paths.csv",
 }
 # Columns that hold text; every other CSV cell is read as a number (empty: NaN).
 TEXT_COLUMNS = frozenset(
@@ -66,6 +69,9 @@ TEXT_COLUMNS = frozenset(
         "seed_success_pct",
         "paper_where",
         "paper_in_interval",
+        "kernel_path",
+        "settings",
+        "first_differing_update",
     }
 )
 

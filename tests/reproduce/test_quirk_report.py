@@ -80,15 +80,3 @@ def test_refs_demonstrations_are_the_same_with_every_quirk_on(tmp_path):
         np.testing.assert_array_equal(a[key], b[key])
     # The recordings do differ where the quirks act: the reward.
     assert not np.array_equal(a["reward"], b["reward"])
-
-
-def test_pips_seeds_that_scored_alike_are_named_as_one_program():
-    from socialzoo.reproduce.report import _one_program
-
-    def row(low, high, seeds=5):
-        return {"experiment": "performance", "policy": "pips", "seeds": seeds, "min_pct": low, "max_pct": high}
-
-    assert _one_program([row(84.9, 84.9)], "performance")
-    assert not _one_program([row(80.0, 91.5)], "performance")
-    assert not _one_program([row(84.9, 84.9, seeds=1)], "performance")
-    assert not _one_program([row(84.9, 84.9)], "transfer")

@@ -1,0 +1,246 @@
+"""One learned policy's rows of a published reproduction replaced by a re-run of its seeds.
+
+The full protocol takes most of a day on 2 cores. When one trainer changes after it (issue 38's
+PIPS synthesiser) while every other policy's runs stay valid, the changed policy's seeds are
+trained and evaluated again with the project's own commands (`socialzoo train`, `socialzoo
+benchmark`), and `replace_policy_rows` puts their trials into the results folder in place of the
+old ones:
+
+- performance.csv and transfer.csv: the first seed's summary row;
+- lfd.csv: the first seed's row at the policy's LfD size, from the first `lfd_trials` scenarios
+  of its gdc1-test trials (the LfD protocol's scenarios and env);
+- seeds.csv, improvement.csv (against Ref) and profiles.csv: the policy's aggregates over seeds;
+- training.json: the re-run trainings' records;
+- run.json: a `reruns` entry (policy, commit, commands), which the report prints.
+
+Ref's trials come along (Ref is deterministic): the probabilities of improvement pair the
+scenarios, and Ref's success must equal the published one, the check that the re-run evaluated
+under the published conditions. Other rows of every file are kept byte for byte.
+
+    rerun = PolicyRerun("pips", {0: "pips:s0.json", 1: "pips:s1.json"}, Path("perf"), Path("transfer"),
+                        ref=Path("ref"), commands=("socialzoo benchmark ...",), commit="3d22979")
+    replace_policy_rows("results/reproduction", rerun)
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from socialzoo.bench.tables import summarize, write_csv
+from socialzoo.reproduce.paper import PAPER_SUCCESS, paper_lfd
+from socialzoo.reproduce.results import CSV_FILES, RESULTS_DIR, RUN_FILE, TRAINING_FILE
+from socialzoo.reproduce.seeds import EXPERIMENTS, IMPROVEMENT_PAIRS
+from socialzoo.studies.seeds import SeedGroup, benchmark_rows, improvement_rows, profile_rows, seed_rows
+
+# The summary columns of an LfD row (lfd.csv's name: the summary's).
+LFD_COLUMNS = {
+    "trials": "trials",
+    "success_rate": "success_rate",
+    "success_ci_low": "success_ci_low",
+    "success_ci_high": "success_ci_high",
+    "average_step_reward": "average_step_reward_mean",
+    "average_step_reward_ci_low": "average_step_reward_ci_low",
+    "average_step_reward_ci_high": "average_step_reward_ci_high",
+}
+
+
+class RerunError(ValueError):
+    """A re-run that cannot replace the published rows; the message names what is missing."""
+
+
+@dataclass(frozen=True)
+class PolicyRerun:
+    """A re-run of one learned policy's seeds.
+
+    Attributes:
+        policy: the registry name ("pips").
+        seed_specs: training seed -> the policy spec its benchmark folders hold ("pips:/x/s0.json");
+            the seeds of the published run, every one.
+        performance: a benchmark folder with every seed on gdc1-test (at least the published
+            trials, the first ones).
+        transfer: the same on ghc3-test.
+        ref: a benchmark folder with "ref" on both maps (the same trials).
+        commands: the commands that made the policy files and the folders (for the record).
+        commit: the repository commit they ran at.
+        training: training.json records of the re-run trainings (replacing the policy's).
+        why: one sentence: why the rows were re-run.
+    """
+
+    policy: str
+    seed_specs: Mapping[int, str]
+    performance: Path
+    transfer: Path
+    ref: Path
+    commands: Sequence[str] = ()
+    commit: str = ""
+    training: Sequence[Mapping[str, Any]] = field(default_factory=tuple)
+    why: str = ""
+
+
+def _raw_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    """(header, rows as the text cells): rows not replaced are written back unchanged."""
+    reader = csv.DictReader(io.StringIO(path.read_text(), newline=""))
+    rows = list(reader)
+    return list(reader.fieldnames or []), rows
+
+
+def _trials(folder: Path, spec: str, map_name: str, trials: int) -> list[dict[str, Any]]:
+    """The first `trials` scenarios of `spec` on `map_name` in a benchmark folder."""
+    try:
+        rows = [
+            r for r in benchmark_rows(folder, spec) if r["map"] == map_name and r["scenario_index"] < trials
+        ]
+    except (KeyError, FileNotFoundError) as err:
+        raise RerunError(f"{folder}: no trials of {spec} ({err})") from None
+    if len(rows) < trials:
+        raise RerunError(f"{folder}: {spec} has {len(rows)} of the first {trials} {map_name} scenarios")
+    return rows
+
+
+def _summary(rows: list[dict[str, Any]], policy: str) -> dict[str, Any]:
+    """The summary entry of trial rows under the published label (its bootstrap streams are
+    seeded by the label, socialzoo.bench.tables.cell_rng)."""
+    return summarize([{**r, "policy": policy} for r in rows])[0]
+
+
+def _scores(rows: list[dict[str, Any]]) -> dict[int, float]:
+    return {int(r["scenario_index"]): float(bool(r["success"])) for r in rows}
+
+
+def _replace(path: Path, key: Any, new: list[dict[str, Any]]) -> None:
+    """Rewrite a CSV with every row whose `key(row)` is a key of `new`'s rows replaced by the new
+    rows of that key, in the old rows' place (new keys last); other rows unchanged."""
+    header, rows = _raw_csv(path)
+    groups: dict[Any, list[dict[str, Any]]] = {}
+    for row in new:
+        groups.setdefault(key(row), []).append(row)
+    out: list[dict[str, Any]] = []
+    for row in rows:
+        k = key(row)
+        if k not in groups:
+            out.append(row)
+        elif groups[k]:
+            out += groups[k]
+            groups[k] = []  # the group is in; its other old rows go
+    out += [row for rows_left in groups.values() for row in rows_left]
+    write_csv(out, path, header)
+
+
+def replace_policy_rows(base_dir: str | Path, rerun: PolicyRerun) -> list[Path]:
+    """Put a re-run's trials into base_dir/results/ in place of the policy's published rows;
+    returns the files rewritten. Tables, figures and reports are then drawn again from the folder
+    (socialzoo.reproduce.publish.regenerate_report, write_report).
+
+    Raises:
+        RerunError: a seed missing or extra, trials missing, or Ref's trials not the published ones.
+    """
+    results = Path(base_dir) / RESULTS_DIR
+    run = json.loads((results / RUN_FILE).read_text())
+    settings = run["settings"]
+    seeds = list(range(int(settings["seed"]), int(settings["seed"]) + int(settings["seeds"])))
+    if sorted(rerun.seed_specs) != seeds:
+        raise RerunError(f"the published run has seeds {seeds}; the re-run names {sorted(rerun.seed_specs)}")
+    name = rerun.policy
+    groups: list[SeedGroup] = []
+    written: list[Path] = []
+    for experiment, (map_name, index) in EXPERIMENTS.items():
+        folder = rerun.performance if experiment == "performance" else rerun.transfer
+        trials = int(settings[f"{experiment}_trials"])
+        published = {r["policy"]: r for r in _raw_csv(results / CSV_FILES[experiment])[1]}
+        ref_rows = _trials(rerun.ref, "ref", map_name, trials)
+        ref_success = float(_summary(ref_rows, "ref")["success_rate"])
+        if not math.isclose(ref_success, float(published["ref"]["success_rate"]), abs_tol=1e-12):
+            raise RerunError(
+                f"{rerun.ref}: Ref succeeds {ref_success:.4f} on {map_name}, the published run "
+                f"{published['ref']['success_rate']}: not the published evaluation"
+            )
+        groups.append(SeedGroup(experiment, "ref", map_name, None, (seeds[0],), (_scores(ref_rows),)))
+        per_seed = {seed: _trials(folder, spec, map_name, trials) for seed, spec in rerun.seed_specs.items()}
+        path = results / CSV_FILES[experiment]
+        entry = _summary(per_seed[seeds[0]], name)
+        _replace(path, lambda r: r["policy"], [{**published[name], **entry}])
+        written.append(path)
+        groups.append(
+            SeedGroup(
+                experiment,
+                name,
+                map_name,
+                None,
+                tuple(seeds),
+                tuple(_scores(per_seed[s]) for s in seeds),
+                PAPER_SUCCESS[name][index],
+            )
+        )
+        if experiment == "performance":
+            groups.append(_lfd(results, rerun, settings, per_seed, seeds))
+            written.append(results / CSV_FILES["lfd"])
+    mine = [g for g in groups if g.policy == name]
+    pairs = [p for p in IMPROVEMENT_PAIRS if p[0] == name]
+    for table, rows, key in (
+        ("seeds", seed_rows(mine), lambda r: (r["experiment"], r["policy"])),
+        ("improvement", improvement_rows(groups, pairs), lambda r: (r["experiment"], r["x"], r["y"])),
+        ("profiles", profile_rows(mine), lambda r: (r["experiment"], r["policy"])),
+    ):
+        _replace(results / CSV_FILES[table], key, rows)
+        written.append(results / CSV_FILES[table])
+    written += _records(results, run, rerun)
+    return written
+
+
+def _lfd(
+    results: Path,
+    rerun: PolicyRerun,
+    settings: Mapping[str, Any],
+    per_seed: Mapping[int, list[dict[str, Any]]],
+    seeds: list[int],
+) -> SeedGroup:
+    """Rewrite the policy's lfd.csv row from the first `lfd_trials` gdc1-test trials; returns its
+    LfD seed group."""
+    size, trials = int(settings[f"{rerun.policy}_steps"]), int(settings["lfd_trials"])
+    first = {s: [r for r in per_seed[s] if r["scenario_index"] < trials] for s in seeds}
+    entry = _summary(first[seeds[0]], rerun.policy)
+
+    def rewrite(row: dict[str, str]) -> dict[str, Any]:
+        return {**row, **{column: entry[source] for column, source in LFD_COLUMNS.items()}}
+
+    path = results / CSV_FILES["lfd"]
+    header, rows = _raw_csv(path)
+    mine = [r for r in rows if r["policy"] == rerun.policy and float(r["demonstration_steps"]) == size]
+    if len(mine) != 1:
+        raise RerunError(f"{path}: {len(mine)} rows of {rerun.policy} at {size} steps, not one")
+    write_csv([rewrite(r) if r is mine[0] else r for r in rows], path, header)
+    paper = paper_lfd(rerun.policy, size)
+    return SeedGroup(
+        "lfd",
+        rerun.policy,
+        "gdc1",
+        size,
+        tuple(seeds),
+        tuple(_scores(first[s]) for s in seeds),
+        paper[0] if paper else None,
+    )
+
+
+def _records(results: Path, run: dict[str, Any], rerun: PolicyRerun) -> list[Path]:
+    """training.json without the policy's old trainings and with the re-run's; run.json's
+    `reruns` entry."""
+    path = results / TRAINING_FILE
+    training = [t for t in json.loads(path.read_text()) if t.get("trainer") != rerun.policy]
+    training += [dict(t) for t in rerun.training]
+    path.write_text(json.dumps(training, indent=1, sort_keys=True) + "\n")
+    entry = {
+        "policy": rerun.policy,
+        "commit": rerun.commit,
+        "commands": list(rerun.commands),
+        "why": rerun.why,
+    }
+    run["reruns"] = [r for r in run.get("reruns", []) if r.get("policy") != rerun.policy] + [entry]
+    (results / RUN_FILE).write_text(json.dumps(run, indent=1, sort_keys=True) + "\n")
+    return [path, results / RUN_FILE]
