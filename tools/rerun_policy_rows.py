@@ -36,9 +36,12 @@ def training_record(policy: str, seed: int, file: Path, run_name: str) -> dict[s
     if policy == "pips":
         from socialzoo.train.pips import read_program_record
 
-        data = read_program_record(file) or {}
+        data = read_program_record(file)
     else:
-        data = json.loads((file.parent / "run.json").read_text())
+        path = file.parent / "run.json"
+        data = json.loads(path.read_text()) if path.is_file() else {}
+    if not data:
+        raise SystemExit(f"{file}: no training record beside it (NAME.train.json or run.json)")
     args, results = data.get("args", {}), data.get("results", {})
     return {
         "run": run_name,
@@ -61,6 +64,12 @@ def main() -> None:
     parser.add_argument("--ref", type=Path, required=True)
     parser.add_argument("--command", action="append", default=[])
     parser.add_argument("--why", default="")
+    parser.add_argument(
+        "--ref-tolerance",
+        type=int,
+        default=0,
+        help="scenarios Ref's successes may differ by per map (default 0)",
+    )
     parser.add_argument("--root", type=Path, default=Path("."))
     args = parser.parse_args()
     files = {int(k): Path(v).resolve() for k, v in (s.split("=", 1) for s in args.seed)}
@@ -83,6 +92,7 @@ def main() -> None:
             for seed, file in sorted(files.items())
         ),
         why=args.why,
+        ref_tolerance=args.ref_tolerance,
     )
     for path in replace_policy_rows(base, rerun):
         print("rewrote", path)

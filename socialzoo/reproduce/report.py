@@ -170,9 +170,13 @@ def _reruns_section(run: Mapping[str, Any]) -> list[str]:
     ]
     for r in reruns:
         commands = "; ".join(f"`{c}`" for c in r.get("commands", []))
-        lines.append(
-            f"- {policy_label(str(r['policy']))}: {r.get('why', '')} At commit `{r.get('commit', '')}`: {commands}"
+        label = policy_label(str(r["policy"]))
+        ref = "; ".join(
+            f"{m}: {c['rerun']:,} of {c['trials']:,} (published {c['published']:,})"
+            for m, c in (r.get("ref_successes") or {}).items()
         )
+        ref = f" Ref's successes in the re-run's evaluation, {ref}." if ref else ""
+        lines.append(f"- {label}: {r.get('why', '')} At commit `{r.get('commit', '')}`: {commands}.{ref}")
     return [*lines, ""]
 
 

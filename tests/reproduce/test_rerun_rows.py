@@ -173,9 +173,17 @@ def test_a_rerun_must_match_the_published_seeds_and_ref(tmp_path, bench):
         replace_policy_rows(base, rerun(bench, seed_specs={0: "pips"}))
     with pytest.raises(RerunError, match="no trials of bc"):
         replace_policy_rows(base, rerun(bench, seed_specs={0: "pips", 1: "bc"}))
-    wrong = published(tmp_path / "b", bench, ref_success=0.123)
+    one_more = _rate(bench, "ref", "gdc1") + 1 / TRIALS  # the published Ref won one more scenario
+    wrong = published(tmp_path / "b", bench, ref_success=one_more)
     with pytest.raises(RerunError, match="not the published evaluation"):
         replace_policy_rows(wrong, rerun(bench))
+    replace_policy_rows(wrong, rerun(bench, ref_tolerance=1))  # within the tolerance it goes in
+    wins = round(_rate(bench, "ref", "gdc1") * TRIALS)
+    assert load(wrong / "results")["run"]["reruns"][0]["ref_successes"]["gdc1"] == {
+        "rerun": wins,
+        "published": wins + 1,
+        "trials": TRIALS,
+    }
     assert benchmark_scores(bench, "pips")  # the folder is a real benchmark run
 
 
@@ -194,7 +202,7 @@ def test_the_report_names_the_rerun(tmp_path):
     run_file.write_text(json.dumps(run))
     report = regenerate_report(tmp_path)
     assert "## Rows re-run after the full run" in report
-    assert "- PIPS: New. At commit `abc1234`: `socialzoo train pips`" in report
+    assert "- PIPS: New. At commit `abc1234`: `socialzoo train pips`." in report
     # The published kernel-path measurement (tools/kernel_paths.py --csv) closes the re-run section.
     section = report[report.index("## What a re-run may differ by") :]
     assert "| again | as installed |" in section and "| threads-2 | --threads 2 |" in section
