@@ -20,8 +20,9 @@ from socialzoo.nav.navigator import GlobalPlans
 def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> BatchedCore:
     """A new core of len(rows) rows that continues the episodes of `core`'s `rows`, in that order.
 
-    Carried over, per row: the world state, the global plans and goals, the carrot, the done
-    flags, visibility, the people's bookkeeping so far, recorded people and the scripts' state.
+    Carried over, per row: the world state, the global plans and goals, the navigator's recovery
+    state, the carrot, the done flags, visibility, the people's bookkeeping so far, recorded people
+    and the scripts' state.
     The sight-line cache starts empty: it only saves work (a full test gives the same answers).
     `core` itself is left as it was.
 
@@ -66,6 +67,9 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
             paths=plans.paths[index].copy(), lengths=plans.lengths[index].copy()
         )
         copy_rows(navigator, new.navigator, index, b)  # goals, route length left, rerouted
+        # Recovery under way (progress, back-off time left, avoided edges): without it a kept
+        # robot that was backing off or waiting for progress started over after compaction.
+        copy_rows(navigator.recovery_state, new.navigator.recovery_state, index, b)
     new.carrot = core.carrot[index].copy()
     new.done = core.done[index].copy()
     new.visible = core.visible[core.robot_rows(index)].copy()

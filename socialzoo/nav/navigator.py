@@ -498,6 +498,12 @@ class Navigator:
         return self.graph.plan_batch(starts, goals)
 
     @property
+    def recovery_state(self) -> RecoveryState:
+        """The per-robot recovery bookkeeping (progress, back-offs, avoided edges), which a
+        compacted core carries over (socialzoo.env.compaction)."""
+        return self._recovering
+
+    @property
     def backing_off(self) -> np.ndarray:
         """(B, R) bool: robots backing off (their commands: socialzoo.nav.recovery.backoff_commands)."""
         return self._recovering.backing_off
