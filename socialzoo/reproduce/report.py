@@ -246,7 +246,10 @@ def _rerun_section(results: Mapping[str, Any]) -> list[str]:
         "lists those of the stored runs. Setting the same paths on two machines (for example "
         "`ATEN_CPU_CAPABILITY=default MKL_CBWR=COMPATIBLE`, one thread, the same torch build) is what "
         "can make them train alike; a path that needs an instruction set the CPU lacks is not there "
-        "to pin.",
+        "to pin. Evaluations made before issue 38's fix of the batch compaction (commit ca3fa96: a "
+        "compacted tail forgot the navigator's recovery state) depended slightly on how the trials "
+        "were batched; a re-run of results stored before it may differ by a few episodes per test set "
+        "from that alone (docs/reproduce.md).",
         "",
     ]
     seen: dict[tuple[Any, ...], list[str]] = {}

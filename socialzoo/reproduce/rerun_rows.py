@@ -72,9 +72,9 @@ class PolicyRerun:
         training: training.json records of the re-run trainings (replacing the policy's).
         why: one sentence: why the rows were re-run.
         ref_tolerance: how many scenarios Ref's successes may differ by from the published run's
-            on each map (0: none). Evaluation results depend on how the trials are batched (a
-            known defect, docs/reproduce.md "What a re-run may differ by"), so a re-run in other
-            batches may differ by a few; run.json records both counts.
+            on each map (0: none). Evaluations before commit ca3fa96 depended slightly on how the
+            trials were batched (docs/reproduce.md, "What a re-run may differ by"), so a re-run
+            of an older published run may differ by a few; run.json records both counts.
     """
 
     policy: str
