@@ -39,6 +39,8 @@ from socialzoo.reproduce.results import CSV_FILES, RESULTS_DIR, RUN_FILE, TRAINI
 from socialzoo.reproduce.seeds import EXPERIMENTS, IMPROVEMENT_PAIRS
 from socialzoo.studies.seeds import SeedGroup, benchmark_rows, improvement_rows, profile_rows, seed_rows
 
+# The policies with a row in the LfD table (PPO and DQN have none).
+LFD_POLICIES = ("bc", "gail", "pips")
 # The summary columns of an LfD row (lfd.csv's name: the summary's).
 LFD_COLUMNS = {
     "trials": "trials",
@@ -186,7 +188,7 @@ def replace_policy_rows(base_dir: str | Path, rerun: PolicyRerun) -> list[Path]:
                 PAPER_SUCCESS[name][index],
             )
         )
-        if experiment == "performance":
+        if experiment == "performance" and name in LFD_POLICIES:
             groups.append(_lfd(results, rerun, settings, per_seed, seeds))
             written.append(results / CSV_FILES["lfd"])
     mine = [g for g in groups if g.policy == name]
@@ -211,7 +213,9 @@ def _lfd(
 ) -> SeedGroup:
     """Rewrite the policy's lfd.csv row from the first `lfd_trials` gdc1-test trials; returns its
     LfD seed group."""
-    size, trials = int(settings[f"{rerun.policy}_steps"]), int(settings["lfd_trials"])
+    # The LfD size of the performance experiments' policy: PIPS's own, BC's and GAIL's largest.
+    size = int(settings["pips_steps"] if rerun.policy == "pips" else max(settings["lfd_sizes"]))
+    trials = int(settings["lfd_trials"])
     first = {s: [r for r in per_seed[s] if r["scenario_index"] < trials] for s in seeds}
     entry = _summary(first[seeds[0]], rerun.policy)
 
