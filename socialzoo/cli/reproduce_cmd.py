@@ -1,5 +1,5 @@
-"""`socialzoo reproduce --out DIR [--quick] [--seeds K] [--only PARTS] [--reference] [--backend B] [--no-progress]`:
-the paper's experiments, their tables and figures, and DIR/REPRODUCTION.md (socialzoo.reproduce)."""
+"""`socialzoo reproduce --out DIR [--quick] [--seeds K] [--only PARTS] [--reference [QUIRKS]] [--backend B]
+[--no-progress]`: the paper's experiments, their tables and figures, and DIR/REPRODUCTION.md (socialzoo.reproduce)."""
 
 from __future__ import annotations
 
@@ -52,10 +52,15 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--reference",
-        action="store_true",
+        nargs="?",
+        const="all",
+        default=None,
+        metavar="QUIRKS",
         help="then train PPO and DQN with the reference code's quirks (SPEC section 11: x-only goal "
         "distance, the reward 'distance gained + bonus'; PPO evaluated without its normalisation) "
-        "and evaluate them on the reference ids, reported as their own columns",
+        "and evaluate them with the quirks on, reported as their own columns. QUIRKS: comma-separated "
+        "quirk sets, each run on its own: 'all' (every quirk together, the default) or one switch of "
+        "ReferenceQuirks alone (e.g. goal_distance_x_only,reward_distance_plus_bonus)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     parser.add_argument(
@@ -84,13 +89,18 @@ def _interrupt_on_signals() -> None:
 def run_reproduce_command(args: argparse.Namespace) -> int:
     """Run `socialzoo reproduce`; returns the exit status (2 for bad arguments or mixed settings)."""
     from socialzoo.reproduce.ledger import LedgerError
-    from socialzoo.reproduce.plan import full_settings, parse_parts, quick_settings
+    from socialzoo.reproduce.plan import full_settings, parse_parts, quick_settings, reference_sets
     from socialzoo.reproduce.run import reproduce
 
     try:
         parts = parse_parts(args.only)
     except ValueError as err:
         print(f"socialzoo reproduce: error: --only: {err}", file=sys.stderr)
+        return 2
+    try:
+        reference = reference_sets(args.reference)
+    except ValueError as err:
+        print(f"socialzoo reproduce: error: --reference: {err}", file=sys.stderr)
         return 2
     if args.seeds < 1:
         print(f"socialzoo reproduce: error: --seeds must be at least 1, got {args.seeds}", file=sys.stderr)
@@ -116,7 +126,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
             backend=args.backend,
             progress=not args.no_progress,
             on_part=report,
-            reference=args.reference,
+            reference=reference,
         )
     except LedgerError as err:  # mixed settings, an unreadable settings or timings file
         print(f"socialzoo reproduce: error: {err}", file=sys.stderr)

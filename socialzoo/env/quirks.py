@@ -66,10 +66,42 @@ class ReferenceQuirks:
         return any(getattr(self, name) for name in self.names())
 
     @property
+    def trains(self) -> bool:
+        """True when a quirk of the env a learner trains in is on (every switch but the evaluation's
+        EVALUATION_QUIRKS): a policy trained without them is another policy."""
+        return any(getattr(self, name) for name in self.names() if name not in EVALUATION_QUIRKS)
+
+    @classmethod
+    def named(cls, name: str) -> ReferenceQuirks:
+        """The quirk set `name`: ALL_QUIRKS (every quirk, `reference()`) or one switch alone.
+
+        Raises:
+            ValueError: an unknown name (listing the known ones).
+        """
+        if name == ALL_QUIRKS:
+            return cls.reference()
+        if name not in cls.names():
+            raise ValueError(f"unknown reference quirk {name!r}; known: {', '.join((ALL_QUIRKS, *cls.names()))}")
+        return cls(**{name: True})
+
+    @property
     def drops_collision(self) -> bool:
         """True when the collision term is left out of the reward (either switch does it)."""
         return self.collision_penalty_dropped or self.reward_distance_plus_bonus
 
+
+# The switches of the evaluation alone (the env's rollouts do not change with them).
+EVALUATION_QUIRKS: tuple[str, ...] = ("ppo_eval_without_normalisation",)
+# The name of the set of every quirk together (`ReferenceQuirks.named`).
+ALL_QUIRKS = "all"
+# Each switch in a few words, for tables and notes.
+QUIRK_LABELS: dict[str, str] = {
+    "goal_distance_x_only": "goal distance along x only",
+    "collision_penalty_dropped": "collision penalty dropped",
+    "reward_distance_plus_bonus": 'reward "distance gained + bonus"',
+    "human_theta_index": "a person's index as its theta",
+    "ppo_eval_without_normalisation": "PPO evaluated without its normalisation",
+}
 
 REFERENCE_QUIRKS = ReferenceQuirks.reference()
 """Every quirk on (the `reference` preset of the ActionSelectionReference ids)."""

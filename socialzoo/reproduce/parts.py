@@ -9,7 +9,8 @@ Every part composes pieces that store their items as they finish, so a part is r
 - performance / transfer: the seven policies on gdc1-test / ghc3-test (socialzoo.bench.experiment),
   and the other seeds' learned policies in <part>/seeds/.
 - reference (only with `--reference`, REFERENCE_PART): PPO and DQN trained and evaluated with the
-  reference code's quirks (socialzoo.env.quirks), in reference/.
+  reference code's quirks (socialzoo.env.quirks), every quirk together in reference/, one quirk
+  alone in reference/alone/<quirk>/.
 
 Every learned policy is trained with each of settings.seed_list (`--seeds K`), each seed in its
 own run folder with its own policy file and trials (socialzoo.reproduce.runs), so a part resumes
@@ -25,8 +26,9 @@ only what is missing. Each part returns how many items it made (0: everything wa
 
 from __future__ import annotations
 
+import dataclasses
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +44,7 @@ from socialzoo.reproduce.runs import (
     finished,
     lfd_eval_dir,
     lfd_items,
+    reference_folder,
     reference_rl_items,
     rl_items,
 )
@@ -225,28 +228,72 @@ def run_transfer(ctx: Context) -> int:
 
 
 def run_reference(ctx: Context) -> int:
-    """`--reference`: PPO and DQN of every seed trained with the reference code's quirks
-    (socialzoo.env.quirks.REFERENCE_QUIRKS: x-only goal distance, the reward "distance gained +
-    bonus"), PPO evaluated without its normalisation, both on gdc1-test and ghc3-test with the
-    quirks on, into reference/; then reference/reference.csv, one row per experiment, policy and
-    seed. BC, GAIL and PIPS are not retrained: their training reads Ref's actions, never the
-    reward, and the quirks change no success. Returns the trainings and trials made."""
-    import dataclasses
+    """`--reference`: for each quirk set of ctx.reference (socialzoo.env.quirks.ReferenceQuirks.named:
+    every quirk together, or one alone), PPO and DQN of every seed trained with it
+    (socialzoo.reproduce.runs.reference_rl_items) and evaluated on gdc1-test and ghc3-test with it on
+    (PPO from its file without its normalisation when the set has that quirk); then
+    reference/reference.csv, one row per quirk set, experiment, policy and seed, the rows of sets not
+    run this time kept. BC, GAIL and PIPS are not retrained: their training reads Ref's actions,
+    never the reward, and the quirks change no success. Returns the trainings and trials made."""
+    from socialzoo.bench.tables import write_csv
+    from socialzoo.reproduce.results import read_csv
 
+    table = ctx.ledger.path(REFERENCE_FOLDER, REFERENCE_FILE)
+    kept = [
+        {**r, "quirks": quirk_set(r), "seed": int(r["seed"]), "trials": int(r["trials"])}
+        for r in (read_csv(table) if table.is_file() else [])
+        if quirk_set(r) not in ctx.reference
+    ]
+    made, rows = 0, []
+    for quirks in ctx.reference:
+        done, mine = _reference_set(ctx, quirks)
+        made += done
+        rows += mine
+    write_csv([*kept, *rows], table, REFERENCE_COLUMNS)
+    return made
+
+
+# The columns of reference.csv.
+REFERENCE_COLUMNS = (
+    "quirks",
+    "experiment",
+    "policy",
+    "seed",
+    "trials",
+    "success_rate",
+    "success_ci_low",
+    "success_ci_high",
+    "average_step_reward_mean",
+)
+
+
+def quirk_set(row: Mapping[str, Any]) -> str:
+    """The quirk set of a reference.csv row (rows written before one quirk could run alone have
+    every quirk on)."""
+    from socialzoo.env.quirks import ALL_QUIRKS
+
+    return str(row.get("quirks") or ALL_QUIRKS)
+
+
+def _reference_set(ctx: Context, quirks: str) -> tuple[int, list[dict[str, Any]]]:
+    """One quirk set of `run_reference`: its trainings, evaluations and rows."""
     from socialzoo.agents.mlp import evaluation_file
     from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
-    from socialzoo.bench.tables import write_csv
-    from socialzoo.env.quirks import REFERENCE_QUIRKS
+    from socialzoo.env.quirks import ReferenceQuirks
     from socialzoo.reproduce.results import read_csv
 
     s = ctx.settings
-    items = reference_rl_items(ctx)
+    chosen = ReferenceQuirks.named(quirks)
+    items = reference_rl_items(ctx, quirks=quirks)
+    if not items:
+        logger.info("reproduce: reference quirk set %s reaches no trainer; nothing to run", quirks)
+        return 0, []
     files, made = _train(ctx, items)
     specs: dict[int, dict[str, str]] = {seed: {} for seed in s.seed_list}
     for (name, args), path in zip(items, files, strict=True):
-        folder = ctx.ledger.path(REFERENCE_FOLDER, "evaluated", Path(args.out).name)
-        specs[int(args.seed)][name] = f"{name}:{evaluation_file(name, path, REFERENCE_QUIRKS, folder)}"
-    env = {**dict(s.eval_env_overrides), "quirks": dataclasses.asdict(REFERENCE_QUIRKS)}
+        folder = reference_folder(ctx, quirks, "evaluated", Path(args.out).name)
+        specs[int(args.seed)][name] = f"{name}:{evaluation_file(name, path, chosen, folder)}"
+    env = {**dict(s.eval_env_overrides), "quirks": dataclasses.asdict(chosen)}
     rows = []
     for experiment, map_name, trials in (
         ("performance", "gdc1", s.performance_trials),
@@ -254,7 +301,7 @@ def run_reference(ctx: Context) -> int:
     ):
         for seed in s.seed_list:
             n = trials if seed == s.seed else min(trials, s.seed_trials or trials)
-            folder = ctx.ledger.path(REFERENCE_FOLDER, experiment, *([] if seed == s.seed else [f"s{seed}"]))
+            folder = reference_folder(ctx, quirks, experiment, *([] if seed == s.seed else [f"s{seed}"]))
             config = BenchmarkConfig(
                 policies=tuple(specs[seed].values()),
                 trials=n,
@@ -270,6 +317,7 @@ def run_reference(ctx: Context) -> int:
                 r = by_spec[spec]
                 rows.append(
                     {
+                        "quirks": quirks,
                         "experiment": experiment,
                         "policy": name,
                         "seed": seed,
@@ -280,8 +328,7 @@ def run_reference(ctx: Context) -> int:
                         "average_step_reward_mean": r["average_step_reward_mean"],
                     }
                 )
-    write_csv(rows, ctx.ledger.path(REFERENCE_FOLDER, REFERENCE_FILE))
-    return made
+    return made, rows
 
 
 PART_RUNNERS: dict[str, Callable[[Context], int]] = {

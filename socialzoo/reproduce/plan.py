@@ -262,3 +262,22 @@ def parse_parts(text: str | Sequence[str] | None) -> tuple[str, ...]:
     if bad:
         raise ValueError(f"unknown part(s) {', '.join(map(repr, bad))}; the parts are: {', '.join(PARTS)}")
     return tuple(p for p in PARTS if p in names)
+
+
+def reference_sets(value: bool | str | Sequence[str] | None) -> tuple[str, ...]:
+    """The quirk sets of the reference part (`--reference [SETS]`): none for False or None, every
+    quirk together ("all") for True, else the named sets in the order given, each once.
+
+    Raises:
+        ValueError: an unknown quirk (socialzoo.env.quirks.ReferenceQuirks.named names the known ones).
+    """
+    from socialzoo.env.quirks import ALL_QUIRKS, ReferenceQuirks
+
+    if value is None or value is False:
+        return ()
+    if value is True:
+        return (ALL_QUIRKS,)
+    names = [n.strip() for n in (value.split(",") if isinstance(value, str) else value) if n.strip()]
+    for name in names:
+        ReferenceQuirks.named(name)
+    return tuple(dict.fromkeys(names)) or (ALL_QUIRKS,)

@@ -12,7 +12,7 @@ number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
     seeds.csv, improvement.csv, profiles.csv    with several training seeds: the aggregates over
                       them (socialzoo.reproduce.seeds)
     reference.csv     with `--reference`: PPO and DQN with the reference code's quirks, per
-                      experiment and seed (socialzoo.reproduce.parts.run_reference)
+                      quirk set, experiment and seed (socialzoo.reproduce.parts.run_reference)
     kernel_paths.csv  one BC training under several CPU kernel paths (tools/kernel_paths.py
                       --csv; not made by a reproduction, so `collect` leaves it as it is)
 
@@ -35,7 +35,7 @@ from socialzoo.bench.tables import write_csv
 from socialzoo.core.files import read_json, read_text
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
-from socialzoo.reproduce.runs import DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
+from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
 from socialzoo.reproduce.seeds import SEEDS_DIR
 
 RESULTS_DIR = "results"
@@ -62,6 +62,7 @@ TEXT_COLUMNS = frozenset(
         "test_set",
         "policy_file",
         "experiment",
+        "quirks",
         "run",
         "x",
         "y",
@@ -100,7 +101,11 @@ def _write_json(path: Path, data: Any) -> None:
 def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
     """Each finished training run under the work folder: what it was and how long it took."""
     out = []
-    records = [*ledger.work.glob("*/*/run.json"), *ledger.work.glob(f"{REFERENCE_FOLDER}/rl/*/run.json")]
+    records = [
+        *ledger.work.glob("*/*/run.json"),
+        *ledger.work.glob(f"{REFERENCE_FOLDER}/rl/*/run.json"),
+        *ledger.work.glob(f"{REFERENCE_FOLDER}/{ALONE_FOLDER}/*/rl/*/run.json"),
+    ]
     for record in sorted(records):
         data = _read_json(record, dict)
         if not data.get("finished"):

@@ -4,6 +4,7 @@ the small results out and write the tables, figures and REPRODUCTION.md.
     reproduce("out/repro", quick_settings())                     # everything, small
     reproduce("out/repro", full_settings(), parts=("lfd",))      # one part of the paper's protocol
     reproduce("out/repro", quick_settings(), reference=True)     # and the reference code's quirks
+    reproduce("out/repro", quick_settings(), reference="goal_distance_x_only")  # one quirk alone
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from pathlib import Path
 from socialzoo.reproduce.backend import Backend, check_backend
 from socialzoo.reproduce.ledger import Ledger
 from socialzoo.reproduce.parts import PART_RUNNERS
-from socialzoo.reproduce.plan import PARTS, REFERENCE_PART, Settings, parse_parts
+from socialzoo.reproduce.plan import PARTS, REFERENCE_PART, Settings, parse_parts, reference_sets
 from socialzoo.reproduce.report import write_report
 from socialzoo.reproduce.results import collect
 from socialzoo.reproduce.runs import Context
@@ -49,7 +50,7 @@ def reproduce(
     backend: Backend = "local",
     progress: bool = True,
     on_part: Callable[[str, int], None] | None = None,
-    reference: bool = False,
+    reference: bool | str | Sequence[str] = False,
 ) -> ReproduceResult:
     """Run `parts` (default: all, in PARTS order) of the reproduction into out_dir.
 
@@ -61,19 +62,22 @@ def reproduce(
         progress: show progress bars.
         on_part: called with (part, items made) after each part.
         reference: then run the reference part (REFERENCE_PART): PPO and DQN trained and
-            evaluated with the reference code's quirks, reported beside ours and the paper's.
+            evaluated with the reference code's quirks, reported beside ours and the paper's. True:
+            every quirk together; quirk set names (comma-separated or a sequence: "all" or one
+            switch of socialzoo.env.quirks.ReferenceQuirks): each set on its own.
 
     Raises:
-        ValueError: an unknown part or backend.
+        ValueError: an unknown part, backend or quirk.
         socialzoo.reproduce.ledger.SettingsMismatch: DIR/<hash>/ holds other settings.
     """
     chosen = parse_parts(parts if parts is None or isinstance(parts, str) else list(parts))
     check_backend(backend)
     ledger = Ledger(out_dir, settings)
-    ctx = Context(ledger, backend=backend, progress=progress)
+    sets = reference_sets(reference)
+    ctx = Context(ledger, backend=backend, progress=progress, reference=sets or ("all",))
     made = {}
     for part in (*PARTS, REFERENCE_PART):
-        if part not in chosen and not (reference and part == REFERENCE_PART):
+        if part not in chosen and not (sets and part == REFERENCE_PART):
             continue
         logger.info("reproduce: part %s (%s)", part, ledger.work)
         with ledger.timed(part, backend) as session:

@@ -29,11 +29,13 @@ class Context:
         ledger: the work folder and its settings.
         backend: "local" or "ray".
         progress: show progress bars.
+        reference: the quirk sets of the reference part (socialzoo.env.quirks.ReferenceQuirks.named).
     """
 
     ledger: Ledger
     backend: Backend = "local"
     progress: bool = True
+    reference: tuple[str, ...] = ("all",)
 
     @property
     def settings(self) -> Any:
@@ -92,26 +94,57 @@ def rl_items(ctx: Context, seeds: tuple[int, ...] | None = None) -> list[tuple[s
 
 
 # The folder of the reference part (`socialzoo reproduce --reference`) in the work folder, and its
-# table of every reference-quirks policy's success (one row per experiment, policy and seed).
+# table of every reference-quirks policy's success (one row per quirk set, experiment, policy and
+# seed). Every quirk together (ALL_QUIRKS) lives in reference/, one quirk alone in reference/alone/<name>/.
 REFERENCE_FOLDER = "reference"
 REFERENCE_FILE = "reference.csv"
+ALONE_FOLDER = "alone"
 # The trainers whose training reads the env's reward, retrained with the reference code's quirks;
 # BC, GAIL (its reward is the discriminator's) and PIPS learn from Ref's actions alone.
 REFERENCE_TRAINERS: tuple[str, ...] = RL_ALGOS
 
 
-def reference_rl_items(ctx: Context, seeds: tuple[int, ...] | None = None) -> list[tuple[str, Any]]:
-    """PPO and DQN of every seed as `rl_items`, trained on the reference code's quirks (the env
-    config's `quirks`: socialzoo.env.quirks.REFERENCE_QUIRKS) in reference/rl/<run>/."""
+def reference_folder(ctx: Context, quirks: str, *parts: str) -> Path:
+    """A path in the folder of quirk set `quirks` (socialzoo.env.quirks.ReferenceQuirks.named)."""
+    from socialzoo.env.quirks import ALL_QUIRKS
+
+    where = () if quirks == ALL_QUIRKS else (ALONE_FOLDER, quirks)
+    return ctx.ledger.path(REFERENCE_FOLDER, *where, *parts)
+
+
+def reference_trainers(quirks: str) -> tuple[str, ...]:
+    """The trainers quirk set `quirks` reaches: those that read the reward when it changes the env
+    a learner trains in, else PPO alone when it changes PPO's evaluation, else none."""
+    from socialzoo.env.quirks import ReferenceQuirks
+
+    chosen = ReferenceQuirks.named(quirks)
+    if chosen.trains:
+        return REFERENCE_TRAINERS
+    return ("ppo",) if chosen.ppo_eval_without_normalisation else ()
+
+
+def reference_rl_items(
+    ctx: Context, seeds: tuple[int, ...] | None = None, quirks: str = "all"
+) -> list[tuple[str, Any]]:
+    """The trainings of quirk set `quirks` (reference_trainers) for every seed, as `rl_items` with
+    the set in the env config's `quirks`, in its folder's rl/<run>/. A set that changes no training
+    env (PPO's evaluation quirk alone) trains nothing of its own: its items are the default runs."""
     import dataclasses
 
-    from socialzoo.env.quirks import REFERENCE_QUIRKS
+    from socialzoo.env.quirks import ALL_QUIRKS, ReferenceQuirks
 
-    quirks = dataclasses.asdict(REFERENCE_QUIRKS)
+    chosen = ReferenceQuirks.named(quirks)
+    trainers = reference_trainers(quirks)
+    defaults = [(algo, args) for algo, args in rl_items(ctx, seeds) if algo in trainers]
+    if not chosen.trains:
+        return defaults
+    # Every quirk together keeps the record its runs have always had (every switch named); one quirk
+    # alone names just that switch.
+    switches = dataclasses.asdict(chosen) if quirks == ALL_QUIRKS else {quirks: True}
     items = []
-    for algo, args in rl_items(ctx, seeds):
-        env = {**dict(args.env_overrides), "quirks": quirks}
-        out = ctx.ledger.path(REFERENCE_FOLDER, "rl", Path(args.out).name)
+    for algo, args in defaults:
+        env = {**dict(args.env_overrides), "quirks": switches}
+        out = reference_folder(ctx, quirks, "rl", Path(args.out).name)
         items.append((algo, dataclasses.replace(args, out=out, env_overrides=env)))
     return items
 

@@ -62,6 +62,17 @@ def test_defaults_off_and_the_preset_all_on():
     assert EnvConfig.from_dict(cfg.to_dict()) == cfg
 
 
+def test_named_sets_and_which_change_training():
+    assert ReferenceQuirks.named("all") == REFERENCE_QUIRKS
+    alone = ReferenceQuirks.named("reward_distance_plus_bonus")
+    assert alone.reward_distance_plus_bonus and sum(getattr(alone, n) for n in ReferenceQuirks.names()) == 1
+    assert alone.trains and REFERENCE_QUIRKS.trains
+    # PPO's evaluation quirk changes no env a learner trains in.
+    assert not ReferenceQuirks.named("ppo_eval_without_normalisation").trains
+    with pytest.raises(ValueError, match="unknown reference quirk 'bonus'"):
+        ReferenceQuirks.named("bonus")
+
+
 def test_goal_distance_x_only():
     # The robot moves 0.1 m along y straight towards a goal 3 m away along y.
     before, after = world((0.0, 0.0), (0.0, 3.0)), world((0.0, 0.1), (0.0, 3.0))

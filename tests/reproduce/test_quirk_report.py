@@ -13,9 +13,10 @@ from socialzoo.reproduce.paper import PAPER_SUCCESS
 from socialzoo.reproduce.quirk_report import quirk_note, reference_section
 
 
-def _reference_rows(policy, experiment, rates):
+def _reference_rows(policy, experiment, rates, quirks=None):
     return [
         {
+            **({} if quirks is None else {"quirks": quirks}),
             "experiment": experiment,
             "policy": policy,
             "seed": seed,
@@ -60,10 +61,31 @@ def test_rows_the_quirks_cannot_reach():
 def test_the_reference_table_lists_every_seed():
     rows = _reference_rows("dqn", "performance", [40.0, 50.0]) + _reference_rows("ppo", "transfer", [30.0])
     text = "\n".join(reference_section({"reference": rows}, {}))
-    assert "| performance | DQN | n/a | 40.0 [38.0, 42.0] | 40.0 to 50.0 (2 seeds) |" in text
-    assert "| transfer | PPO | n/a | 30.0 [28.0, 32.0] |  |" in text
+    assert "| performance | DQN | all | n/a | 40.0 [38.0, 42.0] | 40.0 to 50.0 (2 seeds) |" in text
+    assert "| transfer | PPO | all | n/a | 30.0 [28.0, 32.0] |  |" in text
     assert "Seed 0 played the first 2,000 scenarios of each test set, the other seeds the first 500" in text
     assert "Not run yet" in "\n".join(reference_section({}, {}))
+
+
+def test_each_quirk_alone_is_its_own_range_and_verdict():
+    paper = PAPER_SUCCESS["dqn"][0]  # gdc1
+    rows = (
+        _reference_rows("dqn", "performance", [paper - 20, paper - 2])  # every quirk (rows without a set)
+        + _reference_rows("dqn", "performance", [paper - 30, paper - 10], "goal_distance_x_only")
+        + _reference_rows("dqn", "performance", [paper - 4, paper + 4], "reward_distance_plus_bonus")
+    )
+    note = quirk_note(rows, [], "performance", "dqn")
+    assert "above all 2, so the quirks do not explain it" in note  # every quirk together
+    assert f"goal distance along x only {paper - 30:.1f}% to {paper - 10:.1f}%" in note
+    assert f'reward "distance gained + bonus" {paper - 4:.1f}% to {paper + 4:.1f}%' in note
+    assert note.endswith('So reward "distance gained + bonus" can explain it.')
+    # Without the set that reaches it, nothing explains it; alone, the verdict says so.
+    alone = [r for r in rows if r.get("quirks") == "goal_distance_x_only"]
+    assert quirk_note(alone, [], "performance", "dqn").endswith("So no quirk measured alone explains it.")
+    text = "\n".join(reference_section({"reference": rows}, {}))
+    assert "| performance | DQN | all | n/a |" in text
+    assert "| performance | DQN | goal distance along x only | n/a |" in text
+    assert text.index("| DQN | all |") < text.index("| DQN | goal distance") < text.index('| DQN | reward "')
 
 
 def test_refs_demonstrations_are_the_same_with_every_quirk_on(tmp_path):

@@ -76,6 +76,13 @@ def test_bad_only_names_the_part(tmp_path, capsys):
     assert not any(tmp_path.iterdir())
 
 
+def test_bad_reference_quirk_names_it(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path), "--reference", "x_only"]) == 2
+    err = capsys.readouterr().err
+    assert "--reference" in err and "'x_only'" in err and "goal_distance_x_only" in err
+    assert not any(tmp_path.iterdir())
+
+
 def test_publish_writes_a_report_that_regenerates(quick_run, tmp_path):
     report = publish(quick_run, tmp_path)
     text = report.read_text()
