@@ -22,12 +22,9 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-from socialzoo.reproduce.figures import draw_figures
-from socialzoo.reproduce.publish import PUBLISHED_DIR, regenerate_report
-from socialzoo.reproduce.report import FIGURES_DIR, REPORT_NAME, TABLES_DIR
+from socialzoo.reproduce.publish import PUBLISHED_DIR, redraw_published
 from socialzoo.reproduce.rerun_rows import PolicyRerun, replace_policy_rows
-from socialzoo.reproduce.results import RESULTS_DIR, TRAINING_FILE, load
-from socialzoo.reproduce.tables import build_tables, write_tables
+from socialzoo.reproduce.results import RESULTS_DIR, TRAINING_FILE
 
 
 def training_record(policy: str, seed: int, file: Path, run_name: str) -> dict[str, Any]:
@@ -96,11 +93,7 @@ def main() -> None:
     )
     for path in replace_policy_rows(base, rerun):
         print("rewrote", path)
-    results = load(base / RESULTS_DIR)
-    write_tables(build_tables(results), base / TABLES_DIR)
-    draw_figures(results, base / FIGURES_DIR)
-    (args.root / REPORT_NAME).write_text(regenerate_report(base, PUBLISHED_DIR + "/"))
-    print("wrote", args.root / REPORT_NAME)
+    print("wrote", redraw_published(args.root))
 
 
 if __name__ == "__main__":

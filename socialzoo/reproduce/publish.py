@@ -37,3 +37,20 @@ def publish(out_dir: str | Path, repo_root: str | Path) -> Path:
     path = root / REPORT_NAME
     path.write_text(regenerate_report(target, PUBLISHED_DIR + "/"))
     return path
+
+
+def redraw_published(repo_root: str | Path) -> Path:
+    """Draw repo_root/results/reproduction/'s tables and figures again from its results, and write
+    repo_root/REPRODUCTION.md (after rows of it were replaced: socialzoo.reproduce.rerun_rows);
+    returns the report's path."""
+    from socialzoo.reproduce.figures import draw_figures
+    from socialzoo.reproduce.tables import build_tables, write_tables
+
+    root = Path(repo_root)
+    base = root / PUBLISHED_DIR
+    results = load(base / RESULTS_DIR)
+    write_tables(build_tables(results), base / TABLES_DIR)
+    draw_figures(results, base / FIGURES_DIR)
+    path = root / REPORT_NAME
+    path.write_text(regenerate_report(base, PUBLISHED_DIR + "/"))
+    return path

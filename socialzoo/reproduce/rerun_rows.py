@@ -259,3 +259,37 @@ def _records(
     run["reruns"] = [r for r in run.get("reruns", []) if r.get("policy") != rerun.policy] + [entry]
     (results / RUN_FILE).write_text(json.dumps(run, indent=1, sort_keys=True) + "\n")
     return [path, results / RUN_FILE]
+
+
+def replace_reference_rows(base_dir: str | Path, reference_results: str | Path) -> list[Path]:
+    """Put a later `--reference` run's rows into base_dir/results/: its reference.csv (every quirk set
+    it holds, the sets it kept from earlier runs of its work folder included) in place of the
+    published one, its trainings under reference/ in place of the published ones in training.json,
+    and its reference part's timing in timings.json. The run must share the published run's settings
+    (the same hash: the same protocol, seeds and trials); returns the files rewritten.
+
+    Raises:
+        RerunError: no reference rows in `reference_results`, or another settings hash.
+    """
+    from socialzoo.reproduce.ledger import TIMINGS_FILE
+    from socialzoo.reproduce.plan import REFERENCE_PART
+
+    results, theirs = Path(base_dir) / RESULTS_DIR, Path(reference_results)
+    source = theirs / CSV_FILES["reference"]
+    if not source.is_file():
+        raise RerunError(f"{source}: no reference rows (run `socialzoo reproduce --reference` first)")
+    ours_hash = json.loads((results / RUN_FILE).read_text()).get("settings_hash")
+    their_hash = json.loads((theirs / RUN_FILE).read_text()).get("settings_hash")
+    if ours_hash != their_hash:
+        raise RerunError(f"{theirs}: settings {their_hash}, the published run's are {ours_hash}")
+    target = results / CSV_FILES["reference"]
+    target.write_bytes(source.read_bytes())
+    path = results / TRAINING_FILE
+    training = [t for t in json.loads(path.read_text()) if not str(t.get("run", "")).startswith("reference/")]
+    training += [t for t in json.loads((theirs / TRAINING_FILE).read_text()) if str(t["run"]).startswith("reference/")]
+    path.write_text(json.dumps(training, indent=1, sort_keys=True) + "\n")
+    timings_path = results / TIMINGS_FILE
+    timings = json.loads(timings_path.read_text())
+    timings[REFERENCE_PART] = json.loads((theirs / TIMINGS_FILE).read_text())[REFERENCE_PART]
+    timings_path.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
+    return [target, path, timings_path]

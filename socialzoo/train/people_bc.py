@@ -71,6 +71,8 @@ class Args:
         num_neighbours: neighbours in the observation (EnvConfig.num_human_neighbours).
         action_frame: the action's frame (EnvConfig.human_action_frame).
         action_scale: the action times this times the preferred speed is the desired velocity.
+        velocity_noise: the velocity perturbation of the noisy copies, m/s per axis (`demonstrations`).
+        noisy_copies: noisy copies of each demonstration (0: the recorded states only).
         hidden: hidden units per layer.
         depth: hidden layers.
         lr: Adam learning rate.
@@ -90,6 +92,8 @@ class Args:
     num_neighbours: int = 6
     action_frame: Literal["world", "human"] = "human"
     action_scale: float = 4.0
+    velocity_noise: float = 0.4
+    noisy_copies: int = 2
     hidden: int = 128
     depth: int = 2
     lr: float = 1e-3
@@ -113,6 +117,8 @@ class Args:
         for name in ("hidden", "depth", "batch_size", "max_epochs", "patience", "threads"):
             check_int(self, name, 1)
         check_int(self, "num_neighbours", 0)
+        check_int(self, "noisy_copies", 0)
+        check_number(self, "velocity_noise", 0.0)
         check_number(self, "val_fraction", 0.0, strict=True, high=0.5)
         check_number(self, "action_scale", 0.0, strict=True)
         check_number(self, "lr", 0.0, strict=True)
@@ -243,8 +249,17 @@ def demonstrations(
     action_frame: str = "human",
     action_scale: float = 4.0,
     world: WorldConfig | None = None,
+    velocity_noise: float = 0.0,
+    noisy_copies: int = 0,
+    seed: int = 0,
 ) -> Demonstrations:
     """Every demonstration of a recording (module docstring), replayed in one batched core.
+
+    With `noisy_copies` > 0, each demonstration comes `noisy_copies` more times with its own
+    velocity perturbed (normal, `velocity_noise` m/s per axis, drawn from `seed`), its action the
+    one that still reaches the recorded position on the next frame from the perturbed velocity:
+    states a little off the recorded ones, labelled with the way back, as a person walked by the
+    policy reaches them (noise injection against compounding errors: DART, Laskey et al. 2017).
 
     Raises:
         ValueError: a world step that does not divide the recording's frame period.
@@ -256,6 +271,7 @@ def demonstrations(
     from socialzoo.humans.social_force import human_acceleration
 
     world = world or replay_world()
+    rng = np.random.default_rng([int(seed), 0x64617274])  # "dart"
     steps = round(recording.dt / world.dt)
     if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
         raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
@@ -288,27 +304,31 @@ def demonstrations(
         usable &= exit_dist > world.human.waypoint_radius
         if not usable.any():
             continue
-        v_in = np.where(usable[..., None], (here - prev) / recording.dt, state.human_vel)
-        seen = dataclasses.replace(state, human_vel=v_in)
-        # The parked robot is seen by nobody: observed without it, as the env's people observe it.
-        obs = human_observations(without_robots(seen), walls, every, num_neighbours)
-        other, _ = human_acceleration(
-            seen.human_pos, v_in, seen.human_target, seen.human_pref_speed, seen.human_mask,
-            seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
-            seen.human_mask,
-        )  # fmt: skip
-        desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, recording.dt, world)
-        action = inverse_action(seen, desired, action_frame, action_scale)
-        clipped = (np.abs(action) > ACTION_LIMIT).any(-1)
+        recorded_v = np.where(usable[..., None], (here - prev) / recording.dt, state.human_vel)
         row, slot = np.nonzero(usable)
-        out.append(
-            Demonstrations(
-                obs[row, slot],
-                np.clip(action[row, slot], -ACTION_LIMIT, ACTION_LIMIT).astype(np.float32),
-                row.astype(np.int64),
-                clipped[row, slot],
+        for copy in range(noisy_copies + 1):
+            v_in = recorded_v
+            if copy:
+                v_in = recorded_v + np.where(usable[..., None], rng.normal(0.0, velocity_noise, recorded_v.shape), 0.0)
+            seen = dataclasses.replace(state, human_vel=v_in)
+            # The parked robot is seen by nobody: observed without it, as the env's people observe it.
+            obs = human_observations(without_robots(seen), walls, every, num_neighbours)
+            other, _ = human_acceleration(
+                seen.human_pos, v_in, seen.human_target, seen.human_pref_speed, seen.human_mask,
+                seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
+                seen.human_mask,
+            )  # fmt: skip
+            desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, recording.dt, world)
+            action = inverse_action(seen, desired, action_frame, action_scale)
+            clipped = (np.abs(action) > ACTION_LIMIT).any(-1)
+            out.append(
+                Demonstrations(
+                    obs[row, slot],
+                    np.clip(action[row, slot], -ACTION_LIMIT, ACTION_LIMIT).astype(np.float32),
+                    row.astype(np.int64),
+                    clipped[row, slot],
+                )
             )
-        )
     if not out:
         size = num_neighbours * 5 + 8
         return Demonstrations(
@@ -339,6 +359,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
+            velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies, seed=args.seed,
         )  # fmt: skip
         count = int(demos.window.max()) + 1 if len(demos) else 0
         cut = count - max(1, round(args.val_fraction * count))
@@ -448,6 +469,8 @@ def training_record(
         "seed": args.seed,
         "world_dt": WORLD_DT,
         "window": args.window,
+        "velocity_noise": args.velocity_noise,
+        "noisy_copies": args.noisy_copies,
         "per_scene": scenes,
         "train_demonstrations": num_train,
         "val_demonstrations": num_val,

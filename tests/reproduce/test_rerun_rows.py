@@ -206,3 +206,41 @@ def test_the_report_names_the_rerun(tmp_path):
     # The published kernel-path measurement (tools/kernel_paths.py --csv) closes the re-run section.
     section = report[report.index("## What a re-run may differ by") :]
     assert "| again | as installed |" in section and "| threads-2 | --threads 2 |" in section
+
+
+def test_reference_rows_of_a_later_run_replace_the_published_ones(tmp_path):
+    from socialzoo.reproduce.rerun_rows import replace_reference_rows
+
+    def folder(name, settings_hash, reference, training, timing):
+        results = tmp_path / name / "results"
+        results.mkdir(parents=True)
+        (results / "run.json").write_text(json.dumps({"settings_hash": settings_hash}))
+        (results / "reference.csv").write_text(reference)
+        (results / "training.json").write_text(json.dumps(training))
+        (results / "timings.json").write_text(json.dumps(timing))
+        return results
+
+    published = folder(
+        "published", "abc",
+        "experiment,policy,seed\r\nperformance,dqn,0\r\n",
+        [{"run": "rl/dqn", "trainer": "dqn"}, {"run": "reference/rl/dqn", "trainer": "dqn", "old": True}],
+        {"performance": {"seconds": 1.0}, "reference": {"seconds": 2.0}},
+    )  # fmt: skip
+    later_csv = "quirks,experiment,policy,seed\r\nall,performance,dqn,0\r\ngoal_distance_x_only,performance,dqn,0\r\n"
+    later_training = [
+        {"run": "rl/ppo", "trainer": "ppo"},  # the default run trained again in the reference's work folder
+        {"run": "reference/rl/dqn", "trainer": "dqn"},
+        {"run": "reference/alone/goal_distance_x_only/rl/dqn", "trainer": "dqn"},
+    ]
+    later = folder("later", "abc", later_csv, later_training, {"reference": {"seconds": 9.0}})
+    replace_reference_rows(published.parent, later)
+    assert (published / "reference.csv").read_bytes() == later_csv.encode()
+    training = json.loads((published / "training.json").read_text())
+    assert training == [{"run": "rl/dqn", "trainer": "dqn"}, *later_training[1:]]
+    timings = json.loads((published / "timings.json").read_text())
+    assert timings == {"performance": {"seconds": 1.0}, "reference": {"seconds": 9.0}}
+    other = folder("other", "xyz", later_csv, later_training, {"reference": {}})
+    with pytest.raises(RerunError, match="settings xyz, the published run's are abc"):
+        replace_reference_rows(published.parent, other)
+    with pytest.raises(RerunError, match="no reference rows"):
+        replace_reference_rows(published.parent, tmp_path)

@@ -94,6 +94,37 @@ def test_demonstrations_of_straight_walkers():
     np.testing.assert_allclose(demos.action[lone, 1], 0.0, atol=0.02)
 
 
+def test_noisy_copies_are_labelled_with_the_way_back():
+    """Each noisy copy is the demonstration with its own velocity perturbed, and its action the one
+    that still reaches the recorded next position from there: for a lone walker (no social force)
+    the desired velocity moves by -s / (T - s) times the perturbation (reaching_velocity)."""
+    t = np.arange(30)[:, None] * 0.4
+    lone = Track(person=0, first_frame=0, positions=np.array([0.0, 0.0]) + t * np.array([1.1, 0.3]))
+    rec = Recording(name="lone", dt=0.4, num_frames=30, tracks=(lone,), source="test")
+    kwargs = dict(window=40, num_neighbours=2, action_frame="human", action_scale=4.0)
+    clean = demonstrations(rec, **kwargs)
+    noisy = demonstrations(rec, **kwargs, velocity_noise=0.1, noisy_copies=2, seed=3)
+    # One row, one person: per frame the clean demonstration, then its two copies.
+    assert len(clean) > 20 and len(noisy) == 3 * len(clean)
+    np.testing.assert_array_equal(noisy.obs[0::3], clean.obs)
+    np.testing.assert_array_equal(noisy.action[0::3], clean.action)
+    world = replay_world()
+    rate = world.human.desired_factor / world.human.relaxation_time
+    s = (1.0 - np.exp(-rate * rec.dt)) / rate
+    for copy in (noisy.take(np.arange(1, len(noisy), 3)), noisy.take(np.arange(2, len(noisy), 3))):
+        moved = copy.obs[:, 2:4] - clean.obs[:, 2:4]  # own velocity, own frame
+        assert 0.05 < np.abs(moved).mean() < 0.15  # about 0.1 m/s per axis
+        np.testing.assert_array_equal(np.delete(copy.obs, [2, 3], 1), np.delete(clean.obs, [2, 3], 1))
+        # action = desired / (scale x preferred speed), and d(desired) = -s / (T - s) d(v0).
+        expected = clean.action - s / (rec.dt - s) * moved / (4.0 * clean.obs[:, 4:5])
+        np.testing.assert_allclose(copy.action, expected, atol=1e-5)
+    # The noise is seeded.
+    again = demonstrations(rec, **kwargs, velocity_noise=0.1, noisy_copies=2, seed=3)
+    np.testing.assert_array_equal(again.action, noisy.action)
+    other = demonstrations(rec, **kwargs, velocity_noise=0.1, noisy_copies=2, seed=4)
+    assert not np.array_equal(other.action, noisy.action)
+
+
 def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     rec = _recording()
     monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: rec)
