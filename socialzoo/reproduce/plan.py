@@ -265,8 +265,8 @@ def parse_parts(text: str | Sequence[str] | None) -> tuple[str, ...]:
 
 
 def reference_sets(value: bool | str | Sequence[str] | None) -> tuple[str, ...]:
-    """The quirk sets of the reference part (`--reference [SETS]`): none for False or None, every
-    quirk together ("all") for True, else the named sets in the order given, each once.
+    """The quirk sets of the reference part (`--reference [SETS]`): none for False, None or no names,
+    every quirk together ("all") for True, else the named sets in the order given, each once.
 
     Raises:
         ValueError: an unknown quirk (socialzoo.env.quirks.ReferenceQuirks.named names the known ones).
@@ -280,4 +280,4 @@ def reference_sets(value: bool | str | Sequence[str] | None) -> tuple[str, ...]:
     names = [n.strip() for n in (value.split(",") if isinstance(value, str) else value) if n.strip()]
     for name in names:
         ReferenceQuirks.named(name)
-    return tuple(dict.fromkeys(names)) or (ALL_QUIRKS,)
+    return tuple(dict.fromkeys(names))

@@ -93,7 +93,7 @@ def test_one_quirk_alone_then_another_keeps_both(tmp_path):
 def test_reference_sets_are_checked():
     from socialzoo.reproduce.plan import reference_sets
 
-    assert reference_sets(False) == () and reference_sets(None) == ()
+    assert reference_sets(False) == () and reference_sets(None) == () and reference_sets(()) == ()
     assert reference_sets(True) == ("all",)
     assert reference_sets("goal_distance_x_only, all,goal_distance_x_only") == ("goal_distance_x_only", "all")
     with pytest.raises(ValueError, match="unknown reference quirk 'x_only'; known: all, goal_distance_x_only"):
