@@ -244,3 +244,19 @@ def test_reference_rows_of_a_later_run_replace_the_published_ones(tmp_path):
         replace_reference_rows(published.parent, other)
     with pytest.raises(RerunError, match="no reference rows"):
         replace_reference_rows(published.parent, tmp_path)
+
+
+def test_redraw_published_draws_the_committed_report_again(tmp_path):
+    """After rows are replaced, the tables, figures and report are drawn again from the published
+    results alone: on the committed results that gives the committed REPRODUCTION.md."""
+    import shutil
+    from pathlib import Path
+
+    from socialzoo.reproduce.publish import PUBLISHED_DIR, redraw_published
+
+    root = Path(__file__).resolve().parents[2]
+    shutil.copytree(root / PUBLISHED_DIR / "results", tmp_path / PUBLISHED_DIR / "results")
+    report = redraw_published(tmp_path)
+    assert report.read_text() == (root / "REPRODUCTION.md").read_text()
+    assert (tmp_path / PUBLISHED_DIR / "figures" / "success.png").stat().st_size > 1000
+    assert (tmp_path / PUBLISHED_DIR / "tables" / "performance.md").is_file()
