@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +44,7 @@ from socialzoo.reproduce.runs import (
     finished,
     lfd_eval_dir,
     lfd_items,
+    quirk_set,
     reference_folder,
     reference_rl_items,
     rl_items,
@@ -265,14 +266,6 @@ REFERENCE_COLUMNS = (
     "success_ci_high",
     "average_step_reward_mean",
 )
-
-
-def quirk_set(row: Mapping[str, Any]) -> str:
-    """The quirk set of a reference.csv row (rows written before one quirk could run alone have
-    every quirk on)."""
-    from socialzoo.env.quirks import ALL_QUIRKS
-
-    return str(row.get("quirks") or ALL_QUIRKS)
 
 
 def _reference_set(ctx: Context, quirks: str) -> tuple[int, list[dict[str, Any]]]:

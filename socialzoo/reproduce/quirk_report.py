@@ -19,18 +19,13 @@ from typing import Any
 from socialzoo.bench.tables import policy_label
 from socialzoo.env.quirks import ALL_QUIRKS, QUIRK_LABELS, ReferenceQuirks
 from socialzoo.reproduce.paper import PAPER_SUCCESS
-from socialzoo.reproduce.runs import REFERENCE_TRAINERS
+from socialzoo.reproduce.runs import REFERENCE_TRAINERS, quirk_set
 from socialzoo.reproduce.tables import EXPERIMENT_MAPS
-
-
-def _set_of(row: Mapping[str, Any]) -> str:
-    """The quirk set of a reference row (rows stored before one quirk could run alone: every quirk)."""
-    return str(row.get("quirks") or ALL_QUIRKS)
 
 
 def _sets(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """The quirk sets among `rows`: every quirk together first, then the switches in declaration order."""
-    present = {_set_of(r) for r in rows}
+    present = {quirk_set(r) for r in rows}
     return [q for q in (ALL_QUIRKS, *ReferenceQuirks.names()) if q in present]
 
 
@@ -45,7 +40,7 @@ def _rates(
     return {
         int(r["seed"]): 100 * float(r["success_rate"])
         for r in rows
-        if r["experiment"] == experiment and r["policy"] == policy and _set_of(r) == quirks
+        if r["experiment"] == experiment and r["policy"] == policy and quirk_set(r) == quirks
     }
 
 
@@ -164,7 +159,9 @@ def reference_section(results: Mapping[str, Any], tables: Mapping[str, Any]) -> 
         for policy in REFERENCE_TRAINERS:
             for quirks in _sets(rows):
                 mine = [
-                    r for r in rows if r["experiment"] == experiment and r["policy"] == policy and _set_of(r) == quirks
+                    r
+                    for r in rows
+                    if r["experiment"] == experiment and r["policy"] == policy and quirk_set(r) == quirks
                 ]
                 if not mine:
                     continue

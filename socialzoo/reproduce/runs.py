@@ -7,6 +7,7 @@ first seed (as with one seed) and "<name>-s<seed>" for the others (`run_name`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -102,6 +103,14 @@ ALONE_FOLDER = "alone"
 # The trainers whose training reads the env's reward, retrained with the reference code's quirks;
 # BC, GAIL (its reward is the discriminator's) and PIPS learn from Ref's actions alone.
 REFERENCE_TRAINERS: tuple[str, ...] = RL_ALGOS
+
+
+def quirk_set(row: Mapping[str, Any]) -> str:
+    """The quirk set of a reference.csv row (rows written before one quirk could run alone have
+    every quirk on)."""
+    from socialzoo.env.quirks import ALL_QUIRKS
+
+    return str(row.get("quirks") or ALL_QUIRKS)
 
 
 def reference_folder(ctx: Context, quirks: str, *parts: str) -> Path:
