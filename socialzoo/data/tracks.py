@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -134,6 +135,13 @@ class Recording:
         object.__setattr__(self, "dt", float(self.dt))
         object.__setattr__(self, "num_frames", int(self.num_frames))
         object.__setattr__(self, "tracks", tracks)
+
+    @cached_property
+    def spans(self) -> np.ndarray:
+        """(N, 2) int64 each track's first and last frame, in the order of `tracks` (read-only)."""
+        spans = np.array([(t.first_frame, t.last_frame) for t in self.tracks], dtype=np.int64).reshape(-1, 2)
+        spans.flags.writeable = False
+        return spans
 
     def grid(
         self, tracks: Sequence[int] | None = None, first: int = 0, last: int | None = None

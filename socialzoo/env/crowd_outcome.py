@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_fields
 
@@ -75,17 +76,36 @@ def closest_boundary_distance(
         human_mask: (B, H).
         dt: s.
     """
-    start = human_pos - robot_pos[:, None, :]
-    move = (human_vel - robot_vel[:, None, :]) * dt
-    length2 = (move**2).sum(-1)
-    t = np.clip(-(start * move).sum(-1) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-    closest = start + t[..., None] * move
-    gap = np.hypot(closest[..., 0], closest[..., 1]) - radius_sum
-    return (
-        np.where(human_mask, gap, np.inf).min(axis=1)
-        if human_mask.shape[1]
-        else np.full(len(robot_pos), np.inf)
-    )
+    out = np.empty(len(robot_pos))
+    radius = np.broadcast_to(np.asarray(radius_sum, dtype=np.float64), human_mask.shape)
+    _closest_gaps(robot_pos, robot_vel, human_pos, human_vel, radius, human_mask, dt, out)
+    return out
+
+
+@kernel
+def _closest_gaps(robot_pos, robot_vel, human_pos, human_vel, radius, human_mask, dt, out):
+    """closest_boundary_distance into out (B,), present people only: per person the numpy
+    expressions it replaced (the relative move over the step, the point of it nearest the robot,
+    np.clip's NaN kept, np.hypot), and a NaN gap wins the minimum as it does in np.min."""
+    for i in range(out.shape[0]):
+        best = np.inf
+        for h in range(human_pos.shape[1]):
+            if not human_mask[i, h]:
+                continue
+            sx, sy = human_pos[i, h, 0] - robot_pos[i, 0], human_pos[i, h, 1] - robot_pos[i, 1]
+            mx, my = (human_vel[i, h, 0] - robot_vel[i, 0]) * dt, (human_vel[i, h, 1] - robot_vel[i, 1]) * dt
+            length2 = mx * mx + my * my
+            t = -(sx * mx + sy * my) / (length2 if length2 > 0 else 1.0)
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            gap = np.hypot(sx + t * mx, sy + t * my) - radius[i, h]
+            if gap != gap:
+                best = gap
+                break
+            best = min(best, gap)
+        out[i] = best
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,11 @@ Version History (action-selection ids, their ParallelEnv and TorchRL envs):
         socialzoo/ActionSelectionTransferReference-v2 (the reference code's quirks on, EnvConfig.quirks)
         are new; with the quirks off (the default) no other id's rollouts change.
     Within v2, the ids socialzoo/Recorded-v2 and socialzoo/CrowdNavRecorded-v1 (recorded scenes) are
-        new, and no other id's rollouts change.
+        new, and no other id's rollouts change. Later within v2 (and CrowdNav's v1), only the
+        episode metric reacting_extra_distance of hybrid people changes: a person who entered
+        its slot and reacted in the same step was credited the jump from the slot's previous
+        occupant's last position. The ids' default (people replaying) rollouts are unchanged,
+        and so are hybrid rollouts' observations, rewards and end flags.
     Within v2, the ids socialzoo/Suite-v2 and socialzoo/CrowdNavSuite-v1 (CrowdNav's v1) are new;
         the observation's signal block is opt-in (signals=True), so no other id's rollouts change.
     socialzoo_parallel_v2, socialzoo_crowdnav_v2 (the ParallelEnvs' metadata names; every id

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
@@ -224,7 +225,7 @@ class ReplayRunner:
         self.exit_at[fresh] = np.nan
         assert b == state.batch_size
         state.human_model[fresh] = np.where(self.follows[fresh], REPLAY, state.human_model[fresh])
-        self._place(state, fresh, state.human_mask[fresh].copy())
+        self._place(state, fresh)
 
     def _widen(self, frames: int, route: int, robot_track: int, occupants: int) -> None:
         """Grow the frame, route, robot-track and occupant axes to hold a longer recording."""
@@ -270,55 +271,26 @@ class ReplayRunner:
         rows = np.flatnonzero(self.recorded)
         for name in ("human_mask", "human_model", "human_route_len", "human_pref_speed"):
             setattr(after, name, getattr(after, name).copy())
-        frame = self._place(after, rows, after.human_mask[rows].copy())
+        frame = self._place(after, rows)
         self._react(after, rows, frame, robot_vel)
 
-    def _place(self, state: WorldState, rows: np.ndarray, mask_before: np.ndarray) -> np.ndarray:
+    def _place(self, state: WorldState, rows: np.ndarray) -> np.ndarray:
         """Positions, velocities and presence of `rows`' people at the rows' time (from step_count);
         returns (len(rows),) the frame each row is on."""
         t = state.step_count[rows] * self.dt
         frame = t / self.frame_dt[rows]
-        h, frames = self.tracks.shape[1], self.tracks.shape[2]
-        last = frames - 1
+        last = self.tracks.shape[2] - 1
         i0 = np.minimum(np.floor(frame + _ON_FRAME).astype(np.int64), last)
         w = np.where(frame - i0 > _ON_FRAME, frame - i0, 0.0)
-        i1 = np.minimum(i0 + 1, last)
-        # One flat gather per frame: copying the rows' whole tracks would cost more than the step.
-        base = (rows[:, None] * h + np.arange(h)[None, :]) * frames  # (n, H)
-        flat_tracks = self.tracks.reshape(-1, 2)
-        p0 = flat_tracks[base + i0[:, None]]
-        p1 = flat_tracks[base + i1[:, None]]
-        velocity = self.track_vel.reshape(-1, 2)[base + i0[:, None]]
-        on_frame = (w == 0.0)[:, None]
-        present = ~np.isnan(p0[..., 0]) & (on_frame | ~np.isnan(p1[..., 0]))
-        where = np.where(on_frame[..., None], p0, p0 + w[:, None, None] * (p1 - p0))
         # Who is in each slot now; a slot's next person takes it at its entry frame.
-        now = (self.entry[rows] <= i0[:, None, None]).sum(-1) - 1  # (n, H)
-        new = (now >= 0) & (now != self.occupant[rows])
-        if new.any():
+        now = np.empty((len(rows), self.tracks.shape[1]), dtype=np.int64)
+        new = np.empty(now.shape, dtype=bool)
+        if _occupants_now(rows, i0, self.entry, self.occupant, now, new):
             self._enter(state, rows, new, now, t)
-        follow = self.on_track[rows]
-        # Followers: where their tracks are, present while recorded.
-        pos = np.where((follow & present)[..., None], where, state.human_pos[rows])
-        vel = np.where((follow & present)[..., None], velocity, state.human_vel[rows])
-        mask = np.where(follow, present, mask_before)
-        # People a model walks: they enter at their first frame, on their track ...
-        entering = new & ~follow
-        pos = np.where(entering[..., None], where, pos)
-        vel = np.where(entering[..., None], velocity, vel)
-        direction = state.human_direction[rows]
-        walking = ~follow & (now >= 0) & ~self.gone[rows]
-        # ... and leave where their route ends (the route turned them back there).
-        leaving = walking & (direction < 0)
-        gone = self.gone[rows] | leaving
-        mask = np.where(~follow, walking & ~leaving, mask)
-        exit_at = self.exit_at[rows]
-        left_track = follow & (now >= 0) & ~present & np.isnan(exit_at)
-        self.exit_at[rows] = np.where((leaving | left_track) & np.isnan(exit_at), t[:, None], exit_at)
-        self.gone[rows] = gone
-        state.human_pos[rows] = pos
-        state.human_vel[rows] = vel
-        state.human_mask[rows] = mask
+        _place_people(
+            rows, i0, w, t, now, new, self.tracks, self.track_vel, self.on_track, self.gone, self.exit_at,
+            state.human_direction, state.human_pos, state.human_vel, state.human_mask,
+        )  # fmt: skip
         return i0
 
     def _enter(
@@ -372,18 +344,14 @@ class ReplayRunner:
     def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
         """Hybrid people a robot came near leave their tracks (see the module docstring); frame:
         (len(rows),) the frame each row is on."""
-        watch = self.reacts[rows] & self.on_track[rows] & state.human_mask[rows] & (self.occupant[rows] >= 0)
-        if not watch.any() or state.num_robots == 0:
+        if state.num_robots == 0:
             return
-        d = state.robot_pose[rows, :, None, :2] - state.human_pos[rows][:, None]  # (n, R, H, 2)
-        v = robot_vel[rows][:, :, None] - state.human_vel[rows][:, None]  # relative velocity
-        near = (d**2).sum(-1) < self.radius**2
-        vv = (v**2).sum(-1)
-        when = np.clip(-(d * v).sum(-1) / np.maximum(vv, 1e-12), 0.0, self.react_time)
-        closest = d + when[..., None] * v
-        meets = (closest**2).sum(-1) < self.collision_distance**2
-        react = watch & (near | meets).any(1)
-        if not react.any():
+        react = np.empty((len(rows), state.max_humans), dtype=bool)
+        if not _reacting(
+            rows, self.reacts, self.on_track, state.human_mask, self.occupant, state.robot_pose,
+            state.human_pos, state.human_vel, robot_vel, self.radius**2, self.react_time,
+            self.collision_distance**2, react,
+        ):  # fmt: skip
             return
         local, slot = np.nonzero(react)
         row = rows[local]
@@ -419,32 +387,15 @@ class ReplayRunner:
             return
         live = ~was_done[rows]
         self.elapsed[rows] += self.dt
-        off_track = ~np.isnan(self.reacted_at[rows]) & ~self.gone[rows]
-        if off_track.any():
-            step = after.human_pos[rows] - before.human_pos[rows]
-            self.walked[rows] += np.where(off_track, np.sqrt((step**2).sum(-1)), 0.0)
-            # What the measures read of a reacting person who has not left: the straight way left
-            # to its route's end.
-            end = np.take_along_axis(
-                after.human_route[rows], (after.human_route_len[rows] - 1)[..., None, None].repeat(2, -1), 2
-            )[:, :, 0]
-            self.rest[rows] = np.where(off_track, np.sqrt(((end - after.human_pos[rows]) ** 2).sum(-1)), 0.0)
-        robot = after.robot_pose[rows, :, :2]  # (n, R, 2)
-        has_track = self.robot_track_len[rows] > 1
-        if has_track.any():
-            dist = _polyline_distance(robot, self.robot_track[rows], self.robot_track_len[rows])
-            self.deviation[rows] += np.where(live & has_track[:, None], dist, 0.0)
-        self.moves[rows] += live
-        d = after.human_pos[rows][:, None] - robot[:, :, None]  # robot -> person (n, R, H, 2)
-        dist2 = (d**2).sum(-1)
-        close = (dist2 < self.collision_distance**2) & after.human_mask[rows][:, None]
-        onset = close & ~self.contact[rows]
-        if onset.any():
-            unit = d / np.maximum(np.sqrt(dist2), 1e-9)[..., None]
-            person_in = -(after.human_vel[rows][:, None] * unit).sum(-1)
-            robot_in = (robot_vel[rows][:, :, None] * unit).sum(-1)
-            self.walked_into[rows] += (onset & (person_in > robot_in) & live[..., None]).sum(-1)
-        self.contact[rows] = close
+        _account_people(
+            rows, self.reacted_at, self.gone, before.human_mask, before.human_pos, after.human_pos,
+            after.human_route, after.human_route_len, self.walked, self.rest,
+        )  # fmt: skip
+        _account_robots(
+            rows, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
+            self.robot_track, self.robot_track_len, self.collision_distance**2,
+            self.deviation, self.moves, self.contact, self.walked_into,
+        )  # fmt: skip
 
     def summaries(self, rows: np.ndarray, arrival: Sequence[float], robot: int = 0) -> list[dict[str, Any]]:
         """The recorded metrics (RECORDED_KEYS) of `rows` for robot `robot`; arrival: each row's
@@ -491,12 +442,165 @@ class ReplayRunner:
         return out
 
 
-def _polyline_distance(points: np.ndarray, lines: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """(n, R) distance of points (n, R, 2) to each row's polyline lines (n, L, 2) of lengths[i] points."""
-    a, b = lines[:, None, :-1], lines[:, None, 1:]  # (n, 1, S, 2)
-    ab = b - a
-    p = points[:, :, None]
-    t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0)
-    dist = np.sqrt(((a + t[..., None] * ab - p) ** 2).sum(-1))  # (n, R, S)
-    valid = np.arange(lines.shape[1] - 1)[None, :] < (lengths - 1)[:, None]
-    return np.where(valid[:, None], dist, np.inf).min(-1)
+# ---------------------------------------------------------------------------- kernels
+# Each loops over the rows' slots in compiled code and computes every value as the numpy
+# expressions it replaced did (same operations in the same order, fastmath off), so rollouts are
+# the same bit for bit; a step of a sparse recorded scene was mostly those expressions' temporaries
+# over every slot and every point of the robot's recorded path (benchmarks/recorded_throughput.py).
+
+
+@kernel
+def _occupants_now(rows, i0, entry, occupant, now, new):
+    """Fill now (n, H), who is in each slot of `rows` on frame i0 (entries at or before it, minus
+    one; -1 nobody yet), and new (n, H), a person other than the slot's occupant; True if any."""
+    any_new = False
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        for s in range(entry.shape[1]):
+            count = 0
+            for k in range(entry.shape[2]):
+                if entry[r, s, k] <= i0[j]:
+                    count += 1
+            now[j, s] = count - 1
+            new[j, s] = count > 0 and count - 1 != occupant[r, s]
+            any_new = any_new or new[j, s]
+    return any_new
+
+
+@kernel
+def _place_people(
+    rows, i0, w, t, now, new, tracks, track_vel, on_track, gone, exit_at, direction, pos, vel, mask
+):  # fmt: skip
+    """ReplayRunner._place's update of `rows` in place: followers where their tracks are, present
+    while recorded; people a model walks enter on their track and leave where their route ends."""
+    last = tracks.shape[2] - 1
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        a = i0[j]
+        b = min(a + 1, last)
+        on_frame = w[j] == 0.0
+        for s in range(tracks.shape[1]):
+            x0, y0 = tracks[r, s, a, 0], tracks[r, s, a, 1]
+            x1, y1 = tracks[r, s, b, 0], tracks[r, s, b, 1]
+            present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
+            if on_frame:
+                x, y = x0, y0
+            else:
+                x, y = x0 + w[j] * (x1 - x0), y0 + w[j] * (y1 - y0)
+            seen = now[j, s] >= 0
+            if on_track[r, s]:
+                if present:
+                    pos[r, s, 0], pos[r, s, 1] = x, y
+                    vel[r, s, 0], vel[r, s, 1] = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+                mask[r, s] = present
+                if seen and not present and np.isnan(exit_at[r, s]):
+                    exit_at[r, s] = t[j]
+                continue
+            if new[j, s]:
+                pos[r, s, 0], pos[r, s, 1] = x, y
+                vel[r, s, 0], vel[r, s, 1] = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+            walking = seen and not gone[r, s]
+            leaving = walking and direction[r, s] < 0
+            if leaving:
+                gone[r, s] = True
+                if np.isnan(exit_at[r, s]):
+                    exit_at[r, s] = t[j]
+            mask[r, s] = walking and not leaving
+
+
+@kernel
+def _reacting(
+    rows, reacts, on_track, mask, occupant, robot_pose, human_pos, human_vel, robot_vel, radius2, react_time,
+    collision2, react,
+):  # fmt: skip
+    """Fill react (n, H): the hybrid people of `rows` on their track whom a robot's centre is within
+    the reaction radius of, or would meet (centres within the collision distance) within react_time
+    keeping both velocities (the point of closest approach, its time clipped to [0, react_time]);
+    True if any."""
+    any_react = False
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        for s in range(mask.shape[1]):
+            react[j, s] = False
+            if not (reacts[r, s] and on_track[r, s] and mask[r, s] and occupant[r, s] >= 0):
+                continue
+            for q in range(robot_pose.shape[1]):
+                dx, dy = robot_pose[r, q, 0] - human_pos[r, s, 0], robot_pose[r, q, 1] - human_pos[r, s, 1]
+                vx, vy = robot_vel[r, q, 0] - human_vel[r, s, 0], robot_vel[r, q, 1] - human_vel[r, s, 1]
+                when = -(dx * vx + dy * vy) / max(vx * vx + vy * vy, 1e-12)
+                when = min(max(when, 0.0), react_time)
+                cx, cy = dx + when * vx, dy + when * vy
+                if dx * dx + dy * dy < radius2 or cx * cx + cy * cy < collision2:
+                    react[j, s] = True
+            any_react = any_react or react[j, s]
+    return any_react
+
+
+@kernel
+def _account_people(
+    rows, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len, walked, rest
+):
+    """ReplayRunner.account's measures of the reacting people of `rows` in place (when any row has
+    one): the distance each walked in the step (not one who entered during it: its slot's position
+    before the step was its previous occupant's), and the straight way left to its route's end (0
+    for everyone else)."""
+    off_track = False
+    for j in range(rows.shape[0]):
+        for s in range(gone.shape[1]):
+            off_track = off_track or (
+                reacted_at[rows[j], s] == reacted_at[rows[j], s] and not gone[rows[j], s]
+            )
+    if not off_track:
+        return
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        for s in range(gone.shape[1]):
+            if not (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s]):  # NaN: not reacting
+                rest[r, s] = 0.0
+                continue
+            if mask_before[r, s]:
+                dx, dy = pos_after[r, s, 0] - pos_before[r, s, 0], pos_after[r, s, 1] - pos_before[r, s, 1]
+                walked[r, s] += np.sqrt(dx * dx + dy * dy)
+            end = route_len[r, s] - 1
+            ex, ey = route[r, s, end, 0] - pos_after[r, s, 0], route[r, s, end, 1] - pos_after[r, s, 1]
+            rest[r, s] = np.sqrt(ex * ex + ey * ey)
+
+
+@kernel
+def _account_robots(
+    rows, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_track, robot_track_len,
+    collision2, deviation, moves, contact, walked_into,
+):  # fmt: skip
+    """ReplayRunner.account's robot measures of `rows` in place (live (n, R): the robot's episode
+    had not ended): the distance to the recorded person's path (its polyline of robot_track_len
+    points), the moves counted, and the people who walked into a robot (the onset of a contact at
+    which the person moved towards the robot faster than the robot towards it)."""
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        points = robot_track_len[r]
+        for q in range(robot_pose.shape[1]):
+            px, py = robot_pose[r, q, 0], robot_pose[r, q, 1]
+            if live[j, q]:
+                if points > 1:
+                    nearest = np.inf
+                    for k in range(points - 1):
+                        ax, ay = robot_track[r, k, 0], robot_track[r, k, 1]
+                        abx, aby = robot_track[r, k + 1, 0] - ax, robot_track[r, k + 1, 1] - ay
+                        u = ((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12)
+                        u = min(max(u, 0.0), 1.0)
+                        cx, cy = ax + u * abx - px, ay + u * aby - py
+                        nearest = min(nearest, np.sqrt(cx * cx + cy * cy))
+                    deviation[r, q] += nearest
+                moves[r, q] += 1
+            for s in range(human_pos.shape[1]):
+                dx, dy = human_pos[r, s, 0] - px, human_pos[r, s, 1] - py
+                dist2 = dx * dx + dy * dy
+                close = dist2 < collision2 and human_mask[r, s]
+                if close and not contact[r, q, s] and live[j, q]:
+                    norm = max(np.sqrt(dist2), 1e-9)
+                    ux, uy = dx / norm, dy / norm
+                    person_in = -(human_vel[r, s, 0] * ux + human_vel[r, s, 1] * uy)
+                    robot_in = robot_vel[r, q, 0] * ux + robot_vel[r, q, 1] * uy
+                    if person_in > robot_in:
+                        walked_into[r, q] += 1
+                contact[r, q, s] = close

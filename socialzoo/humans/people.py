@@ -17,7 +17,7 @@ from socialzoo.core.config import WorldConfig
 from socialzoo.core.jit import kernel
 from socialzoo.core.walls import WallIndex
 from socialzoo.humans.groups import add_group_accelerations
-from socialzoo.humans.models import ORCA, SOCIAL_FORCE
+from socialzoo.humans.models import ORCA, REPLAY, SOCIAL_FORCE
 from socialzoo.humans.motion import integrate_humans
 from socialzoo.humans.orca import orca_velocities
 from socialzoo.humans.social_force import human_acceleration
@@ -76,16 +76,18 @@ def orca_people_velocities(
 
 
 @kernel
-def _census(mask, model, group, orca):
-    """(any present ORCA person, any present person of another model, anyone in a walking group)
-    of people (B, H) in one pass: a step with social-force people only skips the others' code."""
+def _census(mask, model, group, orca, replay):
+    """(any present ORCA person, any present person a force walks, anyone in a walking group) of
+    people (B, H) in one pass: a step with social-force people only skips the others' code, and
+    one with ORCA people and people on their recorded tracks (whose step the replay overwrites)
+    skips the forces."""
     has_orca = has_other = has_group = False
     for b in range(mask.shape[0]):
         for h in range(mask.shape[1]):
             if mask[b, h]:
                 if model[b, h] == orca:
                     has_orca = True
-                else:
+                elif model[b, h] != replay:
                     has_other = True
             if group[b, h] >= 0:
                 has_group = True
@@ -127,7 +129,7 @@ def step_people(
     Returns:
         (pos, vel, blocked): the new positions and velocities, and the people a wall stopped.
     """
-    has_orca, has_other, has_group = _census(mask, model, group, ORCA)
+    has_orca, has_other, has_group = _census(mask, model, group, ORCA, REPLAY)
     orca = mask & (model == ORCA) if has_orca else None
     if has_orca and not has_other:
         # Nobody feels a force: only the wall distances of the motion step are needed.

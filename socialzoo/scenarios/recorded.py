@@ -22,6 +22,7 @@ in place of (it may meet that person as one of the crowd).
 from __future__ import annotations
 
 import copy
+import heapq
 import math
 import zlib
 from collections.abc import Sequence
@@ -31,7 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
-from socialzoo.scenarios.recorded_people import RecordedPeople, path_length, route_frames
+from socialzoo.scenarios.recorded_people import RecordedPeople, path_length
 from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
@@ -128,15 +129,14 @@ def replaced_scenario(
     limit = time_budget(me.positions, recording.dt)
     first = me.first_frame
     last = min(recording.num_frames - 1, first + math.ceil(limit / recording.dt))
-    others = [
-        k
-        for k, t in enumerate(recording.tracks)
-        if k != track and t.first_frame <= last and t.last_frame >= first
-    ]
+    spans = recording.spans
+    seen = (spans[:, 0] <= last) & (spans[:, 1] >= first)
+    seen[track] = False
+    others = np.flatnonzero(seen).tolist()
     grid = recording.grid(others, first, last) if others else np.zeros((0, last - first + 1, 2))
     # People who are never there at once share a person slot (pack_slots): fewer, fuller slots.
-    begin = np.array([recording.tracks[k].first_frame for k in others], dtype=np.int64) - first
-    end = np.array([recording.tracks[k].last_frame for k in others], dtype=np.int64) - first
+    begin = spans[others, 0] - first
+    end = spans[others, 1] - first
     slot = pack_slots(begin, end)
     slots = np.full((int(slot.max(initial=-1)) + 1, grid.shape[1], 2), np.nan)
     for k, s in enumerate(slot.tolist()):
@@ -172,8 +172,8 @@ def people_scenario(
     (route_frames), its speed its first person's mean recorded speed (the world takes each later
     person's own when it enters: socialzoo.env.replay)."""
     spawn, routes = [], []
-    for track in recorded.tracks:
-        points = track[route_frames(track)]
+    for track, frames in zip(recorded.tracks, recorded.slot_routes, strict=True):
+        points = track[frames]
         spawn.append(points[0])
         routes.append(points)
     n = recorded.num_people
@@ -197,17 +197,18 @@ def pack_slots(first: np.ndarray, last: np.ndarray, rest: int = SLOT_REST) -> np
     its person left `rest` frames before the next one enters (the earliest-free slot, people in
     order of entry)."""
     order = np.lexsort((last, first))
-    free_at: list[int] = []  # per slot, the first frame it may take a new person
+    # (the first frame a slot may take a new person, slot): the heap's top is the earliest-free
+    # slot, the lowest-numbered among equals.
+    free: list[tuple[int, int]] = []
     slot = np.zeros(len(first), dtype=np.int64)
+    begins, ends = first.tolist(), last.tolist()
     for k in order.tolist():
-        ready = [s for s, at in enumerate(free_at) if at <= first[k]]
-        if ready:
-            s = min(ready, key=lambda j: free_at[j])
+        if free and free[0][0] <= begins[k]:
+            s = heapq.heappop(free)[1]
         else:
-            s = len(free_at)
-            free_at.append(0)
+            s = len(free)  # every slot is in the heap: a new one
         slot[k] = s
-        free_at[s] = int(last[k]) + rest + 1
+        heapq.heappush(free, (int(ends[k]) + rest + 1, s))
     return slot
 
 

@@ -32,8 +32,14 @@ def runs(track: np.ndarray) -> list[tuple[int, int]]:
 def route_frames(track: np.ndarray) -> np.ndarray:
     """The frames of the route points of everyone in a slot, one person after another: each
     person's first frame, every ROUTE_STRIDE frames on, and its last (track: (T, 2), NaN absent)."""
-    parts = [np.unique(np.concatenate((np.arange(a, b + 1, ROUTE_STRIDE), [b]))) for a, b in runs(track)]
-    return np.concatenate(parts).astype(np.int64)
+    return np.concatenate([run_route(a, b) for a, b in runs(track)]).astype(np.int64)
+
+
+def run_route(first: int, last: int) -> np.ndarray:
+    """The route frames of one person seen on frames first..last: every ROUTE_STRIDE-th from its
+    first, and its last."""
+    frames = np.arange(first, last + 1, ROUTE_STRIDE)
+    return frames if frames[-1] == last else np.append(frames, last)
 
 
 def path_length(points: np.ndarray) -> float:
@@ -145,9 +151,21 @@ class RecordedPeople:
         return ~np.isnan(self.tracks[..., 0])
 
     @cached_property
+    def slot_runs(self) -> tuple[list[tuple[int, int]], ...]:
+        """Each slot's (first, last) frames of each person in it, one after another (runs)."""
+        return tuple(runs(track) for track in self.tracks)
+
+    @cached_property
+    def slot_routes(self) -> tuple[np.ndarray, ...]:
+        """Each slot's route frames (route_frames), unpadded."""
+        return tuple(
+            np.concatenate([run_route(a, b) for a, b in slot]).astype(np.int64) for slot in self.slot_runs
+        )
+
+    @cached_property
     def route_frames(self) -> np.ndarray:
         """(S, L) the frames of each slot's route points (route_frames), padded by repeating its last."""
-        frames = [route_frames(track) for track in self.tracks]
+        frames = self.slot_routes
         width = max((len(f) for f in frames), default=1)
         out = np.zeros((len(frames), width), dtype=np.int64)
         for k, f in enumerate(frames):
@@ -172,20 +190,23 @@ class RecordedPeople:
     @cached_property
     def occupants(self) -> Occupants:
         """Who occupies each slot, one after another (Occupants)."""
-        per_slot = [runs(track) for track in self.tracks]
+        per_slot = self.slot_runs
         width = max((len(r) for r in per_slot), default=1)
         shape = (len(per_slot), width)
         entry, exit_ = np.full(shape, NEVER, dtype=np.int64), np.full(shape, NEVER, dtype=np.int64)
         first, last = np.zeros(shape, dtype=np.int64), np.zeros(shape, dtype=np.int64)
         speed = np.full(shape, MIN_SPEED)
         for s, (track, slot_runs) in enumerate(zip(self.tracks, per_slot, strict=True)):
+            # Segment lengths once per slot (NaN across absences); a person's path is its runs' sum.
+            segments = np.sqrt((np.diff(track, axis=0) ** 2).sum(-1))
             index = 0
             for k, (a, b) in enumerate(slot_runs):
-                points = len(np.unique(np.concatenate((np.arange(a, b + 1, ROUTE_STRIDE), [b]))))
+                points = (b - a) // ROUTE_STRIDE + 1 + ((b - a) % ROUTE_STRIDE != 0)
                 entry[s, k], exit_[s, k] = a, b
                 first[s, k], last[s, k] = index, index + points - 1
                 index += points
-                speed[s, k] = mean_speed(track[a : b + 1], self.dt)
+                time = (b - a) * self.dt
+                speed[s, k] = max(float(segments[a:b].sum()) / time, MIN_SPEED) if time > 0 else MIN_SPEED
         return Occupants(entry, exit_, first, last, speed)
 
     @property

@@ -4,6 +4,8 @@ the recording, and both tasks with every adapter on a recorded scene."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -261,3 +263,57 @@ def test_the_second_person_of_a_shared_slot_walks_its_own_route() -> None:
             assert core.state.human_pos[0, 0, 1] > 0.5
     assert mask[40 * 4 - 1] and mask[4]  # both entered
     assert not mask[35 * 4]  # the first had left before the second entered
+
+
+def test_a_person_who_enters_and_reacts_at_once_has_walked_nothing_yet() -> None:
+    # The second person of the shared slot enters at (-3, 0) beside the robot and reacts on its
+    # first step; the slot's position before that step was the first person's, 8 m away.
+    scenario = dataclasses.replace(_shared_slot(), robot_starts=np.array([[-3.0, 0.8, 0.0]]))
+    core = _core([scenario], "hybrid:sf")
+    for _ in range(65 * 4):
+        before = core.state
+        core.step(np.zeros((1, 1, 2)))
+        if not np.isnan(core.replay.reacted_at[0, 0]):
+            break
+    else:
+        pytest.fail("the second person never reacted")
+    assert core.replay.occupant[0, 0] == 1
+    assert before.human_pos[0, 0, 0] > 4.0  # the slot held the first person, who left near (5, 0)
+    assert core.replay.walked[0, 0] == 0.0
+
+
+def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
+    """sha256 prefixes of a seeded VectorEnv rollout of the synthetic scene: (observations,
+    rewards and end flags; the recorded metrics of the episodes that ended)."""
+    import hashlib
+
+    from socialzoo.env.vector import TaskVectorEnv
+
+    env = TaskVectorEnv(8, task="crowdnav", family=family_name, humans=humans, robot_visible=True)
+    obs, _ = env.reset(seed=11)
+    rng = np.random.default_rng(2)
+    core, metrics = hashlib.sha256(obs.tobytes()), hashlib.sha256()
+    for step in range(80):
+        action = rng.uniform(-1.0, 1.0, (8, 2)).astype(np.float32) * (1.0 if step % 3 == 0 else 0.3)
+        obs, reward, term, trunc, info = env.step(action)
+        for array in (obs, reward, term, trunc):
+            core.update(np.ascontiguousarray(array).tobytes())
+        if "final_info" in info:
+            ended = info["final_info"]["metrics"]
+            for key in ("person_path_deviation", "people_walked_into_robot", "people_reacting",
+                        "reacting_time_lost", "reacting_extra_distance"):  # fmt: skip
+                metrics.update(np.ascontiguousarray(ended[key]).tobytes())
+    return core.hexdigest()[:16], metrics.hexdigest()[:16]
+
+
+# Recorded with the numpy replay before its kernels (the metrics after the fix of
+# reacting_extra_distance, which changed nothing else): the kernels keep every value bit for bit.
+GOLDEN_RECORDED = {
+    "replay": ("e5e46e7a1b5ade60", "6abf74028faf97ba"),
+    "hybrid:orca": ("299387c2d98710da", "29c27e51e2f797ea"),
+}
+
+
+@pytest.mark.parametrize("humans", sorted(GOLDEN_RECORDED))
+def test_recorded_rollouts_stay_bit_for_bit(family: RecordedScene, humans: str) -> None:
+    assert _vector_digests(family.name, humans) == GOLDEN_RECORDED[humans]
