@@ -99,6 +99,11 @@ class HumanConfig:
         social_lambda, social_gamma, social_n, social_n_prime: Moussaid parameters.
         robot_scale: robot-human position differences are divided by this before the social force.
         waypoint_radius: a waypoint within this distance counts as reached, m.
+        learned_forces: whether the social and wall forces also act on people who walk by a
+            learner's desired velocity (False: the desired velocity alone, through the relaxation;
+            walls stay solid). A learned people policy file says which it was trained with
+            (socialzoo.env.human_policy.LearnedHumanPolicy.learned_forces), and the world that
+            walks it takes that.
     """
 
     force_radius: float = 0.2
@@ -114,6 +119,7 @@ class HumanConfig:
     social_n_prime: float = 3.0
     robot_scale: float = 1.5
     waypoint_radius: float = 1.0
+    learned_forces: bool = True
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("obstacle_strength", "social_strength"))

@@ -89,6 +89,8 @@ class BatchedCore:
         self.world, self.walls, self.map = world, walls, m
         self.planner, self.robot_visible = planner, robot_visible
         self.people = People(people, world, b, r, max_humans, walls, m, robot_visible)
+        # A learned people policy's file may say its people walk without forces (People.world).
+        self.world = world = self.people.world
         robot = world.robot
         door_reach = robot.radius if robot.radius is not None else robot.half_width
         # Who waits, signals or follows a robot, whom each robot escorts, doors (socialzoo.env.script).

@@ -60,6 +60,10 @@ class LearnedHumanPolicy:
             the scale existed were trained with 1).
         mirror_symmetric: the pre-tanh mean is (f(obs) + m f(mirror(obs))) / 2, with m = (1, -1):
             the same behaviour on the left and the right (socialzoo.train.mappo.MirrorSymmetric).
+        learned_forces: whether the social and wall forces act on the people it walks, as in the
+            world it was trained in (HumanConfig.learned_forces; the header's dynamics section,
+            true for files written before it existed). `socialzoo train people-bc` trains without
+            them: the network's desired velocity alone moves its people.
         header: the policy file's header (kept for config() and reports).
 
     Raises:
@@ -81,6 +85,7 @@ class LearnedHumanPolicy:
         header: dict[str, Any] | None = None,
         *,
         mirror_symmetric: bool = False,
+        learned_forces: bool = True,
     ) -> None:
         if activation not in ACTIVATIONS:
             raise ValueError(
@@ -121,6 +126,7 @@ class LearnedHumanPolicy:
         self.action_frame = action_frame
         self.action_scale = float(action_scale)
         self.mirror_symmetric = bool(mirror_symmetric)
+        self.learned_forces = bool(learned_forces)
         self._mirror = human_mirror_signs(self.num_neighbours)
         self.header = dict(header or {})
         self.path: Path | None = None
@@ -192,6 +198,7 @@ class LearnedHumanPolicy:
                 "action_frame": self.action_frame,
                 "action_scale": self.action_scale,
             },
+            "dynamics": {"learned_forces": self.learned_forces},
             "env_id": env_id,
             "training": training,
         }
@@ -232,7 +239,8 @@ class LearnedHumanPolicy:
                 str(observation["action_frame"]),
                 float(observation.get("action_scale", 1.0)),
                 header,
-                mirror_symmetric=_flag(network, "mirror_symmetric"),
+                mirror_symmetric=_flag(header, "network", "mirror_symmetric"),
+                learned_forces=_flag(header, "dynamics", "learned_forces", default=True),
             )
         except (KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{path}: {err}") from None
@@ -282,9 +290,13 @@ def make_human_policy(spec: str) -> LearnedHumanPolicy | None:
     return None if path is None else LearnedHumanPolicy.load(path)
 
 
-def _flag(section: dict[str, Any], name: str) -> bool:
-    """A true/false header entry (false when absent: files written before it existed)."""
-    value = section.get(name, False)
+def _flag(header: dict[str, Any], section: str, name: str, default: bool = False) -> bool:
+    """The true/false entry header[section][name] (`default` when absent: files written before it
+    existed)."""
+    part = header.get(section, {})
+    if not isinstance(part, dict):
+        raise ValueError(f"the header's {section} must be an object, got {part!r}")
+    value = part.get(name, default)
     if not isinstance(value, bool):
-        raise ValueError(f"network.{name} must be true or false, got {value!r}")
+        raise ValueError(f"{section}.{name} must be true or false, got {value!r}")
     return value

@@ -24,6 +24,7 @@ the default config (social force only, no counterfactual) nothing here runs.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -97,6 +98,10 @@ class People:
             from socialzoo.env.human_policy import LearnedHumanPolicy
 
             self.policy = LearnedHumanPolicy.load(path)
+            if self.policy.learned_forces != world.human.learned_forces:
+                # Its people walk as in the world it was trained in.
+                human = dataclasses.replace(world.human, learned_forces=self.policy.learned_forces)
+                self.world = world = dataclasses.replace(world, human=human)
         self.groups = self.config.has_groups
         self.counterfactual = self.config.counterfactual
         b, h, br = batch_size, self.max_humans, batch_size * self.num_robots

@@ -101,9 +101,10 @@ def _accelerations(
     """Fill out (B, H, 2) with every human's total acceleration; see human_acceleration.
 
     amounts: (2, B * P) exp of the pair exponents (speed, angle). params: relaxation_time,
-    desired_factor, social_strength, obstacle_strength, obstacle_sigma, force_radius.
+    desired_factor, social_strength, obstacle_strength, obstacle_sigma, force_radius, and 1.0 when
+    the forces act on learned people too (HumanConfig.learned_forces), else 0.0.
     """
-    tau, k_desired, k_social, k_wall, sigma, radius = params
+    tau, k_desired, k_social, k_wall, sigma, radius, learned_forces = params
     batch, num_humans = mask.shape
     pairs_per_world = theta.shape[0] // batch
     social = np.zeros((num_humans, 2))
@@ -142,6 +143,10 @@ def _accelerations(
             # target, or the learner's desired velocity.
             if learned[b, i]:
                 wx, wy = desired_vel[b, i, 0], desired_vel[b, i, 1]
+                if learned_forces == 0.0:
+                    out[b, i, 0] = k_desired * ((wx - vx) / tau)
+                    out[b, i, 1] = k_desired * ((wy - vy) / tau)
+                    continue
             else:
                 tx, ty = target[b, i, 0] - px, target[b, i, 1] - py
                 scale = pref_speed[b, i] / max(math.sqrt(tx * tx + ty * ty), _TINY)
@@ -207,7 +212,7 @@ def human_acceleration(
     np.exp(amounts, out=amounts)
     params = (
         cfg.relaxation_time, cfg.desired_factor, cfg.social_strength, cfg.obstacle_strength,
-        cfg.obstacle_sigma, cfg.force_radius,
+        cfg.obstacle_sigma, cfg.force_radius, 1.0 if cfg.learned_forces else 0.0,
     )  # fmt: skip
     accel = np.empty((batch, num_humans, 2))
     _accelerations(

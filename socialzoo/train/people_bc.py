@@ -11,11 +11,15 @@ the frame and the frame after gives one demonstration:
   frame; the replay's is the next segment's, which would give the answer away), the others' as the
   replay has them; neighbour rows of the parked robot are zeroed (absent), as it is not there;
 - the action that walks it to its recorded position on the next frame: the desired velocity v_d
-  that, through the social force every learned person walks by (dv/dt = (v_d - v) / tau + F, F
-  the other people's and walls' forces at the frame, held over the frame, the speed cap aside),
-  covers the recorded displacement over the frame period, expressed as an action of the policy's
-  frame and scale (the inverse of socialzoo.env.human_agents.action_velocities), clipped to
-  [-ACTION_LIMIT, ACTION_LIMIT].
+  that, through the relaxation every learned person walks by (dv/dt = (v_d - v) / tau + F), covers
+  the recorded displacement over the frame period (the speed cap aside), expressed as an action of
+  the policy's frame and scale (the inverse of socialzoo.env.human_agents.action_velocities),
+  clipped to [-ACTION_LIMIT, ACTION_LIMIT]. By default no force acts on the learned people (F = 0,
+  HumanConfig.learned_forces off, written into the policy file): the network's desired velocity
+  alone moves them, and it sees its neighbours to keep clear of them. With `--learned-forces`, F is
+  the other people's and walls' social forces at the frame, held over the frame, and each label
+  compensates them. On the training scenes' held-out time, walked closed-loop, the people without
+  forces came closer to the recorded ones on every scene (docs/humans.md).
 
 An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
 `val_fraction` of each scene's windows (in time) are held out for early stopping. The run folder
@@ -73,6 +77,10 @@ class Args:
         action_scale: the action times this times the preferred speed is the desired velocity.
         velocity_noise: the velocity perturbation of the noisy copies, m/s per axis (`demonstrations`).
         noisy_copies: noisy copies of each demonstration (0: the recorded states only).
+        learned_forces: whether the social force's people and wall forces act on the learned
+            people too (HumanConfig.learned_forces, written into the policy file): then each label
+            compensates the forces at its frame. Off (the default): the network's desired velocity
+            alone moves them, and the labels are the recorded motion's.
         hidden: hidden units per layer.
         depth: hidden layers.
         lr: Adam learning rate.
@@ -94,6 +102,7 @@ class Args:
     action_scale: float = 4.0
     velocity_noise: float = 0.4
     noisy_copies: int = 2
+    learned_forces: bool = False
     hidden: int = 128
     depth: int = 2
     lr: float = 1e-3
@@ -129,11 +138,12 @@ class Args:
         return tuple(self.scenes.split(","))
 
 
-def replay_world(dt: float = WORLD_DT) -> WorldConfig:
-    """The world of the replay: the default people at `dt` s per step."""
-    from socialzoo.core.config import WorldConfig
+def replay_world(dt: float = WORLD_DT, learned_forces: bool = False) -> WorldConfig:
+    """The world of the replay: the default people at `dt` s per step, the forces acting on learned
+    people or not (HumanConfig.learned_forces)."""
+    from socialzoo.core.config import HumanConfig, WorldConfig
 
-    return WorldConfig(dt=dt)
+    return WorldConfig(dt=dt, human=HumanConfig(learned_forces=learned_forces))
 
 
 # ---------------------------------------------------------------------------- scenes
@@ -359,6 +369,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
+            world=replay_world(learned_forces=args.learned_forces),
             velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies, seed=args.seed,
         )  # fmt: skip
         count = int(demos.window.max()) + 1 if len(demos) else 0
@@ -448,8 +459,9 @@ def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> Learn
     linear = [m for m in net if isinstance(m, torch.nn.Linear)]
     weights = [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy()) for m in linear]
     return LearnedHumanPolicy(
-        weights, "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale
-    )
+        weights, "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale,
+        learned_forces=args.learned_forces,
+    )  # fmt: skip
 
 
 def env_id() -> str:
@@ -471,6 +483,7 @@ def training_record(
         "window": args.window,
         "velocity_noise": args.velocity_noise,
         "noisy_copies": args.noisy_copies,
+        "learned_forces": args.learned_forces,
         "per_scene": scenes,
         "train_demonstrations": num_train,
         "val_demonstrations": num_val,

@@ -136,3 +136,36 @@ def test_shipped_human_policy_loads_and_records_its_training():
     assert policy.mirror_symmetric and record["args"]["mirror_symmetric"]
     obs = np.random.default_rng(0).normal(size=(8, policy.input_size))
     assert np.isfinite(policy.act(obs)).all()
+
+
+def test_the_file_says_whether_forces_act_on_its_people_and_the_world_takes_it(walker_policy_path, tmp_path):
+    from socialzoo.core.config import WorldConfig
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.humans.models import PeopleConfig
+
+    policy = LearnedHumanPolicy.load(walker_policy_path)
+    assert policy.learned_forces  # files without the dynamics section: forces on, as before
+    free = LearnedHumanPolicy(
+        policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human",
+        learned_forces=False,
+    )  # fmt: skip
+    path = free.save(tmp_path / "free.safetensors", policy.header["env_id"], {})
+    assert LearnedHumanPolicy.load(path).learned_forces is False
+
+    def world_of(spec: str) -> WorldConfig:
+        core = BatchedCore(
+            1, 1, 2, WorldConfig(), WallIndex(np.zeros((0, 4))), people=PeopleConfig(models=spec)
+        )
+        return core.world
+
+    assert world_of(f"learned:{path}").human.learned_forces is False
+    assert world_of(f"learned:{walker_policy_path}").human.learned_forces is True
+    assert world_of("sf").human.learned_forces is True
+    header = {**LearnedHumanPolicy.load(path).header, "dynamics": {"learned_forces": "no"}}
+    tensors = {"obs_loc": free.obs_loc, "obs_scale": free.obs_scale}
+    for i, (w, b) in enumerate(free.layers):
+        tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"] = w, b
+    bad = save_policy_file(tmp_path / "bad.safetensors", tensors, header)
+    with pytest.raises(PolicyFileError, match=r"dynamics\.learned_forces must be true or false"):
+        LearnedHumanPolicy.load(bad)

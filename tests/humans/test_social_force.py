@@ -136,3 +136,25 @@ def test_waypoints_shuttle_between_ends():
     # A one-waypoint route stays put.
     waypoint, direction = advance_waypoints(pos, pos, np.array([[1]]), np.array([[0]]), np.array([[1]]), 1.0)
     assert waypoint[0, 0] == 0
+
+
+def test_learned_people_without_forces_relax_towards_their_desired_velocity_alone():
+    """HumanConfig.learned_forces off: a learned person beside another person and a wall feels only
+    the relaxation towards its desired velocity; the scripted person still feels every force, and
+    with the switch on the learned person does too."""
+    pos = np.array([[[0.0, 0.15], [0.5, 0.2]]])
+    vel = np.array([[[1.0, 0.0], [-1.0, 0.0]]])
+    target = np.array([[[5.0, 0.0], [-5.0, 0.0]]])
+    speed, mask = np.array([[1.2, 1.2]]), np.ones((1, 2), dtype=bool)
+    desired = np.array([[[0.4, 0.9], [0.0, 0.0]]])
+    learned = np.array([[True, False]])
+    walls = WallIndex(np.array([[-5.0, 0.0, 5.0, 0.0]]))
+    none = np.zeros((1, 0, 2))
+    args = (pos, vel, target, speed, mask, none, none, walls)
+    off = HumanConfig(learned_forces=False)
+    accel_off, _ = human_acceleration(*args, off, desired, learned)
+    accel_on, _ = human_acceleration(*args, CFG, desired, learned)
+    relax = off.desired_factor * (desired[0, 0] - vel[0, 0]) / off.relaxation_time
+    np.testing.assert_array_equal(accel_off[0, 0], relax)
+    assert np.abs(accel_on[0, 0] - relax).max() > 1.0  # the person and the wall push it
+    np.testing.assert_array_equal(accel_off[0, 1], accel_on[0, 1])

@@ -156,3 +156,22 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     # The others walk exactly their tracks: 0.8 s after frame 2 is frame 4.
     other = rec.tracks[1]
     np.testing.assert_allclose(core.state.human_pos[0, 1], other.positions[4 - other.first_frame], atol=1e-9)
+
+
+def test_labels_without_forces_are_the_recorded_motion_and_with_them_compensate():
+    """Without forces on the learned people (the default) a label is what the relaxation alone
+    needs to walk the recorded step, whoever is near; with --learned-forces the label of a person
+    among others also undoes their push."""
+    rec = _recording()
+    kwargs = dict(window=12, num_neighbours=2, action_frame="human", action_scale=4.0)
+    free = demonstrations(rec, **kwargs)
+    forced = demonstrations(rec, **kwargs, world=replay_world(learned_forces=True))
+    np.testing.assert_array_equal(free.obs, forced.obs)
+    # The walkers' recorded velocity is constant, so without forces every label is the same
+    # forward action (speed over scale x preferred speed), near others or not.
+    np.testing.assert_allclose(free.action[:, 0], 0.25, atol=1e-6)
+    np.testing.assert_allclose(free.action[:, 1], 0.0, atol=1e-6)
+    first = np.hypot(free.obs[:, 8], free.obs[:, 9])
+    near = (first < 1.5) & (free.obs[:, 8:13] != 0).any(1)
+    assert near.any()
+    assert np.abs(forced.action[near] - free.action[near]).max() > 0.02  # 0.08 m/s and more
