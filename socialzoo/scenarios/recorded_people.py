@@ -32,7 +32,12 @@ def runs(track: np.ndarray) -> list[tuple[int, int]]:
 def route_frames(track: np.ndarray) -> np.ndarray:
     """The frames of the route points of everyone in a slot, one person after another: each
     person's first frame, every ROUTE_STRIDE frames on, and its last (track: (T, 2), NaN absent)."""
-    return np.concatenate([run_route(a, b) for a, b in runs(track)]).astype(np.int64)
+    return slot_route(runs(track))
+
+
+def slot_route(slot_runs: list[tuple[int, int]]) -> np.ndarray:
+    """route_frames of a slot from its runs (runs)."""
+    return np.concatenate([run_route(a, b) for a, b in slot_runs]).astype(np.int64)
 
 
 def run_route(first: int, last: int) -> np.ndarray:
@@ -50,8 +55,12 @@ def path_length(points: np.ndarray) -> float:
 def mean_speed(positions: np.ndarray, dt: float) -> float:
     """A recorded person's mean speed over its positions (k, 2) every dt s, at least MIN_SPEED, m/s:
     the speed a model walks it at."""
-    time = (len(positions) - 1) * dt
-    return max(path_length(positions) / time, MIN_SPEED) if time > 0 else MIN_SPEED
+    return speed_over(path_length(positions), (len(positions) - 1) * dt)
+
+
+def speed_over(length: float, time: float) -> float:
+    """length / time, at least MIN_SPEED (MIN_SPEED for no time), m/s (mean_speed)."""
+    return max(length / time, MIN_SPEED) if time > 0 else MIN_SPEED
 
 
 @dataclass(frozen=True)
@@ -158,9 +167,7 @@ class RecordedPeople:
     @cached_property
     def slot_routes(self) -> tuple[np.ndarray, ...]:
         """Each slot's route frames (route_frames), unpadded."""
-        return tuple(
-            np.concatenate([run_route(a, b) for a, b in slot]).astype(np.int64) for slot in self.slot_runs
-        )
+        return tuple(slot_route(slot) for slot in self.slot_runs)
 
     @cached_property
     def route_frames(self) -> np.ndarray:
@@ -201,12 +208,11 @@ class RecordedPeople:
             segments = np.sqrt((np.diff(track, axis=0) ** 2).sum(-1))
             index = 0
             for k, (a, b) in enumerate(slot_runs):
-                points = (b - a) // ROUTE_STRIDE + 1 + ((b - a) % ROUTE_STRIDE != 0)
+                points = len(run_route(a, b))
                 entry[s, k], exit_[s, k] = a, b
                 first[s, k], last[s, k] = index, index + points - 1
                 index += points
-                time = (b - a) * self.dt
-                speed[s, k] = max(float(segments[a:b].sum()) / time, MIN_SPEED) if time > 0 else MIN_SPEED
+                speed[s, k] = speed_over(float(segments[a:b].sum()), (b - a) * self.dt)
         return Occupants(entry, exit_, first, last, speed)
 
     @property
