@@ -70,6 +70,11 @@ class CrowdNavConfig:
             robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
         observation: "flat" or "dict" (socialzoo.env.crowd_observation).
         max_humans: person slots of the observation and the state (default: cases.num_humans).
+        observed_people: None (CrowdNav's): the observation holds every person slot, in slot order.
+            A count K: it holds the K present people nearest the robot, nearest first (empty slots
+            after them when fewer are present), whatever the world's slots: a policy trained with K
+            people (the attention network reads a set) plays a scene of more or fewer slots, as a
+            recorded scene's (socialzoo.scenarios.recorded).
         num_robots: robots per world (1: CrowdNav's task; more for the PettingZoo env, each seeing
             the others as people: socialzoo.scenarios.crowd_cases.robot_poses).
         map: None for CrowdNav's open arena; a building map ("gdc1", a path) for crowd navigation
@@ -113,6 +118,7 @@ class CrowdNavConfig:
     action: CrowdAction = "continuous"
     observation: ObservationKind = "flat"
     max_humans: int | None = None
+    observed_people: int | None = None
     num_robots: int = 1
     map: str | None = None
     wall_rays: int = 0
@@ -148,6 +154,7 @@ class CrowdNavConfig:
                 f"CrowdNavConfig.observation must be one of {OBSERVATION_KINDS}, got {self.observation!r}"
             )
         check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
+        check_int("CrowdNavConfig", "observed_people", self.observed_people, low=1, allow_none=True)
         check_int("CrowdNavConfig", "num_robots", self.num_robots, low=1)
         if self.max_humans is not None and self.max_humans < self.cases.num_humans:
             raise ValueError(
@@ -195,7 +202,12 @@ class CrowdNavConfig:
     @property
     def observed_slots(self) -> int:
         """Slots of a robot's observation: the people, the other robots, then the wall rays."""
-        return self.slots + self.num_robots - 1 + self.wall_rays
+        return self.observed_person_slots + self.num_robots - 1 + self.wall_rays
+
+    @property
+    def observed_person_slots(self) -> int:
+        """Person slots of a robot's observation (observed_people, or every slot)."""
+        return self.slots if self.observed_people is None else self.observed_people
 
     @property
     def physics_dt(self) -> float:

@@ -154,6 +154,33 @@ def joint_state(
     return JointState(robot=flat[:, :robot_dim], humans=humans, mask=human_mask.copy(), buffer=flat)
 
 
+def nearest_people(
+    robot_pos: np.ndarray, human_pos: np.ndarray, human_mask: np.ndarray, count: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The slots a robot observes when it sees `count` people (CrowdNavConfig.observed_people).
+
+    Args:
+        robot_pos: (N, 2) m.
+        human_pos: (N, H, 2) m.
+        human_mask: (N, H) bool.
+        count: K, observed person slots.
+
+    Returns:
+        (N, K) int slot indices, the present people nearest each robot first (ties to the lower
+        slot), and (N, K) bool, whether the observed slot holds a person (slot 0 pads a row with
+        fewer than K present).
+    """
+    n, h = human_mask.shape
+    gap = human_pos - robot_pos[:, None, :]
+    distance2 = np.where(human_mask, (gap * gap).sum(-1), np.inf)
+    order = np.argsort(distance2, axis=1, kind="stable")[:, :count]
+    present = np.take_along_axis(human_mask, order, 1)
+    if h < count:
+        order = np.concatenate((order, np.zeros((n, count - h), dtype=order.dtype)), 1)
+        present = np.concatenate((present, np.zeros((n, count - h), dtype=bool)), 1)
+    return np.where(present, order, 0), present
+
+
 @kernel
 def _fill_joint_state(  # type: ignore[no-untyped-def]
     robot_pos,

@@ -21,6 +21,8 @@ theta, PPO evaluated without its normalisation. `socialzoo reproduce --reference
 evaluates the learned rows on them.
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within CrowdNav's v1, CrowdNavConfig.observed_people (the K nearest people in the observation)
+        is new and opt-in (None, every slot in slot order, the default), so no id's rollouts change.
     Within v2, the ids socialzoo/ActionSelectionReference-v2 and
         socialzoo/ActionSelectionTransferReference-v2 (the reference code's quirks on, EnvConfig.quirks)
         are new; with the quirks off (the default) no other id's rollouts change.

@@ -35,6 +35,7 @@ from socialzoo.env.crowd_observation import (
     flat_size,
     human_features,
     joint_state,
+    nearest_people,
     robot_features,
     with_signals,
 )
@@ -395,6 +396,9 @@ class CrowdNavTask(Task):
         pos, vel, mask = core.others(s, velocity)
         radius = np.broadcast_to(self.slot_radius, mask.shape)
         robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        observed = None
+        if self.config.observed_people is not None:
+            pos, vel, mask, radius, observed = self._nearest_people(robot_pos, pos, vel, mask, radius)
         if self.config.wall_rays:
             points, seen = self._wall_points(robot_pos)
             pos = np.concatenate((pos, points), axis=1)
@@ -426,18 +430,45 @@ class CrowdNavTask(Task):
             left = core.route_left if rows is None else core.route_left[rows]
             observation.robot[:, 0] = left.reshape(b * r)
         if self.config.signals:
-            observation = self._with_signals(observation, robot_pos, offset, rows)
+            observation = self._with_signals(observation, robot_pos, offset, rows, observed)
         return observation
 
+    def _nearest_people(
+        self, robot_pos: np.ndarray, pos: np.ndarray, vel: np.ndarray, mask: np.ndarray, radius: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The observed slots' (pos, vel, mask, radius) with the people's H slots replaced by the
+        observed_people nearest (crowd_observation.nearest_people), and those people's slots."""
+        h = self.num_human_slots
+        seen, present = nearest_people(robot_pos, pos[:, :h], mask[:, :h], self.config.observed_people or h)
+
+        def people_first(values: np.ndarray, picked: np.ndarray | None = None) -> np.ndarray:
+            if picked is None:
+                index = seen.reshape(seen.shape + (1,) * (values.ndim - 2))
+                picked = np.take_along_axis(values[:, :h], index, 1)
+            return np.concatenate((picked, values[:, h:]), 1)
+
+        return (
+            people_first(pos), people_first(vel), people_first(mask, present),
+            people_first(np.ascontiguousarray(radius)), seen,
+        )  # fmt: skip
+
     def _with_signals(
-        self, observation: JointState, robot_pos: np.ndarray, goal_offset: np.ndarray, rows: np.ndarray | None
+        self,
+        observation: JointState,
+        robot_pos: np.ndarray,
+        goal_offset: np.ndarray,
+        rows: np.ndarray | None,
+        observed: np.ndarray | None = None,
     ) -> JointState:
         """The joint state with each person slot's gesture and the nearest door, in the frame of
         each robot (x towards the goal it sees; socialzoo.env.crowd_observation.with_signals)."""
         core, script = self.core, self.core.script
         pick = slice(None) if rows is None else rows
         signal = np.zeros(observation.mask.shape)
-        signal[:, : core.max_humans] = core.per_robot(script.signal[pick])  # the people's slots come first
+        people = core.per_robot(script.signal[pick])
+        if observed is not None:  # the observed people's (CrowdNavConfig.observed_people)
+            people = np.take_along_axis(people, observed, 1)
+        signal[:, : people.shape[1]] = people  # the people's slots come first
         offset, closed = nearest_door(
             robot_pos, core.per_robot(script.doors[pick]), core.per_robot(script.closed[pick])
         )
