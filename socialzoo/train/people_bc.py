@@ -77,6 +77,8 @@ class Args:
         action_scale: the action times this times the preferred speed is the desired velocity.
         velocity_noise: the velocity perturbation of the noisy copies, m/s per axis (`demonstrations`).
         noisy_copies: noisy copies of each demonstration (0: the recorded states only).
+        label_frames: frames ahead that each label reaches: the desired velocity, held, that carries the
+            person from its state to its recorded position that many frames later (1: the next frame).
         learned_forces: whether the social force's people and wall forces act on the learned
             people too (HumanConfig.learned_forces, written into the policy file): then each label
             compensates the forces at its frame. Off (the default): the network's desired velocity
@@ -102,6 +104,7 @@ class Args:
     action_scale: float = 4.0
     velocity_noise: float = 0.4
     noisy_copies: int = 2
+    label_frames: int = 1
     learned_forces: bool = False
     hidden: int = 128
     depth: int = 2
@@ -127,6 +130,7 @@ class Args:
             check_int(self, name, 1)
         check_int(self, "num_neighbours", 0)
         check_int(self, "noisy_copies", 0)
+        check_int(self, "label_frames", 1)
         check_number(self, "velocity_noise", 0.0)
         check_number(self, "val_fraction", 0.0, strict=True, high=0.5)
         check_number(self, "action_scale", 0.0, strict=True)
@@ -187,10 +191,13 @@ def window_scenario(
     return dataclasses.replace(scenario, human_routes=routes, human_speed=speeds[order]), order
 
 
-def windows(num_frames: int, window: int) -> list[tuple[int, int]]:
+def windows(num_frames: int, window: int, ahead: int = 1) -> list[tuple[int, int]]:
     """The replay's rows: frames (first, last) with first = start - 1 (the frame before the first
-    demonstrated one) and last = start + window (the frame after the last), starts every `window`."""
-    return [(max(s - 1, 0), min(s + window, num_frames - 1)) for s in range(0, num_frames - 1, window)]
+    demonstrated one) and last = start + window + ahead - 1 (`ahead` frames after the last
+    demonstrated one: the frames its label reaches), starts every `window`."""
+    return [
+        (max(s - 1, 0), min(s + window + ahead - 1, num_frames - 1)) for s in range(0, num_frames - 1, window)
+    ]
 
 
 # ---------------------------------------------------------------------------- demonstrations
@@ -261,6 +268,7 @@ def demonstrations(
     world: WorldConfig | None = None,
     velocity_noise: float = 0.0,
     noisy_copies: int = 0,
+    label_frames: int = 1,
     seed: int = 0,
 ) -> Demonstrations:
     """Every demonstration of a recording (module docstring), replayed in one batched core.
@@ -270,6 +278,7 @@ def demonstrations(
     one that still reaches the recorded position on the next frame from the perturbed velocity:
     states a little off the recorded ones, labelled with the way back, as a person walked by the
     policy reaches them (noise injection against compounding errors: DART, Laskey et al. 2017).
+    Each label reaches the recorded position `label_frames` frames ahead (held over their period).
 
     Raises:
         ValueError: a world step that does not divide the recording's frame period.
@@ -286,11 +295,11 @@ def demonstrations(
     if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
         raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
     speeds = mean_speeds(recording)
-    rows = windows(recording.num_frames, window)
+    rows = windows(recording.num_frames, window, label_frames)
     built = [window_scenario(recording, a, b, speeds) for a, b in rows]
     scenarios = [s for s, _ in built]
     slots = max(s.num_humans for s in scenarios)
-    grids = np.full((len(rows), slots, window + 2, 2), np.nan)
+    grids = np.full((len(rows), slots, window + 1 + label_frames, 2), np.nan)
     for i, (scenario, _) in enumerate(built):
         assert scenario.recorded is not None
         t = scenario.recorded.tracks
@@ -306,7 +315,7 @@ def demonstrations(
             core.step(command)
         state = core.state
         assert state is not None
-        prev, here, nxt = grids[:, :, f - 1], grids[:, :, f], grids[:, :, f + 1]
+        prev, here, nxt = grids[:, :, f - 1], grids[:, :, f], grids[:, :, f + label_frames]
         usable = ~np.isnan(prev[..., 0]) & ~np.isnan(here[..., 0]) & ~np.isnan(nxt[..., 0])
         usable &= state.human_mask & np.isclose(state.human_pos, np.nan_to_num(here)).all(-1)
         # Near its exit a person's target turns back to its entry (the waypoint radius).
@@ -328,7 +337,7 @@ def demonstrations(
                 seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
                 seen.human_mask,
             )  # fmt: skip
-            desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, recording.dt, world)
+            desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, label_frames * recording.dt, world)
             action = inverse_action(seen, desired, action_frame, action_scale)
             clipped = (np.abs(action) > ACTION_LIMIT).any(-1)
             out.append(
@@ -370,7 +379,8 @@ def fit(run: TrainingRun) -> dict[str, Any]:
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
             world=replay_world(learned_forces=args.learned_forces),
-            velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies, seed=args.seed,
+            velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies,
+            label_frames=args.label_frames, seed=args.seed,
         )  # fmt: skip
         count = int(demos.window.max()) + 1 if len(demos) else 0
         cut = count - max(1, round(args.val_fraction * count))
@@ -483,6 +493,7 @@ def training_record(
         "window": args.window,
         "velocity_noise": args.velocity_noise,
         "noisy_copies": args.noisy_copies,
+        "label_frames": args.label_frames,
         "learned_forces": args.learned_forces,
         "per_scene": scenes,
         "train_demonstrations": num_train,

@@ -125,6 +125,31 @@ def test_noisy_copies_are_labelled_with_the_way_back():
     assert not np.array_equal(other.action, noisy.action)
 
 
+def test_labels_reach_the_position_label_frames_ahead():
+    """A lone walker at constant velocity is labelled alike whatever the horizon; a noisy copy's way
+    back is spread over the horizon: d(desired) = -s / (K T - s) d(v0)."""
+    t = np.arange(30)[:, None] * 0.4
+    lone = Track(person=0, first_frame=0, positions=np.array([0.0, 0.0]) + t * np.array([1.1, 0.3]))
+    rec = Recording(name="lone", dt=0.4, num_frames=30, tracks=(lone,), source="test")
+    kwargs = dict(window=40, num_neighbours=2, action_frame="human", action_scale=4.0)
+    one = demonstrations(rec, **kwargs)
+    three = demonstrations(rec, **kwargs, label_frames=3)
+    # (Its last frames, with no position three frames ahead, lie within the exit's radius anyway.)
+    assert len(three) == len(one) > 20
+    np.testing.assert_array_equal(three.obs, one.obs[: len(three)])
+    np.testing.assert_allclose(three.action, one.action[: len(three)], atol=1e-6)
+    noisy = demonstrations(rec, **kwargs, label_frames=3, velocity_noise=0.1, noisy_copies=1, seed=3)
+    world = replay_world()
+    rate = world.human.desired_factor / world.human.relaxation_time
+    s = (1.0 - np.exp(-rate * 3 * rec.dt)) / rate
+    clean, copy = noisy.take(np.arange(0, len(noisy), 2)), noisy.take(np.arange(1, len(noisy), 2))
+    moved = copy.obs[:, 2:4] - clean.obs[:, 2:4]
+    expected = clean.action - s / (3 * rec.dt - s) * moved / (4.0 * clean.obs[:, 4:5])
+    np.testing.assert_allclose(copy.action, expected, atol=1e-5)
+    with pytest.raises(ValueError, match="label_frames"):
+        Args(label_frames=0)
+
+
 def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     rec = _recording()
     monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: rec)
