@@ -30,6 +30,8 @@ POLICIES = {
     "pips": "action_selection",
     "orca": "crowdnav",
     "social_force": "crowdnav",
+    "crowdnav": "crowdnav",
+    "suite_crowdnav": "crowdnav",
 }
 KEYS = (
     "success",
@@ -48,6 +50,23 @@ def _config(task: str) -> dict:
         if kwargs["task"] == task:
             return {k: v for k, v in kwargs.items() if k != "task"}
     raise KeyError(task)
+
+
+def _learned_crowd_overrides(name: str) -> dict:
+    """A learned CrowdNav policy's config in a recorded scene: its own actions and signals, its own
+    id's wall rays, and as many observed people (the nearest) as it has person slots."""
+    import gymnasium as gym
+
+    from socialzoo.env.registration import register_envs
+    from socialzoo.env.tasks.crowdnav import resolve_config
+
+    policy = make_policy(name, task="crowdnav")
+    if not hasattr(policy, "slots"):
+        return {}
+    register_envs()
+    trained = {k: v for k, v in gym.spec(str(policy.header["env_id"])).kwargs.items() if k != "task"}
+    rays = resolve_config(None, trained).wall_rays
+    return {**policy.task_overrides, "wall_rays": rays, "observed_people": policy.slots - rays}
 
 
 def main() -> int:
@@ -72,6 +91,7 @@ def main() -> int:
                     overrides["people"] = {"models": people}
                 else:
                     overrides["humans"] = people.replace("hybrid:sf", "hybrid:orca")
+                    overrides |= _learned_crowd_overrides(name)
                 start = time.perf_counter()
                 from socialzoo.env.tasks import task_class
 
