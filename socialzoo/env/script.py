@@ -17,23 +17,16 @@ person is not pushed about.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 
 import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.scenarios.scenario import Scenario
-from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP_RADIUS, Script
+from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP_RADIUS
 
 # A released person keeps signalling until it is this far from its stop point, m.
 SIGNAL_RADIUS = 3.0
-
-
-@functools.cache
-def _plain(num_robots: int) -> Script:
-    """The empty script of `num_robots` robots (read-only, so one serves every unscripted row)."""
-    return Script.plain(0, num_robots)
 
 
 class ScriptRunner:
@@ -94,15 +87,16 @@ class ScriptRunner:
             grown[:, : self.doors.shape[1]] = self.doors
             self.doors = grown
             self.closed = np.zeros(grown.shape[:2], dtype=bool)
-        for row, scenario in zip(rows.tolist(), scenarios, strict=True):
-            script = None if scenario is None else scenario.script
-            self.scripted[row] = script is not None
+        scripts = [None if s is None else s.script for s in scenarios]
+        self._reset_plain(rows[np.array([script is None for script in scripts], dtype=bool)])
+        for row, script in zip(rows.tolist(), scripts, strict=True):
+            if script is None:
+                continue
+            self.scripted[row] = True
             self.released[row] = False
             self.reached[row] = False
             self.reached_at[row] = np.inf
             self.signal[row] = 0
-            if script is None:
-                script = _plain(self.escort.shape[1])
             n = script.num_humans
             for name, fill in (("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
                                ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False)):  # fmt: skip
@@ -122,6 +116,19 @@ class ScriptRunner:
                 self._follow_routes(state, np.array([row]))
         if self.active:
             self._update(state, rows)
+
+    def _reset_plain(self, rows: np.ndarray) -> None:
+        """`reset` of rows without a script, all at once: what the empty script (Script.plain with
+        no people) writes."""
+        if len(rows) == 0:
+            return
+        self.scripted[rows] = False
+        for name, fill in (("released", False), ("reached", False), ("reached_at", np.inf), ("signal", 0),
+                           ("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
+                           ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False), ("escort", -1),
+                           ("escort_kind", 0), ("band", 0.0), ("doors", 0.0)):  # fmt: skip
+            getattr(self, name)[rows] = fill
+        self.doors[rows, :, 4], self.doors[rows, :, 5] = -np.inf, np.inf
 
     # ------------------------------------------------------------------ step
     def speeds(self, state: WorldState) -> np.ndarray:

@@ -201,3 +201,25 @@ def test_a_stop_at_the_routes_end_holds_and_a_person_who_stays_stays():
     # Without stay it walks its route back.
     back = _run(task, _scenario({"stop": [0], "release": [1.0]}), 900, action=1, record=pos)
     assert back[-1][0] < 24.0
+
+
+def test_rows_reset_without_a_script_hold_what_an_empty_script_writes():
+    """A batch reset mixing scripted and unscripted rows: the unscripted ones (reset all at once)
+    hold exactly the state a script in which nobody waits, follows or escorts gives."""
+    from socialzoo.env.script import ScriptRunner
+    from socialzoo.scenarios.scenario import scenarios_to_state
+
+    waits = _scenario({"stop": [1], "release": [9.0], "gesture": [WAIT]})
+    plain = dataclasses.replace(waits, script=None)
+    empty = dataclasses.replace(waits, script=Script.plain(1, 1))
+    state = scenarios_to_state([waits, waits, waits])
+    mixed, reference = ScriptRunner(3, 1, 1, DT, 0.3), ScriptRunner(3, 1, 1, DT, 0.3)
+    for runner in (mixed, reference):
+        runner.reset(np.arange(3), [waits, waits, waits], state)
+    mixed.reset(np.array([2, 0]), [None, plain], state)
+    reference.reset(np.array([2, 0]), [empty, empty], state)
+    for name, value in vars(reference).items():
+        if isinstance(value, np.ndarray) and name != "scripted":
+            np.testing.assert_array_equal(getattr(mixed, name), value, err_msg=name)
+    assert mixed.scripted.tolist() == [False, True, False]
+    assert mixed.stop[1].tolist() == [1] and mixed.stop[0].tolist() == [-1]
