@@ -9,7 +9,6 @@ bit for bit.
 
 from __future__ import annotations
 
-import functools
 import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -555,10 +554,8 @@ def get_test_set(name: str) -> TestSet:
 
 
 # ---------------------------------------------------------------------------- scenarios -> state
-@functools.lru_cache(maxsize=1 << 16)
 def noise_key(seed: int) -> np.uint64:
-    """The counter-based noise key of a scenario seed (kept: a training stream redraws seeds, and
-    deriving a key costs tens of microseconds per reset row)."""
+    """The counter-based noise key of a scenario seed."""
     return np.random.SeedSequence([int(seed), _NOISE_STREAM]).generate_state(1, dtype=np.uint64)[0]
 
 
