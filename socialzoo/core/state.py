@@ -125,6 +125,14 @@ def pad_to(array: np.ndarray, shape: tuple[int, ...], name: str) -> np.ndarray:
         return array
     if any(have > want for have, want in zip(array.shape[1:], shape, strict=True)):
         raise ValueError(f"cannot shrink state field {name} from {array.shape[1:]} to {shape}")
+    if name == "human_route" and array.shape[1] == shape[0]:
+        # Only the route axis grows (every reset of rows with shorter routes): np.pad's edge mode
+        # by two writes, without its general machinery.
+        have = array.shape[2]
+        out = np.empty(array.shape[:1] + shape, dtype=array.dtype)
+        out[:, :, :have] = array
+        out[:, :, have:] = array[:, :, have - 1 : have]
+        return out
     widths = [(0, 0)] + [(0, want - have) for have, want in zip(array.shape[1:], shape, strict=True)]
     if name == "human_route":
         return np.pad(array, widths, mode="edge")

@@ -177,10 +177,13 @@ class ReplayRunner:
             self._widen(frames, rec.route_frames.shape[1], len(rec.robot_track), occupants.entry.shape[1])
             self.recorded[row] = True
             self.frame_dt[row] = rec.dt
-            self.tracks[row] = np.nan
+            # The recording's block, and the fill around it (not the whole row twice).
             self.tracks[row, :n, :frames] = rec.tracks
-            self.track_vel[row] = 0.0
+            self.tracks[row, n:] = np.nan
+            self.tracks[row, :n, frames:] = np.nan
             self.track_vel[row, :n, :frames] = rec.velocities
+            self.track_vel[row, n:] = 0.0
+            self.track_vel[row, :n, frames:] = 0.0
             self.route_frame[row] = 0
             frames_of = rec.route_frames
             self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
@@ -191,7 +194,7 @@ class ReplayRunner:
                 array[row] = fill
                 array[row, :n, :k] = getattr(occupants, "speed" if name == "occupant_speed" else name)
             self.shared[row] = False
-            self.shared[row, :n] = (occupants.entry < NEVER).sum(1) > 1
+            self.shared[row, :n] = occupants.shared
             kind = slot_kind[:n]
             self.follows[row] = False
             self.follows[row, :n] = rec.follow | self._per_part["follows"][kind]

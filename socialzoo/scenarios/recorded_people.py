@@ -80,6 +80,11 @@ class Occupants:
     last: np.ndarray
     speed: np.ndarray
 
+    @cached_property
+    def shared(self) -> np.ndarray:
+        """(S,) the slots that more than one person occupies."""
+        return (self.entry < NEVER).sum(1) > 1
+
 
 def _frozen(value: Any, dtype: type, ndim: int, what: str) -> np.ndarray:
     arr: np.ndarray = np.array(value, dtype=dtype)
