@@ -21,7 +21,7 @@ import inspect
 import json
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -224,6 +224,7 @@ def run_task_benchmark(
     batch_size: int = 100,
     figures: bool = True,
     say: Callable[[str], None] | None = None,
+    config: Mapping[str, Any] | None = None,
 ) -> tuple[list[dict[str, Any]], list[Path]]:
     """Every policy on the first `cases` cases of a split of a registered task id, into out/: the
     store (results.sqlite), NAME.csv and NAME.md (NAME: the task's name; the benchmark's one table
@@ -233,6 +234,8 @@ def run_task_benchmark(
     or a learned one of another observation size); a learned policy that declares task overrides
     (CrowdNav's learned policy: its discrete or continuous actions) acts with them. `say` gets
     one line per policy (success, episodes played now and read from the store), as the CLI prints.
+    `config` overrides the id's task config for every policy (e.g. CrowdNav's observed_people);
+    the store keeps episodes of each config apart (its digest).
 
     Returns:
         (one table entry per policy, `table_entry`; the files written).
@@ -247,11 +250,12 @@ def run_task_benchmark(
     task = TaskId.of(env_id)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    probe = task.make(1)
+    config = dict(config or {})
+    probe = task.make(1, **config)
     rows = []
     for spec in policies:
         policy = make_policy(spec, task=probe.name, observation_space=probe.observation_space)
-        overrides = dict(getattr(policy, "task_overrides", {}) or {})
+        overrides = config | dict(getattr(policy, "task_overrides", {}) or {})
         episodes, played = evaluate_stored(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides
         )
@@ -264,7 +268,7 @@ def run_task_benchmark(
         logger.info(line)
         if say is not None:
             say(line)
-    title = f"{env_id}, {split} cases ({probe.name} task)"
+    title = f"{env_id}{''.join(f', {k}={v}' for k, v in config.items())}, {split} cases ({probe.name} task)"
     files = write_tables(rows, out, name=probe.name, title=title, layout=task_layout(rows))
     if figures and all("success_rate" in r for r in rows):
         from socialzoo.bench.figures import plot_success

@@ -4,6 +4,7 @@ Thin aliases: `eval` is `socialzoo benchmark --maps socialzoo/CrowdNav<variant>-
 benchmark, socialzoo.bench.task_benchmark), `replay` an episode page of the variant.
 
 socialzoo crowdnav eval --policies orca,social_force,crowdnav --out results/crowdnav
+socialzoo crowdnav eval --variant 20 --observed-people 5 --policies crowdnav --out results/crowdnav20_5
 socialzoo crowdnav replay --policies orca,crowdnav --case 3 --out crowdnav.html
 """
 
@@ -48,6 +49,13 @@ def register(subparsers: Any) -> None:
     evaluate.add_argument("--cases", type=positive_int, default=None, help="first N cases (default all)")
     evaluate.add_argument("--batch-size", type=positive_int, default=100, help="rows stepped together")
     evaluate.add_argument("--no-figures", action="store_true", help="skip success.png/pdf")
+    evaluate.add_argument(
+        "--observed-people",
+        type=positive_int,
+        default=None,
+        help="the robot observes its K nearest people (CrowdNavConfig.observed_people): a learner "
+        "trained with K people on a variant of more slots",
+    )
     evaluate.set_defaults(func=run_eval)
     replay.add_argument("--case", type=int, default=0, help="the case to play")
     replay.set_defaults(func=run_replay)
@@ -74,6 +82,7 @@ def run_eval(args: argparse.Namespace) -> int:
             batch_size=args.batch_size,
             figures=not args.no_figures,
             say=print,
+            config={} if args.observed_people is None else {"observed_people": args.observed_people},
         )
     except (ValueError, StoreError) as err:
         print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
