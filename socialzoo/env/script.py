@@ -27,6 +27,15 @@ from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP
 
 # A released person keeps signalling until it is this far from its stop point, m.
 SIGNAL_RADIUS = 3.0
+# The per-person fields a script sets (Script's arrays of the same names).
+_PERSON_FIELDS = ("stop", "release", "wait", "gate", "gesture", "follow", "gap", "stay")
+# Each field's value in a row without a script (ScriptRunner._clear).
+_EMPTY = (
+    ("released", False), ("reached", False), ("reached_at", np.inf), ("signal", 0),
+    ("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan), ("gesture", 0),
+    ("follow", -1), ("gap", 0.0), ("stay", False),
+    ("escort", -1), ("escort_kind", REACH), ("band", 0.0), ("doors", 0.0),
+)  # fmt: skip
 
 
 class ScriptRunner:
@@ -87,29 +96,19 @@ class ScriptRunner:
             grown[:, : self.doors.shape[1]] = self.doors
             self.doors = grown
             self.closed = np.zeros(grown.shape[:2], dtype=bool)
-        scripts = [None if s is None else s.script for s in scenarios]
-        self._reset_plain(rows[np.array([script is None for script in scripts], dtype=bool)])
-        for row, script in zip(rows.tolist(), scripts, strict=True):
+        self._clear(rows)
+        for row, scenario in zip(rows.tolist(), scenarios, strict=True):
+            script = None if scenario is None else scenario.script
             if script is None:
                 continue
             self.scripted[row] = True
-            self.released[row] = False
-            self.reached[row] = False
-            self.reached_at[row] = np.inf
-            self.signal[row] = 0
             n = script.num_humans
-            for name, fill in (("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
-                               ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False)):  # fmt: skip
-                array = getattr(self, name)
-                array[row] = fill
-                array[row, :n] = getattr(script, name)
-            self.escort[row], self.escort_kind[row], self.band[row] = -1, REACH, 0.0
+            for name in _PERSON_FIELDS:
+                getattr(self, name)[row, :n] = getattr(script, name)
             r = min(script.num_robots, self.escort.shape[1])
             self.escort[row, :r] = script.escort[:r]
             self.escort_kind[row, :r] = script.escort_kind[:r]
             self.band[row, :r] = script.band[:r]
-            self.doors[row] = 0.0
-            self.doors[row, :, 4], self.doors[row, :, 5] = -np.inf, np.inf
             self.doors[row, : len(script.doors)] = script.doors
             if h and n:
                 self._hold_waypoints(state, np.array([row]))
@@ -117,18 +116,13 @@ class ScriptRunner:
         if self.active:
             self._update(state, rows)
 
-    def _reset_plain(self, rows: np.ndarray) -> None:
-        """`reset` of rows without a script, all at once: what the empty script (Script.plain with
-        no people) writes."""
-        if len(rows) == 0:
-            return
+    def _clear(self, rows: np.ndarray) -> None:
+        """Empty `rows`' scripts, all at once (what a script in which nobody waits, follows or
+        escorts, and with no doors, holds); `reset` then writes the scripted rows' own."""
         self.scripted[rows] = False
-        for name, fill in (("released", False), ("reached", False), ("reached_at", np.inf), ("signal", 0),
-                           ("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan),
-                           ("gesture", 0), ("follow", -1), ("gap", 0.0), ("stay", False), ("escort", -1),
-                           ("escort_kind", 0), ("band", 0.0), ("doors", 0.0)):  # fmt: skip
+        for name, fill in _EMPTY:
             getattr(self, name)[rows] = fill
-        self.doors[rows, :, 4], self.doors[rows, :, 5] = -np.inf, np.inf
+        self.doors[rows, :, 4], self.doors[rows, :, 5] = -np.inf, np.inf  # padding doors: open for ever
 
     # ------------------------------------------------------------------ step
     def speeds(self, state: WorldState) -> np.ndarray:
