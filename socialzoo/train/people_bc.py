@@ -22,7 +22,8 @@ the frame and the frame after gives one demonstration:
   forces came closer to the recorded ones on every scene (docs/humans.md).
 
 An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
-`val_fraction` of each scene's windows (in time) are held out for early stopping. The run folder
+`val_fraction` of each scene's windows (in time) are held out for early stopping; on that held-out
+time the run also walks the policy closed-loop (closed_loop_ade) and records the error. The run folder
 holds run.json and people_bc.safetensors, a learned human policy file (socialzoo.env.human_policy)
 that `learned:PATH` walks anywhere; `socialzoo humans realism --models learned:PATH` measures it on a
 scene it never saw (socialzoo.studies.realism).
@@ -359,6 +360,73 @@ def demonstrations(
     return Demonstrations.concatenate(out)
 
 
+# ---------------------------------------------------------------------------- closed loop
+# Frames a person walks closed-loop in the held-out measure (4.8 s, the realism study's horizon).
+HORIZON = 12
+
+
+def subject_cases(recording: Recording, first: int, last: int, horizon: int = HORIZON) -> np.ndarray:
+    """(n, 2) cases (person, start frame) of closed-loop walks within frames first..last: each
+    person's starts every `horizon` frames from its second frame (it walks in with the velocity of
+    frames start - 1 to start), each with its next `horizon` frames recorded."""
+    cases = [
+        (k, s)
+        for k, t in enumerate(recording.tracks)
+        for s in range(max(t.first_frame + 1, first + 1), min(t.last_frame, last) - horizon + 1, horizon)
+    ]
+    return np.array(cases, dtype=np.int64).reshape(-1, 2)
+
+
+def closed_loop_ade(
+    recording: Recording,
+    cases: np.ndarray,
+    policy: Path,
+    *,
+    horizon: int = HORIZON,
+    world: WorldConfig | None = None,
+    rows: int = 256,
+) -> np.ndarray:
+    """(n,) each case's mean distance, m, to its recorded positions over `horizon` frames when the
+    learned human policy file `policy` walks its person from its recorded position and velocity,
+    everyone else on the scene replaying (window_scenario): one batch row per case, `rows` rows per
+    core. A person that leaves at its exit is held where it left, as the realism study holds it.
+
+    Raises:
+        ValueError: a world step that does not divide the recording's frame period.
+    """
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.humans.models import PeopleConfig
+
+    world = world or replay_world()
+    steps = round(recording.dt / world.dt)
+    if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
+        raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
+    speeds = mean_speeds(recording)
+    walls = WallIndex(np.zeros((0, 4)))
+    people = PeopleConfig(models=f"learned:{policy}")
+    ade = np.zeros(len(cases))
+    for lo in range(0, len(cases), rows):
+        batch = [(int(k), int(s)) for k, s in cases[lo : lo + rows]]
+        scenarios = [window_scenario(recording, s, s + horizon, speeds, subject=k)[0] for k, s in batch]
+        truth = np.stack([recording.grid([k], s - 1, s + horizon)[0] for k, s in batch])
+        core = BatchedCore(
+            len(batch), 1, max(sc.num_humans for sc in scenarios), world, walls, people=people, robot_visible=False
+        )  # fmt: skip
+        core.reset_rows(np.arange(len(batch)), scenarios)
+        assert core.state is not None
+        core.state.human_vel[:, 0] = (truth[:, 1] - truth[:, 0]) / recording.dt
+        command = np.zeros((len(batch), 1, 2))
+        held = truth[:, 1].copy()
+        for f in range(1, horizon + 1):
+            for _ in range(steps):
+                core.step(command)
+            state = core.state
+            held = np.where(state.human_mask[:, :1], state.human_pos[:, 0], held)
+            ade[lo : lo + len(batch)] += np.hypot(*(held - truth[:, f + 1]).T) / horizon
+    return ade
+
+
 # ---------------------------------------------------------------------------- training
 def train(args: Args) -> Path:
     """Clone recorded people on the trainer skeleton; returns people_bc.safetensors."""
@@ -372,7 +440,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     from socialzoo.data.fetch import load_scene
 
     args: Args = run.args
-    train_parts, val_parts, per_scene = [], [], {}
+    train_parts, val_parts, per_scene, held_out = [], [], {}, {}
     for name in args.scene_names:
         recording = load_scene(name, cache=args.cache)
         demos = demonstrations(
@@ -386,6 +454,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         cut = count - max(1, round(args.val_fraction * count))
         train_parts.append(demos.take(np.flatnonzero(demos.window < cut)))
         val_parts.append(demos.take(np.flatnonzero(demos.window >= cut)))
+        held_out[name] = (recording, subject_cases(recording, cut * args.window, recording.num_frames - 1))
         per_scene[name] = {
             "demonstrations": len(demos),
             "clipped": round(float(demos.clipped.mean()), 4) if len(demos) else 0.0,
@@ -435,7 +504,20 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     )
     with torch.no_grad():
         baseline = float((yv**2).mean())
+    # How close the policy walks to the recorded people of the held-out time, closed-loop: the
+    # measure the trainer's defaults were chosen on (docs/humans.md).
+    world = replay_world(learned_forces=args.learned_forces)
+    walked = {
+        name: closed_loop_ade(recording, cases, run.policy, world=world)
+        for name, (recording, cases) in held_out.items()
+    }
+    closed_loop = {name: round(float(a.mean()), 4) for name, a in walked.items() if len(a)}
+    logger.info("people-bc: held-out time walked closed-loop, ADE over %d frames: %s", HORIZON, closed_loop)
     return {
+        "held_out_closed_loop_ade": closed_loop,
+        "held_out_closed_loop_ade_mean": round(float(np.mean(list(closed_loop.values()))), 4)
+        if closed_loop
+        else None,
         "train_demonstrations": len(train_set),
         "val_demonstrations": len(val_set),
         "scenes": per_scene,

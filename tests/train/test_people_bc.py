@@ -2,6 +2,7 @@
 and a tiny run writes a learned human policy file that walks a person in the batched core."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -161,6 +162,9 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     policy = LearnedHumanPolicy.load(path)
     assert policy.num_neighbours == 2 and policy.action_frame == "human" and policy.action_scale == 4.0
     assert policy.header["training"]["algorithm"] == "people-bc"
+    # The held-out time is too short here for a 12-frame closed-loop walk: measured on nothing.
+    results = json.loads((tmp_path / "run" / "run.json").read_text())["results"]
+    assert results["held_out_closed_loop_ade"] == {} and results["held_out_closed_loop_ade_mean"] is None
     # `learned:PATH` drives the first person of a recorded window; the others replay.
     from socialzoo.core.walls import WallIndex
     from socialzoo.env.core import BatchedCore
@@ -200,3 +204,38 @@ def test_labels_without_forces_are_the_recorded_motion_and_with_them_compensate(
     near = (first < 1.5) & (free.obs[:, 8:13] != 0).any(1)
     assert near.any()
     assert np.abs(forced.action[near] - free.action[near]).max() > 0.02  # 0.08 m/s and more
+
+
+def test_closed_loop_cases_keep_to_their_frames():
+    rec = _recording()
+    cases = people_bc.subject_cases(rec, 10, 39, horizon=6)
+    assert len(cases)
+    for k, s in cases:
+        track = rec.tracks[k]
+        # The frame before the start (its velocity) and the 6 after it are recorded, inside 10..39.
+        assert 10 <= s - 1 and track.first_frame <= s - 1 and s + 6 <= min(track.last_frame, 39)
+    # Person 0 (frames 0..29): starts every 6 frames from frame 11.
+    assert cases[cases[:, 0] == 0, 1].tolist() == [11, 17, 23]
+
+
+def test_closed_loop_ade_of_a_policy_that_stops(tmp_path):
+    """A policy whose action is always 0 (desired velocity 0) lets a straight walker slow down by
+    the relaxation alone (no forces): each 0.1 s world step keeps 1 - dt / tau of its velocity and
+    moves it by the new one (the world's semi-implicit step), against the recorded v t. (To within
+    1 cm: among these others the world moves it a few millimetres off its bare relaxation, which a
+    person alone follows exactly.)"""
+    rec = _recording()
+    size = human_observation_size(2)
+    weights = [(np.zeros((8, size)), np.zeros(8)), (np.zeros((2, 8)), np.zeros(2))]
+    path = LearnedHumanPolicy(weights, "tanh", np.zeros(size), np.ones(size), 2, "human", 4.0).save(
+        tmp_path / "stop.safetensors", people_bc.env_id(), {}
+    )
+    cases = np.array([[0, 1], [2, 5], [3, 20]])
+    ade = people_bc.closed_loop_ade(rec, cases, path, horizon=6)
+    world = replay_world()
+    keep = 1.0 - world.dt * world.human.desired_factor / world.human.relaxation_time
+    covered = world.dt * np.cumsum(keep ** np.arange(1, 25))[3::4]  # per 1 m/s, at frames 1..6
+    lag = np.arange(1, 7) * rec.dt - covered
+    speed = np.array([np.hypot(*np.diff(rec.tracks[k].positions[:2], axis=0)[0]) / rec.dt for k, _ in cases])
+    np.testing.assert_allclose(ade, speed * lag.mean(), atol=0.01)
+    assert (ade > 0.3).all()
