@@ -104,6 +104,10 @@ class HumanConfig:
             walls stay solid). A learned people policy file says which it was trained with
             (socialzoo.env.human_policy.LearnedHumanPolicy.learned_forces), and the world that
             walks it takes that.
+        learned_relaxation_time: tau of the relaxation of people who walk by a learner's desired
+            velocity towards it, s (None: relaxation_time). A learned people policy file may say
+            which it was trained with (LearnedHumanPolicy.relaxation_time), and the world that
+            walks it takes that.
     """
 
     force_radius: float = 0.2
@@ -120,9 +124,19 @@ class HumanConfig:
     robot_scale: float = 1.5
     waypoint_radius: float = 1.0
     learned_forces: bool = True
+    learned_relaxation_time: float | None = None
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("obstacle_strength", "social_strength"))
+        if self.learned_relaxation_time is not None:
+            check_number(
+                "HumanConfig", "learned_relaxation_time", self.learned_relaxation_time, low=0, low_open=True
+            )
+
+    @property
+    def learned_tau(self) -> float:
+        """The learned people's relaxation time, s."""
+        return self.relaxation_time if self.learned_relaxation_time is None else self.learned_relaxation_time
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -64,6 +64,9 @@ class LearnedHumanPolicy:
             world it was trained in (HumanConfig.learned_forces; the header's dynamics section,
             true for files written before it existed). `socialzoo train people-bc` trains without
             them: the network's desired velocity alone moves its people.
+        relaxation_time: the relaxation time of the people it walks, s, as in the world it was
+            trained in (HumanConfig.learned_relaxation_time; the header's dynamics section), or
+            None (files written before it existed): the walking world's own.
         header: the policy file's header (kept for config() and reports).
 
     Raises:
@@ -86,6 +89,7 @@ class LearnedHumanPolicy:
         *,
         mirror_symmetric: bool = False,
         learned_forces: bool = True,
+        relaxation_time: float | None = None,
     ) -> None:
         if activation not in ACTIVATIONS:
             raise ValueError(
@@ -127,6 +131,11 @@ class LearnedHumanPolicy:
         self.action_scale = float(action_scale)
         self.mirror_symmetric = bool(mirror_symmetric)
         self.learned_forces = bool(learned_forces)
+        if relaxation_time is not None and not (
+            isinstance(relaxation_time, (int, float)) and math.isfinite(relaxation_time) and relaxation_time > 0
+        ):
+            raise ValueError(f"LearnedHumanPolicy: relaxation_time must be a number > 0, got {relaxation_time!r}")
+        self.relaxation_time = None if relaxation_time is None else float(relaxation_time)
         self._mirror = human_mirror_signs(self.num_neighbours)
         self.header = dict(header or {})
         self.path: Path | None = None
@@ -198,7 +207,8 @@ class LearnedHumanPolicy:
                 "action_frame": self.action_frame,
                 "action_scale": self.action_scale,
             },
-            "dynamics": {"learned_forces": self.learned_forces},
+            "dynamics": {"learned_forces": self.learned_forces}
+            | ({} if self.relaxation_time is None else {"relaxation_time": self.relaxation_time}),
             "env_id": env_id,
             "training": training,
         }
@@ -241,6 +251,7 @@ class LearnedHumanPolicy:
                 header,
                 mirror_symmetric=_flag(header, "network", "mirror_symmetric"),
                 learned_forces=_flag(header, "dynamics", "learned_forces", default=True),
+                relaxation_time=header.get("dynamics", {}).get("relaxation_time"),
             )
         except (KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{path}: {err}") from None

@@ -98,9 +98,12 @@ class People:
             from socialzoo.env.human_policy import LearnedHumanPolicy
 
             self.policy = LearnedHumanPolicy.load(path)
-            if self.policy.learned_forces != world.human.learned_forces:
-                # Its people walk as in the world it was trained in.
-                human = dataclasses.replace(world.human, learned_forces=self.policy.learned_forces)
+            # Its people walk as in the world it was trained in.
+            dynamics: dict[str, Any] = {"learned_forces": self.policy.learned_forces}
+            if self.policy.relaxation_time is not None:
+                dynamics["learned_relaxation_time"] = self.policy.relaxation_time
+            if any(getattr(world.human, name) != value for name, value in dynamics.items()):
+                human = dataclasses.replace(world.human, **dynamics)
                 self.world = world = dataclasses.replace(world, human=human)
         self.groups = self.config.has_groups
         self.counterfactual = self.config.counterfactual

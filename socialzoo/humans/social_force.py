@@ -101,10 +101,11 @@ def _accelerations(
     """Fill out (B, H, 2) with every human's total acceleration; see human_acceleration.
 
     amounts: (2, B * P) exp of the pair exponents (speed, angle). params: relaxation_time,
-    desired_factor, social_strength, obstacle_strength, obstacle_sigma, force_radius, and 1.0 when
-    the forces act on learned people too (HumanConfig.learned_forces), else 0.0.
+    desired_factor, social_strength, obstacle_strength, obstacle_sigma, force_radius, 1.0 when
+    the forces act on learned people too (HumanConfig.learned_forces) else 0.0, and the learned
+    people's relaxation time (HumanConfig.learned_tau).
     """
-    tau, k_desired, k_social, k_wall, sigma, radius, learned_forces = params
+    tau, k_desired, k_social, k_wall, sigma, radius, learned_forces, learned_tau = params
     batch, num_humans = mask.shape
     pairs_per_world = theta.shape[0] // batch
     social = np.zeros((num_humans, 2))
@@ -141,18 +142,20 @@ def _accelerations(
             vx, vy = vel[b, i, 0], vel[b, i, 1]
             # Relaxation towards the desired velocity: the preferred speed straight to the route
             # target, or the learner's desired velocity.
+            relax = tau
             if learned[b, i]:
+                relax = learned_tau
                 wx, wy = desired_vel[b, i, 0], desired_vel[b, i, 1]
                 if learned_forces == 0.0:
-                    out[b, i, 0] = k_desired * ((wx - vx) / tau)
-                    out[b, i, 1] = k_desired * ((wy - vy) / tau)
+                    out[b, i, 0] = k_desired * ((wx - vx) / relax)
+                    out[b, i, 1] = k_desired * ((wy - vy) / relax)
                     continue
             else:
                 tx, ty = target[b, i, 0] - px, target[b, i, 1] - py
                 scale = pref_speed[b, i] / max(math.sqrt(tx * tx + ty * ty), _TINY)
                 wx, wy = tx * scale, ty * scale
-            ax = k_desired * ((wx - vx) / tau) + k_social * social[i, 0]
-            ay = k_desired * ((wy - vy) / tau) + k_social * social[i, 1]
+            ax = k_desired * ((wx - vx) / relax) + k_social * social[i, 0]
+            ay = k_desired * ((wy - vy) / relax) + k_social * social[i, 1]
             # Repulsion from the nearest wall point, exp(-(d - r) / sigma) along the wall normal.
             d = wall_dist[b, i]
             if math.isfinite(d) and d > _TINY:
@@ -212,7 +215,7 @@ def human_acceleration(
     np.exp(amounts, out=amounts)
     params = (
         cfg.relaxation_time, cfg.desired_factor, cfg.social_strength, cfg.obstacle_strength,
-        cfg.obstacle_sigma, cfg.force_radius, 1.0 if cfg.learned_forces else 0.0,
+        cfg.obstacle_sigma, cfg.force_radius, 1.0 if cfg.learned_forces else 0.0, cfg.learned_tau,
     )  # fmt: skip
     accel = np.empty((batch, num_humans, 2))
     _accelerations(

@@ -3,23 +3,26 @@
 Each training scene is replayed in the batched core (socialzoo.env.core.BatchedCore, everyone a
 follower of its track, socialzoo.env.replay; one row per time window of `window` frames; a robot
 parked far away that nobody sees). At every recorded frame each person present on the frame before,
-the frame and the frame after gives one demonstration:
+the frame and the frame `label_frames` after gives one demonstration:
 
 - the observation a learned person has there (socialzoo.env.human_agents.human_observations): its
   route is its entry and its recorded exit (the last point of its whole track), its preferred speed
   its mean recorded speed, its own velocity the one it walked into the frame with (frame - 1 ->
   frame; the replay's is the next segment's, which would give the answer away), the others' as the
   replay has them; neighbour rows of the parked robot are zeroed (absent), as it is not there;
-- the action that walks it to its recorded position on the next frame: the desired velocity v_d
-  that, through the relaxation every learned person walks by (dv/dt = (v_d - v) / tau + F), covers
-  the recorded displacement over the frame period (the speed cap aside), expressed as an action of
+- the action that walks it to its recorded position `label_frames` frames on (5, 2 s): the desired
+  velocity v_d that, held, through the relaxation every learned person walks by
+  (dv/dt = (v_d - v) / tau + F, tau = `relaxation_time`, 16 s, written into the policy file), covers
+  the recorded displacement over those frames (the speed cap aside), expressed as an action of
   the policy's frame and scale (the inverse of socialzoo.env.human_agents.action_velocities),
   clipped to [-ACTION_LIMIT, ACTION_LIMIT]. By default no force acts on the learned people (F = 0,
   HumanConfig.learned_forces off, written into the policy file): the network's desired velocity
   alone moves them, and it sees its neighbours to keep clear of them. With `--learned-forces`, F is
   the other people's and walls' social forces at the frame, held over the frame, and each label
   compensates them. On the training scenes' held-out time, walked closed-loop, the people without
-  forces came closer to the recorded ones on every scene (docs/humans.md).
+  forces came closer to the recorded ones on every scene, and a long relaxation time with a label
+  2 s ahead closer than the people's own 0.5 s with a label on the next frame (docs/humans.md):
+  over a few seconds real people keep their velocity, and the network steers it slowly.
 
 An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
 `val_fraction` of each scene's windows (in time) are held out for early stopping; on that held-out
@@ -79,7 +82,12 @@ class Args:
         velocity_noise: the velocity perturbation of the noisy copies, m/s per axis (`demonstrations`).
         noisy_copies: noisy copies of each demonstration (0: the recorded states only).
         label_frames: frames ahead that each label reaches: the desired velocity, held, that carries the
-            person from its state to its recorded position that many frames later (1: the next frame).
+            person from its state to its recorded position that many frames later (1: the next frame;
+            with a long relaxation time a label on the next frame amplifies the tracks' jitter).
+        relaxation_time: tau of the learned people's relaxation towards the network's desired
+            velocity, s (HumanConfig.learned_relaxation_time, written into the policy file): the
+            longer it is, the longer they keep their velocity, and each label is the desired
+            velocity that, held, reaches the recorded position `label_frames` frames on.
         learned_forces: whether the social force's people and wall forces act on the learned
             people too (HumanConfig.learned_forces, written into the policy file): then each label
             compensates the forces at its frame. Off (the default): the network's desired velocity
@@ -105,7 +113,8 @@ class Args:
     action_scale: float = 4.0
     velocity_noise: float = 0.4
     noisy_copies: int = 2
-    label_frames: int = 1
+    label_frames: int = 5
+    relaxation_time: float = 16.0
     learned_forces: bool = False
     hidden: int = 128
     depth: int = 2
@@ -133,6 +142,7 @@ class Args:
         check_int(self, "noisy_copies", 0)
         check_int(self, "label_frames", 1)
         check_number(self, "velocity_noise", 0.0)
+        check_number(self, "relaxation_time", 0.0, strict=True)
         check_number(self, "val_fraction", 0.0, strict=True, high=0.5)
         check_number(self, "action_scale", 0.0, strict=True)
         check_number(self, "lr", 0.0, strict=True)
@@ -143,12 +153,16 @@ class Args:
         return tuple(self.scenes.split(","))
 
 
-def replay_world(dt: float = WORLD_DT, learned_forces: bool = False) -> WorldConfig:
+def replay_world(
+    dt: float = WORLD_DT, learned_forces: bool = False, relaxation_time: float | None = None
+) -> WorldConfig:
     """The world of the replay: the default people at `dt` s per step, the forces acting on learned
-    people or not (HumanConfig.learned_forces)."""
+    people or not (HumanConfig.learned_forces), their relaxation time (None: the people's)."""
     from socialzoo.core.config import HumanConfig, WorldConfig
 
-    return WorldConfig(dt=dt, human=HumanConfig(learned_forces=learned_forces))
+    return WorldConfig(
+        dt=dt, human=HumanConfig(learned_forces=learned_forces, learned_relaxation_time=relaxation_time)
+    )
 
 
 # ---------------------------------------------------------------------------- scenes
@@ -221,8 +235,9 @@ def reaching_velocity(
     """The desired velocity (..., 2) that carries a person of velocity v0 over `displacement` in
     `period` s under dv/dt = c (v_d - v) / tau + other (the social force, c its desired_factor),
     other held constant. With u = v_d + tau other / c: v(t) = u + exp(-c t / tau) (v0 - u), so
-    displacement = u T + (v0 - u) s with s = tau / c (1 - exp(-c T / tau))."""
-    rate = world.human.desired_factor / world.human.relaxation_time
+    displacement = u T + (v0 - u) s with s = tau / c (1 - exp(-c T / tau)); tau is the learned
+    people's (HumanConfig.learned_tau)."""
+    rate = world.human.desired_factor / world.human.learned_tau
     s = (1.0 - math.exp(-rate * period)) / rate
     u = (displacement - s * v0) / (period - s)
     return u - other / rate
@@ -446,7 +461,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
-            world=replay_world(learned_forces=args.learned_forces),
+            world=replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time),
             velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies,
             label_frames=args.label_frames, seed=args.seed,
         )  # fmt: skip
@@ -506,7 +521,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         baseline = float((yv**2).mean())
     # How close the policy walks to the recorded people of the held-out time, closed-loop: the
     # measure the trainer's defaults were chosen on (docs/humans.md).
-    world = replay_world(learned_forces=args.learned_forces)
+    world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
     walked = {
         name: closed_loop_ade(recording, cases, run.policy, world=world)
         for name, (recording, cases) in held_out.items()
@@ -552,7 +567,7 @@ def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> Learn
     weights = [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy()) for m in linear]
     return LearnedHumanPolicy(
         weights, "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale,
-        learned_forces=args.learned_forces,
+        learned_forces=args.learned_forces, relaxation_time=args.relaxation_time,
     )  # fmt: skip
 
 
@@ -576,6 +591,7 @@ def training_record(
         "velocity_noise": args.velocity_noise,
         "noisy_copies": args.noisy_copies,
         "label_frames": args.label_frames,
+        "relaxation_time": args.relaxation_time,
         "learned_forces": args.learned_forces,
         "per_scene": scenes,
         "train_demonstrations": num_train,

@@ -169,3 +169,33 @@ def test_the_file_says_whether_forces_act_on_its_people_and_the_world_takes_it(w
     bad = save_policy_file(tmp_path / "bad.safetensors", tensors, header)
     with pytest.raises(PolicyFileError, match=r"dynamics\.learned_forces must be true or false"):
         LearnedHumanPolicy.load(bad)
+
+
+
+def test_the_file_says_its_peoples_relaxation_time_and_the_world_takes_it(walker_policy_path, tmp_path):
+    from socialzoo.core.config import HumanConfig, WorldConfig
+    from socialzoo.core.walls import WallIndex
+    from socialzoo.env.core import BatchedCore
+    from socialzoo.humans.models import PeopleConfig
+
+    policy = LearnedHumanPolicy.load(walker_policy_path)
+    assert policy.relaxation_time is None  # files without it: the walking world's own
+    slow = LearnedHumanPolicy(
+        policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human",
+        learned_forces=False, relaxation_time=2.0,
+    )  # fmt: skip
+    path = slow.save(tmp_path / "slow.safetensors", policy.header["env_id"], {})
+    assert LearnedHumanPolicy.load(path).relaxation_time == 2.0
+
+    def human_of(spec: str) -> HumanConfig:
+        world = WorldConfig(human=HumanConfig(relaxation_time=0.7))
+        return BatchedCore(1, 1, 2, world, WallIndex(np.zeros((0, 4))), people=PeopleConfig(models=spec)).world.human
+
+    taken = human_of(f"learned:{path}")
+    assert taken.learned_tau == 2.0 and taken.relaxation_time == 0.7  # the other people's stays
+    assert human_of(f"learned:{walker_policy_path}").learned_tau == 0.7
+    with pytest.raises(ValueError, match="relaxation_time must be a number > 0"):
+        LearnedHumanPolicy(
+            policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human",
+            relaxation_time=-1.0,
+        )  # fmt: skip

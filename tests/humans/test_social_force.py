@@ -138,19 +138,25 @@ def test_waypoints_shuttle_between_ends():
     assert waypoint[0, 0] == 0
 
 
-def test_learned_people_without_forces_relax_towards_their_desired_velocity_alone():
-    """HumanConfig.learned_forces off: a learned person beside another person and a wall feels only
-    the relaxation towards its desired velocity; the scripted person still feels every force, and
-    with the switch on the learned person does too."""
+def _learned_beside_a_person_and_a_wall():
+    """(human_acceleration's first arguments, desired velocities, learned mask): a learned person
+    (slot 0) beside a scripted one and a wall."""
     pos = np.array([[[0.0, 0.15], [0.5, 0.2]]])
     vel = np.array([[[1.0, 0.0], [-1.0, 0.0]]])
     target = np.array([[[5.0, 0.0], [-5.0, 0.0]]])
     speed, mask = np.array([[1.2, 1.2]]), np.ones((1, 2), dtype=bool)
-    desired = np.array([[[0.4, 0.9], [0.0, 0.0]]])
-    learned = np.array([[True, False]])
     walls = WallIndex(np.array([[-5.0, 0.0, 5.0, 0.0]]))
     none = np.zeros((1, 0, 2))
     args = (pos, vel, target, speed, mask, none, none, walls)
+    return args, np.array([[[0.4, 0.9], [0.0, 0.0]]]), np.array([[True, False]])
+
+
+def test_learned_people_without_forces_relax_towards_their_desired_velocity_alone():
+    """HumanConfig.learned_forces off: a learned person beside another person and a wall feels only
+    the relaxation towards its desired velocity; the scripted person still feels every force, and
+    with the switch on the learned person does too."""
+    args, desired, learned = _learned_beside_a_person_and_a_wall()
+    vel = args[1]
     off = HumanConfig(learned_forces=False)
     accel_off, _ = human_acceleration(*args, off, desired, learned)
     accel_on, _ = human_acceleration(*args, CFG, desired, learned)
@@ -158,3 +164,25 @@ def test_learned_people_without_forces_relax_towards_their_desired_velocity_alon
     np.testing.assert_array_equal(accel_off[0, 0], relax)
     assert np.abs(accel_on[0, 0] - relax).max() > 1.0  # the person and the wall push it
     np.testing.assert_array_equal(accel_off[0, 1], accel_on[0, 1])
+
+
+def test_learned_people_relax_at_their_own_relaxation_time():
+    """HumanConfig.learned_relaxation_time sets the learned people's tau, with or without forces;
+    the scripted person's acceleration is bit for bit the same as without it, and None is the
+    people's own."""
+    args, desired, learned = _learned_beside_a_person_and_a_wall()
+    vel = args[1]
+    for forces in (False, True):
+        base = HumanConfig(learned_forces=forces)
+        slow = HumanConfig(learned_forces=forces, learned_relaxation_time=2.0)
+        accel_base, _ = human_acceleration(*args, base, desired, learned)
+        accel_slow, _ = human_acceleration(*args, slow, desired, learned)
+        explicit = HumanConfig(learned_forces=forces, learned_relaxation_time=0.5)
+        same, _ = human_acceleration(*args, explicit, desired, learned)
+        np.testing.assert_array_equal(same, accel_base)
+        np.testing.assert_array_equal(accel_slow[0, 1], accel_base[0, 1])
+        # Only the relaxation term changes: from (v_d - v) / 0.5 to (v_d - v) / 2.0.
+        change = (desired[0, 0] - vel[0, 0]) * (1.0 / 2.0 - 1.0 / 0.5)
+        np.testing.assert_allclose(accel_slow[0, 0] - accel_base[0, 0], change, atol=1e-12)
+    with pytest.raises(ValueError, match="learned_relaxation_time"):
+        HumanConfig(learned_relaxation_time=0.0)

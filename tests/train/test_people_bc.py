@@ -63,12 +63,14 @@ def test_actions_invert_action_velocities():
         np.testing.assert_allclose(back[state.human_mask], desired[state.human_mask], atol=1e-12)
 
 
-def test_reaching_velocity_walks_the_recorded_displacement():
-    """The social force's relaxation from v0 towards the desired velocity covers the displacement."""
-    world = dataclasses.replace(replay_world(), dt=0.001)
+@pytest.mark.parametrize("tau", [None, 2.0])
+def test_reaching_velocity_walks_the_recorded_displacement(tau):
+    """The relaxation from v0 towards the desired velocity (at the learned people's relaxation time)
+    covers the displacement."""
+    world = dataclasses.replace(replay_world(relaxation_time=tau), dt=0.001)
     v0, disp, other = np.array([0.3, -0.2]), np.array([0.5, 0.1]), np.array([0.4, 0.7])
     vd = reaching_velocity(v0, disp, other, 0.4, world)
-    rate = world.human.desired_factor / world.human.relaxation_time
+    rate = world.human.desired_factor / (tau or world.human.relaxation_time)
     v, p = v0.copy(), np.zeros(2)
     for _ in range(400):
         v = v + world.dt * (rate * (vd - v) + other)
@@ -156,11 +158,12 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: rec)
     args = Args(
         scenes="eth,hotel", out=tmp_path / "run", seed=0, window=8, num_neighbours=2, hidden=16,
-        max_epochs=3, patience=2, progress=False,
+        max_epochs=3, patience=2, progress=False, relaxation_time=3.0,
     )  # fmt: skip
     path = people_bc.train(args)
     policy = LearnedHumanPolicy.load(path)
     assert policy.num_neighbours == 2 and policy.action_frame == "human" and policy.action_scale == 4.0
+    assert policy.relaxation_time == 3.0 and not policy.learned_forces
     assert policy.header["training"]["algorithm"] == "people-bc"
     # The held-out time is too short here for a 12-frame closed-loop walk: measured on nothing.
     results = json.loads((tmp_path / "run" / "run.json").read_text())["results"]
@@ -177,6 +180,7 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     )  # fmt: skip
     core.reset_rows([0], [scenario])
     assert core.state.human_model[0, 0] == LEARNED
+    assert core.world.human.learned_tau == 3.0  # the world walks its people as they were trained
     start = core.state.human_pos[0, 0].copy()
     for _ in range(8):
         core.step(np.zeros((1, 1, 2)))
