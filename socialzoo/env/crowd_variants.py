@@ -56,11 +56,3 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
 def crowd_env_id(variant: str) -> str:
     """The Gymnasium id of a variant ("" for CrowdNav's own task)."""
     return f"socialzoo/CrowdNav{variant}-v{CROWD_ENV_VERSION}"
-
-
-def variant_of(env_id: str) -> str | None:
-    """The variant of a CrowdNav task id ("" for socialzoo/CrowdNav-v1); None for any other name."""
-    for name in VARIANTS:
-        if env_id == crowd_env_id(name):
-            return name
-    return None

@@ -25,7 +25,6 @@ import copy
 import heapq
 import math
 import zlib
-from collections.abc import Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -366,8 +365,3 @@ RecordedHotel = _scene_family("hotel")
 RecordedUniv = _scene_family("univ")
 RecordedZara1 = _scene_family("zara1")
 RecordedZara2 = _scene_family("zara2")
-
-
-def scenes_in(scenarios: Sequence[Scenario]) -> bool:
-    """Whether any scenario has recorded people."""
-    return any(s.recorded is not None for s in scenarios)
