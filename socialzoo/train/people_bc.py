@@ -513,6 +513,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
             break
     assert best_state is not None
     net.load_state_dict(best_state)
+    see_robots_as_people(net, args.num_neighbours)
     policy = to_policy(net, loc, scale, args)
     policy.save(
         run.policy, env_id(), training_record(args, per_scene, len(train_set), len(val_set), best, best_epoch)
@@ -542,6 +543,20 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         "val_mse_zero_action": round(baseline, 6),
         "train_mse_last": round(history[-1][0], 6),
     }
+
+
+def see_robots_as_people(net: Any, num_neighbours: int) -> None:
+    """Zero the first layer's weights of the neighbours' robot flags. The recordings hold no robot,
+    so the flags were 0 in every demonstration and their weights kept their random initial values:
+    left so, a robot among the neighbours would add a random term. Zeroed, a robot is seen as the
+    person its row otherwise describes (position and velocity), and nothing else changes."""
+    import torch
+
+    from socialzoo.env.human_agents import NEIGHBOUR_SIZE, OWN_SIZE
+
+    flags = [OWN_SIZE + NEIGHBOUR_SIZE * k + NEIGHBOUR_SIZE - 1 for k in range(num_neighbours)]
+    with torch.no_grad():
+        net[0].weight[:, flags] = 0.0
 
 
 def mlp(inputs: int, hidden: int, depth: int) -> Any:

@@ -164,6 +164,13 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     policy = LearnedHumanPolicy.load(path)
     assert policy.num_neighbours == 2 and policy.action_frame == "human" and policy.action_scale == 4.0
     assert policy.relaxation_time == 3.0 and not policy.learned_forces
+    # No robot in the recordings: a robot neighbour is seen as the person its row describes.
+    obs = np.random.default_rng(0).normal(size=(16, policy.input_size)).astype(np.float32)
+    flags = [8 + 5 * k + 4 for k in range(2)]
+    obs[:, flags] = 0.0
+    robots = obs.copy()
+    robots[:, flags] = 1.0
+    np.testing.assert_array_equal(policy.act(robots), policy.act(obs))
     assert policy.header["training"]["algorithm"] == "people-bc"
     # The held-out time is too short here for a 12-frame closed-loop walk: measured on nothing.
     results = json.loads((tmp_path / "run" / "run.json").read_text())["results"]
