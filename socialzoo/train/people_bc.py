@@ -455,13 +455,14 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     from socialzoo.data.fetch import load_scene
 
     args: Args = run.args
+    world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
     train_parts, val_parts, per_scene, held_out = [], [], {}, {}
     for name in args.scene_names:
         recording = load_scene(name, cache=args.cache)
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
-            world=replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time),
+            world=world,
             velocity_noise=args.velocity_noise, noisy_copies=args.noisy_copies,
             label_frames=args.label_frames, seed=args.seed,
         )  # fmt: skip
@@ -522,7 +523,6 @@ def fit(run: TrainingRun) -> dict[str, Any]:
         baseline = float((yv**2).mean())
     # How close the policy walks to the recorded people of the held-out time, closed-loop: the
     # measure the trainer's defaults were chosen on (docs/humans.md).
-    world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
     walked = {
         name: closed_loop_ade(recording, cases, run.policy, world=world)
         for name, (recording, cases) in held_out.items()
