@@ -13,7 +13,7 @@ import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.env.config import EnvConfig, RobotAction
-from socialzoo.env.reward import blame_term, compute_reward, progress, social_force_term
+from socialzoo.env.reward import compute_reward, force_and_blame, progress
 from socialzoo.env.world import StepEvents, robot_velocity_vectors
 from socialzoo.nav.subpolicies import FOLLOW
 
@@ -124,11 +124,12 @@ def robot_outcome(
     skip = np.asarray(skip).reshape(-1)
     quirks = config.quirks
     d_g = progress(before.robot_pose[..., :2].reshape(b * r, 2), pos, goal, quirks.goal_distance_x_only)
-    force = social_force_term(pos, human_pos, visible, skip)
     speed = after.robot_vel[..., 0].reshape(-1)
     still = np.asarray(halted, dtype=bool).reshape(-1) | (np.abs(speed) < STILL_SPEED)
     vel_world = robot_velocity_vectors(after).reshape(b * r, 2)
-    blame = blame_term(pos, vel_world, still, human_pos, visible, skip, config.reward.blame_horizon)
+    force, blame = force_and_blame(
+        pos, vel_world, still, human_pos, visible, skip, config.reward.blame_horizon
+    )
     reached = goal_reached(pos, goal, config.goal_radius)
     if may_arrive is not None:
         reached &= np.asarray(may_arrive, dtype=bool).reshape(-1)

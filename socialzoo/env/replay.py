@@ -172,40 +172,21 @@ class ReplayRunner:
                 self.recorded[row] = False
                 self.on_track[row] = False
                 continue
-            n, frames = rec.num_people, rec.num_frames
             occupants = rec.occupants
-            self._widen(frames, rec.route_frames.shape[1], len(rec.robot_track), occupants.entry.shape[1])
+            self._widen(
+                rec.num_frames, rec.route_frames.shape[1], len(rec.robot_track), occupants.entry.shape[1]
+            )
             self.recorded[row] = True
             self.frame_dt[row] = rec.dt
-            # The recording's block, and the fill around it (not the whole row twice).
-            self.tracks[row, :n, :frames] = rec.tracks
-            self.tracks[row, n:] = np.nan
-            self.tracks[row, :n, frames:] = np.nan
-            self.track_vel[row, :n, :frames] = rec.velocities
-            self.track_vel[row, n:] = 0.0
-            self.track_vel[row, :n, frames:] = 0.0
-            self.route_frame[row] = 0
-            frames_of = rec.route_frames
-            self.route_frame[row, :n, : frames_of.shape[1]] = frames_of
-            self.route_frame[row, :n, frames_of.shape[1] :] = frames_of[:, -1:]
-            k = occupants.entry.shape[1]
-            for name, fill in _OCCUPANT_FIELDS:
-                array = getattr(self, name)
-                array[row] = fill
-                array[row, :n, :k] = getattr(occupants, "speed" if name == "occupant_speed" else name)
-            self.shared[row] = False
-            self.shared[row, :n] = occupants.shared
-            kind = slot_kind[:n]
-            self.follows[row] = False
-            self.follows[row, :n] = rec.follow | self._per_part["follows"][kind]
-            self.reacts[row] = False
-            self.reacts[row, :n] = self._per_part["reacts"][kind] & ~rec.follow
-            self.then[row] = 0
-            self.then[row, :n] = np.where(rec.follow, REPLAY, self._per_part["model"][kind])
             self.time_limit[row] = rec.time_limit
-            self.robot_track[row] = 0.0
-            self.robot_track[row, : len(rec.robot_track)] = rec.robot_track
             self.robot_track_len[row] = len(rec.robot_track)
+            _load_row(
+                row, rec.tracks, rec.velocities, rec.route_frames, occupants.entry, occupants.exit,
+                occupants.first, occupants.last, occupants.speed, occupants.shared, rec.follow, rec.robot_track,
+                slot_kind, self._per_part["follows"], self._per_part["reacts"], self._per_part["model"], REPLAY,
+                self.tracks, self.track_vel, self.route_frame, self.entry, self.exit, self.first, self.last,
+                self.occupant_speed, self.shared, self.follows, self.reacts, self.then, self.robot_track,
+            )  # fmt: skip
         fresh = rows[self.recorded[rows]]
         if len(fresh) == 0:
             return
@@ -450,6 +431,55 @@ class ReplayRunner:
 # expressions it replaced did (same operations in the same order, fastmath off), so rollouts are
 # the same bit for bit; a step of a sparse recorded scene was mostly those expressions' temporaries
 # over every slot and every point of the robot's recorded path (benchmarks/recorded_throughput.py).
+
+
+@kernel
+def _load_row(
+    row, tracks, velocities, route_frames, entry, exit_, first, last, speed, shared, follow, robot_track,
+    kind, part_follows, part_reacts, part_model, replay,
+    out_tracks, out_vel, out_route_frame, out_entry, out_exit, out_first, out_last, out_speed, out_shared,
+    out_follows, out_reacts, out_then, out_robot_track,
+):  # fmt: skip
+    """ReplayRunner.reset's load of one recording (RecordedPeople's arrays, its Occupants') into
+    row `row`: its n slots' tracks, velocities, route frames (padded by repeating the last),
+    occupants and ways of walking (kind: each slot's part of the people spec, -1 the last entry of
+    the part arrays), the replaced person's path; the row's other slots and frames empty."""
+    n, frames = tracks.shape[0], tracks.shape[1]
+    width, most = route_frames.shape[1], entry.shape[1]
+    for s in range(out_tracks.shape[1]):
+        mine = s < n
+        for f in range(out_tracks.shape[2]):
+            if mine and f < frames:
+                for c in range(2):
+                    out_tracks[row, s, f, c] = tracks[s, f, c]
+                    out_vel[row, s, f, c] = velocities[s, f, c]
+            else:
+                for c in range(2):
+                    out_tracks[row, s, f, c] = np.nan
+                    out_vel[row, s, f, c] = 0.0
+        for k in range(out_route_frame.shape[2]):
+            out_route_frame[row, s, k] = route_frames[s, min(k, width - 1)] if mine else 0
+        for k in range(out_entry.shape[2]):
+            held = mine and k < most
+            out_entry[row, s, k] = entry[s, k] if held else NEVER
+            out_exit[row, s, k] = exit_[s, k] if held else NEVER
+            out_first[row, s, k] = first[s, k] if held else 0
+            out_last[row, s, k] = last[s, k] if held else 0
+            out_speed[row, s, k] = speed[s, k] if held else 1.0
+        if mine:
+            part = kind[s]
+            out_shared[row, s] = shared[s]
+            out_follows[row, s] = follow[s] or part_follows[part]
+            out_reacts[row, s] = part_reacts[part] and not follow[s]
+            out_then[row, s] = replay if follow[s] else part_model[part]
+        else:
+            out_shared[row, s] = False
+            out_follows[row, s] = False
+            out_reacts[row, s] = False
+            out_then[row, s] = 0
+    for k in range(out_robot_track.shape[1]):
+        for c in range(2):
+            out_robot_track[row, k, c] = robot_track[k, c] if k < robot_track.shape[0] else 0.0
 
 
 @kernel

@@ -10,6 +10,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from socialzoo.core.geometry import closest_point_on_segment
+from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_fields
 from socialzoo.env.quirks import ReferenceQuirks
 
@@ -70,14 +71,36 @@ class RewardConfig:
         check_fields(self, signed=[f.name for f in fields(self) if f.name != "blame_horizon"])
 
 
-def _nearest_distance2(
+@kernel
+def _nearest_visible(robot_pos, human_pos, visible, skip, nearest2, nearest):  # type: ignore[no-untyped-def]
+    """Fill nearest2 (B,), the squared distance to the nearest counted human (visible, not the
+    skipped one; inf for none), and nearest (B,), its index (0 for none; the first of equals, and
+    the first NaN distance as numpy's argmin gives it)."""
+    for b in range(human_pos.shape[0]):
+        best, at = np.inf, 0
+        for h in range(human_pos.shape[1]):
+            if not visible[b, h] or h == skip[b]:
+                continue
+            dx, dy = human_pos[b, h, 0] - robot_pos[b, 0], human_pos[b, h, 1] - robot_pos[b, 1]
+            d2 = dx * dx + dy * dy
+            if d2 != d2:
+                best, at = d2, h
+                break
+            if d2 < best:
+                best, at = d2, h
+        nearest2[b], nearest[b] = best, at
+
+
+def nearest_visible(
     robot_pos: np.ndarray, human_pos: np.ndarray, visible: np.ndarray, skip: np.ndarray
-) -> np.ndarray:
-    """(B, H) squared robot-human distances, inf for humans not visible or skipped."""
-    rel = human_pos - robot_pos[:, None, :]
-    dist2 = rel[..., 0] ** 2 + rel[..., 1] ** 2
-    counted = visible & (np.arange(human_pos.shape[1]) != np.asarray(skip)[:, None])
-    return np.where(counted, dist2, np.inf)
+) -> tuple[np.ndarray, np.ndarray]:
+    """((B,) squared distance to the nearest visible human other than the skipped one, inf for
+    none; (B,) its index, 0 for none): one pass over the people for both reward terms."""
+    batch = robot_pos.shape[0]
+    nearest2, nearest = np.empty(batch), np.empty(batch, dtype=np.intp)
+    skip = np.broadcast_to(np.asarray(skip, dtype=np.int64), (batch,))
+    _nearest_visible(robot_pos, human_pos, np.asarray(visible, dtype=bool), skip, nearest2, nearest)
+    return nearest2, nearest
 
 
 def social_force_term(
@@ -94,11 +117,15 @@ def social_force_term(
     Returns:
         (B,) in [0, 1].
     """
-    d2 = _nearest_distance2(robot_pos, human_pos, visible, skip).min(axis=1, initial=np.inf)
-    return np.exp(-(d2 * d2))
+    d2, _ = nearest_visible(robot_pos, human_pos, visible, skip)
+    return _force(d2)
 
 
-def blame_term(
+def _force(nearest2: np.ndarray) -> np.ndarray:
+    return np.exp(-(nearest2 * nearest2))
+
+
+def force_and_blame(
     robot_pos: np.ndarray,
     robot_vel_world: np.ndarray,
     halted_or_still: np.ndarray,
@@ -106,8 +133,9 @@ def blame_term(
     visible: np.ndarray,
     skip: np.ndarray,
     horizon: float,
-) -> np.ndarray:
-    """Blame b = 1 - erf(dist(h, S)) (SPEC section 9).
+) -> tuple[np.ndarray, np.ndarray]:
+    """The social force term (social_force_term) and the blame b = 1 - erf(dist(h, S)) (SPEC
+    section 9), from one pass over the people.
 
     S is the segment from the robot to where its current velocity takes it in `horizon` seconds,
     h the visible human nearest to the robot (the skipped one left out). b is 0 for a halted or
@@ -124,19 +152,17 @@ def blame_term(
         horizon: s.
 
     Returns:
-        (B,) in [0, 1].
+        (force, blame), each (B,) in [0, 1].
     """
     batch = robot_pos.shape[0]
     if human_pos.shape[1] == 0:
-        return np.zeros(batch)
-    d2 = _nearest_distance2(robot_pos, human_pos, visible, skip)
-    nearest = np.argmin(d2, axis=1)
-    rows = np.arange(batch)
-    counted = np.isfinite(d2[rows, nearest]) & ~np.asarray(halted_or_still, dtype=bool)
+        return np.zeros(batch), np.zeros(batch)
+    d2, nearest = nearest_visible(robot_pos, human_pos, visible, skip)
+    counted = np.isfinite(d2) & ~np.asarray(halted_or_still, dtype=bool)
     _, dist = closest_point_on_segment(
-        human_pos[rows, nearest], robot_pos, robot_pos + horizon * robot_vel_world
+        human_pos[np.arange(batch), nearest], robot_pos, robot_pos + horizon * robot_vel_world
     )
-    return np.where(counted, 1.0 - erf(dist), 0.0)
+    return _force(d2), np.where(counted, 1.0 - erf(dist), 0.0)
 
 
 def progress(prev_pos: np.ndarray, pos: np.ndarray, goal: np.ndarray, x_only: bool = False) -> np.ndarray:
@@ -176,7 +202,7 @@ def compute_reward(
 
     Args:
         d_g: (B,) distance gained, m (from `progress`).
-        blame: (B,) from `blame_term`.
+        blame: (B,) from `force_and_blame`.
         force: (B,) from `social_force_term`.
         success: (B,) bool, the episode succeeds on this step.
         collisions: (B,) int, humans in collision with the robot this step.

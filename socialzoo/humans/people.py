@@ -175,31 +175,76 @@ def step_people_packed(
     """
     new_pos, new_vel = pos.copy(), vel.copy()
     blocked = np.zeros(mask.shape, dtype=bool)
-    moving = mask if moved is None else mask & moved
-    rows = np.flatnonzero(moving.any(axis=1))
+    rows, order, where = _pack_slots(mask, mask if moved is None else mask & moved)
     if len(rows) == 0:
         return new_pos, new_vel, blocked
-    present = mask[rows]
-    width = int(present.sum(axis=1).max())
-    order = np.argsort(~present, axis=1, kind="stable")[:, :width]  # present slots first, in order
+    # Flat gathers and scatters: indexing (B, H, 2) arrays by (rows, slots) pairs costs ten times more.
+    flat = (rows[:, None] * mask.shape[1] + order).reshape(-1)
 
     def packed(array: np.ndarray) -> np.ndarray:
-        index = order.reshape(order.shape + (1,) * (array.ndim - 2))
-        return np.take_along_axis(array[rows], index, axis=1)
+        rest = array.shape[2:]
+        return array.reshape((-1,) + rest).take(flat, axis=0).reshape(order.shape + rest)
 
     inside = packed(mask)
     # Walking groups name their first member's slot: renumber to the packed slots.
-    where = np.full(present.shape, -1, dtype=np.int64)
-    np.put_along_axis(where, order, np.broadcast_to(np.arange(width), order.shape), axis=1)
     old_group = packed(group)
-    new_group = np.where(old_group >= 0, np.take_along_axis(where, np.maximum(old_group, 0), axis=1), -1)
+    new_group = (
+        np.where(old_group >= 0, np.take_along_axis(where, np.maximum(old_group, 0), axis=1), -1)
+        if (old_group >= 0).any()
+        else old_group
+    )
     p, v, b = step_people(
         packed(pos), packed(vel), packed(target), packed(pref_speed), inside, packed(model), new_group,
         robot_pos[rows], robot_vel[rows], walls, cfg,
         None if desired_vel is None else packed(desired_vel), None if learned is None else packed(learned),
     )  # fmt: skip
-    slots = (rows[:, None], order)
-    new_pos[slots] = np.where(inside[..., None], p, new_pos[slots])
-    new_vel[slots] = np.where(inside[..., None], v, new_vel[slots])
-    blocked[slots] = b & inside
+    _unpack(flat, inside.reshape(-1), p.reshape(-1, 2), v.reshape(-1, 2), b.reshape(-1),
+            new_pos.reshape(-1, 2), new_vel.reshape(-1, 2), blocked.reshape(-1))  # fmt: skip
     return new_pos, new_vel, blocked
+
+
+@kernel
+def _pack_slots(mask: np.ndarray, moving: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The packing of step_people_packed: rows (n,), the rows where someone is `moving`; order
+    (n, W), each row's present slots in slot order, then its first absent ones (W: the most present
+    people of those rows); where (n, H), each slot's place in order (-1: not packed)."""
+    b, h = mask.shape
+    picked = np.zeros(b, dtype=np.bool_)
+    n, width = 0, 0
+    for r in range(b):
+        count = 0
+        for s in range(h):
+            count += mask[r, s]
+            picked[r] = picked[r] or moving[r, s]
+        if picked[r]:
+            n += 1
+            width = max(width, count)
+    rows = np.empty(n, dtype=np.int64)
+    order = np.empty((n, width), dtype=np.int64)
+    where = np.full((n, h), -1, dtype=np.int64)
+    j = 0
+    for r in range(b):
+        if not picked[r]:
+            continue
+        rows[j] = r
+        k = 0
+        for present in (True, False):
+            for s in range(h):
+                if k < width and mask[r, s] == present:
+                    order[j, k] = s
+                    where[j, s] = k
+                    k += 1
+        j += 1
+    return rows, order, where
+
+
+@kernel
+def _unpack(flat, inside, pos, vel, blocked, out_pos, out_vel, out_blocked):  # type: ignore[no-untyped-def]
+    """Write the packed people who are inside back to their flat slots `flat` (the others keep
+    theirs)."""
+    for i in range(flat.shape[0]):
+        if inside[i]:
+            j = flat[i]
+            out_pos[j, 0], out_pos[j, 1] = pos[i, 0], pos[i, 1]
+            out_vel[j, 0], out_vel[j, 1] = vel[i, 0], vel[i, 1]
+            out_blocked[j] = blocked[i]

@@ -9,10 +9,10 @@ import pytest
 
 from socialzoo.env.reward import (
     RewardConfig,
-    blame_term,
     compute_reward,
     erf,
     erf_approx,
+    force_and_blame,
     progress,
     social_force_term,
 )
@@ -53,9 +53,24 @@ def test_force_batched():
 def blame(hp, visible=None, skip=-1, vel=(1.0, 0.0), halted=False, horizon=0.5):
     hp = humans(*hp)
     visible = np.ones(hp.shape[:2], bool) if visible is None else np.asarray([visible])
-    return blame_term(
+    return force_and_blame(
         ORIGIN, np.array([vel], float), np.array([halted]), hp, visible, np.array([skip]), horizon
-    )[0]
+    )[1][0]
+
+
+def test_blame_takes_the_first_of_equally_near_people():
+    # Both 1 m from the robot; the first lies 0.5 m beyond the segment's end, the second 1 m behind it.
+    assert blame([(1.0, 0.0), (-1.0, 0.0)]) == pytest.approx(1.0 - math.erf(0.5), abs=1e-12)
+    assert blame([(-1.0, 0.0), (1.0, 0.0)]) == pytest.approx(1.0 - math.erf(1.0), abs=1e-12)
+
+
+def test_force_and_blame_force_is_the_social_force_term():
+    rng = np.random.default_rng(0)
+    pos, people = rng.normal(size=(8, 2)), rng.normal(size=(8, 5, 2))
+    visible, skip = rng.random((8, 5)) < 0.7, rng.integers(-1, 5, 8)
+    force, _ = force_and_blame(pos, rng.normal(size=(8, 2)), np.zeros(8, bool), people, visible, skip, 0.5)
+    assert np.array_equal(force, social_force_term(pos, people, visible, skip))
+    assert (force > 0).any()
 
 
 def test_blame_by_hand():

@@ -43,7 +43,7 @@ from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_b
 from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
 from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
-from socialzoo.env.reward import RewardConfig, blame_term, social_force_term
+from socialzoo.env.reward import RewardConfig, force_and_blame
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import load_map
@@ -364,11 +364,9 @@ class CrowdNavTask(Task):
         people = np.repeat(s.human_pos, r, axis=0)
         seen = np.repeat(s.human_mask, r, axis=0)
         skip = np.full(b * r, -1)
-        force = social_force_term(pos, people, seen, skip)
         vel = velocity.reshape(b * r, 2)
         still = np.hypot(vel[:, 0], vel[:, 1]) < STILL_SPEED
-        blame = blame_term(pos, vel, still, people, seen, skip, self._blame_horizon)
-        return force, blame
+        return force_and_blame(pos, vel, still, people, seen, skip, self._blame_horizon)
 
     # ------------------------------------------------------------------ the joint state
     def _wall_points(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
