@@ -92,8 +92,12 @@ class ReplayRunner:
         self.dt, self.collision_distance = dt, collision_distance
         self.recorded = np.zeros(b, dtype=bool)
         self.frame_dt = np.ones(b)
+        # (B, H, T, 2) each row's recording in its first people_count slots and frame_count frames
+        # (what lies beyond is not read: a reset writes only the recording's block).
         self.tracks = np.full((b, h, 1, 2), np.nan)
         self.track_vel = np.zeros((b, h, 1, 2))
+        self.people_count = np.zeros(b, dtype=np.int64)
+        self.frame_count = np.zeros(b, dtype=np.int64)
         # (B, H, L) the frame of each route point (socialzoo.scenarios.recorded_people.route_frames).
         self.route_frame = np.zeros((b, h, 1), dtype=np.int64)
         # (B, H, K) each slot's people, one after another (socialzoo.scenarios.recorded_people.Occupants).
@@ -180,6 +184,7 @@ class ReplayRunner:
             self.frame_dt[row] = rec.dt
             self.time_limit[row] = rec.time_limit
             self.robot_track_len[row] = len(rec.robot_track)
+            self.people_count[row], self.frame_count[row] = rec.num_people, rec.num_frames
             _load_row(
                 row, rec.tracks, rec.velocities, rec.route_frames, occupants.entry, occupants.exit,
                 occupants.first, occupants.last, occupants.speed, occupants.shared, rec.follow, rec.robot_track,
@@ -272,7 +277,8 @@ class ReplayRunner:
         if _occupants_now(rows, i0, self.entry, self.occupant, now, new):
             self._enter(state, rows, new, now, t)
         _place_people(
-            rows, i0, w, t, now, new, self.tracks, self.track_vel, self.on_track, self.gone, self.exit_at,
+            rows, i0, w, t, now, new, self.tracks, self.track_vel, self.people_count, self.frame_count,
+            self.on_track, self.gone, self.exit_at,
             state.human_direction, state.human_pos, state.human_vel, state.human_mask,
         )  # fmt: skip
         return i0
@@ -281,49 +287,15 @@ class ReplayRunner:
         self, state: WorldState, rows: np.ndarray, new: np.ndarray, now: np.ndarray, t: np.ndarray
     ) -> None:
         """The people who take their slot now (new (n, H); now: who is in each slot): the one they
-        follow is folded into the measures (a person a model still walks leaves here), and the slot
-        follows its track or is walked from its entry along its own part of the slot's route."""
-        local, slot = np.nonzero(new)
-        row = rows[local]
-        self._fold(row, slot, t[local])
-        k = now[local, slot]
-        self.occupant[row, slot] = k
-        follow = self.follows[row, slot]
-        self.on_track[row, slot] = follow
-        self.gone[row, slot] = False
-        self.reacted_at[row, slot] = np.nan
-        self.exit_at[row, slot] = np.nan
-        self.walked[row, slot] = 0.0
-        state.human_model[row, slot] = np.where(follow, REPLAY, self.then[row, slot])
-        first, last = self.first[row, slot, k], self.last[row, slot, k]
-        shared = self.shared[row, slot]
-        # A slot of one person keeps the scenario's route; in a shared slot each person walks its own part.
-        route_len = np.where(shared, last + 1, state.human_route_len[row, slot])
-        state.human_route_len[row, slot] = route_len
-        state.human_waypoint[row, slot] = np.where(
-            shared, np.minimum(first + 1, last), np.minimum(1, route_len - 1)
-        )
-        state.human_direction[row, slot] = 1
-        state.human_pref_speed[row, slot] = np.where(
-            shared, self.occupant_speed[row, slot, k], state.human_pref_speed[row, slot]
-        )
-
-    def _fold(self, row: np.ndarray, slot: np.ndarray, t: np.ndarray) -> None:
-        """Add the reacting people leaving slots (row, slot) at times t to the row's measures."""
-        reacted = ~np.isnan(self.reacted_at[row, slot])
-        if not reacted.any():
-            return
-        row, slot, t = row[reacted], slot[reacted], t[reacted]
-        exit_at = self.exit_at[row, slot]
-        cut = np.isnan(exit_at)
-        lost = np.where(cut, t, exit_at) - self.recorded_exit[row, slot]
-        extra = (
-            self.walked[row, slot] + np.where(cut, self.rest[row, slot], 0.0) - self.recorded_left[row, slot]
-        )
-        np.add.at(self.folded, (row, 0), 1.0)
-        np.add.at(self.folded, (row, 1), lost)
-        np.add.at(self.folded, (row, 2), extra)
-        self.reacted_at[row, slot] = np.nan
+        follow is folded into the measures (a reacting person leaves here: its time lost and extra
+        distance so far), and the slot follows its track or is walked from its entry along its own
+        part of the slot's route."""
+        _enter_people(
+            rows, new, now, t, self.follows, self.then, self.shared, self.first, self.last, self.occupant_speed,
+            REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at, self.walked,
+            self.recorded_exit, self.recorded_left, self.rest, self.folded, state.human_model,
+            state.human_route_len, state.human_waypoint, state.human_direction, state.human_pref_speed,
+        )  # fmt: skip
 
     def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
         """Hybrid people a robot came near leave their tracks (see the module docstring); frame:
@@ -443,20 +415,14 @@ def _load_row(
     """ReplayRunner.reset's load of one recording (RecordedPeople's arrays, its Occupants') into
     row `row`: its n slots' tracks, velocities, route frames (padded by repeating the last),
     occupants and ways of walking (kind: each slot's part of the people spec, -1 the last entry of
-    the part arrays), the replaced person's path; the row's other slots and frames empty."""
+    the part arrays), the replaced person's path; the row's other slots empty. Only the recording's
+    block of the tracks is written (ReplayRunner.people_count, frame_count)."""
     n, frames = tracks.shape[0], tracks.shape[1]
     width, most = route_frames.shape[1], entry.shape[1]
-    for s in range(out_tracks.shape[1]):
+    out_tracks[row, :n, :frames] = tracks
+    out_vel[row, :n, :frames] = velocities
+    for s in range(out_route_frame.shape[1]):
         mine = s < n
-        for f in range(out_tracks.shape[2]):
-            if mine and f < frames:
-                for c in range(2):
-                    out_tracks[row, s, f, c] = tracks[s, f, c]
-                    out_vel[row, s, f, c] = velocities[s, f, c]
-            else:
-                for c in range(2):
-                    out_tracks[row, s, f, c] = np.nan
-                    out_vel[row, s, f, c] = 0.0
         for k in range(out_route_frame.shape[2]):
             out_route_frame[row, s, k] = route_frames[s, min(k, width - 1)] if mine else 0
         for k in range(out_entry.shape[2]):
@@ -501,11 +467,52 @@ def _occupants_now(rows, i0, entry, occupant, now, new):
 
 
 @kernel
+def _enter_people(
+    rows, new, now, t, follows, then, shared, first, last, occupant_speed, replay,
+    occupant, on_track, gone, reacted_at, exit_at, walked, recorded_exit, recorded_left, rest, folded,
+    model, route_len, waypoint, direction, pref_speed,
+):  # fmt: skip
+    """ReplayRunner._enter in place, slot by slot in row-major order (the order the folded sums
+    add in): a reacting person leaving its slot adds one, its time lost (to its exit, or to now if
+    it had not left) and its extra distance (with the straight way left if it had not left) to
+    its row's `folded`; the slot's new person follows its track (REPLAY) or walks by its model
+    from its route's second point, a shared slot's person along its own part at its own speed."""
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        for s in range(new.shape[1]):
+            if not new[j, s]:
+                continue
+            if reacted_at[r, s] == reacted_at[r, s]:  # not NaN: it reacted
+                cut = exit_at[r, s] != exit_at[r, s]
+                folded[r, 0] += 1.0
+                folded[r, 1] += (t[j] if cut else exit_at[r, s]) - recorded_exit[r, s]
+                folded[r, 2] += walked[r, s] + (rest[r, s] if cut else 0.0) - recorded_left[r, s]
+            k = now[j, s]
+            occupant[r, s] = k
+            on_track[r, s] = follows[r, s]
+            gone[r, s] = False
+            reacted_at[r, s] = np.nan
+            exit_at[r, s] = np.nan
+            walked[r, s] = 0.0
+            model[r, s] = replay if follows[r, s] else then[r, s]
+            if shared[r, s]:
+                route_len[r, s] = last[r, s, k] + 1
+                waypoint[r, s] = min(first[r, s, k] + 1, last[r, s, k])
+                pref_speed[r, s] = occupant_speed[r, s, k]
+            else:
+                waypoint[r, s] = min(1, route_len[r, s] - 1)
+            direction[r, s] = 1
+
+
+@kernel
 def _place_people(
-    rows, i0, w, t, now, new, tracks, track_vel, on_track, gone, exit_at, direction, pos, vel, mask
+    rows, i0, w, t, now, new, tracks, track_vel, people_count, frame_count, on_track, gone, exit_at, direction,
+    pos, vel, mask,
 ):  # fmt: skip
     """ReplayRunner._place's update of `rows` in place: followers where their tracks are, present
-    while recorded; people a model walks enter on their track and leave where their route ends."""
+    while recorded; people a model walks enter on their track and leave where their route ends.
+    A row's tracks beyond its recording (people_count slots, frame_count frames) are NaN (absent)
+    with velocity 0, whatever the arrays hold there."""
     last = tracks.shape[2] - 1
     for j in range(rows.shape[0]):
         r = rows[j]
@@ -513,8 +520,13 @@ def _place_people(
         b = min(a + 1, last)
         on_frame = w[j] == 0.0
         for s in range(tracks.shape[1]):
-            x0, y0 = tracks[r, s, a, 0], tracks[r, s, a, 1]
-            x1, y1 = tracks[r, s, b, 0], tracks[r, s, b, 1]
+            x0 = y0 = x1 = y1 = np.nan
+            vx = vy = 0.0
+            if s < people_count[r] and a < frame_count[r]:
+                x0, y0 = tracks[r, s, a, 0], tracks[r, s, a, 1]
+                vx, vy = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+            if s < people_count[r] and b < frame_count[r]:
+                x1, y1 = tracks[r, s, b, 0], tracks[r, s, b, 1]
             present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
             if on_frame:
                 x, y = x0, y0
@@ -524,14 +536,14 @@ def _place_people(
             if on_track[r, s]:
                 if present:
                     pos[r, s, 0], pos[r, s, 1] = x, y
-                    vel[r, s, 0], vel[r, s, 1] = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+                    vel[r, s, 0], vel[r, s, 1] = vx, vy
                 mask[r, s] = present
                 if seen and not present and np.isnan(exit_at[r, s]):
                     exit_at[r, s] = t[j]
                 continue
             if new[j, s]:
                 pos[r, s, 0], pos[r, s, 1] = x, y
-                vel[r, s, 0], vel[r, s, 1] = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+                vel[r, s, 0], vel[r, s, 1] = vx, vy
             walking = seen and not gone[r, s]
             leaving = walking and direction[r, s] < 0
             if leaving:
