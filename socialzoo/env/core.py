@@ -151,7 +151,8 @@ class BatchedCore:
         if len(rows) == 0:
             return
         scenarios, models = self.people.prepare(list(scenarios))
-        fresh = scenarios_to_state(scenarios, num_robots=self.num_robots, max_humans=self.max_humans)
+        width = 1 if self.state is None else self.state.human_route.shape[2]
+        fresh = scenarios_to_state(scenarios, self.num_robots, self.max_humans, width)
         fresh.human_model[:] = models
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)

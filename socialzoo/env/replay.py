@@ -92,10 +92,11 @@ class ReplayRunner:
         self.dt, self.collision_distance = dt, collision_distance
         self.recorded = np.zeros(b, dtype=bool)
         self.frame_dt = np.ones(b)
-        # (B, H, T, 2) each row's recording in its first people_count slots and frame_count frames
-        # (what lies beyond is not read: a reset writes only the recording's block).
-        self.tracks = np.full((b, h, 1, 2), np.nan)
-        self.track_vel = np.zeros((b, h, 1, 2))
+        # (B, T, H, 2) each row's recording in its first frame_count frames and people_count slots
+        # (what lies beyond is not read: a reset writes only the recording's block). Frame-major:
+        # a step reads every slot of a row on one or two frames.
+        self.tracks = np.full((b, 1, h, 2), np.nan)
+        self.track_vel = np.zeros((b, 1, h, 2))
         self.people_count = np.zeros(b, dtype=np.int64)
         self.frame_count = np.zeros(b, dtype=np.int64)
         # (B, H, L) the frame of each route point (socialzoo.scenarios.recorded_people.route_frames).
@@ -225,15 +226,12 @@ class ReplayRunner:
                 array = getattr(self, name)
                 pad = np.full(array.shape[:2] + (grow,), fill, dtype=array.dtype)
                 setattr(self, name, np.concatenate((array, pad), 2))
-        have = self.tracks.shape[2]
+        have = self.tracks.shape[1]
         if frames > have:
             frames = max(frames, 2 * have)  # grow by doubling: a reset rarely reallocates
-            self.tracks = np.concatenate(
-                (self.tracks, np.full(self.tracks.shape[:2] + (frames - have, 2), np.nan)), 2
-            )
-            self.track_vel = np.concatenate(
-                (self.track_vel, np.zeros(self.track_vel.shape[:2] + (frames - have, 2))), 2
-            )
+            b, h = self.tracks.shape[0], self.tracks.shape[2]
+            self.tracks = np.concatenate((self.tracks, np.full((b, frames - have, h, 2), np.nan)), 1)
+            self.track_vel = np.concatenate((self.track_vel, np.zeros((b, frames - have, h, 2))), 1)
         have = self.route_frame.shape[2]
         if route > have:
             route = max(route, 2 * have)
@@ -268,11 +266,11 @@ class ReplayRunner:
         returns (len(rows),) the frame each row is on."""
         t = state.step_count[rows] * self.dt
         frame = t / self.frame_dt[rows]
-        last = self.tracks.shape[2] - 1
+        last = self.tracks.shape[1] - 1
         i0 = np.minimum(np.floor(frame + _ON_FRAME).astype(np.int64), last)
         w = np.where(frame - i0 > _ON_FRAME, frame - i0, 0.0)
         # Who is in each slot now; a slot's next person takes it at its entry frame.
-        now = np.empty((len(rows), self.tracks.shape[1]), dtype=np.int64)
+        now = np.empty((len(rows), self.tracks.shape[2]), dtype=np.int64)
         new = np.empty(now.shape, dtype=bool)
         if _occupants_now(rows, i0, self.entry, self.occupant, now, new):
             self._enter(state, rows, new, now, t)
@@ -326,7 +324,7 @@ class ReplayRunner:
         self.reacted_at[row, slot] = t
         exit_frame = self.exit[row, slot, k]
         self.recorded_exit[row, slot] = exit_frame * self.frame_dt[row]
-        track = self.tracks[row, slot]  # (m, T, 2)
+        track = self.tracks[row, :, slot]  # (m, T, 2)
         seg = np.sqrt((np.diff(track, axis=1) ** 2).sum(-1))  # NaN where absent
         span = np.arange(track.shape[1] - 1)[None, :]
         mine = (span >= frame[local][:, None]) & (span < exit_frame[:, None])
@@ -419,8 +417,11 @@ def _load_row(
     block of the tracks is written (ReplayRunner.people_count, frame_count)."""
     n, frames = tracks.shape[0], tracks.shape[1]
     width, most = route_frames.shape[1], entry.shape[1]
-    out_tracks[row, :n, :frames] = tracks
-    out_vel[row, :n, :frames] = velocities
+    for f in range(frames):
+        for s in range(n):
+            for c in range(2):
+                out_tracks[row, f, s, c] = tracks[s, f, c]
+                out_vel[row, f, s, c] = velocities[s, f, c]
     for s in range(out_route_frame.shape[1]):
         mine = s < n
         for k in range(out_route_frame.shape[2]):
@@ -513,20 +514,20 @@ def _place_people(
     while recorded; people a model walks enter on their track and leave where their route ends.
     A row's tracks beyond its recording (people_count slots, frame_count frames) are NaN (absent)
     with velocity 0, whatever the arrays hold there."""
-    last = tracks.shape[2] - 1
+    last = tracks.shape[1] - 1
     for j in range(rows.shape[0]):
         r = rows[j]
         a = i0[j]
         b = min(a + 1, last)
         on_frame = w[j] == 0.0
-        for s in range(tracks.shape[1]):
+        for s in range(tracks.shape[2]):
             x0 = y0 = x1 = y1 = np.nan
             vx = vy = 0.0
             if s < people_count[r] and a < frame_count[r]:
-                x0, y0 = tracks[r, s, a, 0], tracks[r, s, a, 1]
-                vx, vy = track_vel[r, s, a, 0], track_vel[r, s, a, 1]
+                x0, y0 = tracks[r, a, s, 0], tracks[r, a, s, 1]
+                vx, vy = track_vel[r, a, s, 0], track_vel[r, a, s, 1]
             if s < people_count[r] and b < frame_count[r]:
-                x1, y1 = tracks[r, s, b, 0], tracks[r, s, b, 1]
+                x1, y1 = tracks[r, b, s, 0], tracks[r, b, s, 1]
             present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
             if on_frame:
                 x, y = x0, y0

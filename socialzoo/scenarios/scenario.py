@@ -560,7 +560,7 @@ def noise_key(seed: int) -> np.uint64:
 
 
 def scenarios_to_state(
-    scenarios: Sequence[Scenario], num_robots: int = 1, max_humans: int | None = None
+    scenarios: Sequence[Scenario], num_robots: int = 1, max_humans: int | None = None, route_width: int = 1
 ) -> WorldState:
     """The batched world state at the start of each scenario (one row per scenario).
 
@@ -573,6 +573,8 @@ def scenarios_to_state(
         scenarios: B scenarios.
         num_robots: robots per row R; each scenario must hold at least R robot starts.
         max_humans: human slots H; default the largest head count.
+        route_width: route points per slot at least (the longest route's count if more): a batch's
+            state takes the rows without padding them again.
 
     Returns:
         The state, B = len(scenarios).
@@ -597,7 +599,7 @@ def scenarios_to_state(
     b = len(scenarios)
     counts = np.array([s.num_humans for s in scenarios], dtype=np.intp)
     lens = [np.array([len(r) for r in s.human_routes], dtype=np.intp) for s in scenarios]
-    width = max([1] + [int(x.max()) for x in lens if len(x)])
+    width = max([route_width] + [int(x.max()) for x in lens if len(x)])
     mask = np.arange(h)[None, :] < counts[:, None]
     route_len = np.ones((b, h), dtype=np.int64)
     route_len[mask] = np.concatenate(lens) if len(lens) else []

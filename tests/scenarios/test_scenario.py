@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
+from socialzoo.core.state import pad_to
 from socialzoo.env.world import step_world
 from socialzoo.maps import map_file as maps
 from socialzoo.maps.map_file import Map
@@ -355,6 +356,11 @@ def test_scenarios_to_state_shapes_masks_and_padding() -> None:
         scenarios_to_state(scenarios[3:4], max_humans=h), m.wall_index, cfg, np.zeros((1, 1, 2))
     )
     np.testing.assert_array_equal(new.human_pos[3], alone.human_pos[0])
+    # A wider route axis asked for is the same state padded by repeating each route's last point.
+    wide = scenarios_to_state(scenarios, route_width=width + 3)
+    assert wide.human_route.shape == (b, h, width + 3, 2)
+    np.testing.assert_array_equal(wide.human_route, pad_to(state.human_route, (h, width + 3, 2), "human_route"))
+    assert scenarios_to_state(scenarios, route_width=2).human_route.shape == state.human_route.shape
 
 
 def test_scenarios_to_state_with_several_robots_and_errors() -> None:
