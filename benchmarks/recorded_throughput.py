@@ -7,12 +7,16 @@ A person-step is one present person for one decision step (a recorded scene's ab
 who have not entered yet or have left, do not count); microseconds per person-step is the run's
 wall time over the present people summed over every step of every row.
 
+With --floor, it also runs the arena with 1 person, and with 5 people in as many person slots as the
+first scene's rows have: what a sparse row costs whoever walks in it (microseconds per row-step, one
+robot's decision step in one row, are printed beside the person-steps).
+
 With --warmup S, each case first runs S seconds untimed: a recorded scene builds each track's scenario
 the first time the track is drawn and keeps it, so a short run from a cold start mostly measures
 those builds, and a long training run does not.
 
 Run: SOCIALZOO_DATA_DIR=DIR python benchmarks/recorded_throughput.py [--scenes eth,zara1] [--seconds 5]
-[--warmup 0] [--json]
+[--warmup 0] [--floor] [--json]
 """
 
 from __future__ import annotations
@@ -24,12 +28,14 @@ import numpy as np
 from _common import parser
 
 from socialzoo.env.vector import CrowdNavVectorEnv
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 BATCH = 256
 
 
 def measure(seconds: float, warmup: float = 0.0, **config: object) -> dict[str, float]:
-    """env-steps/s and microseconds per present person-step of one vector env (after `warmup` s)."""
+    """env-steps/s, person slots per row, and microseconds per present person-step and per row-step
+    of one vector env (after `warmup` s)."""
     env = CrowdNavVectorEnv(BATCH, **config)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -50,7 +56,9 @@ def measure(seconds: float, warmup: float = 0.0, **config: object) -> dict[str, 
     return {
         "env_steps_per_s": round(steps * BATCH / wall),
         "people_per_row": round(people / steps / BATCH, 1),
+        "slots": core.max_humans,
         "us_per_person_step": round(wall / max(people, 1) * 1e6, 3),
+        "us_per_row_step": round(wall / (steps * BATCH) * 1e6, 3),
     }
 
 
@@ -60,6 +68,9 @@ def main() -> None:
         "--scenes", default="eth,zara1", help="recorded scenes (socialzoo data fetch eth-ucy first)"
     )
     p.add_argument("--warmup", type=float, default=0.0, help="untimed seconds before each case's measurement")
+    p.add_argument(
+        "--floor", action="store_true", help="also the arena with 1 person and 5 people in many slots"
+    )
     args = p.parse_args()
     # The issue's reference (20 people) and CrowdNav's own 5, as sparse as the recorded scenes.
     cases = [("CrowdNav 20 ORCA people", {"variant": "20"}), ("CrowdNav 5 ORCA people", {"variant": ""})]
@@ -76,6 +87,13 @@ def main() -> None:
                     },
                 )
             )
+    if args.floor:
+        first = f"recorded_{args.scenes.split(',')[0]}"
+        slots = CrowdNavVectorEnv(1, family=first, humans="replay").task.core.max_humans
+        cases[2:2] = [
+            ("CrowdNav 1 ORCA person", {"cases": CrowdCaseConfig(num_humans=1)}),
+            (f"CrowdNav 5 in {slots} slots", {"variant": "", "max_humans": slots}),
+        ]
     for label, config in cases:
         measured = measure(args.seconds, args.warmup, **config)
         figure = {"case": label, "batch": BATCH, "warmup_s": args.warmup, **measured}
@@ -83,7 +101,8 @@ def main() -> None:
             json.dumps(figure)
             if args.json
             else f"{label:26s} B={BATCH}  {figure['env_steps_per_s']:10,} env-steps/s  "
-            f"{figure['people_per_row']:5.1f} people/row  {figure['us_per_person_step']:7.3f} us/person-step"
+            f"{figure['people_per_row']:5.1f} people/row  {figure['us_per_person_step']:7.3f} us/person-step  "
+            f"{figure['us_per_row_step']:6.2f} us/row-step"
         )
 
 

@@ -14,6 +14,7 @@ from functools import partial
 import numpy as np
 
 from socialzoo.core.config import RobotConfig, WorldConfig
+from socialzoo.core.jit import kernel
 from socialzoo.core.robot import step_robot, world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
@@ -57,11 +58,21 @@ def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> t
 
 def robot_human_contacts(state: WorldState, cfg: WorldConfig) -> np.ndarray:
     """(B, R, H) robot-person centre distances below the collision distance, present people only."""
-    dx = state.robot_pose[:, :, None, 0] - state.human_pos[:, None, :, 0]
-    dy = state.robot_pose[:, :, None, 1] - state.human_pos[:, None, :, 1]
-    # The two squares added (what sum(-1) over an axis of two gives), without a strided reduction.
-    close = dx * dx + dy * dy < cfg.human_collision_distance**2
-    return close & state.human_mask[:, None, :]
+    b, r = state.robot_pose.shape[:2]
+    out = np.empty((b, r, state.human_pos.shape[1]), dtype=bool)
+    _contacts(state.robot_pose, state.human_pos, state.human_mask, cfg.human_collision_distance**2, out)
+    return out
+
+
+@kernel
+def _contacts(robot_pose, human_pos, mask, distance2, out):  # type: ignore[no-untyped-def]
+    """robot_human_contacts into out (B, R, H): the squared centre distance (the two squares added)
+    below distance2, for present people."""
+    for b in range(out.shape[0]):
+        for q in range(out.shape[1]):
+            for h in range(out.shape[2]):
+                dx, dy = robot_pose[b, q, 0] - human_pos[b, h, 0], robot_pose[b, q, 1] - human_pos[b, h, 1]
+                out[b, q, h] = mask[b, h] and dx * dx + dy * dy < distance2
 
 
 def step_world(
