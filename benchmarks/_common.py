@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import sys
 import time
 import tracemalloc
@@ -64,8 +63,3 @@ def report(fig: Figure, as_json: bool) -> None:
             f"{fig.agent_steps_per_s:>14,.0f} agent-steps/s  peak {fig.peak_mem_mib:8.1f} MiB"
         )
     sys.stdout.flush()
-
-
-def process_peak_rss_mib() -> float:
-    """The process's peak resident memory so far (MiB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

@@ -220,11 +220,6 @@ class RecordedPeople:
                 speed[s, k] = speed_over(float(segments[a:b].sum()), (b - a) * self.dt)
         return Occupants(entry, exit_, first, last, speed)
 
-    @property
-    def robot_time(self) -> float:
-        """The replaced person's recorded time from entry to exit, s (nan: nobody replaced)."""
-        return (len(self.robot_track) - 1) * self.dt if len(self.robot_track) else math.nan
-
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, RecordedPeople):
             return NotImplemented
