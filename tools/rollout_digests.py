@@ -4,6 +4,11 @@ keeps each id's rollouts bit for bit.
     python tools/rollout_digests.py --out before.json          # record
     python tools/rollout_digests.py --compare before.json      # record again and list what differs
 
+With --recorded eth,univ (the ETH/UCY cache of `socialzoo data fetch eth-ucy`), it adds the CrowdNav
+task's recorded scenes, replayed and hybrid (ORCA and social force), 16 rows for 300 steps each:
+enough for episodes to end and hybrid people to react. The tool runs against another checkout's
+package with PYTHONPATH=that/checkout.
+
 A rollout is reset with a fixed seed and stepped with actions drawn from a fixed generator of its
 own (never the spaces' samplers); an ended episode is reset without a seed (the stream goes on).
 Each case keeps separate digests of the observations, the rewards, the end flags and the infos,
@@ -208,8 +213,9 @@ def torchrl_rollout(make: Callable[[], Any], seed: int = 11, steps: int = 60) ->
     return digest.hexdigests()
 
 
-def cases() -> dict[str, Callable[[], dict[str, str]]]:
-    """Case name -> a function computing its digests: every registered id, every adapter."""
+def cases(recorded: tuple[str, ...] = ()) -> dict[str, Callable[[], dict[str, str]]]:
+    """Case name -> a function computing its digests: every registered id, every adapter (and the
+    `recorded` scenes, replayed and hybrid)."""
     import gymnasium as gym
 
     import socialzoo  # noqa: F401
@@ -257,6 +263,11 @@ def cases() -> dict[str, Callable[[], dict[str, str]]]:
     out["sb3 benchmark"] = lambda: sb3_vec()
     out["sb3 benchmark short"] = lambda: sb3_vec(max_steps=50)
     out.update(_torchrl_cases())
+    for scene in recorded:
+        for humans in ("replay", "hybrid:orca", "hybrid:sf"):
+            out[f"recorded {scene} {humans}"] = lambda scene=scene, humans=humans: gym_vector(
+                "socialzoo/CrowdNavRecorded-v1", 16, steps=300, family=f"recorded_{scene}", humans=humans
+            )
     return out
 
 
@@ -291,11 +302,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", help="write the digests to this JSON file")
     parser.add_argument("--compare", help="compare with the digests of this JSON file")
-    parser.add_argument("--only", nargs="*", help="case names (default: all)")
+    parser.add_argument(
+        "--only", nargs="*", help="case names or their first words, e.g. recorded (default: all)"
+    )
+    parser.add_argument("--recorded", default="", help="recorded scenes to add, e.g. eth,univ")
     args = parser.parse_args(argv)
     before = json.loads(open(args.compare).read()) if args.compare else None
-    names = args.only if args.only else (list(before) if before else None)
-    table = cases()
+    table = cases(tuple(s for s in args.recorded.split(",") if s))
+    names = list(before) if before else None
+    if args.only:
+        names = [n for n in table if any(n == o or n.startswith(o + " ") for o in args.only)]
+        names += [o for o in args.only if not any(n == o or n.startswith(o + " ") for n in table)]
     digests: dict[str, dict[str, str]] = {}
     differ = 0
     for name in names or list(table):
