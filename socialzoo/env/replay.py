@@ -426,7 +426,7 @@ def _load_row(
         mine = s < n
         for k in range(out_route_frame.shape[2]):
             out_route_frame[row, s, k] = route_frames[s, min(k, width - 1)] if mine else 0
-        for k in range(out_entry.shape[2]):
+        for k in range(out_entry.shape[2]):  # unused entries: the fills of _OCCUPANT_FIELDS
             held = mine and k < most
             out_entry[row, s, k] = entry[s, k] if held else NEVER
             out_exit[row, s, k] = exit_[s, k] if held else NEVER
