@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from socialzoo.core.files import read_json
+from socialzoo.core.seed_hash import seed_states
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.core.walls import WallIndex
@@ -555,8 +556,9 @@ def get_test_set(name: str) -> TestSet:
 
 # ---------------------------------------------------------------------------- scenarios -> state
 def noise_key(seed: int) -> np.uint64:
-    """The counter-based noise key of a scenario seed."""
-    return np.random.SeedSequence([int(seed), _NOISE_STREAM]).generate_state(1, dtype=np.uint64)[0]
+    """The counter-based noise key of a scenario seed: SeedSequence([seed, _NOISE_STREAM])'s first
+    uint64 state word (socialzoo.core.seed_hash, compiled for a batch's rows)."""
+    return seed_states([int(seed)], _NOISE_STREAM)[0]
 
 
 def scenarios_to_state(
@@ -611,7 +613,10 @@ def scenarios_to_state(
         flat_len = route_len[mask]
         offset = np.cumsum(flat_len) - flat_len
         idx = offset[:, None] + np.minimum(np.arange(width)[None, :], flat_len[:, None] - 1)
-        route[mask] = stacked[idx]
+        # Flat takes and an integer index: a boolean mask over (B, H, L, 2) costs several times more.
+        route.reshape(b * h, width, 2)[np.flatnonzero(mask)] = stacked.take(idx.reshape(-1), axis=0).reshape(
+            idx.shape + (2,)
+        )
     pos = np.zeros((b, h, 2))
     pos[mask] = np.concatenate([s.human_spawn for s in scenarios])
     speed = np.zeros((b, h))
@@ -629,7 +634,7 @@ def scenarios_to_state(
         human_waypoint=np.where(mask & (route_len > 1), 1, 0).astype(np.int64),
         human_direction=np.ones((b, h), dtype=np.int64),
         step_count=np.zeros(b, dtype=np.int64),
-        noise_key=np.array([noise_key(s.seed) for s in scenarios], dtype=np.uint64),
+        noise_key=seed_states([s.seed for s in scenarios], _NOISE_STREAM),
         human_group=_groups_of(scenarios, mask),
     )
 
