@@ -628,15 +628,17 @@ def _account_robots(
             px, py = robot_pose[r, q, 0], robot_pose[r, q, 1]
             if live[j, q]:
                 if points > 1:
-                    nearest = np.inf
+                    # The least squared distance, one square root: sqrt is monotone, so this is
+                    # the least of the segments' distances exactly.
+                    nearest2 = np.inf
                     for k in range(points - 1):
                         ax, ay = robot_track[r, k, 0], robot_track[r, k, 1]
                         abx, aby = robot_track[r, k + 1, 0] - ax, robot_track[r, k + 1, 1] - ay
                         u = ((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12)
                         u = min(max(u, 0.0), 1.0)
                         cx, cy = ax + u * abx - px, ay + u * aby - py
-                        nearest = min(nearest, np.sqrt(cx * cx + cy * cy))
-                    deviation[r, q] += nearest
+                        nearest2 = min(nearest2, cx * cx + cy * cy)
+                    deviation[r, q] += np.sqrt(nearest2)
                 moves[r, q] += 1
             for s in range(human_pos.shape[1]):
                 dx, dy = human_pos[r, s, 0] - px, human_pos[r, s, 1] - py
