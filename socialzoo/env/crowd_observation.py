@@ -133,7 +133,9 @@ def joint_state(
         human_mask: (B, H) bool.
     """
     n, h = human_mask.shape
-    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n, h)))
+    radius = np.asarray(human_radius, dtype=np.float64)
+    if radius.shape != (n, h) or not radius.flags.c_contiguous:
+        radius = np.ascontiguousarray(np.broadcast_to(radius, (n, h)))
     flat = np.empty((n, flat_size(h)), dtype=np.float32)
     _fill_joint_state(
         np.ascontiguousarray(robot_pos, dtype=np.float64),

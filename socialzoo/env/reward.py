@@ -98,7 +98,9 @@ def nearest_visible(
     none; (B,) its index, 0 for none): one pass over the people for both reward terms."""
     batch = robot_pos.shape[0]
     nearest2, nearest = np.empty(batch), np.empty(batch, dtype=np.intp)
-    skip = np.broadcast_to(np.asarray(skip, dtype=np.int64), (batch,))
+    skip = np.asarray(skip, dtype=np.int64)
+    if skip.shape != (batch,):
+        skip = np.broadcast_to(skip, (batch,))
     _nearest_visible(robot_pos, human_pos, np.asarray(visible, dtype=bool), skip, nearest2, nearest)
     return nearest2, nearest
 

@@ -118,7 +118,11 @@ class ScriptRunner:
 
     def _clear(self, rows: np.ndarray) -> None:
         """Empty `rows`' scripts, all at once (what a script in which nobody waits, follows or
-        escorts, and with no doors, holds); `reset` then writes the scripted rows' own."""
+        escorts, and with no doors, holds); `reset` then writes the scripted rows' own. Rows that
+        held no script are empty already (only scripted rows are written, and a step leaves an
+        empty row empty), so a reset of unscripted rows writes nothing."""
+        if not self.scripted[rows].any():
+            return
         self.scripted[rows] = False
         for name, fill in _EMPTY:
             getattr(self, name)[rows] = fill

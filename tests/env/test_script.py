@@ -223,3 +223,12 @@ def test_rows_reset_without_a_script_hold_what_an_empty_script_writes():
             np.testing.assert_array_equal(getattr(mixed, name), value, err_msg=name)
     assert mixed.scripted.tolist() == [False, True, False]
     assert mixed.stop[1].tolist() == [1] and mixed.stop[0].tolist() == [-1]
+    # Later steps leave the unscripted rows empty, so their next reset writes nothing.
+    later = dataclasses.replace(state, step_count=np.full(3, 200))
+    for runner in (mixed, reference):
+        runner._update(later, np.arange(3))
+    mixed.reset(np.array([0, 2]), [plain, None], later)
+    reference.reset(np.array([0, 2]), [empty, empty], later)
+    for name, value in vars(reference).items():
+        if isinstance(value, np.ndarray) and name != "scripted":
+            np.testing.assert_array_equal(getattr(mixed, name), value, err_msg=name)

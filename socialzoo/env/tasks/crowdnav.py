@@ -137,6 +137,8 @@ class CrowdNavTask(Task):
             (np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius))
         )
         self.radius_sum = radius + self.slot_radius
+        # Every robot's slot radii, as one array: the observations of any rows read a prefix of it.
+        self._slot_radius_rows = np.tile(self.slot_radius, (batch_size * r, 1))
         self._blame_horizon = RewardConfig().blame_horizon
         # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
         # goal-frame velocity actions are turned by it into the world frame.
@@ -392,7 +394,7 @@ class CrowdNavTask(Task):
         robot = self.config.robot
         velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
         pos, vel, mask = core.others(s, velocity)
-        radius = np.broadcast_to(self.slot_radius, mask.shape)
+        radius = self._slot_radius_rows[: len(mask)]
         robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
         observed = None
         if self.config.observed_people is not None:
