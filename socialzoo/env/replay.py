@@ -41,6 +41,7 @@ import numpy as np
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.env.replay_kernels import (
+    UNUSED_OCCUPANT,
     account_people,
     account_robots,
     enter_people,
@@ -55,8 +56,6 @@ from socialzoo.scenarios.scenario import Scenario
 
 # The metrics of recorded scenes (socialzoo.core.metrics, source "recorded").
 RECORDED_KEYS = metric_names("recorded")
-# The runner's per-occupant arrays and the value of an unused entry (Occupants' fields).
-_OCCUPANT_FIELDS = (("entry", NEVER), ("exit", NEVER), ("first", 0), ("last", 0), ("occupant_speed", 1.0))
 # A time within this of a frame is on it, in frames.
 _ON_FRAME = 1e-9
 
@@ -230,7 +229,7 @@ class ReplayRunner:
         have = self.entry.shape[2]
         if occupants > have:
             grow = max(occupants, 2 * have) - have
-            for name, fill in _OCCUPANT_FIELDS:
+            for name, fill in UNUSED_OCCUPANT:
                 array = getattr(self, name)
                 pad = np.full(array.shape[:2] + (grow,), fill, dtype=array.dtype)
                 setattr(self, name, np.concatenate((array, pad), 2))

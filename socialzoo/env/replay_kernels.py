@@ -15,6 +15,10 @@ import numpy as np
 from socialzoo.core.jit import kernel
 from socialzoo.scenarios.recorded_people import NEVER
 
+# An unused occupant entry: never entering, route indices 0, speed 1 m/s (ReplayRunner's fill too).
+UNUSED_OCCUPANT = (("entry", NEVER), ("exit", NEVER), ("first", 0), ("last", 0), ("occupant_speed", 1.0))
+_UNUSED_SPEED = UNUSED_OCCUPANT[4][1]
+
 
 @kernel
 def load_row(
@@ -39,13 +43,13 @@ def load_row(
         mine = s < n
         for k in range(out_route_frame.shape[2]):
             out_route_frame[row, s, k] = route_frames[s, min(k, width - 1)] if mine else 0
-        for k in range(out_entry.shape[2]):  # unused entries: the fills of replay._OCCUPANT_FIELDS
+        for k in range(out_entry.shape[2]):  # unused entries: UNUSED_OCCUPANT's fills
             held = mine and k < most
             out_entry[row, s, k] = entry[s, k] if held else NEVER
             out_exit[row, s, k] = exit_[s, k] if held else NEVER
             out_first[row, s, k] = first[s, k] if held else 0
             out_last[row, s, k] = last[s, k] if held else 0
-            out_speed[row, s, k] = speed[s, k] if held else 1.0
+            out_speed[row, s, k] = speed[s, k] if held else _UNUSED_SPEED
         if mine:
             part = kind[s]
             out_shared[row, s] = shared[s]
