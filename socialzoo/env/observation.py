@@ -193,9 +193,9 @@ def paper_observation(
     """The paper's observation <p_g, p_l, v_r, H_r> (SPEC section 8), robot frame.
 
     Layout (K = num_slots; the named pieces PAPER_* and SLOT_* of this module): [0:2] goal
-    (x, y), m; [2:4] local target (x, y), m; [4:6] robot (v, omega), m/s and rad/s; [6] previous
-    action index; then K slots [7 + 4i : 11 + 4i] of (x, y, vx, vy) of the i-th nearest visible
-    human relative to the robot (module docstring).
+    (x, y), m; [2:4] local target, m; [4:6] robot (v, omega), m/s and rad/s; [6] previous action
+    index; then K slots [7 + 4i : 11 + 4i] of (x, y, vx, vy) of the i-th nearest visible human
+    relative to the robot (module docstring).
 
     Args:
         robot_pose: (B, 3) x, y (m), heading (rad), world frame.
@@ -211,35 +211,10 @@ def paper_observation(
     Returns:
         (B, 7 + 4K) float32.
     """
-    return _paper(robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, num_slots)[
-        0
-    ]
-
-
-def _paper(
-    robot_pose: np.ndarray,
-    robot_vel: np.ndarray,
-    goal: np.ndarray,
-    carrot: np.ndarray,
-    prev_action: np.ndarray,
-    human_pos: np.ndarray,
-    human_vel: np.ndarray,
-    visible: np.ndarray,
-    num_slots: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(paper_observation, (B, min(K, H)) the human index in each slot, -1 for an empty one)."""
-    batch = robot_pose.shape[0]
-    points = np.stack((goal, carrot), axis=1)
-    points_r, slots, people = _robot_frame_slots(
-        robot_pose, robot_vel, points, human_pos, human_vel, visible, num_slots
+    cfg = ObservationConfig(num_human_slots=num_slots)
+    return build_observation(
+        cfg, robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible
     )
-    out = np.zeros((batch, PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
-    out[:, PAPER_GOAL] = points_r[:, 0]
-    out[:, PAPER_TARGET] = points_r[:, 1]
-    out[:, PAPER_ROBOT_VEL] = robot_vel
-    out[:, PAPER_PREV_ACTION] = prev_action
-    paper_slots(out)[:, : slots.shape[1]] = slots
-    return out, people
 
 
 def socialgym1_observation(
@@ -252,54 +227,53 @@ def socialgym1_observation(
     visible: np.ndarray,
     theta_index: bool = False,
 ) -> np.ndarray:
-    """The reference code's 244-number observation, robot frame.
+    """The reference code's 244-number observation, robot frame; arguments as in
+    `paper_observation` (robot_vel only gives the relative human velocities).
 
     Layout: [3i : 3i + 3] for i < 40, human i's (x, y, theta); [120 + 3i : 123 + 3i] its
     (vx, vy, omega); [240:243] local target (x, y, 0); [243] previous action index. theta and
     omega are 0 (the reference stored a constant index in theta, SPEC section 11; `theta_index`
-    writes it: ReferenceQuirks.human_theta_index). Human
-    slots follow the module's conventions (visible humans nearest first, relative position and
-    velocity in robot axes), the same values as the paper layout. The goal and the robot's
-    velocity are not part of this layout.
-
-    Args:
-        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
-        robot_vel: (B, 2) v (m/s) and omega (rad/s); used for the relative human velocities.
-        carrot: (B, 2) local target, m, world frame.
-        prev_action: (B,) int sub-policy index of the previous step (0 before the first).
-        human_pos: (B, H, 2) m, world frame.
-        human_vel: (B, H, 2) m/s, world frame.
-        visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
-        theta_index: each filled slot's theta is its person's index in the world's person
-            arrays (the reference code's quirk), else 0.
+    writes each filled slot's person index there: ReferenceQuirks.human_theta_index). Human
+    slots follow the module's conventions, the same values as the paper layout. The goal and the
+    robot's velocity are not part of this layout.
 
     Returns:
         (B, 244) float32.
     """
-    return _socialgym1(
-        robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible, theta_index
-    )[0]
+    cfg = ObservationConfig(layout="socialgym1")
+    return build_observation(
+        cfg,
+        robot_pose,
+        robot_vel,
+        carrot,
+        carrot,
+        prev_action,
+        human_pos,
+        human_vel,
+        visible,
+        theta_index=theta_index,
+    )
+
+
+def _paper(
+    points_r: np.ndarray, slots: np.ndarray, robot_vel: np.ndarray, prev_action: np.ndarray, num_slots: int
+) -> np.ndarray:
+    """The paper layout from the robot-frame goal and carrot (points_r) and the human slots."""
+    out = np.zeros((len(points_r), PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
+    out[:, PAPER_GOAL] = points_r[:, 0]
+    out[:, PAPER_TARGET] = points_r[:, 1]
+    out[:, PAPER_ROBOT_VEL] = robot_vel
+    out[:, PAPER_PREV_ACTION] = prev_action
+    paper_slots(out)[:, : slots.shape[1]] = slots
+    return out
 
 
 def _socialgym1(
-    robot_pose: np.ndarray,
-    robot_vel: np.ndarray,
-    carrot: np.ndarray,
-    prev_action: np.ndarray,
-    human_pos: np.ndarray,
-    human_vel: np.ndarray,
-    visible: np.ndarray,
-    theta_index: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(socialgym1_observation, (B, min(40, H)) the human index in each slot, -1 for an empty one).
-    With `theta_index`, each filled slot's theta is its person's index (the reference's quirk)."""
-    batch = robot_pose.shape[0]
-    n = SOCIALGYM1_NUM_SLOTS
-    points_r, slots, people = _robot_frame_slots(
-        robot_pose, robot_vel, carrot[:, None, :], human_pos, human_vel, visible, n
-    )
-    k = slots.shape[1]
-    out = np.zeros((batch, SOCIALGYM1_SIZE), dtype=np.float32)
+    points_r: np.ndarray, slots: np.ndarray, people: np.ndarray, prev_action: np.ndarray, theta_index: bool
+) -> np.ndarray:
+    """The socialgym1 layout from the robot-frame carrot (points_r) and the human slots."""
+    n, k = SOCIALGYM1_NUM_SLOTS, slots.shape[1]
+    out = np.zeros((len(points_r), SOCIALGYM1_SIZE), dtype=np.float32)
     out[:, 0 : 3 * k : 3] = slots[..., 0]
     out[:, 1 : 3 * k : 3] = slots[..., 1]
     if theta_index:
@@ -308,7 +282,7 @@ def _socialgym1(
     out[:, 3 * n + 1 : 3 * n + 3 * k : 3] = slots[..., 3]
     out[:, 6 * n : 6 * n + 2] = points_r[:, 0]
     out[:, 6 * n + 3] = prev_action
-    return out, people
+    return out
 
 
 @dataclass(frozen=True)
@@ -377,14 +351,15 @@ def build_observation(
     Returns:
         (B, observation_size(cfg, signals is not None)) float32.
     """
-    if cfg.layout == "paper":
-        out, people = _paper(
-            robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible, cfg.num_slots
-        )
+    paper = cfg.layout == "paper"
+    points = np.stack((goal, carrot), axis=1) if paper else carrot[:, None, :]
+    points_r, slots, people = _robot_frame_slots(
+        robot_pose, robot_vel, points, human_pos, human_vel, visible, cfg.num_slots
+    )
+    if paper:
+        out = _paper(points_r, slots, robot_vel, prev_action, cfg.num_slots)
     else:
-        out, people = _socialgym1(
-            robot_pose, robot_vel, carrot, prev_action, human_pos, human_vel, visible, theta_index
-        )
+        out = _socialgym1(points_r, slots, people, prev_action, theta_index)
     if signals is None:
         return out
     k = cfg.num_slots
