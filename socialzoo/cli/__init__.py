@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import sys
 from collections.abc import Sequence
 
 from socialzoo import __version__
@@ -75,6 +76,12 @@ def command_help(name: str) -> str:
     return COMMANDS[name][1]
 
 
+def fail(command: str, err: object) -> int:
+    """Say "socialzoo COMMAND: error: ERR" on stderr; returns 2, the exit status of a usage or input error."""
+    print(f"socialzoo {command}: error: {err}", file=sys.stderr)
+    return 2
+
+
 def _chosen_command(argv: Sequence[str]) -> str | None:
     """The subcommand named on the command line: its first word that is not an option."""
     return next((word for word in argv if not word.startswith("-")), None)
@@ -118,8 +125,6 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for a usage or input error)."""
-    import sys
-
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(words)
     _refuse_moved(parser, words)

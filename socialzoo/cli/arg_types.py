@@ -3,26 +3,46 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
 
-def _int_at_least(text: str, low: int, what: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
-    if value < low:
-        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
-    return value
+def at_least(low: int, what: str = "") -> Callable[[str], int]:
+    """argparse type: an integer of at least `low` (the error names the value and says `what`,
+    by default "an integer >= low")."""
+    what = what or f"an integer >= {low}"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
 
 
-def positive_int(text: str) -> int:
-    """argparse type: an integer of at least 1 (the error names the value)."""
-    return _int_at_least(text, 1, "a positive integer")
+positive_int = at_least(1, "a positive integer")
+count = at_least(0)
 
 
-def count(text: str) -> int:
-    """argparse type: an integer of at least 0 (the error names the value)."""
-    return _int_at_least(text, 0, "an integer >= 0")
+def split_commas(text: str) -> tuple[str, ...]:
+    """The items of comma-separated text, stripped, empty ones left out."""
+    return tuple(item.strip() for item in text.split(",") if item.strip())
+
+
+def comma_list(what: str, convert: Callable[[str], str] = str) -> Callable[[str], tuple[str, ...]]:
+    """argparse type: comma-separated items (split_commas), each passed through `convert`; an error
+    ("expected comma-separated WHAT") names text without any."""
+
+    def parse(text: str) -> tuple[str, ...]:
+        items = tuple(convert(item) for item in split_commas(text))
+        if not items:
+            raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}")
+        return items
+
+    return parse
 
 
 def add_backend_arguments(parser: argparse.ArgumentParser, what: str) -> None:

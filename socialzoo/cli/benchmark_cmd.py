@@ -5,40 +5,23 @@
 from __future__ import annotations
 
 import argparse
-import logging
 import re
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import add_backend_arguments, positive_int
-
-logger = logging.getLogger(__name__)
+from socialzoo.cli import command_help, fail
+from socialzoo.cli.arg_types import add_backend_arguments, comma_list, positive_int, split_commas
 
 
-def _policy_specs(text: str) -> tuple[str, ...]:
-    """Comma-separated policy specs; the registry name is lower-cased, a ':PATH' kept as written."""
-    specs = []
-    for item in (n.strip() for n in text.split(",")):
-        if item:
-            name, sep, path = item.partition(":")
-            specs.append(name.lower() + sep + path)
-    if not specs:
-        raise argparse.ArgumentTypeError(f"expected comma-separated policies, got {text!r}")
-    return tuple(specs)
+def _lower_name(spec: str) -> str:
+    """A policy spec with its registry name lower-cased and a ':PATH' kept as written."""
+    name, sep, path = spec.partition(":")
+    return name.lower() + sep + path
 
 
-def _map_names(text: str) -> tuple[str, ...]:
-    """Comma-separated maps: shipped names lowercased, map file paths kept as written."""
-    names = tuple(
-        n.strip() if n.strip().endswith(".json") or "/" in n else n.strip().lower()
-        for n in text.split(",")
-        if n.strip()
-    )
-    if not names:
-        raise argparse.ArgumentTypeError(f"expected comma-separated map names or paths, got {text!r}")
-    return names
+_policy_specs = comma_list("policies", _lower_name)
+# Shipped map names lower-cased, map file paths kept as written.
+_map_names = comma_list("map names or paths", lambda n: n if n.endswith(".json") or "/" in n else n.lower())
 
 
 def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -146,11 +129,6 @@ def register(subparsers: Any) -> None:
     add_demos_parser(subparsers)
 
 
-def _fail(command: str, err: Exception) -> int:
-    print(f"socialzoo {command}: error: {err}", file=sys.stderr)
-    return 2
-
-
 def run_benchmark_command(args: argparse.Namespace) -> int:
     """Run `socialzoo benchmark`; returns the exit status."""
     from socialzoo.bench.experiment import BenchmarkConfig, quick_config, run_benchmark
@@ -161,7 +139,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     if ids:
         return run_task_ids(args, ids)
     overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
-    specs = [h.strip() for h in args.humans.split(",") if h.strip()]
+    specs = list(split_commas(args.humans))
     if len(specs) > 1:
         return run_matrix_command(args, specs, overrides)
     chosen: dict[str, Any] = {
@@ -182,7 +160,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         config = quick_config(**chosen) if args.quick else BenchmarkConfig(**chosen)
         result = run_benchmark(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
-        return _fail("benchmark", err)
+        return fail("benchmark", err)
     print(f"{result.computed} trials run, {result.reused} read from the store, in {result.seconds:.1f} s")
     for entry in result.summary:
         print(
@@ -203,14 +181,12 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
 
     if len(ids) != len(args.maps):
         others = sorted(set(args.maps) - set(ids))
-        return _fail("benchmark", ValueError(f"task ids cannot be mixed with benchmark maps {others}"))
+        return fail("benchmark", f"task ids cannot be mixed with benchmark maps {others}")
     if args.humans != "social_force" or args.counterfactual or args.human_metrics or args.quick:
-        return _fail(
+        return fail(
             "benchmark",
-            ValueError(
-                "--humans, --counterfactual, --human-metrics and --quick are options of the benchmark maps, "
-                "not of a task id (its config says who walks)"
-            ),
+            "--humans, --counterfactual, --human-metrics and --quick are options of the benchmark maps, "
+            "not of a task id (its config says who walks)",
         )
     try:
         for env_id in ids:
@@ -231,7 +207,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             )
             print(f"results in {out}: " + ", ".join(p.name for p in files))
     except (ValueError, StoreError) as err:
-        return _fail("benchmark", err)
+        return fail("benchmark", err)
     return 0
 
 
@@ -250,7 +226,7 @@ def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: di
     # "learned" alone: the shipped learned humans.
     specs = [f"learned:{shipped_humans()}" if s == "learned" else s for s in specs]
     if args.quick:
-        return _fail("benchmark", ValueError("several --humans make a matrix: without --quick"))
+        return fail("benchmark", "several --humans make a matrix: without --quick")
     chosen: dict[str, Any] = {
         "humans": tuple(specs),
         "batch_size": args.batch_size,
@@ -263,7 +239,7 @@ def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: di
         config = MatrixConfig(**chosen)
         result = crowd_matrix(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
-        return _fail("benchmark", err)
+        return fail("benchmark", err)
     print((result.out_dir / "matrix.md").read_text())
     print(f"results in {args.out}: " + ", ".join(p.name for p in result.files))
     return 0
@@ -287,6 +263,6 @@ def run_demos_command(args: argparse.Namespace) -> int:
         path = record_demonstrations(args.out, config, progress=not args.no_progress)
         arrays, _ = load_demonstrations(path)
     except (ValueError, KeyError, DemonstrationError) as err:
-        return _fail("demos", err)
+        return fail("demos", err)
     print(f"{path}: {len(arrays['episode_ids'])} episodes, {len(arrays['action'])} steps")
     return 0

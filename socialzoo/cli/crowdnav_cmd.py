@@ -11,12 +11,11 @@ socialzoo crowdnav replay --policies orca,crowdnav --case 3 --out crowdnav.html
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli import command_help, fail
+from socialzoo.cli.arg_types import positive_int, split_commas
 
 
 def register(subparsers: Any) -> None:
@@ -69,7 +68,7 @@ def run_eval(args: argparse.Namespace) -> int:
     from socialzoo.bench.task_benchmark import run_task_benchmark
     from socialzoo.env.crowd_variants import crowd_env_id
 
-    specs = [p.strip() for p in args.policies.split(",") if p.strip()]
+    specs = list(split_commas(args.policies))
     try:
         if not specs:
             raise ValueError("--policies names no policy")
@@ -85,8 +84,7 @@ def run_eval(args: argparse.Namespace) -> int:
             config={} if args.observed_people is None else {"observed_people": args.observed_people},
         )
     except (ValueError, StoreError) as err:
-        print(f"socialzoo crowdnav eval: error: {err}", file=sys.stderr)
-        return 2
+        return fail("crowdnav eval", err)
     print(f"socialzoo crowdnav eval: wrote {', '.join(str(f) for f in files)}")
     return 0
 

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from socialzoo.cli import command_help
+from socialzoo.cli.arg_types import split_commas
 
 if TYPE_CHECKING:
     from socialzoo.data.tracks import Recording
@@ -22,7 +23,7 @@ def _scene_list(text: str) -> list[str]:
     """argparse type: comma-separated scene names of socialzoo.data.fetch.SCENES."""
     from socialzoo.data.fetch import UnknownSceneError, check_scenes
 
-    names = [name.strip() for name in text.split(",") if name.strip()]
+    names = split_commas(text)
     if not names:
         raise argparse.ArgumentTypeError(f"expected scene names separated by commas, got {text!r}")
     try:

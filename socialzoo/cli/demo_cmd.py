@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 
 
 def register(subparsers: Any) -> None:
@@ -57,8 +56,7 @@ def run_demo(args: argparse.Namespace) -> int:
             max_frames=args.max_frames,
         )
     except (MapError, FileNotFoundError, ValueError, KeyError) as err:
-        print(f"socialzoo demo: error: {err}", file=sys.stderr)
-        return 2
+        return fail("demo", err)
     result = (
         "success"
         if video.metrics["success"]

@@ -9,12 +9,11 @@ the recorded ETH/UCY people and `calibrate` fits the social force's or ORCA's pa
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli import command_help, fail
+from socialzoo.cli.arg_types import positive_int, split_commas
 from socialzoo.cli.people_cmd import add_report
 
 
@@ -123,10 +122,6 @@ def _add_calibrate(commands: Any) -> None:
     parser.set_defaults(func=run_calibrate)
 
 
-def _split(text: str) -> tuple[str, ...]:
-    return tuple(t.strip() for t in text.split(",") if t.strip())
-
-
 def run_realism(args: argparse.Namespace) -> int:
     """Run `socialzoo humans realism`; returns the exit status."""
     from socialzoo.data.fetch import UnknownSceneError, check_scenes
@@ -134,18 +129,17 @@ def run_realism(args: argparse.Namespace) -> int:
     from socialzoo.studies.realism import run_realism as run
 
     try:
-        check_scenes(_split(args.scenes))
+        check_scenes(split_commas(args.scenes))
         config = RealismConfig(
-            scenes=_split(args.scenes),
-            models=_split(args.models),
+            scenes=split_commas(args.scenes),
+            models=split_commas(args.models),
             tracks=args.tracks,
             seed=args.seed,
             cache=args.cache,
         )
         results = run(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, UnknownSceneError, FileNotFoundError) as err:
-        print(f"socialzoo humans realism: error: {err}", file=sys.stderr)
-        return 2
+        return fail("humans realism", err)
     for r in results:
         if r.scene == "overall" and r.model != "recorded":
             print(
@@ -161,10 +155,10 @@ def run_calibrate(args: argparse.Namespace) -> int:
     from socialzoo.studies.calibration import CalibrationConfig, calibrate
 
     try:
-        check_scenes(_split(args.scenes))
+        check_scenes(split_commas(args.scenes))
         config = CalibrationConfig(
             model=args.model,
-            scenes=_split(args.scenes),
+            scenes=split_commas(args.scenes),
             persons=args.persons,
             windows=args.windows,
             generations=args.generations,
@@ -175,8 +169,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
         )
         result = calibrate(config, args.out, progress=not args.no_progress)
     except (ValueError, UnknownSceneError, FileNotFoundError, ImportError) as err:
-        print(f"socialzoo humans calibrate: error: {err}", file=sys.stderr)
-        return 2
+        return fail("humans calibrate", err)
     for fold in result["folds"]:
         print(
             f"held out {fold['held_out']}: ADE {fold['default_ade']:.3f} m default, "
@@ -208,7 +201,7 @@ def run_compare(args: argparse.Namespace) -> int:
         config = ComparisonConfig(
             humans=args.humans,
             policy=args.policy,
-            maps=tuple(m.strip() for m in args.maps.split(",") if m.strip()),
+            maps=split_commas(args.maps),
             trials=args.trials,
             quick=args.quick,
             validation=args.validation,
@@ -217,8 +210,7 @@ def run_compare(args: argparse.Namespace) -> int:
             env_overrides=_env_overrides(args),
         )
     except (ValueError, KeyError) as err:
-        print(f"socialzoo humans compare: error: {err}", file=sys.stderr)
-        return 2
+        return fail("humans compare", err)
     result = compare_humans(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     for map_name, target in result.targets.items():
         print(
@@ -239,8 +231,7 @@ def run_select(args: argparse.Namespace) -> int:
         training_map(args.run)
         check_policy_spec(args.policy)
     except (FileNotFoundError, ValueError) as err:
-        print(f"socialzoo humans select: error: {err}", file=sys.stderr)
-        return 2
+        return fail("humans select", err)
     result = select_humans(
         args.run,
         args.out,

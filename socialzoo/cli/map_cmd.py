@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import positive_int
 
 # A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
@@ -189,11 +189,6 @@ def _add_import_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
 
 
-def _fail(err: Exception) -> int:
-    print(f"socialzoo map: error: {err}", file=sys.stderr)
-    return 2
-
-
 def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_picture: bool) -> None:
     """Add --picture PATH (and --no-picture), and the old --out as a hidden alias of --picture."""
     parser.add_argument(
@@ -281,7 +276,7 @@ def run_show(args: argparse.Namespace) -> int:
         out, why_none = _picture_path(args)
         m = load_map(args.map)
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
-        return _fail(err)
+        return fail("map", err)
     print(f"{args.map}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.legal_poses)} legal poses")
     if out is None:
         print(f"  picture: {why_none}")
@@ -289,7 +284,7 @@ def run_show(args: argparse.Namespace) -> int:
     try:
         _save_picture(lambda path: save_map_png(m, path, show_graph=not args.no_graph), out)
     except ValueError as err:
-        return _fail(err)
+        return fail("map", err)
     print(f"  picture: {out}")
     return 0
 
@@ -301,7 +296,7 @@ def run_validate(args: argparse.Namespace) -> int:
     try:
         validate_map(load_map(args.map))
     except (MapError, FileNotFoundError, KeyError) as err:
-        return _fail(err)
+        return fail("map", err)
     print(f"{args.map}: valid")
     return 0
 
@@ -319,7 +314,7 @@ def run_check(args: argparse.Namespace) -> int:
         max_route = MAX_ROUTE_LENGTH if args.max_route is None else args.max_route
         report = check_map(m, max_route)
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
-        return _fail(err)
+        return fail("map", err)
     print(f"{args.map}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
           f"{len(m.legal_poses)} legal poses")  # fmt: skip
     for line in report.lines():
@@ -342,7 +337,7 @@ def run_check(args: argparse.Namespace) -> int:
         try:
             _save_picture(lambda path: save_map_check_png(m, report, path, drive), out)
         except ValueError as err:
-            return _fail(err)
+            return fail("map", err)
         print(f"  picture: {out}")
     if not report.valid:
         return 2
@@ -490,7 +485,7 @@ def run_import(args: argparse.Namespace) -> int:
             m, drive_steps = _drive_and_repair(m, strict=args.strict)
             steps += drive_steps
     except (MapError, FileNotFoundError, ValueError) as err:
-        return _fail(err)
+        return fail("map", err)
     out = m.save(args.out or Path(f"{args.name}.json"))
     num_repairs = 0
     for kind, message in steps:
@@ -514,7 +509,7 @@ def run_drive(args: argparse.Namespace) -> int:
     try:
         files = _building_files(args)
     except (FileNotFoundError, ValueError) as err:
-        return _fail(err)
+        return fail("map", err)
     for line in building_table_head():
         print(line)
     worst = 100.0

@@ -6,12 +6,8 @@ per log, and all of them in one CSV when asked."""
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -95,25 +91,6 @@ def format_table(title: str, found: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
-    """The CSV, whole or not at all (a temporary file renamed into place)."""
-    buffer = io.StringIO()
-    writer = csv.DictWriter(
-        buffer, fieldnames=["log", "label", "metric", "value", "unit"], lineterminator="\n"
-    )
-    writer.writeheader()
-    writer.writerows(rows)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-            f.write(buffer.getvalue())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def run_metrics(args: argparse.Namespace) -> int:
     """Read and check every log, then print (and write) their tables; 2 on a bad log or option."""
     from socialzoo.bench.episode_log import EpisodeLogError, log_metrics, read_episode_log
@@ -153,6 +130,8 @@ def run_metrics(args: argparse.Namespace) -> int:
                 }
             )
     if args.out is not None:
-        _write_csv(args.out, rows)
+        from socialzoo.bench.tables import write_csv
+
+        write_csv(rows, args.out, ["log", "label", "metric", "value", "unit"], lineterminator="\n")
         print(f"wrote {args.out}")
     return 0

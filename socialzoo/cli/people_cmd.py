@@ -8,11 +8,11 @@ also reads "learned" alone as the shipped learned humans (shipped_humans).
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli import fail
+from socialzoo.cli.arg_types import comma_list, positive_int
 
 
 def shipped_humans() -> str:
@@ -22,12 +22,9 @@ def shipped_humans() -> str:
     return str(Path(socialzoo.agents.__file__).parent / "shipped" / "humans.safetensors")
 
 
-def people_specs(text: str) -> tuple[str, ...]:
-    """Comma-separated people specs; "learned" alone names the shipped learned humans."""
-    specs = tuple(s.strip() for s in text.split(",") if s.strip())
-    if not specs:
-        raise argparse.ArgumentTypeError(f"expected comma-separated people specs, got {text!r}")
-    return tuple(f"learned:{shipped_humans()}" if s == "learned" else s for s in specs)
+def people_spec(spec: str) -> str:
+    """A people spec; "learned" alone names the shipped learned humans."""
+    return f"learned:{shipped_humans()}" if spec == "learned" else spec
 
 
 def add_report(commands: Any) -> None:
@@ -44,7 +41,7 @@ def add_report(commands: Any) -> None:
     )
     report.add_argument(
         "--humans",
-        type=people_specs,
+        type=comma_list("people specs", people_spec),
         default=("sf", "orca", "groups"),
         help="comma-separated people specs: sf, orca, groups, learned (the shipped learned humans), "
         "learned:PATH, or mixes such as sf@0.5+orca@0.5 (default sf,orca,groups)",
@@ -69,8 +66,7 @@ def run_report(args: argparse.Namespace) -> int:
         )
         _, files = human_report(config, args.out, figures=not args.no_figures)
     except (ValueError, FileNotFoundError) as err:
-        print(f"socialzoo humans report: error: {err}", file=sys.stderr)
-        return 2
+        return fail("humans report", err)
     print((args.out / "report.md").read_text())
     print(f"results in {args.out}: " + ", ".join(p.name for p in files))
     return 0

@@ -8,27 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
-
-
-def _policy_list(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
-        raise argparse.ArgumentTypeError(f"expected comma-separated policies, got {text!r}")
-    return names
-
-
-def _count(low: int) -> Any:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}")
-        return value
-
-    return parse
+from socialzoo.cli import command_help, fail
+from socialzoo.cli.arg_types import at_least, comma_list, count
 
 
 def register(subparsers: Any) -> None:
@@ -48,7 +29,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--policy",
         action="append",
-        type=_policy_list,
+        type=comma_list("policies"),
         default=None,
         metavar="NAME[=PATH][,...]",
         help="policies, comma-separated or repeated; NAME=PATH loads a learned policy's file "
@@ -61,7 +42,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
     parser.add_argument("--seed", type=int, default=None, help="scenario seed (default 0)")
     parser.add_argument(
-        "--max-steps", type=_count(1), default=None, help="episode time limit override, steps"
+        "--max-steps", type=at_least(1), default=None, help="episode time limit override, steps"
     )
     parser.add_argument(
         "--env",
@@ -69,13 +50,13 @@ def register(subparsers: Any) -> None:
         help="a registered task id (socialzoo/CrowdNav-v1, any task's id): play its fixed case --case of "
         "--split instead of a benchmark map's scenario",
     )
-    parser.add_argument("--case", type=_count(0), default=None, help="the case of --env to play (default 0)")
+    parser.add_argument("--case", type=count, default=None, help="the case of --env to play (default 0)")
     parser.add_argument("--split", default="test", help="the case split of --env (default test)")
     parser.add_argument(
         "--results", type=Path, default=None, help="a socialzoo benchmark --out directory (with --trial)"
     )
     parser.add_argument(
-        "--trial", type=_count(0), default=None, help="scenario index of the stored trial (with --results)"
+        "--trial", type=count, default=None, help="scenario index of the stored trial (with --results)"
     )
     parser.add_argument(
         "--test-set", default=None, help="test set (or map) of the stored trial, if the store holds several"
@@ -84,10 +65,10 @@ def register(subparsers: Any) -> None:
         "--view", choices=("follow", "map"), default="follow", help="camera the page opens with"
     )
     parser.add_argument(
-        "--stride", type=_count(1), default=2, help="steps per stored frame (default 2 = 50 ms)"
+        "--stride", type=at_least(1), default=2, help="steps per stored frame (default 2 = 50 ms)"
     )
     parser.add_argument(
-        "--laser-rays", type=_count(0), default=60, help="laser rays drawn (default 60; 0: no laser)"
+        "--laser-rays", type=count, default=60, help="laser rays drawn (default 60; 0: no laser)"
     )
     parser.add_argument("--out", type=Path, default=Path("episode.html"), help="the .html file to write")
     parser.set_defaults(func=run_replay)
@@ -154,8 +135,7 @@ def run_replay(args: argparse.Namespace) -> int:
             raise ValueError("--test-set goes with --results")
         return _replay_seed(args)
     except (MapError, StoreError, FileNotFoundError, ValueError, KeyError) as err:
-        print(f"socialzoo replay: error: {err}", file=sys.stderr)
-        return 2
+        return fail("replay", err)
 
 
 def _encoding(args: argparse.Namespace) -> Any:

@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 
 
 def register(subparsers: Any) -> None:
@@ -95,24 +94,20 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
     try:
         parts = parse_parts(args.only)
     except ValueError as err:
-        print(f"socialzoo reproduce: error: --only: {err}", file=sys.stderr)
-        return 2
+        return fail("reproduce", f"--only: {err}")
     try:
         reference = reference_sets(args.reference)
     except ValueError as err:
-        print(f"socialzoo reproduce: error: --reference: {err}", file=sys.stderr)
-        return 2
+        return fail("reproduce", f"--reference: {err}")
     if args.seeds < 1:
-        print(f"socialzoo reproduce: error: --seeds must be at least 1, got {args.seeds}", file=sys.stderr)
-        return 2
+        return fail("reproduce", f"--seeds must be at least 1, got {args.seeds}")
     try:
         volatile = {} if args.workers is None else {"workers": args.workers}
         settings = (quick_settings if args.quick else full_settings)(
             seeds=args.seeds, seed_trials=args.seed_trials, **volatile
         )
     except ValueError as err:
-        print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
-        return 2
+        return fail("reproduce", err)
     _interrupt_on_signals()
 
     def report(part: str, made: int) -> None:
@@ -129,8 +124,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
             reference=reference,
         )
     except LedgerError as err:  # mixed settings, an unreadable settings or timings file
-        print(f"socialzoo reproduce: error: {err}", file=sys.stderr)
-        return 2
+        return fail("reproduce", err)
     print(f"socialzoo reproduce: items in {result.work_dir}; report {result.report}")
     if args.publish is not None:
         from socialzoo.reproduce.publish import publish

@@ -5,11 +5,10 @@ scenarios of our own seeds, never on a test set."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import positive_int
 
 
@@ -64,12 +63,10 @@ def run_steps_to_ref(args: argparse.Namespace) -> int:
     from socialzoo.studies.rl_training import steps_to_reference
 
     if args.total_steps % args.checkpoint_every:
-        print(
-            f"socialzoo steps-to-ref: error: --total-steps ({args.total_steps}) must be a multiple of "
-            f"--checkpoint-every ({args.checkpoint_every})",
-            file=sys.stderr,
+        return fail(
+            "steps-to-ref",
+            f"--total-steps ({args.total_steps}) must be a multiple of --checkpoint-every ({args.checkpoint_every})",
         )
-        return 2
     try:
         record = steps_to_reference(
             args.out,
@@ -83,8 +80,7 @@ def run_steps_to_ref(args: argparse.Namespace) -> int:
             figure=not args.no_figures,
         )
     except (ValueError, KeyError, FileNotFoundError) as err:
-        print(f"socialzoo steps-to-ref: error: {err}", file=sys.stderr)
-        return 2
+        return fail("steps-to-ref", err)
     print(describe(record))
     print(f"wrote {args.out / 'steps_to_ref.json'}")
     return 0

@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import positive_int
 
 
@@ -66,7 +65,6 @@ def run_ref_tradeoff_command(args: argparse.Namespace) -> int:
         )
         result = run_ref_tradeoff(config)
     except (ValueError, KeyError, FileNotFoundError) as err:
-        print(f"socialzoo study ref-tradeoff: error: {err}", file=sys.stderr)
-        return 2
+        return fail("study ref-tradeoff", err)
     print(tradeoff_table(result), end="")
     return 0

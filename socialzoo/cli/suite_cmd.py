@@ -4,21 +4,15 @@ policy x scenario table and heatmap per metric, replay pages and a static result
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import add_backend_arguments, count, positive_int
+from socialzoo.cli import command_help, fail
+from socialzoo.cli.arg_types import add_backend_arguments, comma_list, count, positive_int
 from socialzoo.cli.benchmark_cmd import _policy_specs
 
-
-def _names(text: str) -> tuple[str, ...]:
-    """Comma-separated names, stripped and lower-cased."""
-    names = tuple(n.strip().lower() for n in text.split(",") if n.strip())
-    if not names:
-        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
-    return names
+# Comma-separated names, lower-cased.
+_names = comma_list("names", str.lower)
 
 
 def register(subparsers: Any) -> None:
@@ -100,8 +94,7 @@ def run_suite_command(args: argparse.Namespace) -> int:
         config = SuiteConfig(**chosen)
         result = run_suite(config, args.out, progress=not args.no_progress, say=print)
     except (SuiteError, StoreError) as err:
-        print(f"socialzoo suite: error: {err}", file=sys.stderr)
-        return 2
+        return fail("suite", err)
     print(
         f"{result.played} episodes played, {result.reused} read from the store, in {result.seconds:.1f} s "
         f"({len(result.policies)} policies x {len(result.scenarios)} scenarios x {config.seeds} seeds)"

@@ -7,10 +7,9 @@ command line and the Python API (`train(Args(...))`) take the same arguments wit
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 
 
 def register(subparsers: Any) -> None:
@@ -41,8 +40,7 @@ def run_train_command(args: argparse.Namespace) -> int:
     try:
         train_args = dataclass_from_namespace(args.trainer_class, args)
     except (TypeError, ValueError) as err:
-        print(f"socialzoo train {args.trainer}: error: {err}", file=sys.stderr)
-        return 2
+        return fail(f"train {args.trainer}", err)
     path = trainer_function(args.trainer)(train_args)
     print(f"socialzoo train {args.trainer}: wrote {path}")
     return 0
