@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.metrics import metric, registered
+from socialzoo.core.validation import check_int
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 REPLAY_FORMAT = "socialzoo-replay/1"
@@ -271,9 +272,7 @@ class Encoding:
             ("velocity_decimals", 0),
             ("value_decimals", 0),
         ):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise ValueError(f"Encoding.{name} must be an int >= {low}, got {value!r}")
+            check_int("Encoding", name, getattr(self, name), low=low)
 
 
 def frame_steps(num_steps: int, stride: int) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from collections.abc import Sequence
 from functools import cache
 from importlib import resources
@@ -66,16 +67,7 @@ def replay_document(
         "{{DATA}}": payload,
         "{{SCRIPT}}": _asset("replay.js"),
     }
-    out, rest = [], page
-    while rest:
-        positions = [(rest.find(s), s) for s in _SLOTS if s in rest]
-        if not positions:
-            out.append(rest)
-            break
-        at, slot = min(positions)
-        out += [rest[:at], parts[slot]]
-        rest = rest[at + len(slot) :]
-    return "".join(out)
+    return re.sub("|".join(map(re.escape, _SLOTS)), lambda slot: parts[slot.group()], page)
 
 
 def write_replay_html(
