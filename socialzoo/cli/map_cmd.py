@@ -303,14 +303,15 @@ def run_validate(args: argparse.Namespace) -> int:
 
 def run_check(args: argparse.Namespace) -> int:
     """Run `socialzoo map check`; returns the exit status."""
-    from socialzoo.maps.map_file import MapError, load_map
+    from socialzoo.maps.map_file import MapError, load_map, read_map
     from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH
     from socialzoo.scenarios.map_check import check_map
 
     try:
         out, why_none = _picture_path(args)
         file = _map_file(str(args.map))
-        m = _read_unvalidated(file) if file is not None else load_map(args.map)
+        # A file is read unvalidated: the check lists its problems instead.
+        m = read_map(file, validate=False) if file is not None else load_map(args.map)
         max_route = MAX_ROUTE_LENGTH if args.max_route is None else args.max_route
         report = check_map(m, max_route)
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
@@ -354,13 +355,6 @@ def _drive_progress(total: int) -> Any:
             print(f"socialzoo map: drove {done} of {total} routes", file=sys.stderr, flush=True)
 
     return report
-
-
-def _read_unvalidated(path: str | Path) -> Any:
-    """A map file read without validation (`map check` lists the problems instead)."""
-    from socialzoo.maps.map_file import read_map
-
-    return read_map(path, validate=False)
 
 
 def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict]:

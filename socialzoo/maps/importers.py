@@ -184,31 +184,22 @@ class PedsimScene:
     node_radius: np.ndarray
 
 
-class _LineTracker:
-    """ElementTree parser target that records the source line of every element it sees.
+class _LineTracker(ET.TreeBuilder):
+    """ElementTree tree builder that records the source line of every element it sees.
 
     The file is fed one line at a time, so when expat reports an element start the line last fed is
     the one holding the end of its start tag.
     """
 
     def __init__(self) -> None:
-        self.builder = ET.TreeBuilder()
+        super().__init__()
         self.line = 0
         self.lines: dict[int, int] = {}
 
     def start(self, tag: str, attrib: dict[str, str]) -> ET.Element:
-        element = self.builder.start(tag, attrib)
+        element = super().start(tag, attrib)
         self.lines[id(element)] = self.line
         return element
-
-    def end(self, tag: str) -> ET.Element:
-        return self.builder.end(tag)
-
-    def data(self, text: str) -> None:
-        self.builder.data(text)
-
-    def close(self) -> ET.Element:
-        return self.builder.close()
 
 
 def read_pedsim_scene(path: str | os.PathLike[str]) -> PedsimScene:
