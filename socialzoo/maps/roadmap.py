@@ -179,30 +179,6 @@ class Roadmap:
 # ----------------------------------------------------------------------------- walls
 
 
-def clip_walls(walls: np.ndarray, region: Box) -> np.ndarray:
-    """Walls (W, 4) cut to the box region (xmin, ymin, xmax, ymax); walls outside it are dropped.
-
-    Liang-Barsky clipping; pieces that shrink to a point are dropped too.
-    """
-    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
-    a, d = walls[:, 0:2], walls[:, 2:4] - walls[:, 0:2]
-    lo, hi = np.array(region[:2], dtype=np.float64), np.array(region[2:], dtype=np.float64)
-    t0 = np.zeros(len(walls))
-    t1 = np.ones(len(walls))
-    keep = np.ones(len(walls), dtype=bool)
-    for axis in range(2):
-        da, pa = d[:, axis], a[:, axis]
-        still = da == 0.0
-        keep &= ~(still & ((pa < lo[axis]) | (pa > hi[axis])))
-        safe = np.where(still, 1.0, da)
-        ta, tb = (lo[axis] - pa) / safe, (hi[axis] - pa) / safe
-        t0 = np.maximum(t0, np.where(still, -np.inf, np.minimum(ta, tb)))
-        t1 = np.minimum(t1, np.where(still, np.inf, np.maximum(ta, tb)))
-    keep &= t0 < t1
-    out = np.concatenate((a + t0[:, None] * d, a + t1[:, None] * d), axis=1)[keep]
-    return out[(out[:, 0] != out[:, 2]) | (out[:, 1] != out[:, 3])]
-
-
 def _bounds(walls: np.ndarray, region: Box | None, margin: float) -> Box:
     if region is not None:
         x0, y0, x1, y1 = (float(v) for v in region)

@@ -14,7 +14,6 @@ from socialzoo.maps.roadmap import (
     RoadmapConfig,
     build_edges,
     build_roadmap,
-    clip_walls,
     free_space,
 )
 
@@ -103,14 +102,6 @@ def test_missing_edges_are_joined_around_corners():
     assert m.num_nodes > 2
     np.testing.assert_array_equal(m.nodes[:2], nodes)
     assert _connected(m.num_nodes, m.edges)
-
-
-def test_clip_walls_cuts_at_the_region():
-    walls = np.array(
-        [[-5.0, 0.0, 5.0, 0.0], [20.0, 20.0, 30.0, 20.0], [1.0, -5.0, 1.0, 5.0], [2.0, 2.0, 3.0, 3.0]]
-    )
-    clipped = clip_walls(walls, (0.0, -1.0, 10.0, 10.0))
-    np.testing.assert_allclose(clipped, [[0.0, 0.0, 5.0, 0.0], [1.0, -1.0, 1.0, 5.0], [2.0, 2.0, 3.0, 3.0]])
 
 
 def test_generated_poses_are_clear_spread_reachable_and_face_open_space():
