@@ -48,36 +48,19 @@ class SceneFile(NamedTuple):
         return self.path.rpartition("/")[2]
 
 
+# (path below BASE_URL, SHA-256) of every file; its scene is the path's first part.
+_FILES = (
+    ("eth/test/biwi_eth.txt", "cf8d3fd342a15f409ebc2a1fc76b91a0f06390bd21f1e11410f3859331ab082b"),
+    ("hotel/test/biwi_hotel.txt", "9caa771bb9153d6b809dd0916b6f86761b641e6bbb15e766c1de3133fbbb7fcf"),
+    ("univ/test/students001.txt", "a6d87f278d94136fe39b8be91555487a29ac77259ae403b9dba2d5c18caf7b5b"),
+    ("univ/test/students003.txt", "e25798b660634330aa89f8bb259425de720e84d0873902726c1d1f4ccff21d6c"),
+    ("zara1/test/crowds_zara01.txt", "1147a1962a09abfb86f28c6cddcac862e095a0cf129b3016385b69eacdd09d85"),
+    ("zara2/test/crowds_zara02.txt", "8a649d0f8c9ae75c87c4d23a85f892786b0aa30266e996c7be03e69dafff22ff"),
+)
 # Scene -> its files, in the order they are joined.
 SCENES: dict[str, tuple[SceneFile, ...]] = {
-    "eth": (
-        SceneFile(
-            "eth/test/biwi_eth.txt", "cf8d3fd342a15f409ebc2a1fc76b91a0f06390bd21f1e11410f3859331ab082b"
-        ),
-    ),
-    "hotel": (
-        SceneFile(
-            "hotel/test/biwi_hotel.txt", "9caa771bb9153d6b809dd0916b6f86761b641e6bbb15e766c1de3133fbbb7fcf"
-        ),
-    ),
-    "univ": (
-        SceneFile(
-            "univ/test/students001.txt", "a6d87f278d94136fe39b8be91555487a29ac77259ae403b9dba2d5c18caf7b5b"
-        ),
-        SceneFile(
-            "univ/test/students003.txt", "e25798b660634330aa89f8bb259425de720e84d0873902726c1d1f4ccff21d6c"
-        ),
-    ),
-    "zara1": (
-        SceneFile(
-            "zara1/test/crowds_zara01.txt", "1147a1962a09abfb86f28c6cddcac862e095a0cf129b3016385b69eacdd09d85"
-        ),
-    ),
-    "zara2": (
-        SceneFile(
-            "zara2/test/crowds_zara02.txt", "8a649d0f8c9ae75c87c4d23a85f892786b0aa30266e996c7be03e69dafff22ff"
-        ),
-    ),
+    scene: tuple(SceneFile(*f) for f in _FILES if f[0].partition("/")[0] == scene)
+    for scene in dict.fromkeys(f[0].partition("/")[0] for f in _FILES)
 }
 
 
