@@ -59,10 +59,8 @@ def _optional(annotation: Any) -> tuple[Any, bool]:
 
 
 def _scalar_parser(annotation: Any, name: str) -> Any:
-    if annotation in (int, float, str):
+    if annotation in (int, float, str, Path):
         return annotation
-    if annotation is Path:
-        return Path
     if get_origin(annotation) in (dict, typing.Mapping) or annotation is dict:
 
         def parse_json(text: str) -> Any:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import logging
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -103,10 +104,7 @@ class RepairReport:
 
     def counts(self) -> dict[str, int]:
         """Number of repairs of each kind."""
-        out: dict[str, int] = {}
-        for r in self.repairs:
-            out[r.kind] = out.get(r.kind, 0) + 1
-        return out
+        return dict(Counter(r.kind for r in self.repairs))
 
     def lines(self) -> list[str]:
         """One line per repair."""

@@ -40,13 +40,8 @@ def replay_document(
     encoding: Encoding | None = None,
     view: str = "follow",
 ) -> str:
-    """The viewer page of `traces` (one panel each, sharing one timeline) as an HTML string.
-
-    Args:
-        scene: the map and sizes shared by every panel.
-        traces: the episodes, in panel order.
-        encoding: what is kept and how precisely (default socialzoo.render.replay_data.Encoding()).
-        view: the camera the page opens with, "follow" or "map".
+    """The viewer page of `traces` (one panel each, sharing one timeline) as an HTML string; the
+    arguments are socialzoo.render.replay_data.encode_replay's.
 
     Raises:
         ValueError: no traces, a bad view, or values that are not finite.
