@@ -226,22 +226,26 @@ def start_velocity(scene: SceneTracks, cases: Cases) -> np.ndarray:
     return (b - a) / scene.dt
 
 
+def _inside(cases: Cases) -> np.ndarray:
+    """(n, 1 + max frames) the frames within each case."""
+    span = int(cases.frames.max()) + 1 if len(cases) else 1
+    return np.arange(span)[None, :] <= cases.frames[:, None]
+
+
 def truth(scene: SceneTracks, cases: Cases) -> np.ndarray:
     """(n, 1 + max frames, 2) the recorded positions from each start on, NaN past a case's frames."""
-    span = int(cases.frames.max()) + 1 if len(cases) else 1
-    idx = cases.start[:, None] + np.arange(span)[None, :]
-    inside = np.arange(span)[None, :] <= cases.frames[:, None]
+    inside = _inside(cases)
+    idx = cases.start[:, None] + np.arange(inside.shape[1])[None, :]
     pos = scene.grid[cases.person[:, None], np.minimum(idx, scene.grid.shape[1] - 1)]
     return np.where(inside[..., None], pos, np.nan)
 
 
 def constant_velocity(scene: SceneTracks, cases: Cases) -> np.ndarray:
     """(n, 1 + max frames, 2) the constant-velocity walk from each start (NaN past its frames)."""
-    span = int(cases.frames.max()) + 1 if len(cases) else 1
+    inside = _inside(cases)
     p0 = scene.grid[cases.person, cases.start]
     v = start_velocity(scene, cases)
-    pos = p0[:, None] + v[:, None] * (np.arange(span) * scene.dt)[None, :, None]
-    inside = np.arange(span)[None, :] <= cases.frames[:, None]
+    pos = p0[:, None] + v[:, None] * (np.arange(inside.shape[1]) * scene.dt)[None, :, None]
     return np.where(inside[..., None], pos, np.nan)
 
 
@@ -361,11 +365,10 @@ def simulate(
     steps_per_frame = round(scene.dt / world.dt)
     if not math.isclose(steps_per_frame * world.dt, scene.dt, rel_tol=1e-9):
         raise ValueError(f"the world step {world.dt} s does not divide the frame period {scene.dt} s")
-    n = len(cases)
-    span = int(cases.frames.max()) + 1 if n else 1
-    pos = np.full((n, span, 2), np.nan)
-    present = np.zeros((n, span), dtype=bool)
-    nearest = np.full((n, span), np.inf)
+    inside = _inside(cases)
+    pos = np.full((*inside.shape, 2), np.nan)
+    present = np.zeros(inside.shape, dtype=bool)
+    nearest = np.full(inside.shape, np.inf)
     v0 = start_velocity(scene, cases)
     walls = WallIndex(np.zeros((0, 4)))
     people = PeopleConfig(models=model.people)
@@ -395,7 +398,6 @@ def simulate(
             _record(core.state, idx, f, pos, present, nearest)
         if progress is not None:
             progress(len(idx))
-    inside = np.arange(span)[None, :] <= cases.frames[:, None]
     pos = np.where(inside[..., None], pos, np.nan)
     return Rollout(pos=pos, present=present & inside, others=np.where(inside, nearest, np.inf))
 
@@ -415,16 +417,16 @@ def _record(
     nearest[idx, f] = d.min(1) if d.shape[1] else np.inf
 
 
-def recorded_nearest(scene: SceneTracks, cases: Cases) -> np.ndarray:
-    """(n, 1 + max frames) the recorded subject's distance to the nearest other present person, m."""
-    span = int(cases.frames.max()) + 1 if len(cases) else 1
-    out = np.full((len(cases), span), np.inf)
+def nearest_other(scene: SceneTracks, cases: Cases, pred: np.ndarray) -> np.ndarray:
+    """(n, 1 + max frames) the distance of a subject walked along `pred` (n, 1 + max frames, 2) to
+    the nearest other recorded person present, m (inf: nobody)."""
+    out = np.full(pred.shape[:2], np.inf)
     g = scene.grid
     for i, (k, s, t) in enumerate(
         zip(cases.person.tolist(), cases.start.tolist(), cases.frames.tolist(), strict=True)
     ):
         block = g[:, s : s + t + 1]
-        d = np.hypot(*(block - g[k, s : s + t + 1][None]).transpose(2, 0, 1))
+        d = np.hypot(*(block - pred[i, : t + 1][None]).transpose(2, 0, 1))
         d[k] = np.inf
         out[i, : t + 1] = np.where(np.isnan(d), np.inf, d).min(0)
     return out
@@ -442,9 +444,7 @@ def displacement(pred: np.ndarray, true: np.ndarray, use: np.ndarray | None = No
     last = (~np.isnan(d)).sum(1) - 1
     final = d[np.arange(len(d)), np.maximum(last, 0)]
     ok = valid.any(1)
-    return float(per[ok].mean()) if ok.any() else math.nan, float(np.nanmean(final)) if len(
-        final
-    ) else math.nan
+    return float(per[ok].mean()) if ok.any() else math.nan, float(np.nanmean(final))
 
 
 def frame_speeds(pos: np.ndarray, dt: float, use: np.ndarray | None = None) -> np.ndarray:
@@ -508,7 +508,7 @@ def evaluate_model(
         pred_w = constant_velocity(scene, windows)
         pred_t = constant_velocity(scene, tracks)
         use_t = ~np.isnan(pred_t[..., 0])
-        near_t = _cv_nearest(scene, tracks, pred_t)
+        near_t = nearest_other(scene, tracks, pred_t)
         if progress is not None:
             progress(len(windows) + len(tracks))
     else:
@@ -520,7 +520,7 @@ def evaluate_model(
     rec_use = ~np.isnan(true_t[..., 0])
     speeds = frame_speeds(pred_t, scene.dt, use_t)
     rec_speeds = frame_speeds(true_t, scene.dt, rec_use)
-    rec_near = recorded_nearest(scene, tracks)
+    rec_near = nearest_other(scene, tracks, true_t)
     metrics = {
         "ade": ade,
         "fde": fde,
@@ -539,24 +539,10 @@ def recorded_reference(scene: SceneTracks, tracks: Cases) -> SceneResult:
     """The recorded people themselves (zero errors): their speeds and contact rate, for reference."""
     true_t = truth(scene, tracks)
     use = ~np.isnan(true_t[..., 0])
-    near = recorded_nearest(scene, tracks)
+    near = nearest_other(scene, tracks, true_t)
     metrics = {name: 0.0 for name, _, _ in METRICS}
     metrics.update(contact_rate=contact_rate(near, use), windows=math.nan, people=float(len(tracks)))
     return SceneResult(scene.name, "recorded", metrics, frame_speeds(true_t, scene.dt, use))
-
-
-def _cv_nearest(scene: SceneTracks, cases: Cases, pred: np.ndarray) -> np.ndarray:
-    """(n, 1 + max frames) the constant-velocity subject's distance to the nearest other present person."""
-    out = np.full(pred.shape[:2], np.inf)
-    g = scene.grid
-    for i, (k, s, t) in enumerate(
-        zip(cases.person.tolist(), cases.start.tolist(), cases.frames.tolist(), strict=True)
-    ):
-        block = g[:, s : s + t + 1]
-        d = np.hypot(*(block - pred[i, : t + 1][None]).transpose(2, 0, 1))
-        d[k] = np.inf
-        out[i, : t + 1] = np.where(np.isnan(d), np.inf, d).min(0)
-    return out
 
 
 # ---------------------------------------------------------------------------- the study
@@ -678,10 +664,8 @@ def overall(results: Sequence[SceneResult], scenes: Sequence[str]) -> list[Scene
         metrics = {}
         for name, _, _ in METRICS:
             vals = np.array([r.metrics[name] for r in mine], dtype=float)
-            if name in ("windows", "people"):
-                metrics[name] = float(np.nansum(vals)) if np.isfinite(vals).any() else math.nan
-            else:
-                metrics[name] = float(np.nanmean(vals)) if np.isfinite(vals).any() else math.nan
+            total = np.nansum if name in ("windows", "people") else np.nanmean
+            metrics[name] = float(total(vals)) if np.isfinite(vals).any() else math.nan
         out.append(SceneResult("overall", model, metrics, np.concatenate([r.speeds for r in mine])))
     return out
 
@@ -723,7 +707,7 @@ def write_figures(results: Sequence[SceneResult], out: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    scenes = [s for s in dict.fromkeys(r.scene for r in results)]
+    scenes = list(dict.fromkeys(r.scene for r in results))
     models = [m for m in dict.fromkeys(r.model for r in results) if m != "recorded"]
     fig, ax = plt.subplots(figsize=(1.5 + 1.2 * len(scenes), 3.5))
     width = 0.8 / max(len(models), 1)
