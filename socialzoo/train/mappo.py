@@ -48,6 +48,7 @@ from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.env.policy_file import current_env_version
 from socialzoo.env.torchrl_env import HUMAN, ROBOT, SocialNavTorchEnv
 from socialzoo.train.marl_args import Algo, CollectorKind
+from socialzoo.train.policy_net import mlp
 
 logger = logging.getLogger(__name__)
 
@@ -121,17 +122,6 @@ class MirrorSymmetric(nn.Module):
         return 0.5 * (self.net(x) + self.out_signs * self.net(x * self.in_signs))
 
 
-def mlp(inputs: int, outputs: int, hidden: int, depth: int) -> nn.Sequential:
-    """Linear layers with tanh between them: inputs -> hidden (depth times) -> outputs."""
-    layers: list[nn.Module] = []
-    size = inputs
-    for _ in range(depth):
-        layers += [nn.Linear(size, hidden), nn.Tanh()]
-        size = hidden
-    layers.append(nn.Linear(size, outputs))
-    return nn.Sequential(*layers)
-
-
 def observation_stats(env: SocialNavTorchEnv, group: str, steps: int) -> tuple[torch.Tensor, torch.Tensor]:
     """(loc, scale) of the group's observations over `steps` random-action steps, agents in the mask.
 
@@ -174,7 +164,7 @@ def human_actor(
         raise ValueError(
             f"human_actor: walk_prior must be in [0, action_scale = {action_scale}), got {walk_prior}"
         )
-    body = mlp(obs_size, 2, hidden, depth)
+    body = mlp(obs_size, [hidden] * depth, 2, "tanh", None)
     last = body[-1]
     with torch.no_grad():
         # Small output weights: the prior, not the random initialisation, decides the first moves.
@@ -202,7 +192,7 @@ def robot_actor(
     obs_size: int, num_actions: int, hidden: int, depth: int, loc: torch.Tensor, scale: torch.Tensor
 ) -> ProbabilisticActor:
     """The robots' shared policy: a Categorical over the sub-policies, (B, R) int64 actions."""
-    net = nn.Sequential(Normalize(loc, scale), mlp(obs_size, num_actions, hidden, depth))
+    net = nn.Sequential(Normalize(loc, scale), mlp(obs_size, [hidden] * depth, num_actions, "tanh", None))
     module = TensorDictModule(net, in_keys=[(ROBOT, "observation")], out_keys=[(ROBOT, "logits")])
     return ProbabilisticActor(
         module,

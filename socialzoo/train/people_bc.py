@@ -165,6 +165,14 @@ def replay_world(
     )
 
 
+def frame_steps(recording: Recording, world: WorldConfig) -> int:
+    """World steps per recorded frame; ValueError if the world step does not divide the frame period."""
+    steps = round(recording.dt / world.dt)
+    if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
+        raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
+    return steps
+
+
 # ---------------------------------------------------------------------------- scenes
 def mean_speeds(recording: Recording) -> np.ndarray:
     """(N,) each track's mean recorded speed, at least MIN_SPEED, m/s (as a recorded scene's people
@@ -307,9 +315,7 @@ def demonstrations(
 
     world = world or replay_world()
     rng = np.random.default_rng([int(seed), 0x64617274])  # "dart"
-    steps = round(recording.dt / world.dt)
-    if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
-        raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
+    steps = frame_steps(recording, world)
     speeds = mean_speeds(recording)
     rows = windows(recording.num_frames, window, label_frames)
     built = [window_scenario(recording, a, b, speeds) for a, b in rows]
@@ -344,7 +350,9 @@ def demonstrations(
         for copy in range(noisy_copies + 1):
             v_in = recorded_v
             if copy:
-                v_in = recorded_v + np.where(usable[..., None], rng.normal(0.0, velocity_noise, recorded_v.shape), 0.0)
+                v_in = recorded_v + np.where(
+                    usable[..., None], rng.normal(0.0, velocity_noise, recorded_v.shape), 0.0
+                )
             seen = dataclasses.replace(state, human_vel=v_in)
             # The parked robot is seen by nobody: observed without it, as the env's people observe it.
             obs = human_observations(without_robots(seen), walls, every, num_neighbours)
@@ -353,7 +361,9 @@ def demonstrations(
                 seen.robot_pose[:, :0, :2], np.zeros((len(rows), 0, 2)), walls, world.human, v_in,
                 seen.human_mask,
             )  # fmt: skip
-            desired = reaching_velocity(v_in, np.nan_to_num(nxt - here), other, label_frames * recording.dt, world)
+            desired = reaching_velocity(
+                v_in, np.nan_to_num(nxt - here), other, label_frames * recording.dt, world
+            )
             action = inverse_action(seen, desired, action_frame, action_scale)
             clipped = (np.abs(action) > ACTION_LIMIT).any(-1)
             out.append(
@@ -414,9 +424,7 @@ def closed_loop_ade(
     from socialzoo.humans.models import PeopleConfig
 
     world = world or replay_world()
-    steps = round(recording.dt / world.dt)
-    if steps < 1 or not math.isclose(steps * world.dt, recording.dt, rel_tol=1e-9):
-        raise ValueError(f"the world step {world.dt} s does not divide the frame period {recording.dt} s")
+    steps = frame_steps(recording, world)
     speeds = mean_speeds(recording)
     walls = WallIndex(np.zeros((0, 4)))
     people = PeopleConfig(models=f"learned:{policy}")
@@ -453,6 +461,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     import torch
 
     from socialzoo.data.fetch import load_scene
+    from socialzoo.train.policy_net import mlp
 
     args: Args = run.args
     world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
@@ -482,7 +491,8 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     loc = train_set.obs.mean(0)
     scale = train_set.obs.std(0)
     scale = np.where(scale > 1e-6, scale, 1.0).astype(np.float32)
-    net = mlp(train_set.obs.shape[1], args.hidden, args.depth)
+    # `depth` tanh layers of `hidden` units, then the 2 pre-tanh action means.
+    net = mlp(train_set.obs.shape[1], [args.hidden] * args.depth, 2, "tanh", None)
     optimiser = torch.optim.Adam(net.parameters(), lr=args.lr)
     x = torch.as_tensor((train_set.obs - loc) / scale)
     y = torch.as_tensor(train_set.action)
@@ -557,19 +567,6 @@ def see_robots_as_people(net: Any, num_neighbours: int) -> None:
     flags = [OWN_SIZE + NEIGHBOUR_SIZE * k + NEIGHBOUR_SIZE - 1 for k in range(num_neighbours)]
     with torch.no_grad():
         net[0].weight[:, flags] = 0.0
-
-
-def mlp(inputs: int, hidden: int, depth: int) -> Any:
-    """The network: `depth` tanh layers of `hidden` units, then the 2 pre-tanh action means."""
-    import torch
-
-    layers: list[Any] = []
-    width = inputs
-    for _ in range(depth):
-        layers += [torch.nn.Linear(width, hidden), torch.nn.Tanh()]
-        width = hidden
-    layers.append(torch.nn.Linear(width, 2))
-    return torch.nn.Sequential(*layers)
 
 
 def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> LearnedHumanPolicy:
