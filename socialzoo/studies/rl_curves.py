@@ -253,6 +253,24 @@ def plot_curves(
     return save_figure(fig, out_dir, stem, formats)
 
 
+def _checkpoint_rows(
+    runs: Mapping[str, str | Path],
+    references: Sequence[str],
+    test_set: TestSet,
+    trials: int,
+    out: Path,
+    **evaluation: Any,
+) -> list[dict[str, Any]]:
+    """The curve rows of every checkpoint of `runs` and of each reference policy (step ""), their
+    trials stored in out/curves.sqlite (evaluate_policies' keywords in `evaluation`)."""
+    out.mkdir(parents=True, exist_ok=True)
+    specs = checkpoint_specs(runs)
+    policies = {label: spec for label, (spec, _) in specs.items()} | {r: r for r in references}
+    with ResultsStore(out / STORE_NAME) as store:
+        trial_rows = evaluate_policies(policies, test_set, trials, store, **evaluation)
+    return curve_rows(trial_rows, {label: step for label, (_, step) in specs.items()})
+
+
 @dataclass(frozen=True)
 class CurvesResult:
     """What `rl_curves` produced.
@@ -299,23 +317,10 @@ def rl_curves(
     """
     ts = get_test_set(test_set) if isinstance(test_set, str) else test_set
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    specs = checkpoint_specs(runs)
-    policies = {label: spec for label, (spec, _) in specs.items()} | {r: r for r in references}
-    with ResultsStore(out / STORE_NAME) as store:
-        trial_rows = evaluate_policies(
-            policies,
-            ts,
-            trials,
-            store,
-            workers=workers,
-            batch_size=batch_size,
-            progress=progress,
-            env_overrides=env_overrides,
-            backend=backend,
-        )
-    steps = {label: step for label, (_, step) in specs.items()}
-    all_rows = curve_rows(trial_rows, steps)
+    all_rows = _checkpoint_rows(
+        runs, references, ts, trials, out,
+        workers=workers, batch_size=batch_size, progress=progress, env_overrides=env_overrides, backend=backend,
+    )  # fmt: skip
     rows = [r for r in all_rows if r["step"] != ""]
     refs = [r for r in all_rows if r["step"] == ""]
     files = [out / STORE_NAME, write_curves_csv(all_rows, out / CSV_NAME)]
@@ -351,22 +356,10 @@ def steps_to_match(
             f"steps_to_match chooses a training length: use validation scenarios, not {validation.name!r}"
         )
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    specs = checkpoint_specs({label: run})
-    policies = {lab: spec for lab, (spec, _) in specs.items()} | {reference: reference}
-    with ResultsStore(out / STORE_NAME) as store:
-        trial_rows = evaluate_policies(
-            policies,
-            validation,
-            trials,
-            store,
-            workers=workers,
-            batch_size=batch_size,
-            progress=progress,
-            env_overrides=env_overrides,
-        )
-    steps = {lab: step for lab, (_, step) in specs.items()}
-    all_rows = curve_rows(trial_rows, steps)
+    all_rows = _checkpoint_rows(
+        {label: run}, [reference], validation, trials, out,
+        workers=workers, batch_size=batch_size, progress=progress, env_overrides=env_overrides,
+    )  # fmt: skip
     ref = next(r for r in all_rows if r["step"] == "")
     points = [r for r in all_rows if r["step"] != ""]
     write_curves_csv(all_rows, out / "steps_to_ref.csv")
