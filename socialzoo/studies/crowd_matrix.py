@@ -175,7 +175,7 @@ def crowd_matrix(
             progress=progress,
             figures=False,
         )
-        trials = _run_trials(result.out_dir)
+        trials = run_trials(result.out_dir)
         for policy in config.policies:
             for map_name in dict.fromkeys(t["map"] for t in trials):
                 group = [t for t in trials if t["policy"] == policy and t["map"] == map_name]
@@ -202,7 +202,7 @@ def crowd_matrix(
     return Matrix(out, rows, files)
 
 
-def _run_trials(run_dir: Path) -> list[dict[str, Any]]:
+def run_trials(run_dir: Path) -> list[dict[str, Any]]:
     """The trials of the benchmark run recorded in run_dir/config.json: its config hashes and its
     first `trials` scenarios of each test set (a store may hold more)."""
     record = json.loads((run_dir / "config.json").read_text())

@@ -20,10 +20,10 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
-from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import write_csv, write_text_atomic
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario import TestSet, validation_set
+from socialzoo.studies.crowd_matrix import run_trials
 
 POPULATIONS = ("social_force", "learned")
 
@@ -144,7 +144,7 @@ def compare_humans(
         result = run_benchmark(
             config.benchmark(humans), out / population, test_sets=test_sets, progress=progress, figures=False
         )
-        trials = _run_trials(result.out_dir)
+        trials = run_trials(result.out_dir)
         humans_summary = summarize_humans(trials, policies=[config.policy], maps=[])
         robot = {e["map"]: e for e in result.summary}
         for entry in humans_summary:
@@ -158,21 +158,6 @@ def compare_humans(
     if figures:
         files.append(plot_comparison(rows, out / "comparison.png"))
     return Comparison(out, rows, targets, files)
-
-
-def _run_trials(run_dir: Path) -> list[dict[str, Any]]:
-    """The stored trials of the benchmark run recorded in run_dir/config.json (its config hashes
-    and its first `trials` scenarios of each test set; a store may hold more)."""
-    import json
-
-    record = json.loads((run_dir / "config.json").read_text())
-    hashes = set(record["config_hashes"].values())
-    counts = {name: entry["trials"] for name, entry in record["test_sets"].items()}
-    with ResultsStore(run_dir / "results.sqlite") as store:
-        rows = store.rows()
-    return [
-        r for r in rows if r["config_hash"] in hashes and r["scenario_index"] < counts.get(r["test_set"], 0)
-    ]
 
 
 def check_targets(rows: list[dict[str, Any]]) -> dict[str, dict[str, bool]]:
