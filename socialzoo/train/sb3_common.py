@@ -105,9 +105,8 @@ class SB3Args:
             check_int(owner, name, getattr(self, name), low=1)
         for name in ("batch_size", "threads"):
             check_int(owner, name, getattr(self, name), low=1)
-        check_int(owner, "seed", self.seed, low=0)
-        check_int(owner, "eval_trials", self.eval_trials, low=0)
-        check_int(owner, "eval_every", self.eval_every, low=0)
+        for name in ("seed", "eval_trials", "eval_every"):
+            check_int(owner, name, getattr(self, name), low=0)
         if self.eval_every % self.checkpoint_every:
             raise ValueError(
                 f"{owner}.eval_every ({self.eval_every}) must be a multiple of checkpoint_every "
