@@ -48,6 +48,8 @@ COMPARISONS = ("<=", ">=")
 JUNCTIONS = ("and", "or")
 # Denominators closer to zero than this are taken as +-this (a ratio stays finite).
 _TINY = 1e-6
+# The binary operators but "/" (which keeps its divisor away from 0, _TINY).
+_BINARY = {"+": np.add, "-": np.subtract, "norm": np.hypot, "*": np.multiply}
 
 
 class ProgramError(ValueError):
@@ -119,14 +121,8 @@ def expr_eval(expr: Expr, atoms: Mapping[str, np.ndarray]) -> np.ndarray:
     if expr.op == "abs":
         return np.abs(vals[0])
     a, b = vals
-    if expr.op == "+":
-        return a + b
-    if expr.op == "-":
-        return a - b
-    if expr.op == "norm":
-        return np.hypot(a, b)
-    if expr.op == "*":
-        return a * b
+    if expr.op in _BINARY:
+        return _BINARY[expr.op](a, b)
     return a / np.where(np.abs(b) < _TINY, np.where(b < 0, -_TINY, _TINY), b)
 
 
