@@ -295,9 +295,7 @@ def training_reward(venv: Any, progress: float, collision_extra: float) -> Any:
 
 def train(args: CrowdNavArgs) -> Path:
     """Train on the trainer skeleton; returns crowdnav.safetensors (or a finished run's)."""
-    evaluator = None
-    if args.eval_trials:
-        evaluator = _validation(args)
+    evaluator = _validation(args) if args.eval_trials else None
     return run_training(TRAINER, args, lambda run: _fit(run, args), evaluator=evaluator)
 
 
