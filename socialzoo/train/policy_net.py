@@ -40,12 +40,7 @@ def normalizer_stats(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class Normalize(nn.Module):
-    """clip((x - mean) / sqrt(var + epsilon), -clip, clip) with fixed statistics (buffers).
-
-    Args:
-        mean: (D,) observation mean.
-        var: (D,) observation variance.
-    """
+    """clip((x - mean) / sqrt(var + epsilon), -clip, clip) with fixed (D,) statistics (buffers)."""
 
     def __init__(self, mean: np.ndarray, var: np.ndarray) -> None:
         super().__init__()
@@ -70,15 +65,8 @@ def mlp(
     activation: Activation,
     normalizer: tuple[np.ndarray, np.ndarray] | None,
 ) -> nn.Sequential:
-    """Normalize (optional) -> [Linear -> activation] per hidden size -> Linear.
-
-    Args:
-        in_size: observation width D.
-        hidden: hidden layer sizes.
-        out_size: outputs.
-        activation: "tanh" or "relu".
-        normalizer: (mean, var) of the observations, or None.
-    """
+    """Normalize by the observations' (mean, var) unless `normalizer` is None -> [Linear ->
+    activation] per hidden size -> Linear; in_size is the observation width D."""
     layers: list[nn.Module] = []
     sizes = [in_size, *hidden, out_size]
     for i in range(len(sizes) - 1):
@@ -117,14 +105,9 @@ def init_linear(net: nn.Module, generator: torch.Generator | None, last_gain: fl
 class Discriminator(nn.Module):
     """GAIL's discriminator D(s, a): the probability that a transition is the expert's.
 
-    The observation is normalised with the demonstrations' statistics, the action is one-hot;
-    a tanh MLP gives one logit l = log D - log(1 - D).
-
-    Args:
-        obs_size: observation width D.
-        hidden: hidden layer sizes.
-        normalizer: (mean, var) of the demonstration observations.
-        generator: source of the initial weights.
+    The observation (width obs_size) is normalised with the demonstrations' (mean, var), the
+    action is one-hot; a tanh MLP of `hidden` sizes, its initial weights from `generator`, gives
+    one logit l = log D - log(1 - D).
     """
 
     def __init__(
@@ -166,14 +149,9 @@ def make_actor(net: nn.Module) -> Any:
 
 
 def to_mlp_policy(name: str, net: nn.Sequential, observation: Any, activation: Activation) -> MlpPolicy:
-    """The numpy MlpPolicy computing the same logits as `net` (see `policy_network`).
-
-    Args:
-        name: the policy's registry name ("bc", "gail").
-        net: the trained network.
-        observation: the env's ObservationConfig (or its plain dict).
-        activation: the hidden activation `net` was built with.
-    """
+    """The numpy MlpPolicy computing the same logits as the trained `net` (see `policy_network`,
+    built with `activation`), registered as `name` ("bc", "gail"), for the env's ObservationConfig
+    `observation` (or its plain dict)."""
     normalizer = None
     weights = []
     for module in net:

@@ -124,12 +124,8 @@ def finished_run(trainer: Trainer, args: Any) -> bool:
 
 
 class CheckpointSchedule:
-    """The steps at which a run saves its policy: every `every` steps up to `total`, and `total`.
-
-    Args:
-        total: the run's length (env steps, updates or frames: the trainer's own unit).
-        every: steps between checkpoints.
-    """
+    """The steps at which a run saves its policy: every `every` steps up to `total`, and `total`
+    (the run's length in the trainer's own unit: env steps, updates or frames)."""
 
     def __init__(self, total: int, every: int) -> None:
         self.steps = checkpoint_steps(total, every)
@@ -145,12 +141,9 @@ class CheckpointSchedule:
 class TrainingRun:
     """One run of a trainer: its folder and record, checkpoints, evaluations, logs and progress.
 
-    Built by `run_training`; a trainer's `fit` uses it.
-
-    Args:
-        trainer: what the trainer is.
-        args: its argument dataclass (fields `out` and `seed`; `progress` when it shows progress).
-        evaluator: evaluates each checkpoint (None: checkpoints are only saved).
+    Built by `run_training`; a trainer's `fit` uses it. `args` is the trainer's argument dataclass
+    (fields `out` and `seed`; `progress` when it shows progress); `evaluator` evaluates each
+    checkpoint (None: checkpoints are only saved).
     """
 
     def __init__(self, trainer: Trainer, args: Any, *, evaluator: Evaluator | None = None) -> None:
@@ -294,13 +287,9 @@ def run_training(
     *,
     evaluator: Evaluator | None = None,
 ) -> Path:
-    """Run `fit` on the skeleton (see the module docstring); returns the policy file.
-
-    Args:
-        trainer: what the trainer is.
-        args: its argument dataclass.
-        fit: trains, saves the final policy at run.policy, returns results for the run record.
-        evaluator: evaluates each checkpoint (socialzoo.train.validation.validation_evaluator).
+    """Run `fit` on the skeleton (see the module docstring); returns the policy file. `fit` trains,
+    saves the final policy at run.policy and returns results for the run record; `evaluator`
+    evaluates each checkpoint (socialzoo.train.validation.validation_evaluator).
 
     Raises:
         socialzoo.train.run_dir.RunDirError: the folder holds a run of other arguments.
