@@ -132,13 +132,6 @@ class MlpPolicy:
         scores = self.scores(obs.reshape(-1, obs.shape[-1]))
         return np.argmax(scores, axis=1).astype(np.int64).reshape(lead)
 
-    def check_observation(self, observation: dict[str, Any]) -> None:
-        """Raise ValueError when an env's observation config differs from the training one."""
-        if dict(observation) != self.observation:
-            raise ValueError(
-                f"{self.name}: trained on observation {self.observation}, the env gives {dict(observation)}"
-            )
-
     def config(self) -> dict[str, Any]:
         """What identifies this policy for the results store: the file's digest and training record."""
         return {"file_sha256": self.digest, "training": self.header.get("training", {})}
