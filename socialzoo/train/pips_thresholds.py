@@ -257,10 +257,7 @@ def sketch_eval(sketch: Sketch, columns: list[np.ndarray], thresholds: list[floa
         _, i, cmp = sketch
         return columns[i] <= thresholds[i] if cmp == "<=" else columns[i] >= thresholds[i]
     vals = [sketch_eval(s, columns, thresholds) for s in sketch[1]]
-    out = vals[0]
-    for v in vals[1:]:
-        out = (out & v) if sketch[0] == "and" else (out | v)
-    return out
+    return (np.logical_and if sketch[0] == "and" else np.logical_or).reduce(vals)
 
 
 def centre_thresholds(sketch: Sketch, columns: list[np.ndarray], thresholds: list[float]) -> list[float]:
@@ -268,11 +265,8 @@ def centre_thresholds(sketch: Sketch, columns: list[np.ndarray], thresholds: lis
     same examples on each side, so the same classification)."""
     out = list(thresholds)
     for i, col in enumerate(columns):
-        cmp = _leaf_cmp(sketch, i)
-        if cmp == "<=":
-            out[i] = _midpoint(col, thresholds[i])
-        else:
-            out[i] = _ge_midpoint(col, thresholds[i])
+        midpoint = _midpoint if _leaf_cmp(sketch, i) == "<=" else _ge_midpoint
+        out[i] = midpoint(col, thresholds[i])
     return out
 
 
