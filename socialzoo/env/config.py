@@ -8,7 +8,7 @@ Every field has the benchmark's value by default (SPEC sections 2 to 9); overrid
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -235,18 +235,7 @@ class EnvConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> EnvConfig:
         """Build from a plain dict such as `to_dict()` gives; unknown keys raise naming the key."""
-        _refuse_renamed(data)
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = set(data) - known
-        if unknown:
-            raise ValueError(f"EnvConfig: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
-        kwargs: dict[str, Any] = {}
-        for key, value in data.items():
-            if key in _NESTED and isinstance(value, dict):
-                kwargs[key] = _build(_NESTED[key], value, f"EnvConfig.{key}")
-            else:
-                kwargs[key] = value
-        return cls(**kwargs)
+        return cls(**_nested_overrides(None, data))
 
     def replace(self, **changes: Any) -> EnvConfig:
         """A copy with `changes`; nested configs may be given as dicts of overrides.
@@ -254,18 +243,7 @@ class EnvConfig:
         Raises:
             ValueError: an unknown or renamed field (naming it), or a bad value.
         """
-        _refuse_renamed(changes)
-        known = {f.name for f in dataclasses.fields(self)}
-        unknown = set(changes) - known
-        if unknown:
-            raise ValueError(f"EnvConfig: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
-        resolved: dict[str, Any] = {}
-        for key, value in changes.items():
-            if key in _NESTED and isinstance(value, dict):
-                resolved[key] = _override(getattr(self, key), value, f"EnvConfig.{key}")
-            else:
-                resolved[key] = value
-        return dataclasses.replace(self, **resolved)
+        return dataclasses.replace(self, **_nested_overrides(self, changes))
 
 
 # A family's map_name for the open (no walls): CrowdNav's arena, a recorded scene.
@@ -284,22 +262,30 @@ def family_map(name: str, where: str) -> str:
         raise ValueError(f"{where}: scenario family {name!r} cannot be loaded ({err})") from None
 
 
-def _refuse_renamed(keys: Iterable[str]) -> None:
-    """Raise for keys that are old names of EnvConfig fields, naming the new name."""
-    for key in keys:
+def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[str, Any]:
+    """EnvConfig fields of `data`, nested configs given as dicts applied to `base`'s (None: the
+    defaults). Raises for a renamed field (naming its new name) or an unknown one."""
+    for key in data:
         if key in RENAMED_FIELDS:
             raise ValueError(f"EnvConfig: {key} was renamed {RENAMED_FIELDS[key]}")
+    _check_known(EnvConfig, data, "EnvConfig")
+    return {
+        key: _override(_NESTED[key]() if base is None else getattr(base, key), value, f"EnvConfig.{key}")
+        if key in _NESTED and isinstance(value, dict)
+        else value
+        for key, value in data.items()
+    }
 
 
-def _build(cls: type, data: dict[str, Any], where: str) -> Any:
-    return _override(cls(), data, where)
-
-
-def _override(base: Any, data: dict[str, Any], where: str) -> Any:
-    known = {f.name for f in dataclasses.fields(base)}
+def _check_known(cls: Any, data: Mapping[str, Any], where: str) -> None:
+    known = {f.name for f in dataclasses.fields(cls)}
     unknown = set(data) - known
     if unknown:
         raise ValueError(f"{where}: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
+
+
+def _override(base: Any, data: dict[str, Any], where: str) -> Any:
+    _check_known(base, data, where)
     resolved: dict[str, Any] = {}
     for key, value in data.items():
         nested = _WORLD_NESTED.get(key) if isinstance(base, WorldConfig) else None
