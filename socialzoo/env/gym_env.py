@@ -36,7 +36,27 @@ def robot_row(observations: Any, row: int | slice, robot: int = 0) -> Any:
     return observations[row, robot].copy()
 
 
-class TaskEnv(gym.Env):
+class TaskAdapter:
+    """What every adapter of a task shares: the task it steps, named or its class's `default_task`,
+    and that task's batched core."""
+
+    default_task: ClassVar[str | None] = None
+    task: Task
+
+    def task_class(self, task: Any) -> type[Task]:
+        """The Task class of `task` (a name, "module:Class" path or class), or of `default_task`."""
+        chosen = task if task is not None else self.default_task
+        if chosen is None:
+            raise ValueError(f"{type(self).__name__}: name a task (task='action_selection', 'crowdnav', ...)")
+        return task_class(chosen)
+
+    @property
+    def core(self) -> Any:
+        """The task's batched core."""
+        return self.task.core  # type: ignore[attr-defined]
+
+
+class TaskEnv(TaskAdapter, gym.Env):
     """One robot of a task as a Gymnasium Env (see the task's class for its spaces and rewards).
 
     ## Description
@@ -61,15 +81,11 @@ class TaskEnv(gym.Env):
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 40}
-    default_task: ClassVar[str | None] = None
 
     def __init__(
         self, config: Any = None, render_mode: str | None = None, *, task: Any = None, **kwargs: Any
     ) -> None:
-        chosen = task if task is not None else self.default_task
-        if chosen is None:
-            raise ValueError(f"{type(self).__name__}: name a task (task='action_selection', 'crowdnav', ...)")
-        cls = task_class(chosen)
+        cls = self.task_class(task)
         cls.check_render_mode(render_mode)
         self.task = one_robot(cls(config, 1, **kwargs), type(self).__name__)
         self.config = self.task.config
@@ -80,11 +96,6 @@ class TaskEnv(gym.Env):
         self._renderer: Any = None
         self._needs_reset = True
         self._seeded = False
-
-    @property
-    def core(self) -> Any:
-        """The task's batched core (B = 1)."""
-        return self.task.core  # type: ignore[attr-defined]
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Start an episode.

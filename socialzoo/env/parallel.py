@@ -20,8 +20,7 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from socialzoo.core.state import WorldState
-from socialzoo.env.gym_env import robot_row
-from socialzoo.env.tasks import task_class
+from socialzoo.env.gym_env import TaskAdapter, robot_row
 from socialzoo.env.tasks.base import Task, TaskStep, agent_action
 
 # Entries of the global state per robot: pose (x, y, theta), velocity (v, omega), goal (x, y, theta).
@@ -35,7 +34,7 @@ HUMAN_INFO_KEYS = ("contact", "present")
 EPISODE_KEY = "metrics"
 
 
-class TaskParallelEnv(ParallelEnv[str, Any, Any]):
+class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
     """The robots (and learned humans) of one world of a task as PettingZoo agents.
 
     ## Description
@@ -84,7 +83,6 @@ class TaskParallelEnv(ParallelEnv[str, Any, Any]):
         "render_fps": 40,
         "is_parallelizable": True,
     }
-    default_task: ClassVar[str | None] = None
 
     def __init__(
         self,
@@ -96,10 +94,7 @@ class TaskParallelEnv(ParallelEnv[str, Any, Any]):
         task: Any = None,
         **kwargs: Any,
     ) -> None:
-        chosen = task if task is not None else self.default_task
-        if chosen is None:
-            raise ValueError(f"{type(self).__name__}: name a task (task='action_selection', 'crowdnav', ...)")
-        cls = task_class(chosen)
+        cls = self.task_class(task)
         cls.check_render_mode(render_mode)
         if max_cycles is not None and (
             not isinstance(max_cycles, int) or isinstance(max_cycles, bool) or max_cycles < 1
@@ -132,11 +127,6 @@ class TaskParallelEnv(ParallelEnv[str, Any, Any]):
         self.num_cycles = 0
         self._started = False
         self._renderer: Any = None
-
-    @property
-    def core(self) -> Any:
-        """The task's batched core (B = 1)."""
-        return self.task.core  # type: ignore[attr-defined]
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The observation space of `agent` (the same object at every call)."""

@@ -53,17 +53,17 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
-from socialzoo.env.tasks import task_class
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
-from socialzoo.env.tasks.base import Task, TaskStep
+from socialzoo.env.tasks.base import TaskStep
 
 ROBOT = "robot"
 HUMAN = "human"
 _DONE_KEYS = ("done", "terminated", "truncated")
 
 
-class SocialNavTorchEnv(EnvBase):
+class SocialNavTorchEnv(TaskAdapter, EnvBase):
     """B worlds of R robots and L learned humans (plus scripted humans) as a TorchRL EnvBase.
 
     ## Description
@@ -128,7 +128,7 @@ class SocialNavTorchEnv(EnvBase):
                 f"SocialNavTorchEnv: robot_policy must have act(obs, task), got {type(robot_policy).__name__}"
             )
         super().__init__(device=device, batch_size=torch.Size([batch_size]))
-        self.task: Task = task_class(task)(config, batch_size, **kwargs)
+        self.task = self.task_class(task)(config, batch_size, **kwargs)
         self.config = self.task.config
         self.robot_policy = robot_policy
         self.num_robots = self.task.num_robots
@@ -148,11 +148,6 @@ class SocialNavTorchEnv(EnvBase):
         if self.num_humans:
             groups[HUMAN] = [f"human_{j}" for j in range(self.num_humans)]
         return groups
-
-    @property
-    def core(self) -> Any:
-        """The task's batched core."""
-        return self.task.core  # type: ignore[attr-defined]
 
     # ------------------------------------------------------------------ specs
     def _make_specs(self) -> None:

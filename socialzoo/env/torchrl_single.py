@@ -14,7 +14,7 @@ Imported lazily: TorchRL and torch are optional dependencies (the "train" extra)
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 import torch
@@ -23,12 +23,11 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, OneHot, Unbounded
 from torchrl.envs import EnvBase
 
-from socialzoo.env.gym_env import one_robot
-from socialzoo.env.tasks import task_class
+from socialzoo.env.gym_env import TaskAdapter, one_robot
 from socialzoo.env.tasks.base import batch_actions
 
 
-class TaskTorchEnv(EnvBase):
+class TaskTorchEnv(TaskAdapter, EnvBase):
     """B rows of a one-robot task as a batched TorchRL EnvBase (see the module docstring).
 
     Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does.
@@ -46,8 +45,6 @@ class TaskTorchEnv(EnvBase):
             observation that is not one Box (CrowdNav: observation="flat").
     """
 
-    default_task: ClassVar[str | None] = None
-
     def __init__(
         self,
         num_envs: int,
@@ -61,10 +58,7 @@ class TaskTorchEnv(EnvBase):
         name = type(self).__name__
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"{name}: num_envs must be an int >= 1, got {num_envs!r}")
-        chosen = task if task is not None else self.default_task
-        if chosen is None:
-            raise ValueError(f"{name}: name a task (task='action_selection', 'crowdnav', ...)")
-        self.task = one_robot(task_class(chosen)(config, num_envs, **kwargs), name)
+        self.task = one_robot(self.task_class(task)(config, num_envs, **kwargs), name)
         self.config = self.task.config
         if not isinstance(self.task.observation_space, spaces.Box):
             raise ValueError(
@@ -104,11 +98,6 @@ class TaskTorchEnv(EnvBase):
         self.done_spec = Composite(
             done=flag.clone(), terminated=flag.clone(), truncated=flag.clone(), shape=(b,)
         )
-
-    @property
-    def core(self) -> Any:
-        """The task's batched core."""
-        return self.task.core  # type: ignore[attr-defined]
 
     # ------------------------------------------------------------------ TorchRL hooks
     def _set_seed(self, seed: int | None) -> None:

@@ -17,12 +17,11 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from socialzoo.env.gym_env import one_robot, robot_row
-from socialzoo.env.tasks import task_class
+from socialzoo.env.gym_env import TaskAdapter, one_robot, robot_row
 from socialzoo.env.tasks.base import batch_actions
 
 
-class TaskVectorEnv(VectorEnv):
+class TaskVectorEnv(TaskAdapter, VectorEnv):
     """num_envs rows of a one-robot task in one batched world (see the module docstring).
 
     ## Action Space
@@ -50,7 +49,6 @@ class TaskVectorEnv(VectorEnv):
         "render_modes": ["rgb_array"],
         "render_fps": 40,
     }
-    default_task: ClassVar[str | None] = None
 
     def __init__(
         self,
@@ -61,10 +59,7 @@ class TaskVectorEnv(VectorEnv):
         task: Any = None,
         **kwargs: Any,
     ) -> None:
-        chosen = task if task is not None else self.default_task
-        if chosen is None:
-            raise ValueError(f"{type(self).__name__}: name a task (task='action_selection', 'crowdnav', ...)")
-        cls = task_class(chosen)
+        cls = self.task_class(task)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         cls.check_render_mode(render_mode)
@@ -88,11 +83,6 @@ class TaskVectorEnv(VectorEnv):
         self._action_shape = (num_envs, 1) + tuple(self.single_action_space.shape or ())
         self._started = False
         self._renderer: Any = None
-
-    @property
-    def core(self) -> Any:
-        """The task's batched core."""
-        return self.task.core  # type: ignore[attr-defined]
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Reset every row, or the rows of options["reset_mask"] (see the class docstring)."""
