@@ -343,13 +343,7 @@ class ActionSelectionTask(Task):
         state = core.state
         b, r = self.batch_size, self.num_robots
         if self.config.robot_action == "velocity":
-            action = np.asarray(action, dtype=np.float64)
-            if action.shape != (b, r, 2):
-                raise ValueError(f"velocity actions must have shape {(b, r, 2)}, got {action.shape}")
-            bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
-            if bad.any():
-                where = tuple(int(i) for i in np.argwhere(bad)[0])
-                raise ValueError(f"velocity action {action[where]!r} at index {where} is not in [-1, 1]")
+            action = _unit_actions(action, (b, r, 2), "velocity actions", "velocity action")
             return action * self.speeds, np.zeros((b, r), dtype=bool), np.full((b, r), -1, dtype=np.intp)
         flat = check_actions(np.asarray(action).reshape(-1), b * r)
         human_pos, human_vel, human_mask = core.others(state)
@@ -405,13 +399,7 @@ class ActionSelectionTask(Task):
             raise ValueError(
                 f"config.num_learned_humans = {num}: human_action of shape (B, {num}, 2) is required"
             )
-        action = np.asarray(human_action, dtype=np.float64)
-        if action.shape != (self.batch_size, num, 2):
-            raise ValueError(f"human_action must have shape {(self.batch_size, num, 2)}, got {action.shape}")
-        bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
-        if bad.any():
-            where = tuple(int(i) for i in np.argwhere(bad)[0])
-            raise ValueError(f"human action {action[where]!r} at index {where} is not in [-1, 1]")
+        action = _unit_actions(human_action, (self.batch_size, num, 2), "human_action", "human action")
         s = self.core.state
         desired = np.zeros(s.human_pos.shape)
         desired[:, self.learned] = action_velocities(
@@ -546,12 +534,6 @@ class ActionSelectionTask(Task):
         """The sub-policies (GoAlone, Halt, Follow, Pass); none with velocity actions."""
         return tuple(ACTION_NAMES) if self.config.robot_action == "subpolicy" else ()
 
-    def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """The carrot and the global plan of robot 0 (the navigator's)."""
-        plans = self.core.navigator.plans
-        length = int(plans.lengths[row, 0])
-        return self.core.carrot[row, 0].copy(), plans.paths[row, 0, :length].copy()
-
     def viewer_laser(self) -> tuple[Any, Any, float] | None:
         """The config's laser (default LaserConfig()), the map's walls, the people's radius."""
         from socialzoo.core.config import LaserConfig
@@ -583,3 +565,16 @@ class ActionSelectionTask(Task):
         from socialzoo.env.rendering import CoreRenderer
 
         return CoreRenderer(self, render_mode, view=view)
+
+
+def _unit_actions(values: Any, shape: tuple[int, ...], name: str, item: str) -> np.ndarray:
+    """float64 actions of `shape` in [-1, 1]; anything else raises naming `name` (a wrong shape)
+    or `item` and its index (a value outside)."""
+    action = np.asarray(values, dtype=np.float64)
+    if action.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {action.shape}")
+    bad = ~np.isfinite(action) | (np.abs(action) > 1.0)
+    if bad.any():
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{item} {action[where]!r} at index {where} is not in [-1, 1]")
+    return action

@@ -166,9 +166,14 @@ class Task(ABC):
 
     def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(carrot (2,), global plan (L, 2)) that robot 0 of `row` follows, for the episode viewer
-        (socialzoo.bench.replay); None for either: the recorder draws the goal and the straight
-        line from the start."""
-        return None, None
+        (socialzoo.bench.replay): the core's navigator's, where it has one; None for either: the
+        recorder draws the goal and the straight line from the start."""
+        core: Any = getattr(self, "core", None)
+        if getattr(core, "navigator", None) is None:
+            return None, None
+        plans = core.navigator.plans
+        length = int(plans.lengths[row, 0])
+        return core.carrot[row, 0].copy(), plans.paths[row, 0, :length].copy()
 
     def viewer_laser(self) -> tuple[Any, Any, float] | None:
         """(LaserConfig, WallIndex, person radius) of the scan the viewer draws, or None."""

@@ -489,14 +489,8 @@ class CrowdNavTask(Task):
         """The metrics of each robot's episode (socialzoo.env.crowd_outcome.CrowdNavMetrics): the
         one that ended, or the one running so far (neither success, collision nor timeout yet; an
         adapter that cuts it short, a ParallelEnv's max_cycles, reads it)."""
-        out = []
-        for row in np.asarray(rows, dtype=np.intp).reshape(-1).tolist():
-            flat = row * self.num_robots + robot
-            if flat not in self._ended:
-                out.append(self._running(flat))
-                continue
-            out.append(self._ended[flat])
-        return out
+        flats = np.asarray(rows, dtype=np.intp).reshape(-1) * self.num_robots + robot
+        return [self._ended[k] if k in self._ended else self._running(k) for k in flats.tolist()]
 
     def _running(self, flat: int) -> dict[str, Any]:
         """The metrics so far of robot `flat` (row * R + robot), whose episode has not ended."""
@@ -549,14 +543,6 @@ class CrowdNavTask(Task):
         """The core's WorldState."""
         assert self.core.state is not None
         return self.core.state
-
-    def viewer_guides(self, row: int = 0) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Among walls the route's carrot and plan; in the arena none (the goal, a straight line)."""
-        if self.core.navigator is None:
-            return None, None
-        plans = self.core.navigator.plans
-        length = int(plans.lengths[row, 0])
-        return self.core.carrot[row, 0].copy(), plans.paths[row, 0, :length].copy()
 
     def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
         """The arena (or the map's walls) around every trace; the robot's disc as a square of its
