@@ -367,19 +367,10 @@ class EpisodeMetrics:
         """One plain dict of Python scalars per row of `rows` (index array; default all)."""
         index = np.arange(self.batch_size) if rows is None else np.asarray(rows, dtype=np.intp).reshape(-1)
         arrays = self.arrays(index)
-        out = []
-        for i in range(len(index)):
-            entry: dict[str, Any] = {}
-            for key in SUMMARY_KEYS:
-                value = arrays[key][i]
-                if key in _BOOL_KEYS:
-                    entry[key] = bool(value)
-                elif key in _INT_KEYS:
-                    entry[key] = int(value)
-                else:
-                    entry[key] = float(value)
-            out.append(entry)
-        return out
+        kinds = {
+            key: bool if key in _BOOL_KEYS else int if key in _INT_KEYS else float for key in SUMMARY_KEYS
+        }
+        return [{key: kind(arrays[key][i]) for key, kind in kinds.items()} for i in range(len(index))]
 
     def summary(self, row: int) -> dict[str, Any]:
         """The metrics of one row's current episode as a plain dict (keys SUMMARY_KEYS)."""
@@ -398,14 +389,11 @@ def failure_cause(metrics: Mapping[str, Any]) -> str:
     docstring), else "timeout": the time limit ended an episode in which the robot kept making
     progress. Summaries stored before `stuck` existed count as not stuck.
     """
-    if _flag(metrics.get("success")):
-        return "success"
-    if _flag(metrics.get("wall_collisions")):
-        return "wall_collision"
-    if _flag(metrics.get("human_collisions")):
-        return "human_collision"
-    if _flag(metrics.get("stuck")):
-        return "stuck"
+    for cause, key in zip(
+        FAILURE_CAUSES, ("success", "wall_collisions", "human_collisions", "stuck"), strict=False
+    ):
+        if _flag(metrics.get(key)):
+            return cause
     return "timeout"
 
 
