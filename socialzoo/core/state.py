@@ -96,7 +96,11 @@ class WorldState:
         return WorldState(**{f.name: getattr(self, f.name)[index].copy() for f in dataclasses.fields(self)})
 
     def set_rows(self, index: np.ndarray | slice, other: WorldState) -> None:
-        """Overwrite rows at `index` with `other`'s rows, padding human axes where they differ."""
+        """Overwrite rows at `index` with `other`'s rows, padding human axes where they differ; the
+        route axis of every row first widens to `other`'s where that is longer."""
+        route, length = self.human_route, other.human_route.shape[2]
+        if length > route.shape[2]:
+            self.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
         for f in dataclasses.fields(self):
             dst = getattr(self, f.name)
             src = getattr(other, f.name)

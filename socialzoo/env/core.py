@@ -23,7 +23,7 @@ import numpy as np
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.robot import world_velocity
-from socialzoo.core.state import WorldState, pad_to
+from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
 from socialzoo.env.replay import ReplayRunner
@@ -156,11 +156,7 @@ class BatchedCore:
         fresh.human_model[:] = models
         if self.state is None:
             self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
-        have, length = self.state.human_route.shape[2], fresh.human_route.shape[2]
-        if length > have:  # the route axis widens for a longer route
-            route = self.state.human_route
-            self.state.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
-        self.state.set_rows(rows, fresh)
+        self.state.set_rows(rows, fresh)  # the route axis widens for a longer route
         self.start_rows(rows, scenarios)
 
     def start_rows(self, rows: np.ndarray, scenarios: Sequence[Scenario | None]) -> None:

@@ -170,12 +170,6 @@ class People:
         alone = without_robots(fresh)
         if self.ghost is None:
             self.ghost = WorldState.concatenate([alone.rows(0)] * self.batch_size)
-        have = self.ghost.human_route.shape[2]
-        if alone.human_route.shape[2] > have:
-            route = self.ghost.human_route
-            self.ghost.human_route = pad_to(
-                route, (route.shape[1], alone.human_route.shape[2], 2), "human_route"
-            )
         self.ghost.set_rows(rows, alone)
         route = self.ghost.human_route
         seg = np.sqrt(((np.diff(route[rows], axis=2)) ** 2).sum(-1))  # padded repeats add 0
