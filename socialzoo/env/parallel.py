@@ -350,23 +350,14 @@ def global_state(s: WorldState) -> np.ndarray:
     return np.concatenate((robots, humans), axis=1).astype(np.float32)
 
 
-def parallel_env(
-    config: Any = None,
-    *,
-    render_mode: str | None = None,
-    max_cycles: int | None = None,
-    episode_info: bool = True,
-    **kwargs: Any,
-) -> SocialNavParallelEnv:
-    """The action-selection task's SocialNavParallelEnv (arguments as there); `kwargs` are EnvConfig
-    fields and map_data.
+def parallel_env(config: Any = None, **kwargs: Any) -> SocialNavParallelEnv:
+    """The action-selection task's SocialNavParallelEnv (arguments as there: render_mode,
+    max_cycles, episode_info, then EnvConfig fields and map_data).
 
     Example:
         >>> env = parallel_env(map="open_room", num_robots=2, num_learned_humans=3, max_steps=400)
     """
-    return SocialNavParallelEnv(
-        config, render_mode=render_mode, max_cycles=max_cycles, episode_info=episode_info, **kwargs
-    )
+    return SocialNavParallelEnv(config, **kwargs)
 
 
 def parallel_crowd_env(**kwargs: Any) -> CrowdNavParallelEnv:

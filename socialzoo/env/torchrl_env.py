@@ -282,9 +282,8 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
             },
             "state": global_state(task.world_state),
         }
-        all_done = out[ROBOT]["done"].all(axis=(1, 2))
-        all_term = out[ROBOT]["terminated"].all(axis=(1, 2))
-        all_trunc = out[ROBOT]["truncated"].all(axis=(1, 2))
+        # The row's flags: every agent's (done_on_any=False).
+        root = {k: out[ROBOT][k].all(axis=(1, 2)) for k in _DONE_KEYS}
         if h:
             human_obs = task.human_observations()
             assert human_obs is not None and step.human_reward is not None
@@ -298,12 +297,10 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
                 "info": self._human_info(step, live),
                 **self._flags(trunc | dead_h, dead_h, trunc | dead_h),
             }
-            all_done &= out[HUMAN]["done"].all(axis=(1, 2))
-            all_term &= out[HUMAN]["terminated"].all(axis=(1, 2))
-            all_trunc &= out[HUMAN]["truncated"].all(axis=(1, 2))
-        out["done"] = all_done[:, None]
-        out["terminated"] = all_term[:, None]
-        out["truncated"] = all_trunc[:, None]
+            for k in _DONE_KEYS:
+                root[k] &= out[HUMAN][k].all(axis=(1, 2))
+        for k in _DONE_KEYS:
+            out[k] = root[k][:, None]
         return self._to_tensordict(out)
 
     # ------------------------------------------------------------------ pieces
@@ -313,11 +310,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
 
     @staticmethod
     def _flags(done: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> dict[str, np.ndarray]:
-        return {
-            "done": done[..., None],
-            "terminated": terminated[..., None],
-            "truncated": truncated[..., None],
-        }
+        return {k: v[..., None] for k, v in zip(_DONE_KEYS, (done, terminated, truncated), strict=True)}
 
     def _robot_info(self, step: TaskStep | None, live: np.ndarray | None = None) -> dict[str, np.ndarray]:
         b, r = self.batch_size[0], self.num_robots

@@ -124,15 +124,14 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
 
     def _final_observations(self, ended: np.ndarray) -> Any:
         """The ended rows' last observations, zeros in the other rows."""
-        last = robot_row(self.task.observations(), slice(None))
-        if isinstance(last, dict):
-            out = {k: np.zeros_like(v) for k, v in last.items()}
-            for k, v in last.items():
-                out[k][ended] = v[ended]
+
+        def only_ended(values: np.ndarray) -> np.ndarray:
+            out = np.zeros_like(values)
+            out[ended] = values[ended]
             return out
-        out_array = np.zeros_like(last)
-        out_array[ended] = last[ended]
-        return out_array
+
+        last = robot_row(self.task.observations(), slice(None))
+        return {k: only_ended(v) for k, v in last.items()} if isinstance(last, dict) else only_ended(last)
 
     def _final_metrics(self, ended: np.ndarray) -> dict[str, np.ndarray]:
         """Metric -> (B,) float values of the ended rows' episodes, zeros in the other rows."""
