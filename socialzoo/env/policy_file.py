@@ -81,19 +81,17 @@ def save_policy_file(path: str | Path, tensors: Mapping[str, Any], header: Mappi
         text = json.dumps(header, sort_keys=True, allow_nan=False)
     except (TypeError, ValueError) as err:
         raise ValueError(f"policy header is not plain JSON: {err}") from None
-    arrays = {name: np.ascontiguousarray(_to_numpy(value)) for name, value in tensors.items()}
+    arrays = {
+        # A torch tensor goes through detach().cpu().numpy().
+        name: np.ascontiguousarray(value.detach().cpu().numpy() if hasattr(value, "detach") else value)
+        for name, value in tensors.items()
+    }
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")
     save_file(arrays, str(tmp), metadata={HEADER_KEY: text})
     tmp.replace(path)
     return path
-
-
-def _to_numpy(value: Any) -> np.ndarray:
-    if hasattr(value, "detach"):  # a torch tensor
-        return value.detach().cpu().numpy()
-    return np.asarray(value)
 
 
 def read_policy_file(
