@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import partial
 from typing import Literal, get_args
 
 Kind = Literal["bool", "int", "float"]
@@ -105,28 +106,25 @@ _AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), 
 _GL = ("guidelines",)
 _REC = ("recorded",)
 _BOTH = ("action_selection", "crowdnav")
+# A flag's mean is a share (3 digits); a count of events per episode is fewer is better (2 digits).
+_flag = partial(Metric, unit="", kind="bool", digits=3)
+_count = partial(Metric, unit="", better="lower", kind="int", count=True, digits=2)
 
 _ENTRIES: tuple[Metric, ...] = (
     # ---------------------------------------------------------------- the robot's episode
-    Metric(
+    _flag(
         name="success",
         label="success",
-        unit="",
         better="higher",
-        kind="bool",
-        digits=3,
         sources=_BOTH,
         description="The episode reached its goal without a collision. Action selection: the goal "
         "was reached (within EnvConfig.goal_radius, 0.5 m) with no human collision step and no wall "
         "collision; CrowdNav: the robot reached its goal before a collision or the time limit.",
     ),
-    Metric(
+    _flag(
         name="reached",
         label="goal reached",
-        unit="",
         better="higher",
-        kind="bool",
-        digits=3,
         sources=_AS,
         description="The robot centre came within the goal radius of its goal (0.5 m), collisions or not.",
     ),
@@ -163,24 +161,18 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Sum of the robot's step displacements (short where it stopped early, so no "
         "direction on its own).",
     ),
-    Metric(
+    _flag(
         name="collision",
         label="collision",
-        unit="",
         better="lower",
-        kind="bool",
-        digits=3,
         sources=_CN,
         description="The episode ended in a collision: the robot's and a person's boundaries "
         "overlapped during a step (their closest approach along the step below 0).",
     ),
-    Metric(
+    _flag(
         name="timeout",
         label="timeout",
-        unit="",
         better="lower",
-        kind="bool",
-        digits=3,
         sources=_CN,
         description="The time limit ended the episode (a step starting 1 s or less before it).",
     ),
@@ -206,14 +198,9 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_CN,
         description="Distance the robot moved during the episode.",
     ),
-    Metric(
+    _count(
         name="discomfort_steps",
         label="discomfort steps",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_CN,
         description="Steps in discomfort: a person's boundary within discomfort_dist (0.2 m) of "
         "the robot's during the step, without a collision or the episode's end.",
@@ -324,37 +311,22 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_AS,
         description="Largest blame b = 1 - erf(dist(h, S)) of the episode's steps.",
     ),
-    Metric(
+    _count(
         name="human_collisions",
         label="human collision steps",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_AS,
         description="Steps with at least one human centre closer than the collision distance "
         "(0.4 m) to the robot's (SPEC: counted each step); the episode goes on.",
     ),
-    Metric(
+    _count(
         name="human_contacts",
         label="human contacts",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_AS,
         description="Sum over the episode's steps of the humans in collision with the robot.",
     ),
-    Metric(
+    _count(
         name="wall_collisions",
         label="wall collision steps",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_AS,
         description="Steps with the robot's footprint touching a wall (the first ends the episode).",
     ),
@@ -449,14 +421,9 @@ _ENTRIES: tuple[Metric, ...] = (
         description="The longest stretch without progress towards the goal while not halting (see stuck).",
     ),
     # ---------------------------------------------------------------- the people (socialzoo.env.people)
-    Metric(
+    _count(
         name="group_intrusions",
         label="group intrusions",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_PEOPLE,
         description="Times the robot's centre crossed the line between two members of a walking "
         "group (within 3 m of each other) between their positions.",
@@ -593,25 +560,15 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_HUMANS,
         description="Route waypoints reached per human and minute.",
     ),
-    Metric(
+    _count(
         name="humans_hh_collisions",
         label="human-human collisions per episode",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_HUMANS,
         description="Times two humans came within 0.4 m of each other (each pair once per contact, at its start).",
     ),
-    Metric(
+    _count(
         name="humans_hw_collisions",
         label="human-wall collisions per episode",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_HUMANS,
         description="Times a human's centre came within its radius (0.2 m) of a wall, or a wall stopped its move.",
     ),
@@ -681,84 +638,53 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     # ---------------------------------------------------------------- Table I of the evaluation guidelines
     # (Francis et al., ACM THRI 2025; socialzoo.bench.guideline_metrics, from any trajectory)
-    Metric(
+    _flag(
         name="gl_success",
         label="success (guidelines)",
-        unit="",
         better="higher",
-        kind="bool",
-        digits=3,
         sources=_GL,
         description="Table I's S: the robot centre came within the goal radius of its goal with no contact "
         "(wall, person or other robot) up to that sample.",
     ),
-    Metric(
+    _count(
         name="gl_collisions",
         label="collisions (guidelines)",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_GL,
         description="Table I's C: the episode's collisions of every kind, wall, human and other robot "
         "(gl_wall_collisions + gl_human_collisions + gl_robot_collisions).",
     ),
-    Metric(
+    _count(
         name="gl_wall_collisions",
         label="wall collisions (guidelines)",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_GL,
         description="Table I's WC: starts of a wall contact (the robot's disc overlapping a wall, or the "
         "simulator's wall flag), a contact lasting several steps counted once.",
     ),
-    Metric(
+    _count(
         name="gl_human_collisions",
         label="human collisions (guidelines)",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_GL,
         description="Table I's HC: starts of a contact with a person (discs overlapping, or the simulator's "
         "flag), per person, a contact lasting several steps counted once.",
     ),
-    Metric(
+    _count(
         name="gl_robot_collisions",
         label="robot collisions (guidelines)",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_GL,
         description="Table I's AC: starts of a contact with another robot (discs overlapping, or the "
         "simulator's flag), per robot.",
     ),
-    Metric(
+    _flag(
         name="gl_timeout",
         label="timeout (guidelines)",
-        unit="",
         better="lower",
-        kind="bool",
-        digits=3,
         sources=_GL,
         description="Table I's TO: the episode reached its time limit with neither the goal nor a collision "
         "(without a time limit: it ended with neither).",
     ),
-    Metric(
+    _count(
         name="gl_failure_to_progress",
         label="failures to progress (guidelines)",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
-        digits=2,
         sources=_GL,
         description="Table I's FP: stretches in which some window of 10 s (GuidelineParams.progress_time) "
         "never brought the robot 0.25 m (progress_distance) closer to its goal than at the "
@@ -808,101 +734,29 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), l the shortest path's length (the "
         "straight line unless the log gives it) and p the path length.",
     ),
-    Metric(
-        name="gl_velocity_min",
-        label="velocity (min, guidelines)",
-        unit="m/s",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's V_min: the smallest robot speed over the episode's steps.",
-    ),
-    Metric(
-        name="gl_velocity_avg",
-        label="velocity (avg, guidelines)",
-        unit="m/s",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's V_avg: the mean robot speed over the episode's steps.",
-    ),
-    Metric(
-        name="gl_velocity_max",
-        label="velocity (max, guidelines)",
-        unit="m/s",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's V_max: the largest robot speed over the episode's steps.",
-    ),
-    Metric(
-        name="gl_acceleration_min",
-        label="acceleration (min, guidelines)",
-        unit="m/s^2",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's A_min: the smallest linear acceleration, the change of speed per step over dt "
-        "(negative: braking).",
-    ),
-    Metric(
-        name="gl_acceleration_avg",
-        label="acceleration (avg, guidelines)",
-        unit="m/s^2",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's A_avg: the mean linear acceleration, the change of speed per step over dt "
-        "(negative: braking).",
-    ),
-    Metric(
-        name="gl_acceleration_max",
-        label="acceleration (max, guidelines)",
-        unit="m/s^2",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's A_max: the largest linear acceleration, the change of speed per step over dt "
-        "(negative: braking).",
-    ),
-    Metric(
-        name="gl_jerk_min",
-        label="jerk (min, guidelines)",
-        unit="m/s^3",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's J_min: the smallest linear jerk, the change of linear acceleration per step "
-        "over dt.",
-    ),
-    Metric(
-        name="gl_jerk_avg",
-        label="jerk (avg, guidelines)",
-        unit="m/s^3",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's J_avg: the mean linear jerk, the change of linear acceleration per step over "
-        "dt.",
-    ),
-    Metric(
-        name="gl_jerk_max",
-        label="jerk (max, guidelines)",
-        unit="m/s^3",
-        better="neither",
-        kind="float",
-        digits=3,
-        sources=_GL,
-        description="Table I's J_max: the largest linear jerk, the change of linear acceleration per step "
-        "over dt.",
+    # gl_velocity_min/avg/max, gl_acceleration_min/avg/max, gl_jerk_min/avg/max: Table I's V, A and J
+    *(
+        Metric(
+            name=f"gl_{quantity}_{stat}",
+            label=f"{quantity} ({stat}, guidelines)",
+            unit=unit,
+            better="neither",
+            kind="float",
+            digits=3,
+            sources=_GL,
+            description=f"Table I's {symbol}_{stat}: the {word} {what}.",
+        )
+        for quantity, symbol, unit, what in (
+            ("velocity", "V", "m/s", "robot speed over the episode's steps"),
+            (
+                "acceleration",
+                "A",
+                "m/s^2",
+                "linear acceleration, the change of speed per step over dt (negative: braking)",
+            ),
+            ("jerk", "J", "m/s^3", "linear jerk, the change of linear acceleration per step over dt"),
+        )
+        for stat, word in (("min", "smallest"), ("avg", "mean"), ("max", "largest"))
     ),
     Metric(
         name="gl_clearing_distance_min",
