@@ -106,9 +106,11 @@ _AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), 
 _GL = ("guidelines",)
 _REC = ("recorded",)
 _BOTH = ("action_selection", "crowdnav")
-# A flag's mean is a share (3 digits); a count of events per episode is fewer is better (2 digits).
+# An entry of each kind with the fields its kind fixes: a flag (its mean is a share, printed to 3 digits), a count
+# of events per episode (fewer is better, 2 digits) and a float (NaN where undefined); the rest are Metric(...).
 _flag = partial(Metric, unit="", kind="bool", digits=3)
 _count = partial(Metric, unit="", better="lower", kind="int", count=True, digits=2)
+_float = partial(Metric, kind="float")
 
 _ENTRIES: tuple[Metric, ...] = (
     # ---------------------------------------------------------------- the robot's episode
@@ -128,34 +130,31 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_AS,
         description="The robot centre came within the goal radius of its goal (0.5 m), collisions or not.",
     ),
-    Metric(
+    _float(
         name="time_to_goal",
         label="time to goal",
         unit="s",
         better="lower",
-        kind="float",
         success_only=True,
         digits=2,
         sources=_AS,
         description="Episode time when the goal was reached, NaN when it was not; means are over "
         "the successful episodes (the paper's figure).",
     ),
-    Metric(
+    _float(
         name="distance_from_goal",
         label="distance from goal",
         unit="m",
         better="lower",
-        kind="float",
         digits=2,
         sources=_AS,
         description="Distance between the robot centre and the goal at the end of the episode.",
     ),
-    Metric(
+    _float(
         name="distance_travelled",
         label="distance travelled",
         unit="m",
         better="neither",
-        kind="float",
         digits=2,
         sources=_AS,
         description="Sum of the robot's step displacements (short where it stopped early, so no "
@@ -176,24 +175,22 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_CN,
         description="The time limit ended the episode (a step starting 1 s or less before it).",
     ),
-    Metric(
+    _float(
         name="navigation_time",
         label="navigation time",
         unit="s",
         better="lower",
-        kind="float",
         success_only=True,
         digits=2,
         sources=_CN,
         description="Episode time at the end of a successful episode (CrowdNav's success_times), "
         "NaN otherwise.",
     ),
-    Metric(
+    _float(
         name="path_length",
         label="path length",
         unit="m",
         better="neither",
-        kind="float",
         digits=2,
         sources=_CN,
         description="Distance the robot moved during the episode.",
@@ -215,99 +212,89 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_BOTH,
         description="Steps of the episode.",
     ),
-    Metric(
+    _float(
         name="duration",
         label="duration",
         unit="s",
         better="neither",
-        kind="float",
         digits=2,
         sources=_AS,
         description="Episode time: steps x the step duration.",
     ),
-    Metric(
+    _float(
         name="discomfort_frequency",
         label="discomfort frequency",
         unit="",
         better="lower",
-        kind="float",
         sources=_CN,
         description="Share of the episode's steps in discomfort (CrowdNav's frequency of being in danger).",
     ),
-    Metric(
+    _float(
         name="min_separation",
         label="minimum separation",
         unit="m",
         better="higher",
-        kind="float",
         sources=_CN,
         description="Smallest boundary distance between the robot and a person during the episode "
         "(negative: they overlapped); NaN with nobody.",
     ),
-    Metric(
+    _float(
         name="intrusion_ratio",
         label="intrusion ratio",
         unit="",
         better="lower",
-        kind="float",
         sources=_CN,
         description="Share of the episode's steps with a person's boundary within discomfort_dist "
         "of the robot's, a collision step included (CrowdNav++'s intrusion, on the real positions).",
     ),
-    Metric(
+    _float(
         name="return",
         label="return",
         unit="",
         better="higher",
-        kind="float",
         sources=_CN,
         description="Sum of the episode's CrowdNav rewards.",
     ),
-    Metric(
+    _float(
         name="discounted_return",
         label="discounted return",
         unit="",
         better="higher",
-        kind="float",
         sources=_CN,
         description="Sum over steps t of gamma ** (t dt v_pref) r_t, CrowdNav's total reward "
         "(gamma 0.9 per second at the preferred speed).",
     ),
-    Metric(
+    _float(
         name="mean_force",
         label="force (mean per step)",
         unit="",
         better="lower",
-        kind="float",
         sources=_BOTH,
         description="Mean over the episode's steps of the social force term f = exp(-d^4), d the "
         "distance to the nearest visible human (SPEC section 9, socialzoo.env.reward).",
     ),
-    Metric(
+    _float(
         name="max_force",
         label="force (max per episode)",
         unit="",
         better="lower",
-        kind="float",
         sources=_AS,
         description="Largest social force term f = exp(-d^4) of the episode's steps.",
     ),
-    Metric(
+    _float(
         name="mean_blame",
         label="blame (mean per step)",
         unit="",
         better="lower",
-        kind="float",
         sources=_BOTH,
         description="Mean over the episode's steps of the blame b = 1 - erf(dist(h, S)), S the "
         "robot's next 0.5 s of motion and h the nearest visible human (SPEC section 9).",
     ),
-    Metric(
+    _float(
         name="max_blame",
         label="blame (max per episode)",
         unit="",
         better="lower",
-        kind="float",
         sources=_AS,
         description="Largest blame b = 1 - erf(dist(h, S)) of the episode's steps.",
     ),
@@ -330,72 +317,65 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_AS,
         description="Steps with the robot's footprint touching a wall (the first ends the episode).",
     ),
-    Metric(
+    _float(
         name="average_step_reward",
         label="average step reward",
         unit="",
         better="higher",
-        kind="float",
         sources=_AS,
         description="The episode's total reward divided by its steps.",
     ),
-    Metric(
+    _float(
         name="total_reward",
         label="total reward",
         unit="",
         better="higher",
-        kind="float",
         digits=2,
         sources=_AS,
         description="Sum of the episode's rewards (socialzoo.env.reward).",
     ),
-    Metric(
+    _float(
         name="min_human_distance",
         label="minimum distance to a human",
         unit="m",
         better="higher",
-        kind="float",
         sources=_AS,
         description="Smallest centre distance between the robot and any present human (visible or "
         "not) over the episode; NaN with nobody.",
     ),
-    Metric(
+    _float(
         name="personal_space_intrusion_time",
         label="personal-space intrusion time",
         unit="s",
         better="lower",
-        kind="float",
         sources=_AS,
         description="Time with the robot centre inside a human's intimate zone: a centre distance "
         "below personal_space + human_radius (0.45 + 0.2 m, MetricsConfig).",
     ),
-    Metric(
+    _float(
         name="path_irregularity",
         label="path irregularity",
         unit="rad",
         better="lower",
-        kind="float",
         sources=_AS,
         description="Total rotation of the robot minus the rotation needed to face the goal from "
         "the start, floored at 0 (Guzzi et al. 2013).",
     ),
-    Metric(
+    _float(
         name="path_length_ratio",
         label="path length ratio",
         unit="",
         better="higher",
-        kind="float",
         sources=_AS,
         description="Straight start-goal distance over the distance travelled: 1 for a straight "
         "drive (a little above 1 at most, the goal counting as reached 0.5 m short); NaN when the "
         "robot did not move.",
     ),
-    Metric(
+    _float(
         name="jerk",
         label="jerk",
         unit="m/s^3",
         better="lower",
-        kind="float",
         sources=_AS,
         description="Mean over the episode's steps of |a_t - a_(t-1)| / dt, a the linear "
         "acceleration from the speed, the robot at rest before the first step.",
@@ -410,12 +390,11 @@ _ENTRIES: tuple[Metric, ...] = (
         description="The robot went MetricsConfig.stuck_time (10 s) of steps without its route "
         "left falling by stuck_progress (0.25 m) below its least value while it was not halting.",
     ),
-    Metric(
+    _float(
         name="max_time_without_progress",
         label="longest time without progress",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_AS,
         description="The longest stretch without progress towards the goal while not halting (see stuck).",
@@ -428,67 +407,61 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Times the robot's centre crossed the line between two members of a walking "
         "group (within 3 m of each other) between their positions.",
     ),
-    Metric(
+    _float(
         name="people_time_lost",
         label="people's time lost (mean per person)",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_PEOPLE,
         description="Mean over the people of the time they reach their route's goal end with the "
         "robot minus without it (the counterfactual rows; by the robot's episode end plus the "
         "route left at the preferred speed); NaN with nobody.",
     ),
-    Metric(
+    _float(
         name="people_time_lost_max",
         label="people's time lost (max per person)",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_PEOPLE,
         description="The largest time lost by a person of the episode (see people_time_lost).",
     ),
-    Metric(
+    _float(
         name="people_extra_distance",
         label="people's extra distance (mean per person)",
         unit="m",
         better="lower",
-        kind="float",
         digits=3,
         sources=_PEOPLE,
         description="Mean over the people of the distance walked with the robot minus without it, "
         "each plus its route left (the counterfactual rows); NaN with nobody.",
     ),
     # ---------------------------------------------------------------- recorded scenes (socialzoo.env.replay)
-    Metric(
+    _float(
         name="person_time",
         label="replaced person's time",
         unit="s",
         better="neither",
-        kind="float",
         digits=2,
         sources=_REC,
         description="The recorded time of the person the robot took the place of, from its entry to its exit.",
     ),
-    Metric(
+    _float(
         name="person_time_ratio",
         label="time against the replaced person",
         unit="",
         better="lower",
-        kind="float",
         digits=3,
         success_only=True,
         sources=_REC,
         description="The robot's time to its goal over the replaced person's recorded time (success only).",
     ),
-    Metric(
+    _float(
         name="person_path_deviation",
         label="deviation from the replaced person's path",
         unit="m",
         better="lower",
-        kind="float",
         digits=3,
         sources=_REC,
         description="Mean over the robot's steps of its distance to the replaced person's recorded path (a "
@@ -504,24 +477,22 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_REC,
         description="Recorded people of a hybrid crowd who left their tracks because the robot came near.",
     ),
-    Metric(
+    _float(
         name="reacting_time_lost",
         label="reacting people's time lost (mean)",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_REC,
         description="Mean over the people who left their tracks of the time they left the scene minus their "
         "recorded exit (by the robot's episode end plus the straight distance left at their speed); NaN "
         "with nobody.",
     ),
-    Metric(
+    _float(
         name="reacting_extra_distance",
         label="reacting people's extra distance (mean)",
         unit="m",
         better="lower",
-        kind="float",
         digits=3,
         sources=_REC,
         description="Mean over the people who left their tracks of the distance they walked from there "
@@ -539,23 +510,21 @@ _ENTRIES: tuple[Metric, ...] = (
         "the robot on the person (their velocities along the line between them).",
     ),
     # ---------------------------------------------------------------- the humans (socialzoo.bench.human_metrics)
-    Metric(
+    _float(
         name="humans_goal_rate",
         label="route goal reach rate",
         unit="",
         better="higher",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Share of the humans with a route of two or more waypoints that reached its "
         "goal end (turned back there) during the episode.",
     ),
-    Metric(
+    _float(
         name="humans_waypoints_per_min",
         label="waypoints reached per human",
         unit="1/min",
         better="higher",
-        kind="float",
         digits=2,
         sources=_HUMANS,
         description="Route waypoints reached per human and minute.",
@@ -583,53 +552,48 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_HUMANS,
         description="Times a human came within the robot collision distance (0.4 m) of a robot.",
     ),
-    Metric(
+    _float(
         name="humans_min_human_distance",
         label="min human-human distance",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Smallest centre distance between two humans over the episode; NaN with a single human.",
     ),
-    Metric(
+    _float(
         name="humans_min_wall_distance",
         label="min human-wall distance",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Smallest distance between a human centre and a wall over the episode; NaN when "
         "it never fell within the wall index's reach (1 m).",
     ),
-    Metric(
+    _float(
         name="humans_min_robot_distance",
         label="min human-robot distance",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Smallest centre distance between a human and a robot over the episode.",
     ),
-    Metric(
+    _float(
         name="humans_mean_speed",
         label="mean speed",
         unit="m/s",
         better="neither",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Mean speed over the humans and steps.",
     ),
-    Metric(
+    _float(
         name="humans_path_ratio",
         label="path length / route length",
         unit="",
         better="lower",
-        kind="float",
         digits=3,
         sources=_HUMANS,
         description="Distance walked until the route's goal end was first reached over the route's "
@@ -690,45 +654,41 @@ _ENTRIES: tuple[Metric, ...] = (
         "never brought the robot 0.25 m (progress_distance) closer to its goal than at the "
         "window's start.",
     ),
-    Metric(
+    _float(
         name="gl_stalled_time",
         label="stalled time (guidelines)",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_GL,
         description="Table I's ST: time of the steps whose robot speed was below 0.05 m/s "
         "(GuidelineParams.stall_speed).",
     ),
-    Metric(
+    _float(
         name="gl_time_to_goal",
         label="time to goal (guidelines)",
         unit="s",
         better="lower",
-        kind="float",
         success_only=True,
         digits=2,
         sources=_GL,
         description="Table I's T: time of the first sample within the goal radius, NaN unless the episode "
         "succeeded.",
     ),
-    Metric(
+    _float(
         name="gl_path_length",
         label="path length (guidelines)",
         unit="m",
         better="neither",
-        kind="float",
         digits=2,
         sources=_GL,
         description="Table I's PL: sum of the robot's displacements between samples, up to the goal.",
     ),
-    Metric(
+    _float(
         name="gl_spl",
         label="success weighted by path length",
         unit="",
         better="higher",
-        kind="float",
         digits=3,
         sources=_GL,
         description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), l the shortest path's length (the "
@@ -736,12 +696,11 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     # gl_velocity_min/avg/max, gl_acceleration_min/avg/max, gl_jerk_min/avg/max: Table I's V, A and J
     *(
-        Metric(
+        _float(
             name=f"gl_{quantity}_{stat}",
             label=f"{quantity} ({stat}, guidelines)",
             unit=unit,
             better="neither",
-            kind="float",
             digits=3,
             sources=_GL,
             description=f"Table I's {symbol}_{stat}: the {word} {what}.",
@@ -758,68 +717,62 @@ _ENTRIES: tuple[Metric, ...] = (
         )
         for stat, word in (("min", "smallest"), ("avg", "mean"), ("max", "largest"))
     ),
-    Metric(
+    _float(
         name="gl_clearing_distance_min",
         label="clearing distance (min, guidelines)",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_GL,
         description="Table I's CD_min: the smallest gap between the robot's disc and a wall over the episode "
         "(negative: overlap); NaN without walls.",
     ),
-    Metric(
+    _float(
         name="gl_clearing_distance_avg",
         label="clearing distance (mean, guidelines)",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_GL,
         description="Table I's CD_avg: the mean over the episode's samples of the gap between the robot's "
         "disc and the nearest wall; NaN without walls.",
     ),
-    Metric(
+    _float(
         name="gl_personal_space_compliance",
         label="personal space compliance (guidelines)",
         unit="",
         better="higher",
-        kind="float",
         digits=3,
         sources=_GL,
         description="Table I's SC (PSC, Pérez-D'Arpino et al. 2021): share of the episode's samples with "
         "every person's disc at least 0.5 m (GuidelineParams.personal_space) from the robot's.",
     ),
-    Metric(
+    _float(
         name="gl_min_distance_to_human",
         label="minimum distance to a human (guidelines)",
         unit="m",
         better="higher",
-        kind="float",
         digits=3,
         sources=_GL,
         description="Table I's DH_min: the smallest gap between the robot's disc and a person's over the "
         "episode (negative: overlap); NaN with nobody.",
     ),
-    Metric(
+    _float(
         name="gl_min_time_to_collision",
         label="minimum time to collision (guidelines)",
         unit="s",
         better="higher",
-        kind="float",
         digits=2,
         sources=_GL,
         description="Table I's TTC: the least time, over samples and people, until the robot's and a person's "
         "discs would touch if both kept their velocities; inf when never on a collision course, "
         "NaN with nobody.",
     ),
-    Metric(
+    _float(
         name="gl_aggregated_time",
         label="aggregated time (guidelines)",
         unit="s",
         better="lower",
-        kind="float",
         digits=2,
         sources=_GL,
         description="Table I's AT: time when the last of the cooperative set (the robot and the other robots "
