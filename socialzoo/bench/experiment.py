@@ -28,6 +28,7 @@ from socialzoo.bench.tables import (
     write_tables,
     write_text_atomic,
 )
+from socialzoo.core.validation import check_int
 from socialzoo.env.config import EnvConfig
 from socialzoo.scenarios.scenario import TEST_SETS, TestSet
 
@@ -120,20 +121,13 @@ class BenchmarkConfig:
         unknown = sorted(set(self.policy_kwargs) - set(self.policies))
         if unknown:
             raise ValueError(f"BenchmarkConfig.policy_kwargs names policies not evaluated: {unknown}")
-        if self.trials is not None and (
-            not isinstance(self.trials, int) or isinstance(self.trials, bool) or self.trials < 1
-        ):
-            raise ValueError(f"BenchmarkConfig.trials must be an int >= 1 or None, got {self.trials!r}")
+        check_int("BenchmarkConfig", "trials", self.trials, low=1, allow_none=True)
         if self.backend not in BACKENDS:
             raise ValueError(f"BenchmarkConfig.backend must be one of {BACKENDS}, got {self.backend!r}")
         if self.address is not None and self.backend != "ray":
             raise ValueError(f"BenchmarkConfig.address is for the Ray backend, got backend {self.backend!r}")
-        if self.workers is not None and (
-            not isinstance(self.workers, int) or isinstance(self.workers, bool) or self.workers < 1
-        ):
-            raise ValueError(f"BenchmarkConfig.workers must be an int >= 1 or None, got {self.workers!r}")
-        if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
-            raise ValueError(f"BenchmarkConfig.batch_size must be an int >= 1, got {self.batch_size!r}")
+        check_int("BenchmarkConfig", "workers", self.workers, low=1, allow_none=True)
+        check_int("BenchmarkConfig", "batch_size", self.batch_size, low=1)
         env = EnvConfig().replace(**dict(self.env_overrides))  # fail early, naming a bad override
         if env.num_learned_humans:
             raise ValueError(

@@ -22,6 +22,7 @@ import numpy as np
 from socialzoo.agents import Policy, make_policy
 from socialzoo.bench.compaction import RunStats
 from socialzoo.bench.progress import progress_bar
+from socialzoo.core.validation import check_int
 from socialzoo.env.config import EnvConfig
 from socialzoo.scenarios.scenario import TestSet, get_test_set
 
@@ -117,8 +118,7 @@ class RunSpec:
     guideline_metrics: bool = False
 
     def __post_init__(self) -> None:
-        if not isinstance(self.batch_size, int) or isinstance(self.batch_size, bool) or self.batch_size < 1:
-            raise ValueError(f"RunSpec.batch_size must be an int >= 1, got {self.batch_size!r}")
+        check_int("RunSpec", "batch_size", self.batch_size, low=1)
         for name, config in self.env_configs.items():
             if getattr(config, "num_learned_humans", 0):
                 raise ValueError(

@@ -26,6 +26,7 @@ from typing import Any, Literal, get_args
 
 from socialzoo.bench.runner import BACKENDS, Backend
 from socialzoo.bench.task_benchmark import STORE_FILE, TaskId
+from socialzoo.core.validation import check_int
 from socialzoo.scenarios.suite import SUITE, SUITE_NAMES
 
 logger = logging.getLogger(__name__)
@@ -134,13 +135,8 @@ class SuiteConfig:
             except UnknownMetricError as err:
                 raise SuiteError(f"SuiteConfig.metrics: {err}") from None
         for name, low in (("seeds", 1), ("batch_size", 1), ("replays", 0)):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise SuiteError(f"SuiteConfig.{name} must be an int >= {low}, got {value!r}")
-        if self.workers is not None and (
-            not isinstance(self.workers, int) or isinstance(self.workers, bool) or self.workers < 1
-        ):
-            raise SuiteError(f"SuiteConfig.workers must be an int >= 1 or None, got {self.workers!r}")
+            check_int("SuiteConfig", name, getattr(self, name), low=low, error=SuiteError)
+        check_int("SuiteConfig", "workers", self.workers, low=1, allow_none=True, error=SuiteError)
         if self.backend not in BACKENDS:
             raise SuiteError(f"SuiteConfig.backend must be one of {BACKENDS}, got {self.backend!r}")
         if self.address is not None and self.backend != "ray":
