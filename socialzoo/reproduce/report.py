@@ -124,10 +124,11 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
         "|---|---|---:|---:|---|",
     ]
     total = 0.0
-    for part in PARTS:
+    for part in (*PARTS, REFERENCE_PART):
         entry = timings.get(part)
         if entry is None:
-            lines.append(f"| {part} | {PART_TITLES[part]} | no session recorded | 0 | no |")
+            if part != REFERENCE_PART:  # the reference part is listed only where it ran
+                lines.append(f"| {part} | {PART_TITLES[part]} | no session recorded | 0 | no |")
             continue
         # Sessions that only read stored items back (a rerun) do not count as the part's time.
         seconds = entry.get("work_seconds", entry["seconds"])
@@ -135,14 +136,6 @@ def _timings_section(timings: Mapping[str, Any]) -> list[str]:
         lines.append(
             f"| {part} | {PART_TITLES[part]} | {_duration(seconds)} | {len(entry['sessions'])} "
             f"| {'yes' if entry['finished'] else 'no'} |"
-        )
-    entry = timings.get(REFERENCE_PART)
-    if entry is not None:
-        seconds = entry.get("work_seconds", entry["seconds"])
-        total += seconds
-        lines.append(
-            f"| {REFERENCE_PART} | {PART_TITLES[REFERENCE_PART]} | {_duration(seconds)} "
-            f"| {len(entry['sessions'])} | {'yes' if entry['finished'] else 'no'} |"
         )
     lines.append(f"| all | | {_duration(total)} | | |")
     return lines
