@@ -11,6 +11,7 @@ from socialzoo.bench.tables import PAPER_SUCCESS
 from socialzoo.studies.lfd import LFD_SIZES, PAPER_LFD
 
 __all__ = [
+    "EXPERIMENT_MAPS",
     "LFD_SIZES",
     "PAPER_LFD",
     "PAPER_LFD_ALL",
@@ -25,6 +26,9 @@ SPEC_REFERENCE = "SPEC section 10 (Baselines and experiments)"
 
 # The seven policies of the paper, in its order (SPEC section 10, "Policies").
 PAPER_POLICIES: tuple[str, ...] = ("goalone", "ref", "bc", "gail", "pips", "dqn", "ppo")
+
+# Each experiment's map and its index in PAPER_SUCCESS: the training map (0) or the transfer map (1).
+EXPERIMENT_MAPS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer": ("ghc3", 1)}
 
 # SPEC section 10, LfD table: "PIPS (3,500) 88/0.16" (success %, average step reward).
 PAPER_LFD_PIPS: tuple[int, tuple[float, float]] = (3_500, (88.0, 0.16))

@@ -18,9 +18,8 @@ from typing import Any
 
 from socialzoo.bench.tables import policy_label
 from socialzoo.env.quirks import ALL_QUIRKS, QUIRK_LABELS, ReferenceQuirks
-from socialzoo.reproduce.paper import PAPER_SUCCESS
+from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS
 from socialzoo.reproduce.runs import REFERENCE_TRAINERS, quirk_set
-from socialzoo.reproduce.tables import EXPERIMENT_MAPS
 
 
 def _sets(rows: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -95,7 +94,9 @@ def quirk_note(
         if ours is not None:
             base = float(ours["mean_pct"])
             shift = f" against our {base:.1f}% ({mean - base:+.1f} points)"
-        verdict = "so the quirks can explain it" if _inside(paper, values) else "so the quirks do not explain it"
+        verdict = (
+            "so the quirks can explain it" if _inside(paper, values) else "so the quirks do not explain it"
+        )
         sentences.append(
             f"With every reference quirk on (`--reference`, {len(values)} seeds): {min(values):.1f}% to "
             f"{max(values):.1f}%, mean {mean:.1f}%{shift}; the paper's {paper:.1f}% lies "

@@ -34,9 +34,9 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import summarize, write_csv
-from socialzoo.reproduce.paper import PAPER_SUCCESS, paper_lfd
+from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS, paper_lfd
 from socialzoo.reproduce.results import CSV_FILES, RESULTS_DIR, RUN_FILE, TRAINING_FILE
-from socialzoo.reproduce.seeds import EXPERIMENTS, IMPROVEMENT_PAIRS
+from socialzoo.reproduce.seeds import IMPROVEMENT_PAIRS
 from socialzoo.studies.seeds import SeedGroup, benchmark_rows, improvement_rows, profile_rows, seed_rows
 
 # The policies with a row in the LfD table (PPO and DQN have none).
@@ -158,7 +158,7 @@ def replace_policy_rows(base_dir: str | Path, rerun: PolicyRerun) -> list[Path]:
     groups: list[SeedGroup] = []
     written: list[Path] = []
     ref_check: dict[str, dict[str, int]] = {}
-    for experiment, (map_name, index) in EXPERIMENTS.items():
+    for experiment, (map_name, index) in EXPERIMENT_MAPS.items():
         folder = rerun.performance if experiment == "performance" else rerun.transfer
         trials = int(settings[f"{experiment}_trials"])
         published = {r["policy"]: r for r in _raw_csv(results / CSV_FILES[experiment])[1]}
@@ -286,7 +286,9 @@ def replace_reference_rows(base_dir: str | Path, reference_results: str | Path) 
     target.write_bytes(source.read_bytes())
     path = results / TRAINING_FILE
     training = [t for t in json.loads(path.read_text()) if not str(t.get("run", "")).startswith("reference/")]
-    training += [t for t in json.loads((theirs / TRAINING_FILE).read_text()) if str(t["run"]).startswith("reference/")]
+    training += [
+        t for t in json.loads((theirs / TRAINING_FILE).read_text()) if str(t["run"]).startswith("reference/")
+    ]
     path.write_text(json.dumps(training, indent=1, sort_keys=True) + "\n")
     timings_path = results / TIMINGS_FILE
     timings = json.loads(timings_path.read_text())

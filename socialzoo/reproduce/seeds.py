@@ -21,7 +21,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from socialzoo.reproduce.paper import PAPER_SUCCESS, paper_lfd
+from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS, paper_lfd
 from socialzoo.reproduce.runs import SEEDS_FOLDER, Context, finished, lfd_eval_dir, lfd_items, rl_items
 
 SEEDS_DIR = "seeds"
@@ -36,19 +36,18 @@ IMPROVEMENT_PAIRS: tuple[tuple[str, str], ...] = (
     ("ppo", "dqn"),
     ("bc", "gail"),
 )
-EXPERIMENTS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer": ("ghc3", 1)}
 ENGINEERED = ("goalone", "ref")
 
 
-def _kept_files(ctx: Context, items: list[tuple[str, Any]]) -> list[Path | None]:
+def _kept_files(items: list[tuple[str, Any]]) -> list[Path | None]:
     """The kept policy of each finished item (None for a run not finished): no training here."""
     from socialzoo.train import trainer_spec
     from socialzoo.train.validation import kept_policy
 
-    out: list[Path | None] = []
-    for name, args in items:
-        out.append(kept_policy(trainer_spec(name).policy_path(args)) if finished(name, args) else None)
-    return out
+    return [
+        kept_policy(trainer_spec(name).policy_path(args)) if finished(name, args) else None
+        for name, args in items
+    ]
 
 
 def _groups(ctx: Context) -> list[Any]:
@@ -58,8 +57,8 @@ def _groups(ctx: Context) -> list[Any]:
     s = ctx.settings
     groups: list[SeedGroup] = []
     learned = rl_items(ctx) + lfd_items(ctx, (s.lfd_largest,))
-    files = _kept_files(ctx, learned)
-    for experiment, (map_name, index) in EXPERIMENTS.items():
+    files = _kept_files(learned)
+    for experiment, (map_name, index) in EXPERIMENT_MAPS.items():
         folder = ctx.ledger.path(experiment)
         if not (folder / "config.json").is_file():
             continue
@@ -97,7 +96,7 @@ def _groups(ctx: Context) -> list[Any]:
     lfd: dict[tuple[str, int], list[tuple[int, dict[int, float]]]] = {}
     items = lfd_items(ctx)
     try:
-        for (name, args), path in zip(items, _kept_files(ctx, items), strict=True):
+        for (name, args), path in zip(items, _kept_files(items), strict=True):
             if path is None:
                 raise KeyError(name)
             scores = benchmark_scores(lfd_eval_dir(ctx, int(args.seed)), f"{name}:{path}")

@@ -12,10 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
-from socialzoo.reproduce.paper import PAPER_POLICIES, PAPER_SUCCESS
-
-# Paper's success on the training map (index 0) or the transfer map (index 1).
-EXPERIMENT_MAPS: dict[str, tuple[str, int]] = {"performance": ("gdc1", 0), "transfer": ("ghc3", 1)}
+from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_POLICIES, PAPER_SUCCESS
 
 
 def _num(value: Any, digits: int, scale: float = 1.0) -> str:
