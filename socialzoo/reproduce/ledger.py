@@ -45,7 +45,8 @@ def _read_json(file: Path, what: str, error: type[LedgerError]) -> dict[str, Any
     return read_json(file, what, error, kind=dict)
 
 
-def _write_json(path: Path, data: Any) -> None:
+def write_json(path: Path, data: Any) -> None:
+    """Write `data` as indented JSON with sorted keys, through a temporary file renamed into place."""
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
     os.replace(tmp, path)
@@ -93,7 +94,7 @@ class Ledger:
                 or _comparable(stored["settings"]) != _comparable(record["settings"])
             ):
                 raise SettingsMismatch(f"{self.work} holds items of other settings ({file}); not mixing them")
-        _write_json(file, record)
+        write_json(file, record)
 
     def path(self, *parts: str) -> Path:
         """A path inside the work folder."""
@@ -125,7 +126,7 @@ class Ledger:
         entry["work_seconds"] = round(sum(s["seconds"] for s in entry["sessions"] if s.get("computed")), 1)
         entry["finished"] = any(s["finished"] for s in entry["sessions"])
         entry["machine"] = machine()
-        _write_json(self.work / TIMINGS_FILE, data)
+        write_json(self.work / TIMINGS_FILE, data)
 
     @contextmanager
     def timed(self, part: str, backend: str) -> Iterator[dict[str, Any]]:

@@ -24,16 +24,14 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
-import os
 import shutil
 from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import write_csv
 from socialzoo.core.files import read_json, read_text
-from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
+from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine, write_json
 from socialzoo.reproduce.paper import paper_lfd
 from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
 from socialzoo.reproduce.seeds import SEEDS_DIR
@@ -90,12 +88,6 @@ def command_for(settings_name: str, seeds: int = 1) -> str:
     """The command that makes a reproduction of these settings (`seeds` training seeds)."""
     command = "socialzoo reproduce --out DIR" + (" --quick" if settings_name == "quick" else "")
     return command + (f" --seeds {seeds}" if seeds > 1 else "")
-
-
-def _write_json(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
 
 
 def _training_record(ledger: Ledger) -> list[dict[str, Any]]:
@@ -190,7 +182,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
     """
     results = Path(out_dir) / RESULTS_DIR
     results.mkdir(parents=True, exist_ok=True)
-    _write_json(
+    write_json(
         results / RUN_FILE,
         {
             "settings": ledger.settings.to_json(),
@@ -203,7 +195,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
     )
     if (ledger.work / TIMINGS_FILE).is_file():
         shutil.copyfile(ledger.work / TIMINGS_FILE, results / TIMINGS_FILE)
-    _write_json(results / TRAINING_FILE, _training_record(ledger))
+    write_json(results / TRAINING_FILE, _training_record(ledger))
     sources = {
         "rl_curves": ledger.path("rl", "curves", "rl_curves.csv"),
         "lfd": ledger.path("lfd", "eval", "lfd.csv"),
