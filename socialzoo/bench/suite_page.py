@@ -171,16 +171,11 @@ caption { text-align: left; font-weight: 600; padding-bottom: 0.3em; }
 
 def scenario_card(scenario: SuiteScenario) -> Any:
     """The scenario card of a suite scenario (socialzoo.scenarios.cards.load_card); None outside
-    the suite, or where the cards module does not exist; the error's text where the card cannot be
-    read."""
+    the suite; the error's text where the card cannot be read."""
+    from socialzoo.scenarios.cards import load_card
+
     if not scenario.letter:
         return None
-    try:
-        from socialzoo.scenarios.cards import load_card
-    except ImportError as err:
-        if err.name and err.name.startswith("socialzoo.scenarios.cards"):
-            return None
-        raise
     try:
         return load_card(scenario.name)
     except (ValueError, OSError) as err:  # the cards' CardError is a ValueError
