@@ -366,9 +366,6 @@ def run_benchmark(
         on_results: also called with each group of finished trials, after they are stored.
         figures: draw the figures (needs matplotlib).
 
-    Returns:
-        The BenchmarkResult.
-
     Maps without a registered test set (any shipped map or map file) get one generated on first
     use and stored in out_dir/test_sets/ with the map's hash (socialzoo.bench.test_sets); reruns
     read it back, so their trials compare with the stored ones.

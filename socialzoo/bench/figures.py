@@ -107,11 +107,7 @@ def plot_success(
 ) -> list[Path]:
     """success.{png,pdf}: success rate (%) per policy, one bar per map with its Wilson interval
     (the benchmark's 90%; `interval` names the one given), and the paper's number as a black tick
-    where the paper has one.
-
-    Returns:
-        The files written.
-    """
+    where the paper has one; returns the files written."""
     plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) + 2.0), 3.6))
@@ -142,11 +138,7 @@ def plot_metrics(
     summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
 ) -> list[Path]:
     """metrics.{png,pdf}: force, blame and time to goal (successful episodes) per policy, the
-    training and transfer maps side by side, with 90% Student-t intervals.
-
-    Returns:
-        The files written.
-    """
+    training and transfer maps side by side, with 90% Student-t intervals; returns the files written."""
     plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(4.2 * len(METRIC_PANELS), 3.4))
@@ -172,11 +164,8 @@ def plot_failures(
     summary: Sequence[Mapping[str, Any]], out_dir: str | Path, formats: Sequence[str] = FIGURE_FORMATS
 ) -> list[Path]:
     """failures.{png,pdf}: for each policy and map, a bar of the episodes that failed, stacked by
-    cause (human collision, wall collision, stuck, timeout while moving; % of episodes).
-
-    Returns:
-        The files written.
-    """
+    cause (human collision, wall collision, stuck, timeout while moving; % of episodes); returns the
+    files written."""
     plt = pyplot()
     policies, maps, by_key = _layout(summary)
     fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(policies) * max(len(maps), 1) / 2 + 2.5), 3.6))
