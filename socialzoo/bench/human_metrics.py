@@ -250,14 +250,14 @@ def summarize_humans(
         confidence: two-sided level.
     """
     from socialzoo.bench.stats import count_interval, mean_interval
-    from socialzoo.bench.tables import cell_rng
+    from socialzoo.bench.tables import cell_rng, ordered
 
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in _ordered([k[0] for k in groups], policies):
-        for map_name in _ordered([k[1] for k in groups], maps):
+    for policy in ordered([k[0] for k in groups], policies):
+        for map_name in ordered([k[1] for k in groups], maps):
             group = groups.get((policy, map_name), [])
             if not group:
                 continue
@@ -275,11 +275,6 @@ def summarize_humans(
                 )
             out.append(entry)
     return out
-
-
-def _ordered(values: list[str], order: tuple[str, ...] | list[str]) -> list[str]:
-    seen = list(dict.fromkeys(values))
-    return [v for v in order if v in seen] + [v for v in seen if v not in order]
 
 
 def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: str) -> list[Any]:

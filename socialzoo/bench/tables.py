@@ -214,7 +214,8 @@ def cell_rng(seed: int, policy: str, map_name: str, metric: str) -> np.random.Ge
     return np.random.default_rng([seed, *names])
 
 
-def _ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
+def ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
+    """The distinct values, those of `order` first in its order, the others as they first appear."""
     seen = list(dict.fromkeys(values))
     if order is None:
         return seen
@@ -247,8 +248,8 @@ def summarize(
     for row in rows:
         groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in _ordered([k[0] for k in groups], policies):
-        for map_name in _ordered([k[1] for k in groups], maps):
+    for policy in ordered([k[0] for k in groups], policies):
+        for map_name in ordered([k[1] for k in groups], maps):
             group = groups.get((policy, map_name))
             if not group:
                 continue
