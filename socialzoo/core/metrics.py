@@ -380,12 +380,11 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Mean over the episode's steps of |a_t - a_(t-1)| / dt, a the linear "
         "acceleration from the speed, the robot at rest before the first step.",
     ),
-    Metric(
+    _flag(
         name="stuck",
         label="episodes stuck (share; no progress for 10 s while not halting)",
-        unit="",
         better="lower",
-        kind="bool",
+        digits=4,
         sources=_AS,
         description="The robot went MetricsConfig.stuck_time (10 s) of steps without its route "
         "left falling by stuck_progress (0.25 m) below its least value while it was not halting.",
@@ -467,13 +466,10 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Mean over the robot's steps of its distance to the replaced person's recorded path (a "
         "polyline through its positions).",
     ),
-    Metric(
+    _count(
         name="people_reacting",
         label="people who left their tracks",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
+        digits=4,
         sources=_REC,
         description="Recorded people of a hybrid crowd who left their tracks because the robot came near.",
     ),
@@ -498,13 +494,10 @@ _ENTRIES: tuple[Metric, ...] = (
         description="Mean over the people who left their tracks of the distance they walked from there "
         "(plus the straight distance left) minus their recorded path from there; NaN with nobody.",
     ),
-    Metric(
+    _count(
         name="people_walked_into_robot",
         label="collisions people walked into",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
+        digits=4,
         sources=_REC,
         description="Contacts with a person that began with the person closing in on the robot faster than "
         "the robot on the person (their velocities along the line between them).",
@@ -541,13 +534,9 @@ _ENTRIES: tuple[Metric, ...] = (
         sources=_HUMANS,
         description="Times a human's centre came within its radius (0.2 m) of a wall, or a wall stopped its move.",
     ),
-    Metric(
+    _count(
         name="humans_hr_collisions",
         label="human-robot collisions per episode",
-        unit="",
-        better="lower",
-        kind="int",
-        count=True,
         digits=3,
         sources=_HUMANS,
         description="Times a human came within the robot collision distance (0.4 m) of a robot.",
