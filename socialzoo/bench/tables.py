@@ -336,7 +336,7 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with tmp.open("w", newline="") as f:
+        with tmp.open("w", encoding="utf-8", newline="") as f:
             f.write(text)
         os.replace(tmp, path)
     finally:
