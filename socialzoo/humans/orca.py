@@ -207,27 +207,20 @@ def _wall_lines(  # type: ignore[no-untyped-def]
     # The legs of the velocity obstacle: tangents from the agent to the discs at the ends. Seen
     # obliquely, both legs come from the nearer end ("same"). Directions of the ends' edges:
     # first end along u (its neighbour edge, the wall walked back, along -u), second end along -u.
-    same = False
-    if s < 0.0 and dist_line <= radius2:
-        same = True
-        c1x, c1y, c2x, c2y = r1x, r1y, r1x, r1y
-        dir1x, dir1y, dir2x, dir2y = ux, uy, ux, uy
-        left_nx, left_ny = -ux, -uy
-        leg = math.sqrt(dist1 - radius2)
-        lgx = (r1x * leg - r1y * radius) / dist1
-        lgy = (r1x * radius + r1y * leg) / dist1
-        rgx = (r1x * leg + r1y * radius) / dist1
-        rgy = (-r1x * radius + r1y * leg) / dist1
-    elif s > 1.0 and dist_line <= radius2:
-        same = True
-        c1x, c1y, c2x, c2y = r2x, r2y, r2x, r2y
-        dir1x, dir1y, dir2x, dir2y = -ux, -uy, -ux, -uy
-        left_nx, left_ny = ux, uy
-        leg = math.sqrt(dist2 - radius2)
-        lgx = (r2x * leg - r2y * radius) / dist2
-        lgy = (r2x * radius + r2y * leg) / dist2
-        rgx = (r2x * leg + r2y * radius) / dist2
-        rgy = (-r2x * radius + r2y * leg) / dist2
+    same = (s < 0.0 or s > 1.0) and dist_line <= radius2
+    if same:
+        # The nearer end: the first (its edge along u) or the second (along -u); -1.0 * u is -u exactly.
+        sign = 1.0 if s < 0.0 else -1.0
+        ex, ey, dist = (r1x, r1y, dist1) if s < 0.0 else (r2x, r2y, dist2)
+        c1x, c1y, c2x, c2y = ex, ey, ex, ey
+        dir1x, dir1y = sign * ux, sign * uy
+        dir2x, dir2y = dir1x, dir1y
+        left_nx, left_ny = -dir1x, -dir1y
+        leg = math.sqrt(dist - radius2)
+        lgx = (ex * leg - ey * radius) / dist
+        lgy = (ex * radius + ey * leg) / dist
+        rgx = (ex * leg + ey * radius) / dist
+        rgy = (-ex * radius + ey * leg) / dist
     else:
         c1x, c1y, c2x, c2y = r1x, r1y, r2x, r2y
         dir1x, dir1y, dir2x, dir2y = ux, uy, -ux, -uy
@@ -255,21 +248,16 @@ def _wall_lines(  # type: ignore[no-untyped-def]
     t_left = (vx - lcx) * lgx + (vy - lcy) * lgy
     t_right = (vx - rcx) * rgx + (vy - rcy) * rgy
     grow = radius * inv_tau
-    if (t < 0.0 and t_left < 0.0) or (same and t_left < 0.0 and t_right < 0.0):
-        # Closest to the cut-off disc of the first end.
-        wx, wy = vx - lcx, vy - lcy
+    first = (t < 0.0 and t_left < 0.0) or (same and t_left < 0.0 and t_right < 0.0)
+    if first or (t > 1.0 and t_right < 0.0):
+        # Closest to the cut-off disc of the first end (else of the second).
+        ex, ey, kx, ky = (lcx, lcy, c1x, c1y) if first else (rcx, rcy, c2x, c2y)
+        wx, wy = vx - ex, vy - ey
         norm = math.sqrt(wx * wx + wy * wy)
         if norm <= 0.0:
-            wx, wy, norm = -c1x, -c1y, math.sqrt(c1x * c1x + c1y * c1y)
+            wx, wy, norm = -kx, -ky, math.sqrt(kx * kx + ky * ky)
         wx, wy = wx / norm, wy / norm
-        return _add_line(lines, count, lcx + grow * wx, lcy + grow * wy, wy, -wx)
-    if t > 1.0 and t_right < 0.0:
-        wx, wy = vx - rcx, vy - rcy
-        norm = math.sqrt(wx * wx + wy * wy)
-        if norm <= 0.0:
-            wx, wy, norm = -c2x, -c2y, math.sqrt(c2x * c2x + c2y * c2y)
-        wx, wy = wx / norm, wy / norm
-        return _add_line(lines, count, rcx + grow * wx, rcy + grow * wy, wy, -wx)
+        return _add_line(lines, count, ex + grow * wx, ey + grow * wy, wy, -wx)
     inf = math.inf
     d_cut = inf
     if not (t < 0.0 or t > 1.0 or same):
@@ -383,16 +371,11 @@ def _orca(  # type: ignore[no-untyped-def]
             for q in range(num_walls):
                 m = order[q]
                 w = wall_index[m]
-                if wall_flip[m]:
-                    count = _wall_lines(
-                        lines, count, px, py, vx, vy, r, inv_tau_obst,
-                        walls[w, 2], walls[w, 3], walls[w, 0], walls[w, 1],
-                    )  # fmt: skip
-                else:
-                    count = _wall_lines(
-                        lines, count, px, py, vx, vy, r, inv_tau_obst,
-                        walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3],
-                    )  # fmt: skip
+                e = 2 if wall_flip[m] else 0  # the column of the edge's first end
+                count = _wall_lines(
+                    lines, count, px, py, vx, vy, r, inv_tau_obst,
+                    walls[w, e], walls[w, e + 1], walls[w, 2 - e], walls[w, 3 - e],
+                )  # fmt: skip
             num_obstacle = count
             # Agent lines: each agent takes half of the change of relative velocity that gets it
             # out of the velocity obstacle (truncated at time_horizon; within one step when the
