@@ -73,17 +73,6 @@ def _point_at(path: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
     return path[k] + leg * min((s - arc[k]) / length, 1.0), leg / length
 
 
-def _crossing(path: np.ndarray, centre: np.ndarray, normal: np.ndarray) -> float:
-    """Distance along the path to where it first crosses the line through centre with the given
-    normal (NaN: it never does)."""
-    side = (path - centre) @ normal
-    arc = _arc_lengths(path)
-    for k in range(len(path) - 1):
-        if side[k] * side[k + 1] <= 0.0 and side[k] != side[k + 1]:
-            return float(arc[k] + (arc[k + 1] - arc[k]) * side[k] / (side[k] - side[k + 1]))
-    return math.nan
-
-
 @dataclass(frozen=True)
 class Door:
     """A map's door as the families use it: a frame at its centre and the room behind it.
@@ -151,6 +140,24 @@ def _sides(m: Map, door: Door) -> tuple[np.ndarray, np.ndarray]:
     poses = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)[:, :2]
     depth = door.frame(poses)[:, 1]
     return poses[depth < 0.0], poses[depth > 0.0]
+
+
+def _through_door(
+    m: Map, door: Door, start: np.ndarray, goal: np.ndarray, who: str
+) -> tuple[np.ndarray, float]:
+    """(the robot's route from start to goal, the distance along it to where it first crosses the
+    door's line), m.
+
+    Raises:
+        ValueError: the route does not pass the door.
+    """
+    path = planned_route(m, start, goal, f"{m.where}, family {who!r}")
+    side = (path - door.centre) @ door.inward
+    arc = _arc_lengths(path)
+    for k in range(len(path) - 1):
+        if side[k] * side[k + 1] <= 0.0 and side[k] != side[k + 1]:
+            return path, float(arc[k] + (arc[k + 1] - arc[k]) * side[k] / (side[k] - side[k + 1]))
+    raise ValueError(f"{m.where}: family {who!r}: the robot's route does not pass the door")
 
 
 def _pick(rng: np.random.Generator, points: np.ndarray, keep: np.ndarray, what: str, m: Map) -> np.ndarray:
@@ -337,10 +344,7 @@ class EnteringRoom(SuiteFamily):
         direct = _direct(m, door, outside, np.broadcast_to(robot_goal, outside.shape), self.name)
         near = (out_dist >= 3.0) & (out_dist <= 9.0)
         robot_start = _pick(rng, outside, near & direct, "robot's start outside", m)
-        path = planned_route(m, robot_start, robot_goal, f"{m.where}, family {self.name!r}")
-        s_door = _crossing(path, door.centre, door.inward)
-        if math.isnan(s_door):
-            raise ValueError(f"{m.where}: family {self.name!r}: the robot's route does not pass the door")
+        path, s_door = _through_door(m, door, robot_start, robot_goal, self.name)
         cruise, lag = nominal_timing()
         speed = _speeds(rng, 1)
         lo, hi, deep = door.inside
@@ -439,10 +443,7 @@ class ExitingRoom(SuiteFamily):
         out_dist = np.linalg.norm(outside - door.centre, axis=1)
         direct = _direct(m, door, np.broadcast_to(robot_start, outside.shape), outside, self.name)
         robot_goal = _pick(rng, outside, (out_dist >= 3.0) & direct, "robot's goal outside", m)
-        path = planned_route(m, robot_start, robot_goal, f"{m.where}, family {self.name!r}")
-        s_door = _crossing(path, door.centre, door.inward)
-        if math.isnan(s_door):
-            raise ValueError(f"{m.where}: family {self.name!r}: the robot's route does not pass the door")
+        _, s_door = _through_door(m, door, robot_start, robot_goal, self.name)
         cruise, lag = nominal_timing()
         t_door = s_door / cruise + ROBOT_LAG
         corridor = door.frame(outside)

@@ -174,11 +174,12 @@ def corridor(m: Map) -> Corridor:
     )
 
 
-def _hallway_robot(c: Corridor, m: Map, family: str) -> tuple[np.ndarray, np.ndarray]:
-    """The hallway families' robot: from ROOM_MARGIN before the corridor to ROOM_MARGIN past it."""
-    if min(c.back, c.ahead) < ROOM_MARGIN + 0.5:
+def _hallway_robot(c: Corridor, m: Map, family: str, room: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """The hallway families' robot: from ROOM_MARGIN before the corridor to ROOM_MARGIN past it, with
+    `room` m more at both ends."""
+    if min(c.back, c.ahead) < ROOM_MARGIN + room:
         raise ValueError(
-            f"{m.where}: {family} needs {ROOM_MARGIN + 0.5} m of room at both ends of its corridor"
+            f"{m.where}: {family} needs {ROOM_MARGIN + room} m of room at both ends of its corridor"
         )
     return c.at(-ROOM_MARGIN), c.at(c.length + ROOM_MARGIN)
 
@@ -310,11 +311,7 @@ class DownPath(SuiteFamily):
         start in the corridor's far half, the others 2.3-4.8 m ahead of the robot (more with
         three), spread along their lane."""
         c = corridor(m)
-        start, goal = _hallway_robot(c, m, self.name)
-        if min(c.back, c.ahead) < ROOM_MARGIN + 3.0:
-            raise ValueError(
-                f"{m.where}: {self.name} needs {ROOM_MARGIN + 3.0} m of room at both ends of its corridor"
-            )
+        start, goal = _hallway_robot(c, m, self.name, room=3.0)
         n = int(rng.integers(2, 4, endpoint=True))
         oncoming = np.concatenate(([True, False], rng.random(n - 2) < 0.5))
         lane = rng.choice((-1.0, 1.0))  # the side of the robot's line its way's walkers keep
@@ -488,7 +485,7 @@ class IntersectionWait(SuiteFamily):
         after reaching its stop (the script's `wait`)."""
         _, lay, _ = _signaller(self, m, rng, (4.0, 6.0))
         wait = rng.uniform(2.0, 4.0, size=1)
-        return _scripted(lay, {"wait": wait, "gesture": np.array([WAIT])})
+        return dataclasses.replace(lay, script={"wait": wait, "gesture": np.array([WAIT])})
 
 
 class IntersectionProceed(SuiteFamily):
@@ -506,19 +503,9 @@ class IntersectionProceed(SuiteFamily):
         x, lay, _ = _signaller(self, m, rng, (5.0, 7.0))
         line = x.centre + (x.cross_half_width + GATE_PAST) * x.u
         gate = np.array([[*line, *x.u]])
-        return _scripted(lay, {"release": np.array([30.0]), "gate": gate, "gesture": np.array([PROCEED])})
-
-
-def _scripted(lay: Layout, script: dict[str, np.ndarray]) -> Layout:
-    return Layout(
-        lay.robot_start,
-        lay.robot_goal,
-        lay.human_start,
-        lay.human_goal,
-        lay.human_speed,
-        human_stop=lay.human_stop,
-        script=script,
-    )
+        return dataclasses.replace(
+            lay, script={"release": np.array([30.0]), "gate": gate, "gesture": np.array([PROCEED])}
+        )
 
 
 class NarrowDoorway(SuiteFamily):
