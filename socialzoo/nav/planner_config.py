@@ -82,8 +82,7 @@ class LocalPlannerConfig:
 
     def __post_init__(self) -> None:
         nonnegative = {"obstacle_margin", "progress_weight", "free_path_weight", "escape_slack", "near_range"}
-        nonnegative |= {"human_lookahead"}
-        nonnegative |= {"turn_in_place_max_speed", "turn_in_place_angle_deg"}
+        nonnegative |= {"human_lookahead", "turn_in_place_max_speed", "turn_in_place_angle_deg"}
         check_fields(self, nonnegative=nonnegative, signed=("curvature_min", "curvature_max"))
         if self.curvature_min >= self.curvature_max:
             raise ValueError(
@@ -97,21 +96,15 @@ class LocalPlannerConfig:
                 f"curvature_max - curvature_min ({self.curvature_max - self.curvature_min!r})"
             )
         check_number("LocalPlannerConfig", "turn_in_place_angle_deg", self.turn_in_place_angle_deg, high=180)
-        if self.min_wall_distance > self.wall_distance:
-            raise ValueError(
-                f"LocalPlannerConfig.min_wall_distance ({self.min_wall_distance!r}) exceeds "
-                f"robot_radius + obstacle_margin ({self.wall_distance!r})"
-            )
-        if self.min_human_distance > self.human_distance:
-            raise ValueError(
-                f"LocalPlannerConfig.min_human_distance ({self.min_human_distance!r}) exceeds "
-                f"robot_radius + obstacle_margin + human_radius ({self.human_distance!r})"
-            )
-        if self.near_sample_spacing > self.sample_spacing:
-            raise ValueError(
-                f"LocalPlannerConfig.near_sample_spacing ({self.near_sample_spacing!r}) exceeds "
-                f"sample_spacing ({self.sample_spacing!r})"
-            )
+        for name, most, what in (
+            ("min_wall_distance", self.wall_distance, "robot_radius + obstacle_margin"),
+            ("min_human_distance", self.human_distance, "robot_radius + obstacle_margin + human_radius"),
+            ("near_sample_spacing", self.sample_spacing, "sample_spacing"),
+        ):
+            if getattr(self, name) > most:
+                raise ValueError(
+                    f"LocalPlannerConfig.{name} ({getattr(self, name)!r}) exceeds {what} ({most!r})"
+                )
 
     @property
     def curvatures(self) -> np.ndarray:

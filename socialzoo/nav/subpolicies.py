@@ -227,10 +227,7 @@ def subpolicy_targets(
     if not social.any():
         return carrot, speeds[action], weights[action]
     pos = robot_pose[:, :2]
-    if human_pos.shape[1]:
-        human = human_pos[np.arange(n), np.maximum(target_human, 0)]
-    else:
-        human = pos
+    human = human_pos[np.arange(n), np.maximum(target_human, 0)] if human_pos.shape[1] else pos
     to_human = human - pos
     dist = np.sqrt(to_human[:, 0] ** 2 + to_human[:, 1] ** 2)
     unit = to_human / np.maximum(dist, 1e-9)[:, None]
