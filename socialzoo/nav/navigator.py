@@ -204,8 +204,7 @@ def track(
     Returns:
         (carrot (..., 2) world frame m, distance (...,) m).
     """
-    out, dist, _ = _track_where(pos, paths, lengths, radius, max_skip, tolerance, sight)
-    return out, dist
+    return _track_where(pos, paths, lengths, radius, max_skip, tolerance, sight)[:2]
 
 
 def _track_where(
@@ -547,13 +546,7 @@ class Navigator:
         if stray.any():
             rows, robots = np.nonzero(stray)
             pos = robot_pos[rows, robots]
-            try:
-                paths, lengths = self._plan(pos, self.goals[rows, robots])
-                paths, lengths = self._keep_avoiding(rows, robots, pos, paths, lengths)
-            except ValueError as err:  # NoPathError: keep the old plans, try again next step
-                logger.debug("replanning %d robots failed: %s", len(rows), err)
-            else:
-                plans.assign((rows, robots), paths, lengths)
+            if self._replan(rows, robots, pos):
                 new, _, new_left = _track_where(
                     pos, plans.paths[rows, robots], plans.lengths[rows, robots], *options, self.sight
                 )
@@ -588,18 +581,20 @@ class Navigator:
                     state.avoid_edge_at(nodes, edges, int(rows[k]), int(robots[k]), pos[k])
         if ended.any():
             rows, robots = np.nonzero(ended)
-            self._replan_avoiding(rows, robots, robot_pos[rows, robots])
+            self._replan(rows, robots, robot_pos[rows, robots])
             self.rerouted[rows, robots] = True
 
-    def _replan_avoiding(self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray) -> None:
-        """New plans for robots whose back-off ended (avoiding their avoided edges, if any)."""
+    def _replan(self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray) -> bool:
+        """New plans for robots at pos (M, 2) (avoiding their avoided edges, if any); False where
+        none is found (NoPathError: the old plans are kept, tried again next step)."""
         try:
             paths, lengths = self._plan(pos, self.goals[rows, robots])
-        except ValueError as err:  # NoPathError: keep the old plans
-            logger.debug("replanning %d recovering robots failed: %s", len(rows), err)
-            return
-        paths, lengths = self._keep_avoiding(rows, robots, pos, paths, lengths)
+            paths, lengths = self._keep_avoiding(rows, robots, pos, paths, lengths)
+        except ValueError as err:
+            logger.debug("replanning %d robots failed: %s", len(rows), err)
+            return False
         self.plans.assign((rows, robots), paths, lengths)
+        return True
 
     def _keep_avoiding(
         self, rows: np.ndarray, robots: np.ndarray, pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray
