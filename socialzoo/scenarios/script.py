@@ -43,6 +43,7 @@ SLOW_DISTANCE = 1.0
 STOP_RADIUS = 0.15
 ARRIVE_RADIUS = 0.5
 _ROBOT = ("escort", "escort_kind", "band")
+_FIELDS = (*_PERSON, *_ROBOT, "doors")
 
 
 def _array(value: Any, dtype: type, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -167,16 +168,13 @@ class Script:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Script):
             return NotImplemented
-        return all(
-            np.array_equal(getattr(self, k), getattr(other, k), equal_nan=True)
-            for k in (*_PERSON, *_ROBOT, "doors")
-        )
+        return all(np.array_equal(getattr(self, k), getattr(other, k), equal_nan=True) for k in _FIELDS)
 
     __hash__ = None  # type: ignore[assignment]
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready lists; JSON has no inf or NaN, so they are the strings "inf" and "nan"."""
-        arrays = {k: getattr(self, k) for k in (*_PERSON, *_ROBOT, "doors")}
+        arrays = {k: getattr(self, k) for k in _FIELDS}
         return {k: a.tolist() if a.dtype.kind in "ib" else _floats(a) for k, a in arrays.items()}
 
     @classmethod
@@ -186,11 +184,10 @@ class Script:
         Raises:
             ValueError: not an object, a missing or unknown key, or a value of the wrong shape.
         """
-        keys = (*_PERSON, *_ROBOT, "doors")
-        if not isinstance(data, dict) or set(data) != set(keys):
+        if not isinstance(data, dict) or set(data) != set(_FIELDS):
             got = sorted(data) if isinstance(data, dict) else type(data).__name__
-            raise ValueError(f"script must be an object with keys {sorted(keys)}, got {got}")
-        return cls(**{k: _unfloats(data[k]) for k in keys})
+            raise ValueError(f"script must be an object with keys {sorted(_FIELDS)}, got {got}")
+        return cls(**{k: _unfloats(data[k]) for k in _FIELDS})
 
 
 def _floats(a: np.ndarray) -> Any:
