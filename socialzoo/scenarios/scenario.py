@@ -226,10 +226,8 @@ class Scenario:
         return (
             same_arrays
             and (self.map_name, self.seed, self.family) == (other.map_name, other.seed, other.family)
-            and (self.script is None) == (other.script is None)
-            and (self.script is None or self.script == other.script)
-            and (self.recorded is None) == (other.recorded is None)
-            and (self.recorded is None or self.recorded == other.recorded)
+            and self.script == other.script  # None equals only None: Script's __eq__ declines other types
+            and self.recorded == other.recorded
             and len(self.human_routes) == len(other.human_routes)
             and all(_same(a, b) for a, b in zip(self.human_routes, other.human_routes, strict=True))
         )
