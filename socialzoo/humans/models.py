@@ -92,6 +92,12 @@ class PeoplePart:
         return self.reacts_as or self.model
 
 
+def _model_of(name: str) -> tuple[str, str | None]:
+    """(the model, the preset or None) a spec's model name stands for (aliases and presets resolved)."""
+    name = ALIASES.get(name.strip().lower(), name.strip().lower())
+    return (PRESETS[name]["model"], name) if name in PRESETS else (name, None)
+
+
 def parse_people(spec: str) -> tuple[PeoplePart, ...]:
     """The parts of a people spec.
 
@@ -126,9 +132,7 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
                 f"people spec {spec!r}: the share of {name!r} must be in (0, 1], got {share!r}"
             )
         model, sep, path = name.partition(":")
-        model = ALIASES.get(model.strip().lower(), model.strip().lower())
-        preset = model if model in PRESETS else None
-        model = PRESETS[model]["model"] if preset else model
+        model, preset = _model_of(model)
         if model not in MODEL_IDS:
             raise PeopleSpecError(
                 f"people spec {spec!r}: unknown model {name!r}; known: sf (social_force), orca, groups, "
@@ -137,9 +141,7 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
         reacts_as = None
         if model == "hybrid":
             inner, _, path = path.partition(":")
-            reacts_as = ALIASES.get(inner.strip().lower(), inner.strip().lower())
-            preset = reacts_as if reacts_as in PRESETS else None
-            reacts_as = PRESETS[reacts_as]["model"] if preset else reacts_as
+            reacts_as, preset = _model_of(inner)
             if reacts_as not in REACTING_MODELS:
                 raise PeopleSpecError(
                     f"people spec {spec!r}: a hybrid person reacts as one of {REACTING_MODELS} "
