@@ -117,10 +117,7 @@ def near_sight_lines(
     """
     m = len(p0)
     ends = np.concatenate((p0, p1))
-    if field is None:
-        end_dist = walls.nearest(ends)[1]
-    else:
-        end_dist = field.lookup(ends) - lookup_slack(field)
+    end_dist = walls.nearest(ends)[1] if field is None else field.lookup(ends) - lookup_slack(field)
     wall = np.empty(m, dtype=np.intp)
     clearance = np.empty(m)
     t = walls.fine
