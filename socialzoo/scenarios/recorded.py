@@ -88,8 +88,7 @@ def eligible_tracks(recording: Recording) -> np.ndarray:
     """Indices of the tracks a robot may take the place of: at least MIN_DURATION s and
     MIN_DISTANCE m from entry to exit, and nobody within START_CLEARANCE of the entry when the
     person enters (the robot would start inside a walking companion)."""
-    first = np.array([t.first_frame for t in recording.tracks])
-    last = np.array([t.last_frame for t in recording.tracks])
+    first, last = recording.spans.T
     keep = []
     for k, t in enumerate(recording.tracks):
         if (len(t.positions) - 1) * recording.dt < MIN_DURATION:
@@ -266,8 +265,7 @@ class RecordedScene(ScenarioFamily):
     def max_people(self) -> int:
         """The most person slots of any episode of the scene (pack_slots)."""
         rec = self.recording
-        first = np.array([t.first_frame for t in rec.tracks])
-        last = np.array([t.last_frame for t in rec.tracks])
+        first, last = rec.spans.T
         most = 0
         for k in eligible_tracks(rec).tolist():
             end = min(
