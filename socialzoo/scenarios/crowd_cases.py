@@ -163,11 +163,9 @@ def crowd_case_arrays(
     positions = np.empty((num_robots + n, 2))
     goals = np.empty((num_robots + n, 2))
     radii = np.full(num_robots + n, config.human_radius)
-    positions[:num_robots], goals[:num_robots], radii[:num_robots] = (
-        robot_starts[:, :2],
-        robot_goals[:, :2],
-        config.robot_radius,
-    )
+    positions[:num_robots] = robot_starts[:, :2]
+    goals[:num_robots] = robot_goals[:, :2]
+    radii[:num_robots] = config.robot_radius
     square = config.layout == "square_crossing"
     person, at = num_robots, used
     while True:
@@ -328,24 +326,18 @@ def _draw_people(  # type: ignore[no-untyped-def]
                 return i, begin
             sign = -1.0 if u[at] > 0.5 else 1.0
             at += 1
-            while True:
-                if at + 2 > size:
-                    return i, begin
-                x = u[at] * width * 0.5 * sign
-                y = (u[at + 1] - 0.5) * width
-                at += 2
-                if _clear(x, y, positions, radii, i, own, gap):
-                    break
-            positions[i, 0], positions[i, 1] = x, y
-            while True:
-                if at + 2 > size:
-                    return i, begin
-                x = u[at] * width * 0.5 * -sign
-                y = (u[at + 1] - 0.5) * width
-                at += 2
-                if _clear(x, y, goals, radii, i, own, gap):
-                    break
-            goals[i, 0], goals[i, 1] = x, y
+            # The start on one half of the square, then the goal on the other.
+            for k in range(2):
+                side, out = (sign, positions) if k == 0 else (-sign, goals)
+                while True:
+                    if at + 2 > size:
+                        return i, begin
+                    x = u[at] * width * 0.5 * side
+                    y = (u[at + 1] - 0.5) * width
+                    at += 2
+                    if _clear(x, y, out, radii, i, own, gap):
+                        break
+                out[i, 0], out[i, 1] = x, y
         else:
             while True:
                 if at + 3 > size:
