@@ -5,6 +5,7 @@ feasible-route statistics (`socialzoo map check`; the picture is socialzoo.rende
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -155,10 +156,8 @@ def check_map(
     else:
         edge_clear = np.full(len(edges), CLEARANCE_CAP)
     components = len(np.unique(graph_components(len(nodes), edges))) if ok_edges or len(nodes) else 0
-    repairs: dict[str, int] = {}
-    for r in (m.provenance or {}).get("repairs", []):
-        kind = str(r.get("kind", "?")) if isinstance(r, dict) else "?"
-        repairs[kind] = repairs.get(kind, 0) + 1
+    entries = (m.provenance or {}).get("repairs", [])
+    repairs = Counter(str(r.get("kind", "?")) if isinstance(r, dict) else "?" for r in entries)
     return MapCheck(
         problems=problems,
         node_clearance=node_clear,
@@ -168,7 +167,7 @@ def check_map(
         tight_edges=tuple(int(k) for k in np.flatnonzero(edge_clear < wall_distance)),
         routes=None if problems else route_stats(m, max_route_length),
         wall_distance=wall_distance,
-        repairs=repairs,
+        repairs=dict(repairs),
         max_humans=max_humans_for(m, DEFAULT_SCENARIO.min_humans, DEFAULT_SCENARIO.max_humans),
         walkable="n/a" if m.walkable_area is None else f"{m.walkable_area:.0f} m^2",
     )
