@@ -167,7 +167,7 @@ def people_scenario(
 ) -> Scenario:
     """A scenario of recorded people, one person slot per track of `recorded`: each slot spawns at
     its first recorded position, its route is its people's route points one after another
-    (route_frames), its speed its first person's mean recorded speed (the world takes each later
+    (RecordedPeople.slot_routes), its speed its first person's mean recorded speed (the world takes each later
     person's own when it enters: socialzoo.env.replay)."""
     spawn, routes = [], []
     for track, frames in zip(recorded.tracks, recorded.slot_routes, strict=True):

@@ -29,14 +29,9 @@ def runs(track: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def route_frames(track: np.ndarray) -> np.ndarray:
-    """The frames of the route points of everyone in a slot, one person after another: each
-    person's first frame, every ROUTE_STRIDE frames on, and its last (track: (T, 2), NaN absent)."""
-    return slot_route(runs(track))
-
-
 def slot_route(slot_runs: list[tuple[int, int]]) -> np.ndarray:
-    """route_frames of a slot from its runs (runs)."""
+    """The frames of the route points of everyone in a slot, from its runs (runs), one person after
+    another: each person's first frame, every ROUTE_STRIDE frames on, and its last."""
     return np.concatenate([run_route(a, b) for a, b in slot_runs]).astype(np.int64)
 
 
@@ -70,7 +65,7 @@ class Occupants:
 
     Attributes:
         entry, exit: each person's first and last recorded frame.
-        first, last: the indices of its first and last point in its slot's route (route_frames).
+        first, last: the indices of its first and last point in its slot's route (slot_route).
         speed: its mean recorded speed (at least MIN_SPEED), m/s.
     """
 
@@ -171,12 +166,12 @@ class RecordedPeople:
 
     @cached_property
     def slot_routes(self) -> tuple[np.ndarray, ...]:
-        """Each slot's route frames (route_frames), unpadded."""
+        """Each slot's route frames (slot_route), unpadded."""
         return tuple(slot_route(slot) for slot in self.slot_runs)
 
     @cached_property
     def route_frames(self) -> np.ndarray:
-        """(S, L) the frames of each slot's route points (route_frames), padded by repeating its last."""
+        """(S, L) the frames of each slot's route points (slot_route), padded by repeating its last."""
         frames = self.slot_routes
         width = max((len(f) for f in frames), default=1)
         out = np.zeros((len(frames), width), dtype=np.int64)
