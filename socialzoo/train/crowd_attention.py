@@ -16,7 +16,6 @@ socialzoo.agents.crowd_policy runs the same network in numpy from the exported w
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import torch
 from gymnasium import spaces
@@ -115,11 +114,3 @@ class CrowdAttentionExtractor(BaseFeaturesExtractor):
     def forward(self, observations: torch.Tensor) -> torch.Tensor:
         """Features of a batch of flat observations."""
         return self.net(observations)
-
-
-def attention_state(net: CrowdAttention) -> dict[str, Any]:
-    """The network's weights as numpy arrays by name, and its shape, for the numpy policy."""
-    weights = {
-        f"attention.{k}": v.detach().cpu().numpy().astype("float32") for k, v in net.state_dict().items()
-    }
-    return weights

@@ -147,21 +147,3 @@ def machine_facts() -> dict[str, Any]:
         "numpy": numpy_facts(),
         "env": {name: os.environ[name] for name in THREAD_VARIABLES if name in os.environ},
     }
-
-
-def kernel_key(facts: dict[str, Any]) -> tuple[Any, ...]:
-    """What decides which floating-point kernels a torch training runs: CPU model and flags, torch's
-    version, build and thread count, the thread and ISA variables. Two runs with equal keys ran the
-    same kernels; a run record without facts (older ones) has the key ()."""
-    if not facts:
-        return ()
-    torch = facts.get("torch") or {}
-    cpu = facts.get("cpu") or {}
-    return (
-        cpu.get("model"),
-        tuple(cpu.get("kernel_flags") or ()),
-        torch.get("version"),
-        tuple(sorted((torch.get("build") or {}).items())),
-        torch.get("threads"),
-        tuple(sorted((facts.get("env") or {}).items())),
-    )

@@ -10,8 +10,7 @@ actor's mode).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -197,14 +196,3 @@ def policy_header(algo: str, data: Any, run_record: dict[str, Any], **training: 
             **training,
         },
     }
-
-
-@contextmanager
-def torch_threads(threads: int) -> Iterator[None]:
-    """Run the block with `threads` torch CPU threads, then restore the previous number."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(threads)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)

@@ -8,7 +8,7 @@ torch = pytest.importorskip("torch")
 
 from socialzoo.agents.crowd_policy import CrowdAttentionPolicy  # noqa: E402
 from socialzoo.env.policy_file import PolicyFileError  # noqa: E402
-from socialzoo.train.crowd_attention import CrowdAttention, attention_state  # noqa: E402
+from socialzoo.train.crowd_attention import CrowdAttention  # noqa: E402
 
 SLOTS = 4
 
@@ -53,7 +53,7 @@ def test_the_numpy_policy_computes_the_torch_network(action, signals):
     robot_dim = 9 if signals else 6
     head = torch.nn.Sequential(torch.nn.Linear(robot_dim + 8, 7), torch.nn.Tanh())
     out = torch.nn.Linear(7, 81 if action == "discrete" else 2)
-    tensors = attention_state(net)
+    tensors = {f"attention.{k}": v.detach().numpy() for k, v in net.state_dict().items()}
     tensors.update({f"policy.{k}": v.detach().numpy() for k, v in head.state_dict().items()})
     tensors.update({f"action.{k}": v.detach().numpy() for k, v in out.state_dict().items()})
     observation = {"slots": SLOTS, **({"signals": True} if signals else {})}  # no key: the old layout
@@ -82,7 +82,7 @@ def test_the_signal_features_reach_the_network_and_a_layout_mismatch_is_refused(
     before, after = net(torch.as_tensor(obs)).detach().numpy(), net(torch.as_tensor(changed)).detach().numpy()
     # Both reach the pooled crowd feature (the door through every person's pair with the robot).
     assert not np.allclose(before[0, 9:], after[0, 9:]) and not np.allclose(before[1, 9:], after[1, 9:])
-    tensors = attention_state(net)
+    tensors = {f"attention.{k}": v.detach().numpy() for k, v in net.state_dict().items()}
     tensors.update(
         {"action.weight": np.zeros((81, 9 + 8), np.float32), "action.bias": np.zeros(81, np.float32)}
     )

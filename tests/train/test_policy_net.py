@@ -21,7 +21,6 @@ from socialzoo.train.policy_net import (  # noqa: E402
     normalizer_stats,
     policy_network,
     to_mlp_policy,
-    torch_threads,
 )
 
 OBSERVATION = {"layout": "paper", "num_human_slots": 25}
@@ -56,7 +55,15 @@ def test_normaliser_floors_the_variance_of_constant_entries():
     assert mean[0] == 4.5 and var[0] == pytest.approx(8.25) and var[1] == var[2] > 0
 
 
-@torch_threads(1)
+@pytest.fixture
+def one_torch_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+@pytest.mark.usefixtures("one_torch_thread")
 def test_discriminator_separates_ref_from_random_transitions(small_demos):
     from socialzoo.train.gail import discriminator_loss, discriminator_step
 
