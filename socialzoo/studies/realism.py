@@ -41,6 +41,7 @@ import numpy as np
 
 from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.tables import markdown_table as table_lines
+from socialzoo.bench.tables import write_csv
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
 
 # The world step, s, and world steps per recorded frame (0.4 s at 2.5 Hz).
@@ -156,8 +157,8 @@ class SceneTracks:
             name=recording.name,
             dt=float(recording.dt),
             grid=recording.grid(),
-            first=np.array([t.first_frame for t in recording.tracks], dtype=np.int64),
-            last=np.array([t.last_frame for t in recording.tracks], dtype=np.int64),
+            first=recording.spans[:, 0],
+            last=recording.spans[:, 1],
         )
 
     def mean_speed(self, k: int) -> float:
@@ -194,16 +195,12 @@ class Cases:
 def window_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases:
     """Every 4.8 s window (module docstring) of `persons` (default all tracks)."""
     persons = np.arange(len(scene.first)) if persons is None else np.asarray(persons)
-    who, start = [], []
-    for k in persons.tolist():
-        t0 = np.arange(scene.first[k] + OBS_FRAMES - 1, scene.last[k] - PRED_FRAMES + 1)
-        who.append(np.full(len(t0), k))
-        start.append(t0)
-    person = np.concatenate(who) if who else np.zeros(0, dtype=np.int64)
-    begin = np.concatenate(start) if start else np.zeros(0, dtype=np.int64)
-    return Cases(
-        person.astype(np.int64), begin.astype(np.int64), np.full(len(person), PRED_FRAMES), "windows"
-    )
+    starts = [
+        np.arange(scene.first[k] + OBS_FRAMES - 1, scene.last[k] - PRED_FRAMES + 1) for k in persons.tolist()
+    ]
+    person = np.repeat(persons, [len(t0) for t0 in starts]).astype(np.int64)
+    begin = np.concatenate([np.zeros(0, dtype=np.int64), *starts]).astype(np.int64)
+    return Cases(person, begin, np.full(len(person), PRED_FRAMES), "windows")
 
 
 def track_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases:
@@ -686,13 +683,12 @@ def markdown_table(results: Sequence[SceneResult]) -> str:
 
 def write_tables(results: Sequence[SceneResult], out: Path) -> None:
     """out/realism.csv and out/realism.md (a table per scene and the overall one)."""
-    import csv
-
-    with (out / "realism.csv").open("w", newline="") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(["scene", "model", *(n for n, _, _ in METRICS)])
-        for r in results:
-            writer.writerow([r.scene, r.model, *(r.metrics[n] for n, _, _ in METRICS)])
+    write_csv(
+        ({"scene": r.scene, "model": r.model, **r.metrics} for r in results),
+        out / "realism.csv",
+        ["scene", "model", *(n for n, _, _ in METRICS)],
+        blank_nan=False,
+    )
     parts = ["# Realism against the recorded people\n"]
     for scene in dict.fromkeys(r.scene for r in results):
         parts.append(f"\n## {scene}\n\n" + markdown_table([r for r in results if r.scene == scene]))
