@@ -12,7 +12,6 @@ synthesis time and the program's agreement with the demonstrator.
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import logging
 import math
@@ -26,6 +25,8 @@ import numpy as np
 from socialzoo.agents.demonstrations import load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
+from socialzoo.core.validation import check_int
+from socialzoo.data.fetch import sha256
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
 from socialzoo.train.run_dir import read_record
@@ -90,9 +91,7 @@ class PipsArgs(SearchOptions):
             "heldout_steps": 0,
         }
         for name, low in ints.items():
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise ValueError(f"PipsArgs.{name} must be an int >= {low}, got {value!r}")
+            check_int("PipsArgs", name, getattr(self, name), low=low)
         if self.max_pred_size > 3:
             raise ValueError(f"PipsArgs.max_pred_size must be at most 3, got {self.max_pred_size!r}")
         for name in ("complexity_cost", "z3_timeout_s", "time_budget_s"):
@@ -401,14 +400,6 @@ def agreement(program: Program, obs: np.ndarray, action: np.ndarray) -> dict[str
     }
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with path.open("rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def sidecar_path(program_path: str | Path) -> Path:
     """The sidecar of a program file: NAME.json -> NAME.train.json."""
     path = Path(program_path)
@@ -493,7 +484,7 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
         "z3_version": z3.get_version_string(),
         "demonstrations": {
             "path": str(demos),
-            "sha256": _sha256(demos) if demos.exists() else None,
+            "sha256": sha256(demos) if demos.exists() else None,
             "config_hash": meta.get("config_hash"),
             "test_set": meta.get("test_set"),
             "steps_in_file": len(act_all),

@@ -27,14 +27,11 @@ class SingleFit:
         score: (F,) weighted correct count of the best comparison of each feature.
         cmp: (F,) "<=" or ">=".
         threshold: (F,) the threshold, midway between the two example values it separates.
-        gap: (F,) width of the interval of thresholds with that score, over the feature's spread
-            (a margin: larger is safer).
     """
 
     score: np.ndarray
     cmp: np.ndarray
     threshold: np.ndarray
-    gap: np.ndarray
 
 
 def fit_single(values: np.ndarray, label: np.ndarray, weight: np.ndarray) -> SingleFit:
@@ -63,12 +60,10 @@ def fit_single(values: np.ndarray, label: np.ndarray, weight: np.ndarray) -> Sin
     use_le = best_le >= best_ge
     k = np.where(use_le, k_le, k_ge)
     lo, hi = v[rows, k], v[rows, k + 1] if n > 1 else v[rows, k]
-    spread = np.maximum(v[:, -1] - v[:, 0], 1e-12)
     return SingleFit(
         score=np.where(use_le, best_le, best_ge),
         cmp=np.where(use_le, "<=", ">="),
         threshold=0.5 * (lo + hi),
-        gap=(hi - lo) / spread,
     )
 
 
