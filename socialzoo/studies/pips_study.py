@@ -77,14 +77,6 @@ def find_study_programs(root: str | Path) -> dict[tuple[int, int], Path]:
     return found
 
 
-def program_record(program: str | Path) -> dict[str, Any]:
-    """The synthesis record beside a program file (NAME.train.json), flat; {} when there is none
-    (socialzoo.train.pips.read_program_record)."""
-    from socialzoo.train.pips import read_program_record
-
-    return read_program_record(program)
-
-
 def _comparisons(program: str | Path) -> int:
     """Comparisons in a program's guards (its size)."""
     from socialzoo.agents.pips import load_program, predicate_size
@@ -149,6 +141,7 @@ def run_pips_study(
     """
     from socialzoo.bench.demonstrations import DEMO_BASE_SEED
     from socialzoo.scenarios.scenario import TEST_SETS
+    from socialzoo.train.pips import read_program_record
 
     if not programs:
         raise ValueError("run_pips_study: no programs to evaluate")
@@ -180,7 +173,7 @@ def run_pips_study(
     rows = []
     for (steps, window), spec in specs.items():
         entry = by_spec[spec]
-        record = program_record(programs[(steps, window)])
+        record = read_program_record(programs[(steps, window)])
         demos = record.get("demonstrations", {})
         held = (record.get("agreement") or {}).get("held_out") or {}
         rows.append(

@@ -11,11 +11,11 @@ from socialzoo.scenarios.scenario import TestSet, get_test_set
 from socialzoo.studies.pips_study import (
     CSV_COLUMNS,
     find_study_programs,
-    program_record,
     run_pips_study,
     study_program_file,
 )
 from socialzoo.studies.pips_study_training import PipsStudyConfig, train_pips_study
+from socialzoo.train.pips import read_program_record
 
 pytest.importorskip("z3")
 
@@ -49,7 +49,7 @@ def test_study_synthesises_each_cell_once_and_tabulates_it(rooms_demos, rooms_ma
     assert files == {(s, w): study_program_file(tmp_path / "runs", s, w) for s in (300, 900) for w in (10, 0)}
     assert find_study_programs(tmp_path / "runs") == files
     for (steps, window), path in files.items():
-        record = program_record(path)
+        record = read_program_record(path)
         assert record["seed"] == 3 and record["args"]["max_depth"] == 0
         assert (record["args"]["steps"], record["args"]["window"]) == (steps, window)
         assert record["demonstrations"]["steps_spanned"] == steps
