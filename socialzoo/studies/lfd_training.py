@@ -81,20 +81,14 @@ class LfdTrainConfig:
             "steps": size,
             "seed": self.seed,
             "out": lfd_run_dir(self.root, algo, size),
+            "progress": self.progress,
         }
-        base["progress"] = self.progress
         return cls(**{**base, **extra})
 
 
 def record_lfd_demos(path: str | Path, episodes: int = LFD_DEMO_EPISODES, progress: bool = True) -> Path:
     """Record Ref's demonstrations on gdc1 into `path` (resumes a partial recording)."""
-    try:  # the recorder is moving from socialzoo.agents to socialzoo.bench
-        from socialzoo.bench.demonstrations import (  # type: ignore[import-not-found]
-            DemoConfig,
-            record_demonstrations,
-        )
-    except ImportError:
-        from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
+    from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
 
     config = DemoConfig(episodes=episodes, chunk_episodes=episodes, batch_size=64)
     return record_demonstrations(path, config, progress=progress)
