@@ -45,20 +45,11 @@ from socialzoo.agents import make_policy
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_policy import LearnedHumanPolicy
-from socialzoo.env.policy_file import current_env_version
 from socialzoo.env.torchrl_env import HUMAN, ROBOT, SocialNavTorchEnv
 from socialzoo.train.marl_args import Algo, CollectorKind
-from socialzoo.train.policy_net import mlp
+from socialzoo.train.policy_net import linear_layers, mlp
 
 logger = logging.getLogger(__name__)
-
-# The env id recorded in policy files: the multi-agent env at the benchmark's env version.
-MULTI_AGENT_ENV_ID = "socialzoo/MultiAgent-v{version}"
-
-
-def env_id() -> str:
-    """The env id and version recorded in the policy files the multi-agent trainers write."""
-    return MULTI_AGENT_ENV_ID.format(version=current_env_version())
 
 
 # ---------------------------------------------------------------------------- envs
@@ -377,14 +368,6 @@ def make_collector(
 
 
 # ---------------------------------------------------------------------------- export
-def _linear_layers(net: nn.Sequential) -> list[tuple[np.ndarray, np.ndarray]]:
-    return [
-        (m.weight.detach().cpu().numpy().copy(), m.bias.detach().cpu().numpy().copy())
-        for m in net
-        if isinstance(m, nn.Linear)
-    ]
-
-
 def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanPolicy:
     """The numpy policy of a human actor: deterministic tanh of its mean, same normalisation,
     mirror-symmetric when the actor is."""
@@ -393,7 +376,7 @@ def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanP
     inner = mean.net if symmetric else mean
     norm, body = inner[0], inner[1]
     return LearnedHumanPolicy(
-        _linear_layers(body),
+        linear_layers(body),
         "tanh",
         norm.loc.cpu().numpy(),
         norm.scale.cpu().numpy(),
@@ -412,7 +395,7 @@ def export_robot(actor: ProbabilisticActor, name: str, config: EnvConfig) -> Mlp
     """
     net = actor.module[0].module
     norm, body = net[0], net[1]
-    layers = _linear_layers(body)
+    layers = linear_layers(body)
     w, b = layers[0]
     loc = norm.loc.cpu().numpy()
     scale = norm.scale.cpu().numpy()

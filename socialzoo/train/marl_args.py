@@ -18,6 +18,8 @@ COLLECTORS: tuple[str, ...] = ("single", "multiprocess", "ray")
 # The final policy files of a run: the learned humans', and the robots' when they learn too.
 HUMANS_POLICY_FILE = "humans.safetensors"
 ROBOT_POLICY_FILE = "robot.safetensors"
+# The env id recorded in policy files: the multi-agent env at the benchmark's env version.
+MULTI_AGENT_ENV_ID = "socialzoo/MultiAgent-v{version}"
 
 # The learned humans' reward weights for training (socialzoo.env.human_agents.HumanRewardConfig):
 # a metre of progress is worth 1 (about 0.02 per step at walking speed), a waypoint 0.5; walking off
@@ -45,6 +47,13 @@ INIT_STD = 0.3
 # at the preferred speed they could only ask for less than it, and walked 2-4% slower than the
 # social-force humans, who ask for exactly it.
 ACTION_SCALE = 1.0
+
+
+def env_id() -> str:
+    """The env id and version recorded in the policy files the multi-agent trainers write."""
+    from socialzoo.env.policy_file import current_env_version
+
+    return MULTI_AGENT_ENV_ID.format(version=current_env_version())
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -27,7 +27,6 @@ from socialzoo.train.mappo import (
     PPOSettings,
     critic,
     env_factories,
-    env_id,
     export_humans,
     export_robot,
     human_actor,
@@ -37,7 +36,7 @@ from socialzoo.train.mappo import (
     robot_actor,
     train_loop,
 )
-from socialzoo.train.marl_args import HUMANS_POLICY_FILE, ROBOT_POLICY_FILE
+from socialzoo.train.marl_args import HUMANS_POLICY_FILE, ROBOT_POLICY_FILE, env_id
 from socialzoo.train.run_dir import checkpoint_steps
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 

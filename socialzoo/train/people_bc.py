@@ -461,6 +461,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     import torch
 
     from socialzoo.data.fetch import load_scene
+    from socialzoo.train.marl_args import env_id
     from socialzoo.train.policy_net import mlp
 
     args: Args = run.args
@@ -571,23 +572,13 @@ def see_robots_as_people(net: Any, num_neighbours: int) -> None:
 
 def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> LearnedHumanPolicy:
     """The trained network as a learned human policy."""
-    import torch
-
     from socialzoo.env.human_policy import LearnedHumanPolicy
+    from socialzoo.train.policy_net import linear_layers
 
-    linear = [m for m in net if isinstance(m, torch.nn.Linear)]
-    weights = [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy()) for m in linear]
     return LearnedHumanPolicy(
-        weights, "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale,
+        linear_layers(net), "tanh", loc, scale, args.num_neighbours, args.action_frame, args.action_scale,
         learned_forces=args.learned_forces, relaxation_time=args.relaxation_time,
     )  # fmt: skip
-
-
-def env_id() -> str:
-    """The env id recorded in the policy file (that of the multi-agent trainers' learned humans)."""
-    from socialzoo.train.mappo import env_id as multi_agent_env_id
-
-    return multi_agent_env_id()
 
 
 def training_record(

@@ -151,17 +151,18 @@ def to_mlp_policy(name: str, net: nn.Sequential, observation: Any, activation: A
     """The numpy MlpPolicy computing the same logits as the trained `net` (see `policy_network`,
     built with `activation`), registered as `name` ("bc", "gail"), for the env's ObservationConfig
     `observation` (or its plain dict)."""
-    normalizer = None
-    weights = []
-    for module in net:
-        if isinstance(module, Normalize):
-            normalizer = module.to_numpy()
-        elif isinstance(module, nn.Linear):
-            weights.append(
-                (module.weight.detach().cpu().numpy().copy(), module.bias.detach().cpu().numpy().copy())
-            )
+    normalizer = next((m.to_numpy() for m in net if isinstance(m, Normalize)), None)
     obs = dataclasses.asdict(observation) if dataclasses.is_dataclass(observation) else dict(observation)
-    return MlpPolicy(name, weights, activation, obs, normalizer)
+    return MlpPolicy(name, linear_layers(net), activation, obs, normalizer)
+
+
+def linear_layers(net: nn.Sequential) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(W, b) of the network's Linear layers, in order, as numpy copies."""
+    return [
+        (m.weight.detach().cpu().numpy().copy(), m.bias.detach().cpu().numpy().copy())
+        for m in net
+        if isinstance(m, nn.Linear)
+    ]
 
 
 def benchmark_env_id(map_name: str) -> str:

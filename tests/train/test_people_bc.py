@@ -11,6 +11,7 @@ from socialzoo.data.tracks import Recording, Track
 from socialzoo.env.human_agents import action_velocities, human_observation_size
 from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.train import people_bc
+from socialzoo.train.marl_args import env_id
 from socialzoo.train.people_bc import (
     ACTION_LIMIT,
     Args,
@@ -239,7 +240,7 @@ def test_closed_loop_ade_of_a_policy_that_stops(tmp_path):
     size = human_observation_size(2)
     weights = [(np.zeros((8, size)), np.zeros(8)), (np.zeros((2, 8)), np.zeros(2))]
     path = LearnedHumanPolicy(weights, "tanh", np.zeros(size), np.ones(size), 2, "human", 4.0).save(
-        tmp_path / "stop.safetensors", people_bc.env_id(), {}
+        tmp_path / "stop.safetensors", env_id(), {}
     )
     cases = np.array([[0, 1], [2, 5], [3, 20]])
     ade = people_bc.closed_loop_ade(rec, cases, path, horizon=6)
