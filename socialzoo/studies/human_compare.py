@@ -20,7 +20,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
-from socialzoo.bench.tables import write_csv, write_text_atomic
+from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario import TestSet, validation_set
 from socialzoo.studies.crowd_matrix import run_trials
@@ -209,18 +209,15 @@ def write_comparison_md(
     for map_name in dict.fromkeys(r["map"] for r in rows):
         by = {r["population"]: r for r in rows if r["map"] == map_name}
         present = [p for p in POPULATIONS if p in by]
-        lines += [
-            f"## {map_name}",
-            "",
-            "| metric | " + " | ".join(f"{p.replace('_', '-')} ({by[p]['trials']})" for p in present) + " |",
-            "|---|" + "---|" * len(present),
+        header = ["metric", *(f"{p.replace('_', '-')} ({by[p]['trials']})" for p in present)]
+        cells = [
+            [HUMAN_METRIC_LABELS[key][0], *(_cell(by[p], key, HUMAN_METRIC_LABELS[key][1]) for p in present)]
+            for key in HUMAN_METRIC_KEYS
         ]
-        for key in HUMAN_METRIC_KEYS:
-            label, digits = HUMAN_METRIC_LABELS[key]
-            lines.append(f"| {label} | " + " | ".join(_cell(by[p], key, digits) for p in present) + " |")
-        for key, label, digits in ROBOT_METRICS:
-            lines.append(f"| {label} | " + " | ".join(f"{by[p][key]:.{digits}f}" for p in present) + " |")
-        lines.append("")
+        cells += [
+            [label, *(f"{by[p][key]:.{digits}f}" for p in present)] for key, label, digits in ROBOT_METRICS
+        ]
+        lines += [f"## {map_name}", "", *markdown_table(header, cells), ""]
         if map_name in targets:
             t = targets[map_name]
             lines.append(
