@@ -11,10 +11,9 @@ TanhNormal the trainer samples from, before the tanh). A mirror-symmetric policy
 averages the network over the situation and its mirror image (socialzoo.env.human_agents.
 human_mirror_signs), as it was trained.
 
-Human policies are named by a spec: "social_force" (the scripted model, no learned humans) or
-"learned:PATH" (a file written by `socialzoo train humans` or `socialzoo train cotrain`).
-It lives in env so that the env can drive learned people itself (EnvConfig.people, the "learned"
-model of socialzoo.humans.models).
+People specs name a learned human policy as "learned:PATH" (the "learned" model of
+socialzoo.humans.models; a file written by `socialzoo train humans` or `socialzoo train cotrain`).
+It lives in env so that the env can drive learned people itself (EnvConfig.people).
 """
 
 from __future__ import annotations
@@ -37,9 +36,6 @@ from socialzoo.env.policy_file import (
     save_policy_file,
 )
 
-SOCIAL_FORCE = "social_force"
-LEARNED = "learned"
-HUMAN_POLICY_NAMES = (SOCIAL_FORCE, LEARNED)
 # The "policy" entry of a learned human policy file's header.
 POLICY_NAME = "learned_humans"
 ACTION_FRAMES = ("world", "human")
@@ -74,7 +70,7 @@ class LearnedHumanPolicy:
             size or not finite and positive, an unknown activation or frame, a scale not > 0.
     """
 
-    name = LEARNED
+    name = "learned"
 
     def __init__(
         self,
@@ -132,9 +128,13 @@ class LearnedHumanPolicy:
         self.mirror_symmetric = bool(mirror_symmetric)
         self.learned_forces = bool(learned_forces)
         if relaxation_time is not None and not (
-            isinstance(relaxation_time, (int, float)) and math.isfinite(relaxation_time) and relaxation_time > 0
+            isinstance(relaxation_time, (int, float))
+            and math.isfinite(relaxation_time)
+            and relaxation_time > 0
         ):
-            raise ValueError(f"LearnedHumanPolicy: relaxation_time must be a number > 0, got {relaxation_time!r}")
+            raise ValueError(
+                f"LearnedHumanPolicy: relaxation_time must be a number > 0, got {relaxation_time!r}"
+            )
         self.relaxation_time = None if relaxation_time is None else float(relaxation_time)
         self._mirror = human_mirror_signs(self.num_neighbours)
         self.header = dict(header or {})
@@ -258,47 +258,6 @@ class LearnedHumanPolicy:
         policy.path = Path(path)
         policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
         return policy
-
-
-def split_human_spec(spec: str) -> tuple[str, str | None]:
-    """("learned", "runs/h/humans.safetensors") for "learned:runs/h/humans.safetensors";
-    ("social_force", None) for "social_force".
-
-    Raises:
-        ValueError: an unknown name (listing the known ones), "learned" without a path, or a
-            path after "social_force".
-    """
-    if not isinstance(spec, str) or not spec:
-        raise ValueError(f"a human policy is named by a non-empty string, got {spec!r}")
-    name, sep, path = spec.partition(":")
-    key = name.strip().lower()
-    if key not in HUMAN_POLICY_NAMES:
-        raise ValueError(
-            f"unknown human policy {name!r}; known: {', '.join(HUMAN_POLICY_NAMES)} (learned:PATH)"
-        )
-    if key == SOCIAL_FORCE and sep:
-        raise ValueError(f"human policy {spec!r}: social_force takes no file")
-    if key == LEARNED and not path:
-        raise ValueError(f"human policy {spec!r}: name the file as learned:PATH")
-    return key, (path or None)
-
-
-def check_human_spec(spec: str) -> str:
-    """Validate a human policy spec (the file must exist); returns it.
-
-    Raises:
-        ValueError: as split_human_spec, or a path that is not a file.
-    """
-    _, path = split_human_spec(spec)
-    if path is not None and not Path(path).is_file():
-        raise ValueError(f"human policy {spec!r}: no such file {path!r}")
-    return spec
-
-
-def make_human_policy(spec: str) -> LearnedHumanPolicy | None:
-    """The human policy named by `spec`: None for "social_force", the loaded file for "learned:PATH"."""
-    _, path = split_human_spec(spec)
-    return None if path is None else LearnedHumanPolicy.load(path)
 
 
 def _flag(header: dict[str, Any], section: str, name: str, default: bool = False) -> bool:

@@ -8,12 +8,7 @@ import pytest
 
 from socialzoo.agents import SHIPPED_DIR
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.human_policy import (
-    LearnedHumanPolicy,
-    check_human_spec,
-    make_human_policy,
-    split_human_spec,
-)
+from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.env.policy_file import PolicyFileError, save_policy_file
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.nav.subpolicies import HALT
@@ -80,12 +75,6 @@ def test_bad_files_and_specs_are_named(walker_policy_path, tmp_path):
         LearnedHumanPolicy.load(odd)
     with pytest.raises(ValueError, match="act: observations of shape"):
         policy.act(np.zeros((2, policy.input_size + 1)))
-    assert split_human_spec("social_force") == ("social_force", None)
-    assert make_human_policy("social_force") is None
-    with pytest.raises(ValueError, match="no such file"):
-        check_human_spec(f"learned:{tmp_path / 'none.safetensors'}")
-    with pytest.raises(ValueError, match="social_force takes no file"):
-        split_human_spec("social_force:x")
 
 
 def test_mixed_population_learned_slots_follow_the_policy_the_rest_their_social_force(write_walker, tmp_path):
@@ -171,7 +160,6 @@ def test_the_file_says_whether_forces_act_on_its_people_and_the_world_takes_it(w
         LearnedHumanPolicy.load(bad)
 
 
-
 def test_the_file_says_its_peoples_relaxation_time_and_the_world_takes_it(walker_policy_path, tmp_path):
     from socialzoo.core.config import HumanConfig, WorldConfig
     from socialzoo.core.walls import WallIndex
@@ -189,7 +177,9 @@ def test_the_file_says_its_peoples_relaxation_time_and_the_world_takes_it(walker
 
     def human_of(spec: str) -> HumanConfig:
         world = WorldConfig(human=HumanConfig(relaxation_time=0.7))
-        return BatchedCore(1, 1, 2, world, WallIndex(np.zeros((0, 4))), people=PeopleConfig(models=spec)).world.human
+        return BatchedCore(
+            1, 1, 2, world, WallIndex(np.zeros((0, 4))), people=PeopleConfig(models=spec)
+        ).world.human
 
     taken = human_of(f"learned:{path}")
     assert taken.learned_tau == 2.0 and taken.relaxation_time == 0.7  # the other people's stays
