@@ -91,18 +91,6 @@ REFERENCE_IDS: dict[str, dict] = {
 }
 
 
-def reference_env_id(map_name: str) -> str:
-    """The reference id of a benchmark map ("gdc1" -> socialzoo/ActionSelectionReference-v2).
-
-    Raises:
-        ValueError: a map without a reference id.
-    """
-    for env_id, kwargs in REFERENCE_IDS.items():
-        if kwargs["map"] == map_name:
-            return env_id
-    raise ValueError(f"no reference id for map {map_name!r}; maps with one: gdc1, ghc3")
-
-
 def _family_id(name: str) -> str:
     return "socialzoo/" + "".join(part.capitalize() for part in name.split("_")) + f"-v{ENV_VERSION}"
 

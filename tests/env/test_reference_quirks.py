@@ -16,7 +16,7 @@ from socialzoo.env.config import EnvConfig
 from socialzoo.env.observation import SOCIALGYM1_NUM_SLOTS, socialgym1_observation
 from socialzoo.env.outcome import robot_outcome
 from socialzoo.env.quirks import REFERENCE_QUIRKS, ReferenceQuirks
-from socialzoo.env.registration import BENCHMARK_IDS, REFERENCE_IDS, reference_env_id
+from socialzoo.env.registration import BENCHMARK_IDS, REFERENCE_IDS
 from socialzoo.env.reward import compute_reward, progress
 from socialzoo.env.world import StepEvents
 
@@ -143,7 +143,9 @@ def test_human_theta_index():
 
 
 def test_human_theta_index_in_the_env():
-    env = gym.make(reference_env_id("gdc1"), observation={"layout": "socialgym1"}, max_steps=20).unwrapped
+    env = gym.make(
+        "socialzoo/ActionSelectionReference-v2", observation={"layout": "socialgym1"}, max_steps=20
+    ).unwrapped
     n = SOCIALGYM1_NUM_SLOTS
     for seed in range(20):  # the first scenario whose robot sees two people or more
         obs, _ = env.reset(seed=seed)
@@ -182,14 +184,11 @@ def test_reference_ids():
         "socialzoo/ActionSelectionReference-v2",
         "socialzoo/ActionSelectionTransferReference-v2",
     }
-    for env_id, kwargs in REFERENCE_IDS.items():
+    for env_id in REFERENCE_IDS:
         assert env_id in gym.registry
         assert gym.registry[env_id].kwargs["quirks"] == dataclasses.asdict(REFERENCE_QUIRKS)
-        assert reference_env_id(kwargs["map"]) == env_id
     for env_id in BENCHMARK_IDS:
         assert "quirks" not in gym.registry[env_id].kwargs
-    with pytest.raises(ValueError, match="no reference id"):
-        reference_env_id("open_room")
 
 
 def test_reference_id_same_world_other_reward():
