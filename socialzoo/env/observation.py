@@ -37,6 +37,7 @@ import numpy as np
 from gymnasium import spaces
 
 from socialzoo.core.jit import kernel
+from socialzoo.core.validation import check_int
 
 ObservationLayout = Literal["paper", "socialgym1"]
 
@@ -97,9 +98,7 @@ class ObservationConfig:
             raise ValueError(
                 f"ObservationConfig.layout must be one of {get_args(ObservationLayout)}, got {self.layout!r}"
             )
-        slots = self.num_human_slots
-        if not isinstance(slots, int) or isinstance(slots, bool) or slots < 0:
-            raise ValueError(f"ObservationConfig.num_human_slots must be an int >= 0, got {slots!r}")
+        check_int("ObservationConfig", "num_human_slots", self.num_human_slots, low=0)
 
     @property
     def num_slots(self) -> int:
@@ -179,86 +178,16 @@ def _fill_robot_frame(robot_pose, robot_vel, points, human_pos, human_vel, visib
             slots[b, k, 3] = c * vy - s * vx
 
 
-def paper_observation(
-    robot_pose: np.ndarray,
-    robot_vel: np.ndarray,
-    goal: np.ndarray,
-    carrot: np.ndarray,
-    prev_action: np.ndarray,
-    human_pos: np.ndarray,
-    human_vel: np.ndarray,
-    visible: np.ndarray,
-    num_slots: int,
+def _paper(
+    points_r: np.ndarray, slots: np.ndarray, robot_vel: np.ndarray, prev_action: np.ndarray, num_slots: int
 ) -> np.ndarray:
-    """The paper's observation <p_g, p_l, v_r, H_r> (SPEC section 8), robot frame.
+    """The paper layout from the robot-frame goal and carrot (points_r) and the human slots.
 
     Layout (K = num_slots; the named pieces PAPER_* and SLOT_* of this module): [0:2] goal
     (x, y), m; [2:4] local target, m; [4:6] robot (v, omega), m/s and rad/s; [6] previous action
     index; then K slots [7 + 4i : 11 + 4i] of (x, y, vx, vy) of the i-th nearest visible human
     relative to the robot (module docstring).
-
-    Args:
-        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
-        robot_vel: (B, 2) v (m/s) and omega (rad/s).
-        goal: (B, 2) global goal, m, world frame.
-        carrot: (B, 2) local target on the global plan, m, world frame.
-        prev_action: (B,) int sub-policy index of the previous step (0 before the first).
-        human_pos: (B, H, 2) m, world frame.
-        human_vel: (B, H, 2) m/s, world frame.
-        visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
-        num_slots: K >= 0.
-
-    Returns:
-        (B, 7 + 4K) float32.
     """
-    cfg = ObservationConfig(num_human_slots=num_slots)
-    return build_observation(
-        cfg, robot_pose, robot_vel, goal, carrot, prev_action, human_pos, human_vel, visible
-    )
-
-
-def socialgym1_observation(
-    robot_pose: np.ndarray,
-    robot_vel: np.ndarray,
-    carrot: np.ndarray,
-    prev_action: np.ndarray,
-    human_pos: np.ndarray,
-    human_vel: np.ndarray,
-    visible: np.ndarray,
-    theta_index: bool = False,
-) -> np.ndarray:
-    """The reference code's 244-number observation, robot frame; arguments as in
-    `paper_observation` (robot_vel only gives the relative human velocities).
-
-    Layout: [3i : 3i + 3] for i < 40, human i's (x, y, theta); [120 + 3i : 123 + 3i] its
-    (vx, vy, omega); [240:243] local target (x, y, 0); [243] previous action index. theta and
-    omega are 0 (the reference stored a constant index in theta, SPEC section 11; `theta_index`
-    writes each filled slot's person index there: ReferenceQuirks.human_theta_index). Human
-    slots follow the module's conventions, the same values as the paper layout. The goal and the
-    robot's velocity are not part of this layout.
-
-    Returns:
-        (B, 244) float32.
-    """
-    cfg = ObservationConfig(layout="socialgym1")
-    return build_observation(
-        cfg,
-        robot_pose,
-        robot_vel,
-        carrot,
-        carrot,
-        prev_action,
-        human_pos,
-        human_vel,
-        visible,
-        theta_index=theta_index,
-    )
-
-
-def _paper(
-    points_r: np.ndarray, slots: np.ndarray, robot_vel: np.ndarray, prev_action: np.ndarray, num_slots: int
-) -> np.ndarray:
-    """The paper layout from the robot-frame goal and carrot (points_r) and the human slots."""
     out = np.zeros((len(points_r), PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
     out[:, PAPER_GOAL] = points_r[:, 0]
     out[:, PAPER_TARGET] = points_r[:, 1]
@@ -271,7 +200,15 @@ def _paper(
 def _socialgym1(
     points_r: np.ndarray, slots: np.ndarray, people: np.ndarray, prev_action: np.ndarray, theta_index: bool
 ) -> np.ndarray:
-    """The socialgym1 layout from the robot-frame carrot (points_r) and the human slots."""
+    """The reference code's 244 numbers from the robot-frame carrot (points_r) and the human slots.
+
+    Layout: [3i : 3i + 3] for i < 40, human i's (x, y, theta); [120 + 3i : 123 + 3i] its
+    (vx, vy, omega); [240:243] local target (x, y, 0); [243] previous action index. theta and
+    omega are 0 (the reference stored a constant index in theta, SPEC section 11; `theta_index`
+    writes each filled slot's person index there: ReferenceQuirks.human_theta_index). Human
+    slots follow the module's conventions, the same values as the paper layout. The goal and the
+    robot's velocity (but for the relative human velocities) are not part of this layout.
+    """
     n, k = SOCIALGYM1_NUM_SLOTS, slots.shape[1]
     out = np.zeros((len(points_r), SOCIALGYM1_SIZE), dtype=np.float32)
     out[:, 0 : 3 * k : 3] = slots[..., 0]
@@ -343,10 +280,22 @@ def build_observation(
     signals: Signals | None = None,
     theta_index: bool = False,
 ) -> np.ndarray:
-    """The observation of `cfg.layout`; arguments as in `paper_observation`. With `signals`, the
-    signal block follows (module docstring): each slot's person's gesture, then the nearest door.
-    `theta_index`: the socialgym1 layout's theta holds each person's index (the reference code's
-    quirk, socialzoo.env.quirks); the paper layout has no theta and ignores it.
+    """The observation of `cfg.layout` (laid out by `_paper`, `_socialgym1`), robot frame.
+
+    Args:
+        cfg: the layout and its human slots.
+        robot_pose: (B, 3) x, y (m), heading (rad), world frame.
+        robot_vel: (B, 2) v (m/s) and omega (rad/s).
+        goal: (B, 2) global goal, m, world frame (not in the socialgym1 layout).
+        carrot: (B, 2) local target on the global plan, m, world frame.
+        prev_action: (B,) int sub-policy index of the previous step (0 before the first).
+        human_pos: (B, H, 2) m, world frame.
+        human_vel: (B, H, 2) m/s, world frame.
+        visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
+        signals: the signal block that follows (module docstring): each slot's person's gesture,
+            then the nearest door.
+        theta_index: the socialgym1 layout's theta holds each person's index (the reference
+            code's quirk, socialzoo.env.quirks); the paper layout has no theta and ignores it.
 
     Returns:
         (B, observation_size(cfg, signals is not None)) float32.

@@ -34,10 +34,8 @@ from socialzoo.env.observation import (
     observation_space,
     paper_human_velocity,
     paper_num_slots,
-    paper_observation,
     paper_slot_seen,
     paper_slots,
-    socialgym1_observation,
 )
 from socialzoo.nav.visibility import visible_humans
 
@@ -97,7 +95,7 @@ def test_occluded_human_slot_is_zero():
     walls = WallIndex(np.array([[1.0, -1.0, 1.0, 1.0]]))
     s = scene((0.0, 0.0, 0.0), [[2.0, 0.0], [0.0, 3.0]], human_vel=[[1.0, 1.0], [0.5, 0.0]])
     s["visible"] = visible_humans(s["robot_pose"], s["human_pos"], np.ones((1, 2), bool), walls)
-    obs = paper_observation(**s, num_slots=3)
+    obs = build_observation(ObservationConfig(num_human_slots=3), **s)
     got = slots(obs, 3)
     np.testing.assert_allclose(got[0], [0.0, 3.0, 0.5, 0.0])
     assert np.all(got[1:] == 0.0)
@@ -106,30 +104,30 @@ def test_occluded_human_slot_is_zero():
 def test_slots_sorted_by_distance_and_extra_humans_dropped():
     humans = [[3.0, 0.0], [1.0, 0.0], [0.0, -2.0], [5.0, 0.0], [0.0, 4.0]]
     s = scene((0.0, 0.0, 0.0), humans)
-    got = slots(paper_observation(**s, num_slots=3), 3)
+    got = slots(build_observation(ObservationConfig(num_human_slots=3), **s), 3)
     np.testing.assert_allclose(got[:, :2], [[1.0, 0.0], [0.0, -2.0], [3.0, 0.0]])
     # More slots than humans: the tail is zero.
-    got = slots(paper_observation(**s, num_slots=7), 7)
+    got = slots(build_observation(ObservationConfig(num_human_slots=7), **s), 7)
     np.testing.assert_allclose(got[:5, :2], [[1, 0], [0, -2], [3, 0], [0, 4], [5, 0]])
     assert np.all(got[5:] == 0.0)
 
 
 def test_ties_keep_human_order():
     s = scene((0.0, 0.0, 0.0), [[0.0, 1.0], [1.0, 0.0], [0.0, -1.0]])
-    got = slots(paper_observation(**s, num_slots=3), 3)
+    got = slots(build_observation(ObservationConfig(num_human_slots=3), **s), 3)
     np.testing.assert_allclose(got[:, :2], [[0, 1], [1, 0], [0, -1]])
 
 
 def test_human_behind_robot_is_observed():
     s = scene((0.0, 0.0, 0.0), [[-1.5, 0.0]])
-    got = slots(paper_observation(**s, num_slots=2), 2)
+    got = slots(build_observation(ObservationConfig(num_human_slots=2), **s), 2)
     np.testing.assert_allclose(got[0, :2], [-1.5, 0.0])
 
 
 def test_invisible_and_absent_humans_take_no_slot():
     s = scene((0.0, 0.0, 0.0), [[0.5, 0.0], [2.0, 0.0]])
     s["visible"] = np.array([[False, True]])
-    got = slots(paper_observation(**s, num_slots=2), 2)
+    got = slots(build_observation(ObservationConfig(num_human_slots=2), **s), 2)
     np.testing.assert_allclose(got, [[2.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
 
 
@@ -143,7 +141,7 @@ def test_rotated_robot_frame_by_hand():
         goal=(1.0, 5.0),
         carrot=(0.0, 2.0),
     )
-    obs = paper_observation(**s, num_slots=2)[0]
+    obs = build_observation(ObservationConfig(num_human_slots=2), **s)[0]
     np.testing.assert_allclose(obs[0:2], [3.0, 0.0], atol=1e-6)  # goal straight ahead
     np.testing.assert_allclose(obs[2:4], [0.0, 1.0], atol=1e-6)  # west is on the left
     np.testing.assert_allclose(obs[4:7], [1.0, 0.3, 2.0], atol=1e-6)
@@ -163,7 +161,8 @@ def test_matches_to_frame_on_random_batch():
     hp, hv = rng.uniform(-10, 10, (b, h, 2)), rng.uniform(-1.5, 1.5, (b, h, 2))
     visible = rng.random((b, h)) < 0.7
     action = rng.integers(0, 4, b)
-    obs = paper_observation(pose, vel, goal, carrot, action, hp, hv, visible, k)
+    cfg = ObservationConfig(num_human_slots=k)
+    obs = build_observation(cfg, pose, vel, goal, carrot, action, hp, hv, visible)
     assert obs.shape == (b, 7 + 4 * k) and obs.dtype == np.float32
     for i in range(b):
         np.testing.assert_allclose(obs[i, 0:2], to_frame(goal[i], pose[i]), atol=1e-4)
@@ -180,7 +179,8 @@ def test_matches_to_frame_on_random_batch():
             j = seen[slot]
             np.testing.assert_allclose(got[:2], to_frame(hp[i, j], pose[i]), atol=1e-4)
             np.testing.assert_allclose(got[2:], rotate(hv[i, j] - robot_world_vel, -pose[i, 2]), atol=1e-4)
-        row = paper_observation(
+        row = build_observation(
+            cfg,
             pose[i : i + 1],
             vel[i : i + 1],
             goal[i : i + 1],
@@ -189,7 +189,6 @@ def test_matches_to_frame_on_random_batch():
             hp[i : i + 1],
             hv[i : i + 1],
             visible[i : i + 1],
-            k,
         )
         np.testing.assert_array_equal(row[0], obs[i])
 
@@ -202,15 +201,7 @@ def test_socialgym1_layout():
         robot_vel=(0.5, 0.2),
         carrot=(1.5, -0.5),
     )
-    obs = socialgym1_observation(
-        s["robot_pose"],
-        s["robot_vel"],
-        s["carrot"],
-        s["prev_action"],
-        s["human_pos"],
-        s["human_vel"],
-        s["visible"],
-    )
+    obs = build_observation(ObservationConfig(layout="socialgym1"), **s)
     assert obs.shape == (1, SOCIALGYM1_SIZE) == (1, 244) and obs.dtype == np.float32
     o = obs[0]
     assert np.all(o[2:120:3] == 0.0) and np.all(o[122:240:3] == 0.0)  # theta and omega
@@ -225,8 +216,16 @@ def test_socialgym1_keeps_forty_nearest():
     hp = rng.uniform(-20, 20, (1, 50, 2))
     visible = np.ones((1, 50), bool)
     zero2 = np.zeros((1, 2))
-    obs = socialgym1_observation(
-        np.zeros((1, 3)), zero2, zero2, np.zeros(1, int), hp, np.zeros((1, 50, 2)), visible
+    obs = build_observation(
+        ObservationConfig(layout="socialgym1"),
+        np.zeros((1, 3)),
+        zero2,
+        zero2,
+        zero2,
+        np.zeros(1, int),
+        hp,
+        np.zeros((1, 50, 2)),
+        visible,
     )
     dist = np.sort(np.linalg.norm(hp[0], axis=1))[:40]
     np.testing.assert_allclose(np.hypot(obs[0, 0:120:3], obs[0, 1:120:3]), dist, rtol=1e-5)
@@ -329,7 +328,7 @@ def test_paper_slots_read_an_observation():
     )
     s["visible"][0, 2] = False
     s["robot_vel"][:] = (0.8, 0.1)
-    obs = paper_observation(**s, num_slots=4)
+    obs = build_observation(ObservationConfig(num_human_slots=4), **s)
     view = paper_slots(obs)
     assert view.shape == (1, 4, 4) and np.shares_memory(view, obs)
     assert paper_num_slots(obs.shape[-1]) == 4

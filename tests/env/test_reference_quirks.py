@@ -13,7 +13,7 @@ import socialzoo  # noqa: F401  (registers the ids)
 from socialzoo.agents.mlp import MlpPolicy, ObservationNormalizer, evaluation_file, without_normalisation
 from socialzoo.core.state import WorldState
 from socialzoo.env.config import EnvConfig
-from socialzoo.env.observation import SOCIALGYM1_NUM_SLOTS, socialgym1_observation
+from socialzoo.env.observation import SOCIALGYM1_NUM_SLOTS, ObservationConfig, build_observation
 from socialzoo.env.outcome import robot_outcome
 from socialzoo.env.quirks import REFERENCE_QUIRKS, ReferenceQuirks
 from socialzoo.env.registration import BENCHMARK_IDS, REFERENCE_IDS
@@ -124,21 +124,23 @@ def test_reward_distance_plus_bonus():
 def test_human_theta_index():
     # Two people, the second nearer: slot 0 holds person 1, slot 1 person 0.
     args = (
+        ObservationConfig(layout="socialgym1"),
         np.array([[0.0, 0.0, 0.0]]),
         np.array([[0.0, 0.0]]),
+        np.array([[2.0, 0.0]]),
         np.array([[2.0, 0.0]]),
         np.array([0]),
         np.array([[[3.0, 0.0], [1.0, 1.0]]]),
         np.zeros((1, 2, 2)),
         np.array([[True, True]]),
     )
-    ours = socialgym1_observation(*args)
-    theirs = socialgym1_observation(*args, theta_index=True)
+    ours = build_observation(*args)
+    theirs = build_observation(*args, theta_index=True)
     assert ours[0, 2] == ours[0, 5] == 0.0
     assert (theirs[0, 2], theirs[0, 5]) == (1.0, 0.0)
     np.testing.assert_array_equal(np.delete(ours, [2, 5], axis=1), np.delete(theirs, [2, 5], axis=1))
     # An occluded person keeps an all-zero slot.
-    hidden = socialgym1_observation(*args[:-1], np.array([[False, True]]), theta_index=True)
+    hidden = build_observation(*args[:-1], np.array([[False, True]]), theta_index=True)
     assert hidden[0, 2] == 1.0 and not hidden[0, 3 : 3 * SOCIALGYM1_NUM_SLOTS].any()
 
 
