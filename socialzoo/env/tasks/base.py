@@ -132,8 +132,8 @@ class Task(ABC):
         return {}
 
     def robot_info(self, step: TaskStep, row: int, robot: int) -> dict[str, Any]:
-        """The per-step info dict of one robot: plain Python values under info_keys."""
-        return {key: plain(step.info[key][row, robot]) for key in self.info_keys}
+        """The per-step info dict of one robot: plain Python values (bool, int, float) under info_keys."""
+        return {key: np.asarray(step.info[key][row, robot]).item() for key in self.info_keys}
 
     def action_name(self, row: int = 0, robot: int = 0) -> str | None:
         """A name for the action robot `robot` of `row` took last (for infos and frames), or None."""
@@ -251,56 +251,39 @@ def fixed_cases(
     return split, indices
 
 
-def plain(value: Any) -> Any:
-    """A numpy scalar as the Python value of its kind (bool, int or float)."""
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer, int)):
-        return int(value)
-    return float(value)
-
-
-def discrete_action(value: Any, n: int, who: str) -> int:
-    """One index of Discrete(n) from an int-like value; anything else raises naming `who`."""
-    array = np.asarray(value)
-    ok = array.size == 1 and (
-        np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
-    )
-    if ok:
-        scalar = array.reshape(()).item()
-        ok = bool(np.isfinite(scalar)) and int(scalar) == scalar and 0 <= int(scalar) < n
-    if not ok:
-        raise ValueError(f"{who}: action must be one integer in 0..{n - 1}, got {value!r}")
-    return int(scalar)
-
-
-def box_action(value: Any, space: spaces.Box, who: str) -> np.ndarray:
-    """A float64 action of a Box space; anything else raises naming `who`."""
+def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
+    """`value` checked against one agent's `space`: one index of a Discrete(n) from an int-like
+    value, or a float64 action of a Box; anything else raises naming `who`."""
+    if isinstance(space, spaces.Discrete):
+        n = int(space.n)
+        array = np.asarray(value)
+        ok = array.size == 1 and (
+            np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
+        )
+        if ok:
+            scalar = array.reshape(()).item()
+            ok = bool(np.isfinite(scalar)) and int(scalar) == scalar and 0 <= int(scalar) < n
+        if not ok:
+            raise ValueError(f"{who}: action must be one integer in 0..{n - 1}, got {value!r}")
+        return int(scalar)
+    if not isinstance(space, spaces.Box):
+        raise TypeError(f"{who}: no action check for space {space}")
     try:
-        array = np.asarray(value, dtype=np.float64)
+        box = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        array = None
+        box = None
     if (
-        array is None
-        or array.shape != space.shape
-        or not np.isfinite(array).all()
-        or (array < space.low).any()
-        or (array > space.high).any()
+        box is None
+        or box.shape != space.shape
+        or not np.isfinite(box).all()
+        or (box < space.low).any()
+        or (box > space.high).any()
     ):
         raise ValueError(
             f"{who}: action must be {space.shape} finite numbers in [{space.low.min()}, {space.high.max()}], "
             f"got {value!r}"
         )
-    return array
-
-
-def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
-    """`value` checked against one agent's `space` (Discrete or Box), raising naming `who`."""
-    if isinstance(space, spaces.Discrete):
-        return discrete_action(value, int(space.n), who)
-    if isinstance(space, spaces.Box):
-        return box_action(value, space, who)
-    raise TypeError(f"{who}: no action check for space {space}")
+    return box
 
 
 def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who: str) -> np.ndarray:
