@@ -46,22 +46,17 @@ class JointState:
         humans: (B, H, 7) float32, HUMAN_FEATURES per person slot (zeros for an empty slot; with
             signals (B, H, 8), SIGNAL_HUMAN_FEATURES).
         mask: (B, H) bool, the slot holds a person.
-        buffer: the flat layout that robot and humans are views of, when built that way.
+        buffer: the flat layout that robot and humans are views of (`flat`).
     """
 
     robot: np.ndarray
     humans: np.ndarray
     mask: np.ndarray
-    buffer: np.ndarray | None = None
+    buffer: np.ndarray
 
     def flat(self) -> np.ndarray:
         """(B, robot + (features + 1) H) float32: robot, people row by row, then the mask as 0/1."""
-        if self.buffer is not None:
-            return self.buffer
-        b = self.robot.shape[0]
-        return np.concatenate(
-            (self.robot, self.humans.reshape(b, -1), self.mask.astype(np.float32)), axis=1
-        ).astype(np.float32, copy=False)
+        return self.buffer
 
     def as_dict(self) -> dict[str, np.ndarray]:
         """{"robot", "humans", "mask"}; the mask as int8 (0/1)."""

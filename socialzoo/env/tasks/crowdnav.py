@@ -193,7 +193,7 @@ class CrowdNavTask(Task):
             # Only the reset rows' robots see anything new.
             fresh = self._observe(rows)
             robots = core.robot_rows(rows)
-            self.observation.buffer[robots] = fresh.flat()  # type: ignore[index]
+            self.observation.buffer[robots] = fresh.buffer
             self.observation.mask[robots] = fresh.mask
 
     def case_splits(self) -> dict[str, int]:
@@ -410,9 +410,8 @@ class CrowdNavTask(Task):
             (core.carrot if rows is None else core.carrot[rows]) if guided else s.robot_goal[..., :2]
         ).reshape(b * r, 2)
         offset = goal - robot_pos
-        self.frame_angle[slice(None) if rows is None else core.robot_rows(rows)] = np.arctan2(
-            offset[:, 1], offset[:, 0]
-        )
+        angle = np.arctan2(offset[:, 1], offset[:, 0])
+        self.frame_angle[slice(None) if rows is None else core.robot_rows(rows)] = angle
         observation = joint_state(
             robot_pos=robot_pos,
             robot_goal=goal,
@@ -430,7 +429,7 @@ class CrowdNavTask(Task):
             left = core.route_left if rows is None else core.route_left[rows]
             observation.robot[:, 0] = left.reshape(b * r)
         if self.config.signals:
-            observation = self._with_signals(observation, robot_pos, offset, rows, observed)
+            observation = self._with_signals(observation, robot_pos, angle, rows, observed)
         return observation
 
     def _nearest_people(
@@ -456,12 +455,12 @@ class CrowdNavTask(Task):
         self,
         observation: JointState,
         robot_pos: np.ndarray,
-        goal_offset: np.ndarray,
+        angle: np.ndarray,
         rows: np.ndarray | None,
         observed: np.ndarray | None = None,
     ) -> JointState:
         """The joint state with each person slot's gesture and the nearest door, in the frame of
-        each robot (x towards the goal it sees; socialzoo.env.crowd_observation.with_signals)."""
+        each robot (x towards the goal it sees, at `angle`; socialzoo.env.crowd_observation.with_signals)."""
         core, script = self.core, self.core.script
         pick = slice(None) if rows is None else rows
         signal = np.zeros(observation.mask.shape)
@@ -472,7 +471,6 @@ class CrowdNavTask(Task):
         offset, closed = nearest_door(
             robot_pos, core.per_robot(script.doors[pick]), core.per_robot(script.closed[pick])
         )
-        angle = np.arctan2(goal_offset[:, 1], goal_offset[:, 0])
         c, s = np.cos(angle), np.sin(angle)
         door = np.stack(
             (c * offset[:, 0] + s * offset[:, 1], c * offset[:, 1] - s * offset[:, 0], closed), axis=-1
@@ -481,9 +479,12 @@ class CrowdNavTask(Task):
 
     def observations(self) -> Any:
         """(B, R, D) float32 flat joint states, or the dict layout of (B, R, ...) arrays."""
-        observation = self.observation
+        observation, b, r = self.observation, self.batch_size, self.num_robots
         assert observation is not None
-        return _per_robot(observation, self.config.observation, self.batch_size, self.num_robots)
+        if self.config.observation == "flat":
+            flat = observation.flat()
+            return flat.reshape(b, r, flat.shape[-1])
+        return {k: v.reshape((b, r) + v.shape[1:]) for k, v in observation.as_dict().items()}
 
     def episode_metrics(self, rows: np.ndarray, robot: int = 0) -> list[dict[str, Any]]:
         """The metrics of each robot's episode (socialzoo.env.crowd_outcome.CrowdNavMetrics): the
@@ -559,11 +560,3 @@ class CrowdNavTask(Task):
             human_radius=self.config.cases.human_radius,
             goal_radius=float(self.config.robot.radius),  # type: ignore[arg-type]
         )
-
-
-def _per_robot(observation: JointState, kind: str, b: int, r: int) -> Any:
-    """A JointState of B R robots as (B, R, ...) arrays (flat, or the dict layout)."""
-    if kind == "flat":
-        flat = observation.flat()
-        return flat.reshape(b, r, flat.shape[-1])
-    return {k: v.reshape((b, r) + v.shape[1:]) for k, v in observation.as_dict().items()}
