@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
-from socialzoo.core.validation import check_fields, check_number
+from socialzoo.core.validation import check_choice, check_fields, check_number
 
 Kinematics = Literal["differential", "holonomic", "unicycle"]
 KINEMATICS: tuple[str, ...] = get_args(Kinematics)
@@ -54,8 +54,7 @@ class RobotConfig:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        if self.kinematics not in KINEMATICS:
-            raise ValueError(f"RobotConfig.kinematics must be one of {KINEMATICS}, got {self.kinematics!r}")
+        check_choice("RobotConfig", "kinematics", self.kinematics, KINEMATICS)
         check_number("RobotConfig", "radius", self.radius, low=0, low_open=True, allow_none=True)
         check_number("RobotConfig", "max_rotation", self.max_rotation, low=0, low_open=True, high=math.pi)
 

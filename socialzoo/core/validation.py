@@ -1,4 +1,5 @@
-"""Checks of "a finite number in range" for config dataclasses and input files, with one wording.
+"""Checks of "a finite number in range" (or one of a few choices) for config dataclasses and input files,
+with one wording.
 
 Messages name the owner and the field and show the bad value, e.g.
 "ScenarioConfig.min_speed must be > 0.0, got 0.0" or "EnvConfig.max_steps must be an int >= 1, got 0".
@@ -110,6 +111,17 @@ def check_int(
     return check_number(
         owner, field, value, low=low, high=high, integer=True, allow_none=allow_none, error=error
     )
+
+
+def check_choice(owner: str, field: str, value: Any, choices: Collection[Any]) -> Any:
+    """Check that `value` is one of `choices`; returns it.
+
+    Raises:
+        ValueError: "owner.field must be one of choices, got value".
+    """
+    if value not in choices:
+        raise ValueError(f"{owner}.{field} must be one of {choices}, got {value!r}")
+    return value
 
 
 def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collection[str] = ()) -> None:

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import GroupConfig, HumanConfig, LaserConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig, observation_size
@@ -160,15 +160,8 @@ class EnvConfig:
             )
         check_number("EnvConfig", "goal_radius", self.goal_radius, low=0, low_open=True)
         check_number("EnvConfig", "human_action_scale", self.human_action_scale, low=0, low_open=True)
-        if self.robot_action not in get_args(RobotAction):
-            raise ValueError(
-                f"EnvConfig.robot_action must be one of {get_args(RobotAction)}, got {self.robot_action!r}"
-            )
-        if self.human_action_frame not in get_args(HumanActionFrame):
-            raise ValueError(
-                f"EnvConfig.human_action_frame must be one of {get_args(HumanActionFrame)}, "
-                f"got {self.human_action_frame!r}"
-            )
+        check_choice("EnvConfig", "robot_action", self.robot_action, get_args(RobotAction))
+        check_choice("EnvConfig", "human_action_frame", self.human_action_frame, get_args(HumanActionFrame))
         self._check_people()
         for name, cls in _NESTED.items():
             if not isinstance(getattr(self, name), cls):

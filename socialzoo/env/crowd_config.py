@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.env.config import family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
@@ -147,12 +147,8 @@ class CrowdNavConfig:
                 f"CrowdNavConfig.humans: the CrowdNav task's people walk by {CROWD_MODELS} (or a mix of them), "
                 f"got {self.humans!r}"
             )
-        if self.action not in CROWD_ACTIONS:
-            raise ValueError(f"CrowdNavConfig.action must be one of {CROWD_ACTIONS}, got {self.action!r}")
-        if self.observation not in OBSERVATION_KINDS:
-            raise ValueError(
-                f"CrowdNavConfig.observation must be one of {OBSERVATION_KINDS}, got {self.observation!r}"
-            )
+        check_choice("CrowdNavConfig", "action", self.action, CROWD_ACTIONS)
+        check_choice("CrowdNavConfig", "observation", self.observation, OBSERVATION_KINDS)
         check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
         check_int("CrowdNavConfig", "observed_people", self.observed_people, low=1, allow_none=True)
         check_int("CrowdNavConfig", "num_robots", self.num_robots, low=1)
@@ -164,10 +160,7 @@ class CrowdNavConfig:
             raise ValueError(f"CrowdNavConfig.map must be None or a map name or path, got {self.map!r}")
         check_int("CrowdNavConfig", "wall_rays", self.wall_rays, low=0)
         check_number("CrowdNavConfig", "wall_range", self.wall_range, low=0, low_open=True)
-        if self.action_frame not in ACTION_FRAMES:
-            raise ValueError(
-                f"CrowdNavConfig.action_frame must be one of {ACTION_FRAMES}, got {self.action_frame!r}"
-            )
+        check_choice("CrowdNavConfig", "action_frame", self.action_frame, ACTION_FRAMES)
         if not isinstance(self.signals, bool):
             raise ValueError(f"CrowdNavConfig.signals must be a bool, got {self.signals!r}")
 

@@ -37,7 +37,7 @@ import numpy as np
 from gymnasium import spaces
 
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_choice, check_int
 
 ObservationLayout = Literal["paper", "socialgym1"]
 
@@ -94,10 +94,7 @@ class ObservationConfig:
     num_human_slots: int = 25
 
     def __post_init__(self) -> None:
-        if self.layout not in get_args(ObservationLayout):
-            raise ValueError(
-                f"ObservationConfig.layout must be one of {get_args(ObservationLayout)}, got {self.layout!r}"
-            )
+        check_choice("ObservationConfig", "layout", self.layout, get_args(ObservationLayout))
         check_int("ObservationConfig", "num_human_slots", self.num_human_slots, low=0)
 
     @property
