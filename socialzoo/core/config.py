@@ -68,11 +68,6 @@ class RobotConfig:
         """Half the footprint's width, m."""
         return self.width / 2.0
 
-    @property
-    def velocity_is_world_vector(self) -> bool:
-        """True when the velocity state is a world-frame (vx, vy) (holonomic), not (v, omega)."""
-        return self.kinematics == "holonomic"
-
 
 @dataclass(frozen=True, kw_only=True)
 class HumanConfig:

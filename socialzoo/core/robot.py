@@ -108,7 +108,7 @@ def _step_unicycle(
 def world_velocity(pose: np.ndarray, vel: np.ndarray, cfg: RobotConfig) -> np.ndarray:
     """(..., 2) the robots' velocity in the world frame, m/s: vel itself for a holonomic robot,
     v along the heading otherwise."""
-    if cfg.velocity_is_world_vector:
+    if cfg.kinematics == "holonomic":  # the velocity state is a world-frame (vx, vy)
         return np.asarray(vel, dtype=np.float64)[..., :2].copy()
     out = np.empty(pose.shape[:-1] + (2,))
     out[..., 0] = vel[..., 0] * np.cos(pose[..., 2])

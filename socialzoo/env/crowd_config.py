@@ -44,11 +44,6 @@ ARENA = "arena"
 ARENA_LAYOUTS = ("crowdnav_circle_crossing", "crowdnav_square_crossing")
 
 
-def crowdnav_robot(kinematics: str = "holonomic") -> RobotConfig:
-    """CrowdNav's robot: radius 0.3 m, preferred (and largest) speed 1 m/s."""
-    return RobotConfig(kinematics=kinematics, radius=0.3, max_speed=1.0)  # type: ignore[arg-type]
-
-
 @dataclass(frozen=True, kw_only=True)
 class CrowdNavConfig:
     """Everything the CrowdNav task needs; the defaults are CrowdNav's.
@@ -60,7 +55,8 @@ class CrowdNavConfig:
             CrowdNav's ORCA people do; social-force people take 10 steps of 0.025 s, the
             benchmark's physics).
         time_limit: s; a step that starts at time_limit - 1 s or later ends the episode (CrowdNav).
-        robot: the robot (kinematics, radius, max_speed = its preferred speed).
+        robot: the robot (kinematics, radius, max_speed = its preferred speed; CrowdNav's:
+            holonomic, radius 0.3 m, preferred (and largest) speed 1 m/s).
         robot_visible: whether the people see and avoid the robot (CrowdNav: invisible).
         humans: who walks, as a people spec (socialzoo.humans.models, the one way every env and
             the benchmark say it): "orca" (CrowdNav's), "sf" (also "social_force"), or a mix such
@@ -111,7 +107,9 @@ class CrowdNavConfig:
     time_step: float = 0.25
     physics_substeps: int = 1
     time_limit: float = 25.0
-    robot: RobotConfig = field(default_factory=crowdnav_robot)
+    robot: RobotConfig = field(
+        default_factory=lambda: RobotConfig(kinematics="holonomic", radius=0.3, max_speed=1.0)
+    )
     robot_visible: bool = False
     humans: str = "orca"
     reward: CrowdRewardConfig = field(default_factory=CrowdRewardConfig)
@@ -195,12 +193,7 @@ class CrowdNavConfig:
     @property
     def observed_slots(self) -> int:
         """Slots of a robot's observation: the people, the other robots, then the wall rays."""
-        return self.observed_person_slots + self.num_robots - 1 + self.wall_rays
-
-    @property
-    def observed_person_slots(self) -> int:
-        """Person slots of a robot's observation (observed_people, or every slot)."""
-        return self.slots if self.observed_people is None else self.observed_people
+        return (self.observed_people or self.slots) + self.num_robots - 1 + self.wall_rays
 
     @property
     def physics_dt(self) -> float:
@@ -260,7 +253,8 @@ class CrowdNavConfig:
         if name not in VARIANTS:
             known = ", ".join(repr(v) for v in VARIANTS)
             raise ValueError(f"unknown CrowdNav variant {name!r}; known variants: {known}")
-        return cls().replace(**_copy(VARIANTS[name][1])).replace(**overrides)
+        # replace() reads the nested dicts, never writes them: the registry's stay as they are.
+        return cls().replace(**VARIANTS[name][1]).replace(**overrides)
 
 
 def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:
@@ -274,8 +268,3 @@ def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:
         return [(0.0, 0.0)] + [(s * math.cos(r), s * math.sin(r)) for r in rotations for s in speeds]
     rotations = [-math.pi / 4 + (math.pi / 2) * k / (ROTATION_SAMPLES - 1) for k in range(ROTATION_SAMPLES)]
     return [(0.0, 0.0)] + [(s, r) for r in rotations for s in speeds]
-
-
-def _copy(overrides: dict[str, Any]) -> dict[str, Any]:
-    """A copy of a variant's overrides (nested dicts copied, so replace() never shares them)."""
-    return {k: dict(v) if isinstance(v, dict) else v for k, v in overrides.items()}
