@@ -172,7 +172,7 @@ class EpisodeMetrics:
     """Running metrics of the current episode of each of B rows.
 
     Call `reset` for rows whose episode starts, `update` once per step with the batch's
-    per-step values, and `summary` / `summaries` when episodes end. A row stops accumulating
+    per-step values, and `summaries` when episodes end. A row stops accumulating
     after the step flagged `done` until it is reset.
 
     Args:
@@ -255,7 +255,6 @@ class EpisodeMetrics:
         reached: np.ndarray,
         done: np.ndarray,
         dt: float,
-        active: np.ndarray | None = None,
         route_left: np.ndarray | None = None,
         halted: np.ndarray | None = None,
         rerouted: np.ndarray | None = None,
@@ -273,9 +272,7 @@ class EpisodeMetrics:
             min_human_distance: (B,) distance to the nearest present human, m (inf for none).
             reached: (B,) bool, the goal is reached after the step.
             done: (B,) bool, the episode ended with this step (terminated or truncated).
-            dt: step duration, s.
-            active: (B,) bool, rows that took this step (default: all). Rows that finished
-                and were not reset are skipped either way.
+            dt: step duration, s. Rows that finished and were not reset are skipped.
             route_left: (B,) route length left to the goal after the step, m (default: the
                 straight distance to the goal); progress for `stuck` is counted on it.
             halted: (B,) bool, the policy halted the robot this step (default: none): the
@@ -283,7 +280,7 @@ class EpisodeMetrics:
             rerouted: (B,) bool, the robot took another route this step (the navigator's
                 recovery): progress counts from its length left now on; the clock runs on.
         """
-        live = ~self.finished if active is None else np.asarray(active, dtype=bool) & ~self.finished
+        live = ~self.finished
         pose = np.asarray(robot_pose, dtype=np.float64)
         step = pose[:, :2] - self.last_pose[:, :2]
         if route_left is None:
@@ -371,10 +368,6 @@ class EpisodeMetrics:
             key: bool if key in _BOOL_KEYS else int if key in _INT_KEYS else float for key in SUMMARY_KEYS
         }
         return [{key: kind(arrays[key][i]) for key, kind in kinds.items()} for i in range(len(index))]
-
-    def summary(self, row: int) -> dict[str, Any]:
-        """The metrics of one row's current episode as a plain dict (keys SUMMARY_KEYS)."""
-        return self.summaries([row])[0]
 
 
 # The outcome of an episode: success or one failure cause, in order of precedence.

@@ -54,7 +54,7 @@ def run_episode(collisions=CONTACTS0, wall=(False,) * 5):
 
 
 def test_scripted_episode_by_hand():
-    s = run_episode().summary(0)
+    s = run_episode().summaries([0])[0]
     assert list(s) == list(SUMMARY_KEYS)
     assert s["reached"] is True
     assert s["success"] is False  # two humans touched on step 2
@@ -78,7 +78,7 @@ def test_scripted_episode_by_hand():
 
 
 def test_second_row_and_undefined_values():
-    s = run_episode().summary(1)
+    s = run_episode().summaries([1])[0]
     assert s["reached"] is False and s["success"] is False
     assert math.isnan(s["time_to_goal"])
     assert s["distance_from_goal"] == pytest.approx(2.0)
@@ -92,17 +92,17 @@ def test_second_row_and_undefined_values():
 
 
 def test_success_needs_no_collision():
-    assert run_episode(collisions=[0] * 5).summary(0)["success"] is True
+    assert run_episode(collisions=[0] * 5).summaries([0])[0]["success"] is True
     m = run_episode(collisions=[0] * 5, wall=(False, False, True, False, False))
-    s = m.summary(0)
+    s = m.summaries([0])[0]
     assert s["wall_collisions"] == 1 and s["success"] is False
 
 
 def test_summary_types_and_summaries():
     m = run_episode()
     both = m.summaries()
-    assert same(both, [m.summary(0), m.summary(1)])
-    assert same(m.summaries([1]), [m.summary(1)])
+    assert same(both, [m.summaries([0])[0], m.summaries([1])[0]])
+    assert same(m.summaries([1]), [m.summaries([1])[0]])
     for key, value in both[0].items():
         if key in ("success", "reached", "stuck"):
             assert type(value) is bool
@@ -134,14 +134,14 @@ def test_finished_rows_stop_until_reset_and_reset_one_row():
     assert same(m.summaries(), before)
     m.reset(np.array([1]), np.array([[5.0, 4.0, 0.0]]), np.array([[8.0, 5.0]]))
     m.update(**step)
-    assert same([m.summary(0)], before[:1])
-    s = m.summary(1)
+    assert same([m.summaries([0])[0]], before[:1])
+    s = m.summaries([1])[0]
     assert s["steps"] == 1 and s["reached"] and s["human_collisions"] == 1 and s["human_contacts"] == 3
     assert s["distance_travelled"] == pytest.approx(1.0) and s["distance_from_goal"] == pytest.approx(3.0)
     assert s["time_to_goal"] == pytest.approx(DT)
 
 
-def test_active_mask_and_bool_mask_reset():
+def test_bool_mask_reset():
     m = EpisodeMetrics(3)
     m.reset(np.array([True, True, True]), np.zeros((3, 3)), np.ones((3, 2)))
     m.update(
@@ -156,10 +156,8 @@ def test_active_mask_and_bool_mask_reset():
         reached=np.zeros(3, bool),
         done=np.zeros(3, bool),
         dt=0.025,
-        active=np.array([True, False, True]),
     )
-    assert [s["steps"] for s in m.summaries()] == [1, 0, 1]
-    assert math.isnan(m.summary(1)["mean_force"])
+    assert [s["steps"] for s in m.summaries()] == [1, 1, 1]
 
 
 def test_bad_arguments():
@@ -181,7 +179,7 @@ def _stuck_run(route_left, halted, dt=1.0, config=None):
             min_human_distance=np.full(1, math.inf), reached=np.zeros(1, dtype=bool),
             done=np.array([t == len(route_left) - 1]), dt=dt, route_left=np.array([left]), halted=np.array([halt]),
         )  # fmt: skip
-    return m.summary(0)
+    return m.summaries([0])[0]
 
 
 def test_stuck_is_no_progress_for_ten_seconds_while_not_halting():
