@@ -201,11 +201,6 @@ class NavGraph:
         out[-1] = np.asarray(goal, dtype=np.float64)  # the goal exactly, as plan_batch keeps it
         return np.array(out)
 
-    def path_cost(self, path: list[int] | np.ndarray) -> float:
-        """Length of a node path, m (sum of Euclidean edge lengths)."""
-        p = self.nodes[np.asarray(path, dtype=np.intp)]
-        return float(np.sqrt(((p[1:] - p[:-1]) ** 2).sum(-1)).sum())
-
     # ---------------------------------------------------------------- all-pairs table
     @cached_property
     def table(self) -> PathTable:
@@ -215,18 +210,6 @@ class NavGraph:
         check it on the shipped maps and on random graphs).
         """
         return floyd_warshall(self.nodes, self.edges)
-
-    def node_path(self, start_node: int, goal_node: int) -> list[int]:
-        """Shortest node path read from the all-pairs table; raises NoPathError if unreachable."""
-        start = self._check_node(start_node, "start")
-        goal = self._check_node(goal_node, "goal")
-        if self.table.hops[start, goal] < 0:
-            raise NoPathError(
-                f"{self.name}: no path from node {start} to node {goal}: they are not connected"
-            )
-        return self.table.node_paths(np.array([start]), np.array([goal]))[0].tolist()[
-            : self.table.hops[start, goal] + 1
-        ]
 
     # ---------------------------------------------------------------- joining off-graph points
     # socialzoo.nav.attachment.attach, with this graph as its first argument.

@@ -83,27 +83,6 @@ def _pad_paths(paths: np.ndarray, width: int) -> np.ndarray:
     return np.concatenate((paths, last), axis=-2)
 
 
-def distance_to_path(pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """Distance from points to their polyline paths.
-
-    Args:
-        pos: (..., 2) points, world frame, m.
-        paths: (..., L, 2) waypoints, padded by repeating the last one.
-        lengths: (...,) int number of valid waypoints (>= 1).
-
-    Returns:
-        (...,) distance to the nearest point of the path, m.
-    """
-    return track(pos, paths, lengths)[1]
-
-
-def needs_replan(
-    pos: np.ndarray, paths: np.ndarray, lengths: np.ndarray, max_distance: float = REPLAN_DISTANCE
-) -> np.ndarray:
-    """(...,) bool: robots more than max_distance (m) from their plan (SPEC: 0.5 m)."""
-    return distance_to_path(pos, paths, lengths) > max_distance
-
-
 def carrot(
     pos: np.ndarray,
     paths: np.ndarray,
@@ -194,7 +173,7 @@ def track(
     tolerance: float = 0.0,
     sight: Sight | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """`carrot` and `distance_to_path` from one pass over the path segments.
+    """`carrot` and each point's distance to its path, m, from one pass over the path segments.
 
     With `sight`, a carrot the robot cannot drive to in a straight line (see Sight) is pulled back
     along the path to the last point before the first one out of sight, going forward from the

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from socialzoo.core.geometry import closest_point_on_segment
-from socialzoo.nav.navigator import GlobalPlans, Navigator, carrot, distance_to_path, needs_replan
+from socialzoo.nav.navigator import GlobalPlans, Navigator, carrot, track
 
 L_PATH = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])
 
@@ -81,7 +81,7 @@ def test_distance_and_carrot_properties(points, robot):
     pos = np.array(robot)
     width = len(path) + 2
     lengths = np.array(len(path))
-    dist = distance_to_path(pos, padded(path, width), lengths)
+    dist = track(pos, padded(path, width), lengths)[1]
     _, brute = closest_point_on_segment(pos, path[:-1], path[1:])
     assert dist == pytest.approx(brute.min(), abs=1e-9)
     c = carrot(pos, padded(path, width), lengths)
@@ -92,14 +92,6 @@ def test_distance_and_carrot_properties(points, robot):
         np.testing.assert_allclose(c, path[-1])
     elif dist <= 1.5:
         assert np.hypot(*(c - pos)) == pytest.approx(1.5, abs=1e-6)
-
-
-def test_needs_replan_at_half_a_metre():
-    path = np.array([[0.0, 0.0], [10.0, 0.0]])
-    pos = np.array([[3.0, 0.49], [3.0, 0.51], [-0.6, 0.0]])
-    np.testing.assert_array_equal(
-        needs_replan(pos, path[None].repeat(3, 0), np.full(3, 2)), [False, True, True]
-    )
 
 
 def test_global_plans_assign_pads_both_ways():
@@ -128,7 +120,7 @@ def test_navigator_replans_only_strayed_rows():
     assert graph.calls == [3, 1]
     np.testing.assert_allclose(nav.plans.paths[1, 0, 0], [2.0, 3.0])  # replanned from where it is
     np.testing.assert_allclose(nav.plans.paths[1, 0, nav.plans.lengths[1, 0] - 1], [0.0, 10.0])
-    assert distance_to_path(c[1, 0], nav.plans.paths[1, 0], nav.plans.lengths[1, 0]) < 1e-9
+    assert track(c[1, 0], nav.plans.paths[1, 0], nav.plans.lengths[1, 0])[1] < 1e-9
     # Resetting one row leaves the others.
     nav.reset(np.array([2]), np.array([[5.0, 5.0]]), np.array([[6.0, 5.0]]))
     np.testing.assert_allclose(nav.goals[2, 0], [6.0, 5.0])
@@ -164,7 +156,7 @@ def test_tolerance_follows_a_path_that_doubles_back():
 def test_carrot_in_sight_waits_at_a_door_frame_but_never_at_the_robot():
     from socialzoo.core.walls import WallIndex
     from socialzoo.nav.distance_field import distance_field
-    from socialzoo.nav.navigator import Sight, track
+    from socialzoo.nav.navigator import Sight
 
     # A wall along y = 0 with a 0.9 m door at x 2.05..2.95; the path comes along y = 0.6, turns
     # down through the door at x = 2.5 and back left below the wall (a hairpin round the jamb).
