@@ -7,8 +7,8 @@ trust an answer on later steps (a clear line's clearance, a blocked line's wall)
 - `sight_lines` cuts lines into short pieces and clears those far from every wall with the map's
   distance field (socialzoo.nav.distance_field); it follows lines outwards and stops at the
   first wall, which suits many fresh lines, most of them blocked;
-- `near_sight_lines` tests each line against the walls listed near it on the wall grid, which
-  suits a few lines, or lines that were clear a moment ago.
+- `near_sight_line` (a scalar kernel) tests a line against the walls listed near it on the wall
+  grid, which suits a few lines, or lines that were clear a moment ago.
 """
 
 from __future__ import annotations
@@ -106,29 +106,6 @@ def sight_lines(p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: Distanc
     return Sight(clear, np.maximum(clearance, 0.0), wall)
 
 
-def near_sight_lines(
-    p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: DistanceField | None = None
-) -> Sight:
-    """`sight_lines` from the walls near each segment only (see `near_sight_line`).
-
-    The clearance of the segments' ends comes from the distance field when given (a lower bound),
-    else from WallIndex.nearest (exact). Cheaper than the pieces of `sight_lines` for a few
-    lines, or for lines that are mostly clear.
-    """
-    m = len(p0)
-    ends = np.concatenate((p0, p1))
-    end_dist = walls.nearest(ends)[1] if field is None else field.lookup(ends) - lookup_slack(field)
-    wall = np.empty(m, dtype=np.intp)
-    clearance = np.empty(m)
-    t = walls.fine
-    _near_sight_all(
-        np.ascontiguousarray(p0, dtype=np.float64), np.ascontiguousarray(p1, dtype=np.float64),
-        np.minimum(end_dist[:m], end_dist[m:]), t.shape_args, t.cell_start, t.cell_walls, walls.walls,
-        wall, clearance,
-    )  # fmt: skip
-    return Sight(wall < 0, clearance, wall)
-
-
 @kernel
 def near_sight_line(x0, y0, x1, y1, end_clearance, grid, cell_start, cell_walls, walls):  # type: ignore[no-untyped-def]
     """(a wall the segment [p0, p1] touches or -1, its clearance or 0); a scalar kernel.
@@ -166,15 +143,6 @@ def near_sight_line(x0, y0, x1, y1, end_clearance, grid, cell_start, cell_walls,
                 point_segment_dist2(bx, by, x0, y0, dx, dy, inv_len2),
             )
     return -1, max(min(math.sqrt(best2), end_clearance), 0.0)
-
-
-@kernel
-def _near_sight_all(p0, p1, end_clearance, grid, cell_start, cell_walls, walls, wall, clearance):  # type: ignore[no-untyped-def]
-    """near_sight_line for every row of p0, p1 (M, 2), into wall (M,) and clearance (M,)."""
-    for k in range(p0.shape[0]):
-        wall[k], clearance[k] = near_sight_line(
-            p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], end_clearance[k], grid, cell_start, cell_walls, walls
-        )
 
 
 def lookup_slack(field: DistanceField) -> float:

@@ -10,7 +10,7 @@ from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.sight_cache import SightCache
-from socialzoo.nav.visibility import lines_of_sight, near_sight_lines, sight_lines, visible_humans
+from socialzoo.nav.visibility import Sight, lines_of_sight, near_sight_line, sight_lines, visible_humans
 
 PLANNER = LocalPlannerConfig()
 
@@ -20,6 +20,20 @@ def building(random_building, seed: int):
     walls = WallIndex(random_building(rng))
     field = distance_field(walls, PLANNER.field_resolution, PLANNER.field_range, PLANNER.field_pad)
     return rng, walls, field
+
+
+def near_sight_lines(p0, p1, walls):
+    """near_sight_line (the sight cache's kernel) for each segment [p0, p1], ends' clearance exact."""
+    end = walls.nearest(np.concatenate((p0, p1)))[1]
+    end = np.minimum(end[: len(p0)], end[len(p0) :])
+    t = walls.fine
+    wall, clearance = np.array(
+        [
+            near_sight_line(*a, *b, e, t.shape_args, t.cell_start, t.cell_walls, walls.walls)
+            for a, b, e in zip(p0.tolist(), p1.tolist(), end.tolist(), strict=True)
+        ]
+    ).T
+    return Sight(wall < 0, clearance, wall.astype(np.intp))
 
 
 def test_fast_sight_lines_match_the_wall_test(random_building):
