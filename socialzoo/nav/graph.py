@@ -248,7 +248,6 @@ class NavGraph:
         self,
         starts: np.ndarray,
         goals: np.ndarray,
-        max_len: int | None = None,
         *,
         direct: bool = True,
         clearance: float = 0.0,
@@ -263,7 +262,6 @@ class NavGraph:
         Args:
             starts: (N, 2) start positions, world frame, m.
             goals: (N, 2) goal positions, world frame, m.
-            max_len: pad every path to this many waypoints; None pads to the longest path.
             direct: allow straight start-goal lines where wall-free.
             clearance: with clearance > 0 (a robot's plans), the straight start-goal line is used
                 only where it keeps this from every wall (m), and start and goal join the graph
@@ -271,22 +269,20 @@ class NavGraph:
                 would lead the robot into it. 0: any wall-free line, as humans' routes are planned.
 
         Returns:
-            (paths, lengths): paths (N, L, 2) m, each padded by repeating its last waypoint;
-            lengths (N,) int number of valid waypoints.
+            (paths, lengths): paths (N, L, 2) m, each padded to the longest by repeating its last
+            waypoint; lengths (N,) int number of valid waypoints.
 
         Raises:
             AttachError: a start or goal reaches no edge (the message names the point).
             NoPathError: a row's attach edges are not connected (the message names the row).
-            ValueError: a path needs more than max_len waypoints.
         """
-        paths, lengths, _ = self._plan_batch(starts, goals, max_len, direct, strict=True, clearance=clearance)
+        paths, lengths, _ = self._plan_batch(starts, goals, direct, strict=True, clearance=clearance)
         return paths, lengths
 
     def plan_batch_status(
         self,
         starts: np.ndarray,
         goals: np.ndarray,
-        max_len: int | None = None,
         *,
         direct: bool = True,
         clearance: float = 0.0,
@@ -297,17 +293,13 @@ class NavGraph:
             (paths, lengths, ok): as `plan_batch`, plus ok (N,) bool; a row that is not ok (its
             start or goal reaches no edge, or they are not connected) gets the straight line
             [start, goal], which may cross walls.
-
-        Raises:
-            ValueError: a path needs more than max_len waypoints.
         """
-        return self._plan_batch(starts, goals, max_len, direct, strict=False, clearance=clearance)
+        return self._plan_batch(starts, goals, direct, strict=False, clearance=clearance)
 
     def _plan_batch(
         self,
         starts: np.ndarray,
         goals: np.ndarray,
-        max_len: int | None,
         direct: bool,
         strict: bool,
         clearance: float = 0.0,
@@ -318,8 +310,7 @@ class NavGraph:
             raise ValueError(f"{self.name}: starts {starts.shape} and goals {goals.shape} differ in shape")
         n = len(starts)
         if n == 0:
-            width = max_len or 1
-            return np.zeros((0, width, 2)), np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
+            return np.zeros((0, 1, 2)), np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
         direct_ok = segments_free(self.walls, starts, goals) if direct else np.zeros(n, dtype=bool)
         if clearance > 0 and direct_ok.any():
             direct_ok[direct_ok] = segments_clear(self.walls, starts[direct_ok], goals[direct_ok], clearance)
@@ -384,15 +375,6 @@ class NavGraph:
         idx = np.arange(n)
         compact[idx[last_dup], lengths[last_dup] - 1] = goals[last_dup]
         width = int(lengths.max())
-        if max_len is not None:
-            if int(max_len) < width:
-                bad = int(np.argmax(lengths))
-                raise ValueError(
-                    f"{self.name}: row {bad} needs {int(lengths[bad])} waypoints, more than max_len={max_len}"
-                )
-            width = int(max_len)
-        if compact.shape[1] < width:
-            compact = np.concatenate((compact, np.zeros((n, width - compact.shape[1], 2))), axis=1)
         compact = compact[:, :width]
         pad = np.arange(width)[None, :] >= lengths[:, None]
         last = compact[idx, lengths - 1]

@@ -203,16 +203,14 @@ def test_plan_from_a_node_and_to_the_same_point() -> None:
     np.testing.assert_allclose(g.plan(np.array([1.0, 1.0]), np.array([1.0, 1.0])), [[1, 1]])
 
 
-def test_plan_batch_pads_to_max_len() -> None:
+def test_plan_batch_pads_to_the_longest_path() -> None:
     g = corridor_graph()
     starts = np.array([[2.0, 0.5], [2.0, 0.5]])
     goals = np.array([[2.0, 3.5], [3.0, 0.5]])
-    paths, lengths = g.plan_batch(starts, goals, max_len=9)
-    assert paths.shape == (2, 9, 2)
+    paths, lengths = g.plan_batch(starts, goals)
+    assert paths.shape == (2, 6, 2)
     np.testing.assert_array_equal(lengths, [6, 2])
-    np.testing.assert_array_equal(paths[1, 2:], np.broadcast_to(goals[1], (7, 2)))
-    with pytest.raises(ValueError, match="row 0 needs 6 waypoints, more than max_len=3"):
-        g.plan_batch(starts, goals, max_len=3)
+    np.testing.assert_array_equal(paths[1, 2:], np.broadcast_to(goals[1], (4, 2)))
     empty, lens = g.plan_batch(np.zeros((0, 2)), np.zeros((0, 2)))
     assert empty.shape == (0, 1, 2) and lens.shape == (0,)
 
