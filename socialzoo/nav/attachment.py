@@ -5,7 +5,7 @@ point or node they can reach by a wall-free straight line (SPEC section 5), batc
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -231,13 +231,4 @@ def not_found(points: np.ndarray) -> Attachment:
 
 def take(att: Attachment, sel: slice) -> Attachment:
     """Rows `sel` of an attachment."""
-    return Attachment(
-        point=att.point[sel],
-        dist=att.dist[sel],
-        edge=att.edge[sel],
-        node_a=att.node_a[sel],
-        node_b=att.node_b[sel],
-        cost_a=att.cost_a[sel],
-        cost_b=att.cost_b[sel],
-        found=att.found[sel],
-    )
+    return Attachment(**{f.name: getattr(att, f.name)[sel] for f in fields(Attachment)})

@@ -113,11 +113,6 @@ class LocalPlannerConfig:
         return np.round(np.linspace(self.curvature_min, self.curvature_max, count), 12)
 
     @property
-    def num_arcs(self) -> int:
-        """The number of sampled arcs (curvatures)."""
-        return len(self.curvatures)
-
-    @property
     def wall_distance(self) -> float:
         """Required distance from the robot centre to walls, m."""
         return self.robot_radius + self.obstacle_margin
