@@ -156,11 +156,9 @@ class Scenario:
         spawn = _frozen_array(self.human_spawn, np.float64, (None, 2), "human_spawn")
         n = len(spawn)
         object.__setattr__(self, "human_spawn", spawn)
-        for name in ("human_start_index", "human_goal_index"):
-            object.__setattr__(self, name, _frozen_array(getattr(self, name), np.int64, (n,), name))
-        object.__setattr__(
-            self, "human_speed", _frozen_array(self.human_speed, np.float64, (n,), "human_speed")
-        )
+        for name in ("human_start_index", "human_goal_index", "human_speed"):
+            dtype = np.float64 if name == "human_speed" else np.int64
+            object.__setattr__(self, name, _frozen_array(getattr(self, name), dtype, (n,), name))
         if len(self.human_routes) != n:
             raise ValueError(f"Scenario.human_routes holds {len(self.human_routes)} routes for {n} humans")
         routes = tuple(
@@ -553,12 +551,6 @@ def get_test_set(name: str) -> TestSet:
 
 
 # ---------------------------------------------------------------------------- scenarios -> state
-def noise_key(seed: int) -> np.uint64:
-    """The counter-based noise key of a scenario seed: SeedSequence([seed, _NOISE_STREAM])'s first
-    uint64 state word (socialzoo.core.seed_hash, compiled for a batch's rows)."""
-    return seed_states([int(seed)], _NOISE_STREAM)[0]
-
-
 def scenarios_to_state(
     scenarios: Sequence[Scenario], num_robots: int = 1, max_humans: int | None = None, route_width: int = 1
 ) -> WorldState:
