@@ -152,11 +152,6 @@ def schema() -> dict[str, Any]:
     return dict(json.loads(text))
 
 
-def schema_path() -> Path:
-    """Where the schema file lies (for tools that want the file itself)."""
-    return Path(str(resources.files("socialzoo.scenarios") / SCHEMA_FILE))
-
-
 def card_path(name: str) -> Path:
     """The shipped card of a suite scenario, by family name or Fig. 7 letter.
 
