@@ -154,11 +154,6 @@ class RecordedPeople:
         """T, the frames of the tracks."""
         return self.tracks.shape[1]
 
-    @property
-    def present(self) -> np.ndarray:
-        """(n, T) whether each person is on the scene at each frame."""
-        return ~np.isnan(self.tracks[..., 0])
-
     @cached_property
     def slot_runs(self) -> tuple[list[tuple[int, int]], ...]:
         """Each slot's (first, last) frames of each person in it, one after another (runs)."""
@@ -218,19 +213,12 @@ class RecordedPeople:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, RecordedPeople):
             return NotImplemented
-        return (self.dt, self.time_limit, self.scene, self.first_frame) == (
-            other.dt,
-            other.time_limit,
-            other.scene,
-            other.first_frame,
-        ) and all(
-            a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
-            for a, b in (
-                (self.tracks, other.tracks),
-                (self.follow, other.follow),
-                (self.robot_track, other.robot_track),
-                (self.persons, other.persons),
-            )
+        values = [(getattr(self, k), getattr(other, k)) for k in ("dt", "time_limit", "scene", "first_frame")]
+        arrays = [
+            (getattr(self, k), getattr(other, k)) for k in ("tracks", "follow", "robot_track", "persons")
+        ]
+        return all(a == b for a, b in values) and all(
+            a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind == "f") for a, b in arrays
         )
 
     __hash__ = None  # type: ignore[assignment]
