@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
+from typing import Any
 
 
 def at_least(low: int, what: str = "") -> Callable[[str], int]:
@@ -25,6 +26,12 @@ def at_least(low: int, what: str = "") -> Callable[[str], int]:
 
 positive_int = at_least(1, "a positive integer")
 count = at_least(0)
+
+
+def given(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options among `names` that the command line set (not None), by name (for --max-steps:
+    the env overrides)."""
+    return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
 
 
 def split_commas(text: str) -> tuple[str, ...]:

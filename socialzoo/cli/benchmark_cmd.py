@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_backend_arguments, comma_list, positive_int, split_commas
+from socialzoo.cli.arg_types import add_backend_arguments, comma_list, given, positive_int, split_commas
 
 
 def _lower_name(spec: str) -> str:
@@ -138,7 +138,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     ids = [m for m in args.maps or () if ENV_ID.fullmatch(m)]
     if ids:
         return run_task_ids(args, ids)
-    overrides: dict[str, Any] = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    overrides = given(args, "max_steps")
     specs = list(split_commas(args.humans))
     if len(specs) > 1:
         return run_matrix_command(args, specs, overrides)
@@ -150,10 +150,8 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         "humans": args.humans,
         "human_metrics": args.human_metrics,
         "counterfactual": args.counterfactual,
+        **given(args, "policies", "maps", "trials", "workers"),
     }
-    for key in ("policies", "maps", "trials", "workers"):
-        if getattr(args, key) is not None:
-            chosen[key] = getattr(args, key)
     if args.workers is None and args.backend == "ray":
         chosen["workers"] = None  # one chunk per CPU of the Ray cluster
     try:
@@ -220,23 +218,18 @@ _DEFAULT_POLICIES: dict[str, tuple[str, ...]] = {"crowdnav": ("orca", "social_fo
 def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: dict[str, Any]) -> int:
     """`socialzoo benchmark --humans A,B,...`: every policy among every crowd model (the matrix)."""
     from socialzoo.bench.store import StoreError
-    from socialzoo.cli.people_cmd import shipped_humans
+    from socialzoo.cli.people_cmd import people_spec
     from socialzoo.studies.crowd_matrix import MatrixConfig, crowd_matrix
 
-    # "learned" alone: the shipped learned humans.
-    specs = [f"learned:{shipped_humans()}" if s == "learned" else s for s in specs]
     if args.quick:
         return fail("benchmark", "several --humans make a matrix: without --quick")
-    chosen: dict[str, Any] = {
-        "humans": tuple(specs),
-        "batch_size": args.batch_size,
-        "env_overrides": overrides,
-    }
-    for key in ("policies", "maps", "trials", "workers"):
-        if getattr(args, key) is not None:
-            chosen[key] = getattr(args, key)
     try:
-        config = MatrixConfig(**chosen)
+        config = MatrixConfig(
+            humans=tuple(map(people_spec, specs)),
+            batch_size=args.batch_size,
+            env_overrides=overrides,
+            **given(args, "policies", "maps", "trials", "workers"),
+        )
         result = crowd_matrix(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
         return fail("benchmark", err)
@@ -250,7 +243,6 @@ def run_demos_command(args: argparse.Namespace) -> int:
     from socialzoo.agents.demonstrations import DemonstrationError, load_demonstrations
     from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
 
-    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
     try:
         config = DemoConfig(
             policy=args.policy.lower(),
@@ -258,7 +250,7 @@ def run_demos_command(args: argparse.Namespace) -> int:
             episodes=args.episodes,
             chunk_episodes=args.chunk_episodes,
             batch_size=args.batch_size,
-            env_overrides=overrides,
+            env_overrides=given(args, "max_steps"),
         )
         path = record_demonstrations(args.out, config, progress=not args.no_progress)
         arrays, _ = load_demonstrations(path)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import positive_int, split_commas
+from socialzoo.cli.arg_types import given, positive_int, split_commas
 from socialzoo.cli.people_cmd import add_report
 
 
@@ -188,11 +188,6 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
-def _env_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    """The env settings the command line overrides: the time limit, when given."""
-    return {} if args.max_steps is None else {"max_steps": args.max_steps}
-
-
 def run_compare(args: argparse.Namespace) -> int:
     """Run `socialzoo humans compare`; returns the exit status."""
     from socialzoo.studies.human_compare import ComparisonConfig, compare_humans
@@ -207,7 +202,7 @@ def run_compare(args: argparse.Namespace) -> int:
             validation=args.validation,
             workers=args.workers,
             batch_size=args.batch_size,
-            env_overrides=_env_overrides(args),
+            env_overrides=given(args, "max_steps"),
         )
     except (ValueError, KeyError) as err:
         return fail("humans compare", err)
@@ -239,7 +234,7 @@ def run_select(args: argparse.Namespace) -> int:
         policy=args.policy,
         workers=args.workers,
         batch_size=args.batch_size,
-        env_overrides=_env_overrides(args),
+        env_overrides=given(args, "max_steps"),
         progress=not args.no_progress,
     )
     status = "meets both targets" if result.met else "meets no target set; the closest"

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import at_least, comma_list, count
+from socialzoo.cli.arg_types import at_least, comma_list, count, given
 
 
 def register(subparsers: Any) -> None:
@@ -109,25 +109,17 @@ def run_replay(args: argparse.Namespace) -> int:
         if args.out.suffix.lower() not in (".html", ".htm"):
             raise ValueError(f"--out {args.out} must end in .html")
         if args.env is not None:
-            given = [
-                f"--{n}"
-                for n in ("map", "family", "seed", "results", "trial")
-                if getattr(args, n) is not None
-            ]
-            if given:
-                raise ValueError(
-                    f"{', '.join(given)} cannot be combined with --env: a task id plays its own cases"
-                )
+            if clash := _flags(args, "map", "family", "seed", "results", "trial"):
+                raise ValueError(f"{clash} cannot be combined with --env: a task id plays its own cases")
             return _replay_case(args)
         if args.case is not None:
             raise ValueError("--case goes with --env")
         if (args.results is None) != (args.trial is None):
             raise ValueError("--results and --trial go together")
         if args.results is not None:
-            given = [f"--{n}" for n in ("map", "family", "seed", "max_steps") if getattr(args, n) is not None]
-            if given:
+            if clash := _flags(args, "map", "family", "seed", "max_steps"):
                 raise ValueError(
-                    f"{', '.join(o.replace('_', '-') for o in given)} cannot be combined with --results: "
+                    f"{clash} cannot be combined with --results: "
                     "a stored trial runs with its own map, scenario and env config"
                 )
             return _replay_stored(args)
@@ -136,6 +128,11 @@ def run_replay(args: argparse.Namespace) -> int:
         return _replay_seed(args)
     except (MapError, StoreError, FileNotFoundError, ValueError, KeyError) as err:
         return fail("replay", err)
+
+
+def _flags(args: argparse.Namespace, *names: str) -> str:
+    """The options among `names` that the command line gave, as "--a, --b" ("" for none)."""
+    return ", ".join(f"--{name.replace('_', '-')}" for name in given(args, *names))
 
 
 def _encoding(args: argparse.Namespace) -> Any:
@@ -157,7 +154,7 @@ def _replay_case(args: argparse.Namespace) -> int:
     if not specs:
         raise ValueError(f"name the policies to play on {args.env} (--policy)")
     case = 0 if args.case is None else args.case
-    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    overrides = given(args, "max_steps")
     built = [
         (
             spec,

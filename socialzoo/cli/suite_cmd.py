@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_backend_arguments, comma_list, count, positive_int
+from socialzoo.cli.arg_types import add_backend_arguments, comma_list, count, given, positive_int
 from socialzoo.cli.benchmark_cmd import _policy_specs
 
 # Comma-separated names, lower-cased.
@@ -86,10 +86,8 @@ def run_suite_command(args: argparse.Namespace) -> int:
         "batch_size": args.batch_size,
         "replays": args.replays,
         "workers": args.workers if args.workers is not None or args.backend == "ray" else 2,
+        **given(args, "policies", "scenarios", "metrics"),
     }
-    for key in ("policies", "scenarios", "metrics"):
-        if getattr(args, key) is not None:
-            chosen[key] = getattr(args, key)
     try:
         config = SuiteConfig(**chosen)
         result = run_suite(config, args.out, progress=not args.no_progress, say=print)
