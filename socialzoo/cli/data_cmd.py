@@ -78,12 +78,9 @@ def run_fetch(args: argparse.Namespace) -> int:
     print(CREDIT)
     try:
         fetched = fetch_scenes(args.scenes, source_dir=args.source_dir, cache=cache)
-    except DownloadError as exc:
+    except (ValueError, OSError) as exc:  # a failed download: 1, anything else: 2
         print(f"socialzoo data fetch: {exc}", file=sys.stderr)
-        return 1
-    except (ValueError, OSError) as exc:
-        print(f"socialzoo data fetch: {exc}", file=sys.stderr)
-        return 2
+        return 1 if isinstance(exc, DownloadError) else 2
     print(f"cache: {cache}")
     for scene, paths in fetched.items():
         print(f"  {scene:6s} {', '.join(p.name for p in paths)}")

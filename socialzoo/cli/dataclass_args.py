@@ -91,7 +91,7 @@ def add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
         required = default is dataclasses.MISSING
         help_text = docs.get(field.name, "")
         if not required:
-            help_text += f" (default: {json.dumps(_shown(default))})"
+            help_text += f" (default: {json.dumps(default, default=str)})"  # a Path as its text
         kwargs: dict[str, Any] = {"dest": field.name, "help": help_text}
         if required:
             kwargs["required"] = True
@@ -99,26 +99,18 @@ def add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
             kwargs["default"] = default
         if annotation is bool:
             kwargs["action"] = argparse.BooleanOptionalAction
-        elif get_origin(annotation) is Literal:
-            choices = list(get_args(annotation))
-            kwargs["choices"] = choices + ([None] if optional else [])
-            kwargs["type"] = _literal_parser(choices, optional)
         elif get_origin(annotation) is tuple:
-            element = get_args(annotation)[0]
             kwargs["nargs"] = "+"
-            kwargs["type"] = _scalar_parser(element, field.name)
+            kwargs["type"] = _scalar_parser(get_args(annotation)[0], field.name)
         else:
-            base = _scalar_parser(annotation, field.name)
+            if get_origin(annotation) is Literal:
+                choices = list(get_args(annotation))
+                kwargs["choices"] = choices + ([None] if optional else [])
+                base = _literal_parser(choices)
+            else:
+                base = _scalar_parser(annotation, field.name)
             kwargs["type"] = _none_or(base) if optional else base
         parser.add_argument(flag, **kwargs)
-
-
-def _shown(value: Any) -> Any:
-    if isinstance(value, Path):
-        return str(value)
-    if isinstance(value, tuple):
-        return list(value)
-    return value
 
 
 def _none_or(parse: Any) -> Any:
@@ -128,10 +120,8 @@ def _none_or(parse: Any) -> Any:
     return parse_optional
 
 
-def _literal_parser(choices: list[Any], optional: bool) -> Any:
+def _literal_parser(choices: list[Any]) -> Any:
     def parse_choice(text: str) -> Any:
-        if optional and text.lower() == "none":
-            return None
         for choice in choices:
             if str(choice) == text:
                 return choice
