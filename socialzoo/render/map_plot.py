@@ -10,13 +10,35 @@ import numpy as np
 from socialzoo.maps.map_file import Map
 
 
-def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: bool = True) -> Any:
-    """Draw a map on a matplotlib Axes (a new figure when ax is None); returns the Axes."""
+def _axes(figsize: tuple[float, float]) -> Any:
+    """The Axes of a new off-screen (Agg) matplotlib figure."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
+
+    return plt.subplots(figsize=figsize)[1]
+
+
+def _save(ax: Any, title: str, path: str | Path, **title_options: Any) -> Path:
+    """Finish a map picture (equal axes in metres, the title), write it to a PNG and close it."""
+    import matplotlib.pyplot as plt
+
+    ax.set_aspect("equal")
+    ax.set_title(title, **title_options)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    path = Path(path)
+    ax.figure.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(ax.figure)
+    return path
+
+
+def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_poses: bool = True) -> Path:
+    """Write a picture of the map (walls, navigation graph, legal poses) to a PNG file; returns the path."""
     from matplotlib.collections import LineCollection
 
-    if ax is None:
-        _, ax = plt.subplots(figsize=(10, 8))
+    ax = _axes((10, 8))
     walls = np.asarray(m.walls).reshape(-1, 2, 2)
     ax.add_collection(LineCollection(walls, colors="0.15", linewidths=0.8, label="walls"))
     if show_graph and len(m.edges):
@@ -43,28 +65,8 @@ def plot_map(m: Map, ax: Any = None, *, show_graph: bool = True, show_poses: boo
         ax.set_ylim(y0, y1)
     else:
         ax.autoscale()
-    ax.set_aspect("equal")
-    ax.set_title(
-        f"{m.name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
-        f"{len(m.legal_poses)} legal poses"
-    )
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    return ax
-
-
-def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_poses: bool = True) -> Path:
-    """Write the map picture to a PNG file; returns the path."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    ax = plot_map(m, show_graph=show_graph, show_poses=show_poses)
-    path = Path(path)
-    ax.figure.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(ax.figure)
-    return path
+    title = f"{m.name}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, "
+    return _save(ax, title + f"{len(m.legal_poses)} legal poses", path)
 
 
 # Marker colour of each drive-check failure cause (socialzoo.bench.drive_check.DRIVE_CAUSES).
@@ -89,13 +91,9 @@ def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) 
     and at the place its cause names (a ring: the narrow gap, the goal's join), with a legend of
     the causes, and the poses of failed routes are ringed in red.
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    fig, ax = plt.subplots(figsize=(11, 9))
+    ax = _axes((11, 9))
     ax.add_collection(LineCollection(np.asarray(m.walls).reshape(-1, 2, 2), colors="0.15", linewidths=0.8))
     edges = np.asarray(m.edges, dtype=np.int64).reshape(-1, 2)
     if len(edges) and ((edges >= 0) & (edges < len(m.nodes))).all():
@@ -129,7 +127,6 @@ def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) 
         ax.scatter(p[involved, 0], p[involved, 1], s=80, facecolors="none", edgecolors="tab:red", zorder=4)
         ax.legend(loc="best", fontsize=8, title="routes not completed: where they stopped")
     ax.autoscale()
-    ax.set_aspect("equal")
     title = f"{m.name}: {'valid' if check.valid else 'INVALID'}, {check.num_components} component(s), "
     title += f"{len(check.tight_edges)} tight edges (red)"
     if check.routes is not None:
@@ -141,10 +138,4 @@ def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) 
     if drive is not None:
         done = len(drive.routes) - len(drive.failures)
         title += f"\ndriven alone: {done}/{len(drive.routes)} routes completed"
-    ax.set_title(title, fontsize=10)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    path = Path(path)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return _save(ax, title, path, fontsize=10)
