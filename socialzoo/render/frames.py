@@ -286,11 +286,9 @@ class FrameRenderer:
         return img.reduce(ss) if ss > 1 else img
 
     def _tile(self, i: int, j: int) -> Image.Image:
-        tile = self._tiles.get((i, j))
-        if tile is None:
-            tile = self._draw_static(i * _TILE, j * _TILE, _TILE, _TILE)
-            self._tiles[(i, j)] = tile
-        return tile
+        if (i, j) not in self._tiles:
+            self._tiles[(i, j)] = self._draw_static(i * _TILE, j * _TILE, _TILE, _TILE)
+        return self._tiles[(i, j)]
 
     def _background(self, x0: int, y0: int) -> Image.Image:
         """The static layer (internal size) of the frame whose top-left is internal pixel (x0, y0)."""
@@ -471,13 +469,8 @@ class FrameRenderer:
 
     def _draw_text(self, draw: ImageDraw.ImageDraw, overlay: Overlay, step: int) -> None:
         """Action label, time and info lines in a white box at the top-left corner (output pixels)."""
-        lines = []
-        if overlay.action:
-            lines.append(str(overlay.action))
-        if self.dt is not None:
-            lines.append(f"t = {step * self.dt:.2f} s   step {step}")
-        else:
-            lines.append(f"step {step}")
+        lines = [str(overlay.action)] if overlay.action else []
+        lines.append(f"step {step}" if self.dt is None else f"t = {step * self.dt:.2f} s   step {step}")
         lines.extend(str(line) for line in overlay.info)
         font = _font(self._font_size)
         big = _font(round(self._font_size * 1.3))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -51,12 +51,7 @@ def _array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) ->
     if arr.size == 0 and len(shape) > 1 and arr.ndim != len(shape):
         arr = arr.reshape((0, *(s or 0 for s in shape[1:])))
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)):
-        want = (
-            "("
-            + ", ".join("*" if s is None else str(s) for s in shape)
-            + ("," if len(shape) == 1 else "")
-            + ")"
-        )
+        want = str(tuple("*" if s is None else s for s in shape)).replace("'", "")  # (*, 2), (3,)
         raise ValueError(f"EpisodeTrace.{what} must have shape {want}, got {arr.shape}")
     arr.flags.writeable = False
     return arr
@@ -265,14 +260,8 @@ class Encoding:
     value_decimals: int = 4
 
     def __post_init__(self) -> None:
-        for name, low in (
-            ("stride", 1),
-            ("laser_rays", 0),
-            ("position_decimals", 0),
-            ("velocity_decimals", 0),
-            ("value_decimals", 0),
-        ):
-            check_int("Encoding", name, getattr(self, name), low=low)
+        for f in fields(self):
+            check_int("Encoding", f.name, getattr(self, f.name), low=1 if f.name == "stride" else 0)
 
 
 def frame_steps(num_steps: int, stride: int) -> np.ndarray:

@@ -16,9 +16,6 @@ from pathlib import Path
 
 from socialzoo.render.replay_data import Encoding, EpisodeTrace, ReplayScene, encode_replay
 
-# Placeholders of viewer/replay.html, each replaced exactly once.
-_SLOTS = ("{{TITLE}}", "{{STYLE}}", "{{DATA}}", "{{SCRIPT}}")
-
 
 @cache
 def _asset(name: str) -> str:
@@ -52,17 +49,18 @@ def replay_document(
     except ValueError as err:  # NaN or infinity in an array: the viewer cannot draw it
         raise ValueError(f"replay_document: the episode data must be finite ({err})") from None
     page = _asset("replay.html")
-    for slot in _SLOTS:
-        if page.count(slot) != 1:
-            raise RuntimeError(f"viewer/replay.html must hold {slot} exactly once")
-    # Replaced in one pass over the template, so text in one part never fills another's slot.
+    # The placeholders of viewer/replay.html, each replaced exactly once.
     parts = {
         "{{TITLE}}": html.escape(scene.title),
         "{{STYLE}}": _asset("replay.css"),
         "{{DATA}}": payload,
         "{{SCRIPT}}": _asset("replay.js"),
     }
-    return re.sub("|".join(map(re.escape, _SLOTS)), lambda slot: parts[slot.group()], page)
+    for slot in parts:
+        if page.count(slot) != 1:
+            raise RuntimeError(f"viewer/replay.html must hold {slot} exactly once")
+    # Replaced in one pass over the template, so text in one part never fills another's slot.
+    return re.sub("|".join(map(re.escape, parts)), lambda slot: parts[slot.group()], page)
 
 
 def write_replay_html(
