@@ -19,14 +19,6 @@ GIF_SUFFIXES = (".gif",)
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".mkv", ".avi", ".webm")
 
 
-def _frame(frame: np.ndarray, index: int) -> np.ndarray:
-    """Check one frame: (H, W, 3) uint8 RGB."""
-    frame = np.asarray(frame)
-    if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-        raise ValueError(f"frame {index} must be an (H, W, 3) uint8 array, got {frame.shape} {frame.dtype}")
-    return frame
-
-
 def write_animation(
     frames: Iterable[np.ndarray], path: str | Path, fps: float = 20.0, stride: int = 1
 ) -> Path:
@@ -74,10 +66,14 @@ def write_animation(
 
 
 def _checked(frames: Iterable[np.ndarray]) -> Iterable[np.ndarray]:
-    """Frames, validated and all of the first frame's size."""
+    """Frames, each checked to be (H, W, 3) uint8 RGB of the first frame's size."""
     shape = None
     for index, raw in enumerate(frames):
-        frame = _frame(raw, index)
+        frame = np.asarray(raw)
+        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+            raise ValueError(
+                f"frame {index} must be an (H, W, 3) uint8 array, got {frame.shape} {frame.dtype}"
+            )
         if shape is None:
             shape = frame.shape
         elif frame.shape != shape:
