@@ -13,7 +13,6 @@ openings, reported by the import, never added to the walls).
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import os
@@ -27,7 +26,7 @@ import numpy as np
 
 from socialzoo.core.files import read_text
 from socialzoo.core.validation import check_number
-from socialzoo.maps.map_file import MapError
+from socialzoo.maps.map_file import MapError, parse_json
 
 logger = logging.getLogger(__name__)
 
@@ -122,13 +121,7 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
             or joining a node to itself; the message names the file.
     """
     where = os.fspath(path)
-    text = _read_text(path)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise MapError(f"{where}: invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
-    except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
-        raise MapError(f"{where}: invalid JSON: {err}") from None
+    data = parse_json(_read_text(path), where)
     if not isinstance(data, dict) or not isinstance(data.get("nodes"), list):
         raise MapError(f"{where}: expected an object with a 'nodes' list (and an 'edges' list)")
     raw_edges = data.get("edges", [])

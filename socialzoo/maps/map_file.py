@@ -212,6 +212,16 @@ def _text_field(data: dict[str, Any], key: str, where: str, required: bool) -> s
     return str(data[key])
 
 
+def parse_json(text: str, where: str) -> Any:
+    """JSON text parsed; MapError naming `where` (and the line and column) for text that is not JSON."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as err:
+        raise _fail(where, f"invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
+    except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
+        raise _fail(where, f"invalid JSON: {err}") from None
+
+
 _KNOWN_FIELDS = {
     "format",
     "name",
@@ -244,12 +254,7 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
             Run `validate_map` for the geometric checks.
     """
     if isinstance(data, str):
-        try:
-            data = json.loads(data)
-        except json.JSONDecodeError as err:
-            raise _fail(where, f"invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
-        except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
-            raise _fail(where, f"invalid JSON: {err}") from None
+        data = parse_json(data, where)
     if not isinstance(data, dict):
         raise _fail(where, f"expected a JSON object at the top level, got {type(data).__name__}")
     if "format" not in data:
@@ -381,14 +386,22 @@ def nearest_walls(index: WallIndex, points: np.ndarray) -> tuple[np.ndarray, np.
     t = index.fine
     query, wall = t.candidates(t.cells(points))
     _, dist = closest_point_on_segment(points[query], index.wall_a[wall], index.wall_b[wall])
-    best = np.full(len(points), np.inf)
-    best_wall = np.full(len(points), -1, dtype=np.int64)
+    return _nearest_of(len(points), query, wall, dist, t.reach)
+
+
+def _nearest_of(
+    n: int, query: np.ndarray, wall: np.ndarray, dist: np.ndarray, limit: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(dist (n,), wall (n,)) of the nearest of the (query, wall, dist) pairs of each of n queries
+    within `limit` (inf and -1 where none is)."""
+    best = np.full(n, np.inf)
+    best_wall = np.full(n, -1, dtype=np.int64)
     if len(query):
         # Sort pairs by (query, dist, wall) and keep the first of each query: the nearest wall,
         # ties broken by the lower wall index so the answer does not depend on the grid.
         order = np.lexsort((wall, dist, query))
         first = order[np.r_[True, query[order][1:] != query[order][:-1]]]
-        near = dist[first] <= t.reach
+        near = dist[first] <= limit
         best[query[first][near]] = dist[first][near]
         best_wall[query[first][near]] = wall[first][near]
     return best, best_wall
@@ -409,10 +422,8 @@ def segment_clearance(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> tuple
     """
     a0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
     a1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
-    best = np.full(len(a0), np.inf)
-    best_wall = np.full(len(a0), -1, dtype=np.int64)
     if len(a0) == 0:
-        return best, best_wall
+        return np.full(0, np.inf), np.full(0, -1, dtype=np.int64)
     t = index.fine
     limit = 0.5 * t.reach
     # Samples at most reach/2 apart: every point of a segment is within reach/4 of a sample, so a
@@ -437,13 +448,7 @@ def segment_clearance(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> tuple
         ]
     )
     dist = np.where(segments_intersect(sa, sb, wa, wb), 0.0, dist)
-    if len(seg):
-        order = np.lexsort((wall, dist, seg))
-        first = order[np.r_[True, seg[order][1:] != seg[order][:-1]]]
-        near = dist[first] <= limit
-        best[seg[first][near]] = dist[first][near]
-        best_wall[seg[first][near]] = wall[first][near]
-    return best, best_wall
+    return _nearest_of(len(a0), seg, wall, dist, limit)
 
 
 def _first_crossed_wall(index: WallIndex, p0: np.ndarray, p1: np.ndarray) -> int:
