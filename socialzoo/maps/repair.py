@@ -274,28 +274,26 @@ def _repair_edges(
 
 
 def _keep_largest(
-    nodes: np.ndarray, edges: np.ndarray, keep: np.ndarray, report: RepairReport
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Drop every graph component but the largest; returns (nodes, edges, old index of each node)."""
-    alive = np.flatnonzero(keep)
+    nodes: np.ndarray, edges: np.ndarray, report: RepairReport
+) -> tuple[np.ndarray, np.ndarray]:
+    """Drop every graph component but the largest; returns (nodes, edges)."""
     label = graph_components(len(nodes), edges)
-    names, sizes = np.unique(label[alive], return_counts=True)
+    names, sizes = np.unique(label, return_counts=True)
     main = names[np.argmax(sizes)] if len(names) else -1
     for name, size in zip(names.tolist(), sizes.tolist(), strict=True):
         if name != main:
-            members = alive[label[alive] == name]
-            centre = nodes[members].mean(axis=0)
+            centre = nodes[label == name].mean(axis=0)
             report.add(
                 "component_dropped",
                 f"graph component of {size} node(s) around {_at(centre)} cannot be joined to the rest "
                 "through the free space: dropped",
             )
-    kept = alive[label[alive] == main] if len(alive) else alive
+    kept = np.flatnonzero(label == main)
     new_index = np.full(len(nodes), -1, dtype=np.int64)
     new_index[kept] = np.arange(len(kept))
     edges = new_index[edges] if len(edges) else edges.reshape(-1, 2)
     edges = edges[(edges >= 0).all(axis=1)] if len(edges) else edges
-    return nodes[kept], edges.reshape(-1, 2), kept
+    return nodes[kept], edges.reshape(-1, 2)
 
 
 def _repair_poses(
@@ -387,7 +385,8 @@ def repair_map(
         space = _graph_free_space(walls, given, region, config, index, report)
     else:
         space = free_space(walls, region, seed_point, config, index)
-        _report_closures(space, report)
+        if len(space.closures):  # virtual walls closed the outline's openings to unmapped space
+            report.add("outline_closed", describe_closures(space.closures))
     if nodes is None or len(nodes) == 0:
         roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
         nodes, edges = roadmap.nodes, roadmap.edges
@@ -414,7 +413,7 @@ def repair_map(
                 report,
             )
             keep = np.concatenate((keep, np.ones(len(nodes) - len(keep), dtype=bool)))
-        nodes, edges, _ = _join_and_prune(nodes, edges, keep, space, index, config, report)
+        nodes, edges = _join_and_prune(nodes, edges, keep, space, index, config, report)
     nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     poses = None if legal_poses is None else np.asarray(legal_poses, dtype=np.float64).reshape(-1, 3)
@@ -441,12 +440,6 @@ def repair_map(
     )
     validate_map(m)
     return m, report
-
-
-def _report_closures(space: FreeSpace, report: RepairReport) -> None:
-    """Report the virtual walls that closed the outline's openings to unmapped space, if any."""
-    if len(space.closures):
-        report.add("outline_closed", describe_closures(space.closures))
 
 
 def _graph_free_space(
@@ -501,7 +494,7 @@ def _join_and_prune(
     index: WallIndex,
     config: RoadmapConfig,
     report: RepairReport,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray]:
     """Join components along walking paths where possible, then keep the largest one."""
     alive = np.flatnonzero(keep)
     remap = np.full(len(nodes), -1, dtype=np.int64)
@@ -519,5 +512,4 @@ def _join_and_prune(
                 f"({len(joined_nodes) - len(sub_nodes)} new nodes)",
             )
         sub_nodes, sub_edges = joined_nodes, joined_edges
-    all_keep = np.ones(len(sub_nodes), dtype=bool)
-    return _keep_largest(sub_nodes, sub_edges, all_keep, report)
+    return _keep_largest(sub_nodes, sub_edges, report)
