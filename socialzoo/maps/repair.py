@@ -24,7 +24,6 @@ by socialzoo.bench.map_repair.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import logging
 from collections import Counter
 from dataclasses import dataclass, field
@@ -32,7 +31,6 @@ from typing import Any
 
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import csgraph
 
 from socialzoo.core.walls import WallIndex
 from socialzoo.maps.legal_poses import generate_legal_poses
@@ -50,13 +48,13 @@ from socialzoo.maps.roadmap import (
     Box,
     FreeSpace,
     RoadmapConfig,
+    Walker,
+    add_chain,
     build_edges,
     build_roadmap,
     connect_components,
     describe_closures,
     free_space,
-    grid_graph,
-    pull_string,
 )
 
 logger = logging.getLogger(__name__)
@@ -174,64 +172,16 @@ def _repair_nodes(
     return nodes, keep
 
 
-class _Walker:
-    """Walking paths between points through a free space's interior (grid shortest paths)."""
-
-    def __init__(self, space: FreeSpace, index: WallIndex, config: RoadmapConfig) -> None:
-        self.space = space
-        self.index = index
-        self.graph, self.cell_id = grid_graph(space)
-        self.id_cells = np.argwhere(space.interior)
-        self.clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
-        self.keep_clearance = config.keep_clearance
-        self.floor = config.free_clearance
-        self.max_edge = config.max_edge_length
-
-    def vertex(self, points: np.ndarray) -> np.ndarray:
-        cells = self.space.cell_of(points)
-        v: np.ndarray = self.cell_id[cells[:, 0], cells[:, 1]]
-        return v
-
-    def path(self, a: np.ndarray, b: np.ndarray, limit: float) -> np.ndarray | None:
-        """Corner points (L, 2) of a straightened walking path from a to b (ends included), or
-        None when there is none of weighted length at most `limit`."""
-        va, vb = (int(v) for v in self.vertex(np.stack((a, b))))
-        if va < 0 or vb < 0:
-            return None
-        dist, pred = csgraph.dijkstra(
-            self.graph, directed=False, indices=va, limit=limit, return_predecessors=True
-        )
-        if not np.isfinite(dist[vb]):
-            return None
-        walk = [vb]
-        while pred[walk[-1]] >= 0:
-            walk.append(int(pred[walk[-1]]))
-        cells = self.id_cells[walk[::-1]]
-        path = self.space.centres(cells)
-        path[0], path[-1] = a, b
-        corners = pull_string(
-            path,
-            self.index,
-            self.clearance,
-            self.max_edge,
-            self.space.clearance[cells[:, 0], cells[:, 1]],
-            self.keep_clearance,
-            floor=self.floor,
-        )
-        return path[corners]
-
-
 def _repair_edges(
     nodes: np.ndarray,
     edges: np.ndarray,
     keep: np.ndarray,
-    walker: _Walker,
-    index: WallIndex,
-    config: RoadmapConfig,
+    walker: Walker,
     max_detour: float,
     report: RepairReport,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Edges that keep clear of walls (rerouted or dropped); returns (nodes, edges), nodes appended."""
+    index, config = walker.index, walker.config
     edges = edges[keep[edges].all(axis=1)] if len(edges) else edges
     if len(edges) == 0 or index.num_walls == 0:
         return nodes, edges
@@ -258,15 +208,10 @@ def _repair_edges(
                 "edge_dropped", f"{what} {why}: dropped (no walking path within {max_detour:g}x its length)"
             )
             continue
-        chain = [i]
-        for p in corners[1:-1]:
-            node_list.append(p)
-            chain.append(len(node_list) - 1)
-        chain.append(j)
-        out.extend((min(p, q), max(p, q)) for p, q in itertools.pairwise(chain))
+        add_chain(node_list, out, i, j, corners)
         report.add(
             "edge_rerouted",
-            f"{what} {why}: rerouted along a {walked:.1f} m walking path with {len(chain) - 2} new nodes",
+            f"{what} {why}: rerouted along a {walked:.1f} m walking path with {len(corners) - 2} new nodes",
         )
     return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(
         sorted(set(out)), dtype=np.int64
@@ -401,17 +346,8 @@ def repair_map(
             edges = np.flatnonzero(keep)[edges] if len(edges) else edges.reshape(-1, 2)
             report.add("edges_built", f"graph edges built between the given nodes: {len(edges)} edges")
         else:
-            walker = _Walker(space, index, config)
-            nodes, edges = _repair_edges(
-                nodes,
-                np.asarray(edges, dtype=np.int64).reshape(-1, 2),
-                keep,
-                walker,
-                index,
-                config,
-                max_detour,
-                report,
-            )
+            edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+            nodes, edges = _repair_edges(nodes, edges, keep, Walker(space, index, config), max_detour, report)
             keep = np.concatenate((keep, np.ones(len(nodes) - len(keep), dtype=bool)))
         nodes, edges = _join_and_prune(nodes, edges, keep, space, index, config, report)
     nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)

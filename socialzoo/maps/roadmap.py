@@ -620,6 +620,73 @@ def pull_string(
     return keep
 
 
+class Walker:
+    """Walking paths through a free space's interior: shortest paths on its grid graph (grid_graph),
+    straightened into clear segments (pull_string) that keep to the middle of passages."""
+
+    def __init__(self, space: FreeSpace, index: WallIndex, config: RoadmapConfig) -> None:
+        self.space = space
+        self.index = index
+        self.config = config
+        self.graph, self.cell_id = grid_graph(space)
+        self.id_cells = np.argwhere(space.interior)  # vertex id -> cell, in the order cell_id numbers them
+
+    def vertex(self, points: np.ndarray) -> np.ndarray:
+        """Grid-graph vertices (K,) of the cells holding points (K, 2); -1 outside the interior."""
+        cells = self.space.cell_of(points)
+        v: np.ndarray = self.cell_id[cells[:, 0], cells[:, 1]]
+        return v
+
+    def corners(self, walk: list[int], a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Corner points (L, 2) of a walk of grid vertices straightened, its ends set to a and b."""
+        space, config = self.space, self.config
+        cells = self.id_cells[walk]
+        path = space.centres(cells)
+        path[0], path[-1] = a, b
+        corners = pull_string(
+            path,
+            self.index,
+            min(config.edge_clearance, config.free_clearance - space.resolution),
+            config.max_edge_length,
+            space.clearance[cells[:, 0], cells[:, 1]],
+            config.keep_clearance,
+            floor=config.free_clearance,
+        )
+        return path[corners]
+
+    def path(self, a: np.ndarray, b: np.ndarray, limit: float) -> np.ndarray | None:
+        """Corner points (L, 2) of a straightened walking path from a to b (ends included), or
+        None when there is none of weighted length at most `limit`."""
+        va, vb = (int(v) for v in self.vertex(np.stack((a, b))))
+        if va < 0 or vb < 0:
+            return None
+        dist, pred = csgraph.dijkstra(
+            self.graph, directed=False, indices=va, limit=limit, return_predecessors=True
+        )
+        return self.corners(_walk(pred, vb), a, b) if np.isfinite(dist[vb]) else None
+
+
+def _walk(pred: np.ndarray, end: int) -> list[int]:
+    """The grid vertices of a shortest path (dijkstra's predecessors `pred`) that ends at `end`."""
+    walk = [end]
+    while pred[walk[-1]] >= 0:
+        walk.append(int(pred[walk[-1]]))
+    return walk[::-1]
+
+
+def add_chain(
+    nodes: list[np.ndarray], edges: list[tuple[int, ...]], i: int, j: int, corners: np.ndarray
+) -> None:
+    """Join nodes i and j through the inner points of `corners` (appended to `nodes` as new nodes)
+    by edges (i < j pairs appended to `edges`)."""
+    chain = [i]
+    for p in corners[1:-1]:
+        nodes.append(p)
+        chain.append(len(nodes) - 1)
+    chain.append(j)
+    edges.extend((min(p, q), max(p, q)) for p, q in itertools.pairwise(chain))
+
+
 def connect_components(
     space: FreeSpace,
     nodes: np.ndarray,
@@ -641,11 +708,8 @@ def connect_components(
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     if len(nodes) < 2 or len(np.unique(graph_components(len(nodes), edges))) == 1:
         return nodes, edges
-    graph, cell_id = grid_graph(space)
-    cells = space.cell_of(nodes)
-    vertex = cell_id[cells[:, 0], cells[:, 1]]
-    id_cells = np.argwhere(space.interior)  # vertex id -> cell, in the order cell_id numbers them
-    clearance = min(config.edge_clearance, config.free_clearance - space.resolution)
+    walker = Walker(space, index, config)
+    vertex = walker.vertex(nodes)
     node_list = list(nodes)
     edge_list = [tuple(e) for e in edges.tolist()]
     while True:
@@ -657,37 +721,23 @@ def connect_components(
         source_nodes = np.flatnonzero((label == main) & (vertex[: len(label)] >= 0))
         # The grid graph stores each neighbour pair once (four of the eight steps): undirected.
         dist, pred = csgraph.dijkstra(
-            graph, directed=False, indices=vertex[source_nodes], min_only=True, return_predecessors=True
+            walker.graph,
+            directed=False,
+            indices=vertex[source_nodes],
+            min_only=True,
+            return_predecessors=True,
         )[:2]
         others = np.flatnonzero((label != main) & (vertex[: len(label)] >= 0))
         if len(source_nodes) == 0 or len(others) == 0 or not np.isfinite(dist[vertex[others]]).any():
             logger.warning("connect_components: %d graph components cannot be joined", len(names))
             break
         target = int(others[np.argmin(dist[vertex[others]])])
-        walk = [int(vertex[target])]
-        while pred[walk[-1]] >= 0:
-            walk.append(int(pred[walk[-1]]))
-        start = int(source_nodes[np.flatnonzero(vertex[source_nodes] == walk[-1])[0]])
-        cells_walked = id_cells[walk[::-1]]
-        path = space.centres(cells_walked)
-        path[0], path[-1] = node_list[start], node_list[target]
-        corners = pull_string(
-            path,
-            index,
-            clearance,
-            config.max_edge_length,
-            space.clearance[cells_walked[:, 0], cells_walked[:, 1]],
-            config.keep_clearance,
-            floor=config.free_clearance,
-        )
-        chain = [start]
-        for k in corners[1:-1]:
-            node_list.append(path[k])
-            chain.append(len(node_list) - 1)
-        chain.append(target)
-        edge_list.extend((min(a, b), max(a, b)) for a, b in itertools.pairwise(chain))
-        added = space.cell_of(np.array(node_list[len(vertex) :], dtype=np.float64).reshape(-1, 2))
-        vertex = np.concatenate((vertex, cell_id[added[:, 0], added[:, 1]]))
+        walk = _walk(pred, int(vertex[target]))
+        start = int(source_nodes[np.flatnonzero(vertex[source_nodes] == walk[0])[0]])
+        corners = walker.corners(walk, node_list[start], node_list[target])
+        add_chain(node_list, edge_list, start, target, corners)
+        added = np.array(node_list[len(vertex) :], dtype=np.float64).reshape(-1, 2)
+        vertex = np.concatenate((vertex, walker.vertex(added)))
     return np.array(node_list, dtype=np.float64).reshape(-1, 2), np.array(
         sorted(set(edge_list)), dtype=np.int64
     )
