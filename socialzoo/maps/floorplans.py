@@ -148,7 +148,7 @@ def atrium(
     # The hall: open on each side through two wide openings.
     openings = [(0.25 * w, 3.0), (0.75 * w, 3.0)]
     draw.wall((0, 0), (w, 0), openings)
-    draw.wall((0, h), (w, h), [(0.25 * w, 3.0), (0.75 * w, 3.0)])
+    draw.wall((0, h), (w, h), openings)
     draw.wall((0, 0), (0, h), [(0.5 * h, 3.0)])
     draw.wall((w, 0), (w, h), [(0.5 * h, 3.0)])
     for x in np.arange(pillar_spacing, w - 1.0, pillar_spacing):
@@ -159,16 +159,12 @@ def atrium(
     # The outer wall of the corridor ring, with doors into rooms on the south and north sides.
     room_depth = float(rng.uniform(4.0, 6.0))
     spans = np.linspace(-r, w + r, num_rooms + 1)
-    doors_s = [
-        (float(a + _door_at(rng, b - a, door_width) + r), door_width)
-        for a, b in itertools.pairwise(spans.tolist())
-    ]
-    doors_n = [
-        (float(a + _door_at(rng, b - a, door_width) + r), door_width)
-        for a, b in itertools.pairwise(spans.tolist())
-    ]
-    draw.wall((-r, -r), (w + r, -r), doors_s)
-    draw.wall((-r, h + r), (w + r, h + r), doors_n)
+    for y in (-r, h + r):
+        doors = [
+            (float(a + _door_at(rng, b - a, door_width) + r), door_width)
+            for a, b in itertools.pairwise(spans.tolist())
+        ]
+        draw.wall((-r, y), (w + r, y), doors)
     draw.wall((-r, -r), (-r, h + r))
     draw.wall((w + r, -r), (w + r, h + r))
     for y0, y1 in ((-r, -r - room_depth), (h + r, h + r + room_depth)):

@@ -138,9 +138,8 @@ def _simplify_loop(corners: np.ndarray, tolerance: float) -> np.ndarray:
     """A closed polygon (L, 2) simplified by Douglas-Peucker, split at its two farthest points."""
     if len(corners) <= 4:
         return corners
-    start = 0
-    far = int(np.argmax(((corners - corners[start]) ** 2).sum(-1)))
-    first = corners[start : far + 1]
+    far = int(np.argmax(((corners - corners[0]) ** 2).sum(-1)))
+    first = corners[: far + 1]
     second = np.concatenate((corners[far:], corners[:1]))
     a = first[_douglas_peucker(first, tolerance)]
     b = second[_douglas_peucker(second, tolerance)]
