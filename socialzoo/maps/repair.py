@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -96,17 +95,6 @@ class RepairReport:
         """Record a repair of `kind` and log its message."""
         self.repairs.append(Repair(kind, message))
         logger.debug("repair: %s", message)
-
-    def __len__(self) -> int:
-        return len(self.repairs)
-
-    def counts(self) -> dict[str, int]:
-        """Number of repairs of each kind."""
-        return dict(Counter(r.kind for r in self.repairs))
-
-    def lines(self) -> list[str]:
-        """One line per repair."""
-        return [r.message for r in self.repairs]
 
     def to_json(self) -> list[dict[str, str]]:
         """Every repair as plain JSON, in the order made."""

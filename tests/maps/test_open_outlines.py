@@ -69,7 +69,7 @@ def test_doorways_at_the_corners_are_closed_diagonally():
     g = 3.0
     walls = np.array([(g, 0, 10 - g, 0), (10, g, 10, 7.5 - g), (10 - g, 7.5, g, 7.5), (0, 7.5 - g, 0, g)])
     m, report = repair_map("corners", walls)
-    assert report.counts()["outline_closed"] == 1
+    assert [r.kind for r in report.repairs].count("outline_closed") == 1
     assert in_room(m.legal_poses[:, :2]).all() and m.walkable_area > 40.0
     closures = free_space(walls).closures
     lengths = np.hypot(closures[:, 2] - closures[:, 0], closures[:, 3] - closures[:, 1])
@@ -81,7 +81,7 @@ def test_an_enclosed_closet_does_not_hide_the_open_room_around_it():
     # twice as large once its 4 m doorways are closed, so the room is the building.
     closet = [(0.5, 0.5, 3.0, 0.5), (3.0, 0.5, 3.0, 3.0), (3.0, 3.0, 0.5, 3.0), (0.5, 3.0, 0.5, 0.5)]
     m, report = repair_map("closet", np.concatenate((gapped_room(4.0), np.array(closet, float))))
-    assert report.counts()["outline_closed"] == 1
+    assert [r.kind for r in report.repairs].count("outline_closed") == 1
     assert m.walkable_area > 45.0
     assert (m.legal_poses[:, 0] > 3.0).any() and in_room(m.legal_poses[:, :2]).all()
 

@@ -59,8 +59,8 @@ def test_graph_node_on_a_wall_is_moved_and_edges_through_walls_rerouted(go_alone
     m, report = repair_map("repaired", walls, nodes=nodes, edges=edges, legal_poses=poses)
     validate_map(m)
     assert {"node_moved", "edge_rerouted", "pose_moved"} <= kinds(report)
-    assert any("graph.nodes[1] at (8.00, 2.00) is 0.07 m from wall" in line for line in report.lines())
-    assert m.provenance is not None and len(m.provenance["repairs"]) == len(report)
+    assert any("graph.nodes[1] at (8.00, 2.00) is 0.07 m from wall" in r.message for r in report.repairs)
+    assert m.provenance is not None and len(m.provenance["repairs"]) == len(report.repairs)
     # Moved nodes and poses stand clear of the walls; the rerouted edges go through the door.
     assert nearest_walls(m.wall_index, m.nodes)[0].min() >= 0.35
     assert nearest_walls(m.wall_index, m.legal_poses[:, :2])[0].min() >= 0.35
@@ -74,7 +74,7 @@ def test_stray_components_are_joined_through_the_free_space_or_dropped():
     edges = np.array([[0, 1], [2, 3], [4, 5]])
     m, report = repair_map("joined", walls, nodes=nodes, edges=edges, seed_point=(2.0, 4.0))
     assert {"component_joined", "component_dropped", "poses_generated"} <= kinds(report)
-    dropped = [line for line in report.lines() if "dropped" in line]
+    dropped = [r.message for r in report.repairs if "dropped" in r.message]
     assert len(dropped) == 1 and "2 node(s) around (31.00, 30.00)" in dropped[0]
     assert m.nodes[:, 0].max() < 16 and len(m.legal_poses) >= 2
     assert np.isfinite(route_lengths(m)).all()

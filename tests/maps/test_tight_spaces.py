@@ -42,7 +42,7 @@ def test_a_given_graph_in_a_wing_with_an_open_outline_keeps_its_free_space():
     m, report = repair_map(
         "wing", np.array(closed + wing, float), nodes=nodes, edges=np.array([[0, 1], [1, 2]])
     )
-    assert report.counts() == {"outline_closed": 1, "poses_generated": 1}
-    assert "openings in the building's outline up to 4 m wide count as closed" in report.lines()[0]
+    assert [r.kind for r in report.repairs] == ["outline_closed", "poses_generated"]
+    assert "openings in the building's outline up to 4 m wide count as closed" in report.repairs[0].message
     np.testing.assert_array_equal(m.nodes, nodes)
     assert (m.legal_poses[:, 0] > 20.0).all() and len(m.legal_poses) >= 5
