@@ -155,15 +155,11 @@ def _replay_case(args: argparse.Namespace) -> int:
         raise ValueError(f"name the policies to play on {args.env} (--policy)")
     case = 0 if args.case is None else args.case
     overrides = given(args, "max_steps")
-    built = [
-        (
-            spec,
-            make_policy(spec.name, task=probe.name, observation_space=probe.observation_space, **spec.kwargs),
-        )
-        for spec in specs
-    ]
+    # Every policy is built before any episode runs.
+    space = probe.observation_space
+    policies = [make_policy(s.name, task=probe.name, observation_space=space, **s.kwargs) for s in specs]
     traces, task = [], probe
-    for spec, policy in built:
+    for spec, policy in zip(specs, policies, strict=True):
         acting = {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
         trace, task = record_case(args.env, policy, args.split, case, label=spec.label, **acting)
         traces.append(trace)
