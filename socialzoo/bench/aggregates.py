@@ -24,7 +24,7 @@ scipy.stats.bootstrap where the two define the same interval (seeds only).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,7 +40,6 @@ SEED_RESAMPLES = 5_000
 PROFILE_TAUS: tuple[float, ...] = tuple(np.round(np.linspace(0.0, 1.0, 21), 2).tolist())
 
 ScoreSet = Sequence[np.ndarray]  # one (K_m, N_m) score matrix per stratum
-Statistic = Callable[[np.ndarray], np.ndarray]  # (R, runs) seed scores -> (R,) values
 
 
 def _matrices(scores: ScoreSet | np.ndarray) -> list[np.ndarray]:
@@ -100,46 +99,9 @@ def resample_seed_scores(
     return np.concatenate(columns, axis=1)
 
 
-def mean_statistic(runs: np.ndarray) -> np.ndarray:
-    """The mean of each resample's seed scores ((R, runs) -> (R,))."""
-    return runs.mean(axis=1)
-
-
-def iqm_statistic(runs: np.ndarray) -> np.ndarray:
-    """The IQM of each resample's seed scores ((R, runs) -> (R,))."""
-    return np.asarray(iqm(runs, axis=1))
-
-
-def bootstrap_interval(
-    scores: ScoreSet | np.ndarray,
-    statistic: Statistic,
-    *,
-    confidence: float = SEED_CONFIDENCE,
-    resamples: int = SEED_RESAMPLES,
-    rng: np.random.Generator,
-    scenarios: bool = True,
-) -> Interval:
-    """statistic(seed scores) with its stratified bootstrap percentile interval.
-
-    Args:
-        scores: one (seeds, scenarios) matrix per stratum, or one matrix.
-        statistic: (R, runs) seed scores -> (R,) values (mean_statistic, iqm_statistic).
-        confidence: two-sided level.
-        resamples: bootstrap resamples.
-        rng: the resamples' generator (seed it: tables are reproducible).
-        scenarios: resample the scenarios too (else the seeds only).
-
-    Returns:
-        Interval(value, low, high, n) with n the number of seed runs; with a single seed and a
-        single scenario per stratum the bounds equal the value.
-    """
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
-    runs = seed_scores(scores)
-    value = float(statistic(runs[None, :])[0])
-    samples = statistic(resample_seed_scores(scores, resamples=resamples, rng=rng, scenarios=scenarios))
-    low, high = np.quantile(samples, [0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence])
-    return Interval(value, float(low), float(high), int(runs.size))
+def _levels(confidence: float) -> list[float]:
+    """The two quantiles of a two-sided percentile interval at `confidence`."""
+    return [0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence]
 
 
 @dataclass(frozen=True)
@@ -172,11 +134,10 @@ def aggregate(
     mats = _matrices(scores)
     runs = seed_scores(mats)
     samples = resample_seed_scores(mats, resamples=resamples, rng=rng, scenarios=scenarios)
-    levels = [0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence]
     out = []
-    for statistic in (mean_statistic, iqm_statistic):
-        value = float(statistic(runs[None, :])[0])
-        low, high = np.quantile(statistic(samples), levels)
+    for statistic in (np.mean, iqm):  # each resample's (row's) mean and IQM of its seed scores
+        value = float(statistic(runs))
+        low, high = np.quantile(statistic(samples, axis=1), _levels(confidence))
         out.append(Interval(value, float(low), float(high), int(runs.size)))
     return SeedAggregate(out[0], out[1], tuple(float(v) for v in runs), sum(m.shape[1] for m in mats))
 
@@ -194,11 +155,9 @@ def performance_profile(
     with stratified bootstrap bands (rliable's performance profile)."""
     runs = seed_scores(scores)
     samples = resample_seed_scores(scores, resamples=resamples, rng=rng, scenarios=scenarios)
-    levels = [0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence]
     out = []
     for tau in taus:
-        shares = (samples > tau).mean(axis=1)
-        low, high = np.quantile(shares, levels)
+        low, high = np.quantile((samples > tau).mean(axis=1), _levels(confidence))
         out.append(Interval(float((runs > tau).mean()), float(low), float(high), int(runs.size)))
     return out
 
@@ -248,7 +207,7 @@ def probability_of_improvement(
         pb = np.take_along_axis(rb, rng.integers(0, b.shape[0], size=(resamples, b.shape[0])), axis=1)
         samples.append(_improvement(pa, pb))
     per_resample = np.mean(samples, axis=0)
-    low, high = np.quantile(per_resample, [0.5 - 0.5 * confidence, 0.5 + 0.5 * confidence])
+    low, high = np.quantile(per_resample, _levels(confidence))
     return Interval(float(np.mean(values)), float(low), float(high), sum(a.shape[0] for a in xs))
 
 

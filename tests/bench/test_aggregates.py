@@ -6,10 +6,7 @@ import pytest
 
 from socialzoo.bench.aggregates import (
     aggregate,
-    bootstrap_interval,
     iqm,
-    iqm_statistic,
-    mean_statistic,
     performance_profile,
     probability_of_improvement,
     score_matrix,
@@ -35,9 +32,9 @@ def test_seed_bootstrap_by_hand():
     a resample of 2 seeds has mean 0 w.p. 1/4, 0.5 w.p. 1/2, 1 w.p. 1/4. So the 80% interval
     (10% and 90% quantiles) is [0, 1] and the 40% interval (30%, 70%) is [0.5, 0.5]."""
     scores = np.array([[0.0], [1.0]])
-    wide = bootstrap_interval(scores, mean_statistic, confidence=0.8, resamples=20_000, rng=rng())
+    wide = aggregate(scores, confidence=0.8, resamples=20_000, rng=rng()).mean
     assert (wide.value, wide.low, wide.high, wide.n) == (0.5, 0.0, 1.0, 2)
-    narrow = bootstrap_interval(scores, mean_statistic, confidence=0.4, resamples=20_000, rng=rng())
+    narrow = aggregate(scores, confidence=0.4, resamples=20_000, rng=rng()).mean
     assert (narrow.low, narrow.high) == (0.5, 0.5)
 
 
@@ -45,11 +42,11 @@ def test_scenario_bootstrap_by_hand():
     """One seed that succeeded on one of two scenarios: resampling the scenarios gives 0, 0.5 or 1
     with 1/4, 1/2, 1/4, the same intervals as above; without scenario resampling, none."""
     scores = np.array([[1.0, 0.0]])
-    wide = bootstrap_interval(scores, mean_statistic, confidence=0.8, resamples=20_000, rng=rng())
+    wide = aggregate(scores, confidence=0.8, resamples=20_000, rng=rng()).mean
     assert (wide.low, wide.high) == (0.0, 1.0)
-    narrow = bootstrap_interval(scores, mean_statistic, confidence=0.4, resamples=20_000, rng=rng())
+    narrow = aggregate(scores, confidence=0.4, resamples=20_000, rng=rng()).mean
     assert (narrow.low, narrow.high) == (0.5, 0.5)
-    fixed = bootstrap_interval(scores, mean_statistic, resamples=100, rng=rng(), scenarios=False)
+    fixed = aggregate(scores, resamples=100, rng=rng(), scenarios=False).mean
     assert (fixed.value, fixed.low, fixed.high) == (0.5, 0.5, 0.5)
 
 
@@ -57,9 +54,9 @@ def test_strata_are_resampled_apart():
     """Two strata of one seed each (0.0 and 1.0): seeds are resampled within a stratum, so every
     resample keeps one of each and the mean is always 0.5; pooled as one stratum it would not be."""
     strata = [np.array([[0.0]]), np.array([[1.0]])]
-    interval = bootstrap_interval(strata, mean_statistic, resamples=1000, rng=rng())
+    interval = aggregate(strata, resamples=1000, rng=rng()).mean
     assert (interval.value, interval.low, interval.high, interval.n) == (0.5, 0.5, 0.5, 2)
-    pooled = bootstrap_interval(np.array([[0.0], [1.0]]), mean_statistic, resamples=1000, rng=rng())
+    pooled = aggregate(np.array([[0.0], [1.0]]), resamples=1000, rng=rng()).mean
     assert pooled.low == 0.0 and pooled.high == 1.0
 
 
@@ -68,8 +65,8 @@ def test_seeds_only_matches_scipy_bootstrap():
 
     rates = np.array([0.42, 0.55, 0.61, 0.48, 0.70, 0.52, 0.66])
     scores = rates[:, None]
-    for statistic, function in ((mean_statistic, np.mean), (iqm_statistic, iqm)):
-        ours = bootstrap_interval(scores, statistic, resamples=20_000, rng=rng(1), scenarios=False)
+    ours_both = aggregate(scores, resamples=20_000, rng=rng(1), scenarios=False)
+    for ours, function in ((ours_both.mean, np.mean), (ours_both.iqm, iqm)):
         theirs = bootstrap(
             (rates,),
             lambda x, axis, f=function: f(x, axis=axis),
