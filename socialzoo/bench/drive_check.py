@@ -31,7 +31,7 @@ is given.
 from __future__ import annotations
 
 import math
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.env.config import EnvConfig
 from socialzoo.maps.map_file import Map
 from socialzoo.nav.subpolicies import GO_ALONE
@@ -137,9 +138,7 @@ class DriveReport:
 
     def counts(self) -> dict[str, int]:
         """Failed routes by cause (causes with none left out)."""
-        out: dict[str, int] = {}
-        for r in self.failures:
-            out[r.cause] = out.get(r.cause, 0) + 1
+        out = Counter(r.cause for r in self.failures)
         return {c: out[c] for c in DRIVE_CAUSES if c in out}
 
     def lines(self, limit: int | None = 50) -> list[str]:
@@ -296,7 +295,10 @@ def _judge(task: Any, row: int, start: int, goal: int, summary: dict, trace: np.
     # The joins of the start and goal poses to the graph, as the robot's plans make them.
     poses = core.scenarios[row].robot_starts[0, :2], core.scenarios[row].robot_goals[0, :2]
     att = core.navigator.graph.attach(np.stack(poses), strict=False, clearance=wall_distance)
-    on_join = [bool(att.found[k]) and _segment_gap(where, poses[k], att.point[k]) < 0.25 for k in (0, 1)]
+    on_join = [
+        bool(att.found[k]) and closest_point_on_segment(where, poses[k], att.point[k])[1] < 0.25
+        for k in (0, 1)
+    ]
     if not summary["stuck"]:
         cause = "timeout"
     elif narrow and on_join[1]:
@@ -312,13 +314,6 @@ def _judge(task: Any, row: int, start: int, goal: int, summary: dict, trace: np.
     if cause in ("timeout", "oscillation", "stuck"):
         where, gap = stop.copy(), math.nan
     return RouteDrive(start, goal, False, time, stop, cause, where, gap)
-
-
-def _segment_gap(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    """Distance from a point (2,) to the segment [a, b], m."""
-    ab = b - a
-    t = float(np.clip(np.dot(point - a, ab) / max(float(np.dot(ab, ab)), 1e-12), 0.0, 1.0))
-    return float(np.hypot(*(a + t * ab - point)))
 
 
 def _narrowest_ahead(field: object, path: np.ndarray, pos: np.ndarray) -> tuple[int, np.ndarray, float]:

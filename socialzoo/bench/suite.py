@@ -20,7 +20,7 @@ import logging
 import re
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal, get_args
 
@@ -148,17 +148,10 @@ class SuiteConfig:
         return self.policies or DEFAULT_POLICIES[self.task]
 
     def to_json(self) -> dict[str, Any]:
-        """The config as plain JSON values."""
-        return {
+        """The config as plain JSON values (the policies run, not only those named)."""
+        return asdict(self) | {
             "policies": list(self.policy_specs),
             "scenarios": list(self.scenarios),
-            "task": self.task,
-            "seeds": self.seeds,
-            "backend": self.backend,
-            "address": self.address,
-            "workers": self.workers,
-            "batch_size": self.batch_size,
-            "replays": self.replays,
             "metrics": list(self.metrics),
         }
 
