@@ -98,10 +98,9 @@ class BenchmarkConfig:
             check_humans(self.humans)
         except ValueError as err:
             raise ValueError(f"BenchmarkConfig.humans: {err}") from None
-        if not isinstance(self.counterfactual, bool):
-            raise ValueError(f"BenchmarkConfig.counterfactual must be a bool, got {self.counterfactual!r}")
-        if not isinstance(self.human_metrics, bool):
-            raise ValueError(f"BenchmarkConfig.human_metrics must be a bool, got {self.human_metrics!r}")
+        for name in ("counterfactual", "human_metrics"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"BenchmarkConfig.{name} must be a bool, got {getattr(self, name)!r}")
 
         object.__setattr__(self, "policies", tuple(self.policies))
         object.__setattr__(self, "maps", tuple(self.maps))
@@ -154,9 +153,9 @@ class BenchmarkConfig:
 def quick_config(**changes: Any) -> BenchmarkConfig:
     """The quick benchmark (`make run`): GoAlone, Ref and the shipped learned policies, 100 trials on
     each quick test set, a GIF."""
-    base: dict[str, Any] = {"policies": QUICK_POLICIES, "maps": QUICK_MAPS, "quick": True, "gif": True}
-    base.update(changes)
-    return BenchmarkConfig(**base)
+    return BenchmarkConfig(
+        **{"policies": QUICK_POLICIES, "maps": QUICK_MAPS, "quick": True, "gif": True, **changes}
+    )
 
 
 @dataclass(frozen=True)
@@ -330,11 +329,10 @@ def _resolve_test_sets(
 
     out = {}
     for m in config.maps:
+        name = config.test_set_name(m)
         if test_sets is not None and m in test_sets:
             out[m] = test_sets[m]
-            continue
-        name = config.test_set_name(m)
-        if name in TEST_SETS:
+        elif name in TEST_SETS:
             out[m] = TEST_SETS[name]
         else:
             out[m] = stored_test_set(m, out_dir, config.trials, quick=config.quick)
