@@ -249,31 +249,21 @@ def summarize_humans(
         maps: the order of the maps.
         confidence: two-sided level.
     """
+    from socialzoo.bench.aggregates import cell_generator
     from socialzoo.bench.stats import count_interval, mean_interval
-    from socialzoo.bench.tables import cell_rng, ordered
+    from socialzoo.bench.tables import ordered_groups
 
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for row in rows:
-        groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in ordered([k[0] for k in groups], policies):
-        for map_name in ordered([k[1] for k in groups], maps):
-            group = groups.get((policy, map_name), [])
-            if not group:
-                continue
-            entry: dict[str, Any] = {"policy": policy, "map": map_name, "trials": len(group)}
-            for key in HUMAN_METRIC_KEYS:
-                values = np.array([np.nan if r.get(key) is None else float(r[key]) for r in group])
-                if key in _COUNT_KEYS:
-                    ci = count_interval(values, confidence, rng=cell_rng(0, policy, map_name, key))
-                else:
-                    ci = mean_interval(values, confidence)
-                entry[f"{key}_mean"], entry[f"{key}_ci_low"], entry[f"{key}_ci_high"] = (
-                    ci.value,
-                    ci.low,
-                    ci.high,
-                )
-            out.append(entry)
+    for policy, map_name, group in ordered_groups(rows, policies, maps):
+        entry: dict[str, Any] = {"policy": policy, "map": map_name, "trials": len(group)}
+        for key in HUMAN_METRIC_KEYS:
+            values = np.array([np.nan if r.get(key) is None else float(r[key]) for r in group])
+            if key in _COUNT_KEYS:
+                ci = count_interval(values, confidence, rng=cell_generator(0, policy, map_name, key))
+            else:
+                ci = mean_interval(values, confidence)
+            entry |= {f"{key}_mean": ci.value, f"{key}_ci_low": ci.low, f"{key}_ci_high": ci.high}
+        out.append(entry)
     return out
 
 
@@ -281,7 +271,7 @@ def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: s
     """humans.csv (every column) and humans.md (a table per map, metrics as rows) in out_dir."""
     from pathlib import Path
 
-    from socialzoo.bench.tables import write_csv, write_text_atomic
+    from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
 
     out = Path(out_dir)
     columns = ["policy", "map", "trials"] + [
@@ -291,19 +281,15 @@ def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: s
     lines = [f"# {title}", "", "Means over trials with 90% intervals (bootstrap for collision counts).", ""]
     for map_name in dict.fromkeys(e["map"] for e in summary):
         entries = [e for e in summary if e["map"] == map_name]
-        lines += [
-            f"## {map_name}",
-            "",
-            "| metric | " + " | ".join(f"{e['policy']} ({e['trials']})" for e in entries) + " |",
-        ]
-        lines.append("|---|" + "---|" * len(entries))
-        for key in HUMAN_METRIC_KEYS:
-            label, digits = HUMAN_METRIC_LABELS[key]
-            cells = [
-                _cell(e[f"{key}_mean"], e[f"{key}_ci_low"], e[f"{key}_ci_high"], digits) for e in entries
+        header = ["metric", *(f"{e['policy']} ({e['trials']})" for e in entries)]
+        cells = [
+            [
+                label,
+                *(_cell(e[f"{key}_mean"], e[f"{key}_ci_low"], e[f"{key}_ci_high"], digits) for e in entries),
             ]
-            lines.append(f"| {label} | " + " | ".join(cells) + " |")
-        lines.append("")
+            for key, (label, digits) in HUMAN_METRIC_LABELS.items()
+        ]
+        lines += [f"## {map_name}", "", *markdown_table(header, cells), ""]
     files.append(write_text_atomic(out / "humans.md", "\n".join(lines)))
     return files
 

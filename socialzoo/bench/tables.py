@@ -13,15 +13,15 @@ import csv
 import io
 import math
 import os
-import zlib
 from collections import Counter
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from socialzoo.bench.aggregates import cell_generator
 from socialzoo.bench.stats import (
     BOOTSTRAP_RESAMPLES,
     CONFIDENCE,
@@ -208,18 +208,25 @@ def csv_columns() -> list[str]:
     return PAPER_LAYOUT.csv_columns()
 
 
-def cell_rng(seed: int, policy: str, map_name: str, metric: str) -> np.random.Generator:
-    """The bootstrap generator of one table cell: seeded by `seed` and the cell's names."""
-    names = [zlib.crc32(text.encode()) for text in (policy, map_name, metric)]
-    return np.random.default_rng([seed, *names])
-
-
 def ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
     """The distinct values, those of `order` first in its order, the others as they first appear."""
     seen = list(dict.fromkeys(values))
     if order is None:
         return seen
     return [v for v in order if v in seen] + [v for v in seen if v not in order]
+
+
+def ordered_groups(
+    rows: Sequence[Mapping[str, Any]], policies: Sequence[str] | None, maps: Sequence[str] | None
+) -> Iterator[tuple[str, str, list[Mapping[str, Any]]]]:
+    """(policy, map, its rows) of every pair the rows hold, policies and maps `ordered`."""
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["policy"], row["map"]), []).append(row)
+    for policy in ordered([k[0] for k in groups], policies):
+        for map_name in ordered([k[1] for k in groups], maps):
+            if (policy, map_name) in groups:
+                yield policy, map_name, groups[(policy, map_name)]
 
 
 def summarize(
@@ -237,55 +244,49 @@ def summarize(
         policies: display order of the policies (others follow in order of appearance).
         maps: display order of the maps (likewise).
         confidence: two-sided level of the intervals.
-        seed: seed of the count intervals' bootstrap resamples (see `cell_rng`).
+        seed: seed of the count intervals' bootstrap resamples, one generator per cell with its names
+            (socialzoo.bench.aggregates.cell_generator).
 
     Returns:
         Dicts keyed by `csv_columns()`: success rate with a Wilson interval, mean counts
         (COUNT_METRICS) with bootstrap (BCa) intervals, other metric means with Student-t
         intervals (NaN where a metric is missing or has fewer than 2 finite values).
     """
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for row in rows:
-        groups.setdefault((row["policy"], row["map"]), []).append(row)
     out = []
-    for policy in ordered([k[0] for k in groups], policies):
-        for map_name in ordered([k[1] for k in groups], maps):
-            group = groups.get((policy, map_name))
-            if not group:
-                continue
-            success = np.array([bool(r["success"]) for r in group])
-            rate = rate_interval(int(success.sum()), len(group), confidence)
-            entry: dict[str, Any] = {
-                "policy": policy,
-                "map": map_name,
-                "test_set": ",".join(sorted({str(r["test_set"]) for r in group})),
-                "trials": len(group),
-                "success_rate": rate.value,
-                "success_ci_low": rate.low,
-                "success_ci_high": rate.high,
-            }
-            causes = [failure_cause(r) for r in group]
-            for cause in FAILURE_LABELS:
-                share = rate_interval(causes.count(cause), len(group), confidence)
-                entry[f"failure_{cause}_rate"] = share.value
-                entry[f"failure_{cause}_ci_low"] = share.low
-                entry[f"failure_{cause}_ci_high"] = share.high
-            for name, _ in TABLE_METRICS:
-                values = np.array(
-                    [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
-                )
-                if name in SUCCESS_ONLY:
-                    values = values[success]
-                if name in COUNT_METRICS:
-                    ci = count_interval(values, confidence, rng=cell_rng(seed, policy, map_name, name))
-                else:
-                    ci = mean_interval(values, confidence)
-                entry[f"{name}_mean"] = ci.value
-                entry[f"{name}_ci_low"] = ci.low
-                entry[f"{name}_ci_high"] = ci.high
-                if name in SUCCESS_ONLY:
-                    entry[f"{name}_n"] = ci.n
-            out.append(entry)
+    for policy, map_name, group in ordered_groups(rows, policies, maps):
+        success = np.array([bool(r["success"]) for r in group])
+        rate = rate_interval(int(success.sum()), len(group), confidence)
+        entry: dict[str, Any] = {
+            "policy": policy,
+            "map": map_name,
+            "test_set": ",".join(sorted({str(r["test_set"]) for r in group})),
+            "trials": len(group),
+            "success_rate": rate.value,
+            "success_ci_low": rate.low,
+            "success_ci_high": rate.high,
+        }
+        causes = [failure_cause(r) for r in group]
+        for cause in FAILURE_LABELS:
+            share = rate_interval(causes.count(cause), len(group), confidence)
+            entry[f"failure_{cause}_rate"] = share.value
+            entry[f"failure_{cause}_ci_low"] = share.low
+            entry[f"failure_{cause}_ci_high"] = share.high
+        for name, _ in TABLE_METRICS:
+            values = np.array(
+                [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
+            )
+            if name in SUCCESS_ONLY:
+                values = values[success]
+            if name in COUNT_METRICS:
+                ci = count_interval(values, confidence, rng=cell_generator(seed, policy, map_name, name))
+            else:
+                ci = mean_interval(values, confidence)
+            entry[f"{name}_mean"] = ci.value
+            entry[f"{name}_ci_low"] = ci.low
+            entry[f"{name}_ci_high"] = ci.high
+            if name in SUCCESS_ONLY:
+                entry[f"{name}_n"] = ci.n
+        out.append(entry)
     return out
 
 

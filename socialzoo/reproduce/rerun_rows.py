@@ -113,7 +113,7 @@ def _trials(folder: Path, spec: str, map_name: str, trials: int) -> list[dict[st
 
 def _summary(rows: list[dict[str, Any]], policy: str) -> dict[str, Any]:
     """The summary entry of trial rows under the published label (its bootstrap streams are
-    seeded by the label, socialzoo.bench.tables.cell_rng)."""
+    seeded by the label, socialzoo.bench.aggregates.cell_generator)."""
     return summarize([{**r, "policy": policy} for r in rows])[0]
 
 
