@@ -238,7 +238,7 @@ def read_csv(path: str | Path) -> list[dict[str, Any]]:
             short); the message names the file and line.
     """
     path = Path(path)
-    text = _read_text(path)
+    text = read_text(path, "results file", ResultsError)
     reader = csv.DictReader(io.StringIO(text, newline=""))
     rows = []
     try:
@@ -249,10 +249,6 @@ def read_csv(path: str | Path) -> list[dict[str, Any]]:
     except csv.Error as err:  # a NUL byte or a quote left open
         raise ResultsError(f"{path}:{reader.line_num}: not a CSV file ({err})") from None
     return rows
-
-
-def _read_text(path: Path) -> str:
-    return read_text(path, "results file", ResultsError)
 
 
 def _read_json(path: Path, kind: type) -> Any:
