@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.core.files import read_json
-from socialzoo.reproduce.plan import Settings, settings_hash
+from socialzoo.reproduce.plan import VOLATILE_FIELDS, Settings, settings_hash
 
 logger = logging.getLogger(__name__)
 
@@ -38,11 +38,6 @@ class LedgerError(ValueError):
 class SettingsMismatch(LedgerError):
     """A work folder that holds items of other settings (or whose settings.json is unreadable, so
     that whose items they are cannot be told)."""
-
-
-def _read_json(file: Path, what: str, error: type[LedgerError]) -> dict[str, Any]:
-    """The JSON object in `file`; `error` naming the file if it is not one."""
-    return read_json(file, what, error, kind=dict)
 
 
 def write_json(path: Path, data: Any) -> None:
@@ -87,7 +82,7 @@ class Ledger:
         record: dict[str, Any] = {"hash": self.hash, "settings": settings.to_json()}
         file = self.work / SETTINGS_FILE
         if file.exists():
-            stored = _read_json(file, "settings record; not mixing items with it", SettingsMismatch)
+            stored = read_json(file, "settings record; not mixing items with it", SettingsMismatch, kind=dict)
             if (
                 stored.get("hash") != self.hash
                 or not isinstance(stored.get("settings"), dict)
@@ -110,7 +105,7 @@ class Ledger:
         file = self.work / TIMINGS_FILE
         if not file.exists():
             return {}
-        data = _read_json(file, "timings record", LedgerError)
+        data = read_json(file, "timings record", LedgerError, kind=dict)
         for part, entry in data.items():
             if not isinstance(entry, dict) or not isinstance(entry.get("sessions"), list):
                 raise LedgerError(f"{file}: unreadable timings record ({part!r} has no list of sessions)")
@@ -154,6 +149,4 @@ class Ledger:
 
 
 def _comparable(settings: dict[str, Any]) -> dict[str, Any]:
-    from socialzoo.reproduce.plan import VOLATILE_FIELDS
-
     return {k: v for k, v in settings.items() if k not in VOLATILE_FIELDS}

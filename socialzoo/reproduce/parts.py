@@ -71,12 +71,11 @@ def _train(ctx: Context, items: list[tuple[str, Any]]) -> tuple[list[Path], int]
     validation scenarios keeps its best one (socialzoo.train.validation.kept_policy)."""
     from socialzoo.train.validation import kept_policy
 
-    todo = sum(not finished(name, args) for name, args in items)
     pending = [(name, args) for name, args in items if not finished(name, args)]
     if pending:
         run_tasks(train_task, pending, backend=ctx.backend, workers=ctx.settings.workers)
     files = [train_task(item) for item in items]  # finished now: each returns its policy at once
-    return [kept_policy(f) for f in files], todo
+    return [kept_policy(f) for f in files], len(pending)
 
 
 # ---------------------------------------------------------------------------- parts
@@ -315,10 +314,7 @@ def _reference_set(ctx: Context, quirks: str) -> tuple[int, list[dict[str, Any]]
                         "policy": name,
                         "seed": seed,
                         "trials": int(r["trials"]),
-                        "success_rate": r["success_rate"],
-                        "success_ci_low": r["success_ci_low"],
-                        "success_ci_high": r["success_ci_high"],
-                        "average_step_reward_mean": r["average_step_reward_mean"],
+                        **{column: r[column] for column in REFERENCE_COLUMNS[5:]},  # success, reward
                     }
                 )
     return made, rows

@@ -44,15 +44,10 @@ class Context:
         return self.ledger.settings
 
     @property
-    def ray(self) -> bool:
-        """True on the Ray backend."""
-        return self.backend == "ray"
-
-    @property
     def pooled(self) -> bool:
         """True when trainings run in other processes (Ray tasks, or several local workers), where
         they show no progress bars."""
-        return self.ray or self.settings.workers > 1
+        return self.backend == "ray" or self.settings.workers > 1
 
 
 def finished(name: str, args: Any) -> bool:

@@ -82,16 +82,9 @@ def _groups(ctx: Context) -> list[Any]:
         except (KeyError, FileNotFoundError, ValueError):
             continue  # a part not (fully) run for every seed yet
         for name, runs in by_policy.items():
+            seeds, scored = zip(*runs, strict=True)  # (seed, scores) of each run
             groups.append(
-                SeedGroup(
-                    experiment,
-                    name,
-                    map_name,
-                    None,
-                    tuple(seed for seed, _ in runs),
-                    tuple(scores for _, scores in runs),
-                    PAPER_SUCCESS[name][index],
-                )
+                SeedGroup(experiment, name, map_name, None, seeds, scored, PAPER_SUCCESS[name][index])
             )
     lfd: dict[tuple[str, int], list[tuple[int, dict[int, float]]]] = {}
     items = lfd_items(ctx)
@@ -105,17 +98,8 @@ def _groups(ctx: Context) -> list[Any]:
         lfd = {}
     for (name, size), runs in lfd.items():
         paper = paper_lfd(name, size)
-        groups.append(
-            SeedGroup(
-                "lfd",
-                name,
-                "gdc1",
-                size,
-                tuple(seed for seed, _ in runs),
-                tuple(scores for _, scores in runs),
-                paper[0] if paper else None,
-            )
-        )
+        seeds, scored = zip(*runs, strict=True)
+        groups.append(SeedGroup("lfd", name, "gdc1", size, seeds, scored, paper[0] if paper else None))
     return groups
 
 
@@ -156,20 +140,20 @@ def selection_rows(ctx: Context) -> list[dict[str, Any]]:
 def _evaluations(path: Path) -> list[dict[str, float]]:
     if not path.is_file():
         return []
-    rows = []
-    for row in csv.DictReader(io.StringIO(path.read_text())):
-        rows.append({"step": int(row["step"]), "success": float(row["success"])})
-    return rows
+    return [
+        {"step": int(row["step"]), "success": float(row["success"])}
+        for row in csv.DictReader(io.StringIO(path.read_text()))
+    ]
 
 
 def _curve_success(path: Path) -> dict[tuple[str, int], float]:
     if not path.is_file():
         return {}
-    out = {}
-    for row in csv.DictReader(io.StringIO(path.read_text())):
-        if row["step"]:
-            out[(row["label"], int(float(row["step"])))] = float(row["success_rate"])
-    return out
+    return {
+        (row["label"], int(float(row["step"]))): float(row["success_rate"])
+        for row in csv.DictReader(io.StringIO(path.read_text()))
+        if row["step"]
+    }
 
 
 def write_seed_results(ctx: Context) -> list[Path]:
