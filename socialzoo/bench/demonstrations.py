@@ -84,10 +84,10 @@ class DemoConfig:
 
     def to_json(self) -> dict[str, Any]:
         """The config as plain JSON values (written into the recording's metadata)."""
-        data = dataclasses.asdict(self)
-        data["policy_kwargs"] = dict(self.policy_kwargs)
-        data["env_overrides"] = dict(self.env_overrides)
-        return data
+        return dataclasses.asdict(self) | {
+            "policy_kwargs": dict(self.policy_kwargs),
+            "env_overrides": dict(self.env_overrides),
+        }
 
     def test_set(self) -> TestSet:
         """The demonstration scenarios as a TestSet (name "<map>-demos")."""

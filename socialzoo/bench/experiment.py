@@ -142,12 +142,12 @@ class BenchmarkConfig:
 
     def to_json(self) -> dict[str, Any]:
         """Plain JSON form."""
-        data = dataclasses.asdict(self)
-        data["policies"] = list(self.policies)
-        data["maps"] = list(self.maps)
-        data["env_overrides"] = dict(self.env_overrides)
-        data["policy_kwargs"] = {k: dict(v) for k, v in self.policy_kwargs.items()}
-        return data
+        return dataclasses.asdict(self) | {
+            "policies": list(self.policies),
+            "maps": list(self.maps),
+            "env_overrides": dict(self.env_overrides),
+            "policy_kwargs": {k: dict(v) for k, v in self.policy_kwargs.items()},
+        }
 
 
 def quick_config(**changes: Any) -> BenchmarkConfig:

@@ -203,8 +203,12 @@ def table_entry(policy: str, map_name: str, test_set: str, summary: dict[str, An
     ("<name>_ci_low", "<name>_ci_high"; NaN where it has none)."""
     from socialzoo.bench.tables import value_key
 
-    entry: dict[str, Any] = {"policy": policy, "map": map_name, "test_set": test_set}
-    entry["trials"] = summary["episodes"]
+    entry: dict[str, Any] = {
+        "policy": policy,
+        "map": map_name,
+        "test_set": test_set,
+        "trials": summary["episodes"],
+    }
     for name in METRICS:
         if name in summary or f"{name}_rate" in summary:
             entry[value_key(name)] = summary.get(f"{name}_rate", summary.get(name))
