@@ -219,13 +219,6 @@ def source_digest(files: tuple[str, ...] = ()) -> str:
     return digest.hexdigest()
 
 
-def _map_digest(name: str) -> str:
-    from socialzoo.maps.map_file import load_map
-
-    text = json.dumps(load_map(name).to_json(), sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
 def config_hash(
     env_config: EnvConfig,
     policy: str,
@@ -245,6 +238,8 @@ def config_hash(
     its file, not its path (hashed_people).
     """
     from socialzoo.agents.base import policy_config
+    from socialzoo.bench.test_sets import map_sha256
+    from socialzoo.maps.map_file import load_map
 
     kwargs = dict(policy_kwargs or {})
     module_file = inspect.getsourcefile(type(policy_object))
@@ -253,7 +248,7 @@ def config_hash(
     payload = {
         "env_id": env_id_for(test_set.map_name),
         "env": env,
-        "map_sha256": _map_digest(env_config.map),
+        "map_sha256": map_sha256(load_map(env_config.map)),
         "code_sha256": source_digest((module_file,) if module_file else ()),
         "policy": {
             "name": policy,
