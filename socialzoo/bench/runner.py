@@ -361,12 +361,10 @@ class BatchedRunner:
             if len(finished) == 0:
                 continue
             summaries = task.episode_metrics(finished)
-            if humans is not None:
-                for summary, extra in zip(summaries, humans.summaries(finished), strict=True):
-                    summary.update(extra)
-            if table_one is not None:
-                for summary, extra in zip(summaries, table_one.summaries(finished), strict=True):
-                    summary.update(extra)
+            for recorder in (humans, table_one):
+                if recorder is not None:
+                    for summary, extra in zip(summaries, recorder.summaries(finished), strict=True):
+                        summary.update(extra)
             done_batch = []
             for row, summary in zip(finished.tolist(), summaries, strict=True):
                 t = row_trial[row]
