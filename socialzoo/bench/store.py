@@ -180,12 +180,12 @@ class ResultsStore:
             detail = "; ".join(str(p[0]) for p in problems[:3])
             raise StoreError(f"{self.path}: corrupted results store ({detail}); the file was left as it is")
         tables = self._tables()
-        if not {"meta", "configs", "trials"} <= tables or self._meta("format") != STORE_FORMAT:
+        if not {"meta", "configs", "trials"} <= tables or self.meta("format") != STORE_FORMAT:
             raise StoreError(
                 f"{self.path} is an SQLite database but not a socialzoo results store "
                 f"(tables: {sorted(tables)}); refusing to use or overwrite it"
             )
-        version = self._meta("schema_version")
+        version = self.meta("schema_version")
         if version is None or not version.isdigit() or int(version) > SCHEMA_VERSION:
             raise StoreError(
                 f"{self.path}: results store schema version {version!r} is not supported "
@@ -254,13 +254,14 @@ class ResultsStore:
             "done, or use another output directory"
         )
 
-    def _meta(self, key: str) -> str | None:
+    def meta(self, key: str) -> str | None:
+        """A meta entry, or None."""
         row = self._db.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
         return None if row is None else str(row[0])
 
     def _refresh_kinds(self) -> None:
         """Read the metric columns again: another process may have added some."""
-        kinds = self._json(self._meta("metric_kinds") or "{}", "meta.metric_kinds")
+        kinds = self._json(self.meta("metric_kinds") or "{}", "meta.metric_kinds")
         if not isinstance(kinds, dict) or not all(k in _SQL_TYPE for k in kinds.values()):
             raise StoreError(f"{self.path}: corrupted results store (meta.metric_kinds is {kinds!r})")
         self._kinds = kinds
@@ -290,10 +291,6 @@ class ResultsStore:
             raise ValueError(f"ResultsStore.set_meta: {key!r} is managed by the store")
         with self._write():
             self._db.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value))
-
-    def meta(self, key: str) -> str | None:
-        """A meta entry, or None."""
-        return self._meta(key)
 
     def register_config(self, config_hash: str, config: Mapping[str, Any]) -> None:
         """Record the resolved config behind a config hash (kept as first recorded)."""
