@@ -177,16 +177,9 @@ def replace_policy_rows(base_dir: str | Path, rerun: PolicyRerun) -> list[Path]:
         entry = _summary(per_seed[seeds[0]], name)
         _replace(path, lambda r: r["policy"], [{**published[name], **entry}])
         written.append(path)
+        scores = tuple(_scores(per_seed[s]) for s in seeds)
         groups.append(
-            SeedGroup(
-                experiment,
-                name,
-                map_name,
-                None,
-                tuple(seeds),
-                tuple(_scores(per_seed[s]) for s in seeds),
-                PAPER_SUCCESS[name][index],
-            )
+            SeedGroup(experiment, name, map_name, None, tuple(seeds), scores, PAPER_SUCCESS[name][index])
         )
         if experiment == "performance" and name in LFD_POLICIES:
             groups.append(_lfd(results, rerun, settings, per_seed, seeds))
@@ -229,15 +222,8 @@ def _lfd(
         raise RerunError(f"{path}: {len(mine)} rows of {rerun.policy} at {size} steps, not one")
     write_csv([rewrite(r) if r is mine[0] else r for r in rows], path, header)
     paper = paper_lfd(rerun.policy, size)
-    return SeedGroup(
-        "lfd",
-        rerun.policy,
-        "gdc1",
-        size,
-        tuple(seeds),
-        tuple(_scores(first[s]) for s in seeds),
-        paper[0] if paper else None,
-    )
+    scores = tuple(_scores(first[s]) for s in seeds)
+    return SeedGroup("lfd", rerun.policy, "gdc1", size, tuple(seeds), scores, paper[0] if paper else None)
 
 
 def _records(
