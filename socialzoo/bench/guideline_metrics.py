@@ -32,6 +32,7 @@ import numpy as np
 
 from socialzoo.core.geometry import wall_distances
 from socialzoo.core.metrics import names
+from socialzoo.core.validation import check_number
 
 # Registry order is the order of the table `socialzoo metrics` prints.
 GUIDELINE_KEYS: tuple[str, ...] = names("guidelines")
@@ -58,13 +59,9 @@ class GuidelineParams:
 
     def __post_init__(self) -> None:
         for name in ("personal_space", "stall_speed", "progress_time", "progress_distance"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-                raise ValueError(f"GuidelineParams.{name} must be a finite number, got {value!r}")
-            if value < 0 or (name == "progress_time" and value <= 0):
-                raise ValueError(
-                    f"GuidelineParams.{name} must be {'> 0' if name == 'progress_time' else '>= 0'}, got {value!r}"
-                )
+            check_number(
+                "GuidelineParams", name, getattr(self, name), low=0, low_open=name == "progress_time"
+            )
 
 
 @dataclass(frozen=True, kw_only=True)
