@@ -257,7 +257,6 @@ def _image_uri(path: Path) -> str | None:
 
 
 def _heatmaps(result: SuiteResult, folder: Path) -> list[str]:
-
     parts = ['<section id="heatmaps">', "<h2>Heatmaps</h2>"]
     for name in result.metrics:
         uri = _image_uri(folder / HEATMAPS_DIR / f"{name}.png")
@@ -276,7 +275,6 @@ def _heatmaps(result: SuiteResult, folder: Path) -> list[str]:
 
 
 def _scenario_card(result: SuiteResult, scenario: SuiteScenario) -> str:
-
     labels = policy_labels(result.policies)
     rows = []
     for policy in result.policies:
@@ -310,7 +308,6 @@ def _scenario_card(result: SuiteResult, scenario: SuiteScenario) -> str:
 
 
 def _tables(result: SuiteResult) -> list[str]:
-
     labels = policy_labels(result.policies)
     parts = [
         '<section id="tables">',
