@@ -31,7 +31,7 @@ from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.pips import PipsPolicy, ProgramError, load_program
 from socialzoo.bench import test_sets
 from socialzoo.bench.store import ResultsStore, StoreError
-from socialzoo.bench.tables import SummaryError, csv_columns, read_summary_csv, write_summary_csv
+from socialzoo.bench.tables import PAPER_LAYOUT, SummaryError, read_summary_csv, write_summary_csv
 from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.env.policy_file import PolicyFileError, read_policy_file
 from socialzoo.maps.importers import (
@@ -121,9 +121,9 @@ def _write_store(path: Path) -> None:
 
 
 def _write_summary(path: Path) -> None:
-    entry = {c: 0.25 for c in csv_columns()}
+    entry = {c: 0.25 for c in PAPER_LAYOUT.csv_columns()}
     entry.update(policy="ref", map=MAP, test_set="t", trials=4)
-    entry.update({c: 4 for c in csv_columns() if c.endswith("_n")})
+    entry.update({c: 4 for c in PAPER_LAYOUT.csv_columns() if c.endswith("_n")})
     write_summary_csv([entry, {**entry, "policy": "goalone"}], path)
 
 

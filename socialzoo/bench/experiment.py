@@ -309,12 +309,6 @@ def people_overrides(config: BenchmarkConfig) -> dict[str, Any]:
     return {"people": {"models": config.humans, "counterfactual": config.counterfactual}}
 
 
-def humans_record(config: BenchmarkConfig) -> dict[str, Any] | None:
-    """What the config hash records about the humans besides the env config: whether human
-    metrics are recorded; None without them, so the hashes of such runs are as before."""
-    return {"human_metrics": True} if config.human_metrics else None
-
-
 def _resolve_test_sets(
     config: BenchmarkConfig, test_sets: Mapping[str, TestSet] | None, out_dir: Path
 ) -> dict[str, TestSet]:
@@ -399,7 +393,9 @@ def run_benchmark(
         batch_size=config.batch_size,
         human_metrics=config.human_metrics,
     )
-    humans = humans_record(config)
+    # What the config hash records about the humans besides the env config: whether human metrics
+    # are recorded; None without them, so the hashes of such runs are as before.
+    humans = {"human_metrics": True} if config.human_metrics else None
     hashes = {
         (p, set_names[m]): config_hash(
             env_configs[set_names[m]], p, policies[p], ts, policy_kwargs[p], humans

@@ -203,11 +203,6 @@ def task_layout(summary: Sequence[Mapping[str, Any]], guidelines: bool = False) 
     )
 
 
-def csv_columns() -> list[str]:
-    """Columns of summary.csv, in order."""
-    return PAPER_LAYOUT.csv_columns()
-
-
 def ordered(values: Sequence[str], order: Sequence[str] | None) -> list[str]:
     """The distinct values, those of `order` first in its order, the others as they first appear."""
     seen = list(dict.fromkeys(values))
@@ -248,7 +243,7 @@ def summarize(
             (socialzoo.bench.aggregates.cell_generator).
 
     Returns:
-        Dicts keyed by `csv_columns()`: success rate with a Wilson interval, mean counts
+        Dicts keyed by `PAPER_LAYOUT.csv_columns()`: success rate with a Wilson interval, mean counts
         (COUNT_METRICS) with bootstrap (BCa) intervals, other metric means with Student-t
         intervals (NaN where a metric is missing or has fewer than 2 finite values).
     """

@@ -7,7 +7,7 @@ import pytest
 
 from socialzoo.bench.stats import mean_interval, rate_interval, student_t_cdf, student_t_ppf
 from socialzoo.bench.tables import (
-    csv_columns,
+    PAPER_LAYOUT,
     policy_labels,
     read_summary_csv,
     summarize,
@@ -103,7 +103,7 @@ def test_summary_rows_and_csv(tmp_path):
 
     path = write_summary_csv(summary, tmp_path / "summary.csv")
     header = path.read_text().splitlines()[0].split(",")
-    assert header == csv_columns()
+    assert header == PAPER_LAYOUT.csv_columns()
     assert header[:7] == [
         "policy",
         "map",
@@ -183,7 +183,7 @@ def test_failures_by_cause_in_the_summary_and_markdown():
     assert shares == {"wall_collision": 0.1, "human_collision": 0.1, "stuck": 0.1, "timeout": 0.1}
     assert e["failure_stuck_ci_low"] < 0.1 < e["failure_stuck_ci_high"]
     assert e["stuck_mean"] == pytest.approx(0.3)  # the stuck metric over every episode
-    assert {f"failure_{c}_rate" for c in shares} <= set(csv_columns())
+    assert {f"failure_{c}_rate" for c in shares} <= set(PAPER_LAYOUT.csv_columns())
     text = summary_markdown(summary)
     assert "## Failures by cause (% of episodes)" in text
     assert "| GoAlone | gdc1 | 60.0 | 10.0 | 10.0 | 10.0 | 10.0 |" in text
