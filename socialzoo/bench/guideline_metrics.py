@@ -181,6 +181,34 @@ def _first(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return hit, np.where(hit, flags.argmax(axis=1), flags.shape[1])
 
 
+def _bodies(traj: Trajectories, group: str, pos: np.ndarray, r_robot: np.ndarray, valid: np.ndarray) -> tuple:
+    """The people ("people") or the other robots ("others") of `traj` against the robot: their
+    centres (B, N, M, 2), presence (B, N, M), presence within the robot's episode, reach (the sums
+    of the radii, (B, 1, M)), boundary gaps (B, N, M), collisions (B,) and contact at each sample
+    (B, N), from the gaps or the simulator's contact flags."""
+    b, n = pos.shape[:2]
+    axis, flag_name = {"people": ("H", "human_contact"), "others": ("K", "robot_contact")}[group]
+    bodies = np.asarray(getattr(traj, f"{group}_pos"), dtype=np.float64)
+    if bodies.ndim != 4:
+        raise ValueError(f"Trajectories.{group}_pos must have shape (B, N, {axis}, 2), got {bodies.shape}")
+    m = bodies.shape[2]
+    bodies = _float(bodies, (b, n, m, 2), f"{group}_pos")
+    mask = getattr(traj, f"{group}_mask")
+    mask = np.ones((b, n, m), dtype=bool) if mask is None else _bools(mask, (b, n, m), f"{group}_mask")
+    here = mask & valid[:, :, None]
+    reach = r_robot[:, None, None] + _per_body(getattr(traj, f"{group}_radius"), b, m, f"{group}_radius")
+    gap = np.linalg.norm(bodies - pos[:, :, None, :], axis=3) - reach
+    flags = getattr(traj, flag_name)
+    if flags is None:
+        contact = (gap < 0) & here
+    else:
+        flags = np.asarray(flags)
+        per_body = flags.ndim == 3
+        contact = _bools(flags, (b, n, m) if per_body else (b, n), flag_name) & (here if per_body else valid)
+    hit = contact if contact.ndim == 2 else contact.any(axis=2)
+    return bodies, mask, here, reach, gap, _starts(contact), hit
+
+
 def time_to_collision(rel_pos: np.ndarray, rel_vel: np.ndarray, reach: np.ndarray) -> np.ndarray:
     """Time until two discs touch when both keep their velocities: the least t >= 0 with
     |rel_pos + rel_vel t| = reach (reach the sum of the radii); 0 when they overlap already, inf
@@ -253,28 +281,11 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
     compliant = valid.copy()
     ttc = np.full(b, np.nan)
     if traj.people_pos is not None and np.asarray(traj.people_pos).size:
-        ppos = np.asarray(traj.people_pos, dtype=np.float64)
-        if ppos.ndim != 4:
-            raise ValueError(f"Trajectories.people_pos must have shape (B, N, H, 2), got {ppos.shape}")
-        h = ppos.shape[2]
-        ppos = _float(ppos, (b, n, h, 2), "people_pos")
-        present = (
-            np.ones((b, n, h), dtype=bool)
-            if traj.people_mask is None
-            else _bools(traj.people_mask, (b, n, h), "people_mask").copy()
+        ppos, _, present, reach, gap, human_collisions, hum_contact = _bodies(
+            traj, "people", pos, r_robot, valid
         )
-        present &= valid[:, :, None]
-        reach = r_robot[:, None, None] + _per_body(traj.people_radius, b, h, "people_radius")
+        h = ppos.shape[2]
         rel = ppos - pos[:, :, None, :]
-        gap = np.linalg.norm(rel, axis=3) - reach
-        if traj.human_contact is None:
-            contact = (gap < 0) & present
-        else:
-            flags = np.asarray(traj.human_contact)
-            shape = (b, n, h) if flags.ndim == 3 else (b, n)
-            contact = _bools(flags, shape, "human_contact") & (present if flags.ndim == 3 else valid)
-        human_collisions = _starts(contact)
-        hum_contact = contact if contact.ndim == 2 else contact.any(axis=2)
         some = present.any(axis=(1, 2))
         min_human = np.where(some, np.where(present, gap, np.inf).min(axis=(1, 2)), np.nan)
         compliant = valid & ~(present & (gap < p.personal_space)).any(axis=2)
@@ -313,28 +324,8 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
     rob_contact = np.zeros((b, n), dtype=bool)
     others_reach_at = np.zeros((b, 0))
     if traj.others_pos is not None and np.asarray(traj.others_pos).size:
-        opos = np.asarray(traj.others_pos, dtype=np.float64)
-        if opos.ndim != 4:
-            raise ValueError(f"Trajectories.others_pos must have shape (B, N, K, 2), got {opos.shape}")
+        opos, omask, _, _, _, robot_collisions, rob_contact = _bodies(traj, "others", pos, r_robot, valid)
         kk = opos.shape[2]
-        opos = _float(opos, (b, n, kk, 2), "others_pos")
-        omask = (
-            np.ones((b, n, kk), dtype=bool)
-            if traj.others_mask is None
-            else _bools(traj.others_mask, (b, n, kk), "others_mask")
-        )
-        oreach = r_robot[:, None, None] + _per_body(traj.others_radius, b, kk, "others_radius")
-        ogap = np.linalg.norm(opos - pos[:, :, None, :], axis=3) - oreach
-        if traj.robot_contact is None:
-            ocontact = (ogap < 0) & omask & valid[:, :, None]
-        else:
-            flags = np.asarray(traj.robot_contact)
-            shape = (b, n, kk) if flags.ndim == 3 else (b, n)
-            ocontact = _bools(flags, shape, "robot_contact") & (
-                (omask & valid[:, :, None]) if flags.ndim == 3 else valid
-            )
-        robot_collisions = _starts(ocontact)
-        rob_contact = ocontact if ocontact.ndim == 2 else ocontact.any(axis=2)
         if traj.others_goal is not None:
             ogoal = _float(traj.others_goal, (b, kk, 2), "others_goal")
             oradius = _float(
