@@ -86,21 +86,17 @@ class GuidelineRecorder:
         if not self.samples:
             self.record(task)
         self.start[rows] = self.first + len(self.samples) - 1
-        self._restate(rows, core)
+        # Overwrite the latest sample's rows with the state now (a reset after the sample was taken).
+        latest = self.samples[-1]
+        for key, value in self._sample(core).items():
+            if latest[key].shape[1:] != value.shape[1:]:
+                latest[key] = _pad_like(latest[key], value)
+            latest[key][rows] = value[rows]
         state = core.state
         self.goal[rows] = state.robot_goal[rows, 0, :2]
         route = core.route_left[rows, 0] if core.navigator is not None else None
         straight = np.hypot(*(state.robot_goal[rows, 0, :2] - state.robot_pose[rows, 0, :2]).T)
         self.shortest[rows] = straight if route is None else np.maximum(route, straight)
-
-    def _restate(self, rows: np.ndarray, core: Any) -> None:
-        """Overwrite the latest sample's rows with the state now (a reset after the sample was taken)."""
-        fresh = self._sample(core)
-        latest = self.samples[-1]
-        for key, value in fresh.items():
-            if latest[key].shape[1:] != value.shape[1:]:
-                latest[key] = _pad_like(latest[key], value)
-            latest[key][rows] = value[rows]
 
     def record(self, task: Any) -> None:
         """Take a sample of every row after a step."""
@@ -137,28 +133,22 @@ class GuidelineRecorder:
         offset = n - lengths
         index = np.minimum(offset[:, None] + np.arange(n)[None, :], n - 1)
         fields = {
-            key: np.take_along_axis(value[rows], _expand(index, value.ndim), axis=1)
+            key: np.take_along_axis(value[rows], index.reshape(index.shape + (1,) * (value.ndim - 2)), axis=1)
             for key, value in stacked.items()
         }
+        if not fields["others_pos"].shape[2]:
+            fields["others_pos"] = None
         f = self.frame
         traj = Trajectories(
             dt=f.dt,
-            robot_pos=fields["robot_pos"],
             goal=self.goal[rows],
             length=lengths,
-            robot_vel=fields["robot_vel"],
             robot_radius=f.robot_radius,
             goal_radius=f.goal_radius,
-            people_pos=fields["people_pos"],
-            people_vel=fields["people_vel"],
-            people_mask=fields["people_mask"],
             people_radius=f.people_radius,
-            wall_distance=fields["wall_distance"],
-            others_pos=fields["others_pos"] if fields["others_pos"].shape[2] else None,
             shortest_path=self.shortest[rows],
             time_limit=f.time_limit,
-            wall_contact=fields["wall_contact"],
-            human_contact=fields["human_contact"],
+            **fields,
         )
         found = guideline_metrics(traj, self.params)
         return [{name: values[i].item() for name, values in found.items()} for i in range(len(rows))]
@@ -180,11 +170,6 @@ class GuidelineRecorder:
         out.first = self.first
         out.start, out.goal, out.shortest = self.start[live], self.goal[live], self.shortest[live]
         return out
-
-
-def _expand(index: np.ndarray, ndim: int) -> np.ndarray:
-    """(k, n) sample indices shaped to gather along axis 1 of a (k, n, ...) array."""
-    return index.reshape(index.shape + (1,) * (ndim - 2))
 
 
 def _pad_like(old: np.ndarray, new: np.ndarray) -> np.ndarray:
