@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from functools import cache
 from importlib import resources
@@ -29,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.guideline_metrics import GuidelineParams, Trajectories, guideline_metrics
+from socialzoo.bench.tables import write_text_atomic
 
 FORMAT = "socialzoo-episode-log"
 VERSION = 1
@@ -54,8 +54,7 @@ class EpisodeLogError(ValueError):
 @cache
 def schema() -> dict[str, Any]:
     """The episode log's JSON Schema (draft 2020-12), shipped as package data."""
-    text = (resources.files("socialzoo.bench") / "schemas" / SCHEMA_FILE).read_text(encoding="utf-8")
-    return dict(json.loads(text))
+    return dict(json.loads(schema_path().read_text(encoding="utf-8")))
 
 
 def schema_path() -> Path:
@@ -172,18 +171,8 @@ def write_episode_log(path: str | os.PathLike[str], log: dict[str, Any]) -> Path
     Raises:
         EpisodeLogError: the log is invalid (nothing is written).
     """
-    out = Path(path)
-    validate_log(log, str(out))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(log, f, allow_nan=False, separators=(",", ":"))
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return out
+    validate_log(log, str(Path(path)))
+    return write_text_atomic(path, json.dumps(log, allow_nan=False, separators=(",", ":")))
 
 
 def _point_list(arr: np.ndarray, present: np.ndarray | None = None) -> list[Any]:
