@@ -318,12 +318,11 @@ class ResultsStore:
         new = {k: _kind(k, v) for k, v in metrics.items() if k not in self._kinds}
         if not new:
             return
-        for name in new:
+        for name, kind in new.items():
             if name in TRIAL_COLUMNS or name == "id":
                 raise ValueError(f"metric name {name!r} clashes with a trial column")
-        self._kinds.update(new)
-        for name, kind in new.items():
             self._db.execute(f"ALTER TABLE trials ADD COLUMN {_quote(name)} {_SQL_TYPE[kind]}")
+        self._kinds.update(new)
         self._db.execute(
             "UPDATE meta SET value = ? WHERE key = 'metric_kinds'", (json.dumps(self._kinds, sort_keys=True),)
         )
@@ -360,7 +359,7 @@ class ResultsStore:
                     str(row["config_hash"]),
                     str(row["package_version"]),
                     finished,
-                    *(_to_sql(v) for v in metrics.values()),
+                    *metrics.values(),  # sqlite3 stores a bool as the integer 0 or 1
                 ]
                 cursor = self._db.execute(
                     f"INSERT OR IGNORE INTO trials ({', '.join(map(_quote, names))}) "
@@ -421,15 +420,7 @@ def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
-def _to_sql(value: Any) -> Any:
-    if isinstance(value, bool):
-        return int(value)
-    return value
-
-
 def _from_sql(value: Any, kind: str) -> Any:
-    if kind == "bool":
-        return None if value is None else bool(value)
-    if kind == "int":
-        return None if value is None else int(value)
-    return math.nan if value is None else float(value)
+    if value is None:
+        return math.nan if kind == "float" else None
+    return {"bool": bool, "int": int, "float": float}[kind](value)
