@@ -37,6 +37,7 @@ from socialzoo.agents.demonstrations import (
 from socialzoo.bench.experiment import source_digest
 from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
+from socialzoo.bench.tables import write_text_atomic
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
 from socialzoo.nav.subpolicies import ACTION_NAMES
@@ -128,10 +129,10 @@ def _write_npz(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
     os.replace(tmp, path)
 
 
-def _write_json(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
+# The dtypes of a step's values, in the order _Recorder keeps them.
+_DTYPES = dict(
+    obs=np.float32, action=np.int64, next_obs=np.float32, reward=np.float32, terminated=bool, truncated=bool
+)
 
 
 class _Recorder:
@@ -147,8 +148,7 @@ class _Recorder:
         for row, trial in enumerate(row_trial):
             if trial is None:
                 continue
-            buffer = self.rows.setdefault(row, [])
-            buffer.append(
+            self.rows.setdefault(row, []).append(
                 (
                     obs[row, 0],
                     int(actions[row, 0]),
@@ -159,14 +159,10 @@ class _Recorder:
                 )
             )
             if task.core.done[row].all():
-                steps = self.rows.pop(row)
+                columns = zip(*self.rows.pop(row), strict=True)
                 self.episodes[trial.index] = {
-                    "obs": np.stack([s[0] for s in steps]).astype(np.float32),
-                    "action": np.array([s[1] for s in steps], dtype=np.int64),
-                    "next_obs": np.stack([s[2] for s in steps]).astype(np.float32),
-                    "reward": np.array([s[3] for s in steps], dtype=np.float32),
-                    "terminated": np.array([s[4] for s in steps], dtype=bool),
-                    "truncated": np.array([s[5] for s in steps], dtype=bool),
+                    key: np.array(column, dtype=dtype)
+                    for (key, dtype), column in zip(_DTYPES.items(), columns, strict=True)
                 }
 
 
@@ -250,7 +246,7 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
             arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
             _write_npz(parts / name, arrays)
             index["chunks"][name] = {"episodes": [lo, hi], "steps": len(arrays["action"])}
-            _write_json(index_path, index)
+            write_text_atomic(index_path, json.dumps(index, indent=1, sort_keys=True) + "\n")
             logger.info("demonstrations: wrote %s (episodes %d-%d)", parts / name, lo, hi - 1)
     finally:
         bar.close()
