@@ -100,9 +100,8 @@ class HumanEpisodeMetrics:
         self.walked_to_goal[rows] = np.nan
         for name in ("min_human", "min_wall", "min_robot"):
             getattr(self, name)[rows] = np.inf
-        self.touch_hh[rows] = False
-        self.touch_hw[rows] = False
-        self.touch_hr[rows] = False
+        for touch in (self.touch_hh, self.touch_hw, self.touch_hr):
+            touch[rows] = False
         self.active[rows] = True
         self._measure(state, rows, count=False)
 
@@ -271,7 +270,7 @@ def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: s
     """humans.csv (every column) and humans.md (a table per map, metrics as rows) in out_dir."""
     from pathlib import Path
 
-    from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
+    from socialzoo.bench.tables import interval_text, markdown_table, write_csv, write_text_atomic
 
     out = Path(out_dir)
     columns = ["policy", "map", "trials"] + [
@@ -285,18 +284,10 @@ def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: s
         cells = [
             [
                 label,
-                *(_cell(e[f"{key}_mean"], e[f"{key}_ci_low"], e[f"{key}_ci_high"], digits) for e in entries),
+                *(interval_text(e, key, digits) if np.isfinite(e[f"{key}_mean"]) else "-" for e in entries),
             ]
             for key, (label, digits) in HUMAN_METRIC_LABELS.items()
         ]
         lines += [f"## {map_name}", "", *markdown_table(header, cells), ""]
     files.append(write_text_atomic(out / "humans.md", "\n".join(lines)))
     return files
-
-
-def _cell(mean: float, low: float, high: float, digits: int) -> str:
-    if not np.isfinite(mean):
-        return "-"
-    if not (np.isfinite(low) and np.isfinite(high)):
-        return f"{mean:.{digits}f}"
-    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
