@@ -224,12 +224,8 @@ def find_trials(
 
 def _same(a: Any, b: Any) -> bool:
     """Metric values equal: NaN (or a missing value) equals NaN; floats to METRIC_RTOL."""
-    if a is None or b is None:
-        return (a is None or (isinstance(a, float) and math.isnan(a))) and (
-            b is None or (isinstance(b, float) and math.isnan(b))
-        )
-    if isinstance(a, float) or isinstance(b, float):
-        fa, fb = float(a), float(b)
+    if a is None or b is None or isinstance(a, float) or isinstance(b, float):
+        fa, fb = (math.nan if v is None else float(v) for v in (a, b))
         if math.isnan(fa) or math.isnan(fb):
             return math.isnan(fa) and math.isnan(fb)
         return math.isclose(fa, fb, rel_tol=METRIC_RTOL, abs_tol=1e-12)
