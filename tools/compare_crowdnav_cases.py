@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, crowd_family
 
 
 def _stub_imports() -> None:
@@ -57,10 +57,11 @@ def main() -> None:
         robot.policy = _Policy()
         env.set_robot(robot)
         worst = 0.0
+        family = crowd_family(CrowdCaseConfig(layout=layout))
         for k in range(args.cases):
             env.reset("test", test_case=k)
             theirs = np.array([[h.px, h.py, h.gx, h.gy] for h in env.humans])
-            ours = crowd_case(CrowdCaseConfig(layout=layout), case_seed("test", k))
+            ours = family.make(family.case_seed("test", k))
             mine = np.hstack([ours.human_spawn, np.array([r[0] for r in ours.human_routes])])
             worst = max(worst, float(np.abs(theirs - mine).max()))
         print(f"{layout}: {args.cases} test cases, largest difference {worst:g} m")

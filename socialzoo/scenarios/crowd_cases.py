@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Literal, get_args
 import numpy as np
 
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
 from socialzoo.scenarios.families import antipode, circle_point
 from socialzoo.scenarios.scenario import Scenario
@@ -74,27 +74,18 @@ class CrowdCaseConfig:
     min_robot_route: float = 6.0
 
     def __post_init__(self) -> None:
-        if self.layout not in LAYOUTS:
-            raise ValueError(f"CrowdCaseConfig.layout must be one of {LAYOUTS}, got {self.layout!r}")
+        check_choice("CrowdCaseConfig", "layout", self.layout, LAYOUTS)
         check_int("CrowdCaseConfig", "num_humans", self.num_humans, low=0)
         for name in ("circle_radius", "square_width", "human_radius", "robot_radius", "human_speed"):
             check_number("CrowdCaseConfig", name, getattr(self, name), low=0, low_open=True)
         check_number("CrowdCaseConfig", "discomfort_dist", self.discomfort_dist, low=0)
-        if self.robot_layout not in ("crossing", "random"):
-            raise ValueError(
-                f"CrowdCaseConfig.robot_layout must be 'crossing' or 'random', got {self.robot_layout!r}"
-            )
+        check_choice("CrowdCaseConfig", "robot_layout", self.robot_layout, ("crossing", "random"))
         check_number("CrowdCaseConfig", "min_robot_route", self.min_robot_route, low=0)
         if self.robot_layout == "random" and self.min_robot_route >= 2 * math.sqrt(2) * self.circle_radius:
             raise ValueError(
                 f"CrowdCaseConfig.min_robot_route ({self.min_robot_route}) leaves no start-goal pair in the "
                 f"[-{self.circle_radius}, {self.circle_radius}]^2 square"
             )
-
-
-def case_seed(split: Split, index: int) -> int:
-    """The seed of case `index` of a split (CrowdNav's np.random.seed for that case)."""
-    return _CROWDNAV.case_seed(split, index)
 
 
 @functools.lru_cache(maxsize=64)
@@ -115,7 +106,7 @@ def robot_poses(num_robots: int, radius: float) -> tuple[np.ndarray, np.ndarray]
 
 @dataclass(frozen=True)
 class CrowdCase:
-    """A case as plain arrays (what a reset writes into the state; crowd_case wraps it in a
+    """A case as plain arrays (what a reset writes into the state; case_scenario wraps it in a
     Scenario).
 
     Attributes:
@@ -136,7 +127,9 @@ class CrowdCase:
 def crowd_case_arrays(
     config: CrowdCaseConfig, seed: int, num_robots: int = 1, rs: np.random.RandomState | None = None
 ) -> CrowdCase:
-    """The case drawn from RandomState(seed) (see crowd_case), as plain arrays.
+    """The case drawn from RandomState(seed): the robots (robot_poses; one robot: CrowdNav's, at
+    (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
+    routes to their goals, each drawn clear of the robots and of the people before it.
 
     Args:
         config: how cases are drawn.
@@ -207,13 +200,6 @@ def _random_robots(
     return starts, goals, at
 
 
-def crowd_case(config: CrowdCaseConfig, seed: int, num_robots: int = 1) -> Scenario:
-    """The case drawn from RandomState(seed): the robots (robot_poses; one robot: CrowdNav's, at
-    (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
-    routes to their goals, each drawn clear of the robots and of the people before it."""
-    return case_scenario(crowd_case_arrays(config, seed, num_robots), config)
-
-
 def case_scenario(case: CrowdCase, config: CrowdCaseConfig) -> Scenario:
     """A case as a Scenario: one-point routes to the people's goals, at config.human_speed."""
     n = case.human_starts.shape[0]
@@ -251,7 +237,7 @@ class CrowdNavFamily(ScenarioFamily):
             )
 
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
-        """The case of `seed` (crowd_case) in the arena; a map is refused (CrowdNav's cases are
+        """The case of `seed` (crowd_case_arrays) in the arena; a map is refused (CrowdNav's cases are
         drawn for the open arena: the CrowdNav task's ids, e.g. socialzoo/CrowdNav-v1, play them)."""
         if m is not None:
             raise ValueError(
@@ -291,9 +277,6 @@ _BY_LAYOUT: dict[str, type[CrowdNavFamily]] = {
     "circle_crossing": CrowdNavCircleCrossing,
     "square_crossing": CrowdNavSquareCrossing,
 }
-
-
-_CROWDNAV = CrowdNavCircleCrossing()  # CrowdNav's splits, for case_seed
 
 
 # Circle crossing's geometry (socialzoo.scenarios.families), compiled for the rejection loop.

@@ -5,7 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, case_seed, crowd_case
+from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, crowd_family
+
+
+def crowd_case(config, seed):
+    return crowd_family(config).make(seed)
+
+
+def case_seed(split, index):
+    return crowd_family(CrowdCaseConfig()).case_seed(split, index)
 
 
 def _agents(case):
