@@ -30,20 +30,8 @@ BENCHMARK_TIME_LIMIT = 80.0
 CRUISE_SPEED = 1.5
 
 
-def feasible_route_length(
-    time_limit: float = BENCHMARK_TIME_LIMIT,
-    cruise_speed: float = CRUISE_SPEED,
-    share: float = ROUTE_TIME_SHARE,
-) -> float:
-    """The longest feasible route, m: `share` of the time limit (s) at the cruise speed (m/s)."""
-    for name, value in (("time_limit", time_limit), ("cruise_speed", cruise_speed), ("share", share)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"feasible_route_length: {name} must be a positive number, got {value!r}")
-    return float(share * time_limit * cruise_speed)
-
-
-# The default rule: 0.75 x 80 s x 1.5 m/s.
-MAX_ROUTE_LENGTH = feasible_route_length()
+# The longest feasible route, m: the share of the time limit at the cruise speed, 0.75 x 80 s x 1.5 m/s.
+MAX_ROUTE_LENGTH = ROUTE_TIME_SHARE * BENCHMARK_TIME_LIMIT * CRUISE_SPEED
 # GDC1's walkable floor (cells at least 0.39 m from walls, 5 cm grid, socialzoo.maps.roadmap) and
 # the benchmark's largest crowd on it: the density the crowd keeps on other maps.
 GDC1_WALKABLE_AREA = 1352.0
