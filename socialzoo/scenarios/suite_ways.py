@@ -127,11 +127,6 @@ class Corridor:
         s, t = np.asarray(s, dtype=np.float64)[..., None], np.asarray(t, dtype=np.float64)[..., None]
         return self.start + s * self.u + t * _left(self.u)
 
-    def coords(self, points: np.ndarray) -> np.ndarray:
-        """(..., 2) each point's (s, t): along the axis from `start`, and to its left, m."""
-        rel = np.asarray(points, dtype=np.float64) - self.start
-        return np.stack((rel @ self.u, rel @ _left(self.u)), axis=-1)
-
 
 def corridor(m: Map) -> Corridor:
     """The corridor of map m: the longest stretch of the route between its farthest legal poses
@@ -357,14 +352,6 @@ class Crossroads:
     def u(self) -> np.ndarray:
         """(2,) the unit vector along the robot's way, start to goal."""
         return _unit(self.robot_goal - self.robot_start)
-
-    def lateral(self, points: np.ndarray) -> np.ndarray:
-        """(...,) each point's offset to the left of the robot's way's axis, m (its sign: which side)."""
-        return np.asarray((np.asarray(points) - self.centre) @ _left(self.u))
-
-    def along(self, points: np.ndarray) -> np.ndarray:
-        """(...,) each point's distance along the robot's way past the centre, m."""
-        return np.asarray((np.asarray(points) - self.centre) @ self.u)
 
 
 def crossroads(m: Map) -> Crossroads:

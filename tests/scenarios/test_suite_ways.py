@@ -147,10 +147,16 @@ def test_a_family_on_a_map_without_its_geometry_is_a_named_error():
 # ------------------------------------------------------------------ defining events (GoAlone unless said)
 
 
+def _coords(origin, u, points):
+    """(..., 2) each point's (s, t) from `origin`: along the unit vector u, and to its left, m."""
+    rel = np.asarray(points, dtype=np.float64) - origin
+    return np.stack((rel @ u, rel @ np.array([-u[1], u[0]])), axis=-1)
+
+
 def test_frontal_approach_they_meet_head_on_in_the_corridor():
     rec = _rollout("frontal_approach", steps=600)
     c = corridor(load_map("hallway"))
-    s, t = np.moveaxis(c.coords(rec.robot[..., :2]), -1, 0)
+    s, t = np.moveaxis(_coords(c.start, c.u, rec.robot[..., :2]), -1, 0)
     in_corridor = (s > 0) & (s < c.length) & (np.abs(t) < c.half_width)
     met = (_head_on(rec).any(-1) & in_corridor).any(0)
     assert met.all(), _rows(rec, ~met)
@@ -164,7 +170,7 @@ def test_pedestrian_obstruction_the_person_stands_in_the_robots_way_as_it_comes_
     for i, scenario in enumerate(rec.scenarios):
         k = int(np.argmax(gap[:, i] < 2.0))  # the robot's first step within 2 m of the person
         stop = scenario.human_routes[0][scenario.script.stop[0]]
-        person, robot = c.coords(rec.pos[k, i, 0]), c.coords(rec.robot[k, i, :2])
+        person, robot = _coords(c.start, c.u, rec.pos[k, i, 0]), _coords(c.start, c.u, rec.robot[k, i, :2])
         assert not rec.released[k, i, 0] and np.linalg.norm(rec.pos[k, i, 0] - stop) < 0.5
         assert rec.speed()[k, i, 0] < 0.3  # standing (the approaching robot nudges it)
         assert abs(person[1]) < 0.5 and person[0] > robot[0]  # on the robot's line, ahead of it
@@ -174,7 +180,10 @@ def test_pedestrian_obstruction_the_person_stands_in_the_robots_way_as_it_comes_
 def test_pedestrian_overtaking_the_person_passes_the_robot():
     rec = _rollout("pedestrian_overtaking", steps=700)
     c = corridor(load_map("hallway"))
-    person, robot = c.coords(rec.pos[:, :, 0])[..., 0], c.coords(rec.robot[..., :2])[..., 0]
+    person, robot = (
+        _coords(c.start, c.u, rec.pos[:, :, 0])[..., 0],
+        _coords(c.start, c.u, rec.robot[..., :2])[..., 0],
+    )
     assert (person[0] < robot[0] - 2.5).all()
     passed = ((person > robot + 0.3) & ~rec.done).any(0)
     assert passed.all(), _rows(rec, ~passed)
@@ -203,8 +212,8 @@ def test_down_path_someone_meets_the_robot_head_on_and_someone_walks_its_way():
 
 def _crossings(rec: Record, x) -> np.ndarray:
     """(T - 1, B, H) a person crosses the robot's way's axis inside the crossing, this step."""
-    side = np.sign(x.lateral(rec.pos))
-    inside = np.abs(x.along(rec.pos[1:])) < x.cross_half_width
+    side = np.sign(_coords(x.centre, x.u, rec.pos)[..., 1])
+    inside = np.abs(_coords(x.centre, x.u, rec.pos[1:])[..., 0]) < x.cross_half_width
     return (side[1:] != side[:-1]) & inside & _present(rec)[None]
 
 
@@ -239,12 +248,13 @@ def test_intersection_wait_the_person_stops_signals_wait_before_the_crossing_the
 
     rec = _rollout("intersection_wait", steps=700, policy=policy)
     standing, stop = _stood_signalling(rec, WAIT)
-    assert (np.abs(x.lateral(stop)) >= x.half_width + STOP_BEFORE - 0.25).all()  # before the crossing
+    lateral = _coords(x.centre, x.u, stop)[..., 1]
+    assert (np.abs(lateral) >= x.half_width + STOP_BEFORE - 0.25).all()  # before the crossing
     assert (standing.sum(0) * DT > 1.5).all()  # it signals, standing, for seconds
     stood, crossed = _first(standing), _first(_crossings(rec, x)[..., 0])
     assert (stood < crossed).all() and (crossed < len(rec.pos) - 1).all()
     # It crosses first where the robot waits: the robot is still short of the crossing.
-    robot_along = x.along(rec.robot[crossed, np.arange(len(CASES)), :2])
+    robot_along = _coords(x.centre, x.u, rec.robot[crossed, np.arange(len(CASES)), :2])[..., 0]
     assert (robot_along[polite] < -x.cross_half_width).all()
     assert all(2.0 <= s.script.wait[0] <= 4.0 and s.script.gesture[0] == WAIT for s in rec.scenarios)
 
