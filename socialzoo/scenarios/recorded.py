@@ -169,11 +169,7 @@ def people_scenario(
     its first recorded position, its route is its people's route points one after another
     (RecordedPeople.slot_routes), its speed its first person's mean recorded speed (the world takes each later
     person's own when it enters: socialzoo.env.replay)."""
-    spawn, routes = [], []
-    for track, frames in zip(recorded.tracks, recorded.slot_routes, strict=True):
-        points = track[frames]
-        spawn.append(points[0])
-        routes.append(points)
+    routes = [track[frames] for track, frames in zip(recorded.tracks, recorded.slot_routes, strict=True)]
     n = recorded.num_people
     return Scenario(
         map_name=map_name,
@@ -181,7 +177,7 @@ def people_scenario(
         family=family,
         robot_starts=robot_starts,
         robot_goals=robot_goals,
-        human_spawn=np.array(spawn).reshape(n, 2),
+        human_spawn=np.array([points[0] for points in routes]).reshape(n, 2),
         human_start_index=np.full(n, -1),
         human_goal_index=np.full(n, -1),
         human_routes=tuple(routes),
