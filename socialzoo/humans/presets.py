@@ -44,9 +44,8 @@ def with_presets(world: WorldConfig, presets: Iterable[str]) -> WorldConfig:
     for name in presets:
         if name not in PRESETS:
             raise KeyError(f"unknown people preset {name!r}; known: {sorted(PRESETS)}")
-        preset = PRESETS[name]
-        if "human" in preset:
-            world = dataclasses.replace(world, human=dataclasses.replace(world.human, **preset["human"]))
-        if "orca" in preset:
-            world = dataclasses.replace(world, orca=dataclasses.replace(world.orca, **preset["orca"]))
+        for part in ("human", "orca"):
+            if part in PRESETS[name]:
+                params = dataclasses.replace(getattr(world, part), **PRESETS[name][part])
+                world = dataclasses.replace(world, **{part: params})
     return world
