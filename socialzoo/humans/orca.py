@@ -29,7 +29,7 @@ import numpy as np
 
 from socialzoo.core.config import OrcaConfig
 from socialzoo.core.jit import kernel
-from socialzoo.core.walls import GridTable, WallIndex, grid_cell
+from socialzoo.core.walls import WallIndex, grid_cell
 
 # Tolerance of the linear programs (parallel lines) and of the covered-wall test, as in the paper's
 # reference implementation.
@@ -425,19 +425,6 @@ def _orca(  # type: ignore[no-untyped-def]
             out[b, i, 1] = ny
 
 
-def wall_table(walls: WallIndex, reach: float) -> GridTable:
-    """The grid table that lists every wall within `reach` of any point of a cell.
-
-    The wall index's fine table when its reach suffices (ORCA's obstacle range for walking people
-    with a short obstacle horizon), else a coarser table of at least that reach (rounded up to
-    0.5 m so that few tables are built; each is built once per map and cached).
-    """
-    if reach <= walls.reach:
-        return walls.fine
-    rounded = math.ceil(reach * 2.0) / 2.0
-    return walls.table(cell_size=max(walls.cell_size, rounded / 4.0), reach=rounded)
-
-
 def orca_velocities(
     pos: np.ndarray,
     vel: np.ndarray,
@@ -477,7 +464,12 @@ def orca_velocities(
         out[...] = vel
         return out
     reach = cfg.time_horizon_obst * float(max_speed[active].max()) + float(radius[active].max())
-    table = wall_table(walls, reach)
+    # A grid table of every wall within `reach` of a cell: the wall index's fine one when its reach
+    # suffices (walking people with a short obstacle horizon), else a coarser one of at least that
+    # reach, rounded up to 0.5 m so that few tables are built (each is built once per map and cached).
+    rounded = math.ceil(reach * 2.0) / 2.0
+    fine = reach <= walls.reach
+    table = walls.fine if fine else walls.table(cell_size=max(walls.cell_size, rounded / 4.0), reach=rounded)
     _orca(
         np.ascontiguousarray(pos, dtype=np.float64),
         np.ascontiguousarray(vel, dtype=np.float64),
