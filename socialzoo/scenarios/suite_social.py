@@ -76,18 +76,6 @@ def _away(rng: np.random.Generator, poses: np.ndarray, point: np.ndarray, distan
     return poses[int(rng.choice(np.flatnonzero(far >= distance)))].copy()
 
 
-def _across(m: Map, rng: np.random.Generator, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """A pair of legal poses across the area: any pair at least 0.75 of the farthest pair's
-    distance apart, in a random order."""
-    p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)[:, :2]
-    if len(p) < 2:
-        raise ValueError(f"{m.where}: family {who!r} needs at least 2 legal poses")
-    d = np.linalg.norm(p[:, None] - p[None], axis=-1)
-    i, j = np.nonzero(d >= 0.75 * d.max())
-    k = int(rng.integers(len(i)))
-    return p[i[k]].copy(), p[j[k]].copy()
-
-
 class JoiningGroup(SuiteFamily):
     """(p) 2-4 people stand talking on a circle with a free spot; the robot must join them there,
     while 0-3 passers-by walk across the area.
@@ -284,7 +272,14 @@ class CrowdNavigation(SuiteFamily):
 
     def layout(self, m: Map, rng: np.random.Generator) -> Layout:
         """Robot across; the crowd's starts uniform in the area, its goals about the robot's way."""
-        a, b = _across(m, rng, self.name)
+        # The robot's way: any pair of legal poses at least 0.75 of the farthest pair's distance apart.
+        p = np.asarray(m.legal_poses, dtype=np.float64).reshape(-1, 3)[:, :2]
+        if len(p) < 2:
+            raise ValueError(f"{m.where}: family {self.name!r} needs at least 2 legal poses")
+        d = np.linalg.norm(p[:, None] - p[None], axis=-1)
+        ends = np.nonzero(d >= 0.75 * d.max())
+        k = int(rng.integers(len(ends[0])))
+        a, b = p[ends[0][k]], p[ends[1][k]]
         left = np.array([a[1] - b[1], b[0] - a[0]]) / max(float(np.linalg.norm(b - a)), 1e-9)
         box = interior(m, 1.0, self.name)
         n = int(rng.integers(10, 20, endpoint=True))
