@@ -356,8 +356,6 @@ def _expr_from_json(node: Any, where: str) -> Expr:
         return Atom(name)
     node = _fields(node, where, {"op", "args"})
     op, args = node["op"], node["args"]
-    if not isinstance(op, str) or op not in OPERATORS:
-        raise ProgramError(f"{where}: unknown operator {op!r}; known: {', '.join(OPERATORS)}")
     if not isinstance(args, list):
         raise ProgramError(f"{where}: 'args' must be a list")
     expr = Op(op, tuple(_expr_from_json(a, f"{where}.args[{i}]") for i, a in enumerate(args)))
@@ -371,10 +369,6 @@ def _expr_from_json(node: Any, where: str) -> Expr:
 def _predicate_from_json(node: Any, where: str) -> Predicate:
     if isinstance(node, dict) and "cmp" in node:
         node = _fields(node, where, {"cmp", "expr", "threshold", "unit"})
-        if node["cmp"] not in COMPARISONS:
-            raise ProgramError(
-                f"{where}: unknown comparison {node['cmp']!r}; known: {', '.join(COMPARISONS)}"
-            )
         expr = _expr_from_json(node["expr"], f"{where}.expr")
         threshold = node["threshold"]
         if (
@@ -394,8 +388,6 @@ def _predicate_from_json(node: Any, where: str) -> Predicate:
         pred: Predicate = Compare(expr, node["cmp"], float(threshold))
     else:
         node = _fields(node, where, {"op", "args"})
-        if node["op"] not in JUNCTIONS:
-            raise ProgramError(f"{where}: unknown junction {node['op']!r}; known: {', '.join(JUNCTIONS)}")
         if not isinstance(node["args"], list):
             raise ProgramError(f"{where}: 'args' must be a list")
         pred = Junction(
