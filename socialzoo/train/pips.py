@@ -25,7 +25,7 @@ import numpy as np
 from socialzoo.agents.demonstrations import load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.data.fetch import sha256
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
@@ -77,33 +77,16 @@ class PipsArgs(SearchOptions):
             raise ValueError(f"PipsArgs.demos must be a file path, got {self.demos!r}")
         if not isinstance(self.out, str) or not self.out.endswith(".json"):
             raise ValueError(f"PipsArgs.out must be a .json path, got {self.out!r}")
-        ints = {
-            "steps": 1,
-            "window": 0,
-            "max_depth": 0,
-            "max_pred_size": 1,
-            "beam": 1,
-            "pool": 1,
-            "partners": 1,
-            "min_positives": 1,
-            "z3_candidates": 1,
-            "seed": 0,
-            "heldout_steps": 0,
-        }
-        for name, low in ints.items():
-            check_int("PipsArgs", name, getattr(self, name), low=low)
+        for name in ("steps", "max_pred_size", "beam", "pool", "partners", "min_positives", "z3_candidates"):
+            check_int("PipsArgs", name, getattr(self, name), low=1)
+        for name in ("window", "max_depth", "seed", "heldout_steps"):
+            check_int("PipsArgs", name, getattr(self, name), low=0)
         if self.max_pred_size > 3:
             raise ValueError(f"PipsArgs.max_pred_size must be at most 3, got {self.max_pred_size!r}")
         for name in ("complexity_cost", "z3_timeout_s", "time_budget_s"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"PipsArgs.{name} must be a finite number, got {value!r}")
-            if value < 0 or (value == 0 and name != "complexity_cost"):
-                raise ValueError(f"PipsArgs.{name} must be positive, got {value!r}")
-        if self.sampling not in ("prefix", "windows"):
-            raise ValueError(f"PipsArgs.sampling must be 'prefix' or 'windows', got {self.sampling!r}")
-        if self.solver not in ("z3", "exact"):
-            raise ValueError(f"PipsArgs.solver must be 'z3' or 'exact', got {self.solver!r}")
+            check_number("PipsArgs", name, getattr(self, name), low=0, low_open=name != "complexity_cost")
+        check_choice("PipsArgs", "sampling", self.sampling, ("prefix", "windows"))
+        check_choice("PipsArgs", "solver", self.solver, ("z3", "exact"))
 
 
 @dataclass(frozen=True)
