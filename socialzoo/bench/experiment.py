@@ -29,6 +29,7 @@ from socialzoo.bench.tables import (
     write_text_atomic,
 )
 from socialzoo.core.validation import check_int
+from socialzoo.data.fetch import sha256
 from socialzoo.env.config import EnvConfig
 from socialzoo.scenarios.scenario import TEST_SETS, TestSet
 
@@ -191,10 +192,7 @@ def env_id_for(map_name: str) -> str | None:
 
 def file_digest(path: str | Path) -> str | None:
     """sha256 of a file's bytes, or None when there is no such file."""
-    p = Path(path)
-    if not p.is_file():
-        return None
-    return hashlib.sha256(p.read_bytes()).hexdigest()
+    return sha256(path) if Path(path).is_file() else None
 
 
 # Subpackages whose code decides a rollout (with the policy's own module): the world, its people, maps,
