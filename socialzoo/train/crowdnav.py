@@ -34,7 +34,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.env.crowd_variants import crowd_env_id
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
@@ -160,8 +160,7 @@ class CrowdNavArgs:
             ("collision_penalty", -100.0, 0.0),
         ):
             check_number("CrowdNavArgs", name, getattr(self, name), low=low, high=high)
-        if self.action not in ("discrete", "continuous"):
-            raise ValueError(f"CrowdNavArgs.action must be 'discrete' or 'continuous', got {self.action!r}")
+        check_choice("CrowdNavArgs", "action", self.action, ("discrete", "continuous"))
         rollout = self.num_envs * self.n_steps
         for name in ("checkpoint_every", "total_steps"):
             if getattr(self, name) % rollout:
