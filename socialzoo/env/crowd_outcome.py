@@ -23,8 +23,6 @@ from socialzoo.core.jit import kernel
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_fields
 
-# Episode outcomes, as CrowdNav's info classes.
-SUCCESS, COLLISION, TIMEOUT = "success", "collision", "timeout"
 # The per-episode metrics of the task (CrowdNavMetrics.summaries keys, in order): the registry's
 # metrics of this task (socialzoo.core.metrics).
 METRIC_KEYS: tuple[str, ...] = metric_names("crowdnav")
@@ -211,15 +209,10 @@ class CrowdNavMetrics:
 
     def reset_rows(self, rows: np.ndarray) -> None:
         """Start new episodes in `rows`."""
-        self.steps[rows] = 0
-        self.path[rows] = 0.0
-        self.discomfort[rows] = 0
-        self.intrusion[rows] = 0
+        for total in (self.steps, self.path, self.discomfort, self.intrusion, self.ret, self.discounted):
+            total[rows] = 0
+        self.force[rows] = self.blame[rows] = 0.0
         self.min_gap[rows] = np.inf
-        self.ret[rows] = 0.0
-        self.discounted[rows] = 0.0
-        self.force[rows] = 0.0
-        self.blame[rows] = 0.0
 
     def update(
         self,
