@@ -133,12 +133,10 @@ class CrowdNavTask(Task):
         self._ray_directions = np.stack((np.cos(self._ray_angles), np.sin(self._ray_angles)), axis=-1)
         # Observation slots: the people, then the other robots (each robot's own slot left out).
         radius = float(cfg.robot.radius)  # type: ignore[arg-type]
-        self.slot_radius = np.concatenate(
-            (np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius))
-        )
-        self.radius_sum = radius + self.slot_radius
+        slot_radius = np.concatenate((np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius)))
+        self.radius_sum = radius + slot_radius
         # Every robot's slot radii, as one array: the observations of any rows read a prefix of it.
-        self._slot_radius_rows = np.tile(self.slot_radius, (batch_size * r, 1))
+        self._slot_radius_rows = np.tile(slot_radius, (batch_size * r, 1))
         self._blame_horizon = RewardConfig().blame_horizon
         # (B R,) the angle of each robot's observation frame (x towards the goal it sees), rad:
         # goal-frame velocity actions are turned by it into the world frame.
@@ -164,9 +162,8 @@ class CrowdNavTask(Task):
         else:
             cases = self.source.next(rows)
         self.reset_rows(rows, cases)
-        for row in rows.tolist():
-            for robot in range(self.num_robots):
-                self._ended.pop(row * self.num_robots + robot, None)
+        for k in self.core.robot_rows(rows).tolist():
+            self._ended.pop(k, None)
         return self.case_seed[rows].copy()
 
     def reset_rows(self, rows: np.ndarray, cases: list[Scenario] | list[CrowdCase]) -> None:
@@ -358,17 +355,14 @@ class CrowdNavTask(Task):
     def _force_and_blame(self) -> tuple[np.ndarray, np.ndarray]:
         """(B R,) the benchmark's social force and blame terms of each robot after the step
         (SPEC section 9; every person counts: the task's robot sees everyone)."""
-        s = self.core.state
+        core, s = self.core, self.core.state
         assert s is not None
-        b, r = self.batch_size, self.num_robots
-        velocity = world_velocity(s.robot_pose, s.robot_vel, self.config.robot)
-        pos = s.robot_pose[..., :2].reshape(b * r, 2)
-        people = np.repeat(s.human_pos, r, axis=0)
-        seen = np.repeat(s.human_mask, r, axis=0)
-        skip = np.full(b * r, -1)
-        vel = velocity.reshape(b * r, 2)
+        n = self.batch_size * self.num_robots
+        vel = world_velocity(s.robot_pose, s.robot_vel, self.config.robot).reshape(n, 2)
         still = np.hypot(vel[:, 0], vel[:, 1]) < STILL_SPEED
-        return force_and_blame(pos, vel, still, people, seen, skip, self._blame_horizon)
+        pos = s.robot_pose[..., :2].reshape(n, 2)
+        people, seen = core.per_robot(s.human_pos), core.per_robot(s.human_mask)
+        return force_and_blame(pos, vel, still, people, seen, np.full(n, -1), self._blame_horizon)
 
     # ------------------------------------------------------------------ the joint state
     def _wall_points(self, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
