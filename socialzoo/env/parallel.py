@@ -21,7 +21,7 @@ from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from socialzoo.core.state import WorldState
 from socialzoo.env.gym_env import TaskAdapter, robot_row
-from socialzoo.env.tasks.base import Task, TaskStep, agent_action
+from socialzoo.env.tasks.base import Task, agent_action
 
 # Entries of the global state per robot: pose (x, y, theta), velocity (v, omega), goal (x, y, theta).
 STATE_ROBOT_SIZE = 8
@@ -226,35 +226,21 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
             infos[agent] = self.task.robot_info(step, 0, i)
             if (terminated or truncated) and self.episode_info:
                 infos[agent][EPISODE_KEY] = self.episode_summary(agent)
-        robots_left = all(a not in live or terminations[a] or truncations[a] for a in self.robots)
-        if self.humans:
-            self._human_results(
-                step, live, out_of_time or robots_left, rewards, terminations, truncations, infos
-            )
+        # Learned humans never terminate: they are truncated with the time limit or the last robot.
+        humans_out = out_of_time or all(
+            a not in live or terminations[a] or truncations[a] for a in self.robots
+        )
+        for j, agent in enumerate(self.humans):
+            if agent in live:
+                assert step.human_reward is not None and step.human_info is not None
+                rewards[agent] = float(step.human_reward[0, j])
+                terminations[agent] = False
+                truncations[agent] = humans_out
+                infos[agent] = {key: bool(step.human_info[key][0, j]) for key in HUMAN_INFO_KEYS}
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self.render_mode == "human":
             self.render()
         return observations, rewards, terminations, truncations, infos
-
-    def _human_results(
-        self,
-        step: TaskStep,
-        live: list[str],
-        truncated: bool,
-        rewards: dict[str, float],
-        terminations: dict[str, bool],
-        truncations: dict[str, bool],
-        infos: dict[str, dict[str, Any]],
-    ) -> None:
-        """Fill in the learned humans' rewards, flags and infos of a step."""
-        assert step.human_reward is not None and step.human_info is not None
-        for j, agent in enumerate(self.humans):
-            if agent not in live:
-                continue
-            rewards[agent] = float(step.human_reward[0, j])
-            terminations[agent] = False
-            truncations[agent] = truncated
-            infos[agent] = {key: bool(step.human_info[key][0, j]) for key in HUMAN_INFO_KEYS}
 
     def _action_arrays(self, actions: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray | None]:
         """(robot actions (1, R, ...), human actions (1, L, 2) or None), each checked."""
