@@ -75,13 +75,11 @@ class CrowdCaseSource:
         rows = np.asarray(rows, dtype=np.intp)
         if self._scenarios is not None:
             return self._scenarios.next(rows)
-        if self.open_family is not None:
-            low = self.open_family.splits["train"].first
-            seeds = [int(self._rngs[row].integers(low, _SEED_LIMIT)) for row in rows]
-            return [self.open_family.make(seed, self.config.num_robots) for seed in seeds]
-        low = self.family.splits["train"].first
+        low = (self.open_family or self.family).splits["train"].first
         seeds = [int(self._rngs[row].integers(low, _SEED_LIMIT)) for row in rows]
         r = self.config.num_robots
+        if self.open_family is not None:
+            return [self.open_family.make(seed, r) for seed in seeds]
         # The family's fast path: plain arrays, which the core's reset reads without a Scenario.
         return [self.family.arrays(seed, r, self._case_rs) for seed in seeds]
 
@@ -94,18 +92,8 @@ class CrowdCaseSource:
         if self.config.map is None:
             family = self.open_family or self.family
             return [family.make(family.case_seed(split, int(k)), r) for k in indices]
-        cases = self.case_sets()[split]
-        stream = self._scenarios
-        assert stream is not None
-        if isinstance(cases, str):  # the family's own split
-            family = get_family(stream.family)  # type: ignore[arg-type]
-            return [stream.make(family.case_seed(cases, int(k))) for k in indices]
-        if stream.family is not None:
-            return [stream.make(cases.seed(int(k))) for k in indices]
-        from socialzoo.env.scenario_source import with_robots
-
-        m = stream.map
-        return [with_robots(cases.scenario(int(k), m), m, r) for k in indices]
+        assert self._scenarios is not None
+        return self._scenarios.cases(self.case_sets()[split], indices)
 
     def case_sets(self) -> dict[str, Any]:
         """Among walls, split name -> its TestSet, or for a family with splits of its own the

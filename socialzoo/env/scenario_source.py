@@ -8,14 +8,14 @@ whatever the batch size.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from socialzoo.maps.map_file import POSE_CLEARANCE, Map
 from socialzoo.maps.segments import segments_free
 from socialzoo.scenarios.catalogue import get_family
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, TestSet, generate_scenario
 
 if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig
@@ -191,3 +191,16 @@ class ScenarioStream:
         else:
             scenario = get_family(self.family).make(seed, self.num_robots, m=self.map)
         return with_robots(scenario, self.map, self.num_robots)
+
+    def cases(self, case_set: TestSet | str, indices: Any) -> list[Scenario]:
+        """Cases `indices` of a fixed set: a family's own split (by its name), a registered test
+        set's seeds as the family's scenarios, or without a family the test set's own scenarios."""
+        if self.family is None:
+            assert isinstance(case_set, TestSet)
+            return [
+                with_robots(case_set.scenario(int(k), self.map), self.map, self.num_robots) for k in indices
+            ]
+        if isinstance(case_set, str):
+            family = get_family(self.family)
+            return [self.make(family.case_seed(case_set, int(k))) for k in indices]
+        return [self.make(case_set.seed(int(k))) for k in indices]

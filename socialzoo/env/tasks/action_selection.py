@@ -170,15 +170,7 @@ class ActionSelectionTask(Task):
         options = dict(options)
         chosen = fixed_cases(options, rows, self.case_splits(), self.name)
         if chosen is not None:
-            test_set = self._case_sets()[chosen[0]]
-            if self.config.family is None:
-                options["scenarios"] = [test_set.scenario(int(k), m) for k in chosen[1]]
-            elif isinstance(test_set, str):  # a family's own split
-                family = get_family(self.config.family)
-                seeds = [family.case_seed(test_set, int(k)) for k in chosen[1]]
-                options["scenarios"] = [self.scenarios.make(seed) for seed in seeds]
-            else:  # a family's cases: its own scenarios, drawn from the set's seeds
-                options["scenarios"] = [self.scenarios.make(test_set.seed(int(k))) for k in chosen[1]]
+            options["scenarios"] = self.scenarios.cases(self._case_sets()[chosen[0]], chosen[1])
         scenarios = options.pop("scenarios", None)
         one = options.pop("scenario", None)
         if one is not None:
