@@ -20,6 +20,7 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from socialzoo.core.state import WorldState
+from socialzoo.core.validation import check_int
 from socialzoo.env.gym_env import TaskAdapter, robot_row
 from socialzoo.env.tasks.base import Task, agent_action
 
@@ -96,10 +97,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
     ) -> None:
         cls = self.task_class(task)
         cls.check_render_mode(render_mode)
-        if max_cycles is not None and (
-            not isinstance(max_cycles, int) or isinstance(max_cycles, bool) or max_cycles < 1
-        ):
-            raise ValueError(f"max_cycles must be None or an int >= 1, got {max_cycles!r}")
+        check_int(type(self).__name__, "max_cycles", max_cycles, low=1, allow_none=True)
         self.task: Task = cls(config, 1, **kwargs)
         self.config = self.task.config
         self.metadata = {
@@ -263,10 +261,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
     def _observations(self, agents: list[str]) -> dict[str, Any]:
         """Current observations (copies) of `agents`."""
         robots = self.task.observations()
-        out: dict[str, Any] = {}
-        for i, agent in enumerate(self.robots):
-            if agent in agents:
-                out[agent] = robot_row(robots, 0, i)
+        out = {agent: robot_row(robots, 0, i) for i, agent in enumerate(self.robots) if agent in agents}
         if self.humans:
             humans = self.task.human_observations()
             assert humans is not None

@@ -53,6 +53,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from socialzoo.core.validation import check_int
 from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
@@ -121,8 +122,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
         task: Any = "action_selection",
         **kwargs: Any,
     ) -> None:
-        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
-            raise ValueError(f"SocialNavTorchEnv: batch_size must be an int >= 1, got {batch_size!r}")
+        check_int("SocialNavTorchEnv", "batch_size", batch_size, low=1)
         if robot_policy is not None and not callable(getattr(robot_policy, "act", None)):
             raise ValueError(
                 f"SocialNavTorchEnv: robot_policy must have act(obs, task), got {type(robot_policy).__name__}"
