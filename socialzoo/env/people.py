@@ -59,11 +59,9 @@ class People:
 
     Args:
         config: the people's models, walking groups and counterfactual rows.
-        world: the world's parameters.
         batch_size: B.
         num_robots: R.
         max_humans: H.
-        walls: the wall index.
         m: the map (None without one: no walking groups then).
         robot_visible: whether the people see the robots (learned people observe them only then).
 
