@@ -83,40 +83,6 @@ def _pad_paths(paths: np.ndarray, width: int) -> np.ndarray:
     return np.concatenate((paths, last), axis=-2)
 
 
-def carrot(
-    pos: np.ndarray,
-    paths: np.ndarray,
-    lengths: np.ndarray,
-    radius: float = CARROT_RADIUS,
-    max_skip: int | None = None,
-    tolerance: float = 0.0,
-) -> np.ndarray:
-    """The local target: where a circle around the robot leaves its path, going forward.
-
-    As the reference navigation does: the goal itself when it lies inside the circle; else,
-    from the path segment closest to the robot, walk forward to the first waypoint outside the
-    circle and take the circle's crossing of the segment that reaches it (the crossing nearer that
-    waypoint). A robot farther than `radius` from its whole path gets its closest path point.
-
-    Args:
-        pos: (..., 2) robot positions, world frame, m.
-        paths: (..., L, 2) waypoints, padded by repeating the last one.
-        lengths: (...,) int number of valid waypoints (>= 1).
-        radius: circle radius, m (SPEC: 1.5).
-        max_skip: if given, the carrot lies at most this many whole segments past the closest
-            segment: it stops at that segment's end even inside the circle (or, where that end
-            is nearer than radius / 2, at the first later waypoint that is not). This keeps the
-            carrot from cutting through a wall where the path turns back within the circle (a
-            U-turn through two doors). None: no limit.
-        tolerance: segments within this of the closest distance count as closest too, and the
-            one furthest along the path is used, m.
-
-    Returns:
-        (..., 2) carrot, world frame, m.
-    """
-    return track(pos, paths, lengths, radius, max_skip, tolerance)[0]
-
-
 @dataclass(frozen=True)
 class Sight:
     """What keeps the carrot in sight: the map's wall distance field and the clearance wanted.
@@ -172,31 +138,39 @@ def track(
     max_skip: int | None = None,
     tolerance: float = 0.0,
     sight: Sight | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """`carrot` and each point's distance to its path, m, from one pass over the path segments.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The local target (the carrot), each point's distance to its path and the route length left,
+    from one pass over the path segments.
+
+    The carrot is where a circle around the robot leaves its path, going forward, as the reference
+    navigation does: the goal itself when it lies inside the circle; else, from the path segment
+    closest to the robot, walk forward to the first waypoint outside the circle and take the
+    circle's crossing of the segment that reaches it (the crossing nearer that waypoint). A robot
+    farther than `radius` from its whole path gets its closest path point.
 
     With `sight`, a carrot the robot cannot drive to in a straight line (see Sight) is pulled back
     along the path to the last point before the first one out of sight, going forward from the
     robot's closest path point: the carrot waits at a corner or before a doorway until the robot
     has come round, instead of pulling it into the wall corner that hides the path.
 
+    Args:
+        pos: (..., 2) robot positions, world frame, m.
+        paths: (..., L, 2) waypoints, padded by repeating the last one.
+        lengths: (...,) int number of valid waypoints (>= 1).
+        radius: circle radius, m (SPEC: 1.5).
+        max_skip: if given, the carrot lies at most this many whole segments past the closest
+            segment: it stops at that segment's end even inside the circle (or, where that end
+            is nearer than radius / 2, at the first later waypoint that is not). This keeps the
+            carrot from cutting through a wall where the path turns back within the circle (a
+            U-turn through two doors). None: no limit.
+        tolerance: segments within this of the closest distance count as closest too, and the
+            one furthest along the path is used, m.
+        sight: keeps the carrot in sight; None: the plain carrot.
+
     Returns:
-        (carrot (..., 2) world frame m, distance (...,) m).
+        (carrot (..., 2) world frame m, distance (...,) m, route left (...,) m: from the robot to
+        its closest path point, then along the path to its end).
     """
-    return _track_where(pos, paths, lengths, radius, max_skip, tolerance, sight)[:2]
-
-
-def _track_where(
-    pos: np.ndarray,
-    paths: np.ndarray,
-    lengths: np.ndarray,
-    radius: float = CARROT_RADIUS,
-    max_skip: int | None = None,
-    tolerance: float = 0.0,
-    sight: Sight | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`track`, plus the route length left (..., ) m: from the robot to its closest path point,
-    then along the path to its end."""
     shape = np.shape(pos)[:-1]
     pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
     lengths = np.asarray(lengths)
@@ -303,7 +277,7 @@ def _keep_in_sight(pos, paths, where, out, clearance, tolerance, step, spacing, 
 
 @kernel
 def _track_rows(pos, paths, lengths, radius, max_skip, tolerance, out, dist, where):  # type: ignore[no-untyped-def]
-    """`track` for rows of pos (M, 2), paths (M, L >= 2, 2), lengths (M,); max_skip -1 is None.
+    """`track`'s carrot and distance for rows of pos (M, 2), paths (M, L >= 2, 2), lengths (M,); max_skip -1 is None.
 
     where (M, 4) gets each row's closest segment and fraction along it, and the carrot's.
     """
@@ -389,7 +363,7 @@ class Navigator:
         num_robots: R robots per batch row.
         carrot_radius: local-target circle radius, m.
         replan_distance: a robot farther than this from its plan gets a new one, m.
-        max_skip: passed to `carrot`. The defaults (the carrot stops at the end of
+        max_skip: passed to `track`. The defaults (the carrot stops at the end of
             the closest segment, or at the first later waypoint at least radius / 2 away;
             near-equal closest segments resolve to the one furthest along) depart from the plain
             SPEC carrot (None and 0.0) for robustness: with them GoAlone (no humans) reaches the
@@ -520,13 +494,13 @@ class Navigator:
             self._recover(robot_pos, np.asarray(moving, dtype=bool), dt, human_pos, human_mask)
         plans = self.plans
         options = (self.carrot_radius, self.max_skip, self.tolerance)
-        target, dist, left = _track_where(robot_pos, plans.paths, plans.lengths, *options, self.sight)
+        target, dist, left = track(robot_pos, plans.paths, plans.lengths, *options, self.sight)
         stray = dist > self.replan_distance
         if stray.any():
             rows, robots = np.nonzero(stray)
             pos = robot_pos[rows, robots]
             if self._replan(rows, robots, pos):
-                new, _, new_left = _track_where(
+                new, _, new_left = track(
                     pos, plans.paths[rows, robots], plans.lengths[rows, robots], *options, self.sight
                 )
                 target[rows, robots] = new
