@@ -221,12 +221,15 @@ def _keep_largest(
                 f"graph component of {size} node(s) around {_at(centre)} cannot be joined to the rest "
                 "through the free space: dropped",
             )
-    kept = np.flatnonzero(label == main)
+    return _subgraph(nodes, edges, np.flatnonzero(label == main))
+
+
+def _subgraph(nodes: np.ndarray, edges: np.ndarray, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes `kept` (indices, ascending) and the edges between them, renumbered; (nodes, edges)."""
     new_index = np.full(len(nodes), -1, dtype=np.int64)
     new_index[kept] = np.arange(len(kept))
-    edges = new_index[edges] if len(edges) else edges.reshape(-1, 2)
-    edges = edges[(edges >= 0).all(axis=1)] if len(edges) else edges
-    return nodes[kept], edges.reshape(-1, 2)
+    edges = new_index[edges.reshape(-1, 2)]
+    return nodes[kept], edges[(edges >= 0).all(axis=1)]
 
 
 def _repair_poses(
@@ -420,11 +423,7 @@ def _join_and_prune(
     report: RepairReport,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Join components along walking paths where possible, then keep the largest one."""
-    alive = np.flatnonzero(keep)
-    remap = np.full(len(nodes), -1, dtype=np.int64)
-    remap[alive] = np.arange(len(alive))
-    sub_edges = remap[edges] if len(edges) else edges.reshape(-1, 2)
-    sub_nodes = nodes[alive]
+    sub_nodes, sub_edges = _subgraph(nodes, edges, np.flatnonzero(keep))
     before = len(np.unique(graph_components(len(sub_nodes), sub_edges)))
     if before > 1:
         joined_nodes, joined_edges = connect_components(space, sub_nodes, sub_edges, index, config)
