@@ -403,15 +403,12 @@ class Navigator:
         # (B, R) route length left after the latest update, m (see `update`).
         self.route_left = np.zeros((batch_size, num_robots))
         self.recovery = recovery
-        # Without a recovery config the state stays idle: nothing ever backs off or avoids an edge.
-        self._recovering = RecoveryState(recovery or RecoveryConfig(), batch_size, num_robots)
+        # The per-robot recovery bookkeeping (progress, back-offs, avoided edges), which a compacted
+        # core carries over (socialzoo.env.compaction). Without a recovery config it stays idle:
+        # nothing ever backs off or avoids an edge.
+        self.recovery_state = RecoveryState(recovery or RecoveryConfig(), batch_size, num_robots)
         # (B, R) robots given a new route by a recovery in the latest update.
         self.rerouted = np.zeros((batch_size, num_robots), dtype=bool)
-
-    @property
-    def batch_size(self) -> int:
-        """B, the number of worlds."""
-        return self.plans.paths.shape[0]
 
     @property
     def num_robots(self) -> int:
@@ -437,7 +434,7 @@ class Navigator:
         starts = np.asarray(starts, dtype=np.float64).reshape(num * r, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(num * r, 2)
         self.goals[rows] = goals.reshape(num, r, 2)
-        self._recovering.reset(rows)
+        self.recovery_state.reset(rows)
         if num == 0:
             return
         paths, lengths = self._plan(starts, goals)
@@ -450,20 +447,9 @@ class Navigator:
         return self.graph.plan_batch(starts, goals)
 
     @property
-    def recovery_state(self) -> RecoveryState:
-        """The per-robot recovery bookkeeping (progress, back-offs, avoided edges), which a
-        compacted core carries over (socialzoo.env.compaction)."""
-        return self._recovering
-
-    @property
     def backing_off(self) -> np.ndarray:
         """(B, R) bool: robots backing off (their commands: socialzoo.nav.recovery.backoff_commands)."""
-        return self._recovering.backing_off
-
-    @property
-    def recoveries(self) -> np.ndarray:
-        """(B, R) int: recoveries of each robot this episode."""
-        return self._recovering.recoveries
+        return self.recovery_state.backing_off
 
     def update(
         self,
@@ -518,7 +504,7 @@ class Navigator:
     ) -> None:
         """Recovery bookkeeping on the route left of the last update: a robot starting to back off
         away from people avoids the edge where it stopped; one whose back-off ended is replanned."""
-        state = self._recovering
+        state = self.recovery_state
         started, ended = state.step(self.route_left, moving, dt)
         if started.any():
             rows, robots = np.nonzero(started)
@@ -554,7 +540,7 @@ class Navigator:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Plans (paths (M, L, 2), lengths (M,)) with those of robots that avoid edges replaced by
         plans around them (where the graph has one; else the avoided edges are forgotten)."""
-        avoid = self._recovering.avoid
+        avoid = self.recovery_state.avoid
         avoiding = np.flatnonzero((avoid[rows, robots] >= 0).any(axis=1))
         plan_avoiding = getattr(self.graph, "plan_avoiding", None)
         if len(avoiding) == 0 or plan_avoiding is None:

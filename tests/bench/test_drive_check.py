@@ -146,7 +146,7 @@ def test_a_stuck_robot_recovers_over_another_edge():
         task.step(np.zeros((1, 1), dtype=np.int64))
         ys.append(task.core.state.robot_pose[0, 0, 1])
     assert task.episode_metrics([0])[0]["reached"]
-    assert task.core.navigator.recoveries[0, 0] >= 1 and max(ys) > 4.0
+    assert task.core.navigator.recovery_state.recoveries[0, 0] >= 1 and max(ys) > 4.0
 
 
 def test_pose_pairs_are_the_feasible_ones_or_a_seeded_sample():
