@@ -276,8 +276,7 @@ class NavGraph:
             AttachError: a start or goal reaches no edge (the message names the point).
             NoPathError: a row's attach edges are not connected (the message names the row).
         """
-        paths, lengths, _ = self._plan_batch(starts, goals, direct, strict=True, clearance=clearance)
-        return paths, lengths
+        return self.plan_batch_status(starts, goals, direct=direct, clearance=clearance, strict=True)[:2]
 
     def plan_batch_status(
         self,
@@ -286,24 +285,16 @@ class NavGraph:
         *,
         direct: bool = True,
         clearance: float = 0.0,
+        strict: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """`plan_batch` that never raises for an unreachable row, for batched envs.
+        """`plan_batch` that never raises for an unreachable row, for batched envs (`strict`: raise
+        as `plan_batch` does).
 
         Returns:
             (paths, lengths, ok): as `plan_batch`, plus ok (N,) bool; a row that is not ok (its
             start or goal reaches no edge, or they are not connected) gets the straight line
             [start, goal], which may cross walls.
         """
-        return self._plan_batch(starts, goals, direct, strict=False, clearance=clearance)
-
-    def _plan_batch(
-        self,
-        starts: np.ndarray,
-        goals: np.ndarray,
-        direct: bool,
-        strict: bool,
-        clearance: float = 0.0,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
         goals = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
         if starts.shape != goals.shape:
