@@ -611,6 +611,8 @@ def scenarios_to_state(
     pos[mask] = np.concatenate([s.human_spawn for s in scenarios])
     speed = np.zeros((b, h))
     speed[mask] = np.concatenate([s.human_speed for s in scenarios])
+    group = np.full((b, h), -1, dtype=np.int64)  # -1: walks alone
+    group[mask] = np.concatenate([s.human_group for s in scenarios])
     return WorldState(
         robot_pose=np.stack([s.robot_starts[:num_robots] for s in scenarios]).astype(np.float64),
         robot_vel=np.zeros((b, num_robots, 2)),
@@ -625,13 +627,5 @@ def scenarios_to_state(
         human_direction=np.ones((b, h), dtype=np.int64),
         step_count=np.zeros(b, dtype=np.int64),
         noise_key=seed_states([s.seed for s in scenarios], _NOISE_STREAM),
-        human_group=_groups_of(scenarios, mask),
+        human_group=group,
     )
-
-
-def _groups_of(scenarios: Sequence[Scenario], mask: np.ndarray) -> np.ndarray:
-    """(B, H) walking group of each human slot (Scenario.human_group), -1 for none."""
-    group = np.full(mask.shape, -1, dtype=np.int64)
-    if mask.any():
-        group[mask] = np.concatenate([s.human_group for s in scenarios])
-    return group
