@@ -303,7 +303,9 @@ def free_space(
         sizes[0] = 0
         pick = int(np.argmax(sizes))
         if anchors is not None and len(anchors):
-            held = np.bincount(labels[_anchor_cells(anchors, origin, res, shape)], minlength=count + 1)
+            ij = np.floor((np.reshape(anchors, (-1, 2)) - origin) / res).astype(np.int64)
+            ij = ij[((ij >= 0) & (ij < np.array(shape))).all(axis=1)]  # the anchors on the grid
+            held = np.bincount(labels[ij[:, 0], ij[:, 1]], minlength=count + 1)
             held[0] = 0
             if held.max() > 0:
                 # Most anchors first, the larger area among equals.
@@ -427,15 +429,6 @@ def _openings(
         if np.hypot(*(near[1] - near[0])) > 2 * res:
             closures.append(near.reshape(4))
     return np.array(closures, dtype=np.float64).reshape(-1, 4)
-
-
-def _anchor_cells(
-    points: np.ndarray, origin: np.ndarray, res: float, shape: tuple[int, int]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Grid cells (i, j) of the points that fall on the grid."""
-    ij = np.floor((np.asarray(points, dtype=np.float64).reshape(-1, 2) - origin) / res).astype(np.int64)
-    ij = ij[((ij >= 0) & (ij < np.array(shape))).all(axis=1)]
-    return ij[:, 0], ij[:, 1]
 
 
 # ----------------------------------------------------------------------------- nodes and edges
@@ -633,9 +626,7 @@ class Walker:
 
     def vertex(self, points: np.ndarray) -> np.ndarray:
         """Grid-graph vertices (K,) of the cells holding points (K, 2); -1 outside the interior."""
-        cells = self.space.cell_of(points)
-        v: np.ndarray = self.cell_id[cells[:, 0], cells[:, 1]]
-        return v
+        return np.asarray(self.cell_id[tuple(self.space.cell_of(points).T)])
 
     def corners(self, walk: list[int], a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Corner points (L, 2) of a walk of grid vertices straightened, its ends set to a and b."""
