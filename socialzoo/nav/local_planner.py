@@ -453,11 +453,9 @@ def plan_commands(
     command[:, 1] = speed * c
 
     # Turning in place: when the bearing is large, or to the recovery heading of a stuck robot.
-    turn = ev.turn
-    if turn.any():
-        v_cmd, w_cmd = _turn_in_place(ev.bearing, vel, cfg, robot_cfg, dt)
-        command[:, 0] = np.where(turn, v_cmd, command[:, 0])
-        command[:, 1] = np.where(turn, w_cmd, command[:, 1])
+    if ev.turn.any():
+        turning = np.stack(_turn_in_place(ev.bearing, vel, cfg, robot_cfg, dt), axis=-1)
+        command = np.where(ev.turn[:, None], turning, command)
     return command
 
 
