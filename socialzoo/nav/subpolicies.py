@@ -15,7 +15,7 @@ import numpy as np
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_fields
+from socialzoo.core.validation import check_choice, check_fields
 from socialzoo.core.walls import WallIndex
 from socialzoo.nav.distance_field import distance_field
 from socialzoo.nav.local_planner import LocalPlannerConfig, plan_commands
@@ -64,10 +64,7 @@ class SubPolicyConfig:
     still_speed: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.pass_direction not in ("carrot", "heading"):
-            raise ValueError(
-                f"SubPolicyConfig.pass_direction must be 'carrot' or 'heading', got {self.pass_direction!r}"
-            )
+        check_choice("SubPolicyConfig", "pass_direction", self.pass_direction, ("carrot", "heading"))
         signed = [f.name for f in fields(self) if f.name.endswith("clearance_weight")]
         check_fields(self, nonnegative=("heading_match_deg", "still_speed"), signed=signed)
 
