@@ -8,7 +8,7 @@ the human model (humans), so it lives above both, in env.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -109,6 +109,7 @@ def step_world(
     """
     if robot_halt is None:
         robot_halt = np.zeros(state.robot_pose.shape[:2], dtype=bool)
+    hcfg = cfg.human
     target = state.human_target
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
@@ -144,20 +145,27 @@ def step_world(
         state.human_route_len,
         state.human_waypoint,
         state.human_direction,
-        cfg.human.waypoint_radius,
+        hcfg.waypoint_radius,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot
     )
-    new_state = replace(
-        state,
+    new_state = WorldState(
         robot_pose=robot_pose,
         robot_vel=robot_vel,
+        robot_goal=state.robot_goal,
         human_pos=human_pos,
         human_vel=human_vel,
+        human_pref_speed=state.human_pref_speed,
+        human_mask=state.human_mask,
+        human_route=state.human_route,
+        human_route_len=state.human_route_len,
         human_waypoint=waypoint,
         human_direction=direction,
         step_count=state.step_count + 1,
+        noise_key=state.noise_key,
+        human_model=state.human_model,
+        human_group=state.human_group,
     )
     robot_wall, robot_human = robot_collisions(new_state, walls, cfg)
     return new_state, StepEvents(robot_wall=robot_wall, robot_human=robot_human, human_blocked=blocked)
