@@ -50,20 +50,25 @@ def orca_people_velocities(
     dist = np.sqrt(to_target[..., 0] ** 2 + to_target[..., 1] ** 2)
     pref = to_target * (pref_speed / np.maximum(dist, _TINY))[..., None]
     speed = pref_speed if orca.max_speed is None else np.full((batch, num), orca.max_speed)
-    # The agents: the people, then the robots (present, not driven, at rest in the preferences).
-    robots = (batch, num_robots)
-    a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive = (
-        np.concatenate(pair, axis=1)
-        for pair in (
-            (pos, robot_pos[:, :num_robots]),
-            (vel, robot_vel[:, :num_robots]),
-            (pref, np.zeros((*robots, 2))),
-            (np.full((batch, num), orca.radius), np.full(robots, orca.robot_disc(cfg.robot))),
-            (speed, np.zeros(robots)),
-            (mask, np.ones(robots, dtype=bool)),
-            (drive, np.zeros(robots, dtype=bool)),
-        )
-    )
+    agents = num + num_robots
+    a_pos = np.empty((batch, agents, 2))
+    a_vel = np.empty((batch, agents, 2))
+    a_pref = np.zeros((batch, agents, 2))
+    a_radius = np.empty((batch, agents))
+    a_speed = np.zeros((batch, agents))
+    a_present = np.ones((batch, agents), dtype=bool)
+    a_drive = np.zeros((batch, agents), dtype=bool)
+    a_pos[:, :num] = pos
+    a_vel[:, :num] = vel
+    a_pref[:, :num] = pref
+    a_radius[:, :num] = orca.radius
+    a_speed[:, :num] = speed
+    a_present[:, :num] = mask
+    a_drive[:, :num] = drive
+    if num_robots:
+        a_pos[:, num:] = robot_pos
+        a_vel[:, num:] = robot_vel
+        a_radius[:, num:] = orca.robot_disc(cfg.robot)
     out = orca_velocities(
         a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive, a_present, walls, orca, cfg.dt
     )
