@@ -144,6 +144,9 @@ class Scenario:
     human_group: np.ndarray = None  # type: ignore[assignment]
     script: Script | None = None
     recorded: RecordedPeople | None = None
+    # Derived in __post_init__: the routes end to end and their lengths (see there).
+    _route_points: np.ndarray = field(init=False, repr=False)
+    _route_lens: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
@@ -169,6 +172,10 @@ class Scenario:
             if len(r) == 0:
                 raise ValueError(f"Scenario.human_routes[{i}] is empty")
         object.__setattr__(self, "human_routes", routes)
+        # The routes end to end and their lengths, once: a reset stacks a few scenarios' blocks
+        # instead of every person's route (a kept scenario, as recorded scenes' are, is reset often).
+        object.__setattr__(self, "_route_lens", np.array([len(r) for r in routes], dtype=np.intp))
+        object.__setattr__(self, "_route_points", np.concatenate(routes) if routes else np.zeros((0, 2)))
         object.__setattr__(self, "seed", int(self.seed))
         group = np.full(n, -1) if self.human_group is None else self.human_group
         group = _frozen_array(group, np.int64, (n,), "human_group")
@@ -590,16 +597,15 @@ def scenarios_to_state(
         raise ValueError(f"scenario {bad} has {most} humans, more than max_humans={max_humans}")
     b = len(scenarios)
     counts = np.array([s.num_humans for s in scenarios], dtype=np.intp)
-    lens = [np.array([len(r) for r in s.human_routes], dtype=np.intp) for s in scenarios]
+    lens = [s._route_lens for s in scenarios]
     width = max([route_width] + [int(x.max()) for x in lens if len(x)])
     mask = np.arange(h)[None, :] < counts[:, None]
     route_len = np.ones((b, h), dtype=np.int64)
     route_len[mask] = np.concatenate(lens) if len(lens) else []
     # One flat (total humans, width, 2) block padded by repeating each route's last point.
-    flat_routes = [r for s in scenarios for r in s.human_routes]
     route = np.zeros((b, h, width, 2))
-    if flat_routes:
-        stacked = np.concatenate(flat_routes)
+    if mask.any():
+        stacked = np.concatenate([s._route_points for s in scenarios])
         flat_len = route_len[mask]
         offset = np.cumsum(flat_len) - flat_len
         idx = offset[:, None] + np.minimum(np.arange(width)[None, :], flat_len[:, None] - 1)
