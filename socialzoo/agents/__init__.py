@@ -1,11 +1,4 @@
-"""Policies of every task, by registry name: `make_policy("ref")`, `make_policy("orca", task="crowdnav")`.
-
-Entries name their class as "module:Class" and the task they act in (socialzoo.env.tasks.TASKS), and
-are imported only when built. A policy is named by a spec: "ref" (an engineered policy, or a learned
-one's shipped file in socialzoo/agents/shipped/) or "ppo:PATH" (a learned policy loaded from PATH
-with its class's `load`). make_policy refuses a policy of another task, and a learned policy whose
-observation size is not the task's (PolicyTaskError, naming both).
-"""
+"""Policies of every task, by registry name: `make_policy("ref")`, `make_policy("orca", task="crowdnav")`."""
 
 from __future__ import annotations
 
@@ -81,6 +74,8 @@ def policy_task(name: str) -> str:
 def register_policy(name: str, target: str, task: str = DEFAULT_TASK) -> None:
     """Add a policy to the registry.
 
+    The class is imported only when a policy is built.
+
     Args:
         name: lower-case registry name.
         target: "module:Class"; the class is built with make_policy's keyword arguments, or
@@ -127,7 +122,10 @@ def _policy_class(key: str) -> type:
 
 
 def shipped_policy_file(name: str) -> Path | None:
-    """The shipped file of learned policy `name`, or None."""
+    """The shipped file of learned policy `name`, or None.
+
+    Shipped files live in socialzoo/agents/shipped/.
+    """
     for suffix in SHIPPED_SUFFIXES:
         path = SHIPPED_DIR / f"{name}{suffix}"
         if path.is_file():

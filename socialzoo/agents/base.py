@@ -1,8 +1,4 @@
-"""The Policy protocol every baseline implements: a name, and actions for a batch of observations.
-
-Engineered policies may also read the task they act in (its core's world state: what the robot
-may see); learned policies act on observations alone and load themselves from a file.
-"""
+"""The Policy protocol every baseline implements: a name, and actions for a batch of observations."""
 
 from __future__ import annotations
 

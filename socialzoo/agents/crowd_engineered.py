@@ -1,22 +1,4 @@
-"""Engineered robots of the CrowdNav task: ORCA (CrowdNav's own baseline) and social force.
-
-Both read the world through the task (its core's positions and velocities of everyone, as
-CrowdNav's "coordinates" sensor gives them) and answer with the task's action for every row.
-
-- ORCA (CrowdNav's crowd_sim/envs/policy/orca.py): the robot and the people in one ORCA step in
-  which only the robot is driven; the robot prefers its goal direction at its preferred speed, the
-  people are assumed to prefer standing still (the robot does not know their goals), every radius
-  is padded by 0.01 m plus `safety_space`; CrowdNav's parameters (neighbour distance 10, 10
-  neighbours, time horizons 5 s). Reciprocity is ORCA's premise: against invisible people who do
-  not avoid back it fails often, as CrowdNav reports (0.43 success).
-- Social force: the robot as one more social-force pedestrian (the benchmark's PedSim model)
-  heading for its goal at its preferred speed; its velocity after one step of the force.
-
-A velocity is turned into the task's action: (vx, vy) / v_pref in the action frame (the goal
-frame by default) for a holonomic robot; for a
-unicycle, the turn towards the velocity's direction (at most pi/4) and its speed; for the
-discrete action set, the nearest of CrowdNav's 81 actions.
-"""
+"""Engineered robots of the CrowdNav task: ORCA (CrowdNav's own baseline) and social force."""
 
 from __future__ import annotations
 
@@ -34,7 +16,12 @@ _ORCA_PADDING = 0.01
 
 def velocity_to_action(velocity: np.ndarray, task: Any) -> np.ndarray:
     """The task's actions that come closest to world-frame velocities (B, R, 2): (B, R, 2) or
-    (B, R) (with one robot (B, 2) or (B,))."""
+    (B, R) (with one robot (B, 2) or (B,)).
+
+    A velocity is turned into the task's action: (vx, vy) / v_pref in the action frame (the goal frame by
+    default) for a holonomic robot; for a unicycle, the turn towards the velocity's direction (at most pi/4)
+    and its speed; for the discrete action set, the nearest of CrowdNav's 81 actions.
+    """
     config = task.config
     robot = config.robot
     v_pref = config.preferred_speed
@@ -61,6 +48,13 @@ def velocity_to_action(velocity: np.ndarray, task: Any) -> np.ndarray:
 
 class CrowdOrcaRobot:
     """CrowdNav's ORCA robot.
+
+    CrowdNav's crowd_sim/envs/policy/orca.py: the robot and the people in one ORCA step in which only the
+    robot is driven; the robot prefers its goal direction at its preferred speed, the people are assumed to
+    prefer standing still (the robot does not know their goals), every radius is padded by 0.01 m plus
+    `safety_space`; CrowdNav's parameters (neighbour distance 10, 10 neighbours, time horizons 5 s).
+    Reciprocity is ORCA's premise: against invisible people who do not avoid back it fails often, as CrowdNav
+    reports (0.43 success).
 
     Args:
         safety_space: extra radius the robot keeps, m (CrowdNav: 0; 0.15 for its demonstrations).
@@ -128,6 +122,9 @@ class CrowdOrcaRobot:
 
 class CrowdSocialForceRobot:
     """The robot as one more social-force pedestrian heading for its goal.
+
+    The benchmark's PedSim model, heading for the goal at the preferred speed; the robot's velocity is its
+    velocity after one step of the force.
 
     Args:
         human: the social-force parameters (default the benchmark's people's).

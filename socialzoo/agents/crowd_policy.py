@@ -1,14 +1,5 @@
-"""Learned CrowdNav policies at inference: the attention-over-people network (socialzoo.train.
-crowd_attention) and its policy head, run in numpy from a socialzoo policy file (safetensors with
-a JSON header), greedy: the most likely of CrowdNav's discrete actions, or the mean velocity.
-
-The file's tensors: `attention.embed.*`, `attention.value.*`, `attention.score.*` (the pooling
-network), `policy.*` (the policy MLP on its features) and `action.weight`, `action.bias` (the
-action head: logits, or the mean action in [-1, 1]). Its header says the observation's person
-slots and layout (`header["observation"]["signals"]` true for the task's signals, 9 robot and 8
-person features, socialzoo.env.crowd_observation; a file without the key has CrowdNav's joint
-state, 6 and 7), the activation of the policy MLP, the action kind and the task's env id.
-"""
+"""Learned CrowdNav policies at inference: the attention-over-people network (socialzoo.train.crowd_attention) and
+its policy head, run in numpy from a socialzoo policy file (safetensors with a JSON header)."""
 
 from __future__ import annotations
 
@@ -50,6 +41,15 @@ def _layers(tensors: dict[str, np.ndarray], prefix: str, where: str) -> list[tup
 
 class CrowdAttentionPolicy:
     """A learned CrowdNav policy (PPO with attention over people), greedy.
+
+    Greedy: the most likely of CrowdNav's discrete actions, or the mean velocity.
+
+    The file's tensors: `attention.embed.*`, `attention.value.*`, `attention.score.*` (the pooling network),
+    `policy.*` (the policy MLP on its features) and `action.weight`, `action.bias` (the action head: logits,
+    or the mean action in [-1, 1]). Its header says the observation's person slots and layout
+    (`header["observation"]["signals"]` true for the task's signals, 9 robot and 8 person features,
+    socialzoo.env.crowd_observation; a file without the key has CrowdNav's joint state, 6 and 7), the
+    activation of the policy MLP, the action kind and the task's env id.
 
     Args:
         tensors: the file's tensors (see the module docstring).

@@ -1,11 +1,5 @@
-"""The demonstration file format: (obs, action, next_obs, reward, terminated, truncated, episode)
-transitions of a demonstrating policy in a compressed .npz file, with a JSON metadata entry.
-
-A recording is written in chunks of episodes as it goes (FILE.parts/chunk_NNNNN.npz plus
-index.json); when every chunk is there they are merged into FILE and the parts are removed.
-This module reads both forms, for the imitation baselines; the recorder that writes them is
-socialzoo.bench.demonstrations.
-"""
+"""The demonstration file format: (obs, action, next_obs, reward, terminated, truncated, episode) transitions of a
+demonstrating policy in a compressed .npz file, with a JSON metadata entry."""
 
 from __future__ import annotations
 
@@ -36,7 +30,11 @@ class DemonstrationError(Exception):
 
 
 def parts_dir(path: str | Path) -> Path:
-    """Where the chunks of the recording `path` live while it is being written."""
+    """Where the chunks of the recording `path` live while it is being written.
+
+    A recording is written in chunks of episodes as it goes (FILE.parts/chunk_NNNNN.npz plus index.json); when
+    every chunk is there they are merged into FILE and the parts are removed.
+    """
     path = Path(path)
     return path.with_name(path.name + ".parts")
 

@@ -1,10 +1,5 @@
 """The engineered baselines of the benchmark (SPEC section 10): GoAlone, and the reference policy Ref
-(GoAlone while the corridor ahead is clear, Follow a human walking our way, else Halt).
-
-Ref's decision is a pure, batched function of what the robot sees in its own frame (`ref_actions`);
-the Ref policy feeds it from the paper observation, or from the task's core (world state, sight and
-carrots) for layouts that lack the robot's velocity.
-"""
+(GoAlone while the corridor ahead is clear, Follow a human walking our way, else Halt)."""
 
 from __future__ import annotations
 
@@ -89,6 +84,8 @@ def ref_actions(
     (speed >= still_speed) in a direction within heading_tolerance of the direction to the
     local target, Follow; else Halt. Ref never passes.
 
+    A pure, batched function of what the robot sees in its own frame.
+
     Args:
         human_xy: (N, H, 2) human centres relative to the robot, robot frame, m.
         human_vel: (N, H, 2) the humans' own (world) velocities expressed in robot axes, m/s
@@ -167,6 +164,9 @@ class Ref:
 
     With the paper observation layout Ref acts on the observation alone (so its demonstrations
     are a function of what a learner sees); with another layout it needs the task.
+
+    The Ref policy feeds `ref_actions` from the paper observation, or from the task's core (world state, sight
+    and carrots) for layouts that lack the robot's velocity.
 
     Args:
         config: Ref's parameters; keyword arguments build one when config is None.

@@ -1,12 +1,4 @@
-"""Learned policies at inference: a multilayer perceptron read from a policy file, run in numpy.
-
-Every neural baseline (PPO and DQN trained with Stable-Baselines3, BC and GAIL trained with
-TorchRL) is saved as the same kind of file (socialzoo.env.policy_file): the layers of the
-network that maps an observation to one score per action (logits or Q-values), and the
-observation normalisation it was trained with. Acting is the greedy action: argmax of the scores.
-Evaluating needs neither torch nor the training library, and batches of any size cost one matrix
-product per layer.
-"""
+"""Learned policies at inference: a multilayer perceptron read from a policy file, run in numpy."""
 
 from __future__ import annotations
 
@@ -64,6 +56,12 @@ class ObservationNormalizer:
 
 class MlpPolicy:
     """A greedy policy over a multilayer perceptron.
+
+    Every neural baseline (PPO and DQN trained with Stable-Baselines3, BC and GAIL trained with TorchRL) is
+    saved as the same kind of file (socialzoo.env.policy_file): the layers of the network that maps an
+    observation to one score per action (logits or Q-values), and the observation normalisation it was trained
+    with. Acting is the greedy action: argmax of the scores. Evaluating needs neither torch nor the training
+    library, and batches of any size cost one matrix product per layer.
 
     Args:
         name: the registry name (e.g. "ppo").

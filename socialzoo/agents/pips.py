@@ -1,12 +1,5 @@
 """PIPS programs: action-selection state machines over the four actions, guarded by predicates on
-unit-checked feature expressions; their JSON form and the `pips` policy that runs them.
-
-A program holds, for each current action a (the observation's previous action), an ordered list
-of transitions a -> b, each guarded by a predicate: an and/or tree of comparisons f(x) <= t or
-f(x) >= t of a feature expression f with a threshold t in f's unit. The first guard that holds
-fires; when none does the robot keeps doing a. Loading a program reads JSON and checks every
-node (operators, features, fields, units); nothing in the file is ever executed.
-"""
+unit-checked feature expressions; their JSON form and the `pips` policy that runs them."""
 
 from __future__ import annotations
 
@@ -241,6 +234,10 @@ class Transition:
 class Program:
     """A PIPS state machine: for each current action, its ordered transitions (first match fires).
 
+    For each current action a (the observation's previous action), an ordered list of transitions a -> b, each
+    guarded by a predicate: an and/or tree of comparisons f(x) <= t or f(x) >= t of a feature expression f
+    with a threshold t in f's unit. The first guard that holds fires; when none does the robot keeps doing a.
+
     Attributes:
         transitions: action index -> transitions out of it; actions without an entry never change.
     """
@@ -440,6 +437,9 @@ def program_from_json(data: Any, source: str = "program") -> Program:
 
 def load_program(path: str | Path) -> Program:
     """Read and check a program file.
+
+    Loading reads JSON and checks every node (operators, features, fields, units); nothing in the file is ever
+    executed.
 
     Raises:
         ProgramFileError: (a ProgramError and a PolicyFileError) no such file, a file that is not

@@ -1,12 +1,5 @@
 """The features PIPS programs are written in: physical units, and the atomic features (with their
-units) computed, batched, from paper-layout observations (SPEC section 8).
-
-An atomic feature is one number per observation: the robot's speed, the distance to the local
-target, or an attribute of one chosen human (its distance, lateral offset, walking speed...).
-Humans are chosen by a selector: the nearest visible one, the nearest ahead (x > 0), or the
-nearest ahead inside a lane |y| <= w of a fixed half-width w. Feature expressions (sums,
-ratios...) are built over these in socialzoo.agents.pips; units keep those expressions meaningful.
-"""
+units) computed, batched, from paper-layout observations (SPEC section 8)."""
 
 from __future__ import annotations
 
@@ -154,7 +147,14 @@ def paper_parts(obs: np.ndarray) -> PaperParts:
 
 @dataclass(frozen=True)
 class AtomSpec:
-    """An atomic feature: its name, unit and meaning."""
+    """An atomic feature: its name, unit and meaning.
+
+    An atomic feature is one number per observation: the robot's speed, the distance to the local target, or
+    an attribute of one chosen human (its distance, lateral offset, walking speed...). Humans are chosen by a
+    selector: the nearest visible one, the nearest ahead (x > 0), or the nearest ahead inside a lane |y| <= w
+    of a fixed half-width w. Feature expressions (sums, ratios...) are built over these in
+    socialzoo.agents.pips; units keep those expressions meaningful.
+    """
 
     name: str
     unit: Unit

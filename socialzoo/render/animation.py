@@ -1,8 +1,4 @@
-"""Write rendered frames to an animated GIF or an MP4 video.
-
-GIFs need only Pillow (a dependency of matplotlib and imageio); MP4 needs the ffmpeg plugin of
-imageio (`pip install imageio-ffmpeg`).
-"""
+"""Write rendered frames to an animated GIF or an MP4 video."""
 
 from __future__ import annotations
 
@@ -26,6 +22,9 @@ def write_animation(
 
     Frames are consumed one at a time: an MP4 is streamed to ffmpeg, a GIF keeps each frame as a
     palette image (one byte per pixel) until the file is written.
+
+    GIFs need only Pillow (a dependency of matplotlib and imageio); MP4 needs the ffmpeg plugin of imageio
+    (`pip install imageio-ffmpeg`).
 
     Args:
         frames: (H, W, 3) uint8 RGB frames, all of the same size.

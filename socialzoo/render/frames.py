@@ -1,8 +1,4 @@
-"""Fast RGB frames of one world row, for render_mode="rgb_array" and "human".
-
-The walls (and optionally the navigation graph) are drawn once, antialiased, into cached images;
-each frame copies the visible part and draws the moving parts on it with Pillow.
-"""
+"""Fast RGB frames of one world row, for render_mode="rgb_array" and "human"."""
 
 from __future__ import annotations
 
@@ -119,6 +115,9 @@ class FrameRenderer:
     at least a few pixels wide. The follow view caches the static layer in 512-pixel tiles, made
     as the robot first comes near them (at most about 90 MiB for a 100 m x 60 m map at the default
     640x480, antialias=2, once the robot has been everywhere).
+
+    The walls (and optionally the navigation graph) are drawn once, antialiased, into cached images; each
+    frame copies the visible part and draws the moving parts on it with Pillow.
 
     Args:
         map: the map whose walls are drawn.

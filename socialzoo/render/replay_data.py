@@ -1,9 +1,5 @@
 """The episode viewer's data: a recorded episode as arrays (EpisodeTrace), the scene it plays in
-(ReplayScene), and their compact JSON form that the HTML viewer reads.
-
-Plain numpy containers with no simulation code: the recorder (socialzoo.bench.replay) fills them,
-the writer (socialzoo.render.replay_html) encodes them.
-"""
+(ReplayScene), and their compact JSON form that the HTML viewer reads."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""The episode viewer's writer: recorded episodes -> one self-contained HTML file.
-
-The page inlines its stylesheet, its script (socialzoo/render/viewer/, package data) and the
-episodes as JSON, so it opens from disk with no network access and no other file.
-"""
+"""The episode viewer's writer: recorded episodes -> one self-contained HTML file."""
 
 from __future__ import annotations
 
@@ -39,6 +35,9 @@ def replay_document(
 ) -> str:
     """The viewer page of `traces` (one panel each, sharing one timeline) as an HTML string; the
     arguments are socialzoo.render.replay_data.encode_replay's.
+
+    The page inlines its stylesheet, its script (socialzoo/render/viewer/, package data) and the episodes as
+    JSON, so it opens from disk with no network access and no other file.
 
     Raises:
         ValueError: no traces, a bad view, or values that are not finite.
