@@ -1,16 +1,5 @@
-"""Social-force and ORCA parameters fitted to the recorded ETH/UCY people (issue 37, item 5): CMA-ES
-on the 4.8 s ADE of socialzoo.studies.realism, leave-one-scene-out, and the presets fitted on all.
-
-A fit samples `persons` people of each training scene (seeded) and up to `windows` of each one's
-4.8 s windows, builds their rows once, and minimises the mean over scenes of their ADE over the
-parameters of PARAMETERS (searched in [0, 1] per parameter, mapped log-uniformly onto its range,
-from the study's defaults). A fold fits on all scenes but one and reports the held-out scene's
-ADE, defaults against fitted, on a larger sample of its windows (`eval_persons`, another seed).
-
-The parameter sets fitted on all five scenes are socialzoo.humans.presets.PRESETS (the numbers and
-the command in docs/humans.md): socialzoo.studies.realism applies them (`--models
-sf-eth-ucy,orca-eth-ucy`), and every env takes them by name in its people spec.
-"""
+"""Social-force and ORCA parameters fitted to the recorded ETH/UCY people (issue 37, item 5): CMA-ES on the 4.8 s
+ADE of socialzoo.studies.realism, leave-one-scene-out, and the presets fitted on all (docs/humans.md)."""
 
 from __future__ import annotations
 
@@ -218,7 +207,18 @@ def fit(
 
 def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) -> dict[str, Any]:
     """Run the folds and the fit on all scenes; write out/calibration.{md,csv,json} and
-    out/<model>-eth-ucy.json (the preset). Returns the JSON record."""
+    out/<model>-eth-ucy.json (the preset). Returns the JSON record.
+
+    A fit samples `persons` people of each training scene (seeded) and up to `windows` of each one's 4.8 s
+    windows, builds their rows once, and minimises the mean over scenes of their ADE over the parameters of
+    PARAMETERS (searched in [0, 1] per parameter, mapped log-uniformly onto its range, from the study's
+    defaults). A fold fits on all scenes but one and reports the held-out scene's ADE, defaults against
+    fitted, on a larger sample of its windows (`eval_persons`, another seed).
+
+    The parameter sets fitted on all five scenes are socialzoo.humans.presets.PRESETS (the numbers and the
+    command in docs/humans.md): socialzoo.studies.realism applies them (`--models sf-eth-ucy,orca-eth-ucy`),
+    and every env takes them by name in its people spec.
+    """
     from socialzoo.studies.realism import load_tracks, versions
 
     out.mkdir(parents=True, exist_ok=True)

@@ -1,17 +1,4 @@
-"""Trained with X, tested with Y: every robot policy among every crowd model, one table and heatmap.
-
-`crowd_matrix` runs the benchmark once per crowd model (a people spec of socialzoo.humans.models:
-"sf", "orca", "groups", "learned:PATH", mixes), each into its own folder with its own results
-store (a rerun reads its trials back), the env driving the people (EnvConfig.people) with
-counterfactual rows, so that every cell also says what the robot cost the people. It then writes
-matrix.csv (every policy x model x map: trials, and the mean with its 90% interval of each
-metric), matrix.md (one table per map and metric, policies as rows, crowd models as columns) and
-matrix.png (a heatmap per metric).
-
-Metrics: success rate, human collisions per episode (steps with a person within 0.4 m), mean
-force and blame per step (SPEC section 9), and the people's time lost and extra distance walked
-because of the robot (socialzoo.env.people), means per person.
-"""
+"""Trained with X, tested with Y: every robot policy among every crowd model, one table and heatmap."""
 
 from __future__ import annotations
 
@@ -156,6 +143,17 @@ def crowd_matrix(
     figures: bool = True,
 ) -> Matrix:
     """Run every column and write matrix.csv, matrix.md and matrix.png.
+
+    Runs the benchmark once per crowd model (a people spec of socialzoo.humans.models: "sf", "orca", "groups",
+    "learned:PATH", mixes), each into its own folder with its own results store (a rerun reads its trials
+    back), the env driving the people (EnvConfig.people) with counterfactual rows, so that every cell also
+    says what the robot cost the people. matrix.csv holds every policy x model x map: trials, and the mean
+    with its 90% interval of each metric; matrix.md one table per map and metric, policies as rows, crowd
+    models as columns; matrix.png a heatmap per metric.
+
+    Metrics: success rate, human collisions per episode (steps with a person within 0.4 m), mean force and
+    blame per step (SPEC section 9), and the people's time lost and extra distance walked because of the robot
+    (socialzoo.env.people), means per person.
 
     Args:
         config: the matrix.

@@ -1,15 +1,4 @@
-"""Learned humans against social-force humans on the same scenarios: one table, one figure, the targets.
-
-`compare_humans` runs the benchmark twice on the same test sets and robot policy (Ref by
-default), once among the social-force humans and once among the learned humans of a policy file,
-both with the humans' metrics (socialzoo.bench.human_metrics), each into its own folder
-(social_force/, learned/: results stores, so a rerun reads its trials back). It then writes
-comparison.md and comparison.csv (every human metric and the robot's success, force and blame,
-side by side with 90% intervals), comparison.png (the same as bars), and checks issue 13's
-targets: the learned humans' route-goal reach rate within 10% of the social-force humans' (no
-lower than 0.9 times it) and no more collisions of any kind (human-human, human-wall,
-human-robot, means per episode).
-"""
+"""Learned humans against social-force humans on the same scenarios: one table, one figure, the targets."""
 
 from __future__ import annotations
 
@@ -126,6 +115,15 @@ def compare_humans(
     figures: bool = True,
 ) -> Comparison:
     """Run both populations and write comparison.md, comparison.csv and comparison.png.
+
+    Runs the benchmark twice on the same test sets and robot policy (Ref by default), once among the
+    social-force humans and once among the learned humans of a policy file, both with the humans' metrics
+    (socialzoo.bench.human_metrics), each into its own folder (social_force/, learned/: results stores, so a
+    rerun reads its trials back). comparison.md and comparison.csv hold every human metric and the robot's
+    success, force and blame, side by side with 90% intervals; comparison.png the same as bars. It checks
+    issue 13's targets: the learned humans' route-goal reach rate within 10% of the social-force humans' (no
+    lower than 0.9 times it) and no more collisions of any kind (human-human, human-wall, human-robot, means
+    per episode).
 
     Args:
         config: what to compare.

@@ -1,24 +1,5 @@
 """How each crowd model walks: the people of a model on a map's validation scenarios, without a
-robot, measured as pedestrian studies measure crowds.
-
-For each people spec (socialzoo.humans.models: "sf", "orca", "groups", "learned:PATH", mixes)
-the scenarios' people walk their routes for a while (the world step, no robot), and the report
-gives, per model:
-- speed: mean and the 10-90% range over people and time (sampled every 0.25 s);
-- speed against local density, the fundamental diagram, beside Weidmann's (1993) curve
-  v(rho) = 1.34 (1 - exp(-1.913 (1 / rho - 1 / 5.4))) m/s, and the same curve scaled to the
-  people's mean preferred speed; local density = people within density_radius (the person
-  included) / the disc's area;
-- contacts: person-person (centres closer than 0.4 m) and person-wall (closer than 0.2 m, or a
-  wall stopped the move) contact onsets per person-minute (socialzoo.bench.human_metrics);
-- path length ratio (walked / route length, for those who reached their route's goal end) and
-  time to goal (first arrival at the goal end; the share of people arriving is the reach rate).
-
-It writes report.md and report.csv (one row per model; learned models are checked against the
-targets of the learned humans: reach rate within 10% of the social force's, no more wall
-contacts per person-minute), walk_<model>.png (speed histogram, fundamental diagram, time to
-goal) and config.json.
-"""
+robot, measured as pedestrian studies measure crowds."""
 
 from __future__ import annotations
 
@@ -310,6 +291,24 @@ def human_report(
     cfg: HumanReportConfig, out_dir: str | Path, *, figures: bool = True
 ) -> tuple[list[WalkResult], list[Path]]:
     """Walk every model of `cfg` and write the report into out_dir (created).
+
+    For each people spec (socialzoo.humans.models: "sf", "orca", "groups", "learned:PATH", mixes) the
+    scenarios' people walk their routes for a while (the world step, no robot), and the report gives, per
+    model:
+
+    - speed: mean and the 10-90% range over people and time (sampled every 0.25 s);
+    - speed against local density, the fundamental diagram, beside Weidmann's (1993) curve
+      v(rho) = 1.34 (1 - exp(-1.913 (1 / rho - 1 / 5.4))) m/s, and the same curve scaled to the
+      people's mean preferred speed; local density = people within density_radius (the person
+      included) / the disc's area;
+    - contacts: person-person (centres closer than 0.4 m) and person-wall (closer than 0.2 m, or a
+      wall stopped the move) contact onsets per person-minute (socialzoo.bench.human_metrics);
+    - path length ratio (walked / route length, for those who reached their route's goal end) and
+      time to goal (first arrival at the goal end; the share of people arriving is the reach rate).
+
+    It writes report.md and report.csv (one row per model; learned models are checked against the targets of
+    the learned humans: reach rate within 10% of the social force's, no more wall contacts per person-minute),
+    walk_<model>.png (speed histogram, fundamental diagram, time to goal) and config.json.
 
     Returns:
         (results, files written).

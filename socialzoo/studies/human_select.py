@@ -1,18 +1,5 @@
 """Choose a learned-human checkpoint on validation scenarios: the comparison with social-force
-humans (socialzoo.studies.human_compare) for every checkpoint of a training run, never a test set.
-
-Why: the learned humans' reward is a proxy for what the comparison measures, and a longer run is
-not always closer to the targets (with the default reward, wall contacts grow after the first
-100,000-200,000 frames). `select_humans` runs the comparison for each checkpoint of a run folder
-(`socialzoo train humans`) on the validation scenarios of the training map
-(socialzoo.scenarios.scenario.validation_set) and keeps the most trained checkpoint that meets both of
-issue 13's targets there (reach rate within 10% of the social-force humans', no more collisions of
-any kind); when none does, the one that misses them by the least (the largest relative excess of
-collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv and selection.md
-(every checkpoint's reach rate and collisions), OUT/selection.json, and copies the chosen file to
-OUT/humans.safetensors. The social-force runs are shared by every checkpoint (one results store),
-and every learned run is stored: an interrupted selection resumes where it stopped.
-"""
+humans (socialzoo.studies.human_compare) for every checkpoint of a training run, never a test set."""
 
 from __future__ import annotations
 
@@ -118,6 +105,19 @@ def select_humans(
     progress: bool = True,
 ) -> Selection:
     """Compare every checkpoint of a run with the social-force humans and keep the best one.
+
+    Why: the learned humans' reward is a proxy for what the comparison measures, and a longer run is not
+    always closer to the targets (with the default reward, wall contacts grow after the first 100,000-200,000
+    frames).
+
+    Runs the comparison for each checkpoint of a run folder (`socialzoo train humans`) on the validation
+    scenarios of the training map (socialzoo.scenarios.scenario.validation_set) and keeps the most trained
+    checkpoint that meets both of issue 13's targets there (reach rate within 10% of the social-force humans',
+    no more collisions of any kind); when none does, the one that misses them by the least (the largest
+    relative excess of collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv and
+    selection.md (every checkpoint's reach rate and collisions), OUT/selection.json, and copies the chosen
+    file to OUT/humans.safetensors. The social-force runs are shared by every checkpoint (one results store),
+    and every learned run is stored: an interrupted selection resumes where it stopped.
 
     Args:
         run_dir: a `socialzoo train humans` (or cotrain) run folder.

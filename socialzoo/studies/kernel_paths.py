@@ -1,15 +1,4 @@
-"""Where two torch trainings of one seed part: one BC training under several CPU kernel paths.
-
-Issue 38 saw the torch-trained rows (BC, GAIL, DQN) move when the protocol was re-run on another
-machine of the same kind, while one machine trains one seed to the same weights twice. The likely
-cause is the CPU code path of torch's kernels, which torch and MKL pick at run time from the CPU's
-instruction sets. `kernel_path_rows` makes those choices on one machine: it trains BC (`socialzoo
-train bc`, one seed) once per kernel path, each in its own process with the path's environment
-(torch reads ATEN_CPU_CAPABILITY and MKL reads MKL_CBWR when they load), and reports, against the
-first path, the first checkpoint whose weights differ, the largest weight difference at the end,
-and each final policy's success on the first gdc1-test scenarios (`socialzoo benchmark`). Finished
-trainings and stored trials are reused. tools/kernel_paths.py is its command line.
-"""
+"""Where two torch trainings of one seed part: one BC training under several CPU kernel paths."""
 
 from __future__ import annotations
 
@@ -135,6 +124,14 @@ def kernel_path_rows(
     """One row per kernel path: its settings, the training's updates, the first checkpoint whose
     weights differ from the first path's ("none": none does), the largest final weight difference,
     and the final policy's success (%) on the first `trials` gdc1-test scenarios (NaN for 0).
+
+    Why: issue 38 saw the torch-trained rows (BC, GAIL, DQN) move when the protocol was re-run on another
+    machine of the same kind, while one machine trains one seed to the same weights twice. The likely cause is
+    the CPU code path of torch's kernels, which torch and MKL pick at run time from the CPU's instruction
+    sets. This makes those choices on one machine: it trains BC (`socialzoo train bc`, one seed) once per
+    kernel path, each in its own process with the path's environment (torch reads ATEN_CPU_CAPABILITY and MKL
+    reads MKL_CBWR when they load), and compares each against the first path (`socialzoo benchmark` for the
+    success). Finished trainings and stored trials are reused. tools/kernel_paths.py is its command line.
 
     Raises:
         ValueError: an unknown kernel path (the known ones are named).

@@ -1,13 +1,5 @@
-"""Experiment 2 (SPEC section 10, LfD data efficiency): imitation policies trained on 155,400 /
-116,600 / 77,700 / 38,800 / 3,500 steps of one Ref demonstration set, each evaluated on the same
-fixed scenarios; a table of success % and average step reward beside the paper's.
-
-This module evaluates policy files and writes the table; the policies are trained by
-socialzoo.studies.lfd_training into the folder layout below (`lfd_policy_file`). The evaluation scenarios are
-the first `trials` of the gdc1 test set (base seed 20220001): they are only ever evaluated on,
-never used to train, tune or choose anything. Trials go to a results store as they finish, so an
-interrupted evaluation resumes and a repeated one is read back.
-"""
+"""Experiment 2 (SPEC section 10, LfD data efficiency), evaluation half: the policies of socialzoo.studies.lfd_training
+on the same fixed scenarios; a table of success % and average step reward beside the paper's."""
 
 from __future__ import annotations
 
@@ -125,6 +117,10 @@ def run_lfd_evaluation(
     backend: Backend = "local",
 ) -> LfdResult:
     """Evaluate LfD policy files on the first `trials` gdc1 test scenarios and write the table.
+
+    The evaluation scenarios are the first `trials` of the gdc1 test set (base seed 20220001): they are only
+    ever evaluated on, never used to train, tune or choose anything. Trials go to a results store as they
+    finish, so an interrupted evaluation resumes and a repeated one is read back.
 
     Args:
         policies: (policy name, demonstration steps) -> policy file, e.g. from `find_lfd_policies`.

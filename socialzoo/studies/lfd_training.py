@@ -1,12 +1,5 @@
 """Experiment 2's training half (SPEC section 10, LfD data efficiency): BC and GAIL trained on
-155,400 / 116,600 / 77,700 / 38,800 / 3,500 steps of ONE Ref demonstration recording.
-
-`train_lfd` records the demonstrations when the file is missing (about 155,000 steps of Ref on
-gdc1 scenarios of their own seeds), then trains every (algorithm, size) into
-<root>/<algorithm>_<size>/ with the trainers' own defaults plus the given overrides. Each run is
-skipped when its folder holds a finished run of the same arguments, so an interrupted experiment
-resumes run by run. socialzoo.studies.lfd evaluates the policies and writes the table.
-"""
+155,400 / 116,600 / 77,700 / 38,800 / 3,500 steps of ONE Ref demonstration recording."""
 
 from __future__ import annotations
 
@@ -96,6 +89,11 @@ def record_lfd_demos(path: str | Path, episodes: int = LFD_DEMO_EPISODES, progre
 
 def train_lfd(config: LfdTrainConfig) -> dict[tuple[str, int], Path]:
     """Record the demonstrations if needed, then train every (algorithm, size).
+
+    Records the demonstrations when the file is missing (about 155,000 steps of Ref on gdc1 scenarios of their
+    own seeds), then trains every (algorithm, size) into <root>/<algorithm>_<size>/ with the trainers' own
+    defaults plus the given overrides. Each run is skipped when its folder holds a finished run of the same
+    arguments, so an interrupted experiment resumes run by run.
 
     Returns:
         (algorithm, size) -> policy file, the mapping socialzoo.studies.lfd.run_lfd_evaluation takes.

@@ -1,14 +1,5 @@
-"""PIPS beyond the paper, evaluation half: success against the number of demonstration steps
-(500 / 1,000 / 3,500 / 10,000), with the paper's windowing around changes of action and without
-it, on validation scenarios.
-
-The programs are synthesised by socialzoo.studies.pips_study_training into <root>/pips_<steps>_w<window>/
-(`study_program_file`). Each is evaluated on the first `trials` scenarios of the gdc1 validation
-set (socialzoo.studies.rl_curves.VALIDATION_SET: our own base seed, apart from the test sets and
-the quick sets, which are never looked at here) through run_benchmark, so trials go to its store
-as they finish and an interrupted evaluation resumes. Writes pips_study.csv, pips_study.md (success
-with its 90% interval, the synthesis time and the program's size) and pips_study.png.
-"""
+"""PIPS beyond the paper, evaluation half: success against the number of demonstration steps (500 / 1,000 / 3,500 /
+10,000), with the paper's windowing around changes of action and without it, on validation scenarios."""
 
 from __future__ import annotations
 
@@ -119,6 +110,12 @@ def run_pips_study(
 ) -> StudyResult:
     """Evaluate the study's programs on the first `trials` validation scenarios; write the table
     (and the figure).
+
+    Each program is evaluated on the first `trials` scenarios of the gdc1 validation set
+    (socialzoo.studies.rl_curves.VALIDATION_SET: our own base seed, apart from the test sets and the quick
+    sets, which are never looked at here) through run_benchmark, so trials go to its store as they finish and
+    an interrupted evaluation resumes. pips_study.md gives success with its 90% interval, the synthesis time
+    and the program's size.
 
     Args:
         programs: (demonstration steps, window) -> program file, e.g. from `find_study_programs`

@@ -1,15 +1,5 @@
-"""PIPS beyond the paper, training half: programs synthesised from 500 / 1,000 / 3,500 / 10,000
-demonstration steps, each with the paper's windowing (20 steps around a change of action) and
-without it (window 0: every step is an example).
-
-`train_pips_study` runs `socialzoo.train.pips.train` once per (steps, window) cell into
-<root>/pips_<steps>_w<window>/pips.json (with its .train.json record: arguments, seed, synthesis
-time), all from one demonstration file recorded on training scenarios. A cell whose record holds
-the same arguments is not synthesised again, so an interrupted study resumes cell by cell; a cell
-of other arguments (other overrides) is synthesised again in place.
-socialzoo.studies.pips_study evaluates the programs on validation scenarios and writes the table
-and the figure.
-"""
+"""PIPS beyond the paper, training half: programs synthesised from 500 / 1,000 / 3,500 / 10,000 demonstration
+steps, each with the paper's windowing (20 steps around a change of action) and without it (window 0)."""
 
 from __future__ import annotations
 
@@ -86,6 +76,12 @@ class PipsStudyConfig:
 
 def train_pips_study(config: PipsStudyConfig) -> dict[tuple[int, int], Path]:
     """Synthesise every (steps, window) cell, skipping finished ones.
+
+    Window 0: every step is an example. Runs `socialzoo.train.pips.train` once per (steps, window) cell into
+    <root>/pips_<steps>_w<window>/pips.json (with its .train.json record: arguments, seed, synthesis time),
+    all from one demonstration file recorded on training scenarios. A cell whose record holds the same
+    arguments is not synthesised again, so an interrupted study resumes cell by cell; a cell of other
+    arguments (other overrides) is synthesised again in place.
 
     Returns:
         (steps, window) -> program file, the mapping socialzoo.studies.pips_study.run_pips_study

@@ -1,28 +1,5 @@
-"""Which crowd model walks most like real people: each recorded person of the ETH/UCY scenes walked
-by a model among everyone else replayed, measured against its track (issue 37, item 4).
-
-The protocol (docs/humans.md, "Realism against recorded people"): one subject person per batch row,
-its model started from its recorded state, everyone else present in the row replaying its track
-(RecordedPeople.follow), the world in the open at REALISM_DT s per step (FRAME_STEPS steps per
-0.4 s frame). Two kinds of cases, the same for every model:
-
-- windows (the prediction literature's 4.8 s protocol): every frame t0 at which the person has
-  been seen OBS_FRAMES frames (t0 - 7 .. t0) and is still seen PRED_FRAMES frames later. The model
-  starts at its position at t0 with the observed velocity (t0 - 1 -> t0), its goal the track's
-  last position and its preferred speed its mean recorded speed; ADE and FDE over frames
-  t0 + 1 .. t0 + 12.
-- tracks: each person from its entry (its first frame, with the velocity of its first segment, as
-  socialzoo.env.replay enters a modelled person) to its track's end: ADE over the frames where the
-  simulated person is still on the scene, FDE at the track's last frame (the simulated person
-  where it left, if it left earlier), and the distributions of speeds and nearest-neighbour
-  distances (against the recorded ones of the same frames, scipy.stats.wasserstein_distance), and
-  contacts (within COLLISION_DISTANCE of another person on a frame).
-
-"cv" (constant velocity) is computed from the tracks: the start velocity kept. "groups": the
-subject and its recorded companions (GROUP_DISTANCE, GROUP_SPEED at the start) walk by the social
-force with the group forces, the rest replay; without companions it is "sf". Presets (the fitted
-parameter sets of socialzoo.studies.calibration) are WorldConfig overrides of a model.
-"""
+"""Which crowd model walks most like real people: each recorded ETH/UCY person walked by a model among the others
+replayed, against its own track (issue 37, item 4; protocol: docs/humans.md, "Realism against recorded people")."""
 
 from __future__ import annotations
 
@@ -82,6 +59,10 @@ def realism_world(dt: float = REALISM_DT) -> WorldConfig:
 @dataclass(frozen=True)
 class ModelSpec:
     """A model of the study.
+
+    "groups": the subject and its recorded companions (GROUP_DISTANCE, GROUP_SPEED at the start) walk by the
+    social force with the group forces, the rest replay; without companions it is "sf". Presets (the fitted
+    parameter sets of socialzoo.studies.calibration) are WorldConfig overrides of a model.
 
     Attributes:
         name: as the command line names it ("cv", "sf", "orca", "groups", "learned:PATH", a preset).
@@ -193,7 +174,13 @@ class Cases:
 
 
 def window_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases:
-    """Every 4.8 s window (module docstring) of `persons` (default all tracks)."""
+    """Every 4.8 s window (module docstring) of `persons` (default all tracks).
+
+    The prediction literature's 4.8 s protocol: every frame t0 at which the person has been seen OBS_FRAMES
+    frames (t0 - 7 .. t0) and is still seen PRED_FRAMES frames later. The model starts at its position at t0
+    with the observed velocity (t0 - 1 -> t0), its goal the track's last position and its preferred speed its
+    mean recorded speed; ADE and FDE over frames t0 + 1 .. t0 + 12.
+    """
     persons = np.arange(len(scene.first)) if persons is None else np.asarray(persons)
     starts = [
         np.arange(scene.first[k] + OBS_FRAMES - 1, scene.last[k] - PRED_FRAMES + 1) for k in persons.tolist()
@@ -204,7 +191,14 @@ def window_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases
 
 
 def track_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases:
-    """Each of `persons` (default all tracks seen on 2 frames or more) from entry to its track's end."""
+    """Each of `persons` (default all tracks seen on 2 frames or more) from entry to its track's end.
+
+    The entry is its first frame, with the velocity of its first segment (as socialzoo.env.replay enters a
+    modelled person). ADE over the frames where the simulated person is still on the scene, FDE at the
+    track's last frame (the simulated person where it left, if it left earlier), and the
+    distributions of speeds and nearest-neighbour distances (against the recorded ones of the same frames,
+    scipy.stats.wasserstein_distance), and contacts (within COLLISION_DISTANCE of another person on a frame).
+    """
     persons = np.arange(len(scene.first)) if persons is None else np.asarray(persons)
     persons = persons[scene.last[persons] > scene.first[persons]]
     return Cases(
@@ -238,7 +232,10 @@ def truth(scene: SceneTracks, cases: Cases) -> np.ndarray:
 
 
 def constant_velocity(scene: SceneTracks, cases: Cases) -> np.ndarray:
-    """(n, 1 + max frames, 2) the constant-velocity walk from each start (NaN past its frames)."""
+    """(n, 1 + max frames, 2) the constant-velocity walk from each start (NaN past its frames).
+
+    "cv" is computed from the tracks: the start velocity kept.
+    """
     inside = _inside(cases)
     p0 = scene.grid[cases.person, cases.start]
     v = start_velocity(scene, cases)
@@ -343,6 +340,10 @@ def simulate(
 ) -> Rollout:
     """Walk each case's subject by `model` among the replayed others (module docstring), batched:
     one row per case, cases of similar length in one core.
+
+    One subject person per batch row, its model started from its recorded state, everyone else present in the
+    row replaying its track (RecordedPeople.follow), the world in the open at REALISM_DT s per step
+    (FRAME_STEPS steps per 0.4 s frame). The cases are the same for every model.
 
     Args:
         scene: the scene.

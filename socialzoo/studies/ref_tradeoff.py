@@ -1,22 +1,4 @@
-"""Ref's parameters against its success and blame: is the engineered rule on its own Pareto front?
-
-    socialzoo study ref-tradeoff [--trials 400] [--workers 2] [--map gdc1]
-                                 [--learned NAME:FILE ...] [--halt-offsets=-1,-0.5,0,0.5,1]
-
-Runs Ref (socialzoo.agents.engineered.RefConfig) for every combination of corridor half-width
-(0.45, 0.62, 0.8 m), lookahead margin (0.4, 0.9, 1.5 m) and heading tolerance (0.8, 1.3 rad) on
-the first N scenarios of the map's validation set (`<map>-val`: never a test set); the table has
-one Markdown row per setting: success, mean blame, human-collision and not-reached episodes, and
-whether some other setting has at least its success with less blame ("dominated"). The paper's
-setting is (0.62, 0.9, 0.8). A learner that only imitates Ref more closely can at best land on
-this front; docs/reproduce.md ("A learned policy against Ref") gives the measured table.
-
-`learned` ("NAME:FILE") adds a learned policy's own trade-off on the same scenarios: the policy with
-its Halt score raised by each of `halt_offsets` (a copy of the file with the last layer's Halt
-bias shifted, written to a temporary folder), so it halts more (positive) or less (negative). Its
-rows say whether some Ref setting has at least their success with less blame: a learner that
-gets past Ref's front has a row that no Ref setting dominates at Ref's success or more.
-"""
+"""Ref's parameters against its success and blame: is the engineered rule on its own Pareto front?"""
 
 from __future__ import annotations
 
@@ -134,7 +116,20 @@ def dominated(row: dict[str, Any], rows: list[dict[str, Any]]) -> bool:
 
 def run_ref_tradeoff(config: RefTradeoffConfig) -> RefTradeoff:
     """Every Ref setting of GRID, and each learned policy at each Halt offset, on the first
-    config.trials validation scenarios of config.map."""
+    config.trials validation scenarios of config.map.
+
+    Ref (socialzoo.agents.engineered.RefConfig) runs for every combination of corridor half-width (0.45, 0.62,
+    0.8 m), lookahead margin (0.4, 0.9, 1.5 m) and heading tolerance (0.8, 1.3 rad) on the first N scenarios
+    of the map's validation set (`<map>-val`: never a test set); the table has one Markdown row per setting:
+    success, mean blame, human-collision and not-reached episodes, and whether some other setting has at least
+    its success with less blame ("dominated"). The paper's setting is (0.62, 0.9, 0.8).
+
+    `learned` ("NAME:FILE") adds a learned policy's own trade-off on the same scenarios: the policy with its
+    Halt score raised by each of `halt_offsets` (a copy of the file with the last layer's Halt bias shifted,
+    written to a temporary folder), so it halts more (positive) or less (negative). Its rows say whether some
+    Ref setting has at least their success with less blame: a learner that gets past Ref's front has a row
+    that no Ref setting dominates at Ref's success or more.
+    """
     settings = ref_settings()
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(max_workers=config.workers) as pool:

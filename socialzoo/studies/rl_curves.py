@@ -1,16 +1,5 @@
-"""Experiment 1, RL data efficiency (SPEC section 10): every checkpoint of PPO and DQN training runs
-on the same scenarios, with success, time to goal and average step reward per checkpoint and 90%
-confidence bands, as rl_curves.csv and rl_curves.{png,pdf} (the paper's learning-curve figure).
-
-The paper evaluates each checkpoint on the same 100 test scenarios: the first 100 of gdc1-test,
-for evaluation only (never to choose anything). Choosing something, such as how long to train,
-uses VALIDATION_SET instead: scenarios of our own seeds, apart from every test set
-(`steps_to_match` answers "how many steps does PPO need to reach Ref's success?").
-
-Trials are stored as they finish (curves.sqlite, one row per checkpoint and scenario, keyed by the
-checkpoint file's digest and the code), so an interrupted evaluation resumes and a repeated one
-reads. Training runs are folders written by `socialzoo train ppo|dqn` (checkpoints/step_*.safetensors).
-"""
+"""Experiment 1, RL data efficiency (SPEC section 10): every checkpoint of PPO and DQN runs on the same scenarios,
+with 90% confidence bands, as rl_curves.csv and rl_curves.{png,pdf} (the paper's learning-curve figure)."""
 
 from __future__ import annotations
 
@@ -66,6 +55,8 @@ CSV_COLUMNS = (
 
 def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
     """(step, policy file) of every checkpoint a training run wrote, by step.
+
+    Training runs are folders written by `socialzoo train ppo|dqn` (checkpoints/step_*.safetensors).
 
     Raises:
         FileNotFoundError: the folder has no checkpoints.
@@ -302,6 +293,12 @@ def rl_curves(
 ) -> CurvesResult:
     """Experiment 1: evaluate every checkpoint of each run on the same scenarios, write the curves.
 
+    Success, time to goal and average step reward per checkpoint. The paper evaluates each checkpoint on the
+    same 100 test scenarios: the first 100 of gdc1-test, for evaluation only (never to choose anything);
+    choosing something, such as how long to train, uses VALIDATION_SET instead (`steps_to_match`). Trials are
+    stored as they finish (curves.sqlite, one row per checkpoint and scenario, keyed by the checkpoint file's
+    digest and the code), so an interrupted evaluation resumes and a repeated one reads.
+
     Args:
         runs: label ("ppo", "dqn") -> training run folder.
         out_dir: where curves.sqlite, rl_curves.csv and rl_curves.{png,pdf} go.
@@ -345,6 +342,8 @@ def steps_to_match(
     """Beyond the paper: the fewest training steps after which a run's checkpoint succeeds at least
     as often as `reference` does, both measured on the same validation scenarios (never a test set).
     Trials are stored in out_dir/curves.sqlite, the curve rows written to out_dir/steps_to_ref.csv.
+
+    The validation scenarios are VALIDATION_SET: scenarios of our own seeds, apart from every test set.
 
     Returns:
         {"reference": its curve row, "checkpoints": curve rows by step, "steps": the first step

@@ -1,15 +1,4 @@
-"""Experiment 1, RL data efficiency: the training part (the reproduce command calls these).
-
-`train_curve_runs` trains PPO and DQN with the paper's set-up (84,000 steps, a checkpoint every
-2,000) into one folder each; `socialzoo.studies.rl_curves.rl_curves` then evaluates every checkpoint.
-`train_to_match` trains PPO on for longer, for `socialzoo.studies.rl_curves.steps_to_match` (the
-steps PPO needs to reach Ref's success, measured on validation scenarios); `steps_to_reference`
-does both and writes the answer (`socialzoo steps-to-ref`).
-
-    runs = train_curve_runs("results/rl")               # {"ppo": results/rl/ppo, "dqn": ...}
-    rl_curves(runs, "results/rl")                       # rl_curves.csv, rl_curves.{png,pdf}
-    steps_to_reference("results/steps")                 # steps_to_ref.json, .csv, .{png,pdf}
-"""
+"""Experiment 1, RL data efficiency: the training part (the reproduce command calls these)."""
 
 from __future__ import annotations
 
@@ -36,6 +25,9 @@ def train_curve_runs(
     **changes: Any,
 ) -> dict[str, Path]:
     """Train each algorithm with its defaults (the paper's set-up) into out_dir/<algo>.
+
+    The paper's set-up: 84,000 steps, a checkpoint every 2,000; `socialzoo.studies.rl_curves.rl_curves` then
+    evaluates every checkpoint.
 
     Args:
         out_dir: parent folder of the runs.
@@ -65,7 +57,11 @@ def train_to_match(
     **changes: Any,
 ) -> Path:
     """Train PPO (its defaults otherwise) for `total_steps` with a checkpoint every
-    `checkpoint_every` steps into out_dir/ppo_long; returns the run folder."""
+    `checkpoint_every` steps into out_dir/ppo_long; returns the run folder.
+
+    For `socialzoo.studies.rl_curves.steps_to_match` (the steps PPO needs to reach Ref's success, measured on
+    validation scenarios).
+    """
     args = trainer_args("ppo")(
         out=Path(out_dir) / "ppo_long",
         seed=seed,

@@ -1,17 +1,5 @@
-"""Training seeds as an axis: the same learner trained with K seeds, each seed's policy evaluated
-on the same scenarios, and the aggregates over the seeds (socialzoo.bench.aggregates: mean and
-IQM with stratified bootstrap intervals, performance profiles, probability of improvement).
-
-A `SeedGroup` is one policy in one setting (a map of the performance or transfer experiment, or an
-LfD demonstration size): each seed's {scenario index: success}. Engineered policies (GoAlone, Ref)
-have one "seed": they are deterministic. The writers give seeds.csv (one row per group: mean and
-IQM with their 95% intervals, every seed's success, and where the paper's single-run number falls
-in the seed distribution), improvement.csv (probability of improvement between pairs of policies
-per map) and profiles.csv with profiles.{png,pdf} (performance profiles per map).
-
-    groups = [SeedGroup("performance", "ppo", "gdc1", None, (0, 1), (scores0, scores1), 55.1), ...]
-    rows = seed_rows(groups)
-"""
+"""Training seeds as an axis: the same learner trained with K seeds, each seed's policy evaluated on the same
+scenarios, and the aggregates over the seeds (socialzoo.bench.aggregates)."""
 
 from __future__ import annotations
 
@@ -45,6 +33,9 @@ BOOTSTRAP_SEED = 0
 @dataclass(frozen=True)
 class SeedGroup:
     """One policy in one setting, over its seeds.
+
+    A setting is a map of the performance or transfer experiment, or an LfD demonstration size. Engineered
+    policies (GoAlone, Ref) have one "seed": they are deterministic.
 
     Attributes:
         experiment: "performance", "transfer" or "lfd".
@@ -288,7 +279,12 @@ def write_seed_study(
     resamples: int = SEED_RESAMPLES,
 ) -> list[Path]:
     """seeds.csv, improvement.csv and profiles.csv of the groups into out_dir (empty groups: none
-    is written and earlier ones are removed)."""
+    is written and earlier ones are removed).
+
+    seeds.csv: one row per group: mean and IQM with their 95% intervals, every seed's success, and where the
+    paper's single-run number falls in the seed distribution. improvement.csv: probability of improvement
+    between pairs of policies per map. profiles.csv with profiles.{png,pdf}: performance profiles per map.
+    """
     out = Path(out_dir)
     names = (SEEDS_CSV, IMPROVEMENT_CSV, PROFILES_CSV)
     if not groups:
