@@ -1,14 +1,5 @@
-"""Trainers of the learned baselines: one readable file per algorithm (cleanrl style) on one
-shared skeleton (socialzoo.train.skeleton: run folder, seed, run record, checkpoints, resume,
-evaluation, TensorBoard, progress).
-
-Each trainer module defines a frozen keyword-only dataclass of arguments (every field a command-line
-option of `socialzoo train <name>`, with defaults that reproduce the paper's set-up; the fields a
-family of trainers shares live in a base class: sb3_common.SB3Args, imitation.ImitationArgs,
-marl_args.MarlArgs), its `TRAINER` (what the skeleton needs to know) and a function
-`train(args) -> Path` that runs its algorithm on the skeleton and returns the policy file. Modules
-import torch and the learning libraries inside `train`, so listing the trainers stays cheap.
-"""
+"""Trainers of the learned baselines: one readable file per algorithm (cleanrl style) on one shared skeleton
+(socialzoo.train.skeleton: run folder, seed, run record, checkpoints, resume, evaluation, TensorBoard, progress)."""
 
 from __future__ import annotations
 

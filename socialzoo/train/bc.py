@@ -1,13 +1,4 @@
-"""Behaviour cloning (BC) of the reference policy's demonstrations with TorchRL's BCLoss.
-
-`socialzoo train bc --demos FILE --steps N --out DIR` fits a policy network (fixed observation
-normaliser from the demonstrations, then an MLP giving one logit per sub-policy) to the first N
-demonstration steps by minimising the negative log-likelihood of the demonstrated actions
-(BCLoss on a TorchRL ProbabilisticActor over one-hot actions, i.e. cross-entropy), and writes
-DIR/bc.safetensors (an MlpPolicy file: greedy actions), DIR/run.json, TensorBoard logs and a
-checkpoint every `checkpoint_every` gradient updates. Demonstrations come from `socialzoo demos`
-(Ref on gdc1 scenarios of their own seeds, never a test set).
-"""
+"""Behaviour cloning (BC) of the reference policy's demonstrations with TorchRL's BCLoss."""
 
 from __future__ import annotations
 
@@ -77,7 +68,16 @@ def agreement(net: Any, obs: np.ndarray, action: np.ndarray, batch: int = 8192) 
 
 def train(args: Args) -> Path:
     """Run behaviour cloning on the trainer skeleton; returns bc.safetensors (a finished run of the
-    same arguments in args.out is reused; a short demonstration file raises ValueError)."""
+    same arguments in args.out is reused; a short demonstration file raises ValueError).
+
+    `socialzoo train bc --demos FILE --steps N --out DIR` fits a policy network (fixed observation normaliser
+    from the demonstrations, then an MLP giving one logit per sub-policy) to the first N demonstration steps
+    by minimising the negative log-likelihood of the demonstrated actions (BCLoss on a TorchRL
+    ProbabilisticActor over one-hot actions, i.e. cross-entropy), and writes DIR/bc.safetensors (an MlpPolicy
+    file: greedy actions), DIR/run.json, TensorBoard logs and a checkpoint every `checkpoint_every` gradient
+    updates. Demonstrations come from `socialzoo demos` (Ref on gdc1 scenarios of their own seeds, never a
+    test set).
+    """
     return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 

@@ -1,6 +1,5 @@
-"""Shared pieces of the trainers' argument dataclasses: option types, and validation whose errors
-name the trainer, the field and the value. Free of torch, so listing the trainers stays cheap.
-"""
+"""Shared pieces of the trainers' argument dataclasses: option types, and validation whose errors name the trainer,
+the field and the value. Free of torch, so listing the trainers stays cheap."""
 
 from __future__ import annotations
 

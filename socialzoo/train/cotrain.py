@@ -1,14 +1,4 @@
-"""`socialzoo train cotrain`: robots and learned humans trained together with MAPPO or IPPO.
-
-Both groups of the native env learn: the robots (several per world share one policy, a
-Categorical over the four sub-policies, with the benchmark's reward, SPEC section 9) and the
-learned humans (as in `socialzoo train humans`). Schedule "simultaneous" updates both groups on
-every collected batch; "alternating" updates one group for `alternate_every` batches, then the
-other, while both keep acting (the other group's policy is frozen meanwhile).
-
-Writes humans.safetensors (load with `socialzoo benchmark --humans learned:PATH`) and
-robot.safetensors (a socialzoo policy file: `socialzoo benchmark --policies mappo:PATH`).
-"""
+"""`socialzoo train cotrain`: robots and learned humans trained together with MAPPO or IPPO."""
 
 from __future__ import annotations
 
@@ -76,7 +66,16 @@ class CotrainArgs(MarlArgs):
 
 def train(args: CotrainArgs) -> Path:
     """Train robots and humans together; returns the path of humans.safetensors (robot.safetensors
-    beside it), or of robot.safetensors when no human is learned."""
+    beside it), or of robot.safetensors when no human is learned.
+
+    Both groups of the native env learn: the robots (several per world share one policy, a Categorical over
+    the four sub-policies, with the benchmark's reward, SPEC section 9) and the learned humans (as in
+    `socialzoo train humans`). Schedule "simultaneous" updates both groups on every collected batch;
+    "alternating" updates one group for `alternate_every` batches, then the other, while both keep acting (the
+    other group's policy is frozen meanwhile). Load humans.safetensors with `socialzoo benchmark --humans
+    learned:PATH`, and robot.safetensors (a socialzoo policy file) with `socialzoo benchmark --policies
+    mappo:PATH`.
+    """
     from socialzoo.train.marl_run import run_marl
 
     return run_marl(TRAINER, args, robot_policy=None, schedule=args.groups_at)

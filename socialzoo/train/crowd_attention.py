@@ -1,17 +1,5 @@
 """Attention over people for the CrowdNav task (in the spirit of SARL's pooling, Chen et al. 2019),
-as a Stable-Baselines3 features extractor.
-
-Each person's row of the joint state is paired with the robot's (a (6 + 7,) vector, SARL's rotated
-joint state; with the task's signals (9 + 8,): the nearest door in the robot part, the gesture in the
-person's, socialzoo.env.crowd_observation), embedded by `embed` (an MLP), turned into a feature by
-`value`; an attention score comes from the embedding and the mean embedding of the crowd (SARL's
-global state); the scores are softmaxed over the present people only (the observation's mask) and
-weigh the features into one crowd feature; the extractor outputs [robot state, crowd feature]. With
-nobody present the crowd feature is 0. The network is permutation-invariant over the people and
-takes any head count up to the observation's slots.
-
-socialzoo.agents.crowd_policy runs the same network in numpy from the exported weights.
-"""
+as a Stable-Baselines3 features extractor."""
 
 from __future__ import annotations
 
@@ -36,6 +24,16 @@ def _mlp(sizes: Sequence[int], last_relu: bool) -> nn.Sequential:
 
 class CrowdAttention(nn.Module):
     """The attention pooling network.
+
+    Each person's row of the joint state is paired with the robot's (a (6 + 7,) vector, SARL's rotated joint
+    state; with the task's signals (9 + 8,): the nearest door in the robot part, the gesture in the person's,
+    socialzoo.env.crowd_observation), embedded by `embed` (an MLP), turned into a feature by `value`; an
+    attention score comes from the embedding and the mean embedding of the crowd (SARL's global state); the
+    scores are softmaxed over the present people only (the observation's mask) and weigh the features into one
+    crowd feature; the extractor outputs [robot state, crowd feature]. With nobody present the crowd feature
+    is 0. The network is permutation-invariant over the people and takes any head count up to the
+    observation's slots. socialzoo.agents.crowd_policy runs the same network in numpy from the exported
+    weights.
 
     Args:
         slots: person slots H of the flat observation.

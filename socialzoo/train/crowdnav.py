@@ -1,29 +1,4 @@
-"""`socialzoo train crowdnav`: PPO (Stable-Baselines3) with attention over people on the CrowdNav task.
-
-The policy reads the robot-centred joint state (socialzoo.env.crowd_observation) through an
-attention-pooling features extractor in the spirit of SARL (socialzoo.train.crowd_attention), and
-picks one of CrowdNav's 81 actions (or a velocity, with --action continuous). It trains on the
-task's training cases only (CrowdNav's training split; the 100 validation cases choose nothing
-unless --eval-trials asks for checkpoint evaluations, and the 500 test cases are never seen), on
-the batched CrowdNavVectorEnv behind SB3's VecEnv.
-
-The training reward is the task's (CrowdNav's) with two training-only changes: a potential-based
-shaping term progress_reward * (d_before - d_after) on the robot's goal distance d (Ng et al. 1999:
-shaping by a potential's difference keeps the optimal policies; CrowdNav++ shapes the same way),
-and a collision costing `collision_penalty` instead of the task's -0.25 (CrowdNav++ charges -20
-against +10 for the goal). Episodes are judged, and every reported metric computed, on the task's
-reward and outcomes alone.
-
-With --families (the guidelines' suite, socialzoo.scenarios.suite, or some of its scenarios) one
-learner trains on several scenario families at once: the task is the suite id's
-(socialzoo/CrowdNavSuite-v1, its kwargs read from Gymnasium's registry, so the learner trains on what
-the suite evaluates: among walls, signals on), one CrowdNavVectorEnv per family on the family's own
-map, side by side as one env (socialzoo.env.concat_vector.ConcatVectorEnv); each draws only its
-family's training seeds, and checkpoints are chosen on the families' validation splits.
-
-    socialzoo train crowdnav --out runs/crowdnav --seed 0
-    socialzoo train crowdnav --families suite --out runs/suite_crowdnav --seed 0
-"""
+"""`socialzoo train crowdnav`: PPO (Stable-Baselines3) with attention over people on the CrowdNav task."""
 
 from __future__ import annotations
 
@@ -269,7 +244,13 @@ def suite_kwargs() -> dict[str, Any]:
 def training_reward(venv: Any, progress: float, collision_extra: float) -> Any:
     """An SB3 VecEnvWrapper adding the training-only terms to each row's task reward:
     progress * (goal distance before - after) (the goal distance is the observation's first entry,
-    socialzoo.env.crowd_observation) and collision_extra on a step that ends in a collision."""
+    socialzoo.env.crowd_observation) and collision_extra on a step that ends in a collision.
+
+    The training reward is the task's (CrowdNav's) with two training-only changes: a potential-based shaping
+    term progress_reward * (d_before - d_after) on the robot's goal distance d (Ng et al. 1999: shaping by a
+    potential's difference keeps the optimal policies; CrowdNav++ shapes the same way), and a collision
+    costing `collision_penalty` instead of the task's -0.25 (CrowdNav++ charges -20 against +10 for the goal).
+    """
     from stable_baselines3.common.vec_env import VecEnvWrapper
 
     class TrainingReward(VecEnvWrapper):
@@ -293,7 +274,23 @@ def training_reward(venv: Any, progress: float, collision_extra: float) -> Any:
 
 
 def train(args: CrowdNavArgs) -> Path:
-    """Train on the trainer skeleton; returns crowdnav.safetensors (or a finished run's)."""
+    """Train on the trainer skeleton; returns crowdnav.safetensors (or a finished run's).
+
+    The policy reads the robot-centred joint state (socialzoo.env.crowd_observation) through an
+    attention-pooling features extractor in the spirit of SARL (socialzoo.train.crowd_attention), and picks
+    one of CrowdNav's 81 actions (or a velocity, with --action continuous). It trains on the task's training
+    cases only (CrowdNav's training split; the 100 validation cases choose nothing unless --eval-trials asks
+    for checkpoint evaluations, and the 500 test cases are never seen), on the batched CrowdNavVectorEnv
+    behind SB3's VecEnv. Episodes are judged, and every reported metric computed, on the task's reward and
+    outcomes alone.
+
+    With --families (the guidelines' suite, socialzoo.scenarios.suite, or some of its scenarios) one learner
+    trains on several scenario families at once: the task is the suite id's (socialzoo/CrowdNavSuite-v1, its
+    kwargs read from Gymnasium's registry, so the learner trains on what the suite evaluates: among walls,
+    signals on), one CrowdNavVectorEnv per family on the family's own map, side by side as one env
+    (socialzoo.env.concat_vector.ConcatVectorEnv); each draws only its family's training seeds, and
+    checkpoints are chosen on the families' validation splits.
+    """
     evaluator = _validation(args) if args.eval_trials else None
     return run_training(TRAINER, args, lambda run: _fit(run, args), evaluator=evaluator)
 

@@ -1,20 +1,5 @@
 """DAgger (Ross, Gordon & Bagnell 2011): behaviour cloning that also learns on the states its own
-policy reaches, labelled by the expert, Ref.
-
-`socialzoo train dagger --demos FILE --out DIR` fits a policy to Ref's demonstrations exactly as
-`socialzoo train bc` does (round 0), then for each of `iterations` rounds drives the latest policy
-over `episodes` fresh scenarios of the demonstrations' map (their own seeds, never a validation or
-test scenario), labels every state it reached with the action Ref takes there, adds those pairs to
-the data and fits again from new weights. It writes DIR/dagger.safetensors (an MlpPolicy file),
-DIR/run.json, TensorBoard logs, each round's policy in checkpoints/ and each round's rollout in
-DIR/rollouts/ (a demonstration file: the learner's own actions, resumable).
-
-Why: BC's policy sees its previous action in the paper's observation, and Ref's actions persist
-for many steps, so a cloned policy leans on that input (the "copycat" problem, Wen et al. 2020):
-it agrees with Ref on 99.3% of Ref's own states yet differs from Ref on 22% of the states it
-reaches itself, and drives on where Ref halts (about twice Ref's blame). DAgger's labels on those
-states are what corrects it; docs/imitation.md gives the measurements.
-"""
+policy reaches, labelled by the expert, Ref."""
 
 from __future__ import annotations
 
@@ -65,7 +50,22 @@ class Args(bc.Args):
 
 def train(args: Args) -> Path:
     """Run DAgger on the trainer skeleton; returns dagger.safetensors (a finished run of the same
-    arguments in args.out is reused; demonstrations of another policy than Ref raise ValueError)."""
+    arguments in args.out is reused; demonstrations of another policy than Ref raise ValueError).
+
+    `socialzoo train dagger --demos FILE --out DIR` fits a policy to Ref's demonstrations exactly as
+    `socialzoo train bc` does (round 0), then for each of `iterations` rounds drives the latest policy over
+    `episodes` fresh scenarios of the demonstrations' map (their own seeds, never a validation or test
+    scenario), labels every state it reached with the action Ref takes there, adds those pairs to the data and
+    fits again from new weights. It writes DIR/dagger.safetensors (an MlpPolicy file), DIR/run.json,
+    TensorBoard logs, each round's policy in checkpoints/ and each round's rollout in DIR/rollouts/ (a
+    demonstration file: the learner's own actions, resumable).
+
+    Why: BC's policy sees its previous action in the paper's observation, and Ref's actions persist for many
+    steps, so a cloned policy leans on that input (the "copycat" problem, Wen et al. 2020): it agrees with Ref
+    on 99.3% of Ref's own states yet differs from Ref on 22% of the states it reaches itself, and drives on
+    where Ref halts (about twice Ref's blame). DAgger's labels on those states are what corrects it;
+    docs/imitation.md gives the measurements.
+    """
     return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 

@@ -1,10 +1,4 @@
-"""Demonstrations as the imitation trainers use them: the first N transitions of a recording.
-
-The LfD experiment trains every size on a prefix of ONE recording (the paper's sizes 155,400 /
-116,600 / 77,700 / 38,800 / 3,500 of about 155,000 Ref steps), so a smaller set is always part of
-a larger one. The recording's metadata says which map and observation layout it was made on;
-trainers build their env and their policy header from it.
-"""
+"""Demonstrations as the imitation trainers use them: the first N transitions of a recording."""
 
 from __future__ import annotations
 
@@ -67,6 +61,11 @@ class DemoSteps:
 
 def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
     """The first `steps` transitions (all when None) of the recording at `path`.
+
+    The LfD experiment trains every size on a prefix of ONE recording (the paper's sizes 155,400 / 116,600 /
+    77,700 / 38,800 / 3,500 of about 155,000 Ref steps), so a smaller set is always part of a larger one. The
+    recording's metadata says which map and observation layout it was made on; trainers build their env and
+    their policy header from it.
 
     Raises:
         ValueError: `steps` < 1, more steps than the recording holds (naming the file and both

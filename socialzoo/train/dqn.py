@@ -1,12 +1,4 @@
-"""`socialzoo train dqn`: DQN (Stable-Baselines3) on the benchmark, through the batched SB3VecEnv.
-
-The paper's set-up (SPEC section 10): 84,000 env steps on gdc1, a checkpoint every 2,000, SB3's
-default DQN hyperparameters on one env (a gradient step every 4 env steps, epsilon from 1 to 0.05
-over the first 10% of training, the target network copied every 10,000 steps), raw observations,
-and a new scenario only every 20 resets (the original's scenario repeats for DQN).
-
-    socialzoo train dqn --out runs/dqn --seed 0
-"""
+"""`socialzoo train dqn`: DQN (Stable-Baselines3) on the benchmark, through the batched SB3VecEnv."""
 
 from __future__ import annotations
 
@@ -78,5 +70,11 @@ class DQNArgs(SB3Args):
 
 
 def train(args: DQNArgs) -> Path:
-    """Train DQN as `args` say; returns the final policy file (see socialzoo.train.sb3_common)."""
+    """Train DQN as `args` say; returns the final policy file (see socialzoo.train.sb3_common).
+
+    The paper's set-up (SPEC section 10): 84,000 env steps on gdc1, a checkpoint every 2,000, SB3's default
+    DQN hyperparameters on one env (a gradient step every 4 env steps, epsilon from 1 to 0.05 over the first
+    10% of training, the target network copied every 10,000 steps), raw observations, and a new scenario only
+    every 20 resets (the original's scenario repeats for DQN).
+    """
     return run_sb3(TRAINER, args)

@@ -1,14 +1,4 @@
-"""Generative adversarial imitation learning (GAIL) of the reference policy with TorchRL.
-
-`socialzoo train gail --demos FILE --steps N --out DIR`: a discriminator D(s, a) learns to tell
-the demonstrations (label 1) from the generator's own transitions (label 0) with TorchRL's
-GAILLoss; the generator is a PPO policy (ClipPPOLoss, GAE) trained on the reward
-log D - log(1 - D) only (the env's reward is logged, never learned from). Rollouts come from the
-batched TorchRL env (socialzoo.env.torchrl_single) on the training map's own seeded scenario
-stream, never a test set; by default each scenario runs 20 times before a new one is drawn (the
-original's GAIL set-up). Writes DIR/gail.safetensors (an MlpPolicy file: greedy actions),
-DIR/run.json, TensorBoard logs and a checkpoint policy every `checkpoint_every` env steps.
-"""
+"""Generative adversarial imitation learning (GAIL) of the reference policy with TorchRL."""
 
 from __future__ import annotations
 
@@ -164,7 +154,17 @@ def gail_reward(logits: Any, kind: GailReward) -> Any:
 def train(args: Args) -> Path:
     """Run GAIL on the trainer skeleton, which seeds torch's global generator for the run (TorchRL's
     action sampling draws from it); returns gail.safetensors, or that of a finished run of the same
-    arguments in args.out."""
+    arguments in args.out.
+
+    `socialzoo train gail --demos FILE --steps N --out DIR`: a discriminator D(s, a) learns to tell the
+    demonstrations (label 1) from the generator's own transitions (label 0) with TorchRL's GAILLoss; the
+    generator is a PPO policy (ClipPPOLoss, GAE) trained on the reward log D - log(1 - D) only (the env's
+    reward is logged, never learned from). Rollouts come from the batched TorchRL env
+    (socialzoo.env.torchrl_single) on the training map's own seeded scenario stream, never a test set; by
+    default each scenario runs 20 times before a new one is drawn (the original's GAIL set-up). Writes
+    DIR/gail.safetensors (an MlpPolicy file: greedy actions), DIR/run.json, TensorBoard logs and a checkpoint
+    policy every `checkpoint_every` env steps.
+    """
     return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 

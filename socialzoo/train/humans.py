@@ -1,15 +1,4 @@
-"""`socialzoo train humans`: learned humans trained with MAPPO or IPPO while the robot runs a policy.
-
-Every learned human of a world shares one policy (TanhNormal over its desired velocity in its
-own frame, socialzoo.env.human_agents), trained with TorchRL's MAPPOLoss (centralised critic over
-the group's observations) or IPPOLoss (per-agent critic) on batches collected from the native
-env (socialzoo.env.torchrl_env) by a TorchRL collector: in this process, over local processes, or
-on a Ray cluster. The robot meanwhile acts with any policy spec ("ref", "goalone", "ppo:PATH",
-...); scripted social-force humans fill the slots beyond num_learned_humans.
-
-The run folder (socialzoo.train.run_dir) holds run.json, TensorBoard logs, checkpoints/ and the
-final policy humans.safetensors, which `socialzoo benchmark --humans learned:PATH` loads.
-"""
+"""`socialzoo train humans`: learned humans trained with MAPPO or IPPO while the robot runs a policy."""
 
 from __future__ import annotations
 
@@ -48,7 +37,17 @@ class HumansArgs(MarlArgs):
 
 
 def train(args: HumansArgs) -> Path:
-    """Train the learned humans; returns the path of humans.safetensors."""
+    """Train the learned humans; returns the path of humans.safetensors.
+
+    Every learned human of a world shares one policy (TanhNormal over its desired velocity in its own frame,
+    socialzoo.env.human_agents), trained with TorchRL's MAPPOLoss (centralised critic over the group's
+    observations) or IPPOLoss (per-agent critic) on batches collected from the native env
+    (socialzoo.env.torchrl_env) by a TorchRL collector: in this process, over local processes, or on a Ray
+    cluster. The robot meanwhile acts with any policy spec ("ref", "goalone", "ppo:PATH", ...); scripted
+    social-force humans fill the slots beyond num_learned_humans. The run folder (socialzoo.train.run_dir)
+    holds run.json, TensorBoard logs, checkpoints/ and the final policy humans.safetensors, which `socialzoo
+    benchmark --humans learned:PATH` loads.
+    """
     from socialzoo.train.marl_run import run_marl
 
     return run_marl(TRAINER, args, robot_policy=args.robot)

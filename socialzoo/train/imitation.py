@@ -1,7 +1,5 @@
-"""What the imitation trainers (bc, gail) share: their common arguments, and the demonstrations,
-policy network and policy files of a run. Free of torch at import, so listing the trainers stays
-cheap.
-"""
+"""What the imitation trainers (bc, gail) share: their common arguments, and the demonstrations, policy network and
+policy files of a run. Free of torch at import, so listing the trainers stays cheap."""
 
 from __future__ import annotations
 

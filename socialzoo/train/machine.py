@@ -1,12 +1,5 @@
-"""The machine facts that decide torch-trained numbers, for every run record: the CPU (model and
-the instruction-set flags that pick torch's and the BLAS's kernels), torch and its BLAS/oneDNN
-build, thread counts, numpy and its BLAS, Python.
-
-Two trainings of one seed on one machine give the same weights (tests/train/test_determinism.py);
-on another CPU or library build, the same code may run other kernels (AVX-512 against AVX2 paths
-of MKL/oneDNN/OpenBLAS sum in another order) and the floating-point sums part after a few updates.
-`machine_facts()` records what a reader needs to tell whether a re-run ran the same kernels.
-"""
+"""The machine facts that decide torch-trained numbers, for every run record: the CPU (model and the instruction-set
+flags that pick torch's and the BLAS's kernels), torch and its BLAS/oneDNN build, thread counts, numpy, Python."""
 
 from __future__ import annotations
 
@@ -138,7 +131,13 @@ def numpy_facts() -> dict[str, Any]:
 
 def machine_facts() -> dict[str, Any]:
     """Everything above, plain JSON: "cpu", "platform", "python", "torch" (None without torch),
-    "numpy", "env" (the THREAD_VARIABLES that are set)."""
+    "numpy", "env" (the THREAD_VARIABLES that are set).
+
+    Why: two trainings of one seed on one machine give the same weights (tests/train/test_determinism.py); on
+    another CPU or library build, the same code may run other kernels (AVX-512 against AVX2 paths of
+    MKL/oneDNN/OpenBLAS sum in another order) and the floating-point sums part after a few updates. These
+    facts are what a reader needs to tell whether a re-run ran the same kernels.
+    """
     return {
         "cpu": cpu_facts(),
         "platform": platform.platform(),

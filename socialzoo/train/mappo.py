@@ -1,22 +1,4 @@
-"""MAPPO and IPPO for the agent groups of the native TorchRL env (socialzoo.env.torchrl_env).
-
-The pieces the multi-agent trainers (`socialzoo train humans`, `socialzoo train cotrain`) share,
-in TorchRL's own terms:
-
-- Actors: one network per group, shared by every agent of the group (parameter sharing), acting
-  on the agent's own observation: a TanhNormal over the learned humans' velocities (its mean
-  network and a state-independent scale), a Categorical over the robots' four sub-policies.
-- Critics: torchrl.modules.MultiAgentMLP, centralised for MAPPO (each agent's value sees every
-  agent's observation of its group) or decentralised for IPPO (its own observation only).
-- Losses: torchrl.objectives.MAPPOLoss / IPPOLoss (TorchRL 0.14: ClipPPOLoss with the
-  multi-agent GAE, per-agent advantage normalisation), with per-agent rewards and flags and the
-  group's "mask" as the loss mask, so empty human slots and robots that left do not count.
-- Collectors: torchrl.collectors.Collector in this process, MultiSyncCollector over local
-  processes, or torchrl.collectors.distributed.RayCollector over a Ray cluster; every worker
-  steps its own batched env of B worlds.
-
-One frame is one world step (B frames per batched step); agent-steps are frames times agents.
-"""
+"""MAPPO and IPPO for the agent groups of the native TorchRL env (socialzoo.env.torchrl_env)."""
 
 from __future__ import annotations
 
@@ -436,6 +418,8 @@ def train_loop(
     on_batch: Callable[[list[dict[str, float]]], None] | None = None,
 ) -> LoopResult:
     """Collect, update, log and checkpoint until the collector has given `total_frames` frames.
+
+    One frame is one world step (B frames per batched step); agent-steps are frames times agents.
 
     Args:
         collector: a TorchRL collector over the native env.

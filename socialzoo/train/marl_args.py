@@ -1,7 +1,5 @@
-"""What the multi-agent trainers (humans, cotrain) share: their common arguments, the humans'
-training reward and starting behaviour, and the training env config. Free of torch at import, so
-listing the trainers stays cheap.
-"""
+"""What the multi-agent trainers (humans, cotrain) share: their common arguments, the humans' training reward and
+starting behaviour, and the training env config. Free of torch at import, so listing the trainers stays cheap."""
 
 from __future__ import annotations
 

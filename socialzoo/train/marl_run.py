@@ -1,12 +1,4 @@
-"""One multi-agent training run on the trainer skeleton: envs, networks, collector, loop, files.
-
-`socialzoo train humans` and `socialzoo train cotrain` differ in which groups learn (humans; or
-robots and humans, at once or in turns); what is common to their runs is here: the fixed input
-normalisation, the TorchRL collector, the training loop, history.csv (one row per batch: the
-training curves) and each learned group's policy files. The untrained policy is saved as the
-step-0 checkpoint, the baseline a trained one is measured against. The run folder, seed, record,
-checkpoints, TensorBoard and progress are the skeleton's (socialzoo.train.skeleton).
-"""
+"""One multi-agent training run on the trainer skeleton: envs, networks, collector, loop, files."""
 
 from __future__ import annotations
 
@@ -71,6 +63,13 @@ def run_marl(
     schedule: Callable[[int], Sequence[str]] | None = None,
 ) -> Path:
     """One multi-agent training run on the trainer skeleton; returns the trainer's policy file.
+
+    `socialzoo train humans` and `socialzoo train cotrain` differ in which groups learn (humans; or robots and
+    humans, at once or in turns); what is common to their runs is here: the fixed input normalisation, the
+    TorchRL collector, the training loop, history.csv (one row per batch: the training curves) and each
+    learned group's policy files. The untrained policy is saved as the step-0 checkpoint, the baseline a
+    trained one is measured against. The run folder, seed, record, checkpoints, TensorBoard and progress are
+    the skeleton's (socialzoo.train.skeleton).
 
     Args:
         trainer: "humans" or "cotrain", with its final policy file (the humans', or the robots'

@@ -1,36 +1,4 @@
-"""`socialzoo train people-bc`: learned people cloned from recorded people (ETH/UCY tracks).
-
-Each training scene is replayed in the batched core (socialzoo.env.core.BatchedCore, everyone a
-follower of its track, socialzoo.env.replay; one row per time window of `window` frames; a robot
-parked far away that nobody sees). At every recorded frame each person present on the frame before,
-the frame and the frame `label_frames` after gives one demonstration:
-
-- the observation a learned person has there (socialzoo.env.human_agents.human_observations): its
-  route is its entry and its recorded exit (the last point of its whole track), its preferred speed
-  its mean recorded speed, its own velocity the one it walked into the frame with (frame - 1 ->
-  frame; the replay's is the next segment's, which would give the answer away), the others' as the
-  replay has them; neighbour rows of the parked robot are zeroed (absent), as it is not there;
-- the action that walks it to its recorded position `label_frames` frames on (5, 2 s): the desired
-  velocity v_d that, held, through the relaxation every learned person walks by
-  (dv/dt = (v_d - v) / tau + F, tau = `relaxation_time`, 16 s, written into the policy file), covers
-  the recorded displacement over those frames (the speed cap aside), expressed as an action of
-  the policy's frame and scale (the inverse of socialzoo.env.human_agents.action_velocities),
-  clipped to [-ACTION_LIMIT, ACTION_LIMIT]. By default no force acts on the learned people (F = 0,
-  HumanConfig.learned_forces off, written into the policy file): the network's desired velocity
-  alone moves them, and it sees its neighbours to keep clear of them. With `--learned-forces`, F is
-  the other people's and walls' social forces at the frame, held over the frame, and each label
-  compensates them. On the training scenes' held-out time, walked closed-loop, the people without
-  forces came closer to the recorded ones on every scene, and a long relaxation time with a label
-  2 s ahead closer than the people's own 0.5 s with a label on the next frame (docs/humans.md):
-  over a few seconds real people keep their velocity, and the network steers it slowly.
-
-An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last
-`val_fraction` of each scene's windows (in time) are held out for early stopping; on that held-out
-time the run also walks the policy closed-loop (closed_loop_ade) and records the error. The run folder
-holds run.json and people_bc.safetensors, a learned human policy file (socialzoo.env.human_policy)
-that `learned:PATH` walks anywhere; `socialzoo humans realism --models learned:PATH` measures it on a
-scene it never saw (socialzoo.studies.realism).
-"""
+"""`socialzoo train people-bc`: learned people cloned from recorded people (ETH/UCY tracks)."""
 
 from __future__ import annotations
 
@@ -452,7 +420,39 @@ def closed_loop_ade(
 
 # ---------------------------------------------------------------------------- training
 def train(args: Args) -> Path:
-    """Clone recorded people on the trainer skeleton; returns people_bc.safetensors."""
+    """Clone recorded people on the trainer skeleton; returns people_bc.safetensors.
+
+    Each training scene is replayed in the batched core (socialzoo.env.core.BatchedCore, everyone a follower
+    of its track, socialzoo.env.replay; one row per time window of `window` frames; a robot parked far away
+    that nobody sees). At every recorded frame each person present on the frame before, the frame and the
+    frame `label_frames` after gives one demonstration:
+
+    - the observation a learned person has there (socialzoo.env.human_agents.human_observations): its
+      route is its entry and its recorded exit (the last point of its whole track), its preferred speed
+      its mean recorded speed, its own velocity the one it walked into the frame with (frame - 1 ->
+      frame; the replay's is the next segment's, which would give the answer away), the others' as the
+      replay has them; neighbour rows of the parked robot are zeroed (absent), as it is not there;
+    - the action that walks it to its recorded position `label_frames` frames on (5, 2 s): the desired
+      velocity v_d that, held, through the relaxation every learned person walks by
+      (dv/dt = (v_d - v) / tau + F, tau = `relaxation_time`, 16 s, written into the policy file), covers
+      the recorded displacement over those frames (the speed cap aside), expressed as an action of
+      the policy's frame and scale (the inverse of socialzoo.env.human_agents.action_velocities),
+      clipped to [-ACTION_LIMIT, ACTION_LIMIT]. By default no force acts on the learned people (F = 0,
+      HumanConfig.learned_forces off, written into the policy file): the network's desired velocity
+      alone moves them, and it sees its neighbours to keep clear of them. With `--learned-forces`, F is
+      the other people's and walls' social forces at the frame, held over the frame, and each label
+      compensates them. On the training scenes' held-out time, walked closed-loop, the people without
+      forces came closer to the recorded ones on every scene, and a long relaxation time with a label
+      2 s ahead closer than the people's own 0.5 s with a label on the next frame (docs/humans.md):
+      over a few seconds real people keep their velocity, and the network steers it slowly.
+
+    An MLP (tanh hidden layers, tanh output) is fitted to them with MSE and Adam; the last `val_fraction` of
+    each scene's windows (in time) are held out for early stopping; on that held-out time the run also walks
+    the policy closed-loop (closed_loop_ade) and records the error. The run folder holds run.json and
+    people_bc.safetensors, a learned human policy file (socialzoo.env.human_policy) that `learned:PATH` walks
+    anywhere; `socialzoo humans realism --models learned:PATH` measures it on a scene it never saw
+    (socialzoo.studies.realism).
+    """
     return run_training(TRAINER, args, fit)
 
 

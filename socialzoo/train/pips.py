@@ -1,14 +1,4 @@
-"""PIPS: synthesise a readable action-selection program from demonstrations (SPEC section 10).
-
-The demonstrations' first `steps` steps (in the file's episode order for seed 0, in a seeded
-order of whole episodes for other seeds: a seed is a demonstration sample) are cut into examples
-(observation, previous action, action), windowed around the changes of action; for each current
-action the synthesiser learns the guards of its transitions one target at a time (each on the
-examples the earlier guards leave), with the layered search of socialzoo.train.pips_search, and
-drops the transitions into a state the program could never leave. The program is written as
-JSON (socialzoo.agents.pips) with a sidecar recording the arguments, the seed, the command, the
-synthesis time and the program's agreement with the demonstrator.
-"""
+"""PIPS: synthesise a readable action-selection program from demonstrations (SPEC section 10)."""
 
 from __future__ import annotations
 
@@ -398,6 +388,13 @@ def train(args: PipsArgs) -> Path:
     fit, the readable rules, and the agreement with the demonstrator on the examples, on the steps
     used and on held-out steps (`read_program_record` reads it). A finished run of the same
     arguments is not repeated.
+
+    The demonstrations' first `steps` steps (in the file's episode order for seed 0, in a seeded order of
+    whole episodes for other seeds: a seed is a demonstration sample) are cut into examples (observation,
+    previous action, action), windowed around the changes of action; for each current action the synthesiser
+    learns the guards of its transitions one target at a time (each on the examples the earlier guards leave),
+    with the layered search of socialzoo.train.pips_search, and drops the transitions into a state the program
+    could never leave.
 
     Returns:
         The program's path.

@@ -1,12 +1,5 @@
-"""Enumeration of PIPS feature expressions for the synthesiser: unit-consistent expressions by
-depth, their values on the examples without order-duplicates, and lane half-widths refined to the
-centimetre.
-
-Depth 0 is the atomic features; depth d combines a beam of depth d-1 expressions with an atom by
-+, -, norm (same unit only), *, / (when the result is a comparable unit) or abs. Expressions that
-order the examples exactly as a kept one does (or in reverse) are dropped: a comparison sees only
-the order.
-"""
+"""Enumeration of PIPS feature expressions for the synthesiser: unit-consistent expressions by depth, their values
+on the examples without order-duplicates, and lane half-widths refined to the centimetre."""
 
 from __future__ import annotations
 
@@ -58,6 +51,9 @@ def enumerate_depth(depth: int, beam: Sequence[Expr], atoms: Sequence[Expr]) -> 
 
     Every expression returned has a comparable unit; none adds, subtracts or compares
     quantities of different units (such a combination is never built).
+
+    Depth d combines a beam of depth d-1 expressions with an atom by +, -, norm (same unit only), *, / (when
+    the result is a comparable unit) or abs.
     """
     if depth == 0:
         return list(atoms)
@@ -111,7 +107,10 @@ class AtomCache(Mapping[str, np.ndarray]):
 
 class FeatureBank:
     """Feature expressions and their values on the examples, without order-duplicates (an
-    expression that orders the examples as a kept one does, or in reverse, is dropped)."""
+    expression that orders the examples as a kept one does, or in reverse, is dropped).
+
+    Why: a comparison sees only the order.
+    """
 
     def __init__(self, atoms: Mapping[str, np.ndarray]) -> None:
         self.atoms = atoms

@@ -1,12 +1,5 @@
-"""Layered, dimension-informed search for one PIPS guard: enumerate feature expressions by depth
-(only unit-consistent ones), fill predicate sketches of one or two comparisons with the exact
-threshold search, extend the best ones, and solve the final candidates' thresholds with z3.
-
-A threshold that only the absent-person stand-in (socialzoo.agents.pips_features.FAR) reaches is
-refused (`physical_thresholds`). The expressions come from socialzoo.train.pips_enumerate; the thresholds from
-socialzoo.train.pips_thresholds. The search widens (deeper expressions) only while that improves
-the guard by more than the price of complexity.
-"""
+"""Layered, dimension-informed search for one PIPS guard: unit-consistent feature expressions by depth, sketches of one
+or two comparisons filled by exact threshold search, the best extended, the final thresholds solved with z3."""
 
 from __future__ import annotations
 
@@ -354,6 +347,11 @@ def search_guard(
     the previous one after the price of complexity (settings.complexity_cost). Then the best
     candidates' lane widths are refined to the centimetre, and z3 re-solves the thresholds of
     the best few.
+
+    A threshold that only the absent-person stand-in (socialzoo.agents.pips_features.FAR) reaches is refused
+    (`physical_thresholds`). The expressions come from socialzoo.train.pips_enumerate; the thresholds from
+    socialzoo.train.pips_thresholds. The search widens (deeper expressions) only while that improves the guard
+    by more than the price of complexity.
 
     Args:
         parts: the examples' observations (socialzoo.agents.pips_features.paper_parts).

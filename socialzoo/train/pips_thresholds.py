@@ -1,12 +1,5 @@
-"""Threshold holes of PIPS predicate sketches: the thresholds that classify the most (weighted)
-examples correctly, by an exact search (one comparison, or a pair joined by and/or) and by z3's
-MaxSMT optimiser (any sketch).
-
-A sketch is a predicate (socialzoo.agents.pips) whose thresholds are holes; here its comparisons
-are given by their value columns (the compared expression on every example) and directions.
-Both solvers maximise the weighted number of examples the guard classifies as labelled, and both
-place each threshold midway between the nearest example values on either side.
-"""
+"""Threshold holes of PIPS predicate sketches: the thresholds that classify the most (weighted) examples correctly,
+by an exact search (one comparison, or a pair joined by and/or) and by z3's MaxSMT optimiser (any sketch)."""
 
 from __future__ import annotations
 
@@ -300,6 +293,11 @@ def solve_z3(
 ) -> tuple[float, list[float]] | None:
     """The thresholds that maximise the weighted correctly classified examples, by z3's Optimize
     (MaxSMT: one weighted soft constraint "guard(e) == label(e)" per distinct example).
+
+    A sketch is a predicate (socialzoo.agents.pips) whose thresholds are holes; here its comparisons are given
+    by their value columns (the compared expression on every example) and directions. Both solvers (this and
+    the exact search) maximise the weighted number of examples the guard classifies as labelled, and both
+    place each threshold midway between the nearest example values on either side.
 
     Args:
         sketch: the predicate sketch; its leaves index `columns`.

@@ -1,11 +1,4 @@
-"""The torch networks of the imitation trainers (BC, GAIL) and their export to MlpPolicy files.
-
-A policy network is a fixed observation normaliser (statistics of the demonstrations) followed by
-an MLP that gives one logit per sub-policy. TorchRL wraps it as a ProbabilisticActor over one-hot
-actions (the encoding of socialzoo.env.torchrl_single); `to_mlp_policy` copies the same layers
-into the numpy MlpPolicy that the benchmark loads, which acts greedily (argmax of the logits, the
-actor's mode).
-"""
+"""The torch networks of the imitation trainers (BC, GAIL) and their export to MlpPolicy files."""
 
 from __future__ import annotations
 
@@ -85,7 +78,13 @@ def policy_network(
     normalizer: tuple[np.ndarray, np.ndarray] | None,
     generator: torch.Generator | None = None,
 ) -> nn.Sequential:
-    """The policy MLP: observation (N, D) -> logits (N, 4); its weights drawn from `generator`."""
+    """The policy MLP: observation (N, D) -> logits (N, 4); its weights drawn from `generator`.
+
+    A policy network is a fixed observation normaliser (statistics of the demonstrations) followed by an MLP
+    that gives one logit per sub-policy. TorchRL wraps it as a ProbabilisticActor over one-hot actions (the
+    encoding of socialzoo.env.torchrl_single); `to_mlp_policy` copies the same layers into the numpy MlpPolicy
+    that the benchmark loads, which acts greedily (argmax of the logits, the actor's mode).
+    """
     net = mlp(obs_size, hidden, NUM_ACTIONS, activation, normalizer)
     init_linear(net, generator)
     return net

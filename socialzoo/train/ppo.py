@@ -1,13 +1,4 @@
-"""`socialzoo train ppo`: PPO (Stable-Baselines3) on the benchmark, through the batched SB3VecEnv.
-
-The paper's set-up (SPEC section 10): 84,000 env steps on gdc1, a checkpoint every 2,000, SB3's
-default PPO hyperparameters, observations normalised by VecNormalize; a new scenario every reset.
-socialzoo's differences: the rollout is 50 rows x 40 steps = 2,000 env steps (SB3's default is one
-env x 2,048) so that every checkpoint falls on an update, and the normalisation statistics are
-saved in the policy file and used at evaluation (the original evaluated without them).
-
-    socialzoo train ppo --out runs/ppo --seed 0
-"""
+"""`socialzoo train ppo`: PPO (Stable-Baselines3) on the benchmark, through the batched SB3VecEnv."""
 
 from __future__ import annotations
 
@@ -56,5 +47,12 @@ class PPOArgs(SB3Args):
 
 
 def train(args: PPOArgs) -> Path:
-    """Train PPO as `args` say; returns the final policy file (see socialzoo.train.sb3_common)."""
+    """Train PPO as `args` say; returns the final policy file (see socialzoo.train.sb3_common).
+
+    The paper's set-up (SPEC section 10): 84,000 env steps on gdc1, a checkpoint every 2,000, SB3's default
+    PPO hyperparameters, observations normalised by VecNormalize; a new scenario every reset. socialzoo's
+    differences: the rollout is 50 rows x 40 steps = 2,000 env steps (SB3's default is one env x 2,048) so
+    that every checkpoint falls on an update, and the normalisation statistics are saved in the policy file
+    and used at evaluation (the original evaluated without them).
+    """
     return run_sb3(TRAINER, args)

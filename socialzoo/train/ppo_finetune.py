@@ -1,21 +1,5 @@
 """PPO fine-tuning from a learned policy file: does RL on the benchmark reward move an imitation
-policy past Ref's success-against-blame front?
-
-    socialzoo train ppo-finetune --init FILE --w-blame -2 --w-collision 0 --steps 400000 --out runs/ft
-    socialzoo study ref-tradeoff --halt-offsets 0 --learned dagger:runs/ft/ppo_finetune.safetensors
-
-Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init FILE`; a ReLU or tanh MLP with its
-observation normaliser, such as the shipped DAgger or BC): the actor's layers are copied from the
-file and the file's normaliser is kept fixed (VecNormalize's observation statistics never update),
-so the untrained model acts exactly as the file does (checked before training). The critic, new,
-first learns for `--warmup` steps with the actor frozen; then PPO trains both with a small learning
-rate for `--steps` steps on the benchmark env's own training scenarios (never a validation or
-test scenario) with the reward's blame and collision weights set by `--w-blame` and
-`--w-collision`. It writes DIR/ppo_finetune.safetensors, a policy of the same name as the source
-("dagger" for the shipped DAgger), so `socialzoo study ref-tradeoff --learned` evaluates it beside
-Ref's settings, and DIR/run.json. docs/reproduce.md ("A learned policy against Ref") gives the
-measurements.
-"""
+policy past Ref's success-against-blame front?"""
 
 from __future__ import annotations
 
@@ -85,7 +69,18 @@ class Args:
 
 def train(args: Args) -> Path:
     """Fine-tune on the trainer skeleton; returns DIR/ppo_finetune.safetensors (a finished run of
-    the same arguments in args.out is reused)."""
+    the same arguments in args.out is reused).
+
+    Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init FILE`; a ReLU or tanh MLP with its
+    observation normaliser, such as the shipped DAgger or BC): the actor's layers are copied from the file and
+    the file's normaliser is kept fixed (VecNormalize's observation statistics never update), so the untrained
+    model acts exactly as the file does (checked before training). The critic, new, first learns for
+    `--warmup` steps with the actor frozen; then PPO trains both with a small learning rate for `--steps`
+    steps on the benchmark env's own training scenarios (never a validation or test scenario) with the
+    reward's blame and collision weights set by `--w-blame` and `--w-collision`. The policy has the name of
+    the source ("dagger" for the shipped DAgger), so `socialzoo study ref-tradeoff --learned` evaluates it
+    beside Ref's settings. docs/reproduce.md ("A learned policy against Ref") gives the measurements.
+    """
     return run_training(TRAINER, args, lambda run: _fit(run, args))
 
 

@@ -1,24 +1,4 @@
-"""A training run's folder: its resolved arguments, command and seed, progress, logs and checkpoints.
-
-Every trainer writes into one folder:
-
-    run.json          algorithm, resolved arguments, command line, seed, package version, times
-    tensorboard/      TensorBoard event files (when the tensorboard package is installed)
-    checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
-    <policy file>     the final policy
-
-Paths in run.json are relative to the run folder, never the machine's absolute ones: the path
-arguments (those holding a Path, `out`, and the trainer's `inputs`), those same paths and any
-absolute path on the command line and in the results (`recorded`). A folder already holding a run
-of other arguments is refused, so two runs never mix; a finished run of the same arguments is
-reported as done, so a rerun repeats nothing. An argument added to a trainer after a run was
-recorded does not count against it while it has its default value. A path argument that lies
-where it lay relative to the run folder names the same file, so a work folder moved or copied
-whole together with its inputs (a `socialzoo reproduce` folder) holds the same runs; so does an
-input file (a trainer's `inputs`, such as imitation's demonstrations) of a record written before
-paths were relative, when it lies where it lay relative to the run's `out`.
-Trainers use the folder through their skeleton (socialzoo.train.skeleton).
-"""
+"""A training run's folder: its resolved arguments, command and seed, progress, logs and checkpoints."""
 
 from __future__ import annotations
 
@@ -66,6 +46,23 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
 
 class RunDir:
     """The folder of one training run.
+
+    Every trainer writes into one folder (through its skeleton, socialzoo.train.skeleton):
+
+        run.json          algorithm, resolved arguments, command line, seed, package version, times
+        tensorboard/      TensorBoard event files (when the tensorboard package is installed)
+        checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
+        <policy file>     the final policy
+
+    Paths in run.json are relative to the run folder, never the machine's absolute ones: the path arguments
+    (those holding a Path, `out`, and the trainer's `inputs`), those same paths and any absolute path on the
+    command line and in the results (`recorded`). A folder already holding a run of other arguments is
+    refused, so two runs never mix; a finished run of the same arguments is reported as done, so a rerun
+    repeats nothing. An argument added to a trainer after a run was recorded does not count against it while
+    it has its default value. A path argument that lies where it lay relative to the run folder names the same
+    file, so a work folder moved or copied whole together with its inputs (a `socialzoo reproduce` folder)
+    holds the same runs; so does an input file (a trainer's `inputs`, such as imitation's demonstrations) of a
+    record written before paths were relative, when it lies where it lay relative to the run's `out`.
 
     Args:
         path: the folder (created).

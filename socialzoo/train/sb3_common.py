@@ -1,12 +1,5 @@
 """What the Stable-Baselines3 trainers (ppo, dqn) share: their common arguments, the training
-env, and the SB3 callback that feeds the trainer skeleton's checkpoints, logs and progress.
-
-A run trains on the batched SB3VecEnv (scenarios from the env's own seeded stream, never a test
-set), optionally behind VecNormalize, and writes into its run folder (socialzoo.train.skeleton): a
-policy file every `checkpoint_every` env steps (checkpoints/step_<steps>.safetensors: the policy
-after training on that many steps), TensorBoard logs of SB3's losses and of the episodes' success,
-and the final policy file <algo>.safetensors.
-"""
+env, and the SB3 callback that feeds the trainer skeleton's checkpoints, logs and progress."""
 
 from __future__ import annotations
 
@@ -267,6 +260,12 @@ def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
     The model is stable_baselines3.<trainer.model>("MlpPolicy", the training env,
     **args.model_kwargs(trainer.activation)), seeded with args.seed. A finished run of the same
     arguments in args.out is not repeated: its policy file is returned.
+
+    A run trains on the batched SB3VecEnv (scenarios from the env's own seeded stream, never a test set),
+    optionally behind VecNormalize, and writes into its run folder (socialzoo.train.skeleton): a policy file
+    every `checkpoint_every` env steps (checkpoints/step_<steps>.safetensors: the policy after training on
+    that many steps), TensorBoard logs of SB3's losses and of the episodes' success, and the final policy file
+    <algo>.safetensors.
     """
     from socialzoo.train.validation import validation_evaluator
 

@@ -1,11 +1,5 @@
 """Stable-Baselines3 models as socialzoo policy files: the acting network and the VecNormalize
-statistics of a PPO or DQN model, copied into an `MlpPolicy` that runs in numpy.
-
-PPO acts with the argmax of its action logits (features -> policy MLP -> action_net), DQN with the
-argmax of its Q-values (q_net); both take observations normalised as VecNormalize normalises them
-during training. The exported policy gives the same actions as SB3's `model.predict(obs,
-deterministic=True)` on the VecNormalize-d observations, without torch or SB3.
-"""
+statistics of a PPO or DQN model, copied into an `MlpPolicy` that runs in numpy."""
 
 from __future__ import annotations
 
@@ -81,6 +75,11 @@ def export_policy(
     model: Any, name: str, observation: dict[str, Any], vec_normalize: Any = None
 ) -> tuple[MlpPolicy, str]:
     """The acting network of an SB3 PPO or DQN model as an MlpPolicy.
+
+    PPO acts with the argmax of its action logits (features -> policy MLP -> action_net), DQN with the argmax
+    of its Q-values (q_net); both take observations normalised as VecNormalize normalises them during
+    training. The exported policy gives the same actions as SB3's `model.predict(obs, deterministic=True)` on
+    the VecNormalize-d observations, without torch or SB3.
 
     Args:
         model: a stable_baselines3 PPO (Discrete actions, MlpPolicy) or DQN.

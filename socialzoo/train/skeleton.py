@@ -1,44 +1,5 @@
 """The skeleton every trainer runs on: run folder, seed, run record, checkpoints, resume,
-evaluation callback, TensorBoard and progress; a trainer file holds only its algorithm.
-
-A trainer declares what it is (`Trainer`: its name, the policy file it writes, the arguments that
-do not change the result) and writes one function, `fit(run) -> results`, that trains and saves
-through the `TrainingRun` it is given:
-
-    TRAINER = Trainer("bc", policy_file="bc.safetensors")
-
-    def train(args: Args) -> Path:
-        return run_training(TRAINER, args, fit)
-
-    def fit(run: TrainingRun) -> dict[str, Any]:
-        schedule = run.schedule(updates, run.args.checkpoint_every)
-        bar = run.progress(updates, unit="update")
-        ...                                  # the algorithm
-        for step in schedule.due(done):
-            run.checkpoint(step, save)       # checkpoints/step_<step>.safetensors, then evaluated
-        save(run.policy)
-        return {"updates": updates}          # into run.json's results, beside wall_seconds
-
-`run_training` does the rest, the same way for every trainer:
-- the run folder and its record (socialzoo.train.run_dir.RunDir: arguments, command, seed,
-  package version, start and end, results), refusing a folder that holds another run;
-- resume: a finished run of the same arguments is not repeated (its policy is returned), so a
-  rerun of an interrupted protocol (`socialzoo reproduce`) trains only what is missing. An
-  interrupted run starts again from step 0 in its folder: the checkpoints hold the policy, not
-  the optimiser, replay buffer or env state, and a run continued from one would not equal an
-  uninterrupted run of the same seed;
-- the seed: torch's global generator seeded from args.seed for the run only (the caller's state is
-  given back), torch CPU threads from args.threads and torch's deterministic algorithms (both
-  restored after);
-- the machine facts that decide torch-trained numbers (socialzoo.train.machine: CPU model and
-  flags, torch and BLAS builds, thread counts, numpy, Python) in run.json's "machine";
-- checkpoints on a fixed schedule (`schedule`), each one evaluated by the run's evaluator when it
-  has one (`evaluations.csv`, TensorBoard `eval/*`, the best one named in run.json); with
-  args.eval_every > 0 only the checkpoints at multiples of it and the last one are evaluated;
-- TensorBoard (`tensorboard/`, opened on first use) and a progress display that suits a terminal
-  or a log (socialzoo.bench.progress);
-- wall time, the checkpoint list and the policy file in run.json when the run finishes.
-"""
+evaluation callback, TensorBoard and progress; a trainer file holds only its algorithm."""
 
 from __future__ import annotations
 
@@ -290,6 +251,27 @@ def run_training(
     """Run `fit` on the skeleton (see the module docstring); returns the policy file. `fit` trains,
     saves the final policy at run.policy and returns results for the run record; `evaluator`
     evaluates each checkpoint (socialzoo.train.validation.validation_evaluator).
+
+    It does the rest, the same way for every trainer:
+
+    - the run folder and its record (socialzoo.train.run_dir.RunDir: arguments, command, seed,
+      package version, start and end, results), refusing a folder that holds another run;
+    - resume: a finished run of the same arguments is not repeated (its policy is returned), so a
+      rerun of an interrupted protocol (`socialzoo reproduce`) trains only what is missing. An
+      interrupted run starts again from step 0 in its folder: the checkpoints hold the policy, not
+      the optimiser, replay buffer or env state, and a run continued from one would not equal an
+      uninterrupted run of the same seed;
+    - the seed: torch's global generator seeded from args.seed for the run only (the caller's state is
+      given back), torch CPU threads from args.threads and torch's deterministic algorithms (both
+      restored after);
+    - the machine facts that decide torch-trained numbers (socialzoo.train.machine: CPU model and
+      flags, torch and BLAS builds, thread counts, numpy, Python) in run.json's "machine";
+    - checkpoints on a fixed schedule (`schedule`), each one evaluated by the run's evaluator when it
+      has one (`evaluations.csv`, TensorBoard `eval/*`, the best one named in run.json); with
+      args.eval_every > 0 only the checkpoints at multiples of it and the last one are evaluated;
+    - TensorBoard (`tensorboard/`, opened on first use) and a progress display that suits a terminal
+      or a log (socialzoo.bench.progress);
+    - wall time, the checkpoint list and the policy file in run.json when the run finishes.
 
     Raises:
         socialzoo.train.run_dir.RunDirError: the folder holds a run of other arguments.

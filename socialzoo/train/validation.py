@@ -1,11 +1,5 @@
 """The trainers' checkpoint evaluator: a robot policy file on the first scenarios of its training
-map's validation set (socialzoo.scenarios.scenario.validation_set, "<map>-val": never a test set).
-
-Run in this process, one batched world of `trials` rows, so a checkpoint costs one episode's wall
-time; the skeleton (socialzoo.train.skeleton) calls it after each checkpoint when a trainer's
-`eval_trials` is above 0, and the run keeps the metrics in evaluations.csv and TensorBoard.
-`kept_policy` is the policy such a run keeps: its best validation checkpoint.
-"""
+map's validation set (socialzoo.scenarios.scenario.validation_set, "<map>-val": never a test set)."""
 
 from __future__ import annotations
 
@@ -33,6 +27,10 @@ def validation_evaluator(
     max_rows: int = 128,
 ) -> Evaluator:
     """An evaluator of policy files of registry name `policy` ("ppo", "bc", ...).
+
+    Run in this process, one batched world of `trials` rows, so a checkpoint costs one episode's wall time;
+    the skeleton (socialzoo.train.skeleton) calls it after each checkpoint when a trainer's `eval_trials` is
+    above 0, and the run keeps the metrics in evaluations.csv and TensorBoard.
 
     Args:
         policy: the registry name the files load with (make_policy("<policy>:PATH")).
