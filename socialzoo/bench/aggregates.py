@@ -1,25 +1,5 @@
-"""Aggregates over training seeds (Agarwal et al. 2021, "Deep RL at the edge of the statistical
-precipice"): mean and interquartile mean with stratified bootstrap intervals, performance profiles
-and the probability of improvement, for any evaluation that ran several seeds of a policy.
-
-The data of one policy on one map (a stratum) is a score matrix of shape (K, N): K training seeds
-by the same N test scenarios, each cell one episode's score (success: 0 or 1). A seed's score is
-its row mean (its success rate). The aggregates take the scores of several strata (the maps), as
-rliable's runs x tasks matrices do, but keep each stratum's scenarios:
-
-- mean: the mean of the seeds' scores over every stratum;
-- IQM: the interquartile mean of those seed scores (the mean of the middle 50%: 25% trimmed at
-  each end, scipy.stats.trim_mean), robust to one lucky or unlucky seed;
-- intervals: a stratified bootstrap. Within each stratum the seeds are resampled with replacement
-  (the between-seed spread), and, with `scenarios=True` (the default), the scenarios too, one draw
-  shared by every seed of the stratum, since they all ran the same scenarios (the finite test
-  set's spread); strata are resampled independently of one another. Percentile intervals, 95% by
-  default (rliable's), from `resamples` resamples of a seeded generator.
-
-rliable itself was tried (issue 27) and is not used: its arch dependency fails to import beside
-pandas 3. The resampling here is numpy; tests check it against hand-worked cases and against
-scipy.stats.bootstrap where the two define the same interval (seeds only).
-"""
+"""Aggregates over training seeds (Agarwal et al. 2021, "Deep RL at the edge of the statistical precipice"): mean
+and IQM with stratified bootstrap intervals, performance profiles and the probability of improvement."""
 
 from __future__ import annotations
 
@@ -65,7 +45,10 @@ def _matrices(scores: ScoreSet | np.ndarray) -> list[np.ndarray]:
 
 def iqm(values: np.ndarray | Sequence[float], axis: int | None = None) -> np.ndarray | float:
     """The interquartile mean: the mean after trimming 25% of the values at each end (of 5 values,
-    1 at each end; of 4, 1), as rliable's aggregate_iqm; along `axis` (None: all values)."""
+    1 at each end; of 4, 1), as rliable's aggregate_iqm; along `axis` (None: all values).
+
+    Robust to one lucky or unlucky seed.
+    """
     from scipy.stats import trim_mean
 
     result = trim_mean(np.asarray(values, dtype=np.float64), 0.25, axis=axis)
@@ -83,7 +66,12 @@ def resample_seed_scores(
 ) -> np.ndarray:
     """(resamples, runs) seed scores of stratified bootstrap resamples (see the module docstring):
     per stratum, the scenarios drawn with replacement (shared by its seeds; `scenarios=False`:
-    kept), then its seeds drawn with replacement."""
+    kept), then its seeds drawn with replacement.
+
+    The seed draw gives the between-seed spread; the scenario draw (shared, since every seed of the
+    stratum ran the same scenarios) the finite test set's spread. Strata are resampled independently
+    of one another.
+    """
     if not isinstance(resamples, int) or isinstance(resamples, bool) or resamples < 1:
         raise ValueError(f"resamples must be an int >= 1, got {resamples!r}")
     columns = []
@@ -130,7 +118,10 @@ def aggregate(
     scenarios: bool = True,
 ) -> SeedAggregate:
     """Mean and IQM of the seed scores with stratified bootstrap intervals (the same resamples
-    for both, drawn from `rng`)."""
+    for both, drawn from `rng`).
+
+    Percentile intervals, 95% by default (rliable's), from `resamples` resamples of a seeded generator.
+    """
     mats = _matrices(scores)
     runs = seed_scores(mats)
     samples = resample_seed_scores(mats, resamples=resamples, rng=rng, scenarios=scenarios)

@@ -1,6 +1,5 @@
-"""The evaluation runner's count of rows stepped in its body and its tail, which shows what
-compacting the tail (Task.compact, socialzoo.env.compaction) saves.
-"""
+"""The evaluation runner's count of rows stepped in its body and its tail, which shows what compacting the tail
+(Task.compact, socialzoo.env.compaction) saves."""
 
 from __future__ import annotations
 

@@ -1,10 +1,5 @@
-"""Recording demonstrations of an engineered policy (Ref by default) for the imitation baselines:
-the batched runner steps the policy on the demonstration scenarios and each finished chunk of
-episodes is written at once, so a long recording survives an interruption and resumes.
-
-The file format (and its reader) is socialzoo.agents.demonstrations. Demonstration scenarios come
-from their own seeds, disjoint from the benchmark's test sets.
-"""
+"""Recording demonstrations of an engineered policy (Ref by default) for the imitation baselines, chunk by chunk,
+so that a long recording survives an interruption and resumes."""
 
 from __future__ import annotations
 
@@ -52,6 +47,8 @@ DEMO_BASE_SEED = 20220100
 @dataclass(frozen=True, kw_only=True)
 class DemoConfig:
     """What to record.
+
+    Demonstration scenarios come from their own seeds, disjoint from the benchmark's test sets.
 
     Attributes:
         policy: registry name of the demonstrating policy.
@@ -188,6 +185,8 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
     FILE.parts/ and listed in its index.json at once. A rerun with the same config skips the
     chunks already written; once all are there they are merged into `path` and the parts are
     removed. Calling again when `path` is complete does nothing.
+
+    The file format (and its reader) is socialzoo.agents.demonstrations.
 
     Args:
         path: the .npz file to produce.

@@ -1,32 +1,5 @@
-"""A map that checks itself by driving: GoAlone, alone (no people), over pose pairs in one batched
-world, and a report of every route it cannot complete, where it stopped and why.
-
-`drive_map` runs the benchmark's robot (the action-selection task with GoAlone on every row, the
-same navigator, local planner and motion model as every episode) from each legal pose to each other
-one (or a seeded sample of the ordered pairs) within the benchmark's 80 s. A route that does not
-reach its goal gets a cause, judged from where the robot stopped and the plan it was following:
-
-- "wall_collision": the footprint touched a wall (the episode ended there);
-- "goal_unreachable": it stopped on the last leg of its plan, the straight join from the graph to
-  the goal pose, and that join passes closer to a wall than the robot keeps (a goal behind a gap
-  it cannot drive through);
-- "start_unleavable": likewise on the first leg, from the start pose to the graph;
-- "blocked_doorway": it stopped where the plan ahead passes closer to a wall than the robot
-  keeps (a door or gap narrower than about 0.74 m on its way);
-- "oscillation": no progress for the last `stuck_time` seconds (the episode metric `stuck`) but
-  it kept moving, back and forth;
-- "stuck": no progress and it stayed within 1 m, with no narrow gap ahead;
-- "timeout": it was still making progress when the time ran out (a route too long or slow).
-
-socialzoo.bench.map_repair turns the report into repairs of an imported map; `socialzoo map check
-MAP --drive` prints it and draws it (socialzoo.render.map_plot.save_drive_check_png).
-
-Buildings with people (`socialzoo map drive [DIR]`): `drive_building` runs GoAlone on the first
-scenarios of an imported building's generated test set and counts each episode's outcome by cause
-(success, wall collision, human collision, stuck, timeout), drawing each failure where asked;
-`building_row` is its line of the table; `builtin_buildings` are the walls driven when no folder
-is given.
-"""
+"""A map that checks itself by driving: GoAlone, alone (no people), over pose pairs in one batched world, and a
+report of every route it cannot complete, where it stopped and why."""
 
 from __future__ import annotations
 
@@ -67,6 +40,20 @@ STILL_RADIUS = 1.0
 @dataclass(frozen=True)
 class RouteDrive:
     """One driven route.
+
+    The causes of a route that was not completed:
+
+    - "wall_collision": the footprint touched a wall (the episode ended there);
+    - "goal_unreachable": it stopped on the last leg of its plan, the straight join from the graph to
+      the goal pose, and that join passes closer to a wall than the robot keeps (a goal behind a gap
+      it cannot drive through);
+    - "start_unleavable": likewise on the first leg, from the start pose to the graph;
+    - "blocked_doorway": it stopped where the plan ahead passes closer to a wall than the robot
+      keeps (a door or gap narrower than about 0.74 m on its way);
+    - "oscillation": no progress for the last `stuck_time` seconds (the episode metric `stuck`) but
+      it kept moving, back and forth;
+    - "stuck": no progress and it stayed within 1 m, with no narrow gap ahead;
+    - "timeout": it was still making progress when the time ran out (a route too long or slow).
 
     Attributes:
         start, goal: legal-pose indices.
@@ -206,6 +193,12 @@ def drive_map(
     progress: Callable[[int, int], None] | None = None,
 ) -> DriveReport:
     """Drive GoAlone alone over pose pairs of a map and report every route it cannot complete.
+
+    It runs the benchmark's robot (the action-selection task with GoAlone on every row: the same
+    navigator, local planner and motion model as every episode) from each legal pose to each other one
+    (or a seeded sample of the ordered pairs) within the benchmark's 80 s. A route that does not reach
+    its goal gets a cause (RouteDrive), judged from where the robot stopped and the plan it was
+    following.
 
     Args:
         m: the map (valid: its legal poses join the graph).

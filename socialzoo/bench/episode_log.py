@@ -1,18 +1,5 @@
-"""Episode logs: one episode, sample by sample, in a documented JSON Schema
-(socialzoo/bench/schemas/episode_log.schema.json, docs/guideline_metrics.md), in the spirit of the
-evaluation guidelines' unified metrics API: any simulator or dataset that writes its episodes in
-this schema can have them scored by socialzoo (`socialzoo metrics LOG.json`), with the same
-function that scores socialzoo's own trajectories (socialzoo.bench.guideline_metrics).
-
-- `make_episode_log` builds a log (a dict) from arrays; `trace_episode_log` from a recorded
-  replay (socialzoo.render.replay_data.EpisodeTrace and its ReplayScene).
-- `write_episode_log` validates and writes it (nothing is written when it is invalid);
-  `read_episode_log` reads and validates one.
-- `log_trajectories` turns a log into the arrays of guideline_metrics; `log_metrics` scores it.
-
-A log that breaks the schema, or whose arrays disagree with its `time` (lengths, spacing), is an
-EpisodeLogError naming the file and the field (jsonschema's path, e.g. robot.positions[3]).
-"""
+"""Episode logs: one episode, sample by sample, in a documented JSON Schema, scored (`socialzoo metrics LOG.json`)
+by the function that scores socialzoo's own trajectories (socialzoo.bench.guideline_metrics)."""
 
 from __future__ import annotations
 

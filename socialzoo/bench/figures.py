@@ -1,9 +1,5 @@
-"""Benchmark figures (matplotlib, PNG and PDF): success rates by policy and map with the paper's
-numbers, the failures by cause, and force, blame and time to goal with 90% confidence intervals,
-maps side by side.
-
-matplotlib is imported when a figure is drawn (the "plot" extra), with the non-interactive Agg backend.
-"""
+"""Benchmark figures (matplotlib, PNG and PDF): success rates by policy and map with the paper's numbers, the
+failures by cause, and force, blame and time to goal with 90% confidence intervals, maps side by side."""
 
 from __future__ import annotations
 
@@ -24,7 +20,10 @@ _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
 
 
 def pyplot() -> Any:
-    """matplotlib.pyplot with the non-interactive Agg backend (matplotlib imported on first use)."""
+    """matplotlib.pyplot with the non-interactive Agg backend (matplotlib imported on first use).
+
+    matplotlib is the "plot" extra.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

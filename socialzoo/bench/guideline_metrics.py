@@ -1,27 +1,5 @@
-"""The metrics of Table I of the social-navigation evaluation guidelines (Francis et al., "Principles
-and Guidelines for Evaluating Social Robot Navigation Algorithms", ACM THRI 2025, arXiv 2306.16740),
-computed from trajectory arrays.
-
-One function, `guideline_metrics`, computes every metric for a batch of episodes at once (numpy,
-no loop over steps, people or episodes): the live env path and the episode logs
-(socialzoo.bench.episode_log) call it with the same arrays and get the same numbers. Each metric is
-registered in socialzoo.core.metrics under the source "guidelines" (names `gl_*`); docs/guideline_metrics.md
-gives the formulas and the choices below with their sources.
-
-Conventions (every distance is between body boundaries, robot and people are discs):
-
-- An episode is the samples k = 0..n-1 of its arrays, taken every dt seconds (sample 0 is the
-  start, sample k the state after step k). The robot's episode ends at the first sample within
-  the goal radius of its goal, when there is one: samples after it (a log that goes on while other
-  robots finish) count for the aggregated time only.
-- The robot's velocity during step k (k >= 1) is its velocity at sample k as given (the velocity
-  the simulator applied in that step), else the displacement (p_k - p_(k-1)) / dt; at sample 0 it is
-  the given velocity, else 0 (the robot starts at rest, as socialzoo.env's jerk assumes).
-- A contact is a sample where two bodies overlap (their gap below 0) or, where the simulator's
-  collision flags are given, a flagged sample. A collision is the start of a contact: a sample in
-  contact whose previous sample was not (per person and per other robot when the contacts are
-  per body), so a contact that lasts several steps counts once.
-"""
+"""The metrics of Table I of the social-navigation evaluation guidelines (Francis et al., ACM THRI 2025, arXiv
+2306.16740), computed from trajectory arrays."""
 
 from __future__ import annotations
 
@@ -226,6 +204,10 @@ def time_to_collision(rel_pos: np.ndarray, rel_vel: np.ndarray, reach: np.ndarra
 def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None) -> dict[str, np.ndarray]:
     """Every Table I metric of each episode of `traj`: {name: (B,) array} in registry order
     (GUIDELINE_KEYS; bool, int64 or float64 by the metric's kind, NaN where undefined).
+
+    Batched numpy, no loop over steps, people or episodes: the live env path
+    (socialzoo.bench.guideline_recorder) and the episode logs (socialzoo.bench.episode_log) call it with
+    the same arrays and get the same numbers.
 
     Raises:
         ValueError: arrays of the wrong shape, a dt that is not > 0, a length outside 1..N.

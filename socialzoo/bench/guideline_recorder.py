@@ -1,16 +1,5 @@
-"""The live path of the guidelines' Table I metrics: the world states of B rows recorded step by
-step, and each episode's metrics computed (socialzoo.bench.guideline_metrics.guideline_metrics) from
-its own samples when it ends, the same function the episode logs (socialzoo.bench.episode_log) go
-through.
-
-What is recorded per sample: robot 0's centre, world velocity and distance to the nearest wall, the people's centres,
-velocities and presence, the other robots' centres, and the world's own contact flags (the world
-step's collision rules, socialzoo.env.world.robot_collisions: a person's centre within the collision
-distance, the footprint touching a wall; a robot touching a closed door of a scenario script
-collides as with a wall). The samples between a row's reset and its end are its episode (sample 0
-is the start). Samples that no running episode needs any more are dropped, so memory stays within
-the longest running episode.
-"""
+"""The live path of the guidelines' Table I metrics: the world states of B rows recorded step by step, and each
+episode's metrics computed from its own samples when it ends (socialzoo.bench.guideline_metrics)."""
 
 from __future__ import annotations
 
@@ -61,6 +50,14 @@ class EpisodeFrame:
 
 class GuidelineRecorder:
     """Records B rows of a task's core and gives the Table I metrics of finished episodes.
+
+    Per sample: robot 0's centre, world velocity and distance to the nearest wall, the people's
+    centres, velocities and presence, the other robots' centres, and the world's own contact flags
+    (the world step's collision rules, socialzoo.env.world.robot_collisions: a person's centre within
+    the collision distance, the footprint touching a wall; a robot touching a closed door of a
+    scenario script collides as with a wall). The samples between a row's reset and its end are its
+    episode (sample 0 is the start). Samples that no running episode needs any more are dropped, so
+    memory stays within the longest running episode.
 
     Args:
         task: the task (its `core` holds the world state).

@@ -1,30 +1,5 @@
-"""Per-episode metrics of the humans of B worlds (learned or social-force alike), step by step.
-
-They compare human populations on the same scenarios: does a learned crowd walk its routes as
-the social-force crowd does, and with no more collisions? Every human present in the scenario
-counts. Definitions (centre distances in metres, times in seconds):
-
-- humans_goal_rate: share of the humans (with a route of two or more waypoints) that reached the
-  goal end of their route (turned back there) during the episode.
-- humans_waypoints_per_min: route waypoints reached per human and minute.
-- humans_hh_collisions: human-human collisions: times two humans came within 0.4 m of each
-  other (each pair counted once per contact, at its start).
-- humans_hw_collisions: human-wall collisions: times a human's centre came within its radius
-  (0.2 m) of a wall, or a wall stopped its move.
-- humans_hr_collisions: human-robot collisions: times a human came within the robot collision
-  distance (0.4 m) of a robot.
-- humans_min_human_distance, humans_min_wall_distance, humans_min_robot_distance: the smallest
-  distance over the episode and the humans (NaN when it never fell within the wall index's
-  reach of 1 m, for walls, or with a single human, for humans).
-- humans_mean_speed: mean speed over the humans and steps, m/s.
-- humans_path_ratio: distance walked until the route's goal was first reached / length of the
-  route from the spawn, mean over the humans that reached it (NaN for none); 1 is the route. A
-  goal counts as reached within the waypoint radius (1 m), so the route's length is taken up
-  to that circle: a human walking straight along a one-segment route scores 1.
-
-Rows are independent: a row is reset when its episode starts and stops accumulating once its
-episode is done, so the runner reads a finished row's summary before refilling it.
-"""
+"""Per-episode metrics of the humans of B worlds (learned or social-force alike), step by step: does a learned crowd
+walk its routes as the social-force crowd does, and with no more collisions?"""
 
 from __future__ import annotations
 
@@ -47,6 +22,14 @@ HUMAN_RADIUS = 0.2
 
 class HumanEpisodeMetrics:
     """Running human metrics of the current episode of each of B rows.
+
+    Every human present in the scenario counts; distances are between centres, m, and times in s (each
+    metric's definition: the registry's "humans" metrics, socialzoo.core.metrics). A goal counts as
+    reached within the waypoint radius, so the route's length is taken up to that circle: a human
+    walking straight along a one-segment route has a path ratio of 1.
+
+    Rows are independent: a row is reset when its episode starts and stops accumulating once its
+    episode is done, so the runner reads a finished row's summary before refilling it.
 
     Args:
         batch_size: B.

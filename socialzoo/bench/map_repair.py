@@ -1,20 +1,5 @@
-"""Repairs an imported map needs after driving it: what `drive_map` could not complete is moved,
-dropped or rerouted, so that every start/goal pair a scenario may draw has been driven.
-
-`repair_by_driving` drives GoAlone alone over every feasible pair of legal poses
-(socialzoo.bench.drive_check), then:
-- a pose the robot cannot reach or leave (its join to the graph passes closer to a wall than the
-  robot keeps: "goal_unreachable", "start_unleavable") moves to the nearest place within
-  `MAX_MOVE` whose join keeps the robot's wall distance; without one it is dropped;
-- a graph edge where routes stop at a gap too narrow for the robot ("blocked_doorway") is
-  dropped when the graph stays connected without it;
-- the changed routes are driven again; then, while some route still fails, the pose in most of
-  the failed routes is dropped (never below two poses).
-Every change is a Repair (socialzoo.maps.repair) and the map's provenance records the drive
-("drive": routes driven, completed, failures by cause, the repairs' count), so a map file says
-that its pairs were driven. `socialzoo map import` runs this by default; `--strict` refuses a
-source with any failed route instead.
-"""
+"""Repairs an imported map needs after driving it: what `drive_map` could not complete is moved, dropped or
+rerouted, so that every start/goal pair a scenario may draw has been driven."""
 
 from __future__ import annotations
 
@@ -48,6 +33,20 @@ def repair_by_driving(
     progress: Callable[[int, int], None] | None = None,
 ) -> tuple[Map, list[Repair], DriveReport]:
     """Drive every feasible pose pair of a map and repair what fails (see the module docstring).
+
+    It drives GoAlone alone over every feasible pair of legal poses (socialzoo.bench.drive_check), then:
+
+    - a pose the robot cannot reach or leave (its join to the graph passes closer to a wall than the
+      robot keeps: "goal_unreachable", "start_unleavable") moves to the nearest place within
+      `MAX_MOVE` whose join keeps the robot's wall distance; without one it is dropped;
+    - a graph edge where routes stop at a gap too narrow for the robot ("blocked_doorway") is
+      dropped when the graph stays connected without it;
+    - the changed routes are driven again; then, while some route still fails, the pose in most of
+      the failed routes is dropped (never below two poses).
+
+    Every change is a Repair (socialzoo.maps.repair) and the map's provenance records the drive
+    ("drive": routes driven, completed, failures by cause, the repairs' count), so a map file says
+    that its pairs were driven.
 
     Args:
         m: a valid map.

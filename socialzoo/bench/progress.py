@@ -1,8 +1,4 @@
-"""Progress of a long loop: tqdm's bar on a terminal, a plain line every few percent in a log.
-
-A bar redraws itself with carriage returns, which a log file (`make run > log 2>&1`) keeps as
-hundreds of partial lines; where the output is not a terminal, a few whole lines say the same.
-"""
+"""Progress of a long loop: tqdm's bar on a terminal, a plain line every few percent in a log."""
 
 from __future__ import annotations
 
@@ -31,6 +27,9 @@ class LogProgress:
     close(), use as a context manager, and the attributes `n` and `total`. A line is written by
     the update that crosses the next LOG_STEP_PERCENT of the total or comes LOG_INTERVAL_S after
     the last line, and by close() when the count moved since the last line.
+
+    A bar redraws itself with carriage returns, which a log file (`make run > log 2>&1`) keeps as
+    hundreds of partial lines; where the output is not a terminal, a few whole lines say the same.
 
     Args:
         total: the count at the end (None or 0: unknown; lines then come by time only).

@@ -1,11 +1,5 @@
 """The episode viewer's recorder: run policies on one scenario and keep every step's arrays
-(socialzoo.render.replay_data.EpisodeTrace), for `socialzoo replay`.
-
-Each policy runs its own batch-of-one core, so a recording is the same episode the benchmark runner
-plays for that scenario (rows of a batch never interact). The env does not compute the laser scan
-by default; the recorder scans every state itself (socialzoo.core.laser), which changes nothing
-in the episode.
-"""
+(socialzoo.render.replay_data.EpisodeTrace), for `socialzoo replay`."""
 
 from __future__ import annotations
 
@@ -157,6 +151,9 @@ def record_task_episode(
     keeping every state and step: the world's bodies, the task's guides and scan for the viewer
     (Task.viewer_guides, viewer_laser) and its per-step force, blame and collisions where its
     info has them.
+
+    The env does not compute the laser scan by default; the recorder scans every state itself
+    (socialzoo.core.laser), which changes nothing in the episode.
 
     Args:
         task: a socialzoo.env.tasks Task of batch size 1, reset.
@@ -334,6 +331,9 @@ def record_policies(
 ) -> list[EpisodeTrace]:
     """Record each policy on the same scenario (one panel each, in order); `laser_rays` and
     `laser_stride` as in `record_episode`.
+
+    Each policy runs its own batch-of-one core, so a recording is the same episode the benchmark runner
+    plays for that scenario (rows of a batch never interact).
 
     Raises:
         ValueError: no policies, or an unknown policy name (make_policy's message).

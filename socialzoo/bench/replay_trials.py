@@ -1,11 +1,5 @@
-"""Stored benchmark trials, replayed: find a trial in a results store (`socialzoo benchmark --out
-DIR`), rebuild its env config, scenario and policy, run it again and check that the replayed
-metrics are the stored ones.
-
-A trial's outcome depends only on (policy, test set, scenario index, env config) and the code
-(socialzoo.bench.runner), so a replay reproduces it exactly while the code is unchanged; the
-store's config hash covers the code, and `StoredTrial.code_changed` says when it no longer matches.
-"""
+"""Stored benchmark trials, replayed: find a trial in a results store (`socialzoo benchmark --out DIR`), rebuild
+its env config, scenario and policy, run it again and check that the replayed metrics are the stored ones."""
 
 from __future__ import annotations
 
@@ -268,6 +262,10 @@ def replay_trial(
     world_map: Map | None = None,
 ) -> TrialReplay:
     """Run a stored trial again, record it and compare its metrics with the stored ones.
+
+    A trial's outcome depends only on (policy, test set, scenario index, env config) and the code
+    (socialzoo.bench.runner), so a replay reproduces it exactly while the code is unchanged; the
+    store's config hash covers the code, and `StoredTrial.code_changed` says when it no longer matches.
 
     Args:
         trial: from `find_trials`.

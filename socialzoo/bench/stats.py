@@ -1,9 +1,5 @@
-"""Confidence intervals for benchmark tables and figures: Student-t intervals for means, Wilson
-score intervals for success rates and bootstrap (BCa) intervals for mean counts per episode (90%
-by default, as in the paper).
-
-Pure Python and numpy (the t quantile is computed here, so scipy is not needed).
-"""
+"""Confidence intervals for benchmark tables and figures: Student-t for means, Wilson score for success rates and
+bootstrap (BCa) for mean counts per episode (90% by default, as in the paper); pure Python and numpy."""
 
 from __future__ import annotations
 
@@ -91,7 +87,10 @@ def student_t_cdf(t: float, df: float) -> float:
 
 @lru_cache(maxsize=4096)
 def student_t_ppf(q: float, df: float) -> float:
-    """The q-quantile of Student's t with `df` > 0 degrees of freedom (bisection, |error| < 1e-12)."""
+    """The q-quantile of Student's t with `df` > 0 degrees of freedom (bisection, |error| < 1e-12).
+
+    Computed here, so scipy is not needed.
+    """
     if not 0.0 < q < 1.0:
         raise ValueError(f"student_t_ppf: q must be in (0, 1), got {q!r}")
     if q < 0.5:

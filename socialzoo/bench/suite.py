@@ -1,17 +1,5 @@
-"""The scenario suite's evaluation (socialzoo.scenarios.suite: Fig. 7 of Francis et al. 2025): policies x
-scenarios x seeds into one results store, a policy x scenario table and heatmap per metric, replays.
-
-    socialzoo suite --policies goalone,ref --scenarios a,b,c --seeds 30 --out DIR
-
-Each scenario is its family's cases 0..N-1 of the task's test split (the first split the task
-offers where it has no "test" yet), played by a task built for the family (`suite_task`). Episodes
-are keyed and read exactly as a task id's benchmark keys them (socialzoo.bench.task_benchmark:
-policy spec, split, case index, config hash), so a rerun plays nothing that is stored and an
-interrupted run resumes. The cases the store lacks are played on the harness's backend
-(socialzoo.bench.runner.evaluate: local processes or Ray) and stored as they finish; then
-`evaluate_stored` reads every unit back. The static page of the results is
-socialzoo.bench.suite_page.
-"""
+"""The scenario suite's evaluation (socialzoo.scenarios.suite: Fig. 7 of Francis et al. 2025): policies x scenarios
+x seeds into one results store, a policy x scenario table and heatmap per metric, replays."""
 
 from __future__ import annotations
 

@@ -1,10 +1,5 @@
-"""The scenario suite's outputs: per metric a policy x scenario table (CSV, Markdown) and heatmap (PNG),
-and the static results page (results.html) with the heatmaps, each scenario's card and its replays.
-
-The page has no script and fetches nothing: heatmaps are inlined as data URIs, the rest are links
-to files of the run's folder (replay pages, tables, store). It reads a run's SuiteResult
-(socialzoo.bench.suite) and nothing else.
-"""
+"""The scenario suite's outputs: per metric a policy x scenario table (CSV, Markdown) and heatmap (PNG), and the
+static results page (results.html) with the heatmaps, each scenario's card and its replays."""
 
 from __future__ import annotations
 
@@ -338,7 +333,12 @@ def _tables(result: SuiteResult) -> list[str]:
 
 
 def suite_document(result: SuiteResult, folder: Path) -> str:
-    """The results page of a run whose files are in `folder`, as an HTML string."""
+    """The results page of a run whose files are in `folder`, as an HTML string.
+
+    The page has no script and fetches nothing: heatmaps are inlined as data URIs, the rest are links
+    to files of the run's folder (replay pages, tables, store). It reads the run's SuiteResult
+    (socialzoo.bench.suite) and nothing else.
+    """
     from socialzoo import __version__
 
     config = result.config

@@ -1,11 +1,5 @@
-"""Benchmark tables, one writer (`write_tables`) for every benchmark: summary entries (per policy
-and map, the success rate, the failures by cause and every metric's mean with its confidence
-interval) as NAME.csv and NAME.md, in a `TableLayout`: the paper's (summary.md: the success table,
-a failure table and metric tables) or a task id's (one table, a column per metric).
-
-Intervals: Wilson score for success rates, bootstrap (BCa) for mean counts per episode
-(COUNT_METRICS), Student-t for every other mean (socialzoo.bench.stats).
-"""
+"""Benchmark tables, one writer (`write_tables`) for every benchmark: summary entries as NAME.csv and NAME.md in a
+`TableLayout`, the paper's (summary.md) or a task id's (one table, a column per metric)."""
 
 from __future__ import annotations
 

@@ -1,12 +1,5 @@
-"""Test sets for maps without a registered one (any imported building): generated on first use,
-stored beside the results with the map's hash, and reused so that reruns are comparable.
-
-The file is DIR/test_sets/<map name>-test.json (or -quick): the map's sha256, the set's base
-seed and scenario settings, and every scenario generated so far, exactly (socialzoo-scenario/1).
-A rerun reads the scenarios back instead of generating them, so later changes to the generator
-cannot change them; a run that needs more scenarios generates the next ones (scenario k always
-has seed TestSet.seed(k)) and appends them. A map whose contents changed since is refused.
-"""
+"""Test sets for maps without a registered one (any imported building): generated on first use, stored beside the
+results with the map's hash, and reused so that reruns are comparable."""
 
 from __future__ import annotations
 
@@ -66,6 +59,12 @@ def stored_test_set(
     map_ref: str, out_dir: str | Path, trials: int | None, quick: bool = False
 ) -> StoredTestSet:
     """The test set of a map without a registered one, read from (or written to) out_dir.
+
+    The file is DIR/test_sets/<map name>-test.json (or -quick): the map's sha256, the set's base
+    seed and scenario settings, and every scenario generated so far, exactly (socialzoo-scenario/1).
+    A rerun reads the scenarios back instead of generating them, so later changes to the generator
+    cannot change them; a run that needs more scenarios generates the next ones (scenario k always
+    has seed TestSet.seed(k)) and appends them. A map whose contents changed since is refused.
 
     Args:
         map_ref: a shipped map name or a map JSON path, as the benchmark names it.
