@@ -1,13 +1,5 @@
-"""Independent tasks (trainings) run side by side: in `workers` local processes, or as Ray tasks.
-
-Evaluations have their own paths (socialzoo.bench.runner.evaluate); this module spreads the
-trainings, every seed of every learner. Each training uses one CPU thread (the trainers'
-`threads`), so on the local backend `workers` processes train `workers` policies at once (spawned,
-not forked: the parent may hold torch's threads). A Ray already initialised (a cluster, or
-`ray.init(num_cpus=2)` in a test) is used as it is; otherwise a local Ray with `workers` CPUs is
-started and shut down after, its workers at the usual priority
-(socialzoo.bench.runner.start_local_ray).
-"""
+"""Independent tasks (trainings, every seed of every learner) run side by side: in `workers` local processes, or as
+Ray tasks; evaluations have their own paths (socialzoo.bench.runner.evaluate)."""
 
 from __future__ import annotations
 
@@ -38,6 +30,12 @@ def run_tasks(
     Each task stores its own result as it finishes (a training run folder), so when one fails or
     the run is interrupted, the finished ones are kept; the first error is raised after the others
     ended.
+
+    Each training uses one CPU thread (the trainers' `threads`), so on the local backend `workers`
+    processes train `workers` policies at once (spawned, not forked: the parent may hold torch's
+    threads). A Ray already initialised (a cluster, or `ray.init(num_cpus=2)` in a test) is used as it
+    is; otherwise a local Ray with `workers` CPUs is started and shut down after, its workers at the
+    usual priority (socialzoo.bench.runner.start_local_ray).
     """
     check_backend(backend)
     if len(inputs) <= 1 or (backend == "local" and workers <= 1):

@@ -1,13 +1,5 @@
-"""The paper's figures from the loaded results (socialzoo.reproduce.results.load), PNG and PDF.
-
-- success.{png,pdf}, metrics.{png,pdf}: success rates with the paper's marks, and force, blame and
-  time to goal, per policy on the training and transfer maps (socialzoo.bench.figures);
-- rl_curves.{png,pdf}: success, time and reward of every checkpoint with 90% bands
-  (socialzoo.studies.rl_curves.plot_curves);
-- lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks;
-- profiles.{png,pdf}: with several training seeds, performance profiles per map
-  (socialzoo.studies.seeds.plot_profiles).
-"""
+"""The paper's figures from the loaded results (socialzoo.reproduce.results.load), PNG and PDF: success, metrics,
+RL curves, LfD and, with several training seeds, performance profiles."""
 
 from __future__ import annotations
 
@@ -54,7 +46,16 @@ def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Pat
 
 def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, list[Path]]:
     """Every figure the results allow, into out_dir; returns name -> files ("success",
-    "metrics", "rl_curves", "lfd")."""
+    "metrics", "rl_curves", "lfd").
+
+    - success.{png,pdf}, metrics.{png,pdf}: success rates with the paper's marks, and force, blame and
+      time to goal, per policy on the training and transfer maps (socialzoo.bench.figures);
+    - rl_curves.{png,pdf}: success, time and reward of every checkpoint with 90% bands
+      (socialzoo.studies.rl_curves.plot_curves);
+    - lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks;
+    - profiles.{png,pdf}: with several training seeds, performance profiles per map
+      (socialzoo.studies.seeds.plot_profiles).
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     drawn: dict[str, list[Path]] = {}

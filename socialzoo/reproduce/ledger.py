@@ -1,13 +1,5 @@
-"""Where a reproduction keeps its items, and how long each part took.
-
-    DIR/<hash>/settings.json     the settings these items were made with (refused if they differ)
-    DIR/<hash>/timings.json      every session of every part: start, wall seconds, finished or not
-    DIR/<hash>/demos/ rl/ lfd/ performance/ transfer/     the parts' items
-
-Items are stored as they finish by the pieces that make them (training run folders, demonstration
-chunks, SQLite trial stores), so a rerun after an interruption continues where it stopped. A part's
-wall time is the sum of its sessions, so an interrupted and resumed part counts every second spent.
-"""
+"""Where a reproduction keeps its items (DIR/<hash>/: settings.json, timings.json, the parts' folders), and how long
+each part took."""
 
 from __future__ import annotations
 
@@ -63,6 +55,15 @@ def machine() -> dict[str, Any]:
 
 class Ledger:
     """The work folder DIR/<hash>/ of one settings: its settings record and the parts' timings.
+
+        DIR/<hash>/settings.json     the settings these items were made with (refused if they differ)
+        DIR/<hash>/timings.json      every session of every part: start, wall seconds, finished or not
+        DIR/<hash>/demos/ rl/ lfd/ performance/ transfer/     the parts' items
+
+    Items are stored as they finish by the pieces that make them (training run folders, demonstration
+    chunks, SQLite trial stores), so a rerun after an interruption continues where it stopped. A
+    part's wall time is the sum of its sessions, so an interrupted and resumed part counts every
+    second spent.
 
     Args:
         out_dir: the reproduction's output folder DIR.

@@ -1,9 +1,5 @@
-"""The paper's numbers (SPEC section 10), in one place, for the tables beside ours.
-
-Success rates of the performance and transfer experiments (socialzoo.bench.tables.PAPER_SUCCESS)
-and the LfD table (socialzoo.studies.lfd.PAPER_LFD) already live with the code that prints them; this
-module re-exports them and adds the rest of SPEC section 10: PIPS's LfD row and the protocol.
-"""
+"""The paper's numbers (SPEC section 10), in one place, for the tables beside ours: the success and LfD tables
+re-exported from the code that prints them, plus PIPS's LfD row and the protocol."""
 
 from __future__ import annotations
 

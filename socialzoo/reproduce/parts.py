@@ -1,28 +1,5 @@
-"""The runner of each part of the reproduction (socialzoo.reproduce.plan.PARTS).
-
-Every part composes pieces that store their items as they finish, so a part is resumable:
-
-- demos: Ref's demonstrations (socialzoo.bench.demonstrations, chunk by chunk).
-- rl-curves: PPO and DQN training runs (socialzoo.train, checkpoints) and every checkpoint on the
-  first gdc1-test scenarios (socialzoo.studies.rl_curves, one stored trial at a time).
-- lfd: BC and GAIL at each demonstration size and PIPS, then the LfD table (socialzoo.studies.lfd).
-- performance / transfer: the seven policies on gdc1-test / ghc3-test (socialzoo.bench.experiment),
-  and the other seeds' learned policies in <part>/seeds/.
-- reference (only with `--reference`, REFERENCE_PART): PPO and DQN trained and evaluated with the
-  reference code's quirks (socialzoo.env.quirks), every quirk together in reference/, one quirk
-  alone in reference/alone/<quirk>/.
-
-Every learned policy is trained with each of settings.seed_list (`--seeds K`), each seed in its
-own run folder with its own policy file and trials (socialzoo.reproduce.runs), so a part resumes
-seed by seed. Trainings run side by side
-(socialzoo.reproduce.backend: `workers` local processes, or Ray tasks). A run that evaluated its
-checkpoints on validation scenarios (PPO and DQN, settings.select_trials) keeps its best one
-(socialzoo.train.validation.kept_policy): that is the policy of `performance` and `transfer`.
-
-A training run folder that holds a finished run of the same arguments is not trained again (the
-trainers' RunDir; PIPS by its sidecar), so a part that needs policies of an earlier part trains
-only what is missing. Each part returns how many items it made (0: everything was read back).
-"""
+"""The runner of each part of the reproduction (socialzoo.reproduce.plan.PARTS), each resumable (its pieces store
+their items as they finish); a part returns how many items it made (0: everything was read back)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,5 @@
-"""The reproduction's parts and settings: the full protocol (SPEC section 10) and `--quick`.
-
-A `Settings` is everything that decides what the run stores; its `settings_hash` names the folder
-DIR/<hash>/ that holds the run's items, so a rerun with other settings never reads items stored
-under different ones. How the run is carried out (parts chosen, backend, progress bars) is not a
-setting and does not change the hash, nor are the fields of VOLATILE_FIELDS (how fast, and how many
-test scenarios the later seeds play).
-"""
+"""The reproduction's parts and settings: the full protocol (SPEC section 10) and `--quick`, with the hash that
+names the folder DIR/<hash>/ holding a run's items."""
 
 from __future__ import annotations
 
@@ -177,7 +171,12 @@ VOLATILE_FIELDS: tuple[str, ...] = ("workers", "batch_size", "seed_trials")
 
 
 def settings_hash(settings: Settings) -> str:
-    """12 hex digits naming the settings (and the folder layout): DIR/<hash>/ holds their items."""
+    """12 hex digits naming the settings (and the folder layout): DIR/<hash>/ holds their items.
+
+    A rerun with other settings never reads items stored under different ones. How the run is carried
+    out (parts chosen, backend, progress bars) is not a setting and does not change the hash, nor are
+    the fields of VOLATILE_FIELDS (how fast, and how many test scenarios the later seeds play).
+    """
     data = {k: v for k, v in settings.to_json().items() if k not in VOLATILE_FIELDS}
     text = json.dumps({"layout": LAYOUT_VERSION, "settings": data}, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:12]

@@ -1,9 +1,5 @@
-"""Publishing a reproduction into the repository: DIR's small results, tables and figures go to
-results/reproduction/ and the report to REPRODUCTION.md at the root, with links into that folder.
-
-`regenerate_report` rebuilds a report from a published (or any) folder alone; the tests compare it
-with the committed REPRODUCTION.md, so the committed numbers are those of the committed results.
-"""
+"""Publishing a reproduction into the repository: DIR's small results, tables and figures go to results/reproduction/
+and the report to REPRODUCTION.md at the root, with links into that folder."""
 
 from __future__ import annotations
 
@@ -18,7 +14,11 @@ PUBLISHED_DIR = "results/reproduction"
 
 def regenerate_report(base_dir: str | Path, prefix: str = "") -> str:
     """The report of the results in base_dir/results/, linking the figures present in
-    base_dir/figures/ through `prefix` (the path from the report to base_dir)."""
+    base_dir/figures/ through `prefix` (the path from the report to base_dir).
+
+    It needs that folder alone; the tests compare it with the committed REPRODUCTION.md, so the
+    committed numbers are those of the committed results.
+    """
     base = Path(base_dir)
     figures = {p.stem for p in (base / FIGURES_DIR).glob("*.png")}
     return render_reproduction(load(base / RESULTS_DIR), prefix, figures)

@@ -1,14 +1,5 @@
-"""REPRODUCTION.md's account of the reference code's quirks (SPEC section 11; `--reference`): the
-table of PPO and DQN trained and evaluated with every quirk on and with each quirk run alone, and
-for each learned row of "Where we differ" the measured effect of the quirks on it, read from the
-stored runs.
-
-Which policies the quirks can reach is a fact of the code, not of a run: the quirks change the
-env's reward (socialzoo.env.quirks), the socialgym1 layout's theta entry and PPO's evaluation, so
-only the trainers that read the reward (socialzoo.reproduce.runs.REFERENCE_TRAINERS) are retrained;
-BC, GAIL and PIPS learn from Ref's actions in the paper layout, which no quirk changes
-(tests/reproduce/test_quirk_report.py records Ref's demonstrations both ways and compares them).
-"""
+"""REPRODUCTION.md's account of the reference code's quirks (SPEC section 11; `--reference`): PPO and DQN with every
+quirk on and with each alone, and the quirks' measured effect on each learned row of "Where we differ"."""
 
 from __future__ import annotations
 
@@ -62,6 +53,12 @@ def quirk_note(
     differ"; None for an engineered policy or an experiment the quirks are not run on. Every quirk
     together first, then each quirk run alone (`--reference QUIRK`), each a range over its seeds
     against the paper's number.
+
+    Which policies the quirks can reach is a fact of the code, not of a run: the quirks change the
+    env's reward (socialzoo.env.quirks), the socialgym1 layout's theta entry and PPO's evaluation, so
+    only the trainers that read the reward (socialzoo.reproduce.runs.REFERENCE_TRAINERS) are
+    retrained; BC, GAIL and PIPS learn from Ref's actions in the paper layout, which no quirk changes
+    (tests/reproduce/test_quirk_report.py records Ref's demonstrations both ways and compares them).
 
     Args:
         reference: the `--reference` rows (reference.csv: quirks, experiment, policy, seed, success_rate).

@@ -1,9 +1,5 @@
-"""REPRODUCTION.md: for every table and figure of the paper, ours beside the paper's, the command,
-the wall time of each part on this machine, and an explanation wherever we differ.
-
-Everything is drawn from a results folder (socialzoo.reproduce.results) and nothing else, so
-`render_reproduction(load(results_dir))` regenerates the committed file exactly (a test checks it).
-"""
+"""REPRODUCTION.md: for every table and figure of the paper, ours beside the paper's, the command, the wall time of
+each part on this machine, and an explanation wherever we differ."""
 
 from __future__ import annotations
 

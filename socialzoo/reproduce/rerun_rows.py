@@ -1,27 +1,5 @@
-"""One learned policy's rows of a published reproduction replaced by a re-run of its seeds.
-
-The full protocol takes most of a day on 2 cores. When one trainer changes after it (issue 38's
-PIPS synthesiser) while every other policy's runs stay valid, the changed policy's seeds are
-trained and evaluated again with the project's own commands (`socialzoo train`, `socialzoo
-benchmark`), and `replace_policy_rows` puts their trials into the results folder in place of the
-old ones:
-
-- performance.csv and transfer.csv: the first seed's summary row;
-- lfd.csv: the first seed's row at the policy's LfD size, from the first `lfd_trials` scenarios
-  of its gdc1-test trials (the LfD protocol's scenarios and env);
-- seeds.csv, improvement.csv (against Ref) and profiles.csv: the policy's aggregates over seeds;
-- training.json: the re-run trainings' records;
-- run.json: a `reruns` entry (policy, commit, commands), which the report prints.
-
-Ref's trials come along (Ref is deterministic): the probabilities of improvement pair the
-scenarios, and Ref's successes must equal the published ones (or differ by at most
-`ref_tolerance` scenarios per map), the check that the re-run evaluated under the published
-conditions. Other rows of every file are kept byte for byte.
-
-    rerun = PolicyRerun("pips", {0: "pips:s0.json", 1: "pips:s1.json"}, Path("perf"), Path("transfer"),
-                        ref=Path("ref"), commands=("socialzoo benchmark ...",), commit="3d22979")
-    replace_policy_rows("results/reproduction", rerun)
-"""
+"""One learned policy's rows of a published reproduction replaced by a re-run of its seeds (`replace_policy_rows`),
+for a trainer that changed after the full run while every other policy's runs stay valid."""
 
 from __future__ import annotations
 

@@ -1,24 +1,5 @@
-"""The small result files of a reproduction, DIR/results/, from which every table, figure and
-number of REPRODUCTION.md is drawn (socialzoo.reproduce.report).
-
-    run.json          settings, their hash, the command, the machine, the parts run
-    timings.json      each part's sessions and wall time
-    training.json     each trained policy: trainer, demonstration steps, wall seconds, env steps
-    rl_curves.csv     every PPO/DQN checkpoint (and Ref) on the curve scenarios
-    lfd.csv           the LfD table rows (ours and the paper's)
-    performance.csv   the seven policies on gdc1-test (socialzoo.bench.tables summary columns)
-    transfer.csv      the same on ghc3-test
-    selection.csv     the checkpoint each RL run kept, chosen on validation scenarios
-    seeds.csv, improvement.csv, profiles.csv    with several training seeds: the aggregates over
-                      them (socialzoo.reproduce.seeds)
-    reference.csv     with `--reference`: PPO and DQN with the reference code's quirks, per
-                      quirk set, experiment and seed (socialzoo.reproduce.parts.run_reference)
-    kernel_paths.csv  one BC training under several CPU kernel paths (tools/kernel_paths.py
-                      --csv; not made by a reproduction, so `collect` leaves it as it is)
-
-`collect` copies them out of the work folder DIR/<hash>/ (where the stores and runs are); `load`
-reads them back with numbers as floats, so the report never needs the big stores.
-"""
+"""The small result files of a reproduction, DIR/results/, from which every table, figure and number of
+REPRODUCTION.md is drawn (socialzoo.reproduce.report)."""
 
 from __future__ import annotations
 
@@ -179,6 +160,23 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
     """Copy the run's small results out of its work folder into out_dir/results/; returns that folder.
 
     Results of parts that have not run (yet) are left out, and earlier copies of them removed.
+
+        run.json          settings, their hash, the command, the machine, the parts run
+        timings.json      each part's sessions and wall time
+        training.json     each trained policy: trainer, demonstration steps, wall seconds, env steps
+        rl_curves.csv     every PPO/DQN checkpoint (and Ref) on the curve scenarios
+        lfd.csv           the LfD table rows (ours and the paper's)
+        performance.csv   the seven policies on gdc1-test (socialzoo.bench.tables summary columns)
+        transfer.csv      the same on ghc3-test
+        selection.csv     the checkpoint each RL run kept, chosen on validation scenarios
+        seeds.csv, improvement.csv, profiles.csv    with several training seeds: the aggregates over
+                          them (socialzoo.reproduce.seeds)
+        reference.csv     with `--reference`: PPO and DQN with the reference code's quirks, per
+                          quirk set, experiment and seed (socialzoo.reproduce.parts.run_reference)
+        kernel_paths.csv  one BC training under several CPU kernel paths (tools/kernel_paths.py
+                          --csv; not made by a reproduction, so `collect` leaves it as it is)
+
+    The work folder DIR/<hash>/ is where the stores and runs are.
     """
     results = Path(out_dir) / RESULTS_DIR
     results.mkdir(parents=True, exist_ok=True)
@@ -259,6 +257,8 @@ def _read_json(path: Path, kind: type) -> Any:
 def load(results_dir: str | Path) -> dict[str, Any]:
     """Everything under a results folder: "run", "timings", "training" (JSON) and the CSV tables
     (lists of rows; an absent file: an empty list).
+
+    Numbers are read back as floats, so the report never needs the big stores.
 
     Raises:
         FileNotFoundError: no run.json (not a reproduction's results folder).

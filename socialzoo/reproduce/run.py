@@ -1,11 +1,5 @@
-"""The whole reproduction: run the chosen parts in order (each timed and resumable), then copy
-the small results out and write the tables, figures and REPRODUCTION.md.
-
-    reproduce("out/repro", quick_settings())                     # everything, small
-    reproduce("out/repro", full_settings(), parts=("lfd",))      # one part of the paper's protocol
-    reproduce("out/repro", quick_settings(), reference=True)     # and the reference code's quirks
-    reproduce("out/repro", quick_settings(), reference="goal_distance_x_only")  # one quirk alone
-"""
+"""The whole reproduction: run the chosen parts in order (each timed and resumable), then copy the small results out
+and write the tables, figures and REPRODUCTION.md."""
 
 from __future__ import annotations
 

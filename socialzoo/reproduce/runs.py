@@ -1,9 +1,5 @@
-"""The protocol's training runs: every seed's trainer arguments and run folders, and whether a
-run has finished (read by the parts that train and by the seed results that aggregate them).
-
-Every learned policy is trained with each of settings.seed_list: run folders "<name>" for the
-first seed (as with one seed) and "<name>-s<seed>" for the others (`run_name`).
-"""
+"""The protocol's training runs: every seed's trainer arguments and run folders, and whether a run has finished
+(read by the parts that train and by the seed results that aggregate them)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
-"""REPRODUCTION.md's sections on training seeds and checkpoint choice, drawn from the results'
-selection.csv, seeds.csv and improvement.csv (socialzoo.reproduce.seeds); results without them (a
-single seed made before these existed) get none of these lines."""
+"""REPRODUCTION.md's sections on training seeds and checkpoint choice, from the results' selection.csv, seeds.csv and
+improvement.csv (socialzoo.reproduce.seeds); results without them (a single seed made before these existed) get none."""
 
 from __future__ import annotations
 

@@ -1,17 +1,5 @@
-"""The protocol's seed results: which stored trials belong to which seed, aggregated by
-socialzoo.studies.seeds, and which checkpoint each RL run kept (chosen on validation scenarios).
-
-Written into DIR/<hash>/seeds/ after every part (so a report between parts shows what has run):
-
-    selection.csv     every PPO/DQN run: seed, kept checkpoint, its validation success, and its
-                      success on the curve scenarios (the test-set curve, never used to choose)
-    seeds.csv         with several seeds: per policy and map (and LfD size), mean and IQM with
-                      95% stratified bootstrap intervals over seeds and scenarios, every seed's
-                      success, where the paper's number falls among them
-    improvement.csv   probability of improvement between pairs of policies (learned vs Ref, PPO vs
-                      DQN, BC vs GAIL)
-    profiles.csv      performance profiles (share of seeds above each success threshold)
-"""
+"""The protocol's seed results: which stored trials belong to which seed, aggregated by socialzoo.studies.seeds, and
+which checkpoint each RL run kept (chosen on validation scenarios)."""
 
 from __future__ import annotations
 
@@ -158,7 +146,19 @@ def _curve_success(path: Path) -> dict[tuple[str, int], float]:
 
 def write_seed_results(ctx: Context) -> list[Path]:
     """selection.csv (runs that chose on validation), and with several seeds seeds.csv,
-    improvement.csv and profiles.csv, into DIR/<hash>/seeds/; returns the files written."""
+    improvement.csv and profiles.csv, into DIR/<hash>/seeds/; returns the files written.
+
+    Written after every part, so a report between parts shows what has run:
+
+        selection.csv     every PPO/DQN run: seed, kept checkpoint, its validation success, and its
+                          success on the curve scenarios (the test-set curve, never used to choose)
+        seeds.csv         with several seeds: per policy and map (and LfD size), mean and IQM with
+                          95% stratified bootstrap intervals over seeds and scenarios, every seed's
+                          success, where the paper's number falls among them
+        improvement.csv   probability of improvement between pairs of policies (learned vs Ref, PPO vs
+                          DQN, BC vs GAIL)
+        profiles.csv      performance profiles (share of seeds above each success threshold)
+    """
     from socialzoo.bench.tables import write_csv
     from socialzoo.studies.seeds import write_seed_study
 

@@ -1,8 +1,5 @@
-"""The paper's tables, ours beside the paper's, built from the loaded results
-(socialzoo.reproduce.results.load): each table is a list of rows (written as CSV) and Markdown.
-
-A row's "differs" says whether the paper's number lies outside our 90% interval.
-"""
+"""The paper's tables, ours beside the paper's, built from the loaded results (socialzoo.reproduce.results.load):
+each table is a list of rows (written as CSV) and Markdown."""
 
 from __future__ import annotations
 
@@ -22,7 +19,10 @@ def _num(value: Any, digits: int, scale: float = 1.0) -> str:
 
 
 def outside(paper: float | None, low: float, high: float) -> bool:
-    """True when the paper's number lies outside our interval [low, high] (same units)."""
+    """True when the paper's number lies outside our interval [low, high] (same units).
+
+    A table row's "differs" is this, against our 90% interval.
+    """
     if paper is None or not (math.isfinite(low) and math.isfinite(high)):
         return False
     return not low <= paper <= high
