@@ -1,14 +1,5 @@
-"""The `socialzoo` command: one entry point, one module per group of subcommands.
-
-Each module named in COMMANDS has a `register(subparsers)` function that adds its subcommands;
-every subcommand sets `func(args) -> int` (the exit status). The command starts at once: `socialzoo
---help` lists the subcommands from the table alone, and only the module of the subcommand asked for
-is imported and registered (with the heavy libraries each imports inside its functions), so no
-command pays for torch, ray or matplotlib unless it runs them.
-
-Commands group by noun (`socialzoo humans compare`, `socialzoo map check`); a former top-level name
-is kept in MOVED, so calling it fails with a usage error that names the command to call instead.
-"""
+"""The `socialzoo` command: one entry point, one module per group of subcommands, each imported only when its
+subcommand runs, so no command pays for torch, ray or matplotlib unless it runs them."""
 
 from __future__ import annotations
 

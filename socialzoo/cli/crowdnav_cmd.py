@@ -1,12 +1,5 @@
-"""`socialzoo crowdnav eval|replay`: the CrowdNav task's policies on its fixed cases.
-
-Thin aliases: `eval` is `socialzoo benchmark --maps socialzoo/CrowdNav<variant>-v1` (any task id's
-benchmark, socialzoo.bench.task_benchmark), `replay` an episode page of the variant.
-
-socialzoo crowdnav eval --policies orca,social_force,crowdnav --out results/crowdnav
-socialzoo crowdnav eval --variant 20 --observed-people 5 --policies crowdnav --out results/crowdnav20_5
-socialzoo crowdnav replay --policies orca,crowdnav --case 3 --out crowdnav.html
-"""
+"""`socialzoo crowdnav eval|replay`: the CrowdNav task's policies on its fixed cases, thin aliases: `eval` is
+`socialzoo benchmark --maps socialzoo/CrowdNav<variant>-v1` (socialzoo.bench.task_benchmark), `replay` a page."""
 
 from __future__ import annotations
 

@@ -1,9 +1,5 @@
-"""Command-line options from a frozen dataclass of arguments (the trainers' `Args`).
-
-Every field becomes `--field-name`, typed from its annotation, with its default and the help text
-of the class docstring's "Attributes:" section: int, float, str, Path, bool (`--x/--no-x`),
-Literal choices, `X | None` ("none" for None), tuples (several values) and JSON objects (dicts).
-"""
+"""Command-line options from a frozen dataclass of arguments (the trainers' `Args`): each field a `--field-name`,
+typed from its annotation, with its default and the help text of the class docstring's "Attributes:" section."""
 
 from __future__ import annotations
 
@@ -77,7 +73,11 @@ def _scalar_parser(annotation: Any, name: str) -> Any:
 
 
 def add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
-    """Add one option per field of dataclass `cls` to `parser` (dest = the field name)."""
+    """Add one option per field of dataclass `cls` to `parser` (dest = the field name).
+
+    Types: int, float, str, Path, bool (`--x/--no-x`), Literal choices, `X | None` ("none" for None),
+    tuples (several values) and JSON objects (dicts).
+    """
     hints = typing.get_type_hints(cls)
     docs = attribute_docs(cls)
     for field in dataclasses.fields(cls):

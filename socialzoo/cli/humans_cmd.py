@@ -1,10 +1,4 @@
-"""`socialzoo humans compare|select|report`: the people of the worlds, one command.
-
-`compare` sets learned humans against social-force humans on the same scenarios, `select` picks the
-checkpoint of a training run that compares best on validation scenarios, `report` (its options
-in socialzoo.cli.people_cmd) shows how each crowd model walks, `realism` measures each model against
-the recorded ETH/UCY people and `calibrate` fits the social force's or ORCA's parameters to them.
-"""
+"""`socialzoo humans compare|select|report|realism|calibrate`: the people of the worlds, one command."""
 
 from __future__ import annotations
 
@@ -18,7 +12,13 @@ from socialzoo.cli.people_cmd import add_report
 
 
 def register(subparsers: Any) -> None:
-    """Add `humans` and its subcommands `compare`, `select`, `report`, `realism` and `calibrate`."""
+    """Add `humans` and its subcommands `compare`, `select`, `report`, `realism` and `calibrate`.
+
+    `compare` sets learned humans against social-force humans on the same scenarios, `select` picks the
+    checkpoint of a training run that compares best on validation scenarios, `report` (its options in
+    socialzoo.cli.people_cmd) shows how each crowd model walks, `realism` measures each model against
+    the recorded ETH/UCY people and `calibrate` fits the social force's or ORCA's parameters to them.
+    """
     parser = subparsers.add_parser("humans", help=command_help("humans"), description=command_help("humans"))
     commands = parser.add_subparsers(dest="humans_command", required=True, metavar="SUBCOMMAND")
     _add_compare(commands)

@@ -1,8 +1,4 @@
-"""`socialzoo map list|show|validate|check|import|drive`: see, check, import and drive building maps.
-
-`show` and `check` draw a picture only where asked (--picture PATH) or beside a map file, never
-into the current directory or the package's maps folder, and always say where it went.
-"""
+"""`socialzoo map list|show|validate|check|import|drive`: see, check, import and drive building maps."""
 
 from __future__ import annotations
 
@@ -25,7 +21,11 @@ GENERATED = ("graph_generated", "edges_built", "poses_generated")
 
 
 def register(subparsers: Any) -> None:
-    """Add `map` and its subcommands."""
+    """Add `map` and its subcommands.
+
+    `show` and `check` draw a picture only where asked (--picture PATH) or beside a map file, never
+    into the current directory or the package's maps folder, and always say where it went.
+    """
     parser = subparsers.add_parser("map", help=command_help("map"))
     sub = parser.add_subparsers(dest="map_command", required=True, metavar="ACTION")
 

@@ -1,7 +1,5 @@
-"""`socialzoo metrics LOG.json [LOG2.json ...] [--out table.csv]`: the metrics of Table I of the
-evaluation guidelines (socialzoo.bench.guideline_metrics) of episode logs in socialzoo's schema
-(socialzoo.bench.episode_log), from this simulator or any other: one table (metric, value, unit)
-per log, and all of them in one CSV when asked."""
+"""`socialzoo metrics LOG.json [LOG2.json ...] [--out table.csv]`: Table I of the evaluation guidelines
+(socialzoo.bench.guideline_metrics) for episode logs (socialzoo.bench.episode_log) of this simulator or any other."""
 
 from __future__ import annotations
 

@@ -1,9 +1,5 @@
-"""`socialzoo humans report`: how each crowd model walks (speed, the fundamental diagram beside
-Weidmann's curve, contacts, path length, time to goal), one figure per model and one table.
-
-The `humans` group (socialzoo.cli.humans_cmd) adds this subcommand; `socialzoo benchmark --humans`
-also reads "learned" alone as the shipped learned humans (shipped_humans).
-"""
+"""`socialzoo humans report`: how each crowd model walks (speed, the fundamental diagram beside Weidmann's curve,
+contacts, path length, time to goal), one figure per model and one table."""
 
 from __future__ import annotations
 
@@ -16,7 +12,10 @@ from socialzoo.cli.arg_types import comma_list, positive_int
 
 
 def shipped_humans() -> str:
-    """The path of the shipped learned humans' policy file."""
+    """The path of the shipped learned humans' policy file.
+
+    `socialzoo benchmark --humans` also reads "learned" alone as this file.
+    """
     import socialzoo.agents
 
     return str(Path(socialzoo.agents.__file__).parent / "shipped" / "humans.safetensors")

@@ -1,6 +1,5 @@
-"""`socialzoo steps-to-ref --out DIR`: beyond the paper, the training steps PPO needs to reach
-Ref's success (socialzoo.studies.rl_training.steps_to_reference), measured on validation
-scenarios of our own seeds, never on a test set."""
+"""`socialzoo steps-to-ref --out DIR`: beyond the paper, the training steps PPO needs to reach Ref's success
+(socialzoo.studies.rl_training.steps_to_reference), on validation scenarios of our own seeds, never on a test set."""
 
 from __future__ import annotations
 

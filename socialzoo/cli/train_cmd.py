@@ -1,8 +1,5 @@
-"""`socialzoo train <trainer> [options]`: run one of the trainers of socialzoo.train.
-
-Options are generated from the trainer's argument dataclass (socialzoo.cli.dataclass_args), so the
-command line and the Python API (`train(Args(...))`) take the same arguments with the same defaults.
-"""
+"""`socialzoo train <trainer> [options]`: run one of the trainers of socialzoo.train, with options generated from
+its argument dataclass (socialzoo.cli.dataclass_args): the same arguments and defaults as `train(Args(...))`."""
 
 from __future__ import annotations
 
