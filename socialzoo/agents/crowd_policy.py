@@ -52,7 +52,7 @@ class CrowdAttentionPolicy:
     activation of the policy MLP, the action kind and the task's env id.
 
     Args:
-        tensors: the file's tensors (see the module docstring).
+        tensors: the file's tensors (listed above).
         header: its header.
         where: the file, for messages.
     """

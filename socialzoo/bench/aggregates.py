@@ -64,7 +64,7 @@ def seed_scores(scores: ScoreSet | np.ndarray) -> np.ndarray:
 def resample_seed_scores(
     scores: ScoreSet | np.ndarray, *, resamples: int, rng: np.random.Generator, scenarios: bool = True
 ) -> np.ndarray:
-    """(resamples, runs) seed scores of stratified bootstrap resamples (see the module docstring):
+    """(resamples, runs) seed scores of stratified bootstrap resamples:
     per stratum, the scenarios drawn with replacement (shared by its seeds; `scenarios=False`:
     kept), then its seeds drawn with replacement.
 

@@ -32,7 +32,7 @@ def repair_by_driving(
     batch_size: int = 256,
     progress: Callable[[int, int], None] | None = None,
 ) -> tuple[Map, list[Repair], DriveReport]:
-    """Drive every feasible pose pair of a map and repair what fails (see the module docstring).
+    """Drive every feasible pose pair of a map and repair what fails.
 
     It drives GoAlone alone over every feasible pair of legal poses (socialzoo.bench.drive_check), then:
 

@@ -42,7 +42,7 @@ _EVAL_STREAM = 0x6576616C  # "eval"
 
 @dataclass(frozen=True, kw_only=True)
 class CalibrationConfig:
-    """One calibration run (module docstring).
+    """One calibration run (docs/humans.md, "Calibration").
 
     Attributes:
         model: "sf" or "orca".

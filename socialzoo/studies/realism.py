@@ -174,7 +174,7 @@ class Cases:
 
 
 def window_cases(scene: SceneTracks, persons: np.ndarray | None = None) -> Cases:
-    """Every 4.8 s window (module docstring) of `persons` (default all tracks).
+    """Every 4.8 s window of `persons` (default all tracks).
 
     The prediction literature's 4.8 s protocol: every frame t0 at which the person has been seen OBS_FRAMES
     frames (t0 - 7 .. t0) and is still seen PRED_FRAMES frames later. The model starts at its position at t0
@@ -338,7 +338,7 @@ def simulate(
     progress: Callable[[int], None] | None = None,
     batches: list[Batch] | None = None,
 ) -> Rollout:
-    """Walk each case's subject by `model` among the replayed others (module docstring), batched:
+    """Walk each case's subject by `model` among the replayed others, batched:
     one row per case, cases of similar length in one core.
 
     One subject person per batch row, its model started from its recorded state, everyone else present in the
@@ -500,7 +500,7 @@ def evaluate_model(
     base: WorldConfig | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> SceneResult:
-    """Every metric of `model` on a scene's cases (module docstring)."""
+    """Every metric of `model` on a scene's cases (docs/humans.md, "Realism against recorded people")."""
     true_w, true_t = truth(scene, windows), truth(scene, tracks)
     if model.name == "cv":
         pred_w = constant_velocity(scene, windows)

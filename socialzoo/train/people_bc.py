@@ -263,7 +263,7 @@ def demonstrations(
     label_frames: int = 1,
     seed: int = 0,
 ) -> Demonstrations:
-    """Every demonstration of a recording (module docstring), replayed in one batched core.
+    """Every demonstration of a recording (defined in `train`'s docstring), replayed in one batched core.
 
     With `noisy_copies` > 0, each demonstration comes `noisy_copies` more times with its own
     velocity perturbed (normal, `velocity_noise` m/s per axis, drawn from `seed`), its action the

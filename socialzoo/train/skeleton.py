@@ -248,7 +248,7 @@ def run_training(
     *,
     evaluator: Evaluator | None = None,
 ) -> Path:
-    """Run `fit` on the skeleton (see the module docstring); returns the policy file. `fit` trains,
+    """Run `fit` on the skeleton; returns the policy file. `fit` trains,
     saves the final policy at run.policy and returns results for the run record; `evaluator`
     evaluates each checkpoint (socialzoo.train.validation.validation_evaluator).
 
