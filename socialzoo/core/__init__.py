@@ -1,5 +1,2 @@
 """The batched world's lowest layer: state arrays, geometry, walls, robot kinematics, laser, configs,
-and the metric registry (socialzoo.core.metrics).
-
-numpy (and numba kernels) only; every other subpackage builds on it.
-"""
+and the metric registry (socialzoo.core.metrics)."""

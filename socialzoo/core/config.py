@@ -1,7 +1,4 @@
-"""Configuration of the world: robot, humans, laser and time step (SPEC sections 2 to 4).
-
-Frozen keyword-only dataclasses validated on construction; override with dataclasses.replace.
-"""
+"""Configuration of the world: robot, humans, laser and time step (SPEC sections 2 to 4)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,5 @@
-"""Reading the text and JSON files users point at, with one error style: a file that cannot be
-read (not UTF-8, not JSON, a number or a nesting past Python's limits) raises the loader's own
-named error, with the file's path and what the file should have been.
-
-Every loader of the package (maps, scenarios, policy programs, run records, results, summaries)
-reads through these, so a user sees "PATH: not a map file (not JSON: ...)" rather than a bare
-UnicodeDecodeError or JSONDecodeError; tests/test_loader_fuzz.py holds them to it.
-"""
+"""Reading the text and JSON files users point at, with one error style: a file that cannot be read raises the
+loader's own named error, with the file's path and what the file should have been."""
 
 from __future__ import annotations
 

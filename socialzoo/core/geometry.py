@@ -1,7 +1,4 @@
-"""Vectorised 2D geometry on segments, points and rays.
-
-Every function broadcasts over leading axes, so one call serves a batch of envs, humans and walls.
-"""
+"""Vectorised 2D geometry on segments, points and rays."""
 
 from __future__ import annotations
 

@@ -1,12 +1,5 @@
 """The episode metrics, in one registry: each metric's name, label, unit, direction, kind and
-description, read by the tasks' summaries, the results store, the tables, the figures and the viewer.
-
-Adding a metric is one `Metric` entry in `METRICS` (plus computing it in its source: the task's
-accumulator, socialzoo.env.people or socialzoo.bench.human_metrics). A task's summary keys are
-`names(source)`, in registry order; the entries are in the order the tasks report them, so the
-CrowdNav task's own metrics sit between the ones it shares with the action-selection task
-(success, steps, mean_force, mean_blame). Pure data: no numpy.
-"""
+description, read by the tasks' summaries, the results store, the tables, the figures and the viewer."""
 
 from __future__ import annotations
 
@@ -803,6 +796,10 @@ def registered(*names: str) -> tuple[str, ...]:
 def names(source: str | None = None, *, kind: str | None = None) -> tuple[str, ...]:
     """The registered names in registry order: those computed by `source` (SOURCES) and of
     `kind`, where given. `names("action_selection")` is that task's summary keys, in order.
+
+    The entries are in the order the tasks report them, so the CrowdNav task's own metrics sit
+    between the ones it shares with the action-selection task (success, steps, mean_force,
+    mean_blame).
 
     Raises:
         ValueError: an unknown source or kind.

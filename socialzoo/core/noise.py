@@ -1,9 +1,4 @@
-"""Counter-based random numbers: noise that is a pure function of (row key, step, index).
-
-Per-step noise (laser) must not depend on how rows are batched, and drawing from B generators
-would be a Python loop over the batch. A splitmix64 hash of a counter gives both for free; the
-row keys themselves come from each env's seeded numpy Generator at reset.
-"""
+"""Counter-based random numbers: noise that is a pure function of (row key, step, index)."""
 
 from __future__ import annotations
 

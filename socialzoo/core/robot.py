@@ -1,11 +1,5 @@
 """Robot motion models, vectorised over any leading axes: the benchmark's differential drive
-(SPEC section 3) and the holonomic and unicycle robots of the CrowdNav line of work.
-
-Differential drive: commands are a linear speed v and an angular speed omega (a constant-curvature
-arc c is the command (v, v * c)); as in the reference simulator, accelerations are limited and the
-position advances by the mean of the old and new speed along the current heading. Holonomic and
-unicycle robots take their command at once, as CrowdNav's agents do (RobotConfig says which).
-"""
+(SPEC section 3) and the holonomic and unicycle robots of the CrowdNav line of work."""
 
 from __future__ import annotations
 
@@ -44,6 +38,12 @@ def step_robot(
     cfg: RobotConfig,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Advance robots one step with the motion model cfg.kinematics names.
+
+    Differential drive: commands are a linear speed v and an angular speed omega (a
+    constant-curvature arc c is the command (v, v * c)); as in the reference simulator,
+    accelerations are limited and the position advances by the mean of the old and new speed
+    along the current heading. Holonomic and unicycle robots take their command at once, as
+    CrowdNav's agents do (RobotConfig says which).
 
     Args:
         pose: (..., 3) x, y (m), theta (rad), world frame.

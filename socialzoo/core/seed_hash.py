@@ -1,16 +1,4 @@
-"""numpy's SeedSequence hash, compiled over a batch of seeds.
-
-`np.random.SeedSequence([seed, *tail]).generate_state(1, dtype=np.uint64)[0]` for many seeds at
-once, bit for bit (tests/core/test_seed_hash.py checks it against numpy over tens of thousands of
-seeds, the 32- and 64-bit edges included). A reset builds one SeedSequence per row for its noise
-key, about 20 microseconds each in Python, a large part of a recorded scene's reset; compiled, a
-batch of rows costs about one microsecond.
-
-The algorithm is numpy's (numpy/random/bit_generator.pyx, after Melissa O'Neill's seed_seq_fe):
-the entropy's 32-bit words hashed into a pool of four, the pool mixed, and the state words drawn
-from it. Here the entropy is the seed's words (one, or two above 2**32 - 1) followed by the
-tail's, at most four words in all (the pool's size), which is all a noise key needs.
-"""
+"""numpy's SeedSequence hash, compiled over a batch of seeds."""
 
 from __future__ import annotations
 
@@ -39,6 +27,17 @@ def words(value: int) -> list[int]:
 
 def seed_states(seeds: Sequence[int] | np.ndarray, tail: int) -> np.ndarray:
     """(N,) uint64: SeedSequence([seed, tail]).generate_state(1, dtype=np.uint64)[0] of each seed.
+
+    Bit for bit numpy's (tests/core/test_seed_hash.py checks it against numpy over tens of
+    thousands of seeds, the 32- and 64-bit edges included). A reset builds one SeedSequence per
+    row for its noise key, about 20 microseconds each in Python, a large part of a recorded
+    scene's reset; compiled, a batch of rows costs about one microsecond.
+
+    The algorithm is numpy's (numpy/random/bit_generator.pyx, after Melissa O'Neill's
+    seed_seq_fe): the entropy's 32-bit words hashed into a pool of four, the pool mixed, and the
+    state words drawn from it. Here the entropy is the seed's words (one, or two above 2**32 - 1)
+    followed by the tail's, at most four words in all (the pool's size), which is all a noise key
+    needs.
 
     Raises:
         ValueError: a seed outside [0, 2**64) or a tail of more than two words.

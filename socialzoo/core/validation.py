@@ -1,9 +1,5 @@
 """Checks of "a finite number in range" (or one of a few choices) for config dataclasses and input files,
-with one wording.
-
-Messages name the owner and the field and show the bad value, e.g.
-"ScenarioConfig.min_speed must be > 0.0, got 0.0" or "EnvConfig.max_steps must be an int >= 1, got 0".
-"""
+with one wording."""
 
 from __future__ import annotations
 
@@ -63,7 +59,9 @@ def check_number(
         `value`, unchanged.
 
     Raises:
-        ValueError (or `error`): naming owner.field, the allowed range and the bad value.
+        ValueError (or `error`): naming owner.field, the allowed range and the bad value, e.g.
+            "ScenarioConfig.min_speed must be > 0.0, got 0.0" or "EnvConfig.max_steps must be an
+            int >= 1, got 0".
     """
     if value is None and allow_none:
         return value

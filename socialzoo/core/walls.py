@@ -1,8 +1,4 @@
-"""Wall segments with a uniform-grid spatial index.
-
-Nearest-wall, crossing, footprint and ray queries look only at the walls listed for a query's grid
-cell, so their cost depends on local wall density, not on the map's total number of walls.
-"""
+"""Wall segments with a uniform-grid spatial index."""
 
 from __future__ import annotations
 
