@@ -1,12 +1,5 @@
 """Robot tasks on the batched core (socialzoo.env.tasks) and one adapter per ecosystem, generic over
-the task: Gymnasium env and VectorEnv, PettingZoo ParallelEnv, SB3 VecEnv, TorchRL EnvBase.
-
-    import gymnasium as gym, socialzoo
-    env = gym.make("socialzoo/ActionSelection-v2")
-    env = TaskEnv(task="crowdnav", variant="Square")
-
-Heavy modules load on first use, so `import socialzoo` stays quick.
-"""
+the task: Gymnasium env and VectorEnv, PettingZoo ParallelEnv, SB3 VecEnv, TorchRL EnvBase."""
 
 from __future__ import annotations
 

@@ -1,10 +1,5 @@
 """Shrinking a batched core to some of its rows while their episodes run on, so that an evaluation's
-tail (after its queue of episodes ran dry) steps only rows that still have one.
-
-A row's episode does not depend on the other rows of its batch (every kernel loops per world in
-a fixed order), so a compacted core continues each kept episode exactly as the full one would. A
-task compacts its own per-row arrays beside it (Task.compact).
-"""
+tail (after its queue of episodes ran dry) steps only rows that still have one."""
 
 from __future__ import annotations
 
@@ -25,6 +20,10 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     and the scripts' state.
     The sight-line cache starts empty: it only saves work (a full test gives the same answers).
     `core` itself is left as it was.
+
+    A row's episode does not depend on the other rows of its batch (every kernel loops per world
+    in a fixed order), so a compacted core continues each kept episode exactly as the full one
+    would. A task compacts its own per-row arrays beside it (Task.compact).
 
     Args:
         core: a core whose rows have all been reset from scenarios.

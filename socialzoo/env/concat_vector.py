@@ -1,15 +1,5 @@
 """Several batched VectorEnvs of one task side by side as one VectorEnv: rows 0..B_0-1 are the first
-env's, the next B_1 the second's, and so on. Each part keeps its own world, so the parts may play
-different maps: the suite's families, one part each, train one policy (`socialzoo train crowdnav
---families`).
-
-Every part must have the same single observation and action spaces and reset in the same step
-(AutoresetMode.SAME_STEP, as socialzoo's TaskVectorEnv does); their infos are joined key by key,
-row arrays end to end (a key a part lacks is zeros, or False for a mask, in its rows).
-
-    from socialzoo.env.concat_vector import ConcatVectorEnv
-    venv = ConcatVectorEnv([TaskVectorEnv(8, task="crowdnav", family=f, ...) for f in families])
-"""
+env's, the next B_1 the second's, and so on."""
 
 from __future__ import annotations
 
@@ -23,6 +13,12 @@ from gymnasium.vector.utils import batch_space
 
 class ConcatVectorEnv(VectorEnv):
     """The parts' rows end to end (see the module docstring).
+
+    Each part keeps its own world, so the parts may play different maps: the suite's families,
+    one part each, train one policy (`socialzoo train crowdnav --families`). Every part must have
+    the same single observation and action spaces and reset in the same step
+    (AutoresetMode.SAME_STEP, as socialzoo's TaskVectorEnv does); their infos are joined key by
+    key, row arrays end to end (a key a part lacks is zeros, or False for a mask, in its rows).
 
     Args:
         parts: the VectorEnvs, at least one.

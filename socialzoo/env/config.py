@@ -1,9 +1,4 @@
-"""Configuration of the environments: one frozen EnvConfig holds every part.
-
-Every field has the benchmark's value by default (SPEC sections 2 to 9); overrides go through
-`EnvConfig.replace`, `EnvConfig.resolve` (what every adapter does with its keyword arguments) or
-`EnvConfig.from_dict`, whose plain-JSON form is what the registry stores.
-"""
+"""Configuration of the environments: one frozen EnvConfig holds every part."""
 
 from __future__ import annotations
 
@@ -62,6 +57,10 @@ RENAMED_FIELDS: dict[str, str] = {
 @dataclass(frozen=True, kw_only=True)
 class EnvConfig:
     """Everything an environment needs.
+
+    Every field has the benchmark's value by default (SPEC sections 2 to 9); overrides go through
+    `EnvConfig.replace`, `EnvConfig.resolve` (what every adapter does with its keyword arguments)
+    or `EnvConfig.from_dict`, whose plain-JSON form is what the registry stores.
 
     Attributes:
         map: a shipped map name ("gdc1", "ghc3", "open_room", ...) or a path to a map JSON file;

@@ -1,12 +1,5 @@
 """Configuration of the CrowdNav task: a velocity-controlled robot crossing a crowd (Chen et al.
-2019, vita-epfl/CrowdNav), with CrowdNav's settings as the defaults and its usual variants.
-
-CrowdNav's env.config: time step 0.25 s, time limit 25 s, circle crossing of radius 4 m with 5
-people, square crossing 10 m wide; people ORCA with radius 0.3 m and preferred speed 1 m/s; the
-robot holonomic, radius 0.3 m, preferred speed 1 m/s, invisible to the people; reward +1 at the
-goal, -0.25 on a collision, (d - 0.2) * 0.5 * dt closer than 0.2 m; 100 validation and 500 test
-cases. Variants change one thing each (socialzoo.env.crowd_variants.VARIANTS).
-"""
+2019, vita-epfl/CrowdNav), with CrowdNav's settings as the defaults and its usual variants."""
 
 from __future__ import annotations
 

@@ -1,22 +1,4 @@
-"""The observation of the CrowdNav task: the robot-centred joint state of that line of work.
-
-CrowdNav (Chen et al. 2019, `rotate` in crowd_nav/policy/cadrl.py) turns the world into a frame
-centred on the robot with x pointing at the goal, and describes the robot by (goal distance,
-preferred speed, heading, radius, vx, vy) and each person by (px, py, vx, vy, radius, distance,
-radius sum). We keep those features and their order, with two additions that a fixed-size batch
-needs: people slots beyond a case's head count are zeros, and a mask says which slots hold a
-person. The heading is the robot's heading relative to the goal direction for a unicycle and 0
-otherwise, as in CrowdNav (a holonomic robot's heading does not matter).
-
-Two layouts of the same numbers: "dict" ({"robot": (6,), "humans": (H, 7), "mask": (H,)}) and
-"flat" (one (6 + 8 H,) vector: robot, then the people row by row, then the mask as 0/1).
-
-With signals (CrowdNavConfig.signals) each person slot also carries the gesture its person shows
-(SIGNAL_HUMAN_FEATURES: "signal", 0 none, 1 wait, 2 proceed; 0 for other robots, wall rays and
-empty slots) and the robot part the nearest door (SIGNAL_ROBOT_FEATURES: its point nearest the
-robot, x and y in the same frame, and closed 0/1; zeros without doors): "dict" {"robot": (9,),
-"humans": (H, 8), "mask": (H,)}, "flat" (9 + 9 H,) in the same order (`with_signals`).
-"""
+"""The observation of the CrowdNav task: the robot-centred joint state of that line of work."""
 
 from __future__ import annotations
 
@@ -40,6 +22,9 @@ OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
 @dataclass(frozen=True)
 class JointState:
     """The joint state of B rows, robot-centred (x towards the goal), metres and m/s.
+
+    Two layouts of the same numbers: "dict" ({"robot": (6,), "humans": (H, 7), "mask": (H,)}) and
+    "flat" (one (6 + 8 H,) vector: robot, then the people row by row, then the mask as 0/1).
 
     Attributes:
         robot: (B, 6) float32, ROBOT_FEATURES (with signals (B, 9), SIGNAL_ROBOT_FEATURES).
@@ -81,6 +66,12 @@ def flat_size(max_humans: int, signals: bool = False) -> int:
 def with_signals(state: JointState, signal: np.ndarray, door: np.ndarray) -> JointState:
     """The joint state with signals (module docstring): each slot's gesture and the nearest door.
 
+    With signals (CrowdNavConfig.signals) each person slot also carries the gesture its person
+    shows (SIGNAL_HUMAN_FEATURES: "signal", 0 none, 1 wait, 2 proceed; 0 for other robots, wall
+    rays and empty slots) and the robot part the nearest door (SIGNAL_ROBOT_FEATURES: its point
+    nearest the robot, x and y in the same frame, and closed 0/1; zeros without doors): "dict"
+    {"robot": (9,), "humans": (H, 8), "mask": (H,)}, "flat" (9 + 9 H,) in the same order.
+
     Args:
         state: the joint state of N robots with H slots.
         signal: (N, H) the gesture each slot's person shows (0 none, 1 wait, 2 proceed).
@@ -113,6 +104,14 @@ def joint_state(
     human_mask: np.ndarray,
 ) -> JointState:
     """The joint state of every row.
+
+    CrowdNav (Chen et al. 2019, `rotate` in crowd_nav/policy/cadrl.py) turns the world into a frame
+    centred on the robot with x pointing at the goal, and describes the robot by (goal distance,
+    preferred speed, heading, radius, vx, vy) and each person by (px, py, vx, vy, radius, distance,
+    radius sum). We keep those features and their order, with two additions that a fixed-size
+    batch needs: people slots beyond a case's head count are zeros, and a mask says which slots
+    hold a person. The heading is the robot's heading relative to the goal direction for a
+    unicycle and 0 otherwise, as in CrowdNav (a holonomic robot's heading does not matter).
 
     Args:
         robot_pos: (B, 2) world frame, m.

@@ -1,16 +1,5 @@
 """What a step of the CrowdNav task means: collision, goal, time limit, reward and the episode metrics
-of that line of work (CrowdNav's crowd_sim.py step() and explorer.py).
-
-A step is judged as CrowdNav judges it, in CrowdNav's order:
-1. time limit: a step that starts at time >= time_limit - 1 s ends the episode (truncated, reward 0);
-2. collision: the closest distance between the robot's and a person's boundaries while both move
-   through the step (the robot at its new velocity, the person at its velocity at the start of the
-   step: the relative segment against the origin) is below 0: terminated, `collision_penalty`;
-3. goal: the robot's position after the step is within its radius of the goal: terminated,
-   `success_reward`;
-4. discomfort: closest boundary distance d below `discomfort_dist`: (d - discomfort_dist) *
-   discomfort_penalty_factor * dt.
-"""
+of that line of work (CrowdNav's crowd_sim.py step() and explorer.py)."""
 
 from __future__ import annotations
 
@@ -150,6 +139,18 @@ def judge_step(
     dt: float,
 ) -> CrowdOutcome:
     """Judge a step in CrowdNav's order (see the module docstring).
+
+    A step is judged as CrowdNav judges it, in CrowdNav's order:
+    1. time limit: a step that starts at time >= time_limit - 1 s ends the episode (truncated,
+       reward 0);
+    2. collision: the closest distance between the robot's and a person's boundaries while both
+       move through the step (the robot at its new velocity, the person at its velocity at the
+       start of the step: the relative segment against the origin) is below 0: terminated,
+       `collision_penalty`;
+    3. goal: the robot's position after the step is within its radius of the goal: terminated,
+       `success_reward`;
+    4. discomfort: closest boundary distance d below `discomfort_dist`: (d - discomfort_dist) *
+       discomfort_penalty_factor * dt.
 
     Args:
         closest: (B,) closest boundary distance during the step (closest_boundary_distance).

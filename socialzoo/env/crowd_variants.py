@@ -1,9 +1,4 @@
-"""The registered variants of the CrowdNav task, as plain overrides of CrowdNavConfig.
-
-Free of numpy, so that the Gymnasium registration (socialzoo.env.registration) names every
-variant's id without importing the world: socialzoo/CrowdNav-v1 is CrowdNav's own task, and
-socialzoo/CrowdNav<Name>-v1 each variant below.
-"""
+"""The registered variants of the CrowdNav task, as plain overrides of CrowdNavConfig."""
 
 from __future__ import annotations
 
@@ -54,5 +49,9 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
 
 
 def crowd_env_id(variant: str) -> str:
-    """The Gymnasium id of a variant ("" for CrowdNav's own task)."""
+    """The Gymnasium id of a variant ("" for CrowdNav's own task).
+
+    socialzoo/CrowdNav-v1 is CrowdNav's own task, and socialzoo/CrowdNav<Name>-v1 each variant of
+    VARIANTS.
+    """
     return f"socialzoo/CrowdNav{variant}-v{CROWD_ENV_VERSION}"

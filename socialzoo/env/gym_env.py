@@ -1,10 +1,4 @@
-"""The Gymnasium single-agent env of any task: the batch of one of a Task (socialzoo.env.tasks).
-
-import gymnasium as gym, socialzoo
-env = gym.make("socialzoo/ActionSelection-v2")       # the Social Action Selection task
-env = gym.make("socialzoo/CrowdNav-v1")              # the CrowdNav velocity task
-env = TaskEnv(task="crowdnav", variant="Square")     # any task by name, class or "module:Class"
-"""
+"""The Gymnasium single-agent env of any task: the batch of one of a Task (socialzoo.env.tasks)."""
 
 from __future__ import annotations
 

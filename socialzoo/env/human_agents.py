@@ -1,14 +1,4 @@
-"""Observations, actions and rewards of learned humans (the optional human agents of the envs).
-
-A learned human sees, in its own frame (x axis towards its current route waypoint): that waypoint,
-its velocity and preferred speed, the nearest wall point, and its nearest neighbours (humans and
-robots) with their relative velocity. Its action is a desired velocity in [-1, 1]^2 times its
-preferred speed (and EnvConfig.human_action_scale), in the world frame or in its own frame
-(EnvConfig.human_action_frame). Its
-reward (HumanRewardConfig) adds up, per step: progress towards its waypoint, a bonus for each
-waypoint reached, a penalty for walking off its preferred speed, and penalties for contact with
-other humans, robots and walls.
-"""
+"""Observations, actions and rewards of learned humans (the optional human agents of the envs)."""
 
 from __future__ import annotations
 
@@ -175,6 +165,10 @@ def human_observations(
     state: WorldState, walls: WallIndex, humans: np.ndarray, num_neighbours: int
 ) -> np.ndarray:
     """Observations of the learned humans.
+
+    A learned human sees, in its own frame (x axis towards its current route waypoint): that
+    waypoint, its velocity and preferred speed, the nearest wall point, and its nearest neighbours
+    (humans and robots) with their relative velocity.
 
     Args:
         state: the world.

@@ -1,20 +1,4 @@
-"""Learned human policies at inference: shared-parameter walkers read from a policy file, run in numpy.
-
-A human policy maps each learned human's observation (socialzoo.env.human_agents, (..., D_h)) to
-its action, a desired velocity in [-1, 1]^2 times its preferred speed and the action scale the
-policy was trained with (EnvConfig.human_action_scale), in the frame it was trained with
-(EnvConfig.human_action_frame). Every human of a world uses the same network.
-The file is a socialzoo policy file (safetensors weights plus a JSON header, no pickled code):
-the layers of the network that gives the action's pre-tanh mean, and the observation
-normalisation it was trained with. Acting is deterministic: tanh of that mean (the mode of the
-TanhNormal the trainer samples from, before the tanh). A mirror-symmetric policy (no handedness)
-averages the network over the situation and its mirror image (socialzoo.env.human_agents.
-human_mirror_signs), as it was trained.
-
-People specs name a learned human policy as "learned:PATH" (the "learned" model of
-socialzoo.humans.models; a file written by `socialzoo train humans` or `socialzoo train cotrain`).
-It lives in env so that the env can drive learned people itself (EnvConfig.people).
-"""
+"""Learned human policies at inference: shared-parameter walkers read from a policy file, run in numpy."""
 
 from __future__ import annotations
 
@@ -43,6 +27,18 @@ ACTION_FRAMES = ("world", "human")
 
 class LearnedHumanPolicy:
     """Deterministic actions of learned humans from a multilayer perceptron.
+
+    A human policy maps each learned human's observation (socialzoo.env.human_agents, (..., D_h))
+    to its action, a desired velocity in [-1, 1]^2 times its preferred speed and the action scale
+    the policy was trained with (EnvConfig.human_action_scale), in the frame it was trained with
+    (EnvConfig.human_action_frame). Every human of a world uses the same network. The file is a
+    socialzoo policy file (safetensors weights plus a JSON header, no pickled code): the layers of
+    the network that gives the action's pre-tanh mean, and the observation normalisation it was
+    trained with. A mirror-symmetric policy (no handedness) averages the network over the
+    situation and its mirror image (socialzoo.env.human_agents.human_mirror_signs), as it was
+    trained. People specs name a learned human policy as "learned:PATH" (the "learned" model of
+    socialzoo.humans.models; a file written by `socialzoo train humans` or `socialzoo train
+    cotrain`).
 
     Args:
         weights: (W_i (out, in), b_i (out,)) per layer, torch's Linear convention; the last layer
@@ -155,7 +151,11 @@ class LearnedHumanPolicy:
         }
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """float64 actions (..., 2) in [-1, 1] for observations (..., D)."""
+        """float64 actions (..., 2) in [-1, 1] for observations (..., D).
+
+        Acting is deterministic: tanh of the network's pre-tanh mean (the mode of the TanhNormal
+        the trainer samples from, before the tanh).
+        """
         obs = np.asarray(obs)
         if obs.ndim < 1 or obs.shape[-1] != self.input_size or obs.dtype.kind not in "fiu":
             raise ValueError(

@@ -1,46 +1,5 @@
 """Per-episode metrics of B worlds, accumulated step by step (SPEC section 9, plus the usual
-social-navigation guideline metrics), with rows reset on their own as episodes end.
-
-Definitions (every distance between centres, in metres; times in seconds):
-
-- success: the goal was reached (the env decides: distance < 0.5 m) with no human collision and
-  no wall collision. The env ends an episode at the goal, a wall or the time limit, so a reached
-  goal is reached within the time limit.
-- time_to_goal: elapsed time when the goal was reached, NaN if it was not (collisions or not;
-  filter on success for the benchmark's figure).
-- distance_from_goal: final robot-goal distance. distance_travelled: sum of step displacements.
-- mean/max force and blame: over the episode's steps.
-- human_collisions: number of steps with at least one human in collision (SPEC: "counted each
-  step"); human_contacts: the sum over steps of the number of humans in collision.
-  wall_collisions: steps with the footprint touching a wall.
-- average_step_reward: total_reward / steps.
-- min_human_distance: smallest distance to any present human (visible or not); NaN with none.
-- personal_space_intrusion_time: time with the robot centre inside a human's intimate zone
-  (Hall's 0.45 m, measured from the human's body of radius 0.2 m, so a centre distance below
-  0.65 m by default). Measured from the body and not the centre because the collision distance
-  is already 0.4 m between centres, where a centre-based 0.45 m zone would only count near-hits.
-- path_irregularity: total rotation of the robot minus the rotation needed to face the goal
-  from the start, floored at 0, rad (Guzzi et al. 2013, as listed by Gao and Huang 2022 and
-  Francis et al. 2023: "the amount of rotation that is not needed to reach the goal").
-- path_length_ratio: straight-line start-goal distance / distance travelled (1 for a straight
-  drive; it may exceed 1 by up to the goal tolerance since the goal counts as reached 0.5 m
-  short); NaN when the robot did not move.
-- jerk: mean over steps of |da/dt|, a = dv/dt the linear acceleration from the speed v, with the
-  robot at rest before the first step (a = 0), m/s^3.
-- stuck: the robot went `stuck_time` (10 s) of steps without progress towards its goal while it
-  was not halting (the Halt action, or Follow and Pass without a target, pause the clock).
-  Progress is the route length left (the distance to the global plan plus the plan's length
-  from there to the goal, socialzoo.nav.navigator.Navigator.route_left; the straight distance
-  to the goal where no plan is given) coming `stuck_progress` (0.25 m) below its least value so
-  far: a robot pressed against a wall, turning on the spot or rocking in a doorway makes none,
-  one driving a long way round along its plan does. When the navigator's recovery gives the
-  robot another route, progress counts along that route from then on (the clock runs on: a
-  robot that keeps recovering without getting anywhere is stuck). max_time_without_progress:
-  the longest such stretch, s.
-- failure causes (`failure_cause`): every episode is "success" or fails for one cause, in this
-  order of precedence: "wall_collision" (it ended the episode), "human_collision", "stuck",
-  "timeout" (the time limit ended an episode in which the robot kept making progress).
-"""
+social-navigation guideline metrics), with rows reset on their own as episodes end."""
 
 from __future__ import annotations
 
@@ -174,6 +133,28 @@ class EpisodeMetrics:
     Call `reset` for rows whose episode starts, `update` once per step with the batch's
     per-step values, and `summaries` when episodes end. A row stops accumulating
     after the step flagged `done` until it is reset.
+
+    Every distance is between centres, in metres; times are in seconds. Beyond each metric's
+    description in the registry (socialzoo.core.metrics):
+
+    - success: the env ends an episode at the goal, a wall or the time limit, so a reached goal is
+      reached within the time limit.
+    - time_to_goal: NaN if the goal was not reached (collisions or not; filter on success for the
+      benchmark's figure).
+    - personal_space_intrusion_time: the intimate zone is measured from the human's body and not
+      the centre because the collision distance is already 0.4 m between centres, where a
+      centre-based 0.45 m zone would only count near-hits.
+    - path_irregularity: Guzzi et al. 2013, as listed by Gao and Huang 2022 and Francis et al.
+      2023: "the amount of rotation that is not needed to reach the goal".
+    - stuck: the Halt action, or Follow and Pass without a target, pause the clock. Progress is
+      the route length left (the distance to the global plan plus the plan's length from there to
+      the goal, socialzoo.nav.navigator.Navigator.route_left; the straight distance to the goal
+      where no plan is given) coming `stuck_progress` (0.25 m) below its least value so far: a
+      robot pressed against a wall, turning on the spot or rocking in a doorway makes none, one
+      driving a long way round along its plan does. When the navigator's recovery gives the robot
+      another route, progress counts along that route from then on (the clock runs on: a robot
+      that keeps recovering without getting anywhere is stuck). max_time_without_progress: the
+      longest such stretch, s.
 
     Args:
         batch_size: B.
@@ -380,7 +361,8 @@ def failure_cause(metrics: Mapping[str, Any]) -> str:
     "success"; else "wall_collision" (the footprint touched a wall: the episode ended there),
     "human_collision" (at least one step in collision with a human), "stuck" (see the module
     docstring), else "timeout": the time limit ended an episode in which the robot kept making
-    progress. Summaries stored before `stuck` existed count as not stuck.
+    progress. Summaries stored before `stuck` existed count as not stuck. The `stuck` rule is
+    EpisodeMetrics'.
     """
     for cause, key in zip(
         FAILURE_CAUSES, ("success", "wall_collisions", "human_collisions", "stuck"), strict=False

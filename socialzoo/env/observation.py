@@ -1,31 +1,4 @@
-"""Robot-centric observations of the Social Action Selection benchmark (SPEC section 8).
-
-Pure batched functions: which humans the robot sees (walls occlude), the paper's layout, the
-reference code's 244-number "socialgym1" layout, and their gymnasium spaces and entry names. The
-paper layout's pieces are named here once (PAPER_*, SLOT_*, `paper_slots`, `paper_slot_seen`,
-`paper_human_velocity`): policies and features read observations through them.
-
-Conventions shared by both layouts:
-
-- Robot frame: origin at the robot centre, x along its heading, y to its left (metres).
-- Human slots hold the humans the robot sees (present, line of sight clear of walls), nearest
-  first (stable order on ties: lower human index first). Slots past the last visible human are
-  all zero, so an occluded or absent human never takes a slot; when more humans are visible than
-  there are slots, the farthest are dropped.
-- A human's position is its centre minus the robot's centre, in robot axes. Its velocity is
-  relative too: the human's world velocity minus the robot's world velocity (v along the
-  heading), in robot axes. The frame's own rotation (omega x r) is not added: this is the
-  velocity difference seen from a non-rotating frame aligned with the robot.
-- The previous action is the sub-policy index (SPEC section 7) as a float; adapters pass 0
-  (GoAlone) before the first step, as the reference code did.
-
-With signals (EnvConfig.signals, off by default: the layouts above are then exactly as they are), a
-signal block follows the layout: the gesture of each human slot's person (0 none, 1 wait,
-2 proceed; socialzoo.scenarios.script; 0 for an empty slot), then the nearest door's point
-(x, y) in the robot frame and whether it is closed (0/1) (`nearest_door`; all zero without doors).
-`signal_block` reads it; `observation_size`, `observation_space` and `describe_observation` take
-`signals` and count it.
-"""
+"""Robot-centric observations of the Social Action Selection benchmark (SPEC section 8)."""
 
 from __future__ import annotations
 
@@ -278,6 +251,27 @@ def build_observation(
     theta_index: bool = False,
 ) -> np.ndarray:
     """The observation of `cfg.layout` (laid out by `_paper`, `_socialgym1`), robot frame.
+
+    Conventions shared by both layouts:
+
+    - Robot frame: origin at the robot centre, x along its heading, y to its left (metres).
+    - Human slots hold the humans the robot sees (present, line of sight clear of walls), nearest
+      first (stable order on ties: lower human index first). Slots past the last visible human are
+      all zero, so an occluded or absent human never takes a slot; when more humans are visible
+      than there are slots, the farthest are dropped.
+    - A human's position is its centre minus the robot's centre, in robot axes. Its velocity is
+      relative too: the human's world velocity minus the robot's world velocity (v along the
+      heading), in robot axes. The frame's own rotation (omega x r) is not added: this is the
+      velocity difference seen from a non-rotating frame aligned with the robot.
+    - The previous action is the sub-policy index (SPEC section 7) as a float; adapters pass 0
+      (GoAlone) before the first step, as the reference code did.
+
+    With signals (EnvConfig.signals, off by default: the layouts above are then exactly as they
+    are), a signal block follows the layout: the gesture of each human slot's person (0 none,
+    1 wait, 2 proceed; socialzoo.scenarios.script; 0 for an empty slot), then the nearest door's
+    point (x, y) in the robot frame and whether it is closed (0/1) (`nearest_door`; all zero
+    without doors). `signal_block` reads it; `observation_size`, `observation_space` and
+    `describe_observation` take `signals` and count it.
 
     Args:
         cfg: the layout and its human slots.

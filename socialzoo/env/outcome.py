@@ -1,9 +1,5 @@
 """The action-selection task's outcome of one step for each robot: reward terms, reward, goal
-reached, terminated and truncated.
-
-The task's rules in one place: ActionSelectionTask.step calls `robot_outcome` once per step, so a
-reward variant is a change here (and in the pure terms of socialzoo.env.reward).
-"""
+reached, terminated and truncated."""
 
 from __future__ import annotations
 
@@ -98,6 +94,9 @@ def robot_outcome(
     max_steps: np.ndarray | None = None,
 ) -> RobotOutcome:
     """Reward terms, reward and episode end of every robot for the step before -> after.
+
+    The task's rules in one place: ActionSelectionTask.step calls `robot_outcome` once per step,
+    so a reward variant is a change here (and in the pure terms of socialzoo.env.reward).
 
     Args:
         before: the world state before the step (B worlds, R robots, H humans).

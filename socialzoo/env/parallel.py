@@ -1,12 +1,4 @@
-"""The PettingZoo ParallelEnv of any task: R robots and, where the task has them, L learned humans.
-
-A thin adapter over a Task (socialzoo.env.tasks) with a batch of one world: agent dicts in and
-out, agents that leave when their episode ends, per-agent spaces, a global state, rendering.
-
-    env = parallel_env(map="open_room", num_robots=2, num_learned_humans=3)   # action selection
-    env = parallel_crowd_env(num_robots=3)                                     # CrowdNav
-    env = TaskParallelEnv(task="crowdnav", num_robots=2, variant="Walls")      # any task
-"""
+"""The PettingZoo ParallelEnv of any task: R robots and, where the task has them, L learned humans."""
 
 from __future__ import annotations
 

@@ -1,14 +1,5 @@
 """Policy files of the learned baselines and learned humans: weights as safetensors, plus a JSON
-header; and the numpy forward pass of the networks they hold (mlp_forward, the only one).
-
-A policy file holds plain tensors (no pickled objects, so loading never executes code from the
-file) and, in the safetensors metadata, one JSON header that says what the tensors are and what
-they were trained for: the network, the observation layout, the env id and version, the
-normalisation statistics, and how the policy was made (algorithm, command, seed, steps).
-Loading checks all of it and refuses a file made for another observation layout or env version.
-It lives in env, beside the env versions it checks, so that the env itself can run a learned
-crowd model (socialzoo.env.human_policy).
-"""
+header; and the numpy forward pass of the networks they hold (mlp_forward, the only one)."""
 
 from __future__ import annotations
 
@@ -60,6 +51,11 @@ def current_env_version() -> int:
 def save_policy_file(path: str | Path, tensors: Mapping[str, Any], header: Mapping[str, Any]) -> Path:
     """Write `tensors` (name -> array) and `header` (plain JSON) to a safetensors file.
 
+    A policy file holds plain tensors (no pickled objects, so loading never executes code from the
+    file) and, in the safetensors metadata, one JSON header that says what the tensors are and
+    what they were trained for: the network, the observation layout, the env id and version, the
+    normalisation statistics, and how the policy was made (algorithm, command, seed, steps).
+
     Args:
         path: the file to write (parent folders are created).
         tensors: numpy arrays or torch tensors; stored as contiguous numpy arrays.
@@ -98,6 +94,9 @@ def read_policy_file(
     path: str | Path, *, check_env_version: bool = True
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Read and check a policy file.
+
+    Loading checks all of the header and refuses a file made for another observation layout or
+    env version.
 
     Args:
         path: a file written by `save_policy_file`.

@@ -1,9 +1,5 @@
 """The reference code's quirks (SPEC section 11) as switches: socialzoo follows the paper by
-default, and `ReferenceQuirks.reference()` turns on what social_gym 1.0 did instead.
-
-Each switch is off by default, so a config without quirks runs exactly the documented benchmark;
-the `socialzoo/ActionSelectionReference-v2` ids (socialzoo.env.registration) turn all of them on.
-"""
+default, and `ReferenceQuirks.reference()` turns on what social_gym 1.0 did instead."""
 
 from __future__ import annotations
 
@@ -13,6 +9,10 @@ from dataclasses import dataclass, fields
 @dataclass(frozen=True, kw_only=True)
 class ReferenceQuirks:
     """What the reference implementation did where it departed from the paper.
+
+    Each switch is off by default, so a config without quirks runs exactly the documented
+    benchmark; the `socialzoo/ActionSelectionReference-v2` ids (socialzoo.env.registration) turn
+    all of them on.
 
     Attributes:
         goal_distance_x_only: the distance gained d_g measures the goal distance along the world x
@@ -81,7 +81,9 @@ class ReferenceQuirks:
         if name == ALL_QUIRKS:
             return cls.reference()
         if name not in cls.names():
-            raise ValueError(f"unknown reference quirk {name!r}; known: {', '.join((ALL_QUIRKS, *cls.names()))}")
+            raise ValueError(
+                f"unknown reference quirk {name!r}; known: {', '.join((ALL_QUIRKS, *cls.names()))}"
+            )
         return cls(**{name: True})
 
     @property

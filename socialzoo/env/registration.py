@@ -1,24 +1,5 @@
-"""Gymnasium ids of socialzoo's tasks, and the one Version History of every env.
-
-Every id is `register_task(env_id, task, **config)`: the task's TaskEnv and TaskVectorEnv, with
-registry kwargs as plain JSON values (the task's name and config overrides), so every spec
-round-trips. Changing what a seeded rollout of the action-selection ids does bumps their version
-(ENV_VERSION) and adds a line below; an old version is not registered, so gymnasium.make of it
-raises gymnasium's DeprecatedEnv naming the current id. The CrowdNav ids have their own version
-(socialzoo.env.crowd_variants.CROWD_ENV_VERSION: v1, the initial release). This history is the
-only copy: the adapters' docstrings point here.
-
-The scenario suite's ids (SUITE_IDS) play one registered scenario family with the signals in the
-observation: `gymnasium.make("socialzoo/Suite-v2", family="blind_corner")` (the action-selection
-task) and `gymnasium.make("socialzoo/CrowdNavSuite-v1", family="blind_corner")` (the CrowdNav task
-among walls). Their kwargs hold map=None, so the map is the family's whichever family a call
-names (socialzoo.env.config.EnvConfig.map, socialzoo.env.crowd_config.CrowdNavConfig.map).
-
-The reference ids (REFERENCE_IDS) are the benchmark's with every quirk of the reference code on
-(SPEC section 11, socialzoo.env.quirks.ReferenceQuirks.reference()): x-only goal distance, the
-reward "distance gained + bonus", no collision term, the person's index as the socialgym1 layout's
-theta, PPO evaluated without its normalisation. `socialzoo reproduce --reference` trains and
-evaluates the learned rows on them.
+"""Gymnasium ids of socialzoo's tasks, and the one Version History of every env (the only copy: the adapters'
+docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
     Within CrowdNav's v1, CrowdNavConfig.observed_people (the K nearest people in the observation)

@@ -1,8 +1,4 @@
-"""Rendering of a task's row: the frame renderer plus the overlay the task knows about.
-
-Kept apart from the envs so that stepping never pays for drawing; the renderer is built on the
-first render() call only.
-"""
+"""Rendering of a task's row: the frame renderer plus the overlay the task knows about."""
 
 from __future__ import annotations
 
@@ -13,6 +9,9 @@ import numpy as np
 
 class CoreRenderer:
     """Draws one row of a task's core (a map's world), for render_mode "rgb_array" or "human".
+
+    Kept apart from the envs so that stepping never pays for drawing; the renderer is built on the
+    first render() call only.
 
     Args:
         task: the task (socialzoo.env.tasks) whose core has a map.

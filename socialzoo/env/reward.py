@@ -1,7 +1,4 @@
-"""The Social Action Selection reward (SPEC section 9): progress, blame, social force, success.
-
-Pure batched functions over B worlds; the weights live in RewardConfig.
-"""
+"""The Social Action Selection reward (SPEC section 9): progress, blame, social force, success."""
 
 from __future__ import annotations
 

@@ -1,18 +1,4 @@
-"""A Stable-Baselines3 VecEnv of any task: B rows of a TaskVectorEnv in one process, no env per row.
-
-It adapts `socialzoo.env.vector.TaskVectorEnv` (same rows, same seeded episodes) to SB3's
-conventions: `step` returns (obs, rewards, dones, infos) with dones = terminated | truncated; a
-row whose episode ended is reset within the step and its info holds `terminal_observation` (the
-last observation of the ended episode), `TimeLimit.truncated` (True when the time limit, not the
-task's own end, ended it) and `metrics` (the episode's metrics). SB3 algorithms, VecNormalize and
-VecMonitor work on it unchanged:
-
-    from stable_baselines3 import PPO
-    from socialzoo.env.sb3_vec import SB3VecEnv
-    venv = SB3VecEnv(64, map="gdc1")                      # the action-selection task
-    venv = SB3VecEnv(64, task="crowdnav", variant="20")   # any task
-    PPO("MlpPolicy", venv, n_steps=32).learn(100_000)
-"""
+"""A Stable-Baselines3 VecEnv of any task: B rows of a TaskVectorEnv in one process, no env per row."""
 
 from __future__ import annotations
 
@@ -29,6 +15,13 @@ from socialzoo.env.vector import TaskVectorEnv
 
 class SB3VecEnv(VecEnv):
     """num_envs rows of a one-robot task as one SB3 VecEnv (see the module docstring).
+
+    It adapts `socialzoo.env.vector.TaskVectorEnv` (same rows, same seeded episodes) to SB3's
+    conventions: `step` returns (obs, rewards, dones, infos) with dones = terminated | truncated; a
+    row whose episode ended is reset within the step and its info holds `terminal_observation`
+    (the last observation of the ended episode), `TimeLimit.truncated` (True when the time limit,
+    not the task's own end, ended it) and `metrics` (the episode's metrics). SB3 algorithms,
+    VecNormalize and VecMonitor work on it unchanged.
 
     Row 0 of a VecEnv seeded with s plays the same episodes as the task's single env reset with
     seed s and then without a seed; row i plays those of row i of a TaskVectorEnv seeded with s,

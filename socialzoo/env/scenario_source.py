@@ -1,9 +1,4 @@
-"""Where an environment's episodes come from: seeded scenario streams, one per batch row.
-
-Each row draws scenario seeds from its own numpy Generator (seeded at reset) and runs each scenario
-`repeats` times (SPEC section 5, N_r) before drawing the next, so a row's episodes are the same
-whatever the batch size.
-"""
+"""Where an environment's episodes come from: seeded scenario streams, one per batch row."""
 
 from __future__ import annotations
 
@@ -126,6 +121,10 @@ def _spot_near_poses(
 
 class ScenarioStream:
     """Seeded scenarios for every row of a batch.
+
+    Each row draws scenario seeds from its own numpy Generator (seeded at reset) and runs each
+    scenario `repeats` times (SPEC section 5, N_r) before drawing the next, so a row's episodes are
+    the same whatever the batch size.
 
     Args:
         m: the map.

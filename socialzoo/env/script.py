@@ -1,19 +1,5 @@
-"""The world's side of scenario scripts (socialzoo.scenarios.script): people who wait at a point
-until a time or a robot's passing and signal meanwhile, people who walk after a robot, robots that
-escort a person, and doors that open and close on a schedule.
-
-The core (socialzoo.env.core.BatchedCore) asks `ScriptRunner` for the preferred speeds of a step
-(`speeds`), lets the world step, then `settle`s the step: waiting people keep heading for their
-stop point, releases and signals are updated, and a robot touching a closed door collides.
-Rows without a script cost nothing; with no script in the batch nothing here runs, so unscripted
-episodes are the world's exact steps.
-
-A waiting person slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled by
-the distance left) and stands within STOP_RADIUS of it (socialzoo.scenarios.script's constants); a
-person following a robot slows the same way within SLOW_DISTANCE of its gap and stands inside the
-gap. People's speed is capped at their preferred speed (socialzoo.humans.motion), so a standing
-person is not pushed about.
-"""
+"""The world's side of scenario scripts (socialzoo.scenarios.script): waiting and signalling people, people who
+follow a robot, robots that escort a person, and doors."""
 
 from __future__ import annotations
 
@@ -40,6 +26,21 @@ _EMPTY = (
 
 class ScriptRunner:
     """The scripts of B rows of R robots and H person slots (see the module docstring).
+
+    People who wait at a point until a time or a robot's passing and signal meanwhile, people who
+    walk after a robot, robots that escort a person, and doors that open and close on a schedule.
+
+    The core (socialzoo.env.core.BatchedCore) asks `ScriptRunner` for the preferred speeds of a
+    step (`speeds`), lets the world step, then `settle`s the step: waiting people keep heading for
+    their stop point, releases and signals are updated, and a robot touching a closed door
+    collides. Rows without a script cost nothing; with no script in the batch nothing here runs,
+    so unscripted episodes are the world's exact steps.
+
+    A waiting person slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled
+    by the distance left) and stands within STOP_RADIUS of it (socialzoo.scenarios.script's
+    constants); a person following a robot slows the same way within SLOW_DISTANCE of its gap and
+    stands inside the gap. People's speed is capped at their preferred speed
+    (socialzoo.humans.motion), so a standing person is not pushed about.
 
     Args:
         batch_size: B.

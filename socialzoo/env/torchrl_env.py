@@ -1,46 +1,4 @@
-"""A native TorchRL multi-agent environment: B worlds of the batched core stepped as one EnvBase.
-
-SocialNavTorchEnv steps a task directly (no PettingZoo, no per-agent Python loop), with
-batch_size [B] and the agents stacked in two groups by their name prefix, as TorchRL's
-PettingZooWrapper groups the ParallelEnv's "robot_i" and "human_j":
-
-    ("robot", "observation")  (B, R, D) float32      ("human", "observation")  (B, L, D_h) float32
-    ("robot", "action")       (B, R) int64 sub-policy, or (B, R, 2) velocity in [-1, 1]
-    ("human", "action")       (B, L, 2) desired velocity in [-1, 1] (x preferred speed)
-    ("robot", "reward")       (B, R, 1)              ("human", "reward")       (B, L, 1)
-    (group, "done" | "terminated" | "truncated")  (B, n, 1) bool
-    (group, "mask")           (B, n) bool: the agent acts (alive; for humans also present)
-    (group, "info", key)      (B, n) float32 per-step info
-    "state"                   (B, 8 R + 5 H) float32 global state (SocialNavParallelEnv.state)
-    "done", "terminated", "truncated"  (B, 1) bool: the row's episode ended
-
-The transitions are those of `PettingZooWrapper(SocialNavParallelEnv(...), use_mask=True,
-return_state=True, done_on_any=False)` for the same seed (tests/env/test_torchrl_env.py checks
-it), with one deliberate difference: ("human", "mask") is False for empty human slots (the
-wrapper keeps them as live agents with zero observations), so learners can leave them out.
-
-TorchRL conventions followed:
-- Agents that left: a robot leaves on the step it terminates (goal, wall) or is truncated (time
-  limit); afterwards its observation and reward are zeros, its mask False and its done,
-  terminated and truncated flags all True, as the PettingZooWrapper reports a dead agent.
-  Learned humans never terminate; they are truncated at the time limit and on the step the
-  last robot of their world leaves. The root flags are the `all` of every agent's flags
-  (done_on_any=False): a row is done when its episode ended.
-- Partial resets: `reset` reads the root "_reset" entry (B, 1) that TorchRL's collectors and
-  `rollout(break_when_any_done=False)` / `step_and_maybe_reset` write for done rows, and starts a
-  new episode in those rows only, from each row's own seeded scenario stream; the other rows go
-  on untouched. So finished rows are reset automatically by TorchRL's machinery, while the
-  ("next", ...) entries of a done step keep the last observation of the finished episode.
-  Group-level "_reset" entries are ignored (a world resets as a whole). Without any "_reset",
-  every row is reset.
-- Seeding: `set_seed(s)` seeds the scenario streams: row 0 of any batch plays the episodes of
-  a SocialNavParallelEnv reset with seed s, row i those of SeedSequence(s).spawn(B)[i].
-- A row whose episode ended and was not reset keeps stepping with every agent dead.
-
-The robot group may instead be driven inside the env by `robot_policy` (anything with the
-Policy protocol's `act(obs, task)`, e.g. socialzoo.agents.make_policy("ref")); the robots then have
-no action entry but still report observations, rewards and flags.
-"""
+"""A native TorchRL multi-agent environment: B worlds of the batched core stepped as one EnvBase."""
 
 from __future__ import annotations
 
@@ -92,6 +50,46 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
     ## Episode End
     (group, "done" | "terminated" | "truncated") (B, n, 1) per agent; the row's "done" (B, 1)
     when its last robot has left (goal, wall or time limit).
+
+    ## Keys and TorchRL Conventions
+    The task is stepped directly (no PettingZoo, no per-agent Python loop), with batch_size [B]
+    and the agents stacked in two groups by their name prefix, as TorchRL's PettingZooWrapper
+    groups the ParallelEnv's "robot_i" and "human_j":
+
+        ("robot", "observation")  (B, R, D) float32      ("human", "observation")  (B, L, D_h) float32
+        ("robot", "action")       (B, R) int64 sub-policy, or (B, R, 2) velocity in [-1, 1]
+        ("human", "action")       (B, L, 2) desired velocity in [-1, 1] (x preferred speed)
+        ("robot", "reward")       (B, R, 1)              ("human", "reward")       (B, L, 1)
+        (group, "done" | "terminated" | "truncated")  (B, n, 1) bool
+        (group, "mask")           (B, n) bool: the agent acts (alive; for humans also present)
+        (group, "info", key)      (B, n) float32 per-step info
+        "state"                   (B, 8 R + 5 H) float32 global state (SocialNavParallelEnv.state)
+        "done", "terminated", "truncated"  (B, 1) bool: the row's episode ended
+
+    The transitions are those of `PettingZooWrapper(SocialNavParallelEnv(...), use_mask=True,
+    return_state=True, done_on_any=False)` for the same seed (tests/env/test_torchrl_env.py checks
+    it), with one deliberate difference: ("human", "mask") is False for empty human slots (the
+    wrapper keeps them as live agents with zero observations), so learners can leave them out.
+
+    - Agents that left: a robot leaves on the step it terminates (goal, wall) or is truncated
+      (time limit); afterwards its observation and reward are zeros, its mask False and its done,
+      terminated and truncated flags all True, as the PettingZooWrapper reports a dead agent.
+      Learned humans never terminate; they are truncated at the time limit and on the step the
+      last robot of their world leaves. The root flags are the `all` of every agent's flags
+      (done_on_any=False): a row is done when its episode ended.
+    - Partial resets: `reset` reads the root "_reset" entry (B, 1) that TorchRL's collectors and
+      `rollout(break_when_any_done=False)` / `step_and_maybe_reset` write for done rows, and
+      starts a new episode in those rows only, from each row's own seeded scenario stream; the
+      other rows go on untouched. So finished rows are reset automatically by TorchRL's
+      machinery, while the ("next", ...) entries of a done step keep the last observation of the
+      finished episode. Group-level "_reset" entries are ignored (a world resets as a whole).
+      Without any "_reset", every row is reset.
+    - Seeding: `set_seed(s)` seeds the scenario streams: row 0 of any batch plays the episodes of
+      a SocialNavParallelEnv reset with seed s, row i those of SeedSequence(s).spawn(B)[i].
+    - A row whose episode ended and was not reset keeps stepping with every agent dead.
+    - `robot_policy` (anything with the Policy protocol's `act(obs, task)`, e.g.
+      socialzoo.agents.make_policy("ref")): the robots then have no action entry but still report
+      observations, rewards and flags.
 
     ## Arguments
     Args:

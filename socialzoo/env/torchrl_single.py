@@ -1,16 +1,4 @@
-"""The TorchRL env of any one-robot task: B rows of a Task as one batched EnvBase.
-
-TorchRL's own conventions: a (B,) batch, "observation" (B, D) float32, "action" (one-hot (B, n) or
-integer indices (B,) for a discrete task with categorical_action_encoding=True; (B, ...) floats
-for a Box), ("next", "reward") (B, 1) float32, done / terminated / truncated kept apart, a
-"success" flag on the last step of a successful episode, and partial resets through the "_reset"
-mask (no autoreset inside a step, so ("next", "observation") is always the true last observation
-of an episode). Row i plays the same episodes as row i of the task's TaskVectorEnv seeded alike.
-Observations are copied into their tensors (the core rewrites reset rows of its arrays in place).
-The multi-agent view (robots and learned humans in groups) is socialzoo.env.torchrl_env.
-
-Imported lazily: TorchRL and torch are optional dependencies (the "train" extra).
-"""
+"""The TorchRL env of any one-robot task: B rows of a Task as one batched EnvBase."""
 
 from __future__ import annotations
 
@@ -29,6 +17,16 @@ from socialzoo.env.tasks.base import batch_actions
 
 class TaskTorchEnv(TaskAdapter, EnvBase):
     """B rows of a one-robot task as a batched TorchRL EnvBase (see the module docstring).
+
+    TorchRL's own conventions: a (B,) batch, "observation" (B, D) float32, "action" (one-hot
+    (B, n) or integer indices (B,) for a discrete task with categorical_action_encoding=True;
+    (B, ...) floats for a Box), ("next", "reward") (B, 1) float32, done / terminated / truncated
+    kept apart, a "success" flag on the last step of a successful episode, and partial resets
+    through the "_reset" mask (no autoreset inside a step, so ("next", "observation") is always the
+    true last observation of an episode). Row i plays the same episodes as row i of the task's
+    TaskVectorEnv seeded alike. Observations are copied into their tensors (the core rewrites
+    reset rows of its arrays in place). The multi-agent view (robots and learned humans in groups)
+    is socialzoo.env.torchrl_env.
 
     Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does.
 

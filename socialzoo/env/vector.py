@@ -1,13 +1,4 @@
-"""The Gymnasium VectorEnv of any task: B rows of a Task stepped by one process, no env per row.
-
-Rows that end an episode are reset within the same step (AutoresetMode.SAME_STEP): the returned
-observation starts the new episode, and `info["final_obs"]` and `info["final_info"]["metrics"]` hold
-the last observation and the episode metrics of the one that ended (zeros in the other rows; masks
-"_final_obs", "_final_info", "_metrics"). Row i of a VectorEnv seeded with s plays the same
-episodes whatever the number of envs (row 0 matches a single env seeded with s).
-
-    venv = gym.make_vec("socialzoo/ActionSelection-v2", num_envs=256, vectorization_mode="vector_entry_point")
-"""
+"""The Gymnasium VectorEnv of any task: B rows of a Task stepped by one process, no env per row."""
 
 from __future__ import annotations
 
@@ -23,6 +14,13 @@ from socialzoo.env.tasks.base import batch_actions
 
 class TaskVectorEnv(TaskAdapter, VectorEnv):
     """num_envs rows of a one-robot task in one batched world (see the module docstring).
+
+    Rows that end an episode are reset within the same step (AutoresetMode.SAME_STEP): the
+    returned observation starts the new episode, and `info["final_obs"]` and
+    `info["final_info"]["metrics"]` hold the last observation and the episode metrics of the one
+    that ended (zeros in the other rows; masks "_final_obs", "_final_info", "_metrics"). Row i of
+    a VectorEnv seeded with s plays the same episodes whatever the number of envs (row 0 matches a
+    single env seeded with s).
 
     ## Action Space
     The task's action space batched: `MultiDiscrete` or `Box((B, ...))`.

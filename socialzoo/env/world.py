@@ -1,9 +1,4 @@
-"""The world step: robots and humans of B worlds advance one dt together.
-
-This is the one copy of the dynamics. Every adapter (ParallelEnv, the single-agent benchmark,
-vector envs, the evaluation runner) calls `step_world`. It joins the robot kinematics (core) and
-the human model (humans), so it lives above both, in env.
-"""
+"""The world step: robots and humans of B worlds advance one dt together."""
 
 from __future__ import annotations
 
@@ -87,6 +82,9 @@ def step_world(
     sparse_people: bool = False,
 ) -> tuple[WorldState, StepEvents]:
     """Advance every world by one step of cfg.dt.
+
+    This is the one copy of the dynamics. Every adapter (ParallelEnv, the single-agent benchmark,
+    vector envs, the evaluation runner) calls `step_world`.
 
     Humans react to the robots' positions and velocities at the start of the step.
 

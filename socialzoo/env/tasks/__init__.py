@@ -1,11 +1,4 @@
-"""Robot tasks on the batched core, by name: each task is one class (socialzoo.env.tasks.base.Task).
-
-    from socialzoo.env.tasks import make_task
-    task = make_task("crowdnav", batch_size=8, variant="Square")
-
-A task is named by its registry name ("action_selection", "crowdnav"), by a "module:Class" path
-(how a registered Gymnasium id names a task defined outside the package), or given as its class.
-"""
+"""Robot tasks on the batched core, by name: each task is one class (socialzoo.env.tasks.base.Task)."""
 
 from __future__ import annotations
 
@@ -24,6 +17,9 @@ TASKS: dict[str, str] = {
 
 def task_class(task: str | type[Task]) -> type[Task]:
     """The Task class of a registry name, a "module:Class" path, or a class.
+
+    A "module:Class" path is how a registered Gymnasium id names a task defined outside the
+    package.
 
     Raises:
         ValueError: an unknown name or a path that names no Task class.

@@ -1,19 +1,4 @@
-"""The Social Action Selection task (SocialGym benchmark, SPEC sections 2 to 9) on the batched core.
-
-R differential-drive robots cross a building among 5 to 25 people and pick, every 0.025 s step, one
-of four sub-policies that drive them (GoAlone, Halt, Follow, Pass), or with
-robot_action="velocity" their (v, omega) directly. The core (socialzoo.env.core.BatchedCore) steps
-the world, the people, the navigator (with recovery) and the robots' sight; the task turns each
-action into the robot's command (socialzoo.nav.subpolicies, the navigator's back-off for a
-recovering robot), builds the observation (socialzoo.env.observation), judges the step
-(socialzoo.env.outcome: reward, goal, episode end) and keeps the episode metrics
-(socialzoo.env.metrics, and the people's, socialzoo.env.people). The episodes come from the map's
-seeded scenario stream (socialzoo.env.scenario_source), or a scenario family's (EnvConfig.family);
-with EnvConfig.signals the observation also carries what the scenario's script shows (each human
-slot's gesture and the nearest door, socialzoo.env.observation's signal block). Learned-human agents
-(EnvConfig.num_learned_humans) are human slots a learner drives, for the multi-agent adapters
-(socialzoo.env.human_agents).
-"""
+"""The Social Action Selection task (SocialGym benchmark, SPEC sections 2 to 9) on the batched core."""
 
 from __future__ import annotations
 
@@ -89,6 +74,20 @@ class StepResult(RobotOutcome):
 
 class ActionSelectionTask(Task):
     """Social Action Selection over B worlds (see the module docstring).
+
+    R differential-drive robots cross a building among 5 to 25 people and pick, every 0.025 s step,
+    one of four sub-policies that drive them (GoAlone, Halt, Follow, Pass), or with
+    robot_action="velocity" their (v, omega) directly. The core (socialzoo.env.core.BatchedCore)
+    steps the world, the people, the navigator (with recovery) and the robots' sight; the task
+    turns each action into the robot's command (socialzoo.nav.subpolicies, the navigator's back-off
+    for a recovering robot), builds the observation (socialzoo.env.observation), judges the step
+    (socialzoo.env.outcome: reward, goal, episode end) and keeps the episode metrics
+    (socialzoo.env.metrics, and the people's, socialzoo.env.people). The episodes come from the
+    map's seeded scenario stream (socialzoo.env.scenario_source), or a scenario family's
+    (EnvConfig.family); with EnvConfig.signals the observation also carries what the scenario's
+    script shows (each human slot's gesture and the nearest door, socialzoo.env.observation's
+    signal block). Learned-human agents (EnvConfig.num_learned_humans) are human slots a learner
+    drives, for the multi-agent adapters (socialzoo.env.human_agents).
 
     Args:
         config: an EnvConfig (default: the benchmark on gdc1).

@@ -1,13 +1,4 @@
-"""The task interface: what makes one robot task differ from another, over B worlds of R robots.
-
-A task owns its config, its action space and how an action becomes the robot's command, the
-observation, the reward and the episode's end (terminated, truncated, per-episode metrics), and
-where its episodes come from (a seeded training stream per row, fixed validation and test cases).
-Every adapter (socialzoo.env.gym_env, vector, parallel, sb3_vec) steps a Task and nothing else,
-so a new task is one class in one file plus one registration line (docs/architecture.md).
-
-Arrays are batched: (B, R) per robot, (B, L) per learned-human agent, rows independent.
-"""
+"""The task interface: what makes one robot task differ from another, over B worlds of R robots."""
 
 from __future__ import annotations
 
@@ -47,6 +38,8 @@ class TaskStep:
 
 class Task(ABC):
     """A robot task over B worlds with R robots each (see the module docstring).
+
+    Arrays are batched: (B, R) per robot, (B, L) per learned-human agent, rows independent.
 
     Subclasses set `name`, build their config from `config` and plain-value `overrides` (what a
     registered id's kwargs hold), and set `config`, `batch_size`, `num_robots`,
