@@ -12,7 +12,7 @@ from gymnasium.vector.utils import batch_space
 
 
 class ConcatVectorEnv(VectorEnv):
-    """The parts' rows end to end (see the module docstring).
+    """The parts' rows end to end (below).
 
     Each part keeps its own world, so the parts may play different maps: the suite's families,
     one part each, train one policy (`socialzoo train crowdnav --families`). Every part must have

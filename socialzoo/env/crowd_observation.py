@@ -64,7 +64,7 @@ def flat_size(max_humans: int, signals: bool = False) -> int:
 
 
 def with_signals(state: JointState, signal: np.ndarray, door: np.ndarray) -> JointState:
-    """The joint state with signals (module docstring): each slot's gesture and the nearest door.
+    """The joint state with signals: each slot's gesture and the nearest door.
 
     With signals (CrowdNavConfig.signals) each person slot also carries the gesture its person
     shows (SIGNAL_HUMAN_FEATURES: "signal", 0 none, 1 wait, 2 proceed; 0 for other robots, wall

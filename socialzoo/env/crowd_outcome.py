@@ -138,7 +138,7 @@ def judge_step(
     cfg: CrowdRewardConfig,
     dt: float,
 ) -> CrowdOutcome:
-    """Judge a step in CrowdNav's order (see the module docstring).
+    """Judge a step in CrowdNav's order (below).
 
     A step is judged as CrowdNav judges it, in CrowdNav's order:
     1. time limit: a step that starts at time >= time_limit - 1 s ends the episode (truncated,

@@ -37,7 +37,7 @@ PAPER_SLOT_SIZE = 4
 SLOT_POS = slice(0, 2)
 """The human's centre minus the robot's, robot axes, m."""
 SLOT_VEL = slice(2, 4)
-"""The human's world velocity minus the robot's, robot axes, m/s (module docstring)."""
+"""The human's world velocity minus the robot's, robot axes, m/s (build_observation)."""
 SLOT_X, SLOT_Y, SLOT_VX, SLOT_VY = 0, 1, 2, 3
 # The reference layout: 40 poses (x, y, theta), 40 velocities (vx, vy, omega), local target
 # (x, y, 0), previous action.
@@ -156,7 +156,7 @@ def _paper(
     Layout (K = num_slots; the named pieces PAPER_* and SLOT_* of this module): [0:2] goal
     (x, y), m; [2:4] local target, m; [4:6] robot (v, omega), m/s and rad/s; [6] previous action
     index; then K slots [7 + 4i : 11 + 4i] of (x, y, vx, vy) of the i-th nearest visible human
-    relative to the robot (module docstring).
+    relative to the robot (build_observation).
     """
     out = np.zeros((len(points_r), PAPER_HEADER_SIZE + PAPER_SLOT_SIZE * num_slots), dtype=np.float32)
     out[:, PAPER_GOAL] = points_r[:, 0]
@@ -283,7 +283,7 @@ def build_observation(
         human_pos: (B, H, 2) m, world frame.
         human_vel: (B, H, 2) m/s, world frame.
         visible: (B, H) bool, from socialzoo.nav.visibility.visible_humans.
-        signals: the signal block that follows (module docstring): each slot's person's gesture,
+        signals: the signal block that follows (build_observation): each slot's person's gesture,
             then the nearest door.
         theta_index: the socialgym1 layout's theta holds each person's index (the reference
             code's quirk, socialzoo.env.quirks); the paper layout has no theta and ignores it.

@@ -14,7 +14,7 @@ from socialzoo.env.vector import TaskVectorEnv
 
 
 class SB3VecEnv(VecEnv):
-    """num_envs rows of a one-robot task as one SB3 VecEnv (see the module docstring).
+    """num_envs rows of a one-robot task as one SB3 VecEnv (below).
 
     It adapts `socialzoo.env.vector.TaskVectorEnv` (same rows, same seeded episodes) to SB3's
     conventions: `step` returns (obs, rewards, dones, infos) with dones = terminated | truncated; a

@@ -25,7 +25,7 @@ _EMPTY = (
 
 
 class ScriptRunner:
-    """The scripts of B rows of R robots and H person slots (see the module docstring).
+    """The scripts of B rows of R robots and H person slots (below).
 
     People who wait at a point until a time or a robot's passing and signal meanwhile, people who
     walk after a robot, robots that escort a person, and doors that open and close on a schedule.

@@ -27,7 +27,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
 
     ## Description
     The multi-agent view of B worlds, with the agents stacked in the groups "robot" and "human"
-    (the module docstring lists every key); the same transitions as TorchRL's PettingZooWrapper
+    ("Keys and TorchRL Conventions" below lists every key); the same transitions as TorchRL's PettingZooWrapper
     over `SocialNavParallelEnv`, without a per-agent Python loop.
 
     ## Action Space

@@ -16,7 +16,7 @@ from socialzoo.env.tasks.base import batch_actions
 
 
 class TaskTorchEnv(TaskAdapter, EnvBase):
-    """B rows of a one-robot task as a batched TorchRL EnvBase (see the module docstring).
+    """B rows of a one-robot task as a batched TorchRL EnvBase (below).
 
     TorchRL's own conventions: a (B,) batch, "observation" (B, D) float32, "action" (one-hot
     (B, n) or integer indices (B,) for a discrete task with categorical_action_encoding=True;

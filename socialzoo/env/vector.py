@@ -13,7 +13,7 @@ from socialzoo.env.tasks.base import batch_actions
 
 
 class TaskVectorEnv(TaskAdapter, VectorEnv):
-    """num_envs rows of a one-robot task in one batched world (see the module docstring).
+    """num_envs rows of a one-robot task in one batched world (below).
 
     Rows that end an episode are reset within the same step (AutoresetMode.SAME_STEP): the
     returned observation starts the new episode, and `info["final_obs"]` and

@@ -73,7 +73,7 @@ class StepResult(RobotOutcome):
 
 
 class ActionSelectionTask(Task):
-    """Social Action Selection over B worlds (see the module docstring).
+    """Social Action Selection over B worlds (below).
 
     R differential-drive robots cross a building among 5 to 25 people and pick, every 0.025 s step,
     one of four sub-policies that drive them (GoAlone, Halt, Follow, Pass), or with

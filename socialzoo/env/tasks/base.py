@@ -37,7 +37,7 @@ class TaskStep:
 
 
 class Task(ABC):
-    """A robot task over B worlds with R robots each (see the module docstring).
+    """A robot task over B worlds with R robots each (below).
 
     Arrays are batched: (B, R) per robot, (B, L) per learned-human agent, rows independent.
 
