@@ -1,7 +1,5 @@
-"""The batched world state: a dataclass of numpy arrays with a leading batch axis B.
-
-A single env is the batch of size 1. Absent humans (scenarios have 5 to 25) are masked out.
-"""
+"""The batched world state: a dataclass of numpy arrays with a leading batch axis B (a single env is the batch
+of size 1; absent humans are masked out)."""
 
 from __future__ import annotations
 

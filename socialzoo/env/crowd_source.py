@@ -1,18 +1,5 @@
-"""Where the CrowdNav task's episodes come from: a seeded training stream per batch row, or the fixed
-validation and test cases.
-
-Arena cases come from the task's CrowdNav scenario family (socialzoo.scenarios.crowd_cases.crowd_family:
-crowdnav_circle_crossing or crowdnav_square_crossing, for the task's CrowdCaseConfig), training
-cases from its training split (case seeds from 2000 up):
-row i of a batch reset with seed s draws its case seeds from its own Generator (row 0 from s
-itself, so a single env seeded with s plays row 0's episodes), never a validation or test case.
-On a building map (crowd navigation among walls) the cases are the benchmark's scenarios of that
-map, drawn by the benchmark's training stream (socialzoo.env.scenario_source); with a scenario
-family (CrowdNavConfig.family) that family's scenarios, drawn by the same stream (which skips the
-family's validation and test seeds), and its fixed cases from the family's own splits. A family
-in the open (map "arena": a recorded scene, socialzoo.scenarios.recorded) draws its training seeds
-like the arena's cases, from its training split's first seed up.
-"""
+"""Where the CrowdNav task's episodes come from: a seeded training stream per batch row, or the fixed validation and
+test cases (docs/crowdnav.md)."""
 
 from __future__ import annotations
 
@@ -33,6 +20,17 @@ _SEED_LIMIT = 2**32
 
 class CrowdCaseSource:
     """Cases for the rows of a batch.
+
+    Arena cases come from the task's CrowdNav scenario family (socialzoo.scenarios.crowd_cases.crowd_family:
+    crowdnav_circle_crossing or crowdnav_square_crossing, for the task's CrowdCaseConfig), training cases
+    from its training split (case seeds from 2000 up): row i of a batch reset with seed s draws its case
+    seeds from its own Generator (row 0 from s itself, so a single env seeded with s plays row 0's
+    episodes), never a validation or test case. On a building map the cases are the benchmark's
+    scenarios of that map, drawn by the benchmark's training stream (socialzoo.env.scenario_source);
+    with a scenario family (CrowdNavConfig.family) that family's scenarios, drawn by the same stream
+    (which skips the family's validation and test seeds), and its fixed cases from the family's own
+    splits. A family in the open (a recorded scene) draws its training seeds like the arena's cases,
+    from its training split's first seed up.
 
     Args:
         config: the task (its case settings and map).

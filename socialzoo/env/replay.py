@@ -1,34 +1,5 @@
-"""The world's side of recorded people (Scenario.recorded, socialzoo.scenarios.recorded): people who
-walk their recorded tracks, enter and leave when they did, and, in a hybrid crowd, react to a robot.
-
-Time t of a row is its world steps times the world's dt; on a track of frame period dt_r a person is
-at frame f = t / dt_r, its position interpolated linearly between the frames around f and its
-velocity that segment's (so positions and velocities agree), present while both frames are
-recorded (or f is on a recorded frame). Who follows a track (WorldState.human_model REPLAY) and who
-a model walks is the people spec's (socialzoo.humans.models):
-
-- "replay": every person follows its track, whatever the robot does.
-- "hybrid:MODEL": a person follows its track until a robot's centre comes within
-  PeopleConfig.react_radius of it, or the two would meet (centres within the world's collision
-  distance) within PeopleConfig.react_time keeping their velocities; from then on MODEL walks it
-  along the rest of its recorded route (the route point after its current frame on) at its
-  recorded mean speed, and it leaves the scene where the route ends. The rule has no randomness.
-- any other model: the person enters at its first recorded frame and position and MODEL walks it
-  along its route; it leaves where the route ends.
-
-A person slot may hold several people one after another (socialzoo.scenarios.recorded_people.
-Occupants): each takes the slot at its entry frame with the slot's way of walking, and a model
-walks it along its own part of the slot's route; a person a model still walks when the slot's next
-person enters leaves there. People marked `follow` in the scenario follow their tracks in every
-case. Each step the runner writes the followers' positions, velocities and presence after the
-world step (the models' computations for them are discarded), switches reacting people, and lets
-people leave.
-
-It also measures the episode against the recording: the robot against the person it replaced
-(its time over the person's, its mean distance to the person's path), the reacting people against
-their tracks (time lost and extra distance), and contacts that people walked into. Rows without a
-recording cost nothing, and with none in the batch nothing here runs.
-"""
+"""The world's side of recorded people (Scenario.recorded): people who walk their recorded tracks, enter and leave
+when they did, react to a robot in a hybrid crowd, and the measures against the recording (docs/recorded.md)."""
 
 from __future__ import annotations
 
@@ -65,7 +36,19 @@ class RecordingError(ValueError):
 
 
 class ReplayRunner:
-    """The recorded people of B rows of R robots and H person slots (see the module docstring).
+    """The recorded people of B rows of R robots and H person slots.
+
+    Time t of a row is its world steps times the world's dt; on a track of frame period dt_r a person is
+    at frame f = t / dt_r, its position interpolated linearly between the frames around f and its
+    velocity that segment's (so positions and velocities agree), present while both frames are
+    recorded (or f is on a recorded frame). Who follows a track (WorldState.human_model REPLAY) and who
+    a model walks is the people spec's (socialzoo.humans.models; the rules of replay, hybrid and the
+    other models: docs/recorded.md). A person slot may hold several people one after another
+    (socialzoo.scenarios.recorded_people.Occupants): each takes the slot at its entry frame, and a
+    person a model still walks when the slot's next person enters leaves there. Each step the runner
+    writes the followers' positions, velocities and presence after the world step (the models'
+    computations for them are discarded), switches reacting people, and lets people leave. Rows
+    without a recording cost nothing, and with none in the batch nothing here runs.
 
     Args:
         config: the people spec and the hybrid people's reaction rule.
@@ -303,7 +286,7 @@ class ReplayRunner:
         )  # fmt: skip
 
     def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
-        """Hybrid people a robot came near leave their tracks (see the module docstring); frame:
+        """Hybrid people a robot came near leave their tracks (docs/recorded.md gives the rule); frame:
         (len(rows),) the frame each row is on."""
         if state.num_robots == 0:
             return

@@ -1,12 +1,9 @@
-"""The compiled loops of socialzoo.env.replay.ReplayRunner: loading a recording into a row, who is
-in each slot, people entering their slots, placing the recorded people, hybrid people reacting, and
-the measures against the recording.
+"""The compiled loops of socialzoo.env.replay.ReplayRunner: loading a recording into a row, who is in each slot,
+people entering, placing and reacting, and the measures against the recording."""
 
-Each loops over the rows' slots in compiled code and computes every value as the numpy
-expressions it replaced did (same operations in the same order, fastmath off), so rollouts are
-the same bit for bit; a step of a sparse recorded scene was mostly those expressions' temporaries
-over every slot and every point of the robot's recorded path (benchmarks/recorded_throughput.py).
-"""
+# Each loops over the rows' slots in compiled code and computes every value as the numpy expressions it replaced
+# did (same operations in the same order, fastmath off), so rollouts are the same bit for bit; a step of a sparse
+# recorded scene was mostly those expressions' temporaries (benchmarks/recorded_throughput.py).
 
 from __future__ import annotations
 

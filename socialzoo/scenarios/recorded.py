@@ -1,23 +1,5 @@
-"""Recorded people in scenarios: a recorded scene's episodes, in which the robot takes one recorded
-person's place and everyone else walks as recorded (socialzoo.data reads the recordings).
-
-An episode of a scene starts when the replaced person enters. The robot starts where that person
-entered, heading along its first metre, and its goal is where the person left; its time budget is
-TIME_FACTOR times the person's recorded time or its path at REFERENCE_SPEED (1 m/s), whichever is
-longer, at least MIN_TIME_LIMIT. Everyone else seen during
-that budget walks in a person slot of the scenario, their track on the recording's frames (NaN
-before they enter and after they leave); people never there at once share a slot, SLOT_REST frames
-apart (pack_slots). A person's route is its track's points every ROUTE_STRIDE frames (what a model
-walks along when it moves the person, socialzoo.env.replay), and its preferred speed its mean
-recorded speed.
-
-A scene's tracks are split once, by a permutation drawn from the scene's name: of the eligible
-tracks (at least MIN_DURATION s and MIN_DISTANCE m from entry to exit, nobody within
-START_CLEARANCE of the entry then), the first TEST_TRACKS (at
-most half) are the test cases, the next VAL_TRACKS (at most 15%) the validation cases, the rest
-train (seeds from TRAIN_FIRST on cycle through them). A robot never trains on a person it is tested
-in place of (it may meet that person as one of the crowd).
-"""
+"""Recorded people in scenarios: a recorded scene's episodes, in which the robot takes one recorded person's place
+and everyone else walks as recorded (the rules, budgets and splits: docs/recorded.md)."""
 
 from __future__ import annotations
 
