@@ -1,9 +1,5 @@
 """The ETH/UCY pedestrian recordings: fetched from a pinned public copy (or a local folder) into a
-cache outside the repository, every file checked against its SHA-256, and read as Recordings.
-
-The copy is the one Trajectron++ distributes (StanfordASL/Trajectron-plus-plus at commit COMMIT,
-experiments/pedestrians/raw/SCENE/test/), which Social GAN prepared. Credit: CREDIT.
-"""
+cache outside the repository, every file checked against its SHA-256, and read as Recordings."""
 
 from __future__ import annotations
 

@@ -1,20 +1,4 @@
-"""Pedestrian track files (ETH/UCY) read onto one frame grid: a Recording of per-person Tracks.
-
-Two layouts of whitespace-separated numbers, one row per person and frame:
-
-- "trajectron": `frame person x y`, as distributed with Trajectron++ and Social GAN (tab separated;
-  frame numbers step 10 per 0.4 s).
-- "obsmat": the ETH `obsmat.txt` of OpenTraj, 8 columns `frame person pos_x pos_z pos_y v_x v_z
-  v_y`; x and y are columns 2 and 4 (from 0), the height and the velocities are not used.
-
-The frame grid: frame numbers step by the grid period, the smallest positive difference between
-frame numbers (which must be the step a person's rows take most often), and frame index 0 is the
-file's first frame. Each grid step is `dt` seconds: 0.4 s (2.5 Hz, the ETH/UCY annotation rate)
-unless `dt=` says otherwise, in both layouts.
-
-A person's missing frames are filled by linear interpolation over gaps of up to MAX_GAP_FRAMES
-frames; a longer gap splits the person into two tracks (with the same person id).
-"""
+"""Pedestrian track files (ETH/UCY) read onto one frame grid: a Recording of per-person Tracks."""
 
 from __future__ import annotations
 
@@ -182,7 +166,22 @@ class Recording:
 def read_tracks(
     path: str | Path, *, layout: str = "auto", dt: float | None = None, name: str | None = None
 ) -> Recording:
-    """Read a track file onto its frame grid (the module docstring gives the layouts and the grid).
+    """Read a track file onto its frame grid (the layouts and the grid below).
+
+    Two layouts of whitespace-separated numbers, one row per person and frame:
+
+    - "trajectron": `frame person x y`, as distributed with Trajectron++ and Social GAN (tab separated;
+      frame numbers step 10 per 0.4 s).
+    - "obsmat": the ETH `obsmat.txt` of OpenTraj, 8 columns `frame person pos_x pos_z pos_y v_x v_z
+      v_y`; x and y are columns 2 and 4 (from 0), the height and the velocities are not used.
+
+    The frame grid: frame numbers step by the grid period, the smallest positive difference between
+    frame numbers (which must be the step a person's rows take most often), and frame index 0 is the
+    file's first frame. Each grid step is `dt` seconds: 0.4 s (2.5 Hz, the ETH/UCY annotation rate)
+    unless `dt=` says otherwise, in both layouts.
+
+    A person's missing frames are filled by linear interpolation over gaps of up to MAX_GAP_FRAMES
+    frames; a longer gap splits the person into two tracks (with the same person id).
 
     Blank lines and lines starting with "#" are skipped.
 

@@ -1,6 +1,2 @@
-"""Pedestrians: the crowd models (the social force, Helbing-Molnar with Moussaid's extension;
-walking groups, Moussaid et al. 2010; ORCA, van den Berg et al. 2011), which model drives each
-person (people specs), one step of everyone, and their routes.
-
-Batched over worlds and humans; numpy and numba kernels only.
-"""
+"""Pedestrians: the crowd models (social force, walking groups, ORCA), which one drives each person (people specs),
+one step of everyone, and their routes; batched over worlds and humans, numpy and numba kernels only."""

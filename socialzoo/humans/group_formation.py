@@ -1,12 +1,4 @@
-"""Walking groups in a scenario: some of its people walk together, in groups of 2 to 4.
-
-`with_groups` turns chosen people of a scenario into groups in their order: each group takes a
-size drawn from the size weights, and its members take the first member's start, goal and route
-and spawn abreast of it (Moussaid et al. 2010: small groups walk side by side at low density),
-0.7 m apart across the first walking direction, or jittered around the first member where a
-wall is in the way. The draws come from a generator of the scenario's seed, so the groups of a
-scenario are the same every time; a scenario without chosen people is returned as it is.
-"""
+"""Walking groups in a scenario: some of its people walk together, in groups of 2 to 4 (`with_groups`)."""
 
 from __future__ import annotations
 
@@ -42,6 +34,12 @@ def with_groups(
     scenario: Scenario, m: Map, members: np.ndarray, weights: tuple[float, ...], spawn_clearance: float = 0.2
 ) -> Scenario:
     """The scenario with the people `members` marks walking in groups.
+
+    The chosen people form groups in their order: each group takes a size drawn from the size weights,
+    and its members take the first member's start, goal and route and spawn abreast of it (Moussaid et
+    al. 2010: small groups walk side by side at low density), 0.7 m apart across the first walking
+    direction, or jittered around the first member where a wall is in the way. The draws come from a
+    generator of the scenario's seed, so the groups of a scenario are the same every time.
 
     Args:
         scenario: the scenario.

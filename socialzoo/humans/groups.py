@@ -1,23 +1,5 @@
-"""Walking groups: the forces that keep friends together (Moussaid, Perozo, Garnier, Helbing and
-Theraulaz, "The walking behaviour of pedestrian social groups and its impact on crowd dynamics",
-PLoS ONE 2010), added to the social force of the people who walk in a group.
-
-For a person i of a group of n members (WorldState.human_group), with c the centre of mass of the
-group and c' that of the others:
-- coherence: coherence * s * (c - x_i), s = (1 + tanh(|c - x_i| - (n - 1) / 2)) / 2: Moussaid's
-  attraction towards the centre beyond (n - 1) / 2 m, with PedSim's smooth step (PySocialForce's
-  GroupCoherenceForceAlt);
-- repulsion: repulsion * (x_i - x_j) for each member j closer than repulsion_threshold
-  (PySocialForce's GroupRepulsiveForce);
-- gaze: -gaze * alpha * v_i, v_i the person's velocity and alpha how far (rad) c' lies outside
-  the field of view of half-width vision_deg around the walking direction (towards the
-  waypoint): the person slows down to keep the others in sight (Moussaid's f_vis, with the
-  velocity as in the paper; PySocialForce's GroupGazeForce uses the unit walking direction,
-  which also pushes a person standing still backwards and stalls groups in single file).
-
-One compiled kernel over rows and people; a person's members are found by a loop over the row's
-slots (groups are small), in slot order, so a row steps the same alone or in any batch.
-"""
+"""Walking groups: the forces that keep friends together (Moussaid, Perozo, Garnier, Helbing and Theraulaz,
+PLoS ONE 2010), added to the social force of the people who walk in a group."""
 
 from __future__ import annotations
 
@@ -90,6 +72,24 @@ def add_group_accelerations(
     accel: np.ndarray,
 ) -> None:
     """Add the group forces of every person who walks in a group to `accel`, in place.
+
+    Moussaid, Perozo, Garnier, Helbing and Theraulaz, "The walking behaviour of pedestrian social groups
+    and its impact on crowd dynamics", PLoS ONE 2010. For a person i of a group of n members
+    (WorldState.human_group), with c the centre of mass of the group and c' that of the others:
+
+    - coherence: coherence * s * (c - x_i), s = (1 + tanh(|c - x_i| - (n - 1) / 2)) / 2: Moussaid's
+      attraction towards the centre beyond (n - 1) / 2 m, with PedSim's smooth step (PySocialForce's
+      GroupCoherenceForceAlt);
+    - repulsion: repulsion * (x_i - x_j) for each member j closer than repulsion_threshold
+      (PySocialForce's GroupRepulsiveForce);
+    - gaze: -gaze * alpha * v_i, v_i the person's velocity and alpha how far (rad) c' lies outside
+      the field of view of half-width vision_deg around the walking direction (towards the
+      waypoint): the person slows down to keep the others in sight (Moussaid's f_vis, with the
+      velocity as in the paper; PySocialForce's GroupGazeForce uses the unit walking direction,
+      which also pushes a person standing still backwards and stalls groups in single file).
+
+    One compiled kernel over rows and people; a person's members are found by a loop over the row's
+    slots (groups are small), in slot order, so a row steps the same alone or in any batch.
 
     Args:
         pos: (B, H, 2) positions, world frame, m.

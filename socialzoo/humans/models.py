@@ -1,21 +1,5 @@
-"""Which model drives each person: the people spec of a scenario's crowd and its seeded assignment.
-
-A people spec names one model, or a mix of models with the share of the crowd each drives:
-"sf" (the social force, also "social_force"), "orca", "groups" (social force in walking groups),
-"learned:PATH" (a learned human policy file), a fitted preset of a model ("sf-eth-ucy",
-"orca-eth-ucy": socialzoo.humans.presets), or e.g. "sf@0.5+orca@0.3+groups@0.2". Every
-scenario assigns its people to the models from its own seed, the same way every time: the head
-counts by largest remainder of share x people, the people by a seeded permutation.
-
-Recorded people (a scene's scenarios, socialzoo.scenarios.recorded) take two more: "replay" (they
-follow their recorded tracks and ignore the robot) and "hybrid:MODEL" with MODEL one of sf, orca
-or learned:PATH (they follow their tracks until a robot comes near, then MODEL walks them along the
-rest of their recorded path; the rule is socialzoo.env.replay's). On a recorded scene the other
-models walk each person from where and when it enters towards where it leaves.
-
-The world reads the result from WorldState.human_model (SOCIAL_FORCE, ORCA, LEARNED, REPLAY) and
-WorldState.human_group (walking groups are social-force people with a group).
-"""
+"""Which model drives each person: the people spec of a scenario's crowd (`parse_people`) and its seeded
+assignment (`assign_models`)."""
 
 from __future__ import annotations
 
@@ -101,6 +85,17 @@ def _model_of(name: str) -> tuple[str, str | None]:
 def parse_people(spec: str) -> tuple[PeoplePart, ...]:
     """The parts of a people spec.
 
+    A people spec names one model, or a mix of models with the share of the crowd each drives:
+    "sf" (the social force, also "social_force"), "orca", "groups" (social force in walking groups),
+    "learned:PATH" (a learned human policy file), a fitted preset of a model ("sf-eth-ucy",
+    "orca-eth-ucy": socialzoo.humans.presets), or e.g. "sf@0.5+orca@0.3+groups@0.2".
+
+    Recorded people (a scene's scenarios, socialzoo.scenarios.recorded) take two more: "replay" (they
+    follow their recorded tracks and ignore the robot) and "hybrid:MODEL" with MODEL one of sf, orca
+    or learned:PATH (they follow their tracks until a robot comes near, then MODEL walks them along the
+    rest of their recorded path; the rule is socialzoo.env.replay's). On a recorded scene the other
+    models walk each person from where and when it enters towards where it leaves.
+
     Raises:
         PeopleSpecError: naming the spec and what is wrong with it.
     """
@@ -174,7 +169,7 @@ class PeopleConfig:
     whether each scenario also runs without the robot (what the robot costs people).
 
     Attributes:
-        models: a people spec (see the module docstring): "sf" (the benchmark's people), "orca",
+        models: a people spec (see parse_people): "sf" (the benchmark's people), "orca",
             "groups", "learned:PATH", or a mix such as "sf@0.5+orca@0.5".
         group_sizes: weights of groups of 2, 3 and 4 people among those of the "groups" model
             (pairs most common, as Moussaid et al. 2010 observed).
@@ -257,6 +252,9 @@ def assign_models(parts: tuple[PeoplePart, ...], num_people: int, seed: int) -> 
 
     A single model needs no draw; a mix gives each model its head count (head_counts) and
     shuffles who gets which with a generator of its own, seeded by (seed, a fixed stream).
+
+    The world reads the result from WorldState.human_model (SOCIAL_FORCE, ORCA, LEARNED, REPLAY) and
+    WorldState.human_group (walking groups are social-force people with a group).
     """
     if len(parts) == 1:
         return np.zeros(num_people, dtype=np.int64)

@@ -1,9 +1,4 @@
-"""Integration of human motion: v += dt * a with a speed cap, p += dt * v, walls are solid.
-
-A move whose segment would touch a wall is cancelled and the human stops, so no human ever
-passes through a wall even where the wall force is too weak (sharp corners, thin walls).
-A human already in contact with a robot does not press deeper into it (`keep_off_robots`).
-"""
+"""Integration of human motion: v += dt * a with a speed cap, p += dt * v, walls are solid."""
 
 from __future__ import annotations
 
@@ -28,6 +23,9 @@ def integrate_humans(
     direct: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One explicit Euler step of every human.
+
+    A move whose segment would touch a wall is cancelled and the human stops, so no human ever
+    passes through a wall even where the wall force is too weak (sharp corners, thin walls).
 
     Args:
         pos: (B, H, 2) positions, world frame, m.

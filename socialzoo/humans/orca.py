@@ -1,25 +1,5 @@
-"""ORCA people: optimal reciprocal collision avoidance (van den Berg, Guy, Lin and Manocha,
-"Reciprocal n-body collision avoidance", ISRR 2009 / Springer 2011), batched and compiled.
-
-Each driven agent picks the velocity closest to its preferred one among those that, for a time
-horizon, collide with no neighbour (each agent taking half of the avoidance) and, for a second
-horizon, with no wall. Every constraint is a half-plane of velocities (an ORCA line); the
-velocity is the solution of a small linear program over them inside the max-speed disc, with a
-fall-back that minimises the largest violation of the agent constraints when they leave nothing
-feasible (the paper's sections 4 and 5.2: linear programs in two and three dimensions).
-
-Walls are line segments. Each wall near an agent is the obstacle "edge" that faces the agent (a
-wall seen from its other side is the same segment walked the other way), with convex ends: the
-velocity obstacle of a wall for the obstacle horizon is the segment swept by the agent's disc,
-bounded by two legs and a cut-off segment. This is what the reference library does with an
-obstacle of two vertices; nearby walls are taken nearest first and a wall whose velocity
-obstacle the earlier wall constraints already exclude adds none.
-
-One compiled kernel loops over the batch rows and the agents of each row in a fixed order, so a
-row steps bit for bit the same alone or in any batch. The agents are generic (people, robots,
-anything round): `drive` says whose velocity to compute and `seen` whom the others avoid, so a
-robot can be driven by ORCA too, or be invisible to the people (CrowdNav's robot.visible).
-"""
+"""ORCA people: optimal reciprocal collision avoidance (van den Berg, Guy, Lin and Manocha, "Reciprocal n-body
+collision avoidance", ISRR 2009 / Springer 2011), batched and compiled."""
 
 from __future__ import annotations
 
@@ -439,6 +419,15 @@ def orca_velocities(
     dt: float,
 ) -> np.ndarray:
     """The ORCA velocity of every driven agent of B rows.
+
+    Each driven agent picks the velocity closest to its preferred one among those that, for a time
+    horizon, collide with no neighbour (each agent taking half of the avoidance) and, for a second
+    horizon, with no wall: the solution of a small linear program over the ORCA lines inside the
+    max-speed disc, with a fall-back that minimises the largest violation of the agent constraints
+    when they leave nothing feasible (the paper's sections 4 and 5.2: linear programs in two and three
+    dimensions). Each wall is the obstacle edge that faces the agent (a wall seen from its other side is
+    the same segment walked the other way), with convex ends; the walls and the kernel are described in
+    docs/humans.md, "ORCA people".
 
     Args:
         pos: (B, N, 2) agent positions, world frame, m.

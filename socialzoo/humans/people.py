@@ -1,13 +1,5 @@
-"""One step of every person of B worlds, whatever model drives each (WorldState.human_model):
-the social force (socialzoo.humans.social_force, with the group forces of socialzoo.humans.groups
-for people who walk in a group), ORCA (socialzoo.humans.orca), or a learned policy's desired
-velocity relaxed through the social force.
-
-The models meet in one step: social-force people feel every person (ORCA ones included) and the
-robots; ORCA people avoid every person and, unless the config hides them, the robots. Each model
-costs only where someone uses it, and with social-force people only the step is exactly the
-social-force step it always was.
-"""
+"""One step of every person of B worlds, whatever model drives each (WorldState.human_model): the social force
+(with walking groups), ORCA, or a learned policy's desired velocity relaxed through the social force."""
 
 from __future__ import annotations
 
@@ -110,6 +102,11 @@ def step_people(
     learned: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move every person one step of cfg.dt; walls stay solid (socialzoo.humans.motion).
+
+    The models meet in one step: social-force people feel every person (ORCA ones included) and the
+    robots; ORCA people avoid every person and, unless the config hides them, the robots. Each model
+    costs only where someone uses it, and with social-force people only the step is exactly the
+    social-force step it always was.
 
     Args:
         pos: (B, H, 2) positions, world frame, m.

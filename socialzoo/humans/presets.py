@@ -1,12 +1,5 @@
-"""Fitted parameter sets of the crowd models, usable by name in a people spec ("sf-eth-ucy",
-"orca-eth-ucy", or "hybrid:sf-eth-ucy"; socialzoo.humans.models): a preset is its model with some of
-the world's HumanConfig (social force) or OrcaConfig fields replaced.
-
-The ETH/UCY presets were fitted on all five recorded scenes (eth, hotel, univ, zara1, zara2) by
-`socialzoo humans calibrate` (socialzoo.studies.calibration; the leave-one-scene-out folds and
-the command in docs/humans.md, "Calibration"). A preset sets its model's parameters for everyone
-that model drives in the world (walking groups share the social force's).
-"""
+"""Fitted parameter sets of the crowd models, usable by name in a people spec ("sf-eth-ucy", "orca-eth-ucy", or
+"hybrid:sf-eth-ucy"; socialzoo.humans.models), fitted by `socialzoo humans calibrate` (docs/humans.md)."""
 
 from __future__ import annotations
 
@@ -37,6 +30,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 
 def with_presets(world: WorldConfig, presets: Iterable[str]) -> WorldConfig:
     """The world with each named preset's parameters in place of its own.
+
+    A preset is its model with some of the world's HumanConfig (social force) or OrcaConfig fields
+    replaced; it sets them for everyone that model drives in the world (walking groups share the social
+    force's).
 
     Raises:
         KeyError: an unknown preset (the message lists the known ones).

@@ -1,8 +1,4 @@
-"""Human routes: shuttling forever between start and goal along a waypoint list.
-
-A human walks to route[waypoint]; within the waypoint radius it moves on to the next waypoint in
-its direction of travel, and turns back at either end of the route.
-"""
+"""Human routes: shuttling forever between start and goal along a waypoint list."""
 
 from __future__ import annotations
 
@@ -20,6 +16,9 @@ def advance_waypoints(
     radius: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next waypoint index and direction for every human.
+
+    A human walks to route[waypoint]; within the waypoint radius it moves on to the next waypoint in
+    its direction of travel, and turns back at either end of the route.
 
     Args:
         pos: (B, H, 2) positions, m.

@@ -1,15 +1,4 @@
-"""The social force model of PedSim (Helbing-Molnar with Moussaid's agent interaction).
-
-One implementation for every use: arrays carry a batch axis B and a human axis H, and the
-robots are just more agents seen by the humans (their position difference scaled by 1/1.5).
-Moussaid's pair force is antisymmetric between two humans (swapping them negates both the
-position and the velocity difference), so each human pair is computed once.
-
-The forces are compiled kernels (socialzoo.core.jit) that loop over worlds, pairs and humans;
-only atan2 and exp run as numpy calls over all pairs at once, because numpy's vectorised versions
-are several times faster per element than scalar ones. Pairs are laid out and summed per world
-in a fixed order, so a world steps bit for bit the same alone or in any batch.
-"""
+"""The social force model of PedSim (Helbing-Molnar with Moussaid's agent interaction)."""
 
 from __future__ import annotations
 
@@ -177,6 +166,16 @@ def human_acceleration(
     learned: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Total social-force acceleration on every human.
+
+    One implementation for every use: arrays carry a batch axis B and a human axis H, and the
+    robots are just more agents seen by the humans (their position difference scaled by 1/1.5).
+    Moussaid's pair force is antisymmetric between two humans (swapping them negates both the
+    position and the velocity difference), so each human pair is computed once.
+
+    The forces are compiled kernels (socialzoo.core.jit) that loop over worlds, pairs and humans;
+    only atan2 and exp run as numpy calls over all pairs at once, because numpy's vectorised versions
+    are several times faster per element than scalar ones. Pairs are laid out and summed per world
+    in a fixed order, so a world steps bit for bit the same alone or in any batch.
 
     Args:
         pos: (B, H, 2) human positions, world frame, m.
