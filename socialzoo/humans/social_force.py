@@ -100,7 +100,7 @@ def _accelerations(
     social = np.zeros((num_humans, 2))
     for b in range(batch):
         social[:] = 0.0
-        # Pairs in _pair_directions' fixed order (see the module docstring); robots feel no force here.
+        # Pairs in _pair_directions' fixed order (see human_acceleration's docstring); robots feel no force here.
         col = b * pairs_per_world
         for i in range(num_humans):
             for j in range(i + 1, num_humans + num_robots):
@@ -200,7 +200,7 @@ def human_acceleration(
         learned = np.zeros((batch, num_humans), dtype=bool)
         desired_vel = pos
     closest, wall_dist = walls.nearest(pos)
-    # Moussaid's pair force in three compiled passes around numpy's atan2 and exp (module docstring).
+    # Moussaid's pair force in three compiled passes around numpy's atan2 and exp (human_acceleration's docstring).
     num_pairs = batch * (num_humans * (num_humans - 1) // 2 + num_humans * num_robots)
     work = np.empty((6, num_pairs))
     _pair_directions(pos, vel, mask, robot_pos, robot_vel, cfg.social_lambda, 1.0 / cfg.robot_scale, work)

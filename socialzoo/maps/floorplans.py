@@ -1,11 +1,5 @@
-"""Seeded synthetic floor plans: offices along corridors, atria with pillars, long and winding
-corridors, as wall segments (W, 4) with a point inside, for testing importers and navigation on
-buildings that nobody has tuned for.
-
-Walls are drawn as real plans draw them: solid pieces between door gaps, either thin (one line)
-or `thickness` thick (a closed outline of four lines). Every plan is a pure function of its seed
-and options.
-"""
+"""Seeded synthetic floor plans (offices along corridors, atria with pillars, long and winding corridors) as wall
+segments (W, 4) with a point inside, for testing importers and navigation on buildings nobody has tuned for."""
 
 from __future__ import annotations
 
@@ -21,6 +15,10 @@ Point = tuple[float, float]
 @dataclass(frozen=True)
 class FloorPlan:
     """A synthetic building.
+
+    Walls are drawn as real plans draw them: solid pieces between door gaps, either thin (one line)
+    or `thickness` thick (a closed outline of four lines). Every plan is a pure function of its seed
+    and options.
 
     Attributes:
         name: plan name (kind and seed).

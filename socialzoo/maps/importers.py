@@ -1,15 +1,5 @@
-"""Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs) and
-pedsim scene XML files.
-
-Each importer returns plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2)); map_completion.complete_map
-turns them into a Map, generating what a source lacks. Zero-length wall segments (both end points
-equal) are dropped on import: they block nothing and only cost time in every wall query.
-Parse errors raise MapError naming the file and line (or entry).
-
-Walls are read as drawn: an outline with gaps (doorways to space the plan does not map) is
-closed when the free space is found (socialzoo.maps.roadmap.free_space: virtual walls across the
-openings, reported by the import, never added to the walls).
-"""
+"""Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs) and pedsim scene XML
+files, read into plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2))."""
 
 from __future__ import annotations
 
@@ -76,7 +66,10 @@ def read_table(path: str | os.PathLike[str], width: int, names: str) -> np.ndarr
 
 
 def drop_zero_length(walls: np.ndarray, where: str = "walls") -> np.ndarray:
-    """Walls (W, 4) without the segments whose two end points coincide."""
+    """Walls (W, 4) without the segments whose two end points coincide.
+
+    The importers drop them on import: they block nothing and only cost time in every wall query.
+    """
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     keep = (walls[:, 0] != walls[:, 2]) | (walls[:, 1] != walls[:, 3])
     if not keep.all():

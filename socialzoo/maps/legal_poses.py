@@ -1,9 +1,4 @@
-"""Legal start/goal poses for a wall map that comes without them.
-
-Candidates are cells on the free space's clearance ridge (socialzoo.maps.roadmap.free_space);
-poses are picked among them by farthest-point sampling in walking distance along the navigation
-graph, and each faces the most open direction. Deterministic given the seed.
-"""
+"""Legal start/goal poses for a wall map that comes without them (`generate_legal_poses`)."""
 
 from __future__ import annotations
 
@@ -59,6 +54,8 @@ def generate_legal_poses(
     farthest-point sampling in walking distance (to the nearest visible node, along the graph,
     then out again), scaled by clearance up to config.good_clearance: dead ends and rooms come
     first. Each pose faces the direction with the most free space around it.
+
+    Deterministic given the seed.
 
     Args:
         walls: (W, 4) wall segments, m.

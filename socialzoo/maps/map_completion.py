@@ -1,8 +1,4 @@
-"""A complete Map from walls and whatever of its graph and legal poses a source provides.
-
-The missing parts are generated: a roadmap (socialzoo.maps.roadmap) when there are no nodes,
-edges between given nodes, and legal poses (socialzoo.maps.legal_poses).
-"""
+"""A complete Map from walls and whatever of its graph and legal poses a source provides (`complete_map`)."""
 
 from __future__ import annotations
 

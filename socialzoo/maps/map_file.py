@@ -1,31 +1,5 @@
-"""Maps: walls, navigation graph and legal poses, stored as one JSON file per map.
-
-File format ("socialzoo-map/1"), all coordinates in metres, world frame:
-
-    {
-      "format": "socialzoo-map/1",
-      "name": "gdc1",
-      "source": "where the data comes from",
-      "licence": "licence and attribution of the data",
-      "region": [xmin, ymin, xmax, ymax],          # optional area of interest
-      "walls": [[x1, y1, x2, y2], ...],
-      "doors": [[x1, y1, x2, y2], ...],           # optional: doorway openings a scenario may close
-      "graph": {"nodes": [[x, y], ...], "edges": [[i, j], ...]},   # undirected, node indices
-      "legal_poses": [[x, y, theta], ...],        # robot and human start/goal poses, theta in rad
-      "walkable_area": 821.5,                     # optional: m^2 the robot can drive (importers)
-      "provenance": {...}                         # optional: how an importer made the map
-    }
-
-Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps; load
-them by name with load_map("gdc1"), or load any file with load_map("path/to/map.json"). Every
-loaded map is checked by validate_map (see its docstring for the rules and clearances). A file that
-is not such a map (random bytes, a truncated copy, another kind of file) raises MapError naming it.
-
-Doors are segments across openings in the walls (an elevator's doors, a room's door), not walls:
-people and the robot pass through them while they are open. A scenario may close one for a while
-(its doors); the map only says where they are. A file without the field has no doors, and to_json
-writes it only when there are some, so files without doors round-trip byte for byte.
-"""
+"""Maps: walls, navigation graph and legal poses, stored as one JSON file per map (format "socialzoo-map/1",
+described in docs/maps.md); loading, validation and the wall queries the checks use."""
 
 from __future__ import annotations
 
@@ -137,7 +111,10 @@ class Map:
         return self.path or f"map {self.name!r}"
 
     def to_json(self) -> dict[str, Any]:
-        """The map as a JSON-ready dict in the socialzoo-map/1 format."""
+        """The map as a JSON-ready dict in the socialzoo-map/1 format.
+
+        "doors" is written only when there are some, so files without doors round-trip byte for byte.
+        """
         data: dict[str, Any] = {
             "format": MAP_FORMAT,
             "name": self.name,
@@ -354,6 +331,8 @@ def load_map(name_or_path: str | os.PathLike[str]) -> Map:
 
     Shipped maps are loaded, validated and cached once per process: repeated calls return the
     same Map object. Files are read and validated on every call.
+
+    Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps.
 
     Raises:
         FileNotFoundError: a path that does not exist.

@@ -1,10 +1,4 @@
-"""Walls from an occupancy grid (a floor-plan image: dark pixels are walls), as wall segments.
-
-The outline of every wall region is traced along the pixel edges (wall on the left, so each
-region's outline is a closed loop), straight runs are merged and staircases are simplified by
-Douglas-Peucker within `tolerance` pixels; each simplified loop becomes wall segments. Pixels are
-`scale` metres square; image row 0 is the top, so y grows upwards from the bottom row.
-"""
+"""Walls from an occupancy grid (a floor-plan image: dark pixels are walls), as wall segments."""
 
 from __future__ import annotations
 
@@ -154,6 +148,11 @@ def walls_from_occupancy(
     min_area: float = 0.0,
 ) -> np.ndarray:
     """Wall segments tracing the outlines of the wall pixels of a floor-plan image.
+
+    The outline of every wall region is traced along the pixel edges (wall on the left, so each
+    region's outline is a closed loop), straight runs are merged and staircases are simplified by
+    Douglas-Peucker within `tolerance` pixels; each simplified loop becomes wall segments. Pixels are
+    `scale` metres square; image row 0 is the top, so y grows upwards from the bottom row.
 
     Args:
         wall: (rows, cols) bool, True for wall pixels; row 0 is the top of the image.

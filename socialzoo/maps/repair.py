@@ -1,25 +1,4 @@
-"""Repairs of imported building data: what real floor plans and their navigation graphs get wrong.
-
-Real navigation graphs put nodes in doorways and on walls, draw edges through walls and carry
-stray components; their legal poses stand too close to walls. `repair_map` fixes each of these
-and records every change in a RepairReport, which importers store in the map's provenance:
-- a node closer to a wall than the passable clearance (config.free_clearance), or shut inside a
-  wall loop, moves to the nearest passable grid cell within `max_move`; else it is dropped;
-- an edge that touches a wall or passes closer than config.edge_clearance is rerouted along a
-  walking path through the free space (its corners become new nodes) when that path is at most
-  `max_detour` times longer; else it is dropped;
-- graph components are joined along walking paths where the free space joins them; those that
-  stay apart (outside the building, behind a door too narrow for the robot) are dropped, the
-  largest kept;
-- a legal pose too close to a wall moves to the nearest cell with the pose clearance, a pose that
-  cannot reach the graph is dropped, and with fewer than two left the poses are generated afresh.
-With a given graph the free space is where that graph lies (`_graph_free_space`): the enclosed
-area holding most of its nodes, with wider openings of the outline closed where needed. Without
-one, openings of the outline to unmapped space that leave no enclosed room are closed by virtual
-walls (socialzoo.maps.roadmap.free_space), reported as "outline_closed" with their ends.
-What only driving shows (a pose the robot cannot reach, a gap too narrow) is repaired afterwards
-by socialzoo.bench.map_repair.
-"""
+"""Repairs of imported building data: what real floor plans and their navigation graphs get wrong (`repair_map`)."""
 
 from __future__ import annotations
 
@@ -284,10 +263,32 @@ def repair_map(
     max_detour: float = MAX_DETOUR,
     provenance: dict[str, Any] | None = None,
 ) -> tuple[Map, RepairReport]:
-    """A valid Map from imported data, repairing what breaks the rules (see the module docstring).
+    """A valid Map from imported data, repairing what breaks the rules (below).
 
     What the source lacks is generated as `map_completion.complete_map` does (a roadmap without nodes,
     edges between nodes without edges, legal poses without poses); each such step is reported too.
+
+    Real navigation graphs put nodes in doorways and on walls, draw edges through walls and carry
+    stray components; their legal poses stand too close to walls. This fixes each of these and records
+    every change in a RepairReport, which importers store in the map's provenance:
+
+    - a node closer to a wall than the passable clearance (config.free_clearance), or shut inside a
+      wall loop, moves to the nearest passable grid cell within `max_move`; else it is dropped;
+    - an edge that touches a wall or passes closer than config.edge_clearance is rerouted along a
+      walking path through the free space (its corners become new nodes) when that path is at most
+      `max_detour` times longer; else it is dropped;
+    - graph components are joined along walking paths where the free space joins them; those that
+      stay apart (outside the building, behind a door too narrow for the robot) are dropped, the
+      largest kept;
+    - a legal pose too close to a wall moves to the nearest cell with the pose clearance, a pose that
+      cannot reach the graph is dropped, and with fewer than two left the poses are generated afresh.
+
+    With a given graph the free space is where that graph lies (`_graph_free_space`): the enclosed
+    area holding most of its nodes, with wider openings of the outline closed where needed. Without
+    one, openings of the outline to unmapped space that leave no enclosed room are closed by virtual
+    walls (socialzoo.maps.roadmap.free_space), reported as "outline_closed" with their ends.
+    What only driving shows (a pose the robot cannot reach, a gap too narrow) is repaired afterwards
+    by socialzoo.bench.map_repair.
 
     Args:
         name: map name.

@@ -1,12 +1,5 @@
-"""Navigation graphs for wall maps that come without them.
-
-The free space is rasterised (exact wall clearance per grid cell), the building interior is found
-by flood fill from a seed point, graph nodes are spread over it (most clearance first, one per
-room, a few metres apart along corridors) and joined by straight lines that keep clear of walls.
-Everything is deterministic given the seed. Legal poses are picked on the same free space by
-socialzoo.maps.legal_poses, and socialzoo.maps.map_completion puts the pieces together into a Map.
-Uses scipy (ndimage and sparse.csgraph), which the map tools need but the simulator does not.
-"""
+"""Navigation graphs for wall maps that come without them: the free space, its roadmap and the walking paths
+that join and repair graphs (scipy's ndimage and sparse.csgraph)."""
 
 from __future__ import annotations
 
@@ -743,6 +736,11 @@ def build_roadmap(
     index: WallIndex | None = None,
 ) -> Roadmap:
     """A connected navigation graph over a map's interior (see free_space for what that is).
+
+    The free space is rasterised (exact wall clearance per grid cell), the building interior is found
+    by flood fill from a seed point, graph nodes are spread over it (most clearance first, one per
+    room, a few metres apart along corridors) and joined by straight lines that keep clear of walls.
+    Everything is deterministic given the seed.
 
     Returns:
         the Roadmap: nodes (N, 2), edges (E, 2) and the free space they were built on.

@@ -1,7 +1,4 @@
-"""Wall tests of straight segments: whether lines between points touch a wall, or keep a
-clearance from every wall. The navigation graph joins off-graph points and plans direct lines
-with them; scenario generation and map repair check lines the same way.
-"""
+"""Wall tests of straight segments: whether lines between points touch a wall, or keep a clearance from every wall."""
 
 from __future__ import annotations
 
