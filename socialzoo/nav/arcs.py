@@ -1,10 +1,5 @@
-"""Arc geometry of the trajectory rollout (socialzoo.nav.local_planner): the arcs and their wall
-samples, the wall distance-field codes along every arc, and where arcs enter human discs.
-
-Arcs have constant curvature c and start at the robot, heading along its x axis; a robot-frame
-point after s metres is (sin(|c| s) / |c|, side * (1 - cos(|c| s)) / |c|). Straight arcs use a
-tiny curvature in the same closed forms.
-"""
+"""Arc geometry of the trajectory rollout (socialzoo.nav.local_planner): the arcs and their wall samples, the wall
+distance-field codes along every arc, and where arcs enter human discs."""
 
 from __future__ import annotations
 
@@ -58,7 +53,12 @@ class ArcTable:
 def arc_points(
     abs_curvature: np.ndarray, side: np.ndarray, length: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Robot-frame point reached after `length` metres along arcs; broadcasts, returns (x, y)."""
+    """Robot-frame point reached after `length` metres along arcs; broadcasts, returns (x, y).
+
+    Arcs have constant curvature c and start at the robot, heading along its x axis; a robot-frame
+    point after s metres is (sin(|c| s) / |c|, side * (1 - cos(|c| s)) / |c|). Straight arcs use a
+    tiny curvature in the same closed forms.
+    """
     turn = abs_curvature * length
     x = np.sin(turn) / abs_curvature
     # 1 - cos(u) written as 2 sin^2(u / 2): exact for the tiny curvature of straight arcs.

@@ -1,7 +1,5 @@
-"""How off-graph points (robot and human poses) join the navigation graph: at the nearest edge
-point or node they can reach by a wall-free straight line (SPEC section 5), batched over points.
-`NavGraph.attach` calls `attach` here; planning joins its starts and goals this way.
-"""
+"""How off-graph points (robot and human poses) join the navigation graph: at the nearest edge point or node they
+can reach by a wall-free straight line (SPEC section 5), batched over points (`NavGraph.attach` calls `attach`)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""A map's wall distance field: distance to the nearest wall on a fine grid, one byte per cell.
-
-The local planner reads it at sample points along its arcs and the visibility test uses it to
-clear sight-line pieces far from any wall; one lookup costs one gather whatever the wall density.
-"""
+"""A map's wall distance field: distance to the nearest wall on a fine grid, one byte per cell."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""The navigation graph of a map: A*, an all-pairs next-hop table and batched path planning.
-
-Off-graph points (robot and human poses) join the graph at the nearest edge point they can reach by
-a wall-free straight line (SPEC section 5); `plan_batch` plans many start/goal pairs at once.
-"""
+"""The navigation graph of a map: A*, an all-pairs next-hop table and batched path planning."""
 
 from __future__ import annotations
 

@@ -1,53 +1,5 @@
-"""Trajectory-rollout local planner (SPEC section 6), vectorised over batch rows and arcs.
-
-Each row samples constant-curvature arcs, trims them at the first collision and at the closest
-approach to its local target, scores them, and drives along the best one with 1-D time-optimal
-speed control; a target far off the heading makes the robot stop and turn in place instead.
-
-Collision model. The planning footprint is a disc of `robot_radius` around the robot centre; it
-must stay `obstacle_margin` away from walls and from human discs of `human_radius`.
-- Walls: a precomputed distance field of the map (the distance to the nearest wall at the centres
-  of a 2.5 cm grid, one byte per cell) is read at sample points along every arc, so a call costs
-  one lookup per sample point whatever the wall density. The sample points are arc offsets
-  precomputed in the robot frame, rotated and looked up in one compiled pass that also keeps
-  the running minimum along each arc (socialzoo.nav.arcs.arc_wall_codes).
-- Humans: exact circle-disc intersection of every arc with every human near the row (pairs
-  gathered once), in closed form (float32, written to stay accurate for the straight arc). A
-  walking human is also an obstacle where it will be `human_lookahead` seconds later.
-- Escape rule: a robot already inside a margin (after a tracking error, or a human walking up to
-  it) may still take arcs that come no closer than `escape_slack` less than it is now, down to
-  hard floors (`min_wall_distance`, `min_human_distance`); its own position never blocks an arc.
-
-Scoring (maximised, over arcs with a free length > 0; a row with none stops):
-
-    score = progress_weight * (|t| - |e - t|) + free_path_weight * L - clearance_weight * clr
-
-where t is the local target (robot frame, pulled in to `target_clip`), L the arc's free length
-(trimmed at the first collision, at the closest approach to t and at `max_arc_length`), e the
-arc's point at L, and clr the clearance along the trimmed arc: the smallest gap between the
-planning disc and any wall or human disc, clipped to [0, clearance_cap]. clearance_weight keeps
-the reference planner's cost sign: a negative weight (GoAlone, -0.5) rewards clearance, a positive
-one (Pass, +0.5) lets the robot squeeze past. Defaults: progress_weight 1 (one metre of progress
-is worth one point), free_path_weight 0.1 (a tie-breaker towards arcs with room ahead, small
-enough never to trade progress for length), |clearance_weight| <= 0.5 (a full metre of clearance
-is worth half a metre of progress, as in the reference).
-
-Speed: v = min(max_speed, v_prev + a dt, the speed that still stops within L at deceleration a),
-and no faster than lets omega = v c be reached under the robot's angular acceleration limit, so
-that the robot really follows the arc it checked.
-
-Parameters: socialzoo.nav.planner_config.LocalPlannerConfig; arc geometry and the closed forms:
-socialzoo.nav.arcs.
-
-Turning and recovery (refinements of the SPEC's rule, needed in GDC1's 0.9 m doorways):
-- the 30 degree turn-in-place test uses the target's bearing slid along the nearest wall when
-  the robot is within `slide_band` of its margin and the straight line to its target is blocked
-  (so it lines up with a doorway instead of facing the door frame that hides its target), tilted
-  away from the wall inside the margin; with the line clear, the target's own bearing (in a
-  doorway the wall gradient points back out of the door);
-- a robot whose every arc is blocked by walls turns in place to the heading, on a 15 degree
-  fan, whose straight line makes the most progress towards its target.
-"""
+"""Trajectory-rollout local planner (SPEC section 6), vectorised over batch rows and arcs: `evaluate_arcs` scores
+constant-curvature arcs, `plan_commands` drives along the best one or turns in place."""
 
 from __future__ import annotations
 
@@ -170,7 +122,35 @@ def evaluate_arcs(
     cfg: LocalPlannerConfig,
     human_vel: np.ndarray | None = None,
 ) -> ArcEvaluation:
-    """Roll out, trim and score every arc of every row (see the module docstring).
+    """Roll out, trim and score every arc of every row (below).
+
+    Collision model. The planning footprint is a disc of `robot_radius` around the robot centre; it
+    must stay `obstacle_margin` away from walls and from human discs of `human_radius`.
+    - Walls: a precomputed distance field of the map (the distance to the nearest wall at the centres
+      of a 2.5 cm grid, one byte per cell) is read at sample points along every arc, so a call costs
+      one lookup per sample point whatever the wall density. The sample points are arc offsets
+      precomputed in the robot frame, rotated and looked up in one compiled pass that also keeps
+      the running minimum along each arc (socialzoo.nav.arcs.arc_wall_codes).
+    - Humans: exact circle-disc intersection of every arc with every human near the row (pairs
+      gathered once), in closed form (float32, written to stay accurate for the straight arc). A
+      walking human is also an obstacle where it will be `human_lookahead` seconds later.
+    - Escape rule: a robot already inside a margin (after a tracking error, or a human walking up to
+      it) may still take arcs that come no closer than `escape_slack` less than it is now, down to
+      hard floors (`min_wall_distance`, `min_human_distance`); its own position never blocks an arc.
+
+    Scoring (maximised, over arcs with a free length > 0; a row with none stops):
+
+        score = progress_weight * (|t| - |e - t|) + free_path_weight * L - clearance_weight * clr
+
+    where t is the local target (robot frame, pulled in to `target_clip`), L the arc's free length
+    (trimmed at the first collision, at the closest approach to t and at `max_arc_length`), e the
+    arc's point at L, and clr the clearance along the trimmed arc: the smallest gap between the
+    planning disc and any wall or human disc, clipped to [0, clearance_cap]. clearance_weight keeps
+    the reference planner's cost sign: a negative weight (GoAlone, -0.5) rewards clearance, a positive
+    one (Pass, +0.5) lets the robot squeeze past. Defaults: progress_weight 1 (one metre of progress
+    is worth one point), free_path_weight 0.1 (a tie-breaker towards arcs with room ahead, small
+    enough never to trade progress for length), |clearance_weight| <= 0.5 (a full metre of clearance
+    is worth half a metre of progress, as in the reference).
 
     Args:
         pose: (N, 3) robot pose x, y (m), theta (rad), world frame.
@@ -390,6 +370,23 @@ def plan_commands(
     human_vel: np.ndarray | None = None,
 ) -> np.ndarray:
     """Velocity commands that drive each robot towards its local target without collisions.
+
+    Each row samples constant-curvature arcs, trims them at the first collision and at the closest
+    approach to its local target, scores them, and drives along the best one with 1-D time-optimal
+    speed control; a target far off the heading makes the robot stop and turn in place instead.
+
+    Speed: v = min(max_speed, v_prev + a dt, the speed that still stops within L at deceleration a),
+    and no faster than lets omega = v c be reached under the robot's angular acceleration limit, so
+    that the robot really follows the arc it checked.
+
+    Turning and recovery (refinements of the SPEC's rule, needed in GDC1's 0.9 m doorways):
+    - the 30 degree turn-in-place test uses the target's bearing slid along the nearest wall when
+      the robot is within `slide_band` of its margin and the straight line to its target is blocked
+      (so it lines up with a doorway instead of facing the door frame that hides its target), tilted
+      away from the wall inside the margin; with the line clear, the target's own bearing (in a
+      doorway the wall gradient points back out of the door);
+    - a robot whose every arc is blocked by walls turns in place to the heading, on a 15 degree
+      fan, whose straight line makes the most progress towards its target.
 
     Args:
         pose: (N, 3) robot pose x, y (m), theta (rad), world frame.

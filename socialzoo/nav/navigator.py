@@ -1,11 +1,4 @@
-"""Global-plan tracking for a batch of robots: distance to the plan, replanning, the carrot.
-
-SPEC section 6: replan when a robot is more than 0.5 m from its plan; the local target ("carrot")
-is the point where a 1.5 m circle around the robot leaves the path. With a Sight (as the envs
-use it) the carrot stays where the robot can drive to it in a straight line, and plans avoid
-straight joins that graze walls: on real floor plans the plain carrot, placed behind a door frame
-or corner, pinned the robot against it for the whole episode.
-"""
+"""Global-plan tracking for a batch of robots: distance to the plan, replanning, the carrot (SPEC section 6)."""
 
 from __future__ import annotations
 
@@ -356,6 +349,12 @@ class Navigator:
     avoided for the rest of the episode: `socialzoo.nav.graph.NavGraph.plan_avoiding`). A robot
     wedged beside a door, in a crack of the plan, or pressed against a person gets out; the
     episode metric `stuck` counts the time it lost.
+
+    SPEC section 6: replan when a robot is more than 0.5 m from its plan; the local target ("carrot")
+    is the point where a 1.5 m circle around the robot leaves the path. With a Sight (as the envs
+    use it) the carrot stays where the robot can drive to it in a straight line, and plans avoid
+    straight joins that graze walls: on real floor plans the plain carrot, placed behind a door frame
+    or corner, pinned the robot against it for the whole episode.
 
     Args:
         graph: plans paths (a socialzoo.nav.graph.NavGraph).

@@ -1,8 +1,5 @@
-"""All-pairs shortest paths of a navigation graph: distances, next hops and hop counts in one table.
-
-`floyd_warshall` builds the table once per map; `PathTable.node_paths` reads many node paths from
-it at once (socialzoo.nav.graph.NavGraph plans with both).
-"""
+"""All-pairs shortest paths of a navigation graph: distances, next hops and hop counts in one table
+(`floyd_warshall` builds it once per map; `PathTable.node_paths` reads many node paths at once)."""
 
 from __future__ import annotations
 

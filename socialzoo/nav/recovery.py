@@ -1,13 +1,5 @@
 """Recovery of robots that make no progress along their plans: when, how they back off, which edge
-they avoid afterwards.
-
-A robot wedged beside a door, in a crack of the plan, or pressed against a person drives its plan
-without getting closer to its goal. `RecoveryState` notices (no progress for `RecoveryConfig.after`
-seconds), starts a back-off (the caller drives it with `backoff_commands`), and when the back-off
-ends says which robots need a new plan; unless people stood around it, the graph edge where the
-robot stopped is avoided for the rest of the episode. The Navigator (socialzoo.nav.navigator)
-owns one and does the replanning.
-"""
+they avoid afterwards."""
 
 from __future__ import annotations
 
@@ -126,6 +118,13 @@ def _recovery_step(
 
 class RecoveryState:
     """Per-robot recovery bookkeeping of a batch: progress, back-offs, avoided graph edges.
+
+    A robot wedged beside a door, in a crack of the plan, or pressed against a person drives its plan
+    without getting closer to its goal. This notices (no progress for `RecoveryConfig.after`
+    seconds), starts a back-off (the caller drives it with `backoff_commands`), and when the back-off
+    ends says which robots need a new plan; unless people stood around it, the graph edge where the
+    robot stopped is avoided for the rest of the episode. The Navigator (socialzoo.nav.navigator)
+    owns one and does the replanning.
 
     Args:
         cfg: the recovery settings.

@@ -1,17 +1,4 @@
-"""Robot-human visibility kept from step to step: only sight lines that may have changed are re-tested.
-
-Between two steps a robot and a human move a few centimetres, so most sight lines keep their
-answer, and each line carries a certificate that proves it without touching the walls:
-
-- a clear line with clearance c (a lower bound on its distance to every wall) stays clear while
-  both of its ends stay within c of where they were when it was tested: every point of the new
-  line is then within c of a point of the old one;
-- a blocked line stays blocked while it still crosses the wall that blocked it (one segment test).
-
-Every other line (new, expired, or whose human just appeared) is tested exactly with
-`socialzoo.nav.visibility.near_sight_line` (or `sight_lines` for many fresh lines), so the
-answers are always those of a full test. The per-line bookkeeping is one compiled kernel.
-"""
+"""Robot-human visibility kept from step to step: only sight lines that may have changed are re-tested."""
 
 from __future__ import annotations
 
@@ -32,6 +19,18 @@ _MANY_FRESH = 256
 
 class SightCache:
     """Which humans each of N observers sees, for an (N, H) grid of sight lines, kept across steps.
+
+    Between two steps a robot and a human move a few centimetres, so most sight lines keep their
+    answer, and each line carries a certificate that proves it without touching the walls:
+
+    - a clear line with clearance c (a lower bound on its distance to every wall) stays clear while
+      both of its ends stay within c of where they were when it was tested: every point of the new
+      line is then within c of a point of the old one;
+    - a blocked line stays blocked while it still crosses the wall that blocked it (one segment test).
+
+    Every other line (new, expired, or whose human just appeared) is tested exactly with
+    `socialzoo.nav.visibility.near_sight_line` (or `sight_lines` for many fresh lines), so the
+    answers are always those of a full test. The per-line bookkeeping is one compiled kernel.
 
     Args:
         walls: the map's wall index.

@@ -1,8 +1,4 @@
-"""The benchmark's discrete actions (SPEC section 7): GoAlone, Halt, Follow, Pass.
-
-Each action sets the local planner's target, speed limit and clearance weight; one call plans
-every row of the batch, whatever its action.
-"""
+"""The benchmark's discrete actions (SPEC section 7): GoAlone, Halt, Follow, Pass."""
 
 from __future__ import annotations
 
@@ -266,6 +262,9 @@ def subpolicy_commands(
     target human in the direction of travel (see `SubPolicyConfig.pass_direction`). Follow or
     Pass without a target human halt. Every present human, the followed one included, is an
     obstacle to the planner.
+
+    Each action sets the local planner's target, speed limit and clearance weight (`subpolicy_targets`);
+    one call plans every row of the batch, whatever its action.
 
     Args:
         action: (N,) int in {0 GoAlone, 1 Halt, 2 Follow, 3 Pass}.

@@ -1,15 +1,4 @@
-"""Who sees whom: exact wall occlusion of robot-human sight lines, fast on long lines.
-
-A sight line joins two centres and is blocked when it touches any wall. Two exact tests, with
-the same answers as WallIndex.crosses, that also return what socialzoo.nav.sight_cache needs to
-trust an answer on later steps (a clear line's clearance, a blocked line's wall):
-
-- `sight_lines` cuts lines into short pieces and clears those far from every wall with the map's
-  distance field (socialzoo.nav.distance_field); it follows lines outwards and stops at the
-  first wall, which suits many fresh lines, most of them blocked;
-- `near_sight_line` (a scalar kernel) tests a line against the walls listed near it on the wall
-  grid, which suits a few lines, or lines that were clear a moment ago.
-"""
+"""Who sees whom: exact wall occlusion of robot-human sight lines, fast on long lines."""
 
 from __future__ import annotations
 
@@ -76,6 +65,10 @@ def sight_lines(p0: np.ndarray, p1: np.ndarray, walls: WallIndex, field: Distanc
     their exact clearance). Segments are followed outwards from p0 in a few stretches
     (`_SIGHT_STRETCHES`), and a segment found blocked is not followed further: most sight lines
     in a building end at the first wall.
+
+    The same answers as WallIndex.crosses, plus what socialzoo.nav.sight_cache needs to trust an answer
+    on later steps (a clear line's clearance, a blocked line's wall). Suits many fresh lines, most of
+    them blocked.
     """
     m = len(p0)
     clear = np.ones(m, dtype=bool)
@@ -117,6 +110,9 @@ def near_sight_line(x0, y0, x1, y1, end_clearance, grid, cell_start, cell_walls,
     (`end_clearance`, a lower bound on both ends' wall distance) or at one of the wall's ends, so
     those distances give the clearance, capped at what the walls not listed are certainly
     farther than (`reach` less the farthest any point lies from its sample).
+
+    The same answers as WallIndex.crosses; suits a few lines, or lines that were clear a moment ago
+    (socialzoo.nav.sight_cache).
     """
     dx, dy = x1 - x0, y1 - y0
     len2 = dx * dx + dy * dy
