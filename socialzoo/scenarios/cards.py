@@ -1,13 +1,5 @@
-"""Scenario cards: each suite scenario's card (the guidelines' scenario card: metadata, definition,
-usage) kept as data beside its family, socialzoo/scenarios/cards/FAMILY.toml, checked on load.
-
-A card is read with tomllib and checked against its JSON Schema (socialzoo/scenarios/card.schema.json),
-then against the suite (socialzoo.scenarios.suite: the family, its letter and title, the seed
-splits) and the metric registry (socialzoo.core.metrics). Any problem is a CardError naming the
-file and the field. tools/render_suite_docs.py renders the cards into docs/suite_scenarios.md.
-
-Free of numpy, like the catalogue: a card is plain text and numbers.
-"""
+"""Scenario cards: each suite scenario's card (the guidelines' scenario card: metadata, definition, usage) kept as
+data beside its family, socialzoo/scenarios/cards/FAMILY.toml, checked on load."""
 
 from __future__ import annotations
 
@@ -167,6 +159,10 @@ def card_path(name: str) -> Path:
 def load_card(path_or_name: str | Path) -> ScenarioCard:
     """Read and check a scenario card: a file (a Path, or a string ending in .toml), or a suite
     scenario's shipped card by family name or letter.
+
+    A card is read with tomllib and checked against its JSON Schema (socialzoo/scenarios/card.schema.json),
+    then against the suite (socialzoo.scenarios.suite: the family, its letter and title, the seed
+    splits) and the metric registry (socialzoo.core.metrics).
 
     Raises:
         CardError: the file cannot be read or is not TOML, a field is missing or has the wrong

@@ -1,10 +1,4 @@
-"""Scenario families: the interface every family implements, and the one registry of families by name.
-
-Free of numpy, so that the Gymnasium registration (socialzoo.env.registration) names every
-family's id without importing the world: the built-in families are "module:Class" paths loaded
-on first use (socialzoo.scenarios.families: six on small maps; socialzoo.scenarios.crowd_cases:
-CrowdNav's circle and square crossing in the open arena).
-"""
+"""Scenario families: the interface every family implements, and the one registry of families by name."""
 
 from __future__ import annotations
 

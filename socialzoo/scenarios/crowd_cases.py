@@ -1,18 +1,5 @@
-"""The cases of the CrowdNav task (Chen et al. 2019, vita-epfl/CrowdNav): a robot crossing an open
-arena from (0, -r) to (0, r) among people placed by circle crossing or square crossing.
-
-The rules are CrowdNav's (crowd_sim.py): in circle crossing each person starts on a circle of
-radius `circle_radius` at a uniform angle, plus uniform noise of +-v_pref/2 on each coordinate, and
-walks to the antipode of its start; in square crossing each person starts in a random half of a
-square `square_width` wide and walks to a random point of the other half. A draw closer than
-radius + other radius + discomfort distance to an earlier agent's position (or goal) is drawn
-again. Case k of a split is drawn with numpy's legacy RandomState seeded as CrowdNav seeds it
-(validation k: k; test k: 1000 + k; training k: 2000 + k), consuming draws in CrowdNav's order,
-so our validation and test cases are CrowdNav's own (same positions, to float precision), apart
-from the training stream by construction. People get one-point routes: they walk to their goal
-and stay there, as CrowdNav's people do. The two layouts are scenario families
-(socialzoo.scenarios.catalogue): crowdnav_circle_crossing and crowdnav_square_crossing.
-"""
+"""The cases of the CrowdNav task (Chen et al. 2019, vita-epfl/CrowdNav): a robot crossing an open arena from
+(0, -r) to (0, r) among people placed by circle crossing or square crossing."""
 
 from __future__ import annotations
 
@@ -131,6 +118,14 @@ def crowd_case_arrays(
     (0, -r) heading +y with its goal at (0, r)) and config.num_humans people with one-point
     routes to their goals, each drawn clear of the robots and of the people before it.
 
+    The rules are CrowdNav's (crowd_sim.py): in circle crossing each person starts on a circle of
+    radius `circle_radius` at a uniform angle, plus uniform noise of +-v_pref/2 on each coordinate, and
+    walks to the antipode of its start; in square crossing each person starts in a random half of a
+    square `square_width` wide and walks to a random point of the other half. A draw closer than
+    radius + other radius + discomfort distance to an earlier agent's position (or goal) is drawn
+    again. Draws are consumed in CrowdNav's order. People walk to their goal and stay there, as
+    CrowdNav's people do.
+
     Args:
         config: how cases are drawn.
         seed: the case's seed.
@@ -220,6 +215,11 @@ def case_scenario(case: CrowdCase, config: CrowdCaseConfig) -> Scenario:
 class CrowdNavFamily(ScenarioFamily):
     """CrowdNav's cases as a scenario family: drawn by CrowdNav's rules from its case seeds, in the
     open arena, for a CrowdCaseConfig of the family's layout (default: CrowdNav's own).
+
+    Case k of a split is drawn with numpy's legacy RandomState seeded as CrowdNav seeds it
+    (validation k: k; test k: 1000 + k; training k: 2000 + k), so our validation and test cases are
+    CrowdNav's own (same positions, to float precision), apart from the training stream by
+    construction.
 
     Args:
         cases: how cases are drawn; its layout must be the family's.

@@ -1,8 +1,5 @@
-"""Scenario families on small maps, each one class with a few lines of layout: hallway head-on,
-overtaking, crossing at an intersection, doorway, circle crossing and parallel traffic (the
-scenario names of the social-navigation evaluation guidelines). Their interface and registry are
-socialzoo.scenarios.catalogue; this module imports the world only when a scenario is made.
-"""
+"""Scenario families on small maps, each one class with a few lines of layout: hallway head-on, overtaking, crossing
+at an intersection, doorway, circle crossing and parallel traffic (the guidelines' scenario names)."""
 
 from __future__ import annotations
 

@@ -1,16 +1,5 @@
-"""The feasibility rule of scenario generation: which legal-pose pairs are a fair start and goal.
-
-A route is feasible when its length along the navigation graph (as `NavGraph.plan_batch` plans it,
-a straight line where wall-free) is at most `max_route_length`: by default 75% of the distance the
-robot covers in the episode's time limit at its cruise speed, 0.75 x 80 s x 1.5 m/s = 90 m. The
-other quarter of the time is left for turns, doorways and people. GDC1's and GHC3's longest
-pose-to-pose routes are 86.6 m, so on the paper's maps every pair is feasible.
-
-The crowd keeps the benchmark's density on maps that know their walkable area (imported ones):
-the SPEC's 5 to 25 humans walk GDC1's 1352 m^2 of floor, so a map with less floor gets at most
-proportionally fewer (never fewer than min_humans): 25 people in a 340 m^2 office floor would be
-another, much harder, task. The shipped maps carry no area and keep the SPEC's head count.
-"""
+"""The feasibility rule of scenario generation: which legal-pose pairs are a fair start and goal, and how many
+people a map's floor holds."""
 
 from __future__ import annotations
 
@@ -40,7 +29,12 @@ CROWD_DENSITY = 25 / GDC1_WALKABLE_AREA
 
 def max_humans_for(m: Map, min_humans: int, max_humans: int) -> int:
     """The largest head count of a scenario on map m: max_humans, lowered on a map with a
-    walkable_area to the benchmark's crowd density (rounded, at least min_humans)."""
+    walkable_area to the benchmark's crowd density (rounded, at least min_humans).
+
+    The SPEC's 5 to 25 humans walk GDC1's 1352 m^2 of floor, so a map with less floor gets at most
+    proportionally fewer (never fewer than min_humans): 25 people in a 340 m^2 office floor would be
+    another, much harder, task. The shipped maps carry no area and keep the SPEC's head count.
+    """
     if m.walkable_area is None:
         return max_humans
     return int(min(max_humans, max(min_humans, round(m.walkable_area * CROWD_DENSITY))))
@@ -74,7 +68,14 @@ def route_lengths(m: Map) -> np.ndarray:
 
 
 def feasible_pairs(m: Map, max_route_length: float = MAX_ROUTE_LENGTH) -> np.ndarray:
-    """(P, P) bool: pose i to pose j (i != j) is a feasible route (at most max_route_length, m)."""
+    """(P, P) bool: pose i to pose j (i != j) is a feasible route (at most max_route_length, m).
+
+    A route's length is measured along the navigation graph as `NavGraph.plan_batch` plans it (a
+    straight line where wall-free). By default max_route_length is 75% of the distance the robot
+    covers in the episode's time limit at its cruise speed, 0.75 x 80 s x 1.5 m/s = 90 m; the other
+    quarter of the time is left for turns, doorways and people. GDC1's and GHC3's longest
+    pose-to-pose routes are 86.6 m, so on the paper's maps every pair is feasible.
+    """
     lengths = route_lengths(m)
     ok = lengths <= max_route_length
     np.fill_diagonal(ok, False)

@@ -1,6 +1,5 @@
-"""Whether a map is fit for the benchmark: validation, clearance along the graph, connectivity and
-feasible-route statistics (`socialzoo map check`; the picture is socialzoo.render.map_plot).
-"""
+"""Whether a map is fit for the benchmark: validation, clearance along the graph, connectivity and feasible-route
+statistics (`socialzoo map check`; the picture is socialzoo.render.map_plot)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,5 @@
-"""The field's scenario suite: the 25 scenarios of Fig. 7 of Francis et al., "Principles and
-Guidelines for Evaluating Social Robot Navigation Algorithms" (ACM THRI 2025, arXiv 2306.16740),
-each a registered scenario family (socialzoo.scenarios.catalogue), with its seed splits and its
-scenario card (socialzoo.scenarios.cards).
-
-Free of numpy, like the catalogue: the suite's ids and command name its scenarios without the world.
-"""
+"""The field's scenario suite: the 25 scenarios of Fig. 7 of Francis et al., "Principles and Guidelines for Evaluating
+Social Robot Navigation Algorithms" (ACM THRI 2025, arXiv 2306.16740), each a registered scenario family."""
 
 from __future__ import annotations
 
@@ -22,7 +17,11 @@ SUITE_SPLITS = {
 
 
 class SuiteEntry(NamedTuple):
-    """One scenario of the suite: its letter in Fig. 7, its family's registry name, its title."""
+    """One scenario of the suite: its letter in Fig. 7, its family's registry name, its title.
+
+    Each entry is a registered scenario family (socialzoo.scenarios.catalogue), with the suite's seed
+    splits (SUITE_SPLITS) and its scenario card (socialzoo.scenarios.cards).
+    """
 
     letter: str
     family: str

@@ -1,12 +1,5 @@
-"""The suite's scenarios at places (Francis et al. Fig. 7 i, j, l-o): a blind corner, a narrow
-hallway, entering and leaving a room and an elevator, on the corner, narrow_hallway, room and
-elevator maps; also the timing and geometry helpers the suite's families share.
-
-Everything is placed relative to the map: its farthest legal poses, the route between them, the
-first of its doors (Map.doors) and the walls behind it, so a family also runs on another map of
-the same shape. Encounters are timed with the robot's nominal speed and people's start-up lag
-(`nominal_timing`).
-"""
+"""The suite's scenarios at places (Francis et al. Fig. 7 i, j, l-o): a blind corner, a narrow hallway, entering and
+leaving a room and an elevator; also the timing and geometry helpers the suite's families share."""
 
 from __future__ import annotations
 

@@ -1,7 +1,5 @@
-"""The suite's scenarios with people (Francis et al. Fig. 7 p-u, w, y) in an open area: joining and
-leaving a standing group, following, leading and accompanying a person, crowds and crossing flows,
-and people crowding round the robot; all on the plaza map, placed inside its walls' bounding box.
-"""
+"""The suite's scenarios with people (Francis et al. Fig. 7 p-u, w, y) in an open area: joining and leaving a group,
+following, leading and accompanying a person, crowds and crossing flows, people crowding round the robot."""
 
 from __future__ import annotations
 

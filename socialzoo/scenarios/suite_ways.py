@@ -1,11 +1,5 @@
-"""The suite's scenarios on ways (socialzoo.scenarios.suite, Fig. 7 a-h, k, v, x): traffic along a
-corridor, at an intersection, through a door and across a room, each one family laid out on its map.
-
-Layouts read the map's geometry (its corridor, crossing or door, `corridor`, `crossroads`), so a
-family also runs on another map of the same shape; a map without it is a ValueError naming the map.
-Encounters "timed to meet" assume the robot drives at GoAlone's cruise speed and people start from
-rest (`nominal_timing`).
-"""
+"""The suite's scenarios on ways (socialzoo.scenarios.suite, Fig. 7 a-h, k, v, x): traffic along a corridor, at an
+intersection, through a door and across a room, each one family laid out on its map."""
 
 from __future__ import annotations
 
