@@ -1,28 +1,5 @@
-"""A scenario's script: what its people do besides walking their routes, the goal kind of its
-robots, and doors that open and close on a schedule (the behaviours of the guidelines' scenarios,
-socialzoo.scenarios.suite). The world runs it (socialzoo.env.script).
-
-Per person:
-- stop, release, wait, gate: the person walks its route to route point `stop` and waits there until
-  released: at world time `release` (s), `wait` seconds after it came to stand there, or once any
-  robot is past the gate line, whichever comes first (a person released before it reaches its stop
-  does not wait). It slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled
-  by the distance left) and stands within STOP_RADIUS of it; it has reached its stop within
-  ARRIVE_RADIUS.
-- stay: the person stays at the end of its route once there (instead of walking it back), as it
-  stands at a stop (after a stop too: someone who waits in a lobby, then enters a car and stays).
-- gesture: what the person signals from reaching its stop until, released, it is 3 m past it
-  (0 none, 1 WAIT: the robot should wait, 2 PROCEED: the robot may go first); the robot observes it.
-- follow, gap: the person walks after robot `follow` (its route is the robot's position) and stops
-  within `gap` of it: a person the robot leads, or a crowd pressing on the robot.
-
-Per robot:
-- escort, escort_kind, band: the person the robot follows, leads or accompanies; the robot's goal
-  counts as reached only while that person is within the distance band (they arrive together).
-
-Doors: (D, 6) x1, y1, x2, y2, t_open, t_close: a door segment, open from t_open to t_close (s) and
-closed before and after; a robot touching a closed door collides with it as with a wall.
-"""
+"""A scenario's script: what its people do besides walking their routes, the goal kind of its robots, and doors that
+open and close on a schedule (the guidelines' scenarios, socialzoo.scenarios.suite); run by socialzoo.env.script."""
 
 from __future__ import annotations
 
