@@ -1,18 +1,5 @@
-"""The batched core below every task: B rows of R robots and H person slots in one WorldState,
-stepped through the one world step (socialzoo.env.world.step_world).
-
-The core is task-agnostic: it holds the world (the state, the walls, the map), the people and the
-model that drives each (socialzoo.env.people, the learned people the env drives included), the
-robots' navigator on the map's graph (plans, carrots, route left) and their sight (who each robot
-sees, kept from step to step); it resets rows from scenarios and advances the world one step given
-the robots' commands. What a step means belongs to the task (socialzoo.env.tasks): how an action
-becomes a command, the observation, the reward, the episode's end and its metrics. A task reads
-the world's facts here (the step's collision events, goal distances, who is seen) and tells the
-core whose episode ended (`end_episodes`): those robots stand still, exactly where they stopped,
-until their row is reset.
-
-Per-robot arrays are (B, R); flat ones are (B R, ...), row-major: robot r of row b is b * R + r.
-"""
+"""The batched core below every task: B rows of R robots and H person slots in one WorldState, stepped through the
+one world step (socialzoo.env.world.step_world)."""
 
 from __future__ import annotations
 
@@ -42,7 +29,18 @@ from socialzoo.scenarios.scenario import Scenario, scenarios_to_state
 
 
 class BatchedCore:
-    """B rows of R robots and H person slots, stepped together (see the module docstring).
+    """B rows of R robots and H person slots, stepped together.
+
+    The core is task-agnostic: it holds the world (the state, the walls, the map), the people and the
+    model that drives each (socialzoo.env.people, the learned people the env drives included), the
+    robots' navigator on the map's graph (plans, carrots, route left) and their sight (who each robot
+    sees, kept from step to step); it resets rows from scenarios and advances the world one step given
+    the robots' commands. What a step means belongs to the task (socialzoo.env.tasks): how an action
+    becomes a command, the observation, the reward, the episode's end and its metrics. A task reads
+    the world's facts here (the step's collision events, goal distances, who is seen) and tells the
+    core whose episode ended (`end_episodes`): those robots stand still, exactly where they stopped,
+    until their row is reset. Per-robot arrays are (B, R); flat ones are (B R, ...), row-major: robot r
+    of row b is b * R + r.
 
     Args:
         batch_size: B.

@@ -1,26 +1,5 @@
-"""The core's side of its people (a PeopleConfig): which model drives each person of a scenario,
-the learned people the env drives itself, the counterfactual rows without the robot, and the
-metrics of what the robot costs the people.
-
-- Models: each scenario's people are assigned to the models of the people spec from the
-  scenario's seed (socialzoo.humans.models.assign_models); people of the "groups" model walk in
-  groups (socialzoo.humans.group_formation.with_groups); the world reads WorldState.human_model and
-  human_group.
-- Learned people: the policy file of a "learned:PATH" model acts on each learned person's
-  observation (socialzoo.env.human_agents) every step; its desired velocity drives that person
-  through the social force, as for the learned humans of the multi-agent envs.
-- Counterfactual rows (PeopleConfig.counterfactual): every row has a twin that starts from the
-  same scenario without the robot (same people, same seed) and steps beside it through the same
-  world step, people only. Per person, with T the robot's episode time, A the time the person
-  reaches the goal end of its route (turns back there) or, if it has not by T, T + the route left
-  / its preferred speed, and D the distance it walked until then (plus the route left):
-  time lost = A(with robot) - A(without), extra distance = D(with) - D(without).
-- Group intrusion: the robot's centre crosses the line between two members of a walking group
-  (within 3 m of each other) between their positions, counted per episode.
-
-Everything is per row and in a fixed order, so a row's metrics do not depend on its batch; with
-the default config (social force only, no counterfactual) nothing here runs.
-"""
+"""The core's side of its people (a PeopleConfig): which model drives each person of a scenario, the learned people
+the env drives itself, the counterfactual rows without the robot, and the metrics of what the robot costs people."""
 
 from __future__ import annotations
 
@@ -56,6 +35,25 @@ GROUP_SPAN = 3.0
 
 class People:
     """The people of a batched core (socialzoo.env.core.BatchedCore) of B rows and R robots per row.
+
+    - Models: each scenario's people are assigned to the models of the people spec from the
+      scenario's seed (socialzoo.humans.models.assign_models); people of the "groups" model walk in
+      groups (socialzoo.humans.group_formation.with_groups); the world reads WorldState.human_model and
+      human_group.
+    - Learned people: the policy file of a "learned:PATH" model acts on each learned person's
+      observation (socialzoo.env.human_agents) every step; its desired velocity drives that person
+      through the social force, as for the learned humans of the multi-agent envs.
+    - Counterfactual rows (PeopleConfig.counterfactual): every row has a twin that starts from the
+      same scenario without the robot (same people, same seed) and steps beside it through the same
+      world step, people only. Per person, with T the robot's episode time, A the time the person
+      reaches the goal end of its route (turns back there) or, if it has not by T, T + the route left
+      / its preferred speed, and D the distance it walked until then (plus the route left):
+      time lost = A(with robot) - A(without), extra distance = D(with) - D(without).
+    - Group intrusion: the robot's centre crosses the line between two members of a walking group
+      (within 3 m of each other) between their positions, counted per episode.
+
+    Everything is per row and in a fixed order, so a row's metrics do not depend on its batch; with
+    the default config (social force only, no counterfactual) nothing here runs.
 
     Args:
         config: the people's models, walking groups and counterfactual rows.

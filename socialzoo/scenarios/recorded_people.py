@@ -1,6 +1,5 @@
-"""The recorded side of a scenario (Scenario.recorded): every recorded person's track on the
-recording's frames, and the person the robot took the place of (socialzoo.scenarios.recorded makes
-them from a recording; socialzoo.env.replay plays them)."""
+"""The recorded side of a scenario (Scenario.recorded): every recorded person's track on the recording's frames,
+and the person the robot took the place of (made by socialzoo.scenarios.recorded, played by socialzoo.env.replay)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,5 @@
-"""Seeded scenarios: the benchmark's generator (SPEC section 5), its fixed test sets, and the
-conversion of scenarios into a batched WorldState (scenario families for the small maps:
-socialzoo.scenarios.families).
-
-A scenario is a plain record of where everyone starts, where they go and how fast the humans walk;
-it is a pure function of (map, seed, config) and saves to JSON exactly, so a saved scenario replays
-bit for bit.
-"""
+"""Seeded scenarios: the benchmark's generator (SPEC section 5), its fixed test sets, and the conversion of
+scenarios into a batched WorldState (scenario families for the small maps: socialzoo.scenarios.families)."""
 
 from __future__ import annotations
 
@@ -110,7 +104,8 @@ class Scenario:
     """Everything needed to reset a world: robots' starts and goals, humans' spawns, routes, speeds.
 
     All positions are in the world frame, metres; headings in radians. Arrays are read-only.
-    Equality compares every array exactly (bit for bit).
+    Equality compares every array exactly (bit for bit). A scenario is a pure function of (map, seed,
+    config) and saves to JSON exactly, so a saved scenario replays bit for bit.
 
     Attributes:
         map_name: name of the map the scenario belongs to.

@@ -1,22 +1,5 @@
-"""The CrowdNav velocity task (Chen et al. 2019, vita-epfl/CrowdNav) and its variants on the batched
-core (socialzoo.env.core.BatchedCore), with CrowdNav's settings as the defaults
-(socialzoo.env.crowd_config.CrowdNavConfig).
-
-A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
-a building among the benchmark's people (the Walls variant), or a scenario family's map among its
-scripted people (CrowdNavConfig.family: the guidelines' suite, socialzoo/CrowdNavSuite-v1). The task
-turns each action into the robot's command, advances the core `physics_substeps` world steps per
-decision, judges the step as CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach
-along every substep, the goal, the time limit), accumulates the episode metrics and builds each
-robot's joint-state observation (socialzoo.env.crowd_observation; with CrowdNavConfig.signals also
-each person's gesture and the nearest door). Training episodes are CrowdNav's training cases drawn
-per row (socialzoo.env.crowd_source); `reset` options {"split": "val"|"test", "case": k} or
-{"cases": [...]} play fixed cases (case_splits).
-
-CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a robot
-whose episode ended stands still where it is, and the row's episode lasts until every robot's has
-ended. Per-robot arrays are flat over (B, R), row-major: robot r of row b is entry b * R + r.
-"""
+"""The CrowdNav velocity task (Chen et al. 2019, vita-epfl/CrowdNav) and its variants on the batched core, with
+CrowdNav's settings as the defaults (socialzoo.env.crowd_config.CrowdNavConfig; docs/crowdnav.md)."""
 
 from __future__ import annotations
 
@@ -93,7 +76,22 @@ def action_space(config: CrowdNavConfig) -> spaces.Space:
 
 
 class CrowdNavTask(Task):
-    """The CrowdNav task over B rows of R robots (see the module docstring).
+    """The CrowdNav task over B rows of R robots.
+
+    A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
+    a building among the benchmark's people (the Walls variant), or a scenario family's map among its
+    scripted people (CrowdNavConfig.family: the guidelines' suite, socialzoo/CrowdNavSuite-v1). The task
+    turns each action into the robot's command, advances the core `physics_substeps` world steps per
+    decision, judges the step as CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach
+    along every substep, the goal, the time limit), accumulates the episode metrics and builds each
+    robot's joint-state observation (socialzoo.env.crowd_observation; with CrowdNavConfig.signals also
+    each person's gesture and the nearest door). Training episodes are CrowdNav's training cases drawn
+    per row (socialzoo.env.crowd_source); `reset` options {"split": "val"|"test", "case": k} or
+    {"cases": [...]} play fixed cases (case_splits).
+
+    CrowdNav's task has one robot (R = 1); with several, each robot sees the others as people, a robot
+    whose episode ended stands still where it is, and the row's episode lasts until every robot's has
+    ended. Per-robot arrays are flat over (B, R), row-major: robot r of row b is entry b * R + r.
 
     Args:
         config: a CrowdNavConfig (default CrowdNav's task).
