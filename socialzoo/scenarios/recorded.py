@@ -86,7 +86,7 @@ def eligible_tracks(recording: Recording) -> np.ndarray:
 
 
 def split_tracks(recording: Recording) -> dict[str, np.ndarray]:
-    """The scene's eligible tracks split into "test", "val" and "train" (see the module docstring)."""
+    """The scene's eligible tracks split into "test", "val" and "train" (docs/recorded.md gives the rule)."""
     eligible = eligible_tracks(recording)
     rng = np.random.default_rng([zlib.crc32(recording.name.encode()), _SPLIT_STREAM])
     order = eligible[rng.permutation(len(eligible))]
@@ -103,8 +103,8 @@ def replaced_scenario(
     family: str,
     map_name: str = "arena",
 ) -> Scenario:
-    """The episode in which the robot takes the place of track `track` of `recording` (see the
-    module docstring): the others seen during the robot's budget are the scenario's people."""
+    """The episode in which the robot takes the place of track `track` of `recording` (its start,
+    goal and budget: docs/recorded.md): the others seen during the robot's budget are the scenario's people."""
     me = recording.tracks[track]
     limit = time_budget(me.positions, recording.dt)
     first = me.first_frame
@@ -189,7 +189,7 @@ def pack_slots(first: np.ndarray, last: np.ndarray, rest: int = SLOT_REST) -> np
 
 
 class RecordedScene(ScenarioFamily):
-    """The episodes of one recording (see the module docstring): case k of a split is the robot in
+    """The episodes of one recording (docs/recorded.md): case k of a split is the robot in
     the place of that split's k-th track.
 
     Args:
