@@ -1,11 +1,5 @@
 """Evaluation of CrowdNav-task policies on the task's fixed cases (CrowdNav's 100 validation and 500
-test cases), batched by the evaluation loop of every task (socialzoo.bench.episodes.play_cases).
-
-The summary reports CrowdNav's test metrics (success, collision and timeout rates, navigation time
-of the successful episodes, the frequency of discomfort over all steps) and ours (path length,
-minimum separation, intrusion ratio, returns), each rate with a 95% Wilson interval and each mean
-with a Student-t interval over the cases (socialzoo.bench.stats).
-"""
+test cases), batched by the evaluation loop of every task (socialzoo.bench.episodes.play_cases)."""
 
 from __future__ import annotations
 
@@ -25,6 +19,11 @@ CrowdActor = Callable[[np.ndarray, Any], np.ndarray]
 @dataclass(frozen=True)
 class CrowdEvaluation:
     """The result of one policy on fixed cases.
+
+    The summary reports CrowdNav's test metrics (success, collision and timeout rates, navigation time
+    of the successful episodes, the frequency of discomfort over all steps) and ours (path length,
+    minimum separation, intrusion ratio, returns), each rate with a 95% Wilson interval and each mean
+    with a Student-t interval over the cases (socialzoo.bench.stats).
 
     Attributes:
         split: "val" or "test".

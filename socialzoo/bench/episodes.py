@@ -1,9 +1,5 @@
 """Episodes of one policy on a task's fixed cases, through the evaluation runner of every task
-(socialzoo.bench.runner.BatchedRunner with a CaseSet): every row plays one case at a time and takes
-the next pending case when its episode ends, so N cases cost about N / B episodes of wall time.
-Any task (socialzoo.env.tasks) and any policy with act(obs, task) serve; the results are the
-task's episode metrics, per case.
-"""
+(socialzoo.bench.runner.BatchedRunner with a CaseSet)."""
 
 from __future__ import annotations
 
@@ -31,6 +27,10 @@ def play_cases(
     **task_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Play `act` on cases `indices` of a split of a one-robot task; the episodes in case order.
+
+    Every row plays one case at a time and takes the next pending case when its episode ends, so N
+    cases cost about N / B episodes of wall time. Any task (socialzoo.env.tasks) and any policy with
+    act(obs, task) serve.
 
     Args:
         task: the task's registry name, "module:Class" path or class.

@@ -1,9 +1,5 @@
 """The `benchmark` experiment (SPEC section 10, performance and transfer): policies x maps x trials
--> results store -> summary.csv, summary.md and figures, with config.json beside them.
-
-Trials already in the store (same policy, test set, scenario and config hash) are read, not rerun,
-so a repeated run is free and an interrupted one resumes where it stopped.
-"""
+-> results store -> summary.csv, summary.md and figures, with config.json beside them."""
 
 from __future__ import annotations
 
@@ -341,6 +337,9 @@ def run_benchmark(
     resolved env config and test set with its scenario seeds, policy parameters, config
     hashes, package version), summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf},
     and ref_episode.gif when config.gif.
+
+    Trials already in the store (same policy, test set, scenario and config hash) are read, not rerun,
+    so a repeated run is free and an interrupted one resumes where it stopped.
 
     Args:
         config: what to evaluate.

@@ -1,16 +1,5 @@
-"""Many learned policies of one network shape acting in one batch: the checkpoints of a training
-run (the RL curves evaluate 43 of them side by side) as stacked weights, so a step costs one
-gathered product per layer instead of one small product per policy.
-
-A stack gives exactly the actions its policies give one by one (tests check it on recorded
-observations): the normalisation is the same float64 arithmetic, and each row's products are the
-same float32 dot products, taken row by row (np.matmul over a stack of 1-row matrices).
-
-The evaluation runs with one BLAS thread (`single_blas_thread`): its products are small, and
-OpenBLAS's own threads, on a machine whose cores are already busy with the evaluation's worker
-processes, cost more in waiting than they save (measured: 64 x 256 by 256 x 256 took 27 ms with
-the default threads beside other work, 1.2 ms with one).
-"""
+"""Many learned policies of one network shape acting in one batch as stacked weights, so a step costs one
+gathered product per layer instead of one small product per policy."""
 
 from __future__ import annotations
 
@@ -26,7 +15,13 @@ from socialzoo.env.policy_file import mlp_forward
 
 @contextlib.contextmanager
 def single_blas_thread() -> Iterator[None]:
-    """Limit numpy's BLAS to one thread inside the block (threadpoolctl; without it, nothing)."""
+    """Limit numpy's BLAS to one thread inside the block (threadpoolctl; without it, nothing).
+
+    The evaluation runs with one BLAS thread: its products are small, and OpenBLAS's own threads, on
+    a machine whose cores are already busy with the evaluation's worker processes, cost more in
+    waiting than they save (measured: 64 x 256 by 256 x 256 took 27 ms with the default threads
+    beside other work, 1.2 ms with one).
+    """
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # pragma: no cover - a dependency of the package
@@ -51,6 +46,11 @@ def stack_key(policy: Any) -> tuple[Any, ...] | None:
 
 class MlpStack:
     """Greedy actions of several MlpPolicy of the same `stack_key` at once.
+
+    E.g. the checkpoints of a training run (the RL curves evaluate 43 of them side by side). A stack
+    gives exactly the actions its policies give one by one (tests check it on recorded
+    observations): the normalisation is the same float64 arithmetic, and each row's products are the
+    same float32 dot products, taken row by row (np.matmul over a stack of 1-row matrices).
 
     Args:
         policies: the policies (index i in `act`'s `which` is policies[i]).

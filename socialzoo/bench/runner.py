@@ -1,9 +1,5 @@
-"""Batched evaluation of policies on fixed test sets: a pool of B env rows works through a queue of
-trials, refilling each row as its episode ends, locally over processes or on a Ray cluster.
-
-A trial's result depends only on (policy, test set, scenario index, env config): rows of a batch
-do not interact, so any split of the trials over workers and batches gives the same results.
-"""
+"""Batched evaluation of policies on fixed test sets: a pool of B env rows works through a queue of trials,
+refilling each row as its episode ends, locally over processes or on a Ray cluster."""
 
 from __future__ import annotations
 

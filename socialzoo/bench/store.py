@@ -1,9 +1,5 @@
 """The benchmark's results store: one SQLite file, one row per finished trial, written as trials
-finish, so that an interrupted run resumes and a repeated run reads instead of recomputing.
-
-A trial is keyed by (policy, test set, scenario index, config hash); the config hash covers
-everything that changes a trial's outcome (env config, policy parameters, test set definition).
-"""
+finish, so that an interrupted run resumes and a repeated run reads instead of recomputing."""
 
 from __future__ import annotations
 

@@ -1,18 +1,5 @@
 """The benchmark of any registered task id on its fixed cases: episodes in the results store, a
-summary with intervals, its tables (the benchmark's one writer) and the success figure.
-
-    socialzoo benchmark --maps socialzoo/CrowdNav-v1 --policies orca,crowdnav --out DIR
-
-`evaluate_stored` plays (socialzoo.bench.episodes.play_cases) only the cases the store does not hold
-yet for a policy and writes each episode as it ends, so an interrupted run resumes where it stopped
-and a repeated one reads instead of playing. An episode is keyed like a benchmark trial: (policy
-spec, the task's split, case index, config hash), where the hash covers everything that decides the
-episode besides its case: the task's config, the simulation's source code and the policy's module,
-the policy's parameters and its file's digest. A retrained file under the same path therefore gets
-new episodes, never the old file's. Metrics are summarised from the metric registry
-(socialzoo.core.metrics): a flag's rate with a Wilson interval, a number's mean with a Student-t
-interval (NaN values, such as the time of a failed episode, left out).
-"""
+summary with intervals, its tables (the benchmark's one writer) and the success figure."""
 
 from __future__ import annotations
 
@@ -74,7 +61,12 @@ class TaskId:
 
 
 def config_hash(config: Any, split: str, spec: str, policy: Any) -> str:
-    """16 hex digits naming everything that decides an episode of `policy` besides its case."""
+    """16 hex digits naming everything that decides an episode of `policy` besides its case.
+
+    Covered: the task's config, the split, the simulation's source code and the policy's module, the
+    policy's parameters and its file's digest. A retrained file under the same path therefore gets
+    new episodes, never the old file's.
+    """
     from socialzoo.agents import policy_file
     from socialzoo.agents.base import policy_config
     from socialzoo.bench.experiment import file_digest, source_digest
@@ -107,6 +99,10 @@ def evaluate_stored(
 ) -> tuple[list[dict[str, Any]], int]:
     """The episodes of `policy` (named `spec`) on the first `cases` cases of a split, playing only
     those the store at store_path lacks and storing each as it ends.
+
+    Cases are played by socialzoo.bench.episodes.play_cases, so an interrupted run resumes where it
+    stopped and a repeated one reads instead of playing. An episode is keyed like a benchmark trial:
+    (policy spec, the task's split, case index, config hash: `config_hash`).
 
     Returns:
         (every case's episode, stored and new, in case order; how many were played now).
@@ -175,7 +171,8 @@ def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> d
     """Every registered metric of the episodes: a flag's rate ("<name>_rate") with a Wilson
     interval ("<name>_ci"), a number's mean ("<name>") with a Student-t interval, NaN values left
     out; "episodes" counts them. With CrowdNav's discomfort steps, "discomfort_frequency" is
-    pooled over every step of every episode (its "frequency of being in danger")."""
+    pooled over every step of every episode (its "frequency of being in danger"). The metrics are
+    those of the registry (socialzoo.core.metrics); a NaN value is e.g. the time of a failed episode."""
     from socialzoo.bench.stats import mean_interval, rate_interval
 
     n = len(episodes)

@@ -1,6 +1,5 @@
 """`socialzoo benchmark` (evaluate policies on the benchmark's test sets: store, tables, figures) and
-`socialzoo demos` (record Ref demonstrations for the imitation baselines).
-"""
+`socialzoo demos` (record Ref demonstrations for the imitation baselines)."""
 
 from __future__ import annotations
 
