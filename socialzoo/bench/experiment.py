@@ -236,14 +236,12 @@ def config_hash(
     from socialzoo.maps.map_file import load_map
 
     kwargs = dict(policy_kwargs or {})
-    module_file = inspect.getsourcefile(type(policy_object))
     env = env_config.to_dict()
     env["people"]["models"] = hashed_people(env_config.people.models)
     payload = {
         "env_id": env_id_for(test_set.map_name),
         "env": env,
         "map_sha256": map_sha256(load_map(env_config.map)),
-        "code_sha256": source_digest((module_file,) if module_file else ()),
         "policy": {
             "name": policy,
             "config": policy_config(policy_object),
@@ -257,8 +255,15 @@ def config_hash(
     }
     if humans is not None:
         payload["humans"] = dict(humans)
-    text = json.dumps(payload, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return payload_hash(payload, policy_object)
+
+
+def payload_hash(payload: Mapping[str, Any], policy_object: Any) -> str:
+    """A config hash (both benchmarks'): 16 hex digits of the sha256 of `payload` with "code_sha256",
+    the source_digest of the rollout code and of the module of the policy's class, as sorted JSON."""
+    module_file = inspect.getsourcefile(type(policy_object))
+    payload = {**payload, "code_sha256": source_digest((module_file,) if module_file else ())}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
 def hashed_people(models: str) -> str:

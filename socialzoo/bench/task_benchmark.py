@@ -3,9 +3,6 @@ summary with intervals, its tables (the benchmark's one writer) and the success 
 
 from __future__ import annotations
 
-import hashlib
-import inspect
-import json
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -69,22 +66,19 @@ def config_hash(config: Any, split: str, spec: str, policy: Any) -> str:
     """
     from socialzoo.agents import policy_file
     from socialzoo.agents.base import policy_config
-    from socialzoo.bench.experiment import file_digest, source_digest
+    from socialzoo.bench.experiment import file_digest, payload_hash
 
-    module_file = inspect.getsourcefile(type(policy))
     path = policy_file(spec)
     payload = {
         "task": config.to_dict(),
         "split": split,
-        "code_sha256": source_digest((module_file,) if module_file else ()),
         "policy": {
             "spec": spec,
             "config": policy_config(policy),
             "file_sha256": file_digest(path) if path is not None else None,
         },
     }
-    text = json.dumps(payload, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return payload_hash(payload, policy)
 
 
 def evaluate_stored(
