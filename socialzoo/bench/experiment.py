@@ -366,7 +366,6 @@ def run_benchmark(
         socialzoo.bench.store.StoreError: out_dir holds a results file that is not a socialzoo
             store or is corrupted (it is left untouched).
     """
-    from socialzoo import __version__
     from socialzoo.agents import make_policy
     from socialzoo.agents.base import policy_config
 
@@ -447,7 +446,6 @@ def run_benchmark(
                     "scenario_index": r.trial.index,
                     "seed": r.seed,
                     "config_hash": hashes[(r.trial.policy, r.trial.test_set)],
-                    "package_version": __version__,
                     "metrics": r.metrics,
                 }
                 for r in batch

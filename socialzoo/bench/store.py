@@ -327,14 +327,16 @@ class ResultsStore:
         """Store finished trials in one transaction; trials already stored are skipped.
 
         Args:
-            rows: dicts with policy, map, test_set, scenario_index, seed, config_hash,
-                package_version and metrics (a dict of bool, int or float values); a new
+            rows: dicts with policy, map, test_set, scenario_index, seed, config_hash, metrics (a
+                dict of bool, int or float values) and package_version (default: this package's); a new
                 metric's column takes its kind from the metric registry where the name is
                 registered (socialzoo.core.metrics), else from its first value.
 
         Returns:
             The number of new rows.
         """
+        from socialzoo import __version__
+
         rows = list(rows)
         if not rows:
             return 0
@@ -353,7 +355,7 @@ class ResultsStore:
                     int(row["scenario_index"]),
                     str(int(row["seed"])),
                     str(row["config_hash"]),
-                    str(row["package_version"]),
+                    str(row.get("package_version", __version__)),
                     finished,
                     *metrics.values(),  # sqlite3 stores a bool as the integer 0 or 1
                 ]

@@ -105,7 +105,6 @@ def evaluate_stored(
         socialzoo.bench.store.StoreError: store_path is not a usable results store.
         ValueError: a split the task lacks, or more cases than it holds.
     """
-    from socialzoo import __version__
     from socialzoo.bench.episodes import play_cases
     from socialzoo.bench.store import TRIAL_COLUMNS, ResultsStore
 
@@ -136,7 +135,6 @@ def evaluate_stored(
                     "scenario_index": e["case"],
                     "seed": e["seed"],
                     "config_hash": digest,
-                    "package_version": __version__,
                     "metrics": {k: float(v) for k, v in e.items() if k not in ("case", "seed")},
                 }
                 for e in episodes
