@@ -470,8 +470,9 @@ def _init_worker(result_queue: Any) -> None:
     _WORKER_QUEUE = result_queue
 
 
-def _local_chunk(trials: list[Trial], spec: RunSpec) -> int:
-    run_chunk(trials, spec, sink=_WORKER_QUEUE.put)
+def _chunk(trials: list[Trial], spec: RunSpec, result_queue: Any = None) -> int:
+    """A worker's chunk (either backend): its results go to `result_queue`, else to the local process's."""
+    run_chunk(trials, spec, sink=(_WORKER_QUEUE if result_queue is None else result_queue).put)
     return len(trials)
 
 
@@ -496,7 +497,7 @@ def _evaluate_local(chunks: list[list[Trial]], spec: RunSpec, deliver: ResultSin
         max_workers=len(chunks), mp_context=ctx, initializer=_init_worker, initargs=(result_queue,)
     )
     try:
-        futures = [pool.submit(_local_chunk, chunk, spec) for chunk in chunks]
+        futures = [pool.submit(_chunk, chunk, spec) for chunk in chunks]
         expected = sum(len(c) for c in chunks)
         _drain(
             expected,
@@ -563,11 +564,6 @@ def start_local_ray(num_cpus: int) -> None:
     )
 
 
-def _ray_chunk(trials: list[Trial], spec: RunSpec, result_queue: Any) -> int:
-    run_chunk(trials, spec, sink=result_queue.put)
-    return len(trials)
-
-
 def _evaluate_ray(
     trials: list[Trial], spec: RunSpec, workers: int | None, address: str | None, deliver: ResultSink
 ) -> None:
@@ -586,7 +582,7 @@ def _evaluate_ray(
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
         chunks = split_trials(trials, workers)
         result_queue = Queue(actor_options={"num_cpus": 0})
-        task = ray.remote(num_cpus=1)(_ray_chunk)
+        task = ray.remote(num_cpus=1)(_chunk)
         refs = [task.remote(chunk, spec, result_queue) for chunk in chunks]
         try:
             _drain(
