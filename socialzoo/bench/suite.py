@@ -568,7 +568,6 @@ def _tell(say: Callable[[str], None] | None, line: str) -> None:
 def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteConfig, progress: bool) -> int:
     """Play every unit's cases the store lacks on the run's backend, storing each episode as it ends
     under the key `evaluate_stored` reads it by; returns how many were played."""
-    from socialzoo import __version__
     from socialzoo.bench.runner import CaseSet, RunSpec, Trial, TrialResult, evaluate
     from socialzoo.bench.store import ResultsStore
 
@@ -607,7 +606,6 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
                         "scenario_index": r.trial.index,
                         "seed": r.seed,
                         "config_hash": unit.digest,
-                        "package_version": __version__,
                         "metrics": {k: float(v) for k, v in r.metrics.items()},
                     }
                 )

@@ -112,7 +112,6 @@ def evaluate_policies(
         env_overrides: EnvConfig.replace keywords for the evaluation env (e.g. {"max_steps": 400}).
         backend: "local" (`workers` processes) or "ray" (Ray tasks; a running Ray is used).
     """
-    from socialzoo import __version__
     from socialzoo.agents import make_policy, split_policy_spec
     from socialzoo.bench.experiment import config_hash
 
@@ -144,7 +143,6 @@ def evaluate_policies(
                 "scenario_index": r.trial.index,
                 "seed": r.seed,
                 "config_hash": hashes[label_of[r.trial.policy]],
-                "package_version": __version__,
                 "metrics": r.metrics,
             }
             for r in batch
