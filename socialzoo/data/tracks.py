@@ -175,10 +175,11 @@ def read_tracks(
     - "obsmat": the ETH `obsmat.txt` of OpenTraj, 8 columns `frame person pos_x pos_z pos_y v_x v_z
       v_y`; x and y are columns 2 and 4 (from 0), the height and the velocities are not used.
 
-    The frame grid: frame numbers step by the grid period, the smallest positive difference between
-    frame numbers (which must be the step a person's rows take most often), and frame index 0 is the
-    file's first frame. Each grid step is `dt` seconds: 0.4 s (2.5 Hz, the ETH/UCY annotation rate)
-    unless `dt=` says otherwise, in both layouts.
+    The frame grid: frame numbers step by the grid period, the step a person's rows take most often,
+    and frame index 0 is the file's first frame. After a pause longer than one period in which nobody
+    is annotated, the frame numbers may go on off that grid (ETH's seq_eth obsmat.txt does): such a
+    stretch starts at the nearest grid index. Each grid step is `dt` seconds: 0.4 s (2.5 Hz, the
+    ETH/UCY annotation rate) unless `dt=` says otherwise, in both layouts.
 
     A person's missing frames are filled by linear interpolation over gaps of up to MAX_GAP_FRAMES
     frames; a longer gap splits the person into two tracks (with the same person id).
@@ -341,9 +342,12 @@ def _grid_index(
     """The grid index of each row's frame (file order); raise for the first row off the grid.
 
     The period is the step between a person's consecutive rows taken most often (the smallest
-    frame-number difference when nobody has two rows); the grid is the frame numbers with the
-    remainder modulo the period that most rows have. When every row is on it, the period is also
-    the smallest positive difference of frame numbers.
+    frame-number difference when nobody has two rows). A stretch of annotation is a run of frame
+    numbers without a pause longer than one period; its grid is the frame numbers with the remainder
+    modulo the period that most of its rows have, and it starts at the grid index nearest its first
+    frame's (frame index 0: the file's first frame). A stretch after a pause may be on another
+    remainder (ETH's seq_eth obsmat.txt has stretches on 0, 3 and 5 modulo 6): it moves by at most
+    half a period, while nobody is annotated.
     """
     same = sorted_person[1:] == sorted_person[:-1]
     steps = (sorted_frame[1:] - sorted_frame[:-1])[same]
@@ -355,19 +359,24 @@ def _grid_index(
         period = int(np.diff(distinct).min())
     else:
         period = 1
-    remainders, counts = np.unique(frame % period, return_counts=True)
-    remainder = remainders[np.argmax(counts)]
-    off = np.flatnonzero(frame % period != remainder)
-    if len(off):
-        k = off[0]
-        on = frame[frame % period == remainder]
+    starts = np.concatenate(([True], np.diff(distinct) > period))
+    stretch = (np.cumsum(starts) - 1)[np.searchsorted(distinct, frame)]  # each row's stretch
+    remainder = frame % period
+    rows = np.zeros((stretch.max() + 1, period), dtype=np.int64)
+    np.add.at(rows, (stretch, remainder), 1)
+    off = remainder != rows.argmax(1)[stretch]
+    first = np.full(len(rows), np.iinfo(np.int64).max)
+    np.minimum.at(first, stretch[~off], frame[~off])  # each stretch's first frame on its grid
+    if off.any():
+        k = int(np.argmax(off))
         raise TrackFileError(
             path,
             int(lines[k]),
-            f"frame {frame[k]} is off the frame grid: frames {on.min()} + k * {period} "
+            f"frame {frame[k]} is off the frame grid: frames {first[stretch[k]]} + k * {period} "
             f"(a person's rows step {period} frame numbers most often)",
         )
-    return (frame - distinct[0]) // period
+    start = (2 * (first - distinct[0]) + period) // (2 * period)  # the nearest grid index (halves up)
+    return start[stretch] + (frame - first[stretch]) // period
 
 
 def _tracks(person: np.ndarray, index: np.ndarray, xy: np.ndarray) -> list[Track]:

@@ -71,6 +71,32 @@ def test_obsmat_layout_reads_x_and_y_from_columns_2_and_4(tmp_path):
         assert (rec.tracks[1].person, rec.tracks[1].first_frame) == (2, 2)
 
 
+def test_annotation_restarting_on_another_phase_after_a_pause(tmp_path):
+    # As in ETH's seq_eth obsmat.txt: rows step 6 frame numbers, and after a pause with nobody
+    # annotated the frames continue on another remainder modulo 6 (here 0, then 3, then 5).
+    rows = [_obsmat_row(f, 1, f / 2, 0.0) for f in (780, 786, 792)]
+    rows += [_obsmat_row(f, 2, f / 2, 1.0) for f in (831, 837)]  # 39 after 792: 6.5 steps
+    rows += [_obsmat_row(f, 3, f / 2, 2.0) for f in (863, 869)]  # 26 after 837: 4.33 steps
+    rec = read_tracks(_write(tmp_path, rows, "obsmat.txt", sep=" "))
+    _, two, three = rec.tracks
+    # Each stretch starts at the grid index nearest its first frame's ((f - 780) / 6, halves up)
+    # and keeps its own steps; positions are the file's.
+    assert [(t.person, t.first_frame, t.last_frame) for t in rec.tracks] == [
+        (1, 0, 2),
+        (2, 9, 10),
+        (3, 14, 15),
+    ]
+    assert rec.num_frames == 16
+    np.testing.assert_array_equal(two.positions, [[415.5, 1.0], [418.5, 1.0]])
+    np.testing.assert_array_equal(three.positions, [[431.5, 2.0], [434.5, 2.0]])
+    # Inside a stretch (no pause longer than a step) a frame on another remainder is refused.
+    rows.insert(3, _obsmat_row(795, 4, 0.0, 0.0))
+    with pytest.raises(
+        TrackFileError, match=r"line 4: frame 795 is off the frame grid: frames 780 \+ k \* 6"
+    ):
+        read_tracks(_write(tmp_path, rows, "bad.txt", sep=" "))
+
+
 def test_tracks_sorted_by_first_frame_then_person(tmp_path):
     rows = [[0, 9, 0, 0], [10, 9, 0, 0], [10, 3, 1, 1], [10, 5, 2, 2], [20, 3, 1, 1], [20, 1, 0, 0]]
     rec = read_tracks(_write(tmp_path, rows))
