@@ -10,6 +10,10 @@ from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import given, positive_int, split_commas
 from socialzoo.cli.people_cmd import add_report
 
+SCENES_HELP = (
+    "comma-separated scenes (eth, hotel, univ, zara1, zara2) or track files of your own (PATH or NAME=PATH)"
+)
+
 
 def register(subparsers: Any) -> None:
     """Add `humans` and its subcommands `compare`, `select`, `report`, `realism` and `calibrate`.
@@ -81,7 +85,7 @@ def _add_realism(commands: Any) -> None:
         "(socialzoo.studies.realism), and write DIR/realism.csv, realism.md, realism.json, ade.png and "
         "speeds.png. The scenes come from the data cache (`socialzoo data fetch eth-ucy`).",
     )
-    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help="comma-separated scenes")
+    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
     parser.add_argument(
         "--models",
         default="cv,sf,orca,groups",
@@ -107,7 +111,7 @@ def _add_calibrate(commands: Any) -> None:
         "scenes, DIR/<model>-eth-ucy.json.",
     )
     parser.add_argument("--model", required=True, choices=("sf", "orca"), help="the model to fit")
-    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help="comma-separated scenes")
+    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
     parser.add_argument(
@@ -124,12 +128,12 @@ def _add_calibrate(commands: Any) -> None:
 
 def run_realism(args: argparse.Namespace) -> int:
     """Run `socialzoo humans realism`; returns the exit status."""
-    from socialzoo.data.fetch import UnknownSceneError, check_scenes
+    from socialzoo.data.fetch import UnknownSceneError, check_recordings
     from socialzoo.studies.realism import RealismConfig
     from socialzoo.studies.realism import run_realism as run
 
     try:
-        check_scenes(split_commas(args.scenes))
+        check_recordings(split_commas(args.scenes))
         config = RealismConfig(
             scenes=split_commas(args.scenes),
             models=split_commas(args.models),
@@ -151,11 +155,11 @@ def run_realism(args: argparse.Namespace) -> int:
 
 def run_calibrate(args: argparse.Namespace) -> int:
     """Run `socialzoo humans calibrate`; returns the exit status."""
-    from socialzoo.data.fetch import UnknownSceneError, check_scenes
+    from socialzoo.data.fetch import UnknownSceneError, check_recordings
     from socialzoo.studies.calibration import CalibrationConfig, calibrate
 
     try:
-        check_scenes(split_commas(args.scenes))
+        check_recordings(split_commas(args.scenes))
         config = CalibrationConfig(
             model=args.model,
             scenes=split_commas(args.scenes),

@@ -200,6 +200,47 @@ def load_scene(name: str, cache: str | Path | None = None) -> Recording:
     return recordings[0] if len(recordings) == 1 else join(recordings, scene, JOIN_GAP_FRAMES)
 
 
+def check_recordings(scenes: Iterable[str]) -> list[str]:
+    """The recordings a study asks for, each a fetched scene's name or a track file of your own:
+    `PATH` (named after the file, without its suffix) or `NAME=PATH`. The scenes come first, in
+    SCENES order, then the files in the order given.
+
+    Raises:
+        UnknownSceneError: neither a scene of SCENES nor an existing file.
+        ValueError: no recording, or two with one name.
+    """
+    asked = list(scenes)
+    if not asked:
+        raise ValueError("name at least one scene or track file")
+    files = [s for s in asked if s not in SCENES]
+    for spec in files:
+        if not _track_file(spec)[1].is_file():
+            raise UnknownSceneError(
+                f"{spec!r} is neither a scene nor a track file (PATH or NAME=PATH); scenes: {', '.join(SCENES)}"
+            )
+    names = [s for s in asked if s in SCENES] + [_track_file(s)[0] for s in files]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"two recordings named {', '.join(map(repr, twice))}: name them NAME=PATH")
+    return check_scenes([s for s in asked if s in SCENES]) + files
+
+
+def load_recording(spec: str, cache: str | Path | None = None) -> Recording:
+    """A fetched scene by name (load_scene), or a track file given as `PATH` or `NAME=PATH` (read_tracks,
+    layout "auto"; named NAME or after the file)."""
+    if spec in SCENES:
+        return load_scene(spec, cache)
+    (spec,) = check_recordings([spec])
+    name, path = _track_file(spec)
+    return read_tracks(path, name=name)
+
+
+def _track_file(spec: str) -> tuple[str, Path]:
+    """The name and path of a track file given as PATH or NAME=PATH."""
+    name, _, path = spec.partition("=") if not Path(spec).is_file() else ("", "", spec)
+    return name or Path(path).stem, Path(path)
+
+
 def _verify(path: Path, file: SceneFile, what: str) -> None:
     """Raise ChecksumError when the file at `path` is not `file`."""
     found = sha256(path)

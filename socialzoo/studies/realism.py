@@ -549,7 +549,7 @@ class RealismConfig:
     """One realism run.
 
     Attributes:
-        scenes: ETH/UCY scene names.
+        scenes: ETH/UCY scene names or track files (PATH or NAME=PATH: socialzoo.data.fetch.load_recording).
         models: model names (model_spec).
         tracks: persons per scene (a seeded sample), None for all.
         seed: the sample's seed.
@@ -583,10 +583,10 @@ def sample_persons(scene: SceneTracks, count: int | None, seed: int) -> np.ndarr
 
 
 def load_tracks(scene: str, cache: str | None) -> SceneTracks:
-    """A scene of the cache as SceneTracks."""
-    from socialzoo.data.fetch import load_scene
+    """A scene of the cache, or a track file (PATH or NAME=PATH), as SceneTracks."""
+    from socialzoo.data.fetch import load_recording
 
-    return SceneTracks.of(load_scene(scene, cache=cache))
+    return SceneTracks.of(load_recording(scene, cache=cache))
 
 
 def run_realism(

@@ -38,7 +38,8 @@ class Args:
     """Behaviour cloning of learned people on recorded ETH/UCY tracks.
 
     Attributes:
-        scenes: the training scenes, comma-separated (socialzoo.data.fetch.SCENES).
+        scenes: the training scenes, comma-separated: scenes of socialzoo.data.fetch.SCENES or track
+            files (PATH or NAME=PATH: socialzoo.data.fetch.load_recording).
         out: run folder: people_bc.safetensors, run.json.
         seed: seed of the network's initialisation and the batches' order.
         cache: the scenes' cache folder (None: socialzoo.data.fetch.data_dir()).
@@ -94,12 +95,12 @@ class Args:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        from socialzoo.data.fetch import check_scenes
+        from socialzoo.data.fetch import check_recordings
 
         names = tuple(s.strip() for s in str(self.scenes).split(",") if s.strip())
         if not names:
             raise ValueError(f"Args.scenes must name at least one scene, got {self.scenes!r}")
-        object.__setattr__(self, "scenes", ",".join(check_scenes(list(names))))
+        object.__setattr__(self, "scenes", ",".join(check_recordings(names)))
         object.__setattr__(self, "out", Path(self.out))
         if self.cache is not None:
             object.__setattr__(self, "cache", Path(self.cache))
@@ -460,7 +461,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     """Collect the demonstrations, fit the network with early stopping, save the policy."""
     import torch
 
-    from socialzoo.data.fetch import load_scene
+    from socialzoo.data.fetch import load_recording
     from socialzoo.train.marl_args import env_id
     from socialzoo.train.policy_net import mlp
 
@@ -468,7 +469,7 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
     train_parts, val_parts, per_scene, held_out = [], [], {}, {}
     for name in args.scene_names:
-        recording = load_scene(name, cache=args.cache)
+        recording = load_recording(name, cache=args.cache)
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,

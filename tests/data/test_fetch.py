@@ -17,8 +17,10 @@ from socialzoo.data.fetch import (
     DownloadError,
     SceneFile,
     UnknownSceneError,
+    check_recordings,
     data_dir,
     fetch_scenes,
+    load_recording,
     load_scene,
 )
 
@@ -176,6 +178,30 @@ def test_load_scene_reads_and_joins(scenes, tmp_path):
     (cache / "two_b.txt").write_text("0\t1\t0\t0\n")
     with pytest.raises(ChecksumError, match="fetch it again"):
         load_scene("two", cache=cache)
+
+
+def test_recordings_are_scenes_or_track_files(scenes, tmp_path):
+    cache = tmp_path / "cache"
+    fetch_scenes(source_dir=_write_tree(tmp_path / "src"), cache=cache, progress=False)
+    mine = tmp_path / "mine.txt"
+    mine.write_text(FILES["two/test/two_b.txt"])
+    # Scenes first, in SCENES order, then the files as given.
+    assert check_recordings([str(mine), "two", "one"]) == ["one", "two", str(mine)]
+    assert check_recordings(["two", f"other={mine}"]) == ["two", f"other={mine}"]
+    np.testing.assert_array_equal(
+        load_recording("one", cache=cache).grid(), load_scene("one", cache=cache).grid()
+    )
+    own = load_recording(str(mine))
+    assert (own.name, own.num_frames, own.source) == ("mine", 3, str(mine))
+    assert load_recording(f"other={mine}").name == "other"
+    with pytest.raises(UnknownSceneError, match=r"'nowhere.txt' is neither a scene nor a track file"):
+        check_recordings(["one", "nowhere.txt"])
+    with pytest.raises(UnknownSceneError, match=r"'x=nowhere.txt' is neither"):
+        load_recording("x=nowhere.txt")
+    with pytest.raises(ValueError, match=r"two recordings named 'one': name them NAME=PATH"):
+        check_recordings(["one", f"one={mine}"])
+    with pytest.raises(ValueError, match="at least one"):
+        check_recordings([])
 
 
 def test_data_dir(monkeypatch, tmp_path):

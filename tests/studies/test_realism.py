@@ -138,6 +138,14 @@ def test_realism_command_on_a_synthetic_cache(cache, tmp_path, capsys):
     record = json.loads((out / "realism.json").read_text())
     assert record["seed"] == 0 and "numpy" in record["versions"]
     assert main(["humans", "realism", "--scenes", "nowhere", "--cache", str(cache), "--out", str(out)]) == 2
+    # A track file of your own beside a scene, named after the file or NAME=PATH.
+    own = tmp_path / "mine.txt"
+    own.write_text((cache / "two.txt").read_text())
+    for spec, name in ((str(own), "mine"), (f"walkway={own}", "walkway")):
+        args = ["humans", "realism", "--scenes", f"one,{spec}", "--models", "cv", "--cache", str(cache)]
+        assert main([*args, "--out", str(tmp_path / name), "--no-progress", "--no-figures"]) == 0
+        table = (tmp_path / name / "realism.md").read_text()
+        assert f"| {name} | cv |" in table and "| one | cv |" in table
 
 
 def test_calibrate_command_on_a_synthetic_cache(cache, tmp_path):
