@@ -35,6 +35,8 @@ ROTATION_SAMPLES = 16
 ARENA = "arena"
 # CrowdNav's own arena families, chosen by cases.layout (not CrowdNavConfig.family).
 ARENA_LAYOUTS = ("crowdnav_circle_crossing", "crowdnav_square_crossing")
+# The case fields that follow the robot and the reward (CrowdNavConfig.replace).
+_CASE_SPACING = ("robot_radius", "discomfort_dist")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -152,6 +154,18 @@ class CrowdNavConfig:
         check_int("CrowdNavConfig", "wall_rays", self.wall_rays, low=0)
         check_number("CrowdNavConfig", "wall_range", self.wall_range, low=0, low_open=True)
         check_choice("CrowdNavConfig", "action_frame", self.action_frame, ACTION_FRAMES)
+        # CrowdNav spaces its people from its robot by the robot's radius and the reward's
+        # discomfort distance: cases drawn for another robot could start it inside a person.
+        for spacing, value, owner in (
+            ("robot_radius", self.robot.radius, "robot.radius"),
+            ("discomfort_dist", self.reward.discomfort_dist, "reward.discomfort_dist"),
+        ):
+            if getattr(self.cases, spacing) != value:
+                raise ValueError(
+                    f"CrowdNavConfig.cases.{spacing} ({getattr(self.cases, spacing)}) must equal {owner} "
+                    f"({value}): the cases are drawn for the task's robot and reward (replace() carries "
+                    f"{owner} into the cases)"
+                )
         if not isinstance(self.signals, bool):
             raise ValueError(f"CrowdNavConfig.signals must be a bool, got {self.signals!r}")
 
@@ -217,10 +231,26 @@ class CrowdNavConfig:
         )
 
     def replace(self, **changes: Any) -> CrowdNavConfig:
-        """A copy with `changes`; nested configs may be given as dicts of their fields."""
+        """A copy with `changes`; nested configs may be given as dicts of their fields.
+
+        The cases follow the robot and the reward (CrowdNav reads one value for each): a new
+        robot radius or discomfort distance is carried into cases.robot_radius and
+        cases.discomfort_dist unless `changes` sets those itself (a CrowdCaseConfig, or a dict
+        naming them)."""
+        cases = changes.get("cases")
+        named = cases.keys() if isinstance(cases, dict) else _CASE_SPACING if cases is not None else ()
         for name in ("cases", "robot", "reward"):
             if isinstance(changes.get(name), dict):
                 changes[name] = dataclasses.replace(getattr(self, name), **changes[name])
+        robot, reward = changes.get("robot", self.robot), changes.get("reward", self.reward)
+        follow = {
+            "robot_radius": getattr(robot, "radius", None),
+            "discomfort_dist": getattr(reward, "discomfort_dist", None),
+        }
+        follow = {k: v for k, v in follow.items() if k not in named and v is not None}
+        cases = changes.get("cases", self.cases)
+        if isinstance(cases, CrowdCaseConfig) and any(getattr(cases, k) != v for k, v in follow.items()):
+            changes["cases"] = dataclasses.replace(cases, **follow)
         try:
             return dataclasses.replace(self, **changes)
         except TypeError as err:

@@ -40,9 +40,11 @@ class CrowdCaseConfig:
         circle_radius: radius of the circle of starts, and the robot's distance from the centre, m.
         square_width: side of the square crossing's square, m.
         human_radius: the people's radius, m.
-        robot_radius: the robot's radius, m.
+        robot_radius: the robot's radius, m (in the CrowdNav task its robot's: CrowdNavConfig
+            keeps the two equal, as CrowdNav reads both from [robot] radius).
         human_speed: the people's preferred speed v_pref, m/s (also the scale of the start noise).
-        discomfort_dist: extra spacing between drawn agents, m.
+        discomfort_dist: extra spacing between drawn agents, m (in the CrowdNav task its reward's
+            discomfort distance, as CrowdNav's [reward] discomfort_dist is both).
         robot_layout: "crossing" (CrowdNav: the robot from (0, -r) to (0, r)) or "random"
             (CrowdNav++: start and goal uniform in [-r, r]^2, at least min_robot_route apart,
             drawn before the people from the same stream).

@@ -76,6 +76,23 @@ def test_fixed_cases_are_crowdnavs_and_end_with_metrics():
     assert info["case_seed"].tolist() == [0, 99]
 
 
+def test_the_cases_are_drawn_for_the_tasks_robot_and_reward():
+    # CrowdNav reads [robot] radius and [reward] discomfort_dist for its spawn spacing too: a larger
+    # robot must never start inside a person, nor a wider discomfort zone hold anyone at the start.
+    for overrides in ({"robot": {"radius": 0.7}}, {"reward": {"discomfort_dist": 0.5}}):
+        env = CrowdNavEnv(**overrides)
+        config = env.unwrapped.task.config
+        assert config.cases.robot_radius == config.robot.radius
+        assert config.cases.discomfort_dist == config.reward.discomfort_dist
+        for case in range(30):
+            env.reset(options={"split": "test", "case": case})
+            s = env.unwrapped.task.world_state
+            gap = np.hypot(*(s.human_pos[0] - s.robot_pose[0, 0, :2]).T) - config.robot.radius - 0.3
+            assert gap.min() >= config.reward.discomfort_dist, (overrides, case)
+    with pytest.raises(ValueError, match=r"cases\.robot_radius \(0\.4\) must equal robot\.radius"):
+        CrowdNavEnv(cases={"robot_radius": 0.4})
+
+
 def test_bad_actions_and_configs_are_refused_before_any_change():
     vec = CrowdNavVectorEnv(2, variant="SocialForce")
     vec.reset(seed=0)
