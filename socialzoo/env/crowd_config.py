@@ -92,10 +92,11 @@ class CrowdNavConfig:
         wall_range: the scan's range, m.
         action_frame: the frame of a holonomic robot's velocity (continuous or discrete): "goal"
             (x towards the goal the robot sees: the observation's own frame, so a policy acts in
-            the frame it observes; the default) or "world" (CrowdNav's ActionXY). In CrowdNav's
-            arena the goal lies straight ahead along +y, so the two differ by a fixed quarter
-            turn; with random layouts (CrowdNav++'s arena) or among walls only "goal" can be
-            learned from the observation.
+            the frame it observes; the default) or "world" (CrowdNav's ActionXY). The goal frame
+            turns with the robot's bearing to the goal: in CrowdNav's arena the two differ by a
+            quarter turn only on the start-goal line, and by that bearing elsewhere; with random
+            layouts (CrowdNav++'s arena) or among walls only "goal" can be learned from the
+            observation.
     """
 
     cases: CrowdCaseConfig = field(default_factory=CrowdCaseConfig)
