@@ -2,6 +2,9 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within CrowdNav's v1, default rollouts unchanged: a robot radius or discomfort distance given
+        to the task (robot=, reward=) also spaces its drawn cases, as CrowdNav's generator does
+        (the cases were drawn for a 0.3 m robot and 0.2 m, whatever the task's robot and reward).
     Within CrowdNav's v1, CrowdNavConfig.observed_people (the K nearest people in the observation)
         is new and opt-in (None, every slot in slot order, the default), so no id's rollouts change.
     Within v2, the ids socialzoo/ActionSelectionReference-v2 and
