@@ -16,6 +16,7 @@ from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
 from socialzoo.env.tasks.base import TaskStep
+from socialzoo.env.torchrl_single import box_observation
 
 ROBOT = "robot"
 HUMAN = "human"
@@ -103,7 +104,8 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
         **overrides: EnvConfig fields as plain values (nested configs as dicts).
 
     Raises:
-        ValueError: bad config overrides, batch size, or too few legal poses for the robots.
+        ValueError: bad config overrides, batch size, too few legal poses for the robots, or a
+            robot observation that is not one Box (CrowdNav: observation="flat").
 
     ## Version History
     The action-selection ids' (socialzoo.env.registration's module docstring).
@@ -126,7 +128,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
                 f"SocialNavTorchEnv: robot_policy must have act(obs, task), got {type(robot_policy).__name__}"
             )
         super().__init__(device=device, batch_size=torch.Size([batch_size]))
-        self.task = self.task_class(task)(config, batch_size, **kwargs)
+        self.task = box_observation(self.task_class(task)(config, batch_size, **kwargs), type(self).__name__)
         self.config = self.task.config
         self.robot_policy = robot_policy
         self.num_robots = self.task.num_robots

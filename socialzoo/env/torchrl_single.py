@@ -12,7 +12,18 @@ from torchrl.data import Bounded, Categorical, Composite, OneHot, Unbounded
 from torchrl.envs import EnvBase
 
 from socialzoo.env.gym_env import TaskAdapter, one_robot
-from socialzoo.env.tasks.base import batch_actions
+from socialzoo.env.tasks.base import Task, batch_actions
+
+
+def box_observation(task: Task, adapter: str) -> Task:
+    """`task`, refused when its robot observation is not one Box (a TorchRL adapter's observation
+    entry is one tensor; CrowdNav's observation="dict" is three)."""
+    if not isinstance(task.observation_space, spaces.Box):
+        raise ValueError(
+            f"{adapter}: the task's observation must be one Box, got {task.observation_space} "
+            "(CrowdNav: observation='flat')"
+        )
+    return task
 
 
 class TaskTorchEnv(TaskAdapter, EnvBase):
@@ -56,12 +67,8 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         name = type(self).__name__
         if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"{name}: num_envs must be an int >= 1, got {num_envs!r}")
-        self.task = one_robot(self.task_class(task)(config, num_envs, **kwargs), name)
+        self.task = box_observation(one_robot(self.task_class(task)(config, num_envs, **kwargs), name), name)
         self.config = self.task.config
-        if not isinstance(self.task.observation_space, spaces.Box):
-            raise ValueError(
-                f"{name}: the task's observation must be one Box, got {self.task.observation_space}"
-            )
         super().__init__(device=device, batch_size=torch.Size([num_envs]))
         self.num_envs = num_envs
         self.categorical_action_encoding = categorical_action_encoding

@@ -213,6 +213,9 @@ def test_bad_arguments_and_actions_raise():
         make(robot_policy=object())
     with pytest.raises(ValueError, match="num_learned_humans"):
         make(num_learned_humans=9)
+    # A task whose robot observation is a dict (CrowdNav's "dict"): named, not a TypeError in the specs.
+    with pytest.raises(ValueError, match="SocialNavTorchEnv: the task's observation must be one Box"):
+        SocialNavTorchEnv(task="crowdnav", observation="dict")
     env = make(num_learned_humans=1)
     td = env.rand_action(env.reset())
     td["human", "action"] = torch.full((1, 1, 2), 1.5)
