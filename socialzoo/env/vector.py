@@ -30,7 +30,8 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
 
     ## Starting State
     `reset(seed=s)` seeds the rows' training streams and starts every row on its next episode;
-    `options={"reset_mask": mask}` resets only the masked rows (after the first reset); other
+    `options={"reset_mask": mask}` ((num_envs,) bools) resets only the masked rows (after the
+    first reset; another shape or dtype, such as row indices, is refused before any change); other
     options are the task's (fixed cases: {"split": "test", "cases": [k_0, ..., k_{B-1}]}).
 
     ## Arguments
@@ -84,21 +85,36 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Reset every row, or the rows of options["reset_mask"] (see the class docstring)."""
-        super().reset(seed=seed)
         options = dict(options or {})
-        if seed is not None or not self._started:
-            self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
         rows = self._all
         if "reset_mask" in options:
-            if not self._started:
-                raise RuntimeError(
-                    f"{type(self).__name__}: the first reset must reset every row (no reset_mask)"
-                )
-            rows = np.flatnonzero(np.asarray(options.pop("reset_mask"), dtype=bool))
+            rows = self._masked_rows(options.pop("reset_mask"))
+        super().reset(seed=seed)
+        if seed is not None or not self._started:
+            self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
         seeds = np.zeros(self.num_envs, dtype=np.uint64)
         seeds[rows] = self.task.reset(rows, options)
         self._started = True
         return robot_row(self.task.observations(), slice(None)), {self.task.reset_info_key: seeds}
+
+    def _masked_rows(self, mask: Any) -> np.ndarray:
+        """The rows a reset mask names: (num_envs,) bools, as Gymnasium's vector envs take it.
+
+        Raises:
+            RuntimeError: on the first reset (every row must start).
+            ValueError: a mask of another shape or dtype (row indices, one entry per ended row);
+                nothing is reset then.
+        """
+        name = type(self).__name__
+        if not self._started:
+            raise RuntimeError(f"{name}: the first reset must reset every row (no reset_mask)")
+        array = np.asarray(mask)
+        if array.dtype != np.bool_ or array.shape != (self.num_envs,):
+            raise ValueError(
+                f"{name}: options['reset_mask'] must be {self.num_envs} bools, one per row, "
+                f"got {array.dtype} of shape {array.shape}"
+            )
+        return np.flatnonzero(array)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every row; rows whose episode ended are reset in the same call."""

@@ -119,6 +119,20 @@ def test_vector_env_leaves_the_callers_actions_alone_across_autoresets():
     np.testing.assert_array_equal(actions, [3, 2, 1])
 
 
+@pytest.mark.parametrize("mask", [np.array([True]), np.array([1]), [0, 2], np.array([[True, False, True]])])
+def test_vector_reset_mask_of_another_shape_or_dtype_is_refused_before_anything_changes(mask):
+    """Row indices ([0, 2]) or one entry per ended row used to reset whichever rows they cast to."""
+    vec = ActionSelectionVectorEnv(3, map="open_room", max_steps=40)
+    vec.reset(seed=0)
+    vec.step(np.zeros(3, dtype=np.int64))
+    before = vec.task.observations().copy()
+    with pytest.raises(ValueError, match=r"reset_mask.*3 bools, one per row"):
+        vec.reset(seed=5, options={"reset_mask": mask})
+    np.testing.assert_array_equal(vec.task.observations(), before)
+    obs, _ = vec.reset(options={"reset_mask": np.array([False, True, False])})
+    np.testing.assert_array_equal(obs[[0, 2]], before[[0, 2], 0])
+
+
 def test_episode_end_info_and_step_after_end():
     env = ActionSelectionEnv(map="open_room", max_steps=20)
     env.reset(seed=0)
