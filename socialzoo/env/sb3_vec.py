@@ -77,8 +77,12 @@ class SB3VecEnv(VecEnv):
         seed = self._seeds[0]
         obs, info = self.vector_env.reset(seed=seed)
         self._started = True
-        seeds = info.get("scenario_seed", info.get("case_seed", [None] * self.num_envs))
-        self.reset_infos = [{"scenario_seed": None if s is None else int(s)} for s in seeds]
+        # One dict per row of the vector env's reset info, under its task's own keys ("scenario_seed",
+        # CrowdNav's "case_seed", ...), as plain Python values.
+        self.reset_infos = [
+            {key: np.asarray(values)[row].item() for key, values in info.items() if not key.startswith("_")}
+            for row in range(self.num_envs)
+        ]
         self._reset_seeds()
         self._reset_options()
         return obs

@@ -154,6 +154,15 @@ def test_sb3_conventions_shapes_and_infos():
     assert seen_done
 
 
+def test_reset_infos_hold_the_tasks_own_reset_info():
+    """CrowdNav's reset info is "case_seed": SB3's reset_infos used to call it "scenario_seed"."""
+    venv = SB3VecEnv(3, task="crowdnav")
+    venv.seed(4)
+    venv.reset()
+    _, info = venv.vector_env.reset(seed=4)
+    assert venv.reset_infos == [{"case_seed": int(seed)} for seed in info["case_seed"]]
+
+
 def test_passes_sb3_checks_and_wrappers():
     """SB3's env checker on the single env, its space checks on the VecEnv's spaces, and the
     wrappers training uses: VecCheckNan (raises on NaN or inf), VecMonitor, VecNormalize."""
