@@ -236,10 +236,10 @@ def free_space(
     most anchors, or the largest area when no anchor lies in any).
     A seed point outside every closed outline is allowed: its connected free space is used.
     Without region, seed point and anchors, an outline open to space the plan does not map (a
-    room whose doorways lead nowhere) is closed: where no enclosed area has room for a legal
-    pose, nothing is enclosed, or wider closing encloses twice the largest area, the openings
-    (up to 10 m) get virtual walls (FreeSpace.closures) and the interior ends at them; the walls
-    themselves are not changed. Closed outlines give the same interior as before.
+    room whose doorways lead nowhere) is closed: where no enclosed area has room for a start and
+    a goal (legal poses pose_separation apart), nothing is enclosed, or wider closing encloses
+    twice the largest area, the openings (up to 10 m) get virtual walls (FreeSpace.closures) and
+    the interior ends at them; the walls themselves are not changed. Closed outlines give the same interior as before.
 
     Args:
         walls: (W, 4) wall segments, m.
@@ -347,9 +347,11 @@ def _largest(area: np.ndarray) -> np.ndarray:
 
 
 def _has_room(interior: np.ndarray, clearance: np.ndarray, config: RoadmapConfig) -> bool:
-    """Whether an area holds a place for a legal pose (the tight-space clearance of legal_poses)."""
+    """Whether an area holds places for a start and a goal: two cells with the tight-space clearance
+    of legal_poses, pose_separation apart along x or y (a pocket between walls holds one at most)."""
     tight = max(POSE_CLEARANCE, config.free_clearance + config.resolution)
-    return bool((interior & (clearance >= tight)).any())
+    cells = np.argwhere(interior & (clearance >= tight))
+    return len(cells) > 0 and float(np.ptp(cells, axis=0).max()) * config.resolution >= config.pose_separation
 
 
 def _close_openings(

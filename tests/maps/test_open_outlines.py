@@ -86,6 +86,27 @@ def test_an_enclosed_closet_does_not_hide_the_open_room_around_it():
     assert (m.legal_poses[:, 0] > 3.0).any() and in_room(m.legal_poses[:, :2]).all()
 
 
+def test_a_corner_pocket_is_not_taken_for_the_room():
+    # A room open at its top-left corner (5 m) with a narrow gap at its bottom-right: with the outside
+    # let in at the first closing radius, only a pocket by the bottom-right corner stayed enclosed. It
+    # has the clearance for one pose but not for a start and a goal, and was taken for the building
+    # (0.05 m^2; the import then refused the plan, "needs at least 2 poses"). Found on a real
+    # reading-room plan whose outline is open the same way.
+    walls = np.array(
+        [
+            (-0.475, 6.062, -0.35, -0.3), (-0.35, -0.4, 9.175, -0.587),
+            (10.138, -0.326, 9.9, 7.25), (9.9, 7.25, 4.264, 7.128),
+        ]
+    )  # fmt: skip
+    space = free_space(walls)
+    assert space.interior.sum() * space.resolution**2 > 55.0
+    # Virtual walls from the top wall's end to the left wall, and across the bottom-right gap.
+    ends = {tuple(p) for p in np.round(space.closures.reshape(-1, 2), 2).tolist()}
+    assert {(4.26, 7.13), (10.14, -0.33), (9.18, -0.59)} <= ends and len(space.closures) == 2
+    m, _ = repair_map("pocket", walls)
+    assert len(m.legal_poses) >= 5
+
+
 def test_goalone_drives_the_gapped_room():
     m, _ = repair_map("room", gapped_room(3.0))
     report = drive_map(m)
