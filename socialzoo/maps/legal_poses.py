@@ -49,11 +49,12 @@ def generate_legal_poses(
     Candidates are clearance-ridge cells (corridor centre lines, room centres) with at least
     config.pose_clearance, one per half-metre block, that see a graph node along a line keeping
     config.join_clearance from walls (the robot can drive from the pose to the graph and back).
-    A building with fewer than two such places (tight spaces: rooms and corridors narrower than
-    1.2 m) gets candidates down to config.free_clearance plus one grid cell. Poses are picked by
-    farthest-point sampling in walking distance (to the nearest visible node, along the graph,
-    then out again), scaled by clearance up to config.good_clearance: dead ends and rooms come
-    first. Each pose faces the direction with the most free space around it.
+    Poses are picked by farthest-point sampling in walking distance (to the nearest visible node,
+    along the graph, then out again), scaled by clearance up to config.good_clearance: dead ends
+    and rooms come first; they keep config.pose_separation from each other. A building with fewer
+    than two such places config.pose_separation apart (tight spaces: rooms and corridors narrower
+    than 1.2 m, a room less than about 3 m across) gets candidates down to config.free_clearance
+    plus one grid cell. Each pose faces the direction with the most free space around it.
 
     Deterministic given the seed.
 
@@ -69,7 +70,11 @@ def generate_legal_poses(
         index: the walls' WallIndex, if already built.
 
     Returns:
-        (P, 3) poses x, y (m), theta (rad), P <= config.num_poses.
+        (P, 3) poses x, y (m), theta (rad), 2 <= P <= config.num_poses.
+
+    Raises:
+        MapError: no two places for a pose config.pose_separation apart, even in tight spaces; the
+            message names the free space, its extent and what a pose needs there.
     """
     config = config or RoadmapConfig()
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
@@ -81,14 +86,32 @@ def generate_legal_poses(
 
     ridge = _ridge(space.clearance)
     tight = max(POSE_CLEARANCE, config.free_clearance + space.resolution)
+    graph_dist = _graph_distances(nodes, edges)
     for clearance in dict.fromkeys((config.pose_clearance, min(tight, config.pose_clearance))):
         points, value, attach = _candidates(space, ridge, clearance, nodes, index, config, rng)
-        if len(points) >= 2:
+        # Two poses at least: a start and a goal (two places closer than pose_separation count
+        # as one: a small room's candidates are all within it).
+        hop = np.hypot(*(points - nodes[attach]).T)
+        chosen = _spread(points, value, hop, attach, graph_dist, config) if len(points) >= 2 else []
+        if len(chosen) >= 2:
             break
-    if len(points) < 2:
+    if len(chosen) < 2:
         raise MapError(_no_place_message(space, nodes, clearance, config, len(points)))
-    hop = np.hypot(*(points - nodes[attach]).T)
-    graph_dist = _graph_distances(nodes, edges)
+    pos = points[chosen]
+    return np.concatenate((pos, _open_heading(index, pos)[:, None]), axis=1)
+
+
+def _spread(
+    points: np.ndarray,
+    value: np.ndarray,
+    hop: np.ndarray,
+    attach: np.ndarray,
+    graph_dist: np.ndarray,
+    config: RoadmapConfig,
+) -> list[int]:
+    """Indices of the candidates (K, 2) picked by farthest-point sampling in walking distance
+    (hop (K,) to their attach node (K,), then along the graph), scaled by clearance (value (K,)),
+    at least config.pose_separation apart, at most config.num_poses."""
 
     def walking(from_k: int) -> np.ndarray:
         d = hop + graph_dist[attach, attach[from_k]] + hop[from_k]
@@ -106,13 +129,16 @@ def generate_legal_poses(
     nearest = walking(chosen[0])
     while len(chosen) < config.num_poses:
         score = np.where(np.isfinite(nearest), nearest, -1.0) * quality
+        if len(chosen) == 1:
+            # The goal for the start: the best candidate far enough away, even where a closer
+            # one scores higher (a small room's roomy middle against its far corners).
+            score[nearest < config.pose_separation] = -1.0
         best = int(np.argmax(score))
         if nearest[best] < config.pose_separation or score[best] <= 0:
             break
         chosen.append(best)
         nearest = np.minimum(nearest, walking(best))
-    pos = points[chosen]
-    return np.concatenate((pos, _open_heading(index, pos)[:, None]), axis=1)
+    return chosen
 
 
 def _candidates(
@@ -167,11 +193,14 @@ def _no_place_message(
     need = f"no point {clearance:.2f} m from every wall"
     if config.join_clearance > 0:
         need += f" that joins a graph node by a line {config.join_clearance:.2f} m from walls"
+    why = f"its rooms and passages are narrower than the {2 * clearance:.2f} m a pose needs"
+    if found:
+        need = f"no two such places {config.pose_separation:.1f} m apart"
+        why = f"it is too small for a start and a goal {config.pose_separation:.1f} m apart"
     return (
         f"found {found} places for legal poses with {clearance:.2f} m clearance: the free space the robot "
         f"can drive ({area:.1f} m^2 between ({lo[0]:.1f}, {lo[1]:.1f}) and ({hi[0]:.1f}, {hi[1]:.1f}), "
-        f"at most {widest:.2f} m from a wall, {len(nodes)} graph nodes) has {need}: its rooms and "
-        f"passages are narrower than the {2 * clearance:.2f} m a pose needs"
+        f"at most {widest:.2f} m from a wall, {len(nodes)} graph nodes) has {need}: {why}"
     )
 
 

@@ -46,3 +46,28 @@ def test_a_given_graph_in_a_wing_with_an_open_outline_keeps_its_free_space():
     assert "openings in the building's outline up to 4 m wide count as closed" in report.repairs[0].message
     np.testing.assert_array_equal(m.nodes, nodes)
     assert (m.legal_poses[:, 0] > 20.0).all() and len(m.legal_poses) >= 5
+
+
+def _square_room(side: float) -> np.ndarray:
+    return np.array([[0, 0, side, 0], [side, 0, side, side], [side, side, 0, side], [0, side, 0, 0]], float)
+
+
+def test_a_small_room_gets_a_start_and_a_goal_in_its_corners():
+    # A 3 m room: its places 0.6 m from the walls are all within 1.5 m of each other, and the
+    # tight pass's farthest-point sampling stopped at its roomy middle, so the import failed
+    # validation ("legal_poses: needs at least 2 poses ..., got 1", the ROS TurtleBot3 world too).
+    # The second pose is the best place at least pose_separation (2 m) from the first.
+    m, _ = repair_map("small_room", _square_room(3.0))
+    assert len(m.legal_poses) == 2
+    assert np.hypot(*(m.legal_poses[0, :2] - m.legal_poses[1, :2])) >= 2.0
+    assert (m.wall_index.nearest(m.legal_poses[:, :2])[1] >= 0.44 - 1e-9).all()
+
+
+def test_a_room_too_small_for_two_poses_is_refused_naming_why():
+    with pytest.raises(MapError) as err:
+        repair_map("closet", _square_room(2.4))
+    message = str(err.value)
+    assert "legal_poses: needs at least 2 poses" not in message
+    assert "found 14 places for legal poses with 0.44 m clearance" in message
+    assert "between (0.4, 0.4) and (2.0, 2.0)" in message
+    assert "too small for a start and a goal 2.0 m apart" in message
