@@ -31,6 +31,10 @@ GRID_STEPS = ((1, 0), (0, 1), (1, 1), (1, -1))
 # Wider closing radii tried, in order, where the usual one finds no enclosed room (an outline
 # drawn with wide gaps: doorways to space the plan does not map), m.
 CLOSING_RADII = (2.0, 2.5, 3.0, 4.0, 5.0)
+# Most cells a free-space grid may have: an import holds about 70 bytes a cell at its peak, so
+# 100 M cells (a 500 m square at 5 cm) take about 7 GB; a larger grid would exhaust the memory
+# (the pedsim airport scene, 854 x 894 m, was killed by the kernel without a word).
+MAX_GRID_CELLS = 100_000_000
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -252,14 +256,23 @@ def free_space(
             navigation graph's nodes: the area people walk in).
 
     Raises:
-        ValueError: a seed point outside the grid or too close to a wall, or no free space at all.
+        ValueError: a seed point outside the grid or too close to a wall, no free space at all, or
+            a grid of more than MAX_GRID_CELLS cells (named with its extent, before any is made).
     """
     config = config or RoadmapConfig()
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
-    index = index or WallIndex(walls)
     res = config.resolution
     x0, y0, x1, y1 = _bounds(walls, region, config.margin)
     shape = (max(1, math.ceil((x1 - x0) / res)), max(1, math.ceil((y1 - y0) / res)))
+    if shape[0] * shape[1] > MAX_GRID_CELLS:
+        raise ValueError(
+            f"the plan spans {x1 - x0:.0f} x {y1 - y0:.0f} m (from ({x0:.1f}, {y0:.1f}) to ({x1:.1f}, "
+            f"{y1:.1f}), margin included): its {100 * res:.0f} cm free-space grid would have "
+            f"{shape[0] * shape[1] / 1e6:.0f} M cells, more than the {MAX_GRID_CELLS / 1e6:.0f} M "
+            f"(about 7 GB of memory) an import handles; import a part of it with a region (map import "
+            f"--region XMIN YMIN XMAX YMAX), or check that its coordinates are metres"
+        )
+    index = index or WallIndex(walls)
     origin = np.array([x0, y0])
     clearance = _grid_clearance(index, origin, shape, res)
     passable = clearance >= config.free_clearance

@@ -11,6 +11,7 @@ from socialzoo.maps.legal_poses import generate_legal_poses
 from socialzoo.maps.map_completion import complete_map
 from socialzoo.maps.map_file import load_map, nearest_walls, reaches_graph, segment_clearance, validate_map
 from socialzoo.maps.roadmap import (
+    MAX_GRID_CELLS,
     RoadmapConfig,
     build_edges,
     build_roadmap,
@@ -60,6 +61,22 @@ def test_free_space_stops_at_doors_too_narrow_for_the_robot():
     assert not space.contains(np.array([[9.0, 3.0]])).any()
     wide = np.array([*_box(0, 0, 12, 6), [6, 0, 6, 2.4], [6, 3.6, 6, 6]], dtype=np.float64)
     assert free_space(wide, seed_point=(3.0, 3.0)).contains(np.array([[9.0, 3.0]])).all()
+
+
+def test_a_plan_too_large_for_the_grid_is_refused_before_any_is_made():
+    # An 850 m pedsim scene (pedsim_ros's airport) asked for a 305 M-cell grid: the kernel killed
+    # the import without a word (or numpy failed deep in a distance transform under a memory
+    # limit). The refusal names the extent and the way out, before allocating anything.
+    walls = np.array(_box(0, 0, 600, 500), dtype=np.float64)
+    assert (604 / 0.05) * (504 / 0.05) > MAX_GRID_CELLS
+    with pytest.raises(ValueError) as err:
+        free_space(walls)
+    message = str(err.value)
+    assert "the plan spans 604 x 504 m (from (-2.0, -2.0) to (602.0, 502.0), margin included)" in message
+    assert "122 M cells, more than the 100 M" in message and "--region XMIN YMIN XMAX YMAX" in message
+    assert "metres" in message
+    # A region within the limit is the way out.
+    assert free_space(walls, region=(-1.0, -1.0, 20.0, 20.0)).interior.any()
 
 
 def test_seed_point_must_be_free():
