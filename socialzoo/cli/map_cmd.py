@@ -85,7 +85,8 @@ def register(subparsers: Any) -> None:
         description=(
             "Read walls from an AMRL vector map (one 'x1, y1, x2, y2' segment per line), a pedsim "
             "scene XML or a floor-plan image (PNG occupancy grid: dark pixels are walls, --scale "
-            "metres per pixel), take the navigation graph from --nav (AMRL navigation JSON) or the "
+            "metres per pixel; or a ROS map_server map YAML, which gives the image, scale, origin "
+            "and threshold), take the navigation graph from --nav (AMRL navigation JSON) or the "
             "scene's waypoints, or build one inside the building (from --seed-point, within "
             "--region; default the largest enclosed area; openings of the outline to space the plan "
             "does not map, such as doorways to nowhere wider than 3 m, are closed by virtual walls "
@@ -149,15 +150,20 @@ def _add_import_arguments(parser: argparse.ArgumentParser) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--walls", type=Path, help="AMRL vector map text file")
     source.add_argument("--pedsim", type=Path, help="pedsim scene XML file")
-    source.add_argument("--png", type=Path, help="floor-plan image: dark pixels are walls (needs --scale)")
+    source.add_argument(
+        "--png", type=Path,
+        help="floor-plan image: dark pixels are walls (needs --scale), or a ROS map_server map YAML",
+    )  # fmt: skip
     parser.add_argument("--scale", type=float, default=None, help="metres per pixel of --png")
     parser.add_argument(
-        "--origin", type=float, nargs=2, metavar=("X", "Y"), default=(0.0, 0.0),
+        "--origin", type=float, nargs=2, metavar=("X", "Y"), default=None,
         help="world position of the image's lower-left corner, m (default 0 0)",
     )  # fmt: skip
     parser.add_argument(
-        "--threshold", type=float, default=0.5, help="pixels darker than this (0 black .. 1 white) are walls"
-    )
+        "--threshold", type=float, default=None,
+        help="pixels darker than this (0 black .. 1 white) are walls (default 0.5; from a map YAML: "
+        "1 - occupied_thresh)",
+    )  # fmt: skip
     parser.add_argument(
         "--min-wall-area", type=float, default=0.0, help="drop wall specks smaller than this, m^2"
     )
@@ -378,8 +384,8 @@ def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | Non
             nodes = scene.nodes
         inputs["pedsim"] = args.pedsim.name
     else:
-        walls = _png_walls(args)
-        inputs.update(png=args.png.name, scale=args.scale, origin=list(args.origin), threshold=args.threshold)
+        walls, png_inputs = _png_walls(args)
+        inputs.update(png_inputs)
     if args.nav is not None:
         nodes, edges = read_amrl_nav_graph(args.nav)
         inputs["nav"] = args.nav.name
@@ -412,27 +418,52 @@ def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str
     return m, [(r.kind, r.message) for r in repairs]
 
 
-def _png_walls(args: argparse.Namespace) -> np.ndarray:
+def _png_walls(args: argparse.Namespace) -> tuple[np.ndarray, dict[str, Any]]:
+    """Walls of --png (an image, or a ROS map_server YAML naming one) and their provenance inputs."""
+    from socialzoo.maps.importers import read_map_server_yaml
     from socialzoo.maps.occupancy import wall_pixels, walls_from_occupancy
 
-    if args.scale is None:
-        raise ValueError("--png needs --scale (metres per pixel)")
+    image_file, scale, yaw, negate = args.png, args.scale, 0.0, False
+    origin = (0.0, 0.0) if args.origin is None else tuple(args.origin)
+    threshold = 0.5 if args.threshold is None else args.threshold
+    inputs: dict[str, Any] = {"png": args.png.name}
+    if args.png.suffix.lower() in (".yaml", ".yml"):
+        if args.scale is not None or args.origin is not None:
+            raise ValueError(
+                f"--png {args.png}: a map YAML gives the scale and origin: drop --scale and --origin"
+            )
+        meta = read_map_server_yaml(args.png)
+        x, y, yaw = meta.origin
+        image_file, scale, origin, negate = meta.image, meta.resolution, (x, y), meta.negate
+        # map_server: occupied where 1 - brightness (brightness when negated) > occupied_thresh.
+        threshold = 1.0 - meta.occupied_thresh if args.threshold is None else args.threshold
+        inputs.update(image=image_file.name, negate=negate, yaw=yaw)
+    elif scale is None:
+        raise ValueError("--png needs --scale (metres per pixel), or give a ROS map_server map YAML")
+    inputs.update(scale=scale, origin=list(origin), threshold=threshold)
     try:
         import imageio.v3 as iio
     except ImportError:  # pragma: no cover - the plot extra is missing
         raise ValueError("reading --png needs imageio: pip install 'socialzoo[plot]'") from None
-    if not args.png.is_file():
-        raise FileNotFoundError(f"{args.png}: no such file")
+    if not image_file.is_file():
+        named = f" (the image named by {args.png})" if image_file != args.png else ""
+        raise FileNotFoundError(f"{image_file}: no such file{named}")
     try:
-        image = iio.imread(args.png)
+        image = iio.imread(image_file)
     except Exception as err:  # imageio raises many kinds for a file it cannot decode
-        raise ValueError(f"{args.png}: not a readable image ({err})") from None
+        raise ValueError(f"{image_file}: not a readable image ({err})") from None
+    if negate:
+        image = (np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0) - image
+    # map_server's origin is the pose of the image's lower-left corner: turned by yaw about it.
     walls = walls_from_occupancy(
-        wall_pixels(image, args.threshold), args.scale, tuple(args.origin), min_area=args.min_wall_area
+        wall_pixels(image, threshold), scale, (0.0, 0.0) if yaw else origin, min_area=args.min_wall_area
     )
     if len(walls) == 0:
-        raise ValueError(f"{args.png}: no wall pixels darker than threshold {args.threshold}")
-    return walls
+        raise ValueError(f"{image_file}: no wall pixels darker than threshold {threshold}")
+    if yaw:
+        c, s = np.cos(yaw), np.sin(yaw)
+        walls = (walls.reshape(-1, 2) @ np.array([[c, s], [-s, c]]) + np.array(origin)).reshape(-1, 4)
+    return walls, inputs
 
 
 def run_import(args: argparse.Namespace) -> int:

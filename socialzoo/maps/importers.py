@@ -1,5 +1,5 @@
-"""Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs) and pedsim scene XML
-files, read into plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2))."""
+"""Importers for wall maps from other tools: AMRL vector maps (with their navigation graphs), pedsim scene XML
+files and ROS map_server YAML files, read into plain arrays (walls (W, 4), nodes (N, 2), edges (E, 2))."""
 
 from __future__ import annotations
 
@@ -241,6 +241,98 @@ def read_pedsim_scene(path: str | os.PathLike[str]) -> PedsimScene:
         node_ids=tuple(w.get("id", str(k)) for k, w in enumerate(waypoints)),
         node_radius=np.array([number(w, "r", 0.0) for w in waypoints], dtype=np.float64),
     )
+
+
+@dataclass(frozen=True)
+class MapServerYaml:
+    """What a ROS map_server YAML file says about its occupancy image.
+
+    Attributes:
+        image: the image file (relative paths resolved against the YAML file's folder).
+        resolution: metres per pixel.
+        origin: (x, y, yaw) of the image's lower-left corner: m, m, rad (counter-clockwise).
+        negate: whether white means occupied.
+        occupied_thresh: a pixel is occupied where its occupancy (1 - brightness, or the
+            brightness when negated) exceeds this.
+    """
+
+    image: Path
+    resolution: float
+    origin: tuple[float, float, float]
+    negate: bool
+    occupied_thresh: float
+
+
+def read_map_server_yaml(path: str | os.PathLike[str]) -> MapServerYaml:
+    """Read a ROS map_server map YAML file (image, resolution, origin, negate, occupied_thresh).
+
+    The files are flat "key: value" lines (map_saver writes them so); origin is a list
+    [x, y, yaw]. occupied_thresh defaults to map_saver's 0.65, negate to 0; free_thresh and other
+    keys are ignored (free and unknown pixels both count as free space: only occupied ones are
+    walls).
+
+    Raises:
+        FileNotFoundError: no such file.
+        MapError: not UTF-8 text, a line that is not "key: value", a missing or malformed image,
+            resolution or origin, a threshold outside (0, 1), or mode "raw" (its pixels are
+            occupancy values, not shades); the message names the file (and line).
+    """
+    where = os.fspath(path)
+    values: dict[str, tuple[int, str]] = {}
+    for line_no, line in enumerate(_read_text(path).splitlines(), start=1):
+        body = line.split("#", 1)[0].strip()
+        if not body or body == "---":
+            continue
+        key, colon, value = body.partition(":")
+        if not colon or not key.strip():
+            raise MapError(f"{where}:{line_no}: expected 'key: value', got {line.strip()!r}")
+        values[key.strip()] = (line_no, value.strip().strip("'\""))
+
+    def field(key: str) -> tuple[str, str]:
+        if key not in values:
+            raise MapError(f"{where}: no {key!r}; not a map_server map YAML (image, resolution, origin)")
+        line_no, text = values[key]
+        return f"{where}:{line_no}: {key}", text
+
+    def number(entry: str, text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise MapError(f"{entry}: {text!r} is not a number") from None
+        if not math.isfinite(value):
+            raise MapError(f"{entry}: {text!r} is not finite")
+        return value
+
+    entry, image = field("image")
+    if not image:
+        raise MapError(f"{entry}: empty")
+    entry, text = field("resolution")
+    resolution = number(entry, text)
+    if resolution <= 0:
+        raise MapError(f"{entry}: metres per pixel must be positive, got {text}")
+    entry, text = field("origin")
+    words = [w for w in _SEPARATORS.split(text.strip("[]")) if w] if text.startswith("[") else []
+    if not text.startswith("[") or not text.endswith("]") or len(words) != 3:
+        raise MapError(f"{entry}: expected [x, y, yaw], got {text!r}")
+    x, y, yaw = (number(entry, w) for w in words)
+    occupied = 0.65
+    if "occupied_thresh" in values:
+        entry, text = field("occupied_thresh")
+        occupied = number(entry, text)
+        if not 0.0 < occupied < 1.0:
+            raise MapError(f"{entry}: must be in (0, 1), got {text}")
+    negate = False
+    if "negate" in values:
+        entry, text = field("negate")
+        if text.lower() not in ("0", "1", "true", "false"):
+            raise MapError(f"{entry}: expected 0 or 1, got {text!r}")
+        negate = text.lower() in ("1", "true")
+    if "mode" in values and values["mode"][1].lower() == "raw":
+        raise MapError(f"{field('mode')[0]}: 'raw' images hold occupancy values, not shades; not supported")
+    image_path = Path(image)
+    if not image_path.is_absolute():
+        image_path = Path(where).parent / image_path
+    return MapServerYaml(image_path, resolution, (x, y, yaw), negate, occupied)
 
 
 def write_vector_map(path: str | os.PathLike[str], walls: np.ndarray) -> Path:

@@ -258,3 +258,74 @@ def test_map_check_out_is_a_hidden_deprecated_alias_of_picture(tmp_path, capsys)
         main(["map", "check", "--help"])
     usage = capsys.readouterr().out
     assert "--picture PATH" in usage and "--out" not in usage
+
+
+def _ros_map(tmp_path, yaml_lines: list[str]):
+    """A 16 x 8 m two-room plan as ROS map_server saves one: a PGM (0 occupied, 254 free, 205
+    unknown around the building) and its YAML."""
+    img = np.full((200, 360), 205, np.uint8)  # 18 x 10 m at 5 cm, unknown
+    plan = np.full((160, 320), 254, np.uint8)
+    plan[:4], plan[-4:], plan[:, :4], plan[:, -4:] = 0, 0, 0, 0
+    plan[:, 158:162] = 0
+    plan[62:98, 158:162] = 254  # a 1.8 m door in the middle wall
+    plan[20:40, 40:60] = 205  # an unknown patch inside: free space, not a wall
+    img[20:180, 20:340] = plan
+    iio.imwrite(tmp_path / "lab.pgm", img)
+    (tmp_path / "lab.yaml").write_text("\n".join(yaml_lines) + "\n")
+    return tmp_path / "lab.yaml"
+
+
+def test_map_import_reads_a_ros_map_server_yaml_and_its_pgm(tmp_path, capsys):
+    # ROS map_server maps are the common robot map: before, --png needed their resolution and
+    # origin copied by hand into --scale and --origin, and the threshold converted.
+    yaml = _ros_map(
+        tmp_path,
+        ["image: lab.pgm  # saved by map_saver", "mode: trinary", "resolution: 0.05",
+         "origin: [9.0, 19.0, 0.0]", "negate: 0", "occupied_thresh: 0.65", "free_thresh: 0.196"],
+    )  # fmt: skip
+    out = tmp_path / "lab.json"
+    argv = ["map", "import", "--png", str(yaml), "--name", "lab", "--out", str(out), "--no-drive"]
+    assert main(argv) == 0
+    m = load_map(out)
+    lo, hi = m.walls.reshape(-1, 2).min(axis=0), m.walls.reshape(-1, 2).max(axis=0)
+    np.testing.assert_allclose(lo, [10.0, 20.0], atol=1e-9)  # the image's lower-left corner at the origin
+    np.testing.assert_allclose(hi, [26.0, 28.0], atol=1e-9)
+    assert (m.legal_poses[:, 0] < 18).any() and (m.legal_poses[:, 0] > 18).any()  # both rooms
+    inputs = m.provenance["inputs"]
+    assert inputs["png"] == "lab.yaml" and inputs["image"] == "lab.pgm" and inputs["scale"] == 0.05
+    assert inputs["origin"] == [9.0, 19.0] and inputs["threshold"] == pytest.approx(0.35)
+    # The same image through --scale and --origin gives the same walls.
+    plain = tmp_path / "plain.json"
+    argv = ["map", "import", "--png", str(tmp_path / "lab.pgm"), "--scale", "0.05", "--origin", "9", "19"]
+    assert main([*argv, "--threshold", "0.35", "--name", "p", "--out", str(plain), "--no-drive"]) == 0
+    np.testing.assert_array_equal(load_map(plain).walls, m.walls)
+    # The YAML gives the scale and origin: giving them too is refused.
+    assert main(["map", "import", "--png", str(yaml), "--scale", "0.1", "--name", "lab"]) == 2
+    assert "a map YAML gives the scale and origin" in capsys.readouterr().err
+
+
+def test_map_import_ros_yaml_yaw_negate_and_errors(tmp_path, capsys):
+    yaml = _ros_map(
+        tmp_path,
+        ["image: lab.pgm", "resolution: 0.05", "origin: [9.0, 19.0, 1.5707963267948966]", "negate: 0"],
+    )
+    out = tmp_path / "lab.json"
+    assert main(["map", "import", "--png", str(yaml), "--name", "lab", "--out", str(out), "--no-drive"]) == 0
+    lo, hi = load_map(out).walls.reshape(-1, 2).min(axis=0), load_map(out).walls.reshape(-1, 2).max(axis=0)
+    np.testing.assert_allclose(lo, [9.0 - 9.0, 20.0], atol=1e-9)  # turned a quarter about (9, 19)
+    np.testing.assert_allclose(hi, [9.0 - 1.0, 36.0], atol=1e-9)
+    # negate: white is occupied; the inverted image gives the same plan.
+    img = iio.imread(tmp_path / "lab.pgm")
+    iio.imwrite(tmp_path / "lab.pgm", (255 - img).astype(np.uint8))
+    (tmp_path / "lab.yaml").write_text(
+        "image: lab.pgm\nresolution: 0.05\norigin: [9.0, 19.0, 0]\nnegate: 1\n"
+    )
+    assert main(["map", "import", "--png", str(yaml), "--name", "lab", "--out", str(out), "--no-drive"]) == 0
+    np.testing.assert_allclose(load_map(out).walls.reshape(-1, 2).min(axis=0), [10.0, 20.0], atol=1e-9)
+    capsys.readouterr()
+    (tmp_path / "lab.yaml").write_text("image: lab.pgm\nresolution: 0.05\norigin: [9.0, 19.0]\n")
+    assert main(["map", "import", "--png", str(yaml), "--name", "lab"]) == 2
+    assert f"{yaml}:3: origin: expected [x, y, yaw], got '[9.0, 19.0]'" in capsys.readouterr().err
+    (tmp_path / "lab.yaml").write_text("image: gone.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    assert main(["map", "import", "--png", str(yaml), "--name", "lab"]) == 2
+    assert f"gone.pgm: no such file (the image named by {yaml})" in capsys.readouterr().err
