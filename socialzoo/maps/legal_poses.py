@@ -194,6 +194,10 @@ def _no_place_message(
     if config.join_clearance > 0:
         need += f" that joins a graph node by a line {config.join_clearance:.2f} m from walls"
     why = f"its rooms and passages are narrower than the {2 * clearance:.2f} m a pose needs"
+    if widest >= clearance:
+        # Room enough: what fails is the join (the graph lies elsewhere, or behind walls).
+        inside = int(space.contains(nodes).sum())
+        why = f"{inside} of the graph nodes lie in it, and no place with room for a pose sees one"
     if found:
         need = f"no two such places {config.pose_separation:.1f} m apart"
         why = f"it is too small for a start and a goal {config.pose_separation:.1f} m apart"

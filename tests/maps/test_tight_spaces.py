@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from socialzoo.maps import floorplans
+from socialzoo.maps.legal_poses import generate_legal_poses
 from socialzoo.maps.map_file import MapError
 from socialzoo.maps.repair import repair_map
 
@@ -71,3 +72,15 @@ def test_a_room_too_small_for_two_poses_is_refused_naming_why():
     assert "found 14 places for legal poses with 0.44 m clearance" in message
     assert "between (0.4, 0.4) and (2.0, 2.0)" in message
     assert "too small for a start and a goal 2.0 m apart" in message
+
+
+def test_a_free_space_without_a_reachable_graph_node_is_not_called_narrow():
+    # A 10 m room whose only graph node lies in another room: the refusal said "its rooms and
+    # passages are narrower than the 0.88 m a pose needs" beside "at most 5.00 m from a wall"
+    # (pedsim_ros's airport imported with --region). It names the missing join instead.
+    rooms = np.concatenate((_square_room(10.0), _square_room(10.0) + [20.0, 0.0, 20.0, 0.0]))
+    with pytest.raises(MapError) as err:
+        generate_legal_poses(rooms, np.array([[25.0, 5.0]]), np.zeros((0, 2), int), seed_point=(5.0, 5.0))
+    message = str(err.value)
+    assert "at most 5.00 m from a wall" in message and "narrower than" not in message
+    assert "0 of the graph nodes lie in it, and no place with room for a pose sees one" in message
