@@ -266,73 +266,53 @@ class MapServerYaml:
 def read_map_server_yaml(path: str | os.PathLike[str]) -> MapServerYaml:
     """Read a ROS map_server map YAML file (image, resolution, origin, negate, occupied_thresh).
 
-    The files are flat "key: value" lines (map_saver writes them so); origin is a list
-    [x, y, yaw]. occupied_thresh defaults to map_saver's 0.65, negate to 0; free_thresh and other
-    keys are ignored (free and unknown pixels both count as free space: only occupied ones are
-    walls).
+    origin is a list [x, y, yaw]; occupied_thresh defaults to map_saver's 0.65, negate to 0;
+    free_thresh and other keys are ignored (free and unknown pixels both count as free space: only
+    occupied ones are walls).
 
     Raises:
         FileNotFoundError: no such file.
-        MapError: not UTF-8 text, a line that is not "key: value", a missing or malformed image,
-            resolution or origin, a threshold outside (0, 1), or mode "raw" (its pixels are
-            occupancy values, not shades); the message names the file (and line).
+        MapError: not UTF-8 text, not YAML, not a mapping, a missing or malformed image, resolution
+            or origin, a threshold outside (0, 1), or mode "raw" (its pixels are occupancy values,
+            not shades); the message names the file and the key.
     """
+    import yaml
+
     where = os.fspath(path)
-    values: dict[str, tuple[int, str]] = {}
-    for line_no, line in enumerate(_read_text(path).splitlines(), start=1):
-        body = line.split("#", 1)[0].strip()
-        if not body or body == "---":
-            continue
-        key, colon, value = body.partition(":")
-        if not colon or not key.strip():
-            raise MapError(f"{where}:{line_no}: expected 'key: value', got {line.strip()!r}")
-        values[key.strip()] = (line_no, value.strip().strip("'\""))
+    try:
+        values = yaml.safe_load(_read_text(path))
+    except yaml.YAMLError as err:
+        raise MapError(f"{where}: not YAML ({err})".replace("\n", " ")) from None
+    if not isinstance(values, dict) or not {"image", "resolution", "origin"} <= values.keys():
+        raise MapError(f"{where}: not a map_server map YAML (needs image, resolution and origin)")
 
-    def field(key: str) -> tuple[str, str]:
-        if key not in values:
-            raise MapError(f"{where}: no {key!r}; not a map_server map YAML (image, resolution, origin)")
-        line_no, text = values[key]
-        return f"{where}:{line_no}: {key}", text
+    def number(key: str, value: object) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise MapError(f"{where}: {key}: {value!r} is not a finite number")
+        return float(value)
 
-    def number(entry: str, text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise MapError(f"{entry}: {text!r} is not a number") from None
-        if not math.isfinite(value):
-            raise MapError(f"{entry}: {text!r} is not finite")
-        return value
-
-    entry, image = field("image")
-    if not image:
-        raise MapError(f"{entry}: empty")
-    entry, text = field("resolution")
-    resolution = number(entry, text)
+    image = values["image"]
+    if not isinstance(image, str) or not image:
+        raise MapError(f"{where}: image: expected a file name, got {image!r}")
+    resolution = number("resolution", values["resolution"])
     if resolution <= 0:
-        raise MapError(f"{entry}: metres per pixel must be positive, got {text}")
-    entry, text = field("origin")
-    words = [w for w in _SEPARATORS.split(text.strip("[]")) if w] if text.startswith("[") else []
-    if not text.startswith("[") or not text.endswith("]") or len(words) != 3:
-        raise MapError(f"{entry}: expected [x, y, yaw], got {text!r}")
-    x, y, yaw = (number(entry, w) for w in words)
-    occupied = 0.65
-    if "occupied_thresh" in values:
-        entry, text = field("occupied_thresh")
-        occupied = number(entry, text)
-        if not 0.0 < occupied < 1.0:
-            raise MapError(f"{entry}: must be in (0, 1), got {text}")
-    negate = False
-    if "negate" in values:
-        entry, text = field("negate")
-        if text.lower() not in ("0", "1", "true", "false"):
-            raise MapError(f"{entry}: expected 0 or 1, got {text!r}")
-        negate = text.lower() in ("1", "true")
-    if "mode" in values and values["mode"][1].lower() == "raw":
-        raise MapError(f"{field('mode')[0]}: 'raw' images hold occupancy values, not shades; not supported")
+        raise MapError(f"{where}: resolution: metres per pixel must be positive, got {resolution}")
+    origin = values["origin"]
+    if not isinstance(origin, list) or len(origin) != 3:
+        raise MapError(f"{where}: origin: expected [x, y, yaw], got {origin!r}")
+    x, y, yaw = (number("origin", v) for v in origin)
+    occupied = number("occupied_thresh", values.get("occupied_thresh", 0.65))
+    if not 0.0 < occupied < 1.0:
+        raise MapError(f"{where}: occupied_thresh: must be in (0, 1), got {occupied}")
+    negate = values.get("negate", 0)
+    if negate not in (0, 1):  # True and False are 1 and 0 here
+        raise MapError(f"{where}: negate: expected 0 or 1, got {negate!r}")
+    if str(values.get("mode", "")).lower() == "raw":
+        raise MapError(f"{where}: mode: 'raw' images hold occupancy values, not shades; not supported")
     image_path = Path(image)
     if not image_path.is_absolute():
         image_path = Path(where).parent / image_path
-    return MapServerYaml(image_path, resolution, (x, y, yaw), negate, occupied)
+    return MapServerYaml(image_path, resolution, (x, y, yaw), bool(negate), occupied)
 
 
 def write_vector_map(path: str | os.PathLike[str], walls: np.ndarray) -> Path:

@@ -325,7 +325,7 @@ def test_map_import_ros_yaml_yaw_negate_and_errors(tmp_path, capsys):
     capsys.readouterr()
     (tmp_path / "lab.yaml").write_text("image: lab.pgm\nresolution: 0.05\norigin: [9.0, 19.0]\n")
     assert main(["map", "import", "--png", str(yaml), "--name", "lab"]) == 2
-    assert f"{yaml}:3: origin: expected [x, y, yaw], got '[9.0, 19.0]'" in capsys.readouterr().err
+    assert f"{yaml}: origin: expected [x, y, yaw], got [9.0, 19.0]" in capsys.readouterr().err
     (tmp_path / "lab.yaml").write_text("image: gone.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
     assert main(["map", "import", "--png", str(yaml), "--name", "lab"]) == 2
     assert f"gone.pgm: no such file (the image named by {yaml})" in capsys.readouterr().err
