@@ -20,6 +20,7 @@ class CoreRenderer:
         width: frame width, pixels.
         height: frame height, pixels.
         info: text lines shown on every frame under the action and time, e.g. the policy's name.
+        world_map: the map drawn (default the core's; a task in the open gives one without walls).
     """
 
     def __init__(
@@ -31,6 +32,7 @@ class CoreRenderer:
         width: int = 640,
         height: int = 480,
         info: tuple[str, ...] = (),
+        world_map: Any = None,
     ) -> None:
         from socialzoo.render.frames import FrameRenderer
 
@@ -41,7 +43,7 @@ class CoreRenderer:
         self.render_mode = render_mode
         self.info = tuple(info)
         self.frames = FrameRenderer(
-            task.core.map,
+            task.core.map if world_map is None else world_map,
             width=width,
             height=height,
             view=view,  # type: ignore[arg-type]

@@ -433,10 +433,16 @@ class FrameRenderer:
     def _draw_robot(
         self, draw: ImageDraw.ImageDraw, px: Any, pose: np.ndarray, color: tuple[int, int, int]
     ) -> None:
-        """An oriented box with a chevron pointing along the heading."""
+        """Its footprint, an oriented box or a disc (RobotConfig.radius), with a chevron pointing
+        along the heading."""
         if not np.isfinite(pose).all():
             return
-        hl, hw = self.robot_config.half_length, self.robot_config.half_width
+        disc = self.robot_config.radius
+        hl, hw = (
+            (disc, disc)
+            if disc is not None
+            else (self.robot_config.half_length, self.robot_config.half_width)
+        )
         grow = max(1.0, _MIN_ROBOT_PX * self.antialias / (2.0 * hl * self._s))
         hl, hw = hl * grow, hw * grow
         c, sn = math.cos(pose[2]), math.sin(pose[2])
@@ -447,7 +453,12 @@ class FrameRenderer:
         main = color == ROBOT
         edge = ROBOT_EDGE if main else _fade(ROBOT_EDGE, 0.45)
         mark = ROBOT_MARK if main else _fade(ROBOT_MARK, 0.45)
-        draw.polygon(pts[:4], fill=color, outline=edge, width=max(self.antialias, round(0.03 * self._s)))
+        outline = max(self.antialias, round(0.03 * self._s))
+        if disc is not None:
+            (cx, cy), r = px(pose[None, :2])[0], hl * self._s
+            draw.ellipse([cx - r, cy - r, cx + r, cy + r], fill=color, outline=edge, width=outline)
+        else:
+            draw.polygon(pts[:4], fill=color, outline=edge, width=outline)
         draw.polygon(pts[4:], fill=mark)
 
     def _draw_laser(

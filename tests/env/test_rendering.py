@@ -46,3 +46,34 @@ def test_bad_render_mode_is_refused():
     env.reset(seed=0)
     with pytest.raises(ValueError, match="render_mode must be 'rgb_array' or 'human', got 'ansi'"):
         CoreRenderer(env.unwrapped.task, "ansi")
+
+
+@pytest.mark.parametrize(
+    "env_id", ["socialzoo/CrowdNav-v1", "socialzoo/CrowdNav20-v1", "socialzoo/CrowdNavWalls-v1"]
+)
+def test_the_crowdnav_task_renders(env_id):
+    # The CrowdNav ids refused every render_mode: the arena has no map for the frame renderer.
+    import gymnasium as gym
+
+    from socialzoo.render.frames import ROBOT
+
+    env = gym.make(env_id, render_mode="rgb_array")
+    assert env.unwrapped.metadata["render_modes"] == ["human", "rgb_array"]
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    frame = env.render()
+    assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8
+    # The follow view is centred on the robot, drawn as its disc (radius 0.3 m) in the robot's colour
+    # beside its heading chevron: a ring of pixels halfway out from the centre.
+    radius = 0.3 * 480 / 16.0  # pixels: the view shows +-8 m along its shorter side
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+    ring = np.stack((240 + 0.7 * radius * np.sin(angles), 320 + 0.7 * radius * np.cos(angles)), -1)
+    colours = frame[ring[:, 0].round().astype(int), ring[:, 1].round().astype(int)]
+    assert (np.abs(colours.astype(int) - ROBOT).max(-1) < 40).mean() > 0.5
+    # The map view of the open arena shows the cases' circle with 1 m to spare.
+    task = env.unwrapped.task
+    if task.core.map is None:
+        frames = task.make_renderer("rgb_array", view="map").frames
+        reach = task.config.cases.circle_radius + 1.0
+        assert frames.map.region == (-reach, -reach, reach, reach) and len(frames.map.walls) == 0
+    env.close()

@@ -101,6 +101,7 @@ class CrowdNavTask(Task):
 
     name: ClassVar[str] = "crowdnav"
     render_fps: ClassVar[int] = 4
+    render_modes: ClassVar[tuple[str, ...]] = ("human", "rgb_array")
     reset_info_key: ClassVar[str] = "case_seed"
 
     def __init__(self, config: CrowdNavConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
@@ -536,6 +537,28 @@ class CrowdNavTask(Task):
         """The core's WorldState."""
         assert self.core.state is not None
         return self.core.state
+
+    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
+        """socialzoo.env.rendering.CoreRenderer of the task. In the open (the arena, a recorded
+        scene) the frames show no walls, and the map view shows the arena's cases with 1 m to
+        spare (a scene of another family: 5 m around the origin; follow the robot instead)."""
+        from socialzoo.env.rendering import CoreRenderer
+        from socialzoo.maps.map_file import Map
+
+        world_map = self.core.map
+        if world_map is None:
+            cases = self.config.cases
+            half = cases.square_width / 2 if cases.layout == "square_crossing" else cases.circle_radius
+            reach = half + 1.0 if self.config.family is None else 5.0
+            world_map = Map(
+                name="open",
+                walls=np.zeros((0, 4)),
+                nodes=np.zeros((0, 2)),
+                edges=np.zeros((0, 2), dtype=np.int64),
+                legal_poses=np.zeros((0, 3)),
+                region=(-reach, -reach, reach, reach),
+            )
+        return CoreRenderer(self, render_mode, view=view, world_map=world_map)
 
     def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
         """The arena (or the map's walls) around every trace; the robot's disc as a square of its
