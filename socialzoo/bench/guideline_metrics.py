@@ -159,6 +159,19 @@ def _first(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return hit, np.where(hit, flags.argmax(axis=1), flags.shape[1])
 
 
+def _flags_alone(traj: Trajectories, flag_name: str, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(collisions (B,), contact at each sample (B, N)) from the simulator's contact flags of a
+    group that has no positions (a log with the flags but no people or other robots): the flags
+    count as given, since a contact the simulator saw is a contact whether or not the bodies were
+    logged. No flags (or per-body flags of no body): none."""
+    b, n = valid.shape
+    flags = getattr(traj, flag_name)
+    if flags is None or np.ndim(flags) == 3:
+        return np.zeros(b, dtype=np.int64), np.zeros((b, n), dtype=bool)
+    contact = _bools(flags, (b, n), flag_name) & valid
+    return _starts(contact), contact
+
+
 def _bodies(traj: Trajectories, group: str, pos: np.ndarray, r_robot: np.ndarray, valid: np.ndarray) -> tuple:
     """The people ("people") or the other robots ("others") of `traj` against the robot: their
     centres (B, N, M, 2), presence (B, N, M), presence within the robot's episode, reach (the sums
@@ -257,8 +270,7 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
 
     # ---- people: boundary gaps, contacts, personal space, time to collision
     zeros = np.zeros(b, dtype=np.int64)
-    human_collisions = zeros
-    hum_contact = np.zeros((b, n), dtype=bool)
+    human_collisions, hum_contact = _flags_alone(traj, "human_contact", valid)
     min_human = np.full(b, np.nan)
     compliant = valid.copy()
     ttc = np.full(b, np.nan)
@@ -302,8 +314,7 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
     wall_collisions = _starts(wall_contact)
 
     # ---- other robots: contacts and the cooperative set's goals
-    robot_collisions = zeros
-    rob_contact = np.zeros((b, n), dtype=bool)
+    robot_collisions, rob_contact = _flags_alone(traj, "robot_contact", valid)
     others_reach_at = np.zeros((b, 0))
     if traj.others_pos is not None and np.asarray(traj.others_pos).size:
         opos, omask, _, _, _, robot_collisions, rob_contact = _bodies(traj, "others", pos, r_robot, valid)

@@ -214,6 +214,21 @@ def test_other_robots_collisions_and_aggregated_time():
     assert math.isnan(never["gl_aggregated_time"])
 
 
+def test_contact_flags_count_without_the_bodies_positions():
+    # A simulator that logs its contact flags but not the people (or the other robots) still had
+    # those contacts: the robot touches someone at samples 1-2 and another robot at sample 3 of its
+    # way to (3, 0): two collisions and no success, as with the bodies' positions given.
+    kw = dict(dt=1.0, robot_pos=line(0, 1, 2, 3), goal=[3, 0])
+    human = np.array([False, True, True, False])
+    found = episode_metrics(human_contact=human, **kw)
+    assert found["gl_human_collisions"] == 1 and found["gl_collisions"] == 1 and not found["gl_success"]
+    assert math.isnan(found["gl_time_to_goal"])
+    robot = np.array([False, False, False, True])
+    found = episode_metrics(robot_contact=robot, **kw)
+    assert found["gl_robot_collisions"] == 1 and not found["gl_success"]
+    assert episode_metrics(**kw)["gl_success"]
+
+
 def test_a_batch_is_its_episodes_one_by_one():
     # Two episodes of 5 and 3 samples padded to 5 give what each gives alone.
     rng = np.random.default_rng(0)
