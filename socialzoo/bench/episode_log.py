@@ -104,6 +104,8 @@ def validate_log(data: Any, source: str = "<log>") -> None:
             raise EpisodeLogError(source, "time", "must increase from sample to sample")
         if np.abs(steps - dt).max() > _SPACING_TOLERANCE * max(dt, 1.0):
             raise EpisodeLogError(source, "time", "must be evenly spaced (one step dt)")
+    if "time_limit" in data:
+        _finite(data["time_limit"], "time_limit", source)
     robot = data["robot"]
     for key in ("radius", "goal_radius", "shortest_path_length"):
         if key in robot:
@@ -123,8 +125,9 @@ def validate_log(data: Any, source: str = "<log>") -> None:
             for key in ("positions", "velocities"):
                 if key in body:
                     _points(body[key], n, f"{group}[{i}].{key}", source)
-            if "goal" in body:
-                _finite(body["goal"], f"{group}[{i}].goal", source)
+            for key in ("goal", "goal_radius"):
+                if key in body:
+                    _finite(body[key], f"{group}[{i}].{key}", source)
     if data.get("walls"):
         _finite(data["walls"], "walls", source)
     for key, flags in data.get("collisions", {}).items():

@@ -158,6 +158,22 @@ def _good():
             "finite",
         ),
         (lambda log: log["walls"][2].__setitem__(1, float("inf")), "walls[2][1]", "finite"),
+        (lambda log: log.__setitem__("time_limit", float("nan")), "time_limit", "finite"),
+        (
+            lambda log: log.__setitem__(
+                "other_robots",
+                [
+                    {
+                        "radius": 0.3,
+                        "positions": log["robot"]["positions"],
+                        "goal": [0, 0],
+                        "goal_radius": float("nan"),
+                    }
+                ],
+            ),
+            "other_robots[0].goal_radius",
+            "finite",
+        ),
     ],
 )
 def test_a_broken_log_is_a_named_error_and_nothing_is_written(change, field, words, tmp_path):
