@@ -59,6 +59,26 @@ def test_registered_suite_families_play_on_their_card_map():
         assert family.map_name == card.map_name, card.family
 
 
+def test_the_success_criteria_give_the_suite_ids_goal_radius_and_time_limit():
+    """The cards are shown beside the suite's results: their goal radius and time limit must be those
+    of the ids the suite plays (socialzoo/Suite-v2, socialzoo/CrowdNavSuite-v1), not EnvConfig's defaults."""
+    import gymnasium as gym
+
+    import socialzoo  # noqa: F401  (registers the ids)
+    from socialzoo.env.registration import SUITE_IDS
+
+    suite_as, suite_cn = (gym.make(env_id).unwrapped.task for env_id in SUITE_IDS)
+    limits = {suite_as.config.max_steps * suite_as.core.world.dt, suite_cn.config.time_limit}
+    assert len(limits) == 1
+    words = (
+        f"{suite_as.config.goal_radius:g} m in socialzoo/Suite-v2",
+        f"the robot's radius, {suite_cn.core.world.robot.radius:g} m, in socialzoo/CrowdNavSuite-v1",
+        f"before the time limit ({limits.pop():g} s in both)",
+    )
+    for card in suite_cards():
+        assert any(all(w in line for w in words) for line in card.success), (card.family, card.success)
+
+
 def test_the_module_imports_no_numpy():
     tree = ast.parse(Path(cards.__file__).read_text())
     top = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
