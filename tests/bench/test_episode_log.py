@@ -279,3 +279,22 @@ def test_thresholds_reach_the_log_path():
     log = make_episode_log(**_episodes()["crowd"], goal_radius=0.5)
     strict = log_metrics(log, GuidelineParams(personal_space=2.0))
     assert strict["gl_personal_space_compliance"] < log_metrics(log)["gl_personal_space_compliance"]
+
+
+def test_float32_and_rounded_stamps_are_evenly_spaced_a_dropped_sample_is_not():
+    # A JAX or torch simulator keeps time in float32: a minute at 40 Hz strays from k dt by a few
+    # microseconds, which is one step for the metrics (dt the mean step).
+    n, dt = 2401, 0.025
+    pos = np.stack([np.linspace(0.0, 30.0, n), np.zeros(n)], axis=1)
+    log = make_episode_log(dt=dt, robot_pos=pos, goal=[30, 0], robot_radius=0.3, goal_radius=0.005)
+    log["time"] = (np.arange(n, dtype=np.float32) * np.float32(dt)).tolist()
+    validate_log(log)
+    assert log_metrics(log)["gl_time_to_goal"] == pytest.approx(60.0, rel=1e-6)
+    # Stamps rounded to the millisecond at 10 Hz.
+    slow = make_episode_log(dt=0.1, robot_pos=pos[:50], goal=[30, 0], robot_radius=0.3, goal_radius=0.2)
+    slow["time"] = [round(0.1 * k + 0.0004 * (-1) ** k, 3) for k in range(50)]
+    validate_log(slow)
+    # A dropped sample (one step of 2 dt) is named, with the step.
+    dropped = dict(log, time=[dt * k for k in range(n + 1) if k != 100])
+    with pytest.raises(EpisodeLogError, match=r"time\[99\] to time\[100\] is 0\.05 s, the mean step 0\.025"):
+        validate_log(dropped)
