@@ -249,7 +249,7 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
             log(f"fold {held}: held-out ADE {default_ade:.4f} m default, {fitted_ade:.4f} m fitted")
             folds.append(
                 {
-                    "held_out": held,
+                    "held_out": scenes[held].name,
                     "train_ade": train_ade,
                     "default_ade": default_ade,
                     "fitted_ade": fitted_ade,

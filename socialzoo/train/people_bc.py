@@ -468,8 +468,9 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     args: Args = run.args
     world = replay_world(learned_forces=args.learned_forces, relaxation_time=args.relaxation_time)
     train_parts, val_parts, per_scene, held_out = [], [], {}, {}
-    for name in args.scene_names:
-        recording = load_recording(name, cache=args.cache)
+    for spec in args.scene_names:
+        recording = load_recording(spec, cache=args.cache)
+        name = recording.name  # a track file's NAME (or file stem), not its path
         demos = demonstrations(
             recording, window=args.window, num_neighbours=args.num_neighbours,
             action_frame=args.action_frame, action_scale=args.action_scale,
