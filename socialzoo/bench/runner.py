@@ -6,7 +6,9 @@ from __future__ import annotations
 import logging
 import math
 import multiprocessing
+import os
 import queue as queue_module
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -465,9 +467,32 @@ def split_trials(trials: Sequence[Trial], parts: int) -> list[list[Trial]]:
 _WORKER_QUEUE: Any = None
 
 
-def _init_worker(result_queue: Any) -> None:
+def exit_with_parent(parent_pid: int, interval: float = 1.0) -> None:
+    """In a pool's worker process: end the process once `parent_pid` is no longer its parent.
+
+    A pool's worker waits on queues its parent feeds. When the parent is killed outright (SIGKILL,
+    the kernel's OOM killer), nothing tells the worker: it finishes the task in hand and then waits
+    for the next one forever. A daemon thread checks every `interval` seconds whether the worker
+    has been handed to another parent, and ends the process at once if so. Ctrl-C and other
+    catchable signals are handled by the parent itself, which ends its workers.
+
+    Args:
+        parent_pid: the pid of the process that started the pool (its os.getpid()).
+        interval: seconds between checks.
+    """
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(interval)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="socialzoo-exit-with-parent", daemon=True).start()
+
+
+def _init_worker(result_queue: Any, parent_pid: int) -> None:
     global _WORKER_QUEUE
     _WORKER_QUEUE = result_queue
+    exit_with_parent(parent_pid)
 
 
 def _chunk(trials: list[Trial], spec: RunSpec, result_queue: Any = None) -> int:
@@ -494,7 +519,10 @@ def _evaluate_local(chunks: list[list[Trial]], spec: RunSpec, deliver: ResultSin
     ctx = multiprocessing.get_context("spawn")
     result_queue = ctx.Queue()
     pool = ProcessPoolExecutor(
-        max_workers=len(chunks), mp_context=ctx, initializer=_init_worker, initargs=(result_queue,)
+        max_workers=len(chunks),
+        mp_context=ctx,
+        initializer=_init_worker,
+        initargs=(result_queue, os.getpid()),
     )
     try:
         futures = [pool.submit(_chunk, chunk, spec) for chunk in chunks]

@@ -68,10 +68,19 @@ def run_tasks(
 def _run_local(function: Callable[[Any], Any], inputs: Sequence[Any], workers: int) -> list[Any]:
     """The inputs in min(workers, len(inputs)) spawned processes, results in input order."""
     import multiprocessing
+    import os
     from concurrent.futures import ProcessPoolExecutor, wait
 
+    from socialzoo.bench.runner import exit_with_parent
+
     context = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(inputs)), mp_context=context)
+    # A worker ends when this process is killed outright (it would otherwise train on, then wait forever).
+    pool = ProcessPoolExecutor(
+        max_workers=min(workers, len(inputs)),
+        mp_context=context,
+        initializer=exit_with_parent,
+        initargs=(os.getpid(),),
+    )
     try:
         futures = [pool.submit(function, x) for x in inputs]
         wait(futures)

@@ -3,6 +3,11 @@ same rows whatever the batching, the number of processes, or the backend (local 
 
 import itertools
 import math
+import os
+import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -178,3 +183,55 @@ def test_observation_only_policies_act_on_their_rows_with_the_same_results(test_
     assert as_rows(mixed) == as_rows(alone)
     # Stacked (socialzoo.bench.policy_stack: both files share a network shape): the same results.
     assert as_rows(BatchedRunner(spec).run(trials)) == as_rows(alone)
+
+
+# A parent that starts both kinds of worker pool (the evaluation's and the trainings'), each worker
+# busy for two minutes, prints the workers' pids and waits to be killed.
+_POOL_PARENT = """
+import multiprocessing, os, threading, time
+from concurrent.futures import ProcessPoolExecutor
+from socialzoo.bench.runner import _init_worker
+from socialzoo.reproduce.backend import _run_local
+
+ctx = multiprocessing.get_context("spawn")
+pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_init_worker,
+                           initargs=(ctx.Queue(), os.getpid()))
+pool.submit(time.sleep, 120)
+threading.Thread(target=_run_local, args=(time.sleep, [120, 120], 2), daemon=True).start()
+deadline = time.monotonic() + 60
+while len(multiprocessing.active_children()) < 3 and time.monotonic() < deadline:
+    time.sleep(0.1)
+time.sleep(5)  # the workers' initializers have run
+print(*[p.pid for p in multiprocessing.active_children()], flush=True)
+time.sleep(120)
+"""
+
+
+def _alive(pid):
+    try:
+        state = next(line for line in open(f"/proc/{pid}/status") if line.startswith("State:"))
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return "zombie" not in state
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_workers_end_when_their_parent_is_killed(tmp_path):
+    # Found killing `socialzoo benchmark --workers 2` with SIGKILL: both workers were still there
+    # ten minutes later, waiting on their dead parent's queue; trainings would train on to the end.
+    parent = subprocess.Popen(
+        [sys.executable, "-c", _POOL_PARENT], stdout=subprocess.PIPE, text=True, cwd=str(tmp_path)
+    )
+    try:
+        workers = [int(p) for p in parent.stdout.readline().split()]
+    finally:
+        parent.kill()
+        parent.wait()
+    assert len(workers) >= 3
+    deadline = time.monotonic() + 20
+    while any(map(_alive, workers)) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = [pid for pid in workers if _alive(pid)]
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"workers {left} outlived their killed parent"
