@@ -106,7 +106,7 @@ class RunDir:
         self.record: dict[str, Any] = existing or {
             "algo": algo,
             "args": resolved,
-            "command": recorded_command([Path(sys.argv[0]).name, *sys.argv[1:]], self.path, self._paths),
+            "command": recorded_command([program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths),
             "seed": resolved.get("seed"),
             "package_version": __version__,
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -244,6 +244,15 @@ def recorded(value: Any, folder: str | Path, given: set[str]) -> Any:
     if isinstance(value, str) and value and (os.path.isabs(value) or os.path.normpath(value) in given):
         return relative_path(value, folder)
     return value
+
+
+def program_name(argv0: str) -> str:
+    """The program as a run record names it: argv[0]'s file name, and `socialzoo` for
+    `python -m socialzoo`, whose argv[0] is the package's __main__.py (not a command one can run)."""
+    path = Path(argv0)
+    if path.name == "__main__.py" and path.parent.name == "socialzoo":
+        return "socialzoo"
+    return path.name
 
 
 def recorded_command(argv: list[str], folder: str | Path, given: set[str]) -> str:

@@ -89,6 +89,14 @@ class FileArgs:
     note: str = ""
 
 
+def test_the_command_of_python_m_socialzoo_is_recorded_as_socialzoo(tmp_path, monkeypatch):
+    # Found training with `python -m socialzoo train ppo ...`: run.json said "__main__.py train ppo ...".
+    main_file = Path(__import__("socialzoo").__file__).with_name("__main__.py")
+    monkeypatch.setattr("sys.argv", [str(main_file), "train", "x", "--seed", "5"])
+    RunDir(tmp_path, "x", Args(seed=5, out=tmp_path))
+    assert json.loads((tmp_path / "run.json").read_text())["command"] == "socialzoo train x --seed 5"
+
+
 def test_a_fresh_run_record_holds_no_absolute_path(tmp_path, monkeypatch):
     demos = tmp_path / "demos" / "d.npz"
     program = tmp_path / "runs" / "p" / "prog.json"
