@@ -4,9 +4,12 @@ its argument dataclass (socialzoo.cli.dataclass_args): the same arguments and de
 from __future__ import annotations
 
 import argparse
+import logging
 from typing import Any
 
 from socialzoo.cli import command_help, fail
+
+logger = logging.getLogger(__name__)
 
 
 def register(subparsers: Any) -> None:
@@ -31,13 +34,21 @@ def register(subparsers: Any) -> None:
 
 def run_train_command(args: argparse.Namespace) -> int:
     """Run `socialzoo train <trainer>`; returns the exit status (2 for bad arguments)."""
+    from socialzoo.agents.demonstrations import DemonstrationError
     from socialzoo.cli.dataclass_args import dataclass_from_namespace
     from socialzoo.train import trainer_function
+    from socialzoo.train.run_dir import RunDirError
 
     try:
         train_args = dataclass_from_namespace(args.trainer_class, args)
     except (TypeError, ValueError) as err:
         return fail(f"train {args.trainer}", err)
-    path = trainer_function(args.trainer)(train_args)
+    try:
+        path = trainer_function(args.trainer)(train_args)
+    except (ValueError, FileNotFoundError, RunDirError, DemonstrationError) as err:
+        # Inputs found bad once the trainer reads them: an unknown map, a missing demonstration
+        # file, a run folder holding a run of other arguments (the traceback with -v).
+        logger.debug("socialzoo train %s failed", args.trainer, exc_info=True)
+        return fail(f"train {args.trainer}", err)
     print(f"socialzoo train {args.trainer}: wrote {path}")
     return 0
