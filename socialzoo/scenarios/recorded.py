@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import heapq
 import math
+import os
 import zlib
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -270,14 +271,23 @@ class RecordedScene(ScenarioFamily):
         return int(pool[k])
 
     def open_map(self) -> str:
-        """The path of the scene's open area as a map file (open_area_map), written once into the
-        data cache (socialzoo.data.fetch.data_dir) beside the recordings."""
+        """The path of the scene's open area as a map file (open_area_map) in the data cache
+        (socialzoo.data.fetch.data_dir), beside the recordings. The file is named after the family,
+        so it is rewritten whenever it does not hold this recording's area: another recording
+        registered under the same name, or the same file edited since, gets its own walls."""
         from socialzoo.data.fetch import data_dir
 
         path = data_dir() / "maps" / f"{self.name}.json"
-        if not path.exists():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            open_area_map(self.recording, self.name).save(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # Built beside it and renamed over it: another process reading or writing the same
+        # family's map never sees half a file.
+        staged = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            open_area_map(self.recording, self.name).save(staged)
+            if not path.exists() or path.read_bytes() != staged.read_bytes():
+                os.replace(staged, path)
+        finally:
+            staged.unlink(missing_ok=True)
         return str(path)
 
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:

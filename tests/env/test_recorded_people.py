@@ -160,6 +160,25 @@ def test_the_replaced_scenario_and_its_json(family: RecordedScene) -> None:
     assert not (test & val or test & train or val & train) and train
 
 
+def test_the_open_area_map_is_the_registered_recordings(tmp_path, monkeypatch) -> None:
+    # The map file is named after the family: a second recording registered under the same
+    # name (docs/recorded.md's "recorded_mine") must get its own walls, not the first one's.
+    from socialzoo.maps.map_file import load_map
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    first = _recording(count=20)
+    moved = dataclasses.replace(
+        first, tracks=tuple(Track(t.person, t.first_frame, t.positions + 100.0) for t in first.tracks)
+    )
+    for recording in (first, moved, first):
+        path = RecordedScene(recording, name="recorded_mine").open_map()
+        walls = load_map(path).walls
+        points = np.concatenate([t.positions for t in recording.tracks])
+        assert walls[:, [0, 2]].min() < points[:, 0].min() and walls[:, [0, 2]].max() > points[:, 0].max()
+        assert walls[:, [1, 3]].min() < points[:, 1].min() and walls[:, [1, 3]].max() > points[:, 1].max()
+    assert [p.name for p in (tmp_path / "maps").iterdir()] == ["recorded_mine.json"]
+
+
 @pytest.mark.parametrize("humans", ["replay", "hybrid:sf", "orca"])
 def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene, humans: str) -> None:
     from gymnasium.utils.env_checker import check_env
