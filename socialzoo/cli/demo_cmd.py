@@ -18,7 +18,9 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--policy", default="ref", help="policy name (goalone, ref, ...; default ref)")
     parser.add_argument("--policy-path", type=Path, default=None, help="saved file of a learned policy")
-    parser.add_argument("--map", default="gdc1", help="map name or JSON path (default gdc1)")
+    parser.add_argument(
+        "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
+    )
     parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
     parser.add_argument("--seed", type=int, default=0, help="scenario seed (default 0)")
     parser.add_argument("--view", choices=("follow", "map"), default="follow", help="camera")

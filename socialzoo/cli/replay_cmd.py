@@ -38,7 +38,9 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--policy-path", type=Path, default=None, help="saved file of the (single) learned policy"
     )
-    parser.add_argument("--map", default=None, help="map name or JSON path (default gdc1)")
+    parser.add_argument(
+        "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
+    )
     parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
     parser.add_argument("--seed", type=int, default=None, help="scenario seed (default 0)")
     parser.add_argument(
@@ -180,7 +182,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
 
     specs = _specs(args) or [PolicySpec.parse("ref")]
     seed = 0 if args.seed is None else args.seed
-    config = EnvConfig(map=args.map or "gdc1", family=args.family)
+    config = EnvConfig(map=args.map, family=args.family)  # no --map: the family's, else gdc1
     if args.max_steps is not None:
         config = config.replace(max_steps=args.max_steps)
     m = load_map(config.map)

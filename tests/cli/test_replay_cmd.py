@@ -34,6 +34,31 @@ def test_replay_from_a_seed(tmp_path, capsys):
     assert again.read_text() == out.read_text()
 
 
+def test_replay_and_demo_of_a_family_play_on_its_own_map(tmp_path, capsys, monkeypatch):
+    # Without --map a family plays on its own map (--map used to default to gdc1, where no family
+    # fits): a suite family on its building, and a recorded scene of one's own in its open area.
+    import numpy as np
+
+    from socialzoo.data.tracks import Recording, Track
+    from socialzoo.scenarios.catalogue import register_family
+    from socialzoo.scenarios.recorded import RecordedScene
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    walkers = [Track(p, 3 * p, np.linspace([-4.0 + p, -5.0], [4.0 - p, 5.0], 30)) for p in range(4)]
+    register_family(
+        RecordedScene(Recording(name="cli", dt=0.4, num_frames=40, tracks=tuple(walkers), source="test"))
+    )
+    for family, home in (("frontal_approach", "hallway"), ("recorded_cli", "recorded_cli")):
+        out = tmp_path / f"{family}.html"
+        argv = ["replay", "--policy", "goalone", "--family", family, "--seed", "100", "--max-steps", "20"]
+        assert socialzoo_main([*argv, "--out", str(out)]) == 0
+        assert capsys.readouterr().out.startswith(f"{out}: 1 episode(s) on {home}, seed 100; ")
+    gif = tmp_path / "episode.gif"
+    argv = ["demo", "--policy", "goalone", "--family", "recorded_cli", "--seed", "100", "--max-frames", "3"]
+    assert socialzoo_main([*argv, "--out", str(gif)]) == 0
+    assert "frames;" in capsys.readouterr().out
+
+
 def test_replay_options_reach_the_file(tmp_path):
     out = tmp_path / "ep.html"
     argv = ["replay", "--map", "open_room", "--seed", "1", "--max-steps", "30", "--stride", "5"]
