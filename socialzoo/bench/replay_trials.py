@@ -152,8 +152,9 @@ def find_trials(
     Raises:
         FileNotFoundError: no store at `results`.
         socialzoo.bench.store.StoreError: not a results store.
-        ValueError: no trial matches (the message lists what the store holds), or several test
-            sets do and `test_set` was not given.
+        ValueError: no trial matches (the message lists what the store holds), several test
+            sets do and `test_set` was not given, or the trial is a task id's fixed case (the
+            message names the `socialzoo replay --env` command that plays it).
     """
     path = store_path(results)
     with ResultsStore(path) as store:
@@ -196,6 +197,13 @@ def find_trials(
             if stored is None:
                 raise ValueError(
                     f"{path}: config {row['config_hash']} of trial {row['test_set']} #{index} is missing"
+                )
+            if "env" not in stored and "task" in stored:
+                # socialzoo.bench.task_benchmark's trials: a task id's fixed case, not a map's scenario.
+                raise ValueError(
+                    f"{path}: trial {row['test_set']} #{index} is a task id's case (socialzoo benchmark "
+                    f"--maps ID); play it with socialzoo replay --env ID --split {stored.get('split', 'test')} "
+                    f"--case {index} --policy {name}"
                 )
             kwargs = run.get("policies", {}).get(name, {}).get("kwargs", {}) if row["_rank"][0] else {}
             trials.append(

@@ -126,3 +126,15 @@ def test_a_changed_configuration_is_flagged(results, tmp_path):
     (trial,) = find_trials(copy, 0, policies=["goalone"])
     done = replay_trial(trial, laser_rays=0)
     assert done.code_changed is True and done.mismatches == []
+
+
+def test_a_task_ids_trial_names_the_command_that_plays_it(tmp_path):
+    # A task id's benchmark (socialzoo benchmark --maps socialzoo/Recorded-v2, ...) stores fixed
+    # cases with the task's config, not an EnvConfig: it used to fail with KeyError 'env'.
+    from socialzoo.agents.crowd_engineered import CrowdOrcaRobot
+    from socialzoo.bench.task_benchmark import TaskId, evaluate_stored
+
+    store = tmp_path / "results.sqlite"
+    evaluate_stored(store, TaskId.of("socialzoo/CrowdNav-v1"), "orca", CrowdOrcaRobot(), "val", cases=1)
+    with pytest.raises(ValueError, match=r"a task id's case .* --env ID --split val --case 0 --policy orca"):
+        find_trials(tmp_path, 0)
