@@ -139,7 +139,8 @@ class CrowdNavConfig:
         if not models <= set(CROWD_MODELS):
             raise ValueError(
                 f"CrowdNavConfig.humans: the CrowdNav task's people walk by {CROWD_MODELS} (or a mix of them), "
-                f"got {self.humans!r}"
+                "recorded people also as hybrid:sf or hybrid:orca; learned people, hybrid or not, and groups "
+                f"are the action-selection task's, got {self.humans!r}"
             )
         check_choice("CrowdNavConfig", "action", self.action, CROWD_ACTIONS)
         check_choice("CrowdNavConfig", "observation", self.observation, OBSERVATION_KINDS)

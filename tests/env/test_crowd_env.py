@@ -234,6 +234,7 @@ def test_the_crowdnav_task_takes_the_people_spec():
     for spec, match in (
         ("groups", "walk by"),
         ("learned:x.safetensors", "walk by"),
+        ("hybrid:learned:x.safetensors", "learned people, hybrid or not, .* action-selection task's"),
         ("boids", "unknown model"),
     ):
         with pytest.raises(ValueError, match=match):
