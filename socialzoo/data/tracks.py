@@ -271,7 +271,7 @@ def _parse(path: Path, layout: str) -> tuple[np.ndarray, np.ndarray]:
     """(line numbers (N,), values (N, C)) of the data rows of a track file, checked row by row."""
     raw = path.read_bytes()
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark (Windows editors) is not data
     except UnicodeDecodeError as exc:
         raise TrackFileError(
             path, raw.count(b"\n", 0, exc.start) + 1, "not a text file (not UTF-8)"

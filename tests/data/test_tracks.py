@@ -60,6 +60,15 @@ def test_whitespace_separated_with_blank_and_comment_lines(tmp_path):
     np.testing.assert_array_equal(rec.tracks[0].positions, [[1.0, 2.0], [1.5, 2.5]])
 
 
+def test_a_byte_order_mark_is_not_part_of_the_first_frame(tmp_path):
+    # Editors and spreadsheets on Windows save UTF-8 with a BOM; it used to read as the first
+    # line's frame ("frame is not a number: '\\ufeff0'").
+    path = tmp_path / "bom.txt"
+    path.write_bytes(b"\xef\xbb\xbf0\t7\t1.0\t2.0\r\n10\t7\t1.5\t2.5\r\n")
+    rec = read_tracks(path)
+    np.testing.assert_array_equal(rec.tracks[0].positions, [[1.0, 2.0], [1.5, 2.5]])
+
+
 def test_obsmat_layout_reads_x_and_y_from_columns_2_and_4(tmp_path):
     rows = [_obsmat_row(f, 1, 0.5 * k, 2.0 + k) for k, f in enumerate((780, 786, 792))]
     rows.append(_obsmat_row(792, 2, -1.0, -2.0))
