@@ -96,7 +96,13 @@ class BatchedCore:
         # Recorded people: tracks, hybrid people's reactions, the measures against the recording
         # (socialzoo.env.replay).
         self.replay = ReplayRunner(
-            self.people.config, b, r, max_humans, world.dt, world.human_collision_distance
+            self.people.config,
+            b,
+            r,
+            max_humans,
+            world.dt,
+            world.human_collision_distance,
+            robot_visible=robot_visible,
         )
         self.field: DistanceField | None = None
         self.navigator: Navigator | None = None

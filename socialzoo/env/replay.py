@@ -57,6 +57,8 @@ class ReplayRunner:
         max_humans: H.
         dt: the world step, s.
         collision_distance: robot and person centres nearer than this touch, m.
+        robot_visible: whether the people see the robots: hybrid people react only to robots
+            they see (an invisible robot leaves them on their tracks, as replay).
     """
 
     def __init__(
@@ -67,6 +69,8 @@ class ReplayRunner:
         max_humans: int,
         dt: float,
         collision_distance: float,
+        *,
+        robot_visible: bool = True,
     ) -> None:
         b, r, h = batch_size, num_robots, max_humans
         self.parts: tuple[PeoplePart, ...] = config.parts
@@ -80,6 +84,7 @@ class ReplayRunner:
         self._recorded_spec = config.recorded
         self.radius, self.react_time = config.react_radius, config.react_time
         self.dt, self.collision_distance = dt, collision_distance
+        self.robot_visible = robot_visible
         self.recorded = np.zeros(b, dtype=bool)
         self.frame_dt = np.ones(b)
         # (B, T, H, 2) each row's recording in its first frame_count frames and people_count slots
@@ -288,7 +293,7 @@ class ReplayRunner:
     def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
         """Hybrid people a robot came near leave their tracks (docs/recorded.md gives the rule); frame:
         (len(rows),) the frame each row is on."""
-        if state.num_robots == 0:
+        if state.num_robots == 0 or not self.robot_visible:
             return
         react = np.empty((len(rows), state.max_humans), dtype=bool)
         if not reacting_people(

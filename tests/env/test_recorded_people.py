@@ -138,6 +138,25 @@ def test_hybrid_people_leave_their_track_only_when_a_robot_comes_near() -> None:
         PeopleConfig(models="hybrid:sf", react_radius=-1.0)
 
 
+def test_hybrid_people_do_not_react_to_a_robot_they_cannot_see() -> None:
+    # docs/recorded.md: hybrid people react to the robot only if they can see it (robot_visible).
+    scenario = _two_walkers((6.0, 0.0))  # on the first walker's line
+    core = BatchedCore(
+        1,
+        1,
+        scenario.num_humans,
+        WorldConfig(dt=0.1),
+        WallIndex(np.zeros((0, 4))),
+        people=PeopleConfig(models="hybrid:sf"),
+        robot_visible=False,
+    )
+    core.reset_rows(np.arange(1), [scenario])
+    for _ in range(40):
+        core.step(np.zeros((1, 1, 2)))
+    assert np.isnan(core.replay.reacted_at[0]).all()
+    assert (core.state.human_model[0, :2] == REPLAY).all()
+
+
 def test_replay_needs_recorded_people() -> None:
     from socialzoo.scenarios.catalogue import get_family
 
