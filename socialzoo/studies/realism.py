@@ -268,7 +268,7 @@ def _row_scenario(scene: SceneTracks, k: int, start: int, frames: int, groups: b
 
     end = start + frames
     g = scene.grid
-    seen = ~np.isnan(g[:, start : end + 1, 0]).any(1)
+    seen = (~np.isnan(g[:, start : end + 1, 0])).any(1)  # present on any frame of the case
     seen[k] = False
     others = np.flatnonzero(seen)
     companions = np.zeros(0, dtype=np.int64)

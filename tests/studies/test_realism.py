@@ -76,6 +76,18 @@ def test_a_model_person_avoids_a_replayed_one_coming_at_it():
     assert orca.metrics["contact_rate"] == 0.0
 
 
+def test_everyone_seen_during_a_case_replays_beside_the_subject():
+    # The subject walks frames 0..29; a walker 1 m beside it enters at frame 10. It is seen during
+    # the subject's track case, so it replays there (it was left out: only people present on every
+    # frame of the case were).
+    rec = _walkers(frames=30, lanes=((0.0, 0.0, 1.0, 0.0), (4.0, 1.0, 1.0, 0.0)), start=(0, 10))
+    scene = SceneTracks.of(rec)
+    cases = track_cases(scene, np.array([0]))
+    others = simulate(scene, cases, model_spec("sf")).others[0]
+    assert np.isinf(others[:10]).all()
+    assert np.isfinite(others[10:25]).all() and (others[10:25] < 2.0).all()
+
+
 def test_metrics():
     pred = np.zeros((2, 3, 2))
     true = np.zeros((2, 3, 2))
