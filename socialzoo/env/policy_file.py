@@ -48,6 +48,17 @@ def current_env_version() -> int:
     return versions.pop()
 
 
+def _other_task(env_id: str, version: int) -> str | None:
+    """The task of `env_id` when it is one of this package's ids but not of the benchmark's
+    version `version` (a task numbering its versions apart, such as CrowdNav), else None."""
+    from socialzoo.env.registration import task_ids
+
+    kwargs = task_ids().get(env_id)
+    if kwargs is None or env_version(env_id) == version:
+        return None
+    return str(kwargs["task"])
+
+
 def save_policy_file(path: str | Path, tensors: Mapping[str, Any], header: Mapping[str, Any]) -> Path:
     """Write `tensors` (name -> array) and `header` (plain JSON) to a safetensors file.
 
@@ -137,6 +148,13 @@ def read_policy_file(
         except ValueError as err:
             raise PolicyFileError(f"{path}: {err}") from None
         ours = current_env_version()
+        task = _other_task(str(header["env_id"]), ours)
+        if task is not None:
+            # A current id of a task with its own version numbers (CrowdNav): not an outdated file.
+            raise PolicyFileError(
+                f"{path}: a {header['policy']!r} policy for {header['env_id']}, a {task!r} task env, not for "
+                f"this socialzoo's v{ours} benchmark envs; load it as a policy of the {task!r} task"
+            )
         if theirs != ours:
             raise PolicyFileError(
                 f"{path}: trained on {header['env_id']} (v{theirs}) but this socialzoo's benchmark env is "

@@ -174,14 +174,12 @@ def register_task(env_id: str, task: str, **kwargs: object) -> None:
         )
 
 
+def task_ids() -> dict[str, dict]:
+    """Every id of socialzoo's tasks -> its registration kwargs (with "task", the task's name)."""
+    return {**CROWD_IDS, **BENCHMARK_IDS, **REFERENCE_IDS, **FAMILY_IDS, **SUITE_IDS, **RECORDED_IDS}
+
+
 def register_envs() -> None:
     """Register every id of socialzoo's tasks (idempotent)."""
-    for env_id, kwargs in {
-        **CROWD_IDS,
-        **BENCHMARK_IDS,
-        **REFERENCE_IDS,
-        **FAMILY_IDS,
-        **SUITE_IDS,
-        **RECORDED_IDS,
-    }.items():
+    for env_id, kwargs in task_ids().items():
         register_task(env_id, **kwargs)

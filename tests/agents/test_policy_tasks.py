@@ -73,3 +73,48 @@ def test_the_crowdnav_replay_of_a_policy_on_another_variant_fails_with_the_named
     )
     assert done.returncode == 2
     assert "reads observations of 46 numbers" in done.stderr and "166" in done.stderr
+
+
+def test_a_policy_file_of_another_task_is_refused_as_such_not_as_outdated(tmp_path):
+    """A file recording a current id of a task with versions of its own (socialzoo/CrowdNav-v1) is
+    not a benchmark policy of an old version: the robot and people loaders say whose it is."""
+    import numpy as np
+
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+    from socialzoo.env.policy_file import PolicyFileError, save_policy_file
+
+    network = {"kind": "mlp", "activation": "tanh", "output": "logits", "sizes": [3, 2]}
+    tensors = {"net.0.weight": np.zeros((2, 3), np.float32), "net.0.bias": np.zeros(2, np.float32)}
+    path = save_policy_file(
+        tmp_path / "crowd.safetensors",
+        tensors,
+        {
+            "policy": "crowdnav",
+            "network": network,
+            "observation": {},
+            "env_id": "socialzoo/CrowdNav-v1",
+            "training": {},
+        },
+    )
+    for spec in (f"ppo:{path}", f"bc:{path}"):
+        with pytest.raises(
+            PolicyFileError, match=r"CrowdNav-v1, a 'crowdnav' task env.*policy of the 'crowdnav' task"
+        ) as err:
+            make_policy(spec)
+        assert "retrain" not in str(err.value)
+    with pytest.raises(PolicyFileError, match=r"a 'crowdnav' task env"):
+        LearnedHumanPolicy.load(path)
+    # An outdated benchmark file still gets the advice to retrain.
+    old = save_policy_file(
+        tmp_path / "old.safetensors",
+        tensors,
+        {
+            "policy": "ppo",
+            "network": network,
+            "observation": {},
+            "env_id": "socialzoo/ActionSelection-v1",
+            "training": {},
+        },
+    )
+    with pytest.raises(PolicyFileError, match=r"retrain it"):
+        make_policy(f"ppo:{old}")
