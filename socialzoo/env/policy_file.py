@@ -107,7 +107,7 @@ def read_policy_file(
     """Read and check a policy file.
 
     Loading checks all of the header and refuses a file made for another observation layout or
-    env version.
+    env version, or one whose tensors hold NaN or inf.
 
     Args:
         path: a file written by `save_policy_file`.
@@ -130,6 +130,10 @@ def read_policy_file(
             tensors = {name: f.get_tensor(name) for name in f.keys()}
     except (SafetensorError, OSError, ValueError) as err:
         raise PolicyFileError(f"{path}: not a safetensors policy file ({err})") from None
+    broken = sorted(name for name, t in tensors.items() if t.dtype.kind in "fc" and not np.isfinite(t).all())
+    if broken:
+        # A diverged training run: such a network would still act (argmax of NaN is 0), silently.
+        raise PolicyFileError(f"{path}: tensors {broken} hold non-finite values (NaN or inf)")
     if HEADER_KEY not in metadata:
         raise PolicyFileError(f"{path}: a safetensors file without a socialzoo policy header")
     try:

@@ -107,3 +107,25 @@ def test_headers_are_checked(tmp_path):
     save_policy_file(tmp_path / "bad.safetensors", tensors, header)
     with pytest.raises(PolicyFileError, match=r"net\.0\.weight has shape"):
         MlpPolicy.load(tmp_path / "bad.safetensors")
+
+
+def test_a_file_whose_weights_hold_nan_or_inf_is_refused_naming_the_tensors(tmp_path):
+    """A diverged run's network still acts (the argmax of NaN logits is action 0 for every
+    observation), so the loader refuses it instead of letting it play."""
+    from socialzoo.agents import make_policy
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+
+    rng = np.random.default_rng(0)
+    policy = _policy(rng)
+    good = policy.save(tmp_path / "good.safetensors", _header())
+    tensors, header = read_policy_file(good)
+    for bad_value, name in ((np.nan, "nan"), (np.inf, "inf")):
+        tensors = {**tensors, "net.1.weight": tensors["net.1.weight"].copy()}
+        tensors["net.1.weight"][3, 5] = bad_value
+        path = save_policy_file(tmp_path / f"{name}.safetensors", tensors, header)
+        with pytest.raises(
+            PolicyFileError, match=rf"{name}\.safetensors: tensors \['net.1.weight'\] hold non-finite"
+        ):
+            make_policy(f"ppo:{path}")
+        with pytest.raises(PolicyFileError, match="non-finite"):
+            LearnedHumanPolicy.load(path)
