@@ -59,6 +59,11 @@ POLICY_TASKS: dict[str, str] = {
     "orca": "crowdnav",
     "social_force": "crowdnav",
 }
+# Registry name -> the `socialzoo train` command that makes its file, where it is not the name's own.
+POLICY_TRAINERS: dict[str, str] = {
+    "mappo": "cotrain",
+    "suite_crowdnav": "crowdnav --families suite",
+}
 DEFAULT_TASK = "action_selection"
 
 
@@ -161,8 +166,9 @@ def check_policy_spec(spec: str) -> str:
         if not Path(path).is_file():
             raise ValueError(f"policy {spec!r}: no such file {path!r}")
     elif hasattr(cls, "load") and shipped_policy_file(key) is None:
+        trainer = POLICY_TRAINERS.get(key, key)
         raise ValueError(
-            f"no shipped {key!r} policy in {SHIPPED_DIR}; train one (`socialzoo train {key} --out DIR`) "
+            f"no shipped {key!r} policy in {SHIPPED_DIR}; train one (`socialzoo train {trainer} --out DIR`) "
             f"and name it '{key}:PATH'"
         )
     return spec

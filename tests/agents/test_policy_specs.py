@@ -47,3 +47,13 @@ def test_bad_specs_are_refused_before_anything_runs(tmp_path):
 
     with pytest.raises(ValueError, match=r"BenchmarkConfig\.policies: policy 'ppo:"):
         BenchmarkConfig(policies=(f"ppo:{tmp_path / 'missing.safetensors'}",))
+
+
+def test_a_learned_policy_without_a_shipped_file_names_the_command_that_trains_it():
+    """mappo files come from `socialzoo train cotrain` (there is no `socialzoo train mappo`)."""
+    from socialzoo.train import TRAINERS
+
+    with pytest.raises(ValueError, match=r"`socialzoo train cotrain --out DIR`\) and name it 'mappo:PATH'"):
+        check_policy_spec("mappo")
+    for key, command in agents.POLICY_TRAINERS.items():
+        assert key in agents.POLICIES and command.split()[0] in TRAINERS
