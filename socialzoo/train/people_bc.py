@@ -530,7 +530,11 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     see_robots_as_people(net, args.num_neighbours)
     policy = to_policy(net, loc, scale, args)
     policy.save(
-        run.policy, env_id(), training_record(args, per_scene, len(train_set), len(val_set), best, best_epoch)
+        run.policy,
+        env_id(),
+        training_record(
+            args, per_scene, len(train_set), len(val_set), best, best_epoch, command=run.record["command"]
+        ),
     )
     with torch.no_grad():
         baseline = float((yv**2).mean())
@@ -584,9 +588,16 @@ def to_policy(net: Any, loc: np.ndarray, scale: np.ndarray, args: Args) -> Learn
 
 
 def training_record(
-    args: Args, scenes: dict[str, Any], num_train: int, num_val: int, val_mse: float, best_epoch: int
+    args: Args,
+    scenes: dict[str, Any],
+    num_train: int,
+    num_val: int,
+    val_mse: float,
+    best_epoch: int,
+    *,
+    command: str,
 ) -> dict[str, Any]:
-    """The policy file's training record (plain JSON)."""
+    """The policy file's training record (plain JSON); `command` is the run's, as run.json holds it."""
     return {
         "algorithm": "people-bc",
         "scenes": list(args.scene_names),
@@ -603,5 +614,5 @@ def training_record(
         "val_demonstrations": num_val,
         "val_mse": round(val_mse, 6),
         "best_epoch": best_epoch,
-        "command": (f"socialzoo train people-bc --scenes {args.scenes} --out {args.out} --seed {args.seed}"),
+        "command": command,
     }

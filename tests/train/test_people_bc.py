@@ -157,6 +157,9 @@ def test_labels_reach_the_position_label_frames_ahead():
 def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     rec = _recording()
     monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: rec)
+    monkeypatch.setattr(
+        "sys.argv", ["socialzoo", "train", "people-bc", "--scenes", "eth,hotel", "--max-epochs", "3"]
+    )
     args = Args(
         scenes="eth,hotel", out=tmp_path / "run", seed=0, window=8, num_neighbours=2, hidden=16,
         max_epochs=3, patience=2, progress=False, relaxation_time=3.0,
@@ -173,8 +176,12 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     robots[:, flags] = 1.0
     np.testing.assert_array_equal(policy.act(robots), policy.act(obs))
     assert policy.header["training"]["algorithm"] == "people-bc"
+    # The file records the command that was run (every option given), as run.json does.
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert "--max-epochs 3" in record["command"]
+    assert policy.header["training"]["command"] == record["command"]
     # The held-out time is too short here for a 12-frame closed-loop walk: measured on nothing.
-    results = json.loads((tmp_path / "run" / "run.json").read_text())["results"]
+    results = record["results"]
     assert results["held_out_closed_loop_ade"] == {} and results["held_out_closed_loop_ade_mean"] is None
     # `learned:PATH` drives the first person of a recorded window; the others replay.
     from socialzoo.core.walls import WallIndex
