@@ -12,6 +12,29 @@ from socialzoo.cli import command_help, fail
 logger = logging.getLogger(__name__)
 
 
+def _input_errors() -> tuple[type[Exception], ...]:
+    """The errors by which a trainer refuses its inputs (each names the input): a run folder holding
+    another run, an unreadable demonstration, policy, map or track file, a bad people spec."""
+    from socialzoo.agents.demonstrations import DemonstrationError
+    from socialzoo.data.fetch import UnknownSceneError
+    from socialzoo.data.tracks import TrackFileError
+    from socialzoo.env.policy_file import PolicyFileError
+    from socialzoo.humans.models import PeopleSpecError
+    from socialzoo.maps.map_file import MapError
+    from socialzoo.train.run_dir import RunDirError
+
+    return (
+        RunDirError,
+        DemonstrationError,
+        PolicyFileError,
+        MapError,
+        TrackFileError,
+        UnknownSceneError,
+        PeopleSpecError,
+        FileNotFoundError,
+    )
+
+
 def register(subparsers: Any) -> None:
     """Add `train` with one sub-subcommand per registered trainer."""
     from socialzoo.cli.dataclass_args import add_dataclass_arguments
@@ -34,10 +57,8 @@ def register(subparsers: Any) -> None:
 
 def run_train_command(args: argparse.Namespace) -> int:
     """Run `socialzoo train <trainer>`; returns the exit status (2 for bad arguments)."""
-    from socialzoo.agents.demonstrations import DemonstrationError
     from socialzoo.cli.dataclass_args import dataclass_from_namespace
     from socialzoo.train import trainer_function
-    from socialzoo.train.run_dir import RunDirError
 
     try:
         train_args = dataclass_from_namespace(args.trainer_class, args)
@@ -45,9 +66,9 @@ def run_train_command(args: argparse.Namespace) -> int:
         return fail(f"train {args.trainer}", err)
     try:
         path = trainer_function(args.trainer)(train_args)
-    except (ValueError, FileNotFoundError, RunDirError, DemonstrationError) as err:
-        # Inputs found bad once the trainer reads them: an unknown map, a missing demonstration
-        # file, a run folder holding a run of other arguments (the traceback with -v).
+    except _input_errors() as err:
+        # Inputs found bad once the trainer reads them, each named by its loader; a fault inside
+        # training keeps its traceback (this one is logged with -v).
         logger.debug("socialzoo train %s failed", args.trainer, exc_info=True)
         return fail(f"train {args.trainer}", err)
     print(f"socialzoo train {args.trainer}: wrote {path}")

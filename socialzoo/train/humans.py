@@ -8,7 +8,7 @@ from pathlib import Path
 from socialzoo.train.marl_args import HUMANS_POLICY_FILE, MarlArgs
 from socialzoo.train.skeleton import Trainer
 
-TRAINER = Trainer("humans", policy_file=HUMANS_POLICY_FILE)
+TRAINER = Trainer("humans", policy_file=HUMANS_POLICY_FILE, inputs=("robot",))
 
 
 @dataclass(frozen=True, kw_only=True)

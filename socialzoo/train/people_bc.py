@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
-TRAINER = Trainer("people-bc", policy_file="people_bc.safetensors")
+TRAINER = Trainer("people-bc", policy_file="people_bc.safetensors", inputs=("scenes",))
 # The world step of the replay, s (4 steps per 0.4 s frame).
 WORLD_DT = 0.1
 # Demonstrated actions are clipped to this (tanh reaches it at a finite mean).

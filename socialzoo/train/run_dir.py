@@ -6,6 +6,7 @@ import dataclasses
 import json
 import logging
 import os
+import re
 import shlex
 import sys
 import time
@@ -221,12 +222,35 @@ def _same_place(before: Any, before_out: Any, current: Any, current_out: Any) ->
 
 def given_paths(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
     """The paths that argument dataclass `args` names, as given: the values of its fields that hold
-    a Path, of `out` and of the `inputs` fields (normalised; None and empty ones left out)."""
+    a Path, of `out` and of the `inputs` fields, or the paths inside an `inputs` field that is a spec
+    (normalised; None and empty ones left out)."""
     names = {"out", *inputs}
     if dataclasses.is_dataclass(args):
         names |= {f.name for f in dataclasses.fields(args) if isinstance(getattr(args, f.name), Path)}
-    values = (getattr(args, name, None) for name in names)
-    return {os.path.normpath(v) for v in values if isinstance(v, (str, Path)) and str(v)}
+    found = set()
+    for name in names:
+        value = getattr(args, name, None)
+        items = [_spec_item(item) for item in value.split(",")] if isinstance(value, str) else []
+        if name in inputs and (len(items) > 1 or (items and items[0][0])):
+            # A spec naming its files inside it ("ppo:PATH", "eth,NAME=PATH,PATH"): its "NAME:" or
+            # "NAME=" paths, and its bare items that are files (not names, such as a scene's "eth").
+            found |= {
+                os.path.normpath(path) for prefix, path in items if path and (prefix or os.path.isfile(path))
+            }
+        elif isinstance(value, (str, Path)) and str(value):
+            found.add(os.path.normpath(value))
+    return found
+
+
+def _spec_item(item: str) -> tuple[str, str]:
+    """(prefix, path) of one item of a spec naming a file: "ppo:PATH" -> ("ppo:", PATH), "NAME=PATH"
+    -> ("NAME=", PATH), "learned:PATH" likewise; an item without such a prefix is all path."""
+    match = _SPEC_PREFIX.match(item)
+    return (match.group(0), item[match.end() :]) if match else ("", item)
+
+
+# One or more "name:" or "name=" in front of a path in a spec ("hybrid:learned:PATH").
+_SPEC_PREFIX = re.compile(r"(?:[A-Za-z][A-Za-z0-9_.\-]*[:=])+")
 
 
 def relative_path(path: str, folder: str | Path) -> str:
@@ -243,7 +267,19 @@ def recorded(value: Any, folder: str | Path, given: set[str]) -> Any:
         return [recorded(v, folder, given) for v in value]
     if isinstance(value, str) and value and (os.path.isabs(value) or os.path.normpath(value) in given):
         return relative_path(value, folder)
+    if isinstance(value, str) and any(mark in value for mark in ",:="):
+        # A spec naming files ("ppo:PATH", "eth,NAME=PATH"): its paths as run records hold paths.
+        items = [_spec_item(item) for item in value.split(",")]
+        return ",".join(prefix + _recorded_path(path, folder, given) for prefix, path in items)
     return value
+
+
+def _recorded_path(path: str, folder: str | Path, given: set[str]) -> str:
+    """A path inside a spec as a run record holds it: relative to the run `folder` when it is one of
+    the `given` paths or absolute ("//", as in "ray://host", is an address, not a path)."""
+    if path and not path.startswith("//") and (os.path.isabs(path) or os.path.normpath(path) in given):
+        return relative_path(path, folder)
+    return path
 
 
 def program_name(argv0: str) -> str:

@@ -157,3 +157,35 @@ def test_plain_turns_dataclasses_paths_and_tuples_into_json():
     assert plain({"a": (Path("p"), Args())}) == {
         "a": ["p", {"steps": 10, "seed": 0, "out": "x", "progress": True}]
     }
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpecArgs:
+    scenes: str
+    robot: str = "ref"
+    ray_address: str = "ray://head:10001"
+    out: str
+
+
+def test_paths_inside_specs_are_recorded_relative_to_the_run_folder(tmp_path, monkeypatch):
+    """Specs that name files ("NAME=PATH" scenes, "ppo:PATH" policies) keep no absolute path and,
+    for input arguments, hold their paths as seen from the run folder, like plain path arguments."""
+    monkeypatch.chdir(tmp_path)
+    track, policy = tmp_path / "data" / "t.txt", tmp_path / "p" / "ppo.safetensors"
+    track.parent.mkdir()
+    (tmp_path / "data" / "u.txt").write_text("")
+    scenes = f"eth,mine={track},data/u.txt"
+    robot = f"hybrid:ppo:{policy}"
+    argv = ["socialzoo", "train", "x", "--scenes", scenes, "--robot", robot, "--out", "runs/a"]
+    monkeypatch.setattr("sys.argv", argv)
+    args = SpecArgs(scenes=scenes, robot=robot, out="runs/a")
+    RunDir(Path("runs/a"), "x", args, inputs=("scenes",)).finish(files=[f"log={tmp_path}/runs/a/log.txt"])
+    record = json.loads((tmp_path / "runs" / "a" / "run.json").read_text())
+    assert record["args"]["scenes"] == "eth,mine=../../data/t.txt,../../data/u.txt"
+    assert record["args"]["robot"] == "hybrid:ppo:../../p/ppo.safetensors"
+    assert record["args"]["ray_address"] == "ray://head:10001"  # an address, not a path
+    assert record["results"]["files"] == ["log=log.txt"]
+    assert absolute_paths(record) == []
+    assert "--scenes eth,mine=../../data/t.txt,../../data/u.txt" in record["command"]
+    # The same run, from the same folder: the same arguments.
+    assert RunDir(Path("runs/a"), "x", args, inputs=("scenes",)).finished
