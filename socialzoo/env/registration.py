@@ -2,6 +2,9 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within v2 (and CrowdNav's v1), default rollouts unchanged: the presets sf-eth-ucy and
+        orca-eth-ucy were fitted again (the realism cases' protocol fix), so people specs that name
+        them walk otherwise; hybrid people react only to a robot they can see (robot_visible).
     Within CrowdNav's v1, default rollouts unchanged: a robot radius or discomfort distance given
         to the task (robot=, reward=) also spaces its drawn cases, as CrowdNav's generator does
         (the cases were drawn for a 0.3 m robot and 0.2 m, whatever the task's robot and reward).
