@@ -420,50 +420,19 @@ def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str
 
 def _png_walls(args: argparse.Namespace) -> tuple[np.ndarray, dict[str, Any]]:
     """Walls of --png (an image, or a ROS map_server YAML naming one) and their provenance inputs."""
-    from socialzoo.maps.importers import read_map_server_yaml
-    from socialzoo.maps.occupancy import wall_pixels, walls_from_occupancy
+    from socialzoo.maps.importers import is_map_server_yaml, read_floor_plan
 
-    image_file, scale, yaw, negate = args.png, args.scale, 0.0, False
-    origin = (0.0, 0.0) if args.origin is None else tuple(args.origin)
-    threshold = 0.5 if args.threshold is None else args.threshold
-    inputs: dict[str, Any] = {"png": args.png.name}
-    if args.png.suffix.lower() in (".yaml", ".yml"):
+    if is_map_server_yaml(args.png):
         if args.scale is not None or args.origin is not None:
             raise ValueError(
                 f"--png {args.png}: a map YAML gives the scale and origin: drop --scale and --origin"
             )
-        meta = read_map_server_yaml(args.png)
-        x, y, yaw = meta.origin
-        image_file, scale, origin, negate = meta.image, meta.resolution, (x, y), meta.negate
-        # map_server: occupied where 1 - brightness (brightness when negated) > occupied_thresh.
-        threshold = 1.0 - meta.occupied_thresh if args.threshold is None else args.threshold
-        inputs.update(image=image_file.name, negate=negate, yaw=yaw)
-    elif scale is None:
+    elif args.scale is None:
         raise ValueError("--png needs --scale (metres per pixel), or give a ROS map_server map YAML")
-    inputs.update(scale=scale, origin=list(origin), threshold=threshold)
-    try:
-        import imageio.v3 as iio
-    except ImportError:  # pragma: no cover - the plot extra is missing
-        raise ValueError("reading --png needs imageio: pip install 'socialzoo[plot]'") from None
-    if not image_file.is_file():
-        named = f" (the image named by {args.png})" if image_file != args.png else ""
-        raise FileNotFoundError(f"{image_file}: no such file{named}")
-    try:
-        image = iio.imread(image_file)
-    except Exception as err:  # imageio raises many kinds for a file it cannot decode
-        raise ValueError(f"{image_file}: not a readable image ({err})") from None
-    if negate:
-        image = (np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0) - image
-    # map_server's origin is the pose of the image's lower-left corner: turned by yaw about it.
-    walls = walls_from_occupancy(
-        wall_pixels(image, threshold), scale, (0.0, 0.0) if yaw else origin, min_area=args.min_wall_area
+    origin = (0.0, 0.0) if args.origin is None else tuple(args.origin)
+    return read_floor_plan(
+        args.png, scale=args.scale, origin=origin, threshold=args.threshold, min_area=args.min_wall_area
     )
-    if len(walls) == 0:
-        raise ValueError(f"{image_file}: no wall pixels darker than threshold {threshold}")
-    if yaw:
-        c, s = np.cos(yaw), np.sin(yaw)
-        walls = (walls.reshape(-1, 2) @ np.array([[c, s], [-s, c]]) + np.array(origin)).reshape(-1, 4)
-    return walls, inputs
 
 
 def run_import(args: argparse.Namespace) -> int:

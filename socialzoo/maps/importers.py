@@ -315,6 +315,71 @@ def read_map_server_yaml(path: str | os.PathLike[str]) -> MapServerYaml:
     return MapServerYaml(image_path, resolution, (x, y, yaw), bool(negate), occupied)
 
 
+def is_map_server_yaml(path: str | os.PathLike[str]) -> bool:
+    """Whether `path` names a ROS map_server map YAML (by its suffix) rather than an image."""
+    return Path(path).suffix.lower() in (".yaml", ".yml")
+
+
+def read_floor_plan(
+    path: str | os.PathLike[str],
+    *,
+    scale: float | None = None,
+    origin: tuple[float, float] = (0.0, 0.0),
+    threshold: float | None = None,
+    min_area: float = 0.0,
+) -> tuple[np.ndarray, dict[str, Any]]:
+    """Walls (W, 4) of a floor-plan image (an occupancy grid: pixels darker than `threshold`, 0 black
+    .. 1 white, default 0.5, are walls; `scale` metres per pixel; `origin` the world position of its
+    lower-left corner, m) or of a ROS map_server map YAML, which gives the image, the scale, the
+    origin with its yaw, negate and the threshold (1 - occupied_thresh, unless `threshold` is
+    given); and the inputs that made them, for the map's provenance.
+
+    Raises:
+        FileNotFoundError: no such image (or none where the YAML says).
+        ValueError: an image without a scale, one that cannot be decoded or without wall pixels, a
+            malformed YAML (MapError), or imageio missing.
+    """
+    from socialzoo.maps.occupancy import wall_pixels, walls_from_occupancy
+
+    path = Path(path)
+    image_file, yaw, negate = path, 0.0, False
+    inputs: dict[str, Any] = {"png": path.name}
+    if is_map_server_yaml(path):
+        meta = read_map_server_yaml(path)
+        x, y, yaw = meta.origin
+        image_file, scale, origin, negate = meta.image, meta.resolution, (x, y), meta.negate
+        # map_server: occupied where 1 - brightness (brightness when negated) > occupied_thresh.
+        threshold = 1.0 - meta.occupied_thresh if threshold is None else threshold
+        inputs.update(image=image_file.name, negate=negate, yaw=yaw)
+    elif scale is None:
+        raise ValueError(f"{path}: a floor-plan image needs its scale (metres per pixel)")
+    threshold = 0.5 if threshold is None else threshold
+    inputs.update(scale=scale, origin=list(origin), threshold=threshold)
+    try:
+        import imageio.v3 as iio
+    except ImportError:  # pragma: no cover - the plot extra is missing
+        raise ValueError("reading a floor-plan image needs imageio: pip install 'socialzoo[plot]'") from None
+    if not image_file.is_file():
+        named = f" (the image named by {path})" if image_file != path else ""
+        raise FileNotFoundError(f"{image_file}: no such file{named}")
+    try:
+        image = iio.imread(image_file)
+    except Exception as err:  # imageio raises many kinds for a file it cannot decode
+        raise ValueError(f"{image_file}: not a readable image ({err})") from None
+    if negate:
+        image = (np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0) - image
+    # map_server's origin is the pose of the image's lower-left corner: turned by yaw about it.
+    walls = walls_from_occupancy(
+        wall_pixels(image, threshold), scale, (0.0, 0.0) if yaw else origin, min_area=min_area
+    )
+    if len(walls) == 0:
+        raise ValueError(f"{image_file}: no wall pixels darker than threshold {threshold}")
+    if yaw:
+        c, s = np.cos(yaw), np.sin(yaw)
+        walls = (walls.reshape(-1, 2) @ np.array([[c, s], [-s, c]]) + np.array(origin)).reshape(-1, 4)
+    return walls, inputs
+
+
 def write_vector_map(path: str | os.PathLike[str], walls: np.ndarray) -> Path:
     """Write walls (W, 4) as an AMRL vector map ("x1, y1, x2, y2" per line); returns the path."""
     path = Path(path)
