@@ -16,10 +16,12 @@ from socialzoo.env.replay_kernels import (
     account_people,
     account_robots,
     enter_people,
+    leave_tracks,
     load_row,
     occupants_now,
     place_people,
     reacting_people,
+    reacting_totals,
 )
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
 from socialzoo.scenarios.recorded_people import NEVER
@@ -302,28 +304,12 @@ class ReplayRunner:
             self.collision_distance**2, react,
         ):  # fmt: skip
             return
-        local, slot = np.nonzero(react)
-        row = rows[local]
-        t = state.step_count[row] * self.dt
-        self.on_track[row, slot] = False
-        state.human_model[row, slot] = self.then[row, slot]
-        # The rest of its recorded route: the first route point after its current frame.
-        k = self.occupant[row, slot]
-        first, last = self.first[row, slot, k], self.last[row, slot, k]
-        frames = self.route_frame[row, slot]  # (m, L)
-        ahead = (frames <= frame[local][:, None]).sum(-1)
-        shared = self.shared[row, slot]
-        end = np.where(shared, last, state.human_route_len[row, slot] - 1)
-        state.human_waypoint[row, slot] = np.clip(ahead, np.where(shared, first, 0), end)
-        state.human_direction[row, slot] = 1
-        self.reacted_at[row, slot] = t
-        exit_frame = self.exit[row, slot, k]
-        self.recorded_exit[row, slot] = exit_frame * self.frame_dt[row]
-        track = self.tracks[row, :, slot]  # (m, T, 2)
-        seg = np.sqrt((np.diff(track, axis=1) ** 2).sum(-1))  # NaN where absent
-        span = np.arange(track.shape[1] - 1)[None, :]
-        mine = (span >= frame[local][:, None]) & (span < exit_frame[:, None])
-        self.recorded_left[row, slot] = np.where(mine & ~np.isnan(seg), seg, 0.0).sum(-1)
+        leave_tracks(
+            rows, react, frame, state.step_count, self.dt, self.frame_dt, self.then, self.occupant, self.first,
+            self.last, self.route_frame, self.shared, self.exit, self.tracks, self.on_track, state.human_model,
+            state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at, self.recorded_exit,
+            self.recorded_left, np.empty(max(self.tracks.shape[1] - 1, 0)),
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ measures
     def account(
@@ -346,46 +332,50 @@ class ReplayRunner:
             self.deviation, self.moves, self.contact, self.walked_into,
         )  # fmt: skip
 
-    def summaries(self, rows: np.ndarray, arrival: Sequence[float], robot: int = 0) -> list[dict[str, Any]]:
-        """The recorded metrics (RECORDED_KEYS) of `rows` for robot `robot`; arrival: each row's
-        time to goal, s (NaN unless the episode succeeded)."""
+    def summaries(
+        self, rows: np.ndarray | Sequence[int], arrival: Sequence[float], robot: int | np.ndarray = 0
+    ) -> list[dict[str, Any]]:
+        """The recorded metrics (RECORDED_KEYS) of `rows` for robot `robot` (one for every row, or
+        one per row); arrival: each row's time to goal, s (NaN unless the episode succeeded). A row
+        without a recording gets an empty dict."""
+        rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+        robots = np.broadcast_to(np.asarray(robot, dtype=np.intp), rows.shape)
+        h = self.reacted_at.shape[1]
+        totals = np.empty((len(rows), 3))
+        reacting_totals(
+            rows, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, self.occupant_speed,
+            self.recorded_exit, self.walked, self.recorded_left, self.folded, totals, np.empty(h), np.empty(h),
+        )  # fmt: skip
+        points = self.robot_track_len[rows]
+        person = np.where(points > 0, (points - 1) * self.frame_dt[rows], np.nan)
+        moves = self.moves[rows, robots]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            deviation = np.where((moves > 0) & (points > 1), self.deviation[rows, robots] / moves, np.nan)
         out: list[dict[str, Any]] = []
-        for row, reached in zip(np.asarray(rows, dtype=np.intp).tolist(), arrival, strict=True):
-            if not self.recorded[row]:
+        for recorded, reached, person_time, deviated, (count, lost, extra), walked_into in zip(
+            self.recorded[rows].tolist(),
+            arrival,
+            person.tolist(),
+            deviation.tolist(),
+            totals.tolist(),
+            self.walked_into[rows, robots].tolist(),
+            strict=True,
+        ):
+            if not recorded:
                 out.append({})
                 continue
-            person = (
-                float((self.robot_track_len[row] - 1) * self.frame_dt[row])
-                if self.robot_track_len[row]
-                else math.nan
+            reached = float(reached)
+            out.append(
+                {
+                    "person_time": person_time,
+                    "person_time_ratio": reached / person_time
+                    if person_time > 0 and math.isfinite(reached)
+                    else math.nan,
+                    "person_path_deviation": deviated,
+                    "people_reacting": int(count),
+                    "people_walked_into_robot": walked_into,
+                    "reacting_time_lost": lost / count if count else math.nan,
+                    "reacting_extra_distance": extra / count if count else math.nan,
+                }
             )
-            reacted = ~np.isnan(self.reacted_at[row])
-            count, lost, extra = self.folded[row]
-            if reacted.any():
-                # Not gone yet: the episode's time plus the straight way left at its speed.
-                exit_at, rest = self.exit_at[row], self.rest[row]
-                done = ~np.isnan(exit_at)
-                speed = np.maximum(
-                    self.occupant_speed[row, np.arange(len(rest)), np.maximum(self.occupant[row], 0)], 1e-9
-                )
-                at = np.where(done, exit_at, self.elapsed[row] + rest / speed)
-                count += reacted.sum()
-                lost += (at - self.recorded_exit[row])[reacted].sum()
-                extra += (self.walked[row] + np.where(done, 0.0, rest) - self.recorded_left[row])[
-                    reacted
-                ].sum()
-            entry: dict[str, Any] = {
-                "person_time": person,
-                "person_time_ratio": float(reached) / person
-                if person > 0 and math.isfinite(float(reached))
-                else math.nan,
-                "person_path_deviation": float(self.deviation[row, robot] / self.moves[row, robot])
-                if self.moves[row, robot] and self.robot_track_len[row] > 1
-                else math.nan,
-                "people_reacting": int(count),
-                "people_walked_into_robot": int(self.walked_into[row, robot]),
-                "reacting_time_lost": float(lost / count) if count else math.nan,
-                "reacting_extra_distance": float(extra / count) if count else math.nan,
-            }
-            out.append(entry)
         return out

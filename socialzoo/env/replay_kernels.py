@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from socialzoo.core.jit import kernel
+from socialzoo.core.jit import kernel, numpy_sum
 from socialzoo.scenarios.recorded_people import NEVER
 
 # An unused occupant entry: never entering, route indices 0, speed 1 m/s (ReplayRunner's fill too).
@@ -197,6 +197,48 @@ def reacting_people(
 
 
 @kernel
+def leave_tracks(
+    rows, react, frame, step_count, dt, frame_dt, then, occupant, first, last, route_frame, shared, exit_, tracks,
+    on_track, model, route_len, waypoint, direction, reacted_at, recorded_exit, recorded_left, seg,
+):  # fmt: skip
+    """ReplayRunner._react's switch of the people in react (n, H) off their tracks, in place: each walks by
+    its model towards the first point of its route (of its own part, in a shared slot) recorded after
+    `frame` (n,), the frame its row is on; its reaction time, its recorded exit time and the recorded
+    distance left from `frame` to its exit (segments where both frames are recorded) are kept. seg:
+    a scratch buffer of at least T - 1 floats (T: the tracks' frame axis), summed in numpy's order over
+    the whole axis as the expressions it replaced did."""
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        for s in range(react.shape[1]):
+            if not react[j, s]:
+                continue
+            on_track[r, s] = False
+            model[r, s] = then[r, s]
+            k = occupant[r, s]
+            ahead = 0
+            for p in range(route_frame.shape[2]):
+                if route_frame[r, s, p] <= frame[j]:
+                    ahead += 1
+            if shared[r, s]:
+                low, end = first[r, s, k], last[r, s, k]
+            else:
+                low, end = 0, route_len[r, s] - 1
+            waypoint[r, s] = min(max(ahead, low), end)
+            direction[r, s] = 1
+            reacted_at[r, s] = step_count[r] * dt
+            exit_frame = exit_[r, s, k]
+            recorded_exit[r, s] = exit_frame * frame_dt[r]
+            for f in range(tracks.shape[1] - 1):
+                dx, dy = (
+                    tracks[r, f + 1, s, 0] - tracks[r, f, s, 0],
+                    tracks[r, f + 1, s, 1] - tracks[r, f, s, 1],
+                )
+                length = np.sqrt(dx * dx + dy * dy)
+                seg[f] = length if f >= frame[j] and f < exit_frame and not np.isnan(length) else 0.0
+            recorded_left[r, s] = numpy_sum(seg, 0, tracks.shape[1] - 1)
+
+
+@kernel
 def account_people(
     rows, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len, walked, rest
 ):
@@ -266,3 +308,34 @@ def account_robots(
                     if person_in > robot_in:
                         walked_into[r, q] += 1
                 contact[r, q, s] = close
+
+
+@kernel
+def reacting_totals(
+    rows, reacted_at, exit_at, rest, elapsed, occupant, occupant_speed, recorded_exit, walked, recorded_left,
+    folded, totals, lost, extra,
+):  # fmt: skip
+    """ReplayRunner.summaries' reacting people of `rows` into totals (n, 3): per row the count, the time
+    lost and the extra distance of the reacting people who left their slot (`folded`) plus those still
+    in one: each one's time to its exit (or, not gone yet, the episode's time plus the straight way left
+    at its speed) against its recorded exit, and its distance walked (plus the way left) against the
+    recorded distance left, added in numpy's order (lost, extra: scratch buffers of H floats)."""
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        count, lost_sum, extra_sum = folded[r, 0], folded[r, 1], folded[r, 2]
+        m = 0
+        for s in range(reacted_at.shape[1]):
+            if reacted_at[r, s] != reacted_at[r, s]:  # NaN: it did not react
+                continue
+            done = exit_at[r, s] == exit_at[r, s]
+            speed = occupant_speed[r, s, max(occupant[r, s], 0)]
+            speed = speed if speed >= 1e-9 or speed != speed else 1e-9  # np.maximum keeps a NaN
+            at = exit_at[r, s] if done else elapsed[r] + rest[r, s] / speed
+            lost[m] = at - recorded_exit[r, s]
+            extra[m] = walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
+            m += 1
+        if m:
+            count += m
+            lost_sum += numpy_sum(lost, 0, m)
+            extra_sum += numpy_sum(extra, 0, m)
+        totals[j, 0], totals[j, 1], totals[j, 2] = count, lost_sum, extra_sum

@@ -252,11 +252,16 @@ class CrowdNavTask(Task):
         force, blame = self._force_and_blame()
         self.metrics.update(outcome, moved, force, blame)
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
-        for k, summary in zip(ended.tolist(), self.metrics.summaries(ended, outcome), strict=True):
+        summaries = self.metrics.summaries(ended, outcome)
+        for k, summary in zip(ended.tolist(), summaries, strict=True):
             summary["wall_collision"] = float(wall[k] and outcome.collision[k])
-            if core.replay.recorded[k // r]:  # against the recording (socialzoo.env.replay)
-                summary.update(core.replay.summaries([k // r], [summary["navigation_time"]], k % r)[0])
             self._ended[k] = summary
+        if core.replay.active and len(ended):  # against the recording (socialzoo.env.replay)
+            arrival = [summary["navigation_time"] for summary in summaries]
+            for summary, extra in zip(
+                summaries, core.replay.summaries(ended // r, arrival, ended % r), strict=True
+            ):
+                summary.update(extra)
         core.end_episodes((outcome.terminated | outcome.truncated).reshape(b, r))
         self.observation = self._observe()
         wall_collision = wall & outcome.collision
