@@ -239,28 +239,27 @@ class CrowdNavMetrics:
 
     def summaries(self, rows: np.ndarray, outcome: CrowdOutcome) -> list[dict[str, float]]:
         """The ending episodes' metrics (METRIC_KEYS), one dict per row of `rows`."""
-        out = []
-        for i in np.asarray(rows, dtype=np.intp):
-            steps = int(self.steps[i])
-            success = bool(outcome.success[i])
-            out.append(
-                {
-                    "success": float(success),
-                    "collision": float(outcome.collision[i]),
-                    "timeout": float(outcome.timeout[i]),
-                    "navigation_time": steps * self.dt if success else float("nan"),
-                    "path_length": float(self.path[i]),
-                    "discomfort_steps": float(self.discomfort[i]),
-                    "steps": float(steps),
-                    "discomfort_frequency": float(self.discomfort[i]) / max(steps, 1),
-                    "min_separation": float(self.min_gap[i])
-                    if np.isfinite(self.min_gap[i])
-                    else float("nan"),
-                    "intrusion_ratio": float(self.intrusion[i]) / max(steps, 1),
-                    "return": float(self.ret[i]),
-                    "discounted_return": float(self.discounted[i]),
-                    "mean_force": float(self.force[i]) / max(steps, 1),
-                    "mean_blame": float(self.blame[i]) / max(steps, 1),
-                }
-            )
-        return out
+        rows = np.asarray(rows, dtype=np.intp)
+        # Columns over the rows, then one dict a row: per-row numpy scalars cost more than the sums.
+        steps = self.steps[rows]
+        per_step = np.maximum(steps, 1)
+        success = outcome.success[rows]
+        gap = self.min_gap[rows]
+        columns = {
+            "success": success.astype(np.float64),
+            "collision": outcome.collision[rows].astype(np.float64),
+            "timeout": outcome.timeout[rows].astype(np.float64),
+            "navigation_time": np.where(success, steps * self.dt, np.nan),
+            "path_length": self.path[rows],
+            "discomfort_steps": self.discomfort[rows].astype(np.float64),
+            "steps": steps.astype(np.float64),
+            "discomfort_frequency": self.discomfort[rows] / per_step,
+            "min_separation": np.where(np.isfinite(gap), gap, np.nan),
+            "intrusion_ratio": self.intrusion[rows] / per_step,
+            "return": self.ret[rows],
+            "discounted_return": self.discounted[rows],
+            "mean_force": self.force[rows] / per_step,
+            "mean_blame": self.blame[rows] / per_step,
+        }
+        names, values = list(columns), [column.tolist() for column in columns.values()]
+        return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
