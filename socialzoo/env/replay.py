@@ -261,15 +261,16 @@ class ReplayRunner:
     def _place(self, state: WorldState, rows: np.ndarray) -> np.ndarray:
         """Positions, velocities and presence of `rows`' people at the rows' time (from step_count);
         returns (len(rows),) the frame each row is on."""
-        t = state.step_count[rows] * self.dt
-        frame = t / self.frame_dt[rows]
-        last = self.tracks.shape[1] - 1
-        i0 = np.minimum(np.floor(frame + _ON_FRAME).astype(np.int64), last)
-        w = np.where(frame - i0 > _ON_FRAME, frame - i0, 0.0)
+        n = len(rows)
+        t, i0, w = np.empty(n), np.empty(n, dtype=np.int64), np.empty(n)
         # Who is in each slot now; a slot's next person takes it at its entry frame.
-        now = np.empty((len(rows), self.tracks.shape[2]), dtype=np.int64)
+        now = np.empty((n, self.tracks.shape[2]), dtype=np.int64)
         new = np.empty(now.shape, dtype=bool)
-        if occupants_now(rows, i0, self.entry, self.occupant, now, new):
+        last = self.tracks.shape[1] - 1
+        if occupants_now(
+            rows, state.step_count, self.dt, self.frame_dt, last, _ON_FRAME, self.entry, self.occupant,
+            t, i0, w, now, new,
+        ):  # fmt: skip
             self._enter(state, rows, new, now, t)
         place_people(
             rows, i0, w, t, now, new, self.tracks, self.track_vel, self.people_count, self.frame_count,

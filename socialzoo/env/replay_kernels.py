@@ -64,12 +64,19 @@ def load_row(
 
 
 @kernel
-def occupants_now(rows, i0, entry, occupant, now, new):
-    """Fill now (n, H), who is in each slot of `rows` on frame i0 (entries at or before it, minus
-    one; -1 nobody yet), and new (n, H), a person other than the slot's occupant; True if any."""
+def occupants_now(rows, step_count, dt, frame_dt, last, on_frame, entry, occupant, t, i0, w, now, new):
+    """For `rows` at their time t = steps * dt (n,): the frame i0 (n,) each is on (frame period
+    frame_dt, at most `last`; a time within on_frame frames of a frame is on it) and the weight w (n,)
+    of the next frame (0 on a frame); now (n, H), who is in each slot on frame i0 (entries at or
+    before it, minus one; -1 nobody yet); new (n, H), a person other than the slot's occupant. True
+    if anyone is new."""
     any_new = False
     for j in range(rows.shape[0]):
         r = rows[j]
+        t[j] = step_count[r] * dt
+        frame = t[j] / frame_dt[r]
+        i0[j] = min(int(np.floor(frame + on_frame)), last)
+        w[j] = frame - i0[j] if frame - i0[j] > on_frame else 0.0
         for s in range(entry.shape[1]):
             count = 0
             for k in range(entry.shape[2]):
