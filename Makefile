@@ -8,7 +8,7 @@ CHROMIUM := /usr/bin/chromium
 # apt-get needs root: sudo when make runs as another user.
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: run test lint bench venv clean chromium policies docs
+.PHONY: run test lint bench venv clean clean-kernels chromium policies docs
 
 venv: $(STAMP)
 
@@ -65,5 +65,9 @@ policies: $(STAMP)
 	done
 	cp $(SHIP)/pips/pips.json $(SHIP)/pips/pips.train.json socialzoo/agents/shipped/
 
-clean:
+clean: clean-kernels
 	rm -rf $(VENV) results build site *.egg-info
+
+# numba's cached kernels (DEVELOPERS.md, Compiled kernels: a cache does not see a change in another file).
+clean-kernels:
+	find socialzoo -name '*.nbi' -delete -o -name '*.nbc' -delete
