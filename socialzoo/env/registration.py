@@ -2,6 +2,14 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2 (the recorded ids, each one version
+        ahead of its task's other ids; no other id changes): a recorded row plays the same whatever
+        else its batch holds. Past the last frame of its own recording everyone on a track leaves
+        (the row whose recording was the batch's longest kept them standing on its last frame, and
+        a single env is such a row), and a reacting person's recorded distance left starts where
+        the person is, partway along its segment, and adds the row's own frames in order (the
+        metric reacting_extra_distance read up to one segment low, and its last bits depended on
+        the batch).
     Within v2 (and CrowdNav's v1), default rollouts unchanged: the presets sf-eth-ucy and
         orca-eth-ucy were fitted again (the realism cases' protocol fix), so people specs that name
         them walk otherwise; hybrid people react only to a robot they can see (robot_visible).
@@ -46,7 +54,7 @@ import dataclasses
 
 import gymnasium as gym
 
-from socialzoo.env.crowd_variants import VARIANTS, crowd_env_id
+from socialzoo.env.crowd_variants import CROWD_ENV_VERSION, VARIANTS, crowd_env_id
 from socialzoo.env.quirks import REFERENCE_QUIRKS
 from socialzoo.scenarios.catalogue import get_family
 
@@ -141,14 +149,17 @@ SUITE_IDS: dict[str, dict] = {
 # person's time). The CrowdNav task in the open with a visible robot and person slots for the
 # scene's largest episode; the action-selection task on the scene's open area as a map.
 RECORDED_DEFAULT_FAMILY = "recorded_eth"
+# The recorded ids' own versions, one ahead of their task's other ids (the Version History's first line).
+RECORDED_VERSION = ENV_VERSION + 1
+CROWD_RECORDED_VERSION = CROWD_ENV_VERSION + 1
 RECORDED_IDS: dict[str, dict] = {
-    f"socialzoo/Recorded-v{ENV_VERSION}": {
+    f"socialzoo/Recorded-v{RECORDED_VERSION}": {
         "task": "action_selection",
         "map": None,
         "family": RECORDED_DEFAULT_FAMILY,
         "people": {"models": "replay"},
     },
-    crowd_env_id("Recorded"): {
+    f"socialzoo/CrowdNavRecorded-v{CROWD_RECORDED_VERSION}": {
         "task": "crowdnav",
         "map": None,
         "family": RECORDED_DEFAULT_FAMILY,

@@ -255,20 +255,19 @@ class ReplayRunner:
         rows = np.flatnonzero(self.recorded)
         for name in ("human_mask", "human_model", "human_route_len", "human_pref_speed"):
             setattr(after, name, getattr(after, name).copy())
-        frame = self._place(after, rows)
-        self._react(after, rows, frame, robot_vel)
+        frame, weight = self._place(after, rows)
+        self._react(after, rows, frame, weight, robot_vel)
 
-    def _place(self, state: WorldState, rows: np.ndarray) -> np.ndarray:
+    def _place(self, state: WorldState, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions, velocities and presence of `rows`' people at the rows' time (from step_count);
-        returns (len(rows),) the frame each row is on."""
+        returns ((len(rows),) the frame each row is on, (len(rows),) how far it is to the next)."""
         n = len(rows)
         t, i0, w = np.empty(n), np.empty(n, dtype=np.int64), np.empty(n)
         # Who is in each slot now; a slot's next person takes it at its entry frame.
         now = np.empty((n, self.tracks.shape[2]), dtype=np.int64)
         new = np.empty(now.shape, dtype=bool)
-        last = self.tracks.shape[1] - 1
         if occupants_now(
-            rows, state.step_count, self.dt, self.frame_dt, last, _ON_FRAME, self.entry, self.occupant,
+            rows, state.step_count, self.dt, self.frame_dt, _ON_FRAME, self.entry, self.occupant,
             t, i0, w, now, new,
         ):  # fmt: skip
             self._enter(state, rows, new, now, t)
@@ -277,7 +276,7 @@ class ReplayRunner:
             self.on_track, self.gone, self.exit_at,
             state.human_direction, state.human_pos, state.human_vel, state.human_mask,
         )  # fmt: skip
-        return i0
+        return i0, w
 
     def _enter(
         self, state: WorldState, rows: np.ndarray, new: np.ndarray, now: np.ndarray, t: np.ndarray
@@ -293,9 +292,16 @@ class ReplayRunner:
             state.human_route_len, state.human_waypoint, state.human_direction, state.human_pref_speed,
         )  # fmt: skip
 
-    def _react(self, state: WorldState, rows: np.ndarray, frame: np.ndarray, robot_vel: np.ndarray) -> None:
+    def _react(
+        self,
+        state: WorldState,
+        rows: np.ndarray,
+        frame: np.ndarray,
+        weight: np.ndarray,
+        robot_vel: np.ndarray,
+    ) -> None:
         """Hybrid people a robot came near leave their tracks (docs/recorded.md gives the rule); frame:
-        (len(rows),) the frame each row is on."""
+        (len(rows),) the frame each row is on, weight: how far each is to the next."""
         if state.num_robots == 0 or not self.robot_visible:
             return
         react = np.empty((len(rows), state.max_humans), dtype=bool)
@@ -306,10 +312,10 @@ class ReplayRunner:
         ):  # fmt: skip
             return
         leave_tracks(
-            rows, react, frame, state.step_count, self.dt, self.frame_dt, self.then, self.occupant, self.first,
-            self.last, self.route_frame, self.shared, self.exit, self.tracks, self.on_track, state.human_model,
-            state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at, self.recorded_exit,
-            self.recorded_left, np.empty(max(self.tracks.shape[1] - 1, 0)),
+            rows, react, frame, weight, state.step_count, self.dt, self.frame_dt, self.then, self.occupant,
+            self.first, self.last, self.route_frame, self.shared, self.exit, self.tracks, self.on_track,
+            state.human_model, state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at,
+            self.recorded_exit, self.recorded_left,
         )  # fmt: skip
 
     # ------------------------------------------------------------------ measures

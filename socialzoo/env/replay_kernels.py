@@ -64,9 +64,9 @@ def load_row(
 
 
 @kernel
-def occupants_now(rows, step_count, dt, frame_dt, last, on_frame, entry, occupant, t, i0, w, now, new):
+def occupants_now(rows, step_count, dt, frame_dt, on_frame, entry, occupant, t, i0, w, now, new):
     """For `rows` at their time t = steps * dt (n,): the frame i0 (n,) each is on (frame period
-    frame_dt, at most `last`; a time within on_frame frames of a frame is on it) and the weight w (n,)
+    frame_dt, past its recording's end too; a time within on_frame frames of a frame is on it) and the weight w (n,)
     of the next frame (0 on a frame); now (n, H), who is in each slot on frame i0 (entries at or
     before it, minus one; -1 nobody yet); new (n, H), a person other than the slot's occupant. True
     if anyone is new."""
@@ -75,7 +75,7 @@ def occupants_now(rows, step_count, dt, frame_dt, last, on_frame, entry, occupan
         r = rows[j]
         t[j] = step_count[r] * dt
         frame = t[j] / frame_dt[r]
-        i0[j] = min(int(np.floor(frame + on_frame)), last)
+        i0[j] = int(np.floor(frame + on_frame))
         w[j] = frame - i0[j] if frame - i0[j] > on_frame else 0.0
         for s in range(entry.shape[1]):
             count = 0
@@ -135,11 +135,11 @@ def place_people(
     while recorded; people a model walks enter on their track and leave where their route ends.
     A row's tracks beyond its recording (people_count slots, frame_count frames) are NaN (absent)
     with velocity 0, whatever the arrays hold there."""
-    last = tracks.shape[1] - 1
     for j in range(rows.shape[0]):
         r = rows[j]
-        a = i0[j]
-        b = min(a + 1, last)
+        # A row's own recording's frames only: a frame the row does not have is absent (a wider
+        # recording in another row does not keep this row's people on its last frame).
+        a, b = i0[j], i0[j] + 1
         on_frame = w[j] == 0.0
         for s in range(tracks.shape[2]):
             x0 = y0 = x1 = y1 = np.nan
@@ -205,15 +205,14 @@ def reacting_people(
 
 @kernel
 def leave_tracks(
-    rows, react, frame, step_count, dt, frame_dt, then, occupant, first, last, route_frame, shared, exit_, tracks,
-    on_track, model, route_len, waypoint, direction, reacted_at, recorded_exit, recorded_left, seg,
+    rows, react, frame, w, step_count, dt, frame_dt, then, occupant, first, last, route_frame, shared, exit_,
+    tracks, on_track, model, route_len, waypoint, direction, reacted_at, recorded_exit, recorded_left,
 ):  # fmt: skip
     """ReplayRunner._react's switch of the people in react (n, H) off their tracks, in place: each walks by
     its model towards the first point of its route (of its own part, in a shared slot) recorded after
     `frame` (n,), the frame its row is on; its reaction time, its recorded exit time and the recorded
-    distance left from `frame` to its exit (segments where both frames are recorded) are kept. seg:
-    a scratch buffer of at least T - 1 floats (T: the tracks' frame axis), summed in numpy's order over
-    the whole axis as the expressions it replaced did."""
+    distance left are kept: from where it is (w (n,) of the way from `frame` to the next) along its
+    track to its last frame, adding the segments whose both frames are recorded, in frame order."""
     for j in range(rows.shape[0]):
         r = rows[j]
         for s in range(react.shape[1]):
@@ -235,14 +234,16 @@ def leave_tracks(
             reacted_at[r, s] = step_count[r] * dt
             exit_frame = exit_[r, s, k]
             recorded_exit[r, s] = exit_frame * frame_dt[r]
-            for f in range(tracks.shape[1] - 1):
+            left = 0.0
+            for f in range(frame[j], exit_frame):
                 dx, dy = (
                     tracks[r, f + 1, s, 0] - tracks[r, f, s, 0],
                     tracks[r, f + 1, s, 1] - tracks[r, f, s, 1],
                 )
                 length = np.sqrt(dx * dx + dy * dy)
-                seg[f] = length if f >= frame[j] and f < exit_frame and not np.isnan(length) else 0.0
-            recorded_left[r, s] = numpy_sum(seg, 0, tracks.shape[1] - 1)
+                if not np.isnan(length):
+                    left += (1.0 - w[j]) * length if f == frame[j] else length
+            recorded_left[r, s] = left
 
 
 @kernel

@@ -138,6 +138,64 @@ def test_hybrid_people_leave_their_track_only_when_a_robot_comes_near() -> None:
         PeopleConfig(models="hybrid:sf", react_radius=-1.0)
 
 
+def test_the_recorded_distance_left_starts_where_the_person_reacted() -> None:
+    # The walker reacts at 2.5 s, a quarter into the segment of frames 6-7 (x = 3.125 m): its
+    # recorded way to its last frame (x = 12 m) is 8.875 m, not the 9 m from frame 6.
+    near = _core([_two_walkers((6.0, 0.0))], "hybrid:sf")
+    for _ in range(40):
+        near.step(np.zeros((1, 1, 2)))
+    reacted = near.replay.reacted_at[0, 0]
+    assert (reacted / DT) % 1.0 > 0.0  # between frames
+    assert near.replay.recorded_left[0, 0] == pytest.approx(12.0 - 1.25 * reacted, abs=1e-9)
+
+
+def _to_the_end(robot_start=(50.0, 50.0)) -> Scenario:
+    """A person on every frame of a 10-frame recording, walking +x at 1.25 m/s, another on frames 2-9."""
+    tracks = np.stack((np.arange(10) * 0.5, np.zeros(10)), -1)[None].repeat(2, 0)
+    tracks[1, :, 1] = 3.0
+    tracks[1, :2] = np.nan
+    start = np.array([[*robot_start, 0.0]])
+    return people_scenario(
+        RecordedPeople(dt=DT, tracks=tracks), start, start + [[1.0, 0.0, 0.0]], seed=1, family="test"
+    )
+
+
+def test_everyone_leaves_when_the_recording_ends() -> None:
+    core = _core([_to_the_end()], "replay")
+    for _ in range(9 * 4):
+        core.step(np.zeros((1, 1, 2)))
+    assert core.state.human_mask[0, 0]  # on the last frame
+    core.step(np.zeros((1, 1, 2)))
+    assert not core.state.human_mask[0, 0]  # past it: no frame after it is recorded
+
+
+@pytest.mark.parametrize("humans", ["replay", "hybrid:sf"])
+def test_a_recorded_row_plays_the_same_whatever_else_its_batch_holds(humans: str) -> None:
+    # Row 0 alone, and beside a row whose recording is longer: the same world and measures bit for
+    # bit, also past the end of row 0's recording (the longer one once kept row 0's people there).
+    walker = np.stack((np.linspace(-20.0, 20.0, 80), np.full(80, -9.0)), -1)[None]
+    start = np.array([[50.0, 50.0, 0.0]])
+    longer = people_scenario(
+        RecordedPeople(dt=DT, tracks=walker), start, start + [[1.0, 0.0, 0.0]], seed=9, family="test"
+    )
+    alone = _core([_to_the_end((3.0, 0.0))], humans)
+    batch = _core([_to_the_end((3.0, 0.0)), longer], humans)
+    for step in range(14 * 4):
+        alone.step(np.zeros((1, 1, 2)))
+        batch.step(np.zeros((2, 1, 2)))
+        for name in ("human_pos", "human_vel", "human_mask", "human_model"):
+            assert np.array_equal(
+                getattr(alone.state, name)[0], getattr(batch.state, name)[0], equal_nan=name == "human_pos"
+            ), (
+                step,
+                name,
+            )
+    ended = alone.replay.summaries([0], [np.nan])[0]
+    assert ended == pytest.approx(batch.replay.summaries([0], [np.nan])[0], nan_ok=True, rel=0, abs=0)
+    if humans != "replay":
+        assert ended["people_reacting"] == 1
+
+
 def test_hybrid_people_do_not_react_to_a_robot_they_cannot_see() -> None:
     # docs/recorded.md: hybrid people react to the robot only if they can see it (robot_visible).
     scenario = _two_walkers((6.0, 0.0))  # on the first walker's line
@@ -203,7 +261,7 @@ def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene
     from gymnasium.utils.env_checker import check_env
 
     def rollout() -> tuple[np.ndarray, dict]:
-        env = gym.make("socialzoo/CrowdNavRecorded-v1", family=family.name, humans=humans)
+        env = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans=humans)
         check_env(env.unwrapped, skip_render_check=True)
         obs, _ = env.reset(seed=4)
         trace = [obs]
@@ -222,7 +280,7 @@ def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene
 
 
 def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
-    env = gym.make("socialzoo/Recorded-v2", family=family.name, people={"models": "hybrid:sf"})
+    env = gym.make("socialzoo/Recorded-v3", family=family.name, people={"models": "hybrid:sf"})
     env.reset(seed=0, options={"split": "test", "case": 0})
     for _ in range(5000):
         _, _, term, trunc, info = env.step(0)  # GoAlone
@@ -232,7 +290,7 @@ def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
     for key in ("person_time", "person_time_ratio", "person_path_deviation", "people_reacting"):
         assert key in metrics
     assert metrics["person_time"] > 0
-    crowd = gym.make("socialzoo/CrowdNavRecorded-v1", family=family.name)
+    crowd = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name)
     crowd.reset(seed=0, options={"split": "test", "case": 0})
     for _ in range(500):
         _, _, term, trunc, info = crowd.step(np.zeros(2, dtype=np.float32))
@@ -344,11 +402,13 @@ def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
     return core.hexdigest()[:16], metrics.hexdigest()[:16]
 
 
-# Recorded with the numpy replay before its kernels (the metrics after the fix of
-# reacting_extra_distance, which changed nothing else): the kernels keep every value bit for bit.
+# Recorded with the numpy replay before its kernels (the metrics after the fixes of
+# reacting_extra_distance, which changed nothing else: the jump of a person entering and reacting
+# in one step, then the recorded distance left from where the person is, the row's own frames only):
+# the kernels keep every value bit for bit.
 GOLDEN_RECORDED = {
     "replay": ("e5e46e7a1b5ade60", "6abf74028faf97ba"),
-    "hybrid:orca": ("299387c2d98710da", "29c27e51e2f797ea"),
+    "hybrid:orca": ("299387c2d98710da", "851f780243971c9d"),
 }
 
 
