@@ -96,15 +96,20 @@ class WorldState:
     def set_rows(self, index: np.ndarray | slice, other: WorldState) -> None:
         """Overwrite rows at `index` with `other`'s rows, padding human axes where they differ; the
         route axis of every row first widens to `other`'s where that is longer."""
-        route, length = self.human_route, other.human_route.shape[2]
-        if length > route.shape[2]:
-            self.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
+        self.widen_routes(other.human_route.shape[2])
         for f in dataclasses.fields(self):
             dst = getattr(self, f.name)
             src = getattr(other, f.name)
             if dst.shape[1:] != src.shape[1:]:
                 src = pad_to(src, dst.shape[1:], f.name)
             dst[index] = src
+
+    def widen_routes(self, length: int) -> None:
+        """Widen the route axis of every row to `length` points where it is shorter (repeating
+        each route's last point, pad_to)."""
+        route = self.human_route
+        if length > route.shape[2]:
+            self.human_route = pad_to(route, (route.shape[1], length, 2), "human_route")
 
     @staticmethod
     def concatenate(states: list[WorldState]) -> WorldState:

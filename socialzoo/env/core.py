@@ -25,7 +25,7 @@ from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.recovery import RecoveryConfig
 from socialzoo.nav.sight_cache import SightCache
-from socialzoo.scenarios.scenario import Scenario, scenarios_to_state
+from socialzoo.scenarios.scenario import Scenario, scenarios_to_state, write_scenarios
 
 
 class BatchedCore:
@@ -155,12 +155,13 @@ class BatchedCore:
         if len(rows) == 0:
             return
         scenarios, models = self.people.prepare(list(scenarios))
-        width = 1 if self.state is None else self.state.human_route.shape[2]
-        fresh = scenarios_to_state(scenarios, self.num_robots, self.max_humans, width)
-        fresh.human_model[:] = models
         if self.state is None:
-            self.state = WorldState.concatenate([fresh.rows(0)] * self.batch_size)
-        self.state.set_rows(rows, fresh)  # the route axis widens for a longer route
+            # Rows not reset yet hold the first row's start (a step needs every row reset first).
+            first = scenarios_to_state(scenarios[:1], self.num_robots, self.max_humans)
+            first.human_model[:] = models[:1]
+            self.state = WorldState.concatenate([first] * self.batch_size)
+        write_scenarios(self.state, rows, scenarios)  # the route axis widens for a longer route
+        self.state.human_model[rows] = models
         self.start_rows(rows, scenarios)
 
     def start_rows(self, rows: np.ndarray, scenarios: Sequence[Scenario | None]) -> None:

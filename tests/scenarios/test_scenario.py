@@ -27,6 +27,7 @@ from socialzoo.scenarios.scenario import (
     generate_scenario,
     get_test_set,
     scenarios_to_state,
+    write_scenarios,
 )
 
 
@@ -364,6 +365,39 @@ def test_scenarios_to_state_shapes_masks_and_padding() -> None:
         wide.human_route, pad_to(state.human_route, (h, width + 3, 2), "human_route")
     )
     assert scenarios_to_state(scenarios, route_width=2).human_route.shape == state.human_route.shape
+
+
+def test_write_scenarios_in_place_is_scenarios_to_state() -> None:
+    """Rows written into a used state, its slots, route axis and the other rows as they were, hold
+    exactly what scenarios_to_state makes of the same scenarios; a longer route widens every row."""
+    m = gdc1()
+    scenarios = [generate_scenario(m, seed) for seed in range(8)]
+    h = max(s.num_humans for s in scenarios) + 2
+    state = scenarios_to_state(scenarios[:4], max_humans=h)
+    state.human_pos += 1.0  # a stepped state: what the rows held must not show through
+    state.human_vel[:] = 0.5
+    state.human_waypoint[:] = 3
+    state.step_count[:] = 7
+    kept = state.rows(np.array([0, 2]))
+    rows = np.array([3, 1])
+    longest = [max(len(r) for r in s.human_routes) for s in scenarios]
+    assert longest[4] > max(longest[:4])  # seed 4's longest route widens the state
+    written = [scenarios[4], scenarios[6]]
+    write_scenarios(state, rows, written)
+    width = state.human_route.shape[2]
+    assert width == longest[4]
+    fresh = scenarios_to_state(written, max_humans=h, route_width=width)
+    kept.human_route = pad_to(kept.human_route, (h, width, 2), "human_route")  # the last point repeated
+    for f in dataclasses.fields(state):
+        np.testing.assert_array_equal(getattr(state, f.name)[rows], getattr(fresh, f.name), err_msg=f.name)
+        np.testing.assert_array_equal(getattr(state, f.name)[[0, 2]], getattr(kept, f.name), err_msg=f.name)
+    with pytest.raises(IndexError, match="a row outside the batch"):
+        write_scenarios(state, np.array([4]), scenarios[:1])
+    fewest = min(scenarios, key=lambda s: s.num_humans)
+    with pytest.raises(ValueError, match=f"more than max_humans={fewest.num_humans}"):
+        write_scenarios(
+            scenarios_to_state([fewest]), np.array([0]), [max(scenarios, key=lambda s: s.num_humans)]
+        )
 
 
 def test_scenarios_to_state_with_several_robots_and_errors() -> None:
