@@ -15,6 +15,7 @@ from socialzoo.env.replay_kernels import (
     UNUSED_OCCUPANT,
     account_people,
     account_robots,
+    begin_episodes,
     enter_people,
     leave_tracks,
     load_row,
@@ -193,25 +194,12 @@ class ReplayRunner:
         fresh = rows[self.recorded[rows]]
         if len(fresh) == 0:
             return
-        self.occupant[fresh] = -1
-        for name in ("on_track", "gone", "contact"):
-            getattr(self, name)[fresh] = False
-        for name in (
-            "elapsed",
-            "walked",
-            "deviation",
-            "moves",
-            "walked_into",
-            "recorded_left",
-            "recorded_exit",
-            "rest",
-            "folded",
-        ):
-            getattr(self, name)[fresh] = 0
-        self.reacted_at[fresh] = np.nan
-        self.exit_at[fresh] = np.nan
         assert b == state.batch_size
-        state.human_model[fresh] = np.where(self.follows[fresh], REPLAY, state.human_model[fresh])
+        begin_episodes(
+            fresh, self.follows, REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at,
+            self.walked, self.recorded_left, self.recorded_exit, self.rest, self.elapsed, self.folded,
+            self.deviation, self.moves, self.walked_into, self.contact, state.human_model,
+        )  # fmt: skip
         self._place(state, fresh)
 
     def _widen(self, frames: int, route: int, robot_track: int, occupants: int) -> None:

@@ -64,6 +64,38 @@ def load_row(
 
 
 @kernel
+def begin_episodes(
+    rows, follows, replay, occupant, on_track, gone, reacted_at, exit_at, walked, recorded_left, recorded_exit,
+    rest, elapsed, folded, deviation, moves, walked_into, contact, model,
+):  # fmt: skip
+    """ReplayRunner.reset's start of `rows`' episodes, once their recordings are loaded: nobody in
+    a slot yet, nothing measured, and the slots that follow their tracks walked by `replay`."""
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        elapsed[r] = 0.0
+        for c in range(folded.shape[1]):
+            folded[r, c] = 0.0
+        for k in range(deviation.shape[1]):
+            deviation[r, k] = 0.0
+            moves[r, k] = 0
+            walked_into[r, k] = 0
+            for s in range(contact.shape[2]):
+                contact[r, k, s] = False
+        for s in range(occupant.shape[1]):
+            occupant[r, s] = -1
+            on_track[r, s] = False
+            gone[r, s] = False
+            reacted_at[r, s] = np.nan
+            exit_at[r, s] = np.nan
+            walked[r, s] = 0.0
+            recorded_left[r, s] = 0.0
+            recorded_exit[r, s] = 0.0
+            rest[r, s] = 0.0
+            if follows[r, s]:
+                model[r, s] = replay
+
+
+@kernel
 def occupants_now(rows, step_count, dt, frame_dt, on_frame, entry, occupant, t, i0, w, now, new):
     """For `rows` at their time t = steps * dt (n,): the frame i0 (n,) each is on (frame period
     frame_dt, past its recording's end too; a time within on_frame frames of a frame is on it) and the weight w (n,)

@@ -378,6 +378,67 @@ def test_a_person_who_enters_and_reacts_at_once_has_walked_nothing_yet() -> None
     assert core.replay.walked[0, 0] == 0.0
 
 
+def _trace(core: BatchedCore, row: int, steps: int) -> list[np.ndarray]:
+    """Row `row`'s people (positions, velocities, presence, models) and recorded metrics over `steps`
+    steps of robots standing still."""
+    out = []
+    for _ in range(steps):
+        core.step(np.zeros((core.batch_size, 1, 2)))
+        s = core.state
+        out += [
+            s.human_pos[row].copy(),
+            s.human_vel[row].copy(),
+            s.human_mask[row].copy(),
+            s.human_model[row].copy(),
+        ]
+    metrics = core.replay.summaries([row], [float("nan")])[0]
+    return out + [np.array([metrics[k] for k in sorted(metrics)])]
+
+
+@pytest.mark.parametrize(("humans", "before"), [("hybrid:sf", "recorded"), ("sf", "plain")])
+def test_a_reset_row_plays_as_a_fresh_one(family: RecordedScene, humans: str, before: str) -> None:
+    """A recorded row reset after another episode (a recorded one in which people reacted and left
+    their slots; or a scenario without recordings) holds and plays exactly what a row reset only
+    once does (ReplayRunner.reset clears everything the last episode left)."""
+    new, old = family.make(1000), family.make(1008)
+    if before == "plain":
+        old = Scenario(
+            map_name="arena", seed=5, robot_starts=[[0.0, 0.0, 0.0]], robot_goals=[[4.0, 0.0, 0.0]],
+            human_spawn=[[1.0, 1.0], [2.0, -1.0]], human_start_index=[-1, -1], human_goal_index=[-1, -1],
+            human_routes=(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([[2.0, -1.0], [2.0, 3.0]])),
+            human_speed=[1.0, 1.2],
+        )  # fmt: skip
+    h = max(new.num_humans, old.num_humans, family.make(1001).num_humans)
+
+    def core(scenarios: list[Scenario]) -> BatchedCore:
+        c = BatchedCore(
+            len(scenarios),
+            1,
+            h,
+            WorldConfig(dt=0.1),
+            WallIndex(np.zeros((0, 4))),
+            people=PeopleConfig(models=humans),
+        )
+        c.reset_rows(np.arange(len(scenarios)), scenarios)
+        return c
+
+    used, fresh = core([family.make(1001), old]), core([new])
+    _trace(used, 1, 200)
+    if before == "recorded":
+        assert used.replay.folded[1, 0] > 0  # a reacting person left its slot
+    used.reset_rows(np.array([1]), [new])
+    for name, array in vars(fresh.replay).items():
+        if isinstance(array, np.ndarray) and array.shape[:1] == (1,):
+            # The used runner's axes may be longer: what lies beyond the recording is not read.
+            block = (1,) + tuple(slice(0, n) for n in array.shape[1:])
+            np.testing.assert_array_equal(getattr(used.replay, name)[block], array[0], err_msg=name)
+    # Within the episode's budget (a task ends it there; past its last frame a batch of one holds
+    # its people on that frame, a batch with longer recordings lets them go).
+    steps = int(new.recorded.time_limit / 0.1)
+    for a, b in zip(_trace(used, 1, steps), _trace(fresh, 0, steps), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
 def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
     """sha256 prefixes of a seeded VectorEnv rollout of the synthetic scene: (observations,
     rewards and end flags; the recorded metrics of the episodes that ended)."""
