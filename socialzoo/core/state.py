@@ -88,10 +88,17 @@ class WorldState:
         return WorldState(**{f.name: getattr(self, f.name).copy() for f in dataclasses.fields(self)})
 
     def rows(self, index: np.ndarray | slice | int) -> WorldState:
-        """The sub-batch at `index` (copies)."""
+        """The sub-batch at `index` (copies): a row, a slice, row indices or a (B,) mask."""
         if isinstance(index, int):
             index = slice(index, index + 1)
-        return WorldState(**{f.name: getattr(self, f.name)[index].copy() for f in dataclasses.fields(self)})
+        if isinstance(index, slice):
+            return WorldState(**{name: getattr(self, name)[index].copy() for name in _FIELDS})
+        # An index array's take is a copy already, and cheaper than indexing (the observations of a
+        # batch's reset rows take them on every reset).
+        index = np.asarray(index)
+        if index.dtype == np.bool_:
+            index = np.flatnonzero(index)
+        return WorldState(**{name: getattr(self, name).take(index, axis=0) for name in _FIELDS})
 
     def set_rows(self, index: np.ndarray | slice, other: WorldState) -> None:
         """Overwrite rows at `index` with `other`'s rows, padding human axes where they differ; the
@@ -120,6 +127,10 @@ class WorldState:
             shape = tuple(max(a.shape[i] for a in arrays) for i in range(1, arrays[0].ndim))
             out[f.name] = np.concatenate([pad_to(a, shape, f.name) for a in arrays], axis=0)
         return WorldState(**out)
+
+
+# The state's fields, in order (dataclasses.fields builds them anew on every call).
+_FIELDS = tuple(f.name for f in dataclasses.fields(WorldState))
 
 
 def pad_to(array: np.ndarray, shape: tuple[int, ...], name: str) -> np.ndarray:

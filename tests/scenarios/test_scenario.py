@@ -400,6 +400,23 @@ def test_write_scenarios_in_place_is_scenarios_to_state() -> None:
         )
 
 
+def test_state_rows_by_row_slice_indices_or_mask_are_copies() -> None:
+    state = scenarios_to_state([generate_scenario(gdc1(), seed) for seed in range(4)])
+    picks = {
+        "row": (2, [2]),
+        "slice": (slice(1, 3), [1, 2]),
+        "indices": (np.array([3, 0, 3]), [3, 0, 3]),
+        "list": ([1, -1], [1, 3]),
+        "mask": (np.array([True, False, True, False]), [0, 2]),
+    }
+    for what, (index, want) in picks.items():
+        part = state.rows(index)
+        for f in dataclasses.fields(state):
+            got, full = getattr(part, f.name), getattr(state, f.name)
+            np.testing.assert_array_equal(got, full[want], err_msg=f"{what} {f.name}")
+            assert not np.shares_memory(got, full), (what, f.name)
+
+
 def test_scenarios_to_state_with_several_robots_and_errors() -> None:
     s = generate_scenario(gdc1(), 1)
     poses = gdc1().legal_poses
