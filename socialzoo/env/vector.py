@@ -137,25 +137,27 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         return robot_row(self.task.observations(), slice(None)), reward, terminated, truncated, info
 
     def _final_observations(self, ended: np.ndarray) -> Any:
-        """The ended rows' last observations, zeros in the other rows."""
+        """The ended rows' last observations, zeros in the other rows (only the ended rows are
+        copied: a few rows end on a step)."""
 
-        def only_ended(values: np.ndarray) -> np.ndarray:
-            out = np.zeros_like(values)
-            out[ended] = values[ended]
+        def only_ended(values: np.ndarray) -> np.ndarray:  # (B, R, ...) -> robot 0's (B, ...)
+            out = np.zeros(values.shape[:1] + values.shape[2:], dtype=values.dtype)
+            out[ended] = values[ended, 0]
             return out
 
-        last = robot_row(self.task.observations(), slice(None))
+        last = self.task.observations()
         return {k: only_ended(v) for k, v in last.items()} if isinstance(last, dict) else only_ended(last)
 
     def _final_metrics(self, ended: np.ndarray) -> dict[str, np.ndarray]:
         """Metric -> (B,) float values of the ended rows' episodes, zeros in the other rows."""
         summaries = self.task.episode_metrics(ended)
+        keys = list(summaries[0])
         for key, value in summaries[0].items():
             self.metric_types.setdefault(key, type(value))
-        metrics = {key: np.zeros(self.num_envs) for key in summaries[0]}
-        for key, values in metrics.items():
-            values[ended] = [s[key] for s in summaries]
-        return metrics
+        # One (metrics, B) table filled at once: a write per metric cost more than the values.
+        table = np.zeros((len(keys), self.num_envs))
+        table[:, ended] = np.array([[s[key] for s in summaries] for key in keys], dtype=np.float64)
+        return dict(zip(keys, table, strict=True))
 
     def render(self) -> np.ndarray | None:
         """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""

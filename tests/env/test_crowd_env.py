@@ -44,22 +44,38 @@ def test_rollouts_repeat_bit_for_bit_over_many_steps(variant):
     assert not np.array_equal(a, _rollout(CrowdNavEnv(variant=variant), seed=4))
 
 
-def test_a_batch_row_plays_what_a_single_env_plays():
-    vec = CrowdNavVectorEnv(3, variant="SocialForce")
-    single = CrowdNavEnv(variant="SocialForce")
+@pytest.mark.parametrize("observation", ["flat", "dict"])
+def test_a_batch_row_plays_what_a_single_env_plays(observation):
+    vec = CrowdNavVectorEnv(3, variant="SocialForce", observation=observation)
+    single = CrowdNavEnv(variant="SocialForce", observation=observation)
+
+    def same(a, b):
+        for key in a if observation == "dict" else [None]:
+            np.testing.assert_array_equal(a if key is None else a[key], b if key is None else b[key])
+
+    def row(values, k):
+        return {key: v[k] for key, v in values.items()} if observation == "dict" else values[k]
+
     obs, _ = vec.reset(seed=5)
     one, _ = single.reset(seed=5)
-    np.testing.assert_array_equal(obs[0], one)
+    same(row(obs, 0), one)
     rng = np.random.default_rng(0)
-    for _ in range(60):
+    ends = 0
+    for _ in range(120):  # row 0's first episode ends within its time limit (100 steps)
         actions = rng.uniform(-1, 1, (3, 2)).astype(np.float32)
         obs, reward, terminated, truncated, info = vec.step(actions)
         one, r, te, tr, _ = single.step(actions[0])
         assert (terminated[0], truncated[0], reward[0]) == (te, tr, r)
         if te or tr:
-            np.testing.assert_array_equal(info["final_obs"][0], one)  # the ended episode's last observation
+            ends += 1
+            same(row(info["final_obs"], 0), one)  # the ended episode's last observation
             one, _ = single.reset()
-        np.testing.assert_array_equal(obs[0], one)
+        if "final_obs" in info:  # zeros in the rows that did not end
+            final = info["final_obs"]
+            for v in final.values() if observation == "dict" else [final]:
+                assert not v[~(terminated | truncated)].any()
+        same(row(obs, 0), one)
+    assert ends
 
 
 def test_fixed_cases_are_crowdnavs_and_end_with_metrics():
