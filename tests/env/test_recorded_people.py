@@ -432,8 +432,7 @@ def test_a_reset_row_plays_as_a_fresh_one(family: RecordedScene, humans: str, be
             # The used runner's axes may be longer: what lies beyond the recording is not read.
             block = (1,) + tuple(slice(0, n) for n in array.shape[1:])
             np.testing.assert_array_equal(getattr(used.replay, name)[block], array[0], err_msg=name)
-    # Within the episode's budget (a task ends it there; past its last frame a batch of one holds
-    # its people on that frame, a batch with longer recordings lets them go).
+    # Over the episode's time budget (a task ends it there).
     steps = int(new.recorded.time_limit / 0.1)
     for a, b in zip(_trace(used, 1, steps), _trace(fresh, 0, steps), strict=True):
         np.testing.assert_array_equal(a, b)
