@@ -335,11 +335,10 @@ class ReplayRunner:
         without a recording gets an empty dict."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         robots = np.broadcast_to(np.asarray(robot, dtype=np.intp), rows.shape)
-        h = self.reacted_at.shape[1]
         totals = np.empty((len(rows), 3))
         reacting_totals(
             rows, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, self.occupant_speed,
-            self.recorded_exit, self.walked, self.recorded_left, self.folded, totals, np.empty(h), np.empty(h),
+            self.recorded_exit, self.walked, self.recorded_left, self.folded, totals,
         )  # fmt: skip
         points = self.robot_track_len[rows]
         person = np.where(points > 0, (points - 1) * self.frame_dt[rows], np.nan)

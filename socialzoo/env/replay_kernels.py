@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from socialzoo.core.jit import kernel, numpy_sum
+from socialzoo.core.jit import kernel
 from socialzoo.scenarios.recorded_people import NEVER
 
 # An unused occupant entry: never entering, route indices 0, speed 1 m/s (ReplayRunner's fill too).
@@ -353,29 +353,25 @@ def account_robots(
 @kernel
 def reacting_totals(
     rows, reacted_at, exit_at, rest, elapsed, occupant, occupant_speed, recorded_exit, walked, recorded_left,
-    folded, totals, lost, extra,
+    folded, totals,
 ):  # fmt: skip
     """ReplayRunner.summaries' reacting people of `rows` into totals (n, 3): per row the count, the time
     lost and the extra distance of the reacting people who left their slot (`folded`) plus those still
-    in one: each one's time to its exit (or, not gone yet, the episode's time plus the straight way left
-    at its speed) against its recorded exit, and its distance walked (plus the way left) against the
-    recorded distance left, added in numpy's order (lost, extra: scratch buffers of H floats)."""
+    in one, in slot order: each one's time to its exit (or, not gone yet, the episode's time plus the
+    straight way left at its speed) against its recorded exit, and its distance walked (plus the way
+    left) against the recorded distance left."""
     for j in range(rows.shape[0]):
         r = rows[j]
-        count, lost_sum, extra_sum = folded[r, 0], folded[r, 1], folded[r, 2]
-        m = 0
+        count, lost, extra = 0, 0.0, 0.0
         for s in range(reacted_at.shape[1]):
             if reacted_at[r, s] != reacted_at[r, s]:  # NaN: it did not react
                 continue
             done = exit_at[r, s] == exit_at[r, s]
-            speed = occupant_speed[r, s, max(occupant[r, s], 0)]
-            speed = speed if speed >= 1e-9 or speed != speed else 1e-9  # np.maximum keeps a NaN
+            speed = max(occupant_speed[r, s, max(occupant[r, s], 0)], 1e-9)
             at = exit_at[r, s] if done else elapsed[r] + rest[r, s] / speed
-            lost[m] = at - recorded_exit[r, s]
-            extra[m] = walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
-            m += 1
-        if m:
-            count += m
-            lost_sum += numpy_sum(lost, 0, m)
-            extra_sum += numpy_sum(extra, 0, m)
-        totals[j, 0], totals[j, 1], totals[j, 2] = count, lost_sum, extra_sum
+            lost += at - recorded_exit[r, s]
+            extra += walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
+            count += 1
+        totals[j, 0] = folded[r, 0] + count
+        totals[j, 1] = folded[r, 1] + lost
+        totals[j, 2] = folded[r, 2] + extra
