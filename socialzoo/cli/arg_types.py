@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from collections.abc import Callable
 from typing import Any
 
@@ -50,6 +51,46 @@ def comma_list(what: str, convert: Callable[[str], str] = str) -> Callable[[str]
         return items
 
     return parse
+
+
+def config_field(text: str) -> tuple[str, Any]:
+    """argparse type of --task-config: KEY=VALUE, the value read as JSON where it parses (numbers,
+    true, null, {"models": "orca"}) and kept as text otherwise (family=recorded_zara1)."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        return key.strip(), json.loads(value)
+    except json.JSONDecodeError:
+        return key.strip(), value
+
+
+def task_config(fields: list[tuple[str, Any]] | None) -> dict[str, Any]:
+    """The --task-config fields as a task config's overrides; a dotted key sets a nested config's
+    field (reward.discomfort_dist=0.3 -> {"reward": {"discomfort_dist": 0.3}})."""
+    config: dict[str, Any] = {}
+    for key, value in fields or ():
+        *parents, name = key.split(".")
+        node = config
+        for parent in parents:
+            node = node.setdefault(parent, {})
+            if not isinstance(node, dict):
+                raise ValueError(f"--task-config {key}: {parent} is given a value and fields at once")
+        node[name] = value
+    return config
+
+
+def add_task_config_argument(parser: argparse.ArgumentParser) -> None:
+    """--task-config KEY=VALUE (repeatable): a registered task id's config fields."""
+    parser.add_argument(
+        "--task-config",
+        type=config_field,
+        action="append",
+        metavar="KEY=VALUE",
+        help="a config field of the task ids (repeatable; VALUE read as JSON where it parses, a dotted KEY "
+        "sets a nested field), e.g. family=recorded_zara1, humans=hybrid:orca, "
+        'humans=\'{"models": "hybrid:orca", "react_radius": 3}\', reward.discomfort_dist=0.3',
+    )
 
 
 def add_backend_arguments(parser: argparse.ArgumentParser, what: str) -> None:

@@ -9,7 +9,15 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_backend_arguments, comma_list, given, positive_int, split_commas
+from socialzoo.cli.arg_types import (
+    add_backend_arguments,
+    add_task_config_argument,
+    comma_list,
+    given,
+    positive_int,
+    split_commas,
+    task_config,
+)
 
 
 def _lower_name(spec: str) -> str:
@@ -91,6 +99,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="GoAlone, Ref and the shipped learned policies on gdc1-quick and ghc3-quick (100 trials each), "
         "plus one Ref episode GIF",
     )
+    add_task_config_argument(parser)
     parser.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run_benchmark_command)
@@ -137,6 +146,8 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     ids = [m for m in args.maps or () if ENV_ID.fullmatch(m)]
     if ids:
         return run_task_ids(args, ids)
+    if args.task_config:
+        return fail("benchmark", "--task-config sets a task id's config: name the id in --maps")
     overrides = given(args, "max_steps")
     specs = list(split_commas(args.humans))
     if len(specs) > 1:
@@ -186,6 +197,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             "not of a task id (its config says who walks)",
         )
     try:
+        config = task_config(args.task_config)
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())
@@ -201,6 +213,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
                 batch_size=args.batch_size or 100,
                 figures=not args.no_figures,
                 say=print,
+                config=config,
             )
             print(f"results in {out}: " + ", ".join(p.name for p in files))
     except (ValueError, StoreError) as err:

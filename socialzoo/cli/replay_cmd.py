@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import at_least, comma_list, count, given
+from socialzoo.cli.arg_types import add_task_config_argument, at_least, comma_list, count, given, task_config
 
 
 def register(subparsers: Any) -> None:
@@ -54,6 +54,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--case", type=count, default=None, help="the case of --env to play (default 0)")
     parser.add_argument("--split", default="test", help="the case split of --env (default test)")
+    add_task_config_argument(parser)
     parser.add_argument(
         "--results", type=Path, default=None, help="a socialzoo benchmark --out directory (with --trial)"
     )
@@ -114,8 +115,8 @@ def run_replay(args: argparse.Namespace) -> int:
             if clash := _flags(args, "map", "family", "seed", "results", "trial"):
                 raise ValueError(f"{clash} cannot be combined with --env: a task id plays its own cases")
             return _replay_case(args)
-        if args.case is not None:
-            raise ValueError("--case goes with --env")
+        if args.case is not None or args.task_config:
+            raise ValueError("--case and --task-config go with --env")
         if (args.results is None) != (args.trial is None):
             raise ValueError("--results and --trial go together")
         if args.results is not None:
@@ -151,12 +152,12 @@ def _replay_case(args: argparse.Namespace) -> int:
     from socialzoo.render.replay_html import write_replay_html
 
     task_id = TaskId.of(args.env)
-    probe = task_id.make(1)
+    overrides = given(args, "max_steps") | task_config(args.task_config)
+    probe = task_id.make(1, **overrides)
     specs = _specs(args)
     if not specs:
         raise ValueError(f"name the policies to play on {args.env} (--policy)")
     case = 0 if args.case is None else args.case
-    overrides = given(args, "max_steps")
     # Every policy is built before any episode runs.
     space = probe.observation_space
     policies = [make_policy(s.name, task=probe.name, observation_space=space, **s.kwargs) for s in specs]
@@ -166,6 +167,7 @@ def _replay_case(args: argparse.Namespace) -> int:
         trace, task = record_case(args.env, policy, args.split, case, label=spec.label, **acting)
         traces.append(trace)
     title = f"{' vs '.join(t.label for t in traces)} on {args.env}, {args.split} case {case}"
+    title += "".join(f", {k}={v}" for k, v in task_config(args.task_config).items())
     scene = task.viewer_scene(title, f"the {probe.name} task", traces)
     path = write_replay_html(args.out, scene, traces, encoding=_encoding(args), view=args.view)
     print(f"{path}: {len(traces)} episode(s) on {args.env}, {args.split} case {case}; {_size(path)}")

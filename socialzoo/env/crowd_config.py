@@ -14,7 +14,7 @@ from socialzoo.env.config import family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
-from socialzoo.humans.models import PeopleSpecError, parse_people
+from socialzoo.humans.models import PeopleConfig, PeopleSpecError
 from socialzoo.scenarios.catalogue import FAMILIES, get_family
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
@@ -55,7 +55,9 @@ class CrowdNavConfig:
         robot_visible: whether the people see and avoid the robot (CrowdNav: invisible).
         humans: who walks, as a people spec (socialzoo.humans.models, the one way every env and
             the benchmark say it): "orca" (CrowdNav's), "sf" (also "social_force"), or a mix such
-            as "sf@0.5+orca@0.5", assigned from each case's seed.
+            as "sf@0.5+orca@0.5", assigned from each case's seed. A PeopleConfig, or a dict of its
+            fields, also sets a hybrid crowd's reaction rule (react_radius, react_time; models
+            defaults to "orca"), e.g. {"models": "hybrid:orca", "react_radius": 3.0}.
         reward: the task's reward.
         action: "continuous" (Box [-1, 1]^2 scaled to the robot's speed: (vx, vy) for a holonomic
             robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
@@ -107,7 +109,7 @@ class CrowdNavConfig:
         default_factory=lambda: RobotConfig(kinematics="holonomic", radius=0.3, max_speed=1.0)
     )
     robot_visible: bool = False
-    humans: str = "orca"
+    humans: str | PeopleConfig = "orca"
     reward: CrowdRewardConfig = field(default_factory=CrowdRewardConfig)
     action: CrowdAction = "continuous"
     observation: ObservationKind = "flat"
@@ -132,16 +134,18 @@ class CrowdNavConfig:
             )
         if self.robot.radius is None:
             raise ValueError("CrowdNavConfig.robot.radius must be set (the task's robot is a disc)")
-        try:
-            models = {part.walks_as for part in parse_people(self.humans)}
-        except PeopleSpecError as err:
-            raise ValueError(f"CrowdNavConfig.humans: {err}") from None
+        if isinstance(self.humans, dict):
+            object.__setattr__(self, "humans", people_config(self.humans))
+        people = self.people
+        models = {part.walks_as for part in people.parts}
         if not models <= set(CROWD_MODELS):
             raise ValueError(
                 f"CrowdNavConfig.humans: the CrowdNav task's people walk by {CROWD_MODELS} (or a mix of them), "
                 "recorded people also as hybrid:sf or hybrid:orca; learned people, hybrid or not, and groups "
-                f"are the action-selection task's, got {self.humans!r}"
+                f"are the action-selection task's, got {people.models!r}"
             )
+        if people.counterfactual:
+            raise ValueError("CrowdNavConfig.humans: counterfactual runs are the action-selection task's")
         check_choice("CrowdNavConfig", "action", self.action, CROWD_ACTIONS)
         check_choice("CrowdNavConfig", "observation", self.observation, OBSERVATION_KINDS)
         check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
@@ -193,6 +197,20 @@ class CrowdNavConfig:
             most = getattr(get_family(self.family), "max_people", None)
             if most is not None and most > self.cases.num_humans:
                 object.__setattr__(self, "max_humans", int(most))
+
+    @property
+    def people(self) -> PeopleConfig:
+        """Who walks and how hybrid people react (`humans` as a PeopleConfig)."""
+        if isinstance(self.humans, PeopleConfig):
+            return self.humans
+        if isinstance(self.humans, str):
+            try:
+                return PeopleConfig(models=self.humans)
+            except PeopleSpecError as err:
+                raise ValueError(f"CrowdNavConfig.humans: {err}") from None
+        raise ValueError(
+            f"CrowdNavConfig.humans must be a people spec, a PeopleConfig or a dict of its fields, got {self.humans!r}"
+        )
 
     @property
     def slots(self) -> int:
@@ -280,6 +298,17 @@ class CrowdNavConfig:
             raise ValueError(f"unknown CrowdNav variant {name!r}; known variants: {known}")
         # replace() reads the nested dicts, never writes them: the registry's stay as they are.
         return cls().replace(**VARIANTS[name][1]).replace(**overrides)
+
+
+def people_config(fields: dict[str, Any]) -> PeopleConfig:
+    """CrowdNavConfig.humans given as a dict of PeopleConfig's fields (models defaults to "orca")."""
+    try:
+        return PeopleConfig(**{"models": "orca", **fields})
+    except TypeError as err:
+        known = sorted(f.name for f in dataclasses.fields(PeopleConfig))
+        raise ValueError(f"CrowdNavConfig.humans: {err}; known fields: {known}") from None
+    except ValueError as err:
+        raise ValueError(f"CrowdNavConfig.humans: {err}") from None
 
 
 def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:

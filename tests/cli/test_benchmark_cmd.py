@@ -106,3 +106,44 @@ def test_benchmark_on_a_map_file_stores_its_test_set_and_reuses_it(tmp_path, roo
     moved = [changed.as_posix() if a == rooms_path else a for a in argv]
     assert socialzoo_main(moved) == 2
     assert "rooms-test.json: this test set was generated on map" in capsys.readouterr().err
+
+
+def test_task_config_fields_are_read_as_json_or_text_and_nest_by_dots():
+    import argparse
+
+    from socialzoo.cli.arg_types import config_field, task_config
+
+    fields = [
+        config_field("family=recorded_zara1"),
+        config_field('humans={"models": "hybrid:orca", "react_radius": 3}'),
+        config_field("reward.discomfort_dist=0.3"),
+        config_field("reward.success_reward=1"),
+        config_field("robot_visible=true"),
+    ]
+    assert task_config(fields) == {
+        "family": "recorded_zara1",
+        "humans": {"models": "hybrid:orca", "react_radius": 3},
+        "reward": {"discomfort_dist": 0.3, "success_reward": 1},
+        "robot_visible": True,
+    }
+    with pytest.raises(argparse.ArgumentTypeError, match="KEY=VALUE"):
+        config_field("family")
+    with pytest.raises(ValueError, match="reward is given a value and fields at once"):
+        task_config([("reward", 1), ("reward.discomfort_dist", 0.3)])
+
+
+def test_task_config_needs_a_task_id(tmp_path, capsys):
+    argv = ["benchmark", "--task-config", "family=x", "--out", str(tmp_path)]
+    assert socialzoo_main(argv) == 2
+    assert "name the id in --maps" in capsys.readouterr().err
+    argv = [
+        "benchmark",
+        "--maps",
+        "socialzoo/CrowdNav-v1",
+        "--task-config",
+        "famly=x",
+        "--out",
+        str(tmp_path),
+    ]
+    assert socialzoo_main([*argv, "--policies", "orca"]) == 2
+    assert "unexpected keyword argument 'famly'" in capsys.readouterr().err

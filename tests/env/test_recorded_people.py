@@ -279,6 +279,45 @@ def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene
     assert np.array_equal(a, b)
 
 
+def test_crowdnav_takes_the_hybrid_reaction_rule(family: RecordedScene) -> None:
+    from socialzoo.humans.models import REPLAY
+
+    def walked_by_a_model(humans: object) -> tuple[int, int]:
+        env = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans=humans)
+        env.reset(seed=0, options={"split": "test", "case": 0})
+        env.step(np.zeros(2, dtype=np.float32))
+        state = env.unwrapped.task.core.state
+        present = state.human_mask[0]
+        return int((state.human_model[0][present] != REPLAY).sum()), int(present.sum())
+
+    everyone, present = walked_by_a_model({"models": "hybrid:orca", "react_radius": 1000.0})
+    assert present > 1 and everyone == present
+    by_default, _ = walked_by_a_model("hybrid:orca")
+    assert by_default < present
+    with pytest.raises(ValueError, match="react_radius must be >= 0"):
+        gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans={"react_radius": -1.0})
+    with pytest.raises(ValueError, match="known fields"):
+        gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans={"radius": 2.0})
+
+
+def test_the_task_id_commands_play_the_family_and_people_given(
+    family: RecordedScene, tmp_path, capsys
+) -> None:
+    from socialzoo.cli import main
+
+    config = ["--task-config", f"family={family.name}", "--task-config", 'humans={"models": "hybrid:orca"}']
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v2", "--policies", "orca", "--trials", "3"]
+    assert main([*argv, *config, "--out", str(tmp_path), "--no-figures"]) == 0
+    table = (tmp_path / "crowdnav.md").read_text()
+    assert f"family={family.name}" in table and "hybrid:orca" in table
+    assert "| orca |" in table and "replaced person's time" in table
+    page = tmp_path / "case.html"
+    argv = ["replay", "--env", "socialzoo/CrowdNavRecorded-v2", "--policy", "orca", "--case", "1", *config]
+    assert main([*argv, "--out", str(page)]) == 0
+    assert f"family={family.name}" in page.read_text()
+    assert "test case 1" in capsys.readouterr().out
+
+
 def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
     env = gym.make("socialzoo/Recorded-v3", family=family.name, people={"models": "hybrid:sf"})
     env.reset(seed=0, options={"split": "test", "case": 0})

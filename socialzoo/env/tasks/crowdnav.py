@@ -28,7 +28,6 @@ from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, force_and_blame
 from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
-from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import load_map
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.scenarios.crowd_cases import CrowdCase, case_scenario
@@ -117,7 +116,7 @@ class CrowdNavTask(Task):
             cfg.world,
             WallIndex(np.zeros((0, 4))) if m is None else m.wall_index,
             m=m,
-            people=PeopleConfig(models=cfg.humans),
+            people=cfg.people,
             planner=LocalPlannerConfig() if m is not None else None,
             robot_visible=cfg.robot_visible,
         )
