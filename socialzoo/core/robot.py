@@ -7,6 +7,7 @@ import numpy as np
 
 from socialzoo.core.config import RobotConfig
 from socialzoo.core.geometry import wrap_angle
+from socialzoo.core.jit import kernel
 
 
 def limit_command(vel: np.ndarray, command: np.ndarray, dt: float, cfg: RobotConfig) -> np.ndarray:
@@ -79,12 +80,35 @@ def _step_holonomic(
 ) -> tuple[np.ndarray, np.ndarray]:
     """CrowdNav's holonomic agent: the velocity (vx, vy) is the command, its norm capped at
     max_speed; the position moves by velocity * dt; the heading is left as it is."""
-    speed = np.hypot(command[..., 0], command[..., 1])
-    scale = np.minimum(1.0, cfg.max_speed / np.maximum(speed, 1e-12))
-    new_vel = np.where(halt[..., None], 0.0, command * scale[..., None])
-    new_pose = pose.astype(np.float64, copy=True)
-    new_pose[..., :2] += new_vel * dt
+    new_pose = np.array(pose, dtype=np.float64)
+    new_vel = np.empty(command.shape)
+    halt = np.asarray(halt, dtype=bool)
+    if halt.shape != command.shape[:-1]:
+        halt = np.broadcast_to(halt, command.shape[:-1])
+    _holonomic(
+        new_pose.reshape(-1, 3),
+        np.asarray(command, dtype=np.float64).reshape(-1, 2),
+        halt.reshape(-1),
+        dt,
+        cfg.max_speed,
+        new_vel.reshape(-1, 2),
+    )
     return new_pose, new_vel
+
+
+@kernel
+def _holonomic(pose, command, halt, dt, max_speed, vel):  # type: ignore[no-untyped-def]
+    """_step_holonomic's numpy expressions per robot (np.maximum's and np.minimum's NaN kept): vel
+    (N, 2) the command capped at max_speed (0 for a halting robot), pose (N, 3) moved by vel * dt
+    in place."""
+    for i in range(pose.shape[0]):
+        speed = np.hypot(command[i, 0], command[i, 1])
+        floor = speed if speed >= 1e-12 or speed != speed else 1e-12
+        ratio = max_speed / floor
+        scale = 1.0 if 1.0 < ratio else ratio
+        for k in range(2):
+            vel[i, k] = 0.0 if halt[i] else command[i, k] * scale
+            pose[i, k] += vel[i, k] * dt
 
 
 def _step_unicycle(

@@ -3,7 +3,6 @@ of that line of work (CrowdNav's crowd_sim.py step() and explorer.py)."""
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,30 +68,76 @@ def closest_boundary_distance(
     return out
 
 
+def track_approach(
+    closest: np.ndarray,
+    moved: np.ndarray,
+    robot_before: np.ndarray,
+    robot_after: np.ndarray,
+    human_pos: np.ndarray,
+    human_vel: np.ndarray,
+    radius_sum: np.ndarray,
+    human_mask: np.ndarray,
+    dt: float,
+) -> None:
+    """Add one world step of the robots' moves from `robot_before` to `robot_after` (B, 2): the
+    closest boundary distance during it (closest_boundary_distance at the robot's velocity through
+    the step) into the running minimum `closest` (B,), and the distance each robot moved into
+    `moved` (B,), in place. The people's arrays are those of closest_boundary_distance, `radius_sum`
+    (B, H)."""
+    _track_approach(
+        robot_before, robot_after, human_pos, human_vel, radius_sum, human_mask, dt, closest, moved
+    )
+
+
 @kernel
 def _closest_gaps(robot_pos, robot_vel, human_pos, human_vel, radius, human_mask, dt, out):
-    """closest_boundary_distance into out (B,), present people only: per person the numpy
-    expressions it replaced (the relative move over the step, the point of it nearest the robot,
-    np.clip's NaN kept, np.hypot), and a NaN gap wins the minimum as it does in np.min."""
+    """closest_boundary_distance into out (B,)."""
     for i in range(out.shape[0]):
-        best = np.inf
-        for h in range(human_pos.shape[1]):
-            if not human_mask[i, h]:
-                continue
-            sx, sy = human_pos[i, h, 0] - robot_pos[i, 0], human_pos[i, h, 1] - robot_pos[i, 1]
-            mx, my = (human_vel[i, h, 0] - robot_vel[i, 0]) * dt, (human_vel[i, h, 1] - robot_vel[i, 1]) * dt
-            length2 = mx * mx + my * my
-            t = -(sx * mx + sy * my) / (length2 if length2 > 0 else 1.0)
-            if t < 0.0:
-                t = 0.0
-            elif t > 1.0:
-                t = 1.0
-            gap = np.hypot(sx + t * mx, sy + t * my) - radius[i, h]
-            if gap != gap:
-                best = gap
-                break
-            best = min(best, gap)
-        out[i] = best
+        rx, ry, vx, vy = robot_pos[i, 0], robot_pos[i, 1], robot_vel[i, 0], robot_vel[i, 1]
+        out[i] = _row_gap(i, rx, ry, vx, vy, human_pos, human_vel, radius, human_mask, dt)
+
+
+@kernel
+def _track_approach(robot_before, robot_after, human_pos, human_vel, radius, human_mask, dt, closest, moved):
+    """track_approach: the numpy expressions it replaced per robot (the shift after - before, np.hypot
+    of it, the velocity shift / dt, np.minimum's NaN kept)."""
+    for i in range(closest.shape[0]):
+        sx, sy = robot_after[i, 0] - robot_before[i, 0], robot_after[i, 1] - robot_before[i, 1]
+        moved[i] += np.hypot(sx, sy)
+        rx, ry = robot_before[i, 0], robot_before[i, 1]
+        gap = _row_gap(i, rx, ry, sx / dt, sy / dt, human_pos, human_vel, radius, human_mask, dt)
+        closest[i] = nan_min(closest[i], gap)
+
+
+@kernel
+def nan_min(a: float, b: float) -> float:
+    """np.minimum of two floats: the smaller, a NaN of either wins (scalar kernel)."""
+    return a if a < b or a != a else b
+
+
+@kernel
+def _row_gap(i, rx, ry, vx, vy, human_pos, human_vel, radius, human_mask, dt):
+    """Row i's closest boundary distance for a robot at (rx, ry) moving at (vx, vy), present people
+    only: per person the numpy expressions it replaced (the relative move over the step, the point
+    of it nearest the robot, np.clip's NaN kept, np.hypot), and a NaN gap wins the minimum as it
+    does in np.min."""
+    best = np.inf
+    for h in range(human_pos.shape[1]):
+        if not human_mask[i, h]:
+            continue
+        sx, sy = human_pos[i, h, 0] - rx, human_pos[i, h, 1] - ry
+        mx, my = (human_vel[i, h, 0] - vx) * dt, (human_vel[i, h, 1] - vy) * dt
+        length2 = mx * mx + my * my
+        t = -(sx * mx + sy * my) / (length2 if length2 > 0 else 1.0)
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+        gap = np.hypot(sx + t * mx, sy + t * my) - radius[i, h]
+        if gap != gap:
+            return gap
+        best = min(best, gap)
+    return best
 
 
 @dataclass(frozen=True)
@@ -117,26 +162,16 @@ class CrowdOutcome:
     closest: np.ndarray
     discomfort: np.ndarray
 
-    def masked(self, done: np.ndarray) -> CrowdOutcome:
-        """The outcome with the rows `done` (B,) (their episode had already ended) cleared: no
-        reward, no flags."""
-        if not done.any():
-            return self
-        keep = ~done
-        flags = ("success", "collision", "timeout", "terminated", "truncated", "discomfort")
-        return dataclasses.replace(
-            self, reward=np.where(keep, self.reward, 0.0), **{k: getattr(self, k) & keep for k in flags}
-        )
-
 
 def judge_step(
     closest: np.ndarray,
     goal_distance_after: np.ndarray,
     robot_radius: float,
     step_start_time: np.ndarray,
-    time_limit: float,
+    time_limit: np.ndarray | float,
     cfg: CrowdRewardConfig,
     dt: float,
+    done: np.ndarray | None = None,
 ) -> CrowdOutcome:
     """Judge a step in CrowdNav's order (below).
 
@@ -151,34 +186,64 @@ def judge_step(
        `success_reward`;
     4. discomfort: closest boundary distance d below `discomfort_dist`: (d - discomfort_dist) *
        discomfort_penalty_factor * dt.
+    A row whose episode had already ended (`done`) gets no reward and no flags.
 
     Args:
         closest: (B,) closest boundary distance during the step (closest_boundary_distance).
         goal_distance_after: (B,) robot-goal distance after the step, m.
         robot_radius: m (the goal tolerance).
         step_start_time: (B,) episode time at the start of the step, s.
-        time_limit: the episode's time limit, s.
+        time_limit: the episode's time limit, s, one for all or (B,).
         cfg: the reward.
         dt: s.
+        done: (B,) bool, rows whose episode had already ended (None: none).
     """
-    timeout = step_start_time >= time_limit - 1.0 - 1e-9
-    collision = ~timeout & (closest < 0)
-    success = ~timeout & ~collision & (goal_distance_after < robot_radius)
-    discomfort = ~(timeout | collision | success) & (closest < cfg.discomfort_dist)
-    reward = np.zeros(len(closest))
-    reward[collision] = cfg.collision_penalty
-    reward[success] = cfg.success_reward
-    reward[discomfort] = (closest[discomfort] - cfg.discomfort_dist) * cfg.discomfort_penalty_factor * dt
+    n = len(closest)
+    limit = time_limit if isinstance(time_limit, np.ndarray) else np.full(n, float(time_limit))
+    ended = np.zeros(n, dtype=bool) if done is None else done
+    reward = np.empty(n)
+    flags = np.empty((5, n), dtype=bool)
+    success, collision, timeout, terminated, discomfort = flags[0], flags[1], flags[2], flags[3], flags[4]
+    _judge(
+        closest, goal_distance_after, float(robot_radius), step_start_time, limit, ended,
+        cfg.collision_penalty, cfg.success_reward, cfg.discomfort_dist, cfg.discomfort_penalty_factor, dt,
+        reward, flags,
+    )  # fmt: skip
     return CrowdOutcome(
         reward=reward,
         success=success,
         collision=collision,
         timeout=timeout,
-        terminated=success | collision,
+        terminated=terminated,
         truncated=timeout,
         closest=closest,
         discomfort=discomfort,
     )
+
+
+@kernel
+def _judge(
+    closest, goal, radius, start, limit, done, penalty, success_reward, comfort, factor, dt, reward, flags
+):
+    """judge_step into reward (B,) and flags (5, B): success, collision, timeout, terminated and
+    discomfort, each robot's by the numpy expressions it replaced."""
+    for i in range(closest.shape[0]):
+        timeout = start[i] >= limit[i] - 1.0 - 1e-9
+        collision = not timeout and closest[i] < 0
+        success = not timeout and not collision and goal[i] < radius
+        discomfort = not (timeout or collision or success) and closest[i] < comfort
+        value = 0.0
+        if collision:
+            value = penalty
+        elif success:
+            value = success_reward
+        elif discomfort:
+            value = (closest[i] - comfort) * factor * dt
+        if done[i]:
+            value, timeout, collision, success, discomfort = 0.0, False, False, False, False
+        reward[i] = value
+        flags[0, i], flags[1, i], flags[2, i] = success, collision, timeout
+        flags[3, i], flags[4, i] = success or collision, discomfort
 
 
 class CrowdNavMetrics:
@@ -224,18 +289,14 @@ class CrowdNavMetrics:
     ) -> None:
         """Add one step: its outcome, the distance (B,) each robot moved, and the step's social
         force and blame terms (B,) (0 when not given)."""
-        if force is not None:
-            self.force += force
-        if blame is not None:
-            self.blame += blame
-        discount = self.cfg.gamma ** (self.steps * self.dt * self.v_pref)
-        self.ret += outcome.reward
-        self.discounted += discount * outcome.reward
-        self.steps += 1
-        self.path += moved
-        self.discomfort += outcome.discomfort
-        self.intrusion += outcome.closest < self.cfg.discomfort_dist
-        self.min_gap = np.minimum(self.min_gap, outcome.closest)
+        zeros = np.zeros(len(moved))
+        _count_step(
+            outcome.reward, outcome.discomfort, outcome.closest, moved,
+            zeros if force is None else force, zeros if blame is None else blame,
+            self.cfg.gamma, self.dt, self.v_pref, self.cfg.discomfort_dist,
+            self.steps, self.path, self.discomfort, self.intrusion, self.min_gap, self.ret, self.discounted,
+            self.force, self.blame,
+        )  # fmt: skip
 
     def summaries(self, rows: np.ndarray, outcome: CrowdOutcome) -> list[dict[str, float]]:
         """The ending episodes' metrics (METRIC_KEYS), one dict per row of `rows`."""
@@ -263,3 +324,23 @@ class CrowdNavMetrics:
         }
         names, values = list(columns), [column.tolist() for column in columns.values()]
         return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
+
+
+@kernel
+def _count_step(
+    reward, in_discomfort, closest, moved, force, blame, gamma, dt, v_pref, comfort,
+    steps, path, discomfort, intrusion, min_gap, ret, discounted, force_sum, blame_sum,
+):  # fmt: skip
+    """CrowdNavMetrics.update in place, each robot's by the numpy expressions it replaced (the
+    discount gamma ** (steps * dt * v_pref) before the step counts, np.minimum's NaN kept)."""
+    for i in range(reward.shape[0]):
+        force_sum[i] += force[i]
+        blame_sum[i] += blame[i]
+        discount = gamma ** (steps[i] * dt * v_pref)
+        ret[i] += reward[i]
+        discounted[i] += discount * reward[i]
+        steps[i] += 1
+        path[i] += moved[i]
+        discomfort[i] += in_discomfort[i]
+        intrusion[i] += closest[i] < comfort
+        min_gap[i] = nan_min(min_gap[i], closest[i])

@@ -6,7 +6,6 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.core.jit import kernel
 from socialzoo.core.validation import check_fields
 from socialzoo.env.quirks import ReferenceQuirks
@@ -71,21 +70,50 @@ class RewardConfig:
 @kernel
 def _nearest_visible(robot_pos, human_pos, visible, skip, nearest2, nearest):  # type: ignore[no-untyped-def]
     """Fill nearest2 (B,), the squared distance to the nearest counted human (visible, not the
-    skipped one; inf for none), and nearest (B,), its index (0 for none; the first of equals, and
-    the first NaN distance as numpy's argmin gives it)."""
+    skipped one; inf for none), and nearest (B,), its index (0 for none)."""
     for b in range(human_pos.shape[0]):
-        best, at = np.inf, 0
-        for h in range(human_pos.shape[1]):
-            if not visible[b, h] or h == skip[b]:
-                continue
-            dx, dy = human_pos[b, h, 0] - robot_pos[b, 0], human_pos[b, h, 1] - robot_pos[b, 1]
-            d2 = dx * dx + dy * dy
-            if d2 != d2:
-                best, at = d2, h
-                break
-            if d2 < best:
-                best, at = d2, h
-        nearest2[b], nearest[b] = best, at
+        nearest2[b], nearest[b] = _nearest_in_row(b, robot_pos, human_pos, visible, skip)
+
+
+@kernel
+def _nearest_in_row(b, robot_pos, human_pos, visible, skip):  # type: ignore[no-untyped-def]
+    """(squared distance, index) of row b's nearest counted human: inf and 0 for none, the first
+    of equals, and the first NaN distance as numpy's argmin gives it."""
+    best, at = np.inf, 0
+    for h in range(human_pos.shape[1]):
+        if not visible[b, h] or h == skip[b]:
+            continue
+        dx, dy = human_pos[b, h, 0] - robot_pos[b, 0], human_pos[b, h, 1] - robot_pos[b, 1]
+        d2 = dx * dx + dy * dy
+        if d2 != d2:
+            return d2, h
+        if d2 < best:
+            best, at = d2, h
+    return best, at
+
+
+@kernel
+def _blame_parts(  # type: ignore[no-untyped-def]
+    robot_pos, robot_vel, still, human_pos, visible, skip, horizon, nearest2, dist, counted
+):
+    """force_and_blame's parts per row: nearest2 (B,) as _nearest_visible's, dist (B,) the nearest
+    human's distance to the robot's segment [p, p + horizon v] (closest_point_on_segment's numpy
+    expressions; human 0 for none) and counted (B,), someone counted and the robot not still."""
+    for b in range(human_pos.shape[0]):
+        d2, h = _nearest_in_row(b, robot_pos, human_pos, visible, skip)
+        nearest2[b] = d2
+        counted[b] = np.isfinite(d2) and not still[b]
+        ax, ay = robot_pos[b, 0], robot_pos[b, 1]
+        abx, aby = (ax + horizon * robot_vel[b, 0]) - ax, (ay + horizon * robot_vel[b, 1]) - ay
+        apx, apy = human_pos[b, h, 0] - ax, human_pos[b, h, 1] - ay
+        denom = abx * abx + aby * aby
+        t = (apx * abx + apy * aby) / (denom if denom > 0.0 else 1.0)
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+        dx, dy = human_pos[b, h, 0] - (ax + t * abx), human_pos[b, h, 1] - (ay + t * aby)
+        dist[b] = np.sqrt(dx * dx + dy * dy)
 
 
 def nearest_visible(
@@ -95,11 +123,16 @@ def nearest_visible(
     none; (B,) its index, 0 for none): one pass over the people for both reward terms."""
     batch = robot_pos.shape[0]
     nearest2, nearest = np.empty(batch), np.empty(batch, dtype=np.intp)
-    skip = np.asarray(skip, dtype=np.int64)
-    if skip.shape != (batch,):
-        skip = np.broadcast_to(skip, (batch,))
-    _nearest_visible(robot_pos, human_pos, np.asarray(visible, dtype=bool), skip, nearest2, nearest)
+    _nearest_visible(
+        robot_pos, human_pos, np.asarray(visible, dtype=bool), _skips(skip, batch), nearest2, nearest
+    )
     return nearest2, nearest
+
+
+def _skips(skip: np.ndarray, batch: int) -> np.ndarray:
+    """(B,) int64 the skipped human of each row (one index for all rows is broadcast)."""
+    skip = np.asarray(skip, dtype=np.int64)
+    return skip if skip.shape == (batch,) else np.broadcast_to(skip, (batch,))
 
 
 def social_force_term(
@@ -157,11 +190,11 @@ def force_and_blame(
     batch = robot_pos.shape[0]
     if human_pos.shape[1] == 0:
         return np.zeros(batch), np.zeros(batch)
-    d2, nearest = nearest_visible(robot_pos, human_pos, visible, skip)
-    counted = np.isfinite(d2) & ~np.asarray(halted_or_still, dtype=bool)
-    _, dist = closest_point_on_segment(
-        human_pos[np.arange(batch), nearest], robot_pos, robot_pos + horizon * robot_vel_world
-    )
+    d2, dist, counted = np.empty(batch), np.empty(batch), np.empty(batch, dtype=bool)
+    _blame_parts(
+        robot_pos, robot_vel_world, np.asarray(halted_or_still, dtype=bool), human_pos,
+        np.asarray(visible, dtype=bool), _skips(skip, batch), float(horizon), d2, dist, counted,
+    )  # fmt: skip
     return _force(d2), np.where(counted, 1.0 - erf(dist), 0.0)
 
 

@@ -3,11 +3,13 @@ CrowdNav's settings as the defaults (socialzoo.env.crowd_config.CrowdNavConfig; 
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
 
+from socialzoo.core.jit import kernel
 from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
@@ -22,7 +24,7 @@ from socialzoo.env.crowd_observation import (
     robot_features,
     with_signals,
 )
-from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, closest_boundary_distance, judge_step
+from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, judge_step, track_approach
 from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
 from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
@@ -133,6 +135,7 @@ class CrowdNavTask(Task):
         radius = float(cfg.robot.radius)  # type: ignore[arg-type]
         slot_radius = np.concatenate((np.full(cfg.slots, cfg.cases.human_radius), np.full(r - 1, radius)))
         self.radius_sum = radius + slot_radius
+        self._radius_sum_rows = np.broadcast_to(self.radius_sum, (batch_size * r, len(slot_radius)))
         # Every robot's slot radii, as one array: the observations of any rows read a prefix of it.
         self._slot_radius_rows = np.tile(slot_radius, (batch_size * r, 1))
         self._blame_horizon = RewardConfig().blame_horizon
@@ -213,7 +216,6 @@ class CrowdNavTask(Task):
         closest = np.full(b * r, np.inf)
         wall = np.zeros(b * r, dtype=bool)
         moved = np.zeros(b * r)
-        start_time = np.repeat(self.time, r)
         dt = cfg.physics_dt
         for _ in range(cfg.physics_substeps):
             before = core.state
@@ -222,19 +224,19 @@ class CrowdNavTask(Task):
                 self._arrive(before)
             events = core.step(command)
             after = core.state
-            shift = (after.robot_pose[..., :2] - before.robot_pose[..., :2]).reshape(b * r, 2)
-            moved += np.hypot(shift[:, 0], shift[:, 1])
-            pos, vel, mask = core.others(before, shift.reshape(b, r, 2) / dt)
-            gap = closest_boundary_distance(
-                before.robot_pose[..., :2].reshape(b * r, 2), shift / dt, pos, vel, self.radius_sum, mask, dt
+            robot_before = before.robot_pose[..., :2].reshape(b * r, 2)
+            robot_after = after.robot_pose[..., :2].reshape(b * r, 2)
+            # The other robots move at their velocity through the step (none with one robot).
+            others_vel = (robot_after - robot_before).reshape(b, r, 2) / dt if r > 1 else None
+            pos, vel, mask = core.others(before, others_vel)
+            track_approach(
+                closest, moved, robot_before, robot_after, pos, vel, self._radius_sum_rows, mask, dt
             )
-            closest = np.minimum(closest, gap)
             wall |= events.robot_wall.reshape(b * r)
-        self.time += cfg.time_step
         if core.navigator is not None:
             core.follow_routes()
         # A wall contact is a collision of the task (CrowdNav's arena has none).
-        closest = np.where(wall, np.minimum(closest, -1e-9), closest)
+        np.minimum(closest, -1e-9, out=closest, where=wall)
         goal_distance = core.goal_distance()
         if core.script.active:  # a robot escorting a person arrives only with that person
             goal_distance = np.where(core.escort_ok(), goal_distance, np.inf)
@@ -242,16 +244,18 @@ class CrowdNavTask(Task):
             closest,
             goal_distance.reshape(b * r),
             float(cfg.robot.radius),  # type: ignore[arg-type]
-            start_time,
+            core.per_robot(self.time),
             np.minimum(cfg.time_limit, core.per_robot(core.time_limit)),
             cfg.reward,
             cfg.time_step,
-        ).masked(core.done.reshape(b * r))
+            core.done.reshape(b * r),
+        )
+        self.time += cfg.time_step
         # The step's social force and blame terms per robot (the viewer draws them).
         force, blame = self._force_and_blame()
         self.metrics.update(outcome, moved, force, blame)
         ended = np.flatnonzero(outcome.terminated | outcome.truncated)
-        summaries = self.metrics.summaries(ended, outcome)
+        summaries = self.metrics.summaries(ended, outcome) if len(ended) else []
         for k, summary in zip(ended.tolist(), summaries, strict=True):
             summary["wall_collision"] = float(wall[k] and outcome.collision[k])
             self._ended[k] = summary
@@ -313,18 +317,16 @@ class CrowdNavTask(Task):
                 f"CrowdNav: velocity actions must have shape {(b, r, 2)}, got {np.shape(action)}"
             )
         action = np.asarray(action, dtype=np.float64).reshape(b * r, 2)
-        bad = ~np.isfinite(action).all(axis=1) | (np.abs(action) > 1.0).any(axis=1)
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
+        unicycle = robot.kinematics == "unicycle"
+        command = np.empty((b * r, 2))
+        k = _velocity_commands(
+            action, unicycle, self.config.preferred_speed, robot.max_rotation, self.config.time_step, command
+        )
+        if k >= 0:
             raise ValueError(
                 f"CrowdNav: velocity action {action[k].tolist()} of robot {k} is not finite in [-1, 1]"
             )
-        v_pref = self.config.preferred_speed
-        if robot.kinematics == "holonomic":
-            return self._to_world(action * v_pref).reshape(b, r, 2)
-        speed = (action[:, 0] + 1.0) * 0.5 * v_pref
-        omega = action[:, 1] * robot.max_rotation / self.config.time_step
-        return np.stack((speed, omega), axis=-1).reshape(b, r, 2)
+        return (command if unicycle else self._to_world(command)).reshape(b, r, 2)
 
     def _to_world(self, velocity: np.ndarray) -> np.ndarray:
         """(B R, 2) holonomic velocities in the action frame -> the world frame."""
@@ -339,20 +341,17 @@ class CrowdNavTask(Task):
 
     def _turn(self, velocity: np.ndarray, sign: float) -> np.ndarray:
         """(B R, 2) velocities turned by `sign` times each robot's frame angle."""
-        c, s = np.cos(self.frame_angle), sign * np.sin(self.frame_angle)
-        return np.stack(
-            (c * velocity[:, 0] - s * velocity[:, 1], s * velocity[:, 0] + c * velocity[:, 1]), axis=-1
-        )
+        out = np.empty(velocity.shape)
+        _turn_rows(velocity, np.cos(self.frame_angle), np.sin(self.frame_angle), sign, out)
+        return out
 
     def _arrive(self, s: WorldState) -> None:
         """CrowdNav's people slow down on their last metre and stop at their goal: the preferred
         velocity is the goal's offset per second, capped at the preferred speed (its ORCA policy's
         `velocity / speed if speed > 1 else velocity` at v_pref 1). Written into the state's
         preferred speeds before each step; the arena's routes are one point, the goal."""
-        offset = s.human_route[:, :, 0] - s.human_pos
-        distance = np.sqrt(offset[..., 0] ** 2 + offset[..., 1] ** 2)
-        s.human_pref_speed[...] = np.where(
-            s.human_mask, np.minimum(self.config.cases.human_speed, distance / _ARRIVAL_TIME), 0.0
+        _arrival_speeds(
+            s.human_route, s.human_pos, s.human_mask, self.config.cases.human_speed, s.human_pref_speed
         )
 
     def _force_and_blame(self) -> tuple[np.ndarray, np.ndarray]:
@@ -579,3 +578,46 @@ class CrowdNavTask(Task):
             human_radius=self.config.cases.human_radius,
             goal_radius=float(self.config.robot.radius),  # type: ignore[arg-type]
         )
+
+
+@kernel
+def _velocity_commands(action, unicycle, v_pref, max_rotation, time_step, out):  # type: ignore[no-untyped-def]
+    """The commands of velocity actions (N, 2) in [-1, 1] into out (N, 2), in the action frame
+    (CrowdNavTask.commands): a holonomic robot's velocity at v_pref, a unicycle's (speed, omega).
+    Returns the first robot whose action is not finite in [-1, 1] (out unwritten), -1 for none."""
+    n = action.shape[0]
+    for i in range(n):
+        if not (abs(action[i, 0]) <= 1.0 and abs(action[i, 1]) <= 1.0):  # NaN fails too
+            return i
+    for i in range(n):
+        if unicycle:
+            out[i, 0] = (action[i, 0] + 1.0) * 0.5 * v_pref
+            out[i, 1] = action[i, 1] * max_rotation / time_step
+        else:
+            out[i, 0] = action[i, 0] * v_pref
+            out[i, 1] = action[i, 1] * v_pref
+    return -1
+
+
+@kernel
+def _turn_rows(velocity, cos, sin, sign, out):  # type: ignore[no-untyped-def]
+    """Each velocity (N, 2) turned by the angle of cosine cos (N,) and sine sign * sin (N,), into out."""
+    for i in range(velocity.shape[0]):
+        c, s = cos[i], sign * sin[i]
+        out[i, 0] = c * velocity[i, 0] - s * velocity[i, 1]
+        out[i, 1] = s * velocity[i, 0] + c * velocity[i, 1]
+
+
+@kernel
+def _arrival_speeds(route, pos, mask, speed, out):  # type: ignore[no-untyped-def]
+    """CrowdNavTask._arrive into out (B, H): each present person's distance to its route's first
+    point per _ARRIVAL_TIME, capped at `speed` (a NaN distance kept, as np.minimum keeps it); 0 for
+    an empty slot."""
+    for b in range(mask.shape[0]):
+        for h in range(mask.shape[1]):
+            if not mask[b, h]:
+                out[b, h] = 0.0
+                continue
+            ox, oy = route[b, h, 0, 0] - pos[b, h, 0], route[b, h, 0, 1] - pos[b, h, 1]
+            reach = math.sqrt(ox * ox + oy * oy) / _ARRIVAL_TIME
+            out[b, h] = speed if speed < reach else reach
