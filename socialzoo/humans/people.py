@@ -38,33 +38,48 @@ def orca_people_velocities(
     orca = cfg.orca
     batch, num = mask.shape
     num_robots = robot_pos.shape[1] if orca.robot_visible else 0
-    to_target = target - pos
-    dist = np.sqrt(to_target[..., 0] ** 2 + to_target[..., 1] ** 2)
-    pref = to_target * (pref_speed / np.maximum(dist, _TINY))[..., None]
-    speed = pref_speed if orca.max_speed is None else np.full((batch, num), orca.max_speed)
     agents = num + num_robots
-    a_pos = np.empty((batch, agents, 2))
-    a_vel = np.empty((batch, agents, 2))
-    a_pref = np.zeros((batch, agents, 2))
-    a_radius = np.empty((batch, agents))
-    a_speed = np.zeros((batch, agents))
-    a_present = np.ones((batch, agents), dtype=bool)
-    a_drive = np.zeros((batch, agents), dtype=bool)
-    a_pos[:, :num] = pos
-    a_vel[:, :num] = vel
-    a_pref[:, :num] = pref
-    a_radius[:, :num] = orca.radius
-    a_speed[:, :num] = speed
-    a_present[:, :num] = mask
-    a_drive[:, :num] = drive
-    if num_robots:
-        a_pos[:, num:] = robot_pos
-        a_vel[:, num:] = robot_vel
-        a_radius[:, num:] = orca.robot_disc(cfg.robot)
+    a_pos, a_vel, a_pref = (np.empty((batch, agents, 2)) for _ in range(3))
+    a_radius, a_speed = np.empty((batch, agents)), np.empty((batch, agents))
+    a_present, a_drive = np.empty((batch, agents), dtype=bool), np.empty((batch, agents), dtype=bool)
+    _orca_agents(
+        pos, vel, target, pref_speed, mask, drive, robot_pos[:, :num_robots], robot_vel[:, :num_robots],
+        orca.radius, orca.robot_disc(cfg.robot) if num_robots else 0.0,
+        orca.max_speed is None, 0.0 if orca.max_speed is None else orca.max_speed,
+        a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive,
+    )  # fmt: skip
     out = orca_velocities(
         a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive, a_present, walls, orca, cfg.dt
     )
     return out[:, :num]
+
+
+@kernel
+def _orca_agents(  # type: ignore[no-untyped-def]
+    pos, vel, target, pref_speed, mask, drive, robot_pos, robot_vel, radius, robot_radius, own_speed, max_speed,
+    a_pos, a_vel, a_pref, a_radius, a_speed, a_present, a_drive,
+):  # fmt: skip
+    """orca_people_velocities' agents (B, H + R): the people, each preferring its preferred speed
+    straight to its waypoint (the numpy expressions it replaced, np.maximum's NaN kept) and limited
+    to it (own_speed) or to max_speed, then the robots given (present, seen, not driven, still)."""
+    for b in range(mask.shape[0]):
+        for h in range(mask.shape[1]):
+            tx, ty = target[b, h, 0] - pos[b, h, 0], target[b, h, 1] - pos[b, h, 1]
+            dist = np.sqrt(tx * tx + ty * ty)
+            scale = pref_speed[b, h] / (dist if dist >= _TINY or dist != dist else _TINY)
+            a_pos[b, h, 0], a_pos[b, h, 1] = pos[b, h, 0], pos[b, h, 1]
+            a_vel[b, h, 0], a_vel[b, h, 1] = vel[b, h, 0], vel[b, h, 1]
+            a_pref[b, h, 0], a_pref[b, h, 1] = tx * scale, ty * scale
+            a_radius[b, h] = radius
+            a_speed[b, h] = pref_speed[b, h] if own_speed else max_speed
+            a_present[b, h], a_drive[b, h] = mask[b, h], drive[b, h]
+        for k in range(robot_pos.shape[1]):
+            at = mask.shape[1] + k
+            a_pos[b, at, 0], a_pos[b, at, 1] = robot_pos[b, k, 0], robot_pos[b, k, 1]
+            a_vel[b, at, 0], a_vel[b, at, 1] = robot_vel[b, k, 0], robot_vel[b, k, 1]
+            a_pref[b, at, 0] = a_pref[b, at, 1] = 0.0
+            a_radius[b, at], a_speed[b, at] = robot_radius, 0.0
+            a_present[b, at], a_drive[b, at] = True, False
 
 
 @kernel
