@@ -301,29 +301,48 @@ class CrowdNavMetrics:
     def summaries(self, rows: np.ndarray, outcome: CrowdOutcome) -> list[dict[str, float]]:
         """The ending episodes' metrics (METRIC_KEYS), one dict per row of `rows`."""
         rows = np.asarray(rows, dtype=np.intp)
-        # Columns over the rows, then one dict a row: per-row numpy scalars cost more than the sums.
-        steps = self.steps[rows]
-        per_step = np.maximum(steps, 1)
-        success = outcome.success[rows]
-        gap = self.min_gap[rows]
-        columns = {
-            "success": success.astype(np.float64),
-            "collision": outcome.collision[rows].astype(np.float64),
-            "timeout": outcome.timeout[rows].astype(np.float64),
-            "navigation_time": np.where(success, steps * self.dt, np.nan),
-            "path_length": self.path[rows],
-            "discomfort_steps": self.discomfort[rows].astype(np.float64),
-            "steps": steps.astype(np.float64),
-            "discomfort_frequency": self.discomfort[rows] / per_step,
-            "min_separation": np.where(np.isfinite(gap), gap, np.nan),
-            "intrusion_ratio": self.intrusion[rows] / per_step,
-            "return": self.ret[rows],
-            "discounted_return": self.discounted[rows],
-            "mean_force": self.force[rows] / per_step,
-            "mean_blame": self.blame[rows] / per_step,
-        }
-        names, values = list(columns), [column.tolist() for column in columns.values()]
-        return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
+        # One table of the rows' metrics, then one dict a row: per-row numpy scalars cost more than the sums.
+        table = np.empty((len(rows), len(_SUMMARY_COLUMNS)))
+        _summary_table(
+            rows, outcome.success, outcome.collision, outcome.timeout, self.steps, self.path, self.discomfort,
+            self.intrusion, self.min_gap, self.ret, self.discounted, self.force, self.blame, self.dt, table,
+        )  # fmt: skip
+        return [dict(zip(_SUMMARY_COLUMNS, row, strict=True)) for row in table.tolist()]
+
+
+# The columns of _summary_table, in the order it writes them (METRIC_KEYS' order).
+_SUMMARY_COLUMNS: tuple[str, ...] = (
+    "success", "collision", "timeout", "navigation_time", "path_length", "discomfort_steps", "steps",
+    "discomfort_frequency", "min_separation", "intrusion_ratio", "return", "discounted_return", "mean_force",
+    "mean_blame",
+)  # fmt: skip
+
+
+@kernel
+def _summary_table(
+    rows, success, collision, timeout, steps, path, discomfort, intrusion, min_gap, ret, discounted, force, blame,
+    dt, out,
+):  # fmt: skip
+    """CrowdNavMetrics.summaries' values of each row of `rows`, into out (rows, _SUMMARY_COLUMNS):
+    flags as 0/1, navigation_time only on success (else NaN), min_separation NaN for nobody met,
+    the counts and sums per step of the episode (at least 1)."""
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        per_step = max(steps[i], 1)
+        out[j, 0] = 1.0 if success[i] else 0.0
+        out[j, 1] = 1.0 if collision[i] else 0.0
+        out[j, 2] = 1.0 if timeout[i] else 0.0
+        out[j, 3] = steps[i] * dt if success[i] else np.nan
+        out[j, 4] = path[i]
+        out[j, 5] = discomfort[i]
+        out[j, 6] = steps[i]
+        out[j, 7] = discomfort[i] / per_step
+        out[j, 8] = min_gap[i] if np.isfinite(min_gap[i]) else np.nan
+        out[j, 9] = intrusion[i] / per_step
+        out[j, 10] = ret[i]
+        out[j, 11] = discounted[i]
+        out[j, 12] = force[i] / per_step
+        out[j, 13] = blame[i] / per_step
 
 
 @kernel
