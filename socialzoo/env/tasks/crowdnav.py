@@ -254,7 +254,8 @@ class CrowdNavTask(Task):
         # The step's social force and blame terms per robot (the viewer draws them).
         force, blame = self._force_and_blame()
         self.metrics.update(outcome, moved, force, blame)
-        ended = np.flatnonzero(outcome.terminated | outcome.truncated)
+        over = outcome.terminated | outcome.truncated
+        ended = np.flatnonzero(over)
         summaries = self.metrics.summaries(ended, outcome) if len(ended) else []
         for k, summary in zip(ended.tolist(), summaries, strict=True):
             summary["wall_collision"] = float(wall[k] and outcome.collision[k])
@@ -265,7 +266,7 @@ class CrowdNavTask(Task):
                 summaries, core.replay.summaries(ended // r, arrival, ended % r), strict=True
             ):
                 summary.update(extra)
-        core.end_episodes((outcome.terminated | outcome.truncated).reshape(b, r))
+        core.end_episodes(over.reshape(b, r))
         self.observation = self._observe()
         wall_collision = wall & outcome.collision
         truncated = outcome.truncated.reshape(b, r)
