@@ -28,6 +28,10 @@ SPLIT_SEED_OFFSET: dict[str, int] = {"val": 0, "test": 1000, "train": 2000}
 # CrowdNav's fixed set sizes (env.config val_size, test_size).
 SPLIT_SIZE: dict[str, int] = {"val": 100, "test": 500}
 ARENA_MAP = "arena"
+# Most uniform draws a case may take (128 MiB) before its config is refused as too full: CrowdNav
+# draws a person again until it fits, forever when the people placed leave it no room, and a
+# 20-person case in CrowdNav's 4 m circle takes a median 5,300.
+MAX_CASE_DRAWS = 1 << 24
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -165,6 +169,13 @@ def crowd_case_arrays(
         )  # fmt: skip
         if person == num_robots + n:
             break
+        if len(draws) >= MAX_CASE_DRAWS:
+            raise ValueError(
+                f"crowd case {seed}: person {person - num_robots} of {n} found no place clear of the "
+                f"{person} agents before it in {len(draws):,} draws (CrowdNav's rule would draw forever): "
+                f"the {config.layout} layout is too full for {n} people; use fewer people or a larger "
+                "circle_radius or square_width (CrowdNav++'s 20 people: CrowdNavConfig.variant('20'))"
+            )
         # The draws ran out before every person found a place: the same stream, longer, from the
         # person whose draws ran out (the people before keep their places).
         draws = np.concatenate((draws, rs.random_sample(len(draws))))

@@ -63,3 +63,17 @@ def test_splits_use_crowdnavs_seeds_and_sizes():
         CrowdCaseConfig(layout="corridor")
     with pytest.raises(ValueError, match="human_radius"):
         CrowdCaseConfig(human_radius=-0.3)
+
+
+def test_a_case_with_no_room_left_is_refused_by_name_not_drawn_forever():
+    from socialzoo.scenarios.crowd_cases import crowd_case_arrays
+
+    # 20 people on a 1 m circle: after a few people every start is taken (CrowdNav's loop never ends).
+    with pytest.raises(
+        ValueError, match=r"crowd case 0: person \d+ of 20 found no place .* too full for 20 people"
+    ):
+        crowd_case_arrays(CrowdCaseConfig(num_humans=20, circle_radius=1.0), 0)
+    # CrowdNav's own 4 m circle jams for a few seeds of 20 people (213 of the first 3000).
+    with pytest.raises(ValueError, match="crowd case 213"):
+        crowd_case_arrays(CrowdCaseConfig(num_humans=20), 213)
+    assert crowd_case_arrays(CrowdCaseConfig(num_humans=20), 212).human_starts.shape == (20, 2)
