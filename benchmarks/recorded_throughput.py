@@ -15,8 +15,13 @@ With --warmup S, each case first runs S seconds untimed: a recorded scene builds
 the first time the track is drawn and keeps it, so a short run from a cold start mostly measures
 those builds, and a long training run does not.
 
+With --memory STEPS, it prints instead what the replay holds of the recordings after STEPS steps of each
+scene in replay at B = 256: the bytes of its bank of recordings (socialzoo.env.recording_bank), or, run with
+an older socialzoo on the path (PYTHONPATH=old/checkout), of the rows' own copies of their recordings; and of
+all of the replay's arrays.
+
 Run: SOCIALZOO_DATA_DIR=DIR python benchmarks/recorded_throughput.py [--scenes eth,zara1] [--seconds 5]
-[--warmup 0] [--floor] [--json]
+[--warmup 0] [--floor] [--memory STEPS] [--json]
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ from socialzoo.env.vector import CrowdNavVectorEnv
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 BATCH = 256
+# Before the bank (0be8e2f and earlier), each row's recording was its copy in these ReplayRunner arrays.
+ROW_COPIES = ("tracks", "track_vel", "route_frame", "entry", "exit", "first", "last", "occupant_speed", "shared",
+              "robot_track")  # fmt: skip
 
 
 def measure(seconds: float, warmup: float = 0.0, **config: object) -> dict[str, float]:
@@ -62,6 +70,31 @@ def measure(seconds: float, warmup: float = 0.0, **config: object) -> dict[str, 
     }
 
 
+def memory(scene: str, steps: int) -> dict[str, float]:
+    """MiB of the recordings the replay holds after `steps` steps of `scene` in replay (its bank's arrays, or
+    the rows' copies before the bank), of their content (the bank's arrays, grown by doubling, hold room to
+    grow), of all the replay's arrays, and the recordings held (0: no bank)."""
+    env = CrowdNavVectorEnv(
+        BATCH, family=f"recorded_{scene}", humans="replay", robot_visible=True, time_limit=200.0
+    )
+    env.reset(seed=0)
+    actions = np.random.default_rng(0).uniform(-1, 1, (64, BATCH, 2)).astype(np.float32)
+    for k in range(steps):
+        env.step(actions[k % 64])
+    runner = env.task.core.replay
+    arrays = {k: v for k, v in vars(runner).items() if isinstance(v, np.ndarray)}
+    bank = getattr(runner, "bank", None)
+    held = bank.nbytes if bank is not None else sum(arrays[k].nbytes for k in ROW_COPIES)
+    mib = 1 / 2**20
+    content = sum(bank.used_bytes) if bank is not None else held
+    return {
+        "recordings_mib": round(held * mib, 2),
+        "recordings_content_mib": round(content * mib, 2),
+        "replay_mib": round((sum(v.nbytes for v in arrays.values()) + (bank.nbytes if bank else 0)) * mib, 2),
+        "recordings_held": len(bank.recordings) if bank is not None else 0,
+    }
+
+
 def main() -> None:
     p = parser(__doc__.splitlines()[0])
     p.add_argument(
@@ -71,7 +104,20 @@ def main() -> None:
     p.add_argument(
         "--floor", action="store_true", help="also the arena with 1 person and 5 people in many slots"
     )
+    p.add_argument(
+        "--memory", type=int, default=0, metavar="STEPS", help="print the recordings' bytes after STEPS"
+    )
     args = p.parse_args()
+    if args.memory:
+        for scene in args.scenes.split(","):
+            figure = {
+                "case": f"{scene} replay",
+                "batch": BATCH,
+                "steps": args.memory,
+                **memory(scene, args.memory),
+            }
+            print(json.dumps(figure) if args.json else "  ".join(f"{k}={v}" for k, v in figure.items()))
+        return
     # The issue's reference (20 people) and CrowdNav's own 5, as sparse as the recorded scenes.
     cases = [("CrowdNav 20 ORCA people", {"variant": "20"}), ("CrowdNav 5 ORCA people", {"variant": ""})]
     for scene in args.scenes.split(","):

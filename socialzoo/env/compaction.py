@@ -73,7 +73,8 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     new.done = core.done[index].copy()
     new.visible = core.visible[core.robot_rows(index)].copy()
     # The people's side: counterfactual rows and the people's metrics so far; recorded people;
-    # scripted people and doors (who was released, which doors closed).
+    # scripted people and doors (who was released, which doors closed). The recorded rows' bank of
+    # recordings is the reset's: it holds the kept rows' recordings, and they point there.
     new.people = core.people.rows(index)
     copy_rows(core.replay, new.replay, index, b)
     copy_rows(core.script, new.script, index, b)

@@ -181,7 +181,7 @@ class BatchedCore:
             seeds = [0 if s is None else s.seed for s in scenarios]
             self.replay.reset(rows, scenarios, state, self.people.kinds(seeds, counts))
         else:
-            self.replay.recorded[rows] = False
+            self.replay.release(rows)
         if self.navigator is not None:
             self.navigator.reset(rows, state.robot_pose[rows][..., :2], state.robot_goal[rows][..., :2])
             self.carrot[rows] = self.navigator.update(state.robot_pose[..., :2])[rows]

@@ -11,21 +11,19 @@ import numpy as np
 
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
+from socialzoo.env.recording_bank import RecordingBank
 from socialzoo.env.replay_kernels import (
-    UNUSED_OCCUPANT,
     account_people,
     account_robots,
     begin_episodes,
     enter_people,
     leave_tracks,
-    load_row,
     occupants_now,
     place_people,
     reacting_people,
     reacting_totals,
 )
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
-from socialzoo.scenarios.recorded_people import NEVER
 from socialzoo.scenarios.scenario import Scenario
 
 # The metrics of recorded scenes (socialzoo.core.metrics, source "recorded").
@@ -90,22 +88,9 @@ class ReplayRunner:
         self.robot_visible = robot_visible
         self.recorded = np.zeros(b, dtype=bool)
         self.frame_dt = np.ones(b)
-        # (B, T, H, 2) each row's recording in its first frame_count frames and people_count slots
-        # (what lies beyond is not read: a reset writes only the recording's block). Frame-major:
-        # a step reads every slot of a row on one or two frames.
-        self.tracks = np.full((b, 1, h, 2), np.nan)
-        self.track_vel = np.zeros((b, 1, h, 2))
-        self.people_count = np.zeros(b, dtype=np.int64)
-        self.frame_count = np.zeros(b, dtype=np.int64)
-        # (B, H, L) the frame of each route point (socialzoo.scenarios.recorded_people.route_frames).
-        self.route_frame = np.zeros((b, h, 1), dtype=np.int64)
-        # (B, H, K) each slot's people, one after another (socialzoo.scenarios.recorded_people.Occupants).
-        self.entry = np.full((b, h, 1), NEVER, dtype=np.int64)
-        self.exit = np.full((b, h, 1), NEVER, dtype=np.int64)
-        self.first = np.zeros((b, h, 1), dtype=np.int64)
-        self.last = np.zeros((b, h, 1), dtype=np.int64)
-        self.occupant_speed = np.ones((b, h, 1))
-        self.shared = np.zeros((b, h), dtype=bool)  # a slot of more than one person
+        # Each row's recording: a pointer into the recordings the rows play, each stored once (a reset
+        # copies nothing of it).
+        self.bank = RecordingBank(b)
         self.occupant = np.full((b, h), -1, dtype=np.int64)  # who is in each slot now (-1: nobody yet)
         # Per slot, from the people spec: follows its track from entry; may react; the model after.
         self.follows = np.zeros((b, h), dtype=bool)
@@ -125,8 +110,6 @@ class ReplayRunner:
         self.rest = np.zeros((b, h))
         # ... and the reacting people who already left their slot: count, time lost, extra distance.
         self.folded = np.zeros((b, 3))
-        self.robot_track = np.zeros((b, 1, 2))
-        self.robot_track_len = np.zeros(b, dtype=np.int64)
         self.deviation = np.zeros((b, r))
         self.moves = np.zeros((b, r), dtype=np.int64)
         self.contact = np.zeros((b, r, h), dtype=bool)
@@ -157,78 +140,43 @@ class ReplayRunner:
         Raises:
             RecordingError: a replay or hybrid spec on a scenario without recorded people.
         """
-        b = len(self.recorded)
-        for i, (row, scenario) in enumerate(zip(rows.tolist(), scenarios, strict=True)):
-            rec = None if scenario is None else scenario.recorded
-            slot_kind = kinds[i]
-            if rec is None:
-                if self._recorded_spec:
-                    name = (
-                        "a task's own case"
-                        if scenario is None
-                        else f"scenario {scenario.family} seed {scenario.seed}"
-                    )
-                    raise RecordingError(
-                        f"people spec {'+'.join(p.name for p in self.parts)!r}: replay and hybrid people "
-                        f"need recorded people (a recorded scene's family), {name} has none"
-                    )
-                self.recorded[row] = False
-                self.on_track[row] = False
-                continue
-            occupants = rec.occupants
-            self._widen(
-                rec.num_frames, rec.route_frames.shape[1], len(rec.robot_track), occupants.entry.shape[1]
+        recordings = [None if s is None else s.recorded for s in scenarios]
+        missing = [k for k, r in enumerate(recordings) if r is None]
+        if self._recorded_spec and missing:
+            scenario = scenarios[missing[0]]
+            name = (
+                "a task's own case"
+                if scenario is None
+                else f"scenario {scenario.family} seed {scenario.seed}"
             )
-            self.recorded[row] = True
-            self.frame_dt[row] = rec.dt
-            self.time_limit[row] = rec.time_limit
-            self.robot_track_len[row] = len(rec.robot_track)
-            self.people_count[row], self.frame_count[row] = rec.num_people, rec.num_frames
-            load_row(
-                row, rec.tracks, rec.velocities, rec.route_frames, occupants.entry, occupants.exit,
-                occupants.first, occupants.last, occupants.speed, occupants.shared, rec.follow, rec.robot_track,
-                slot_kind, self._per_part["follows"], self._per_part["reacts"], self._per_part["model"], REPLAY,
-                self.tracks, self.track_vel, self.route_frame, self.entry, self.exit, self.first, self.last,
-                self.occupant_speed, self.shared, self.follows, self.reacts, self.then, self.robot_track,
-            )  # fmt: skip
-        fresh = rows[self.recorded[rows]]
+            raise RecordingError(
+                f"people spec {'+'.join(p.name for p in self.parts)!r}: replay and hybrid people "
+                f"need recorded people (a recorded scene's family), {name} has none"
+            )
+        entries = self.bank.point(rows, recordings)
+        has = entries >= 0
+        self.recorded[rows] = has
+        self.on_track[rows[~has]] = False
+        fresh, entries = rows[has], entries[has]
         if len(fresh) == 0:
             return
-        assert b == state.batch_size
+        assert len(self.recorded) == state.batch_size
+        self.frame_dt[fresh] = self.bank.dt[entries]
+        self.time_limit[fresh] = self.bank.time_limit[entries]
+        bank = self.bank
         begin_episodes(
-            fresh, self.follows, REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at,
-            self.walked, self.recorded_left, self.recorded_exit, self.rest, self.elapsed, self.folded,
-            self.deviation, self.moves, self.walked_into, self.contact, state.human_model,
+            fresh, kinds[has], bank.slot_at, bank.people, bank.follow, self._per_part["follows"],
+            self._per_part["reacts"], self._per_part["model"], REPLAY, self.follows, self.reacts, self.then,
+            self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at, self.walked, self.recorded_left,
+            self.recorded_exit, self.rest, self.elapsed, self.folded, self.deviation, self.moves, self.walked_into,
+            self.contact, state.human_model,
         )  # fmt: skip
         self._place(state, fresh)
 
-    def _widen(self, frames: int, route: int, robot_track: int, occupants: int) -> None:
-        """Grow the frame, route, robot-track and occupant axes to hold a longer recording."""
-        have = self.entry.shape[2]
-        if occupants > have:
-            grow = max(occupants, 2 * have) - have
-            for name, fill in UNUSED_OCCUPANT:
-                array = getattr(self, name)
-                pad = np.full(array.shape[:2] + (grow,), fill, dtype=array.dtype)
-                setattr(self, name, np.concatenate((array, pad), 2))
-        have = self.tracks.shape[1]
-        if frames > have:
-            frames = max(frames, 2 * have)  # grow by doubling: a reset rarely reallocates
-            b, h = self.tracks.shape[0], self.tracks.shape[2]
-            self.tracks = np.concatenate((self.tracks, np.full((b, frames - have, h, 2), np.nan)), 1)
-            self.track_vel = np.concatenate((self.track_vel, np.zeros((b, frames - have, h, 2))), 1)
-        have = self.route_frame.shape[2]
-        if route > have:
-            route = max(route, 2 * have)
-            self.route_frame = np.concatenate(
-                (self.route_frame, np.repeat(self.route_frame[:, :, -1:], route - have, axis=2)), 2
-            )
-        have = self.robot_track.shape[1]
-        if robot_track > have:
-            robot_track = max(robot_track, 2 * have)
-            self.robot_track = np.concatenate(
-                (self.robot_track, np.zeros((len(self.robot_track), robot_track - have, 2))), 1
-            )
+    def release(self, rows: np.ndarray) -> None:
+        """`rows` start episodes without recorded people (their recordings may be forgotten)."""
+        self.recorded[rows] = False
+        self.bank.release(rows)
 
     # ------------------------------------------------------------------ step
     def settle(self, after: WorldState, robot_vel: np.ndarray) -> None:
@@ -252,15 +200,16 @@ class ReplayRunner:
         n = len(rows)
         t, i0, w = np.empty(n), np.empty(n, dtype=np.int64), np.empty(n)
         # Who is in each slot now; a slot's next person takes it at its entry frame.
-        now = np.empty((n, self.tracks.shape[2]), dtype=np.int64)
+        now = np.empty((n, self.occupant.shape[1]), dtype=np.int64)
         new = np.empty(now.shape, dtype=bool)
+        bank = self.bank
         if occupants_now(
-            rows, state.step_count, self.dt, self.frame_dt, _ON_FRAME, self.entry, self.occupant,
-            t, i0, w, now, new,
+            rows, state.step_count, self.dt, self.frame_dt, _ON_FRAME, bank.slot_at, bank.people, bank.occupants_at,
+            bank.occupants, bank.entry, self.occupant, t, i0, w, now, new,
         ):  # fmt: skip
             self._enter(state, rows, new, now, t)
         place_people(
-            rows, i0, w, t, now, new, self.tracks, self.track_vel, self.people_count, self.frame_count,
+            rows, i0, w, t, now, new, bank.point_at, bank.people, bank.frames, bank.pos, bank.vel,
             self.on_track, self.gone, self.exit_at,
             state.human_direction, state.human_pos, state.human_vel, state.human_mask,
         )  # fmt: skip
@@ -273,10 +222,11 @@ class ReplayRunner:
         follow is folded into the measures (a reacting person leaves here: its time lost and extra
         distance so far), and the slot follows its track or is walked from its entry along its own
         part of the slot's route."""
+        bank = self.bank
         enter_people(
-            rows, new, now, t, self.follows, self.then, self.shared, self.first, self.last, self.occupant_speed,
-            REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at, self.walked,
-            self.recorded_exit, self.recorded_left, self.rest, self.folded, state.human_model,
+            rows, new, now, t, self.follows, self.then, bank.slot_at, bank.occupants_at, bank.shared, bank.first,
+            bank.last, bank.speed, REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at,
+            self.walked, self.recorded_exit, self.recorded_left, self.rest, self.folded, state.human_model,
             state.human_route_len, state.human_waypoint, state.human_direction, state.human_pref_speed,
         )  # fmt: skip
 
@@ -299,11 +249,13 @@ class ReplayRunner:
             self.collision_distance**2, react,
         ):  # fmt: skip
             return
+        bank = self.bank
         leave_tracks(
             rows, react, frame, weight, state.step_count, self.dt, self.frame_dt, self.then, self.occupant,
-            self.first, self.last, self.route_frame, self.shared, self.exit, self.tracks, self.on_track,
-            state.human_model, state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at,
-            self.recorded_exit, self.recorded_left,
+            bank.point_at, bank.people, bank.slot_at, bank.occupants_at, bank.shared, bank.first, bank.last,
+            bank.exit, bank.route_at, bank.route_points, bank.route_frame, bank.pos, self.on_track, state.human_model,
+            state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at, self.recorded_exit,
+            self.recorded_left,
         )  # fmt: skip
 
     # ------------------------------------------------------------------ measures
@@ -323,7 +275,7 @@ class ReplayRunner:
         )  # fmt: skip
         account_robots(
             rows, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
-            self.robot_track, self.robot_track_len, self.collision_distance**2,
+            self.bank.robot_at, self.bank.robot_points, self.bank.robot, self.collision_distance**2,
             self.deviation, self.moves, self.contact, self.walked_into,
         )  # fmt: skip
 
@@ -336,11 +288,12 @@ class ReplayRunner:
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         robots = np.broadcast_to(np.asarray(robot, dtype=np.intp), rows.shape)
         totals = np.empty((len(rows), 3))
+        bank = self.bank
         reacting_totals(
-            rows, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, self.occupant_speed,
-            self.recorded_exit, self.walked, self.recorded_left, self.folded, totals,
+            rows, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, bank.slot_at, bank.people,
+            bank.occupants_at, bank.speed, self.recorded_exit, self.walked, self.recorded_left, self.folded, totals,
         )  # fmt: skip
-        points = self.robot_track_len[rows]
+        points = bank.robot_points[rows]
         person = np.where(points > 0, (points - 1) * self.frame_dt[rows], np.nan)
         moves = self.moves[rows, robots]
         with np.errstate(invalid="ignore", divide="ignore"):

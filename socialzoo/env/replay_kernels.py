@@ -1,5 +1,6 @@
-"""The compiled loops of socialzoo.env.replay.ReplayRunner: loading a recording into a row, who is in each slot,
-people entering, placing and reacting, and the measures against the recording."""
+"""The compiled loops of socialzoo.env.replay.ReplayRunner: starting a row's episode, who is in each slot, people
+entering, placing and reacting, and the measures against the recording (read through the rows' pointers into the
+socialzoo.env.recording_bank.RecordingBank: slot s of row r is the bank's slot slot_at[r] + s)."""
 
 # Each loops over the rows' slots in compiled code and computes every value as the numpy expressions it replaced
 # did (same operations in the same order, fastmath off), so rollouts are the same bit for bit; a step of a sparse
@@ -10,66 +11,19 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.core.jit import kernel
-from socialzoo.scenarios.recorded_people import NEVER
-
-# An unused occupant entry: never entering, route indices 0, speed 1 m/s (ReplayRunner's fill too).
-UNUSED_OCCUPANT = (("entry", NEVER), ("exit", NEVER), ("first", 0), ("last", 0), ("occupant_speed", 1.0))
-_UNUSED_SPEED = UNUSED_OCCUPANT[4][1]
-
-
-@kernel
-def load_row(
-    row, tracks, velocities, route_frames, entry, exit_, first, last, speed, shared, follow, robot_track,
-    kind, part_follows, part_reacts, part_model, replay,
-    out_tracks, out_vel, out_route_frame, out_entry, out_exit, out_first, out_last, out_speed, out_shared,
-    out_follows, out_reacts, out_then, out_robot_track,
-):  # fmt: skip
-    """ReplayRunner.reset's load of one recording (RecordedPeople's arrays, its Occupants') into
-    row `row`: its n slots' tracks, velocities, route frames (padded by repeating the last),
-    occupants and ways of walking (kind: each slot's part of the people spec, -1 the last entry of
-    the part arrays), the replaced person's path; the row's other slots empty. Only the recording's
-    block of the tracks is written (ReplayRunner.people_count, frame_count)."""
-    n, frames = tracks.shape[0], tracks.shape[1]
-    width, most = route_frames.shape[1], entry.shape[1]
-    for f in range(frames):
-        for s in range(n):
-            for c in range(2):
-                out_tracks[row, f, s, c] = tracks[s, f, c]
-                out_vel[row, f, s, c] = velocities[s, f, c]
-    for s in range(out_route_frame.shape[1]):
-        mine = s < n
-        for k in range(out_route_frame.shape[2]):
-            out_route_frame[row, s, k] = route_frames[s, min(k, width - 1)] if mine else 0
-        for k in range(out_entry.shape[2]):  # unused entries: UNUSED_OCCUPANT's fills
-            held = mine and k < most
-            out_entry[row, s, k] = entry[s, k] if held else NEVER
-            out_exit[row, s, k] = exit_[s, k] if held else NEVER
-            out_first[row, s, k] = first[s, k] if held else 0
-            out_last[row, s, k] = last[s, k] if held else 0
-            out_speed[row, s, k] = speed[s, k] if held else _UNUSED_SPEED
-        if mine:
-            part = kind[s]
-            out_shared[row, s] = shared[s]
-            out_follows[row, s] = follow[s] or part_follows[part]
-            out_reacts[row, s] = part_reacts[part] and not follow[s]
-            out_then[row, s] = replay if follow[s] else part_model[part]
-        else:
-            out_shared[row, s] = False
-            out_follows[row, s] = False
-            out_reacts[row, s] = False
-            out_then[row, s] = 0
-    for k in range(out_robot_track.shape[1]):
-        for c in range(2):
-            out_robot_track[row, k, c] = robot_track[k, c] if k < robot_track.shape[0] else 0.0
 
 
 @kernel
 def begin_episodes(
-    rows, follows, replay, occupant, on_track, gone, reacted_at, exit_at, walked, recorded_left, recorded_exit,
+    rows, kind, slot_at, people, follow, part_follows, part_reacts, part_model, replay,
+    follows, reacts, then, occupant, on_track, gone, reacted_at, exit_at, walked, recorded_left, recorded_exit,
     rest, elapsed, folded, deviation, moves, walked_into, contact, model,
 ):  # fmt: skip
-    """ReplayRunner.reset's start of `rows`' episodes, once their recordings are loaded: nobody in
-    a slot yet, nothing measured, and the slots that follow their tracks walked by `replay`."""
+    """ReplayRunner.reset's start of `rows`' episodes, pointed at their recordings: each slot's way of
+    walking (kind (n, H): its part of the people spec, -1 the last entry of the part arrays; a slot the
+    recording says follows its track does, whatever the spec), nobody in a slot yet, nothing measured,
+    and the slots that follow their tracks walked by `replay`. The row's slots beyond its recording's
+    people neither follow nor react."""
     for j in range(rows.shape[0]):
         r = rows[j]
         elapsed[r] = 0.0
@@ -82,6 +36,15 @@ def begin_episodes(
             for s in range(contact.shape[2]):
                 contact[r, k, s] = False
         for s in range(occupant.shape[1]):
+            if s < people[r]:
+                part, recorded = kind[j, s], follow[slot_at[r] + s]
+                follows[r, s] = recorded or part_follows[part]
+                reacts[r, s] = part_reacts[part] and not recorded
+                then[r, s] = replay if recorded else part_model[part]
+            else:
+                follows[r, s] = False
+                reacts[r, s] = False
+                then[r, s] = 0
             occupant[r, s] = -1
             on_track[r, s] = False
             gone[r, s] = False
@@ -96,7 +59,10 @@ def begin_episodes(
 
 
 @kernel
-def occupants_now(rows, step_count, dt, frame_dt, on_frame, entry, occupant, t, i0, w, now, new):
+def occupants_now(
+    rows, step_count, dt, frame_dt, on_frame, slot_at, people, occupants_at, occupants, entry, occupant, t, i0, w, now,
+    new,
+):  # fmt: skip
     """For `rows` at their time t = steps * dt (n,): the frame i0 (n,) each is on (frame period
     frame_dt, past its recording's end too; a time within on_frame frames of a frame is on it) and the weight w (n,)
     of the next frame (0 on a frame); now (n, H), who is in each slot on frame i0 (entries at or
@@ -109,11 +75,13 @@ def occupants_now(rows, step_count, dt, frame_dt, on_frame, entry, occupant, t, 
         frame = t[j] / frame_dt[r]
         i0[j] = int(np.floor(frame + on_frame))
         w[j] = frame - i0[j] if frame - i0[j] > on_frame else 0.0
-        for s in range(entry.shape[1]):
+        for s in range(now.shape[1]):
             count = 0
-            for k in range(entry.shape[2]):
-                if entry[r, s, k] <= i0[j]:
-                    count += 1
+            if s < people[r]:
+                g = slot_at[r] + s
+                for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
+                    if entry[k] <= i0[j]:
+                        count += 1
             now[j, s] = count - 1
             new[j, s] = count > 0 and count - 1 != occupant[r, s]
             any_new = any_new or new[j, s]
@@ -122,7 +90,7 @@ def occupants_now(rows, step_count, dt, frame_dt, on_frame, entry, occupant, t, 
 
 @kernel
 def enter_people(
-    rows, new, now, t, follows, then, shared, first, last, occupant_speed, replay,
+    rows, new, now, t, follows, then, slot_at, occupants_at, shared, first, last, speed, replay,
     occupant, on_track, gone, reacted_at, exit_at, walked, recorded_exit, recorded_left, rest, folded,
     model, route_len, waypoint, direction, pref_speed,
 ):  # fmt: skip
@@ -149,10 +117,12 @@ def enter_people(
             exit_at[r, s] = np.nan
             walked[r, s] = 0.0
             model[r, s] = replay if follows[r, s] else then[r, s]
-            if shared[r, s]:
-                route_len[r, s] = last[r, s, k] + 1
-                waypoint[r, s] = min(first[r, s, k] + 1, last[r, s, k])
-                pref_speed[r, s] = occupant_speed[r, s, k]
+            g = slot_at[r] + s
+            if shared[g]:
+                o = occupants_at[g] + k
+                route_len[r, s] = last[o] + 1
+                waypoint[r, s] = min(first[o] + 1, last[o])
+                pref_speed[r, s] = speed[o]
             else:
                 waypoint[r, s] = min(1, route_len[r, s] - 1)
             direction[r, s] = 1
@@ -160,27 +130,29 @@ def enter_people(
 
 @kernel
 def place_people(
-    rows, i0, w, t, now, new, tracks, track_vel, people_count, frame_count, on_track, gone, exit_at, direction,
+    rows, i0, w, t, now, new, point_at, people, frames, track_pos, track_vel, on_track, gone, exit_at, direction,
     pos, vel, mask,
 ):  # fmt: skip
     """ReplayRunner._place's update of `rows` in place: followers where their tracks are, present
     while recorded; people a model walks enter on their track and leave where their route ends.
-    A row's tracks beyond its recording (people_count slots, frame_count frames) are NaN (absent)
-    with velocity 0, whatever the arrays hold there."""
+    Beyond its recording's people and frames, a row's slots are absent (NaN) with velocity 0."""
     for j in range(rows.shape[0]):
         r = rows[j]
         # A row's own recording's frames only: a frame the row does not have is absent (a wider
         # recording in another row does not keep this row's people on its last frame).
         a, b = i0[j], i0[j] + 1
         on_frame = w[j] == 0.0
-        for s in range(tracks.shape[2]):
+        n = people[r]
+        for s in range(mask.shape[1]):
             x0 = y0 = x1 = y1 = np.nan
             vx = vy = 0.0
-            if s < people_count[r] and a < frame_count[r]:
-                x0, y0 = tracks[r, a, s, 0], tracks[r, a, s, 1]
-                vx, vy = track_vel[r, a, s, 0], track_vel[r, a, s, 1]
-            if s < people_count[r] and b < frame_count[r]:
-                x1, y1 = tracks[r, b, s, 0], tracks[r, b, s, 1]
+            if s < n and a < frames[r]:
+                p = point_at[r] + a * n + s
+                x0, y0 = track_pos[p, 0], track_pos[p, 1]
+                vx, vy = track_vel[p, 0], track_vel[p, 1]
+            if s < n and b < frames[r]:
+                p = point_at[r] + b * n + s
+                x1, y1 = track_pos[p, 0], track_pos[p, 1]
             present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
             if on_frame:
                 x, y = x0, y0
@@ -237,8 +209,9 @@ def reacting_people(
 
 @kernel
 def leave_tracks(
-    rows, react, frame, w, step_count, dt, frame_dt, then, occupant, first, last, route_frame, shared, exit_,
-    tracks, on_track, model, route_len, waypoint, direction, reacted_at, recorded_exit, recorded_left,
+    rows, react, frame, w, step_count, dt, frame_dt, then, occupant, point_at, people, slot_at, occupants_at, shared,
+    first, last, exit_, route_at, route_points, route_frame, track_pos, on_track, model, route_len, waypoint,
+    direction, reacted_at, recorded_exit, recorded_left,
 ):  # fmt: skip
     """ReplayRunner._react's switch of the people in react (n, H) off their tracks, in place: each walks by
     its model towards the first point of its route (of its own part, in a shared slot) recorded after
@@ -252,26 +225,28 @@ def leave_tracks(
                 continue
             on_track[r, s] = False
             model[r, s] = then[r, s]
-            k = occupant[r, s]
+            g = slot_at[r] + s
+            o = occupants_at[g] + occupant[r, s]
+            # The route points recorded at or before `frame` (a route recorded by then counts its
+            # length, which the clip below takes to its end as the padded count did).
             ahead = 0
-            for p in range(route_frame.shape[2]):
-                if route_frame[r, s, p] <= frame[j]:
+            for p in range(route_at[g], route_at[g] + route_points[g]):
+                if route_frame[p] <= frame[j]:
                     ahead += 1
-            if shared[r, s]:
-                low, end = first[r, s, k], last[r, s, k]
+            if shared[g]:
+                low, end = first[o], last[o]
             else:
                 low, end = 0, route_len[r, s] - 1
             waypoint[r, s] = min(max(ahead, low), end)
             direction[r, s] = 1
             reacted_at[r, s] = step_count[r] * dt
-            exit_frame = exit_[r, s, k]
+            exit_frame = exit_[o]
             recorded_exit[r, s] = exit_frame * frame_dt[r]
             left = 0.0
+            n = people[r]
             for f in range(frame[j], exit_frame):
-                dx, dy = (
-                    tracks[r, f + 1, s, 0] - tracks[r, f, s, 0],
-                    tracks[r, f + 1, s, 1] - tracks[r, f, s, 1],
-                )
+                p, q = point_at[r] + f * n + s, point_at[r] + (f + 1) * n + s
+                dx, dy = track_pos[q, 0] - track_pos[p, 0], track_pos[q, 1] - track_pos[p, 1]
                 length = np.sqrt(dx * dx + dy * dy)
                 if not np.isnan(length):
                     left += (1.0 - w[j]) * length if f == frame[j] else length
@@ -310,16 +285,17 @@ def account_people(
 
 @kernel
 def account_robots(
-    rows, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_track, robot_track_len,
+    rows, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track,
     collision2, deviation, moves, contact, walked_into,
 ):  # fmt: skip
     """ReplayRunner.account's robot measures of `rows` in place (live (n, R): the robot's episode
-    had not ended): the distance to the recorded person's path (its polyline of robot_track_len
-    points), the moves counted, and the people who walked into a robot (the onset of a contact at
-    which the person moved towards the robot faster than the robot towards it)."""
+    had not ended): the distance to the recorded person's path (its polyline of robot_points[r]
+    points of robot_track from robot_at[r]), the moves counted, and the people who walked into a
+    robot (the onset of a contact at which the person moved towards the robot faster than the robot
+    towards it)."""
     for j in range(rows.shape[0]):
         r = rows[j]
-        points = robot_track_len[r]
+        points, at = robot_points[r], robot_at[r]
         for q in range(robot_pose.shape[1]):
             px, py = robot_pose[r, q, 0], robot_pose[r, q, 1]
             if live[j, q]:
@@ -327,9 +303,9 @@ def account_robots(
                     # The least squared distance, one square root: sqrt is monotone, so this is
                     # the least of the segments' distances exactly.
                     nearest2 = np.inf
-                    for k in range(points - 1):
-                        ax, ay = robot_track[r, k, 0], robot_track[r, k, 1]
-                        abx, aby = robot_track[r, k + 1, 0] - ax, robot_track[r, k + 1, 1] - ay
+                    for k in range(at, at + points - 1):
+                        ax, ay = robot_track[k, 0], robot_track[k, 1]
+                        abx, aby = robot_track[k + 1, 0] - ax, robot_track[k + 1, 1] - ay
                         u = ((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12)
                         u = min(max(u, 0.0), 1.0)
                         cx, cy = ax + u * abx - px, ay + u * aby - py
@@ -352,8 +328,8 @@ def account_robots(
 
 @kernel
 def reacting_totals(
-    rows, reacted_at, exit_at, rest, elapsed, occupant, occupant_speed, recorded_exit, walked, recorded_left,
-    folded, totals,
+    rows, reacted_at, exit_at, rest, elapsed, occupant, slot_at, people, occupants_at, speed, recorded_exit, walked,
+    recorded_left, folded, totals,
 ):  # fmt: skip
     """ReplayRunner.summaries' reacting people of `rows` into totals (n, 3): per row the count, the time
     lost and the extra distance of the reacting people who left their slot (`folded`) plus those still
@@ -363,12 +339,12 @@ def reacting_totals(
     for j in range(rows.shape[0]):
         r = rows[j]
         count, lost, extra = 0, 0.0, 0.0
-        for s in range(reacted_at.shape[1]):
+        for s in range(people[r]):  # a row without a recording has none
             if reacted_at[r, s] != reacted_at[r, s]:  # NaN: it did not react
                 continue
             done = exit_at[r, s] == exit_at[r, s]
-            speed = max(occupant_speed[r, s, max(occupant[r, s], 0)], 1e-9)
-            at = exit_at[r, s] if done else elapsed[r] + rest[r, s] / speed
+            own = max(speed[occupants_at[slot_at[r] + s] + max(occupant[r, s], 0)], 1e-9)
+            at = exit_at[r, s] if done else elapsed[r] + rest[r, s] / own
             lost += at - recorded_exit[r, s]
             extra += walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
             count += 1

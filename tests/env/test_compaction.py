@@ -44,9 +44,10 @@ def arrays_of(obj):
     return {k: v for k, v in vars(obj).items() if isinstance(v, np.ndarray)}
 
 
-# What compaction starts afresh on purpose: the sight-line cache (it only saves work) and the
-# state before the last step (the next step writes it before reading it).
-NOT_CARRIED = {"task.core.sight", "task.core.before"}
+# What compaction starts afresh on purpose: the sight-line cache (it only saves work), the
+# state before the last step (the next step writes it before reading it), and the bank of
+# recordings (the kept rows' reset fills it with their recordings and points them there).
+NOT_CARRIED = {"task.core.sight", "task.core.before", "task.core.replay.bank"}
 
 
 def nested_pairs(where, a, b, depth=0):

@@ -466,6 +466,9 @@ def test_a_reset_row_plays_as_a_fresh_one(family: RecordedScene, humans: str, be
     if before == "recorded":
         assert used.replay.folded[1, 0] > 0  # a reacting person left its slot
     used.reset_rows(np.array([1]), [new])
+    bank = used.replay.bank
+    assert bank.recordings[bank.entry_of[1]] is new.recorded
+    assert (bank.people[1], bank.frames[1]) == (fresh.replay.bank.people[0], fresh.replay.bank.frames[0])
     for name, array in vars(fresh.replay).items():
         if isinstance(array, np.ndarray) and array.shape[:1] == (1,):
             # The used runner's axes may be longer: what lies beyond the recording is not read.
@@ -475,6 +478,105 @@ def test_a_reset_row_plays_as_a_fresh_one(family: RecordedScene, humans: str, be
     steps = int(new.recorded.time_limit / 0.1)
     for a, b in zip(_trace(used, 1, steps), _trace(fresh, 0, steps), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_rows_sharing_a_recording_read_one_bank_entry(family: RecordedScene) -> None:
+    """Rows whose scenarios hold one recording point at one entry of the runner's bank, which holds it
+    frame-major; a reset from a recording the bank holds copies nothing (socialzoo.env.recording_bank)."""
+    pool = len(family.track_splits["train"])
+    first, again, other = family.make(1000), family.make(1000 + pool), family.make(1001)
+    assert first.recorded is again.recorded and first.seed != again.seed
+    core = _core([first, again, other, other], "hybrid:sf")
+    bank = core.replay.bank
+    assert len(bank.recordings) == 2
+    assert bank.entry_of[0] == bank.entry_of[1] != bank.entry_of[2] == bank.entry_of[3]
+    assert bank.point_at[0] == bank.point_at[1] and bank.slot_at[0] == bank.slot_at[1]
+    rec = first.recorded
+    at, n, t = bank.point_at[0], rec.num_people, rec.num_frames
+    assert (bank.people[0], bank.frames[0]) == (n, t)
+    np.testing.assert_array_equal(bank.pos[at : at + t * n].reshape(t, n, 2), rec.tracks.transpose(1, 0, 2))
+    np.testing.assert_array_equal(
+        bank.vel[at : at + t * n].reshape(t, n, 2), rec.velocities.transpose(1, 0, 2)
+    )
+    held = {name: getattr(bank, name) for name in ("pos", "vel", "entry", "speed", "route_frame", "robot")}
+    kept = {name: array.copy() for name, array in held.items()}
+    core.reset_rows(np.array([3]), [family.make(1000 + 2 * pool)])
+    assert bank.entry_of[3] == bank.entry_of[0] and bank.point_at[3] == at and len(bank.recordings) == 2
+    for name, array in held.items():
+        assert getattr(bank, name) is array, name  # not reallocated
+        np.testing.assert_array_equal(array, kept[name], err_msg=name)  # nor written
+    # The runner's own arrays are per slot and robot, none per frame: a longer recording adds nothing there.
+    frames = {k: v.shape for k, v in vars(core.replay).items() if isinstance(v, np.ndarray)}
+    assert all(
+        shape[1:] in {(), (core.max_humans,), (1,), (1, core.max_humans), (3,)} for shape in frames.values()
+    )
+
+
+def test_the_bank_forgets_recordings_no_row_plays(family: RecordedScene) -> None:
+    """A family that builds a new recording for every reset keeps the bank bounded: once the recordings no
+    row plays outweigh those rows play, they are dropped, and the rows play on exactly as before."""
+    rows, h = 4, family.max_people
+    fresh_scenario = lambda seed: replaced_scenario(  # noqa: E731
+        family.recording, family.track_of(seed), seed=seed, family=family.name
+    )
+
+    def core(scenarios: list[Scenario]) -> BatchedCore:
+        c = BatchedCore(
+            len(scenarios), 1, h, WorldConfig(dt=0.1), WallIndex(np.zeros((0, 4))),
+            people=PeopleConfig(models="hybrid:sf"),
+        )  # fmt: skip
+        c.reset_rows(np.arange(len(scenarios)), scenarios)
+        return c
+
+    used = core([fresh_scenario(1000 + k) for k in range(rows)])
+    bank = used.replay.bank
+    largest, sizes = 0, []
+    for k in range(rows, 160):
+        scenario = fresh_scenario(1000 + k)
+        used.reset_rows(np.array([k % rows]), [scenario])
+        largest = max(largest, bank._bytes[bank.entry_of[k % rows]])
+        for _ in range(3):
+            used.step(np.zeros((rows, 1, 2)))
+        in_use, unused = bank.used_bytes
+        assert unused <= in_use
+        assert [bank.recordings[e] for e in bank.entry_of] == [s.recorded for s in used.scenarios]
+        assert all(
+            bank.recordings[e] is s.recorded for e, s in zip(bank.entry_of, used.scenarios, strict=True)
+        )
+        sizes.append(bank.nbytes)
+    # At most twice the rows' recordings and the latest, in arrays at most twice that (they double).
+    assert max(sizes) <= 2 * (2 * rows + 1) * largest + 64 * 1024
+    assert len(bank.recordings) <= 2 * rows + 1 < 160
+    # After many compactions a row plays what it plays in a fresh batch, bit for bit.
+    last = fresh_scenario(1160)
+    used.reset_rows(np.array([0]), [last])
+    alone = core([last])
+    for a, b in zip(_trace(used, 0, 150), _trace(alone, 0, 150), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_compacted_core_plays_its_recorded_rows_on(family: RecordedScene) -> None:
+    """Compaction (socialzoo.env.compaction) keeps recorded rows' episodes: the new core's bank holds
+    the kept rows' recordings, and each kept row steps on exactly as in the full batch."""
+    from socialzoo.env.compaction import compact_core
+
+    full = _core([family.make(1000 + k) for k in range(4)], "hybrid:sf")
+    for _ in range(40):
+        full.step(np.zeros((4, 1, 2)))
+    keep = [3, 1]
+    small = compact_core(full, keep)
+    assert len(small.replay.bank.recordings) == 2
+    for _ in range(120):
+        full.step(np.zeros((4, 1, 2)))
+        small.step(np.zeros((2, 1, 2)))
+        for name in ("human_pos", "human_vel", "human_mask", "human_model"):
+            np.testing.assert_array_equal(
+                getattr(small.state, name), getattr(full.state, name)[keep], err_msg=name
+            )
+    for kept, whole in zip(
+        small.replay.summaries([0, 1], [np.nan] * 2), full.replay.summaries(keep, [np.nan] * 2), strict=True
+    ):
+        assert kept == pytest.approx(whole, nan_ok=True, rel=0, abs=0)
 
 
 def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:

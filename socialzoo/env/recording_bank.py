@@ -1,0 +1,249 @@
+"""The recordings that a batch's recorded rows play (socialzoo.env.replay), each stored once, and each row's
+pointer into them: a reset points a row at its recording instead of copying it into the row."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from socialzoo.scenarios.recorded_people import NEVER, RecordedPeople
+
+# A recording's blocks, one per section; every column of a section holds one row per item of it.
+POINTS, SLOTS, OCCUPANTS, ROUTE, ROBOT = range(5)
+# The columns of a row's pointer (RecordingBank.pointer).
+_POINTER = ("entry_of", "point_at", "people", "frames", "slot_at", "robot_at", "robot_points")
+_COLUMNS: tuple[tuple[str, ...], ...] = (
+    ("pos", "vel"),
+    ("occupants_at", "occupants", "route_at", "route_points", "shared", "follow"),
+    ("entry", "exit", "first", "last", "speed"),
+    ("route_frame",),
+    ("robot",),
+)
+
+
+class RecordingBank:
+    """Every recording (RecordedPeople) that B rows play, each stored once, and where each row's is.
+
+    A recording of n slots on T frames is a block of each section, appended when a row first plays it
+    (the same object: a family that keeps its scenarios, as recorded scenes do, adds each recording once):
+
+    - points: pos and vel (P, 2), its tracks and their velocities (RecordedPeople.velocities) frame-major,
+      frame f's n slots together (a step reads a row's slots on one or two frames), m and m/s, NaN absent;
+    - slots (S,): occupants_at and occupants, where each slot's people are in the occupant section and
+      how many; route_at and route_points, where its route frames are (RecordedPeople.route_frames,
+      unpadded) and how many; shared, more than one person in it; follow, RecordedPeople.follow;
+    - occupants (O,): entry, exit, first, last, speed, each slot's people one after another
+      (socialzoo.scenarios.recorded_people.Occupants without its padding);
+    - route points (F,): route_frame;
+    - robot points: robot (Q, 2), the replaced person's path (RecordedPeople.robot_track), m.
+
+    A row's pointer (B,) says where its recording is: entry_of, its entry (-1: none); point_at, its
+    frame 0's slot 0; people, n; frames, T; slot_at, its slot 0; robot_at and robot_points, its path's
+    first point and their count (a row without a recording: all 0). Slot s of row b is the bank's slot
+    slot_at[b] + s, and on frame f at pos[point_at[b] + f * people[b] + s]. Each entry's per-entry
+    values: recordings, dt (its frame period, s) and time_limit (its robot's budget, s).
+
+    Forgetting: each entry counts the rows that point at it. An entry no row points at stays (free to
+    point at again when a row draws its recording) until the unused entries hold more bytes than the
+    used ones; then they are dropped and the used ones move down in their order (the rows' pointers
+    with them), into arrays of their size. So after every reset the bank holds at most twice the bytes
+    of the recordings its rows play, however many recording objects a family makes, and a compaction
+    copies fewer bytes than it drops (tests/env/test_recorded_people.py checks the bound over a long run
+    of resets from fresh recordings).
+
+    Args:
+        batch_size: B.
+    """
+
+    def __init__(self, batch_size: int) -> None:
+        self.pos = np.zeros((0, 2))
+        self.vel = np.zeros((0, 2))
+        self.occupants_at = np.zeros(0, dtype=np.int64)
+        self.occupants = np.zeros(0, dtype=np.int64)
+        self.route_at = np.zeros(0, dtype=np.int64)
+        self.route_points = np.zeros(0, dtype=np.int64)
+        self.shared = np.zeros(0, dtype=bool)
+        self.follow = np.zeros(0, dtype=bool)
+        self.entry = np.zeros(0, dtype=np.int64)
+        self.exit = np.zeros(0, dtype=np.int64)
+        self.first = np.zeros(0, dtype=np.int64)
+        self.last = np.zeros(0, dtype=np.int64)
+        self.speed = np.zeros(0)
+        self.route_frame = np.zeros(0, dtype=np.int64)
+        self.robot = np.zeros((0, 2))
+        # Items in use of each section (its arrays may be longer: they grow by doubling).
+        self._size = np.zeros(len(_COLUMNS), dtype=np.int64)
+        # Per entry: the recording (kept, so that its id stays its name), its blocks' starts and sizes,
+        # its bytes, the rows pointing at it, and its pointer (a last row of zeros with entry -1: the
+        # pointer of no recording, which index -1 picks).
+        self.recordings: list[RecordedPeople] = []
+        self._index: dict[int, int] = {}
+        self._start = np.zeros((0, len(_COLUMNS)), dtype=np.int64)
+        self._items = np.zeros((0, len(_COLUMNS)), dtype=np.int64)
+        self._frames: list[int] = []
+        self._bytes: list[int] = []
+        self._rows: list[int] = []
+        self._used_bytes = self._unused_bytes = 0
+        self._tabulate()
+        self.dt = np.zeros(0)
+        self.time_limit = np.zeros(0)
+        # (B, 7) each row's pointer; its columns are the views entry_of ... robot_points.
+        self.pointer = np.repeat(self._pointers[-1:], batch_size, axis=0)
+        (
+            self.entry_of, self.point_at, self.people, self.frames, self.slot_at, self.robot_at, self.robot_points,
+        ) = self.pointer.T  # fmt: skip
+
+    # ------------------------------------------------------------------ rows
+    def point(self, rows: np.ndarray, recordings: Sequence[RecordedPeople | None]) -> np.ndarray:
+        """Point `rows` at `recordings` (one per row; None: no recording), adding those the bank does
+        not hold, and forget what no row uses once it outweighs what rows use (the rule above); returns
+        (len(rows),) their entries (-1 for None)."""
+        entries = [-1 if r is None else self._add(r) for r in recordings]
+        for entry in self.entry_of[rows].tolist():
+            if entry >= 0:
+                self._count(entry, -1)
+        for entry in entries:
+            if entry >= 0:
+                self._count(entry, 1)
+        self.pointer[rows] = self._pointers[entries]
+        if self._unused_bytes > self._used_bytes:
+            self._compact()
+        return self.entry_of[rows]
+
+    def release(self, rows: np.ndarray) -> None:
+        """Point `rows` at no recording (nothing to do, as on every reset of a task's own cases, if
+        none of them points at one)."""
+        if (self.entry_of[rows] >= 0).any():
+            self.point(rows, [None] * len(rows))
+
+    def _count(self, entry: int, change: int) -> None:
+        """One row more (change 1) or fewer (-1) points at `entry`; its bytes move between the used
+        and the unused ones when it gains its first or loses its last."""
+        was = self._rows[entry]
+        self._rows[entry] = was + change
+        if (was == 0) != (was + change == 0):
+            moved = self._bytes[entry] * change
+            self._used_bytes += moved
+            self._unused_bytes -= moved
+
+    # ------------------------------------------------------------------ entries
+    def _add(self, recording: RecordedPeople) -> int:
+        """The entry of `recording`, its blocks appended if the bank does not hold it (no row points
+        at a new entry yet)."""
+        entry = self._index.get(id(recording))
+        if entry is not None:
+            return entry
+        occupants = recording.occupants
+        held = occupants.entry < NEVER  # each slot's people are its first entries
+        counts = held.sum(1)
+        lengths = np.array([len(frames) for frames in recording.slot_routes], dtype=np.int64)
+        n, t = recording.num_people, recording.num_frames
+        blocks: list[dict[str, np.ndarray]] = [
+            {
+                "pos": recording.tracks.transpose(1, 0, 2).reshape(-1, 2),
+                "vel": recording.velocities.transpose(1, 0, 2).reshape(-1, 2),
+            },
+            {
+                "occupants_at": self._size[OCCUPANTS] + np.cumsum(counts) - counts,
+                "occupants": counts,
+                "route_at": self._size[ROUTE] + np.cumsum(lengths) - lengths,
+                "route_points": lengths,
+                "shared": occupants.shared,
+                "follow": recording.follow,
+            },
+            {name: getattr(occupants, name)[held] for name in ("entry", "exit", "first", "last", "speed")},
+            {"route_frame": np.concatenate(recording.slot_routes) if n else np.zeros(0, dtype=np.int64)},
+            {"robot": recording.robot_track},
+        ]
+        start = self._size.copy()
+        for section, block in enumerate(blocks):
+            self._append(section, block)
+        items = self._size - start
+        entry = len(self.recordings)
+        self.recordings.append(recording)
+        self._index[id(recording)] = entry
+        self._start = np.concatenate((self._start, start[None]))
+        self._items = np.concatenate((self._items, items[None]))
+        self._bytes.append(int((items * self._item_bytes()).sum()))
+        self._unused_bytes += self._bytes[-1]
+        self._rows.append(0)
+        self._frames.append(t)
+        self._tabulate()
+        self.dt = np.append(self.dt, recording.dt)
+        self.time_limit = np.append(self.time_limit, recording.time_limit)
+        return entry
+
+    def _tabulate(self) -> None:
+        """Each entry's pointer (_POINTER's columns) from its blocks, and the pointer of none last."""
+        start, items = self._start, self._items
+        columns = (np.arange(len(start)), start[:, POINTS], items[:, SLOTS], self._frames, start[:, SLOTS],
+                   start[:, ROBOT], items[:, ROBOT])  # fmt: skip
+        none = np.zeros((1, len(_POINTER)), dtype=np.int64)
+        none[0, _POINTER.index("entry_of")] = -1
+        self._pointers = np.concatenate(
+            (np.stack(columns, 1).astype(np.int64).reshape(-1, len(_POINTER)), none)
+        )
+
+    def _item_bytes(self) -> np.ndarray:
+        """(5,) bytes of one item of each section (its row of every column)."""
+        return np.array(
+            [sum(getattr(self, name).itemsize * int(np.prod(getattr(self, name).shape[1:])) for name in names)
+             for names in _COLUMNS],
+            dtype=np.int64,
+        )  # fmt: skip
+
+    def _append(self, section: int, block: dict[str, np.ndarray]) -> None:
+        """Append one block of `section` (a value per column), growing its arrays by doubling."""
+        size = int(self._size[section])
+        count = len(block[_COLUMNS[section][0]])
+        for name in _COLUMNS[section]:
+            array = getattr(self, name)
+            if size + count > len(array):
+                grown = np.zeros((max(size + count, 2 * len(array)),) + array.shape[1:], dtype=array.dtype)
+                grown[:size] = array[:size]
+                setattr(self, name, array := grown)
+            array[size : size + count] = block[name]
+        self._size[section] = size + count
+
+    def _compact(self) -> None:
+        """Drop every entry no row points at; the others move down in their order, with their rows'
+        pointers and their slots' indices into the occupant and route sections."""
+        keep = np.flatnonzero(np.array(self._rows) > 0)
+        renumber = np.full(len(self._rows) + 1, -1, dtype=np.int64)  # old entry -> new; the last: none
+        renumber[keep] = np.arange(len(keep))
+        start, items = self._start[keep], self._items[keep]
+        moved = np.cumsum(items, axis=0) - items
+        for section, names in enumerate(_COLUMNS):
+            lengths = items[:, section]
+            take = np.repeat(start[:, section] - moved[:, section], lengths) + np.arange(lengths.sum())
+            for name in names:
+                setattr(self, name, getattr(self, name)[take])
+        self._size = items.sum(0)
+        slots = items[:, SLOTS]
+        self.occupants_at -= np.repeat(start[:, OCCUPANTS] - moved[:, OCCUPANTS], slots)
+        self.route_at -= np.repeat(start[:, ROUTE] - moved[:, ROUTE], slots)
+        kept = keep.tolist()
+        self.recordings = [self.recordings[k] for k in kept]
+        self._index = {id(r): k for k, r in enumerate(self.recordings)}
+        self._bytes = [self._bytes[k] for k in kept]
+        self._rows = [self._rows[k] for k in kept]
+        self._unused_bytes = 0
+        self._start, self._items = moved, items
+        self._frames = [self._frames[k] for k in kept]
+        self._tabulate()
+        self.dt, self.time_limit = self.dt[keep], self.time_limit[keep]
+        self.pointer[:] = self._pointers[renumber[self.entry_of]]
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the bank's arrays: its sections as allocated, its entries' tables and the rows' pointers."""
+        names = [n for section in _COLUMNS for n in section]
+        names += ["_start", "_items", "_pointers", "dt", "time_limit", "pointer"]
+        return int(sum(getattr(self, n).nbytes for n in names))
+
+    @property
+    def used_bytes(self) -> tuple[int, int]:
+        """(bytes of the entries some row points at, bytes of those none does), their sections' items."""
+        return self._used_bytes, self._unused_bytes
