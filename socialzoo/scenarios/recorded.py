@@ -3,7 +3,6 @@ and everyone else walks as recorded (the rules, budgets and splits: docs/recorde
 
 from __future__ import annotations
 
-import copy
 import heapq
 import math
 import os
@@ -302,10 +301,9 @@ class RecordedScene(ScenarioFamily):
             self._made[key] = replaced_scenario(
                 self.recording, track, seed=seed, family=self.name, map_name=map_name
             )
-        # The kept scenario under this seed: a shallow copy (its arrays are read-only), not re-checked.
-        scenario = copy.copy(self._made[key])
-        object.__setattr__(scenario, "seed", int(seed))
-        return scenario
+        # The kept scenario under this seed: the seed keys the row's noise and people's models, and
+        # the kept one (held by the rows that play it) keeps its own.
+        return self._made[key].with_seed(seed)
 
 
 def open_area_map(recording: Recording, name: str) -> Map:

@@ -235,6 +235,15 @@ class Scenario:
 
     __hash__ = None  # type: ignore[assignment]
 
+    def with_seed(self, seed: int) -> Scenario:
+        """This scenario under another seed: a shallow copy (the arrays, read-only, are shared) that is
+        not checked again, as copy.copy makes it at a tenth of its cost (a family that keeps its
+        scenarios renames one on every reset: socialzoo.scenarios.recorded)."""
+        renamed = object.__new__(Scenario)
+        renamed.__dict__.update(self.__dict__)
+        renamed.__dict__["seed"] = int(seed)
+        return renamed
+
     def to_json(self) -> dict[str, Any]:
         """The scenario as a JSON-ready dict; floats keep their exact value (shortest repr)."""
         return {

@@ -122,6 +122,20 @@ def test_same_seed_same_scenario_and_different_seeds_differ() -> None:
     assert len({o.human_spawn.tobytes() for o in others}) == len(others)
 
 
+def test_with_seed_is_a_shallow_copy_under_another_seed() -> None:
+    """Scenario.with_seed, which a family that keeps its scenarios calls on every reset, makes what
+    copy.copy and a new seed make: the same fields, the same (read-only) arrays, the kept one as it was."""
+    import copy
+
+    kept = generate_scenario(gdc1(), 7)
+    renamed, reference = kept.with_seed(2**40), copy.copy(kept)
+    object.__setattr__(reference, "seed", 2**40)
+    assert type(renamed) is Scenario and renamed.seed == 2**40 and kept.seed == 7
+    assert vars(renamed).keys() == vars(reference).keys()
+    assert all(vars(renamed)[k] is vars(reference)[k] for k in vars(kept) if k != "seed")
+    assert renamed == reference and renamed != kept
+
+
 def test_benchmark_scenarios_follow_the_spec() -> None:
     m = gdc1()
     cfg = ScenarioConfig()
