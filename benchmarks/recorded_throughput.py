@@ -91,7 +91,7 @@ def memory(scene: str, steps: int) -> dict[str, float]:
         "recordings_mib": round(held * mib, 2),
         "recordings_content_mib": round(content * mib, 2),
         "replay_mib": round((sum(v.nbytes for v in arrays.values()) + (bank.nbytes if bank else 0)) * mib, 2),
-        "recordings_held": len(bank.recordings) if bank is not None else 0,
+        "recordings_held": bank.entries if bank is not None else 0,
     }
 
 

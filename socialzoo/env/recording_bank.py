@@ -3,6 +3,7 @@ pointer into them: a reset points a row at its recording instead of copying it i
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 
 import numpy as np
@@ -41,16 +42,18 @@ class RecordingBank:
     A row's pointer (B,) says where its recording is: entry_of, its entry (-1: none); point_at, its
     frame 0's slot 0; people, n; frames, T; slot_at, its slot 0; robot_at and robot_points, its path's
     first point and their count (a row without a recording: all 0). Slot s of row b is the bank's slot
-    slot_at[b] + s, and on frame f at pos[point_at[b] + f * people[b] + s]. Each entry's per-entry
-    values: recordings, dt (its frame period, s) and time_limit (its robot's budget, s).
+    slot_at[b] + s, and on frame f at pos[point_at[b] + f * people[b] + s]. Per entry: dt (its frame
+    period, s) and time_limit (its robot's budget, s); `recording(entry)` is its recording.
 
-    Forgetting: each entry counts the rows that point at it. An entry no row points at stays (free to
-    point at again when a row draws its recording) until the unused entries hold more bytes than the
-    used ones; then they are dropped and the used ones move down in their order (the rows' pointers
-    with them), into arrays of their size. So after every reset the bank holds at most twice the bytes
-    of the recordings its rows play, however many recording objects a family makes, and a compaction
-    copies fewer bytes than it drops (tests/env/test_recorded_people.py checks the bound over a long run
-    of resets from fresh recordings).
+    Forgetting: an entry is named by its recording object, which the bank refers to weakly. An entry
+    that no row points at and whose recording nobody holds any more (a family that builds a new
+    recording on every reset drops it once no row plays it) can never be drawn again: it is garbage.
+    When an addition leaves the garbage holding more bytes than the other entries, the garbage is
+    dropped and the others move down in their order (the rows' pointers with them), into arrays of
+    their size. So the bank holds at most twice the bytes of the recordings still held (by the rows'
+    scenarios, or by a family that keeps them: the recorded scenes keep each track's, and the bank
+    then adds each once and never drops it), and a compaction copies fewer bytes than it drops
+    (tests/env/test_recorded_people.py checks both over long runs of resets).
 
     Args:
         batch_size: B.
@@ -74,17 +77,16 @@ class RecordingBank:
         self.robot = np.zeros((0, 2))
         # Items in use of each section (its arrays may be longer: they grow by doubling).
         self._size = np.zeros(len(_COLUMNS), dtype=np.int64)
-        # Per entry: the recording (kept, so that its id stays its name), its blocks' starts and sizes,
-        # its bytes, the rows pointing at it, and its pointer (a last row of zeros with entry -1: the
-        # pointer of no recording, which index -1 picks).
-        self.recordings: list[RecordedPeople] = []
+        # Per entry: its recording (a weak reference; the index finds an entry by the recording's id,
+        # checked against it), its blocks' starts and sizes, its bytes, the rows pointing at it, and its
+        # pointer (a last row of zeros with entry -1: the pointer of no recording, which index -1 picks).
+        self._refs: list[weakref.ref[RecordedPeople]] = []
         self._index: dict[int, int] = {}
         self._start = np.zeros((0, len(_COLUMNS)), dtype=np.int64)
         self._items = np.zeros((0, len(_COLUMNS)), dtype=np.int64)
         self._frames: list[int] = []
-        self._bytes: list[int] = []
+        self._bytes = np.zeros(0, dtype=np.int64)
         self._rows: list[int] = []
-        self._used_bytes = self._unused_bytes = 0
         self._tabulate()
         self.dt = np.zeros(0)
         self.time_limit = np.zeros(0)
@@ -97,18 +99,21 @@ class RecordingBank:
     # ------------------------------------------------------------------ rows
     def point(self, rows: np.ndarray, recordings: Sequence[RecordedPeople | None]) -> np.ndarray:
         """Point `rows` at `recordings` (one per row; None: no recording), adding those the bank does
-        not hold, and forget what no row uses once it outweighs what rows use (the rule above); returns
+        not hold and dropping the garbage once it outweighs the rest (the rule above); returns
         (len(rows),) their entries (-1 for None)."""
+        held = len(self._refs)
         entries = [-1 if r is None else self._add(r) for r in recordings]
         for entry in self.entry_of[rows].tolist():
             if entry >= 0:
-                self._count(entry, -1)
+                self._rows[entry] -= 1
         for entry in entries:
             if entry >= 0:
-                self._count(entry, 1)
+                self._rows[entry] += 1
         self.pointer[rows] = self._pointers[entries]
-        if self._unused_bytes > self._used_bytes:
-            self._compact()
+        if len(self._refs) > held:
+            garbage = self._garbage()
+            if garbage.any() and self._bytes[garbage].sum() > self._bytes[~garbage].sum():
+                self._compact(np.flatnonzero(~garbage))
         return self.entry_of[rows]
 
     def release(self, rows: np.ndarray) -> None:
@@ -117,22 +122,22 @@ class RecordingBank:
         if (self.entry_of[rows] >= 0).any():
             self.point(rows, [None] * len(rows))
 
-    def _count(self, entry: int, change: int) -> None:
-        """One row more (change 1) or fewer (-1) points at `entry`; its bytes move between the used
-        and the unused ones when it gains its first or loses its last."""
-        was = self._rows[entry]
-        self._rows[entry] = was + change
-        if (was == 0) != (was + change == 0):
-            moved = self._bytes[entry] * change
-            self._used_bytes += moved
-            self._unused_bytes -= moved
+    def recording(self, entry: int) -> RecordedPeople | None:
+        """The recording of `entry` (None once nobody holds it)."""
+        return self._refs[entry]()
+
+    def _garbage(self) -> np.ndarray:
+        """(E,) the entries that no row points at and whose recording nobody holds."""
+        return np.array(
+            [n == 0 and r() is None for n, r in zip(self._rows, self._refs, strict=True)], dtype=bool
+        )
 
     # ------------------------------------------------------------------ entries
     def _add(self, recording: RecordedPeople) -> int:
         """The entry of `recording`, its blocks appended if the bank does not hold it (no row points
         at a new entry yet)."""
         entry = self._index.get(id(recording))
-        if entry is not None:
+        if entry is not None and self._refs[entry]() is recording:  # not a dead one's id, reused
             return entry
         occupants = recording.occupants
         held = occupants.entry < NEVER  # each slot's people are its first entries
@@ -160,13 +165,12 @@ class RecordingBank:
         for section, block in enumerate(blocks):
             self._append(section, block)
         items = self._size - start
-        entry = len(self.recordings)
-        self.recordings.append(recording)
+        entry = len(self._refs)
+        self._refs.append(weakref.ref(recording))
         self._index[id(recording)] = entry
         self._start = np.concatenate((self._start, start[None]))
         self._items = np.concatenate((self._items, items[None]))
-        self._bytes.append(int((items * self._item_bytes()).sum()))
-        self._unused_bytes += self._bytes[-1]
+        self._bytes = np.append(self._bytes, (items * self._item_bytes()).sum())
         self._rows.append(0)
         self._frames.append(t)
         self._tabulate()
@@ -206,11 +210,11 @@ class RecordingBank:
             array[size : size + count] = block[name]
         self._size[section] = size + count
 
-    def _compact(self) -> None:
-        """Drop every entry no row points at; the others move down in their order, with their rows'
-        pointers and their slots' indices into the occupant and route sections."""
-        keep = np.flatnonzero(np.array(self._rows) > 0)
-        renumber = np.full(len(self._rows) + 1, -1, dtype=np.int64)  # old entry -> new; the last: none
+    def _compact(self, keep: np.ndarray) -> None:
+        """Keep only the entries `keep` (increasing; every entry a row points at among them): they move
+        down in their order, with their rows' pointers and their slots' indices into the occupant and
+        route sections."""
+        renumber = np.full(len(self._refs) + 1, -1, dtype=np.int64)  # old entry -> new; the last: none
         renumber[keep] = np.arange(len(keep))
         start, items = self._start[keep], self._items[keep]
         moved = np.cumsum(items, axis=0) - items
@@ -224,11 +228,10 @@ class RecordingBank:
         self.occupants_at -= np.repeat(start[:, OCCUPANTS] - moved[:, OCCUPANTS], slots)
         self.route_at -= np.repeat(start[:, ROUTE] - moved[:, ROUTE], slots)
         kept = keep.tolist()
-        self.recordings = [self.recordings[k] for k in kept]
-        self._index = {id(r): k for k, r in enumerate(self.recordings)}
-        self._bytes = [self._bytes[k] for k in kept]
+        self._refs = [self._refs[k] for k in kept]
+        self._index = {id(r()): k for k, r in enumerate(self._refs) if r() is not None}
+        self._bytes = self._bytes[keep]
         self._rows = [self._rows[k] for k in kept]
-        self._unused_bytes = 0
         self._start, self._items = moved, items
         self._frames = [self._frames[k] for k in kept]
         self._tabulate()
@@ -244,6 +247,12 @@ class RecordingBank:
         return int(sum(getattr(self, n).nbytes for n in names))
 
     @property
+    def entries(self) -> int:
+        """The recordings the bank holds (garbage included until it is dropped)."""
+        return len(self._refs)
+
+    @property
     def used_bytes(self) -> tuple[int, int]:
-        """(bytes of the entries some row points at, bytes of those none does), their sections' items."""
-        return self._used_bytes, self._unused_bytes
+        """(bytes of the entries kept, bytes of the garbage) in the sections (the rule above)."""
+        garbage = self._garbage()
+        return int(self._bytes[~garbage].sum()), int(self._bytes[garbage].sum())
