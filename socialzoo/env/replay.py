@@ -129,7 +129,8 @@ class ReplayRunner:
     def reset(
         self, rows: np.ndarray, scenarios: Sequence[Scenario | None], state: WorldState, kinds: np.ndarray
     ) -> None:
-        """Load the recordings of `rows` and place their people at time 0 in `state`.
+        """Point `rows` at their recordings (the bank's, adding those it lacks) and place their people
+        at time 0 in `state`.
 
         Args:
             rows: the rows, reset just now in `state`.

@@ -227,8 +227,8 @@ def leave_tracks(
             model[r, s] = then[r, s]
             g = slot_at[r] + s
             o = occupants_at[g] + occupant[r, s]
-            # The route points recorded at or before `frame` (a route recorded by then counts its
-            # length, which the clip below takes to its end as the padded count did).
+            # The slot's route points recorded by `frame`, its own only (once all are, the count
+            # is past `end` with or without a padding, so the clip below gives the same waypoint).
             ahead = 0
             for p in range(route_at[g], route_at[g] + route_points[g]):
                 if route_frame[p] <= frame[j]:
