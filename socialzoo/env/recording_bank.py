@@ -12,6 +12,9 @@ from socialzoo.scenarios.recorded_people import NEVER, RecordedPeople
 
 # A recording's blocks, one per section; every column of a section holds one row per item of it.
 POINTS, SLOTS, OCCUPANTS, ROUTE, ROBOT = range(5)
+# Segments of the replaced person's path per bounding box (robot_box): a robot's distance to the path
+# looks only into the boxes that can hold its nearest point (socialzoo.env.replay_kernels.account_robots).
+PATH_CHUNK = 8
 # The columns of a row's pointer (RecordingBank.pointer).
 _POINTER = ("entry_of", "point_at", "people", "frames", "slot_at", "robot_at", "robot_points")
 _COLUMNS: tuple[tuple[str, ...], ...] = (
@@ -19,7 +22,7 @@ _COLUMNS: tuple[tuple[str, ...], ...] = (
     ("occupants_at", "occupants", "route_at", "route_points", "shared", "follow"),
     ("entry", "exit", "first", "last", "speed"),
     ("route_frame",),
-    ("robot",),
+    ("robot", "robot_box"),
 )
 
 
@@ -37,7 +40,9 @@ class RecordingBank:
     - occupants (O,): entry, exit, first, last, speed, each slot's people one after another
       (socialzoo.scenarios.recorded_people.Occupants without its padding);
     - route points (F,): route_frame;
-    - robot points: robot (Q, 2), the replaced person's path (RecordedPeople.robot_track), m.
+    - robot points: robot (Q, 2), the replaced person's path (RecordedPeople.robot_track), m; robot_box
+      (Q, 4), at the first point of every PATH_CHUNK segments of it, their bounding box (min x, min y,
+      max x, max y; the other points' rows unused).
 
     A row's pointer (B,) says where its recording is: entry_of, its entry (-1: none); point_at, its
     frame 0's slot 0; people, n; frames, T; slot_at, its slot 0; robot_at and robot_points, its path's
@@ -75,6 +80,7 @@ class RecordingBank:
         self.speed = np.zeros(0)
         self.route_frame = np.zeros(0, dtype=np.int64)
         self.robot = np.zeros((0, 2))
+        self.robot_box = np.zeros((0, 4))
         # Items in use of each section (its arrays may be longer: they grow by doubling).
         self._size = np.zeros(len(_COLUMNS), dtype=np.int64)
         # Per entry: its recording (a weak reference; the index finds an entry by the recording's id,
@@ -159,7 +165,7 @@ class RecordingBank:
             },
             {name: getattr(occupants, name)[held] for name in ("entry", "exit", "first", "last", "speed")},
             {"route_frame": np.concatenate(recording.slot_routes) if n else np.zeros(0, dtype=np.int64)},
-            {"robot": recording.robot_track},
+            {"robot": recording.robot_track, "robot_box": path_boxes(recording.robot_track)},
         ]
         start = self._size.copy()
         for section, block in enumerate(blocks):
@@ -256,3 +262,17 @@ class RecordingBank:
         """(bytes of the entries kept, bytes of the garbage) in the sections (the rule above)."""
         garbage = self._garbage()
         return int(self._bytes[~garbage].sum()), int(self._bytes[garbage].sum())
+
+
+def path_boxes(path: np.ndarray) -> np.ndarray:
+    """(Q, 4) for a path of Q points (Q, 2): at point c * PATH_CHUNK, the bounding box (min x, min y,
+    max x, max y) of the segments from there to the next such point (PATH_CHUNK + 1 points, fewer at
+    the path's end); zeros elsewhere."""
+    boxes = np.zeros((len(path), 4))
+    if len(path) < 2:
+        return boxes
+    starts = np.arange(0, len(path) - 1, PATH_CHUNK)
+    ends = np.minimum(starts + PATH_CHUNK, len(path) - 1)  # each chunk's last point, shared with the next
+    boxes[starts, :2] = np.minimum(np.minimum.reduceat(path[:-1], starts), path[ends])
+    boxes[starts, 2:] = np.maximum(np.maximum.reduceat(path[:-1], starts), path[ends])
+    return boxes

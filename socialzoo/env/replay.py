@@ -11,7 +11,7 @@ import numpy as np
 
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
-from socialzoo.env.recording_bank import RecordingBank
+from socialzoo.env.recording_bank import PATH_CHUNK, RecordingBank
 from socialzoo.env.replay_kernels import (
     account_people,
     account_robots,
@@ -276,8 +276,9 @@ class ReplayRunner:
         )  # fmt: skip
         account_robots(
             rows, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
-            self.bank.robot_at, self.bank.robot_points, self.bank.robot, self.collision_distance**2,
-            self.deviation, self.moves, self.contact, self.walked_into,
+            self.bank.robot_at, self.bank.robot_points, self.bank.robot, self.bank.robot_box, PATH_CHUNK,
+            self.collision_distance**2, self.deviation, self.moves, self.contact, self.walked_into,
+            np.empty(max(int(self.bank.robot_points[rows].max()) - 2, 0) // PATH_CHUNK + 1),
         )  # fmt: skip
 
     def summaries(

@@ -286,13 +286,14 @@ def account_people(
 @kernel
 def account_robots(
     rows, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track,
-    collision2, deviation, moves, contact, walked_into,
+    robot_box, chunk, collision2, deviation, moves, contact, walked_into, box_gap,
 ):  # fmt: skip
     """ReplayRunner.account's robot measures of `rows` in place (live (n, R): the robot's episode
     had not ended): the distance to the recorded person's path (its polyline of robot_points[r]
-    points of robot_track from robot_at[r]), the moves counted, and the people who walked into a
-    robot (the onset of a contact at which the person moved towards the robot faster than the robot
-    towards it)."""
+    points of robot_track from robot_at[r], with a bounding box robot_box every `chunk` segments),
+    the moves counted, and the people who walked into a robot (the onset of a contact at which the
+    person moved towards the robot faster than the robot towards it). box_gap: scratch of at least
+    the most boxes of a path."""
     for j in range(rows.shape[0]):
         r = rows[j]
         points, at = robot_points[r], robot_at[r]
@@ -300,17 +301,9 @@ def account_robots(
             px, py = robot_pose[r, q, 0], robot_pose[r, q, 1]
             if live[j, q]:
                 if points > 1:
-                    # The least squared distance, one square root: sqrt is monotone, so this is
-                    # the least of the segments' distances exactly.
-                    nearest2 = np.inf
-                    for k in range(at, at + points - 1):
-                        ax, ay = robot_track[k, 0], robot_track[k, 1]
-                        abx, aby = robot_track[k + 1, 0] - ax, robot_track[k + 1, 1] - ay
-                        u = ((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12)
-                        u = min(max(u, 0.0), 1.0)
-                        cx, cy = ax + u * abx - px, ay + u * aby - py
-                        nearest2 = min(nearest2, cx * cx + cy * cy)
-                    deviation[r, q] += np.sqrt(nearest2)
+                    deviation[r, q] += np.sqrt(
+                        _path_distance2(px, py, robot_track, robot_box, at, points, chunk, box_gap)
+                    )
                 moves[r, q] += 1
             for s in range(human_pos.shape[1]):
                 dx, dy = human_pos[r, s, 0] - px, human_pos[r, s, 1] - py
@@ -324,6 +317,39 @@ def account_robots(
                     if person_in > robot_in:
                         walked_into[r, q] += 1
                 contact[r, q, s] = close
+
+
+@kernel
+def _path_distance2(px, py, path, box, at, points, chunk, box_gap):  # type: ignore[no-untyped-def]
+    """The least squared distance from (px, py) to the polyline of `points` points of `path` from `at`
+    (one square root of it is the least of the segments' distances exactly: sqrt is monotone).
+
+    The segments' boxes (`box` at every `chunk`-th point) are visited nearest first, and the search
+    stops at a box farther than the least distance found (with a slack far above rounding): no
+    segment in it can be nearer, so the least is the same as over every segment, in fewer divisions."""
+    boxes = (points - 2) // chunk + 1
+    for c in range(boxes):
+        k = at + c * chunk
+        gx = max(box[k, 0] - px, px - box[k, 2], 0.0)
+        gy = max(box[k, 1] - py, py - box[k, 3], 0.0)
+        box_gap[c] = gx * gx + gy * gy
+    nearest2 = np.inf
+    while True:
+        best, low = -1, np.inf
+        for c in range(boxes):
+            if box_gap[c] < low:
+                best, low = c, box_gap[c]
+        if best < 0 or low > nearest2 * (1.0 + 1e-9):
+            return nearest2
+        box_gap[best] = np.inf
+        first = at + best * chunk
+        for k in range(first, min(first + chunk, at + points - 1)):
+            ax, ay = path[k, 0], path[k, 1]
+            abx, aby = path[k + 1, 0] - ax, path[k + 1, 1] - ay
+            u = ((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12)
+            u = min(max(u, 0.0), 1.0)
+            cx, cy = ax + u * abx - px, ay + u * aby - py
+            nearest2 = min(nearest2, cx * cx + cy * cy)
 
 
 @kernel

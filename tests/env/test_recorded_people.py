@@ -5,6 +5,7 @@ the recording, and both tasks with every adapter on a recorded scene."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import gymnasium as gym
 import numpy as np
@@ -620,3 +621,30 @@ GOLDEN_RECORDED = {
 @pytest.mark.parametrize("humans", sorted(GOLDEN_RECORDED))
 def test_recorded_rollouts_stay_bit_for_bit(family: RecordedScene, humans: str) -> None:
     assert _vector_digests(family.name, humans) == GOLDEN_RECORDED[humans]
+
+
+def test_the_distance_to_the_replaced_persons_path_is_the_least_over_every_segment() -> None:
+    from socialzoo.env.recording_bank import PATH_CHUNK, path_boxes
+    from socialzoo.env.replay_kernels import _path_distance2
+
+    def every_segment(px: float, py: float, path: np.ndarray) -> float:
+        nearest2 = np.inf
+        for (ax, ay), (bx, by) in itertools.pairwise(path):
+            abx, aby = bx - ax, by - ay
+            u = min(max(((px - ax) * abx + (py - ay) * aby) / max(abx * abx + aby * aby, 1e-12), 0.0), 1.0)
+            cx, cy = ax + u * abx - px, ay + u * aby - py
+            nearest2 = min(nearest2, cx * cx + cy * cy)
+        return nearest2
+
+    rng = np.random.default_rng(0)
+    lead = np.zeros((3, 2))  # the path sits after other entries' points in the bank
+    for points in (2, 3, PATH_CHUNK, PATH_CHUNK + 1, PATH_CHUNK + 2, 40, 97):
+        # A walk that turns back on itself, with repeated points (a person standing still).
+        steps = rng.normal(0.0, 0.5, (points, 2)) * (rng.random((points, 1)) > 0.2)
+        path = np.cumsum(steps, axis=0)
+        bank_path = np.concatenate((lead, path))
+        boxes = np.concatenate((np.zeros((3, 4)), path_boxes(path)))
+        scratch = np.empty((points - 2) // PATH_CHUNK + 1)
+        for px, py in rng.uniform(path.min() - 2, path.max() + 2, (200, 2)):
+            got = _path_distance2(px, py, bank_path, boxes, 3, points, PATH_CHUNK, scratch)
+            assert got == every_segment(px, py, path)
