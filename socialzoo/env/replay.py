@@ -158,6 +158,7 @@ class ReplayRunner:
         has = entries >= 0
         self.recorded[rows] = has
         self.on_track[rows[~has]] = False
+        self.time_limit[rows[~has]] = np.inf  # the task's own budget, not a recording's of before
         fresh, entries = rows[has], entries[has]
         if len(fresh) == 0:
             return
@@ -177,6 +178,7 @@ class ReplayRunner:
     def release(self, rows: np.ndarray) -> None:
         """`rows` start episodes without recorded people (their recordings may be forgotten)."""
         self.recorded[rows] = False
+        self.time_limit[rows] = np.inf  # the task's own budget, not a recording's of before
         self.bank.release(rows)
 
     # ------------------------------------------------------------------ step

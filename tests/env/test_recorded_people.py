@@ -584,6 +584,21 @@ def test_a_compacted_core_plays_its_recorded_rows_on(family: RecordedScene) -> N
         assert kept == pytest.approx(whole, nan_ok=True, rel=0, abs=0)
 
 
+def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
+    family: RecordedScene,
+) -> None:
+    plain = Scenario(
+        map_name="arena", seed=5, robot_starts=[[0.0, 0.0, 0.0]], robot_goals=[[4.0, 0.0, 0.0]],
+        human_spawn=[[1.0, 1.0]], human_start_index=[-1], human_goal_index=[-1],
+        human_routes=(np.array([[1.0, 1.0], [3.0, 1.0]]),), human_speed=[1.0],
+    )  # fmt: skip
+    recorded = family.make(1000)
+    core = _core([recorded, plain], "sf")
+    assert core.time_limit[0] == recorded.recorded.time_limit and core.time_limit[1] == np.inf
+    core.reset_rows(np.array([0]), [plain])
+    assert core.time_limit[0] == np.inf
+
+
 def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
     """sha256 prefixes of a seeded VectorEnv rollout of the synthetic scene: (observations,
     rewards and end flags; the recorded metrics of the episodes that ended)."""
