@@ -237,8 +237,8 @@ class Scenario:
 
     def with_seed(self, seed: int) -> Scenario:
         """This scenario under another seed: a shallow copy (the arrays, read-only, are shared) that is
-        not checked again, as copy.copy makes it at a tenth of its cost (a family that keeps its
-        scenarios renames one on every reset: socialzoo.scenarios.recorded)."""
+        not checked again, as copy.copy makes it, at about a third of its cost (0.74 against 2.5 us
+        here; a family that keeps its scenarios renames one on every reset: socialzoo.scenarios.recorded)."""
         renamed = object.__new__(Scenario)
         renamed.__dict__.update(self.__dict__)
         renamed.__dict__["seed"] = int(seed)
