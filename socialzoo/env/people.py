@@ -128,6 +128,11 @@ class People:
     def kinds(self, seeds: Sequence[int], counts: Sequence[int]) -> np.ndarray:
         """(len(seeds), H) each person slot's index into the spec's parts for rows with these seeds
         and head counts (socialzoo.humans.models.assign_models); -1 in empty slots."""
+        if len(seeds) != len(counts):
+            raise ValueError(f"People.kinds: {len(seeds)} seeds but {len(counts)} head counts")
+        if len(self.parts) == 1:  # one model needs no draw (assign_models): slot i < n is part 0
+            present = np.arange(self.max_humans) < np.asarray(counts, dtype=np.int64).reshape(-1, 1)
+            return np.where(present, 0, -1)
         kinds = np.full((len(seeds), self.max_humans), -1, dtype=np.int64)
         for row, (seed, n) in enumerate(zip(seeds, counts, strict=True)):
             kinds[row, :n] = assign_models(self.parts, n, seed)

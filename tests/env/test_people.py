@@ -53,6 +53,23 @@ def test_a_mix_assigns_models_per_scenario_seed():
     assert np.isfinite(task.core.state.human_pos).all()
 
 
+@pytest.mark.parametrize("models", ["orca", "sf@0.5+orca@0.5"])
+def test_kinds_are_each_rows_assignment_and_minus_one_in_empty_slots(models):
+    from socialzoo.humans.models import assign_models
+
+    people = task_of(batch=2, models=models).core.people
+    rng = np.random.default_rng(5)
+    seeds, counts = rng.integers(0, 10**6, 9).tolist(), [0, people.max_humans, *rng.integers(0, 9, 7)]
+    kinds = people.kinds(seeds, counts)
+    assert kinds.shape == (9, people.max_humans) and kinds.dtype == np.int64
+    for row, (seed, n) in enumerate(zip(seeds, counts, strict=True)):
+        assert kinds[row, :n].tolist() == assign_models(people.parts, n, seed).tolist()
+        assert (kinds[row, n:] == -1).all()
+    assert people.kinds([], []).shape == (0, people.max_humans)
+    with pytest.raises(ValueError, match="2 seeds but 1 head counts"):
+        people.kinds([1, 2], [3])
+
+
 def test_counterfactual_rows_step_as_the_scenario_without_its_robot():
     task = task_of(models="sf@0.5+orca@0.5", counterfactual=True)
     alone = without_robots(task.core.state)
