@@ -1,11 +1,10 @@
 """The suite's scenarios at places (Francis et al. Fig. 7 i, j, l-o): a blind corner, a narrow hallway, entering and
-leaving a room and an elevator; also the timing and geometry helpers the suite's families share."""
+leaving a room and an elevator, each one family, with what they read of their map: its door, corner, narrow stretch."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -21,49 +20,18 @@ from socialzoo.scenarios.families import (
     nominal_timing,
     planned_route,
 )
+from socialzoo.scenarios.placement import ROBOT_LAG, arc_lengths, clear_of_walls, draw_spots, point_at
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
     from socialzoo.scenarios.scenario import Scenario
 
-# GoAlone arrives about this much later than route length / cruise speed, s: it accelerates (0.2 s
-# on a straight run from rest) and slows in turns.
-ROBOT_LAG = 0.4
 # A person leaving a room as the robot enters it is timed to pass the door this much earlier, s.
 LEAVE_FIRST = 1.5
 # A person leaving a room walks straight out of its door to this far in front of it, m.
 OUT_OF_DOOR = 1.6
 # People walk through a doorway at about this fraction of their preferred speed (the walls' force).
 DOORWAY_PACE = 0.6
-# Clearance from walls of every spot a family draws, m (a legal pose needs 0.35).
-SPOT_CLEARANCE = 0.4
-
-
-def _clear_of_walls(m: Map, points: np.ndarray, clearance: float = SPOT_CLEARANCE) -> np.ndarray:
-    """(n,) whether each of the (n, 2) points is at least `clearance` from every wall."""
-    if not m.num_walls:
-        return np.ones(len(points), dtype=bool)
-    _, dist = m.wall_index.nearest(np.asarray(points, dtype=np.float64).reshape(-1, 2))
-    return np.asarray(dist >= clearance)
-
-
-def _arc_lengths(path: np.ndarray) -> np.ndarray:
-    """(k,) the distance along the (k, 2) path to each of its points, m."""
-    return np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))))
-
-
-def _point_at(path: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(point, unit direction) at distance s along the path (clipped to its ends)."""
-    arc = _arc_lengths(path)
-    if len(path) < 2 or arc[-1] <= 0.0:
-        return path[0].copy(), np.array([1.0, 0.0])
-    s = float(np.clip(s, 0.0, arc[-1]))
-    k = int(np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(path) - 2))
-    while arc[k + 1] <= arc[k] and k + 2 < len(path):  # skip repeated points
-        k += 1
-    leg = path[k + 1] - path[k]
-    length = max(float(np.linalg.norm(leg)), 1e-9)
-    return path[k] + leg * min((s - arc[k]) / length, 1.0), leg / length
 
 
 @dataclass(frozen=True)
@@ -146,7 +114,7 @@ def _through_door(
     """
     path = planned_route(m, start, goal, f"{m.where}, family {who!r}")
     side = (path - door.centre) @ door.inward
-    arc = _arc_lengths(path)
+    arc = arc_lengths(path)
     for k in range(len(path) - 1):
         if side[k] * side[k + 1] <= 0.0 and side[k] != side[k + 1]:
             return path, float(arc[k] + (arc[k + 1] - arc[k]) * side[k] / (side[k] - side[k + 1]))
@@ -167,36 +135,9 @@ def _direct(m: Map, door: Door, starts: np.ndarray, goals: np.ndarray, who: str)
     from socialzoo.scenarios.scenario import plan_routes
 
     paths, lengths = plan_routes(m, starts, goals, f"{m.where}, family {who!r}")
-    walked = np.array([_arc_lengths(p[:k])[-1] for p, k in zip(paths, lengths, strict=True)])
+    walked = np.array([arc_lengths(p[:k])[-1] for p, k in zip(paths, lengths, strict=True)])
     through = np.linalg.norm(starts - door.centre, axis=1) + np.linalg.norm(goals - door.centre, axis=1)
     return np.asarray(walked <= 1.25 * through + 1.0)
-
-
-def draw_spots(
-    m: Map,
-    rng: np.random.Generator,
-    n: int,
-    draw: Callable[[], np.ndarray],
-    avoid: np.ndarray,
-    gap: float,
-    box: tuple[np.ndarray, np.ndarray] | None = None,
-    tries: int = 50,
-) -> np.ndarray:
-    """Up to n points from draw() (one (2,) point a call), each clear of the walls, inside the box
-    (lo, hi) if one is given, and at least `gap` from the `avoid` points and from each other; a
-    point whose tries run out is left out, so fewer may come back."""
-    spots: list[np.ndarray] = []
-    taken = np.asarray(avoid, dtype=np.float64).reshape(-1, 2)
-    for _ in range(n):
-        for _ in range(tries):
-            p = np.asarray(draw(), dtype=np.float64)
-            far = not len(taken) or float(np.min(np.linalg.norm(taken - p, axis=1))) >= gap
-            inside = box is None or bool(np.all((p >= box[0]) & (p <= box[1])))
-            if far and inside and _clear_of_walls(m, p[None])[0]:
-                spots.append(p)
-                taken = np.vstack((taken, p))
-                break
-    return np.array(spots, dtype=np.float64).reshape(-1, 2)
 
 
 def _sharpest_turn(path: np.ndarray) -> tuple[int, float]:
@@ -221,9 +162,9 @@ def _narrow_section(m: Map, path: np.ndarray, who: str) -> tuple[float, float]:
         ValueError: the path keeps more than 0.9 m from the walls everywhere (no passage narrower
             than 1.8 m), or the narrow stretch is shorter than 2 m.
     """
-    arc = _arc_lengths(path)
+    arc = arc_lengths(path)
     s = np.arange(1.0, arc[-1] - 1.0, 0.1)
-    points = np.array([_point_at(path, float(x))[0] for x in s]).reshape(-1, 2)
+    points = np.array([point_at(path, float(x))[0] for x in s]).reshape(-1, 2)
     _, dist = m.wall_index.nearest(points) if m.num_walls else (None, np.full(len(s), np.inf))
     least = float(np.min(dist)) if len(s) else math.inf
     if least > 0.9:
@@ -266,12 +207,12 @@ class BlindCorner(SuiteFamily):
         k, turn = _sharpest_turn(path)
         if turn < math.radians(45.0):
             raise ValueError(f"{m.where}: family {self.name!r} needs a corner on the route between its ends")
-        arc = _arc_lengths(path)
+        arc = arc_lengths(path)
         speed = _speeds(rng, 1)
         cruise, lag = nominal_timing()
         ahead = speed[0] * (arc[k] / cruise + ROBOT_LAG - lag)
         ahead = float(np.clip(ahead, 1.0, arc[-1] - arc[k] - 0.5))
-        spawn, u = _point_at(path, arc[k] + ahead)
+        spawn, u = point_at(path, arc[k] + ahead)
         start = _near(m, rng, spawn, 1, (0.0, 0.0), (-0.3, 0.3), u)
         goal = _near(m, rng, a, 1, (0.0, 0.0), (-0.3, 0.3), path[1] - path[0])
         return Layout(a, b, start, goal, speed)
@@ -297,12 +238,12 @@ class NarrowHallway(SuiteFamily):
             a, b = b, a
         path = planned_route(m, a, b, f"{m.where}, family {self.name!r}")
         s0, s1 = _narrow_section(m, path, self.name)
-        arc = _arc_lengths(path)
+        arc = arc_lengths(path)
         meet = (s0 + s1) / 2.0 + rng.uniform(-0.25, 0.25) * (s1 - s0)
         speed = _speeds(rng, 1)
         cruise, lag = nominal_timing()
         ahead = speed[0] * (meet / cruise + ROBOT_LAG - lag)
-        spawn, _ = _point_at(path, min(meet + ahead, arc[-1] - 0.3))
+        spawn, _ = point_at(path, min(meet + ahead, arc[-1] - 0.3))
         start = spawn[None] if meet + ahead < s1 else _near(m, rng, spawn, 1, (0.0, 0.0), (-0.3, 0.3), b - a)
         goal = _near(m, rng, a, 1, (0.0, 0.0), (-0.3, 0.3), b - a)
         return Layout(a, b, start, goal, speed)
@@ -359,7 +300,7 @@ class EnteringRoom(SuiteFamily):
         gate = np.full((1, 4), np.nan)
         release = np.zeros(1)
         if s_gate > 0.3:
-            where, u = _point_at(path, s_gate)
+            where, u = point_at(path, s_gate)
             gate[0] = [*where, *u]
             release[0] = s_gate / cruise + ROBOT_LAG + 10.0
         num_standing = int(rng.integers(0, 2, endpoint=True))
@@ -451,7 +392,7 @@ class ExitingRoom(SuiteFamily):
         distance = np.clip(speed * (when - lag), 0.5, np.where(way > 0, -left, right))
         starts = door.point(-way * distance, depth)
         goals = door.point(np.where(way > 0, right, left), depth)
-        bad = ~_clear_of_walls(m, starts)
+        bad = ~clear_of_walls(m, starts)
         starts[bad] = door.point(-way[bad] * np.minimum(distance[bad], 1.0), 0.5 * (deep + shallow))
         return Layout(robot_start, robot_goal, starts, goals, speed)
 
@@ -468,7 +409,7 @@ def _car(m: Map, door: Door, who: str) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{m.where}: family {who!r}: the room behind the door is too small for a car")
     back = door.point(np.array([lo + 0.45, (lo + hi) / 2.0, hi - 0.45]), np.full(3, deep - 0.45))
     centre = door.point((lo + hi) / 2.0, deep / 2.0)
-    if not _clear_of_walls(m, np.vstack((back, centre[None])), 0.35).all():
+    if not clear_of_walls(m, np.vstack((back, centre[None])), 0.35).all():
         raise ValueError(f"{m.where}: family {who!r}: the car behind the door has no room for its spots")
     return back, centre
 

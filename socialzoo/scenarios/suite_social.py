@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.scenarios.families import Layout, SuiteFamily, _speeds, circle_point, interior, nominal_timing
+from socialzoo.scenarios.placement import ROBOT_LAG, draw_spots
 from socialzoo.scenarios.script import ACCOMPANY, FOLLOW, LEAD
-from socialzoo.scenarios.suite_places import ROBOT_LAG, draw_spots
 
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
