@@ -90,8 +90,9 @@ class CalibrationConfig:
 
 
 def defaults(model: str) -> dict[str, float]:
-    """The study world's values of a model's fitted parameters (socialzoo.studies.realism.realism_world)."""
-    from socialzoo.studies.realism import realism_world
+    """The study world's values of a model's fitted parameters
+    (socialzoo.studies.realism_simulation.realism_world)."""
+    from socialzoo.studies.realism_simulation import realism_world
 
     world = realism_world()
     return {
@@ -120,7 +121,7 @@ def from_unit(model: str, x: Sequence[float]) -> dict[str, float]:
 
 def spec_of(model: str, values: dict[str, float], name: str | None = None) -> Any:
     """The realism ModelSpec of `model` with these parameter values."""
-    from socialzoo.studies.realism import ModelSpec
+    from socialzoo.studies.realism_simulation import ModelSpec
 
     human = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("human.")}
     orca = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("orca.")}
@@ -139,7 +140,7 @@ class _Sample:
 
 def sample_windows(scene: Any, persons: int, windows: int, seed: int) -> Any:
     """Up to `windows` of each of `persons` sampled people's 4.8 s windows, drawn with `seed`."""
-    from socialzoo.studies.realism import sample_persons, window_cases
+    from socialzoo.studies.realism_cases import sample_persons, window_cases
 
     cases = window_cases(scene, sample_persons(scene, persons, seed))
     rng = np.random.default_rng([int(seed), _FIT_STREAM])
@@ -151,14 +152,16 @@ def sample_windows(scene: Any, persons: int, windows: int, seed: int) -> Any:
 
 
 def _prepare(scene: Any, cases: Any) -> _Sample:
-    from socialzoo.studies.realism import prepare_batches, truth
+    from socialzoo.studies.realism_cases import truth
+    from socialzoo.studies.realism_simulation import prepare_batches
 
     return _Sample(scene, cases, prepare_batches(scene, cases, groups=False), truth(scene, cases))
 
 
 def mean_ade(model: str, values: dict[str, float], samples: Sequence[_Sample]) -> float:
     """The mean over samples (scenes) of the ADE over 4.8 s of `model` with `values`."""
-    from socialzoo.studies.realism import displacement, simulate
+    from socialzoo.studies.realism_metrics import displacement
+    from socialzoo.studies.realism_simulation import simulate
 
     spec = spec_of(model, values)
     scores = []
@@ -219,7 +222,8 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
     command in docs/humans.md): socialzoo.studies.realism applies them (`--models sf-eth-ucy,orca-eth-ucy`),
     and every env takes them by name in its people spec.
     """
-    from socialzoo.studies.realism import load_tracks, versions
+    from socialzoo.studies.realism import versions
+    from socialzoo.studies.realism_cases import load_tracks
 
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

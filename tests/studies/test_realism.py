@@ -11,22 +11,24 @@ import pytest
 from socialzoo.data import fetch
 from socialzoo.data.fetch import SceneFile
 from socialzoo.data.tracks import Recording, Track
-from socialzoo.studies import calibration, realism
-from socialzoo.studies.realism import (
-    COLLISION_DISTANCE,
+from socialzoo.studies import calibration
+from socialzoo.studies.realism_cases import (
     OBS_FRAMES,
     PRED_FRAMES,
     SceneTracks,
     constant_velocity,
-    displacement,
-    evaluate_model,
-    model_spec,
-    simulate,
     track_cases,
     truth,
-    wasserstein,
     window_cases,
 )
+from socialzoo.studies.realism_metrics import (
+    COLLISION_DISTANCE,
+    contact_rate,
+    displacement,
+    evaluate_model,
+    wasserstein,
+)
+from socialzoo.studies.realism_simulation import model_spec, realism_world, simulate
 
 DT = 0.4
 
@@ -95,8 +97,8 @@ def test_metrics():
     ade, fde = displacement(pred, true)
     assert ade == pytest.approx(0.75) and fde == pytest.approx(1.0)
     assert wasserstein(np.array([0.0, 1.0]), np.array([1.0, 2.0])) == pytest.approx(1.0)
-    assert realism.contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, True]])) == 1.0
-    assert realism.contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, False]])) == 0.0
+    assert contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, True]])) == 1.0
+    assert contact_rate(np.array([[1.0, COLLISION_DISTANCE / 2]]), np.array([[True, False]])) == 0.0
 
 
 def test_model_names_and_presets():
@@ -108,7 +110,7 @@ def test_model_names_and_presets():
     spec = calibration.spec_of(
         "orca", {"orca.radius": 0.2, "orca.time_horizon": 1.0, "orca.neighbor_dist": 3.0}
     )
-    world = spec.world(realism.realism_world())
+    world = spec.world(realism_world())
     assert world.orca.radius == 0.2 and world.orca.time_horizon == 1.0
     for name, preset in calibration.PRESETS.items():
         assert model_spec(name).people == preset["model"]
