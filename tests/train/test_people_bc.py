@@ -12,15 +12,10 @@ from socialzoo.env.human_agents import action_velocities, human_observation_size
 from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.train import people_bc
 from socialzoo.train.marl_args import env_id
-from socialzoo.train.people_bc import (
-    ACTION_LIMIT,
-    Args,
-    demonstrations,
-    inverse_action,
-    reaching_velocity,
-    replay_world,
-    window_scenario,
-)
+from socialzoo.train.people_bc import Args
+from socialzoo.train.people_closed_loop import closed_loop_ade, subject_cases
+from socialzoo.train.people_demos import ACTION_LIMIT, demonstrations, inverse_action, reaching_velocity
+from socialzoo.train.people_replay import mean_speeds, replay_world, window_scenario
 
 
 def _recording() -> Recording:
@@ -51,7 +46,7 @@ def _one_thread():
 
 def test_actions_invert_action_velocities():
     rec = _recording()
-    scenario, _ = window_scenario(rec, 0, 10, people_bc.mean_speeds(rec))
+    scenario, _ = window_scenario(rec, 0, 10, mean_speeds(rec))
     from socialzoo.scenarios.scenario import scenarios_to_state
 
     state = scenarios_to_state([scenario])
@@ -188,7 +183,7 @@ def test_tiny_run_writes_a_policy_that_walks_a_person(tmp_path, monkeypatch):
     from socialzoo.env.core import BatchedCore
     from socialzoo.humans.models import LEARNED, PeopleConfig
 
-    scenario, _ = window_scenario(rec, 2, 14, people_bc.mean_speeds(rec), subject=0)
+    scenario, _ = window_scenario(rec, 2, 14, mean_speeds(rec), subject=0)
     core = BatchedCore(
         1, 1, scenario.num_humans, replay_world(), WallIndex(np.zeros((0, 4))),
         people=PeopleConfig(models=f"learned:{path}"), robot_visible=False,
@@ -227,7 +222,7 @@ def test_labels_without_forces_are_the_recorded_motion_and_with_them_compensate(
 
 def test_closed_loop_cases_keep_to_their_frames():
     rec = _recording()
-    cases = people_bc.subject_cases(rec, 10, 39, horizon=6)
+    cases = subject_cases(rec, 10, 39, horizon=6)
     assert len(cases)
     for k, s in cases:
         track = rec.tracks[k]
@@ -250,7 +245,7 @@ def test_closed_loop_ade_of_a_policy_that_stops(tmp_path):
         tmp_path / "stop.safetensors", env_id(), {}
     )
     cases = np.array([[0, 1], [2, 5], [3, 20]])
-    ade = people_bc.closed_loop_ade(rec, cases, path, horizon=6)
+    ade = closed_loop_ade(rec, cases, path, horizon=6)
     world = replay_world()
     keep = 1.0 - world.dt * world.human.desired_factor / world.human.relaxation_time
     covered = world.dt * np.cumsum(keep ** np.arange(1, 25))[3::4]  # per 1 m/s, at frames 1..6
