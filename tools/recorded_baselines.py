@@ -57,8 +57,8 @@ def _learned_crowd_overrides(name: str) -> dict:
     id's wall rays, and as many observed people (the nearest) as it has person slots."""
     import gymnasium as gym
 
+    from socialzoo.env.crowd_config import resolve_config
     from socialzoo.env.registration import register_envs
-    from socialzoo.env.tasks.crowdnav import resolve_config
 
     policy = make_policy(name, task="crowdnav")
     if not hasattr(policy, "slots"):

@@ -300,6 +300,17 @@ class CrowdNavConfig:
         return cls().replace(**VARIANTS[name][1]).replace(**overrides)
 
 
+def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdNavConfig:
+    """The config of `config` (default CrowdNav's) with plain overrides; `variant=NAME` starts from
+    a registered variant (socialzoo.env.crowd_variants)."""
+    overrides = dict(overrides)
+    variant = overrides.pop("variant", None)
+    if config is not None and not isinstance(config, CrowdNavConfig):
+        raise TypeError(f"config must be a CrowdNavConfig or None, got {type(config).__name__}")
+    base = config or (CrowdNavConfig.variant(variant) if variant is not None else CrowdNavConfig())
+    return base.replace(**overrides) if overrides else base
+
+
 def people_config(fields: dict[str, Any]) -> PeopleConfig:
     """CrowdNavConfig.humans given as a dict of PeopleConfig's fields (models defaults to "orca")."""
     try:

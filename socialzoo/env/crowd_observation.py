@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import TYPE_CHECKING, Literal, get_args
 
 import numpy as np
+from gymnasium import spaces
 
 from socialzoo.core.jit import kernel
+
+if TYPE_CHECKING:
+    from socialzoo.env.crowd_config import CrowdNavConfig
 
 ROBOT_FEATURES: tuple[str, ...] = ("goal_distance", "preferred_speed", "heading", "radius", "vx", "vy")
 HUMAN_FEATURES: tuple[str, ...] = ("px", "py", "vx", "vy", "radius", "distance", "radius_sum")
@@ -61,6 +65,20 @@ def human_features(signals: bool = False) -> tuple[str, ...]:
 def flat_size(max_humans: int, signals: bool = False) -> int:
     """The length of the flat layout with `max_humans` slots (with signals, if `signals`)."""
     return len(robot_features(signals)) + (len(human_features(signals)) + 1) * max_humans
+
+
+def observation_space(config: CrowdNavConfig) -> spaces.Space:
+    """One robot's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
+    h, signals = config.observed_slots, config.signals
+    if config.observation == "flat":
+        return spaces.Box(-np.inf, np.inf, (flat_size(h, signals),), np.float32)
+    return spaces.Dict(
+        {
+            "robot": spaces.Box(-np.inf, np.inf, (len(robot_features(signals)),), np.float32),
+            "humans": spaces.Box(-np.inf, np.inf, (h, len(human_features(signals))), np.float32),
+            "mask": spaces.MultiBinary(h),
+        }
+    )
 
 
 def with_signals(state: JointState, signal: np.ndarray, door: np.ndarray) -> JointState:

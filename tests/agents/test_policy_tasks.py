@@ -10,8 +10,9 @@ import pytest
 
 from socialzoo.agents import POLICIES, PolicyTaskError, make_policy, policy_task, register_policy
 from socialzoo.env.crowd_config import CrowdNavConfig
+from socialzoo.env.crowd_observation import observation_space
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
-from socialzoo.env.tasks.crowdnav import CrowdNavTask, observation_space
+from socialzoo.env.tasks.crowdnav import CrowdNavTask
 
 
 def test_every_shipped_policy_names_a_known_task():

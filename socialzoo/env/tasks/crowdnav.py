@@ -7,21 +7,19 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
-from gymnasium import spaces
 
 from socialzoo.core.jit import kernel
 from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.core import BatchedCore
-from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
+from socialzoo.env.crowd_actions import action_space, turn_rows, velocity_commands
+from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions, resolve_config
 from socialzoo.env.crowd_observation import (
     JointState,
-    flat_size,
-    human_features,
     joint_state,
     nearest_people,
-    robot_features,
+    observation_space,
     with_signals,
 )
 from socialzoo.env.crowd_outcome import CrowdNavMetrics, CrowdOutcome, judge_step, track_approach
@@ -42,38 +40,6 @@ INFO_KEYS = ("closest", "force", "blame", "human_collisions", "wall_collision")
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
 # to the goal per this time, capped at their preferred speed (s).
 _ARRIVAL_TIME = 1.0
-
-
-def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> CrowdNavConfig:
-    """The config of `config` (default CrowdNav's) with plain overrides; `variant=NAME` starts from
-    a registered variant (socialzoo.env.crowd_variants)."""
-    overrides = dict(overrides)
-    variant = overrides.pop("variant", None)
-    if config is not None and not isinstance(config, CrowdNavConfig):
-        raise TypeError(f"config must be a CrowdNavConfig or None, got {type(config).__name__}")
-    base = config or (CrowdNavConfig.variant(variant) if variant is not None else CrowdNavConfig())
-    return base.replace(**overrides) if overrides else base
-
-
-def observation_space(config: CrowdNavConfig) -> spaces.Space:
-    """One robot's observation space (flat Box or Dict, socialzoo.env.crowd_observation)."""
-    h, signals = config.observed_slots, config.signals
-    if config.observation == "flat":
-        return spaces.Box(-np.inf, np.inf, (flat_size(h, signals),), np.float32)
-    return spaces.Dict(
-        {
-            "robot": spaces.Box(-np.inf, np.inf, (len(robot_features(signals)),), np.float32),
-            "humans": spaces.Box(-np.inf, np.inf, (h, len(human_features(signals))), np.float32),
-            "mask": spaces.MultiBinary(h),
-        }
-    )
-
-
-def action_space(config: CrowdNavConfig) -> spaces.Space:
-    """One robot's action space: Box([-1, 1]^2) or Discrete(81)."""
-    if config.action == "discrete":
-        return spaces.Discrete(len(discrete_actions(config.robot)))
-    return spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
 class CrowdNavTask(Task):
@@ -320,7 +286,7 @@ class CrowdNavTask(Task):
         action = np.asarray(action, dtype=np.float64).reshape(b * r, 2)
         unicycle = robot.kinematics == "unicycle"
         command = np.empty((b * r, 2))
-        k = _velocity_commands(
+        k = velocity_commands(
             action, unicycle, self.config.preferred_speed, robot.max_rotation, self.config.time_step, command
         )
         if k >= 0:
@@ -343,7 +309,7 @@ class CrowdNavTask(Task):
     def _turn(self, velocity: np.ndarray, sign: float) -> np.ndarray:
         """(B R, 2) velocities turned by `sign` times each robot's frame angle."""
         out = np.empty(velocity.shape)
-        _turn_rows(velocity, np.cos(self.frame_angle), np.sin(self.frame_angle), sign, out)
+        turn_rows(velocity, np.cos(self.frame_angle), np.sin(self.frame_angle), sign, out)
         return out
 
     def _arrive(self, s: WorldState) -> None:
@@ -579,34 +545,6 @@ class CrowdNavTask(Task):
             human_radius=self.config.cases.human_radius,
             goal_radius=float(self.config.robot.radius),  # type: ignore[arg-type]
         )
-
-
-@kernel
-def _velocity_commands(action, unicycle, v_pref, max_rotation, time_step, out):  # type: ignore[no-untyped-def]
-    """The commands of velocity actions (N, 2) in [-1, 1] into out (N, 2), in the action frame
-    (CrowdNavTask.commands): a holonomic robot's velocity at v_pref, a unicycle's (speed, omega).
-    Returns the first robot whose action is not finite in [-1, 1] (out unwritten), -1 for none."""
-    n = action.shape[0]
-    for i in range(n):
-        if not (abs(action[i, 0]) <= 1.0 and abs(action[i, 1]) <= 1.0):  # NaN fails too
-            return i
-    for i in range(n):
-        if unicycle:
-            out[i, 0] = (action[i, 0] + 1.0) * 0.5 * v_pref
-            out[i, 1] = action[i, 1] * max_rotation / time_step
-        else:
-            out[i, 0] = action[i, 0] * v_pref
-            out[i, 1] = action[i, 1] * v_pref
-    return -1
-
-
-@kernel
-def _turn_rows(velocity, cos, sin, sign, out):  # type: ignore[no-untyped-def]
-    """Each velocity (N, 2) turned by the angle of cosine cos (N,) and sine sign * sin (N,), into out."""
-    for i in range(velocity.shape[0]):
-        c, s = cos[i], sign * sin[i]
-        out[i, 0] = c * velocity[i, 0] - s * velocity[i, 1]
-        out[i, 1] = s * velocity[i, 0] + c * velocity[i, 1]
 
 
 @kernel
