@@ -3,11 +3,31 @@ compiled loops that turn velocity actions into robot commands and carry them bet
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from gymnasium import spaces
 
+from socialzoo.core.config import RobotConfig
 from socialzoo.core.jit import kernel
-from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions
+from socialzoo.env.crowd_config import CrowdNavConfig
+
+# CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
+SPEED_SAMPLES = 5
+ROTATION_SAMPLES = 16
+
+
+def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:
+    """CrowdNav's 81 actions (build_action_space): stop, then 16 headings x 5 speeds exponentially
+    spaced up to the preferred speed; headings over the full circle for a holonomic robot (as
+    (vx, vy)), within +-pi/4 for a unicycle (as (speed, turn))."""
+    v_pref = robot.max_speed
+    speeds = [(math.exp((i + 1) / SPEED_SAMPLES) - 1) / (math.e - 1) * v_pref for i in range(SPEED_SAMPLES)]
+    if robot.kinematics == "holonomic":
+        rotations = [2 * math.pi * k / ROTATION_SAMPLES for k in range(ROTATION_SAMPLES)]
+        return [(0.0, 0.0)] + [(s * math.cos(r), s * math.sin(r)) for r in rotations for s in speeds]
+    rotations = [-math.pi / 4 + (math.pi / 2) * k / (ROTATION_SAMPLES - 1) for k in range(ROTATION_SAMPLES)]
+    return [(0.0, 0.0)] + [(s, r) for r in rotations for s in speeds]
 
 
 def action_space(config: CrowdNavConfig) -> spaces.Space:

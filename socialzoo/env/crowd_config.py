@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
@@ -28,9 +27,6 @@ CROWD_ACTIONS: tuple[str, ...] = get_args(CrowdAction)
 CROWD_MODELS: tuple[str, ...] = ("sf", "orca", "replay")
 ActionFrame = Literal["goal", "world"]
 ACTION_FRAMES: tuple[str, ...] = get_args(ActionFrame)
-# CrowdNav's discrete action set: speeds exponentially spaced, headings evenly spread.
-SPEED_SAMPLES = 5
-ROTATION_SAMPLES = 16
 # The map_name of the families of CrowdNav's open arena (socialzoo.scenarios.catalogue).
 ARENA = "arena"
 # CrowdNav's own arena families, chosen by cases.layout (not CrowdNavConfig.family).
@@ -320,16 +316,3 @@ def people_config(fields: dict[str, Any]) -> PeopleConfig:
         raise ValueError(f"CrowdNavConfig.humans: {err}; known fields: {known}") from None
     except ValueError as err:
         raise ValueError(f"CrowdNavConfig.humans: {err}") from None
-
-
-def discrete_actions(robot: RobotConfig) -> list[tuple[float, float]]:
-    """CrowdNav's 81 actions (build_action_space): stop, then 16 headings x 5 speeds exponentially
-    spaced up to the preferred speed; headings over the full circle for a holonomic robot (as
-    (vx, vy)), within +-pi/4 for a unicycle (as (speed, turn))."""
-    v_pref = robot.max_speed
-    speeds = [(math.exp((i + 1) / SPEED_SAMPLES) - 1) / (math.e - 1) * v_pref for i in range(SPEED_SAMPLES)]
-    if robot.kinematics == "holonomic":
-        rotations = [2 * math.pi * k / ROTATION_SAMPLES for k in range(ROTATION_SAMPLES)]
-        return [(0.0, 0.0)] + [(s * math.cos(r), s * math.sin(r)) for r in rotations for s in speeds]
-    rotations = [-math.pi / 4 + (math.pi / 2) * k / (ROTATION_SAMPLES - 1) for k in range(ROTATION_SAMPLES)]
-    return [(0.0, 0.0)] + [(s, r) for r in rotations for s in speeds]

@@ -13,8 +13,8 @@ from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.core import BatchedCore
-from socialzoo.env.crowd_actions import action_space, turn_rows, velocity_commands
-from socialzoo.env.crowd_config import CrowdNavConfig, discrete_actions, resolve_config
+from socialzoo.env.crowd_actions import action_space, discrete_actions, turn_rows, velocity_commands
+from socialzoo.env.crowd_config import CrowdNavConfig, resolve_config
 from socialzoo.env.crowd_observation import (
     JointState,
     joint_state,
