@@ -17,7 +17,8 @@ from socialzoo.nav.graph import graph_of
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.subpolicies import SubPolicyConfig, subpolicy_commands
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 HUMANS = 25
 

@@ -20,7 +20,8 @@ from socialzoo.env.world import step_world
 from socialzoo.maps.map_file import load_map
 from socialzoo.nav.graph import NavGraph
 from socialzoo.render.frames import FrameRenderer, Overlay
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 HUMANS = 25
 ACTIONS = ("GoAlone", "Follow", "Pass", "Halt")

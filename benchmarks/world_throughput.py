@@ -23,7 +23,8 @@ from socialzoo.env.world import step_world
 from socialzoo.humans.group_formation import with_groups
 from socialzoo.humans.models import MODEL_IDS, PeopleConfig, assign_models
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 HUMANS = 25
 

@@ -45,7 +45,8 @@ from socialzoo.maps.map_file import MapError, load_map, read_map
 from socialzoo.reproduce import results
 from socialzoo.reproduce.ledger import Ledger, LedgerError
 from socialzoo.reproduce.plan import quick_settings, settings_hash
-from socialzoo.scenarios.scenario import Scenario, ScenarioError, generate_scenario
+from socialzoo.scenarios.generator import generate_scenario
+from socialzoo.scenarios.scenario import Scenario, ScenarioError
 from socialzoo.train.demo_data import load_demo_steps
 from socialzoo.train.run_dir import RunDir, RunDirError
 

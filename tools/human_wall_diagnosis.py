@@ -3,7 +3,7 @@
     python tools/human_wall_diagnosis.py social_force runs/humans/checkpoints/step_000384000.humans.safetensors
     python tools/human_wall_diagnosis.py --scenarios 64 social_force socialzoo/agents/shipped/humans.safetensors
 
-Every human of the first N gdc1 validation scenarios (socialzoo.scenarios.scenario.validation_set, never
+Every human of the first N gdc1 validation scenarios (socialzoo.scenarios.scenario_sets.validation_set, never
 a test set) walks with the given policy ("social_force" or a learned human policy file) for a fixed
 number of steps while the robot runs GoAlone. Printed per policy: wall-contact events per episode
 (a human's centre coming within 0.2 m of a wall, or a wall stopping its move: the count of
@@ -23,7 +23,7 @@ from socialzoo.env.config import EnvConfig
 from socialzoo.env.human_policy import LearnedHumanPolicy
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.nav.subpolicies import GO_ALONE
-from socialzoo.scenarios.scenario import validation_set
+from socialzoo.scenarios.scenario_sets import validation_set
 
 WALL_CONTACT = 0.2  # socialzoo.bench.human_metrics.HUMAN_RADIUS
 

@@ -36,7 +36,7 @@ from socialzoo.bench.tables import write_text_atomic
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
 from socialzoo.nav.subpolicies import ACTION_NAMES
-from socialzoo.scenarios.scenario import TestSet
+from socialzoo.scenarios.scenario_sets import TestSet
 
 logger = logging.getLogger(__name__)
 

@@ -16,7 +16,8 @@ from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.env.config import EnvConfig
 from socialzoo.maps.map_file import Map
 from socialzoo.nav.subpolicies import GO_ALONE
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario import Scenario
 
 # The causes of a route that was not completed, in the order the report lists them.
 DRIVE_CAUSES = (

@@ -27,7 +27,7 @@ from socialzoo.bench.tables import (
 from socialzoo.core.validation import check_int
 from socialzoo.data.fetch import sha256
 from socialzoo.env.config import EnvConfig
-from socialzoo.scenarios.scenario import TEST_SETS, TestSet
+from socialzoo.scenarios.scenario_sets import TEST_SETS, TestSet
 
 logger = logging.getLogger(__name__)
 

@@ -19,7 +19,9 @@ from socialzoo.env.config import EnvConfig
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.maps.map_file import Map, load_map
 from socialzoo.render.replay_data import EpisodeTrace
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, TestSet, generate_scenario
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.scenario_sets import TestSet
 
 # Relative tolerance of the metric check. Replays are bit-identical in practice (the runner's
 # results do not depend on the batch); the tolerance only keeps the check from failing on a

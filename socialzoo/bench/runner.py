@@ -22,7 +22,7 @@ from socialzoo.bench.compaction import RunStats
 from socialzoo.bench.progress import progress_bar
 from socialzoo.core.validation import check_int
 from socialzoo.env.config import EnvConfig
-from socialzoo.scenarios.scenario import TestSet, get_test_set
+from socialzoo.scenarios.scenario_sets import TestSet, get_test_set
 
 logger = logging.getLogger(__name__)
 

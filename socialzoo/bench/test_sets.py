@@ -12,7 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.maps.map_file import Map, load_map
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, ScenarioError, TestSet, generate_scenario
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario, ScenarioError
+from socialzoo.scenarios.scenario_sets import TestSet
 
 logger = logging.getLogger(__name__)
 

@@ -71,7 +71,7 @@ class HumanConfig:
     """Social-force pedestrians (SPEC section 4, PedSim's Helbing-Molnar-Moussaid model).
 
     How many humans there are, where they spawn and how fast they prefer to walk is the scenario's
-    business (socialzoo.scenarios.scenario.ScenarioConfig); walls beyond the map's WallIndex reach
+    business (socialzoo.scenarios.generator.ScenarioConfig); walls beyond the map's WallIndex reach
     (1 m) exert no force.
 
     Attributes:

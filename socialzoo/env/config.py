@@ -20,7 +20,7 @@ from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.subpolicies import SubPolicyConfig
 from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.families import FAMILIES
-from socialzoo.scenarios.scenario import ScenarioConfig
+from socialzoo.scenarios.generator import ScenarioConfig
 
 RobotAction = Literal["subpolicy", "velocity"]
 HumanActionFrame = Literal["world", "human"]

@@ -25,7 +25,8 @@ from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.recovery import RecoveryConfig
 from socialzoo.nav.sight_cache import SightCache
-from socialzoo.scenarios.scenario import Scenario, scenarios_to_state, write_scenarios
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.start_state import scenarios_to_state, write_scenarios
 
 
 class BatchedCore:

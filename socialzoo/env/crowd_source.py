@@ -52,7 +52,7 @@ class CrowdCaseSource:
         if config.map is not None:
             from socialzoo.env.scenario_source import ScenarioStream
             from socialzoo.maps.map_file import load_map
-            from socialzoo.scenarios.scenario import ScenarioConfig
+            from socialzoo.scenarios.generator import ScenarioConfig
 
             scenario = ScenarioConfig(max_humans=config.slots, min_humans=min(5, config.slots))
             self._scenarios = ScenarioStream(
@@ -97,7 +97,7 @@ class CrowdCaseSource:
         """Among walls, split name -> its TestSet, or for a family with splits of its own the
         split's name ("val" and "test"): a family's own splits, else the map's validation
         scenarios and its registered test set (where it has one)."""
-        from socialzoo.scenarios.scenario import TEST_SETS, validation_set
+        from socialzoo.scenarios.scenario_sets import TEST_SETS, validation_set
 
         stream = self._scenarios
         assert stream is not None

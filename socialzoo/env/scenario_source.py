@@ -10,7 +10,9 @@ import numpy as np
 from socialzoo.maps.map_file import POSE_CLEARANCE, Map
 from socialzoo.maps.segments import segments_free
 from socialzoo.scenarios.catalogue import get_family
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, TestSet, generate_scenario
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.scenario_sets import TestSet
 
 if TYPE_CHECKING:
     from socialzoo.env.config import EnvConfig

@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 
 from socialzoo.maps.map_file import Map
-from socialzoo.scenarios.scenario import Scenario, spawn_points
+from socialzoo.scenarios.generator import spawn_points
+from socialzoo.scenarios.scenario import Scenario
 
 # Sizes a group may have, and the spacing of members walking abreast, m.
 GROUP_SIZES = (2, 3, 4)

@@ -76,7 +76,8 @@ class LayoutFamily(ScenarioFamily):
             NoPathError: someone's goal cannot be reached.
         """
         from socialzoo.maps.map_file import load_map
-        from socialzoo.scenarios.scenario import Scenario, plan_routes, split_routes
+        from socialzoo.scenarios.generator import plan_routes, split_routes
+        from socialzoo.scenarios.scenario import Scenario
         from socialzoo.scenarios.script import Script
 
         m = load_map(self.map_name) if m is None else m
@@ -165,7 +166,7 @@ def interior(m: Map, margin: float, who: str) -> tuple[np.ndarray, np.ndarray]:
 
 def planned_route(m: Map, start: np.ndarray, goal: np.ndarray, context: str) -> np.ndarray:
     """(k, 2) the route from start to goal, planned as people's routes are; errors begin with `context`."""
-    from socialzoo.scenarios.scenario import plan_routes
+    from socialzoo.scenarios.generator import plan_routes
 
     paths, lengths = plan_routes(m, start[None], goal[None], context)
     return np.asarray(paths[0, : int(lengths[0])])
@@ -237,7 +238,7 @@ def _near(
         t = rng.uniform(*lateral, size=(k, 1))
         return s * u + t * left
 
-    from socialzoo.scenarios.scenario import spawn_points
+    from socialzoo.scenarios.generator import spawn_points
 
     base = np.broadcast_to(anchor, (n, 2)).copy()
     return spawn_points(m.wall_index, base, base, draw, 0.3, 20)

@@ -19,7 +19,7 @@ from socialzoo.maps.map_file import (
 )
 from socialzoo.nav.planner_config import LocalPlannerConfig
 from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH, RouteStats, max_humans_for, route_stats
-from socialzoo.scenarios.scenario import ScenarioConfig
+from socialzoo.scenarios.generator import ScenarioConfig
 
 # The benchmark's scenario settings (head count 5 to 25, SPEC section 4).
 DEFAULT_SCENARIO = ScenarioConfig()

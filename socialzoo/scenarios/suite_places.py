@@ -132,7 +132,7 @@ def _pick(rng: np.random.Generator, points: np.ndarray, keep: np.ndarray, what: 
 def _direct(m: Map, door: Door, starts: np.ndarray, goals: np.ndarray, who: str) -> np.ndarray:
     """(k,) whether the route from each start to each goal (k, 2 each) goes through the door without
     a detour: at most 1.25 times the way through the door's centre, plus 1 m."""
-    from socialzoo.scenarios.scenario import plan_routes
+    from socialzoo.scenarios.generator import plan_routes
 
     paths, lengths = plan_routes(m, starts, goals, f"{m.where}, family {who!r}")
     walked = np.array([arc_lengths(p[:k])[-1] for p, k in zip(paths, lengths, strict=True)])

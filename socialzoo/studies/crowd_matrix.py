@@ -16,7 +16,7 @@ from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, write_csv, write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
-from socialzoo.scenarios.scenario import TestSet
+from socialzoo.scenarios.scenario_sets import TestSet
 
 
 def _cell_format(name: str) -> tuple[str, str, int, float]:

@@ -11,7 +11,7 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
 from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
 from socialzoo.core.metrics import metric, registered
-from socialzoo.scenarios.scenario import TestSet, validation_set
+from socialzoo.scenarios.scenario_sets import TestSet, validation_set
 from socialzoo.studies.crowd_matrix import run_trials
 
 POPULATIONS = ("social_force", "learned")
@@ -47,7 +47,7 @@ class ComparisonConfig:
         trials: scenarios per map (the first of each test set); None: all.
         quick: use the quick test sets.
         validation: use each map's validation scenarios ("<map>-val",
-            socialzoo.scenarios.scenario.validation_set) instead of a test set: for choosing training
+            socialzoo.scenarios.scenario_sets.validation_set) instead of a test set: for choosing training
             settings or checkpoints without looking at a test set.
         workers: local processes.
         batch_size: env rows stepped together per worker.

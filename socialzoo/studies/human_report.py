@@ -22,7 +22,9 @@ from socialzoo.env.people import People, without_robots
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import ScenarioConfig, scenarios_to_state, validation_set
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import validation_set
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 # Weidmann (1993): free speed, the fit's gamma and the jam density.
 WEIDMANN_V0, WEIDMANN_GAMMA, WEIDMANN_RHO_MAX = 1.34, 1.913, 5.4

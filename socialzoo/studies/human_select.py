@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import write_text_atomic
-from socialzoo.scenarios.scenario import TestSet
+from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.human_compare import (
     COLLISION_KEYS,
     POPULATIONS,
@@ -111,11 +111,11 @@ def select_humans(
     frames).
 
     Runs the comparison for each checkpoint of a run folder (`socialzoo train humans`) on the validation
-    scenarios of the training map (socialzoo.scenarios.scenario.validation_set) and keeps the most trained
-    checkpoint that meets both of issue 13's targets there (reach rate within 10% of the social-force humans',
-    no more collisions of any kind); when none does, the one that misses them by the least (the largest
-    relative excess of collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv and
-    selection.md (every checkpoint's reach rate and collisions), OUT/selection.json, and copies the chosen
+    scenarios of the training map (socialzoo.scenarios.scenario_sets.validation_set) and keeps the most
+    trained checkpoint that meets both of issue 13's targets there (reach rate within 10% of the social-force
+    humans', no more collisions of any kind); when none does, the one that misses them by the least (the
+    largest relative excess of collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv
+    and selection.md (every checkpoint's reach rate and collisions), OUT/selection.json, and copies the chosen
     file to OUT/humans.safetensors. The social-force runs are shared by every checkpoint (one results store),
     and every learned run is stored: an interrupted selection resumes where it stopped.
 

@@ -12,7 +12,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import policy_label, write_csv
-from socialzoo.scenarios.scenario import TestSet
+from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
@@ -137,7 +137,7 @@ def run_pips_study(
             demonstrations' own scenarios.
     """
     from socialzoo.bench.demonstrations import DEMO_BASE_SEED
-    from socialzoo.scenarios.scenario import TEST_SETS
+    from socialzoo.scenarios.scenario_sets import TEST_SETS
     from socialzoo.train.pips import read_program_record
 
     if not programs:

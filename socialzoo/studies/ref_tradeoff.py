@@ -16,7 +16,7 @@ from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.bench.runner import RunSpec, Trial, env_config_for, run_chunk
 from socialzoo.core.validation import check_int
 from socialzoo.nav.subpolicies import HALT
-from socialzoo.scenarios.scenario import validation_set
+from socialzoo.scenarios.scenario_sets import validation_set
 
 GRID = {
     "corridor_half_width": (0.45, 0.62, 0.8),

@@ -15,7 +15,7 @@ from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_con
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, summarize, write_csv
 from socialzoo.core.metrics import axis_label, metric, registered
-from socialzoo.scenarios.scenario import TestSet, get_test_set, validation_set
+from socialzoo.scenarios.scenario_sets import TestSet, get_test_set, validation_set
 
 logger = logging.getLogger(__name__)
 

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from socialzoo.train import trainer_args, trainer_function
 
 if TYPE_CHECKING:
-    from socialzoo.scenarios.scenario import TestSet
+    from socialzoo.scenarios.scenario_sets import TestSet
 
 CURVE_ALGOS = ("ppo", "dqn")
 

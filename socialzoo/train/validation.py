@@ -1,5 +1,5 @@
 """The trainers' checkpoint evaluator: a robot policy file on the first scenarios of its training
-map's validation set (socialzoo.scenarios.scenario.validation_set, "<map>-val": never a test set)."""
+map's validation set (socialzoo.scenarios.scenario_sets.validation_set, "<map>-val": never a test set)."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def validation_evaluator(
         ValueError: trials below 1, or an unknown map.
     """
     from socialzoo.bench.runner import RunSpec, Trial, env_config_for, run_chunk
-    from socialzoo.scenarios.scenario import validation_set
+    from socialzoo.scenarios.scenario_sets import validation_set
 
     check_int("validation_evaluator", "trials", trials, low=1)
     test_set = validation_set(map_name)

@@ -130,7 +130,7 @@ def test_observation_and_world_state_give_the_same_decisions(rooms_map_path):
     """On a real env, Ref from the paper observation equals Ref from the core's world state."""
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.tasks.action_selection import ActionSelectionTask
-    from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario
+    from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 
     path = rooms_map_path
     scenarios = ScenarioConfig(min_humans=4, max_humans=8)

@@ -225,7 +225,7 @@ def test_a_building_row_gives_the_import_and_every_outcome():
 def test_a_failure_picture_shows_the_episode(tmp_path):
     from socialzoo.bench.drive_check import draw_failure
     from socialzoo.maps.map_file import load_map
-    from socialzoo.scenarios.scenario import validation_set
+    from socialzoo.scenarios.scenario_sets import validation_set
 
     scenario = validation_set("gdc1").scenario(0)
     start, goal = scenario.robot_start[:2], scenario.robot_goal[:2]

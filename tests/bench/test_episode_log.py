@@ -258,7 +258,7 @@ def test_a_recorded_episode_agrees_with_the_env(rooms_map_path, tmp_path):
     from socialzoo.bench.replay import benchmark_scenario, record_episode, replay_scene
     from socialzoo.env.config import EnvConfig
     from socialzoo.maps.map_file import load_map
-    from socialzoo.scenarios.scenario import ScenarioConfig
+    from socialzoo.scenarios.generator import ScenarioConfig
 
     config = EnvConfig(
         map=str(rooms_map_path), max_steps=400, scenario=ScenarioConfig(min_humans=2, max_humans=3)

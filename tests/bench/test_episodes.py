@@ -28,7 +28,7 @@ def test_a_batch_plays_the_same_episodes_as_one_row_at_a_time():
 def test_the_loop_serves_the_action_selection_and_crowdnav_tasks():
     ref = make_policy("ref")
     episodes = play_cases("action_selection", ref.act, "gdc1-quick", [0, 1], batch_size=2, max_steps=80)
-    from socialzoo.scenarios.scenario import get_test_set
+    from socialzoo.scenarios.scenario_sets import get_test_set
 
     assert [e["seed"] for e in episodes] == [get_test_set("gdc1-quick").seed(k) for k in (0, 1)]
     orca = make_policy("orca", task="crowdnav")

@@ -19,7 +19,8 @@ from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS
 from socialzoo.bench.runner import RunSpec, env_config_for
 from socialzoo.bench.store import ResultsStore
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 TRIALS = 4
 MAX_STEPS = 150

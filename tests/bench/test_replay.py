@@ -19,7 +19,8 @@ from socialzoo.core.config import LaserConfig
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 MAX_STEPS = 160
 

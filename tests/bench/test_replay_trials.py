@@ -10,7 +10,8 @@ import pytest
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.replay_trials import compare_metrics, find_trials, replay_trial, store_path
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 TRIALS = 3
 

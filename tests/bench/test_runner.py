@@ -13,7 +13,8 @@ import pytest
 
 from socialzoo.bench.runner import BatchedRunner, Trial, evaluate, make_spec, split_trials
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 MAX_STEPS = 150
 

@@ -10,7 +10,8 @@ import pytest
 
 from socialzoo.bench.experiment import STORE_NAME, BenchmarkConfig, run_benchmark
 from socialzoo.bench.store import ResultsStore, StoreError
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 TRIALS = 6
 

@@ -6,7 +6,8 @@ from socialzoo.core.config import LaserConfig
 from socialzoo.core.geometry import ray_circle_hit, ray_segment_hit
 from socialzoo.core.laser import laser_scan, ray_angles
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 CROWD = ScenarioConfig(min_humans=25, max_humans=25)
 

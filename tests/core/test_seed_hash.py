@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from socialzoo.core.seed_hash import seed_states, words
-from socialzoo.scenarios.scenario import _NOISE_STREAM
+from socialzoo.scenarios.start_state import _NOISE_STREAM
 
 
 def _numpy(seed: int, tail: int) -> np.uint64:

@@ -11,7 +11,7 @@ from socialzoo.env.compaction import compact_core
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.scenario_source import with_robots
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 
 B, R = 5, 2
 KEEP = [4, 1, 3]

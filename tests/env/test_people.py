@@ -12,7 +12,8 @@ from socialzoo.env.registration import BENCHMARK_IDS
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.env.world import step_world
 from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 SMALL = {"map": "open_room", "max_steps": 120, "scenario": {"min_humans": 6, "max_humans": 8}}
 BENCHMARK_ID = next(iter(BENCHMARK_IDS))  # the training map's id, at its current version

@@ -11,7 +11,8 @@ import socialzoo.env.world as world
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.walls import WallIndex
 from socialzoo.humans.models import LEARNED
-from socialzoo.scenarios.scenario import Scenario, scenarios_to_state
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 
 def _meet_in_a_corridor(width: float, steps: int = 800, learned: bool = False) -> tuple[int, int, float]:

@@ -25,7 +25,8 @@ from socialzoo.env.scenario_source import (
 )
 from socialzoo.maps.map_file import POSE_CLEARANCE, load_map
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig, crowd_case_arrays
-from socialzoo.scenarios.scenario import Scenario, generate_scenario
+from socialzoo.scenarios.generator import generate_scenario
+from socialzoo.scenarios.scenario import Scenario
 
 MAPS = {name: load_map(name) for name in ("gdc1", "open_room")}
 

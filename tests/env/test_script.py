@@ -207,7 +207,7 @@ def test_rows_reset_without_a_script_hold_what_an_empty_script_writes():
     """A batch reset mixing scripted and unscripted rows: the unscripted ones (reset all at once)
     hold exactly the state a script in which nobody waits, follows or escorts gives."""
     from socialzoo.env.script import ScriptRunner
-    from socialzoo.scenarios.scenario import scenarios_to_state
+    from socialzoo.scenarios.start_state import scenarios_to_state
 
     waits = _scenario({"stop": [1], "release": [9.0], "gesture": [WAIT]})
     plain = dataclasses.replace(waits, script=None)

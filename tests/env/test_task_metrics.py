@@ -12,7 +12,8 @@ from socialzoo.env.crowd_outcome import METRIC_KEYS, CrowdNavMetrics, CrowdRewar
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.env.people import COST_KEYS, GROUP_KEYS, PEOPLE_KEYS
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 ROOM_SET = TestSet("open_room", 5, 8, ScenarioConfig(min_humans=6, max_humans=8))
 

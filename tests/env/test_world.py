@@ -9,7 +9,8 @@ from socialzoo.core.config import WorldConfig
 from socialzoo.core.geometry import segments_intersect
 from socialzoo.env.world import step_world
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 FULL = ScenarioConfig(min_humans=25, max_humans=25)
 WORLD = WorldConfig()

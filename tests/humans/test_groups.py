@@ -10,7 +10,9 @@ from socialzoo.env.world import step_world
 from socialzoo.humans.group_formation import draw_group_sizes, with_groups
 from socialzoo.humans.groups import add_group_accelerations
 from socialzoo.maps.map_file import load_map
-from socialzoo.scenarios.scenario import Scenario, ScenarioConfig, generate_scenario, scenarios_to_state
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.start_state import scenarios_to_state
 
 
 def forces(pos, target, group, cfg=None, vel=None):

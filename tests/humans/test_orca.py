@@ -183,7 +183,8 @@ def test_an_invisible_agent_is_not_avoided_but_sees_the_others():
 
 def test_rows_step_the_same_alone_or_in_any_batch():
     from socialzoo.maps.map_file import load_map
-    from socialzoo.scenarios.scenario import ScenarioConfig, generate_scenario, scenarios_to_state
+    from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+    from socialzoo.scenarios.start_state import scenarios_to_state
 
     m = load_map("gdc1")
     scenarios = [generate_scenario(m, s, ScenarioConfig(min_humans=20, max_humans=25)) for s in (3, 8, 11)]

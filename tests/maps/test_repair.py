@@ -15,7 +15,7 @@ from socialzoo.maps.map_completion import complete_map
 from socialzoo.maps.map_file import MapError, load_map, nearest_walls, validate_map
 from socialzoo.maps.repair import repair_map
 from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH, route_lengths
-from socialzoo.scenarios.scenario import generate_scenario
+from socialzoo.scenarios.generator import generate_scenario
 
 
 def box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:

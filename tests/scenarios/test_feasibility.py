@@ -67,7 +67,7 @@ def test_benchmark_maps_have_every_pair_feasible():
 
 def test_crowd_keeps_the_benchmark_density_on_maps_with_a_walkable_area(tmp_path):
     from socialzoo.scenarios.feasibility import CROWD_DENSITY, max_humans_for
-    from socialzoo.scenarios.scenario import generate_scenario
+    from socialzoo.scenarios.generator import generate_scenario
 
     m = corridor()
     assert max_humans_for(m, 5, 25) == 25  # no area: the SPEC's head count

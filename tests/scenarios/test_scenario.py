@@ -18,17 +18,10 @@ from socialzoo.maps.map_file import Map
 from socialzoo.maps.segments import segments_free
 from socialzoo.scenarios.catalogue import FAMILIES, get_family
 from socialzoo.scenarios.families import LayoutFamily
-from socialzoo.scenarios.scenario import (
-    _NOISE_STREAM,
-    TEST_SETS,
-    Scenario,
-    ScenarioConfig,
-    TestSet,
-    generate_scenario,
-    get_test_set,
-    scenarios_to_state,
-    write_scenarios,
-)
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.scenario_sets import TEST_SETS, TestSet, get_test_set
+from socialzoo.scenarios.start_state import _NOISE_STREAM, scenarios_to_state, write_scenarios
 
 
 def gdc1() -> Map:

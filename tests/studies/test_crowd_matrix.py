@@ -5,7 +5,8 @@ import json
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.crowd_matrix import MatrixConfig, column_folder, column_label, crowd_matrix
 
 

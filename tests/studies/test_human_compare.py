@@ -4,7 +4,8 @@
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.human_compare import ComparisonConfig, check_targets, compare_humans
 
 
@@ -75,7 +76,7 @@ def test_cli_rejects_social_force_and_names_bad_input(tmp_path, capsys):
 
 
 def test_validation_scenarios_are_no_test_set(tmp_path, walker_policy_path, capsys):
-    from socialzoo.scenarios.scenario import TEST_SETS, validation_set
+    from socialzoo.scenarios.scenario_sets import TEST_SETS, validation_set
     from socialzoo.studies.rl_curves import VALIDATION_SET
 
     val = validation_set("ghc3")

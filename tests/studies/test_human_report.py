@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.scenarios.scenario import ScenarioConfig
+from socialzoo.scenarios.generator import ScenarioConfig
 from socialzoo.studies.human_report import (
     HumanReportConfig,
     human_report,

@@ -6,7 +6,8 @@ import json
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.human_select import miss_score, run_checkpoints, select_humans
 
 

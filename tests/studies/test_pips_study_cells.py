@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from socialzoo.scenarios.scenario import TestSet, get_test_set
+from socialzoo.scenarios.scenario_sets import TestSet, get_test_set
 from socialzoo.studies.pips_study import (
     CSV_COLUMNS,
     find_study_programs,

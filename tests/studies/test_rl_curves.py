@@ -11,7 +11,8 @@ import socialzoo.studies.rl_curves as rl
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.bench.store import ResultsStore
 from socialzoo.env.policy_file import current_env_version
-from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+from socialzoo.scenarios.generator import ScenarioConfig
+from socialzoo.scenarios.scenario_sets import TestSet
 
 FAST = {"max_steps": 150}
 
@@ -106,7 +107,7 @@ def test_steps_to_match_uses_validation_scenarios_only(tmp_path, scenarios):
 
 
 def rl_test_sets():
-    from socialzoo.scenarios.scenario import TEST_SETS
+    from socialzoo.scenarios.scenario_sets import TEST_SETS
 
     return TEST_SETS.values()
 

@@ -25,7 +25,8 @@ def test_one_run_per_algorithm_with_checkpoints(tmp_path):
 
 
 def test_steps_to_reference_trains_evaluates_and_writes_the_answer(tmp_path, rooms_map_path):
-    from socialzoo.scenarios.scenario import ScenarioConfig, TestSet
+    from socialzoo.scenarios.generator import ScenarioConfig
+    from socialzoo.scenarios.scenario_sets import TestSet
     from socialzoo.studies.rl_training import steps_to_reference
 
     validation = TestSet(

@@ -11,7 +11,7 @@ from socialzoo.agents import make_policy
 from socialzoo.agents.demonstrations import load_demonstrations
 from socialzoo.agents.engineered import Ref
 from socialzoo.agents.mlp import MlpPolicy
-from socialzoo.scenarios.scenario import get_test_set, validation_set
+from socialzoo.scenarios.scenario_sets import get_test_set, validation_set
 from socialzoo.train import bc, dagger
 
 WIDE_REF = Ref(corridor_half_width=4.0, lookahead_margin=8.0)

@@ -47,7 +47,7 @@ def _one_thread():
 def test_actions_invert_action_velocities():
     rec = _recording()
     scenario, _ = window_scenario(rec, 0, 10, mean_speeds(rec))
-    from socialzoo.scenarios.scenario import scenarios_to_state
+    from socialzoo.scenarios.start_state import scenarios_to_state
 
     state = scenarios_to_state([scenario])
     rng = np.random.default_rng(0)

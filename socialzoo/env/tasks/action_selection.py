@@ -214,7 +214,7 @@ class ActionSelectionTask(Task):
     def _case_sets(self) -> dict[str, Any]:
         """Split name -> its TestSet, or for a family with fixed splits of its own the split's name
         (its "val" and "test"; "train" is the training stream's)."""
-        from socialzoo.scenarios.scenario import TEST_SETS, validation_set
+        from socialzoo.scenarios.scenario_sets import TEST_SETS, validation_set
 
         if self.config.family is not None:
             splits = get_family(self.config.family).splits

@@ -1,0 +1,107 @@
+"""Fixed lists of seeded benchmark scenarios: the registered test sets ("gdc1-test", ...) and each map's validation
+set, apart from every test set (generated sets for other maps: socialzoo.bench.test_sets)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from socialzoo.core.validation import check_int
+from socialzoo.maps.map_file import Map
+from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
+from socialzoo.scenarios.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class TestSet:
+    """A fixed list of seeded benchmark scenarios on one map.
+
+    Scenario k has seed `seed(k)`, a 64-bit value derived from (base_seed, k) by numpy's
+    SeedSequence, so it is the same on every machine, whether generated alone or in a list, and
+    independent of every other scenario.
+
+    Attributes:
+        map_name: the map, as `load_map` names it (a shipped name or a map file's path).
+        base_seed: the set's seed.
+        count: number of scenarios.
+        cfg: generator settings.
+        name: the set's registry name, if any.
+    """
+
+    __test__: ClassVar[bool] = False  # not a pytest test class
+
+    map_name: str
+    base_seed: int
+    count: int
+    cfg: ScenarioConfig = field(default_factory=ScenarioConfig)
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        check_int("TestSet", "count", self.count, low=0)
+        check_int("TestSet", "base_seed", self.base_seed, low=0)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def seed(self, k: int) -> int:
+        """Seed of scenario k, 0 <= k < count."""
+        if not 0 <= k < self.count:
+            raise IndexError(
+                f"test set {self.name or self.map_name!r}: scenario {k} is outside 0..{self.count - 1}"
+            )
+        return int(np.random.SeedSequence([self.base_seed, k]).generate_state(1, dtype=np.uint64)[0])
+
+    def _map(self, m: Map | None) -> Map:
+        if m is None:
+            from socialzoo.maps import map_file as maps
+
+            return maps.load_map(self.map_name)
+        if self.map_name not in (m.name, m.path):
+            raise ValueError(
+                f"test set {self.name or self.map_name!r} is on map {self.map_name!r}, got map {m.name!r}"
+            )
+        return m
+
+    def scenario(self, k: int, m: Map | None = None) -> Scenario:
+        """Scenario k; loads the map by name unless `m` is given."""
+        return generate_scenario(self._map(m), self.seed(k), self.cfg)
+
+    def scenarios(self, indices: Sequence[int] | None = None, m: Map | None = None) -> list[Scenario]:
+        """Scenarios at `indices` (default: all), each exactly as `scenario(k)` makes it."""
+        m = self._map(m)
+        ks = range(self.count) if indices is None else indices
+        return [generate_scenario(m, self.seed(k), self.cfg) for k in ks]
+
+
+TEST_SETS: dict[str, TestSet] = {
+    "gdc1-test": TestSet("gdc1", 20220001, 2000, name="gdc1-test"),
+    "ghc3-test": TestSet("ghc3", 20220002, 2000, name="ghc3-test"),
+    "gdc1-quick": TestSet("gdc1", 20220003, 100, name="gdc1-quick"),
+    "ghc3-quick": TestSet("ghc3", 20220004, 100, name="ghc3-quick"),
+}
+
+
+# Base seed of every map's validation scenarios: apart from every test set's, for choices
+# (training lengths, settings, checkpoints) that must not look at a test set.
+VALIDATION_BASE_SEED = 20_229_001
+VALIDATION_SIZE = 1000
+
+
+def validation_set(map_name: str) -> TestSet:
+    """Our own validation scenarios on a map ("<map>-val", 1000 scenarios): never a test set."""
+    return TestSet(map_name, VALIDATION_BASE_SEED, VALIDATION_SIZE, name=f"{map_name}-val")
+
+
+def get_test_set(name: str) -> TestSet:
+    """A named test set: "gdc1-test", "ghc3-test" (2000 each), "gdc1-quick", "ghc3-quick" (100 each).
+
+    The quick sets have their own base seeds: they are not the first 100 of the full sets, so
+    choosing checkpoints on a quick set does not look at the final test scenarios.
+    """
+    try:
+        return TEST_SETS[name]
+    except KeyError:
+        raise KeyError(f"unknown test set {name!r}; known: {sorted(TEST_SETS)}") from None
