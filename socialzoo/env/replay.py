@@ -247,7 +247,7 @@ class ReplayRunner:
             return
         react = np.empty((len(rows), state.max_humans), dtype=bool)
         if not reacting_people(
-            rows, self.reacts, self.on_track, state.human_mask, self.occupant, state.robot_pose,
+            rows, self.bank.people, self.reacts, self.on_track, state.human_mask, self.occupant, state.robot_pose,
             state.human_pos, state.human_vel, robot_vel, self.radius**2, self.react_time,
             self.collision_distance**2, react,
         ):  # fmt: skip
@@ -273,14 +273,15 @@ class ReplayRunner:
         live = ~was_done[rows]
         self.elapsed[rows] += self.dt
         account_people(
-            rows, self.reacted_at, self.gone, before.human_mask, before.human_pos, after.human_pos,
+            rows, self.bank.people, self.reacted_at, self.gone, before.human_mask, before.human_pos, after.human_pos,
             after.human_route, after.human_route_len, self.walked, self.rest,
         )  # fmt: skip
+        bank = self.bank
         account_robots(
-            rows, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
-            self.bank.robot_at, self.bank.robot_points, self.bank.robot, self.bank.robot_box, PATH_CHUNK,
+            rows, bank.people, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
+            bank.robot_at, bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK,
             self.collision_distance**2, self.deviation, self.moves, self.contact, self.walked_into,
-            np.empty(max(int(self.bank.robot_points[rows].max()) - 2, 0) // PATH_CHUNK + 1),
+            np.empty(max(int(bank.robot_points[rows].max()) - 2, 0) // PATH_CHUNK + 1),
         )  # fmt: skip
 
     def summaries(

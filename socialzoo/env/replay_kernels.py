@@ -75,16 +75,18 @@ def occupants_now(
         frame = t[j] / frame_dt[r]
         i0[j] = int(np.floor(frame + on_frame))
         w[j] = frame - i0[j] if frame - i0[j] > on_frame else 0.0
-        for s in range(now.shape[1]):
+        for s in range(people[r]):
             count = 0
-            if s < people[r]:
-                g = slot_at[r] + s
-                for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
-                    if entry[k] <= i0[j]:
-                        count += 1
+            g = slot_at[r] + s
+            for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
+                if entry[k] <= i0[j]:
+                    count += 1
             now[j, s] = count - 1
             new[j, s] = count > 0 and count - 1 != occupant[r, s]
             any_new = any_new or new[j, s]
+        for s in range(people[r], now.shape[1]):  # beyond the recording's people: nobody, ever
+            now[j, s] = -1
+            new[j, s] = False
     return any_new
 
 
@@ -143,14 +145,14 @@ def place_people(
         a, b = i0[j], i0[j] + 1
         on_frame = w[j] == 0.0
         n = people[r]
-        for s in range(mask.shape[1]):
+        for s in range(n):
             x0 = y0 = x1 = y1 = np.nan
             vx = vy = 0.0
-            if s < n and a < frames[r]:
+            if a < frames[r]:
                 p = point_at[r] + a * n + s
                 x0, y0 = track_pos[p, 0], track_pos[p, 1]
                 vx, vy = track_vel[p, 0], track_vel[p, 1]
-            if s < n and b < frames[r]:
+            if b < frames[r]:
                 p = point_at[r] + b * n + s
                 x1, y1 = track_pos[p, 0], track_pos[p, 1]
             present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
@@ -177,11 +179,15 @@ def place_people(
                 if np.isnan(exit_at[r, s]):
                     exit_at[r, s] = t[j]
             mask[r, s] = walking and not leaving
+        # A slot beyond the recording's people has nobody in it (now -1) and is never on a track:
+        # the loop above would only write it absent.
+        for s in range(n, mask.shape[1]):
+            mask[r, s] = False
 
 
 @kernel
 def reacting_people(
-    rows, reacts, on_track, mask, occupant, robot_pose, human_pos, human_vel, robot_vel, radius2, react_time,
+    rows, people, reacts, on_track, mask, occupant, robot_pose, human_pos, human_vel, robot_vel, radius2, react_time,
     collision2, react,
 ):  # fmt: skip
     """Fill react (n, H): the hybrid people of `rows` on their track whom a robot's centre is within
@@ -193,6 +199,7 @@ def reacting_people(
         r = rows[j]
         for s in range(mask.shape[1]):
             react[j, s] = False
+        for s in range(people[r]):  # the slots beyond never react
             if not (reacts[r, s] and on_track[r, s] and mask[r, s] and occupant[r, s] >= 0):
                 continue
             for q in range(robot_pose.shape[1]):
@@ -255,7 +262,7 @@ def leave_tracks(
 
 @kernel
 def account_people(
-    rows, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len, walked, rest
+    rows, people, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len, walked, rest
 ):
     """ReplayRunner.account's measures of the reacting people of `rows` in place (when any row has
     one): the distance each walked in the step (not one who entered during it: its slot's position
@@ -263,7 +270,7 @@ def account_people(
     for everyone else)."""
     off_track = False
     for j in range(rows.shape[0]):
-        for s in range(gone.shape[1]):
+        for s in range(people[rows[j]]):
             off_track = off_track or (
                 reacted_at[rows[j], s] == reacted_at[rows[j], s] and not gone[rows[j], s]
             )
@@ -271,7 +278,7 @@ def account_people(
         return
     for j in range(rows.shape[0]):
         r = rows[j]
-        for s in range(gone.shape[1]):
+        for s in range(people[r]):
             if not (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s]):  # NaN: not reacting
                 rest[r, s] = 0.0
                 continue
@@ -285,7 +292,7 @@ def account_people(
 
 @kernel
 def account_robots(
-    rows, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track,
+    rows, people, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track,
     robot_box, chunk, collision2, deviation, moves, contact, walked_into, box_gap,
 ):  # fmt: skip
     """ReplayRunner.account's robot measures of `rows` in place (live (n, R): the robot's episode
@@ -305,7 +312,7 @@ def account_robots(
                         _path_distance2(px, py, robot_track, robot_box, at, points, chunk, box_gap)
                     )
                 moves[r, q] += 1
-            for s in range(human_pos.shape[1]):
+            for s in range(people[r]):  # the slots beyond are never present: never in contact
                 dx, dy = human_pos[r, s, 0] - px, human_pos[r, s, 1] - py
                 dist2 = dx * dx + dy * dy
                 close = dist2 < collision2 and human_mask[r, s]
