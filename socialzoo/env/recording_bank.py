@@ -13,7 +13,7 @@ from socialzoo.scenarios.recorded_people import NEVER, RecordedPeople
 # A recording's blocks, one per section; every column of a section holds one row per item of it.
 POINTS, SLOTS, OCCUPANTS, ROUTE, ROBOT = range(5)
 # Segments of the replaced person's path per bounding box (robot_box): a robot's distance to the path
-# looks only into the boxes that can hold its nearest point (socialzoo.env.replay_kernels.account_robots).
+# looks only into the boxes that can hold its nearest point (socialzoo.env.replay_kernels.account_step).
 PATH_CHUNK = 8
 # The columns of a row's pointer (RecordingBank.pointer).
 _POINTER = ("entry_of", "point_at", "people", "frames", "slot_at", "robot_at", "robot_points")

@@ -13,8 +13,7 @@ from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.state import WorldState
 from socialzoo.env.recording_bank import PATH_CHUNK, RecordingBank
 from socialzoo.env.replay_kernels import (
-    account_people,
-    account_robots,
+    account_step,
     begin_episodes,
     enter_people,
     leave_tracks,
@@ -267,21 +266,13 @@ class ReplayRunner:
     ) -> None:
         """Measure one step of the robots whose episode had not ended before it (was_done (B, R));
         robot_vel: (B, R, 2) the robots' velocity vectors after the step, m/s."""
-        rows = np.flatnonzero(self.recorded & ~was_done.all(axis=1))
-        if len(rows) == 0:
-            return
-        live = ~was_done[rows]
-        self.elapsed[rows] += self.dt
-        account_people(
-            rows, self.bank.people, self.reacted_at, self.gone, before.human_mask, before.human_pos, after.human_pos,
-            after.human_route, after.human_route_len, self.walked, self.rest,
-        )  # fmt: skip
         bank = self.bank
-        account_robots(
-            rows, bank.people, live, after.robot_pose, after.human_pos, after.human_vel, after.human_mask, robot_vel,
-            bank.robot_at, bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK,
-            self.collision_distance**2, self.deviation, self.moves, self.contact, self.walked_into,
-            np.empty(max(int(bank.robot_points[rows].max()) - 2, 0) // PATH_CHUNK + 1),
+        account_step(
+            self.recorded, was_done, self.dt, bank.people, self.elapsed, self.reacted_at, self.gone,
+            before.human_mask, before.human_pos, after.human_pos, after.human_route, after.human_route_len,
+            self.walked, self.rest, after.robot_pose, after.human_vel, after.human_mask, robot_vel, bank.robot_at,
+            bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK, self.collision_distance**2, self.deviation,
+            self.moves, self.contact, self.walked_into,
         )  # fmt: skip
 
     def summaries(

@@ -261,62 +261,68 @@ def leave_tracks(
 
 
 @kernel
-def account_people(
-    rows, people, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len, walked, rest
-):
-    """ReplayRunner.account's measures of the reacting people of `rows` in place (when any row has
-    one): the distance each walked in the step (not one who entered during it: its slot's position
-    before the step was its previous occupant's), and the straight way left to its route's end (0
-    for everyone else)."""
-    off_track = False
-    for j in range(rows.shape[0]):
-        for s in range(people[rows[j]]):
-            off_track = off_track or (
-                reacted_at[rows[j], s] == reacted_at[rows[j], s] and not gone[rows[j], s]
-            )
-    if not off_track:
-        return
-    for j in range(rows.shape[0]):
-        r = rows[j]
-        for s in range(people[r]):
-            if not (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s]):  # NaN: not reacting
-                rest[r, s] = 0.0
-                continue
-            if mask_before[r, s]:
-                dx, dy = pos_after[r, s, 0] - pos_before[r, s, 0], pos_after[r, s, 1] - pos_before[r, s, 1]
-                walked[r, s] += np.sqrt(dx * dx + dy * dy)
-            end = route_len[r, s] - 1
-            ex, ey = route[r, s, end, 0] - pos_after[r, s, 0], route[r, s, end, 1] - pos_after[r, s, 1]
-            rest[r, s] = np.sqrt(ex * ex + ey * ey)
-
-
-@kernel
-def account_robots(
-    rows, people, live, robot_pose, human_pos, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track,
-    robot_box, chunk, collision2, deviation, moves, contact, walked_into, box_gap,
+def account_step(
+    recorded, was_done, dt, people, elapsed, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len,
+    walked, rest, robot_pose, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track, robot_box, chunk,
+    collision2, deviation, moves, contact, walked_into,
 ):  # fmt: skip
-    """ReplayRunner.account's robot measures of `rows` in place (live (n, R): the robot's episode
-    had not ended): the distance to the recorded person's path (its polyline of robot_points[r]
-    points of robot_track from robot_at[r], with a bounding box robot_box every `chunk` segments),
-    the moves counted, and the people who walked into a robot (the onset of a contact at which the
-    person moved towards the robot faster than the robot towards it). box_gap: scratch of at least
-    the most boxes of a path."""
-    for j in range(rows.shape[0]):
-        r = rows[j]
+    """ReplayRunner.account in place: one step of the recorded rows whose robots' episodes had not all ended
+    before it (was_done (B, R)): its time, the reacting people's measures and the robots'.
+
+    The reacting people (when any row has one): the distance each walked in the step (not one who entered
+    during it: its slot's position before the step was its previous occupant's), and the straight way left
+    to its route's end (0 for everyone else). The robots whose episode had not ended: the distance to the
+    recorded person's path (its polyline of robot_points[r] points of robot_track from robot_at[r], with a
+    bounding box robot_box every `chunk` segments) and the moves counted; every robot: the people who walked
+    into it (the onset of a contact at which the person moved towards the robot faster than the robot
+    towards it). Only a row's recorded people's slots: the slots beyond are never present, never react."""
+    b = recorded.shape[0]
+    counted = np.zeros(b, dtype=np.bool_)
+    off_track, most_points = False, 0
+    for r in range(b):
+        if not recorded[r]:
+            continue
+        for q in range(was_done.shape[1]):
+            counted[r] = counted[r] or not was_done[r, q]
+        if not counted[r]:
+            continue
+        most_points = max(most_points, robot_points[r])
+        for s in range(people[r]):
+            off_track = off_track or (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s])
+    box_gap = np.empty(max(most_points - 2, 0) // chunk + 1)  # scratch: the most boxes of a path
+    for r in range(b):
+        if not counted[r]:
+            continue
+        elapsed[r] += dt
+        if off_track:  # as before anyone reacted: every rest stays 0
+            for s in range(people[r]):
+                if not (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s]):  # NaN: not reacting
+                    rest[r, s] = 0.0
+                    continue
+                if mask_before[r, s]:
+                    dx, dy = (
+                        pos_after[r, s, 0] - pos_before[r, s, 0],
+                        pos_after[r, s, 1] - pos_before[r, s, 1],
+                    )
+                    walked[r, s] += np.sqrt(dx * dx + dy * dy)
+                end = route_len[r, s] - 1
+                ex, ey = route[r, s, end, 0] - pos_after[r, s, 0], route[r, s, end, 1] - pos_after[r, s, 1]
+                rest[r, s] = np.sqrt(ex * ex + ey * ey)
         points, at = robot_points[r], robot_at[r]
         for q in range(robot_pose.shape[1]):
+            live = not was_done[r, q]
             px, py = robot_pose[r, q, 0], robot_pose[r, q, 1]
-            if live[j, q]:
+            if live:
                 if points > 1:
                     deviation[r, q] += np.sqrt(
                         _path_distance2(px, py, robot_track, robot_box, at, points, chunk, box_gap)
                     )
                 moves[r, q] += 1
-            for s in range(people[r]):  # the slots beyond are never present: never in contact
-                dx, dy = human_pos[r, s, 0] - px, human_pos[r, s, 1] - py
+            for s in range(people[r]):
+                dx, dy = pos_after[r, s, 0] - px, pos_after[r, s, 1] - py
                 dist2 = dx * dx + dy * dy
                 close = dist2 < collision2 and human_mask[r, s]
-                if close and not contact[r, q, s] and live[j, q]:
+                if close and not contact[r, q, s] and live:
                     norm = max(np.sqrt(dist2), 1e-9)
                     ux, uy = dx / norm, dy / norm
                     person_in = -(human_vel[r, s, 0] * ux + human_vel[r, s, 1] * uy)
