@@ -20,7 +20,7 @@ from socialzoo.env.replay_kernels import (
     occupants_now,
     place_people,
     reacting_people,
-    reacting_totals,
+    row_measures,
 )
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
 from socialzoo.scenarios.scenario import Scenario
@@ -283,26 +283,16 @@ class ReplayRunner:
         without a recording gets an empty dict."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         robots = np.broadcast_to(np.asarray(robot, dtype=np.intp), rows.shape)
-        totals = np.empty((len(rows), 3))
+        measures = np.empty((len(rows), 6))
         bank = self.bank
-        reacting_totals(
-            rows, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, bank.slot_at, bank.people,
-            bank.occupants_at, bank.speed, self.recorded_exit, self.walked, self.recorded_left, self.folded, totals,
+        row_measures(
+            rows, robots, self.reacted_at, self.exit_at, self.rest, self.elapsed, self.occupant, bank.slot_at,
+            bank.people, bank.occupants_at, bank.speed, self.recorded_exit, self.walked, self.recorded_left,
+            self.folded, self.frame_dt, bank.robot_points, self.deviation, self.moves, self.walked_into, measures,
         )  # fmt: skip
-        points = bank.robot_points[rows]
-        person = np.where(points > 0, (points - 1) * self.frame_dt[rows], np.nan)
-        moves = self.moves[rows, robots]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            deviation = np.where((moves > 0) & (points > 1), self.deviation[rows, robots] / moves, np.nan)
         out: list[dict[str, Any]] = []
-        for recorded, reached, person_time, deviated, (count, lost, extra), walked_into in zip(
-            self.recorded[rows].tolist(),
-            arrival,
-            person.tolist(),
-            deviation.tolist(),
-            totals.tolist(),
-            self.walked_into[rows, robots].tolist(),
-            strict=True,
+        for recorded, reached, (count, lost, extra, person_time, deviated, walked_into) in zip(
+            self.recorded[rows].tolist(), arrival, measures.tolist(), strict=True
         ):
             if not recorded:
                 out.append({})
@@ -316,7 +306,7 @@ class ReplayRunner:
                     else math.nan,
                     "person_path_deviation": deviated,
                     "people_reacting": int(count),
-                    "people_walked_into_robot": walked_into,
+                    "people_walked_into_robot": int(walked_into),
                     "reacting_time_lost": lost / count if count else math.nan,
                     "reacting_extra_distance": extra / count if count else math.nan,
                 }

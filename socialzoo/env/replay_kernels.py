@@ -366,17 +366,21 @@ def _path_distance2(px, py, path, box, at, points, chunk, box_gap):  # type: ign
 
 
 @kernel
-def reacting_totals(
-    rows, reacted_at, exit_at, rest, elapsed, occupant, slot_at, people, occupants_at, speed, recorded_exit, walked,
-    recorded_left, folded, totals,
+def row_measures(
+    rows, robots, reacted_at, exit_at, rest, elapsed, occupant, slot_at, people, occupants_at, speed, recorded_exit,
+    walked, recorded_left, folded, frame_dt, robot_points, deviation, moves, walked_into, measures,
 ):  # fmt: skip
-    """ReplayRunner.summaries' reacting people of `rows` into totals (n, 3): per row the count, the time
-    lost and the extra distance of the reacting people who left their slot (`folded`) plus those still
-    in one, in slot order: each one's time to its exit (or, not gone yet, the episode's time plus the
-    straight way left at its speed) against its recorded exit, and its distance walked (plus the way
-    left) against the recorded distance left."""
+    """ReplayRunner.summaries' numbers of `rows` for robot robots[j] of row j, into measures (n, 6): the
+    reacting people's count, time lost and extra distance; the replaced person's time (NaN without a path);
+    the robot's mean distance to that person's path (NaN without moves or a path of 2 points); and the people
+    who walked into the robot.
+
+    The reacting people are those who left their slot (`folded`) plus those still in one, in slot order:
+    each one's time to its exit (or, not gone yet, the episode's time plus the straight way left at its
+    speed) against its recorded exit, and its distance walked (plus the way left) against the recorded
+    distance left."""
     for j in range(rows.shape[0]):
-        r = rows[j]
+        r, q = rows[j], robots[j]
         count, lost, extra = 0, 0.0, 0.0
         for s in range(people[r]):  # a row without a recording has none
             if reacted_at[r, s] != reacted_at[r, s]:  # NaN: it did not react
@@ -387,6 +391,10 @@ def reacting_totals(
             lost += at - recorded_exit[r, s]
             extra += walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
             count += 1
-        totals[j, 0] = folded[r, 0] + count
-        totals[j, 1] = folded[r, 1] + lost
-        totals[j, 2] = folded[r, 2] + extra
+        measures[j, 0] = folded[r, 0] + count
+        measures[j, 1] = folded[r, 1] + lost
+        measures[j, 2] = folded[r, 2] + extra
+        points = robot_points[r]
+        measures[j, 3] = (points - 1) * frame_dt[r] if points > 0 else np.nan
+        measures[j, 4] = deviation[r, q] / moves[r, q] if moves[r, q] > 0 and points > 1 else np.nan
+        measures[j, 5] = walked_into[r, q]
