@@ -15,12 +15,8 @@ from socialzoo.env.recording_bank import PATH_CHUNK, RecordingBank
 from socialzoo.env.replay_kernels import (
     account_step,
     begin_episodes,
-    enter_people,
-    leave_tracks,
-    occupants_now,
-    place_people,
-    reacting_people,
     row_measures,
+    settle_rows,
 )
 from socialzoo.humans.models import MODEL_IDS, RECORDED_MODELS, REPLAY, PeopleConfig, PeoplePart
 from socialzoo.scenarios.scenario import Scenario
@@ -172,7 +168,8 @@ class ReplayRunner:
             self.recorded_exit, self.rest, self.elapsed, self.folded, self.deviation, self.moves, self.walked_into,
             self.contact, state.human_model,
         )  # fmt: skip
-        self._place(state, fresh)
+        # The robots' velocity state stands in for their velocity vectors: nobody reacts at time 0.
+        self._settle(state, fresh, state.robot_vel, react=False)
 
     def release(self, rows: np.ndarray) -> None:
         """`rows` start episodes without recorded people (their recordings may be forgotten)."""
@@ -193,71 +190,24 @@ class ReplayRunner:
         rows = np.flatnonzero(self.recorded)
         for name in ("human_mask", "human_model", "human_route_len", "human_pref_speed"):
             setattr(after, name, getattr(after, name).copy())
-        frame, weight = self._place(after, rows)
-        self._react(after, rows, frame, weight, robot_vel)
+        self._settle(after, rows, robot_vel, react=after.num_robots > 0 and self.robot_visible)
 
-    def _place(self, state: WorldState, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions, velocities and presence of `rows`' people at the rows' time (from step_count);
-        returns ((len(rows),) the frame each row is on, (len(rows),) how far it is to the next)."""
-        n = len(rows)
-        t, i0, w = np.empty(n), np.empty(n, dtype=np.int64), np.empty(n)
-        # Who is in each slot now; a slot's next person takes it at its entry frame.
-        now = np.empty((n, self.occupant.shape[1]), dtype=np.int64)
-        new = np.empty(now.shape, dtype=bool)
+    def _settle(self, state: WorldState, rows: np.ndarray, robot_vel: np.ndarray, *, react: bool) -> None:
+        """`rows`' people at the rows' time (from step_count), in place in `state`: who is in each slot
+        (a slot's next person takes it at its entry frame: the one it follows is folded into the
+        measures), their positions, velocities and presence, and with `react` the hybrid people a robot
+        came near leaving their tracks (docs/recorded.md gives the rule; robot_vel (B, R, 2), the robots'
+        velocity vectors, m/s, read only then)."""
         bank = self.bank
-        if occupants_now(
-            rows, state.step_count, self.dt, self.frame_dt, _ON_FRAME, bank.slot_at, bank.people, bank.occupants_at,
-            bank.occupants, bank.entry, self.occupant, t, i0, w, now, new,
-        ):  # fmt: skip
-            self._enter(state, rows, new, now, t)
-        place_people(
-            rows, i0, w, t, now, new, bank.point_at, bank.people, bank.frames, bank.pos, bank.vel,
-            self.on_track, self.gone, self.exit_at,
-            state.human_direction, state.human_pos, state.human_vel, state.human_mask,
-        )  # fmt: skip
-        return i0, w
-
-    def _enter(
-        self, state: WorldState, rows: np.ndarray, new: np.ndarray, now: np.ndarray, t: np.ndarray
-    ) -> None:
-        """The people who take their slot now (new (n, H); now: who is in each slot): the one they
-        follow is folded into the measures (a reacting person leaves here: its time lost and extra
-        distance so far), and the slot follows its track or is walked from its entry along its own
-        part of the slot's route."""
-        bank = self.bank
-        enter_people(
-            rows, new, now, t, self.follows, self.then, bank.slot_at, bank.occupants_at, bank.shared, bank.first,
-            bank.last, bank.speed, REPLAY, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at,
-            self.walked, self.recorded_exit, self.recorded_left, self.rest, self.folded, state.human_model,
-            state.human_route_len, state.human_waypoint, state.human_direction, state.human_pref_speed,
-        )  # fmt: skip
-
-    def _react(
-        self,
-        state: WorldState,
-        rows: np.ndarray,
-        frame: np.ndarray,
-        weight: np.ndarray,
-        robot_vel: np.ndarray,
-    ) -> None:
-        """Hybrid people a robot came near leave their tracks (docs/recorded.md gives the rule); frame:
-        (len(rows),) the frame each row is on, weight: how far each is to the next."""
-        if state.num_robots == 0 or not self.robot_visible:
-            return
-        react = np.empty((len(rows), state.max_humans), dtype=bool)
-        if not reacting_people(
-            rows, self.bank.people, self.reacts, self.on_track, state.human_mask, self.occupant, state.robot_pose,
-            state.human_pos, state.human_vel, robot_vel, self.radius**2, self.react_time,
-            self.collision_distance**2, react,
-        ):  # fmt: skip
-            return
-        bank = self.bank
-        leave_tracks(
-            rows, react, frame, weight, state.step_count, self.dt, self.frame_dt, self.then, self.occupant,
-            bank.point_at, bank.people, bank.slot_at, bank.occupants_at, bank.shared, bank.first, bank.last,
-            bank.exit, bank.route_at, bank.route_points, bank.route_frame, bank.pos, self.on_track, state.human_model,
-            state.human_route_len, state.human_waypoint, state.human_direction, self.reacted_at, self.recorded_exit,
-            self.recorded_left,
+        settle_rows(
+            rows, state.step_count, self.dt, self.frame_dt, _ON_FRAME, react, self.radius**2, self.react_time,
+            self.collision_distance**2, REPLAY, bank.slot_at, bank.people, bank.point_at, bank.frames,
+            bank.occupants_at, bank.occupants, bank.shared, bank.route_at, bank.route_points, bank.entry, bank.exit,
+            bank.first, bank.last, bank.speed, bank.route_frame, bank.pos, bank.vel, self.follows, self.reacts,
+            self.then, self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at, self.walked,
+            self.recorded_exit, self.recorded_left, self.rest, self.folded, state.human_pos, state.human_vel,
+            state.human_mask, state.human_model, state.human_route_len, state.human_waypoint, state.human_direction,
+            state.human_pref_speed, state.robot_pose, robot_vel,
         )  # fmt: skip
 
     # ------------------------------------------------------------------ measures

@@ -59,186 +59,135 @@ def begin_episodes(
 
 
 @kernel
-def occupants_now(
-    rows, step_count, dt, frame_dt, on_frame, slot_at, people, occupants_at, occupants, entry, occupant, t, i0, w, now,
-    new,
+def settle_rows(
+    rows, step_count, dt, frame_dt, on_frame, react, radius2, react_time, collision2, replay,
+    slot_at, people, point_at, frames, occupants_at, occupants, shared, route_at, route_points, entry, exit_, first,
+    last, speed, route_frame, track_pos, track_vel,
+    follows, reacts, then, occupant, on_track, gone, reacted_at, exit_at, walked, recorded_exit, recorded_left, rest,
+    folded, pos, vel, mask, model, route_len, waypoint, direction, pref_speed, robot_pose, robot_vel,
 ):  # fmt: skip
-    """For `rows` at their time t = steps * dt (n,): the frame i0 (n,) each is on (frame period
-    frame_dt, past its recording's end too; a time within on_frame frames of a frame is on it) and the weight w (n,)
-    of the next frame (0 on a frame); now (n, H), who is in each slot on frame i0 (entries at or
-    before it, minus one; -1 nobody yet); new (n, H), a person other than the slot's occupant. True
-    if anyone is new."""
-    any_new = False
+    """ReplayRunner's people of `rows` at the rows' time t = steps * dt, in place, slot by slot in row-major
+    order: who is in the slot now, its new person entering, its position, velocity and presence, and with
+    `react` (the robots are seen) a hybrid person a robot came near leaving its track.
+
+    Each of those reads and writes its slot only (and its row's `folded`, whose sums add in row-major slot
+    order), so this one pass computes what a pass of each over every slot did. One kernel, its parts
+    inline: a compiled call per slot and part, passing it its arrays, made a step of eth at B = 256 cost seven
+    times as much (860 us against 125).
+
+    - The frame: a row is on frame i0 = floor(t / frame_dt + on_frame) (past its recording's end too; a
+      time within on_frame frames of a frame is on it), w of the way to the next (0 on a frame).
+    - Who is in a slot: its people who entered at or before i0, counted, minus one (-1: nobody yet); a
+      slot beyond the recording's people has nobody in it, ever: absent.
+    - Entering: the one the new person follows is folded into the measures (a reacting person leaving its
+      slot adds one, its time lost (to its exit, or to t if it had not left) and its extra distance (with
+      the straight way left if it had not left) to the row's `folded`); the new person follows its track
+      (REPLAY) or walks by its model from its route's second point, a shared slot's person along its own
+      part at its own speed.
+    - Placing: a follower where its track is, present while recorded; a person a model walks enters on its
+      track and leaves where its route ends. A frame the row's own recording does not have is absent (a
+      wider recording in another row does not keep this row's people on its last frame).
+    - Reacting: a hybrid person on its track whom a robot's centre is within the reaction radius of, or
+      would meet (centres within the collision distance) within react_time keeping both velocities (the
+      point of closest approach, its time clipped to [0, react_time]), walks by its model towards the first
+      point of its route (of its own part, in a shared slot) recorded after i0; its reaction time, its
+      recorded exit time and the recorded distance left are kept: from where it is along its track to its
+      last frame, adding the segments whose both frames are recorded, in frame order."""
     for j in range(rows.shape[0]):
         r = rows[j]
-        t[j] = step_count[r] * dt
-        frame = t[j] / frame_dt[r]
-        i0[j] = int(np.floor(frame + on_frame))
-        w[j] = frame - i0[j] if frame - i0[j] > on_frame else 0.0
-        for s in range(people[r]):
-            count = 0
-            g = slot_at[r] + s
-            for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
-                if entry[k] <= i0[j]:
-                    count += 1
-            now[j, s] = count - 1
-            new[j, s] = count > 0 and count - 1 != occupant[r, s]
-            any_new = any_new or new[j, s]
-        for s in range(people[r], now.shape[1]):  # beyond the recording's people: nobody, ever
-            now[j, s] = -1
-            new[j, s] = False
-    return any_new
-
-
-@kernel
-def enter_people(
-    rows, new, now, t, follows, then, slot_at, occupants_at, shared, first, last, speed, replay,
-    occupant, on_track, gone, reacted_at, exit_at, walked, recorded_exit, recorded_left, rest, folded,
-    model, route_len, waypoint, direction, pref_speed,
-):  # fmt: skip
-    """ReplayRunner._enter in place, slot by slot in row-major order (the order the folded sums
-    add in): a reacting person leaving its slot adds one, its time lost (to its exit, or to now if
-    it had not left) and its extra distance (with the straight way left if it had not left) to
-    its row's `folded`; the slot's new person follows its track (REPLAY) or walks by its model
-    from its route's second point, a shared slot's person along its own part at its own speed."""
-    for j in range(rows.shape[0]):
-        r = rows[j]
-        for s in range(new.shape[1]):
-            if not new[j, s]:
-                continue
-            if reacted_at[r, s] == reacted_at[r, s]:  # not NaN: it reacted
-                cut = exit_at[r, s] != exit_at[r, s]
-                folded[r, 0] += 1.0
-                folded[r, 1] += (t[j] if cut else exit_at[r, s]) - recorded_exit[r, s]
-                folded[r, 2] += walked[r, s] + (rest[r, s] if cut else 0.0) - recorded_left[r, s]
-            k = now[j, s]
-            occupant[r, s] = k
-            on_track[r, s] = follows[r, s]
-            gone[r, s] = False
-            reacted_at[r, s] = np.nan
-            exit_at[r, s] = np.nan
-            walked[r, s] = 0.0
-            model[r, s] = replay if follows[r, s] else then[r, s]
-            g = slot_at[r] + s
-            if shared[g]:
-                o = occupants_at[g] + k
-                route_len[r, s] = last[o] + 1
-                waypoint[r, s] = min(first[o] + 1, last[o])
-                pref_speed[r, s] = speed[o]
-            else:
-                waypoint[r, s] = min(1, route_len[r, s] - 1)
-            direction[r, s] = 1
-
-
-@kernel
-def place_people(
-    rows, i0, w, t, now, new, point_at, people, frames, track_pos, track_vel, on_track, gone, exit_at, direction,
-    pos, vel, mask,
-):  # fmt: skip
-    """ReplayRunner._place's update of `rows` in place: followers where their tracks are, present
-    while recorded; people a model walks enter on their track and leave where their route ends.
-    Beyond its recording's people and frames, a row's slots are absent (NaN) with velocity 0."""
-    for j in range(rows.shape[0]):
-        r = rows[j]
-        # A row's own recording's frames only: a frame the row does not have is absent (a wider
-        # recording in another row does not keep this row's people on its last frame).
-        a, b = i0[j], i0[j] + 1
-        on_frame = w[j] == 0.0
+        t = step_count[r] * dt
+        frame = t / frame_dt[r]
+        i0 = int(np.floor(frame + on_frame))
+        w = frame - i0 if frame - i0 > on_frame else 0.0
         n = people[r]
         for s in range(n):
+            g = slot_at[r] + s
+            # Who is in the slot now.
+            count = 0
+            for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
+                if entry[k] <= i0:
+                    count += 1
+            now = count - 1
+            new = count > 0 and now != occupant[r, s]
+            # Entering.
+            if new:
+                if reacted_at[r, s] == reacted_at[r, s]:  # not NaN: it reacted
+                    cut = exit_at[r, s] != exit_at[r, s]
+                    folded[r, 0] += 1.0
+                    folded[r, 1] += (t if cut else exit_at[r, s]) - recorded_exit[r, s]
+                    folded[r, 2] += walked[r, s] + (rest[r, s] if cut else 0.0) - recorded_left[r, s]
+                occupant[r, s] = now
+                on_track[r, s] = follows[r, s]
+                gone[r, s] = False
+                reacted_at[r, s] = np.nan
+                exit_at[r, s] = np.nan
+                walked[r, s] = 0.0
+                model[r, s] = replay if follows[r, s] else then[r, s]
+                if shared[g]:
+                    o = occupants_at[g] + now
+                    route_len[r, s] = last[o] + 1
+                    waypoint[r, s] = min(first[o] + 1, last[o])
+                    pref_speed[r, s] = speed[o]
+                else:
+                    waypoint[r, s] = min(1, route_len[r, s] - 1)
+                direction[r, s] = 1
+            # Placing.
             x0 = y0 = x1 = y1 = np.nan
             vx = vy = 0.0
-            if a < frames[r]:
-                p = point_at[r] + a * n + s
+            if i0 < frames[r]:
+                p = point_at[r] + i0 * n + s
                 x0, y0 = track_pos[p, 0], track_pos[p, 1]
                 vx, vy = track_vel[p, 0], track_vel[p, 1]
-            if b < frames[r]:
-                p = point_at[r] + b * n + s
+            if i0 + 1 < frames[r]:
+                p = point_at[r] + (i0 + 1) * n + s
                 x1, y1 = track_pos[p, 0], track_pos[p, 1]
-            present = not np.isnan(x0) and (on_frame or not np.isnan(x1))
-            if on_frame:
+            at_frame = w == 0.0
+            present = not np.isnan(x0) and (at_frame or not np.isnan(x1))
+            if at_frame:
                 x, y = x0, y0
             else:
-                x, y = x0 + w[j] * (x1 - x0), y0 + w[j] * (y1 - y0)
-            seen = now[j, s] >= 0
+                x, y = x0 + w * (x1 - x0), y0 + w * (y1 - y0)
+            seen = now >= 0
             if on_track[r, s]:
                 if present:
                     pos[r, s, 0], pos[r, s, 1] = x, y
                     vel[r, s, 0], vel[r, s, 1] = vx, vy
                 mask[r, s] = present
                 if seen and not present and np.isnan(exit_at[r, s]):
-                    exit_at[r, s] = t[j]
+                    exit_at[r, s] = t
+            else:
+                if new:
+                    pos[r, s, 0], pos[r, s, 1] = x, y
+                    vel[r, s, 0], vel[r, s, 1] = vx, vy
+                walking = seen and not gone[r, s]
+                leaving = walking and direction[r, s] < 0
+                if leaving:
+                    gone[r, s] = True
+                    if np.isnan(exit_at[r, s]):
+                        exit_at[r, s] = t
+                mask[r, s] = walking and not leaving
+            # Reacting.
+            if not (react and reacts[r, s] and on_track[r, s] and mask[r, s] and occupant[r, s] >= 0):
                 continue
-            if new[j, s]:
-                pos[r, s, 0], pos[r, s, 1] = x, y
-                vel[r, s, 0], vel[r, s, 1] = vx, vy
-            walking = seen and not gone[r, s]
-            leaving = walking and direction[r, s] < 0
-            if leaving:
-                gone[r, s] = True
-                if np.isnan(exit_at[r, s]):
-                    exit_at[r, s] = t[j]
-            mask[r, s] = walking and not leaving
-        # A slot beyond the recording's people has nobody in it (now -1) and is never on a track:
-        # the loop above would only write it absent.
-        for s in range(n, mask.shape[1]):
-            mask[r, s] = False
-
-
-@kernel
-def reacting_people(
-    rows, people, reacts, on_track, mask, occupant, robot_pose, human_pos, human_vel, robot_vel, radius2, react_time,
-    collision2, react,
-):  # fmt: skip
-    """Fill react (n, H): the hybrid people of `rows` on their track whom a robot's centre is within
-    the reaction radius of, or would meet (centres within the collision distance) within react_time
-    keeping both velocities (the point of closest approach, its time clipped to [0, react_time]);
-    True if any."""
-    any_react = False
-    for j in range(rows.shape[0]):
-        r = rows[j]
-        for s in range(mask.shape[1]):
-            react[j, s] = False
-        for s in range(people[r]):  # the slots beyond never react
-            if not (reacts[r, s] and on_track[r, s] and mask[r, s] and occupant[r, s] >= 0):
-                continue
+            near = False
             for q in range(robot_pose.shape[1]):
-                dx, dy = robot_pose[r, q, 0] - human_pos[r, s, 0], robot_pose[r, q, 1] - human_pos[r, s, 1]
-                vx, vy = robot_vel[r, q, 0] - human_vel[r, s, 0], robot_vel[r, q, 1] - human_vel[r, s, 1]
-                when = -(dx * vx + dy * vy) / max(vx * vx + vy * vy, 1e-12)
+                dx, dy = robot_pose[r, q, 0] - pos[r, s, 0], robot_pose[r, q, 1] - pos[r, s, 1]
+                ux, uy = robot_vel[r, q, 0] - vel[r, s, 0], robot_vel[r, q, 1] - vel[r, s, 1]
+                when = -(dx * ux + dy * uy) / max(ux * ux + uy * uy, 1e-12)
                 when = min(max(when, 0.0), react_time)
-                cx, cy = dx + when * vx, dy + when * vy
+                cx, cy = dx + when * ux, dy + when * uy
                 if dx * dx + dy * dy < radius2 or cx * cx + cy * cy < collision2:
-                    react[j, s] = True
-            any_react = any_react or react[j, s]
-    return any_react
-
-
-@kernel
-def leave_tracks(
-    rows, react, frame, w, step_count, dt, frame_dt, then, occupant, point_at, people, slot_at, occupants_at, shared,
-    first, last, exit_, route_at, route_points, route_frame, track_pos, on_track, model, route_len, waypoint,
-    direction, reacted_at, recorded_exit, recorded_left,
-):  # fmt: skip
-    """ReplayRunner._react's switch of the people in react (n, H) off their tracks, in place: each walks by
-    its model towards the first point of its route (of its own part, in a shared slot) recorded after
-    `frame` (n,), the frame its row is on; its reaction time, its recorded exit time and the recorded
-    distance left are kept: from where it is (w (n,) of the way from `frame` to the next) along its
-    track to its last frame, adding the segments whose both frames are recorded, in frame order."""
-    for j in range(rows.shape[0]):
-        r = rows[j]
-        for s in range(react.shape[1]):
-            if not react[j, s]:
+                    near = True
+            if not near:
                 continue
             on_track[r, s] = False
             model[r, s] = then[r, s]
-            g = slot_at[r] + s
             o = occupants_at[g] + occupant[r, s]
-            # The slot's route points recorded by `frame`, its own only (once all are, the count
-            # is past `end` with or without a padding, so the clip below gives the same waypoint).
+            # The slot's route points recorded by i0, its own only (once all are, the count is past `end`
+            # with or without a padding, so the clip below gives the same waypoint).
             ahead = 0
             for p in range(route_at[g], route_at[g] + route_points[g]):
-                if route_frame[p] <= frame[j]:
+                if route_frame[p] <= i0:
                     ahead += 1
             if shared[g]:
                 low, end = first[o], last[o]
@@ -246,18 +195,19 @@ def leave_tracks(
                 low, end = 0, route_len[r, s] - 1
             waypoint[r, s] = min(max(ahead, low), end)
             direction[r, s] = 1
-            reacted_at[r, s] = step_count[r] * dt
+            reacted_at[r, s] = t
             exit_frame = exit_[o]
             recorded_exit[r, s] = exit_frame * frame_dt[r]
             left = 0.0
-            n = people[r]
-            for f in range(frame[j], exit_frame):
-                p, q = point_at[r] + f * n + s, point_at[r] + (f + 1) * n + s
-                dx, dy = track_pos[q, 0] - track_pos[p, 0], track_pos[q, 1] - track_pos[p, 1]
+            for f in range(i0, exit_frame):
+                p0, p1 = point_at[r] + f * n + s, point_at[r] + (f + 1) * n + s
+                dx, dy = track_pos[p1, 0] - track_pos[p0, 0], track_pos[p1, 1] - track_pos[p0, 1]
                 length = np.sqrt(dx * dx + dy * dy)
                 if not np.isnan(length):
-                    left += (1.0 - w[j]) * length if f == frame[j] else length
+                    left += (1.0 - w) * length if f == i0 else length
             recorded_left[r, s] = left
+        for s in range(n, mask.shape[1]):
+            mask[r, s] = False
 
 
 @kernel
