@@ -663,3 +663,26 @@ def test_the_distance_to_the_replaced_persons_path_is_the_least_over_every_segme
         for px, py in rng.uniform(path.min() - 2, path.max() + 2, (200, 2)):
             got = _path_distance2(px, py, bank_path, boxes, 3, points, PATH_CHUNK, scratch)
             assert got == every_segment(px, py, path)
+
+
+def test_a_robot_whose_episode_ended_stops_counting_while_its_row_goes_on() -> None:
+    # Two robots in one recorded row (ReplayRunner.account): the robot whose episode ended adds no moves
+    # and no distance to the recorded path; its row's time runs on until every robot's episode ended.
+    tracks = np.full((1, 30, 2), np.nan)
+    tracks[0] = np.stack((np.arange(30) * 0.5, np.zeros(30)), -1)
+    recorded = RecordedPeople(dt=DT, tracks=tracks, robot_track=np.array([[0.0, 2.0], [10.0, 2.0]]))
+    starts = np.array([[1.0, 3.0, 0.0], [5.0, 4.0, 0.0]])
+    scenario = people_scenario(recorded, starts, starts + [[1.0, 0.0, 0.0]], seed=4, family="test")
+    core = BatchedCore(
+        1, 2, 1, WorldConfig(dt=0.1), WallIndex(np.zeros((0, 4))), people=PeopleConfig(models="replay")
+    )
+    core.reset_rows(np.array([0]), [scenario])
+    replay = core.replay
+    for ended in ([False, False], [False, True], [True, True]):
+        for _ in range(3):
+            core.step(np.zeros((1, 2, 2)))
+            core.end_episodes(np.array([ended]))
+    assert replay.moves[0].tolist() == [7, 4]
+    assert replay.elapsed[0] == pytest.approx(0.7)
+    # Each robot stood 1 m and 2 m off the path on every step it counted.
+    assert replay.deviation[0] == pytest.approx([7 * 1.0, 4 * 2.0])
