@@ -141,12 +141,14 @@ class BatchedCore:
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         if len(rows) != count:
             raise ValueError(f"reset_rows got {len(rows)} rows but {count} scenarios")
-        if np.any((rows < 0) | (rows >= self.batch_size)):
+        if ((rows < 0) | (rows >= self.batch_size)).any():
             raise ValueError(f"reset_rows: rows {rows.tolist()} outside 0..{self.batch_size - 1}")
         return rows
 
     def robot_rows(self, rows: np.ndarray) -> np.ndarray:
         """The flat robot indices (row * R + robot) of `rows`."""
+        if self.num_robots == 1:  # each row's one robot: its flat index is the row (a reset asks often)
+            return np.array(rows, dtype=np.intp).reshape(-1)
         return (np.asarray(rows)[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
 
     def reset_rows(self, rows: np.ndarray | Sequence[int], scenarios: Sequence[Scenario]) -> None:

@@ -229,9 +229,10 @@ class RecordedScene(ScenarioFamily):
         """The scene's tracks of each split (split_tracks)."""
         return split_tracks(self.recording)
 
-    @property
+    @cached_property
     def splits(self) -> dict[str, SeedSplit]:  # type: ignore[override]
-        """The seeds of the scene's splits: val 0.., test TEST_FIRST.., train TRAIN_FIRST.. (no end)."""
+        """The seeds of the scene's splits: val 0.., test TEST_FIRST.., train TRAIN_FIRST.. (no end);
+        kept, as track_splits is (every training reset draws from the train split)."""
         sizes = {k: len(v) for k, v in self.track_splits.items()}
         return {
             "val": SeedSplit(0, sizes["val"]),

@@ -123,7 +123,9 @@ class CrowdNavTask(Task):
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
         """Start the rows on their next training cases, or on fixed validation or test cases."""
         rows = np.asarray(rows, dtype=np.intp)
-        chosen = fixed_cases(dict(options), rows, self.case_splits(), self.name)
+        # An autoreset passes no options: the split sizes (a recorded scene's split of its tracks)
+        # are looked up only when options may name fixed cases.
+        chosen = fixed_cases(dict(options), rows, self.case_splits(), self.name) if options else None
         if chosen is not None:
             cases: list[Scenario] | list[CrowdCase] = self.source.fixed(chosen[0], chosen[1])  # type: ignore[arg-type]
         else:
