@@ -75,9 +75,10 @@ class Scenario:
     human_group: np.ndarray = None  # type: ignore[assignment]
     script: Script | None = None
     recorded: RecordedPeople | None = None
-    # Derived in __post_init__: the routes end to end and their lengths (see there).
+    # Derived in __post_init__: the routes end to end, their lengths and the longest (see there).
     _route_points: np.ndarray = field(init=False, repr=False)
     _route_lens: np.ndarray = field(init=False, repr=False)
+    _route_width: int = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
@@ -106,6 +107,7 @@ class Scenario:
         # The routes end to end and their lengths, once: a reset stacks a few scenarios' blocks
         # instead of every person's route (a kept scenario, as recorded scenes' are, is reset often).
         object.__setattr__(self, "_route_lens", np.array([len(r) for r in routes], dtype=np.intp))
+        object.__setattr__(self, "_route_width", max([1] + [len(r) for r in routes]))
         object.__setattr__(self, "_route_points", np.concatenate(routes) if routes else np.zeros((0, 2)))
         object.__setattr__(self, "seed", int(self.seed))
         group = np.full(n, -1) if self.human_group is None else self.human_group

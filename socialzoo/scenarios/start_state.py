@@ -95,16 +95,17 @@ def write_scenarios(state: WorldState, rows: np.ndarray, scenarios: Sequence[Sce
         raise ValueError(f"scenario {bad} has {counts[bad]} humans, more than max_humans={h}")
     if len(scenarios) == 0:
         return
-    lens = [s._route_lens for s in scenarios]
-    state.widen_routes(max([1] + [int(x.max()) for x in lens if len(x)]))
+    state.widen_routes(max(s._route_width for s in scenarios))
+    robot_shape = (len(scenarios), num_robots, 3)
+    # Each scenario's arrays end to end (a concatenate costs a fraction of a stack on a reset's few rows).
     _write_rows(
-        np.asarray(rows, dtype=np.intp), counts, np.concatenate(lens),
+        np.asarray(rows, dtype=np.intp), counts, np.concatenate([s._route_lens for s in scenarios]),
         np.concatenate([s._route_points for s in scenarios]),
         np.concatenate([s.human_spawn for s in scenarios]),
         np.concatenate([s.human_speed for s in scenarios]),
         np.concatenate([s.human_group for s in scenarios]),
-        np.stack([s.robot_starts[:num_robots] for s in scenarios]),
-        np.stack([s.robot_goals[:num_robots] for s in scenarios]),
+        np.concatenate([s.robot_starts[:num_robots] for s in scenarios]).reshape(robot_shape),
+        np.concatenate([s.robot_goals[:num_robots] for s in scenarios]).reshape(robot_shape),
         seed_states([s.seed for s in scenarios], _NOISE_STREAM),
         state.robot_pose, state.robot_vel, state.robot_goal, state.human_pos, state.human_vel,
         state.human_pref_speed, state.human_mask, state.human_route, state.human_route_len,
