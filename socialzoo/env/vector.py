@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import operator
 from typing import Any, ClassVar
 
 import numpy as np
@@ -151,12 +152,18 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
     def _final_metrics(self, ended: np.ndarray) -> dict[str, np.ndarray]:
         """Metric -> (B,) float values of the ended rows' episodes, zeros in the other rows."""
         summaries = self.task.episode_metrics(ended)
-        keys = list(summaries[0])
-        for key, value in summaries[0].items():
-            self.metric_types.setdefault(key, type(value))
-        # One (metrics, B) table filled at once: a write per metric cost more than the values.
+        first = summaries[0]
+        if not self.metric_types.keys() >= first.keys():
+            for key, value in first.items():
+                self.metric_types.setdefault(key, type(value))
+        keys = list(first)
+        if not keys:
+            return {}
+        # One (metrics, B) table filled at once: a write per metric cost more than the values, and
+        # itemgetter reads a row's values in one call.
+        values = operator.itemgetter(*keys)
         table = np.zeros((len(keys), self.num_envs))
-        table[:, ended] = np.array([[s[key] for s in summaries] for key in keys], dtype=np.float64)
+        table[:, ended] = np.array([values(s) for s in summaries], dtype=np.float64).T
         return dict(zip(keys, table, strict=True))
 
     def render(self) -> np.ndarray | None:
