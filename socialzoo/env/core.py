@@ -292,20 +292,29 @@ class BatchedCore:
         return self.visible
 
     def others(
-        self, s: WorldState, robot_vel: np.ndarray | None = None
+        self, s: WorldState, robot_vel: np.ndarray | None = None, rows: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(pos, vel, mask) of who each robot keeps clear of in the state `s` (B rows): the people,
-        then the other robots at `robot_vel` (B, R, 2) (default: their velocity in `s`), (B R,
-        H + R - 1, ...) with each robot's own slot left out; the people's (B, H, ...) when R = 1."""
-        b, r = s.batch_size, self.num_robots
+        """(pos, vel, mask) of who each robot keeps clear of in the state `s` (B rows; with `rows`, an
+        index array, those rows only): the people, then the other robots at `robot_vel` (B, R, 2),
+        or (len(rows), R, 2) (default: their velocity in `s`), (B R, H + R - 1, ...) with each
+        robot's own slot left out; the people's (B, H, ...) when R = 1."""
+        # A reset's few rows: only the arrays read here are taken, not a sub-state of every field.
+        pos, vel, mask = (
+            (s.human_pos, s.human_vel, s.human_mask)
+            if rows is None
+            else (s.human_pos.take(rows, 0), s.human_vel.take(rows, 0), s.human_mask.take(rows, 0))
+        )
+        b, r = len(mask), self.num_robots
         if r == 1:
-            return s.human_pos, s.human_vel, s.human_mask
+            return pos, vel, mask
+        robot_pose = s.robot_pose if rows is None else s.robot_pose.take(rows, 0)
         if robot_vel is None:
-            robot_vel = world_velocity(s.robot_pose, s.robot_vel, self.world.robot)
+            own = s.robot_vel if rows is None else s.robot_vel.take(rows, 0)
+            robot_vel = world_velocity(robot_pose, own, self.world.robot)
         others = self._others
-        pos = np.concatenate((np.repeat(s.human_pos[:, None], r, 1), s.robot_pose[:, others, :2]), 2)
-        vel = np.concatenate((np.repeat(s.human_vel[:, None], r, 1), robot_vel[:, others]), 2)
-        mask = np.concatenate((np.repeat(s.human_mask[:, None], r, 1), np.ones((b, r, r - 1), dtype=bool)), 2)
+        pos = np.concatenate((np.repeat(pos[:, None], r, 1), robot_pose[:, others, :2]), 2)
+        vel = np.concatenate((np.repeat(vel[:, None], r, 1), robot_vel[:, others]), 2)
+        mask = np.concatenate((np.repeat(mask[:, None], r, 1), np.ones((b, r, r - 1), dtype=bool)), 2)
         return pos.reshape(b * r, -1, 2), vel.reshape(b * r, -1, 2), mask.reshape(b * r, -1)
 
     def escort_ok(self) -> np.ndarray:

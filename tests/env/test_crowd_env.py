@@ -255,3 +255,30 @@ def test_the_crowdnav_task_takes_the_people_spec():
     ):
         with pytest.raises(ValueError, match=match):
             CrowdNavEnv(humans=spec)
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [{}, {"num_robots": 2}, {"variant": "Walls"}, {"variant": "Walls", "num_robots": 2}],
+    ids=["one robot", "two robots", "walls", "walls, two robots"],
+)
+def test_a_reset_observes_its_rows_as_the_whole_batch_is_observed(overrides):
+    from socialzoo.env.tasks.crowdnav import CrowdNavTask
+
+    task = CrowdNavTask(None, 4, **overrides)
+    task.seed(3)
+    task.reset(np.arange(4), {})
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        task.step(rng.uniform(-1, 1, (4, task.num_robots, 2)))
+    # The reset rows' robots are observed alone (a take of their rows), the others kept from the step.
+    task.reset(np.array([2, 0]), {})
+    partial, mask, angle = (
+        task.observation.buffer.copy(),
+        task.observation.mask.copy(),
+        task.frame_angle.copy(),
+    )
+    whole = task._observe()
+    np.testing.assert_array_equal(partial, whole.buffer)
+    np.testing.assert_array_equal(mask, whole.mask)
+    np.testing.assert_array_equal(angle, task.frame_angle)

@@ -353,14 +353,17 @@ class CrowdNavTask(Task):
         core = self.core
         s = core.state
         assert s is not None
-        if rows is not None:
-            s = s.rows(rows)
-        b, r = s.batch_size, self.num_robots
+
+        def of_rows(array: np.ndarray) -> np.ndarray:  # a reset's few rows take only what is read
+            return array if rows is None else array.take(rows, 0)
+
+        robot_pose = of_rows(s.robot_pose)
+        b, r = len(robot_pose), self.num_robots
         robot = self.config.robot
-        velocity = world_velocity(s.robot_pose, s.robot_vel, robot)
-        pos, vel, mask = core.others(s, velocity)
+        velocity = world_velocity(robot_pose, of_rows(s.robot_vel), robot)
+        pos, vel, mask = core.others(s, velocity, rows)
         radius = self._slot_radius_rows[: len(mask)]
-        robot_pos = s.robot_pose[..., :2].reshape(b * r, 2)
+        robot_pos = robot_pose[..., :2].reshape(b * r, 2)
         observed = None
         if self.config.observed_people is not None:
             pos, vel, mask, radius, observed = self._nearest_people(robot_pos, pos, vel, mask, radius)
@@ -371,9 +374,7 @@ class CrowdNavTask(Task):
             mask = np.concatenate((mask, seen), axis=1)
             radius = np.concatenate((radius, np.zeros(seen.shape)), axis=1)
         guided = core.navigator is not None
-        goal = (
-            (core.carrot if rows is None else core.carrot[rows]) if guided else s.robot_goal[..., :2]
-        ).reshape(b * r, 2)
+        goal = (of_rows(core.carrot) if guided else of_rows(s.robot_goal)[..., :2]).reshape(b * r, 2)
         offset = goal - robot_pos
         angle = np.arctan2(offset[:, 1], offset[:, 0])
         self.frame_angle[slice(None) if rows is None else core.robot_rows(rows)] = angle
@@ -381,7 +382,7 @@ class CrowdNavTask(Task):
             robot_pos=robot_pos,
             robot_goal=goal,
             robot_vel=velocity.reshape(b * r, 2),
-            robot_heading=s.robot_pose[..., 2].reshape(b * r),
+            robot_heading=robot_pose[..., 2].reshape(b * r),
             robot_radius=float(robot.radius),  # type: ignore[arg-type]
             preferred_speed=self.config.preferred_speed,
             unicycle=robot.kinematics == "unicycle",
@@ -391,8 +392,7 @@ class CrowdNavTask(Task):
             human_mask=mask,
         )
         if guided:  # the goal distance is the route's length left, not the carrot's distance
-            left = core.route_left if rows is None else core.route_left[rows]
-            observation.robot[:, 0] = left.reshape(b * r)
+            observation.robot[:, 0] = of_rows(core.route_left).reshape(b * r)
         if self.config.signals:
             observation = self._with_signals(observation, robot_pos, angle, rows, observed)
         return observation
