@@ -51,26 +51,28 @@ def seed_states(seeds: Sequence[int] | np.ndarray, tail: int) -> np.ndarray:
         if bad:
             raise ValueError(f"seed_states: seeds must lie in [0, 2**64), got {bad[0]}")
         seeds = np.array(values, dtype=np.uint64)
-    low = (seeds & np.uint64(_MASK)).astype(np.int64)
-    high = (seeds >> np.uint64(32)).astype(np.int64)
     out = np.empty(len(seeds), dtype=np.uint64)
-    _seed_states(low, high, tail_words, out)
+    _seed_states(seeds, tail_words, out)
     return out
 
 
 @kernel
-def _seed_states(low, high, tail, out):  # type: ignore[no-untyped-def]
-    """out[i] = the SeedSequence state word of entropy [low[i], high[i] (if not 0), *tail], in
-    int64 arithmetic masked to 32 bits (products wrap; their low 32 bits are the uint32 result)."""
+def _seed_states(seeds, tail, out):  # type: ignore[no-untyped-def]
+    """out[i] = the SeedSequence state word of entropy [low, high (if not 0), *tail], low and high
+    the 32-bit words of seeds[i], in int64 arithmetic masked to 32 bits (products wrap; their low
+    32 bits are the uint32 result). The words are split here, in uint64, where a reset's few seeds
+    cost less than the numpy calls that split them."""
     entropy = np.zeros(_POOL, dtype=np.int64)
     pool = np.zeros(_POOL, dtype=np.int64)
     state = np.zeros(2, dtype=np.int64)
     for i in range(out.shape[0]):
+        low = np.int64(seeds[i] & np.uint64(_MASK))
+        high = np.int64(seeds[i] >> np.uint64(32))
         n = 0
-        entropy[n] = low[i]
+        entropy[n] = low
         n += 1
-        if high[i] != 0:
-            entropy[n] = high[i]
+        if high != 0:
+            entropy[n] = high
             n += 1
         for w in range(tail.shape[0]):
             entropy[n] = tail[w]
