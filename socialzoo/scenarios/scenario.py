@@ -104,8 +104,8 @@ class Scenario:
             if len(r) == 0:
                 raise ValueError(f"Scenario.human_routes[{i}] is empty")
         object.__setattr__(self, "human_routes", routes)
-        # The routes end to end and their lengths, once: a reset stacks a few scenarios' blocks
-        # instead of every person's route (a kept scenario, as recorded scenes' are, is reset often).
+        # The routes end to end, their lengths and the longest, once: a reset stacks a few scenarios'
+        # blocks instead of every person's route (a kept scenario, as recorded scenes' are, is reset often).
         object.__setattr__(self, "_route_lens", np.array([len(r) for r in routes], dtype=np.intp))
         object.__setattr__(self, "_route_width", max([1] + [len(r) for r in routes]))
         object.__setattr__(self, "_route_points", np.concatenate(routes) if routes else np.zeros((0, 2)))
