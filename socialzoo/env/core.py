@@ -235,7 +235,7 @@ class BatchedCore:
                 stepping = dataclasses.replace(before, human_pref_speed=speeds)
         after, events = step_world(
             stepping, self.walls, self.world, command, halt, desired, learned, self.robot_visible,
-            sparse_people=self.replay.active,
+            sparse_people=self.replay.active, human_contacts=not self.replay.active,
         )  # fmt: skip
         if scripted:
             at_door = self.script.settle(before, after)

@@ -44,11 +44,14 @@ def robot_velocity_vectors(state: WorldState, robot: RobotConfig | None = None) 
 
 def robot_collisions(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> tuple[np.ndarray, np.ndarray]:
     """(robot_wall (B, R), robot_human (B, R, H)) collision flags for the current state."""
+    return robot_wall_contacts(state, walls, cfg), robot_human_contacts(state, cfg)
+
+
+def robot_wall_contacts(state: WorldState, walls: WallIndex, cfg: WorldConfig) -> np.ndarray:
+    """(B, R) robots whose footprint touches a wall in the current state."""
     if cfg.robot.radius is not None:  # a disc footprint
-        robot_wall = walls.nearest(state.robot_pose[..., :2])[1] < cfg.robot.radius
-    else:
-        robot_wall = walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
-    return robot_wall, robot_human_contacts(state, cfg)
+        return walls.nearest(state.robot_pose[..., :2])[1] < cfg.robot.radius
+    return walls.footprint_hits(state.robot_pose, cfg.robot.half_length, cfg.robot.half_width)
 
 
 def robot_human_contacts(state: WorldState, cfg: WorldConfig) -> np.ndarray:
@@ -80,6 +83,7 @@ def step_world(
     human_learned: np.ndarray | None = None,
     robot_visible: bool = True,
     sparse_people: bool = False,
+    human_contacts: bool = True,
 ) -> tuple[WorldState, StepEvents]:
     """Advance every world by one step of cfg.dt.
 
@@ -101,6 +105,8 @@ def step_world(
         sparse_people: step only the rows where a model moves someone, each with only its present
             people (socialzoo.humans.people.step_people_packed; the same steps, for recorded scenes
             whose slots are mostly empty and whose replayed people no model moves).
+        human_contacts: False: events.robot_human is left all False, for a caller that places
+            people after the step (the replay) and counts the contacts where it put them.
 
     Returns:
         (new_state, events).
@@ -165,5 +171,9 @@ def step_world(
         human_model=state.human_model,
         human_group=state.human_group,
     )
-    robot_wall, robot_human = robot_collisions(new_state, walls, cfg)
+    robot_wall = robot_wall_contacts(new_state, walls, cfg)
+    if human_contacts:
+        robot_human = robot_human_contacts(new_state, cfg)
+    else:
+        robot_human = np.zeros(robot_pose.shape[:2] + human_pos.shape[1:2], dtype=bool)
     return new_state, StepEvents(robot_wall=robot_wall, robot_human=robot_human, human_blocked=blocked)

@@ -116,3 +116,16 @@ def test_collision_events():
     state.robot_pose[0, 0] = [(x1 + x2) / 2, (y1 + y2) / 2, 0.0]
     _, events = step_world(state, m.wall_index, WORLD, np.zeros((1, 1, 2)))
     assert events.robot_wall[0, 0]
+
+
+def test_step_without_human_contacts_is_the_same_step_with_none_counted():
+    m, state = crowd("open_room", [0], ScenarioConfig(min_humans=5, max_humans=5))
+    state.human_pos[0, 0] = state.robot_pose[0, 0, :2] + [0.3, 0.0]
+    after, events = step_world(state, m.wall_index, WORLD, np.zeros((1, 1, 2)))
+    bare, left = step_world(state, m.wall_index, WORLD, np.zeros((1, 1, 2)), human_contacts=False)
+    assert events.robot_human.any() and not left.robot_human.any()
+    assert left.robot_human.shape == events.robot_human.shape and left.robot_human.dtype == bool
+    assert np.array_equal(left.robot_wall, events.robot_wall)
+    assert np.array_equal(bare.human_pos, after.human_pos) and np.array_equal(
+        bare.robot_pose, after.robot_pose
+    )
