@@ -118,8 +118,11 @@ def step_world(
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
     people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
+    anyone_moved = True
     if sparse_people:
-        people_step = partial(step_people_packed, moved=state.human_model != REPLAY)
+        moved = state.human_mask & (state.human_model != REPLAY)
+        anyone_moved = bool(moved.any())
+        people_step = partial(step_people_packed, moved=moved)
     human_pos, human_vel, blocked = people_step(
         state.human_pos,
         state.human_vel,
@@ -135,7 +138,8 @@ def step_world(
         human_desired_vel,
         human_learned,
     )
-    if robot_visible:
+    # A step that moved nobody (replayed people only, each where it stood) presses nobody into a robot.
+    if robot_visible and anyone_moved:
         # People the social force moves (its own and learned people, whose desired velocity it
         # follows) do not press deeper into a robot they touch (socialzoo.humans.motion.
         # keep_off_robots: the model has no body force); ORCA people keep off by construction.

@@ -187,9 +187,11 @@ def step_people_packed(
     """
     new_pos, new_vel = pos.copy(), vel.copy()
     blocked = np.zeros(mask.shape, dtype=bool)
-    rows, order, where = _pack_slots(mask, mask if moved is None else mask & moved)
-    if len(rows) == 0:
+    moving = mask if moved is None else mask & moved
+    # Nobody moved (a batch of replayed people only): skip the packing's pass over every slot.
+    if not moving.any():
         return new_pos, new_vel, blocked
+    rows, order, where = _pack_slots(mask, moving)
     # Flat gathers and scatters: indexing (B, H, 2) arrays by (rows, slots) pairs costs ten times more.
     flat = (rows[:, None] * mask.shape[1] + order).reshape(-1)
 

@@ -42,3 +42,14 @@ def test_packed_people_step_exactly_as_unpacked() -> None:
         # Rows where no present person is moved are not stepped at all.
         idle = ~(mask & moved).any(axis=1)
         assert np.array_equal(packed[0][idle], args[0][idle])
+
+
+def test_nobody_moved_returns_new_arrays_equal_to_the_old() -> None:
+    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
+    args = _crowd(0)
+    pos, vel, mask = args[0], args[1], args[4]
+    new_pos, new_vel, blocked = step_people_packed(
+        *args, walls, WorldConfig(dt=0.1), moved=np.zeros_like(mask)
+    )
+    assert np.array_equal(new_pos, pos) and np.array_equal(new_vel, vel) and not blocked.any()
+    assert blocked.shape == mask.shape and new_pos is not pos and new_vel is not vel
