@@ -157,7 +157,8 @@ class BatchedCore:
         rows = self.check_rows(rows, len(scenarios))
         if len(rows) == 0:
             return
-        scenarios, models = self.people.prepare(list(scenarios))
+        scenarios, kinds = self.people.prepare(list(scenarios))
+        models = self.people.models_of(kinds)
         if self.state is None:
             # Rows not reset yet hold the first row's start (a step needs every row reset first).
             first = scenarios_to_state(scenarios[:1], self.num_robots, self.max_humans)
@@ -165,12 +166,15 @@ class BatchedCore:
             self.state = WorldState.concatenate([first] * self.batch_size)
         write_scenarios(self.state, rows, scenarios)  # the route axis widens for a longer route
         self.state.human_model[rows] = models
-        self.start_rows(rows, scenarios)
+        self.start_rows(rows, scenarios, kinds)
 
-    def start_rows(self, rows: np.ndarray, scenarios: Sequence[Scenario | None]) -> None:
+    def start_rows(
+        self, rows: np.ndarray, scenarios: Sequence[Scenario | None], kinds: np.ndarray | None = None
+    ) -> None:
         """Start new episodes in `rows` whose state is written (by `reset_rows`, or by a task's own
         faster writer: CrowdNav's arena cases, with None for their scenarios): the people's
-        bookkeeping, the robots' plans and carrots, their sight lines and done flags."""
+        bookkeeping, the robots' plans and carrots, their sight lines and done flags. kinds: (len(rows),
+        H) each slot's index into the people spec's parts (People.kinds) where the caller drew them."""
         state = self.state
         assert state is not None
         for row, scenario in zip(rows.tolist(), scenarios, strict=True):
@@ -180,9 +184,10 @@ class BatchedCore:
         self.people.reset(rows, state)
         self.script.reset(rows, scenarios, state)
         if self.replay.wanted(scenarios):
-            counts = [0 if s is None else s.num_humans for s in scenarios]
-            seeds = [0 if s is None else s.seed for s in scenarios]
-            self.replay.reset(rows, scenarios, state, self.people.kinds(seeds, counts))
+            if kinds is None:
+                counts = [0 if s is None else s.num_humans for s in scenarios]
+                kinds = self.people.kinds([0 if s is None else s.seed for s in scenarios], counts)
+            self.replay.reset(rows, scenarios, state, kinds)
         else:
             self.replay.release(rows)
         if self.navigator is not None:

@@ -88,6 +88,8 @@ class People:
         self.max_humans = max_humans
         self.parts = self.config.parts
         self.ids = np.array([MODEL_IDS[p.model] for p in self.parts], dtype=np.int8)
+        # Each kind's model and, last (kind -1, an empty slot), social force.
+        self._slot_ids = np.append(self.ids, np.int8(MODEL_IDS["sf"]))
         self.policy: LearnedHumanPolicy | None = None
         path = self.config.learned_path
         if path is not None:
@@ -141,24 +143,29 @@ class People:
     def models(self, seeds: Sequence[int], counts: Sequence[int]) -> np.ndarray:
         """(len(seeds), H) int8 model of every person slot of rows with these seeds and head counts
         (socialzoo.humans.models.assign_models); social force in empty slots."""
-        models = np.zeros((len(seeds), self.max_humans), dtype=np.int8)
-        if len(self.parts) > 1 or self.parts[0].model != "sf":
-            kinds = self.kinds(seeds, counts)
-            models[:] = np.where(kinds >= 0, self.ids[kinds], 0)
-        return models
+        if len(self.parts) == 1 and self.parts[0].model == "sf":  # every slot social force: no draw
+            return np.zeros((len(seeds), self.max_humans), dtype=np.int8)
+        return self.models_of(self.kinds(seeds, counts))
+
+    def models_of(self, kinds: np.ndarray) -> np.ndarray:
+        """(n, H) int8 model of every person slot of `kinds` (n, H) (`kinds`); social force in empty slots."""
+        return self._slot_ids[kinds]
 
     def prepare(self, scenarios: list[Scenario]) -> tuple[list[Scenario], np.ndarray]:
-        """The scenarios as the config's people walk them, and (len, H) int8 model of each slot."""
-        models = self.models([s.seed for s in scenarios], [s.num_humans for s in scenarios])
+        """The scenarios as the config's people walk them, and (len, H) each slot's index into the
+        spec's parts (`kinds`, drawn once per reset: `models_of` gives their models)."""
+        kinds = self.kinds([s.seed for s in scenarios], [s.num_humans for s in scenarios])
         if not self.groups:
-            return scenarios, models
+            return scenarios, kinds
         assert self.map is not None, "walking groups form on a map"
         grouped = np.array([p.model == "groups" for p in self.parts])
-        out = []
-        for scenario in scenarios:
-            kinds = assign_models(self.parts, scenario.num_humans, scenario.seed)
-            out.append(with_groups(scenario, self.map, grouped[kinds], self.config.group_sizes))
-        return out, models
+        out = [
+            with_groups(
+                scenario, self.map, grouped[kinds[row, : scenario.num_humans]], self.config.group_sizes
+            )
+            for row, scenario in enumerate(scenarios)
+        ]
+        return out, kinds
 
     def reset(self, rows: np.ndarray, state: WorldState) -> None:
         """Start the episodes of `rows`, whose rows of `state` were just written."""

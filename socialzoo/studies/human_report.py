@@ -135,9 +135,9 @@ def walk(spec: str, cfg: HumanReportConfig) -> WalkResult:
     test_set = dataclasses.replace(validation_set(cfg.map), cfg=cfg.scenario)
     n = cfg.scenarios
     people = People(config.people, config.world, n, config.num_robots, config.max_humans, walls, m)
-    scenarios, models = people.prepare(test_set.scenarios(range(n), m))
+    scenarios, kinds = people.prepare(test_set.scenarios(range(n), m))
     state = without_robots(scenarios_to_state(scenarios, num_robots=1, max_humans=config.max_humans))
-    state.human_model[:] = models
+    state.human_model[:] = people.models_of(kinds)
     world = config.world
     tracker = HumanEpisodeMetrics(
         n, config.max_humans, 0, walls, world.human_collision_distance, world.human.waypoint_radius

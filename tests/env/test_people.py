@@ -71,6 +71,17 @@ def test_kinds_are_each_rows_assignment_and_minus_one_in_empty_slots(models):
         people.kinds([1, 2], [3])
 
 
+@pytest.mark.parametrize("models", ["sf", "orca", "sf@0.5+orca@0.5"])
+def test_models_of_kinds_are_the_models_of_seeds_and_counts(models):
+    people = task_of(batch=2, models=models).core.people
+    rng = np.random.default_rng(6)
+    seeds, counts = rng.integers(0, 10**6, 6).tolist(), [0, people.max_humans, *rng.integers(0, 9, 4)]
+    models_of = people.models_of(people.kinds(seeds, counts))
+    assert models_of.dtype == np.int8
+    assert np.array_equal(models_of, people.models(seeds, counts))
+    assert (models_of[0] == 0).all()  # empty slots: social force
+
+
 def test_counterfactual_rows_step_as_the_scenario_without_its_robot():
     task = task_of(models="sf@0.5+orca@0.5", counterfactual=True)
     alone = without_robots(task.core.state)
