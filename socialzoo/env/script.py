@@ -86,10 +86,11 @@ class ScriptRunner:
     # ------------------------------------------------------------------ reset
     def reset(self, rows: np.ndarray, scenarios: Sequence[Scenario | None], state: WorldState) -> None:
         """Load the scripts of `rows` (None or unscripted: nothing scripted) into their slots."""
+        scripts = [s.script for s in scenarios if s is not None and s.script is not None]
+        if not scripts and not self.active:  # nothing scripted before or after (every recorded scene's reset)
+            return
         h = self.stop.shape[1]
-        most_doors = max(
-            [len(s.script.doors) for s in scenarios if s is not None and s.script is not None] + [0]
-        )
+        most_doors = max([len(script.doors) for script in scripts] + [0])
         if most_doors > self.doors.shape[1]:
             grown = np.zeros((len(self.doors), most_doors, 6))
             grown[..., 4:] = np.inf  # padding doors are never closed: open from 0 to forever
