@@ -150,19 +150,22 @@ class ReplayRunner:
                 f"need recorded people (a recorded scene's family), {name} has none"
             )
         entries = self.bank.point(rows, recordings)
-        has = entries >= 0
-        self.recorded[rows] = has
-        self.on_track[rows[~has]] = False
-        self.time_limit[rows[~has]] = np.inf  # the task's own budget, not a recording's of before
-        fresh, entries = rows[has], entries[has]
-        if len(fresh) == 0:
-            return
+        fresh = rows
+        if missing:  # a task's own cases among them (a recorded scene's rows all have recordings)
+            has = entries >= 0
+            self.recorded[rows[~has]] = False
+            self.on_track[rows[~has]] = False
+            self.time_limit[rows[~has]] = np.inf  # the task's own budget, not a recording's of before
+            fresh, entries, kinds = rows[has], entries[has], kinds[has]
+            if len(fresh) == 0:
+                return
+        self.recorded[fresh] = True
         assert len(self.recorded) == state.batch_size
         self.frame_dt[fresh] = self.bank.dt[entries]
         self.time_limit[fresh] = self.bank.time_limit[entries]
         bank = self.bank
         begin_episodes(
-            fresh, kinds[has], bank.slot_at, bank.people, bank.follow, self._per_part["follows"],
+            fresh, kinds, bank.slot_at, bank.people, bank.follow, self._per_part["follows"],
             self._per_part["reacts"], self._per_part["model"], REPLAY, self.follows, self.reacts, self.then,
             self.occupant, self.on_track, self.gone, self.reacted_at, self.exit_at, self.walked, self.recorded_left,
             self.recorded_exit, self.rest, self.elapsed, self.folded, self.deviation, self.moves, self.walked_into,

@@ -599,6 +599,27 @@ def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
     assert core.time_limit[0] == np.inf
 
 
+def test_a_recorded_row_reset_beside_a_plain_one_starts_as_reset_alone(family: RecordedScene) -> None:
+    """A reset of rows with and without recordings gives each recorded row its own slots' models
+    (its kinds, not its neighbour's) and walks it as a reset of that row alone does."""
+    plain = Scenario(
+        map_name="arena", seed=5, robot_starts=[[0.0, 0.0, 0.0]], robot_goals=[[4.0, 0.0, 0.0]],
+        human_spawn=[[1.0, 1.0]], human_start_index=[-1], human_goal_index=[-1],
+        human_routes=(np.array([[1.0, 1.0], [3.0, 1.0]]),), human_speed=[1.0],
+    )  # fmt: skip
+    recorded = family.make(1003)
+    mixed = _core([plain, recorded], "sf@0.5+orca@0.5")
+    alone = _core([recorded], "sf@0.5+orca@0.5")
+    for name in ("follows", "reacts", "then", "occupant", "on_track"):
+        np.testing.assert_array_equal(getattr(mixed.replay, name)[1], getattr(alone.replay, name)[0], name)
+    for _ in range(30):
+        mixed.step(np.zeros((2, 1, 2)))
+        alone.step(np.zeros((1, 1, 2)))
+    for name in ("human_pos", "human_mask", "human_model"):
+        np.testing.assert_array_equal(getattr(mixed.state, name)[1], getattr(alone.state, name)[0], name)
+    assert not mixed.replay.recorded[0] and mixed.time_limit[0] == np.inf
+
+
 def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
     """sha256 prefixes of a seeded VectorEnv rollout of the synthetic scene: (observations,
     rewards and end flags; the recorded metrics of the episodes that ended)."""
