@@ -584,14 +584,19 @@ def test_a_compacted_core_plays_its_recorded_rows_on(family: RecordedScene) -> N
         assert kept == pytest.approx(whole, nan_ok=True, rel=0, abs=0)
 
 
-def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
-    family: RecordedScene,
-) -> None:
-    plain = Scenario(
+def _plain_scenario() -> Scenario:
+    """A scenario without recorded people: one person walking 2 m in the arena."""
+    return Scenario(
         map_name="arena", seed=5, robot_starts=[[0.0, 0.0, 0.0]], robot_goals=[[4.0, 0.0, 0.0]],
         human_spawn=[[1.0, 1.0]], human_start_index=[-1], human_goal_index=[-1],
         human_routes=(np.array([[1.0, 1.0], [3.0, 1.0]]),), human_speed=[1.0],
     )  # fmt: skip
+
+
+def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
+    family: RecordedScene,
+) -> None:
+    plain = _plain_scenario()
     recorded = family.make(1000)
     core = _core([recorded, plain], "sf")
     assert core.time_limit[0] == recorded.recorded.time_limit and core.time_limit[1] == np.inf
@@ -602,11 +607,7 @@ def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
 def test_a_recorded_row_reset_beside_a_plain_one_starts_as_reset_alone(family: RecordedScene) -> None:
     """A reset of rows with and without recordings gives each recorded row its own slots' models
     (its kinds, not its neighbour's) and walks it as a reset of that row alone does."""
-    plain = Scenario(
-        map_name="arena", seed=5, robot_starts=[[0.0, 0.0, 0.0]], robot_goals=[[4.0, 0.0, 0.0]],
-        human_spawn=[[1.0, 1.0]], human_start_index=[-1], human_goal_index=[-1],
-        human_routes=(np.array([[1.0, 1.0], [3.0, 1.0]]),), human_speed=[1.0],
-    )  # fmt: skip
+    plain = _plain_scenario()
     recorded = family.make(1003)
     mixed = _core([plain, recorded], "sf@0.5+orca@0.5")
     alone = _core([recorded], "sf@0.5+orca@0.5")
