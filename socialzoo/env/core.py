@@ -26,7 +26,7 @@ from socialzoo.nav.navigator import Navigator, Sight
 from socialzoo.nav.recovery import RecoveryConfig
 from socialzoo.nav.sight_cache import SightCache
 from socialzoo.scenarios.scenario import Scenario
-from socialzoo.scenarios.start_state import scenarios_to_state, write_scenarios
+from socialzoo.scenarios.start_state import StartStore, scenarios_to_state
 
 
 class BatchedCore:
@@ -129,6 +129,8 @@ class BatchedCore:
         self.visible = np.zeros((b * r, max_humans), dtype=bool)
         self.done = np.zeros((b, r), dtype=bool)
         self.scenarios: list[Scenario | None] = [None] * b
+        # The starts of the scenarios the rows are reset from again and again (a recorded scene's).
+        self.starts = StartStore(r, max_humans)
         self._ever_reset = np.zeros(b, dtype=bool)
         # For each robot, the other robots of its row.
         self._others = np.array([[j for j in range(r) if j != k] for k in range(r)], dtype=np.intp).reshape(
@@ -164,7 +166,7 @@ class BatchedCore:
             first = scenarios_to_state(scenarios[:1], self.num_robots, self.max_humans)
             first.human_model[:] = models[:1]
             self.state = WorldState.concatenate([first] * self.batch_size)
-        write_scenarios(self.state, rows, scenarios)  # the route axis widens for a longer route
+        self.starts.write(self.state, rows, scenarios)  # the route axis widens for a longer route
         self.state.human_model[rows] = models
         self.start_rows(rows, scenarios, kinds)
 

@@ -5,13 +5,14 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import pickle
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from socialzoo.core.config import WorldConfig
-from socialzoo.core.state import pad_to
+from socialzoo.core.state import WorldState, pad_to
 from socialzoo.env.world import step_world
 from socialzoo.maps import map_file as maps
 from socialzoo.maps.map_file import Map
@@ -21,7 +22,7 @@ from socialzoo.scenarios.families import LayoutFamily
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario
 from socialzoo.scenarios.scenario_sets import TEST_SETS, TestSet, get_test_set
-from socialzoo.scenarios.start_state import _NOISE_STREAM, scenarios_to_state, write_scenarios
+from socialzoo.scenarios.start_state import _NOISE_STREAM, StartStore, scenarios_to_state, write_scenarios
 
 
 def gdc1() -> Map:
@@ -405,6 +406,39 @@ def test_write_scenarios_in_place_is_scenarios_to_state() -> None:
         write_scenarios(
             scenarios_to_state([fewest]), np.array([0]), [max(scenarios, key=lambda s: s.num_humans)]
         )
+
+
+def test_start_store_writes_as_write_scenarios() -> None:
+    """A StartStore writes rows exactly as write_scenarios does: scenarios met once (written as
+    write_scenarios writes them), then stored and written from the store (renamed copies under new
+    seeds, as a family that keeps its scenarios resets from: draws 2 and 6 are all stored), a new
+    scenario among stored ones; nothing of another scenario or of a row written before shows through."""
+    m = gdc1()
+    kept = [generate_scenario(m, seed) for seed in range(6)]
+    h = max(s.num_humans for s in kept) + 1
+    store = StartStore(1, h)
+    state = scenarios_to_state(kept[:1], max_humans=h)
+    state = WorldState.concatenate([state] * 4)
+    reference = state.rows(np.arange(4))
+    draws = [[0, 1, 2], [1, 0, 2], [2, 1, 0], [3, 4, 1], [4, 3, 5], [5, 0, 4], [1, 5, 3]]
+    for k, picks in enumerate(draws):
+        rows = np.array([3, 0, 2]) if k % 2 else np.array([1, 2, 3])
+        scenarios = [kept[i].with_seed(1000 * k + i) for i in picks]
+        if k == 5:
+            scenarios[1] = generate_scenario(m, 99)  # never met again: written, noted, not stored
+        store.write(state, rows, scenarios)
+        write_scenarios(reference, rows, scenarios)
+        for f in dataclasses.fields(state):
+            np.testing.assert_array_equal(getattr(state, f.name), getattr(reference, f.name), err_msg=f.name)
+    assert len(store._held) == 6  # every kept scenario stored once, the one-off not
+    # A copy (pickled, as a vector env's worker gets it) writes from its own store alike.
+    copied_kept, copied = pickle.loads(pickle.dumps((kept, store)))
+    again = [copied_kept[i].with_seed(7 + i) for i in (4, 2, 0)]
+    copied.write(state, np.array([0, 1, 2]), again)
+    write_scenarios(reference, np.array([0, 1, 2]), again)
+    assert len(copied._held) == 6 and all(id(s._route_points) in copied._entry for s in again)
+    for f in dataclasses.fields(state):
+        np.testing.assert_array_equal(getattr(state, f.name), getattr(reference, f.name), err_msg=f.name)
 
 
 def test_state_rows_by_row_slice_indices_or_mask_are_copies() -> None:
