@@ -7,7 +7,7 @@ import numpy as np
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.walls import WallIndex
-from socialzoo.humans.models import ORCA, REPLAY, SOCIAL_FORCE
+from socialzoo.humans.models import LEARNED, ORCA, REPLAY, SOCIAL_FORCE
 from socialzoo.humans.people import step_people, step_people_packed
 
 
@@ -53,3 +53,22 @@ def test_nobody_moved_returns_new_arrays_equal_to_the_old() -> None:
     )
     assert np.array_equal(new_pos, pos) and np.array_equal(new_vel, vel) and not blocked.any()
     assert blocked.shape == mask.shape and new_pos is not pos and new_vel is not vel
+
+
+def test_packed_learned_people_step_exactly_as_unpacked() -> None:
+    """Learned people's desired velocities are packed with the same flat indices as the rest."""
+    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
+    cfg = WorldConfig(dt=0.1)
+    rng = np.random.default_rng(7)
+    args = list(_crowd(1))
+    mask, model = args[4], args[5].copy()
+    model[1:4, ::3] = LEARNED
+    args[5] = model
+    desired = rng.normal(0, 1, args[0].shape)
+    learned = mask & (model == LEARNED)
+    moved = model != REPLAY
+    full = step_people(*args, walls, cfg, desired, learned)
+    packed = step_people_packed(*args, walls, cfg, desired, learned, moved=moved)
+    stepped = mask & moved.any(axis=1, where=mask, keepdims=True)
+    for whole, part in zip(full, packed, strict=True):
+        assert np.array_equal(whole[stepped], part[stepped])
