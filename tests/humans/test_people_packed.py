@@ -21,6 +21,10 @@ def _crowd(seed: int):
     mask = rng.random((b, h)) < 0.45
     mask[0, [3, 5]] = True
     mask[4] = False  # an empty row
+    # A pair whose first member (the slot that names the group) is absent: packed, it walks alone.
+    group[2, [1, 6]] = 1
+    model[2, 6] = SOCIAL_FORCE
+    mask[2, 1], mask[2, 6] = False, True
     return (
         rng.uniform(-4, 4, (b, h, 2)), rng.normal(0, 1, (b, h, 2)), rng.uniform(-6, 6, (b, h, 2)),
         rng.uniform(0.8, 1.4, (b, h)), mask, model, group, rng.uniform(-4, 4, (b, 1, 2)), rng.normal(0, 1, (b, 1, 2)),
