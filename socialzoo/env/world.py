@@ -114,7 +114,6 @@ def step_world(
     if robot_halt is None:
         robot_halt = np.zeros(state.robot_pose.shape[:2], dtype=bool)
     hcfg = cfg.human
-    target = state.human_target
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
     people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
@@ -123,21 +122,27 @@ def step_world(
         moved = state.human_mask & (state.human_model != REPLAY)
         anyone_moved = bool(moved.any())
         people_step = partial(step_people_packed, moved=moved)
-    human_pos, human_vel, blocked = people_step(
-        state.human_pos,
-        state.human_vel,
-        target,
-        state.human_pref_speed,
-        state.human_mask,
-        state.human_model,
-        state.human_group,
-        state.robot_pose[..., :2] if robot_visible else state.robot_pose[:, :0, :2],
-        robot_velocity_vectors(state, cfg.robot)[:, : state.num_robots if robot_visible else 0],
-        walls,
-        cfg,
-        human_desired_vel,
-        human_learned,
-    )
+    if anyone_moved:
+        human_pos, human_vel, blocked = people_step(
+            state.human_pos,
+            state.human_vel,
+            state.human_target,
+            state.human_pref_speed,
+            state.human_mask,
+            state.human_model,
+            state.human_group,
+            state.robot_pose[..., :2] if robot_visible else state.robot_pose[:, :0, :2],
+            robot_velocity_vectors(state, cfg.robot)[:, : state.num_robots if robot_visible else 0],
+            walls,
+            cfg,
+            human_desired_vel,
+            human_learned,
+        )
+    else:
+        # Nobody moved (replayed people only: step_people_packed would leave each where it stood),
+        # so no model reads the waypoints and their gather from the cold route array is skipped.
+        human_pos, human_vel = state.human_pos.copy(), state.human_vel.copy()
+        blocked = np.zeros(state.human_mask.shape, dtype=bool)
     # A step that moved nobody (replayed people only, each where it stood) presses nobody into a robot.
     if robot_visible and anyone_moved:
         # People the social force moves (its own and learned people, whose desired velocity it
@@ -149,7 +154,7 @@ def step_world(
         )  # fmt: skip
     waypoint, direction = advance_waypoints(
         human_pos,
-        target,
+        state.human_route,
         state.human_route_len,
         state.human_waypoint,
         state.human_direction,

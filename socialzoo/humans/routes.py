@@ -9,7 +9,7 @@ from socialzoo.core.jit import kernel
 
 def advance_waypoints(
     pos: np.ndarray,
-    target: np.ndarray,
+    route: np.ndarray,
     route_len: np.ndarray,
     waypoint: np.ndarray,
     direction: np.ndarray,
@@ -22,7 +22,9 @@ def advance_waypoints(
 
     Args:
         pos: (B, H, 2) positions, m.
-        target: (B, H, 2) current waypoints, m.
+        route: (B, H, L, 2) waypoints, m; each human's current one is route[waypoint]
+            (WorldState.human_target), read here point by point: a step whose models read no
+            target (replayed people only) builds none.
         route_len: (B, H) number of waypoints per route (>= 1).
         waypoint: (B, H) current waypoint index.
         direction: (B, H) +1 towards the goal end, -1 towards the start.
@@ -34,19 +36,19 @@ def advance_waypoints(
     dtype = np.result_type(waypoint, direction, route_len)
     new_waypoint = np.empty(np.shape(waypoint), dtype=dtype)
     new_direction = np.empty(np.shape(direction), dtype=np.asarray(direction).dtype)
-    _advance(pos, target, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction)
+    _advance(pos, route, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction)
     return new_waypoint, new_direction
 
 
 @kernel
-def _advance(pos, target, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
+def _advance(pos, route, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
     """`advance_waypoints` in one pass over (B, H)."""
     for b in range(waypoint.shape[0]):
         for h in range(waypoint.shape[1]):
-            dx, dy = pos[b, h, 0] - target[b, h, 0], pos[b, h, 1] - target[b, h, 1]
+            d, w = direction[b, h], waypoint[b, h]
+            dx, dy = pos[b, h, 0] - route[b, h, w, 0], pos[b, h, 1] - route[b, h, w, 1]
             reached = dx * dx + dy * dy < radius2
             last = route_len[b, h] - 1
-            d, w = direction[b, h], waypoint[b, h]
             if reached and ((d > 0 and w >= last) or (d < 0 and w <= 0)):
                 d = -d
             if reached:

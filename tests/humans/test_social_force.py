@@ -125,16 +125,18 @@ def test_pair_force_is_antisymmetric_between_two_humans():
 def test_waypoints_shuttle_between_ends():
     route_len = np.array([[3]])
     pos = np.zeros((1, 1, 2))
+    # The person stands on the route's ends; its middle waypoint lies far off.
+    route = np.array([[[[0.0, 0.0], [5.0, 5.0], [0.0, 0.0]]]])
     waypoint, direction = np.array([[2]]), np.array([[1]])
-    waypoint, direction = advance_waypoints(pos, pos, route_len, waypoint, direction, 1.0)
+    waypoint, direction = advance_waypoints(pos, route, route_len, waypoint, direction, 1.0)
     assert (waypoint[0, 0], direction[0, 0]) == (1, -1)
-    waypoint, direction = advance_waypoints(pos, pos, route_len, np.array([[0]]), np.array([[-1]]), 1.0)
+    waypoint, direction = advance_waypoints(pos, route, route_len, np.array([[0]]), np.array([[-1]]), 1.0)
     assert (waypoint[0, 0], direction[0, 0]) == (1, 1)
-    far = np.full((1, 1, 2), 5.0)
-    waypoint, direction = advance_waypoints(pos, far, route_len, np.array([[1]]), np.array([[1]]), 1.0)
+    waypoint, direction = advance_waypoints(pos, route, route_len, np.array([[1]]), np.array([[1]]), 1.0)
     assert (waypoint[0, 0], direction[0, 0]) == (1, 1)
     # A one-waypoint route stays put.
-    waypoint, direction = advance_waypoints(pos, pos, np.array([[1]]), np.array([[0]]), np.array([[1]]), 1.0)
+    one_point = np.array([[1]])
+    waypoint, direction = advance_waypoints(pos, route, one_point, np.array([[0]]), np.array([[1]]), 1.0)
     assert waypoint[0, 0] == 0
 
 
