@@ -122,11 +122,12 @@ def step_world(
         moved = state.human_mask & (state.human_model != REPLAY)
         anyone_moved = bool(moved.any())
         people_step = partial(step_people_packed, moved=moved)
-    if anyone_moved:
+    target = state.human_target if anyone_moved else None
+    if target is not None:
         human_pos, human_vel, blocked = people_step(
             state.human_pos,
             state.human_vel,
-            state.human_target,
+            target,
             state.human_pref_speed,
             state.human_mask,
             state.human_model,
@@ -140,7 +141,8 @@ def step_world(
         )
     else:
         # Nobody moved (replayed people only: step_people_packed would leave each where it stood),
-        # so no model reads the waypoints and their gather from the cold route array is skipped.
+        # so no model reads the waypoints and their gather from the cold route array is skipped
+        # (advance_waypoints reads the route itself).
         human_pos, human_vel = state.human_pos.copy(), state.human_vel.copy()
         blocked = np.zeros(state.human_mask.shape, dtype=bool)
     # A step that moved nobody (replayed people only, each where it stood) presses nobody into a robot.
@@ -159,6 +161,7 @@ def step_world(
         state.human_waypoint,
         state.human_direction,
         hcfg.waypoint_radius,
+        target,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot

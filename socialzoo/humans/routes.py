@@ -14,6 +14,7 @@ def advance_waypoints(
     waypoint: np.ndarray,
     direction: np.ndarray,
     radius: float,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next waypoint index and direction for every human.
 
@@ -22,13 +23,16 @@ def advance_waypoints(
 
     Args:
         pos: (B, H, 2) positions, m.
-        route: (B, H, L, 2) waypoints, m; each human's current one is route[waypoint]
-            (WorldState.human_target), read here point by point: a step whose models read no
-            target (replayed people only) builds none.
+        route: (B, H, L, 2) waypoints, m; each human's current one is route[waypoint], read
+            here point by point unless `target` is given.
         route_len: (B, H) number of waypoints per route (>= 1).
         waypoint: (B, H) current waypoint index.
         direction: (B, H) +1 towards the goal end, -1 towards the start.
         radius: reach radius, m.
+        target: (B, H, 2) route[waypoint] (WorldState.human_target) where the caller gathered it
+            for its models already: read instead of the route, whose second pass over a long
+            recorded route array misses the cache again. A step whose models read no target
+            (replayed people only) gathers none and leaves this None.
 
     Returns:
         (waypoint, direction), new arrays of the same shapes.
@@ -36,17 +40,23 @@ def advance_waypoints(
     dtype = np.result_type(waypoint, direction, route_len)
     new_waypoint = np.empty(np.shape(waypoint), dtype=dtype)
     new_direction = np.empty(np.shape(direction), dtype=np.asarray(direction).dtype)
-    _advance(pos, route, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction)
+    # The current waypoints as points[b, h, w if at_waypoint else 0]: one kernel either way.
+    points, at_waypoint = (route, True) if target is None else (target[:, :, None], False)
+    _advance(
+        pos, points, at_waypoint, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction
+    )
     return new_waypoint, new_direction
 
 
 @kernel
-def _advance(pos, route, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
-    """`advance_waypoints` in one pass over (B, H)."""
+def _advance(pos, points, at_waypoint, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
+    """`advance_waypoints` in one pass over (B, H); the current waypoint is points[b, h, k], k the
+    waypoint index if at_waypoint (points the route), else 0 (points the gathered targets)."""
     for b in range(waypoint.shape[0]):
         for h in range(waypoint.shape[1]):
             d, w = direction[b, h], waypoint[b, h]
-            dx, dy = pos[b, h, 0] - route[b, h, w, 0], pos[b, h, 1] - route[b, h, w, 1]
+            k = w if at_waypoint else 0
+            dx, dy = pos[b, h, 0] - points[b, h, k, 0], pos[b, h, 1] - points[b, h, k, 1]
             reached = dx * dx + dy * dy < radius2
             last = route_len[b, h] - 1
             if reached and ((d > 0 and w >= last) or (d < 0 and w <= 0)):

@@ -140,6 +140,22 @@ def test_waypoints_shuttle_between_ends():
     assert waypoint[0, 0] == 0
 
 
+def test_waypoints_advance_alike_from_the_route_or_the_gathered_targets():
+    rng = np.random.default_rng(0)
+    route = rng.uniform(-2.0, 2.0, (3, 5, 4, 2))
+    route_len = rng.integers(1, 5, (3, 5))
+    waypoint = rng.integers(0, route_len)
+    direction = rng.choice([-1, 1], (3, 5))
+    # Half the people stand on their waypoint, so some advance and some turn back.
+    target = np.take_along_axis(route, waypoint[:, :, None, None], axis=2)[:, :, 0]
+    pos = np.where(rng.random((3, 5, 1)) < 0.5, target, target + 3.0)
+    from_route = advance_waypoints(pos, route, route_len, waypoint, direction, 0.5)
+    from_target = advance_waypoints(pos, route, route_len, waypoint, direction, 0.5, target)
+    for got, want in zip(from_target, from_route, strict=True):
+        np.testing.assert_array_equal(got, want)
+    assert (from_route[0] != waypoint).any() and (from_route[1] != direction).any()
+
+
 def _learned_beside_a_person_and_a_wall():
     """(human_acceleration's first arguments, desired velocities, learned mask): a learned person
     (slot 0) beside a scripted one and a wall."""
