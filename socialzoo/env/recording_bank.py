@@ -35,7 +35,7 @@ class RecordingBank:
     - points: pos and vel (P, 2), its tracks and their velocities (RecordedPeople.velocities) frame-major,
       frame f's n slots together (a step reads a row's slots on one or two frames), m and m/s, NaN absent;
     - slots (S,): occupants_at and occupants, where each slot's people are in the occupant section and
-      how many; route_at and route_points, where its route frames are (RecordedPeople.route_frames,
+      how many; route_at and route_points, where its route frames are (RecordedPeople.slot_routes,
       unpadded) and how many; shared, more than one person in it; follow, RecordedPeople.follow;
     - occupants (O,): entry, exit, first, last, speed, each slot's people one after another
       (socialzoo.scenarios.recorded_people.Occupants without its padding);

@@ -164,17 +164,6 @@ class RecordedPeople:
         return tuple(slot_route(slot) for slot in self.slot_runs)
 
     @cached_property
-    def route_frames(self) -> np.ndarray:
-        """(S, L) the frames of each slot's route points (slot_route), padded by repeating its last."""
-        frames = self.slot_routes
-        width = max((len(f) for f in frames), default=1)
-        out = np.zeros((len(frames), width), dtype=np.int64)
-        for k, f in enumerate(frames):
-            out[k, : len(f)] = f
-            out[k, len(f) :] = f[-1]
-        return out
-
-    @cached_property
     def velocities(self) -> np.ndarray:
         """(n, T, 2) each slot's velocity on the segment from each frame to the next (the one before
         it at a person's last frame; 0 for a person seen on one frame only), m/s: what a replayed
