@@ -235,7 +235,9 @@ class ReplayRunner:
         one per row); arrival: each row's time to goal, s (NaN unless the episode succeeded). A row
         without a recording gets an empty dict."""
         rows = np.asarray(rows, dtype=np.intp).reshape(-1)
-        robots = np.broadcast_to(np.asarray(robot, dtype=np.intp), rows.shape)
+        robots = np.asarray(robot, dtype=np.intp)
+        # The task passes one robot per row; np.broadcast_to cost more than the kernel's work.
+        robots = np.full(rows.shape, robots) if robots.ndim == 0 else robots.reshape(rows.shape)
         measures = np.empty((len(rows), 6))
         bank = self.bank
         row_measures(
