@@ -235,6 +235,7 @@ class BatchedCore:
             halt = done if halt is None else halt | done
             command = np.where(done[..., None], 0.0, command)
         scripted = self.script.active
+        replayed = self.replay.active  # read once: each read scans the rows
         stepping = before
         if scripted:
             speeds = self.script.speeds(before)
@@ -242,7 +243,7 @@ class BatchedCore:
                 stepping = dataclasses.replace(before, human_pref_speed=speeds)
         after, events = step_world(
             stepping, self.walls, self.world, command, halt, desired, learned, self.robot_visible,
-            sparse_people=self.replay.active, human_contacts=not self.replay.active,
+            sparse_people=replayed, human_contacts=not replayed,
         )  # fmt: skip
         if scripted:
             at_door = self.script.settle(before, after)
@@ -251,7 +252,7 @@ class BatchedCore:
         if done is not None:
             # The halting step's motion model would still carry a differential robot half a step.
             after.robot_pose = np.where(done[..., None], before.robot_pose, after.robot_pose)
-        if self.replay.active:
+        if replayed:
             robot_vel = world_velocity(after.robot_pose, after.robot_vel, self.world.robot)
             self.replay.settle(after, robot_vel)
             # Contacts with the people where the recording put them.
