@@ -282,3 +282,20 @@ def test_a_reset_observes_its_rows_as_the_whole_batch_is_observed(overrides):
     np.testing.assert_array_equal(partial, whole.buffer)
     np.testing.assert_array_equal(mask, whole.mask)
     np.testing.assert_array_equal(angle, task.frame_angle)
+
+
+@pytest.mark.parametrize("overrides", [{}, {"variant": "Walls"}], ids=["arena cases", "scenarios"])
+def test_reset_rows_refuses_rows_outside_the_batch_before_any_change(overrides):
+    from socialzoo.env.tasks.crowdnav import CrowdNavTask
+
+    task = CrowdNavTask(None, 4, **overrides)
+    task.seed(3)
+    task.reset(np.arange(4), {})
+    cases = task.source.next(np.array([1, 2]))
+    seeds, pose = task.case_seed.copy(), task.core.state.robot_pose.copy()
+    with pytest.raises(ValueError, match=r"outside 0..3"):
+        task.reset_rows(np.array([1, 4]), cases)
+    with pytest.raises(ValueError, match="got 1 rows but 2 scenarios"):
+        task.reset_rows(np.array([1]), cases)
+    np.testing.assert_array_equal(task.case_seed, seeds)
+    np.testing.assert_array_equal(task.core.state.robot_pose, pose)

@@ -139,9 +139,9 @@ class CrowdNavTask(Task):
         """Start new episodes in `rows` from `cases` (one per row: Scenarios, or the arena's
         CrowdCases, written straight into the state once it exists)."""
         core = self.core
-        rows = core.check_rows(rows, len(cases))
         seeds = [c.seed for c in cases]
         if len(cases) and isinstance(cases[0], CrowdCase) and core.state is not None:
+            rows = core.check_rows(rows, len(cases))  # core.reset_rows checks them on the other path
             n = cases[0].human_starts.shape[0]
             models = core.people.models(seeds, [n] * len(cases))
             write_cases(core.state, rows, cases, self.config.cases.human_speed, models)  # type: ignore[arg-type]
@@ -150,6 +150,7 @@ class CrowdNavTask(Task):
             if len(cases) and isinstance(cases[0], CrowdCase):
                 cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
             core.reset_rows(rows, cases)  # type: ignore[arg-type]
+            rows = np.asarray(rows, dtype=np.intp).reshape(-1)
         self.case_seed[rows] = seeds
         self.time[rows] = 0.0
         self.metrics.reset_rows(core.robot_rows(rows))
