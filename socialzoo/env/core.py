@@ -153,12 +153,13 @@ class BatchedCore:
             return np.array(rows, dtype=np.intp).reshape(-1)
         return (np.asarray(rows)[:, None] * self.num_robots + np.arange(self.num_robots)).reshape(-1)
 
-    def reset_rows(self, rows: np.ndarray | Sequence[int], scenarios: Sequence[Scenario]) -> None:
+    def reset_rows(self, rows: np.ndarray | Sequence[int], scenarios: Sequence[Scenario]) -> np.ndarray:
         """Start new episodes in `rows` from `scenarios` (one per row), their people driven by the
-        models the people config assigns from each scenario's seed (walking groups formed)."""
+        models the people config assigns from each scenario's seed (walking groups formed). Returns
+        the rows as the index array check_rows makes of them."""
         rows = self.check_rows(rows, len(scenarios))
         if len(rows) == 0:
-            return
+            return rows
         scenarios, kinds = self.people.prepare(list(scenarios))
         models = self.people.models_of(kinds)
         if self.state is None:
@@ -169,6 +170,7 @@ class BatchedCore:
         self.starts.write(self.state, rows, scenarios)  # the route axis widens for a longer route
         self.state.human_model[rows] = models
         self.start_rows(rows, scenarios, kinds)
+        return rows
 
     def start_rows(
         self, rows: np.ndarray, scenarios: Sequence[Scenario | None], kinds: np.ndarray | None = None

@@ -149,8 +149,7 @@ class CrowdNavTask(Task):
         else:
             if len(cases) and isinstance(cases[0], CrowdCase):
                 cases = [case_scenario(c, self.config.cases) for c in cases]  # type: ignore[arg-type]
-            core.reset_rows(rows, cases)  # type: ignore[arg-type]
-            rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+            rows = core.reset_rows(rows, cases)  # type: ignore[arg-type]
         self.case_seed[rows] = seeds
         self.time[rows] = 0.0
         self.metrics.reset_rows(core.robot_rows(rows))
