@@ -98,6 +98,25 @@ class RecordingBank:
         self.time_limit = np.zeros(0)
         # (B, 7) each row's pointer; its columns are the views entry_of ... robot_points.
         self.pointer = np.repeat(self._pointers[-1:], batch_size, axis=0)
+        self._view_columns()
+
+    def __getstate__(self) -> dict[str, object]:
+        # A copy (pickled or deep-copied with the env: vector envs' workers) holds its recordings
+        # strongly, so that they are the copy's scenarios' own (one pickle, one memo); weak references
+        # and ids do not carry over, and the pointer's column views would come back as copies.
+        state = {k: v for k, v in self.__dict__.items() if k not in ("_index", *_POINTER)}
+        state["_refs"] = [r() for r in self._refs]
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        recordings: list[RecordedPeople | None] = state.pop("_refs")  # type: ignore[assignment]
+        self.__dict__.update(state)
+        self._refs = [weakref.ref(r) if r is not None else _gone() for r in recordings]
+        self._index = {id(r): k for k, r in enumerate(recordings) if r is not None}
+        self._view_columns()
+
+    def _view_columns(self) -> None:
+        """entry_of ... robot_points: the columns of `pointer`, as views of it."""
         (
             self.entry_of, self.point_at, self.people, self.frames, self.slot_at, self.robot_at, self.robot_points,
         ) = self.pointer.T  # fmt: skip
@@ -262,6 +281,15 @@ class RecordingBank:
         """(bytes of the entries kept, bytes of the garbage) in the sections (the rule above)."""
         garbage = self._garbage()
         return int(self._bytes[~garbage].sum()), int(self._bytes[garbage].sum())
+
+
+class _Gone:
+    """An object that nobody holds (_gone)."""
+
+
+def _gone() -> weakref.ref[RecordedPeople]:
+    """A dead weak reference: a copied entry whose recording nobody held any more."""
+    return weakref.ref(_Gone())  # type: ignore[arg-type]
 
 
 def path_boxes(path: np.ndarray) -> np.ndarray:

@@ -560,6 +560,33 @@ def test_the_bank_forgets_recordings_nobody_holds(family: RecordedScene) -> None
     assert kept.replay.bank.entries == 10 and kept.replay.bank.used_bytes[1] == 0
 
 
+@pytest.mark.parametrize("copy_env", ["pickle", "deepcopy"])
+@pytest.mark.parametrize("humans", ["replay", "hybrid:orca"])
+def test_a_copied_recorded_vector_env_plays_on_as_the_original(
+    family: RecordedScene, humans: str, copy_env: str
+) -> None:
+    """A recorded VectorEnv pickled mid-episode (what a worker process receives) or deep-copied steps on
+    as the original, bit for bit, through autoresets: the bank's weak references and its pointer's
+    column views (entry_of ...) are rebuilt, not copied."""
+    import copy
+    import pickle
+
+    from socialzoo.env.vector import TaskVectorEnv
+
+    rng = np.random.default_rng(0)
+    vec = TaskVectorEnv(4, task="crowdnav", family=family.name, humans=humans, robot_visible=True)
+    vec.reset(seed=1)
+    for _ in range(30):
+        vec.step(rng.uniform(-1, 1, (4, 2)).astype(np.float32))
+    other = pickle.loads(pickle.dumps(vec)) if copy_env == "pickle" else copy.deepcopy(vec)
+    bank = other.task.core.replay.bank
+    assert np.shares_memory(bank.entry_of, bank.pointer)
+    for action in rng.uniform(-1, 1, (150, 4, 2)).astype(np.float32):
+        for a, b in zip(vec.step(action), other.step(action), strict=True):
+            if isinstance(a, np.ndarray):
+                np.testing.assert_array_equal(a, b)
+
+
 def test_a_compacted_core_plays_its_recorded_rows_on(family: RecordedScene) -> None:
     """Compaction (socialzoo.env.compaction) keeps recorded rows' episodes: the new core's bank holds
     the kept rows' recordings, and each kept row steps on exactly as in the full batch."""
