@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
-from socialzoo.scenarios.recorded_people import RecordedPeople, path_length
+from socialzoo.scenarios.recorded_people import RecordedPeople, frames_in, path_length
 from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
@@ -35,9 +35,10 @@ VAL_TRACKS = 50
 TEST_TRACKS = 100
 TEST_FIRST = 100
 TRAIN_FIRST = 1000
-# A person slot takes a new person this many frames after its last one left (10 s): a person a
-# model walks (hybrid, after reacting) has that long to finish before the slot's next person enters.
-SLOT_REST = 25
+# A person slot takes a new person this many seconds after its last one left (25 frames at 2.5 Hz;
+# frames_in): a person a model walks (hybrid, after reacting) has that long to finish before the
+# slot's next person enters.
+SLOT_REST_TIME = 10.0
 # Mixed with the scene's name for the permutation of its tracks.
 _SPLIT_STREAM = 0x7265636F7264  # "record"
 # The open area of a scene as a map (for tasks that need one): its walls stand this far beyond
@@ -117,7 +118,7 @@ def replaced_scenario(
     # People who are never there at once share a person slot (pack_slots): fewer, fuller slots.
     begin = spans[others, 0] - first
     end = spans[others, 1] - first
-    slot = pack_slots(begin, end)
+    slot = pack_slots(begin, end, frames_in(SLOT_REST_TIME, recording.dt))
     slots = np.full((int(slot.max(initial=-1)) + 1, grid.shape[1], 2), np.nan)
     for k, s in enumerate(slot.tolist()):
         on = ~np.isnan(grid[k, :, 0])
@@ -168,10 +169,10 @@ def people_scenario(
     )
 
 
-def pack_slots(first: np.ndarray, last: np.ndarray, rest: int = SLOT_REST) -> np.ndarray:
+def pack_slots(first: np.ndarray, last: np.ndarray, rest: int) -> np.ndarray:
     """(n,) a person slot for each of n people present on frames first..last, reusing a slot once
-    its person left `rest` frames before the next one enters (the earliest-free slot, people in
-    order of entry)."""
+    its person left `rest` frames (frames_in(SLOT_REST_TIME, dt)) before the next one enters (the
+    earliest-free slot, people in order of entry)."""
     order = np.lexsort((last, first))
     # (the first frame a slot may take a new person, slot): the heap's top is the earliest-free
     # slot, the lowest-numbered among equals.
@@ -245,7 +246,7 @@ class RecordedScene(ScenarioFamily):
         """The most person slots of any episode of the scene (pack_slots)."""
         rec = self.recording
         first, last = rec.spans.T
-        most = 0
+        most, rest = 0, frames_in(SLOT_REST_TIME, rec.dt)
         for k in eligible_tracks(rec).tolist():
             end = min(
                 rec.num_frames - 1,
@@ -254,7 +255,7 @@ class RecordedScene(ScenarioFamily):
             seen = (first <= end) & (last >= first[k])
             seen[k] = False
             if seen.any():
-                most = max(most, int(pack_slots(first[seen], last[seen]).max()) + 1)
+                most = max(most, int(pack_slots(first[seen], last[seen], rest).max()) + 1)
         return most
 
     def track_of(self, seed: int) -> int:

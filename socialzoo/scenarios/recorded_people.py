@@ -12,8 +12,9 @@ import numpy as np
 
 from socialzoo.core.validation import check_number
 
-# A recorded person's route: its track's points this many frames apart (1.6 s at 2.5 Hz), and its last.
-ROUTE_STRIDE = 4
+# A recorded person's route: its track's points this many seconds apart (4 frames at 2.5 Hz; frames_in),
+# and its last.
+ROUTE_TIME = 1.6
 # A person below this mean speed is given this speed should a model walk it, m/s.
 MIN_SPEED = 0.3
 # Unused occupant entries (Occupants) hold this frame.
@@ -28,16 +29,22 @@ def runs(track: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def slot_route(slot_runs: list[tuple[int, int]]) -> np.ndarray:
+def frames_in(seconds: float, dt: float) -> int:
+    """The whole number of frames of dt s nearest to `seconds`, at least 1: the recordings' rules are
+    in seconds, whatever a file's frame rate."""
+    return max(1, round(seconds / dt))
+
+
+def slot_route(slot_runs: list[tuple[int, int]], stride: int) -> np.ndarray:
     """The frames of the route points of everyone in a slot, from its runs (runs), one person after
-    another: each person's first frame, every ROUTE_STRIDE frames on, and its last."""
-    return np.concatenate([run_route(a, b) for a, b in slot_runs]).astype(np.int64)
+    another: each person's first frame, every `stride` frames on, and its last."""
+    return np.concatenate([run_route(a, b, stride) for a, b in slot_runs]).astype(np.int64)
 
 
-def run_route(first: int, last: int) -> np.ndarray:
-    """The route frames of one person seen on frames first..last: every ROUTE_STRIDE-th from its
-    first, and its last."""
-    frames = np.arange(first, last + 1, ROUTE_STRIDE)
+def run_route(first: int, last: int, stride: int) -> np.ndarray:
+    """The route frames of one person seen on frames first..last: every `stride`-th from its first
+    (frames_in(ROUTE_TIME, dt)), and its last."""
+    frames = np.arange(first, last + 1, stride)
     return frames if frames[-1] == last else np.append(frames, last)
 
 
@@ -158,10 +165,15 @@ class RecordedPeople:
         """Each slot's (first, last) frames of each person in it, one after another (runs)."""
         return tuple(runs(track) for track in self.tracks)
 
+    @property
+    def route_stride(self) -> int:
+        """Frames between a person's route points: ROUTE_TIME s (frames_in)."""
+        return frames_in(ROUTE_TIME, self.dt)
+
     @cached_property
     def slot_routes(self) -> tuple[np.ndarray, ...]:
         """Each slot's route frames (slot_route), unpadded."""
-        return tuple(slot_route(slot) for slot in self.slot_runs)
+        return tuple(slot_route(slot, self.route_stride) for slot in self.slot_runs)
 
     @cached_property
     def velocities(self) -> np.ndarray:
@@ -191,7 +203,7 @@ class RecordedPeople:
             segments = np.sqrt((np.diff(track, axis=0) ** 2).sum(-1))
             index = 0
             for k, (a, b) in enumerate(slot_runs):
-                points = len(run_route(a, b))
+                points = len(run_route(a, b, self.route_stride))
                 entry[s, k], exit_[s, k] = a, b
                 first[s, k], last[s, k] = index, index + points - 1
                 index += points

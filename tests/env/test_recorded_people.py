@@ -372,6 +372,27 @@ def _shared_slot() -> Scenario:
     )
 
 
+@pytest.mark.parametrize("dt", [0.4, 0.04, 1 / 30])
+def test_slot_rest_and_route_stride_are_seconds_at_any_frame_rate(dt: float) -> None:
+    """A recording at another frame rate (25 Hz, 30 Hz) keeps the rules' seconds: people share a slot
+    only 10 s apart, and route points are 1.6 s apart (at 2.5 Hz: 25 and 4 frames, as always)."""
+
+    def walker(person: int, first: int, seconds: float, y: float) -> Track:
+        n = round(seconds / dt) + 1
+        return Track(person, first, np.stack((np.linspace(0.0, 6.0, n), np.full(n, y)), -1))
+
+    leaves = round(8 / dt)  # person 1 leaves 8 s in; person 2 enters 12 s after that
+    tracks = (walker(0, 0, 40.0, 5.0), walker(1, 0, 8.0, 0.0), walker(2, leaves + round(12 / dt), 8.0, 0.0))
+    rec = Recording(name="rate", dt=dt, num_frames=tracks[0].last_frame + 1, tracks=tracks, source="test")
+    shared = replaced_scenario(rec, 0, seed=0, family="test").recorded
+    assert shared.num_people == 1  # 12 s apart: one slot
+    stride = round(1.6 / dt)
+    np.testing.assert_array_equal(shared.slot_routes[0][:3], [0, stride, 2 * stride])
+    close = (tracks[0], tracks[1], walker(2, leaves + round(6 / dt), 8.0, 0.0))
+    rec = dataclasses.replace(rec, tracks=close)
+    assert replaced_scenario(rec, 0, seed=0, family="test").recorded.num_people == 2  # 6 s apart: two
+
+
 def test_a_shared_slot_replays_each_person_at_their_frames() -> None:
     scenario = _shared_slot()
     assert scenario.recorded.occupants.entry[0, :2].tolist() == [0, 40]
