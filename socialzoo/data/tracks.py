@@ -283,6 +283,8 @@ def _parse(path: Path, layout: str) -> tuple[np.ndarray, np.ndarray]:
         fields = line.split()
         if not fields or fields[0].startswith("#"):
             continue
+        # Commas are not separators: say so rather than count a CSV line as one column.
+        commas = "; columns are separated by whitespace, not commas" if "," in line else ""
         if columns is None:
             columns = next((c for c in COLUMNS.values() if len(c) == len(fields)), None)
             if columns is None:
@@ -290,21 +292,24 @@ def _parse(path: Path, layout: str) -> tuple[np.ndarray, np.ndarray]:
                     path,
                     line_number,
                     f"{len(fields)} columns; expected 4 (trajectron: frame person x y) or 8 "
-                    "(obsmat: frame person pos_x pos_z pos_y v_x v_z v_y)",
+                    f"(obsmat: frame person pos_x pos_z pos_y v_x v_z v_y){commas}",
                 )
         if len(fields) != len(columns):
             used = next(k for k, c in COLUMNS.items() if c is columns)
             raise TrackFileError(
                 path,
                 line_number,
-                f"{len(fields)} columns; the {used} layout has {len(columns)} ({' '.join(columns)})",
+                f"{len(fields)} columns; the {used} layout has {len(columns)} ({' '.join(columns)}){commas}",
             )
         row = []
         for column, field in zip(columns, fields, strict=True):
             try:
                 value = float(field)
             except ValueError:
-                raise TrackFileError(path, line_number, f"{column} is not a number: {field!r}") from None
+                header = " (a header line? start it with #)" if not numbers else ""
+                raise TrackFileError(
+                    path, line_number, f"{column} is not a number: {field!r}{header}"
+                ) from None
             if not math.isfinite(value):
                 raise TrackFileError(path, line_number, f"{column} must be a finite number, got {field!r}")
             if column in ("frame", "person") and value != round(value):

@@ -184,6 +184,23 @@ def test_join_refuses_bad_arguments(tmp_path):
     [
         ("0\t1\t1.0\t2.0\n10\t1\t1.0\n", 2, "3 columns; the trajectron layout has 4 (frame person x y)"),
         ("0 1 1 2 3\n", 1, "5 columns; expected 4 (trajectron: frame person x y) or 8"),
+        (
+            "0,1,1.0,2.0\n",
+            1,
+            "1 columns; expected 4 (trajectron: frame person x y) or 8 (obsmat: frame person "
+            "pos_x pos_z pos_y v_x v_z v_y); columns are separated by whitespace, not commas",
+        ),
+        (
+            "0\t1\t1.0\t2.0\n10,1,1.0,2.0\n",
+            2,
+            "1 columns; the trajectron layout has 4 (frame person x y); "
+            "columns are separated by whitespace, not commas",
+        ),
+        (
+            "frame\tperson\tx\ty\n0\t1\t1.0\t2.0\n",
+            1,
+            "frame is not a number: 'frame' (a header line? start it with #)",
+        ),
         ("0\t1\t1.0\t2.0\n10\t1\tabc\t2.0\n", 2, "x is not a number: 'abc'"),
         ("0\t1\t1.0\t2.0\n10\t1\t1.0\tnan\n", 2, "y must be a finite number, got 'nan'"),
         ("0\t1\t1.0\t2.0\n10\t1\tinf\t2.0\n", 2, "x must be a finite number, got 'inf'"),
