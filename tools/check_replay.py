@@ -2,8 +2,10 @@
 file at every recorded frame (issue 37's goal: within 1 cm).
 
 Each scene's test episodes are replayed (people spec "replay", the robot standing at its start,
-the world step 0.1 s) and every present slot's position at each frame is compared with the
-recording (the files as read: socialzoo.data.tracks).
+the world step the recording's frame period split into steps of about 0.1 s: 0.1 s at 2.5 Hz) and
+every present slot's position at each frame is compared with the recording (the files as read:
+socialzoo.data.tracks). A scene too small for a test split (a recording of your own, registered as a
+family) is checked on its validation, else its training episodes.
 
     SOCIALZOO_DATA_DIR=DIR python tools/check_replay.py [--scenes eth,hotel] [--cases 100]
 """
@@ -20,21 +22,26 @@ from socialzoo.env.core import BatchedCore
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.catalogue import get_family
 
+# The longest world step: a frame period is split into whole steps of at most about this.
 DT = 0.1
 
 
 def check_scene(scene: str, cases: int) -> tuple[int, float, int]:
-    """(positions compared, largest error in m, presence mismatches) over the scene's test episodes."""
-    family = get_family(f"recorded_{scene}")
-    size = family.splits["test"].size or 0
-    scenarios = [family.make(family.case_seed("test", k)) for k in range(min(cases, size))]
+    """(positions compared, largest error in m, presence mismatches) over the scene's test episodes
+    (its validation or training ones where it has no test split); `scene` a recorded scene's name
+    (family recorded_SCENE) or a recorded family's registered name."""
+    family = get_family(scene if scene.startswith("recorded_") else f"recorded_{scene}")
+    split = next((s for s in ("test", "val", "train") if family.splits[s].size), "train")
+    count = min(cases, family.splits[split].size or cases)
+    scenarios = [family.make(family.case_seed(split, k)) for k in range(count)]
+    frame_dt = scenarios[0].recorded.dt
+    per_frame = max(1, round(frame_dt / DT))
     core = BatchedCore(
-        len(scenarios), 1, max(s.num_humans for s in scenarios), WorldConfig(dt=DT),
+        len(scenarios), 1, max(s.num_humans for s in scenarios), WorldConfig(dt=frame_dt / per_frame),
         WallIndex(np.zeros((0, 4))), people=PeopleConfig(models="replay"),
     )  # fmt: skip
     core.reset_rows(np.arange(len(scenarios)), scenarios)
     frames = max(s.recorded.num_frames for s in scenarios)
-    per_frame = round(scenarios[0].recorded.dt / DT)
     compared, worst, mismatched = 0, 0.0, 0
     for frame in range(frames):
         if frame:
