@@ -65,12 +65,17 @@ class ToyReachTask(Task):
         self.steps[rows], self.reached[rows], self.touched[rows] = 0, False, False
         return np.array([s.seed for s in scenarios], dtype=np.uint64)
 
-    def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
+    def command(self, action: np.ndarray) -> np.ndarray:
+        """(B, R, 2) robot commands (v, omega) of the (B, R) actions, checked."""
         index = np.asarray(action).reshape(self.batch_size, self.num_robots)
         if ((index < 0) | (index >= len(COMMANDS))).any():
             raise ValueError(f"toy_reach: actions must be in 0..{len(COMMANDS) - 1}, got {index.tolist()}")
+        return COMMANDS[index] * self.speeds
+
+    def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
+        command = self.command(action)
         live, before = ~self.core.done, self.core.goal_distance()
-        events = self.core.step(COMMANDS[index] * self.speeds)
+        events = self.core.step(command)
         after, contacts = self.core.goal_distance(), events.robot_human.sum(-1)
         reached = after < self.config.goal_radius
         terminated = (reached | events.robot_wall) & live
@@ -143,6 +148,49 @@ class ToyReachTask(Task):
         from socialzoo.env.rendering import CoreRenderer
 
         return CoreRenderer(self, render_mode, view=view)
+
+
+class ToyVelocityTask(ToyReachTask):
+    """The toy task driven by (v, omega) as fractions of the top speeds: a Box of v in [0, 1] (no
+    reversing) and omega in [-1, 1]."""
+
+    name: ClassVar[str] = "toy_velocity"
+
+    def __init__(self, config: EnvConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
+        super().__init__(config, batch_size, **overrides)
+        self.action_space = spaces.Box(np.array([0.0, -1.0], np.float32), np.array([1.0, 1.0], np.float32))
+
+    def command(self, action: np.ndarray) -> np.ndarray:
+        value = np.asarray(action, dtype=np.float64).reshape(self.batch_size, self.num_robots, 2)
+        if not ((value >= self.action_space.low) & (value <= self.action_space.high)).all():
+            raise ValueError(f"toy_velocity: (v, omega) must be in [0, 1] x [-1, 1], got {value.tolist()}")
+        return value * self.speeds
+
+    def action_labels(self) -> tuple[str, ...]:
+        return ()
+
+
+class ToyPairTask(ToyReachTask):
+    """The toy task driven by a pair of choices, MultiDiscrete([3, 3]): (stop, slow, fast), (right,
+    straight, left)."""
+
+    name: ClassVar[str] = "toy_pair"
+
+    def __init__(self, config: EnvConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
+        super().__init__(config, batch_size, **overrides)
+        self.action_space = spaces.MultiDiscrete([3, 3])
+
+    def command(self, action: np.ndarray) -> np.ndarray:
+        pair = np.asarray(action).reshape(self.batch_size, self.num_robots, 2)
+        if not np.issubdtype(pair.dtype, np.integer) or ((pair < 0) | (pair > 2)).any():
+            raise ValueError(f"toy_pair: actions must be pairs of integers in 0..2, got {pair.tolist()}")
+        return np.stack((pair[..., 0] / 2, pair[..., 1] - 1.0), axis=-1) * self.speeds
+
+    def idle_action(self) -> Any:
+        return np.array([0, 1])
+
+    def action_labels(self) -> tuple[str, ...]:
+        return ()
 
 
 class ToyHeadForGoal:

@@ -236,7 +236,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         """(robot actions (1, R, ...), human actions (1, L, 2) or None), each checked."""
         task = self.task
         shape = tuple(task.action_space.shape or ())
-        discrete = isinstance(task.action_space, spaces.Discrete)
+        discrete = isinstance(task.action_space, (spaces.Discrete, spaces.MultiDiscrete))
         robot_action = np.zeros((1, task.num_robots) + shape, dtype=np.int64 if discrete else np.float64)
         for i, agent in enumerate(self.robots):
             value = actions[agent] if agent in self.agents else task.idle_action()

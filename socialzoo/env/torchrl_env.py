@@ -16,7 +16,7 @@ from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
 from socialzoo.env.tasks.base import TaskStep
-from socialzoo.env.torchrl_single import box_observation
+from socialzoo.env.torchrl_single import box_observation, vector_action_spec
 
 ROBOT = "robot"
 HUMAN = "human"
@@ -179,8 +179,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
             if isinstance(space, spaces.Discrete):
                 robot_action: Any = Categorical(int(space.n), shape=(b, r), dtype=torch.int64)
             else:
-                low, high = float(space.low.min()), float(space.high.max())  # type: ignore[attr-defined]
-                robot_action = Bounded(low, high, shape=(b, r, *space.shape), dtype=torch.float32)
+                robot_action = vector_action_spec(space, (b, r))
             action[ROBOT] = Composite(action=robot_action, shape=(b, r))
         if h:
             assert task.human_observation_space is not None

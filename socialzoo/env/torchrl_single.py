@@ -8,7 +8,7 @@ import numpy as np
 import torch
 from gymnasium import spaces
 from tensordict import TensorDict, TensorDictBase
-from torchrl.data import Bounded, Categorical, Composite, OneHot, Unbounded
+from torchrl.data import Bounded, Categorical, Composite, MultiCategorical, OneHot, TensorSpec, Unbounded
 from torchrl.envs import EnvBase
 
 from socialzoo.env.gym_env import TaskAdapter, one_robot
@@ -26,17 +26,34 @@ def box_observation(task: Task, adapter: str) -> Task:
     return task
 
 
+def vector_action_spec(space: spaces.Space, batch: tuple[int, ...], device: Any = "cpu") -> TensorSpec:
+    """The TorchRL spec of a batch (leading shape `batch`) of one agent's actions that are not one
+    Discrete index: a MultiDiscrete's indices (int64), or a Box's float32 values within its
+    bounds, entry by entry (a Box of v in [0, 1] and omega in [-1, 1] keeps both ranges)."""
+    shape = batch + tuple(space.shape or ())
+    if isinstance(space, spaces.MultiDiscrete):
+        return MultiCategorical(space.nvec.tolist(), shape=shape, dtype=torch.int64, device=device)
+    if not isinstance(space, spaces.Box):
+        raise ValueError(f"no TorchRL action spec for space {space}")
+
+    def bound(values: np.ndarray) -> torch.Tensor:
+        return torch.as_tensor(np.broadcast_to(values, shape).astype(np.float32))
+
+    return Bounded(bound(space.low), bound(space.high), shape=shape, dtype=torch.float32, device=device)
+
+
 class TaskTorchEnv(TaskAdapter, EnvBase):
     """B rows of a one-robot task as a batched TorchRL EnvBase (below).
 
     TorchRL's own conventions: a (B,) batch, "observation" (B, D) float32, "action" (one-hot
     (B, n) or integer indices (B,) for a discrete task with categorical_action_encoding=True;
-    (B, ...) floats for a Box), ("next", "reward") (B, 1) float32, done / terminated / truncated
-    kept apart, a "success" flag on the last step of a successful episode, and partial resets
-    through the "_reset" mask (no autoreset inside a step, so ("next", "observation") is always the
-    true last observation of an episode). Row i plays the same episodes as row i of the task's
-    TaskVectorEnv seeded alike. Observations are copied into their tensors (the core rewrites
-    reset rows of its arrays in place). The multi-agent view (robots and learned humans in groups)
+    (B, k) indices for a MultiDiscrete; (B, ...) floats for a Box, each entry within its bounds),
+    ("next", "reward") (B, 1) float32, done / terminated / truncated kept apart, a "success" flag
+    on the last step of a successful episode, and partial resets through the "_reset" mask (no
+    autoreset inside a step, so ("next", "observation") is always the true last observation of an
+    episode). Row i plays the same episodes as row i of the task's TaskVectorEnv seeded alike.
+    Observations are copied into their tensors (the core rewrites reset rows of its arrays in
+    place). The multi-agent view (robots and learned humans in groups)
     is socialzoo.env.torchrl_env.
 
     Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does.
@@ -91,14 +108,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
                 else OneHot(n, shape=(b, n), device=self.device)
             )
         else:
-            assert isinstance(space, spaces.Box)
-            self.action_spec = Bounded(
-                float(space.low.min()),
-                float(space.high.max()),
-                shape=(b, *space.shape),
-                dtype=torch.float32,
-                device=self.device,
-            )
+            self.action_spec = vector_action_spec(space, (b,), self.device)
         self.reward_spec = Unbounded((b, 1), dtype=torch.float32, device=self.device)
         self.done_spec = Composite(
             done=flag.clone(), terminated=flag.clone(), truncated=flag.clone(), shape=(b,)
@@ -124,7 +134,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         if isinstance(space, spaces.Discrete) and not self.categorical_action_encoding:
             action = action.to(torch.float32).argmax(-1)
         values = action.reshape(self.num_envs, *space.shape).cpu().numpy()
-        if isinstance(space, spaces.Discrete):
+        if isinstance(space, (spaces.Discrete, spaces.MultiDiscrete)):
             values = values.astype(np.int64)
         actions = batch_actions(space, values, (self.num_envs,), type(self).__name__)
         step = self.task.step(actions.reshape((self.num_envs, 1) + tuple(space.shape or ())))

@@ -137,3 +137,43 @@ def test_socialzoo_replay_writes_a_page_of_a_case_with_the_tasks_own_legend(tmp_
     velocity = tmp_path / "crowd.html"
     assert main(["replay", "--env", "socialzoo/CrowdNav-v1", "--policy", "orca", "--out", str(velocity)]) == 0
     assert data(velocity)["actions"]["names"] == []  # a velocity task: no sub-policy legend
+
+
+def test_a_multidiscrete_action_passes_every_adapter_and_checker():
+    from gymnasium.utils.env_checker import check_env
+    from pettingzoo.test import parallel_api_test
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    from socialzoo.env.parallel import TaskParallelEnv
+    from socialzoo.env.vector import TaskVectorEnv
+
+    pair = "toy_task:ToyPairTask"
+    register_task("socialzoo-test/ToyPair-v0", pair, max_steps=40)
+    check_env(gym.make("socialzoo-test/ToyPair-v0").unwrapped, skip_render_check=True)
+    sb3_check_env(gym.make("socialzoo-test/ToyPair-v0").unwrapped)
+    vec = TaskVectorEnv(3, task=pair, max_steps=15)
+    vec.reset(seed=0)
+    vec.action_space.seed(0)
+    for _ in range(40):
+        vec.step(vec.action_space.sample())
+    with pytest.raises(ValueError, match=r"action 3 at \(1, 1\) is not in 0..2"):
+        vec.step(np.array([[0, 0], [0, 3], [0, 0]]))
+    parallel_api_test(TaskParallelEnv(task=pair, num_robots=2, max_steps=40), num_cycles=60)
+
+
+def test_torchrl_specs_keep_each_entry_of_a_box_action_s_bounds_and_multidiscrete_choices():
+    pytest.importorskip("torchrl")
+    from torchrl.envs.utils import check_env_specs
+
+    from socialzoo.env.torchrl_env import SocialNavTorchEnv
+    from socialzoo.env.torchrl_single import TaskTorchEnv
+
+    velocity = "toy_task:ToyVelocityTask"
+    env = TaskTorchEnv(3, task=velocity, max_steps=20)
+    np.testing.assert_array_equal(env.action_spec.space.low[0].numpy(), [0.0, -1.0])  # v never negative
+    check_env_specs(env, seed=0)
+    check_env_specs(SocialNavTorchEnv(task=velocity, batch_size=2, num_robots=2, max_steps=20), seed=0)
+    check_env_specs(TaskTorchEnv(3, task="toy_task:ToyPairTask", max_steps=20), seed=0)
+    check_env_specs(
+        SocialNavTorchEnv(task="toy_task:ToyPairTask", batch_size=2, num_robots=2, max_steps=20), seed=0
+    )

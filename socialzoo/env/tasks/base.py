@@ -246,7 +246,8 @@ def fixed_cases(
 
 def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
     """`value` checked against one agent's `space`: one index of a Discrete(n) from an int-like
-    value, or a float64 action of a Box; anything else raises naming `who`."""
+    value, int64 indices of a MultiDiscrete, or a float64 action of a Box; anything else raises
+    naming `who`."""
     if isinstance(space, spaces.Discrete):
         n = int(space.n)
         array = np.asarray(value)
@@ -259,6 +260,8 @@ def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
         if not ok:
             raise ValueError(f"{who}: action must be one integer in 0..{n - 1}, got {value!r}")
         return int(scalar)
+    if isinstance(space, spaces.MultiDiscrete):
+        return batch_actions(space, value, (), who)
     if not isinstance(space, spaces.Box):
         raise TypeError(f"{who}: no action check for space {space}")
     try:
@@ -280,11 +283,12 @@ def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
 
 
 def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who: str) -> np.ndarray:
-    """A batch of actions of `space` with leading shape `batch` (int64 indices for Discrete,
-    float64 for Box); integral floats count as indices. Raises naming the first bad entry."""
+    """A batch of actions of `space` with leading shape `batch` (int64 indices for Discrete and
+    MultiDiscrete, float64 for Box); integral floats count as indices. Raises naming the first bad
+    entry."""
     array = np.asarray(values)
     shape = batch + tuple(space.shape or ())
-    if isinstance(space, spaces.Discrete):
+    if isinstance(space, (spaces.Discrete, spaces.MultiDiscrete)):
         if array.shape != shape or not (
             np.issubdtype(array.dtype, np.integer)
             or (
@@ -295,10 +299,13 @@ def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who:
         ):
             raise ValueError(f"{who}: actions must be {shape} integers, got {values!r}")
         array = array.astype(np.int64)
-        bad = np.argwhere((array < 0) | (array >= space.n))
+        # Each entry's count of choices: n, or the MultiDiscrete's nvec entry of its position.
+        counts = np.asarray(space.n if isinstance(space, spaces.Discrete) else space.nvec, dtype=np.int64)
+        bad = np.argwhere((array < 0) | (array >= counts))
         if len(bad):
             where = tuple(int(i) for i in bad[0])
-            raise ValueError(f"{who}: action {int(array[where])} at {where} is not in 0..{int(space.n) - 1}")
+            top = int(np.broadcast_to(counts, shape)[where]) - 1
+            raise ValueError(f"{who}: action {int(array[where])} at {where} is not in 0..{top}")
         return array
     if array.shape != shape:
         raise ValueError(f"{who}: actions must have shape {shape}, got {array.shape}")
