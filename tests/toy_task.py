@@ -34,7 +34,10 @@ class ToyReachTask(Task):
     render_fps: ClassVar[int] = 40
 
     def __init__(self, config: EnvConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
-        self.config = cfg = EnvConfig.resolve(config, {"map": "open_room", "max_steps": 300, **overrides})
+        # The task's own defaults apply only without a config: a given config is whole (the
+        # evaluation rebuilds a task from the config an id's kwargs resolved to).
+        defaults = {"map": "open_room", "max_steps": 300} if config is None else {}
+        self.config = cfg = EnvConfig.resolve(config, {**defaults, **overrides})
         m = load_map(cfg.map)
         self.core = BatchedCore(batch_size, cfg.num_robots, cfg.max_humans, cfg.world, m.wall_index, m=m)
         self.scenarios = ScenarioStream.for_config(m, batch_size, cfg)

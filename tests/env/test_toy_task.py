@@ -177,3 +177,21 @@ def test_torchrl_specs_keep_each_entry_of_a_box_action_s_bounds_and_multidiscret
     check_env_specs(
         SocialNavTorchEnv(task="toy_task:ToyPairTask", batch_size=2, num_robots=2, max_steps=20), seed=0
     )
+
+
+def test_an_evaluation_plays_the_registered_id_s_config_not_the_task_s_defaults():
+    from socialzoo.bench.task_benchmark import TaskId
+
+    class Stop:
+        def act(self, obs, task=None):
+            return np.full(len(obs), 3)
+
+    register_task("socialzoo-test/ToyReachShort-v0", TOY, max_steps=12)
+    task = TaskId.of("socialzoo-test/ToyReachShort-v0")
+    assert task.make(1).config.max_steps == 12
+    # The runner rebuilds the task from the id's resolved config: the toy's own max_steps=300
+    # must not override it.
+    from socialzoo.bench.episodes import play_cases
+
+    episodes = play_cases(task.task, Stop().act, "test", [0, 1], config=task.make(1).config)
+    assert [e["steps"] for e in episodes] == [12, 12]
