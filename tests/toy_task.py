@@ -196,6 +196,23 @@ class ToyPairTask(ToyReachTask):
         return ()
 
 
+class ToyDictTask(ToyReachTask):
+    """The toy task observing a Dict: "goal" (its goal and velocity, 4) and "people" (3 x 4)."""
+
+    name: ClassVar[str] = "toy_dict"
+
+    def __init__(self, config: EnvConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
+        super().__init__(config, batch_size, **overrides)
+        box = spaces.Box(-np.inf, np.inf, (4,), np.float32)
+        self.observation_space = spaces.Dict(
+            {"goal": box, "people": spaces.Box(-np.inf, np.inf, (NEAREST, 4))}
+        )
+
+    def observations(self) -> dict[str, np.ndarray]:
+        flat = super().observations()
+        return {"goal": flat[..., :4], "people": flat[..., 4:].reshape(flat.shape[:2] + (NEAREST, 4))}
+
+
 class ToyHeadForGoal:
     """An engineered policy of the toy task: turn towards the goal, then drive forward."""
 

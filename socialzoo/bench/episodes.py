@@ -8,9 +8,11 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.env.gym_env import robot_row
 from socialzoo.env.tasks import make_task
 
-# A policy: (robot 0's observations (B, D), the task) -> actions (B,) or (B, ...).
+# A policy: (robot 0's observations (B, D), or a dict of (B, ...) for a Dict space, the task) ->
+# actions (B,) or (B, ...).
 Actor = Callable[[np.ndarray, Any], np.ndarray]
 
 
@@ -92,13 +94,14 @@ def play_cases(
 
 
 class _RobotZero:
-    """A policy of robot 0's observations (B, D) as the runner's policy of (B, R, D) ones."""
+    """A policy of robot 0's observations (B, D) as the runner's policy of (B, R, D) ones (a Dict
+    observation's arrays each sliced alike)."""
 
     reads_core = True
 
     def __init__(self, act: Actor) -> None:
         self.act_zero = act
 
-    def act(self, observations: np.ndarray, task: Any = None) -> np.ndarray:
-        actions = np.asarray(self.act_zero(observations[:, 0], task))
+    def act(self, observations: Any, task: Any = None) -> np.ndarray:
+        actions = np.asarray(self.act_zero(robot_row(observations, slice(None)), task))
         return actions.reshape((actions.shape[0], 1) + actions.shape[1:])

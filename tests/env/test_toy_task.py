@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import POLICIES, register_policy
+from socialzoo.env.gym_env import TaskEnv
 from socialzoo.env.registration import register_task
 
 TOY = "toy_task:ToyReachTask"
@@ -195,3 +196,15 @@ def test_an_evaluation_plays_the_registered_id_s_config_not_the_task_s_defaults(
 
     episodes = play_cases(task.task, Stop().act, "test", [0, 1], config=task.make(1).config)
     assert [e["steps"] for e in episodes] == [12, 12]
+
+
+def test_the_evaluation_plays_a_task_with_a_dict_observation():
+    from gymnasium.utils.env_checker import check_env
+    from toy_task import ToyHeadForGoal
+
+    from socialzoo.bench.episodes import play_cases
+
+    check_env(TaskEnv(task="toy_task:ToyDictTask"), skip_render_check=True)
+    heading = ToyHeadForGoal()
+    episodes = play_cases("toy_task:ToyDictTask", lambda obs, task: heading.act(obs["goal"]), "test", [0, 1])
+    assert [e["case"] for e in episodes] == [0, 1] and all(e["steps"] > 0 for e in episodes)
