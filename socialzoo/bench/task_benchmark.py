@@ -32,14 +32,24 @@ class TaskId:
 
     @classmethod
     def of(cls, env_id: str) -> TaskId:
-        """The task of a registered id.
+        """The task of a registered id; "module:ns/Name-vN" imports the module first (Gymnasium's
+        form for an id its own code registers, so the command line reaches a task of one's own).
 
         Raises:
-            ValueError: an id that is not registered, or not a task's.
+            ValueError: an id that is not registered, or not a task's; a module that cannot be imported.
         """
+        import importlib
+
         import gymnasium as gym
 
         import socialzoo  # noqa: F401  (registers the ids)
+
+        module, sep, env_id = env_id.rpartition(":")
+        if sep:
+            try:
+                importlib.import_module(module)
+            except ImportError as err:
+                raise ValueError(f"env id {module}:{env_id}: cannot import {module!r} ({err})") from None
 
         if env_id not in gym.registry:
             known = sorted(i for i in gym.registry if i.startswith("socialzoo"))

@@ -60,7 +60,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
             "comma-separated maps: shipped names or map JSON files (default gdc1,ghc3); a map without a "
             "registered test set gets one generated on first use, stored in DIR/test_sets/ with the "
             "map's hash and reused by reruns; or registered task ids (socialzoo/CrowdNav-v1, "
-            "socialzoo/CrowdNav20-v1, any task's NAMESPACE/Name-vN: their fixed test cases)"
+            "socialzoo/CrowdNav20-v1, any task's NAMESPACE/Name-vN, or MODULE:NAMESPACE/Name-vN for an id that "
+            "MODULE registers: their fixed test cases)"
         ),
     )
     parser.add_argument(
@@ -221,8 +222,9 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
     return 0
 
 
-# A Gymnasium id (namespace/Name-vN), told apart from map names and map files.
-ENV_ID = re.compile(r"[A-Za-z0-9_.-]+/[A-Za-z0-9_.]+-v\d+")
+# A Gymnasium id (namespace/Name-vN, or module:namespace/Name-vN: the module registers it), told
+# apart from map names and map files.
+ENV_ID = re.compile(r"(?:[A-Za-z_][\w.]*:)?[A-Za-z0-9_.-]+/[A-Za-z0-9_.]+-v\d+")
 # The policies a task id's benchmark runs when --policies names none.
 _DEFAULT_POLICIES: dict[str, tuple[str, ...]] = {"crowdnav": ("orca", "social_force", "crowdnav")}
 

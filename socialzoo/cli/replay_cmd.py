@@ -49,8 +49,8 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--env",
         default=None,
-        help="a registered task id (socialzoo/CrowdNav-v1, any task's id): play its fixed case --case of "
-        "--split instead of a benchmark map's scenario",
+        help="a registered task id (socialzoo/CrowdNav-v1, any task's id; MODULE:ID for an id that MODULE "
+        "registers): play its fixed case --case of --split instead of a benchmark map's scenario",
     )
     parser.add_argument("--case", type=count, default=None, help="the case of --env to play (default 0)")
     parser.add_argument("--split", default="test", help="the case split of --env (default test)")

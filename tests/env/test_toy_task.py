@@ -208,3 +208,24 @@ def test_the_evaluation_plays_a_task_with_a_dict_observation():
     heading = ToyHeadForGoal()
     episodes = play_cases("toy_task:ToyDictTask", lambda obs, task: heading.act(obs["goal"]), "test", [0, 1])
     assert [e["case"] for e in episodes] == [0, 1] and all(e["steps"] > 0 for e in episodes)
+
+
+def test_the_command_line_reaches_an_id_that_a_module_of_one_s_own_registers(tmp_path, monkeypatch, capsys):
+    from socialzoo.cli import main
+
+    (tmp_path / "my_tasks.py").write_text(
+        "from socialzoo.env.registration import register_task\n"
+        f"register_task('mine/ToyReach-v0', {TOY!r}, max_steps=30)\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    out = tmp_path / "bench"
+    args = ["--policies", "toy_heading", "--trials", "2", "--no-figures", "--out", str(out)]
+    assert main(["benchmark", "--maps", "my_tasks:mine/ToyReach-v0", *args]) == 0
+    assert "| toy_heading |" in (out / "toy_reach.md").read_text()
+    page = tmp_path / "mine.html"
+    assert (
+        main(["replay", "--env", "my_tasks:mine/ToyReach-v0", "--policy", "toy_heading", "--out", str(page)])
+        == 0
+    )
+    assert main(["benchmark", "--maps", "no_such_module:mine/ToyReach-v0", *args]) == 2
+    assert "cannot import 'no_such_module'" in capsys.readouterr().err
