@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import partial
-from typing import Literal, get_args
+from typing import Any, Literal, get_args
 
 Kind = Literal["bool", "int", "float"]
 Direction = Literal["higher", "lower", "neither"]
@@ -19,6 +19,8 @@ Direction = Literal["higher", "lower", "neither"]
 # their tracks (socialzoo.env.replay).
 Source = Literal["action_selection", "crowdnav", "people", "humans", "guidelines", "recorded"]
 SOURCES: tuple[str, ...] = get_args(Source)
+# Sources that register_metric added: the names of tasks written outside the package.
+_TASK_SOURCES: set[str] = set()
 
 
 class UnknownMetricError(KeyError):
@@ -73,8 +75,11 @@ class Metric:
             problems.append(f"kind must be one of {get_args(Kind)}, got {self.kind!r}")
         if not self.description.strip():
             problems.append("description must not be empty")
-        if not self.sources or any(s not in SOURCES for s in self.sources):
-            problems.append(f"sources must be some of {SOURCES}, got {self.sources!r}")
+        if not self.sources or any(s not in SOURCES and s not in _TASK_SOURCES for s in self.sources):
+            problems.append(
+                f"sources must be some of {SOURCES} (or a task's own name, through register_metric), "
+                f"got {self.sources!r}"
+            )
         if self.count and self.kind != "int":
             problems.append(f"a count must be of kind 'int', got {self.kind!r}")
         if self.kind == "bool" and self.unit:
@@ -767,6 +772,32 @@ if len(METRICS) != len(_ENTRIES):
     raise ValueError("socialzoo.core.metrics: two registry entries share a name")
 
 
+def register_metric(**fields: Any) -> Metric:
+    """Add a metric of a task written outside the package (Metric's fields; its `sources` may name
+    that task) to the registry, where the results store, the benchmark's summaries and tables, the
+    figures and the viewer read it, as they read the package's entries. Call it where the task is
+    registered, once.
+
+    Raises:
+        ValueError: a malformed entry (Metric's checks), a source that is not an identifier, or a
+            name that is registered already.
+    """
+    sources = fields.get("sources", ())
+    new = {s for s in sources if s not in SOURCES and s not in _TASK_SOURCES}
+    if any(not (isinstance(s, str) and s.isidentifier()) for s in new):
+        raise ValueError(f"register_metric: sources must be task names (identifiers), got {sources!r}")
+    if fields.get("name") in METRICS:
+        raise ValueError(f"register_metric: a metric {fields['name']!r} is registered already")
+    _TASK_SOURCES.update(new)
+    try:
+        entry = Metric(**fields)
+    except (TypeError, ValueError):
+        _TASK_SOURCES.difference_update(new)
+        raise
+    METRICS[entry.name] = entry
+    return entry
+
+
 def metric(name: str) -> Metric:
     """The registered metric `name`.
 
@@ -804,8 +835,8 @@ def names(source: str | None = None, *, kind: str | None = None) -> tuple[str, .
     Raises:
         ValueError: an unknown source or kind.
     """
-    if source is not None and source not in SOURCES:
-        raise ValueError(f"source must be one of {SOURCES}, got {source!r}")
+    if source is not None and source not in SOURCES and source not in _TASK_SOURCES:
+        raise ValueError(f"source must be one of {SOURCES + tuple(sorted(_TASK_SOURCES))}, got {source!r}")
     if kind is not None and kind not in get_args(Kind):
         raise ValueError(f"kind must be one of {get_args(Kind)}, got {kind!r}")
     return tuple(

@@ -90,3 +90,44 @@ def test_describe_is_a_markdown_table_of_every_metric():
     rows = [line for line in text.splitlines() if line.startswith("| `")]
     assert [re.match(r"\| `(\w+)`", r).group(1) for r in rows] == list(METRICS)
     assert "| `time_to_goal` | s | lower | float | successful episodes only |" in text
+
+
+@pytest.fixture
+def own_metric():
+    """A metric of a task written outside the package, registered for the test and removed after it."""
+    from socialzoo.core import metrics
+
+    entry = metrics.register_metric(
+        name="closest_person_own",
+        label="closest person",
+        unit="m",
+        better="higher",
+        kind="float",
+        description="The least distance to a person over the episode.",
+        sources=("reach_own",),
+    )
+    yield entry
+    del METRICS[entry.name]
+    metrics._TASK_SOURCES.discard("reach_own")
+
+
+def test_a_task_of_one_s_own_registers_its_metric_where_summaries_and_tables_read_it(own_metric):
+    from socialzoo.bench.tables import task_layout
+    from socialzoo.bench.task_benchmark import summarize, table_entry
+    from socialzoo.core.metrics import register_metric
+
+    assert metric("closest_person_own") is own_metric and names("reach_own") == ("closest_person_own",)
+    summary = summarize([{"success": 1.0, "closest_person_own": d} for d in (0.5, 1.5)])
+    assert summary["closest_person_own"] == pytest.approx(1.0)
+    entry = table_entry("p", "reach", "reach-test", summary)
+    assert "closest_person_own" in task_layout([entry]).metrics
+    with pytest.raises(ValueError, match="registered already"):
+        register_metric(**{f.name: getattr(own_metric, f.name) for f in dataclasses.fields(own_metric)})
+    with pytest.raises(ValueError, match="sources must be task names"):
+        register_metric(name="x_own", sources=("two words",))
+    with pytest.raises(ValueError, match=r"Metric 'y_own'.*better"):
+        register_metric(
+            name="y_own", label="y", unit="", better="up", kind="float", description="Y.", sources=("z_own",)
+        )
+    with pytest.raises(ValueError, match="source must be one of"):
+        names("z_own")  # a refused entry leaves no source behind
