@@ -21,7 +21,7 @@ def box_observation(task: Task, adapter: str) -> Task:
     if not isinstance(task.observation_space, spaces.Box):
         raise ValueError(
             f"{adapter}: the task's observation must be one Box, got {task.observation_space} "
-            "(CrowdNav: observation='flat')"
+            "(the TorchRL adapters read one observation tensor; CrowdNav offers observation='flat')"
         )
     return task
 
@@ -143,7 +143,8 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         ended = np.flatnonzero(terminated | truncated)
         success = np.zeros(self.num_envs, dtype=bool)
         if len(ended):
-            success[ended] = [bool(s["success"]) for s in self.task.episode_metrics(ended)]
+            # A task without a "success" metric reports no successes.
+            success[ended] = [bool(s.get("success", False)) for s in self.task.episode_metrics(ended)]
         return self._tensordict(step.reward[:, 0], success, terminated, truncated)
 
     def _tensordict(

@@ -229,3 +229,20 @@ def test_the_command_line_reaches_an_id_that_a_module_of_one_s_own_registers(tmp
     )
     assert main(["benchmark", "--maps", "no_such_module:mine/ToyReach-v0", *args]) == 2
     assert "cannot import 'no_such_module'" in capsys.readouterr().err
+
+
+def test_torchrl_reports_no_success_for_a_task_whose_metrics_have_none():
+    pytest.importorskip("torchrl")
+    import torch
+    from toy_task import ToyReachTask
+
+    from socialzoo.env.torchrl_single import TaskTorchEnv
+
+    class NoSuccess(ToyReachTask):
+        def episode_metrics(self, rows, robot=0):
+            return [{"steps": m["steps"]} for m in super().episode_metrics(rows, robot)]
+
+    env = TaskTorchEnv(2, task=NoSuccess, max_steps=5)
+    td = env.rollout(6, break_when_any_done=False)  # every episode ends on step 5
+    assert td["next", "done"].any() and not td["next", "success"].any()
+    assert td["next", "success"].dtype == torch.bool
