@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 
@@ -27,6 +29,18 @@ def at_least(low: int, what: str = "") -> Callable[[str], int]:
 
 positive_int = at_least(1, "a positive integer")
 count = at_least(0)
+
+
+def out_path(text: str) -> Path:
+    """argparse type of an output path (--out): one the command can create, checked before it runs
+    (the error names the path and the folder in its way), so a long run does not end in a traceback."""
+    path = Path(text)
+    folder = next((p for p in path.parents if p.exists()), Path("."))
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: {str(folder)!r} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: no permission to write in {str(folder)!r}")
+    return path
 
 
 def given(args: argparse.Namespace, *names: str) -> dict[str, Any]:

@@ -14,6 +14,7 @@ from socialzoo.cli.arg_types import (
     add_task_config_argument,
     comma_list,
     given,
+    out_path,
     positive_int,
     split_commas,
     task_config,
@@ -93,7 +94,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="also record the humans' metrics (goal reach, collisions, distances, speed, path ratio) "
         "in humans.csv and humans.md",
     )
-    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_path, required=True, help="output directory")
     parser.add_argument(
         "--quick",
         action="store_true",
@@ -119,7 +120,7 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--episodes", type=positive_int, required=True, help="number of episodes")
-    parser.add_argument("--out", type=Path, required=True, help="output .npz file")
+    parser.add_argument("--out", type=out_path, required=True, help="output .npz file")
     parser.add_argument("--map", default="gdc1", help="map (default gdc1, the training map)")
     parser.add_argument("--policy", default="ref", help="demonstrating policy (default ref)")
     parser.add_argument("--chunk-episodes", type=positive_int, default=25, help="episodes per chunk file")

@@ -4,11 +4,10 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import positive_int, split_commas
+from socialzoo.cli.arg_types import out_path, positive_int, split_commas
 
 
 def register(subparsers: Any) -> None:
@@ -35,7 +34,7 @@ def register(subparsers: Any) -> None:
         )
         action.add_argument("--split", choices=("val", "test"), default="test", help="the fixed cases")
         action.add_argument(
-            "--out", type=Path, required=True, help="output folder (eval) or .html file (replay)"
+            "--out", type=out_path, required=True, help="output folder (eval) or .html file (replay)"
         )
     evaluate, replay = sub.choices["eval"], sub.choices["replay"]
     evaluate.add_argument("--cases", type=positive_int, default=None, help="first N cases (default all)")

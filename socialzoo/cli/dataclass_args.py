@@ -13,6 +13,8 @@ import typing
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
+from socialzoo.cli.arg_types import out_path
+
 
 def attribute_docs(cls: type) -> dict[str, str]:
     """Field name -> description, from the "Attributes:" sections of the Google-style docstrings of
@@ -55,6 +57,8 @@ def _optional(annotation: Any) -> tuple[Any, bool]:
 
 
 def _scalar_parser(annotation: Any, name: str) -> Any:
+    if annotation is Path and name == "out":  # the run folder: checked before training starts
+        return out_path
     if annotation in (int, float, str, Path):
         return annotation
     if get_origin(annotation) in (dict, typing.Mapping) or annotation is dict:

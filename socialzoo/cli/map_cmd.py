@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.arg_types import out_path, positive_int
 
 # A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
 VECTOR_MAP, NAVIGATION = ".vectormap.txt", ".navigation.json"
@@ -131,7 +131,7 @@ def register(subparsers: Any) -> None:
         help="folder of NAME.vectormap.txt [+ NAME.navigation.json] (default: the built-in buildings)",
     )  # fmt: skip
     drive.add_argument(
-        "--out", type=Path, required=True, help="folder of the imported maps, test sets, pictures"
+        "--out", type=out_path, required=True, help="folder of the imported maps, test sets, pictures"
     )
     drive.add_argument("--episodes", type=positive_int, default=30, help="episodes per building (default 30)")
     drive.add_argument("--batch-size", type=positive_int, default=30, help="episodes stepped together")
@@ -192,7 +192,7 @@ def _add_import_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--source", default="", help="provenance text stored in the map")
     parser.add_argument("--licence", default="", help="licence text stored in the map")
-    parser.add_argument("--out", type=Path, default=None, help="output JSON (default NAME.json)")
+    parser.add_argument("--out", type=out_path, default=None, help="output JSON (default NAME.json)")
 
 
 def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_picture: bool) -> None:
@@ -205,7 +205,7 @@ def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_pic
         help=f"PNG to write (default: beside a map file, FILE-{suffix}.png; none for a shipped map name)",
     )
     # The old name, kept so existing command lines still work; hidden so new ones use --picture.
-    parser.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--out", type=out_path, default=None, help=argparse.SUPPRESS)
     if no_picture:
         parser.add_argument(
             "--no-picture", action="store_true", help="skip the picture (no matplotlib needed)"

@@ -9,7 +9,15 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_task_config_argument, at_least, comma_list, count, given, task_config
+from socialzoo.cli.arg_types import (
+    add_task_config_argument,
+    at_least,
+    comma_list,
+    count,
+    given,
+    out_path,
+    task_config,
+)
 
 
 def register(subparsers: Any) -> None:
@@ -73,7 +81,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--laser-rays", type=count, default=60, help="laser rays drawn (default 60; 0: no laser)"
     )
-    parser.add_argument("--out", type=Path, default=Path("episode.html"), help="the .html file to write")
+    parser.add_argument("--out", type=out_path, default=Path("episode.html"), help="the .html file to write")
     parser.set_defaults(func=run_replay)
 
 

@@ -1,0 +1,51 @@
+"""The CLI's shared argument types (socialzoo.cli.arg_types)."""
+
+import argparse
+
+import pytest
+
+from socialzoo.cli import main
+from socialzoo.cli.arg_types import out_path
+
+
+def test_out_path_takes_a_path_whose_folders_can_be_made(tmp_path):
+    assert out_path(str(tmp_path / "new" / "deeper" / "x.gif")) == tmp_path / "new" / "deeper" / "x.gif"
+    assert out_path("episode.gif").name == "episode.gif"
+
+
+def test_out_path_names_the_file_in_its_way(tmp_path):
+    blocker = tmp_path / "results"
+    blocker.write_text("a file, not a folder")
+    with pytest.raises(
+        argparse.ArgumentTypeError, match=r"cannot write .*results/run.*'.*results' is not a folder"
+    ):
+        out_path(str(blocker / "run" / "x.csv"))
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ("benchmark", "--trials", "1"),
+        ("demos", "--episodes", "1"),
+        ("demo",),
+        ("replay",),
+        ("suite",),
+        ("crowdnav", "eval"),
+        ("metrics", "log.json"),
+        ("humans", "report"),
+        ("reproduce",),
+        ("train", "ppo"),
+    ],
+    ids=" ".join,
+)
+def test_every_out_is_checked_before_the_command_runs(tmp_path, capsys, words):
+    # An --out under a file was a NotADirectoryError traceback, for demo and replay only after
+    # the episode had run.
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    with pytest.raises(SystemExit) as exit_info:
+        main([*words, "--out", str(blocker / "out")])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --out: cannot write" in err and "is not a folder" in err
+    assert "Traceback" not in err
