@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -29,6 +30,17 @@ def at_least(low: int, what: str = "") -> Callable[[str], int]:
 
 positive_int = at_least(1, "a positive integer")
 count = at_least(0)
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0 (a length, a time); the error names the value."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
 
 
 def out_path(text: str) -> Path:

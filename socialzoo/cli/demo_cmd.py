@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import out_path
+from socialzoo.cli.arg_types import count, out_path, positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -23,11 +23,11 @@ def register(subparsers: Any) -> None:
         "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
     )
     parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
-    parser.add_argument("--seed", type=int, default=0, help="scenario seed (default 0)")
+    parser.add_argument("--seed", type=count, default=0, help="scenario seed (default 0)")
     parser.add_argument("--view", choices=("follow", "map"), default="follow", help="camera")
-    parser.add_argument("--stride", type=int, default=4, help="steps per frame (default 4 = 0.1 s)")
+    parser.add_argument("--stride", type=positive_int, default=4, help="steps per frame (default 4 = 0.1 s)")
     parser.add_argument("--fps", type=float, default=20.0, help="frames per second of the file")
-    parser.add_argument("--max-frames", type=int, default=800, help="longest animation, frames")
+    parser.add_argument("--max-frames", type=positive_int, default=800, help="longest animation, frames")
     parser.add_argument("--out", type=out_path, default=Path("episode.gif"), help=".gif or .mp4 file")
     parser.set_defaults(func=run_demo)
 

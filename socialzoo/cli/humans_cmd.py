@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import given, out_path, positive_int, split_commas
+from socialzoo.cli.arg_types import count, given, out_path, positive_int, split_commas
 from socialzoo.cli.people_cmd import add_report
 
 SCENES_HELP = (
@@ -94,7 +94,7 @@ def _add_realism(commands: Any) -> None:
     parser.add_argument("--out", type=out_path, required=True, help="output directory")
     parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
     parser.add_argument("--tracks", type=positive_int, default=None, help="persons per scene (default all)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the persons' sample (default 0)")
+    parser.add_argument("--seed", type=count, default=0, help="seed of the persons' sample (default 0)")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run_realism)
@@ -120,7 +120,7 @@ def _add_calibrate(commands: Any) -> None:
     parser.add_argument("--windows", type=positive_int, default=3, help="windows per person (default 3)")
     parser.add_argument("--generations", type=positive_int, default=6, help="CMA-ES generations (default 6)")
     parser.add_argument("--popsize", type=positive_int, default=6, help="CMA-ES population (default 6)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the samples and CMA-ES (default 0)")
+    parser.add_argument("--seed", type=count, default=0, help="seed of the samples and CMA-ES (default 0)")
     parser.add_argument("--no-folds", action="store_true", help="fit on all scenes only")
     parser.add_argument("--no-progress", action="store_true", help="no progress output")
     parser.set_defaults(func=run_calibrate)

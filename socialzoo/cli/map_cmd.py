@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import out_path, positive_int
+from socialzoo.cli.arg_types import count, out_path, positive_float, positive_int
 
 # A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
 VECTOR_MAP, NAVIGATION = ".vectormap.txt", ".navigation.json"
@@ -70,12 +70,14 @@ def register(subparsers: Any) -> None:
         ),
     )
     check.add_argument("map", help="shipped map name or path to a map JSON file")
-    check.add_argument("--max-route", type=float, default=None, help="feasible route length, m (default 90)")
     check.add_argument(
-        "--drive", nargs="?", type=int, const=0, default=None, metavar="N",
+        "--max-route", type=positive_float, default=None, help="feasible route length, m (default 90)"
+    )
+    check.add_argument(
+        "--drive", nargs="?", type=count, const=0, default=None, metavar="N",
         help="drive every feasible pose pair (or a seeded sample of N pairs) and report the failed routes",
     )  # fmt: skip
-    check.add_argument("--seed", type=int, default=0, help="seed of the --drive N sample (default 0)")
+    check.add_argument("--seed", type=count, default=0, help="seed of the --drive N sample (default 0)")
     _add_picture_options(check, "check", no_picture=True)
     check.set_defaults(func=run_check)
 

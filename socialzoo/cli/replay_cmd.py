@@ -50,7 +50,7 @@ def register(subparsers: Any) -> None:
         "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
     )
     parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
-    parser.add_argument("--seed", type=int, default=None, help="scenario seed (default 0)")
+    parser.add_argument("--seed", type=count, default=None, help="scenario seed (default 0)")
     parser.add_argument(
         "--max-steps", type=at_least(1), default=None, help="episode time limit override, steps"
     )

@@ -49,3 +49,29 @@ def test_every_out_is_checked_before_the_command_runs(tmp_path, capsys, words):
     err = capsys.readouterr().err
     assert "argument --out: cannot write" in err and "is not a folder" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ("demo", "--seed", "-1"),
+        ("demo", "--stride", "0"),
+        ("demo", "--max-frames", "0"),
+        ("replay", "--seed", "-1"),
+        ("map", "check", "gdc1", "--seed", "-1"),
+        ("map", "check", "gdc1", "--drive", "-1"),
+        ("map", "check", "gdc1", "--max-route", "-5"),
+        ("map", "check", "gdc1", "--max-route", "nan"),
+        ("humans", "realism", "--seed", "-1"),
+        ("humans", "calibrate", "--seed", "-1"),
+    ],
+    ids=" ".join,
+)
+def test_a_bad_number_is_a_usage_error_naming_its_option(capsys, words):
+    # These were numpy tracebacks (a negative seed, --drive -1), a ZeroDivisionError (--stride 0),
+    # or taken as they came (--max-route -5 judged every route infeasible).
+    with pytest.raises(SystemExit) as exit_info:
+        main(list(words))
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument {words[-2]}: expected" in err and repr(words[-1]) in err
