@@ -191,8 +191,8 @@ def make_policy(
             same as "NAME:PATH").
 
     Raises:
-        ValueError: an unknown name (the message lists the known ones), or a learned policy with
-            neither a path nor a shipped file.
+        ValueError: an unknown name (the message lists the known ones), a learned policy with
+            neither a path nor a shipped file, or a file given to an engineered policy.
         PolicyTaskError: a policy of another task, or a learned policy whose observations are not
             the size of the task's.
     """
@@ -211,6 +211,8 @@ def make_policy(
         if kwargs:
             raise ValueError(f"policy {name!r} names its file; got keyword arguments {sorted(kwargs)} too")
         kwargs = {"path": path}
+    if "path" in kwargs and not hasattr(cls, "load"):
+        raise ValueError(f"policy {key!r} is not loaded from a file; name it without ':PATH'")
     if hasattr(cls, "load"):
         if set(kwargs) == {"path"}:
             policy = cls.load(kwargs["path"])

@@ -49,6 +49,16 @@ def test_bad_specs_are_refused_before_anything_runs(tmp_path):
         BenchmarkConfig(policies=(f"ppo:{tmp_path / 'missing.safetensors'}",))
 
 
+@pytest.mark.parametrize("how", ["spec", "keyword"])
+def test_make_policy_refuses_a_file_for_an_engineered_policy(tmp_path, how):
+    # socialzoo demo --policy-path FILE (ref by default) and replay --policy ref=FILE got a
+    # TypeError from RefConfig (a traceback from demo) instead of check_policy_spec's message.
+    args = ("ref:" + str(tmp_path),) if how == "spec" else ("ref",)
+    kwargs = {} if how == "spec" else {"path": tmp_path}
+    with pytest.raises(ValueError, match="policy 'ref' is not loaded from a file"):
+        make_policy(*args, **kwargs)
+
+
 def test_a_learned_policy_without_a_shipped_file_names_the_command_that_trains_it():
     """mappo files come from `socialzoo train cotrain` (there is no `socialzoo train mappo`)."""
     from socialzoo.train import TRAINERS
