@@ -120,6 +120,14 @@ class CrowdNavConfig:
     signals: bool = False
 
     def __post_init__(self) -> None:
+        for name, cls in (("cases", CrowdCaseConfig), ("robot", RobotConfig), ("reward", CrowdRewardConfig)):
+            value = getattr(self, name)
+            if not isinstance(value, cls):
+                raise ValueError(
+                    f"CrowdNavConfig.{name} must be a {cls.__name__} or a dict of its fields, got {value!r}"
+                )
+        if not isinstance(self.robot_visible, bool):
+            raise ValueError(f"CrowdNavConfig.robot_visible must be a bool, got {self.robot_visible!r}")
         self._resolve_family()
         check_number("CrowdNavConfig", "time_step", self.time_step, low=0, low_open=True)
         check_int("CrowdNavConfig", "physics_substeps", self.physics_substeps, low=1)
@@ -257,7 +265,7 @@ class CrowdNavConfig:
         named = cases.keys() if isinstance(cases, dict) else _CASE_SPACING if cases is not None else ()
         for name in ("cases", "robot", "reward"):
             if isinstance(changes.get(name), dict):
-                changes[name] = dataclasses.replace(getattr(self, name), **changes[name])
+                changes[name] = _replace_nested(getattr(self, name), changes[name], f"CrowdNavConfig.{name}")
         robot, reward = changes.get("robot", self.robot), changes.get("reward", self.reward)
         follow = {
             "robot_radius": getattr(robot, "radius", None),
@@ -305,6 +313,14 @@ def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> 
         raise TypeError(f"config must be a CrowdNavConfig or None, got {type(config).__name__}")
     base = config or (CrowdNavConfig.variant(variant) if variant is not None else CrowdNavConfig())
     return base.replace(**overrides) if overrides else base
+
+
+def _replace_nested(config: Any, fields: dict[str, Any], where: str) -> Any:
+    """`config` with `fields`; an unknown field raises naming `where` and the known ones."""
+    known = {f.name for f in dataclasses.fields(config)}
+    if unknown := sorted(set(fields) - known):
+        raise ValueError(f"{where}: unknown field(s) {unknown}; known: {sorted(known)}")
+    return dataclasses.replace(config, **fields)
 
 
 def people_config(fields: dict[str, Any]) -> PeopleConfig:

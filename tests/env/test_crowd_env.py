@@ -134,6 +134,32 @@ def test_bad_actions_and_configs_are_refused_before_any_change():
         discrete.step(81)
 
 
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (
+            {"cases": {"num_human": 5}},
+            r"CrowdNavConfig\.cases: unknown field\(s\) \['num_human'\]; known: .*'num_humans'",
+        ),
+        ({"robot": {"radious": 0.3}}, r"CrowdNavConfig\.robot: unknown field\(s\) \['radious'\]"),
+        ({"reward": {"gama": 0.9}}, r"CrowdNavConfig\.reward: unknown field\(s\) \['gama'\]"),
+        (
+            {"cases": "circle_crossing"},
+            r"CrowdNavConfig\.cases must be a CrowdCaseConfig .*'circle_crossing'",
+        ),
+        ({"robot": 0.3}, r"CrowdNavConfig\.robot must be a RobotConfig .*0\.3"),
+        ({"reward": None}, r"CrowdNavConfig\.reward must be a CrowdRewardConfig .*None"),
+        ({"robot_visible": "no"}, r"CrowdNavConfig\.robot_visible must be a bool, got 'no'"),
+    ],
+)
+def test_a_bad_nested_config_names_its_field(overrides, message):
+    # A misspelt nested field was a bare TypeError of the nested class (a traceback from
+    # `socialzoo replay --task-config cases.foo=1`), a nested config of the wrong type an
+    # AttributeError, and robot_visible was reported as OrcaConfig's.
+    with pytest.raises(ValueError, match=message):
+        gym.make("socialzoo/CrowdNav-v1", **overrides)
+
+
 @pytest.mark.parametrize("action", ["continuous", "discrete"])
 def test_the_torchrl_env_passes_its_spec_check_and_matches_the_vector_env(action):
     pytest.importorskip("torchrl")
