@@ -44,5 +44,12 @@ def test_fixed_case_options_are_checked_naming_the_split_and_the_cases():
         task.reset(np.arange(2), {"split": "test", "cases": [0, 20]})
     with pytest.raises(ValueError, match="2 rows to reset but 1 cases"):
         task.reset(np.arange(2), {"split": "test", "cases": [0]})
+    # Whole indices only: 1.5 and True were truncated to cases 1, None and "x" were numpy's errors.
+    for cases in ([0, 1.5], [True, 0], [None, 0], ["x", 0]):
+        with pytest.raises(ValueError, match="must be whole case indices"):
+            task.reset(np.arange(2), {"split": "test", "cases": cases})
+    with pytest.raises(ValueError, match=r"holds 20 cases; got \[0, 10{30}\]"):
+        task.reset(np.arange(2), {"split": "test", "cases": [0, 10**30]})
+    task.reset(np.arange(2), {"split": "test", "cases": np.array([3, 4])})
     with pytest.raises(ValueError, match="twice"):
         play_cases(TOY, forward, "test", [1, 1])

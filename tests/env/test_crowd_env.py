@@ -116,6 +116,8 @@ def test_bad_actions_and_configs_are_refused_before_any_change():
     for bad in (np.array([[np.nan, 0.0], [0.0, 0.0]]), np.array([[2.0, 0.0], [0.0, 0.0]]), np.zeros((3, 2))):
         with pytest.raises(ValueError, match="action"):
             vec.step(bad)
+    with pytest.raises(ValueError, match="CrowdNavVectorEnv: actions must be numbers"):
+        vec.step(np.array([["a", "b"], ["c", "d"]]))  # was numpy's "could not convert string to float"
     np.testing.assert_array_equal(vec.core.state.robot_pose, before.robot_pose)
     np.testing.assert_array_equal(vec.core.state.human_pos, before.human_pos)
     with pytest.raises(ValueError, match="variant"):

@@ -235,7 +235,14 @@ def fixed_cases(
         raise ValueError(f"{task}: options split must be one of {sorted(splits)}, got {split!r}")
     if cases is None:
         raise ValueError(f"{task}: options split {split!r} needs case (one row) or cases (one per row)")
-    indices = np.asarray(cases, dtype=np.int64).reshape(-1)
+    # Whole numbers only: np.asarray(dtype=int64) would truncate 1.5 to case 1, take True as 1 and
+    # fail on None or a string with numpy's words.
+    values = np.asarray(cases, dtype=object).reshape(-1)
+    if not all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) for v in values):
+        raise ValueError(f"{task}: options case / cases must be whole case indices, got {cases!r}")
+    if any(not -(2**63) <= int(v) < 2**63 for v in values):
+        raise ValueError(f"{task}: the {split} split holds {splits[split]} cases; got {cases!r}")
+    indices = values.astype(np.int64)
     if len(indices) != len(rows):
         raise ValueError(f"{task}: {len(rows)} rows to reset but {len(indices)} cases")
     outside = indices[(indices < 0) | (indices >= splits[split])]
@@ -309,4 +316,6 @@ def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who:
         return array
     if array.shape != shape:
         raise ValueError(f"{who}: actions must have shape {shape}, got {array.shape}")
+    if not (np.issubdtype(array.dtype, np.number) or array.dtype == np.bool_):
+        raise ValueError(f"{who}: actions must be numbers, got {array.dtype} {values!r}")
     return array.astype(np.float64)
