@@ -57,7 +57,7 @@ def register(subparsers: Any) -> None:
             "Validate a map and report the wall clearance of its nodes, edges and legal poses, its "
             "graph components, the edges closer to a wall than the robot keeps (it leaves its path "
             "there), and the feasible-route statistics of its legal poses (a route is feasible when "
-            "it is at most --max-route metres: 75%% of the 80 s time limit at 1.5 m/s). Draws the "
+            "it is at most --max-route metres: 75% of the 80 s time limit at 1.5 m/s). Draws the "
             "walls, the graph (tight edges in red) and the poses (stranded ones in red) to "
             "--picture PATH, or beside a map file (FILE-check.png); a shipped map name gets no "
             "picture unless --picture is given. Prints where the picture went. With --drive the "
@@ -125,7 +125,7 @@ def register(subparsers: Any) -> None:
             "the episodes whose metric stuck is set and those in which the robot never moved 1 m. "
             "--pictures draws every failure to OUT/NAME-fail-K.png. Floor plans without a licence "
             "stay outside the repository: pass their folder. Exit status 1 when an import was "
-            "refused or a building's success is below 90%%, 2 for bad arguments."
+            "refused or a building's success is below 90%, 2 for bad arguments."
         ),
     )
     drive.add_argument(

@@ -4,6 +4,7 @@ a subcommand's help imports no heavy library (torch, ray, matplotlib, Stable-Bas
 Times are measured by benchmarks/cli_startup.py, never here; this checks what gets imported.
 """
 
+import argparse
 import subprocess
 import sys
 
@@ -72,3 +73,19 @@ def test_a_subcommand_registers_its_options_when_asked_for(capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["no-such-command"])
     assert exit_info.value.code == 2 and "invalid choice" in capsys.readouterr().err
+
+
+def _parsers(parser):
+    """`parser` and every subcommand parser below it."""
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield from _parsers(sub)
+
+
+def test_help_texts_show_a_percent_sign_once():
+    # argparse %-formats an option's help but not a description: "%%" in a description shows as is.
+    for parser in _parsers(build_parser()):
+        text = parser.format_help()
+        assert "%%" not in text, f"{parser.prog} --help shows '%%'"
