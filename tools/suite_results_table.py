@@ -1,6 +1,7 @@
 """The suite's results as one Markdown table for docs/suite.md: per scenario and policy the success
 rate and the share of episodes with a collision (the guidelines' count above 0), and over all
 scenarios both rates with 95% Wilson intervals, the way robot_sf reports its planner comparison.
+A policy that did not play a scenario (its folder ran other scenarios) has "-" there.
 
     python tools/suite_results_table.py results/suite_as results/suite_crowdnav
 
@@ -44,8 +45,8 @@ def table(outcomes: dict[tuple[str, str], tuple[list[bool], list[bool]]]) -> str
         cells = []
         for policy in policies:
             success, collided = outcomes.get((policy, scenario), ([], []))
-            n = max(len(success), 1)
-            cells.append(f"{100 * sum(success) / n:.0f} / {100 * sum(collided) / n:.0f}")
+            n = len(success)  # 0: not played (a folder without this scenario), not a 0% success
+            cells.append(f"{100 * sum(success) / n:.0f} / {100 * sum(collided) / n:.0f}" if n else "-")
         lines.append(f"| {entry.letter}. {entry.title} | " + " | ".join(cells) + " |")
     totals = []
     for policy in policies:

@@ -1,0 +1,29 @@
+"""tools/suite_results_table.py: the suite's Markdown table from stored outcomes."""
+
+import importlib.util
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location(
+        "suite_results_table", ROOT / "tools" / "suite_results_table.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_scenario_a_policy_did_not_play_is_not_a_zero():
+    # Two suite folders with different scenarios: ref played both, orca only the frontal approach.
+    outcomes = {
+        ("ref", "frontal_approach"): ([True, True], [False, False]),
+        ("ref", "blind_corner"): ([True, False], [False, True]),
+        ("orca", "frontal_approach"): ([False, True], [True, False]),
+    }
+    rows = {line.split("|")[1].strip(): line for line in _tool().table(outcomes).splitlines()[2:]}
+    corner = [c.strip() for c in rows["i. Blind corner"].split("|")[2:-1]]
+    assert corner == ["50 / 50", "-"]
+    frontal = [c.strip() for c in rows["a. Frontal approach"].split("|")[2:-1]]
+    assert frontal == ["100 / 0", "50 / 50"]
