@@ -19,11 +19,14 @@ from typing import Any
 from socialzoo.bench.runner import BACKENDS, Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import (
+    PAPER_LAYOUT,
+    TableLayout,
     policy_label,
     summarize,
     write_tables,
     write_text_atomic,
 )
+from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_int
 from socialzoo.data.fetch import sha256
 from socialzoo.env.config import EnvConfig
@@ -474,8 +477,16 @@ def run_benchmark(
                 )
     finally:
         store.close()
-    summary = summarize(rows, policies=config.policies, maps=[_display_name(sets[m]) for m in config.maps])
-    files += write_tables(summary, out, title=_title(config, counts))
+    # What the robot cost the people (--counterfactual; groups' intrusions) where every trial holds it.
+    people = tuple(n for n in metric_names("people") if rows and all(r.get(n) is not None for r in rows))
+    layout = TableLayout(PAPER_LAYOUT.metrics + people, paper=True)
+    summary = summarize(
+        rows,
+        policies=config.policies,
+        maps=[_display_name(sets[m]) for m in config.maps],
+        metrics=layout.metrics,
+    )
+    files += write_tables(summary, out, title=_title(config, counts), layout=layout)
     if config.human_metrics:
         from socialzoo.bench.human_metrics import summarize_humans, write_humans_tables
 

@@ -168,7 +168,7 @@ class TableLayout:
         for name in self.metrics:
             if name != "success":
                 columns += [value_key(name), f"{name}_ci_low", f"{name}_ci_high"]
-            if self.paper and name in SUCCESS_ONLY:
+            if self.paper and metric(name).success_only:
                 columns.append(f"{name}_n")
         return columns
 
@@ -225,21 +225,23 @@ def summarize(
     maps: Sequence[str] | None = None,
     confidence: float = CONFIDENCE,
     seed: int = BOOTSTRAP_SEED,
+    metrics: Sequence[str] = PAPER_LAYOUT.metrics,
 ) -> list[dict[str, Any]]:
     """One summary per (policy, map) of stored trial rows (ResultsStore.rows).
 
     Args:
-        rows: trial dicts with policy, map, test_set, success and the TABLE_METRICS.
+        rows: trial dicts with policy, map, test_set, success and the `metrics`.
         policies: display order of the policies (others follow in order of appearance).
         maps: display order of the maps (likewise).
         confidence: two-sided level of the intervals.
         seed: seed of the count intervals' bootstrap resamples, one generator per cell with its names
             (socialzoo.bench.aggregates.cell_generator).
+        metrics: the registered metrics to average (default the paper layout's, TABLE_METRICS).
 
     Returns:
-        Dicts keyed by `PAPER_LAYOUT.csv_columns()`: success rate with a Wilson interval, mean counts
-        (COUNT_METRICS) with bootstrap (BCa) intervals, other metric means with Student-t
-        intervals (NaN where a metric is missing or has fewer than 2 finite values).
+        Dicts keyed by `TableLayout(metrics, paper=True).csv_columns()`: success rate with a Wilson
+        interval, mean counts (the registry's counts) with bootstrap (BCa) intervals, other metric
+        means with Student-t intervals (NaN where a metric is missing or has fewer than 2 finite values).
     """
     out = []
     for policy, map_name, group in ordered_groups(rows, policies, maps):
@@ -260,20 +262,20 @@ def summarize(
             entry[f"failure_{cause}_rate"] = share.value
             entry[f"failure_{cause}_ci_low"] = share.low
             entry[f"failure_{cause}_ci_high"] = share.high
-        for name, _ in TABLE_METRICS:
+        for name in metrics:
             values = np.array(
                 [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
             )
-            if name in SUCCESS_ONLY:
+            if metric(name).success_only:
                 values = values[success]
-            if name in COUNT_METRICS:
+            if metric(name).count:
                 ci = count_interval(values, confidence, rng=cell_generator(seed, policy, map_name, name))
             else:
                 ci = mean_interval(values, confidence)
             entry[f"{name}_mean"] = ci.value
             entry[f"{name}_ci_low"] = ci.low
             entry[f"{name}_ci_high"] = ci.high
-            if name in SUCCESS_ONLY:
+            if metric(name).success_only:
                 entry[f"{name}_n"] = ci.n
         out.append(entry)
     return out
@@ -478,7 +480,7 @@ def summary_markdown(
             cells = [labels[p]]
             for m in maps:
                 e = by_key.get((p, m))
-                n = f" (n={e[f'{name}_n']})" if e is not None and name in SUCCESS_ONLY else ""
+                n = f" (n={e[f'{name}_n']})" if e is not None and metric(name).success_only else ""
                 cells.append(interval_text(e, name, metric(name).digits) + n)
             rows.append(cells)
         lines += markdown_table(["policy", *(_map_header(m) for m in maps)], rows)

@@ -310,3 +310,19 @@ def test_policy_named_with_its_file(rooms, tmp_path):
     first_hash = by_policy[name][0]["config_hash"]
     halted = [r for r in stored(out) if r["policy"] == name and r["config_hash"] != first_hash]
     assert len(halted) == TRIALS and not any(r["success"] for r in halted)
+
+
+def test_the_summary_has_what_the_robot_cost_the_people_when_the_run_records_it(
+    rooms, uninterrupted, tmp_path
+):
+    # Without --counterfactual the summary keeps the paper's columns.
+    assert "people_time_lost_mean" not in (uninterrupted / "summary.csv").read_text()
+    result = run_benchmark(
+        config(policies=("goalone",), trials=2, counterfactual=True), tmp_path, test_sets=rooms, progress=False,
+        figures=False,
+    )  # fmt: skip
+    header = (tmp_path / "summary.csv").read_text().splitlines()[0].split(",")
+    for name in ("people_time_lost", "people_time_lost_max", "people_extra_distance"):
+        assert f"{name}_mean" in header and f"{name}_ci_low" in header
+        assert math.isfinite(result.summary[0][f"{name}_mean"])
+    assert "## People's time lost (mean per person), s" in (tmp_path / "summary.md").read_text()
