@@ -236,7 +236,7 @@ def run_task_benchmark(
     A policy acts in the task the id names (socialzoo.agents.make_policy refuses another task's,
     or a learned one of another observation size); a learned policy that declares task overrides
     (CrowdNav's learned policy: its discrete or continuous actions) acts with them. `say` gets
-    one line per policy (success, episodes played now and read from the store), as the CLI prints.
+    one line per policy (success, episodes played and read from the store), as the CLI prints.
     `config` overrides the id's task config for every policy (e.g. CrowdNav's observed_people);
     the store keeps episodes of each config apart (its digest).
 
@@ -264,9 +264,10 @@ def run_task_benchmark(
         )
         summary = summarize(episodes)
         rows.append(table_entry(spec, env_id.split("/")[-1], f"{probe.name}-{split}", summary))
+        read = summary["episodes"] - played
         line = (
-            f"{spec}: success {summary.get('success_rate', math.nan):.3f} ({played} of {summary['episodes']} "
-            "episodes played now, the others read from the store)"
+            f"{spec}: success {summary.get('success_rate', math.nan):.3f} "
+            f"({played} episodes played, {read} read from the store)"  # as the maps' and the suite's runs say
         )
         logger.info(line)
         if say is not None:

@@ -111,8 +111,10 @@ def test_socialzoo_benchmark_runs_the_registered_id_with_tables_and_a_figure(tmp
     table = (tmp_path / "toy_reach.md").read_text()
     assert "| toy_heading |" in table and "success (rate)" in table
     assert (tmp_path / "success.png").stat().st_size > 5_000
-    assert "0 of 6 episodes played now" not in capsys.readouterr().out
-    assert main(args) == 0 and "0 of 6 episodes played now" in capsys.readouterr().out  # read back
+    assert "6 episodes played, 0 read from the store" in capsys.readouterr().out
+    assert (
+        main(args) == 0 and "0 episodes played, 6 read from the store" in capsys.readouterr().out
+    )  # read back
     assert main([*args[:4], "ref", *args[5:]]) == 2
     assert "acts in task 'action_selection', not 'toy_reach'" in capsys.readouterr().err
 
