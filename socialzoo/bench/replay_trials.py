@@ -204,7 +204,8 @@ def find_trials(
                 # socialzoo.bench.task_benchmark's trials: a task id's fixed case, not a map's scenario.
                 raise ValueError(
                     f"{path}: trial {row['test_set']} #{index} is a task id's case (socialzoo benchmark "
-                    f"--maps ID); play it with socialzoo replay --env ID --split {stored.get('split', 'test')} "
+                    f"--maps ID); play it with socialzoo replay --env {stored.get('env_id', 'ID')} "
+                    f"--split {stored.get('split', 'test')} "
                     f"--case {index} --policy {name}"
                 )
             kwargs = run.get("policies", {}).get(name, {}).get("kwargs", {}) if row["_rank"][0] else {}

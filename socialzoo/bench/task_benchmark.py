@@ -132,7 +132,9 @@ def evaluate_stored(
     test_set = f"{probe.name}-{split}"
     where = str(getattr(config, "map", None) or probe.name)
     with ResultsStore(store_path) as store:
-        store.register_config(digest, {"task": config.to_dict(), "split": split, "policy": spec})
+        store.register_config(
+            digest, {"task": config.to_dict(), "split": split, "policy": spec, "env_id": task.env_id}
+        )
         have = store.stored_indices(spec, test_set, digest)
         todo = [k for k in range(total) if k not in have]
 
