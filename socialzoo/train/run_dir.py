@@ -95,6 +95,7 @@ class RunDir:
         self.file = self.path / record_name
         self.algo = algo
         self._paths = given_paths(args, inputs)
+        self._fields = path_fields(args, inputs)
         existing = self.read()
         if existing is not None:
             changed = differing_args(existing, algo, args, volatile, inputs, self.path)
@@ -103,11 +104,13 @@ class RunDir:
                     f"{self.file}: {self.path} holds a {existing.get('algo')} run with other arguments "
                     f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
                 )
-        resolved = recorded(plain(args), self.path, self._paths)
+        resolved = recorded_args(plain(args), self.path, self._paths, self._fields)
         self.record: dict[str, Any] = existing or {
             "algo": algo,
             "args": resolved,
-            "command": recorded_command([program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths),
+            "command": recorded_command(
+                [program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths, self._fields
+            ),
             "seed": resolved.get("seed"),
             "package_version": __version__,
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -176,13 +179,13 @@ def differing_args(
     relative to the run folder as recorded, and, in a record of absolute or working-folder paths,
     `inputs` files at the same place relative to `out`); else the differing argument names (empty
     when only the algorithm differs). `folder`: the run folder (default args.out)."""
-    given = given_paths(args, inputs)
+    given, fields = given_paths(args, inputs), path_fields(args, inputs)
     folder = Path(args.out) if folder is None else Path(folder)
     as_given, theirs_all = plain(args), record.get("args", {})
-    ours_all = recorded(as_given, folder, given)
+    ours_all = recorded_args(as_given, folder, given, fields)
     identity = {k: v for k, v in ours_all.items() if k not in volatile}
     theirs = {k: v for k, v in theirs_all.items() if k not in volatile}
-    for name, default in recorded(_defaults(args), folder, given).items():
+    for name, default in recorded_args(_defaults(args), folder, given, fields).items():
         if name not in theirs and name in identity and identity[name] == default:
             theirs[name] = default
     # A record of working-folder or absolute paths: its out is not as the run folder sees it.
@@ -220,15 +223,21 @@ def _same_place(before: Any, before_out: Any, current: Any, current_out: Any) ->
     return os.path.relpath(before, before_out) == os.path.relpath(current, current_out)
 
 
+def path_fields(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
+    """The names of the arguments of dataclass `args` that name paths: `out`, the `inputs` and the
+    fields holding a Path."""
+    names = {"out", *inputs}
+    if dataclasses.is_dataclass(args):
+        names |= {f.name for f in dataclasses.fields(args) if isinstance(getattr(args, f.name), Path)}
+    return names
+
+
 def given_paths(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
     """The paths that argument dataclass `args` names, as given: the values of its fields that hold
     a Path, of `out` and of the `inputs` fields, or the paths inside an `inputs` field that is a spec
     (normalised; None and empty ones left out)."""
-    names = {"out", *inputs}
-    if dataclasses.is_dataclass(args):
-        names |= {f.name for f in dataclasses.fields(args) if isinstance(getattr(args, f.name), Path)}
     found = set()
-    for name in names:
+    for name in path_fields(args, inputs):
         value = getattr(args, name, None)
         items = [_spec_item(item) for item in value.split(",")] if isinstance(value, str) else []
         if name in inputs and (len(items) > 1 or (items and items[0][0])):
@@ -274,6 +283,15 @@ def recorded(value: Any, folder: str | Path, given: set[str]) -> Any:
     return value
 
 
+def recorded_args(
+    args: dict[str, Any], folder: str | Path, given: set[str], fields: set[str]
+) -> dict[str, Any]:
+    """Plain arguments as a run record holds them (`recorded`), the `given` paths rewritten only in
+    the path arguments `fields`: an argument that merely spells the same as a path (`--family crossing
+    --out crossing`) stays as it is. Absolute paths are rewritten in every argument."""
+    return {k: recorded(v, folder, given if k in fields else set()) for k, v in args.items()}
+
+
 def _recorded_path(path: str, folder: str | Path, given: set[str]) -> str:
     """A path inside a spec as a run record holds it: relative to the run `folder` when it is one of
     the `given` paths or absolute ("//", as in "ray://host", is an address, not a path)."""
@@ -291,17 +309,24 @@ def program_name(argv0: str) -> str:
     return path.name
 
 
-def recorded_command(argv: list[str], folder: str | Path, given: set[str]) -> str:
-    """The command line as a run record holds it: each word (or the value of a word
-    "--option=value") that is one of the `given` paths or an absolute path written relative to the
-    run `folder`."""
+def recorded_command(argv: list[str], folder: str | Path, given: set[str], fields: set[str]) -> str:
+    """The command line as a run record holds it: each value of an option of a path argument
+    `fields` ("--out DIR", "--demos=FILE", a spec naming files) that is one of the `given` paths,
+    and any absolute path, written relative to the run `folder`. The words before the options
+    (program, subcommand, trainer) and other options' values are no paths given, even when they
+    spell the same (`socialzoo train bc --out bc`)."""
     words = []
+    field = None  # the argument the words after an option are values of; None: command words
     for word in argv:
-        option, equals, value = word.partition("=") if word.startswith("-") else ("", "", word)
-        if word.startswith("-") and not equals:
-            words.append(word)
-        else:
-            words.append(option + equals + recorded(value, folder, given))
+        if not word.startswith("-"):
+            words.append(recorded(word, folder, given if field in fields else set()))
+            continue
+        option, equals, value = word.partition("=")
+        name = option.lstrip("-").replace("-", "_")
+        field = None if equals else name
+        words.append(
+            option + equals + recorded(value, folder, given if name in fields else set()) if equals else word
+        )
     return shlex.join(words)
 
 

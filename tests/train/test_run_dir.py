@@ -189,3 +189,24 @@ def test_paths_inside_specs_are_recorded_relative_to_the_run_folder(tmp_path, mo
     assert "--scenes eth,mine=../../data/t.txt,../../data/u.txt" in record["command"]
     # The same run, from the same folder: the same arguments.
     assert RunDir(Path("runs/a"), "x", args, inputs=("scenes",)).finished
+
+
+@dataclass(frozen=True, kw_only=True)
+class FamilyArgs:
+    family: str
+    out: Path
+
+
+def test_a_word_that_spells_the_run_folder_is_no_path(tmp_path, monkeypatch):
+    # Found running `socialzoo train bc --out bc` in a work folder: run.json (and the policy file's
+    # header) said "socialzoo train . --out .", and --family crossing --out crossing recorded family ".".
+    monkeypatch.chdir(tmp_path)
+    argv = ["socialzoo", "train", "bc", "--family", "bc", "--out", "bc"]
+    monkeypatch.setattr("sys.argv", argv)
+    RunDir("bc", "bc", FamilyArgs(family="bc", out=Path("bc")))
+    record = json.loads((tmp_path / "bc" / "run.json").read_text())
+    assert record["command"] == "socialzoo train bc --family bc --out ."
+    assert record["args"] == {"family": "bc", "out": "."}
+    assert RunDir("bc", "bc", FamilyArgs(family="bc", out=Path("bc"))).record == record
+    with pytest.raises(RunDirError, match="family differ"):
+        RunDir("bc", "bc", FamilyArgs(family=".", out=Path("bc")))
