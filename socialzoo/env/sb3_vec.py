@@ -29,7 +29,8 @@ class SB3VecEnv(VecEnv):
 
     Seeding follows SB3: `seed(s)` (which SB3 algorithms call with their own seed) takes effect at
     the next `reset()`; all rows draw their training streams from that one seed. Without a seed the
-    first reset seeds from fresh entropy.
+    first reset seeds from fresh entropy. So do options: `set_options(dict)` gives the next `reset()`
+    the task's reset options for all rows.
 
     Attributes and methods (`get_attr`, `set_attr`, `env_method`) are those of the one batched env
     that every row shares (`self.vector_env`): `get_attr("config")` gives its config once per
@@ -73,9 +74,21 @@ class SB3VecEnv(VecEnv):
 
     # ----------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
-        """Reset every row; returns (B, D) observations. Uses the seed given to `seed()`, if any."""
+        """Reset every row; returns (B, D) observations. Uses the seed given to `seed()` and the
+        options given to `set_options()` (the task's reset options, e.g. {"split": "val", "cases":
+        [...]}: one dict for all rows, which share one env), if any.
+
+        Raises:
+            ValueError: `set_options` gave the rows different options.
+        """
         seed = self._seeds[0]
-        obs, info = self.vector_env.reset(seed=seed)
+        options = self._options[0]
+        if any(other != options for other in self._options):
+            raise ValueError(
+                "SB3VecEnv.reset: rows share one env; set_options takes one dict for all rows "
+                "(a split's cases as {'split': NAME, 'cases': [one per row]}), got different options per row"
+            )
+        obs, info = self.vector_env.reset(seed=seed, options=options or None)
         self._started = True
         # One dict per row of the vector env's reset info, under its task's own keys ("scenario_seed",
         # CrowdNav's "case_seed", ...), as plain Python values.

@@ -222,3 +222,17 @@ def test_bad_use_fails_clearly():
     venv.reset()
     with pytest.raises(ValueError, match="actions"):
         venv.step(np.array([0, 1, 2]))
+
+
+def test_set_options_reach_the_next_reset():
+    # Found probing SB3's VecEnv API: set_options({"split": "val", ...}) was dropped at reset(), so
+    # a model evaluated on validation cases played training scenarios without a word.
+    venv, vector = SB3VecEnv(2, max_steps=40), ActionSelectionVectorEnv(2, max_steps=40)
+    options = {"split": "val", "cases": [3, 1]}
+    venv.set_options(options)
+    expected, _ = vector.reset(seed=0, options=options)
+    np.testing.assert_array_equal(venv.reset(), expected)
+    assert not np.array_equal(venv.reset(), expected)  # options are used once, as SB3's are
+    venv.set_options([{"split": "val", "case": 0}, {"split": "val", "case": 1}])
+    with pytest.raises(ValueError, match="one dict for all rows"):
+        venv.reset()
