@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,25 @@ def vector_action_spec(space: spaces.Space, batch: tuple[int, ...], device: Any 
         return torch.as_tensor(np.broadcast_to(values, shape).astype(np.float32))
 
     return Bounded(bound(space.low), bound(space.high), shape=shape, dtype=torch.float32, device=device)
+
+
+def one_hot_indices(values: np.ndarray, n: int, rows: int, who: str) -> np.ndarray:
+    """(rows,) indices of (rows, n) one-hot actions (TorchRL's OneHot spec).
+
+    Raises:
+        ValueError: naming `who`: another shape, or a row that is not one 1 among zeros (all
+            zeros, NaN, scores or probabilities: argmax would pick an action the policy never chose).
+    """
+    if values.shape != (rows, n):
+        raise ValueError(f"{who}: one-hot actions must have shape {(rows, n)}, got {values.shape}")
+    ones = values == 1
+    bad = np.flatnonzero((ones.sum(-1) != 1) | ((values != 0) & ~ones).any(-1))
+    if len(bad):
+        raise ValueError(
+            f"{who}: the action of row {bad[0]} is not one-hot (one 1 among zeros), got {values[bad[0]].tolist()}; "
+            "integer actions need categorical_action_encoding=True"
+        )
+    return ones.argmax(-1)
 
 
 class TaskTorchEnv(TaskAdapter, EnvBase):
@@ -129,14 +149,15 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         return self._tensordict()
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        action = tensordict.get("action")
-        space = self.task.action_space
+        space, who = self.task.action_space, type(self).__name__
+        values = tensordict.get("action").detach().cpu().numpy()
         if isinstance(space, spaces.Discrete) and not self.categorical_action_encoding:
-            action = action.to(torch.float32).argmax(-1)
-        values = action.reshape(self.num_envs, *space.shape).cpu().numpy()
-        if isinstance(space, (spaces.Discrete, spaces.MultiDiscrete)):
-            values = values.astype(np.int64)
-        actions = batch_actions(space, values, (self.num_envs,), type(self).__name__)
+            values = one_hot_indices(values, int(space.n), self.num_envs, who)
+        shape = (self.num_envs, *space.shape)
+        if values.shape != shape and values.size == math.prod(shape):
+            values = values.reshape(shape)  # (B, 1) indices, as some policies write them
+        # Checked as the task's other adapters check them: 1.5 or NaN is no index, 5 no velocity.
+        actions = batch_actions(space, values, (self.num_envs,), who)
         step = self.task.step(actions.reshape((self.num_envs, 1) + tuple(space.shape or ())))
         terminated = step.terminated[:, 0]
         truncated = step.truncated[:, 0]

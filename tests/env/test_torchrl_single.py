@@ -98,3 +98,34 @@ def test_velocity_actions_are_a_bounded_box_that_passes_the_spec_check():
     env = ActionSelectionTorchEnv(2, robot_action="velocity", max_steps=10)
     assert tuple(env.action_spec.shape) == (2, 2)
     check_env_specs(env, seed=0)
+
+
+def test_bad_actions_are_refused_naming_the_adapter():
+    # Found probing the adapter with bad actions: an all-zero or NaN one-hot played action 0, a
+    # (B, 2) one-hot action 0 or 1 (argmax), index 1.5 played 1 and NaN said "action
+    # -9223372036854775808", and a wrong shape was torch's "shape '[3]' is invalid".
+    from tensordict import TensorDict
+
+    env = ActionSelectionTorchEnv(3, max_steps=20)
+    env.set_seed(0)
+    env.reset()
+    bad_one_hots = {
+        "not one-hot": torch.zeros(3, 4),
+        "not one-hot.*nan": torch.full((3, 4), float("nan")),
+        r"shape \(3, 4\), got \(3, 2\)": torch.eye(2)[[0, 1, 0]],
+        r"shape \(3, 4\), got \(3,\)": torch.tensor([0, 1, 2]),
+    }
+    for match, action in bad_one_hots.items():
+        with pytest.raises(ValueError, match=f"ActionSelectionTorchEnv: .*{match}"):
+            env.step(TensorDict({"action": action}, batch_size=[3]))
+    env.step(TensorDict({"action": _one_hot([0, 1, 3])}, batch_size=[3]))
+    indices = ActionSelectionTorchEnv(3, categorical_action_encoding=True, max_steps=20)
+    indices.reset()
+    for action in ([0.0, 1.0, 1.5], [0.0, 1.0, float("nan")], [[0, 0]] * 3, [True, False, True]):
+        with pytest.raises(ValueError, match="ActionSelectionTorchEnv: actions must be"):
+            indices.step(TensorDict({"action": torch.tensor(action)}, batch_size=[3]))
+    indices.step(TensorDict({"action": torch.tensor([[0], [1], [3]])}, batch_size=[3]))  # (B, 1) indices
+    velocity = ActionSelectionTorchEnv(3, robot_action="velocity", max_steps=20)
+    velocity.reset()
+    with pytest.raises(ValueError, match=r"ActionSelectionTorchEnv: actions must have shape \(3, 2\)"):
+        velocity.step(TensorDict({"action": torch.zeros(3, 3)}, batch_size=[3]))
