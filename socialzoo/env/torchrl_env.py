@@ -16,7 +16,7 @@ from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
 from socialzoo.env.tasks.base import TaskStep
-from socialzoo.env.torchrl_single import box_observation, vector_action_spec
+from socialzoo.env.torchrl_single import box_observation, reset_rows, vector_action_spec
 
 ROBOT = "robot"
 HUMAN = "human"
@@ -216,7 +216,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
         if reset is None:
             rows = np.arange(b)
         else:
-            rows = np.flatnonzero(reset.reshape(b, -1).any(-1).cpu().numpy())
+            rows = reset_rows(reset, b, type(self).__name__)
         task = self.task
         if len(rows):
             task.reset(rows, {})

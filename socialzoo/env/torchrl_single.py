@@ -62,6 +62,19 @@ def one_hot_indices(values: np.ndarray, n: int, rows: int, who: str) -> np.ndarr
     return ones.argmax(-1)
 
 
+def reset_rows(mask: torch.Tensor, rows: int, who: str) -> np.ndarray:
+    """The rows that a root "_reset" entry of shape (rows, 1) or (rows,) names.
+
+    Raises:
+        ValueError: naming `who`, for a mask of another shape (torch's reshape error before).
+    """
+    if tuple(mask.shape) not in ((rows,), (rows, 1)):
+        raise ValueError(
+            f"{who}: '_reset' must be ({rows}, 1) flags, one per row, got shape {tuple(mask.shape)}"
+        )
+    return np.flatnonzero(mask.reshape(rows).cpu().numpy())
+
+
 class TaskTorchEnv(TaskAdapter, EnvBase):
     """B rows of a one-robot task as a batched TorchRL EnvBase (below).
 
@@ -143,7 +156,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         rows = np.arange(self.num_envs)
         mask = tensordict.get("_reset", None) if tensordict is not None else None
         if mask is not None and self._started:
-            rows = np.flatnonzero(mask.reshape(self.num_envs).cpu().numpy())
+            rows = reset_rows(mask, self.num_envs, type(self).__name__)
         self.task.reset(rows, {})
         self._started = True
         return self._tensordict()

@@ -129,3 +129,21 @@ def test_bad_actions_are_refused_naming_the_adapter():
     velocity.reset()
     with pytest.raises(ValueError, match=r"ActionSelectionTorchEnv: actions must have shape \(3, 2\)"):
         velocity.step(TensorDict({"action": torch.zeros(3, 3)}, batch_size=[3]))
+
+
+def test_a_reset_mask_of_another_shape_is_refused_by_name():
+    # Found probing partial resets: a (B, 2) "_reset" was torch's "shape '[3]' is invalid for input
+    # of size 6" (TaskTorchEnv) or TorchRL's mask IndexError after the rows were reset (SocialNavTorchEnv).
+    from tensordict import TensorDict
+
+    from socialzoo.env.torchrl_env import SocialNavTorchEnv
+
+    for env in (ActionSelectionTorchEnv(3, max_steps=20), SocialNavTorchEnv(batch_size=3, max_steps=20)):
+        env.rollout(2, break_when_any_done=False)
+        steps = env.core.state.step_count.copy()
+        assert (steps == 2).all()
+        mask = TensorDict({"_reset": torch.ones(3, 2, dtype=torch.bool)}, batch_size=[3])
+        with pytest.raises(ValueError, match=rf"{type(env).__name__}: '_reset' must be \(3, 1\) flags"):
+            env.reset(mask)
+        np.testing.assert_array_equal(env.core.state.step_count, steps)
+        env.reset(TensorDict({"_reset": torch.tensor([True, False, False])}, batch_size=[3]))
