@@ -91,12 +91,15 @@ class RunDir:
         from socialzoo import __version__
 
         self.path = Path(path)
+        self._made = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
         self.file = self.path / record_name
         self.algo = algo
         self._paths = given_paths(args, inputs)
         self._fields = path_fields(args, inputs)
         existing = self.read()
+        # What the folder held before this run's record (None: the record was there already).
+        self._before = None if existing is not None else {p.name for p in self.path.iterdir()}
         if existing is not None:
             changed = differing_args(existing, algo, args, volatile, inputs, self.path)
             if changed is not None:
@@ -121,6 +124,17 @@ class RunDir:
     def read(self) -> dict[str, Any] | None:
         """The record of this folder, or None."""
         return read_record(self.file)
+
+    def discard(self) -> None:
+        """Undo a run that wrote nothing but its new record (one stopped at a missing input file or an
+        argument its trainer refuses): the record goes, and the folder when the run made it, so the
+        corrected command may use the folder. A run that wrote anything else is kept as it is."""
+        if self._before is None or not self.path.is_dir():
+            return
+        if {p.name for p in self.path.iterdir()} - self._before == {self.file.name}:
+            self.file.unlink()
+            if self._made and not any(self.path.iterdir()):
+                self.path.rmdir()
 
     @property
     def finished(self) -> bool:

@@ -255,7 +255,8 @@ def run_training(
     It does the rest, the same way for every trainer:
 
     - the run folder and its record (socialzoo.train.run_dir.RunDir: arguments, command, seed,
-      package version, start and end, results), refusing a folder that holds another run;
+      package version, start and end, results), refusing a folder that holds another run; a run
+      that stops before writing anything but its record (a missing input file) removes the record;
     - resume: a finished run of the same arguments is not repeated (its policy is returned), so a
       rerun of an interrupted protocol (`socialzoo reproduce`) trains only what is missing. An
       interrupted run starts again from step 0 in its folder: the checkpoints hold the policy, not
@@ -287,6 +288,10 @@ def run_training(
             # Inside the run's torch settings, so the threads recorded are the run's.
             run.record["machine"] = machine_facts()
             results = fit(run)
+    except BaseException:
+        run.close()
+        run.dir.discard()
+        raise
     finally:
         run.close()
     if not run.policy.is_file():

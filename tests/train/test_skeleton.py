@@ -77,6 +77,32 @@ def test_an_interrupted_run_trains_again(tmp_path):
     assert len(calls) == 1 and finished_run(TOY, args)
 
 
+def test_a_run_stopped_before_writing_anything_leaves_the_folder_as_it_was(tmp_path):
+    # Found with `socialzoo train bc --demos MISTYPED` (or ppo-finetune --init): the refused run left a
+    # record, so the corrected command in the same folder was refused ("demos differ").
+    def refused(run):
+        raise ValueError("no such demonstration file")
+
+    with pytest.raises(ValueError, match="no such"):
+        run_training(TOY, ToyArgs(out=tmp_path / "run", seed=1), refused)
+    assert not (tmp_path / "run").exists()
+    (tmp_path / "kept").mkdir()
+    (tmp_path / "kept" / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="no such"):
+        run_training(TOY, ToyArgs(out=tmp_path / "kept", seed=1), refused)
+    assert [p.name for p in (tmp_path / "kept").iterdir()] == ["notes.txt"]
+    run_training(TOY, ToyArgs(out=tmp_path / "run", seed=2), toy_fit([]))
+
+    def stopped_after_a_checkpoint(run):
+        run.checkpoint(4, lambda path: path.write_text("policy at 4"), ".txt")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_training(TOY, ToyArgs(out=tmp_path / "half", seed=1), stopped_after_a_checkpoint)
+    with pytest.raises(RunDirError, match="seed differ"):  # its checkpoint would mix with another run's
+        run_training(TOY, ToyArgs(out=tmp_path / "half", seed=2), toy_fit([]))
+
+
 def test_a_fit_that_writes_no_policy_fails_and_leaves_the_run_unfinished(tmp_path):
     args = ToyArgs(out=tmp_path / "run")
     with pytest.raises(RuntimeError, match="without writing"):
