@@ -120,10 +120,14 @@ class EnvConfig:
     planner: LocalPlannerConfig = field(default_factory=LocalPlannerConfig)
     metrics: MetricsConfig = field(default_factory=MetricsConfig)
     human_reward: HumanRewardConfig = field(default_factory=HumanRewardConfig)
-    people: PeopleConfig = field(default_factory=PeopleConfig)
+    people: PeopleConfig = field(
+        default_factory=PeopleConfig
+    )  # or a people spec string: PeopleConfig(models=...)
     quirks: ReferenceQuirks = field(default_factory=ReferenceQuirks)
 
     def __post_init__(self) -> None:
+        if isinstance(self.people, str):  # a people spec, as the CrowdNav task and the CLI take it
+            object.__setattr__(self, "people", PeopleConfig(models=self.people))
         if self.family is not None and self.family not in FAMILIES:
             raise ValueError(
                 f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
@@ -264,6 +268,9 @@ def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[s
     return {
         key: _override(_NESTED[key]() if base is None else getattr(base, key), value, f"EnvConfig.{key}")
         if key in _NESTED and isinstance(value, dict)
+        # A people spec string changes the models only (a run's counterfactual switch is kept).
+        else _override(PeopleConfig() if base is None else base.people, {"models": value}, "EnvConfig.people")
+        if key == "people" and isinstance(value, str)
         else value
         for key, value in data.items()
     }

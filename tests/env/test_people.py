@@ -11,7 +11,7 @@ from socialzoo.env.people import COST_KEYS, _group_crossings, without_robots
 from socialzoo.env.registration import BENCHMARK_IDS
 from socialzoo.env.tasks.action_selection import ActionSelectionTask
 from socialzoo.env.world import step_world
-from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE
+from socialzoo.humans.models import LEARNED, ORCA, SOCIAL_FORCE, PeopleConfig
 from socialzoo.scenarios.generator import ScenarioConfig
 from socialzoo.scenarios.scenario_sets import TestSet
 
@@ -199,6 +199,13 @@ def test_orca_people_in_the_gymnasium_env():
     assert (env.core.state.human_model[env.core.state.human_mask] == ORCA).all()
     _, _, _, _, info = env.step(0)
     assert "reached" in info
+    # A people spec alone, as the CrowdNav task and the CLI take it (it was refused: "must be a
+    # PeopleConfig"); as an override it changes the models only.
+    spec = gymnasium.make(BENCHMARK_ID, **SMALL, people="orca").unwrapped
+    assert spec.config.people == env.config.people
+    counting = EnvConfig().replace(people={"counterfactual": True})
+    assert counting.replace(people="orca").people == PeopleConfig(models="orca", counterfactual=True)
+    assert EnvConfig(people="groups").people == PeopleConfig(models="groups")
 
 
 def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_path):
