@@ -298,3 +298,72 @@ def test_float32_and_rounded_stamps_are_evenly_spaced_a_dropped_sample_is_not():
     dropped = dict(log, time=[dt * k for k in range(n + 1) if k != 100])
     with pytest.raises(EpisodeLogError, match=r"time\[99\] to time\[100\] is 0\.05 s, the mean step 0\.025"):
         validate_log(dropped)
+
+
+def test_a_long_log_is_checked_entry_by_entry_outside_jsonschema(monkeypatch):
+    # jsonschema walked every sample through $ref and oneOf: a log of 10,000 samples and 200 people
+    # took minutes to check. It now sees one entry of each per-sample array that passes the quick
+    # test of its entries, and every entry of an array that does not.
+    import jsonschema
+
+    n = 400
+    t = np.arange(n)
+    people = np.stack([np.stack([t * 0.01, np.full(n, 2.0 + j)], axis=1) for j in range(3)], axis=1)
+    log = make_episode_log(
+        dt=0.1,
+        robot_pos=np.stack([t * 0.01, np.zeros(n)], axis=1),
+        goal=[10, 0],
+        robot_radius=0.3,
+        goal_radius=0.2,
+        people_pos=people,
+        human_contact=np.zeros(n, dtype=bool),
+    )
+    seen = []
+    iter_errors = jsonschema.Draft202012Validator.iter_errors
+    monkeypatch.setattr(
+        jsonschema.Draft202012Validator,
+        "iter_errors",
+        lambda self, instance, *a: seen.append(instance) or iter_errors(self, instance, *a),
+    )
+    validate_log(log)
+    walked = seen[0]
+    assert len(walked["time"]) == len(walked["robot"]["positions"]) == 1
+    assert [len(p["positions"]) for p in walked["people"]] == [1, 1, 1]
+    assert len(walked["collisions"]["human"]) == 1 and len(log["time"]) == n
+    # Errors deep in a long array are jsonschema's, at the entry, as before.
+    for where, change, words in [
+        (
+            "people[1].positions[350]",
+            lambda g: g["people"][1]["positions"].__setitem__(350, [1.0]),
+            "too short",
+        ),
+        (
+            "collisions.human[9]",
+            lambda g: g["collisions"]["human"].__setitem__(9, 1),
+            "not of type 'boolean'",
+        ),
+        ("robot.positions[399][1]", lambda g: g["robot"]["positions"][399].__setitem__(1, True), "'number'"),
+        ("time[5]", lambda g: g["time"].__setitem__(5, "0.5"), "not of type 'number'"),
+    ]:
+        broken = json.loads(json.dumps(log))
+        change(broken)
+        with pytest.raises(EpisodeLogError) as info:
+            validate_log(broken)
+        assert info.value.field == where and words in info.value.problem, str(info.value)
+
+
+def test_a_file_of_several_episodes_or_a_huge_wrong_value_is_a_short_error(tmp_path):
+    log = _good()
+    many = tmp_path / "many.json"
+    many.write_text(json.dumps([log, log]))
+    with pytest.raises(
+        EpisodeLogError, match=r"many\.json: \(top level\): a list of 2 entries is not of type 'object'"
+    ) as info:
+        read_episode_log(many)
+    assert "one JSON object per file" in str(info.value) and len(str(info.value)) < 200
+    # jsonschema quotes the value it refuses: a whole array of samples was megabytes of message.
+    log["robot"]["positions"] = {"xy": log["robot"]["positions"] * 100}
+    with pytest.raises(EpisodeLogError) as info:
+        validate_log(log)
+    assert info.value.field == "robot.positions" and "is not of type 'array'" in info.value.problem
+    assert len(str(info.value)) < 200, str(info.value)
