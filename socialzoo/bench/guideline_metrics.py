@@ -294,8 +294,11 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
             known[:, 0] = False
         with np.errstate(invalid="ignore", over="ignore"):
             t = time_to_collision(rel, pvel - vel[:, :, None, :], reach)
-        t = np.where(known, t, np.inf)
-        ttc = np.where(known.any(axis=(1, 2)), t.min(axis=(1, 2)), np.nan)
+        # Overlapping discs are 0 s from contact whatever their velocities, so a person's first
+        # sample (no velocity from the positions yet) counts when it overlaps.
+        overlap = present & (gap <= 0)
+        t = np.where(known, t, np.where(overlap, 0.0, np.inf))
+        ttc = np.where((known | overlap).any(axis=(1, 2)), t.min(axis=(1, 2)), np.nan)
 
     # ---- walls: clearing distance and contacts
     if traj.wall_distance is not None:

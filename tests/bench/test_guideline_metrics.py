@@ -153,6 +153,31 @@ def test_minimum_time_to_collision_over_the_episode():
     assert episode_metrics(**{**kw, "people_pos": beside})["gl_min_time_to_collision"] == np.inf
 
 
+def test_overlapping_discs_are_0_s_from_contact_without_velocities():
+    # A log without velocities starts in contact (a collision at t = 0): the person overlaps the
+    # robot at sample 0, where no velocity of theirs is known, then steps away. The time to
+    # collision at an overlap is 0 whatever the velocities (it was inf, beside a negative gap).
+    robot = line(0, 0.5, 1.0)
+    person = line(0.3, 3.0, 3.0, y=3.0)[:, None, :]
+    person[0, 0] = [0.3, 0.0]
+    kw = dict(dt=0.5, robot_pos=robot, goal=FAR, people_pos=person, robot_radius=0.3, people_radius=0.2)
+    found = episode_metrics(**kw)
+    assert found["gl_min_distance_to_human"] == pytest.approx(-0.2)
+    assert found["gl_human_collisions"] == 1 and found["gl_min_time_to_collision"] == 0.0
+    # The same for a person who appears overlapping the robot later, with nothing before.
+    mask = np.array([[False], [True], [True]])
+    late = np.array([[[9.0, 9.0]], [[0.6, 0.0]], [[3.0, 3.0]]])
+    found = episode_metrics(**{**kw, "people_pos": late, "people_mask": mask})
+    assert found["gl_min_distance_to_human"] == pytest.approx(-0.4)
+    assert found["gl_min_time_to_collision"] == 0.0
+    # A person present at one sample only, apart: no time to collision (no velocity), as before.
+    apart = np.array([[[9.0, 9.0]], [[3.0, 0.0]], [[9.0, 9.0]]])
+    mask = np.array([[False], [True], [False]])
+    assert math.isnan(
+        episode_metrics(**{**kw, "people_pos": apart, "people_mask": mask})["gl_min_time_to_collision"]
+    )
+
+
 def test_clearing_distance_and_wall_collisions():
     # Walls y = 1 for x in [-1, 1] and x = 3 for y in [-5, 5]; the robot (radius 0.3) at (0,0),
     # (0,0.5), (0,0.8), (2,0.8): nearest wall distances 1, 0.5, 0.2, min(|(1,0.2)|, 1) = 1, so
