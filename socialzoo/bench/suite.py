@@ -281,7 +281,9 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
     from socialzoo.bench.task_benchmark import config_hash
     from socialzoo.core.metrics import metric
 
-    others = [name for name in config.metrics if config.task not in metric(name).sources]
+    # Every suite episode holds its task's metrics and Table I's (play_cases(guideline_metrics=True)).
+    computed = {config.task, "guidelines"}
+    others = [name for name in config.metrics if not computed & set(metric(name).sources)]
     if others:
         raise SuiteError(f"the {config.task} task's episodes hold no metric {', '.join(others)}")
     scenarios = resolve_scenarios(config.scenarios)

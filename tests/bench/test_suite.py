@@ -124,6 +124,19 @@ def test_bad_configs_are_named():
         plan_suite(SuiteConfig(policies=("orca",), scenarios=("doorway",)))
 
 
+@pytest.mark.parametrize(("task", "policy"), [("action_selection", "goalone"), ("crowdnav", "orca")])
+def test_table_i_metrics_can_be_chosen(task, policy):
+    # Every suite episode holds Table I's gl_* metrics (the default tables show some of them), but
+    # --metrics gl_spl was refused: "the action_selection task's episodes hold no metric gl_spl".
+    chosen = ("success", "gl_spl", "gl_velocity_avg")
+    units, _ = plan_suite(SuiteConfig(task=task, policies=(policy,), metrics=chosen, scenarios=("doorway",)))
+    assert len(units) == 1
+    with pytest.raises(SuiteError, match=f"the {task} task's episodes hold no metric humans_goal_rate"):
+        plan_suite(
+            SuiteConfig(task=task, policies=(policy,), metrics=("humans_goal_rate",), scenarios=("doorway",))
+        )
+
+
 def test_more_seeds_than_the_split_holds_write_nothing(tmp_path):
     out = tmp_path / "suite"
     with pytest.raises(
