@@ -164,8 +164,13 @@ def evaluate_stored(
                 guideline_metrics=True,
             )
         rows = store.rows(policy=spec, test_set=test_set, config_hash=digest, indices=range(total))
+    # The store has a column for every metric of any episode it holds: another task's bool and int
+    # metrics read back as None in this task's rows (its floats as NaN, as a NaN of this task's).
     episodes = [
-        {"case": int(r["scenario_index"]), **{k: float(v) for k, v in r.items() if k not in TRIAL_COLUMNS}}
+        {
+            "case": int(r["scenario_index"]),
+            **{k: float(v) for k, v in r.items() if k not in TRIAL_COLUMNS and v is not None},
+        }
         for r in rows
     ]
     return episodes, len(todo)

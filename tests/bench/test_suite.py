@@ -137,6 +137,31 @@ def test_table_i_metrics_can_be_chosen(task, policy):
         )
 
 
+def test_the_other_task_reruns_into_the_same_folder(tmp_path):
+    # The store holds one column per metric of any episode it has seen: after an action-selection
+    # run, the CrowdNav task's rows read back None for the action-selection ints (reached, stuck,
+    # ...), and evaluate_stored's float(None) was a TypeError traceback.
+    def config(task, policy):
+        return SuiteConfig(
+            task=task,
+            policies=(policy,),
+            scenarios=("doorway",),
+            seeds=1,
+            workers=1,
+            replays=0,
+            metrics=("success",),
+        )
+
+    run_suite(config("action_selection", "goalone"), tmp_path / "both")
+    mixed = run_suite(config("crowdnav", "orca"), tmp_path / "both")
+    alone = run_suite(config("crowdnav", "orca"), tmp_path / "alone")
+    assert mixed.played == alone.played == 1
+    # The same numbers; the action-selection floats the store holds are NaN beside them.
+    (together,), (apart,) = mixed.entries, alone.entries
+    np.testing.assert_equal({k: together[k] for k in apart}, apart)
+    assert all(math.isnan(v) for k, v in together.items() if k not in apart)
+
+
 def test_more_seeds_than_the_split_holds_write_nothing(tmp_path):
     out = tmp_path / "suite"
     with pytest.raises(
