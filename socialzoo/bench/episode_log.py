@@ -418,8 +418,8 @@ def trace_episode_log(
 
 
 def log_trajectories(log: dict[str, Any], source: str = "<log>") -> Trajectories:
-    """The arrays of guideline_metrics (a batch of one) of a validated log (the people's
-    velocities are the log's when every person has them, else all come from the positions)."""
+    """The arrays of guideline_metrics (a batch of one) of a validated log (a person's velocity is
+    the log's where given, else from the positions)."""
     time = np.asarray(log["time"], dtype=np.float64)
     n = len(time)
     dt = float(np.diff(time).mean()) if n > 1 else 1.0
@@ -448,9 +448,11 @@ def log_trajectories(log: dict[str, Any], source: str = "<log>") -> Trajectories
         fields[f"{prefix}_pos"] = np.stack([p for p, _ in read], axis=1)[None]
         fields[f"{prefix}_mask"] = np.stack([m for _, m in read], axis=1)[None]
         fields[f"{prefix}_radius"] = np.array([float(b["radius"]) for b in bodies])
-        if group == "people" and all("velocities" in b for b in bodies):
+        if group == "people" and any("velocities" in b for b in bodies):
             vels = [
                 _points(b["velocities"], n, f"people[{i}].velocities", source)[0]
+                if "velocities" in b
+                else np.full((n, 2), np.nan)  # not given: from the positions
                 for i, b in enumerate(bodies)
             ]
             fields["people_vel"] = np.stack(vels, axis=1)[None]

@@ -56,8 +56,9 @@ class Trajectories:
         robot_radius: the robot's disc radius, m: a number or (B,).
         goal_radius: the goal is reached within this centre distance, m: a number or (B,).
         people_pos: (B, N, H, 2) people's centres, m (anything where absent); None: nobody.
-        people_vel: (B, N, H, 2) their velocities, m/s; None: (p_k - p_(k-1)) / dt where present
-            at both samples (no velocity at a sample without its predecessor).
+        people_vel: (B, N, H, 2) their velocities, m/s; None (or NaN where not given): (p_k -
+            p_(k-1)) / dt where present at both samples (no velocity at a sample without its
+            predecessor).
         people_mask: (B, N, H) who is present at each sample; None: everyone, always.
         people_radius: the people's disc radius, m: a number, (H,) or (B, H).
         walls: (W, 4) wall segments x0, y0, x1, y1 shared by the batch, m; None: no walls.
@@ -283,15 +284,17 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
         some = present.any(axis=(1, 2))
         min_human = np.where(some, np.where(present, gap, np.inf).min(axis=(1, 2)), np.nan)
         compliant = valid & ~(present & (gap < p.personal_space)).any(axis=2)
-        if traj.people_vel is not None:
-            pvel = _float(traj.people_vel, (b, n, h, 2), "people_vel")
-            known = present
-        else:
-            pvel = np.zeros((b, n, h, 2))
+        pvel = np.zeros((b, n, h, 2))
+        with np.errstate(invalid="ignore"):
             pvel[:, 1:] = np.diff(ppos, axis=1) / dt
-            known = present.copy()
-            known[:, 1:] &= present[:, :-1]
-            known[:, 0] = False
+        known = present.copy()
+        known[:, 1:] &= present[:, :-1]
+        known[:, 0] = False
+        if traj.people_vel is not None:  # given velocities, else (NaN) those of the positions
+            given = _float(traj.people_vel, (b, n, h, 2), "people_vel")
+            has = present & np.isfinite(given).all(axis=3)
+            pvel = np.where(has[..., None], given, pvel)
+            known |= has
         with np.errstate(invalid="ignore", over="ignore"):
             t = time_to_collision(rel, pvel - vel[:, :, None, :], reach)
         # Overlapping discs are 0 s from contact whatever their velocities, so a person's first

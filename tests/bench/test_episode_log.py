@@ -367,3 +367,25 @@ def test_a_file_of_several_episodes_or_a_huge_wrong_value_is_a_short_error(tmp_p
         validate_log(log)
     assert info.value.field == "robot.positions" and "is not of type 'array'" in info.value.problem
     assert len(str(info.value)) < 200, str(info.value)
+
+
+def test_a_person_without_velocities_beside_one_with_them():
+    # Person 0 gives velocities, person 1 does not: person 0's are used (they were all dropped
+    # for the positions' when any person lacked them) and a null velocity at a present sample is
+    # taken from the positions (it scored no time to collision there).
+    log = make_episode_log(
+        dt=1.0, robot_pos=[[0, 0], [0, 0], [0, 0]], goal=[9, 9], robot_radius=0.3, goal_radius=0.1
+    )
+    # Person 0 stands 3 m away but reports walking at the robot at 1 m/s: (3 - 0.5) / 1 = 2.5 s.
+    walker = {"radius": 0.2, "positions": [[3, 0]] * 3, "velocities": [[-1, 0]] * 3}
+    # Person 1 walks away, far off: no collision course.
+    far = {"radius": 0.2, "positions": [[0, 8], [0, 9], [0, 10]]}
+    assert log_metrics({**log, "people": [walker, far]})["gl_min_time_to_collision"] == 2.5
+    # Person 2 steps from 4.5 m to 3.5 m towards the robot, its velocity null at sample 1:
+    # (3.5 - 0.5) / 1 = 3 s from its positions (not "never").
+    stepper = {
+        "radius": 0.2,
+        "positions": [[5.5, 0], [4.5, 0], [3.5, 0]],
+        "velocities": [[-1, 0], None, None],
+    }
+    assert log_metrics({**log, "people": [stepper]})["gl_min_time_to_collision"] == 3.0
