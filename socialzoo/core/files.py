@@ -16,7 +16,7 @@ def read_text(
     *,
     missing: type[Exception] = FileNotFoundError,
 ) -> str:
-    """The UTF-8 text of `path`.
+    """The UTF-8 text of `path`, without the byte-order mark that Windows tools write first.
 
     Args:
         path: the file.
@@ -30,7 +30,9 @@ def read_text(
     """
     where = os.fspath(path)
     try:
-        return Path(path).read_text(encoding="utf-8")
+        # "utf-8-sig" drops a leading BOM (Notepad, Excel's "CSV UTF-8"): kept, it is a character
+        # before the first number of a table and makes a JSON file invalid.
+        return Path(path).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise missing(f"{where}: no such {what}") from None
     except UnicodeDecodeError as err:

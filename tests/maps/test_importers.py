@@ -81,3 +81,19 @@ def test_pedsim_errors_name_the_line(tmp_path):
     (tmp_path / "broken.xml").write_text("<scenario>\n<obstacle x1='0'\n</scenario>\n")
     with pytest.raises(MapError, match=r"broken\.xml:3: malformed XML"):
         read_pedsim_scene(tmp_path / "broken.xml")
+
+
+def test_files_with_a_byte_order_mark_and_windows_line_ends_read(tmp_path):
+    # Windows editors and Excel's "CSV UTF-8" start a file with a BOM: the first line read as
+    # "not a number in '\ufeff0, 0, 10, 0'", a navigation JSON as invalid JSON.
+    bom = b"\xef\xbb\xbf"
+    (tmp_path / "w.txt").write_bytes(bom + b"0, 0, 10, 0\r\n10\t0\t10\t10\r\n")
+    np.testing.assert_array_equal(read_vector_map(tmp_path / "w.txt"), [[0, 0, 10, 0], [10, 0, 10, 10]])
+    data = {"nodes": [{"id": 1, "loc": {"x": 1.0, "y": 2.0}}, {"id": 2, "loc": {"x": 3.0, "y": 2.0}}]}
+    (tmp_path / "nav.json").write_bytes(bom + json.dumps(data).encode())
+    np.testing.assert_array_equal(read_amrl_nav_graph(tmp_path / "nav.json")[0], [[1, 2], [3, 2]])
+    (tmp_path / "scene.xml").write_bytes(bom + b'<?xml version="1.0"?><s><waypoint id="a" x="2" y="2"/></s>')
+    np.testing.assert_array_equal(read_pedsim_scene(tmp_path / "scene.xml").nodes, [[2, 2]])
+    saved = load_map("doorway").save(tmp_path / "m.json")
+    saved.write_bytes(bom + saved.read_bytes())
+    np.testing.assert_array_equal(load_map(saved).walls, load_map("doorway").walls)
