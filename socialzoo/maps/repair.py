@@ -325,7 +325,7 @@ def repair_map(
         if len(space.closures):  # virtual walls closed the outline's openings to unmapped space
             report.add("outline_closed", describe_closures(space.closures))
     if nodes is None or len(nodes) == 0:
-        roadmap = build_roadmap(walls, region, seed_point, config, seed, index)
+        roadmap = build_roadmap(walls, region, seed_point, config, seed, index, space)
         nodes, edges = roadmap.nodes, roadmap.edges
         report.add("graph_generated", f"navigation graph generated: {len(nodes)} nodes, {len(edges)} edges")
     else:

@@ -749,13 +749,15 @@ def build_roadmap(
     config: RoadmapConfig | None = None,
     seed: int = 0,
     index: WallIndex | None = None,
+    space: FreeSpace | None = None,
 ) -> Roadmap:
     """A connected navigation graph over a map's interior (see free_space for what that is).
 
     The free space is rasterised (exact wall clearance per grid cell), the building interior is found
     by flood fill from a seed point, graph nodes are spread over it (most clearance first, one per
     room, a few metres apart along corridors) and joined by straight lines that keep clear of walls.
-    Everything is deterministic given the seed.
+    Everything is deterministic given the seed. `space`, free_space's result for these arguments
+    when the caller has it already (rasterising a large building takes seconds), is used as given.
 
     Returns:
         the Roadmap: nodes (N, 2), edges (E, 2) and the free space they were built on.
@@ -763,7 +765,8 @@ def build_roadmap(
     config = config or RoadmapConfig()
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     index = index or WallIndex(walls)
-    space = free_space(walls, region, seed_point, config, index)
+    if space is None:
+        space = free_space(walls, region, seed_point, config, index)
     nodes = place_nodes(space, config, seed)
     edges = build_edges(nodes, index, config.edge_clearance, config.max_edge_length, config.detour_tolerance)
     nodes, edges = connect_components(space, nodes, edges, index, config)

@@ -131,3 +131,24 @@ def test_repaired_map_round_trips_with_its_provenance(tmp_path):
     back = load_map(m.save(tmp_path / "p.json"))
     assert back.provenance == {"importer": "test", "repairs": report.to_json()}
     np.testing.assert_allclose(back.nodes, m.nodes, atol=1e-6)
+
+
+def test_a_generated_graph_rasterises_the_free_space_once(monkeypatch):
+    # repair_map rasterised the plan for its own checks and build_roadmap did it again with the
+    # same arguments: a quarter of a large building's import (GDC2 without its graph).
+    import socialzoo.maps.repair as repair
+    import socialzoo.maps.roadmap as roadmap
+
+    calls, original = [], roadmap.free_space
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(repair, "free_space", counted)
+    monkeypatch.setattr(roadmap, "free_space", counted)
+    m, _ = repair_map("door", two_rooms(door=1.2), seed_point=(3.0, 4.0))
+    monkeypatch.undo()
+    assert len(calls) == 1
+    again = roadmap.build_roadmap(two_rooms(door=1.2), seed_point=(3.0, 4.0))
+    np.testing.assert_array_equal(m.nodes, again.nodes)
