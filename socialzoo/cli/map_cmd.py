@@ -376,6 +376,15 @@ def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | Non
 
     nodes = edges = None
     inputs: dict[str, Any] = {}
+    if args.png is None:
+        # The image's options would be ignored: a plan in feet given --scale 0.3048 imported in feet.
+        unset = {"scale": None, "origin": None, "threshold": None, "min_wall_area": 0.0}
+        given = [f"--{k.replace('_', '-')}" for k, v in unset.items() if getattr(args, k) != v]
+        if given:
+            raise ValueError(
+                f"only --png takes {', '.join(given)}: --walls and --pedsim coordinates are read as "
+                "metres (a plan in feet: multiply every coordinate by 0.3048 first)"
+            )
     if args.walls is not None:
         walls = read_vector_map(args.walls)
         inputs["walls"] = args.walls.name

@@ -220,6 +220,23 @@ def test_map_import_from_a_png_floor_plan(tmp_path, capsys):
     assert m.provenance["inputs"]["scale"] == 0.05
 
 
+def test_map_import_refuses_image_options_for_a_vector_map(tmp_path, capsys):
+    # --walls plan.txt --scale 0.3048 (a plan in feet) imported the plan in feet as metres.
+    walls = write_vector_map(tmp_path / "plan.txt", load_map("doorway").walls)
+    argv = ["map", "import", "--walls", str(walls), "--name", "plan", "--out", str(tmp_path / "p.json")]
+    for extra in (
+        ["--scale", "0.3048"],
+        ["--origin", "1", "2"],
+        ["--threshold", "0.3"],
+        ["--min-wall-area", "1"],
+    ):
+        assert main([*argv, *extra]) == 2
+        assert f"only --png takes {extra[0]}: --walls and --pedsim coordinates are read as metres" in (
+            capsys.readouterr().err
+        )
+    assert not (tmp_path / "p.json").exists()
+
+
 def test_map_check_draws_beside_a_map_file(tmp_path, capsys):
     (tmp_path / "maps").mkdir()
     mine = load_map("hallway").save(tmp_path / "maps" / "mine.json")
