@@ -104,10 +104,21 @@ def _repair_nodes(
     config: RoadmapConfig,
     max_move: float,
     report: RepairReport,
+    region: Box | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes moved clear of walls; (nodes (N, 2), keep (N,) bool)."""
+    """Nodes moved clear of walls, those outside `region` dropped; (nodes (N, 2), keep (N,) bool)."""
     keep = np.ones(len(nodes), dtype=bool)
     nodes = nodes.copy()
+    if region is not None:  # a part of a building imported with the whole building's graph
+        x0, y0, x1, y1 = region
+        keep = (nodes[:, 0] >= x0) & (nodes[:, 0] <= x1) & (nodes[:, 1] >= y0) & (nodes[:, 1] <= y1)
+        if not keep.all():
+            out = np.flatnonzero(~keep)
+            report.add(
+                "node_dropped",
+                f"{len(out)} of the graph's {len(nodes)} nodes lie outside the region {list(region)}: dropped "
+                f"(graph.nodes{out.tolist()})",
+            )
     if len(nodes) == 0 or index.num_walls == 0:
         return nodes, keep
     dist, wall = nearest_walls(index, nodes)
@@ -118,7 +129,7 @@ def _repair_nodes(
     cells = space.cell_of(nodes)
     pocket = sizes[labels[cells[:, 0], cells[:, 1]]] * space.resolution**2 < 1.0
     pocket &= labels[cells[:, 0], cells[:, 1]] > 0
-    bad = np.flatnonzero((dist < config.free_clearance) | pocket)
+    bad = np.flatnonzero(((dist < config.free_clearance) | pocket) & keep)
     if len(bad) == 0:
         return nodes, keep
     roomy = passable & (sizes[labels] * space.resolution**2 >= 1.0) & (labels > 0)
@@ -330,7 +341,7 @@ def repair_map(
         report.add("graph_generated", f"navigation graph generated: {len(nodes)} nodes, {len(edges)} edges")
     else:
         nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 2)
-        nodes, keep = _repair_nodes(nodes, space, index, config, max_move, report)
+        nodes, keep = _repair_nodes(nodes, space, index, config, max_move, report, region)
         if edges is None or len(edges) == 0:
             edges = build_edges(
                 nodes[keep], index, config.edge_clearance, config.max_edge_length, config.detour_tolerance

@@ -152,3 +152,20 @@ def test_a_generated_graph_rasterises_the_free_space_once(monkeypatch):
     assert len(calls) == 1
     again = roadmap.build_roadmap(two_rooms(door=1.2), seed_point=(3.0, 4.0))
     np.testing.assert_array_equal(m.nodes, again.nodes)
+
+
+def test_a_region_of_a_building_imported_with_the_whole_graph():
+    # A part of a building (--region) with the whole building's graph (--nav) was refused when the
+    # map was validated: "graph.nodes[2] at (12.00, 4.00) lies outside region [...]".
+    nodes = np.array([[2.0, 4.0], [5.0, 4.0], [12.0, 4.0], [14.0, 4.0]])
+    edges = np.array([[0, 1], [1, 2], [2, 3]])
+    m, report = repair_map(
+        "left", two_rooms(door=1.2), nodes=nodes, edges=edges, region=(-1.0, -1.0, 8.5, 9.0)
+    )
+    np.testing.assert_array_equal(m.nodes, nodes[:2])
+    np.testing.assert_array_equal(m.edges, [[0, 1]])
+    dropped = [r.message for r in report.repairs if r.kind == "node_dropped"]
+    assert dropped == [
+        "2 of the graph's 4 nodes lie outside the region [-1.0, -1.0, 8.5, 9.0]: dropped (graph.nodes[2, 3])"
+    ]
+    assert (m.legal_poses[:, 0] < 8.0).all()
