@@ -177,16 +177,23 @@ class Roadmap:
 
 
 def _bounds(walls: np.ndarray, region: Box | None, margin: float) -> Box:
-    if region is not None:
-        x0, y0, x1, y1 = (float(v) for v in region)
-        if not (x0 < x1 and y0 < y1):
-            raise ValueError(f"region must be (xmin, ymin, xmax, ymax) with min < max, got {region}")
-        return (x0, y0, x1, y1)
-    if len(walls) == 0:
-        raise ValueError("a map without walls needs a region to bound its free space")
     pts = walls.reshape(-1, 2)
-    lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
-    return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+    if region is None:
+        if len(walls) == 0:
+            raise ValueError("a map without walls needs a region to bound its free space")
+        lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+    x0, y0, x1, y1 = (float(v) for v in region)
+    if not (x0 < x1 and y0 < y1):
+        raise ValueError(f"region must be (xmin, ymin, xmax, ymax) with min < max, got {region}")
+    lo, hi = pts.min(axis=0, initial=np.inf), pts.max(axis=0, initial=-np.inf)
+    if len(walls) and (x1 < lo[0] or x0 > hi[0] or y1 < lo[1] or y0 > hi[1]):
+        # Else: "found 0 places for legal poses ..., at most inf m from a wall", not a word of why.
+        raise ValueError(
+            f"region {[x0, y0, x1, y1]} holds no part of the plan, whose walls span ({lo[0]:.2f}, "
+            f"{lo[1]:.2f}) to ({hi[0]:.2f}, {hi[1]:.2f}): give the region in the plan's coordinates"
+        )
+    return (x0, y0, x1, y1)
 
 
 # ----------------------------------------------------------------------------- free space

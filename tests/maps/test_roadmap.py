@@ -79,6 +79,21 @@ def test_a_plan_too_large_for_the_grid_is_refused_before_any_is_made():
     assert free_space(walls, region=(-1.0, -1.0, 20.0, 20.0)).interior.any()
 
 
+def test_a_region_beside_the_plan_is_refused_by_name():
+    # A region in other coordinates (or units) than the plan's said "found 0 places for legal
+    # poses ... (1.0 m^2 ..., at most inf m from a wall ...) has no point 0.44 m from every wall".
+    walls = np.array(_box(10, 10, 30, 20), dtype=np.float64)
+    with pytest.raises(
+        ValueError,
+        match=r"region \[0.0, 0.0, 1.0, 1.0\] holds no part of the plan, whose "
+        r"walls span \(10.00, 10.00\) to \(30.00, 20.00\)",
+    ):
+        complete_map("r", walls, region=(0, 0, 1, 1))
+    # A region that holds a part of it, or a region round a map without walls, is as before.
+    assert free_space(walls, region=(5.0, 5.0, 20.0, 25.0)).interior.any()
+    assert free_space(np.zeros((0, 4)), region=(0.0, 0.0, 5.0, 5.0)).clearance.shape == (100, 100)
+
+
 def test_seed_point_must_be_free():
     walls = np.array(_box(0, 0, 10, 10), dtype=np.float64)
     with pytest.raises(ValueError, match=r"seed point \(0.10, 5.00\) is 0.10 m from a wall"):
