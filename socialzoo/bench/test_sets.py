@@ -14,18 +14,18 @@ from typing import Any
 from socialzoo.maps.map_file import Map, load_map
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario, ScenarioError
-from socialzoo.scenarios.scenario_sets import TestSet
+from socialzoo.scenarios.scenario_sets import (
+    CUSTOM_QUICK_SEED,
+    CUSTOM_QUICK_SIZE,
+    CUSTOM_TEST_SEED,
+    CUSTOM_TEST_SIZE,
+    TestSet,
+)
 
 logger = logging.getLogger(__name__)
 
 TEST_SET_FORMAT = "socialzoo-testset/1"
 TEST_SET_DIR = "test_sets"
-# Base seeds of generated test sets (the registered ones use 20220001..20220004).
-CUSTOM_TEST_SEED = 20220100
-CUSTOM_QUICK_SEED = 20220101
-# Scenarios in a generated test set, as in the registered ones.
-CUSTOM_TEST_SIZE = 2000
-CUSTOM_QUICK_SIZE = 100
 
 
 class TestSetError(ValueError):

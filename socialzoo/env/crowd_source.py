@@ -95,9 +95,10 @@ class CrowdCaseSource:
 
     def case_sets(self) -> dict[str, Any]:
         """Among walls, split name -> its TestSet, or for a family with splits of its own the
-        split's name ("val" and "test"): a family's own splits, else the map's validation
-        scenarios and its registered test set (where it has one)."""
-        from socialzoo.scenarios.scenario_sets import TEST_SETS, validation_set
+        split's name ("val" and "test"): a family's own splits, else the map's case sets
+        (socialzoo.scenarios.scenario_sets.map_case_sets: a map without a registered test set has
+        the generated one)."""
+        from socialzoo.scenarios.scenario_sets import map_case_sets
 
         stream = self._scenarios
         assert stream is not None
@@ -105,11 +106,7 @@ class CrowdCaseSource:
             splits = get_family(stream.family).splits
             if splits:
                 return {k: k for k in ("val", "test") if k in splits and splits[k].size is not None}
-        name = stream.map.name
-        sets: dict[str, Any] = {"val": validation_set(name)}
-        if f"{name}-test" in TEST_SETS:
-            sets["test"] = TEST_SETS[f"{name}-test"]
-        return sets
+        return dict(map_case_sets(stream.map.name))
 
     def case_splits(self) -> dict[str, int]:
         """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, else those

@@ -95,6 +95,28 @@ def validation_set(map_name: str) -> TestSet:
     return TestSet(map_name, VALIDATION_BASE_SEED, VALIDATION_SIZE, name=f"{map_name}-val")
 
 
+# Base seeds and sizes of the test sets of maps without a registered one (any imported building): the
+# benchmark stores their scenarios beside its results (socialzoo.bench.test_sets); a task plays them
+# as its "test" split on such a map.
+CUSTOM_TEST_SEED = 20220100
+CUSTOM_QUICK_SEED = 20220101
+CUSTOM_TEST_SIZE = 2000
+CUSTOM_QUICK_SIZE = 100
+
+
+def map_case_sets(map_name: str) -> dict[str, TestSet]:
+    """A map's fixed case sets, as both robot tasks split them: "val" (validation_set, never a test
+    set), each registered test set of the map by its own name (e.g. "gdc1-quick"), and "test": the
+    registered "<map>-test", else the generated set of a map without one (CUSTOM_TEST_SEED, the
+    benchmark's for that map)."""
+    sets = {"val": validation_set(map_name)}
+    sets.update({k: v for k, v in TEST_SETS.items() if v.map_name == map_name})
+    sets["test"] = TEST_SETS.get(f"{map_name}-test") or TestSet(
+        map_name, CUSTOM_TEST_SEED, CUSTOM_TEST_SIZE, name=f"{map_name}-test"
+    )
+    return sets
+
+
 def get_test_set(name: str) -> TestSet:
     """A named test set: "gdc1-test", "ghc3-test" (2000 each), "gdc1-quick", "ghc3-quick" (100 each).
 

@@ -327,3 +327,25 @@ def test_reset_rows_refuses_rows_outside_the_batch_before_any_change(overrides):
         task.reset_rows(np.array([1]), cases)
     np.testing.assert_array_equal(task.case_seed, seeds)
     np.testing.assert_array_equal(task.core.state.robot_pose, pose)
+
+
+def test_a_map_without_a_registered_test_set_plays_the_generated_one_as_its_test_split(
+    rooms_map_path, tmp_path
+):
+    # `socialzoo benchmark --maps socialzoo/CrowdNavWalls-v1 --task-config map=PATH` on an imported
+    # building ended in "split must be one of ['val'], got 'test'".
+    from socialzoo.bench.task_benchmark import TaskId
+    from socialzoo.bench.test_sets import stored_test_set
+    from socialzoo.scenarios.scenario_sets import CUSTOM_TEST_SEED, map_case_sets
+
+    sets = map_case_sets("rooms")
+    assert sets["test"].base_seed == CUSTOM_TEST_SEED and sets["val"].name == "rooms-val"
+    assert map_case_sets("gdc1")["test"].name == "gdc1-test" and "gdc1-quick" in map_case_sets("gdc1")
+    generated = stored_test_set(str(rooms_map_path), tmp_path, 2)  # the maps benchmark's set
+    for env_id in ("socialzoo/CrowdNavWalls-v1", "socialzoo/ActionSelection-v2"):
+        task = TaskId.of(env_id).make(2, map=str(rooms_map_path))
+        assert task.case_splits()["test"] == 2000
+        task.reset(np.arange(2), {"split": "test", "cases": [0, 1]})
+        np.testing.assert_allclose(
+            task.core.state.robot_goal[:, 0, :2], [s.robot_goal[:2] for s in generated.stored[:2]]
+        )

@@ -187,7 +187,8 @@ def test_a_suite_family_gives_its_own_splits_and_trains_above_them(env_id):
 def test_a_family_without_splits_plays_its_maps_validation_seeds_in_crowdnav():
     task = make_task("crowdnav", 1, None, variant="Walls", map=None, family=PLAIN, max_humans=20)
     splits = task.case_splits()
-    assert set(splits) == {"val"} and splits["val"] > 0
+    # Its map has no registered test set: "test" is the generated one's seeds (map_case_sets).
+    assert set(splits) == {"val", "test"} and splits["val"] > 0 and splits["test"] == 2000
     seeds = task.reset(np.array([0]), {"split": "val", "case": 2})
     scenario = task.core.scenarios[0]
     assert scenario.family == PLAIN and int(seeds[0]) == scenario.seed

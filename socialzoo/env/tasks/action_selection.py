@@ -214,18 +214,13 @@ class ActionSelectionTask(Task):
     def _case_sets(self) -> dict[str, Any]:
         """Split name -> its TestSet, or for a family with fixed splits of its own the split's name
         (its "val" and "test"; "train" is the training stream's)."""
-        from socialzoo.scenarios.scenario_sets import TEST_SETS, validation_set
+        from socialzoo.scenarios.scenario_sets import map_case_sets
 
         if self.config.family is not None:
             splits = get_family(self.config.family).splits
             if splits:
                 return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
-        name = self.map.name
-        sets: dict[str, Any] = {"val": validation_set(name)}
-        sets.update({k: v for k, v in TEST_SETS.items() if v.map_name == name})
-        if f"{name}-test" in TEST_SETS:
-            sets["test"] = TEST_SETS[f"{name}-test"]
-        return sets
+        return dict(map_case_sets(self.map.name))
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """Advance every row one 0.025 s step.
