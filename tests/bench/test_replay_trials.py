@@ -137,5 +137,6 @@ def test_a_task_ids_trial_names_the_command_that_plays_it(tmp_path):
 
     store = tmp_path / "results.sqlite"
     evaluate_stored(store, TaskId.of("socialzoo/CrowdNav-v1"), "orca", CrowdOrcaRobot(), "val", cases=1)
-    with pytest.raises(ValueError, match=r"a task id's case .* --env socialzoo/CrowdNav-v1 --split val --case 0 --policy orca"):
+    command = r"--env socialzoo/CrowdNav-v1 --split val --case 0 --policy orca"
+    with pytest.raises(ValueError, match=r"a task id's case .* " + command):
         find_trials(tmp_path, 0)
