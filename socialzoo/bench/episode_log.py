@@ -406,6 +406,7 @@ def trace_episode_log(
         goal_radius=scene.goal_radius,
         people_pos=trace.human_pos,
         people_vel=trace.human_vel,
+        people_mask=trace.human_present,
         people_radius=scene.human_radius,
         walls=scene.walls,
         shortest_path_length=shortest_path_length,

@@ -205,16 +205,11 @@ class _Recorder:
         state = task.world_state
         self.task = task
         self.laser = laser
-        self.present = np.flatnonzero(state.human_mask[0])
-        # Human slot -> index among the present humans (the trace keeps only those); the extra
-        # last entry stays -1, so the task's "no target" (-1) maps to -1.
-        self.slot_to_present = np.full(state.human_mask.shape[1] + 1, -1, dtype=np.int64)
-        self.slot_to_present[self.present] = np.arange(len(self.present))
         self.goal = np.asarray(state.robot_goal[0, 0], dtype=np.float64).copy()
         self.start = np.asarray(state.robot_pose[0, 0, :2], dtype=np.float64).copy()
         self.holonomic = getattr(getattr(task.config, "robot", None), "kinematics", None) == "holonomic"
         self.states: dict[str, list[np.ndarray]] = {
-            k: [] for k in ("pose", "vel", "humans", "human_vel", "carrot")
+            k: [] for k in ("pose", "vel", "humans", "human_vel", "human_mask", "carrot")
         }
         self.plans: list[np.ndarray] = []
         self.plan_index: list[int] = []
@@ -242,8 +237,10 @@ class _Recorder:
             vel = np.array([speed, 0.0])
         kept["pose"].append(pose)
         kept["vel"].append(vel)
-        kept["humans"].append(s.human_pos[0, self.present].copy())
-        kept["human_vel"].append(s.human_vel[0, self.present].copy())
+        # Every slot: people of a recorded scene enter and leave (the trace keeps those ever present).
+        kept["humans"].append(s.human_pos[0].copy())
+        kept["human_vel"].append(s.human_vel[0].copy())
+        kept["human_mask"].append(s.human_mask[0].copy())
         carrot, path = self.task.viewer_guides(0)
         kept["carrot"].append(self.goal[:2].copy() if carrot is None else carrot)
         path = np.array([self.start, self.goal[:2]]) if path is None else path
@@ -268,7 +265,7 @@ class _Recorder:
         def value(key: str, default: Any) -> Any:
             return info[key][0, 0] if key in info else default
 
-        steps["target"].append(int(self.slot_to_present[int(value("target_human", -1))]))
+        steps["target"].append(int(value("target_human", -1)))  # a slot; trace() maps it
         steps["reward"].append(float(step.reward[0, 0]))
         steps["force"].append(float(value("force", 0.0)))
         steps["blame"].append(float(value("blame", 0.0)))
@@ -283,7 +280,12 @@ class _Recorder:
         """The EpisodeTrace of what was kept, with the episode's metrics."""
         metrics = self.task.episode_metrics(np.array([0]))[0]
         kept, steps = self.states, self.steps
-        count, humans = len(kept["pose"]), len(self.present)
+        count = len(kept["pose"])
+        mask = np.array(kept["human_mask"], dtype=bool).reshape(count, -1)
+        present = np.flatnonzero(mask.any(axis=0))  # the slots anyone fills during the episode
+        # Slot -> index among those kept; the extra last entry stays -1, so "no target" (-1) is -1.
+        slot_to_kept = np.full(mask.shape[1] + 1, -1, dtype=np.int64)
+        slot_to_kept[present] = np.arange(len(present))
         laser = self.laser[0] if self.laser is not None else None
         dt = getattr(self.task.config, "dt", getattr(self.task.config, "time_step", None))
         return EpisodeTrace(
@@ -292,8 +294,9 @@ class _Recorder:
             robot_pose=np.array(kept["pose"]),
             robot_vel=np.array(kept["vel"]),
             goal=self.goal,
-            human_pos=np.array(kept["humans"]).reshape(count, humans, 2),
-            human_vel=np.array(kept["human_vel"]).reshape(count, humans, 2),
+            human_pos=np.array(kept["humans"]).reshape(count, -1, 2)[:, present],
+            human_vel=np.array(kept["human_vel"]).reshape(count, -1, 2)[:, present],
+            human_present=mask[:, present],
             carrot=np.array(kept["carrot"]),
             plans=tuple(self.plans),
             plan_index=np.array(self.plan_index),
@@ -302,7 +305,7 @@ class _Recorder:
             laser_ranges=np.array(self.scans).reshape(len(self.scanned), -1),
             laser_max_range=laser.max_range if laser else LaserConfig().max_range,
             action=np.array(self.actions, dtype=np.int64),
-            target_human=np.array(steps["target"], dtype=np.int64),
+            target_human=slot_to_kept[np.array(steps["target"], dtype=np.int64)],
             reward=np.array(steps["reward"], dtype=np.float64),
             force=np.array(steps["force"], dtype=np.float64),
             blame=np.array(steps["blame"], dtype=np.float64),

@@ -69,6 +69,8 @@ class EpisodeTrace:
         goal: (3,) goal pose.
         human_pos: (T+1, H, 2) the H humans present in the scenario.
         human_vel: (T+1, H, 2) their velocities.
+        human_present: (T+1, H) bool, whether each human is in the scene in each state (people
+            of a recorded scene enter and leave); None: all of them in every state.
         carrot: (T+1, 2) the local target on the global plan.
         plans: the distinct global plans of the episode, each (L, 2) waypoints.
         plan_index: (T+1,) int, which of `plans` the robot follows in each state.
@@ -96,6 +98,7 @@ class EpisodeTrace:
     goal: np.ndarray
     human_pos: np.ndarray
     human_vel: np.ndarray
+    human_present: np.ndarray | None = None
     carrot: np.ndarray
     plans: tuple[np.ndarray, ...]
     plan_index: np.ndarray
@@ -131,6 +134,8 @@ class EpisodeTrace:
         set_(self, "goal", _array(self.goal, np.float64, (3,), "goal"))
         set_(self, "human_pos", _array(self.human_pos, np.float64, (states, humans, 2), "human_pos"))
         set_(self, "human_vel", _array(self.human_vel, np.float64, (states, humans, 2), "human_vel"))
+        present = np.ones((states, humans), bool) if self.human_present is None else self.human_present
+        set_(self, "human_present", _array(present, bool, (states, humans), "human_present"))
         set_(self, "carrot", _array(self.carrot, np.float64, (states, 2), "carrot"))
         plans = tuple(_array(p, np.float64, (None, 2), f"plans[{i}]") for i, p in enumerate(self.plans))
         set_(self, "plans", plans)
@@ -303,6 +308,7 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
         ray_index = np.zeros(0, dtype=int)
     # The latest scan at or before each kept state.
     scan = np.searchsorted(trace.laser_steps, kept, side="right") - 1
+    present = trace.human_present[kept]
     return {
         "label": trace.label,
         "outcome": trace.outcome,
@@ -314,8 +320,11 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
         "robotVel": _flat(trace.robot_vel[kept], vd),
         "goal": _flat(trace.goal, pd),
         "humans": trace.num_humans,
-        "humanPos": _flat(trace.human_pos[kept], pd),
-        "humanVel": _flat(trace.human_vel[kept], vd),
+        # An absent person's values are whatever its slot holds (maybe NaN): written as 0.
+        "humanPos": _flat(np.where(present[..., None], trace.human_pos[kept], 0.0), pd),
+        "humanVel": _flat(np.where(present[..., None], trace.human_vel[kept], 0.0), vd),
+        # Only where someone is absent in a kept state (people who enter or leave the scene).
+        **({} if present.all() else {"humanPresent": present.astype(int).reshape(-1).tolist()}),
         "carrot": _flat(trace.carrot[kept], pd),
         "plans": [_flat(p, pd) for p in trace.plans],
         "planIndex": trace.plan_index[kept].tolist(),

@@ -190,3 +190,30 @@ def test_a_policy_of_observations_alone_is_recorded_with_its_flat_batch():
     task.reset(np.array([0]), {"split": "test", "cases": [0]})
     trace = record_task_episode(task, policy, label="suite_crowdnav")
     assert trace.outcome in ("success", "collision", "timeout") and len(trace.robot_pose) > 1
+
+
+def test_people_who_enter_and_leave_a_recorded_scene_are_kept_with_their_presence(tmp_path, monkeypatch):
+    """The recorder kept only the people present in the first state: in a recorded scene those who
+    entered later were never drawn, and those who left stayed drawn where they left."""
+    from socialzoo.data.tracks import Recording, Track
+    from socialzoo.scenarios.catalogue import FAMILIES, register_family
+    from socialzoo.scenarios.recorded import RecordedScene
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    name = "recorded_come_and_go"
+    if name not in FAMILIES:
+        # Whichever track the robot takes, someone enters (at frame 8) or leaves (at frame 25)
+        # while it drives.
+        walkers = tuple(
+            Track(p, first, np.linspace([-6.0 + 3 * p, -6.0], [-6.0 + 3 * p, 6.0], last - first))
+            for p, (first, last) in enumerate([(0, 40), (0, 25), (0, 25), (8, 40), (8, 40)])
+        )
+        recording = Recording(name="come_and_go", dt=0.4, num_frames=40, tracks=walkers, source="test")
+        register_family(RecordedScene(recording))
+    config = EnvConfig(family=name, max_steps=400)
+    m = load_map(config.map)
+    trace = record_episode(config, benchmark_scenario(config, 100, m), make_policy("goalone"), world_map=m)
+    present = trace.human_present
+    assert present.shape == (trace.num_steps + 1, trace.num_humans) == (trace.num_steps + 1, 4)
+    assert not present[0].all() or not present[-1].all()  # kept though absent at the start or end
+    assert np.isfinite(trace.human_pos[present]).all()

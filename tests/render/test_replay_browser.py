@@ -272,3 +272,41 @@ def test_a_stuck_episode_charts_its_reward_flat(browser, make_scene, make_trace,
     rows = np.nonzero(line.any(axis=1))[0]
     assert line.sum() > 0.5 * band.shape[1], "no reward line drawn"
     assert rows.max() - rows.min() <= 3, f"the reward line spans rows {rows.min()}-{rows.max()}"
+
+
+def test_people_are_drawn_only_while_present(browser, make_scene, make_trace, tmp_path):
+    """People of a recorded scene come and go: one absent at the start, the other gone at the end
+    is not drawn (before, the viewer never drew newcomers and kept drawing those who had left)."""
+    present = np.ones((10, 2), bool)
+    present[:4, 1] = False
+    present[6:, 0] = False
+    trace = make_trace(steps=9, human_present=present, laser_ranges=np.full((10, 8), 10.0))
+    path = tmp_path / "come_and_go.html"
+    write_replay_html(path, make_scene(), [trace], encoding=Encoding(stride=1), view="map")
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(path.as_uri())
+    page.wait_for_function("document.body.dataset.ready === 'true'", timeout=15_000)
+    human = np.array([70, 120, 205])  # replay.js COLORS.human
+    counts = []
+    for step in (0, 5, 9):
+        page.evaluate(f"window.socialzooReplay.seek({step})")
+        rgb = np.asarray(_image(page.locator("canvas.scene").screenshot())).astype(int)
+        # Human 0 walks along x = 3 m (the middle of the map view), human 1 along x = 4 m: split
+        # their discs at x = 3.5 m (the view's scale is 0.97 x the width over the 7 m bounds).
+        _, xs = np.nonzero(np.abs(rgb - human).max(axis=-1) <= 12)
+        split = rgb.shape[1] * (0.5 + 0.5 * 0.97 / 7)
+        counts.append((int((xs < split).sum()), int((xs >= split).sum())))
+    page.close()
+    assert errors == []
+    (a0, b0), (a5, b5), (a9, b9) = counts
+    assert a0 > 20 and b0 == 0  # only human 0 at the start
+    assert a5 > 20 and b5 > 20  # both
+    assert a9 == 0 and b9 > 20  # only human 1 at the end
+
+
+def _image(png: bytes):
+    from PIL import Image
+
+    return Image.open(io.BytesIO(png)).convert("RGB")

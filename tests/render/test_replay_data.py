@@ -83,6 +83,23 @@ def test_encode_episode_keeps_frames_and_every_step(make_trace):
     json.dumps(data, allow_nan=False)
 
 
+def test_people_who_enter_or_leave_are_marked_absent(make_trace):
+    # A recorded scene's people come and go: the file says who is there in each kept state, and
+    # an absent person's slot values (NaN in the world) are written as 0.
+    present = np.ones((10, 2), bool)
+    present[:3, 1] = False  # human 1 enters at state 3
+    present[7:, 0] = False  # human 0 leaves at state 7
+    pos = make_trace(steps=9).human_pos.copy()
+    pos[~present] = np.nan
+    data = encode_episode(make_trace(steps=9, human_present=present, human_pos=pos), Encoding(stride=4))
+    assert data["humanPresent"] == [1, 0, 1, 1, 0, 1, 0, 1]  # states 0, 4, 8, 9
+    assert data["humanPos"][2:4] == [0, 0] and data["humanPos"][12:14] == [0, 0]
+    json.dumps(data, allow_nan=False)
+    assert "humanPresent" not in encode_episode(make_trace(steps=9))  # everyone, always: no key
+    with pytest.raises(ValueError, match=r"human_present must have shape \(10, 2\), got \(10, 3\)"):
+        make_trace(steps=9, human_present=np.ones((10, 3), bool))
+
+
 def test_laser_of_unscanned_frames_is_the_latest_scan(make_trace):
     ranges = np.arange(3)[:, None] + np.zeros((3, 8))
     trace = make_trace(steps=9, laser_steps=np.array([0, 5, 9]), laser_ranges=ranges)

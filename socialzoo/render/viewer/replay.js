@@ -154,6 +154,8 @@
       this.steps = d.steps;
       this.frames = d.frameSteps.length;
       this.humans = d.humans;
+      // 1/0 per kept state and human where people enter or leave; absent: everyone, always.
+      this.present = d.humanPresent || null;
       this.rays = d.laser.angles.length;
     }
     // The stored state shown at clock step s: the last one at or before s.
@@ -167,6 +169,9 @@
         if (fs[mid] <= target) lo = mid; else hi = mid - 1;
       }
       return lo;
+    }
+    isPresent(f, i) {
+      return this.present === null || this.present[f * this.humans + i] === 1;
     }
     pose(f) {
       const r = this.d.robot;
@@ -423,7 +428,7 @@
       const hv = d.humanVel;
       const base = f * ep.humans * 2;
       const hr = Math.max(3, SCENE.humanRadius * px);
-      if (target >= 0) {
+      if (target >= 0 && ep.isPresent(f, target)) {
         ctx.strokeStyle = COLORS.highlight;
         ctx.lineWidth = 1.5;
         ctx.beginPath();
@@ -432,6 +437,7 @@
         ctx.stroke();
       }
       for (let i = 0; i < ep.humans; i++) {
+        if (!ep.isPresent(f, i)) continue;
         const x = X(hp[base + 2 * i]);
         const y = Y(hp[base + 2 * i + 1]);
         ctx.fillStyle = COLORS.human;
@@ -453,6 +459,7 @@
         ctx.strokeStyle = COLORS.humanEdge;
         ctx.lineWidth = 1.5;
         for (let i = 0; i < ep.humans; i++) {
+          if (!ep.isPresent(f, i)) continue;
           const x = hp[base + 2 * i];
           const y = hp[base + 2 * i + 1];
           const vx = hv[base + 2 * i];
