@@ -179,7 +179,8 @@ def record_task_episode(
     recorder = _Recorder(task, None if laser_rays == 0 else scan)
     recorder.keep_state(scan=True)
     named = bool(task.action_labels())  # the timeline shows actions that have names
-    shape = (1, 1, *(task.action_space.shape or ()))
+    # Every robot of the row acts (robot 0 is recorded, the others drawn); the action space is one robot's.
+    shape = (1, task.world_state.robot_pose.shape[1], *(task.action_space.shape or ()))
     reads_core = getattr(policy, "reads_core", True)
     while True:
         obs = task.observations()
@@ -209,7 +210,7 @@ class _Recorder:
         self.start = np.asarray(state.robot_pose[0, 0, :2], dtype=np.float64).copy()
         self.holonomic = getattr(getattr(task.config, "robot", None), "kinematics", None) == "holonomic"
         self.states: dict[str, list[np.ndarray]] = {
-            k: [] for k in ("pose", "vel", "humans", "human_vel", "human_mask", "carrot")
+            k: [] for k in ("pose", "vel", "others", "humans", "human_vel", "human_mask", "carrot")
         }
         self.plans: list[np.ndarray] = []
         self.plan_index: list[int] = []
@@ -237,6 +238,7 @@ class _Recorder:
             vel = np.array([speed, 0.0])
         kept["pose"].append(pose)
         kept["vel"].append(vel)
+        kept["others"].append(s.robot_pose[0, 1:].copy())
         # Every slot: people of a recorded scene enter and leave (the trace keeps those ever present).
         kept["humans"].append(s.human_pos[0].copy())
         kept["human_vel"].append(s.human_vel[0].copy())
@@ -293,6 +295,7 @@ class _Recorder:
             dt=float(dt),  # type: ignore[arg-type]
             robot_pose=np.array(kept["pose"]),
             robot_vel=np.array(kept["vel"]),
+            other_robots=np.array(kept["others"]).reshape(count, -1, 3),
             goal=self.goal,
             human_pos=np.array(kept["humans"]).reshape(count, -1, 2)[:, present],
             human_vel=np.array(kept["human_vel"]).reshape(count, -1, 2)[:, present],

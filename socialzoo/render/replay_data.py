@@ -71,6 +71,8 @@ class EpisodeTrace:
         human_vel: (T+1, H, 2) their velocities.
         human_present: (T+1, H) bool, whether each human is in the scene in each state (people
             of a recorded scene enter and leave); None: all of them in every state.
+        other_robots: (T+1, K, 3) x, y, heading of the world's other robots (robots 1..K of a
+            multi-robot task); None: none.
         carrot: (T+1, 2) the local target on the global plan.
         plans: the distinct global plans of the episode, each (L, 2) waypoints.
         plan_index: (T+1,) int, which of `plans` the robot follows in each state.
@@ -99,6 +101,7 @@ class EpisodeTrace:
     human_pos: np.ndarray
     human_vel: np.ndarray
     human_present: np.ndarray | None = None
+    other_robots: np.ndarray | None = None
     carrot: np.ndarray
     plans: tuple[np.ndarray, ...]
     plan_index: np.ndarray
@@ -136,6 +139,8 @@ class EpisodeTrace:
         set_(self, "human_vel", _array(self.human_vel, np.float64, (states, humans, 2), "human_vel"))
         present = np.ones((states, humans), bool) if self.human_present is None else self.human_present
         set_(self, "human_present", _array(present, bool, (states, humans), "human_present"))
+        others = np.zeros((states, 0, 3)) if self.other_robots is None else self.other_robots
+        set_(self, "other_robots", _array(others, np.float64, (states, None, 3), "other_robots"))
         set_(self, "carrot", _array(self.carrot, np.float64, (states, 2), "carrot"))
         plans = tuple(_array(p, np.float64, (None, 2), f"plans[{i}]") for i, p in enumerate(self.plans))
         set_(self, "plans", plans)
@@ -326,6 +331,8 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
         # Only where someone is absent in a kept state (people who enter or leave the scene).
         **({} if present.all() else {"humanPresent": present.astype(int).reshape(-1).tolist()}),
         "carrot": _flat(trace.carrot[kept], pd),
+        # Only where the world has other robots: K poses per kept state.
+        **({"others": _flat(trace.other_robots[kept], pd)} if trace.other_robots.shape[1] else {}),
         "plans": [_flat(p, pd) for p in trace.plans],
         "planIndex": trace.plan_index[kept].tolist(),
         "laser": {
@@ -381,6 +388,8 @@ def encode_replay(
     # The legend shows what the page draws: the task's actions, the bodies, and the scan and the
     # followed person only where an episode has them.
     legend = ["robot", "humans", "goal", "carrot"]
+    if any(t.other_robots.shape[1] for t in traces):
+        legend.insert(1, "other robots")
     if any(t.laser_ranges.shape[1] for t in traces):
         legend.append("laser")
     if any((t.target_human >= 0).any() for t in traces):

@@ -217,3 +217,21 @@ def test_people_who_enter_and_leave_a_recorded_scene_are_kept_with_their_presenc
     assert present.shape == (trace.num_steps + 1, trace.num_humans) == (trace.num_steps + 1, 4)
     assert not present[0].all() or not present[-1].all()  # kept though absent at the start or end
     assert np.isfinite(trace.human_pos[present]).all()
+
+
+@pytest.mark.parametrize(
+    ("env_id", "policy"), [("socialzoo/ActionSelection-v2", "ref"), ("socialzoo/CrowdNav-v1", "orca")]
+)
+def test_a_task_of_two_robots_is_recorded_with_the_other_robot(env_id, policy):
+    """`socialzoo replay --env ID --task-config num_robots=2` failed with numpy's 'cannot reshape
+    array of size 2 into shape (1,1)': the recorder gave the task one robot's action. Every robot
+    acts; robot 0 is the panel's, the others are kept to be drawn."""
+    from socialzoo.bench.replay import record_case
+    from socialzoo.bench.task_benchmark import TaskId
+
+    limit = {"max_steps": 30} if "ActionSelection" in env_id else {"time_limit": 3.0}
+    probe = TaskId.of(env_id).make(1, num_robots=2, **limit)
+    acting = make_policy(policy, task=probe.name, observation_space=probe.observation_space)
+    trace, _ = record_case(env_id, acting, "test", 0, num_robots=2, **limit)
+    assert trace.other_robots.shape == (trace.num_steps + 1, 1, 3) and 0 < trace.num_steps <= 40
+    assert np.ptp(trace.other_robots[:, 0, :2], axis=0).max() > 0.05  # it drives too

@@ -306,6 +306,22 @@ def test_people_are_drawn_only_while_present(browser, make_scene, make_trace, tm
     assert a9 == 0 and b9 > 20  # only human 1 at the end
 
 
+def test_the_other_robots_are_drawn(browser, make_scene, make_trace, tmp_path):
+    others = np.tile([5.0, 2.5, 0.0], (10, 1, 1))  # a second robot standing at (5, 2.5)
+    path = tmp_path / "two_robots.html"
+    write_replay_html(path, make_scene(), [make_trace(steps=9, other_robots=others)], view="map")
+    page = browser.new_page()
+    page.goto(path.as_uri())
+    page.wait_for_function("document.body.dataset.ready === 'true'", timeout=15_000)
+    rgb = np.asarray(_image(page.locator("canvas.scene").screenshot())).astype(int)
+    assert "other robots" in page.locator("#legend").inner_text()
+    page.close()
+    scale = 0.97 * rgb.shape[1] / 7  # the map view of the 7 m x 4 m bounds, centred on (3, 1.5)
+    x, y = round(rgb.shape[1] / 2 + 2 * scale), round(rgb.shape[0] / 2 - scale)
+    near = rgb[y - 15 : y + 15, x - 15 : x + 15]  # the footprint is 0.5 m x 0.43 m, 60 px a metre
+    assert (np.abs(near - [168, 168, 180]).max(axis=-1) <= 3).sum() >= 200  # replay.js COLORS.other
+
+
 def _image(png: bytes):
     from PIL import Image
 

@@ -100,6 +100,20 @@ def test_people_who_enter_or_leave_are_marked_absent(make_trace):
         make_trace(steps=9, human_present=np.ones((10, 3), bool))
 
 
+def test_other_robots_are_written_where_there_are_some(make_trace, make_scene):
+    others = np.zeros((10, 2, 3))
+    others[:, 1, 0] = np.arange(10)
+    trace = make_trace(steps=9, other_robots=others)
+    data = encode_episode(trace, Encoding(stride=4))
+    assert data["others"] == [0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 0, 8, 0, 0, 0, 0, 0, 9, 0, 0]
+    assert "others" not in encode_episode(make_trace(steps=9))
+    assert make_trace(steps=9).other_robots.shape == (10, 0, 3)
+    assert "other robots" in encode_replay(make_scene(), [make_trace(steps=9), trace])["legend"]
+    assert "other robots" not in encode_replay(make_scene(), [make_trace(steps=9)])["legend"]
+    with pytest.raises(ValueError, match=r"other_robots must have shape \(10, \*, 3\), got \(10, 2\)"):
+        make_trace(steps=9, other_robots=np.zeros((10, 2)))
+
+
 def test_laser_of_unscanned_frames_is_the_latest_scan(make_trace):
     ranges = np.arange(3)[:, None] + np.zeros((3, 8))
     trace = make_trace(steps=9, laser_steps=np.array([0, 5, 9]), laser_ranges=ranges)

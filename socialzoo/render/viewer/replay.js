@@ -16,6 +16,8 @@
     robot: "#f58c1e",
     robotEdge: "#824100",
     robotMark: "#502300",
+    other: "#a8a8b4",
+    otherEdge: "#50505c",
     trail: "rgba(245, 140, 30, 0.45)",
     goal: "#23a541",
     carrot: "#d700c8",
@@ -157,6 +159,7 @@
       // 1/0 per kept state and human where people enter or leave; absent: everyone, always.
       this.present = d.humanPresent || null;
       this.rays = d.laser.angles.length;
+      this.others = d.others ? d.others.length / (3 * this.frames) : 0; // the other robots
     }
     // The stored state shown at clock step s: the last one at or before s.
     frame(s) {
@@ -468,8 +471,14 @@
         }
       }
 
-      // The robot's footprint (length along the heading) with a chevron, and its velocity.
-      this.drawRobot(ctx, X, Y, px, pose);
+      // The other robots, then this one: footprints (length along the heading) with a chevron,
+      // and this one's velocity.
+      for (let k = 0; k < ep.others; k++) {
+        const o = d.others;
+        const at = 3 * (f * ep.others + k);
+        this.drawRobot(ctx, X, Y, px, [o[at], o[at + 1], o[at + 2]], COLORS.other, COLORS.otherEdge);
+      }
+      this.drawRobot(ctx, X, Y, px, pose, COLORS.robot, COLORS.robotEdge);
       if (view.velocity) {
         const v = d.robotVel[2 * f];
         ctx.strokeStyle = COLORS.robotEdge;
@@ -490,7 +499,7 @@
       this.drawHud(ctx, w, h, s, last);
     }
 
-    drawRobot(ctx, X, Y, px, pose) {
+    drawRobot(ctx, X, Y, px, pose, fill, edge) {
       // Never smaller than 10 pixels long, so the robot stays visible in the map view.
       const grow = Math.max(1, 10 / (SCENE.robotLength * px));
       const hl = 0.5 * SCENE.robotLength * grow;
@@ -499,8 +508,8 @@
       const sn = Math.sin(pose[2]);
       const at = (a, b) => [X(pose[0] + a * c - b * sn), Y(pose[1] + a * sn + b * c)];
       const corners = [at(hl, hw), at(-hl, hw), at(-hl, -hw), at(hl, -hw)];
-      ctx.fillStyle = COLORS.robot;
-      ctx.strokeStyle = COLORS.robotEdge;
+      ctx.fillStyle = fill;
+      ctx.strokeStyle = edge;
       ctx.lineWidth = Math.max(1, 0.03 * px);
       ctx.beginPath();
       corners.forEach(([x, y], k) => (k ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
@@ -683,7 +692,7 @@
   document.getElementById("subtitle").textContent = DATA.subtitle;
   const legend = document.getElementById("legend");
   const swatches = ACTIONS.names.map((name, i) => [name, ACTIONS.colors[i]]);
-  const bodies = {robot: COLORS.robot, humans: COLORS.human, goal: COLORS.goal, carrot: COLORS.carrot,
+  const bodies = {robot: COLORS.robot, "other robots": COLORS.other, humans: COLORS.human, goal: COLORS.goal, carrot: COLORS.carrot,
     laser: COLORS.laserHit, "followed / passed": COLORS.highlight};
   // The task's own legend (no sub-policies on a velocity task, no laser where none was scanned).
   for (const name of DATA.legend || Object.keys(bodies)) swatches.push([name, bodies[name]]);
