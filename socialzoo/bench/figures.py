@@ -4,6 +4,7 @@ failures by cause, and force, blame and time to goal with 90% confidence interva
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,8 @@ FIGURE_FORMATS = ("png", "pdf")
 METRIC_PANELS: tuple[tuple[str, str], ...] = tuple(
     (name, axis_label(name)) for name in registered("mean_force", "mean_blame", "time_to_goal")
 )
+# Characters per line of a policy's label (a group is about 1.2 inches wide at 10 points).
+_TICK_CHARS = 14
 _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
 
 
@@ -38,6 +41,15 @@ def _layout(
     policies = list(dict.fromkeys(e["policy"] for e in summary))
     maps = list(dict.fromkeys(e["map"] for e in summary))
     return policies, maps, {(e["policy"], e["map"]): e for e in summary}
+
+
+def _policy_ticks(ax: Any, policies: list[str]) -> None:
+    """The policies' labels under their groups, wrapped to the group's width (a learned policy's
+    label holds its file name: "PPO (final_model.safetensors)" overran its neighbours)."""
+    ax.set_xticks(range(len(policies)))
+    ax.set_xlim(-0.5, len(policies) - 0.5)  # every group's slot, with or without bars
+    labels = policy_labels(policies).values()
+    ax.set_xticklabels([textwrap.fill(label, _TICK_CHARS, break_on_hyphens=False) for label in labels])
 
 
 def _map_label(map_name: str) -> str:
@@ -79,8 +91,7 @@ def _bars(
             color=_COLORS[j % len(_COLORS)],
             label=_map_label(m),
         )
-    ax.set_xticks(range(len(policies)))
-    ax.set_xticklabels(list(policy_labels(policies).values()))
+    _policy_ticks(ax, policies)
     return width
 
 
@@ -140,7 +151,9 @@ def plot_metrics(
     training and transfer maps side by side, with 90% Student-t intervals; returns the files written."""
     plt = pyplot()
     policies, maps, by_key = _layout(summary)
-    fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(4.2 * len(METRIC_PANELS), 3.4))
+    # A panel is wide enough for its policy groups' labels (about 1.5 inches each).
+    panel = max(4.2, 1.5 * len(policies) + 0.6)
+    fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(panel * len(METRIC_PANELS), 3.4))
     for ax, (name, label) in zip(axes, METRIC_PANELS, strict=True):
         _bars(ax, policies, maps, by_key, f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high")
         ax.set_ylabel(label)
@@ -185,11 +198,14 @@ def plot_failures(
                        label=None if cause in labelled else label)  # fmt: skip
                 labelled.add(cause)
                 bottom += value
-            ax.text(x, bottom, m, ha="center", va="bottom", fontsize=6, rotation=90)
-    ax.set_xticks(range(len(policies)))
-    ax.set_xticklabels(list(policy_labels(policies).values()))
+            # The map's name above a short bar, inside a tall one: never out of the axes.
+            inside = bottom > 50.0
+            ax.text(x, bottom - 1.5 if inside else bottom + 1.5, m, ha="center", fontsize=6, rotation=90,
+                    va="top" if inside else "bottom", clip_on=True,
+                    bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 0.5})  # fmt: skip
+    _policy_ticks(ax, policies)
     ax.set_ylabel("failed episodes, % (by cause)")
-    ax.set_ylim(bottom=0)
+    ax.set_ylim(0, 105)
     if labelled:
         ax.legend(fontsize="small")
     ax.set_title("Failures by cause")

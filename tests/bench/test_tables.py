@@ -1,5 +1,6 @@
 """Confidence intervals on known numbers, and the summary CSV / Markdown / figures."""
 
+import itertools
 import math
 
 import numpy as np
@@ -167,6 +168,48 @@ def test_figures_are_written(tmp_path):
         "failures.pdf", "failures.png", "metrics.pdf", "metrics.png", "success.pdf", "success.png",
     ]  # fmt: skip
     assert all(p.stat().st_size > 1000 for p in files)
+
+
+def test_figures_keep_their_text_apart_and_inside(monkeypatch):
+    """Learned policies' labels (with their file names) overran each other under the bars, and a
+    map's name over a bar of 100% failures ran out of the axes into the title. One policy that
+    never succeeds (time to goal NaN) and a single trial draw too."""
+    pytest.importorskip("matplotlib")
+    from socialzoo.bench import figures
+
+    figs = {}
+
+    def keep(fig, out_dir, stem, formats=(), dpi=150):
+        figs[stem] = fig
+        return []
+
+    monkeypatch.setattr(figures, "save_figure", keep)
+    policies = [
+        "ppo:runs/a/final_model.safetensors",
+        "dagger:runs/b/dagger_policy.safetensors",
+        "goalone",
+        "ref",
+    ]
+    rows = [
+        r
+        for p in policies
+        for m in ("gdc1", "imported_building")
+        for r in rows_for(p, m, 0 if p == "goalone" else 1, 1)
+    ]
+    figures.plot_summary(summarize(rows), "unused")
+    for stem, fig in figs.items():
+        renderer = fig.canvas.get_renderer()
+        for ax in fig.axes:
+            ticks = [t.get_window_extent(renderer) for t in ax.get_xticklabels() if t.get_text()]
+            for left, right in itertools.pairwise(ticks):
+                assert left.x1 < right.x0, f"{stem}: tick labels overlap"
+            frame = ax.get_window_extent(renderer)
+            for text in ax.texts:
+                box = text.get_window_extent(renderer)
+                assert frame.y0 - 1 <= box.y0 and box.y1 <= frame.y1 + 1, (
+                    f"{stem}: {text.get_text()} out of the axes"
+                )
+        figures.pyplot().close(fig)
 
 
 def test_failures_by_cause_in_the_summary_and_markdown():
