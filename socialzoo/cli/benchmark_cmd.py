@@ -199,7 +199,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             "not of a task id (its config says who walks)",
         )
     try:
-        config = task_config(args.task_config)
+        config = given(args, "max_steps") | task_config(args.task_config)  # a task without max_steps refuses it
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())

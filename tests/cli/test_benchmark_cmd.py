@@ -147,3 +147,17 @@ def test_task_config_needs_a_task_id(tmp_path, capsys):
     ]
     assert socialzoo_main([*argv, "--policies", "orca"]) == 2
     assert "unexpected keyword argument 'famly'" in capsys.readouterr().err
+
+
+def test_a_task_id_takes_max_steps_where_its_config_has_it(tmp_path, capsys):
+    # --max-steps was silently dropped for a task id; a task whose config has no max_steps (CrowdNav's
+    # time limit is time_limit, s) refuses it naming its fields.
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNav-v1", "--policies", "orca", "--trials", "1"]
+    assert socialzoo_main([*argv, "--max-steps", "5", "--out", str(tmp_path / "c")]) == 2
+    assert "'max_steps'" in (err := capsys.readouterr().err) and "time_limit" in err
+    toy = ["benchmark", "--maps", "socialzoo/ActionSelection-v2", "--policies", "goalone", "--trials", "1"]
+    assert socialzoo_main([*toy, "--max-steps", "3", "--out", str(tmp_path / "a")]) == 0
+    from socialzoo.bench.store import ResultsStore
+
+    with ResultsStore(tmp_path / "a" / "results.sqlite") as store:
+        assert [row["steps"] for row in store.rows()] == [3]  # the episode stopped at the override
