@@ -55,15 +55,15 @@ class RunDir:
         checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
         <policy file>     the final policy
 
-    Paths in run.json are relative to the run folder, never the machine's absolute ones: the path arguments
-    (those holding a Path, `out`, and the trainer's `inputs`), those same paths and any absolute path on the
-    command line and in the results (`recorded`). A folder already holding a run of other arguments is
-    refused, so two runs never mix; a finished run of the same arguments is reported as done, so a rerun
-    repeats nothing. An argument added to a trainer after a run was recorded does not count against it while
-    it has its default value. A path argument that lies where it lay relative to the run folder names the same
-    file, so a work folder moved or copied whole together with its inputs (a `socialzoo reproduce` folder)
-    holds the same runs; so does an input file (a trainer's `inputs`, such as imitation's demonstrations) of a
-    record written before paths were relative, when it lies where it lay relative to the run's `out`.
+    Paths in run.json are relative to the run folder, never the machine's absolute ones: the path arguments (those
+    holding a Path, `out`, and the files the trainer's `inputs` name: "ref" or "eth" are names), those same paths
+    and any absolute path on the command line and in the results (`recorded`). A folder already holding a run of
+    other arguments is refused, so two runs never mix; a finished run of the same arguments is reported as done, so
+    a rerun repeats nothing. An argument added to a trainer after a run was recorded does not count against it while
+    it has its default value. A path argument that lies where it lay relative to the run folder names the same file,
+    so a work folder moved or copied whole together with its inputs (a `socialzoo reproduce` folder) holds the same
+    runs; so does an input file (a trainer's `inputs`, such as imitation's demonstrations) of a record written
+    before paths were relative, when it lies where it lay relative to the run's `out`.
 
     Args:
         path: the folder (created).
@@ -248,15 +248,16 @@ def path_fields(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
 
 def given_paths(args: Any, inputs: tuple[str, ...] = ()) -> set[str]:
     """The paths that argument dataclass `args` names, as given: the values of its fields that hold
-    a Path, of `out` and of the `inputs` fields, or the paths inside an `inputs` field that is a spec
-    (normalised; None and empty ones left out)."""
+    a Path and of `out`, and the paths inside the `inputs` fields, each a spec (normalised; None and
+    empty ones left out)."""
     found = set()
     for name in path_fields(args, inputs):
         value = getattr(args, name, None)
         items = [_spec_item(item) for item in value.split(",")] if isinstance(value, str) else []
-        if name in inputs and (len(items) > 1 or (items and items[0][0])):
-            # A spec naming its files inside it ("ppo:PATH", "eth,NAME=PATH,PATH"): its "NAME:" or
-            # "NAME=" paths, and its bare items that are files (not names, such as a scene's "eth").
+        if name in inputs and items:
+            # An input is a spec that may name files ("ppo:PATH", "eth,NAME=PATH,PATH", "ref"): its
+            # "NAME:" or "NAME=" paths, and its bare items that are files (not names, such as a
+            # scene's "eth" or the robot policy "ref", even when given alone).
             found |= {
                 os.path.normpath(path) for prefix, path in items if path and (prefix or os.path.isfile(path))
             }

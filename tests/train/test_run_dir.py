@@ -101,6 +101,7 @@ def test_a_fresh_run_record_holds_no_absolute_path(tmp_path, monkeypatch):
     demos = tmp_path / "demos" / "d.npz"
     program = tmp_path / "runs" / "p" / "prog.json"
     demos.parent.mkdir()
+    demos.write_bytes(b"")  # an input given alone is a path when it is a file (not a name such as "ref")
     argv = ["/usr/bin/socialzoo", "train", "x", "--demos", str(demos), f"--out={program}", "--note", "a b"]
     monkeypatch.setattr("sys.argv", argv)
     args = FileArgs(demos=str(demos), out=str(program), note="/etc/passwd")  # a str argument, yet absolute
@@ -189,6 +190,29 @@ def test_paths_inside_specs_are_recorded_relative_to_the_run_folder(tmp_path, mo
     assert "--scenes eth,mine=../../data/t.txt,../../data/u.txt" in record["command"]
     # The same run, from the same folder: the same arguments.
     assert RunDir(Path("runs/a"), "x", args, inputs=("scenes",)).finished
+
+
+def test_a_name_given_alone_to_an_input_is_no_path(tmp_path, monkeypatch):
+    # Found rerunning a finished `socialzoo train humans --out DIR` (default --robot ref) from another
+    # working folder: it was refused ("robot differ"), run.json holding robot "../../<cwd>/ref".
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    out = tmp_path / "runs" / "h"
+    for cwd in ("a", "b"):
+        monkeypatch.chdir(tmp_path / cwd)
+        monkeypatch.setattr("sys.argv", ["socialzoo", "train", "x", "--scenes", "eth", "--out", str(out)])
+        run = RunDir(out, "x", SpecArgs(scenes="eth", out=str(out)), inputs=("scenes", "robot"))
+        if cwd == "a":
+            run.finish()
+    assert run.finished
+    record = json.loads((out / "run.json").read_text())
+    assert record["args"]["robot"] == "ref" and record["args"]["scenes"] == "eth"
+    assert "--scenes eth " in record["command"]
+    # A file given alone is still a path, seen from the run folder.
+    (tmp_path / "b" / "eth").write_text("")
+    other = tmp_path / "runs" / "f"
+    RunDir(other, "x", SpecArgs(scenes="eth", out=str(other)), inputs=("scenes",))
+    assert json.loads((other / "run.json").read_text())["args"]["scenes"] == "../../b/eth"
 
 
 @dataclass(frozen=True, kw_only=True)
