@@ -182,6 +182,14 @@ class EnvConfig:
                 "EnvConfig.people.counterfactual needs people the env drives itself, but "
                 f"num_learned_humans = {self.num_learned_humans} are driven from outside"
             )
+        if self.people.recorded and self.num_learned_humans:
+            # The recording places replayed and hybrid people after every step: a learner's actions
+            # for their slots would be ignored.
+            raise ValueError(
+                f"EnvConfig.people.models {self.people.models!r} puts people on their recorded tracks, "
+                f"where num_learned_humans = {self.num_learned_humans} learned slots cannot walk; "
+                "give people a model that walks (e.g. 'sf') or num_learned_humans = 0"
+            )
 
     @property
     def max_humans(self) -> int:

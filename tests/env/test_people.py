@@ -219,6 +219,11 @@ def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_pa
         EnvConfig().replace(people={"models": f"learned:{tmp_path / 'none.safetensors'}"})
     with pytest.raises(ValueError, match="counterfactual needs people the env drives itself"):
         EnvConfig().replace(num_learned_humans=2, people={"counterfactual": True})
+    # Learned-human agents among recorded people (socialzoo/Recorded-v3 with num_learned_humans):
+    # the recording placed their slots' people, and the learner's actions were silently ignored.
+    for models in ("replay", "hybrid:sf", "replay@0.5+sf@0.5"):
+        with pytest.raises(ValueError, match="on their recorded tracks, where num_learned_humans = 2"):
+            EnvConfig().replace(num_learned_humans=2, people={"models": models})
     # A file of the wrong kind: a robot policy, not a learned human policy.
     from socialzoo.env.policy_file import PolicyFileError, current_env_version, save_policy_file
 
