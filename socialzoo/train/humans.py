@@ -34,6 +34,11 @@ class HumansArgs(MarlArgs):
         except ValueError as err:
             raise ValueError(f"HumansArgs.robot: {err}") from None
         super().__post_init__()
+        if not self.env_config().num_learned_humans:
+            raise ValueError(
+                "HumansArgs.num_learned_humans must be >= 1: this trainer learns humans only (the robots "
+                f"run {self.robot!r}), got 0"
+            )
 
 
 def train(args: HumansArgs) -> Path:

@@ -171,6 +171,12 @@ def test_bad_arguments_name_the_field(tmp_path):
         HumansArgs(out=tmp_path, batch_size=16, frames_per_batch=1000)
     with pytest.raises(ValueError, match=r"CotrainArgs\.schedule"):
         CotrainArgs(out=tmp_path, schedule="sometimes")
+    # No human to learn: `socialzoo train humans --num-learned-humans 0` failed inside the run with a
+    # traceback (exit 1) instead of a named argument error (exit 2).
+    for zero in ({"num_learned_humans": 0}, {"env_overrides": {"num_learned_humans": 0}}):
+        with pytest.raises(ValueError, match=r"HumansArgs\.num_learned_humans must be >= 1"):
+            HumansArgs(out=tmp_path, **zero)
+    assert CotrainArgs(out=tmp_path, num_learned_humans=0).env_config().num_learned_humans == 0
 
 
 def test_walk_prior_starts_humans_walking_towards_their_waypoint():
