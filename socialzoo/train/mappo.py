@@ -427,8 +427,9 @@ def train_loop(
         schedule: batch index -> the groups updated on that batch (alternating or simultaneous).
         groups: every group whose statistics are logged (learned or not).
         total_frames: frames to collect.
-        checkpoint_at: frame counts after which to write a checkpoint (the first batch at or past).
-        write_checkpoint: frames -> files written.
+        checkpoint_at: frame counts after which to write a checkpoint (after the first batch at or
+            past each, one for all it passes).
+        write_checkpoint: frames collected so far -> files written.
         writer: a TensorBoard SummaryWriter (add_scalar).
         bar: a progress bar (update(n), set_postfix).
         seed: seeds the minibatch sampling.
@@ -465,8 +466,11 @@ def train_loop(
             bar.set_postfix(reward=f"{record[f'{HUMAN}/reward']:.4f}", refresh=False)
         if on_batch is not None:
             on_batch(history)
-        while pending and frames >= pending[0]:
-            checkpoints += write_checkpoint(pending.pop(0))
+        if pending and frames >= pending[0]:
+            # Named by the frames trained on: a batch may end past a checkpoint's count (or several).
+            while pending and frames >= pending[0]:
+                pending.pop(0)
+            checkpoints += write_checkpoint(frames)
         if frames >= total_frames:
             break
     return LoopResult(frames, time.perf_counter() - start, history, checkpoints)

@@ -121,6 +121,18 @@ def test_ippo_runs(tmp_path):
     assert len(read_history(tmp_path / "history.csv")) == 2
 
 
+def test_checkpoints_are_named_by_the_frames_they_trained_on(tmp_path):
+    # Found with --frames 600 --frames-per-batch 256 --checkpoint-every 100: the files said steps 100,
+    # 200, ..., 600 (100 and 200 the same weights, after 256 frames) and the final policy said 768.
+    tiny = {**TINY, "batch_size": 4, "frames_per_batch": 256, "minibatch_size": 128, "checkpoint_every": 100}
+    args = HumansArgs(out=tmp_path, frames=600, epochs=1, stats_steps=8, seed=0, **tiny)
+    final = train_humans(args)
+    names = sorted(p.name for p in (tmp_path / "checkpoints").iterdir())
+    assert names == [f"step_{n:09d}.humans.safetensors" for n in (0, 256, 512, 768)]
+    last = LearnedHumanPolicy.load(tmp_path / "checkpoints" / names[-1]).header["training"]["frames"]
+    assert last == LearnedHumanPolicy.load(final).header["training"]["frames"] == 768
+
+
 @pytest.mark.parametrize("schedule", ["simultaneous", "alternating"])
 def test_cotrain_runs_and_writes_both_policies(tmp_path, schedule):
     tiny = {**TINY, "num_learned_humans": 2, "checkpoint_every": 10_000}
