@@ -24,6 +24,7 @@ import json
 import math
 import sys
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -218,7 +219,7 @@ def cases(recorded: tuple[str, ...] = ()) -> dict[str, Callable[[], dict[str, st
     `recorded` scenes, replayed and hybrid)."""
     import gymnasium as gym
 
-    import socialzoo  # noqa: F401
+    import socialzoo
     from socialzoo.env.parallel import parallel_crowd_env, parallel_env
 
     out: dict[str, Callable[[], dict[str, str]]] = {}
@@ -241,8 +242,11 @@ def cases(recorded: tuple[str, ...] = ()) -> dict[str, Callable[[], dict[str, st
         "sf@0.5+orca@0.5",
         "learned:socialzoo/agents/shipped/humans.safetensors",
     ):
-        out[f"vector ActionSelection people={people}"] = lambda people=people: gym_vector(
-            "socialzoo/ActionSelection-v2", people={"models": people}, max_steps=70, steps=90
+        # The file of the package on the path (another checkout's with PYTHONPATH), from any folder;
+        # the case keeps its name.
+        models = people.replace("socialzoo/", f"{Path(socialzoo.__file__).parent}/", 1)
+        out[f"vector ActionSelection people={people}"] = lambda models=models: gym_vector(
+            "socialzoo/ActionSelection-v2", people={"models": models}, max_steps=70, steps=90
         )
     out["vector ActionSelection counterfactual"] = lambda: gym_vector(
         "socialzoo/ActionSelection-v2", people={"counterfactual": True}, max_steps=60, steps=70
