@@ -43,11 +43,11 @@ def measure(
     runner.run(todo, on_results=on_results)
     end, end_cpu = clocks()
     count, (tail_start, tail_start_cpu), body_trials = 0, (start, start_cpu), 0
-    for when, when_cpu, k in finishes:
-        count += k
+    for when, when_cpu, k in finishes:  # with N <= B every trial had a row from the start: no body
         if count >= n - b:
-            tail_start, tail_start_cpu, body_trials = when, when_cpu, count
             break
+        count += k
+        tail_start, tail_start_cpu, body_trials = when, when_cpu, count
     body_s, tail_s = tail_start - start, end - tail_start
     body_cpu, tail_cpu = tail_start_cpu - start_cpu, end_cpu - tail_start_cpu
     figures: dict[str, float | int | str] = {
