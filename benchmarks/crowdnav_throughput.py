@@ -1,5 +1,5 @@
 """Throughput of the CrowdNav task: env-steps/s of CrowdNavVectorEnv (random velocity actions, the
-same-step autoreset included) and of the bare core, at several batch sizes and head counts.
+same-step autoreset included) at several batch sizes and head counts.
 
 CrowdNav's own simulator (one process, env.step alone) steps about 5,035 times a second with 5 people
 and 253 with 20 on the 2-core machine (the issue's measurement); the goal is at least 10x that with 5

@@ -3,7 +3,9 @@
 The states come from a real rollout (humans walking their routes, the robot pure-pursuing its
 global path); each frame carries the full overlay (path, carrot, goal, 180-ray laser scan, action
 label, highlighted human). Prints frames/s; --png DIR saves the last frame of each view, --gif PATH
-also writes and times an animation. Run: python benchmarks/render_speed.py [--seconds 3]
+also writes and times an animation.
+
+Run: python benchmarks/render_speed.py [--steps 600] [--antialias 2] [--png DIR] [--gif PATH]
 """
 
 from __future__ import annotations
