@@ -39,11 +39,13 @@ def tree(spec: str, scratch: Path) -> Path:
     if Path(spec).is_dir():
         return Path(spec).resolve()
     folder = scratch / f"tree-{spec.replace('/', '_')}"
-    subprocess.run(
+    added = subprocess.run(
         ["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), spec],
-        check=True,
         capture_output=True,
+        text=True,
     )
+    if added.returncode:
+        sys.exit(f"{spec!r} is neither a folder nor a revision of {REPO}: {added.stderr.strip()}")
     return folder
 
 
@@ -68,11 +70,20 @@ def run(folder: Path, script: Path, args: list[str], cache: Path, metric: str, c
         if not line.startswith("{"):
             continue
         fig = json.loads(line)
+        if metric not in fig:
+            sys.exit(
+                f"{script.name} prints no {metric!r} (its fields: {', '.join(fig)}): choose one with --metric"
+            )
         key = " ".join(
             str(v) for k, v in fig.items() if isinstance(v, str) or (k in KEY_NUMBERS and isinstance(v, int))
         )
         figures[key] = float(fig[metric])
     return figures
+
+
+def number(value: float) -> str:
+    """A figure to print: rates whole, small figures (seconds, MiB) with 4 significant digits."""
+    return f"{value:,.0f}" if abs(value) >= 100 else f"{value:.4g}"
 
 
 def spread(values: list[float]) -> str:
@@ -114,7 +125,9 @@ def main() -> None:
                 folders = dict.fromkeys(trees, Path(args.scripts).resolve())
             scripts = {side: folders[side] / name for side in trees}
             print(
-                f"old {trees['old']}\nnew {trees['new']}\nscript {name} {' '.join(script_args)}", flush=True
+                f"old {trees['old']}\nnew {trees['new']}\nscript {name} {' '.join(script_args)}\n"
+                f"figure {args.metric} (old, new) and new/old",
+                flush=True,
             )
             if not args.no_warmup:
                 for side in trees:
@@ -132,7 +145,7 @@ def main() -> None:
                         ratio = rates["new"][key] / old
                         ratios.setdefault(key, []).append(ratio)
                         print(
-                            f"round {r + 1}  {key:<52} old {old:>12,.0f}  new {rates['new'][key]:>12,.0f}  "
+                            f"round {r + 1}  {key:<52} old {number(old):>12}  new {number(rates['new'][key]):>12}  "
                             f"new/old {ratio:.3f}",
                             flush=True,
                         )
