@@ -39,6 +39,8 @@ def main() -> None:
     p.add_argument("--repeats", type=int, default=7, help="timed runs per command")
     p.add_argument("--json", action="store_true", help="print one JSON object per line")
     args = p.parse_args()
+    if args.repeats < 1:
+        p.error(f"--repeats must be at least 1, got {args.repeats}")
     for name, command in COMMANDS:
         times = wall_times(command, args.repeats)
         figure = {

@@ -53,7 +53,10 @@ def main() -> None:
     )
     args = p.parse_args()
     for case in args.cases.split(","):
-        batch, people = (int(n) for n in case.split("x"))
+        try:
+            batch, people = (int(n) for n in case.split("x"))
+        except ValueError:
+            p.error(f"--cases: {case!r} is not B x people, e.g. 256x5")
         rate = measure(batch, people, args.variant, args.seconds)
         figure = {
             "variant": args.variant or "CrowdNav",
