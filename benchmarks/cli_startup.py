@@ -35,7 +35,7 @@ def wall_times(command: list[str], repeats: int) -> list[float]:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=7, help="timed runs per command")
     p.add_argument("--json", action="store_true", help="print one JSON object per line")
     args = p.parse_args()

@@ -91,7 +91,7 @@ def spread(values: list[float]) -> str:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("old", help="folder or git revision of the baseline")
     p.add_argument("new", help="folder or git revision measured against it")
     p.add_argument("script", help="a script of benchmarks/ (name or path)")

@@ -46,7 +46,7 @@ def measure(batch: int, people: int, variant: str, seconds: float) -> float:
 
 
 def main() -> None:
-    p = parser(__doc__.splitlines()[0])
+    p = parser(__doc__.split("\n\n")[0])
     p.add_argument("--variant", default="", help="a registered variant of the task ('' CrowdNav's own)")
     p.add_argument(
         "--cases", default=CASES, help=f"B x people of each case, comma-separated (default {CASES})"

@@ -77,7 +77,7 @@ def report(name: str, batch: int, calls_per_s: float, as_json: bool) -> None:
 
 
 def main() -> None:
-    p = parser(__doc__.splitlines()[0])
+    p = parser(__doc__.split("\n\n")[0])
     p.add_argument("--map", default="gdc1")
     p.add_argument("--batch", type=int, default=256, help="worlds of the native env")
     args = p.parse_args()

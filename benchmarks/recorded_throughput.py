@@ -96,7 +96,7 @@ def memory(scene: str, steps: int) -> dict[str, float]:
 
 
 def main() -> None:
-    p = parser(__doc__.splitlines()[0])
+    p = parser(__doc__.split("\n\n")[0])
     p.add_argument(
         "--scenes", default="eth,zara1", help="recorded scenes (socialzoo data fetch eth-ucy first)"
     )

@@ -195,7 +195,7 @@ def extrapolate(figures: dict[str, Any], seeds: int, workers: int = 2, batch: in
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--curve-trials", type=int, default=4, help="scenarios per checkpoint in the curve batch")
     p.add_argument(

@@ -63,7 +63,7 @@ def check_scene(scene: str, cases: int) -> tuple[int, float, int]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2")
     parser.add_argument("--cases", type=int, default=100)
     args = parser.parse_args()

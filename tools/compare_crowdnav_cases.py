@@ -33,7 +33,7 @@ def _stub_imports() -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--crowdnav", type=Path, required=True, help="a checkout of vita-epfl/CrowdNav")
     p.add_argument("--cases", type=int, default=500, help="test cases per layout")
     args = p.parse_args()

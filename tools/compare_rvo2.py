@@ -247,7 +247,7 @@ def compare_cases(rvo2: Rvo2, cases: int, seed: int) -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--rvo2", type=Path, required=True, help="a checkout of snape/RVO2")
     p.add_argument("--precision", choices=("double", "float"), default="double", help="RVO2's number type")
     p.add_argument("--steps", type=int, default=400, help="steps of each scenario")

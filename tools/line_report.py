@@ -72,7 +72,7 @@ def report(rev: str, folder: str, without: list[str]) -> dict[str, int]:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("revs", nargs="+", help="commits to measure")
     p.add_argument("--folder", default="socialzoo")
     p.add_argument("--without", action="append", default=[], help="glob of files to leave out (repeatable)")

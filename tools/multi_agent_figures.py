@@ -27,7 +27,7 @@ PANELS = (
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("history", type=Path)
     p.add_argument("out", type=Path)
     args = p.parse_args()

@@ -70,7 +70,7 @@ def _learned_crowd_overrides(name: str) -> dict:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2")
     parser.add_argument("--policies", default=",".join(POLICIES))
     parser.add_argument("--people", default="replay,hybrid:sf")

@@ -403,7 +403,7 @@ def render(
 
 
 def main(argv: Iterable[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", metavar="NAME", help="draw only this scenario's picture (family or letter)")
     parser.add_argument("--doc", type=Path, default=DOC, help="the page to write")
     parser.add_argument("--images", type=Path, default=IMAGES, help="the pictures' folder")

@@ -303,7 +303,7 @@ def record(names: list[str] | None = None) -> dict[str, dict[str, str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", help="write the digests to this JSON file")
     parser.add_argument("--compare", help="compare with the digests of this JSON file")
     parser.add_argument(

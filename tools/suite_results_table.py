@@ -61,7 +61,7 @@ def table(outcomes: dict[tuple[str, str], tuple[list[bool], list[bool]]]) -> str
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("folders", nargs="+", type=Path, help="socialzoo suite output folders")
     args = parser.parse_args()
     outcomes: dict[tuple[str, str], tuple[list[bool], list[bool]]] = {}

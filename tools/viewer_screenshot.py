@@ -24,7 +24,7 @@ FLAGS = [
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("page", type=Path, help="the replay .html file")
     parser.add_argument("out", type=Path, help="the .png to write")
     parser.add_argument("--step", type=int, default=0, help="clock step to show")
