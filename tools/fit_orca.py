@@ -36,6 +36,12 @@ def main() -> None:
     base = {"map": args.map, "scenarios": args.scenarios, "seconds": args.seconds}
     reference = walk("sf", HumanReportConfig(humans=("sf",), **base)).row
     print("social force: " + ", ".join(f"{k} {reference[k]:.3f}" for k in KEYS))
+    unscored = [k for k in KEYS if not abs(reference[k]) > 0]  # zero or NaN: no relative difference
+    if unscored:
+        p.error(
+            f"the social-force people give {', '.join(unscored)} of 0 or nan on {args.scenarios} scenarios "
+            f"of {args.seconds:g} s (nobody reached a route goal?): give more --seconds or --scenarios"
+        )
     scored = []
     for values in itertools.product(*GRID.values()):
         orca = dict(zip(GRID, values, strict=True))
