@@ -84,10 +84,11 @@ def test_the_command_writes_tables_and_reuses_finished_policies(tmp_path, capsys
     assert (tmp_path / "success.png").stat().st_size > 5_000
     table = (tmp_path / "crowdnav.csv").read_text()
     capsys.readouterr()
-    assert main(args) == 0 and "0 of 4 episodes played now" in capsys.readouterr().out
+    assert main(args) == 0 and "0 episodes played, 4 read from the store" in capsys.readouterr().out
     assert (tmp_path / "crowdnav.csv").read_text() == table  # read back, the same numbers
     # Two more cases: only those are played.
-    assert main([*args[:5], "6", *args[6:]]) == 0 and "2 of 6 episodes played now" in capsys.readouterr().out
+    assert main([*args[:5], "6", *args[6:]]) == 0
+    assert "2 episodes played, 4 read from the store" in capsys.readouterr().out
     page = tmp_path / "case.html"
     assert (
         main(["crowdnav", "replay", "--variant", "SocialForce", "--policies", "orca", "--out", str(page)])
@@ -197,9 +198,10 @@ def test_a_learner_of_five_people_evaluates_on_twenty_through_its_nearest_five(t
     args = ["crowdnav", "eval", "--variant", "20", "--cases", "3", "--policies", "crowdnav", "--out", str(tmp_path)]
     assert main(args) == 2 and "reads observations of 46 numbers" in capsys.readouterr().err
     assert main([*args, "--observed-people", "5"]) == 0
-    assert "3 of 3 episodes played now" in capsys.readouterr().out
+    assert "3 episodes played, 0 read from the store" in capsys.readouterr().out
     assert "socialzoo/CrowdNav20-v1, observed_people=5, test cases" in (tmp_path / "crowdnav.md").read_text()
     # The store keeps each config's episodes apart: the same robot with every person observed plays anew.
     orca = ["crowdnav", "eval", "--variant", "20", "--cases", "2", "--policies", "orca", "--out", str(tmp_path)]
-    assert main([*orca, "--observed-people", "5"]) == 0 and "2 of 2 episodes played now" in capsys.readouterr().out
-    assert main(orca) == 0 and "2 of 2 episodes played now" in capsys.readouterr().out
+    assert main([*orca, "--observed-people", "5"]) == 0
+    assert "2 episodes played, 0 read from the store" in capsys.readouterr().out
+    assert main(orca) == 0 and "2 episodes played, 0 read from the store" in capsys.readouterr().out
