@@ -1,6 +1,9 @@
 """Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps, the
 episode viewer's files and the shipped policies."""
 
+import importlib.metadata
+import os
+import re
 import subprocess
 import sys
 import zipfile
@@ -49,3 +52,59 @@ def test_wheel_ships_the_maps(tmp_path):
     assert len(viewer) == 3 and viewer <= names  # the episode viewer's page, stylesheet and script
     policies = {p.name for p in (ROOT / "socialzoo" / "agents" / "shipped").glob("*.*")}
     assert {f"socialzoo/agents/shipped/{name}" for name in policies} <= names
+
+
+def _requirement_name(requirement: str) -> str:
+    return re.split(r"[\s<>=!~;\[]", requirement, maxsplit=1)[0].lower().replace("_", "-")
+
+
+def extra_only_modules() -> list[str]:
+    """Top-level modules installed here whose distribution only an extra of pyproject.toml brings."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    core = {_requirement_name(r) for r in project["dependencies"]}
+    extras = {_requirement_name(r) for reqs in project["optional-dependencies"].values() for r in reqs} - core
+    return sorted(
+        module
+        for module, dists in importlib.metadata.packages_distributions().items()
+        if {_requirement_name(d) for d in dists} & extras
+    )
+
+
+# Runs argv's socialzoo command with the extras' modules hidden, as after `pip install socialzoo`.
+CORE_INSTALL = """
+import sys
+blocked = set(sys.argv[1].split(","))
+class Hide:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in blocked:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, Hide())
+from socialzoo.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_a_core_install_runs_the_benchmark(tmp_path):
+    """Without the extras (torch, matplotlib, ...), the benchmark runs Ref and a shipped learned
+    policy with its progress bar: tqdm drew it, and tqdm was only in the extras."""
+    blocked = extra_only_modules()
+    assert {"torch", "matplotlib"} <= set(blocked) and "tqdm" not in blocked
+    argv = ["benchmark", "--policies", "ref,ppo", "--maps", "gdc1", "--trials", "1", "--workers", "1"]
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            CORE_INSTALL,
+            ",".join(blocked),
+            *argv,
+            "--no-figures",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "SOCIALZOO_PROGRESS": "bar", "PYTHONPATH": str(ROOT)},
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (tmp_path / "summary.csv").is_file()
