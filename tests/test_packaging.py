@@ -9,6 +9,7 @@ import sys
 import zipfile
 from pathlib import Path
 
+import pytest
 import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,27 +85,40 @@ sys.exit(main(sys.argv[2:]))
 """
 
 
+def core_install(*argv: str, cwd: Path) -> subprocess.CompletedProcess:
+    """`socialzoo ARGV` with the extras' modules hidden and the progress bar on."""
+    return subprocess.run(
+        [sys.executable, "-c", CORE_INSTALL, ",".join(extra_only_modules()), *argv],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env={**os.environ, "SOCIALZOO_PROGRESS": "bar", "PYTHONPATH": str(ROOT)},
+    )
+
+
 def test_a_core_install_runs_the_benchmark(tmp_path):
     """Without the extras (torch, matplotlib, ...), the benchmark runs Ref and a shipped learned
     policy with its progress bar: tqdm drew it, and tqdm was only in the extras."""
     blocked = extra_only_modules()
     assert {"torch", "matplotlib"} <= set(blocked) and "tqdm" not in blocked
     argv = ["benchmark", "--policies", "ref,ppo", "--maps", "gdc1", "--trials", "1", "--workers", "1"]
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            CORE_INSTALL,
-            ",".join(blocked),
-            *argv,
-            "--no-figures",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env={**os.environ, "SOCIALZOO_PROGRESS": "bar", "PYTHONPATH": str(ROOT)},
-    )
+    done = core_install(*argv, "--no-figures", "--out", str(tmp_path), cwd=tmp_path)
     assert done.returncode == 0, done.stderr[-2000:]
     assert (tmp_path / "summary.csv").is_file()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("benchmark", "--policies", "ref", "--maps", "gdc1", "--trials", "1"),
+        ("suite", "--policies", "ref", "--scenarios", "frontal_approach", "--seeds", "1"),
+    ],
+    ids=lambda argv: argv[0],
+)
+def test_figures_without_the_plot_extra_are_refused_before_the_run(tmp_path, argv):
+    """They ran every trial, then stopped with a traceback of `No module named 'matplotlib'`."""
+    done = core_install(*argv, "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr and "pip install 'socialzoo[plot]'" in done.stderr
+    assert ("--no-figures" in done.stderr) == (argv[0] == "benchmark")
+    assert not (tmp_path / "out" / "results.sqlite").exists()

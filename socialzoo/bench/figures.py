@@ -25,9 +25,16 @@ _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
 def pyplot() -> Any:
     """matplotlib.pyplot with the non-interactive Agg backend (matplotlib imported on first use).
 
-    matplotlib is the "plot" extra.
+    Raises:
+        ModuleNotFoundError: matplotlib, the "plot" extra, is not installed (the message says how
+            to install it).
     """
-    import matplotlib
+    try:
+        import matplotlib
+    except ModuleNotFoundError as err:
+        raise ModuleNotFoundError(
+            "the figures need matplotlib, the plot extra: pip install 'socialzoo[plot]'", name="matplotlib"
+        ) from err
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

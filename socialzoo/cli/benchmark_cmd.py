@@ -142,9 +142,15 @@ def register(subparsers: Any) -> None:
 def run_benchmark_command(args: argparse.Namespace) -> int:
     """Run `socialzoo benchmark`; returns the exit status."""
     from socialzoo.bench.experiment import BenchmarkConfig, quick_config, run_benchmark
+    from socialzoo.bench.figures import pyplot
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.tables import policy_label
 
+    if not args.no_figures:
+        try:  # before the trials, not after them
+            pyplot()
+        except ModuleNotFoundError as err:
+            return fail("benchmark", f"{err}, or pass --no-figures")
     ids = [m for m in args.maps or () if ENV_ID.fullmatch(m)]
     if ids:
         return run_task_ids(args, ids)
@@ -199,7 +205,9 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             "not of a task id (its config says who walks)",
         )
     try:
-        config = given(args, "max_steps") | task_config(args.task_config)  # a task without max_steps refuses it
+        config = given(args, "max_steps") | task_config(
+            args.task_config
+        )  # a task without max_steps refuses it
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())

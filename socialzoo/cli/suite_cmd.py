@@ -73,10 +73,15 @@ def register(subparsers: Any) -> None:
 
 def run_suite_command(args: argparse.Namespace) -> int:
     """Run `socialzoo suite`; returns the exit status (2 for a bad name or option)."""
+    from socialzoo.bench.figures import pyplot
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.suite import SuiteConfig, SuiteError, run_suite
     from socialzoo.bench.tables import interval_text, policy_labels
 
+    try:  # the heatmaps' library, before the episodes
+        pyplot()
+    except ModuleNotFoundError as err:
+        return fail("suite", err)
     chosen: dict[str, Any] = {
         "task": args.task,
         "seeds": args.seeds,
