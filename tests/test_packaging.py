@@ -6,6 +6,7 @@ import os
 import re
 import subprocess
 import sys
+import tarfile
 import zipfile
 from pathlib import Path
 
@@ -27,23 +28,18 @@ def test_every_subpackage_is_listed():
 
 
 def test_wheel_ships_the_maps(tmp_path):
-    """A non-editable install gets the maps inside the package (socialzoo/_maps/*.json)."""
+    """A non-editable install gets the maps inside the package (socialzoo/_maps/*.json): the wheel
+    built from the sdist, as `python -m build` makes it; the sdist holds no tests."""
+    build_sdist = "import sys; from setuptools import build_meta; build_meta.build_sdist(sys.argv[1])"
     subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "wheel",
-            str(ROOT),
-            "--no-deps",
-            "--no-build-isolation",
-            "-q",
-            "-w",
-            str(tmp_path),
-        ],
-        check=True,
-        capture_output=True,
+        [sys.executable, "-c", build_sdist, str(tmp_path)], check=True, capture_output=True, cwd=ROOT
     )
+    (sdist,) = tmp_path.glob("socialzoo-*.tar.gz")
+    with tarfile.open(sdist) as archive:
+        top = {Path(name).parts[1] for name in archive.getnames() if len(Path(name).parts) > 1}
+    assert {"socialzoo", "maps", "pyproject.toml", "LICENSE"} <= top and "tests" not in top
+    pip_wheel = [sys.executable, "-m", "pip", "wheel", str(sdist), "--no-deps", "--no-build-isolation", "-q"]
+    subprocess.run([*pip_wheel, "-w", str(tmp_path)], check=True, capture_output=True)
     (wheel,) = tmp_path.glob("socialzoo-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
     shipped = {p.name for p in (ROOT / "maps").glob("*.json")}
