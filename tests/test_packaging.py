@@ -118,3 +118,31 @@ def test_figures_without_the_plot_extra_are_refused_before_the_run(tmp_path, arg
     assert "Traceback" not in done.stderr and "pip install 'socialzoo[plot]'" in done.stderr
     assert ("--no-figures" in done.stderr) == (argv[0] == "benchmark")
     assert not (tmp_path / "out" / "results.sqlite").exists()
+
+
+def test_every_distribution_of_the_plot_train_and_ray_extras_names_its_extra():
+    from socialzoo.cli import EXTRA_MODULES
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    installed = importlib.metadata.packages_distributions()
+    for extra in ("plot", "train", "ray"):
+        for requirement in project["optional-dependencies"][extra]:
+            name = _requirement_name(requirement)
+            modules = [m for m, dists in installed.items() if name in {_requirement_name(d) for d in dists}]
+            if modules:  # installed here
+                assert any(EXTRA_MODULES.get(m) == extra for m in modules), (name, modules)
+
+
+@pytest.mark.parametrize(
+    ("argv", "extra"),
+    [
+        (["map", "show", "gdc1", "--out", "map.png"], "plot"),
+        (["train", "ppo", "--out", "ppo", "--total-steps", "2000"], "train"),
+    ],
+    ids=["map show", "train ppo"],
+)
+def test_a_command_that_needs_an_extra_names_it(tmp_path, argv, extra):
+    """They ended in a traceback of `No module named 'matplotlib'` (or 'torch')."""
+    done = core_install(*argv, cwd=tmp_path)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr and f"pip install 'socialzoo[{extra}]'" in done.stderr

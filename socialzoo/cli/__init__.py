@@ -58,6 +58,17 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
 }
 
+# The modules that only an extra of pyproject.toml brings (pillow comes with matplotlib and imageio) -> that
+# extra: a command that needs one says what to install instead of ending in a traceback.
+EXTRA_MODULES: dict[str, str] = {
+    **dict.fromkeys(("matplotlib", "imageio", "imageio_ffmpeg", "PIL"), "plot"),
+    **dict.fromkeys(
+        ("torch", "stable_baselines3", "supersuit", "torchrl", "tensordict", "tensorboard", "z3", "cma"),
+        "train",
+    ),
+    "ray": "ray",
+}
+
 # Former subcommands -> the command that took their place; naming one is a usage error (exit 2).
 MOVED: dict[str, str] = {"compare-humans": "humans compare", "select-humans": "humans select"}
 
@@ -123,4 +134,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(name)s: %(message)s"
     )
-    return int(args.func(args))
+    try:
+        return int(args.func(args))
+    except ModuleNotFoundError as err:
+        extra = EXTRA_MODULES.get((err.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        return fail(
+            args.command, f"this needs {err.name}, of the {extra} extra: pip install 'socialzoo[{extra}]'"
+        )
