@@ -205,9 +205,8 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             "not of a task id (its config says who walks)",
         )
     try:
-        config = given(args, "max_steps") | task_config(
-            args.task_config
-        )  # a task without max_steps refuses it
+        # --max-steps is a field of the task's config (a task without max_steps refuses it).
+        config = given(args, "max_steps") | task_config(args.task_config)
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())
