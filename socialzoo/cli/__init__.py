@@ -126,7 +126,8 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (2 for a usage or input error)."""
+    """Run the command line; returns the exit status (2 for a usage or input error, 130 when
+    interrupted by Ctrl-C: a line on stderr instead of a traceback, which --verbose keeps)."""
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(words)
     _refuse_moved(parser, words)
@@ -143,3 +144,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(
             args.command, f"this needs {err.name}, of the {extra} extra: pip install 'socialzoo[{extra}]'"
         )
+    except KeyboardInterrupt:
+        if args.verbose:
+            raise
+        # Ctrl-C is how a long run is stopped, not a failure: a line saying so (and, for a command that
+        # stores as it goes, how to continue), not the traceback of wherever the run happened to be.
+        hint = getattr(args, "on_interrupt", None)
+        print(f"socialzoo {args.command}: interrupted" + (f"; {hint}" if hint else ""), file=sys.stderr)
+        return INTERRUPTED
+
+
+# The exit status of a command stopped by Ctrl-C (SIGINT), as a shell reports it: 128 + 2.
+INTERRUPTED = 130

@@ -104,7 +104,10 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_task_config_argument(parser)
     parser.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.set_defaults(func=run_benchmark_command)
+    parser.set_defaults(
+        func=run_benchmark_command,
+        on_interrupt="the finished trials are kept in the results store: the same command resumes",
+    )
     return parser
 
 
@@ -129,7 +132,9 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--max-steps", type=positive_int, default=None, help="episode time limit override, steps"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.set_defaults(func=run_demos_command)
+    parser.set_defaults(
+        func=run_demos_command, on_interrupt="the finished chunks are kept: the same command resumes"
+    )
     return parser
 
 

@@ -70,7 +70,10 @@ def register(subparsers: Any) -> None:
         help="then copy the results, tables and figures into REPO/results/reproduction/ and write "
         "REPO/REPRODUCTION.md",
     )
-    parser.set_defaults(func=run_reproduce_command)
+    parser.set_defaults(
+        func=run_reproduce_command,
+        on_interrupt="the finished items are kept: the same command continues where it stopped",
+    )
 
 
 def _interrupt(signum: int, frame: Any) -> None:

@@ -161,3 +161,21 @@ def test_a_task_id_takes_max_steps_where_its_config_has_it(tmp_path, capsys):
 
     with ResultsStore(tmp_path / "a" / "results.sqlite") as store:
         assert [row["steps"] for row in store.rows()] == [3]  # the episode stopped at the override
+
+
+def test_an_interrupted_benchmark_ends_in_a_line_not_a_traceback(tmp_path, capsys, monkeypatch):
+    import socialzoo.bench.experiment as experiment
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(experiment, "run_benchmark", interrupted)
+    argv = ["benchmark", "--policies", "goalone", "--maps", "gdc1", "--trials", "2", "--out", str(tmp_path)]
+    assert socialzoo_main(argv) == 130
+    err = capsys.readouterr().err
+    assert err == (
+        "socialzoo benchmark: interrupted; the finished trials are kept in the results store: "
+        "the same command resumes\n"
+    )
+    with pytest.raises(KeyboardInterrupt):  # --verbose keeps the traceback
+        socialzoo_main(["-v", *argv])
