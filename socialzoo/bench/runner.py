@@ -552,10 +552,14 @@ def _drain(
     num_tasks: int,
     deliver: ResultSink,
 ) -> None:
-    """Deliver results from a queue until `expected` arrived; re-raise a failed task's error."""
-    got = 0
+    """Deliver results from a queue until `expected` distinct trials arrived; re-raise a failed task's error.
+
+    A trial may arrive twice: Ray runs a chunk again from its start when its worker dies (a task's
+    max_retries), so counting results instead of trials would stop before the rerun's new ones.
+    """
+    arrived: set[Trial] = set()
     idle_since: float | None = None
-    while got < expected:
+    while len(arrived) < expected:
         try:
             batch = get(0.1)
         except empty:
@@ -566,12 +570,12 @@ def _drain(
                 idle_since = idle_since or time.monotonic()
                 if time.monotonic() - idle_since > _DRAIN_TIMEOUT:
                     raise RuntimeError(
-                        f"workers finished but only {got} of {expected} results arrived"
+                        f"workers finished but only {len(arrived)} of {expected} results arrived"
                     ) from None
             continue
         idle_since = None
         deliver(batch)
-        got += len(batch)
+        arrived.update(r.trial for r in batch)
 
 
 # ---------------------------------------------------------------------------- Ray

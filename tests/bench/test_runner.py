@@ -11,7 +11,15 @@ import time
 
 import pytest
 
-from socialzoo.bench.runner import BatchedRunner, Trial, evaluate, make_spec, split_trials
+from socialzoo.bench.runner import (
+    BatchedRunner,
+    Trial,
+    TrialResult,
+    _drain,
+    evaluate,
+    make_spec,
+    split_trials,
+)
 from socialzoo.env.metrics import SUMMARY_KEYS
 from socialzoo.scenarios.generator import ScenarioConfig
 from socialzoo.scenarios.scenario_sets import TestSet
@@ -126,6 +134,22 @@ def test_ray_backend_equals_local(test_set, sequential):
         ray.shutdown()
     assert as_rows(results) == as_rows(sequential)
     assert len(got) == len(results)
+
+
+def test_a_chunk_run_again_delivers_every_trial(test_set):
+    """Ray reruns the chunk of a worker that died from its start: its first trials arrive twice, and
+    the drain waits for the trials still missing instead of stopping at as many results as trials."""
+    a, b, c = trials_for(3)[:3]
+    queue = [[a, b], [a], [b, c]]  # the chunk's first attempt gave a and b, then its rerun a, b, c
+    got = []
+
+    def get(timeout):
+        if not queue:
+            raise LookupError  # empty
+        return [TrialResult(t, "rooms", 0, {}) for t in queue.pop(0)]
+
+    _drain(3, get, LookupError, list, lambda task: None, 1, got.append)
+    assert [[r.trial for r in batch] for batch in got] == [[a, b], [a], [b, c]]
 
 
 def test_split_and_bad_input(test_set):
