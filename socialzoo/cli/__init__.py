@@ -8,6 +8,7 @@ import importlib
 import logging
 import sys
 from collections.abc import Sequence
+from concurrent.futures.process import BrokenProcessPool
 
 from socialzoo import __version__
 
@@ -127,7 +128,8 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for a usage or input error, 130 when
-    interrupted by Ctrl-C: a line on stderr instead of a traceback, which --verbose keeps)."""
+    interrupted by Ctrl-C, 1 when a worker process was killed: a line on stderr instead of a
+    traceback, which --verbose keeps)."""
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(words)
     _refuse_moved(parser, words)
@@ -144,14 +146,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(
             args.command, f"this needs {err.name}, of the {extra} extra: pip install 'socialzoo[{extra}]'"
         )
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, BrokenProcessPool) as err:
         if args.verbose:
             raise
-        # Ctrl-C is how a long run is stopped, not a failure: a line saying so (and, for a command that
-        # stores as it goes, how to continue), not the traceback of wherever the run happened to be.
-        hint = getattr(args, "on_interrupt", None)
-        print(f"socialzoo {args.command}: interrupted" + (f"; {hint}" if hint else ""), file=sys.stderr)
-        return INTERRUPTED
+        # A run stopped from outside, by Ctrl-C or by a worker process killed (a kill -9, the
+        # out-of-memory killer), is not a bug: a line saying so and, for a command that stores as it
+        # goes, how to continue, not the traceback of wherever the run happened to be.
+        hint = getattr(args, "resume_hint", None)
+        interrupted = isinstance(err, KeyboardInterrupt)
+        what = (
+            "interrupted" if interrupted else "error: a worker process was killed (the out-of-memory killer?)"
+        )
+        print(f"socialzoo {args.command}: {what}" + (f"; {hint}" if hint else ""), file=sys.stderr)
+        return INTERRUPTED if interrupted else 1
 
 
 # The exit status of a command stopped by Ctrl-C (SIGINT), as a shell reports it: 128 + 2.

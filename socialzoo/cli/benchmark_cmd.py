@@ -106,7 +106,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(
         func=run_benchmark_command,
-        on_interrupt="the finished trials are kept in the results store: the same command resumes",
+        resume_hint="the finished trials are kept in the results store: the same command resumes",
     )
     return parser
 
@@ -133,7 +133,7 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(
-        func=run_demos_command, on_interrupt="the finished chunks are kept: the same command resumes"
+        func=run_demos_command, resume_hint="the finished chunks are kept: the same command resumes"
     )
     return parser
 

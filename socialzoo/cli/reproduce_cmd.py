@@ -72,7 +72,7 @@ def register(subparsers: Any) -> None:
     )
     parser.set_defaults(
         func=run_reproduce_command,
-        on_interrupt="the finished items are kept: the same command continues where it stopped",
+        resume_hint="the finished items are kept: the same command continues where it stopped",
     )
 
 

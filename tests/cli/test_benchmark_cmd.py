@@ -179,3 +179,19 @@ def test_an_interrupted_benchmark_ends_in_a_line_not_a_traceback(tmp_path, capsy
     )
     with pytest.raises(KeyboardInterrupt):  # --verbose keeps the traceback
         socialzoo_main(["-v", *argv])
+
+
+def test_a_killed_worker_ends_the_benchmark_in_a_line(tmp_path, capsys, monkeypatch):
+    from concurrent.futures.process import BrokenProcessPool
+
+    import socialzoo.bench.experiment as experiment
+
+    def worker_killed(*args, **kwargs):
+        raise BrokenProcessPool("A process in the process pool was terminated abruptly")
+
+    monkeypatch.setattr(experiment, "run_benchmark", worker_killed)
+    argv = ["benchmark", "--policies", "goalone", "--maps", "gdc1", "--trials", "2", "--out", str(tmp_path)]
+    assert socialzoo_main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("socialzoo benchmark: error: a worker process was killed")
+    assert err.endswith("the same command resumes\n") and err.count("\n") == 1
