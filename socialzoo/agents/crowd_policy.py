@@ -104,8 +104,15 @@ class CrowdAttentionPolicy:
     @property
     def task_overrides(self) -> dict[str, Any]:
         """The task config it acts in: CrowdNav's discrete or continuous actions, as it was trained
-        (and the signals, for a policy trained with them)."""
-        return {"action": self.action_kind, **({"signals": True} if self.signals else {})}
+        (and the signals, for a policy trained with them; the world action frame, for one trained
+        with CrowdNav's world-frame velocities: its header's training.task.action_frame)."""
+        task = self.header.get("training", {}).get("task", {})
+        world = isinstance(task, dict) and task.get("action_frame") == "world"
+        return {
+            "action": self.action_kind,
+            **({"signals": True} if self.signals else {}),
+            **({"action_frame": "world"} if world else {}),
+        }
 
     @property
     def observation_size(self) -> int:

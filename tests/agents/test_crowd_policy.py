@@ -6,6 +6,7 @@ import json
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 from socialzoo.agents import SHIPPED_DIR, make_policy
 from socialzoo.env.policy_file import read_policy_file
@@ -58,3 +59,29 @@ def test_the_shipped_suite_policy_acts_on_the_suite_ids_observations_with_its_ru
             assert action.shape == (1,) and 0 <= action[0] < 81
             obs, *_ = env.step(int(action[0]))
         env.close()
+
+
+def test_a_policy_trained_in_the_world_frame_is_evaluated_in_it(tmp_path):
+    """A learner trained with action_frame="world" (CrowdNav's ActionXY) acts in the world frame in
+    `socialzoo crowdnav eval` as it does in training, not turned into the default goal frame."""
+    from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
+    from socialzoo.bench.crowd_eval import evaluate_crowd
+    from socialzoo.bench.task_benchmark import run_task_benchmark
+    from socialzoo.env.crowd_config import CrowdNavConfig
+
+    tensors, header = read_policy_file(SHIPPED_DIR / "crowdnav.safetensors", check_env_version=False)
+    header["training"]["task"]["action_frame"] = "world"
+    path = CrowdAttentionPolicy(tensors, header).save(tmp_path / "world.safetensors", tensors)
+    policy = CrowdAttentionPolicy.load(path)
+    assert policy.task_overrides == {"action": "discrete", "action_frame": "world"}
+    rows, _ = run_task_benchmark(
+        "socialzoo/CrowdNav-v1", [f"crowdnav:{path}"], tmp_path / "out", cases=4, figures=False
+    )
+    config = CrowdNavConfig(action="discrete", action_frame="world")
+    direct = evaluate_crowd(lambda obs, task: policy.act(obs), config, "test", 4).episodes
+    expected = float(np.mean([e["path_length"] for e in direct]))
+    goal_frame = evaluate_crowd(
+        lambda obs, task: policy.act(obs), config.replace(action_frame="goal"), "test", 4
+    )
+    assert rows[0]["path_length_mean"] == pytest.approx(expected)
+    assert expected != pytest.approx(float(np.mean([e["path_length"] for e in goal_frame.episodes])))
