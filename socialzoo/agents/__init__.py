@@ -194,7 +194,8 @@ def make_policy(
         ValueError: an unknown name (the message lists the known ones), a learned policy with
             neither a path nor a shipped file, or a file given to an engineered policy.
         PolicyTaskError: a policy of another task, or a learned policy whose observations are not
-            the size of the task's.
+            the size of the task's, or (a Task given) that was trained on another of its settings
+            (the policy's check_config: a CrowdNav learner's robot kinematics).
     """
     task_name = task if isinstance(task, str) else getattr(task, "name", None)
     others = sorted(k for k in POLICIES if policy_task(k) == task_name)
@@ -226,6 +227,9 @@ def make_policy(
     space = getattr(task, "observation_space", observation_space)
     if space is not None:
         _check_observation_size(name, policy, task_name, space)
+    config = getattr(task, "config", None)
+    if config is not None and hasattr(policy, "check_config"):  # what else it was trained for
+        policy.check_config(config)
     return policy
 
 

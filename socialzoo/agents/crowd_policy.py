@@ -114,6 +114,26 @@ class CrowdAttentionPolicy:
             **({"action_frame": "world"} if world else {}),
         }
 
+    def check_config(self, config: Any) -> None:
+        """Refuse a task config whose robot moves by other kinematics than the one it was trained on
+        (its header's training.task.robot.kinematics): a unicycle's (speed, turn) played as holonomic
+        velocities, or the reverse, has as many actions and runs without a word.
+
+        Raises:
+            PolicyTaskError: the two kinematics differ.
+        """
+        from socialzoo.agents import PolicyTaskError
+
+        robot = self.header.get("training", {}).get("task", {}).get("robot", {})
+        trained = robot.get("kinematics") if isinstance(robot, dict) else None
+        acting = getattr(getattr(config, "robot", None), "kinematics", None)
+        if trained and acting and trained != acting:
+            raise PolicyTaskError(
+                f"policy {self.name!r} was trained with a {trained} robot ({self.header.get('env_id')}), but this "
+                f"task's robot is {acting}: evaluate it on a task of its kinematics (e.g. --variant "
+                f"{'Unicycle' if trained == 'unicycle' else 'the default'})"
+            )
+
     @property
     def observation_size(self) -> int:
         """Length of the flat observation the policy reads."""

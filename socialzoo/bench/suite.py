@@ -353,13 +353,13 @@ def _suite_policy(
     from socialzoo.agents import make_policy
 
     try:
-        return make_policy(spec, task=probe.name, observation_space=probe.observation_space), False
+        return make_policy(spec, task=probe), False
     except ValueError as err:  # PolicyTaskError included
         if not getattr(probe.config, "signals", False):
             raise SuiteError(f"--task {task_name}: {err}") from None
         plain = _probe(task, scenario, {"signals": False})
         try:
-            return make_policy(spec, task=plain.name, observation_space=plain.observation_space), True
+            return make_policy(spec, task=plain), True
         except ValueError:
             raise SuiteError(f"--task {task_name}: {err}") from None
 

@@ -264,7 +264,7 @@ def run_task_benchmark(
     probe = task.make(1, **config)
     rows = []
     for spec in policies:
-        policy = make_policy(spec, task=probe.name, observation_space=probe.observation_space)
+        policy = make_policy(spec, task=probe)
         overrides = config | dict(getattr(policy, "task_overrides", {}) or {})
         episodes, played = evaluate_stored(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides

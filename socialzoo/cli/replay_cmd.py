@@ -167,8 +167,7 @@ def _replay_case(args: argparse.Namespace) -> int:
         raise ValueError(f"name the policies to play on {args.env} (--policy)")
     case = 0 if args.case is None else args.case
     # Every policy is built before any episode runs.
-    space = probe.observation_space
-    policies = [make_policy(s.name, task=probe.name, observation_space=space, **s.kwargs) for s in specs]
+    policies = [make_policy(s.name, task=probe, **s.kwargs) for s in specs]
     traces, task = [], probe
     for spec, policy in zip(specs, policies, strict=True):
         acting = {**overrides, **(getattr(policy, "task_overrides", {}) or {})}

@@ -85,3 +85,24 @@ def test_a_policy_trained_in_the_world_frame_is_evaluated_in_it(tmp_path):
     )
     assert rows[0]["path_length_mean"] == pytest.approx(expected)
     assert expected != pytest.approx(float(np.mean([e["path_length"] for e in goal_frame.episodes])))
+
+
+def test_a_policy_trained_with_other_kinematics_is_refused_by_name(tmp_path):
+    """A unicycle learner played on a holonomic task (81 actions either way) ran without a word."""
+    from socialzoo.agents import PolicyTaskError, make_policy
+    from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
+    from socialzoo.bench.task_benchmark import TaskId, run_task_benchmark
+
+    tensors, header = read_policy_file(SHIPPED_DIR / "crowdnav.safetensors", check_env_version=False)
+    header["training"]["task"]["robot"]["kinematics"] = "unicycle"
+    path = CrowdAttentionPolicy(tensors, header).save(tmp_path / "unicycle.safetensors", tensors)
+    holonomic = TaskId.of("socialzoo/CrowdNav-v1").make(1)
+    with pytest.raises(
+        PolicyTaskError, match=r"trained with a unicycle robot .* this task's robot is holonomic"
+    ):
+        make_policy(f"crowdnav:{path}", task=holonomic)
+    with pytest.raises(PolicyTaskError, match="unicycle"):
+        run_task_benchmark("socialzoo/CrowdNav-v1", [f"crowdnav:{path}"], tmp_path / "out", cases=1)
+    unicycle = TaskId.of("socialzoo/CrowdNav-v1").make(1, robot={"kinematics": "unicycle"})
+    assert make_policy(f"crowdnav:{path}", task=unicycle).check_config(unicycle.config) is None
+    make_policy("crowdnav", task=holonomic)  # the shipped learner, trained holonomic
