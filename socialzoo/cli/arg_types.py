@@ -55,6 +55,15 @@ def out_path(text: str) -> Path:
     return path
 
 
+def out_dir(text: str) -> Path:
+    """argparse type of an output folder (--out DIR): out_path, and not the name of an existing file
+    (the command would end in a FileExistsError traceback when it makes the folder)."""
+    path = out_path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: it is a file, not a folder")
+    return path
+
+
 def given(args: argparse.Namespace, *names: str) -> dict[str, Any]:
     """The options among `names` that the command line set (not None), by name (for --max-steps:
     the env overrides)."""

@@ -14,6 +14,7 @@ from socialzoo.cli.arg_types import (
     add_task_config_argument,
     comma_list,
     given,
+    out_dir,
     out_path,
     positive_int,
     split_commas,
@@ -94,7 +95,7 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="also record the humans' metrics (goal reach, collisions, distances, speed, path ratio) "
         "in humans.csv and humans.md",
     )
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument(
         "--quick",
         action="store_true",

@@ -13,7 +13,7 @@ import typing
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
-from socialzoo.cli.arg_types import out_path
+from socialzoo.cli.arg_types import out_dir
 
 
 def attribute_docs(cls: type) -> dict[str, str]:
@@ -58,7 +58,7 @@ def _optional(annotation: Any) -> tuple[Any, bool]:
 
 def _scalar_parser(annotation: Any, name: str) -> Any:
     if annotation is Path and name == "out":  # the run folder: checked before training starts
-        return out_path
+        return out_dir
     if annotation in (int, float, str, Path):
         return annotation
     if get_origin(annotation) in (dict, typing.Mapping) or annotation is dict:

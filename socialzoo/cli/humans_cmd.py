@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import count, given, out_path, positive_int, split_commas
+from socialzoo.cli.arg_types import count, given, out_dir, positive_int, split_commas
 from socialzoo.cli.people_cmd import add_report
 
 SCENES_HELP = (
@@ -52,7 +52,7 @@ def _add_compare(commands: Any) -> None:
         help="each map's validation scenarios (<map>-val), never a test set: for choosing settings",
     )
     _add_run_options(parser)
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument("--no-figures", action="store_true", help="skip comparison.png")
     parser.set_defaults(func=run_compare)
 
@@ -68,7 +68,7 @@ def _add_select(commands: Any) -> None:
         "selection.csv, selection.json and DIR/humans.safetensors (a copy of the chosen checkpoint).",
     )
     parser.add_argument("--run", type=Path, required=True, help="the training run folder")
-    parser.add_argument("--out", type=out_path, default=None, help="output folder (default RUN/selection)")
+    parser.add_argument("--out", type=out_dir, default=None, help="output folder (default RUN/selection)")
     parser.add_argument(
         "--trials", type=positive_int, default=100, help="validation scenarios per checkpoint"
     )
@@ -91,7 +91,7 @@ def _add_realism(commands: Any) -> None:
         default="cv,sf,orca,groups",
         help="comma-separated: cv, sf, orca, groups, learned:PATH, sf-eth-ucy, orca-eth-ucy",
     )
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
     parser.add_argument("--tracks", type=positive_int, default=None, help="persons per scene (default all)")
     parser.add_argument("--seed", type=count, default=0, help="seed of the persons' sample (default 0)")
@@ -112,7 +112,7 @@ def _add_calibrate(commands: Any) -> None:
     )
     parser.add_argument("--model", required=True, choices=("sf", "orca"), help="the model to fit")
     parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
     parser.add_argument(
         "--persons", type=positive_int, default=40, help="persons sampled per scene for the fit (default 40)"

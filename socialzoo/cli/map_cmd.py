@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import count, out_path, positive_float, positive_int
+from socialzoo.cli.arg_types import count, out_dir, out_path, positive_float, positive_int
 
 # A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
 VECTOR_MAP, NAVIGATION = ".vectormap.txt", ".navigation.json"
@@ -133,7 +133,7 @@ def register(subparsers: Any) -> None:
         help="folder of NAME.vectormap.txt [+ NAME.navigation.json] (default: the built-in buildings)",
     )  # fmt: skip
     drive.add_argument(
-        "--out", type=out_path, required=True, help="folder of the imported maps, test sets, pictures"
+        "--out", type=out_dir, required=True, help="folder of the imported maps, test sets, pictures"
     )
     drive.add_argument("--episodes", type=positive_int, default=30, help="episodes per building (default 30)")
     drive.add_argument("--batch-size", type=positive_int, default=30, help="episodes stepped together")

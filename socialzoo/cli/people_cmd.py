@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import fail
-from socialzoo.cli.arg_types import comma_list, out_path, positive_int
+from socialzoo.cli.arg_types import comma_list, out_dir, positive_int
 
 
 def shipped_humans() -> str:
@@ -50,7 +50,7 @@ def add_report(commands: Any) -> None:
     report.add_argument(
         "--seconds", type=float, default=60.0, help="how long the people walk, s (default 60)"
     )
-    report.add_argument("--out", type=out_path, required=True, help="output directory")
+    report.add_argument("--out", type=out_dir, required=True, help="output directory")
     report.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     report.set_defaults(func=run_report)
 

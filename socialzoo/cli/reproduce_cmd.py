@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import out_path
+from socialzoo.cli.arg_types import out_dir
 
 
 def register(subparsers: Any) -> None:
@@ -21,7 +21,7 @@ def register(subparsers: Any) -> None:
         "performance on gdc1-test and transfer on ghc3-test for the seven policies. Every item is "
         "stored as it finishes under DIR/<settings hash>/; a rerun continues where it stopped.",
     )
-    parser.add_argument("--out", type=out_path, required=True, help="output folder DIR")
+    parser.add_argument("--out", type=out_dir, required=True, help="output folder DIR")
     parser.add_argument("--quick", action="store_true", help="a small version of everything (minutes)")
     parser.add_argument(
         "--seeds",

@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import out_path, positive_int
+from socialzoo.cli.arg_types import out_dir, positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -21,7 +21,7 @@ def register(subparsers: Any) -> None:
         "as often as the reference. Writes DIR/steps_to_ref.json, .csv and .png/.pdf; a finished "
         "training run and stored trials are reused.",
     )
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument("--total-steps", type=positive_int, default=600_000, help="PPO training steps")
     parser.add_argument(
         "--checkpoint-every", type=positive_int, default=50_000, help="steps between checkpoints"

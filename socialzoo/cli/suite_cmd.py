@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_backend_arguments, comma_list, count, given, out_path, positive_int
+from socialzoo.cli.arg_types import add_backend_arguments, comma_list, count, given, out_dir, positive_int
 from socialzoo.cli.benchmark_cmd import _policy_specs
 
 # Comma-separated names, lower-cased.
@@ -52,7 +52,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--seeds", type=positive_int, default=30, help="cases per policy and scenario (default 30)"
     )
-    parser.add_argument("--out", type=out_path, required=True, help="output directory")
+    parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     add_backend_arguments(parser, "episodes")
     parser.add_argument(
         "--replays",

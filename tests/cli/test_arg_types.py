@@ -5,7 +5,7 @@ import argparse
 import pytest
 
 from socialzoo.cli import main
-from socialzoo.cli.arg_types import out_path
+from socialzoo.cli.arg_types import out_dir, out_path
 
 
 def test_out_path_takes_a_path_whose_folders_can_be_made(tmp_path):
@@ -49,6 +49,34 @@ def test_every_out_is_checked_before_the_command_runs(tmp_path, capsys, words):
     err = capsys.readouterr().err
     assert "argument --out: cannot write" in err and "is not a folder" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ("benchmark", "--trials", "1"),
+        ("suite",),
+        ("humans", "realism"),
+        ("humans", "calibrate", "--model", "sf"),
+        ("humans", "report"),
+        ("reproduce",),
+        ("train", "ppo"),
+        ("train", "people-bc"),
+    ],
+    ids=" ".join,
+)
+def test_an_out_folder_that_is_a_file_is_a_usage_error(tmp_path, capsys, words):
+    # A file named as the output folder passed out_path (its parent is a folder) and the command
+    # ended in a FileExistsError traceback when it made the folder, for train after its setup.
+    afile = tmp_path / "results"
+    afile.write_text("")
+    with pytest.raises(SystemExit) as exit_info:
+        main([*words, "--out", str(afile)])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --out: cannot write" in err and "it is a file, not a folder" in err
+    assert out_path(str(afile)) == afile  # a file output may replace a file
+    assert out_dir(str(tmp_path / "new")) == tmp_path / "new"
 
 
 @pytest.mark.parametrize(
