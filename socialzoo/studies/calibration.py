@@ -223,7 +223,7 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
     and every env takes them by name in its people spec.
     """
     from socialzoo.studies.realism import versions
-    from socialzoo.studies.realism_cases import load_tracks
+    from socialzoo.studies.realism_cases import OBS_FRAMES, PRED_FRAMES, load_tracks
 
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
@@ -237,17 +237,31 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
         s: _prepare(sc, sample_windows(sc, config.persons, config.windows, config.seed))
         for s, sc in scenes.items()
     }
+    held_samples = {
+        s: _prepare(
+            sc, sample_windows(sc, config.eval_persons, config.eval_windows, config.seed + _EVAL_STREAM)
+        )
+        for s, sc in scenes.items()
+        if config.folds
+    }
+    for what, samples, persons, option in (
+        ("fit", fit_samples, config.persons, "--persons"),
+        ("held-out", held_samples, config.eval_persons, "CalibrationConfig.eval_persons"),
+    ):
+        for s, sample in samples.items():
+            if not len(sample.cases):
+                raise ValueError(
+                    f"scene {scenes[s].name!r}: none of the {min(persons, len(scenes[s].first))} people of its "
+                    f"{what} sample has a 4.8 s window (seen {OBS_FRAMES + PRED_FRAMES} frames in a row), so it "
+                    f"would not count; sample more people ({option}) or leave the scene out"
+                )
     base = defaults(config.model)
     folds = []
     if config.folds:
         for held in config.scenes:
             train = [fit_samples[s] for s in config.scenes if s != held]
             values, train_ade, evals = fit(config, train, log, f"fold {held}")
-            scene = scenes[held]
-            held_sample = _prepare(
-                scene,
-                sample_windows(scene, config.eval_persons, config.eval_windows, config.seed + _EVAL_STREAM),
-            )
+            held_sample = held_samples[held]
             default_ade = mean_ade(config.model, base, [held_sample])
             fitted_ade = mean_ade(config.model, values, [held_sample])
             log(f"fold {held}: held-out ADE {default_ade:.4f} m default, {fitted_ade:.4f} m fitted")
