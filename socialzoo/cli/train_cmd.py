@@ -14,17 +14,20 @@ logger = logging.getLogger(__name__)
 
 def _input_errors() -> tuple[type[Exception], ...]:
     """The errors by which a trainer refuses its inputs (each names the input): a run folder holding
-    another run, an unreadable demonstration, policy, map or track file, a bad people spec."""
+    another run, an unreadable demonstration, policy, map or track file, a bad people spec, recorded
+    scenes with no people to clone."""
     from socialzoo.agents.demonstrations import DemonstrationError
     from socialzoo.data.fetch import UnknownSceneError
     from socialzoo.data.tracks import TrackFileError
     from socialzoo.env.policy_file import PolicyFileError
     from socialzoo.humans.models import PeopleSpecError
     from socialzoo.maps.map_file import MapError
+    from socialzoo.train.people_bc import PeopleDataError
     from socialzoo.train.run_dir import RunDirError
 
     return (
         RunDirError,
+        PeopleDataError,
         DemonstrationError,
         PolicyFileError,
         MapError,

@@ -24,6 +24,10 @@ logger = logging.getLogger(__name__)
 TRAINER = Trainer("people-bc", policy_file="people_bc.safetensors", inputs=("scenes",))
 
 
+class PeopleDataError(ValueError):
+    """Training scenes that give nothing to learn from (the message names them and says why)."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class Args:
     """Behaviour cloning of learned people on recorded ETH/UCY tracks.
@@ -182,9 +186,20 @@ def fit(run: TrainingRun) -> dict[str, Any]:
             "clipped": round(float(demos.clipped.mean()), 4) if len(demos) else 0.0,
         }
         logger.info("people-bc: %s: %d demonstrations", name, len(demos))
+    empty = [name for name, scene in per_scene.items() if not scene["demonstrations"]]
+    if empty:
+        raise PeopleDataError(
+            f"people-bc: no demonstration in {', '.join(empty)}: one needs a person seen on "
+            f"{args.label_frames + 2} frames in a row (--label-frames + 2), more than the waypoint radius "
+            "from its exit"
+        )
     train_set, val_set = Demonstrations.concatenate(train_parts), Demonstrations.concatenate(val_parts)
-    if len(train_set) == 0 or len(val_set) == 0:
-        raise ValueError(f"people-bc: no demonstrations to train on or validate with in {args.scenes}")
+    if len(train_set) == 0:
+        raise PeopleDataError(
+            f"people-bc: nothing left to train on in {', '.join(per_scene)}: the last of each scene's windows "
+            f"of {args.window} frames is held out for validation (--val-fraction), and no scene has a second; "
+            "pass a smaller --window"
+        )
     loc = train_set.obs.mean(0)
     scale = train_set.obs.std(0)
     scale = np.where(scale > 1e-6, scale, 1.0).astype(np.float32)

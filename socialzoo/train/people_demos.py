@@ -117,6 +117,8 @@ def demonstrations(
     steps = frame_steps(recording, world)
     speeds = mean_speeds(recording)
     rows = windows(recording.num_frames, window, label_frames)
+    if not rows:  # a recording of one frame: nobody moves
+        return _no_demonstrations(num_neighbours)
     built = [window_scenario(recording, a, b, speeds) for a, b in rows]
     scenarios = [s for s, _ in built]
     slots = max(s.num_humans for s in scenarios)
@@ -173,12 +175,14 @@ def demonstrations(
                     clipped[row, slot],
                 )
             )
-    if not out:
-        size = num_neighbours * 5 + 8
-        return Demonstrations(
-            np.zeros((0, size), np.float32),
-            np.zeros((0, 2), np.float32),
-            np.zeros(0, np.int64),
-            np.zeros(0, bool),
-        )
-    return Demonstrations.concatenate(out)
+    return Demonstrations.concatenate(out) if out else _no_demonstrations(num_neighbours)
+
+
+def _no_demonstrations(num_neighbours: int) -> Demonstrations:
+    """An empty set, its observations of the size num_neighbours gives."""
+    return Demonstrations(
+        np.zeros((0, num_neighbours * 5 + 8), np.float32),
+        np.zeros((0, 2), np.float32),
+        np.zeros(0, np.int64),
+        np.zeros(0, bool),
+    )

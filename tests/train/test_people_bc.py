@@ -253,3 +253,28 @@ def test_closed_loop_ade_of_a_policy_that_stops(tmp_path):
     speed = np.array([np.hypot(*np.diff(rec.tracks[k].positions[:2], axis=0)[0]) / rec.dt for k, _ in cases])
     np.testing.assert_allclose(ade, speed * lag.mean(), atol=0.01)
     assert (ade > 0.3).all()
+
+
+def test_scenes_with_nothing_to_clone_are_named(tmp_path, monkeypatch, capsys):
+    # A scene of one frame ended in "max() arg is an empty sequence"; a scene too short for a
+    # second window of --window frames (all its demonstrations held out for validation) and a
+    # scene without demonstrations were a ValueError traceback out of `socialzoo train people-bc`.
+    from socialzoo.cli import main
+
+    one_frame = Recording(
+        "still", 0.4, 1, (Track(person=1, first_frame=0, positions=np.zeros((1, 2))),), "test"
+    )
+    assert len(demonstrations(one_frame)) == 0
+    scenes = {"eth": _recording(), "hotel": one_frame}
+    monkeypatch.setattr("socialzoo.data.fetch.load_scene", lambda name, cache=None: scenes[name])
+    tiny = ["--max-epochs", "1", "--hidden", "8", "--no-progress"]
+    for names, window, says in (
+        ("eth,hotel", "8", "no demonstration in still: one needs a person seen on 7 frames in a row"),
+        ("eth", "40", "nothing left to train on in straight: the last of each scene's windows of 40 frames"),
+    ):
+        out = tmp_path / f"run{window}"
+        assert (
+            main(["train", "people-bc", "--scenes", names, "--window", window, "--out", str(out), *tiny]) == 2
+        )
+        err = capsys.readouterr().err
+        assert says in err and "Traceback" not in err
