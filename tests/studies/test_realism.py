@@ -78,6 +78,18 @@ def test_a_model_person_avoids_a_replayed_one_coming_at_it():
     assert orca.metrics["contact_rate"] == 0.0
 
 
+def test_the_distributions_compare_the_frames_the_model_walks():
+    # Two people pass each other 1 m apart; a model's person walks its track exactly and leaves 1.2 m
+    # before its exit. The recorded speeds and nearest-neighbour distances of its last frames, which
+    # the model never walks, counted against it: NN W1 1.18 m for a perfect walk.
+    rec = _walkers(frames=10, lanes=((0.0, 0.0, 1.0, 0.0), (10.0, 1.0, -1.0, 0.0)), start=(0, 0))
+    scene = SceneTracks.of(rec)
+    result = evaluate_model(scene, window_cases(scene), track_cases(scene), model_spec("orca"))
+    assert result.metrics["track_ade"] == pytest.approx(0.0, abs=1e-6)
+    assert result.metrics["nn_w1"] == pytest.approx(0.0, abs=1e-6)
+    assert result.metrics["speed_w1"] == pytest.approx(0.0, abs=1e-6)
+
+
 def test_everyone_seen_during_a_case_replays_beside_the_subject():
     # The subject walks frames 0..29; a walker 1 m beside it enters at frame 10. It is seen during
     # the subject's track case, so it replays there (it was left out: only people present on every
