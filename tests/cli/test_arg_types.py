@@ -22,6 +22,16 @@ def test_out_path_names_the_file_in_its_way(tmp_path):
         out_path(str(blocker / "run" / "x.csv"))
 
 
+def _refused_out(capsys, words, out):
+    """The usage error (exit 2) of `socialzoo WORDS --out OUT`, whose --out cannot be written."""
+    with pytest.raises(SystemExit) as exit_info:
+        main([*words, "--out", str(out)])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --out: cannot write" in err
+    return err
+
+
 @pytest.mark.parametrize(
     "words",
     [
@@ -43,12 +53,8 @@ def test_every_out_is_checked_before_the_command_runs(tmp_path, capsys, words):
     # the episode had run.
     blocker = tmp_path / "afile"
     blocker.write_text("")
-    with pytest.raises(SystemExit) as exit_info:
-        main([*words, "--out", str(blocker / "out")])
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err
-    assert "argument --out: cannot write" in err and "is not a folder" in err
-    assert "Traceback" not in err
+    err = _refused_out(capsys, words, blocker / "out")
+    assert "is not a folder" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize(
@@ -70,11 +76,7 @@ def test_an_out_folder_that_is_a_file_is_a_usage_error(tmp_path, capsys, words):
     # ended in a FileExistsError traceback when it made the folder, for train after its setup.
     afile = tmp_path / "results"
     afile.write_text("")
-    with pytest.raises(SystemExit) as exit_info:
-        main([*words, "--out", str(afile)])
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err
-    assert "argument --out: cannot write" in err and "it is a file, not a folder" in err
+    assert "it is a file, not a folder" in _refused_out(capsys, words, afile)
     assert out_path(str(afile)) == afile  # a file output may replace a file
     assert out_dir(str(tmp_path / "new")) == tmp_path / "new"
 
