@@ -55,8 +55,12 @@ def _policy_ticks(ax: Any, policies: list[str]) -> None:
     label holds its file name: "PPO (final_model.safetensors)" overran its neighbours)."""
     ax.set_xticks(range(len(policies)))
     ax.set_xlim(-0.5, len(policies) - 0.5)  # every group's slot, with or without bars
-    labels = policy_labels(policies).values()
-    ax.set_xticklabels([textwrap.fill(label, _TICK_CHARS, break_on_hyphens=False) for label in labels])
+    ax.set_xticklabels([_wrapped(label) for label in policy_labels(policies).values()])
+
+
+def _wrapped(label: str) -> str:
+    """A policy's label in lines of at most _TICK_CHARS characters."""
+    return textwrap.fill(label, _TICK_CHARS, break_on_hyphens=False)
 
 
 def _map_label(map_name: str) -> str:
@@ -158,8 +162,10 @@ def plot_metrics(
     training and transfer maps side by side, with 90% Student-t intervals; returns the files written."""
     plt = pyplot()
     policies, maps, by_key = _layout(summary)
-    # A panel is wide enough for its policy groups' labels (about 1.5 inches each).
-    panel = max(4.2, 1.5 * len(policies) + 0.6)
+    # A panel is wide enough for its policy groups' wrapped labels (about 0.08 inches a character at
+    # the ticks' size): as wide as ever for short names, wider for learned policies' file names.
+    lines = [line for label in policy_labels(policies).values() for line in _wrapped(label).split("\n")]
+    panel = max(4.2, len(policies) * (0.08 * max(map(len, lines), default=0) + 0.25) + 0.6)
     fig, axes = plt.subplots(1, len(METRIC_PANELS), figsize=(panel * len(METRIC_PANELS), 3.4))
     for ax, (name, label) in zip(axes, METRIC_PANELS, strict=True):
         _bars(ax, policies, maps, by_key, f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high")
