@@ -120,9 +120,8 @@ class EnvConfig:
     planner: LocalPlannerConfig = field(default_factory=LocalPlannerConfig)
     metrics: MetricsConfig = field(default_factory=MetricsConfig)
     human_reward: HumanRewardConfig = field(default_factory=HumanRewardConfig)
-    people: PeopleConfig = field(
-        default_factory=PeopleConfig
-    )  # or a people spec string: PeopleConfig(models=...)
+    # Or a people spec string, taken as PeopleConfig(models=...).
+    people: PeopleConfig = field(default_factory=PeopleConfig)
     quirks: ReferenceQuirks = field(default_factory=ReferenceQuirks)
 
     def __post_init__(self) -> None:
