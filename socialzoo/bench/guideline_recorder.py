@@ -24,7 +24,8 @@ class EpisodeFrame:
         robot_radius: the robot's disc for the gaps, m (a box footprint: its circumscribed circle).
         people_radius: m.
         goal_radius: the goal is reached within this centre distance, m.
-        time_limit: s, or None.
+        time_limit: s, or None: the timeout rule of a recorder that is not told which episodes the
+            task's time limit ended (GuidelineRecorder.record without `truncated`).
     """
 
     dt: float
@@ -75,6 +76,8 @@ class GuidelineRecorder:
         self.start = np.zeros(b, dtype=np.int64)  # each row's sample 0, global index
         self.goal = np.zeros((b, 2))
         self.shortest = np.full(b, np.nan)
+        # Each row's episode was ended by the task's time limit (TaskStep.truncated), once record is told.
+        self.truncated: np.ndarray | None = None
 
     def reset(self, rows: np.ndarray, task: Any) -> None:
         """Rows whose episodes start now (their state just reset): their sample 0 is the current state."""
@@ -91,13 +94,23 @@ class GuidelineRecorder:
             latest[key][rows] = value[rows]
         state = core.state
         self.goal[rows] = state.robot_goal[rows, 0, :2]
+        if self.truncated is not None:
+            self.truncated[rows] = False
         route = core.route_left[rows, 0] if core.navigator is not None else None
         straight = np.hypot(*(state.robot_goal[rows, 0, :2] - state.robot_pose[rows, 0, :2]).T)
         self.shortest[rows] = straight if route is None else np.maximum(route, straight)
 
-    def record(self, task: Any) -> None:
-        """Take a sample of every row after a step."""
+    def record(self, task: Any, truncated: np.ndarray | None = None) -> None:
+        """Take a sample of every row after a step; `truncated` (B, R): the step's TaskStep.truncated.
+
+        Given, an episode times out (gl_timeout) when the task's own time limit ended it, however the
+        task applies it (CrowdNav ends an episode at the step starting 1 s before its time limit; a
+        recorded scene has its own budget); without it, when it lasted the frame's time_limit."""
         self.samples.append(self._sample(task.core))
+        if truncated is not None:
+            if self.truncated is None:
+                self.truncated = np.zeros(len(self.start), dtype=bool)
+            self.truncated |= np.asarray(truncated, dtype=bool).reshape(len(self.start), -1)[:, 0]
 
     def _sample(self, core: Any) -> dict[str, np.ndarray]:
         s: WorldState = core.state
@@ -144,7 +157,10 @@ class GuidelineRecorder:
             goal_radius=f.goal_radius,
             people_radius=f.people_radius,
             shortest_path=self.shortest[rows],
-            time_limit=f.time_limit,
+            # The task's time limit as it applied it: the end of the episodes it truncated, else none.
+            time_limit=f.time_limit
+            if self.truncated is None
+            else np.where(self.truncated[rows], f.dt * (lengths - 1), np.inf),
             **fields,
         )
         found = guideline_metrics(traj, self.params)
@@ -166,6 +182,7 @@ class GuidelineRecorder:
         out.samples = [{key: value[live] for key, value in s.items()} for s in self.samples]
         out.first = self.first
         out.start, out.goal, out.shortest = self.start[live], self.goal[live], self.shortest[live]
+        out.truncated = None if self.truncated is None else self.truncated[live]
         return out
 
 

@@ -129,3 +129,19 @@ def test_the_runner_adds_table_one_to_every_episode_whatever_the_batch():
         # Table I's success agrees with the task's own when nothing collided.
         if a["gl_collisions"] == 0 and not a["gl_timeout"]:
             assert bool(a["gl_success"]) == bool(a["success"])
+
+
+def test_table_one_times_out_where_the_task_s_own_time_limit_ended_the_episode():
+    # CrowdNav ends an episode at the step starting 1 s before its time limit (4.25 s of a 5 s limit
+    # here): Table I's timeout is the task's, not "the episode lasted 5 s", which it never does.
+    from socialzoo.env.crowd_config import CrowdNavConfig
+
+    def stand_still(obs, task):
+        return np.zeros((len(obs), 2), dtype=np.float32)
+
+    config = CrowdNavConfig.variant("").replace(observation="flat", time_limit=5.0)
+    (episode,) = play_cases(
+        "crowdnav", stand_still, "val", [0], batch_size=1, config=config, guideline_metrics=True
+    )
+    assert episode["timeout"] == 1.0 and episode["steps"] == 17
+    assert episode["gl_timeout"] and not episode["gl_success"] and episode["gl_collisions"] == 0
