@@ -357,7 +357,8 @@ _ENTRIES: tuple[Metric, ...] = (
         better="lower",
         sources=_AS,
         description="Total rotation of the robot minus the rotation needed to face the goal from "
-        "the start, floored at 0 (Guzzi et al. 2013).",
+        "the start, floored at 0: Guzzi et al. 2013's unnecessary turning, not divided by the path length "
+        "as their path irregularity (rad/m) is; divide by distance_travelled for theirs.",
     ),
     _float(
         name="path_length_ratio",

@@ -145,7 +145,8 @@ class EpisodeMetrics:
       the centre because the collision distance is already 0.4 m between centres, where a
       centre-based 0.45 m zone would only count near-hits.
     - path_irregularity: Guzzi et al. 2013, as listed by Gao and Huang 2022 and Francis et al.
-      2023: "the amount of rotation that is not needed to reach the goal".
+      2023: "the amount of rotation that is not needed to reach the goal", in rad; Guzzi et al.
+      divide it by the path length (rad/m), which distance_travelled gives.
     - stuck: the Halt action, or Follow and Pass without a target, pause the clock. Progress is
       the route length left (the distance to the global plan plus the plan's length from there to
       the goal, socialzoo.nav.navigator.Navigator.route_left; the straight distance to the goal
