@@ -243,7 +243,10 @@ _ENTRIES: tuple[Metric, ...] = (
         better="lower",
         sources=_CN,
         description="Share of the episode's steps with a person's boundary within discomfort_dist "
-        "of the robot's, a collision step included (CrowdNav++'s intrusion, on the real positions).",
+        "(0.2 m) of the robot's during the step, a collision step included: CrowdNav's danger zone on the "
+        "people's present positions. CrowdNav++'s intrusion ratio differs: there a step intrudes when the "
+        "robot's centre is within the radii's sum of a person's true positions over the next 5 steps, "
+        "and the episode's last step never counts.",
     ),
     _float(
         name="return",

@@ -254,9 +254,10 @@ class CrowdNavMetrics:
     and steps; discomfort_frequency (share of the episode's steps in discomfort, CrowdNav's
     "frequency of being in danger"); min_separation (smallest boundary distance of the episode,
     m); intrusion_ratio (share of steps with a person's boundary within discomfort_dist of the
-    robot's, a collision step included: CrowdNav++'s intrusion, measured on the real rather than
-    predicted positions); return and discounted_return (gamma ** (t * dt * v_pref) per step t, as
-    CrowdNav's total reward); mean_force and mean_blame, the benchmark's social force and blame
+    robot's, a collision step included: CrowdNav's danger zone on the present positions, not
+    CrowdNav++'s intrusion, which tests the people's true positions over the next 5 steps);
+    return and discounted_return (gamma ** (t * dt * v_pref) per step t, as CrowdNav's total
+    reward); mean_force and mean_blame, the benchmark's social force and blame
     terms (SPEC section 9, socialzoo.env.reward) averaged over the episode's steps, so the task's
     policies compare with the Social Action Selection policies.
     """

@@ -87,3 +87,21 @@ def test_judgement_follows_crowdnavs_order_and_reward():
     assert (
         math.isnan(rows[1]["navigation_time"]) and rows[1]["collision"] == 1.0 and rows[0]["timeout"] == 1.0
     )
+
+
+def test_an_episode_s_danger_and_intrusion_counts_worked_by_hand():
+    # Three steps: clear (0.5 m), in the danger zone (0.1 m), a collision (-0.05 m). CrowdNav counts
+    # the middle one as danger; the intrusion ratio counts the collision step too.
+    cfg = CrowdRewardConfig()
+    metrics = CrowdNavMetrics(1, 0.25, 1.0, cfg)
+    for k, gap in enumerate((0.5, 0.1, -0.05)):
+        out = judge_step(np.array([gap]), np.array([5.0]), 0.3, np.array([0.25 * k]), 25.0, cfg, 0.25)
+        metrics.update(out, moved=np.array([0.25]))
+    (row,) = metrics.summaries(np.array([0]), out)
+    assert row["collision"] == 1.0 and row["steps"] == 3 and row["discomfort_steps"] == 1
+    assert row["discomfort_frequency"] == 1 / 3 and row["intrusion_ratio"] == 2 / 3
+    assert row["min_separation"] == -0.05 and row["path_length"] == 0.75
+    danger = (0.1 - 0.2) * 0.5 * 0.25
+    assert math.isclose(row["return"], danger - 0.25)
+    # CrowdNav's total reward: gamma ** (t dt v_pref) r_t, t counted from 0.
+    assert math.isclose(row["discounted_return"], 0.9**0.25 * danger + 0.9**0.5 * -0.25)
