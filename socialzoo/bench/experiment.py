@@ -22,6 +22,7 @@ from socialzoo.bench.tables import (
     PAPER_LAYOUT,
     TableLayout,
     policy_label,
+    remove_outputs,
     summarize,
     write_tables,
     write_text_atomic,
@@ -495,10 +496,12 @@ def run_benchmark(
             out,
             title=f"Humans ({config.humans}) in the {_title(config, counts)}",
         )
-    if figures:
-        from socialzoo.bench.figures import plot_summary
+    from socialzoo.bench.figures import FIGURE_FORMATS, SUMMARY_FIGURES, plot_summary
 
+    if figures:
         files += plot_summary(summary, out)
+    else:  # an older run's figures would not match these tables
+        remove_outputs(out, SUMMARY_FIGURES, FIGURE_FORMATS)
     if config.gif:
         first = config.maps[0]
         files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))

@@ -13,6 +13,8 @@ from socialzoo.bench.tables import FAILURE_LABELS, MAP_ROLES, paper_success, pol
 from socialzoo.core.metrics import axis_label, registered
 
 FIGURE_FORMATS = ("png", "pdf")
+# The figures plot_summary draws: a run that draws none removes an older run's (remove_outputs).
+SUMMARY_FIGURES = ("success", "failures", "metrics")
 # Panels of the metrics figure: (metric, axis label), the labels from the metric registry.
 METRIC_PANELS: tuple[tuple[str, str], ...] = tuple(
     (name, axis_label(name)) for name in registered("mean_force", "mean_blame", "time_to_goal")

@@ -471,12 +471,14 @@ def run_suite(
         CONFIG_FILE,
         HEATMAPS_DIR,
         PAGE_FILE,
+        TABLES_DIR,
         plot_heatmap,
         write_suite_page,
         write_suite_tables,
     )
-    from socialzoo.bench.tables import write_text_atomic
+    from socialzoo.bench.tables import remove_outputs, write_text_atomic
     from socialzoo.bench.task_benchmark import evaluate_stored, summarize, table_entry
+    from socialzoo.core.metrics import names as metric_names
 
     start = time.perf_counter()
     units, notes = plan_suite(config)
@@ -526,6 +528,10 @@ def run_suite(
     files = [store_path]
     files += write_suite_tables(result, out)
     files += [plot_heatmap(result, name, out / HEATMAPS_DIR) for name in result.metrics]
+    # An older run's tables and heatmaps of metrics this one left out (another --metrics).
+    stale = [name for name in metric_names() if name not in result.metrics]
+    remove_outputs(out / TABLES_DIR, stale, ("csv", "md"))
+    remove_outputs(out / HEATMAPS_DIR, stale, ("png",))
     result.replays = write_replays(units, episodes_of, out, config.replays, say)
     result.notes += [
         f"the replay {r.path} did not end as its stored episode (the code changed since it was stored?)"

@@ -336,6 +336,16 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return path
 
 
+def remove_outputs(folder: str | Path, stems: Iterable[str], suffixes: Sequence[str]) -> None:
+    """Delete folder/STEM.SUFFIX for each stem and suffix where present: the files a writer owns
+    but did not write this run (a figure skipped by --no-figures, a metric left out of --metrics),
+    so that its folder never shows an older run's output beside this run's tables. Only the named
+    files are touched, never anything else in the folder."""
+    for stem in stems:
+        for suffix in suffixes:
+            (Path(folder) / f"{stem}.{suffix}").unlink(missing_ok=True)
+
+
 class SummaryError(ValueError):
     """A summary.csv that cannot be read back: not UTF-8 CSV, without the summary's key columns,
     or with a row of the wrong width or a cell that is not a number; the message names the file."""

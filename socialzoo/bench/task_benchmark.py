@@ -255,7 +255,7 @@ def run_task_benchmark(
             of another task; an unusable store.
     """
     from socialzoo.agents import make_policy
-    from socialzoo.bench.tables import task_layout, write_tables
+    from socialzoo.bench.tables import remove_outputs, task_layout, write_tables
 
     task = TaskId.of(env_id)
     out = Path(out)
@@ -281,8 +281,10 @@ def run_task_benchmark(
             say(line)
     title = f"{env_id}{''.join(f', {k}={v}' for k, v in config.items())}, {split} cases ({probe.name} task)"
     files = write_tables(rows, out, name=probe.name, title=title, layout=task_layout(rows))
-    if figures and all("success_rate" in r for r in rows):
-        from socialzoo.bench.figures import plot_success
+    from socialzoo.bench.figures import FIGURE_FORMATS, plot_success
 
+    if figures and all("success_rate" in r for r in rows):
         files += plot_success(rows, out, interval="95% CI")
+    else:  # an older run's figure would not match these tables
+        remove_outputs(out, ["success"], FIGURE_FORMATS)
     return rows, files

@@ -103,7 +103,11 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         "plus one Ref episode GIF",
     )
     add_task_config_argument(parser)
-    parser.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
+    parser.add_argument(
+        "--no-figures",
+        action="store_true",
+        help="skip the figures, removing those an earlier run drew into --out (no matplotlib needed)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(
         func=run_benchmark_command,

@@ -13,7 +13,7 @@ import numpy as np
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, write_csv, write_text_atomic
+from socialzoo.bench.tables import policy_label, remove_outputs, write_csv, write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario_sets import TestSet
@@ -197,6 +197,8 @@ def crowd_matrix(
     files.append(write_text_atomic(out / "matrix.json", json.dumps(rows, indent=1, default=float) + "\n"))
     if figures:
         files.append(plot_matrix(rows, config, out / "matrix.png"))
+    else:  # an older run's heatmaps would not match these tables
+        remove_outputs(out, ["matrix"], ["png"])
     return Matrix(out, rows, files)
 
 

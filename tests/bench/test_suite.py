@@ -209,6 +209,11 @@ def test_run_stores_resumes_and_equals_the_task_benchmarks_episodes(tmp_path):
     # More seeds play only the new cases.
     more = run_suite(SuiteConfig(**{**config.to_json(), "seeds": 3}), tmp_path / "suite")
     assert (more.played, more.reused) == (4, 8)
+    # Another --metrics: the tables and heatmap of the metric left out go; the user's own files stay.
+    (tmp_path / "suite" / "heatmaps" / "notes.png").write_bytes(b"mine")
+    run_suite(SuiteConfig(**{**config.to_json(), "seeds": 3, "metrics": ("success",)}), tmp_path / "suite")
+    assert sorted(p.name for p in (tmp_path / "suite" / "heatmaps").iterdir()) == ["notes.png", "success.png"]
+    assert sorted(p.name for p in (tmp_path / "suite" / "tables").iterdir()) == ["success.csv", "success.md"]
 
 
 def test_replays_are_the_failures_first_then_successes_in_case_order():

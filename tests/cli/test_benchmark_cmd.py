@@ -45,9 +45,15 @@ def test_benchmark_end_to_end(tmp_path, capsys):
     assert config["benchmark"]["env_overrides"] == {"max_steps": 80}
     assert len(config["test_sets"]["gdc1-quick"]["seeds"]) == 4
     assert config["package_version"]
-    # Run again: everything is read back from the store.
+    # Run again: everything is read back from the store. Without figures, the older run's figures
+    # go (they would not match the new tables); the user's own files in the folder stay.
+    (out / "notes.png").write_bytes(b"mine")
     assert socialzoo_main([*argv[:-1], "--no-figures", "--no-progress"]) == 0
     assert f"0 trials run, {trials} read from the store" in capsys.readouterr().out
+    assert not {f"{s}.{f}" for s in ("success", "failures", "metrics") for f in ("png", "pdf")} & {
+        p.name for p in out.iterdir()
+    }
+    assert (out / "notes.png").read_bytes() == b"mine"
 
 
 def test_benchmark_bad_names(tmp_path, capsys):

@@ -115,6 +115,9 @@ def test_socialzoo_benchmark_runs_the_registered_id_with_tables_and_a_figure(tmp
     assert (
         main(args) == 0 and "0 episodes played, 6 read from the store" in capsys.readouterr().out
     )  # read back
+    # A rerun without figures removes the older run's figure (it would not match the new tables).
+    assert main([*args, "--trials", "3", "--no-figures"]) == 0
+    assert not (tmp_path / "success.png").exists() and not (tmp_path / "success.pdf").exists()
     assert main([*args[:4], "ref", *args[5:]]) == 2
     assert "acts in task 'action_selection', not 'toy_reach'" in capsys.readouterr().err
 

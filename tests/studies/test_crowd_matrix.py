@@ -59,9 +59,11 @@ def test_matrix_runs_every_policy_among_every_crowd_model(rooms, tmp_path):
         "react_radius": 1.5,
         "react_time": 2.0,
     }
-    # A rerun reads every trial back.
+    # A rerun reads every trial back; without figures it removes an older run's heatmaps.
+    (tmp_path / "matrix.png").write_bytes(b"an older run's")
     again = crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
     assert again.rows == result.rows
+    assert not (tmp_path / "matrix.png").exists()
 
 
 def test_matrix_labels_and_bad_configs(tmp_path):
