@@ -579,6 +579,51 @@ def _drain(
 
 
 # ---------------------------------------------------------------------------- Ray
+class RayAddressError(ValueError):
+    """A Ray cluster address that nothing answers at; the message names the address."""
+
+
+# Seconds to wait for a Ray address to accept a connection: a cluster answers in milliseconds,
+# while ray.init waits on an unreachable one for minutes before it gives up.
+RAY_CONNECT_TIMEOUT = 5.0
+# The port Ray listens on when an address names none: the client server's, else the GCS's.
+_RAY_PORTS = {"ray": 10001, "": 6379}
+
+
+def check_ray_address(address: str | None, timeout: float = RAY_CONNECT_TIMEOUT) -> None:
+    """Check that a Ray cluster's HOST:PORT or ray://HOST[:PORT] accepts a TCP connection within
+    `timeout` seconds, before ray.init waits minutes on an address nothing answers at. None, "auto",
+    "local" and other schemes (resolved by Ray itself) are left to ray.init.
+
+    Raises:
+        RayAddressError: the host is unknown, or refuses or does not answer a connection on the port.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    if not address or address.lower() in ("auto", "local"):
+        return
+    scheme, sep, rest = address.partition("://")
+    if not sep:
+        scheme, rest = "", address
+    elif scheme.lower() != "ray":
+        return
+    try:
+        parts = urlsplit(f"//{rest}")
+        host, port = parts.hostname, parts.port or _RAY_PORTS[scheme.lower()]
+    except ValueError as err:
+        raise RayAddressError(f"Ray address {address!r}: {err}") from None
+    if not host:
+        raise RayAddressError(f"Ray address {address!r} names no host (HOST:PORT or ray://HOST:PORT)")
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as err:
+        reason = f"no answer within {timeout:g} s" if isinstance(err, TimeoutError) else err.strerror or err
+        raise RayAddressError(
+            f"cannot reach the Ray cluster at {address!r} ({host}:{port}: {reason})"
+        ) from None
+
+
 def start_local_ray(num_cpus: int) -> None:
     """ray.init of a local Ray with num_cpus CPUs whose workers run at the usual priority.
 
@@ -605,6 +650,7 @@ def _evaluate_ray(
     started = False
     if not ray.is_initialized():
         if address:
+            check_ray_address(address)
             ray.init(address=address, logging_level=logging.WARNING)
         else:
             start_local_ray(workers or 2)
@@ -669,6 +715,7 @@ def evaluate(
     Raises:
         ValueError: an unknown backend, a bad worker count, or a trial the spec does not know;
             any exception of a worker.
+        RayAddressError: a Ray address nothing answers at (a ValueError; within seconds).
     """
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")

@@ -74,6 +74,7 @@ def register(subparsers: Any) -> None:
 def run_suite_command(args: argparse.Namespace) -> int:
     """Run `socialzoo suite`; returns the exit status (2 for a bad name or option)."""
     from socialzoo.bench.figures import pyplot
+    from socialzoo.bench.runner import RayAddressError
     from socialzoo.bench.store import StoreError
     from socialzoo.bench.suite import SuiteConfig, SuiteError, run_suite
     from socialzoo.bench.tables import interval_text, policy_labels
@@ -95,7 +96,7 @@ def run_suite_command(args: argparse.Namespace) -> int:
     try:
         config = SuiteConfig(**chosen)
         result = run_suite(config, args.out, progress=not args.no_progress, say=print)
-    except (SuiteError, StoreError) as err:
+    except (SuiteError, StoreError, RayAddressError) as err:
         return fail("suite", err)
     print(
         f"{result.played} episodes played, {result.reused} read from the store, in {result.seconds:.1f} s "

@@ -15,8 +15,9 @@ logger = logging.getLogger(__name__)
 def _input_errors() -> tuple[type[Exception], ...]:
     """The errors by which a trainer refuses its inputs (each names the input): a run folder holding
     another run, an unreadable demonstration, policy, map or track file, a bad people spec, recorded
-    scenes with no people to clone."""
+    scenes with no people to clone, a Ray address nothing answers at."""
     from socialzoo.agents.demonstrations import DemonstrationError
+    from socialzoo.bench.runner import RayAddressError
     from socialzoo.data.fetch import UnknownSceneError
     from socialzoo.data.tracks import TrackFileError
     from socialzoo.env.policy_file import PolicyFileError
@@ -34,6 +35,7 @@ def _input_errors() -> tuple[type[Exception], ...]:
         TrackFileError,
         UnknownSceneError,
         PeopleSpecError,
+        RayAddressError,
         FileNotFoundError,
     )
 

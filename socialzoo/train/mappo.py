@@ -335,6 +335,9 @@ def make_collector(
         return MultiSyncCollector(list(factories), policy, **common)
     from torchrl.collectors.distributed import RayCollector
 
+    from socialzoo.bench.runner import check_ray_address
+
+    check_ray_address(ray_address)  # seconds, not Ray's minutes, for an address nothing answers at
     init = (
         {"address": ray_address} if ray_address else {"num_cpus": len(factories), "include_dashboard": False}
     )

@@ -5,6 +5,7 @@ import itertools
 import math
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -13,9 +14,11 @@ import pytest
 
 from socialzoo.bench.runner import (
     BatchedRunner,
+    RayAddressError,
     Trial,
     TrialResult,
     _drain,
+    check_ray_address,
     evaluate,
     make_spec,
     split_trials,
@@ -134,6 +137,46 @@ def test_ray_backend_equals_local(test_set, sequential):
         ray.shutdown()
     assert as_rows(results) == as_rows(sequential)
     assert len(got) == len(results)
+
+
+def closed_port():
+    """A local TCP port that nothing listens on (bound, then closed)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_ray_address_nothing_answers_at_fails_in_seconds_naming_it(test_set, capsys, tmp_path):
+    # ray.init(address=...) waited over two minutes on an address nothing answered at.
+    pytest.importorskip("ray")
+    port = closed_port()
+    for address in (f"127.0.0.1:{port}", f"ray://localhost:{port}"):
+        start = time.monotonic()
+        with pytest.raises(RayAddressError, match=rf"cannot reach the Ray cluster at '{address}'.*refused"):
+            evaluate(trials_for(1), spec_for(test_set, 1), backend="ray", address=address)
+        assert time.monotonic() - start < 10.0
+    with pytest.raises(RayAddressError, match="names no host"):
+        check_ray_address("ray://:10001")
+    for address in (None, "auto", "local", "anyscale://my-cluster"):  # left to Ray
+        check_ray_address(address)
+    # The command says it in one line (exit 2), before any trial.
+    from socialzoo.cli import main
+
+    argv = [
+        "benchmark",
+        "--policies",
+        "goalone",
+        "--maps",
+        test_set.map_name,
+        "--trials",
+        "1",
+        "--no-figures",
+    ]
+    argv += ["--backend", "ray", "--address", f"127.0.0.1:{port}", "--out", str(tmp_path), "--no-progress"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"socialzoo benchmark: error: cannot reach the Ray cluster at '127.0.0.1:{port}'")
+    assert len(err.splitlines()) == 1
 
 
 def test_a_chunk_run_again_delivers_every_trial(test_set):

@@ -176,6 +176,31 @@ def test_distributed_collectors_run(tmp_path, collector, monkeypatch):
     assert record["args"]["collector"] == collector and record["results"]["frames"] == 1024
 
 
+def test_a_ray_address_nothing_answers_at_is_one_line_in_seconds(tmp_path, capsys):
+    # RayCollector's ray.init waited minutes on a cluster address nothing answered at.
+    import socket
+
+    from socialzoo.cli import main
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]  # closed once the socket is
+    argv = ["train", "humans", "--collector", "ray", "--ray-address", f"127.0.0.1:{port}", "--workers", "2"]
+    argv += [
+        "--frames",
+        "512",
+        "--frames-per-batch",
+        "512",
+        "--batch-size",
+        "8",
+        "--out",
+        str(tmp_path / "run"),
+    ]
+    assert main(argv) == 2
+    said = f"cannot reach the Ray cluster at '127.0.0.1:{port}' (127.0.0.1:{port}: Connection refused)"
+    assert capsys.readouterr().err == f"socialzoo train humans: error: {said}\n"
+
+
 def test_bad_arguments_name_the_field(tmp_path):
     with pytest.raises(ValueError, match=r"HumansArgs\.algo"):
         HumansArgs(out=tmp_path, algo="ddpg")
