@@ -39,8 +39,8 @@ TEST_TRIALS = FULL.performance_trials
 VALIDATION_EVALS = FULL.rl_total_steps // FULL.select_every  # checkpoints chosen among, per RL run
 VALIDATION_TRIALS = FULL.select_trials
 RL_STEPS = FULL.rl_total_steps
-# Training wall times of the other trainers from the last full run (REPRODUCTION.md, machine
-# factor about 0.84 when quiet): BC 0.5-1 min each, GAIL 1.2-2.8 min each, PIPS 12 s, demos 200 s.
+# Training wall times of the other trainers from the last full run (REPRODUCTION.md, the
+# 2-core machine when quiet): BC 0.5-1 min each, GAIL 1.2-2.8 min each, PIPS 12 s, demos 200 s.
 OTHER_TRAINING_S = 5 * 37 + 5 * 106 + 12
 DEMOS_S = 200
 

@@ -37,6 +37,20 @@ def test_every_doc_page_is_in_the_nav():
         assert f": {rel}" in nav, f"docs/{rel} is not in mkdocs.yml's nav"
 
 
+def test_pages_cite_nothing_outside_the_repository():
+    # The docs cited machine factors from ../shared/tools/machine_factor.py, a tool of the
+    # development machine that no reader has: a page's figures stand on what the repository holds.
+    pages = [
+        ROOT / "README.md",
+        *sorted((ROOT / "docs").rglob("*.md")),
+        *sorted((ROOT / "benchmarks").glob("*.py")),
+    ]
+    for page in pages:
+        text = page.read_text()
+        for outside in ("../shared/", "machine_factor", "machine factor"):
+            assert outside not in text.lower(), f"{page.relative_to(ROOT)} cites {outside!r}"
+
+
 def test_site_builds_strict(tmp_path):
     pytest.importorskip("mkdocs", reason="the docs extra: pip install -e '.[docs]'")
     pytest.importorskip("material", reason="the docs extra: pip install -e '.[docs]'")
