@@ -112,7 +112,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
             self.observation_spaces[a] = task_.human_observation_space
             self.action_spaces[a] = task_.human_action_space
         state_size = STATE_ROBOT_SIZE * task_.num_robots + STATE_HUMAN_SIZE * task_.num_human_slots
-        self.state_space = spaces.Box(-np.inf, np.inf, (state_size,), dtype=np.float32)
+        self.state_space = spaces.Box(-np.inf, np.inf, (state_size,), dtype=np.float64)
         self.stream_seed: int | None = None
         self.num_cycles = 0
         self._started = False
@@ -264,7 +264,9 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
 
     # ------------------------------------------------------------------ state, metrics
     def state(self) -> np.ndarray:
-        """The global state: float32 of length 8 R + 5 H (state_space), world frame, SI units.
+        """The global state: float64 of length 8 R + 5 H (state_space), world frame, SI units;
+        float64 so that positions keep the world's precision on maps with large coordinates
+        (float32's steps are 0.03 m at a UTM easting of 5e5 m and 0.5 m at a northing of 5e6 m).
 
         Per robot: pose x, y, theta; velocity v, omega; goal x, y, theta. Then per human slot
         (learned or scripted): position x, y; velocity vx, vy; present (1.0) or empty (0.0, with
@@ -315,12 +317,13 @@ class CrowdNavParallelEnv(TaskParallelEnv):
     default_task = "crowdnav"
 
 
-def global_state(s: WorldState) -> np.ndarray:
-    """(B, 8 R + 5 H) float32: the global state of every world (TaskParallelEnv.state)."""
+def global_state(s: WorldState, dtype: type[np.floating] = np.float64) -> np.ndarray:
+    """(B, 8 R + 5 H): the global state of every world (TaskParallelEnv.state), float64 unless
+    `dtype` says otherwise (the TorchRL env's "state" is float32, as its golden rollouts are)."""
     b = s.batch_size
     robots = np.concatenate((s.robot_pose, s.robot_vel, s.robot_goal), axis=-1).reshape(b, -1)
     humans = np.concatenate((s.human_pos, s.human_vel, s.human_mask[..., None]), axis=-1).reshape(b, -1)
-    return np.concatenate((robots, humans), axis=1).astype(np.float32)
+    return np.concatenate((robots, humans), axis=1).astype(dtype)
 
 
 def parallel_env(config: Any = None, **kwargs: Any) -> SocialNavParallelEnv:

@@ -39,7 +39,8 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
     ## Observation Space
     ("robot", "observation") (B, R, D) float32, the benchmark observation; ("human",
     "observation") (B, L, D_h) float32 (socialzoo.env.human_agents); "state" (B, 8 R + 5 H)
-    float32, the global state; (group, "mask") (B, n) bool, the agents that act.
+    float32, the global state (SocialNavParallelEnv.state is float64: float32 rounds positions
+    to steps of up to 0.5 m on maps at UTM-sized coordinates); (group, "mask") (B, n) bool, the agents that act.
 
     ## Rewards
     ("robot", "reward") (B, R, 1): the benchmark reward; ("human", "reward") (B, L, 1): the
@@ -232,7 +233,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
                 "info": self._robot_info(None),
                 **self._flags(zeros_r, zeros_r, zeros_r),
             },
-            "state": global_state(task.world_state),
+            "state": global_state(task.world_state, np.float32),
         }
         if self.num_humans:
             human_obs = task.human_observations()
@@ -279,7 +280,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
                 "info": self._robot_info(step, robot_was),
                 **self._flags(leaving | dead_r, robot_term | dead_r, robot_trunc | dead_r),
             },
-            "state": global_state(task.world_state),
+            "state": global_state(task.world_state, np.float32),
         }
         # The row's flags: every agent's (done_on_any=False).
         root = {k: out[ROBOT][k].all(axis=(1, 2)) for k in _DONE_KEYS}

@@ -126,14 +126,14 @@ def test_state_is_the_global_state():
     for _ in range(5):
         env.step({a: env.action_space(a).sample() for a in env.agents})
     state = env.state()
-    assert state.dtype == np.float32 and env.state_space.contains(state)
+    assert state.dtype == np.float64 and env.state_space.contains(state)
     s = env.core.state
-    np.testing.assert_array_equal(state[:3], s.robot_pose[0, 0].astype(np.float32))
-    np.testing.assert_array_equal(state[8 + 5 : 8 + 8], s.robot_goal[0, 1].astype(np.float32))
+    np.testing.assert_array_equal(state[:3], s.robot_pose[0, 0])
+    np.testing.assert_array_equal(state[8 + 5 : 8 + 8], s.robot_goal[0, 1])
     humans = state[16:].reshape(-1, 5)
     assert len(humans) == env.config.max_humans
     np.testing.assert_array_equal(humans[:, 4], s.human_mask[0])
-    np.testing.assert_array_equal(humans[:, :2], s.human_pos[0].astype(np.float32))
+    np.testing.assert_array_equal(humans[:, :2], s.human_pos[0])
 
 
 # ---------------------------------------------------------------------------- determinism
@@ -262,6 +262,30 @@ def test_time_limit_and_max_cycles_truncate_everyone():
 
 
 # ---------------------------------------------------------------------------- bad input
+def test_the_state_keeps_world_positions_on_a_map_at_utm_coordinates():
+    # A map imported in UTM coordinates: float32 rounded its positions to steps of 0.03 m at
+    # x = 5e5 and 0.5 m at y = 4.3e6 (0.15 m off here), so state() no longer matched its world.
+    offset = np.array([512_345.678, 4_321_987.654])
+    room_ = stand_in_room()
+    far = Map(
+        name="open_room",
+        walls=room_.walls + np.tile(offset, 2),
+        nodes=room_.nodes + offset,
+        edges=room_.edges,
+        legal_poses=room_.legal_poses + np.append(offset, 0.0),
+    )
+    env = make(far, num_robots=2, num_learned_humans=1)
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step({a: env.action_space(a).sample() for a in env.agents})
+    state, s = env.state(), env.core.state
+    assert env.state_space.contains(state)
+    np.testing.assert_array_equal(state[:3], s.robot_pose[0, 0])
+    humans = state[16:].reshape(-1, 5)
+    np.testing.assert_array_equal(humans[:, :2], s.human_pos[0])
+    assert np.abs(humans[s.human_mask[0], :2] - offset).max() < 20.0  # the people are there too
+
+
 def test_missing_unknown_and_invalid_actions_raise_before_anything_changes():
     env = make(num_robots=2, num_learned_humans=1)
     with pytest.raises(RuntimeError, match="reset"):
