@@ -15,6 +15,7 @@ from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int
 from socialzoo.env.gym_env import TaskAdapter, robot_row
 from socialzoo.env.tasks.base import Task, agent_action
+from socialzoo.scenarios.scenario import Scenario
 
 # Entries of the global state per robot: pose (x, y, theta), velocity (v, omega), goal (x, y, theta).
 STATE_ROBOT_SIZE = 8
@@ -125,6 +126,13 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
     def action_space(self, agent: str) -> spaces.Space:
         """The action space of `agent` (the same object at every call)."""
         return self.action_spaces[agent]
+
+    @property
+    def scenario(self) -> Scenario | None:
+        """The scenario the current episode plays, for `reset(options={"scenario": ...})` to replay;
+        None before the first reset and for cases that are no Scenario (CrowdNav's arena)."""
+        core = getattr(self.task, "core", None)
+        return None if core is None else core.scenarios[0]
 
     # ------------------------------------------------------------------ reset
     def reset(

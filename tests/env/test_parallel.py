@@ -173,7 +173,8 @@ def test_unseeded_first_reset_is_recorded_and_replayable():
     again, _ = make(num_robots=2).reset(seed=env.stream_seed)
     assert same(obs, again)
     replay = make(num_robots=2)
-    replayed, _ = replay.reset(seed=999, options={"scenario": env.core.scenarios[0]})
+    assert replay.scenario is None  # docs/parallel_env.md: `env.scenario` is the current one
+    replayed, _ = replay.reset(seed=999, options={"scenario": env.scenario})
     assert same(obs, replayed)
     with pytest.raises(TypeError, match="Scenario"):
         replay.reset(options={"scenario": "gdc1-0"})
