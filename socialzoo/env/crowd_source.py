@@ -102,8 +102,8 @@ class CrowdCaseSource:
 
         stream = self._scenarios
         assert stream is not None
-        if stream.family is not None:
-            splits = get_family(stream.family).splits
+        if stream.scenario_family is not None:
+            splits = stream.scenario_family.splits
             if splits:
                 return {k: k for k in ("val", "test") if k in splits and splits[k].size is not None}
         return dict(map_case_sets(stream.map.name))
@@ -122,7 +122,7 @@ class CrowdCaseSource:
         }
 
     def _split_size(self, split: str) -> int:
-        size = get_family(self._scenarios.family).splits[split].size  # type: ignore[union-attr,arg-type]
+        size = self._scenarios.scenario_family.splits[split].size  # type: ignore[union-attr]
         assert size is not None
         return size
 

@@ -144,10 +144,14 @@ class ScenarioStream:
         self.num_robots = num_robots
         self.cfg = cfg
         self.family = family
+        # The family itself, not only its name: a copy of the stream (a pickled env in a worker
+        # process) draws and looks up its scenarios without the registry of the process that
+        # registered the family (register_family: a recording of one's own, docs/recorded.md).
+        self.scenario_family = None if family is None else get_family(family)
         self._rngs: list[np.random.Generator] = [np.random.default_rng() for _ in range(batch_size)]
         self._current: list[Scenario | None] = [None] * batch_size
         self._uses = np.zeros(batch_size, dtype=np.intp)
-        splits = {} if family is None else get_family(family).splits
+        splits = {} if self.scenario_family is None else self.scenario_family.splits
         self._first_training_seed = splits["train"].first if "train" in splits else 0
 
     @classmethod
@@ -187,21 +191,21 @@ class ScenarioStream:
 
     def make(self, seed: int) -> Scenario:
         """The scenario of `seed` (benchmark generation or the configured family)."""
-        if self.family is None:
+        if self.scenario_family is None:
             scenario = generate_scenario(self.map, seed, self.cfg)
         else:
-            scenario = get_family(self.family).make(seed, self.num_robots, m=self.map)
+            scenario = self.scenario_family.make(seed, self.num_robots, m=self.map)
         return with_robots(scenario, self.map, self.num_robots)
 
     def cases(self, case_set: TestSet | str, indices: Any) -> list[Scenario]:
         """Cases `indices` of a fixed set: a family's own split (by its name), a registered test
         set's seeds as the family's scenarios, or without a family the test set's own scenarios."""
-        if self.family is None:
+        if self.scenario_family is None:
             assert isinstance(case_set, TestSet)
             return [
                 with_robots(case_set.scenario(int(k), self.map), self.map, self.num_robots) for k in indices
             ]
         if isinstance(case_set, str):
-            family = get_family(self.family)
+            family = self.scenario_family
             return [self.make(family.case_seed(case_set, int(k))) for k in indices]
         return [self.make(case_set.seed(int(k))) for k in indices]

@@ -756,3 +756,40 @@ def test_a_robot_whose_episode_ended_stops_counting_while_its_row_goes_on() -> N
     assert replay.elapsed[0] == pytest.approx(0.7)
     # Each robot stood 1 m and 2 m off the path on every step it counted.
     assert replay.deviation[0] == pytest.approx([7 * 1.0, 4 * 2.0])
+
+
+@pytest.mark.parametrize("task", ["action_selection", "crowdnav"])
+def test_a_pickled_env_of_a_family_of_ones_own_plays_on_where_it_is_not_registered(
+    task: str, tmp_path, monkeypatch
+) -> None:
+    """A worker process that receives a pickled env (supersuit's process workers, a spawn start
+    method) has not run register_family: the copy resets on and plays its fixed cases as the
+    original, from the family it carries (the action-selection task looked it up by name at reset)."""
+    import pickle
+
+    from socialzoo.env.vector import TaskVectorEnv
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))  # the action-selection task's open-area map
+    name = "recorded_test_worker"
+    monkeypatch.setitem(FAMILIES, name, RecordedScene(_recording(count=40), name=name))
+    kwargs = (
+        {"map": None, "people": {"models": "replay"}, "max_steps": 30}
+        if task == "action_selection"
+        else {"humans": "replay", "robot_visible": True, "time_limit": 8.0}
+    )
+    vec = TaskVectorEnv(2, task=task, family=name, **kwargs)
+    vec.reset(seed=3)
+    blob = pickle.dumps(vec)
+    monkeypatch.delitem(FAMILIES, name)
+    other = pickle.loads(blob)
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(80):
+        action = vec.action_space.sample() if task == "crowdnav" else rng.integers(0, 4, 2)
+        a, b = vec.step(action), other.step(action)
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+        ended += int((a[2] | a[3]).sum())
+    assert ended  # the copy drew its next episodes itself
+    options = {"split": "test", "cases": [0, 1]}
+    np.testing.assert_array_equal(vec.reset(options=options)[0], other.reset(options=options)[0])

@@ -28,7 +28,6 @@ from socialzoo.env.world import StepEvents
 from socialzoo.maps.map_file import Map, load_map
 from socialzoo.nav.recovery import RecoveryConfig, backoff_commands
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS, check_actions, subpolicy_commands
-from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.scenario import Scenario
 
 # The sub-policy given to robots that already left (the core halts them anyway).
@@ -205,7 +204,7 @@ class ActionSelectionTask(Task):
         """The map's validation scenarios ("val", never a test set), and its registered test sets
         ("test" for "<map>-test", and each by its own name, e.g. "gdc1-quick"); a scenario
         family's cases are the family's scenarios of the same seeds."""
-        family = None if self.config.family is None else get_family(self.config.family)
+        family = self.scenarios.scenario_family
         return {
             name: family.splits[name].size if isinstance(cases, str) else len(cases)  # type: ignore[union-attr,misc]
             for name, cases in self._case_sets().items()
@@ -216,8 +215,8 @@ class ActionSelectionTask(Task):
         (its "val" and "test"; "train" is the training stream's)."""
         from socialzoo.scenarios.scenario_sets import map_case_sets
 
-        if self.config.family is not None:
-            splits = get_family(self.config.family).splits
+        if self.scenarios.scenario_family is not None:
+            splits = self.scenarios.scenario_family.splits
             if splits:
                 return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
         return dict(map_case_sets(self.map.name))
