@@ -4,6 +4,7 @@ with one wording."""
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Collection
 from dataclasses import fields
 from typing import Any
@@ -109,6 +110,21 @@ def check_int(
     return check_number(
         owner, field, value, low=low, high=high, integer=True, allow_none=allow_none, error=error
     )
+
+
+def check_seed(owner: str, seed: Any) -> int | None:
+    """A reset or set_seed seed as Gymnasium takes it: None, or an int >= 0 (numpy's integers too,
+    which PettingZoo and TorchRL callers pass); returns it as a Python int.
+
+    Raises:
+        ValueError: "owner: seed must be an int >= 0 or None, got seed" (a float, a list, a negative
+            int), before any state changes.
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise ValueError(f"{owner}: seed must be an int >= 0 or None, got {seed!r}")
+    return int(seed)
 
 
 def check_choice(owner: str, field: str, value: Any, choices: Collection[Any]) -> Any:

@@ -12,7 +12,7 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from socialzoo.core.state import WorldState
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_int, check_seed
 from socialzoo.env.gym_env import TaskAdapter, robot_row
 from socialzoo.env.tasks.base import Task, agent_action
 from socialzoo.scenarios.scenario import Scenario
@@ -148,6 +148,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         Returns:
             (observations, infos) for every agent.
         """
+        seed = check_seed(type(self).__name__ + ".reset", seed)
         if seed is not None or self.stream_seed is None:
             stream_seed = seed if seed is not None else int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
             self.task.seed(stream_seed)

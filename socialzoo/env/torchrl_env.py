@@ -11,7 +11,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_int, check_seed
 from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
@@ -206,6 +206,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
 
     # ------------------------------------------------------------------ seeding, reset
     def _set_seed(self, seed: int | None) -> None:
+        seed = check_seed(type(self).__name__ + ".set_seed", seed)
         if seed is None:
             seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
         self.task.seed(seed)

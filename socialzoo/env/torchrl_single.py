@@ -12,6 +12,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, MultiCategorical, OneHot, TensorSpec, Unbounded
 from torchrl.envs import EnvBase
 
+from socialzoo.core.validation import check_seed
 from socialzoo.env.gym_env import TaskAdapter, one_robot
 from socialzoo.env.tasks.base import Task, batch_actions
 
@@ -149,7 +150,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
 
     # ------------------------------------------------------------------ TorchRL hooks
     def _set_seed(self, seed: int | None) -> None:
-        self.task.seed(seed)
+        self.task.seed(check_seed(type(self).__name__ + ".set_seed", seed))
         self._started = False
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:

@@ -180,6 +180,18 @@ def test_unseeded_first_reset_is_recorded_and_replayable():
         replay.reset(options={"scenario": "gdc1-0"})
 
 
+@pytest.mark.parametrize("seed", [-1, 1.5, [1, 2], True])
+def test_a_bad_seed_is_refused_by_name_before_anything_changes(seed):
+    """Gymnasium's rule (an int >= 0), where numpy's SeedSequence said "expected non-negative integer"
+    or took a list; numpy's own integers stay welcome."""
+    env = make()
+    with pytest.raises(ValueError, match=r"SocialNavParallelEnv.reset: seed must be an int >= 0"):
+        env.reset(seed=seed)
+    assert env.stream_seed is None
+    env.reset(seed=np.int64(3))
+    assert env.stream_seed == 3 and type(env.stream_seed) is int
+
+
 def test_one_robot_plays_the_single_agent_episode():
     """One world, one copy of the dynamics: R = 1 equals ActionSelectionEnv seed for seed."""
     from socialzoo.env.gym_env import ActionSelectionEnv

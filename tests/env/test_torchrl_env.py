@@ -219,6 +219,8 @@ def test_bad_arguments_and_actions_raise():
     # A task whose robot observation is a dict (CrowdNav's "dict"): named, not a TypeError in the specs.
     with pytest.raises(ValueError, match="SocialNavTorchEnv: the task's observation must be one Box"):
         SocialNavTorchEnv(task="crowdnav", observation="dict")
+    with pytest.raises(ValueError, match=r"SocialNavTorchEnv.set_seed: seed must be an int >= 0"):
+        make().set_seed(-1)
     env = make(num_learned_humans=1)
     td = env.rand_action(env.reset())
     td["human", "action"] = torch.full((1, 1, 2), 1.5)

@@ -90,6 +90,8 @@ def test_configs_it_cannot_serve_are_refused():
         ActionSelectionTorchEnv(0)
     with pytest.raises(ValueError, match="one Box"):
         CrowdNavTorchEnv(1, observation="dict")
+    with pytest.raises(ValueError, match=r"CrowdNavTorchEnv.set_seed: seed must be an int >= 0"):
+        CrowdNavTorchEnv(1).set_seed(1.5)
 
 
 def test_velocity_actions_are_a_bounded_box_that_passes_the_spec_check():
