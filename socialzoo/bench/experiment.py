@@ -496,6 +496,8 @@ def run_benchmark(
             out,
             title=f"Humans ({config.humans}) in the {_title(config, counts)}",
         )
+    else:  # an older run's people tables would sit beside tables without them
+        remove_outputs(out, ["humans"], ("csv", "md"))
     from socialzoo.bench.figures import FIGURE_FORMATS, SUMMARY_FIGURES, plot_summary
 
     if figures:

@@ -104,6 +104,10 @@ def test_learned_humans_replace_the_social_force_humans(rooms, learned_run, writ
     assert 0.3 * social_speed < slow_speed < 0.7 * social_speed
     text = (learned_run / "humans.md").read_text()
     assert "learned:" in text and "route goal reach rate" in text
+    # A rerun into the same folder without the people's metrics leaves no older people tables beside it.
+    assert (social / "humans.md").is_file()
+    run(config("social_force", human_metrics=False), social, rooms)
+    assert not (social / "humans.md").exists() and not (social / "humans.csv").exists()
 
 
 def test_config_hash_follows_the_policy_file_digest(
