@@ -117,8 +117,8 @@ def evaluate_model(
     ade, fde = displacement(pred_w, true_w)
     track_ade, track_fde = displacement(pred_t, true_t, use_t)
     # The recorded distributions over the frames the model's person is on the scene too (a modelled
-    # person leaves within the waypoint radius of its exit): a frame the model never walks is not
-    # held against it.
+    # person that reaches its exit early leaves there): a frame the model never walks is not held
+    # against it.
     rec_use = ~np.isnan(true_t[..., 0]) & use_t
     speeds = frame_speeds(pred_t, scene.dt, use_t)
     rec_speeds = frame_speeds(true_t, scene.dt, rec_use)

@@ -117,9 +117,24 @@ class Rollout:
     others: np.ndarray
 
 
-def _row_scenario(scene: SceneTracks, k: int, start: int, frames: int, groups: bool, v0: np.ndarray) -> Any:
+def exit_route(start: np.ndarray, exit_: np.ndarray, reach: float) -> np.ndarray:
+    """(2, 2) a modelled person's route, m: from its start to `reach` m beyond its exit, on the line from
+    the start through the exit (the exit itself if the two coincide).
+
+    A person leaves within the waypoint radius `reach` of its route's end; the end beyond the exit makes
+    one that walks towards it leave at its exit, as the recorded person did, not `reach` m short of it
+    and held there while the recorded person walks on."""
+    way = exit_ - start
+    length = float(np.hypot(*way))
+    return np.stack((start, exit_ + way * (reach / length) if length > 0 else exit_))
+
+
+def _row_scenario(
+    scene: SceneTracks, k: int, start: int, frames: int, groups: bool, v0: np.ndarray, reach: float
+) -> Any:
     """The Scenario of one case: the subject in slot 0 (a model walks it), its companions next when
-    `groups` (returned as their count), everyone else present replaying."""
+    `groups` (returned as their count), everyone else present replaying; the modelled people's routes
+    end `reach` m beyond their exits (exit_route)."""
     from socialzoo.scenarios.recorded import people_scenario
     from socialzoo.scenarios.recorded_people import RecordedPeople
 
@@ -152,7 +167,7 @@ def _row_scenario(scene: SceneTracks, k: int, start: int, frames: int, groups: b
     routes = list(scenario.human_routes)
     speed = np.array(scenario.human_speed)
     for slot, person in enumerate(order[: 1 + len(companions)].tolist()):
-        routes[slot] = np.stack((g[person, start], g[person, scene.last[person]]))
+        routes[slot] = exit_route(g[person, start], g[person, scene.last[person]], reach)
         speed[slot] = scene.mean_speed(person)
     spawn = np.array(scenario.human_spawn)
     spawn[0] = g[k, start]
@@ -167,9 +182,11 @@ Batch = tuple[np.ndarray, list[tuple[Any, np.ndarray]]]
 
 
 def prepare_batches(
-    scene: SceneTracks, cases: Cases, groups: bool, batch_rows: int = BATCH_ROWS
+    scene: SceneTracks, cases: Cases, groups: bool, batch_rows: int = BATCH_ROWS, reach: float | None = None
 ) -> list[Batch]:
-    """The scenarios of the cases in batches of up to `batch_rows`, cases of similar length together."""
+    """The scenarios of the cases in batches of up to `batch_rows`, cases of similar length together;
+    `reach`: the world's waypoint radius, m (default realism_world()'s)."""
+    reach = realism_world().human.waypoint_radius if reach is None else reach
     v0 = start_velocity(scene, cases)
     order = np.argsort(cases.frames, kind="stable")
     out = []
@@ -177,7 +194,7 @@ def prepare_batches(
         idx = order[lo : lo + batch_rows]
         built = [
             _row_scenario(
-                scene, int(cases.person[i]), int(cases.start[i]), int(cases.frames[i]), groups, v0[i]
+                scene, int(cases.person[i]), int(cases.start[i]), int(cases.frames[i]), groups, v0[i], reach
             )
             for i in idx
         ]
@@ -228,7 +245,7 @@ def simulate(
     walls = WallIndex(np.zeros((0, 4)))
     people = PeopleConfig(models=model.people)
     if batches is None:
-        batches = prepare_batches(scene, cases, model.groups, batch_rows)
+        batches = prepare_batches(scene, cases, model.groups, batch_rows, world.human.waypoint_radius)
     for idx, built in batches:
         scenarios = [b[0] for b in built]
         slots = max(s.num_humans for s in scenarios)
