@@ -2,6 +2,9 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within v2 (and CrowdNav's v1), default rollouts unchanged: the presets sf-eth-ucy and
+        orca-eth-ucy were fitted again on 2026-11-29 (the realism cases' exit fix: a modelled person
+        leaves at its exit), so people specs that name them walk otherwise.
     socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2 (the recorded ids, each one version
         ahead of its task's other ids; no other id changes): a recorded row plays the same whatever
         else its batch holds. Past the last frame of its own recording everyone on a track leaves

@@ -14,16 +14,16 @@ PRESETS: dict[str, dict[str, Any]] = {
     "sf-eth-ucy": {
         "model": "sf",
         "human": {
-            "relaxation_time": 1.6173,
-            "social_strength": 0.5724,
-            "social_lambda": 2.0292,
-            "social_gamma": 0.0672,
+            "relaxation_time": 2.0752,
+            "social_strength": 0.3168,
+            "social_lambda": 4.6222,
+            "social_gamma": 0.2099,
         },
     },
     # socialzoo humans calibrate --model orca --persons 30 --windows 2 --generations 10 --popsize 8 --seed 0
     "orca-eth-ucy": {
         "model": "orca",
-        "orca": {"neighbor_dist": 4.9963, "time_horizon": 5.0778, "radius": 0.2271},
+        "orca": {"neighbor_dist": 3.8604, "time_horizon": 6.8048, "radius": 0.1593},
     },
 }
 
