@@ -365,10 +365,14 @@ def _drive_progress(total: int) -> Any:
     return report
 
 
-def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict]:
-    """Walls, nodes and edges of the import's source, and its provenance inputs."""
+def _read_source(
+    args: argparse.Namespace,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict, int]:
+    """Walls, nodes and edges of the import's source, its provenance inputs, and how many of its
+    walls were merged into others (repeated pieces, `merge_duplicate_walls`)."""
     from socialzoo.maps.importers import (
         drop_zero_length,
+        merge_duplicate_walls,
         read_amrl_nav_graph,
         read_pedsim_scene,
         read_vector_map,
@@ -401,7 +405,8 @@ def _read_source(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray | Non
         nodes, edges = read_amrl_nav_graph(args.nav)
         inputs["nav"] = args.nav.name
     walls = drop_zero_length(np.asarray(walls, dtype=np.float64), str(args.walls or args.pedsim or args.png))
-    return walls, nodes, edges, inputs
+    walls, merged = merge_duplicate_walls(walls)
+    return walls, nodes, edges, inputs, merged
 
 
 def _drive_and_repair(m: Any, *, strict: bool) -> tuple[Any, list[tuple[str, str]]]:
@@ -455,7 +460,7 @@ def run_import(args: argparse.Namespace) -> int:
     from socialzoo.maps.roadmap import describe_closures
 
     try:
-        walls, nodes, edges, inputs = _read_source(args)
+        walls, nodes, edges, inputs, merged = _read_source(args)
         common: dict[str, Any] = {
             "nodes": nodes,
             "edges": edges,
@@ -473,6 +478,7 @@ def run_import(args: argparse.Namespace) -> int:
                 "seed_point": args.seed_point,
                 "strict": bool(args.strict),
             },
+            **({"walls_merged": merged} if merged else {}),
         }
         if args.strict:
             m = complete_map(args.name, walls, **common)
@@ -497,9 +503,10 @@ def run_import(args: argparse.Namespace) -> int:
         generated = kind in GENERATED
         num_repairs += not generated
         print(f"{'generated' if generated else 'repaired'}: {message}")
+    walls_merged = f" ({merged} repeated pieces merged)" if merged else ""
     print(
-        f"{out}: {m.num_walls} walls, {m.num_nodes} nodes, {len(m.edges)} edges, {len(m.legal_poses)} poses"
-        f" ({num_repairs} repairs)"
+        f"{out}: {m.num_walls} walls{walls_merged}, {m.num_nodes} nodes, {len(m.edges)} edges, "
+        f"{len(m.legal_poses)} poses ({num_repairs} repairs)"
     )
     return 0
 

@@ -22,6 +22,9 @@ logger = logging.getLogger(__name__)
 
 # A vector-map line: numbers separated by commas and/or white space.
 _SEPARATORS = re.compile(r"[,\s]+")
+# Walls whose ends lie this close to another wall's line, and overlap it by more, repeat it: merged
+# on import (merge_duplicate_walls), m. Plans are drawn to the millimetre or finer.
+MERGE_TOLERANCE = 1e-3
 
 
 def _read_text(path: str | os.PathLike[str]) -> str:
@@ -75,6 +78,67 @@ def drop_zero_length(walls: np.ndarray, where: str = "walls") -> np.ndarray:
     if not keep.all():
         logger.info("%s: dropped %d zero-length wall segments", where, int((~keep).sum()))
     return walls[keep]
+
+
+def merge_duplicate_walls(walls: np.ndarray, tolerance: float = MERGE_TOLERANCE) -> tuple[np.ndarray, int]:
+    """Walls (W, 4) with repeated pieces merged: segments on one line (every end within `tolerance`,
+    m, of the longer one's line) that overlap by more than `tolerance` become their union; so exact
+    duplicates, reversed ones and pieces lying inside a longer wall go. Collinear segments that only
+    touch end to end (overlapping by at most `tolerance`) are kept apart: they draw no point twice,
+    and the plan's own segments stay as drawn; segments farther apart than `tolerance` (a wall's
+    two faces) are kept.
+
+    A merged wall keeps the place in the list of its first piece and the direction of its longest
+    one, whose ends it keeps unless another piece reaches more than `tolerance` beyond them; walls
+    that repeat nothing are returned unchanged, in order.
+
+    Returns:
+        (walls (W', 4), the number of walls merged away, W - W').
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    n = len(walls)
+    start, end = walls[:, :2], walls[:, 2:]
+    lo, hi = np.minimum(start, end) - tolerance, np.maximum(start, end) + tolerance
+    # Candidate pairs: boxes that overlap along x (a sweep over the sorted left edges), then along y.
+    order = np.argsort(lo[:, 0], kind="stable")
+    last = np.searchsorted(lo[order, 0], hi[order, 0], side="right")
+    count = last - np.arange(n) - 1
+    first = np.repeat(np.arange(n), count)
+    second = first + 1 + np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    a, b = order[first], order[second]
+    near = (lo[a, 1] <= hi[b, 1]) & (lo[b, 1] <= hi[a, 1])
+    a, b = a[near], b[near]
+    length = np.hypot(*(end - start).T)
+    # a: the longer of the two; b's ends must lie on its line and overlap it.
+    a, b = np.where(length[a] >= length[b], a, b), np.where(length[a] >= length[b], b, a)
+    u = (end[a] - start[a]) / length[a, None]
+    off0, off1 = start[b] - start[a], end[b] - start[a]
+    on_line = (np.abs(u[:, 0] * off0[:, 1] - u[:, 1] * off0[:, 0]) <= tolerance) & (
+        np.abs(u[:, 0] * off1[:, 1] - u[:, 1] * off1[:, 0]) <= tolerance
+    )
+    t0, t1 = (u * off0).sum(1), (u * off1).sum(1)
+    overlap = np.minimum(length[a], np.maximum(t0, t1)) - np.maximum(0.0, np.minimum(t0, t1))
+    a, b = a[on_line & (overlap > tolerance)], b[on_line & (overlap > tolerance)]
+    if len(a) == 0:
+        return walls, 0
+    _, label = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    out = walls.copy()
+    keep = np.ones(n, dtype=bool)
+    for group in np.split(np.argsort(label, kind="stable"), np.flatnonzero(np.diff(np.sort(label))) + 1):
+        if len(group) < 2:
+            continue
+        ref = group[np.argmax(length[group])]
+        u = (end[ref] - start[ref]) / length[ref]
+        ends = walls[group].reshape(-1, 2)
+        t = (ends - start[ref]) @ u
+        new_start = ends[np.argmin(t)] if t.min() < -tolerance else start[ref]
+        new_end = ends[np.argmax(t)] if t.max() > length[ref] + tolerance else end[ref]
+        out[group[0]] = np.concatenate((new_start, new_end))
+        keep[group[1:]] = False
+    return out[keep], int(n - keep.sum())
 
 
 def read_vector_map(path: str | os.PathLike[str]) -> np.ndarray:

@@ -79,6 +79,25 @@ def test_map_import_from_walls(tmp_path):
     assert m.name == "mine" and m.num_nodes >= 2 and len(m.legal_poses) >= 2
 
 
+def test_map_import_merges_repeated_walls_and_says_how_many(tmp_path, capsys):
+    doorway = load_map("doorway").walls
+    # Every wall again reversed (6), then the first wall's first half and the first wall reversed again.
+    repeats = [
+        [*doorway[0, :2], *doorway[0, :2] / 2 + doorway[0, 2:] / 2],
+        [*doorway[0, 2:], *doorway[0, :2]],
+    ]
+    source = write_vector_map(
+        tmp_path / "building.txt", np.vstack((doorway, doorway[:, [2, 3, 0, 1]], repeats))
+    )
+    out = tmp_path / "mine.json"
+    argv = ["map", "import", "--walls", str(source), "--name", "mine", "--out", str(out), "--no-drive"]
+    assert main([*argv, "--seed-point", "4", "4"]) == 0
+    assert f"{out}: 6 walls (8 repeated pieces merged), " in capsys.readouterr().out
+    m = load_map(out)
+    np.testing.assert_array_equal(m.walls, doorway)
+    assert m.provenance is not None and m.provenance["walls_merged"] == 8
+
+
 def test_demo_writes_a_gif(tmp_path, capsys):
     out = tmp_path / "episode.gif"
     assert (

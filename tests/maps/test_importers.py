@@ -5,7 +5,13 @@ import json
 import numpy as np
 import pytest
 
-from socialzoo.maps.importers import read_amrl_nav_graph, read_pedsim_scene, read_vector_map, write_vector_map
+from socialzoo.maps.importers import (
+    merge_duplicate_walls,
+    read_amrl_nav_graph,
+    read_pedsim_scene,
+    read_vector_map,
+    write_vector_map,
+)
 from socialzoo.maps.map_file import MapError, load_map
 
 
@@ -55,6 +61,43 @@ def test_pedsim_scene(tmp_path):
 def test_zero_length_walls_are_dropped_on_import(tmp_path):
     (tmp_path / "w.txt").write_text("0, 0, 1, 0\n2, 2, 2, 2\n1,0,1,1\n")
     np.testing.assert_array_equal(read_vector_map(tmp_path / "w.txt"), [[0, 0, 1, 0], [1, 0, 1, 1]])
+
+
+def test_repeated_wall_pieces_merge_within_a_millimetre():
+    walls = np.array(
+        [
+            [0, 0, 10, 0],  # 0: kept, grown to the overlapping piece 4's far end
+            [0, 5, 10, 5],  # 1: repeats nothing
+            [0, 0, 10, 0],  # a duplicate
+            [10, 0, 0, 0],  # a reversed duplicate
+            [8, 0, 14, 0],  # overlaps 0 by 2 m: merged into (0, 0)-(14, 0)
+            [2, 0, 3, 0],  # lies inside 0
+            [0, 0.0005, 10, 0.0005],  # 0.5 mm off: within the tolerance
+            [14, 0, 20, 0],  # only touches the merged wall end to end: kept
+            [0, 0.005, 10, 0.005],  # 5 mm off (a wall's other face): kept
+            [0, 10, 4, 10],  # 9: a chain of overlaps, each with the next: one wall (0, 10)-(9, 10)
+            [3, 10, 7, 10],
+            [9, 10, 6, 10],
+            [5, -1, 5, 1],  # crosses 0: kept
+        ],
+        dtype=np.float64,
+    )
+    merged, count = merge_duplicate_walls(walls)
+    expected = [
+        [0, 0, 14, 0],
+        [0, 5, 10, 5],
+        [14, 0, 20, 0],
+        [0, 0.005, 10, 0.005],
+        [0, 10, 9, 10],
+        [5, -1, 5, 1],
+    ]
+    np.testing.assert_array_equal(merged, expected)
+    assert count == len(walls) - len(expected)
+    # The longest piece gives the direction; a plan without repeats comes back as it was.
+    np.testing.assert_array_equal(merge_duplicate_walls(walls[[3, 2]])[0], [[10, 0, 0, 0]])
+    again, none = merge_duplicate_walls(merged)
+    assert none == 0
+    np.testing.assert_array_equal(again, merged)
 
 
 def test_amrl_nav_graph_errors_name_the_entry(tmp_path):
