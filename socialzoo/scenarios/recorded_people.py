@@ -64,6 +64,18 @@ def speed_over(length: float, time: float) -> float:
     return max(length / time, MIN_SPEED) if time > 0 else MIN_SPEED
 
 
+def exit_route(start: np.ndarray, exit_: np.ndarray, reach: float) -> np.ndarray:
+    """(2, 2) a modelled person's route, m: from its start to `reach` m beyond its exit, on the line from
+    the start through the exit (the exit itself if the two coincide).
+
+    A person leaves within the waypoint radius `reach` of its route's end; the end beyond the exit makes
+    one that walks towards it leave at its exit, as the recorded person did, not `reach` m short of it
+    and held there while the recorded person walks on."""
+    way = exit_ - start
+    length = float(np.hypot(*way))
+    return np.stack((start, exit_ + way * (reach / length) if length > 0 else exit_))
+
+
 @dataclass(frozen=True)
 class Occupants:
     """Who occupies each slot of a RecordedPeople, one after another: (S, K) arrays, K the most

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
+from socialzoo.scenarios.recorded_people import exit_route
 from socialzoo.studies.realism_cases import Cases, SceneTracks, frames_inside, start_velocity
 
 # The world step, s, and world steps per recorded frame (0.4 s at 2.5 Hz).
@@ -115,18 +116,6 @@ class Rollout:
     pos: np.ndarray
     present: np.ndarray
     others: np.ndarray
-
-
-def exit_route(start: np.ndarray, exit_: np.ndarray, reach: float) -> np.ndarray:
-    """(2, 2) a modelled person's route, m: from its start to `reach` m beyond its exit, on the line from
-    the start through the exit (the exit itself if the two coincide).
-
-    A person leaves within the waypoint radius `reach` of its route's end; the end beyond the exit makes
-    one that walks towards it leave at its exit, as the recorded person did, not `reach` m short of it
-    and held there while the recorded person walks on."""
-    way = exit_ - start
-    length = float(np.hypot(*way))
-    return np.stack((start, exit_ + way * (reach / length) if length > 0 else exit_))
 
 
 def _row_scenario(

@@ -3,16 +3,19 @@ its recorded position and velocity while everyone else replays, strays from its 
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from socialzoo.scenarios.recorded_people import exit_route
 from socialzoo.train.people_replay import frame_steps, mean_speeds, replay_world, window_scenario
 
 if TYPE_CHECKING:
     from socialzoo.core.config import WorldConfig
     from socialzoo.data.tracks import Recording
+    from socialzoo.scenarios.scenario import Scenario
 
 # Frames a person walks closed-loop in the held-out measure (4.8 s, the realism study's horizon).
 HORIZON = 12
@@ -42,7 +45,9 @@ def closed_loop_ade(
     """(n,) each case's mean distance, m, to its recorded positions over `horizon` frames when the
     learned human policy file `policy` walks its person from its recorded position and velocity,
     everyone else on the scene replaying (window_scenario): one batch row per case, `rows` rows per
-    core. A person that leaves at its exit is held where it left, as the realism study holds it.
+    core. As in the realism study (socialzoo.studies.realism_simulation), the person's route ends the
+    waypoint radius beyond its exit (exit_route), so one walking towards it leaves at its exit, not
+    the radius short of it, and is held where it left.
 
     Raises:
         ValueError: a world step that does not divide the recording's frame period.
@@ -55,11 +60,15 @@ def closed_loop_ade(
     steps = frame_steps(recording, world)
     speeds = mean_speeds(recording)
     walls = WallIndex(np.zeros((0, 4)))
+    reach = world.human.waypoint_radius
     people = PeopleConfig(models=f"learned:{policy}")
     ade = np.zeros(len(cases))
     for lo in range(0, len(cases), rows):
         batch = [(int(k), int(s)) for k, s in cases[lo : lo + rows]]
-        scenarios = [window_scenario(recording, s, s + horizon, speeds, subject=k)[0] for k, s in batch]
+        scenarios = [
+            leaving_at_exit(window_scenario(recording, s, s + horizon, speeds, subject=k)[0], reach)
+            for k, s in batch
+        ]
         truth = np.stack([recording.grid([k], s - 1, s + horizon)[0] for k, s in batch])
         core = BatchedCore(
             len(batch), 1, max(sc.num_humans for sc in scenarios), world, walls, people=people, robot_visible=False
@@ -76,3 +85,13 @@ def closed_loop_ade(
             held = np.where(state.human_mask[:, :1], state.human_pos[:, 0], held)
             ade[lo : lo + len(batch)] += np.hypot(*(held - truth[:, f + 1]).T) / horizon
     return ade
+
+
+def leaving_at_exit(scenario: Scenario, reach: float) -> Scenario:
+    """window_scenario's `scenario` with its subject's (slot 0) route points after its entry moved `reach` m
+    beyond its exit (exit_route), so that it leaves at its exit; window_scenario itself, which people_demos
+    builds the demonstrations from, keeps the exit."""
+    route = scenario.human_routes[0]
+    end = exit_route(route[0], route[-1], reach)[1]
+    subject = np.concatenate((route[:1], np.repeat(end[None], len(route) - 1, 0)))
+    return dataclasses.replace(scenario, human_routes=(subject, *scenario.human_routes[1:]))

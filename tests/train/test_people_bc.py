@@ -255,6 +255,20 @@ def test_closed_loop_ade_of_a_policy_that_stops(tmp_path):
     assert (ade > 0.3).all()
 
 
+def test_closed_loop_ade_of_a_walker_that_leaves_at_its_exit(write_walker, tmp_path):
+    """A person alone walking straight at 1 m/s, walked by a policy that walks straight at its waypoint at
+    its preferred speed (its mean recorded speed), follows its track: ADE 0, on the windows that end on its
+    last frame too. Its route ended at its exit, so it left within the 1 m waypoint radius of it and was held
+    there while the recorded person walked on (ADE 0.1 m on that window); it ends the radius beyond the exit
+    now, as in the realism study (exit_route)."""
+    t = np.arange(30)[:, None] * 0.4
+    walker = Track(person=0, first_frame=0, positions=t * np.array([0.6, 0.8]))
+    rec = Recording(name="alone", dt=0.4, num_frames=30, tracks=(walker,), source="test")
+    cases = np.array([[0, 1], [0, 9], [0, 17]])  # the last ends on frame 29, its last
+    ade = closed_loop_ade(rec, cases, write_walker(tmp_path / "walker.safetensors", speed=10.0))
+    np.testing.assert_allclose(ade, 0.0, atol=1e-6)
+
+
 def test_scenes_with_nothing_to_clone_are_named(tmp_path, monkeypatch, capsys):
     # A scene of one frame ended in "max() arg is an empty sequence"; a scene too short for a
     # second window of --window frames (all its demonstrations held out for validation) and a
