@@ -293,7 +293,8 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
 
 
 def read_map(path: str | os.PathLike[str], validate: bool = True) -> Map:
-    """Read a map JSON file (and, by default, validate it).
+    """Read a map JSON file (and, by default, validate it: then a file read again with the same text,
+    under the same path, gives the same Map object, as load_map does).
 
     Raises:
         FileNotFoundError: no such file.
@@ -301,9 +302,17 @@ def read_map(path: str | os.PathLike[str], validate: bool = True) -> Map:
             kind included); the message names the file and the entry.
     """
     where = os.fspath(path)
-    m = map_from_json(read_text(path, "map file", MapError), where)
-    if validate:
-        validate_map(m)
+    text = read_text(path, "map file", MapError)
+    return _validated_file(text, where) if validate else map_from_json(text, where)
+
+
+@functools.lru_cache(maxsize=4)
+def _validated_file(text: str, where: str) -> Map:
+    # A file read again with the same text is the same Map object, as a shipped map is: its wall
+    # index, distance field and graph tables (keyed on the object) are built once, not by every env,
+    # test set and check that loads it (seconds and 100 MiB each for a building of 5,000 walls).
+    m = map_from_json(text, where)
+    validate_map(m)
     return m
 
 
@@ -330,7 +339,8 @@ def load_map(name_or_path: str | os.PathLike[str]) -> Map:
     """A shipped map by name (e.g. "gdc1") or a map file by path (anything ending in .json).
 
     Shipped maps are loaded, validated and cached once per process: repeated calls return the
-    same Map object. Files are read and validated on every call.
+    same Map object. Files are read on every call; a file whose text is unchanged returns the Map
+    object of its latest reads (the last few files' are kept), so its tables are built once.
 
     Shipped maps live in the top-level maps/ folder, installed as the package socialzoo._maps.
 

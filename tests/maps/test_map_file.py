@@ -44,6 +44,18 @@ def test_load_is_cached_per_name():
     assert load_map("gdc1") is load_map("gdc1")
 
 
+def test_a_map_file_read_again_unchanged_is_the_same_map(tmp_path):
+    # Its wall index and the tables keyed on the map object are built once, not by every env.
+    path = _write(tmp_path, _room(), name="room.json")
+    m = load_map(path)
+    assert load_map(str(path)) is m and m.wall_index is load_map(path).wall_index
+    data = _room()
+    data["walls"] = [*data["walls"], [2.0, 2.0, 3.0, 2.0]]
+    _write(tmp_path, data, name="room.json")  # the file changed: read anew
+    changed = load_map(path)
+    assert changed is not m and changed.num_walls == m.num_walls + 1
+
+
 def _write(tmp_path, data, name="bad.json"):
     path = tmp_path / name
     path.write_text(data if isinstance(data, str) else json.dumps(data))
