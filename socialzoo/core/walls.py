@@ -9,8 +9,8 @@ from functools import cached_property
 import numpy as np
 
 from socialzoo.core.geometry import (
+    PARALLEL_EPS,
     closest_point_on_segment,
-    ray_segment_hit,
     segment_hits_box,
     segments_intersect,
     to_frame,
@@ -373,14 +373,31 @@ class WallIndex:
             Ranges, shape (N, M), metres, in [0, max_range].
         """
         t = self.table(cell_size=max(self.cell_size, max_range / 4.0), reach=max_range)
+        origins = np.ascontiguousarray(origins, dtype=np.float64)
         query, wall = t.candidates(t.cells(origins))
         direction = np.stack((np.cos(angles), np.sin(angles)), axis=-1)  # (N, M, 2)
-        hit = ray_segment_hit(
-            origins[query][:, None, :],
-            direction[query],
-            self.wall_a[wall][:, None, :],
-            self.wall_b[wall][:, None, :],
-        )  # (pairs, M)
         ranges = np.full(angles.shape, float(max_range))
-        np.minimum.at(ranges, query, hit)
+        # Compiled pair by pair: a (pairs, M) array per temporary was GiBs for a building's
+        # hundreds of walls within a 10 m range at B = 512.
+        _lower_to_hits(origins, direction, query, wall, self.wall_a, self.wall_b, ranges)
         return ranges
+
+
+@kernel
+def _lower_to_hits(origins, direction, query, wall, wall_a, wall_b, ranges):  # type: ignore[no-untyped-def]
+    """Lower ranges (N, M) to where each ray of origin query[p] (direction (N, M, 2)) hits wall[p],
+    for every candidate pair p: socialzoo.core.geometry.ray_segment_hit's arithmetic, pair by pair.
+    A tie takes the later pair, as np.minimum.at does (the sign of a zero range is kept)."""
+    for p in range(query.shape[0]):
+        q, w = query[p], wall[p]
+        sx, sy = wall_b[w, 0] - wall_a[w, 0], wall_b[w, 1] - wall_a[w, 1]
+        aox, aoy = wall_a[w, 0] - origins[q, 0], wall_a[w, 1] - origins[q, 1]
+        for m in range(direction.shape[1]):
+            dx, dy = direction[q, m, 0], direction[q, m, 1]
+            denom = dx * sy - dy * sx
+            if abs(denom) <= PARALLEL_EPS:
+                continue
+            t = (aox * sy - aoy * sx) / denom
+            u = (aox * dy - aoy * dx) / denom
+            if t >= 0.0 and u >= 0.0 and u <= 1.0 and t <= ranges[q, m]:
+                ranges[q, m] = t
