@@ -9,6 +9,7 @@ import numpy as np
 
 from socialzoo.maps.map_file import POSE_CLEARANCE, Map
 from socialzoo.maps.segments import segments_free
+from socialzoo.nav.graph import graph_of
 from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario
@@ -43,9 +44,9 @@ def with_robots(scenario: Scenario, m: Map, num_robots: int) -> Scenario:
     Robot 0 keeps the scenario's own start and goal. Each extra robot starts on a legal pose at
     least START_CLEARANCE from every person's spawn and every robot placed before it, drawn
     uniformly among such poses; when none is left, on a spot near a legal pose (START_REACH,
-    START_TRIES) as clear. Its goal is a legal pose other than the one it starts on or near.
-    Every draw comes from a generator seeded by the scenario seed and the robot count, so the
-    result is as reproducible as the scenario itself.
+    START_TRIES) as clear, in sight of that pose and of the navigation graph. Its goal is a legal
+    pose other than the one it starts on or near. Every draw comes from a generator seeded by the
+    scenario seed and the robot count, so the result is as reproducible as the scenario itself.
 
     Raises:
         RobotPlacementError: no clear start for an extra robot (names the map, the scenario seed
@@ -111,11 +112,14 @@ def _spot_near_poses(
         & (wall_dist >= POSE_CLEARANCE)
         & segments_free(m.wall_index, spot, poses[anchor, :2])
     )
+    # A spot in sight of its legal pose but of no edge or node of the navigation graph would end the
+    # reset in the navigator's AttachError: the robot has no plan from it.
+    good[good] = graph_of(m).attach(spot[good], strict=False).found
     if not good.any():
         raise RobotPlacementError(
             f"{m.where}: scenario seed {scenario.seed} with {num_robots} robots: no start for robot {robot} "
             f"keeps {START_CLEARANCE:g} m from the scenario's {scenario.num_humans} people and the other robots "
-            f"(no clear legal pose, none of {START_TRIES} spots near one)"
+            f"(no clear legal pose, none of {START_TRIES} spots near one that joins the navigation graph)"
         )
     k = int(np.argmax(good))
     return int(anchor[k]), np.array([spot[k, 0], spot[k, 1], poses[anchor[k], 2]])
