@@ -775,12 +775,19 @@ METRICS: dict[str, Metric] = {m.name: m for m in _ENTRIES}
 if len(METRICS) != len(_ENTRIES):
     raise ValueError("socialzoo.core.metrics: two registry entries share a name")
 
+_PACKAGE_NAMES = frozenset(METRICS)
+
+
+def added_names() -> tuple[str, ...]:
+    """The names register_metric added (tasks written outside the package), in the order added."""
+    return tuple(name for name in METRICS if name not in _PACKAGE_NAMES)
+
 
 def register_metric(**fields: Any) -> Metric:
     """Add a metric of a task written outside the package (Metric's fields; its `sources` may name
-    that task) to the registry, where the results store, the benchmark's summaries and tables, the
-    figures and the viewer read it, as they read the package's entries. Call it where the task is
-    registered, once.
+    that task) to the registry, where the results store, the benchmark's summaries and tables and the
+    viewer's metric table (`added_names`) read it, as they read the package's entries; a figure draws
+    it where its selection names it. Call it where the task is registered, once.
 
     Raises:
         ValueError: a malformed entry (Metric's checks), a source that is not an identifier, or a

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.core.metrics import metric, registered
+from socialzoo.core.metrics import added_names, metric, registered
 from socialzoo.core.validation import check_int
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
@@ -350,9 +350,12 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
     }
 
 
-def metric_rows(names: Sequence[str] = VIEWER_METRICS) -> list[list[Any]]:
-    """The viewer's metric table: [name, heading, digits, kind] per metric, from the registry."""
-    return [[m.name, m.heading, m.digits, m.kind] for m in map(metric, names)]
+def metric_rows(names: Sequence[str] | None = None) -> list[list[Any]]:
+    """The viewer's metric table: [name, heading, digits, kind] per metric, from the registry
+    (default: VIEWER_METRICS, then the metrics of tasks written outside the package, which
+    socialzoo.core.metrics.register_metric added)."""
+    chosen = (*VIEWER_METRICS, *added_names()) if names is None else names
+    return [[m.name, m.heading, m.digits, m.kind] for m in map(metric, chosen)]
 
 
 def encode_replay(

@@ -251,3 +251,37 @@ def test_torchrl_reports_no_success_for_a_task_whose_metrics_have_none():
     td = env.rollout(6, break_when_any_done=False)  # every episode ends on step 5
     assert td["next", "done"].any() and not td["next", "success"].any()
     assert td["next", "success"].dtype == torch.bool
+
+
+def test_the_viewer_shows_a_metric_that_a_module_of_one_s_own_registers(tmp_path, monkeypatch):
+    """docs/architecture.md's metric of a task written outside the package: register_metric said the
+    viewer reads it, but the viewer's table listed only VIEWER_METRICS, a tuple bound as a default."""
+    from socialzoo.cli import main
+    from socialzoo.core import metrics
+
+    (tmp_path / "my_metric_task.py").write_text(
+        "from toy_task import ToyReachTask\n"
+        "from socialzoo.core.metrics import register_metric\n"
+        "from socialzoo.env.registration import register_task\n"
+        "class Twice(ToyReachTask):\n"
+        "    name = 'toy_twice'\n"
+        "    def episode_metrics(self, rows, robot=0):\n"
+        "        return [{**m, 'twice_steps_own': 2 * m['steps']} for m in super().episode_metrics(rows, robot)]\n"
+        "register_metric(name='twice_steps_own', label='twice the steps', unit='', better='neither',\n"
+        "                kind='int', description='Twice the steps.', sources=('toy_twice',))\n"
+        "register_task('mine/ToyTwice-v0', 'my_metric_task:Twice', max_steps=20)\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    if "toy_twice_heading" not in POLICIES:
+        register_policy("toy_twice_heading", "toy_task:ToyHeadForGoal", task="toy_twice")
+    page = tmp_path / "twice.html"
+    try:
+        argv = ["replay", "--env", "my_metric_task:mine/ToyTwice-v0", "--policy", "toy_twice_heading"]
+        assert main([*argv, "--out", str(page)]) == 0
+        assert metrics.added_names() == ("twice_steps_own",)
+    finally:
+        metrics.METRICS.pop("twice_steps_own", None)
+        metrics._TASK_SOURCES.discard("toy_twice")
+    text = page.read_text()
+    assert '["twice_steps_own","twice the steps",' in text.replace(", ", ",")
+    assert '"twice_steps_own":40' in text.replace(" ", "")
