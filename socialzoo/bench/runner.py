@@ -106,6 +106,9 @@ class RunSpec:
             trial's metrics.
         guideline_metrics: add the guidelines' Table I metrics (socialzoo.bench.guideline_recorder,
             the `gl_*` names) to every trial's metrics.
+        families: set from env_configs: the scenario families they play that this process
+            registered (socialzoo.scenarios.catalogue.register_family), which the BatchedRunner
+            registers in a worker process that never ran register_family.
     """
 
     test_sets: Mapping[str, TestSet | CaseSet]
@@ -114,9 +117,14 @@ class RunSpec:
     batch_size: int = 64
     human_metrics: bool = False
     guideline_metrics: bool = False
+    families: tuple[Any, ...] = field(init=False, default=())
 
     def __post_init__(self) -> None:
+        from socialzoo.scenarios.catalogue import added_families
+
         check_int("RunSpec", "batch_size", self.batch_size, low=1)
+        played = (getattr(config, "family", None) for config in self.env_configs.values())
+        object.__setattr__(self, "families", added_families(played))
         for name, config in self.env_configs.items():
             if getattr(config, "num_learned_humans", 0):
                 raise ValueError(
@@ -209,6 +217,10 @@ class BatchedRunner:
         stack_policies: bool = True,
         given: Mapping[str, Any] | None = None,
     ) -> None:
+        from socialzoo.scenarios.catalogue import register_family
+
+        for family in spec.families:  # a no-op where they were registered
+            register_family(family)
         self.spec = spec
         self.compact_tail = compact_tail
         self.stack_policies = stack_policies

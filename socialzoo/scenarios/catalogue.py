@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
@@ -99,6 +99,20 @@ FAMILIES: dict[str, ScenarioFamily | str] = {
         for scene in ("eth", "hotel", "univ", "zara1", "zara2")
     },
 }
+
+
+# The package's own families: every process knows them; register_family adds others in its own.
+_PACKAGE_FAMILIES = frozenset(FAMILIES)
+
+
+def added_families(names: Iterable[str | None]) -> tuple[ScenarioFamily, ...]:
+    """The families among `names` that register_family added in this process (not the package's
+    own, which a new process loads by name): what a worker process must be given to play them."""
+    return tuple(
+        get_family(name)
+        for name in dict.fromkeys(names)
+        if name in FAMILIES and name not in _PACKAGE_FAMILIES
+    )
 
 
 def register_family(family: ScenarioFamily | type[ScenarioFamily]) -> ScenarioFamily:

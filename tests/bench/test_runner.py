@@ -303,3 +303,36 @@ def test_workers_end_when_their_parent_is_killed(tmp_path):
     for pid in left:
         os.kill(pid, signal.SIGKILL)
     assert not left, f"workers {left} outlived their killed parent"
+
+
+def test_worker_processes_play_a_family_registered_in_this_one(tmp_path, monkeypatch):
+    """A family of one's own, registered by register_family (docs/architecture.md), played by two
+    worker processes: a spawned worker never ran register_family and ended in KeyError: unknown
+    scenario family. The RunSpec carries it and the runner registers it there."""
+    from socialzoo.bench.runner import CaseSet, RunSpec
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.scenarios.catalogue import FAMILIES, register_family
+
+    (tmp_path / "my_families_own.py").write_text(
+        "from socialzoo.scenarios.catalogue import SeedSplit\n"
+        "from socialzoo.scenarios.families import HallwayHeadOn\n"
+        "class HeadOnOwn(HallwayHeadOn):\n"
+        "    name = 'head_on_own'\n"
+        "    splits = {'test': SeedSplit(0, 4)}\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    from my_families_own import HeadOnOwn  # registers nothing at import: only this process does
+
+    register_family(HeadOnOwn)
+    try:
+        spec = RunSpec(
+            test_sets={"own": CaseSet("action_selection", "test", 4)},
+            env_configs={"own": EnvConfig(family="head_on_own", max_steps=MAX_STEPS)},
+            policies={"goalone": {}},
+            batch_size=2,
+        )
+        assert [f.name for f in spec.families] == ["head_on_own"]
+        trials = [Trial("goalone", "own", k) for k in range(4)]
+        assert as_rows(evaluate(trials, spec, workers=2)) == as_rows(evaluate(trials, spec, workers=1))
+    finally:
+        FAMILIES.pop("head_on_own", None)
