@@ -146,20 +146,24 @@ class SuiteConfig:
 
 def resolve_scenarios(names: Sequence[str]) -> list[SuiteScenario]:
     """The scenarios a run names, in order (a name given twice, once): Fig. 7 letters, suite
-    family names, or other registered families' names (case-insensitive).
+    family names, or other registered families' names (case-insensitive; MODULE:NAME imports
+    MODULE first, for a family it registers).
 
     Raises:
         SuiteError: names that are none of these (every one listed, with the suite's letters and
             names and the registered families), or suite scenarios whose family is not registered
             yet (listed, with the registered families).
     """
-    from socialzoo.scenarios.catalogue import FAMILIES, get_family
+    from socialzoo.scenarios.catalogue import FAMILIES, family_name, get_family
 
     by_key = {e.letter: e for e in SUITE} | {e.family: e for e in SUITE}
     chosen: dict[str, SuiteScenario] = {}
     unknown, unregistered = [], []
     for raw in names:
-        key = raw.strip().lower()
+        try:
+            key = family_name(raw.strip()).lower()
+        except ValueError as err:
+            raise SuiteError(str(err)) from None
         entry = by_key.get(key)
         name = entry.family if entry is not None else key
         if entry is None and key not in FAMILIES:

@@ -22,7 +22,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
     )
-    parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
+    parser.add_argument(
+        "--family",
+        default=None,
+        help="a scenario family instead of the benchmark's (MODULE:NAME for a family that MODULE registers)",
+    )
     parser.add_argument("--seed", type=count, default=0, help="scenario seed (default 0)")
     parser.add_argument("--view", choices=("follow", "map"), default="follow", help="camera")
     parser.add_argument("--stride", type=positive_int, default=4, help="steps per frame (default 4 = 0.1 s)")
@@ -39,9 +43,10 @@ def run_demo(args: argparse.Namespace) -> int:
     from socialzoo.env.config import EnvConfig
     from socialzoo.env.scenario_source import ScenarioStream
     from socialzoo.maps.map_file import MapError, load_map
+    from socialzoo.scenarios.catalogue import family_name
 
     try:
-        config = EnvConfig(map=args.map, family=args.family)
+        config = EnvConfig(map=args.map, family=args.family and family_name(args.family))
         m = load_map(config.map)
         scenario = ScenarioStream.for_config(m, 1, config).make(args.seed)
         policy = (

@@ -49,7 +49,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
     )
-    parser.add_argument("--family", default=None, help="a scenario family instead of the benchmark's")
+    parser.add_argument(
+        "--family",
+        default=None,
+        help="a scenario family instead of the benchmark's (MODULE:NAME for a family that MODULE registers)",
+    )
     parser.add_argument("--seed", type=count, default=None, help="scenario seed (default 0)")
     parser.add_argument(
         "--max-steps", type=at_least(1), default=None, help="episode time limit override, steps"
@@ -188,10 +192,12 @@ def _replay_seed(args: argparse.Namespace) -> int:
     from socialzoo.env.config import EnvConfig
     from socialzoo.maps.map_file import load_map
     from socialzoo.render.replay_html import write_replay_html
+    from socialzoo.scenarios.catalogue import family_name
 
     specs = _specs(args) or [PolicySpec.parse("ref")]
     seed = 0 if args.seed is None else args.seed
-    config = EnvConfig(map=args.map, family=args.family)  # no --map: the family's, else gdc1
+    family = args.family and family_name(args.family)
+    config = EnvConfig(map=args.map, family=family)  # no --map: the family's, else gdc1
     if args.max_steps is not None:
         config = config.replace(max_steps=args.max_steps)
     m = load_map(config.map)
@@ -204,7 +210,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
         laser_stride=args.stride,
         world_map=m,
     )
-    kind = f"{args.family} scenario" if args.family else "scenario"
+    kind = f"{family} scenario" if family else "scenario"
     title = f"{' vs '.join(t.label for t in traces)} on {m.name}, {kind} seed {seed}"
     subtitle = (
         f"{len(scenario.human_spawn)} humans; time limit {config.max_steps * config.dt:.0f} s "

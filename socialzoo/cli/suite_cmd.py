@@ -40,7 +40,8 @@ def register(subparsers: Any) -> None:
         type=_names,
         default=None,
         help="comma-separated scenarios: Fig. 7 letters (a-y), suite names (frontal_approach, ...) or any "
-        "registered scenario family's name (default: all 25 of the suite)",
+        "registered scenario family's name, MODULE:NAME for one that MODULE registers (default: all 25 of "
+        "the suite)",
     )
     parser.add_argument(
         "--task",

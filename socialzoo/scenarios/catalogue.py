@@ -134,6 +134,24 @@ def register_family(family: ScenarioFamily | type[ScenarioFamily]) -> ScenarioFa
     return family
 
 
+def family_name(text: str) -> str:
+    """The family a command line names: NAME, or MODULE:NAME for a family that MODULE registers when
+    imported (imported here, as Gymnasium's MODULE:ID names an id a module registers).
+
+    Raises:
+        ValueError: MODULE cannot be imported, or registers no family NAME.
+    """
+    module, sep, name = text.rpartition(":")
+    if sep:
+        try:
+            importlib.import_module(module)
+        except ImportError as err:
+            raise ValueError(f"scenario family {text}: cannot import {module!r} ({err})") from None
+        if name not in FAMILIES:
+            raise ValueError(f"scenario family {text}: importing {module!r} registers no family {name!r}")
+    return name
+
+
 def get_family(name: str) -> ScenarioFamily:
     """The registered family `name` (a registry path is loaded and kept).
 

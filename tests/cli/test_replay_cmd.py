@@ -59,6 +59,41 @@ def test_replay_and_demo_of_a_family_play_on_its_own_map(tmp_path, capsys, monke
     assert "frames;" in capsys.readouterr().out
 
 
+def test_a_family_that_a_module_of_one_s_own_registers_is_named_as_module_colon_name(
+    tmp_path, capsys, monkeypatch
+):
+    """docs/architecture.md: a family registered from your own code is then accepted by `socialzoo demo
+    --family` and `socialzoo replay --family`; the command's process never imported that code, so the
+    name was refused. MODULE:NAME imports MODULE first, as MODULE:ID does for an id."""
+    from socialzoo.bench.suite import SuiteError, resolve_scenarios
+    from socialzoo.scenarios.catalogue import FAMILIES
+
+    (tmp_path / "my_corridor_own.py").write_text(
+        "from socialzoo.scenarios.catalogue import register_family\n"
+        "from socialzoo.scenarios.families import HallwayHeadOn\n"
+        "class CorridorOwn(HallwayHeadOn):\n"
+        "    name = 'corridor_own'\n"
+        "register_family(CorridorOwn)\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    out = tmp_path / "own.html"
+    argv = ["replay", "--policy", "goalone", "--seed", "2", "--max-steps", "20", "--out", str(out)]
+    try:
+        assert socialzoo_main([*argv, "--family", "my_corridor_own:corridor_own"]) == 0
+        assert capsys.readouterr().out.startswith(f"{out}: 1 episode(s) on hallway, seed 2; ")
+        assert embedded(out)["title"] == "goalone on hallway, corridor_own scenario seed 2"
+        (scenario,) = resolve_scenarios(["my_corridor_own:corridor_own"])
+        assert scenario.name == "corridor_own"
+    finally:
+        FAMILIES.pop("corridor_own", None)
+    assert socialzoo_main([*argv, "--family", "no_such_module_own:corridor_own"]) == 2
+    assert "cannot import 'no_such_module_own'" in capsys.readouterr().err
+    assert socialzoo_main([*argv, "--family", "my_corridor_own:other_own"]) == 2
+    assert "importing 'my_corridor_own' registers no family 'other_own'" in capsys.readouterr().err
+    with pytest.raises(SuiteError, match="cannot import 'no_such_module_own'"):
+        resolve_scenarios(["no_such_module_own:x"])
+
+
 def test_replay_options_reach_the_file(tmp_path):
     out = tmp_path / "ep.html"
     argv = ["replay", "--map", "open_room", "--seed", "1", "--max-steps", "30", "--stride", "5"]
