@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -13,6 +13,9 @@ from socialzoo.bench.guideline_metrics import GuidelineParams, Trajectories, gui
 from socialzoo.core.geometry import wall_distances
 from socialzoo.core.state import WorldState
 from socialzoo.env.world import robot_collisions, robot_velocity_vectors
+
+if TYPE_CHECKING:
+    from socialzoo.env.tasks.base import TaskStep
 
 
 @dataclass(frozen=True)
@@ -25,7 +28,7 @@ class EpisodeFrame:
         people_radius: m.
         goal_radius: the goal is reached within this centre distance, m.
         time_limit: s, or None: the timeout rule of a recorder that is not told which episodes the
-            task's time limit ended (GuidelineRecorder.record without `truncated`).
+            task's time limit ended (GuidelineRecorder.record without the step).
     """
 
     dt: float
@@ -56,7 +59,8 @@ class GuidelineRecorder:
     centres, velocities and presence, the other robots' centres, and the world's own contact flags
     (the world step's collision rules, socialzoo.env.world.robot_collisions: a person's centre within
     the collision distance, the footprint touching a wall; a robot touching a closed door of a
-    scenario script collides as with a wall). The samples between a row's reset and its end are its
+    scenario script collides as with a wall), and the collisions the task judged on the step when
+    `record` is given it. The samples between a row's reset and its end are its
     episode (sample 0 is the start). Samples that no running episode needs any more are dropped, so
     memory stays within the longest running episode.
 
@@ -100,17 +104,37 @@ class GuidelineRecorder:
         straight = np.hypot(*(state.robot_goal[rows, 0, :2] - state.robot_pose[rows, 0, :2]).T)
         self.shortest[rows] = straight if route is None else np.maximum(route, straight)
 
-    def record(self, task: Any, truncated: np.ndarray | None = None) -> None:
-        """Take a sample of every row after a step; `truncated` (B, R): the step's TaskStep.truncated.
+    def record(self, task: Any, step: TaskStep | None = None) -> None:
+        """Take a sample of every row after a step; `step`: the task's judgement of that step.
 
-        Given, an episode times out (gl_timeout) when the task's own time limit ended it, however the
-        task applies it (CrowdNav ends an episode at the step starting 1 s before its time limit; a
-        recorded scene has its own budget); without it, when it lasted the frame's time_limit."""
-        self.samples.append(self._sample(task.core))
-        if truncated is not None:
-            if self.truncated is None:
-                self.truncated = np.zeros(len(self.start), dtype=bool)
-            self.truncated |= np.asarray(truncated, dtype=bool).reshape(len(self.start), -1)[:, 0]
+        Given, an episode times out (gl_timeout) when the task's own time limit ended it
+        (TaskStep.truncated), however the task applies it (CrowdNav ends an episode at the step
+        starting 1 s before its time limit; a recorded scene has its own budget); and a collision
+        the task judged on the step (its info's wall_collision, human_collisions) is a contact at
+        this sample besides the world's own flags (CrowdNav judges one along the step, which the
+        bodies may have left by its end; a person the task hit that the world's flags miss is the
+        one nearest the robot). Without it, the timeout is an episode that lasted the
+        frame's time_limit and the contacts are the world's alone."""
+        sample = self._sample(task.core)
+        self.samples.append(sample)
+        if step is None:
+            return
+        b = len(self.start)
+        if self.truncated is None:
+            self.truncated = np.zeros(b, dtype=bool)
+        self.truncated |= np.asarray(step.truncated, dtype=bool).reshape(b, -1)[:, 0]
+        info = step.info
+        if "wall_collision" in info:
+            sample["wall_contact"] |= np.asarray(info["wall_collision"], dtype=bool).reshape(b, -1)[:, 0]
+        if "human_collisions" in info:
+            missed = np.asarray(info["human_collisions"]).reshape(b, -1)[:, 0] > 0
+            rows = np.flatnonzero(missed & ~sample["human_contact"].any(axis=1))
+            # The task does not say whom it hit: the person nearest the robot at the step's end.
+            dist = np.hypot(
+                *(sample["people_pos"][rows] - sample["robot_pos"][rows, None]).transpose(2, 0, 1)
+            )
+            nearest = np.where(sample["people_mask"][rows], dist, np.inf).argmin(axis=1)
+            sample["human_contact"][rows, nearest] = True
 
     def _sample(self, core: Any) -> dict[str, np.ndarray]:
         s: WorldState = core.state

@@ -353,7 +353,7 @@ class BatchedRunner:
             step = task.step(actions)
             done |= step.terminated | step.truncated
             if table_one is not None:
-                table_one.record(task, step.truncated)
+                table_one.record(task, step)
             if humans is not None:
                 humans.update(
                     before, task.world_state, step.detail.events.human_blocked, config.dt, done.all(axis=1)

@@ -145,3 +145,33 @@ def test_table_one_times_out_where_the_task_s_own_time_limit_ended_the_episode()
     )
     assert episode["timeout"] == 1.0 and episode["steps"] == 17
     assert episode["gl_timeout"] and not episode["gl_success"] and episode["gl_collisions"] == 0
+
+
+def test_table_one_counts_a_collision_the_crowdnav_task_judged_in_the_middle_of_a_step(monkeypatch):
+    # The robot drives +y at 1 m/s (0.25 m a step) past a person standing 0.59 m off its line (radii
+    # 0.3 + 0.3): the step from y = -0.125 to 0.125 comes within 0.59 m half-way (the task's
+    # collision) and ends 0.603 m apart, where the world's contact flags see nothing.
+    from socialzoo.env.crowd_config import CrowdNavConfig
+    from socialzoo.env.crowd_source import CrowdCaseSource
+    from socialzoo.scenarios.crowd_cases import CrowdCase
+
+    config = CrowdNavConfig.variant("").replace(observation="flat")
+    people = np.array([[0.59, 0.0]] + [[-5.0 - k, 5.0] for k in range(config.cases.num_humans - 1)])
+    case = CrowdCase(
+        seed=0,
+        robot_starts=np.array([[0.0, -1.125, math.pi / 2]]),
+        robot_goals=np.array([[0.0, 4.0, math.pi / 2]]),
+        human_starts=people,
+        human_goals=people.copy(),  # standing still
+    )
+    monkeypatch.setattr(CrowdCaseSource, "fixed", lambda self, split, indices: [case for _ in indices])
+
+    def ahead(obs, task):
+        return np.tile(np.array([1.0, 0.0], dtype=np.float32), (len(obs), 1))
+
+    (episode,) = play_cases(
+        "crowdnav", ahead, "val", [0], batch_size=1, config=config, guideline_metrics=True
+    )
+    assert episode["collision"] == 1.0 and episode["steps"] == 5
+    assert 0 < episode["gl_min_distance_to_human"] < 0.01  # apart at every sample
+    assert episode["gl_human_collisions"] == episode["gl_collisions"] == 1 and not episode["gl_success"]
