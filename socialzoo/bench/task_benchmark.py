@@ -24,11 +24,18 @@ class TaskId:
         env_id: the Gymnasium id.
         task: the task's registry name or "module:Class" path.
         kwargs: the id's config fields (plain values).
+        module: the module named before the id ("module:ns/Name-vN"), imported to register it; "" if none.
     """
 
     env_id: str
     task: str
     kwargs: dict[str, Any]
+    module: str = ""
+
+    @property
+    def name(self) -> str:
+        """The id as the command line takes it again: "module:ns/Name-vN" when a module registered it."""
+        return f"{self.module}:{self.env_id}" if self.module else self.env_id
 
     @classmethod
     def of(cls, env_id: str) -> TaskId:
@@ -58,7 +65,7 @@ class TaskId:
         task = kwargs.pop("task", None)
         if not isinstance(task, str):
             raise ValueError(f"{env_id} is not a task's id (its kwargs name no task)")
-        return cls(env_id, task, kwargs)
+        return cls(env_id, task, kwargs, module)
 
     def make(self, batch_size: int = 1, **overrides: Any) -> Any:
         """The task of B = batch_size rows, with config overrides."""
@@ -133,7 +140,7 @@ def evaluate_stored(
     where = str(getattr(config, "map", None) or probe.name)
     with ResultsStore(store_path) as store:
         store.register_config(
-            digest, {"task": config.to_dict(), "split": split, "policy": spec, "env_id": task.env_id}
+            digest, {"task": config.to_dict(), "split": split, "policy": spec, "env_id": task.name}
         )
         have = store.stored_indices(spec, test_set, digest)
         todo = [k for k in range(total) if k not in have]

@@ -232,6 +232,10 @@ def test_the_command_line_reaches_an_id_that_a_module_of_one_s_own_registers(tmp
         main(["replay", "--env", "my_tasks:mine/ToyReach-v0", "--policy", "toy_heading", "--out", str(page)])
         == 0
     )
+    capsys.readouterr()
+    # Its stored trials name the command that plays them with the module, as the id was given.
+    assert main(["replay", "--results", str(out), "--trial", "0", "--out", str(page)]) == 2
+    assert "socialzoo replay --env my_tasks:mine/ToyReach-v0 --split test" in capsys.readouterr().err
     assert main(["benchmark", "--maps", "no_such_module:mine/ToyReach-v0", *args]) == 2
     assert "cannot import 'no_such_module'" in capsys.readouterr().err
 
