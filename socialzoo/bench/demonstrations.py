@@ -36,12 +36,15 @@ from socialzoo.bench.tables import write_text_atomic
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
 from socialzoo.nav.subpolicies import ACTION_NAMES
-from socialzoo.scenarios.scenario_sets import TestSet
+from socialzoo.scenarios.scenario_sets import TestSet, evaluation_seeds
 
 logger = logging.getLogger(__name__)
 
 # Base seed of the demonstration scenarios; the test sets use 20220001 to 20220004.
 DEMO_BASE_SEED = 20220100
+# On a map without a registered test set 20220100 is its generated test set's
+# (scenario_sets.CUSTOM_TEST_SEED): its demonstrations come from this base seed.
+OTHER_MAP_DEMO_SEED = 20220200
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -55,7 +58,9 @@ class DemoConfig:
         policy_kwargs: its make_policy keyword arguments.
         map: map name; scenarios are drawn with the benchmark generator from their own seeds.
         episodes: number of episodes (scenarios 0 .. episodes - 1 of the demonstration set).
-        base_seed: seed of the demonstration scenario set.
+        base_seed: seed of the demonstration scenario set; None: DEMO_BASE_SEED, or on a map without
+            a registered test set OTHER_MAP_DEMO_SEED (DEMO_BASE_SEED is that map's test set's). A
+            base seed of one of the map's validation or test sets is refused (evaluation_seeds).
         chunk_episodes: episodes per chunk file.
         batch_size: env rows stepped together.
         env_overrides: EnvConfig.replace keywords (plain JSON), e.g. {"max_steps": 1600}.
@@ -65,7 +70,7 @@ class DemoConfig:
     policy_kwargs: Mapping[str, Any] = field(default_factory=dict)
     map: str = "gdc1"
     episodes: int = 100
-    base_seed: int = DEMO_BASE_SEED
+    base_seed: int | None = None
     chunk_episodes: int = 25
     batch_size: int = 64
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -75,10 +80,19 @@ class DemoConfig:
             raise ValueError(
                 f"DemoConfig.policy: unknown policy {self.policy!r}; known: {', '.join(sorted(POLICIES))}"
             )
-        for name, low in (("episodes", 1), ("chunk_episodes", 1), ("batch_size", 1), ("base_seed", 0)):
-            check_int("DemoConfig", name, getattr(self, name), low=low)
         if not isinstance(self.map, str) or not self.map:
             raise ValueError(f"DemoConfig.map must be a map name, got {self.map!r}")
+        reserved = evaluation_seeds(self.map)
+        if self.base_seed is None:
+            seed = DEMO_BASE_SEED if DEMO_BASE_SEED not in reserved else OTHER_MAP_DEMO_SEED
+            object.__setattr__(self, "base_seed", seed)
+        for name, low in (("episodes", 1), ("chunk_episodes", 1), ("batch_size", 1), ("base_seed", 0)):
+            check_int("DemoConfig", name, getattr(self, name), low=low)
+        if self.base_seed in reserved:
+            raise ValueError(
+                f"DemoConfig.base_seed {self.base_seed} is the base seed of a validation or test set of map "
+                f"{self.map!r}: demonstrations are training data"
+            )
 
     def to_json(self) -> dict[str, Any]:
         """The config as plain JSON values (written into the recording's metadata)."""
@@ -89,6 +103,7 @@ class DemoConfig:
 
     def test_set(self) -> TestSet:
         """The demonstration scenarios as a TestSet (name "<map>-demos")."""
+        assert self.base_seed is not None  # resolved in __post_init__
         return TestSet(self.map, self.base_seed, self.episodes, name=f"{Path(self.map).stem}-demos")
 
 

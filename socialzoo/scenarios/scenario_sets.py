@@ -117,6 +117,16 @@ def map_case_sets(map_name: str) -> dict[str, TestSet]:
     return sets
 
 
+def evaluation_seeds(map_name: str) -> frozenset[int]:
+    """The base seeds of every fixed set the map `map_name` is validated or tested on: its map_case_sets,
+    and the generated quick set of a map without a registered test set (socialzoo.bench.test_sets). A
+    set of training scenarios on the map (demonstrations, DAgger's rollouts) must use none of them."""
+    seeds = {ts.base_seed for ts in map_case_sets(map_name).values()}
+    if f"{map_name}-test" not in TEST_SETS:
+        seeds.add(CUSTOM_QUICK_SEED)
+    return frozenset(seeds)
+
+
 def get_test_set(name: str) -> TestSet:
     """A named test set: "gdc1-test", "ghc3-test" (2000 each), "gdc1-quick", "ghc3-quick" (100 each).
 

@@ -57,3 +57,22 @@ def test_interrupted_recording_resumes(tmp_path, rooms_path, monkeypatch):
     other = DemoConfig(map=rooms_path, episodes=4, chunk_episodes=2, env_overrides={"max_steps": 50})
     with pytest.raises(DemonstrationError, match="another config"):
         record_demonstrations(target, other)
+
+
+def test_demonstrations_are_none_of_the_maps_test_scenarios(tmp_path, rooms_path):
+    """On a map without a registered test set the demonstrations' default base seed was its generated
+    test set's (20220100): BC, GAIL, DAgger and PIPS trained on the scenarios the benchmark tests on."""
+    from socialzoo.bench.test_sets import stored_test_set
+    from socialzoo.scenarios.scenario_sets import map_case_sets
+
+    demos = DemoConfig(map=rooms_path, episodes=3).test_set()
+    tested = stored_test_set(rooms_path, tmp_path, 3)
+    for k in range(3):
+        a, b = demos.scenario(k), tested.scenario(k)
+        assert a.seed != b.seed and not np.array_equal(a.human_spawn, b.human_spawn)
+    assert demos.base_seed not in {ts.base_seed for ts in map_case_sets(rooms_path).values()}
+    assert DemoConfig().base_seed == demonstrations.DEMO_BASE_SEED  # gdc1's demonstrations are as before
+    with pytest.raises(ValueError, match=r"DemoConfig\.base_seed 20220100 .* test set of map"):
+        DemoConfig(map=rooms_path, base_seed=20220100)
+    with pytest.raises(ValueError, match=r"DemoConfig\.base_seed 20220001 .* test set of map 'gdc1'"):
+        DemoConfig(base_seed=20220001)
