@@ -87,13 +87,24 @@ def eligible_tracks(recording: Recording) -> np.ndarray:
 
 
 def split_tracks(recording: Recording) -> dict[str, np.ndarray]:
-    """The scene's eligible tracks split into "test", "val" and "train" (docs/recorded.md gives the rule)."""
+    """The scene's eligible tracks split into "test", "val" and "train" (docs/recorded.md gives the rule).
+
+    A person whose track a gap split in several (socialzoo.data.tracks.MAX_GAP_FRAMES) has all of them in
+    the split of its first one in the permutation, so no person is in two splits."""
     eligible = eligible_tracks(recording)
     rng = np.random.default_rng([zlib.crc32(recording.name.encode()), _SPLIT_STREAM])
     order = eligible[rng.permutation(len(eligible))]
     test = min(TEST_TRACKS, len(order) // 2)
     val = min(VAL_TRACKS, (len(order) * 3) // 20)
-    return {"test": order[:test], "val": order[test : test + val], "train": order[test + val :]}
+    splits: dict[str, list[int]] = {"test": [], "val": [], "train": []}
+    placed: dict[int, str] = {}
+    for k in order.tolist():
+        person = recording.tracks[k].person
+        if person not in placed:
+            filled = len(splits["test"]) >= test
+            placed[person] = "train" if filled and len(splits["val"]) >= val else "val" if filled else "test"
+        splits[placed[person]].append(k)
+    return {name: np.array(tracks, dtype=np.int64) for name, tracks in splits.items()}
 
 
 def replaced_scenario(

@@ -238,6 +238,35 @@ def test_the_replaced_scenario_and_its_json(family: RecordedScene) -> None:
     assert not (test & val or test & train or val & train) and train
 
 
+def test_a_person_split_by_a_gap_is_in_one_split() -> None:
+    # A gap longer than MAX_GAP_FRAMES splits a person into two tracks with one person id; the tracks
+    # were split apart, so the robot could train in the place of a person it is tested in place of.
+    from socialzoo.scenarios.recorded import split_tracks
+
+    tracks = []
+    for track in _recording(count=120).tracks:
+        half = len(track.positions) // 2
+        if track.person % 2 or half < 12:
+            tracks.append(track)
+            continue
+        tracks.append(Track(track.person, track.first_frame, track.positions[:half]))
+        tracks.append(Track(track.person, track.first_frame + half + 5, track.positions[half:]))
+    tracks.sort(key=lambda t: (t.first_frame, t.person))
+    rec = Recording(
+        name="gaps",
+        dt=DT,
+        num_frames=max(t.last_frame for t in tracks) + 1,
+        tracks=tuple(tracks),
+        source="test",
+    )
+    splits = split_tracks(rec)
+    persons = {k: {rec.tracks[i].person for i in v.tolist()} for k, v in splits.items()}
+    assert persons["test"] and persons["val"] and persons["train"]
+    assert not (persons["test"] & persons["val"] or persons["test"] & persons["train"])
+    assert not persons["val"] & persons["train"]
+    assert sum(len(v) for v in splits.values()) == len(set(np.concatenate(list(splits.values())).tolist()))
+
+
 def test_the_open_area_map_is_the_registered_recordings(tmp_path, monkeypatch) -> None:
     # The map file is named after the family: a second recording registered under the same
     # name (docs/recorded.md's "recorded_mine") must get its own walls, not the first one's.
