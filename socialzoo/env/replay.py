@@ -221,11 +221,11 @@ class ReplayRunner:
         robot_vel: (B, R, 2) the robots' velocity vectors after the step, m/s."""
         bank = self.bank
         account_step(
-            self.recorded, was_done, self.dt, bank.people, self.elapsed, self.reacted_at, self.gone,
-            before.human_mask, before.human_pos, after.human_pos, after.human_route, after.human_route_len,
-            self.walked, self.rest, after.robot_pose, after.human_vel, after.human_mask, robot_vel, bank.robot_at,
-            bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK, self.collision_distance**2, self.deviation,
-            self.moves, self.contact, self.walked_into,
+            self.recorded, was_done, self.dt, after.step_count, bank.people, self.elapsed, self.reacted_at,
+            self.gone, self.exit_at, before.human_mask, before.human_pos, after.human_pos, after.human_route,
+            after.human_route_len, self.walked, self.rest, after.robot_pose, after.human_vel, after.human_mask,
+            robot_vel, bank.robot_at, bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK,
+            self.collision_distance**2, self.deviation, self.moves, self.contact, self.walked_into,
         )  # fmt: skip
 
     def summaries(

@@ -212,20 +212,22 @@ def settle_rows(
 
 @kernel
 def account_step(
-    recorded, was_done, dt, people, elapsed, reacted_at, gone, mask_before, pos_before, pos_after, route, route_len,
-    walked, rest, robot_pose, human_vel, human_mask, robot_vel, robot_at, robot_points, robot_track, robot_box, chunk,
-    collision2, deviation, moves, contact, walked_into,
+    recorded, was_done, dt, step_count, people, elapsed, reacted_at, gone, exit_at, mask_before, pos_before,
+    pos_after, route, route_len, walked, rest, robot_pose, human_vel, human_mask, robot_vel, robot_at, robot_points,
+    robot_track, robot_box, chunk, collision2, deviation, moves, contact, walked_into,
 ):  # fmt: skip
     """ReplayRunner.account in place: one step of the recorded rows whose robots' episodes had not all ended
     before it (was_done (B, R)): its time, the reacting people's measures and the robots'.
 
-    The reacting people (when any row has one): the distance each walked in the step (not one who entered
-    during it: its slot's position before the step was its previous occupant's), and the straight way left
-    to its route's end (0 for everyone else). The robots whose episode had not ended: the distance to the
-    recorded person's path (its polyline of robot_points[r] points of robot_track from robot_at[r], with a
-    bounding box robot_box every `chunk` segments) and the moves counted; every robot: the people who walked
-    into it (the onset of a contact at which the person moved towards the robot faster than the robot
-    towards it). Only a row's recorded people's slots: the slots beyond are never present, never react."""
+    The reacting people (when any row has one): the distance each walked in the step, and the straight way
+    left to its route's end (0 for everyone else). A person's walk counts from the step after the one at whose
+    end it reacted (in that one it walked its track, before the place its recorded distance left starts from)
+    to the step it left in (its time counts to that step's end); not in a step during which it entered (its
+    slot's position before the step was its previous occupant's). The robots whose episode had not ended: the
+    distance to the recorded person's path (its polyline of robot_points[r] points of robot_track from
+    robot_at[r], with a bounding box robot_box every `chunk` segments) and the moves counted; every robot: the
+    people who walked into it (the onset of a contact at which the person moved towards the robot faster than
+    the robot towards it). Only a row's recorded people's slots: the slots beyond are never present, never react."""
     b = recorded.shape[0]
     counted = np.zeros(b, dtype=np.bool_)
     off_track, most_points = False, 0
@@ -237,24 +239,34 @@ def account_step(
         if not counted[r]:
             continue
         most_points = max(most_points, robot_points[r])
+        t = step_count[r] * dt  # the row's time after the step, as ReplayRunner's settle_rows takes it
         for s in range(people[r]):
-            off_track = off_track or (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s])
+            reacted = reacted_at[r, s] == reacted_at[r, s]  # not NaN
+            off_track = off_track or (reacted and (not gone[r, s] or exit_at[r, s] == t))
     box_gap = np.empty(max(most_points - 2, 0) // chunk + 1)  # scratch: the most boxes of a path
     for r in range(b):
         if not counted[r]:
             continue
         elapsed[r] += dt
         if off_track:  # as before anyone reacted: every rest stays 0
+            t = step_count[r] * dt
             for s in range(people[r]):
-                if not (reacted_at[r, s] == reacted_at[r, s] and not gone[r, s]):  # NaN: not reacting
-                    rest[r, s] = 0.0
-                    continue
-                if mask_before[r, s]:
+                reacted = reacted_at[r, s] == reacted_at[r, s]  # NaN: not reacting
+                walking = reacted and not gone[r, s]
+                if (
+                    mask_before[r, s]
+                    and reacted
+                    and reacted_at[r, s] != t
+                    and (walking or exit_at[r, s] == t)
+                ):
                     dx, dy = (
                         pos_after[r, s, 0] - pos_before[r, s, 0],
                         pos_after[r, s, 1] - pos_before[r, s, 1],
                     )
                     walked[r, s] += np.sqrt(dx * dx + dy * dy)
+                if not walking:
+                    rest[r, s] = 0.0
+                    continue
                 end = route_len[r, s] - 1
                 ex, ey = route[r, s, end, 0] - pos_after[r, s, 0], route[r, s, end, 1] - pos_after[r, s, 1]
                 rest[r, s] = np.sqrt(ex * ex + ey * ey)
