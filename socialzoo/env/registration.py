@@ -2,6 +2,11 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations,
+        rewards, end flags): only the episode metric reacting_extra_distance of hybrid people changes,
+        on 2026-11-29: a reacting person's distance walked counts from the step after its reaction to
+        the step in which it left (it counted the reaction's step, walked on its track, and not the
+        leaving one).
     Within v2 (and CrowdNav's v1), default rollouts unchanged: the presets sf-eth-ucy and
         orca-eth-ucy were fitted again on 2026-11-29 (the realism cases' exit fix: a modelled person
         leaves at its exit), so people specs that name them walk otherwise.
