@@ -317,7 +317,9 @@ def _orca(  # type: ignore[no-untyped-def]
                         if num_near == max_neighbors:
                             range2 = near_dist[num_near - 1]
             # Walls within reach of the obstacle horizon, nearest first, each as the edge that has
-            # the agent on its right (a wall the agent is exactly in line with has no side).
+            # the agent on its right. A wall the agent is exactly in line with, seen end-on, is kept
+            # as it is given (its velocity obstacle, that of its nearer end, is the same either way
+            # round; RVO2 drops it and walks the agent into it); one the agent stands on is dropped.
             reach = time_horizon_obst * speed + r
             reach2 = reach * reach
             cell = grid_cell(px, py, grid)
@@ -330,9 +332,9 @@ def _orca(  # type: ignore[no-untyped-def]
                 if len2 <= 0.0:
                     continue
                 side = (ax - px) * oy - (ay - py) * ox
-                if side == 0.0:
-                    continue
                 t = ((px - ax) * ox + (py - ay) * oy) / len2
+                if side == 0.0 and 0.0 <= t <= 1.0:
+                    continue
                 if t < 0.0:
                     ex, ey = px - ax, py - ay
                 elif t > 1.0:

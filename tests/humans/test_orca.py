@@ -226,3 +226,16 @@ def test_bad_parameters_are_refused_naming_them():
     assert (crowdnav.time_horizon_obst, crowdnav.radius, crowdnav.max_speed) == (5.0, 0.3, 1.0)
     invisible = dataclasses.replace(crowdnav, robot_visible=False)
     assert not invisible.robot_visible
+
+
+def test_a_wall_seen_exactly_end_on_is_avoided_as_one_seen_slightly_askew():
+    # Walking along the line of a wall at its end: the wall has no side, yet its near end is in the
+    # way. Dropping it (as RVO2 does) walked the agent into the wall; now the answer is the limit of
+    # the answers slightly off the line.
+    cfg = OrcaConfig()
+    walls = WallIndex(np.array([[0.0, 0.0, 5.0, 0.0]]))
+    vel = pref = np.array([[1.0, 0.0]])
+    on_line = orca(np.array([[-0.5, 0.0]]), vel, pref, walls, cfg, 0.1)
+    askew = orca(np.array([[-0.5, 1e-12]]), vel, pref, walls, cfg, 0.1)
+    assert on_line[0, 0] < 0.5, "it slows down for the wall's end"
+    np.testing.assert_allclose(on_line, askew, atol=1e-9)
