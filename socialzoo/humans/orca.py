@@ -17,6 +17,9 @@ EPSILON = 1e-5
 # Columns of a line row: a point on the line and its unit direction; the allowed velocities lie
 # to the left of the direction.
 _PX, _PY, _DX, _DY = range(4)
+# A post (a zero-length wall) is avoided as a wall seen end-on: a stub from it straight away from the
+# agent, this fraction of their distance long (its velocity obstacle is the post's alone).
+_STUB = 1e-9
 
 
 @kernel
@@ -319,7 +322,8 @@ def _orca(  # type: ignore[no-untyped-def]
             # Walls within reach of the obstacle horizon, nearest first, each as the edge that has
             # the agent on its right. A wall the agent is exactly in line with, seen end-on, is kept
             # as it is given (its velocity obstacle, that of its nearer end, is the same either way
-            # round; RVO2 drops it and walks the agent into it); one the agent stands on is dropped.
+            # round; RVO2 drops it and walks the agent into it), and so is a post, which lies before
+            # its own start (the wall index's points); one the agent stands on is dropped.
             reach = time_horizon_obst * speed + r
             reach2 = reach * reach
             cell = grid_cell(px, py, grid)
@@ -329,11 +333,9 @@ def _orca(  # type: ignore[no-untyped-def]
                 ax, ay, bx, by = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
                 ox, oy = bx - ax, by - ay
                 len2 = ox * ox + oy * oy
-                if len2 <= 0.0:
-                    continue
                 side = (ax - px) * oy - (ay - py) * ox
-                t = ((px - ax) * ox + (py - ay) * oy) / len2
-                if side == 0.0 and 0.0 <= t <= 1.0:
+                t = ((px - ax) * ox + (py - ay) * oy) / len2 if len2 > 0.0 else -1.0
+                if (side == 0.0 and 0.0 <= t <= 1.0) or (px == ax and py == ay):
                     continue
                 if t < 0.0:
                     ex, ey = px - ax, py - ay
@@ -354,10 +356,10 @@ def _orca(  # type: ignore[no-untyped-def]
                 m = order[q]
                 w = wall_index[m]
                 e = 2 if wall_flip[m] else 0  # the column of the edge's first end
-                count = _wall_lines(
-                    lines, count, px, py, vx, vy, r, inv_tau_obst,
-                    walls[w, e], walls[w, e + 1], walls[w, 2 - e], walls[w, 3 - e],
-                )  # fmt: skip
+                x1, y1, x2, y2 = walls[w, e], walls[w, e + 1], walls[w, 2 - e], walls[w, 3 - e]
+                if (x2 - x1) * (x2 - x1) + (y2 - y1) * (y2 - y1) <= 0.0:
+                    x2, y2 = x1 + _STUB * (x1 - px), y1 + _STUB * (y1 - py)
+                count = _wall_lines(lines, count, px, py, vx, vy, r, inv_tau_obst, x1, y1, x2, y2)
             num_obstacle = count
             # Agent lines: each agent takes half of the change of relative velocity that gets it
             # out of the velocity obstacle (truncated at time_horizon; within one step when the

@@ -239,3 +239,19 @@ def test_a_wall_seen_exactly_end_on_is_avoided_as_one_seen_slightly_askew():
     askew = orca(np.array([[-0.5, 1e-12]]), vel, pref, walls, cfg, 0.1)
     assert on_line[0, 0] < 0.5, "it slows down for the wall's end"
     np.testing.assert_allclose(on_line, askew, atol=1e-9)
+
+
+def test_a_post_is_avoided_as_the_end_of_a_wall_seen_end_on():
+    # A zero-length wall acts as a point (socialzoo.maps.map_file); ORCA used to drop it, so its
+    # people walked through posts. Its velocity obstacle is the point's alone: that of a wall
+    # starting at the post and pointing straight away from the agent.
+    cfg = OrcaConfig(time_horizon_obst=1.0)
+    pos, vel, pref = np.array([[-0.5, 0.2]]), np.array([[1.0, -0.1]]), np.array([[1.0, 0.0]])
+    post = orca(pos, vel, pref, WallIndex(np.array([[0.0, 0.0, 0.0, 0.0]])), cfg, 0.025)
+    end_on = orca(pos, vel, pref, WallIndex(np.array([[0.0, 0.0, 1.0, -0.4]])), cfg, 0.025)
+    assert np.abs(post - pref).max() > 0.1
+    np.testing.assert_allclose(post, end_on, atol=1e-9)
+    trace = walk(np.array([[-3.0, 0.0]]), np.array([[3.0, 0.0]]), WallIndex(np.array([[0.0, 0.05, 0.0, 0.05]])),
+                 cfg, 0.025, 10.0, speed=[1.0])  # fmt: skip
+    assert np.linalg.norm(trace[:, 0] - [0.0, 0.05], axis=-1).min() > cfg.radius - 1e-3
+    assert np.abs(trace[-1, 0] - [3.0, 0.0]).max() < 0.1, "it goes round the post"
