@@ -7,9 +7,9 @@ shim of ours into a temporary folder and ctypes drives it. RVO2 computes in floa
 (the default) compiles a copy with float replaced by double, which separates a difference of ours from
 float32 rounding. Runs, with the same agents, parameters and preferred velocities in both:
 
-- scenarios (head-on pairs, four crossing agents, circles of 5, 10 and 20 swapping places, a corridor, a
-  door, a box) for `--steps` steps under two parameter sets (socialzoo's, CrowdNav's), printing the
-  largest position difference over the steps;
+- scenarios (head-on pairs, four crossing agents, circles of 5, 10 and 20 swapping places, two groups of
+  25 crossing, a corridor, a door, a box) for `--steps` steps under two parameter sets (socialzoo's,
+  CrowdNav's), printing the largest position difference over the steps;
 - `--cases` random one-step cases (1-13 agents of random radii, speeds and velocities, random parameters,
   0-4 random walls), printing the largest velocity difference and the cases above 1e-8 m/s.
 
@@ -158,6 +158,11 @@ def _scenarios(rng: np.random.Generator):  # type: ignore[no-untyped-def]
         ring = (4.0 if num < 20 else 6.0) * np.stack([np.cos(angle), np.sin(angle)], -1)
         yield f"circle {num}", ring, -ring, []
         yield f"circle {num}, noisy", ring + rng.normal(0.0, 0.02, ring.shape), -ring, []
+    # Two groups of 25 on a 0.8 m lattice crossing at right angles: a dense crowd, more agents than
+    # max_neighbors, many at equal distances.
+    lattice = 0.8 * np.stack(np.meshgrid(np.arange(5), np.arange(5)), -1).reshape(-1, 2) - 1.6
+    west, south = lattice + [-8.0, 0.0], lattice[:, ::-1] + [0.0, -8.0]
+    yield "crossing 50", np.concatenate([west, south]), np.concatenate([west + [16, 0], south + [0, 16]]), []
     corridor = [[-6.0, 1.0, 6.0, 1.0], [6.0, -1.0, -6.0, -1.0]]
     yield "corridor pair", [[-4.0, 0.1], [4.0, -0.1]], [[4.0, 0.1], [-4.0, -0.1]], corridor
     door = [[-5.0, 0.0, -0.5, 0.0], [0.5, 0.0, 5.0, 0.0]]
