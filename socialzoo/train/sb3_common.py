@@ -61,7 +61,8 @@ class SB3Args:
         normalize: normalise observations with VecNormalize (saved with the policy).
         normalize_reward: normalise rewards with VecNormalize during training (SB3's PPO default).
         eval_trials: evaluate every checkpoint on this many validation scenarios of the training
-            map (never a test set; evaluations.csv, TensorBoard eval/*); 0: none.
+            map, or with a family of the family's validation split (never a test set;
+            evaluations.csv, TensorBoard eval/*); 0: none.
         eval_every: evaluate only the checkpoints at multiples of this many env steps, and the
             last one (a multiple of checkpoint_every); 0: every checkpoint.
         threads: torch CPU threads.
@@ -116,6 +117,15 @@ class SB3Args:
             self.env_config()
         except (TypeError, ValueError) as err:
             raise ValueError(f"{owner}: bad training env ({err})") from None
+        if self.family is not None:
+            from socialzoo.train.validation import family_validation_size
+
+            cases = family_validation_size(self.family)
+            if self.eval_trials > cases:
+                raise ValueError(
+                    f"{owner}.eval_trials ({self.eval_trials}) is more than the {cases} validation "
+                    f"cases of family {self.family!r}"
+                )
 
     def check_block(self, block: int, what: str) -> None:
         """Raise ValueError unless checkpoints and the end of training fall on `block` env steps (a
@@ -272,7 +282,7 @@ def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
     evaluator = None
     if args.eval_trials:
         evaluator = validation_evaluator(
-            trainer.name, args.map, args.eval_trials, env_overrides=args.env_overrides
+            trainer.name, args.map, args.eval_trials, env_overrides=args.env_overrides, family=args.family
         )
     return run_training(trainer, args, lambda run: _fit(run, args), evaluator=evaluator)
 

@@ -1,5 +1,6 @@
 """The trainers' checkpoint evaluator: a robot policy file on the first scenarios of its training
-map's validation set (socialzoo.scenarios.scenario_sets.validation_set, "<map>-val": never a test set)."""
+map's validation set (socialzoo.scenarios.scenario_sets.validation_set, "<map>-val": never a test set),
+or of its scenario family's own validation split."""
 
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ def validation_evaluator(
     trials: int,
     *,
     env_overrides: Mapping[str, Any] | None = None,
+    family: str | None = None,
     max_rows: int = 128,
 ) -> Evaluator:
     """An evaluator of policy files of registry name `policy` ("ppo", "bc", ...).
@@ -37,21 +39,32 @@ def validation_evaluator(
         map_name: the training map; its validation scenarios 0 .. trials-1 are run.
         trials: scenarios per checkpoint.
         env_overrides: EnvConfig fields the policy was trained with (observation, reward, ...).
+        family: the scenario family the policy was trained on: cases 0 .. trials-1 of the action-selection
+            task's "val" split of that family on `map_name` (the family's own validation seeds, or for a
+            family without splits its scenarios of the map's validation seeds) in place of "<map>-val".
         max_rows: most env rows stepped together.
+
+    A family's split holds family_validation_size(family) cases; more trials fail at the first evaluation.
 
     Returns:
         path -> {metric: mean over the scenarios} (EVALUATION_METRICS; time_to_goal over the
         successful ones, NaN when none).
 
     Raises:
-        ValueError: trials below 1, or an unknown map.
+        ValueError: trials below 1, or an unknown map or family.
     """
-    from socialzoo.bench.runner import RunSpec, Trial, env_config_for, run_chunk
-    from socialzoo.scenarios.scenario_sets import validation_set
+    from socialzoo.bench.runner import CaseSet, RunSpec, Trial, env_config_for, run_chunk
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.scenarios.scenario_sets import TestSet, validation_set
 
     check_int("validation_evaluator", "trials", trials, low=1)
-    test_set = validation_set(map_name)
-    config = env_config_for(test_set, **dict(env_overrides or {}))
+    test_set: TestSet | CaseSet
+    if family is None:
+        test_set = validation_set(map_name)
+        config = env_config_for(test_set, **dict(env_overrides or {}))
+    else:
+        config = EnvConfig(map=map_name, family=family).replace(**dict(env_overrides or {}))
+        test_set = CaseSet("action_selection", "val", trials, name=f"{family}-val", map_name=map_name)
 
     def evaluate(path: Path) -> dict[str, float]:
         import numpy as np
@@ -76,6 +89,18 @@ def validation_evaluator(
         return out
 
     return evaluate
+
+
+def family_validation_size(family: str) -> int:
+    """The cases of the action-selection task's "val" split with scenario family `family`: its own
+    "val" split's, or the map's validation set's for a family without seed splits (0: none)."""
+    from socialzoo.scenarios.catalogue import get_family
+    from socialzoo.scenarios.scenario_sets import VALIDATION_SIZE
+
+    splits = get_family(family).splits
+    if not splits:
+        return VALIDATION_SIZE
+    return int(splits["val"].size or 0) if "val" in splits else 0
 
 
 def kept_policy(policy: str | Path) -> Path:

@@ -149,3 +149,38 @@ def test_trainers_are_registered_with_the_papers_defaults():
 def test_bad_arguments_name_the_field(cls, changes, message):
     with pytest.raises(ValueError, match=message):
         cls(**changes)
+
+
+@pytest.mark.parametrize("family", ["frontal_approach", "hallway_head_on"])
+def test_a_family_run_chooses_its_checkpoints_on_the_familys_validation_cases(monkeypatch, family):
+    """With --family the checkpoints are evaluated on the family's "val" split (the action-selection
+    task's, for a family with seed splits of its own and for one without), not on "<map>-val"."""
+    import socialzoo.bench.runner as runner
+    from socialzoo.agents import shipped_policy_file
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.tasks import make_task
+    from socialzoo.train import sb3_common
+    from socialzoo.train.ppo import TRAINER
+
+    made = {}
+    monkeypatch.setattr(
+        sb3_common, "run_training", lambda *a, evaluator=None: made.setdefault("e", evaluator)
+    )
+    played, families = [], []
+    run_chunk = runner.run_chunk
+
+    def spy(trials, spec):
+        results = run_chunk(trials, spec)
+        played.extend(r.seed for r in results)
+        families.extend(config.family for config in spec.env_configs.values())
+        return results
+
+    monkeypatch.setattr(runner, "run_chunk", spy)
+    args = PPOArgs(family=family, map="hallway", eval_trials=2, env_overrides={"max_steps": 40})
+    sb3_common.run_sb3(TRAINER, args)
+    made["e"](shipped_policy_file("ppo"))
+    task = make_task("action_selection", 2, EnvConfig(map="hallway", family=family))
+    expected = task.reset(np.arange(2), {"split": "val", "cases": [0, 1]}).tolist()
+    assert played == expected and families == [family]  # a family without splits: the map's seeds
+    with pytest.raises(ValueError, match=r"eval_trials \(101\) is more than the 100 validation cases"):
+        PPOArgs(family="frontal_approach", map="hallway", eval_trials=101)
