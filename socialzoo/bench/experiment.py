@@ -315,19 +315,27 @@ def people_overrides(config: BenchmarkConfig) -> dict[str, Any]:
 def _resolve_test_sets(
     config: BenchmarkConfig, test_sets: Mapping[str, TestSet] | None, out_dir: Path
 ) -> dict[str, TestSet]:
-    """Test set per map: given ones first, else the registry's, else one generated for the map
-    and stored in out_dir (socialzoo.bench.test_sets: any shipped map or map file)."""
+    """Test set per map: given ones first, else the registry's (a map file with a shipped map's contents
+    included: scenario_sets.shipped_map), else one generated for the map and stored in out_dir
+    (socialzoo.bench.test_sets: any shipped map or map file)."""
     from socialzoo.bench.test_sets import stored_test_set
+    from socialzoo.scenarios.scenario_sets import shipped_map
 
-    out = {}
+    out: dict[str, TestSet] = {}
     for m in config.maps:
-        name = config.test_set_name(m)
+        name = config.test_set_name(shipped_map(m) or m)
         if test_sets is not None and m in test_sets:
             out[m] = test_sets[m]
         elif name in TEST_SETS:
             out[m] = TEST_SETS[name]
         else:
             out[m] = stored_test_set(m, out_dir, config.trials, quick=config.quick)
+        same = [k for k in out if k != m and (out[k].name or k) == (out[m].name or m)]
+        if same:
+            raise ValueError(
+                f"maps {same[0]!r} and {m!r} both give test set {out[m].name or m!r} (one map, or two of "
+                "one name): benchmark one of them"
+            )
     return out
 
 

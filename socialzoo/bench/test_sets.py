@@ -4,14 +4,13 @@ results with the map's hash, and reused so that reruns are comparable."""
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.maps.map_file import Map, load_map
+from socialzoo.maps.map_file import Map, load_map, map_sha256
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario, ScenarioError
 from socialzoo.scenarios.scenario_sets import (
@@ -33,11 +32,6 @@ class TestSetError(ValueError):
     version of the map; the message names the file."""
 
     __test__ = False  # not a pytest test class, despite its name
-
-
-def map_sha256(m: Map) -> str:
-    """sha256 of a map's contents (its JSON form with sorted keys)."""
-    return hashlib.sha256(json.dumps(m.to_json(), sort_keys=True).encode()).hexdigest()
 
 
 @dataclass(frozen=True)

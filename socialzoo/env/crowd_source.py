@@ -106,7 +106,7 @@ class CrowdCaseSource:
             splits = stream.scenario_family.splits
             if splits:
                 return {k: k for k in ("val", "test") if k in splits and splits[k].size is not None}
-        return dict(map_case_sets(stream.map.name))
+        return dict(map_case_sets(stream.map))
 
     def case_splits(self) -> dict[str, int]:
         """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, else those

@@ -4,6 +4,7 @@ described in docs/maps.md); loading, validation and the wall queries the checks 
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib.resources
 import json
 import logging
@@ -314,6 +315,11 @@ def _validated_file(text: str, where: str) -> Map:
     m = map_from_json(text, where)
     validate_map(m)
     return m
+
+
+def map_sha256(m: Map) -> str:
+    """sha256 of a map's contents (its JSON form with sorted keys)."""
+    return hashlib.sha256(json.dumps(m.to_json(), sort_keys=True).encode()).hexdigest()
 
 
 def list_maps() -> list[str]:

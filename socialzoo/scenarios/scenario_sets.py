@@ -3,6 +3,7 @@ set, apart from every test set (generated sets for other maps: socialzoo.bench.t
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -104,25 +105,59 @@ CUSTOM_TEST_SIZE = 2000
 CUSTOM_QUICK_SIZE = 100
 
 
-def map_case_sets(map_name: str) -> dict[str, TestSet]:
-    """A map's fixed case sets, as both robot tasks split them: "val" (validation_set, never a test
-    set), each registered test set of the map by its own name (e.g. "gdc1-quick"), and "test": the
-    registered "<map>-test", else the generated set of a map without one (CUSTOM_TEST_SEED, the
-    benchmark's for that map)."""
-    sets = {"val": validation_set(map_name)}
-    sets.update({k: v for k, v in TEST_SETS.items() if v.map_name == map_name})
-    sets["test"] = TEST_SETS.get(f"{map_name}-test") or TestSet(
-        map_name, CUSTOM_TEST_SEED, CUSTOM_TEST_SIZE, name=f"{map_name}-test"
+def shipped_map(map_ref: str | Map) -> str | None:
+    """The shipped map whose registered sets `map_ref` plays: a shipped map's name, or a Map or map
+    file whose contents are that shipped map's (the same map_sha256: name, walls, graph, poses and the
+    rest, so every set's scenarios are the same), wherever the file lies; None for any other map (an
+    imported building, an edited or renamed copy of a shipped one) and a file that does not load."""
+    from socialzoo.maps.map_file import MapError, list_maps, load_map
+
+    if isinstance(map_ref, str):
+        if map_ref in list_maps():
+            return map_ref
+        try:
+            map_ref = load_map(map_ref)
+        except (OSError, MapError):
+            return None
+    return _shipped_map_of(map_ref)
+
+
+@functools.lru_cache(maxsize=16)
+def _shipped_map_of(m: Map) -> str | None:
+    # Keyed on the Map object (immutable; a file read again with the same text is the same object),
+    # so a task asking at every reset hashes a map once.
+    from socialzoo.maps.map_file import list_maps, load_map, map_sha256
+
+    if m.name not in list_maps():
+        return None
+    shipped = load_map(m.name)
+    return m.name if m is shipped or map_sha256(m) == map_sha256(shipped) else None
+
+
+def map_case_sets(map_ref: str | Map) -> dict[str, TestSet]:
+    """A map's fixed case sets, as both robot tasks and the benchmark split them: "val" (validation_set,
+    never a test set), each registered test set of the map by its own name (e.g. "gdc1-quick"), and
+    "test": the registered "<map>-test", else the generated set of a map without one (CUSTOM_TEST_SEED,
+    the benchmark's for that map). A map file with a shipped map's contents has the shipped map's sets
+    (shipped_map); the sets of any other map go by its name (a Map's) or reference."""
+    shipped = shipped_map(map_ref)
+    key = shipped or (map_ref if isinstance(map_ref, str) else map_ref.name)
+    sets = {"val": validation_set(key)}
+    registered = {k: v for k, v in TEST_SETS.items() if shipped is not None and v.map_name == shipped}
+    sets.update(registered)
+    sets["test"] = registered.get(f"{key}-test") or TestSet(
+        key, CUSTOM_TEST_SEED, CUSTOM_TEST_SIZE, name=f"{key}-test"
     )
     return sets
 
 
-def evaluation_seeds(map_name: str) -> frozenset[int]:
-    """The base seeds of every fixed set the map `map_name` is validated or tested on: its map_case_sets,
+def evaluation_seeds(map_ref: str | Map) -> frozenset[int]:
+    """The base seeds of every fixed set the map `map_ref` is validated or tested on: its map_case_sets,
     and the generated quick set of a map without a registered test set (socialzoo.bench.test_sets). A
     set of training scenarios on the map (demonstrations, DAgger's rollouts) must use none of them."""
-    seeds = {ts.base_seed for ts in map_case_sets(map_name).values()}
-    if f"{map_name}-test" not in TEST_SETS:
+    sets = map_case_sets(map_ref)
+    seeds = {ts.base_seed for ts in sets.values()}
+    if sets["test"].base_seed == CUSTOM_TEST_SEED:
         seeds.add(CUSTOM_QUICK_SEED)
     return frozenset(seeds)
 

@@ -201,3 +201,52 @@ def test_a_killed_worker_ends_the_benchmark_in_a_line(tmp_path, capsys, monkeypa
     err = capsys.readouterr().err
     assert err.startswith("socialzoo benchmark: error: a worker process was killed")
     assert err.endswith("the same command resumes\n") and err.count("\n") == 1
+
+
+def test_a_copy_of_a_shipped_map_file_has_its_registered_sets_and_an_edited_one_its_own(tmp_path, capsys):
+    """`--maps` a shipped map's file (any copy of its contents) is that map's benchmark: its registered
+    test set, as the env's "test" split is; an edited copy, even under the shipped name, is an imported
+    map with a generated set, in the env and in the benchmark alike."""
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.tasks import make_task
+    from socialzoo.maps.map_file import load_map
+    from socialzoo.scenarios.scenario_sets import CUSTOM_TEST_SEED, TEST_SETS
+
+    shipped = load_map("gdc1")
+    copy = tmp_path / "copy" / "gdc1.json"
+    copy.parent.mkdir()
+    copy.write_text(json.dumps(shipped.to_json(), indent=1))  # another layout, the same contents
+    data = shipped.to_json()
+    data["legal_poses"] = data["legal_poses"][::-1]
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(data))  # still named "gdc1"
+    registered = TEST_SETS["gdc1-test"]
+
+    def first_test_seed(path):
+        task = make_task("action_selection", 1, EnvConfig(map=str(path)))
+        return int(task.reset(np.arange(1), {"split": "test", "cases": [0]})[0])
+
+    for path, base_seed in ((copy, registered.base_seed), (edited, CUSTOM_TEST_SEED)):
+        out = tmp_path / f"out-{path.stem}"
+        argv = [
+            "benchmark",
+            "--policies",
+            "goalone",
+            "--maps",
+            str(path),
+            "--trials",
+            "2",
+            "--max-steps",
+            "20",
+        ]
+        argv += ["--workers", "1", "--batch-size", "2", "--out", str(out), "--no-progress", "--no-figures"]
+        assert socialzoo_main(argv) == 0, capsys.readouterr().err
+        (test_set,) = json.loads((out / "config.json").read_text())["test_sets"].values()
+        assert test_set["base_seed"] == base_seed
+        assert (out / "test_sets").exists() == (base_seed == CUSTOM_TEST_SEED)
+        assert first_test_seed(path) == test_set["seeds"][0]
+    assert first_test_seed(copy) == registered.seed(0)
+    # The shipped map and its copy are one test set: refused, not counted twice.
+    argv = ["benchmark", "--policies", "goalone", "--maps", f"gdc1,{copy}", "--out", str(tmp_path / "both")]
+    assert socialzoo_main(argv) == 2
+    assert "both give test set 'gdc1-test'" in capsys.readouterr().err

@@ -219,7 +219,7 @@ class ActionSelectionTask(Task):
             splits = self.scenarios.scenario_family.splits
             if splits:
                 return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
-        return dict(map_case_sets(self.map.name))
+        return dict(map_case_sets(self.map))
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """Advance every row one 0.025 s step.
