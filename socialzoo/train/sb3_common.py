@@ -47,6 +47,7 @@ class SB3Args:
             of the trainer's update block (PPO: the rollout, num_envs * n_steps; DQN: num_envs *
             train_freq).
         map: the training map; scenarios come from the env's own seeded stream, never a test set.
+            "" (the default): the family's own map with a family, else gdc1 (the paper's).
         family: a scenario family instead of the benchmark's scenarios (None: the benchmark).
         max_steps: episode time limit in steps (the benchmark: 3,200 = 80 s).
         scenario_repeats: episodes run on each scenario before a new one is drawn (the original:
@@ -73,7 +74,7 @@ class SB3Args:
     seed: int = 0
     total_steps: int = 84_000
     checkpoint_every: int = 2_000
-    map: str = "gdc1"
+    map: str = ""
     family: str | None = None
     max_steps: int = 3200
     scenario_repeats: int = 1
@@ -95,6 +96,8 @@ class SB3Args:
         object.__setattr__(self, "out", Path(self.out))
         object.__setattr__(self, "net_arch", tuple(self.net_arch))
         owner = type(self).__name__
+        if not self.map:
+            object.__setattr__(self, "map", default_map(self.family))
         for name in ("total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs"):
             check_int(owner, name, getattr(self, name), low=1)
         for name in ("batch_size", "threads"):
@@ -169,6 +172,21 @@ class SB3Args:
             max_steps=self.max_steps,
             scenario={"repeats": self.scenario_repeats},
         )
+
+
+def default_map(family: str | None) -> str:
+    """The map a run trains on when none is named: a family's own (a family's scenarios are laid out
+    for its map, and another map may lack the place they need), else the paper's gdc1."""
+    if family is not None:
+        from socialzoo.scenarios.catalogue import get_family
+
+        try:
+            own = get_family(family).map_name
+        except KeyError:
+            own = ""  # an unknown family: the env's own error names it
+        if own and own != "arena":
+            return own
+    return "gdc1"
 
 
 def env_id_of(config: EnvConfig) -> str:
