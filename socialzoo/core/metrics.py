@@ -502,7 +502,8 @@ _ENTRIES: tuple[Metric, ...] = (
         digits=4,
         sources=_REC,
         description="Contacts with a person that began with the person closing in on the robot faster than "
-        "the robot on the person (their velocities along the line between them).",
+        "the robot on the person (their velocities along the line between them); in the CrowdNav task the "
+        "contacts its collision judges during a step.",
     ),
     # ---------------------------------------------------------------- the humans (socialzoo.bench.human_metrics)
     _float(

@@ -57,6 +57,8 @@ class BatchedCore:
         sight_lines: sight lines hide people behind walls (`see`; needs a planner); without
             them every present person is seen.
         robot_visible: whether the people see and avoid the robots.
+        contacts_in_step: the recorded people's contacts with a robot (people_walked_into_robot) are
+            the CrowdNav task's, judged during a step, not the world's at its end (ReplayRunner).
 
     Raises:
         ValueError: a batch size that is not an int >= 1.
@@ -77,6 +79,7 @@ class BatchedCore:
         recovery: RecoveryConfig | None = None,
         sight_lines: bool = False,
         robot_visible: bool = True,
+        contacts_in_step: bool = False,
     ) -> None:
         if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
             raise ValueError(f"BatchedCore: batch_size must be an int >= 1, got {batch_size!r}")
@@ -104,6 +107,7 @@ class BatchedCore:
             world.dt,
             world.human_collision_distance,
             robot_visible=robot_visible,
+            contacts_in_step=contacts_in_step,
         )
         self.field: DistanceField | None = None
         self.navigator: Navigator | None = None

@@ -118,26 +118,33 @@ def nan_min(a: float, b: float) -> float:
 @kernel
 def _row_gap(i, rx, ry, vx, vy, human_pos, human_vel, radius, human_mask, dt):
     """Row i's closest boundary distance for a robot at (rx, ry) moving at (vx, vy), present people
-    only: per person the numpy expressions it replaced (the relative move over the step, the point
-    of it nearest the robot, np.clip's NaN kept, np.hypot), and a NaN gap wins the minimum as it
-    does in np.min."""
+    only: per person the numpy expressions it replaced (the relative move over the step, its
+    closest_gap), and a NaN gap wins the minimum as it does in np.min."""
     best = np.inf
     for h in range(human_pos.shape[1]):
         if not human_mask[i, h]:
             continue
         sx, sy = human_pos[i, h, 0] - rx, human_pos[i, h, 1] - ry
         mx, my = (human_vel[i, h, 0] - vx) * dt, (human_vel[i, h, 1] - vy) * dt
-        length2 = mx * mx + my * my
-        t = -(sx * mx + sy * my) / (length2 if length2 > 0 else 1.0)
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
-        gap = np.hypot(sx + t * mx, sy + t * my) - radius[i, h]
+        gap = closest_gap(sx, sy, mx, my, radius[i, h])
         if gap != gap:
             return gap
         best = min(best, gap)
     return best
+
+
+@kernel
+def closest_gap(sx: float, sy: float, mx: float, my: float, radius: float) -> float:
+    """The closest boundary distance during a step of a person at (sx, sy) from the robot at its
+    start, moving (mx, my) relative to the robot through the step, m, with `radius` the two radii
+    (scalar kernel): the point of the relative move nearest the robot (np.clip's NaN kept)."""
+    length2 = mx * mx + my * my
+    t = -(sx * mx + sy * my) / (length2 if length2 > 0 else 1.0)
+    if t < 0.0:
+        t = 0.0
+    elif t > 1.0:
+        t = 1.0
+    return np.hypot(sx + t * mx, sy + t * my) - radius
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,10 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations, rewards, end flags): only
+        the episode metric people_walked_into_robot changes, on 2026-11-29: it counts the contacts the
+        CrowdNav task judges during a step (the closest approach, blamed where it first came within
+        touching), not the world's at the steps' ends, which missed collisions judged mid-step.
     Within socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations,
         rewards, end flags): only the episode metric reacting_extra_distance of hybrid people changes,
         on 2026-11-29: a reacting person's distance walked counts from the step after its reaction to

@@ -55,6 +55,9 @@ class ReplayRunner:
         collision_distance: robot and person centres nearer than this touch, m.
         robot_visible: whether the people see the robots: hybrid people react only to robots
             they see (an invisible robot leaves them on their tracks, as replay).
+        contacts_in_step: people_walked_into_robot counts the contacts of the CrowdNav task's
+            judgement (the closest approach during a step, socialzoo.env.crowd_outcome) instead of
+            the world's at the steps' ends.
     """
 
     def __init__(
@@ -67,6 +70,7 @@ class ReplayRunner:
         collision_distance: float,
         *,
         robot_visible: bool = True,
+        contacts_in_step: bool = False,
     ) -> None:
         b, r, h = batch_size, num_robots, max_humans
         self.parts: tuple[PeoplePart, ...] = config.parts
@@ -80,7 +84,7 @@ class ReplayRunner:
         self._recorded_spec = config.recorded
         self.radius, self.react_time = config.react_radius, config.react_time
         self.dt, self.collision_distance = dt, collision_distance
-        self.robot_visible = robot_visible
+        self.robot_visible, self.contacts_in_step = robot_visible, contacts_in_step
         self.recorded = np.zeros(b, dtype=bool)
         self.frame_dt = np.ones(b)
         # Each row's recording: a pointer into the recordings the rows play, each stored once (a reset
@@ -226,6 +230,7 @@ class ReplayRunner:
             after.human_route_len, self.walked, self.rest, after.robot_pose, after.human_vel, after.human_mask,
             robot_vel, bank.robot_at, bank.robot_points, bank.robot, bank.robot_box, PATH_CHUNK,
             self.collision_distance**2, self.deviation, self.moves, self.contact, self.walked_into,
+            self.contacts_in_step, before.robot_pose, before.human_vel, self.collision_distance,
         )  # fmt: skip
 
     def summaries(

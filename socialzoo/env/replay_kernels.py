@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from socialzoo.core.jit import kernel
+from socialzoo.env.crowd_outcome import closest_gap
 
 
 @kernel
@@ -214,7 +215,8 @@ def settle_rows(
 def account_step(
     recorded, was_done, dt, step_count, people, elapsed, reacted_at, gone, exit_at, mask_before, pos_before,
     pos_after, route, route_len, walked, rest, robot_pose, human_vel, human_mask, robot_vel, robot_at, robot_points,
-    robot_track, robot_box, chunk, collision2, deviation, moves, contact, walked_into,
+    robot_track, robot_box, chunk, collision2, deviation, moves, contact, walked_into, in_step, robot_before,
+    vel_before, collision,
 ):  # fmt: skip
     """ReplayRunner.account in place: one step of the recorded rows whose robots' episodes had not all ended
     before it (was_done (B, R)): its time, the reacting people's measures and the robots'.
@@ -227,7 +229,12 @@ def account_step(
     distance to the recorded person's path (its polyline of robot_points[r] points of robot_track from
     robot_at[r], with a bounding box robot_box every `chunk` segments) and the moves counted; every robot: the
     people who walked into it (the onset of a contact at which the person moved towards the robot faster than
-    the robot towards it). Only a row's recorded people's slots: the slots beyond are never present, never react."""
+    the robot towards it). A contact is the world's, centres within the collision distance at the step's end
+    (person and robot velocities after the step); with `in_step`, the CrowdNav task's judgement, the closest
+    approach during the step from robot_before and the people's positions, velocities (vel_before) and
+    presence before it, the robot at its move over dt (socialzoo.env.crowd_outcome.closest_gap with
+    `collision` the distance), its onset where the relative move first came within touching, with those
+    velocities. Only a row's recorded people's slots: the slots beyond are never present, never react."""
     b = recorded.shape[0]
     counted = np.zeros(b, dtype=np.bool_)
     off_track, most_points = False, 0
@@ -280,15 +287,30 @@ def account_step(
                         _path_distance2(px, py, robot_track, robot_box, at, points, chunk, box_gap)
                     )
                 moves[r, q] += 1
+            bx, by = robot_before[r, q, 0], robot_before[r, q, 1]
+            rvx, rvy = (px - bx) / dt, (py - by) / dt  # the robot's velocity through the step
             for s in range(people[r]):
-                dx, dy = pos_after[r, s, 0] - px, pos_after[r, s, 1] - py
-                dist2 = dx * dx + dy * dy
-                close = dist2 < collision2 and human_mask[r, s]
+                if in_step:  # the CrowdNav task's judgement: the closest approach during the step
+                    sx, sy = pos_before[r, s, 0] - bx, pos_before[r, s, 1] - by
+                    hvx, hvy = vel_before[r, s, 0], vel_before[r, s, 1]
+                    mx, my = (hvx - rvx) * dt, (hvy - rvy) * dt
+                    close = mask_before[r, s] and closest_gap(sx, sy, mx, my, collision) < 0
+                    # The contact began where the relative move first came within touching.
+                    a, c, f = mx * mx + my * my, sx * sx + sy * sy - collision2, 0.0
+                    if close and a > 0 and c > 0:
+                        half = sx * mx + sy * my
+                        f = min(max((-half - np.sqrt(max(half * half - a * c, 0.0))) / a, 0.0), 1.0)
+                    dx, dy, vx, vy, ox, oy = sx + f * mx, sy + f * my, hvx, hvy, rvx, rvy
+                else:  # the world's contacts at the step's end
+                    dx, dy = pos_after[r, s, 0] - px, pos_after[r, s, 1] - py
+                    close = dx * dx + dy * dy < collision2 and human_mask[r, s]
+                    vx, vy = human_vel[r, s, 0], human_vel[r, s, 1]
+                    ox, oy = robot_vel[r, q, 0], robot_vel[r, q, 1]
                 if close and not contact[r, q, s] and live:
-                    norm = max(np.sqrt(dist2), 1e-9)
+                    norm = max(np.sqrt(dx * dx + dy * dy), 1e-9)
                     ux, uy = dx / norm, dy / norm
-                    person_in = -(human_vel[r, s, 0] * ux + human_vel[r, s, 1] * uy)
-                    robot_in = robot_vel[r, q, 0] * ux + robot_vel[r, q, 1] * uy
+                    person_in = -(vx * ux + vy * uy)
+                    robot_in = ox * ux + oy * uy
                     if person_in > robot_in:
                         walked_into[r, q] += 1
                 contact[r, q, s] = close

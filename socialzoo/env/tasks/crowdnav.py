@@ -87,6 +87,7 @@ class CrowdNavTask(Task):
             people=cfg.people,
             planner=LocalPlannerConfig() if m is not None else None,
             robot_visible=cfg.robot_visible,
+            contacts_in_step=True,  # the recorded measures' contacts are the judgement's
         )
         self.source = CrowdCaseSource(cfg, batch_size)
         self.batch_size = batch_size
