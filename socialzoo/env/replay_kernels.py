@@ -291,16 +291,20 @@ def account_step(
             rvx, rvy = (px - bx) / dt, (py - by) / dt  # the robot's velocity through the step
             for s in range(people[r]):
                 if in_step:  # the CrowdNav task's judgement: the closest approach during the step
-                    sx, sy = pos_before[r, s, 0] - bx, pos_before[r, s, 1] - by
-                    hvx, hvy = vel_before[r, s, 0], vel_before[r, s, 1]
-                    mx, my = (hvx - rvx) * dt, (hvy - rvy) * dt
-                    close = mask_before[r, s] and closest_gap(sx, sy, mx, my, collision) < 0
-                    # The contact began where the relative move first came within touching.
-                    a, c, f = mx * mx + my * my, sx * sx + sy * sy - collision2, 0.0
-                    if close and a > 0 and c > 0:
-                        half = sx * mx + sy * my
-                        f = min(max((-half - np.sqrt(max(half * half - a * c, 0.0))) / a, 0.0), 1.0)
-                    dx, dy, vx, vy, ox, oy = sx + f * mx, sy + f * my, hvx, hvy, rvx, rvy
+                    close, dx, dy, vx, vy, ox, oy = False, 0.0, 0.0, 0.0, 0.0, rvx, rvy
+                    if mask_before[r, s]:  # only those present before the step (a row has many free slots)
+                        sx, sy = pos_before[r, s, 0] - bx, pos_before[r, s, 1] - by
+                        vx, vy = vel_before[r, s, 0], vel_before[r, s, 1]
+                        mx, my = (vx - rvx) * dt, (vy - rvy) * dt
+                        a, c, f = mx * mx + my * my, sx * sx + sy * sy - collision2, 0.0
+                        # A person farther than the collision distance plus the relative move cannot touch:
+                        # s^2 > 2 (collision^2 + m^2) >= (collision + |m|)^2, said without a square root.
+                        close = c <= collision2 + 2.0 * a and closest_gap(sx, sy, mx, my, collision) < 0
+                        # The contact began where the relative move first came within touching.
+                        if close and a > 0 and c > 0:
+                            half = sx * mx + sy * my
+                            f = min(max((-half - np.sqrt(max(half * half - a * c, 0.0))) / a, 0.0), 1.0)
+                        dx, dy = sx + f * mx, sy + f * my
                 else:  # the world's contacts at the step's end
                     dx, dy = pos_after[r, s, 0] - px, pos_after[r, s, 1] - py
                     close = dx * dx + dy * dy < collision2 and human_mask[r, s]
