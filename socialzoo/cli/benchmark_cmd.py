@@ -217,13 +217,14 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
     try:
         # --max-steps is a field of the task's config (a task without max_steps refuses it).
         config = given(args, "max_steps") | task_config(args.task_config)
+        folders = _id_folders(ids)
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())
             policies = list(args.policies) if args.policies else list(default)
             if not policies:
                 raise ValueError(f"{env_id}: name the policies to run (--policies)")
-            out = Path(args.out) / env_id.split("/")[-1] if len(ids) > 1 else Path(args.out)
+            out = Path(args.out) / folders[env_id] if len(ids) > 1 else Path(args.out)
             _, files = run_task_benchmark(
                 env_id,
                 policies,
@@ -290,3 +291,14 @@ def run_demos_command(args: argparse.Namespace) -> int:
         return fail("demos", err)
     print(f"{path}: {len(arrays['episode_ids'])} episodes, {len(arrays['action'])} steps")
     return 0
+
+
+def _id_folders(ids: list[str]) -> dict[str, str]:
+    """Each task id's folder under --out: its name without the namespace ("Name-vN"), or, where two
+    ids share that name (a/X-v0 and b/X-v0), the whole id with "_" for its "/" and ":"."""
+    short = {env_id: env_id.split("/")[-1] for env_id in ids}  # an id given twice is one id
+    taken = list(short.values())
+    return {
+        env_id: name if taken.count(name) == 1 else env_id.replace("/", "_").replace(":", "_")
+        for env_id, name in short.items()
+    }

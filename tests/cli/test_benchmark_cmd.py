@@ -250,3 +250,15 @@ def test_a_copy_of_a_shipped_map_file_has_its_registered_sets_and_an_edited_one_
     argv = ["benchmark", "--policies", "goalone", "--maps", f"gdc1,{copy}", "--out", str(tmp_path / "both")]
     assert socialzoo_main(argv) == 2
     assert "both give test set 'gdc1-test'" in capsys.readouterr().err
+
+
+def test_task_ids_of_one_name_in_two_namespaces_get_folders_of_their_own():
+    # a/X-v0 and b/X-v0 both wrote to OUT/X-v0, the second run's tables over the first's.
+    from socialzoo.cli.benchmark_cmd import _id_folders
+
+    ids = ["socialzoo/CrowdNav-v1", "mine/ToyReach-v0", "my_tasks:theirs/ToyReach-v0", "mine/ToyReach-v0"]
+    assert _id_folders(ids) == {
+        "socialzoo/CrowdNav-v1": "CrowdNav-v1",
+        "mine/ToyReach-v0": "mine_ToyReach-v0",
+        "my_tasks:theirs/ToyReach-v0": "my_tasks_theirs_ToyReach-v0",
+    }
