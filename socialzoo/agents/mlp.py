@@ -15,6 +15,8 @@ from socialzoo.env.policy_file import (
     PolicyFileError,
     checked_layers,
     mlp_forward,
+    mlp_layers,
+    mlp_parts,
     read_policy_file,
     save_policy_file,
 )
@@ -137,19 +139,12 @@ class MlpPolicy:
     # ---------------------------------------------------------------- files
     def save(self, path: str | Path, header: dict[str, Any]) -> Path:
         """Write the policy file (header: env_id and training record; the network part is filled in)."""
-        tensors: dict[str, np.ndarray] = {}
-        for i, (w, b) in enumerate(self.layers):
-            tensors[f"net.{i}.weight"] = w
-            tensors[f"net.{i}.bias"] = b
+        output = header.get("network", {}).get("output", "logits")
+        tensors, network = mlp_parts(self.layers, self.activation, output)
         full = {
             **header,
             "policy": self.name,
-            "network": {
-                "kind": "mlp",
-                "sizes": [self.input_size] + [int(w.shape[0]) for w, _ in self.layers],
-                "activation": self.activation,
-                "output": header.get("network", {}).get("output", "logits"),
-            },
+            "network": network,
             "observation": self.observation,
             "normalization": None,
         }
@@ -170,19 +165,7 @@ class MlpPolicy:
         tensors, header = read_policy_file(path)
         network = header["network"]
         try:
-            if not isinstance(network, dict):
-                raise ValueError(f"the header's network is a {type(network).__name__}, not an object")
-            if network.get("kind") != "mlp":
-                raise ValueError(f"network kind {network.get('kind')!r} is not 'mlp'")
-            if network.get("output") not in OUTPUTS:
-                raise ValueError(f"network output {network.get('output')!r} is not one of {OUTPUTS}")
-            sizes = [int(s) for s in network["sizes"]]
-            weights = [(tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"]) for i in range(len(sizes) - 1)]
-            for i, (w, _) in enumerate(weights):
-                if tuple(w.shape) != (sizes[i + 1], sizes[i]):
-                    raise ValueError(
-                        f"net.{i}.weight has shape {w.shape}, the header says {(sizes[i + 1], sizes[i])}"
-                    )
+            weights = mlp_layers(tensors, network, OUTPUTS)
             normalizer = None
             norm = header.get("normalization")
             if norm is not None:

@@ -16,6 +16,8 @@ from socialzoo.env.policy_file import (
     PolicyFileError,
     checked_layers,
     mlp_forward,
+    mlp_layers,
+    mlp_parts,
     read_policy_file,
     save_policy_file,
 )
@@ -187,19 +189,11 @@ class LearnedHumanPolicy:
             env_id: the env id and version the policy was trained on ("...-vN").
             training: plain-JSON record of how it was made (algorithm, command, seed, frames).
         """
-        tensors: dict[str, np.ndarray] = {"obs_loc": self.obs_loc, "obs_scale": self.obs_scale}
-        for i, (w, b) in enumerate(self.layers):
-            tensors[f"net.{i}.weight"] = w
-            tensors[f"net.{i}.bias"] = b
+        tensors, network = mlp_parts(self.layers, self.activation, "tanh_mean")
+        tensors = {"obs_loc": self.obs_loc, "obs_scale": self.obs_scale, **tensors}
         header = {
             "policy": POLICY_NAME,
-            "network": {
-                "kind": "mlp",
-                "sizes": [self.input_size] + [int(w.shape[0]) for w, _ in self.layers],
-                "activation": self.activation,
-                "output": "tanh_mean",
-                "mirror_symmetric": self.mirror_symmetric,
-            },
+            "network": network | {"mirror_symmetric": self.mirror_symmetric},
             "observation": {
                 "kind": "learned_human",
                 "num_human_neighbours": self.num_neighbours,
@@ -231,15 +225,7 @@ class LearnedHumanPolicy:
             network, observation = header["network"], header["observation"]
             if not (isinstance(network, dict) and isinstance(observation, dict)):
                 raise ValueError("the header's network and observation must be objects")
-            if network.get("kind") != "mlp" or network.get("output") != "tanh_mean":
-                raise ValueError(f"network {network!r} is not an mlp giving tanh means")
-            sizes = [int(s) for s in network["sizes"]]
-            weights = [(tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"]) for i in range(len(sizes) - 1)]
-            for i, (w, _) in enumerate(weights):
-                if tuple(w.shape) != (sizes[i + 1], sizes[i]):
-                    raise ValueError(
-                        f"net.{i}.weight has shape {w.shape}, the header says {(sizes[i + 1], sizes[i])}"
-                    )
+            weights = mlp_layers(tensors, network, ("tanh_mean",))
             policy = cls(
                 weights,
                 str(network["activation"]),

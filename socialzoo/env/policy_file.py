@@ -188,6 +188,35 @@ def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple
     return layers
 
 
+def mlp_parts(layers: Sequence[tuple[Any, Any]], activation: str, output: str) -> tuple[dict, dict]:
+    """A network's layers as a policy file holds them: tensors net.<i>.weight (out, in), net.<i>.bias
+    (out,), and the header's "network" entry (kind, sizes: the inputs, then each layer's outputs, activation,
+    output)."""
+    tensors = {f"net.{i}.{k}": t for i, (w, b) in enumerate(layers) for k, t in (("weight", w), ("bias", b))}
+    sizes = [int(layers[0][0].shape[1])] + [int(w.shape[0]) for w, _ in layers]
+    return tensors, {"kind": "mlp", "sizes": sizes, "activation": activation, "output": output}
+
+
+def mlp_layers(tensors: Mapping[str, Any], network: Any, outputs: tuple[str, ...]) -> list[tuple[Any, Any]]:
+    """The (weight, bias) layers of `mlp_parts`, checked against the header's "network" entry: an
+    "mlp" whose output is one of `outputs`, each weight of the header's sizes (a ValueError; a
+    KeyError for a missing tensor)."""
+    if not isinstance(network, dict):
+        raise ValueError(f"the header's network is a {type(network).__name__}, not an object")
+    if network.get("kind") != "mlp":
+        raise ValueError(f"network kind {network.get('kind')!r} is not 'mlp'")
+    if network.get("output") not in outputs:
+        raise ValueError(f"network output {network.get('output')!r} is not one of {outputs}")
+    sizes = [int(s) for s in network["sizes"]]
+    weights = [(tensors[f"net.{i}.weight"], tensors[f"net.{i}.bias"]) for i in range(len(sizes) - 1)]
+    for i, (w, _) in enumerate(weights):
+        if tuple(w.shape) != (sizes[i + 1], sizes[i]):
+            raise ValueError(
+                f"net.{i}.weight has shape {w.shape}, the header says {(sizes[i + 1], sizes[i])}"
+            )
+    return weights
+
+
 def mlp_forward(
     x: np.ndarray,
     layers: Sequence[tuple[np.ndarray, np.ndarray]],
