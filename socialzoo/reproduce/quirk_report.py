@@ -7,7 +7,7 @@ import statistics
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from socialzoo.bench.tables import policy_label
+from socialzoo.bench.tables import interval_text, policy_label
 from socialzoo.env.quirks import ALL_QUIRKS, QUIRK_LABELS, ReferenceQuirks
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS
 from socialzoo.reproduce.runs import REFERENCE_TRAINERS, quirk_set
@@ -169,7 +169,7 @@ def reference_section(results: Mapping[str, Any], tables: Mapping[str, Any]) -> 
                 our = f"{ours[policy]['success_pct']:.1f}" if policy in ours else "n/a"
                 lines.append(
                     f"| {experiment} | {policy_label(policy)} | {_set_label(quirks)} | {our} | "
-                    f"{100 * head['success_rate']:.1f} [{100 * head['success_ci_low']:.1f}, "
-                    f"{100 * head['success_ci_high']:.1f}] | {spread} | {PAPER_SUCCESS[policy][index]:.1f} |"
+                    f"{interval_text(head, 'success', 1, 100.0)} | {spread} "
+                    f"| {PAPER_SUCCESS[policy][index]:.1f} |"
                 )
     return [*lines, ""]

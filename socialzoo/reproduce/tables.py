@@ -12,10 +12,10 @@ from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_POLICIES, PAPER_SUCCESS
 
 
-def _num(value: Any, digits: int, scale: float = 1.0) -> str:
+def _num(value: Any, digits: int) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
-    return f"{scale * float(value):.{digits}f}"
+    return f"{float(value):.{digits}f}"
 
 
 def outside(paper: float | None, low: float, high: float) -> bool:
@@ -110,11 +110,9 @@ def lfd_markdown(table: Sequence[Mapping[str, Any]]) -> str:
     ]
     for t in table:
         r = t["_row"]
-        success = f"{_num(r['success_rate'], 1, 100.0)} [{_num(r['success_ci_low'], 1, 100.0)}, " + (
-            f"{_num(r['success_ci_high'], 1, 100.0)}]"
-        )
         lines.append(
-            f"| {policy_label(str(t['policy']))} | {t['demonstration_steps']:,} | {t['trials']} | {success} "
+            f"| {policy_label(str(t['policy']))} | {t['demonstration_steps']:,} | {t['trials']} "
+            f"| {interval_text(r, 'success', 1, 100.0)} "
             f"| {_num(t['paper_success_pct'], 0)} | {_num(t['average_step_reward'], 3)} "
             f"| {_num(t['paper_average_step_reward'], 2)} | {'yes' if t['differs'] else ''} |"
         )

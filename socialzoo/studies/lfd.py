@@ -12,7 +12,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.runner import Backend
-from socialzoo.bench.tables import policy_label, write_csv
+from socialzoo.bench.tables import interval_text, policy_label, write_csv
 
 logger = logging.getLogger(__name__)
 
@@ -205,9 +205,9 @@ def write_lfd_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: in
         "|---|---:|---|---:|---:|---:|",
     ]
     for r in rows:
-        success = f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, {100 * r['success_ci_high']:.1f}]"
         lines.append(
-            f"| {policy_label(r['policy'])} | {r['demonstration_steps']:,} | {success} "
+            f"| {policy_label(r['policy'])} | {r['demonstration_steps']:,} "
+            f"| {interval_text(r, 'success', 1, 100.0)} "
             f"| {_cell(r['paper_success_pct'], 0)} | {_cell(r['average_step_reward'], 3)} "
             f"| {_cell(r['paper_average_step_reward'], 2)} |"
         )

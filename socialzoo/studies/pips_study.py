@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
-from socialzoo.bench.tables import policy_label, write_csv
+from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
@@ -219,12 +219,6 @@ def _cell(value: Any, fmt: str) -> str:
     return format(value, fmt)
 
 
-def _success(r: Mapping[str, Any]) -> str:
-    return (
-        f"{100 * r['success_rate']:.1f} [{100 * r['success_ci_low']:.1f}, {100 * r['success_ci_high']:.1f}]"
-    )
-
-
 def write_study_md(
     rows: Sequence[Mapping[str, Any]],
     path: str | Path,
@@ -244,7 +238,7 @@ def write_study_md(
         "|---:|---|---|---:|---:|---:|---:|---:|",
     ]
     for r in sorted(rows, key=lambda r: (-r["window"], r["demonstration_steps"])):
-        success = _success(r)
+        success = interval_text(r, "success", 1, 100.0)
         agree = r.get("heldout_agreement")
         lines.append(
             f"| {r['demonstration_steps']:,} | {_window_label(r['window'])} | {success} "
@@ -255,7 +249,9 @@ def write_study_md(
     if baselines:
         lines.append("")
         lines += [
-            f"{policy_label(b['policy'])} on the same scenarios: {_success(b)} % success." for b in baselines
+            f"{policy_label(b['policy'])} on the same scenarios: {interval_text(b, 'success', 1, 100.0)} "
+            "% success."
+            for b in baselines
         ]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
