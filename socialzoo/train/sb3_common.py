@@ -63,7 +63,7 @@ class SB3Args:
         normalize_reward: normalise rewards with VecNormalize during training (SB3's PPO default).
         eval_trials: evaluate every checkpoint on this many validation scenarios of the training
             map, or with a family of the family's validation split (never a test set;
-            evaluations.csv, TensorBoard eval/*); 0: none.
+            evaluations.csv, TensorBoard eval/*), in episodes of max_steps; 0: none.
         eval_every: evaluate only the checkpoints at multiples of this many env steps, and the
             last one (a multiple of checkpoint_every); 0: every checkpoint.
         threads: torch CPU threads.
@@ -299,8 +299,11 @@ def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
 
     evaluator = None
     if args.eval_trials:
+        # Validation episodes end at the training's time limit, which args.max_steps sets over
+        # env_overrides (env_config).
+        overrides = {**dict(args.env_overrides), "max_steps": args.max_steps}
         evaluator = validation_evaluator(
-            trainer.name, args.map, args.eval_trials, env_overrides=args.env_overrides, family=args.family
+            trainer.name, args.map, args.eval_trials, env_overrides=overrides, family=args.family
         )
     return run_training(trainer, args, lambda run: _fit(run, args), evaluator=evaluator)
 

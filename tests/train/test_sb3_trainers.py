@@ -179,7 +179,7 @@ def test_a_family_run_chooses_its_checkpoints_on_the_familys_validation_cases(mo
         return results
 
     monkeypatch.setattr(runner, "run_chunk", spy)
-    args = PPOArgs(family=family, map="hallway", eval_trials=2, env_overrides={"max_steps": 40})
+    args = PPOArgs(family=family, map="hallway", eval_trials=2, max_steps=40)
     sb3_common.run_sb3(TRAINER, args)
     made["e"](shipped_policy_file("ppo"))
     task = make_task("action_selection", 2, EnvConfig(map="hallway", family=family))
@@ -187,3 +187,27 @@ def test_a_family_run_chooses_its_checkpoints_on_the_familys_validation_cases(mo
     assert played == expected and families == [family]  # a family without splits: the map's seeds
     with pytest.raises(ValueError, match=r"eval_trials \(101\) is more than the 100 validation cases"):
         PPOArgs(family="frontal_approach", map="hallway", eval_trials=101)
+
+
+@pytest.mark.parametrize("family", [None, "frontal_approach"])
+def test_checkpoints_are_evaluated_in_episodes_of_the_training_time_limit(monkeypatch, family):
+    """--max-steps is the training env's time limit (over env_overrides' max_steps, as in training):
+    the validation episodes that choose the checkpoint end at it too, not at the benchmark's 3200."""
+    import socialzoo.bench.runner as runner
+    from socialzoo.train import sb3_common
+    from socialzoo.train.ppo import TRAINER
+
+    made, limits = {}, []
+    monkeypatch.setattr(
+        sb3_common, "run_training", lambda *a, evaluator=None: made.setdefault("e", evaluator)
+    )
+    monkeypatch.setattr(
+        runner,
+        "run_chunk",
+        lambda trials, spec: limits.extend(c.max_steps for c in spec.env_configs.values()) or [],
+    )
+    args = PPOArgs(family=family, eval_trials=2, max_steps=40, env_overrides={"max_steps": 7})
+    assert args.env_config().max_steps == 40
+    sb3_common.run_sb3(TRAINER, args)
+    made["e"]("unused.safetensors")
+    assert limits == [40]
