@@ -32,6 +32,9 @@ SUITE_MAX_STEPS = 2400
 # Two-sided level of every interval of the tables and the page (as a task id's benchmark).
 CONFIDENCE = 0.95
 REPLAYS_DIR = "replays"
+# The name of a replay page write_replays writes (POLICY-caseK-HASH.html): the only files of
+# REPLAYS_DIR a rerun removes.
+REPLAY_PAGE = re.compile(r".+-case\d+-[0-9a-f]{8}\.html")
 # Replay pages: one stored state every REPLAY_STRIDE steps, REPLAY_LASER_RAYS laser rays drawn.
 REPLAY_STRIDE = 2
 REPLAY_LASER_RAYS = 60
@@ -698,7 +701,8 @@ def write_replays(
 ) -> list[Replay]:
     """Replay pages (socialzoo.render.replay_html) of each unit's chosen episodes
     (`replay_choices`), as replays/SCENARIO/POLICY-caseK-HASH.html; a page already there (same
-    episode key) is kept. Each new recording is checked against the stored episode."""
+    episode key) is kept, and an older run's pages this run does not show (another policy, scenario,
+    episode or --replays) are removed. Each new recording is checked against the stored episode."""
     import numpy as np
 
     from socialzoo.bench.replay import record_task_episode
@@ -740,4 +744,11 @@ def write_replays(
             )
             _tell(say, f"replay {rel}: {trace.outcome}")
             replays.append(Replay(name, unit.spec, case, seed, success, rel, same))
+    shown = {r.path for r in replays}
+    for page in sorted((out / REPLAYS_DIR).glob("*/*.html")):
+        rel = page.relative_to(out).as_posix()
+        if rel not in shown and REPLAY_PAGE.fullmatch(page.name):
+            page.unlink()
+            if not any(page.parent.iterdir()):
+                page.parent.rmdir()
     return replays

@@ -216,6 +216,23 @@ def test_run_stores_resumes_and_equals_the_task_benchmarks_episodes(tmp_path):
     assert sorted(p.name for p in (tmp_path / "suite" / "tables").iterdir()) == ["success.csv", "success.md"]
 
 
+def test_a_rerun_with_fewer_policies_and_scenarios_keeps_only_its_replay_pages(tmp_path):
+    # The older run's pages of a policy and a scenario left out stayed beside this run's tables.
+    def config(policies, scenarios):
+        return SuiteConfig(
+            policies=policies, scenarios=scenarios, seeds=1, workers=1, replays=1, metrics=("success",)
+        )
+
+    out = tmp_path / "suite"
+    first = run_suite(config(("goalone", "ref"), FAST), out)
+    assert len(first.replays) == 4
+    (out / "replays" / "crossing" / "notes.html").write_text("mine")
+    again = run_suite(config(("goalone",), ("crossing",)), out)
+    pages = sorted(p.relative_to(out).as_posix() for p in (out / "replays").rglob("*.html"))
+    assert pages == sorted([r.path for r in again.replays] + ["replays/crossing/notes.html"])
+    assert len(again.replays) == 1 and not (out / "replays" / "doorway").exists()
+
+
 def test_replays_are_the_failures_first_then_successes_in_case_order():
     episodes = [{"case": k, "success": s} for k, s in enumerate([True, False, True, False, False])]
     assert [e["case"] for e in replay_choices(episodes, 1)] == [1]
