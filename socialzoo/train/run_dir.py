@@ -50,7 +50,8 @@ class RunDir:
 
     Every trainer writes into one folder (through its skeleton, socialzoo.train.skeleton):
 
-        run.json          algorithm, resolved arguments, command line, seed, package version, times
+        run.json          algorithm, resolved arguments, command line, seed, package version, times,
+                          and the sha256 of the training map's contents (map_digest)
         tensorboard/      TensorBoard event files (when the tensorboard package is installed)
         checkpoints/      the policy every `checkpoint_every` steps (step_000002000.<ext>, ...)
         <policy file>     the final policy
@@ -91,9 +92,11 @@ class RunDir:
         from socialzoo import __version__
 
         self.path = Path(path)
+        self.file = self.path / record_name
+        # Before the folder is made: a map that does not load (MapError) leaves no folder behind.
+        digest = {} if self.file.exists() else map_digest(args)
         self._made = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
-        self.file = self.path / record_name
         self.algo = algo
         self._paths = given_paths(args, inputs)
         self._fields = path_fields(args, inputs)
@@ -115,6 +118,7 @@ class RunDir:
                 [program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths, self._fields
             ),
             "seed": resolved.get("seed"),
+            **digest,
             "package_version": __version__,
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "finished": None,
@@ -211,6 +215,18 @@ def differing_args(
     if record.get("algo") == algo and theirs == identity:
         return None
     return sorted(k for k in set(theirs) | set(identity) if theirs.get(k) != identity.get(k))
+
+
+def map_digest(args: Any) -> dict[str, str]:
+    """{"map_sha256": the sha256 of the contents of the map that args.map names} (map_sha256, as test
+    sets and benchmark folders record it), so a record tells which map a run trained on after the file
+    changed; {} for arguments without a map (and records written before the key: read as they are)."""
+    name = getattr(args, "map", None)
+    if not isinstance(name, (str, Path)) or not str(name):
+        return {}
+    from socialzoo.maps.map_file import load_map, map_sha256
+
+    return {"map_sha256": map_sha256(load_map(name))}
 
 
 def read_record(file: Path) -> dict[str, Any] | None:

@@ -38,6 +38,36 @@ def test_other_arguments_are_refused(tmp_path):
 
 
 @dataclass(frozen=True, kw_only=True)
+class MapArgs:
+    map: str = "open_room"
+    out: Path = Path("x")
+
+
+def test_run_json_records_the_training_maps_contents(tmp_path):
+    """A map file's contents (not only its name) are recorded, so a record tells which walls a
+    policy trained on after the file was edited; an older record without the key still reads."""
+    from socialzoo.maps.map_file import MapError, load_map, map_sha256
+
+    room = load_map("open_room").to_json()
+    path = tmp_path / "room.json"
+    path.write_text(json.dumps(room))
+    first = RunDir(tmp_path / "a", "ppo", MapArgs(map=str(path), out=tmp_path / "a"))
+    assert first.record["map_sha256"] == map_sha256(load_map("open_room"))
+    path.write_text(json.dumps({**room, "walls": room["walls"][:-1]}))
+    edited = RunDir(tmp_path / "b", "ppo", MapArgs(map=str(path), out=tmp_path / "b"))
+    assert edited.record["map_sha256"] == map_sha256(load_map(path)) != first.record["map_sha256"]
+    assert "map_sha256" not in RunDir(tmp_path / "c", "ppo", Args(out=tmp_path / "c")).record
+    first.finish()
+    old = json.loads((tmp_path / "a" / "run.json").read_text())
+    del old["map_sha256"]  # a record written before the key
+    (tmp_path / "a" / "run.json").write_text(json.dumps(old))
+    assert RunDir(tmp_path / "a", "ppo", MapArgs(map=str(path), out=tmp_path / "a")).finished
+    with pytest.raises(MapError, match="nope"):  # named by the map's loader, and no folder made
+        RunDir(tmp_path / "d", "ppo", MapArgs(map="nope", out=tmp_path / "d"))
+    assert not (tmp_path / "d").exists()
+
+
+@dataclass(frozen=True, kw_only=True)
 class LfdArgs:
     demos: Path
     out: Path
