@@ -179,7 +179,7 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     from socialzoo.env.torchrl_single import ActionSelectionTorchEnv
     from socialzoo.train.policy_net import Discriminator, init_linear, make_actor, mlp
 
-    parts = imitation_parts(run, args)
+    parts = imitation_parts(run, args, max_steps=args.max_episode_steps)
     data, stats, generator, policy_net = parts.data, parts.stats, parts.generator, parts.net
     obs_size = data.obs.shape[1]
 

@@ -84,9 +84,10 @@ class ImitationParts:
     save: Callable[..., Path]
 
 
-def imitation_parts(run: TrainingRun, args: ImitationArgs) -> ImitationParts:
+def imitation_parts(run: TrainingRun, args: ImitationArgs, *, max_steps: int | None = None) -> ImitationParts:
     """Load the demonstrations, build the seeded policy network and its saver, and give the run its
-    checkpoint evaluator when args.eval_trials asks for one (on the demonstrations' map)."""
+    checkpoint evaluator when args.eval_trials asks for one (on the demonstrations' map, in episodes
+    of `max_steps`, a trainer's own time limit in its env; None: the benchmark's)."""
     import torch
 
     from socialzoo.train.demo_data import load_demo_steps
@@ -99,8 +100,9 @@ def imitation_parts(run: TrainingRun, args: ImitationArgs) -> ImitationParts:
     net = policy_network(data.obs.shape[1], args.hidden, args.activation, stats, generator)
     name = run.trainer.name
     if args.eval_trials:
+        limit = {} if max_steps is None else {"max_steps": max_steps}
         run.evaluator = validation_evaluator(
-            name, data.map, args.eval_trials, env_overrides={"observation": data.observation}
+            name, data.map, args.eval_trials, env_overrides={"observation": data.observation, **limit}
         )
 
     def save(path: Path, **training: Any) -> Path:

@@ -32,6 +32,25 @@ def test_a_short_gail_run_writes_policy_checkpoints_and_record(small_demos, tmp_
     assert policy.act(obs).shape == (3,)
 
 
+def test_checkpoints_are_evaluated_in_episodes_of_the_training_time_limit(small_demos, tmp_path, monkeypatch):
+    """max_episode_steps is the time limit of the validation episodes too, not the benchmark's 3200."""
+    import socialzoo.bench.runner as runner
+
+    limits = []
+    monkeypatch.setattr(
+        runner,
+        "run_chunk",
+        lambda trials, spec: limits.extend(c.max_steps for c in spec.env_configs.values()) or [],
+    )
+    args = Args(
+        demos=small_demos, steps=1000, total_steps=200, num_envs=4, rollout_len=50, max_episode_steps=60,
+        hidden=(16, 16), disc_hidden=(16, 16), minibatch=100, out=tmp_path / "gail", checkpoint_every=200,
+        progress=False, eval_trials=2,
+    )  # fmt: skip
+    train(args)
+    assert limits == [60]
+
+
 def test_reward_forms():
     logits = torch.tensor([-50.0, 0.0, 2.0])
     d = torch.sigmoid(logits)
