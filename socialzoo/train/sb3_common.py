@@ -52,7 +52,9 @@ class SB3Args:
         max_steps: episode time limit in steps (the benchmark: 3,200 = 80 s).
         scenario_repeats: episodes run on each scenario before a new one is drawn (the original:
             1 for PPO, 20 for DQN).
-        env_overrides: other EnvConfig fields, as a JSON object (e.g. {"reward": {"w_force": -0.02}}).
+        env_overrides: other EnvConfig fields, as a JSON object (e.g. {"reward": {"w_force": -0.02}});
+            one that a field above decides (map, family, max_steps, scenario.repeats) is refused
+            unless it is that field's value.
         num_envs: rows of the batched training env.
         learning_rate: Adam learning rate (SB3: PPO 3e-4, DQN 1e-4).
         batch_size: minibatch size of an update (SB3: PPO 64, DQN 32).
@@ -116,6 +118,12 @@ class SB3Args:
             not isinstance(n, int) or isinstance(n, bool) or n < 1 for n in self.net_arch
         ):
             raise ValueError(f"{owner}.net_arch must be positive layer sizes, got {self.net_arch!r}")
+        for name, given in self._overridden().items():
+            if given != getattr(self, name):
+                raise ValueError(
+                    f"{owner}.env_overrides sets {name} ({given!r}), which its own field decides "
+                    f"({getattr(self, name)!r}): give {name} instead"
+                )
         try:
             self.env_config()
         except (TypeError, ValueError) as err:
@@ -129,6 +137,16 @@ class SB3Args:
                     f"{owner}.eval_trials ({self.eval_trials}) is more than the {cases} validation "
                     f"cases of family {self.family!r}"
                 )
+
+    def _overridden(self) -> dict[str, Any]:
+        """The env_overrides values of the EnvConfig fields that env_config sets from this
+        dataclass's own fields (map, family, max_steps, scenario_repeats), by the field's name."""
+        given = dict(self.env_overrides)
+        found = {name: given[name] for name in ("map", "family", "max_steps") if name in given}
+        scenario = given.get("scenario")
+        if isinstance(scenario, Mapping) and "repeats" in scenario:
+            found["scenario_repeats"] = scenario["repeats"]
+        return found
 
     def check_block(self, block: int, what: str) -> None:
         """Raise ValueError unless checkpoints and the end of training fall on `block` env steps (a

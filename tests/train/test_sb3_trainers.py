@@ -144,6 +144,10 @@ def test_trainers_are_registered_with_the_papers_defaults():
         (PPOArgs, {"gamma": 1.5}, r"PPOArgs.gamma must be in \[0.0, 1.0\], got 1.5"),
         (PPOArgs, {"net_arch": ()}, "PPOArgs.net_arch"),
         (PPOArgs, {"env_overrides": {"max_stepz": 3}}, "bad training env.*max_stepz"),
+        (PPOArgs, {"env_overrides": {"map": "hallway"}}, r"env_overrides sets map \('hallway'\).*\('gdc1'\)"),
+        (PPOArgs, {"max_steps": 40, "env_overrides": {"max_steps": 7}}, r"sets max_steps \(7\).*\(40\)"),
+        (DQNArgs, {"env_overrides": {"scenario": {"repeats": 5}}}, r"sets scenario_repeats \(5\).*\(20\)"),
+        (DQNArgs, {"family": "crossing", "env_overrides": {"family": "doorway"}}, "sets family"),
         (DQNArgs, {"scenario_repeats": 0}, "DQNArgs.scenario_repeats must be an int >= 1, got 0"),
         (DQNArgs, {"exploration_final_eps": -0.1}, "DQNArgs.exploration_final_eps"),
         (DQNArgs, {"family": "nope"}, "family"),
@@ -191,8 +195,8 @@ def test_a_family_run_chooses_its_checkpoints_on_the_familys_validation_cases(mo
 
 @pytest.mark.parametrize("family", [None, "frontal_approach"])
 def test_checkpoints_are_evaluated_in_episodes_of_the_training_time_limit(monkeypatch, family):
-    """--max-steps is the training env's time limit (over env_overrides' max_steps, as in training):
-    the validation episodes that choose the checkpoint end at it too, not at the benchmark's 3200."""
+    """--max-steps is the training env's time limit: the validation episodes that choose the
+    checkpoint end at it too, not at the benchmark's 3200."""
     import socialzoo.bench.runner as runner
     from socialzoo.train import sb3_common
     from socialzoo.train.ppo import TRAINER
@@ -206,8 +210,7 @@ def test_checkpoints_are_evaluated_in_episodes_of_the_training_time_limit(monkey
         "run_chunk",
         lambda trials, spec: limits.extend(c.max_steps for c in spec.env_configs.values()) or [],
     )
-    args = PPOArgs(family=family, eval_trials=2, max_steps=40, env_overrides={"max_steps": 7})
-    assert args.env_config().max_steps == 40
+    args = PPOArgs(family=family, eval_trials=2, max_steps=40)
     sb3_common.run_sb3(TRAINER, args)
     made["e"]("unused.safetensors")
     assert limits == [40]
