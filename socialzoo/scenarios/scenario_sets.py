@@ -3,6 +3,7 @@ set, apart from every test set (generated sets for other maps: socialzoo.bench.t
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -139,14 +140,26 @@ def map_case_sets(map_ref: str | Map) -> dict[str, TestSet]:
     never a test set), each registered test set of the map by its own name (e.g. "gdc1-quick"), and
     "test": the registered "<map>-test", else the generated set of a map without one (CUSTOM_TEST_SEED,
     the benchmark's for that map). A map file with a shipped map's contents has the shipped map's sets
-    (shipped_map); the sets of any other map go by its name (a Map's) or reference."""
+    (shipped_map). The sets of any other map are keyed by its contents: named "<name>-<first 8 hex
+    digits of its map_sha256>-val" (and "-test"), on the map's file (its reference, else the Map's
+    path), so two maps of one name (two "floor.json" files, an edited copy still named "gdc1") never
+    share a set, and a set's scenarios without a map given are its own map's (a file that does not load:
+    its reference)."""
     shipped = shipped_map(map_ref)
-    key = shipped or (map_ref if isinstance(map_ref, str) else map_ref.name)
-    sets = {"val": validation_set(key)}
-    registered = {k: v for k, v in TEST_SETS.items() if shipped is not None and v.map_name == shipped}
+    where = key = shipped or (map_ref if isinstance(map_ref, str) else map_ref.path or map_ref.name)
+    if shipped is None:
+        from socialzoo.maps.map_file import MapError, load_map, map_sha256
+
+        try:
+            m = load_map(map_ref) if isinstance(map_ref, str) else map_ref
+            key = f"{m.name}-{map_sha256(m)[:8]}"
+        except (OSError, MapError):  # no contents to key by: the reference itself
+            pass
+    sets = {"val": dataclasses.replace(validation_set(where), name=f"{key}-val")}
+    registered = {k: v for k, v in TEST_SETS.items() if v.map_name == shipped}
     sets.update(registered)
     sets["test"] = registered.get(f"{key}-test") or TestSet(
-        key, CUSTOM_TEST_SEED, CUSTOM_TEST_SIZE, name=f"{key}-test"
+        where, CUSTOM_TEST_SEED, CUSTOM_TEST_SIZE, name=f"{key}-test"
     )
     return sets
 

@@ -309,6 +309,33 @@ def test_named_test_sets() -> None:
     check_scenario_geometry(gdc1(), s)
 
 
+def test_maps_of_one_name_never_share_a_case_set(tmp_path: Path) -> None:
+    """An imported map's sets are keyed by its contents: two files of one name, or an edited copy still
+    named "gdc1", each have their own val and test sets, and a set's scenarios are its own map's. Keyed
+    by the name field, the edited copy's "gdc1-test" and "gdc1-val" were sets on map "gdc1": without a
+    map given, they generated the shipped gdc1's scenarios."""
+    from socialzoo.scenarios.scenario_sets import CUSTOM_TEST_SEED, map_case_sets, validation_set
+
+    data = gdc1().to_json()
+    data["legal_poses"] = data["legal_poses"][::-1]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    edited = tmp_path / "a" / "floor.json"
+    edited.write_text(json.dumps(data))  # still named "gdc1"
+    data["walls"] = data["walls"][:-1]
+    other = tmp_path / "b" / "floor.json"
+    other.write_text(json.dumps(data))
+    a, b = (map_case_sets(maps.load_map(str(p))) for p in (edited, other))
+    for split in ("val", "test"):
+        assert a[split] != b[split] and a[split].name != b[split].name
+    assert a["test"].base_seed == CUSTOM_TEST_SEED and a["test"].name.startswith("gdc1-")
+    assert a["val"] != validation_set("gdc1") and a["test"].name != "gdc1-test"
+    own = a["test"].scenario(0, maps.load_map(str(edited)))
+    assert a["test"].scenario(0).to_json() == own.to_json()
+    assert map_case_sets(str(edited)) == a  # a reference or its Map: the same sets
+    assert map_case_sets(gdc1())["test"] is TEST_SETS["gdc1-test"]
+
+
 # sha256 of the scenarios' JSON (sort_keys) in index order, computed from the code before the
 # feasibility rule existed (commit cb9a195): the benchmark's test sets must never move. The full
 # sets (2000 each) are checked every 20th scenario; the quick sets in full.
