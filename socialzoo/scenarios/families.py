@@ -19,6 +19,10 @@ if TYPE_CHECKING:
     from socialzoo.scenarios.scenario import Scenario
 
 
+# Layouts a family draws from one seed before it gives up on a map (LayoutFamily.make).
+LAYOUT_TRIES = 30
+
+
 @dataclass(frozen=True)
 class Layout:
     """A family's choice of robot and human starts, goals and speeds (world frame, m, m/s).
@@ -69,36 +73,51 @@ class LayoutFamily(ScenarioFamily):
         """The scenario of `seed` on map m (default: the family's map), drawn from default_rng(seed).
 
         Routes are planned like the benchmark's (a straight line where wall-free); humans spawn on
-        their start points, and their pose indices are -1. One robot, whatever num_robots.
+        their start points, and their pose indices are -1. One robot, whatever num_robots. A layout
+        that puts someone where no route reaches (on another map than the family's: in a wall,
+        outside the building, in a closed room) is drawn again from the same generator, up to
+        LAYOUT_TRIES layouts, so a layout that plans is the one it always was.
 
         Raises:
             ValueError: the map has fewer than 2 legal poses.
-            NoPathError: someone's goal cannot be reached.
+            NoPathError: none of LAYOUT_TRIES layouts can be planned: the layout does not fit the map.
         """
         from socialzoo.maps.map_file import load_map
+        from socialzoo.nav.graph import NoPathError
         from socialzoo.scenarios.generator import plan_routes, split_routes
         from socialzoo.scenarios.scenario import Scenario
         from socialzoo.scenarios.script import Script
 
         m = load_map(self.map_name) if m is None else m
-        lay = self.layout(m, np.random.default_rng(seed))
-        n = len(lay.human_start)
+        rng = np.random.default_rng(seed)
         context = f"{m.where}, family {self.name!r} seed {seed}"
-        starts = np.concatenate((lay.robot_start[None], lay.human_start))
-        goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
-        stops = (
-            np.full((n, 2), np.nan)
-            if lay.human_stop is None
-            else np.asarray(lay.human_stop, dtype=np.float64)
-        )
-        stopping = ~np.isnan(stops[:, 0])
-        # People who stop walk start -> stop, then stop -> goal: their goals are their stops first.
-        goals[1:][stopping] = stops[stopping]
-        paths, lengths = plan_routes(m, starts, goals, context)
+        for attempt in range(LAYOUT_TRIES):
+            lay = self.layout(m, rng)
+            n = len(lay.human_start)
+            starts = np.concatenate((lay.robot_start[None], lay.human_start))
+            goals = np.concatenate((lay.robot_goal[None], lay.human_goal))
+            stops = (
+                np.full((n, 2), np.nan)
+                if lay.human_stop is None
+                else np.asarray(lay.human_stop, dtype=np.float64)
+            )
+            stopping = ~np.isnan(stops[:, 0])
+            # People who stop walk start -> stop, then stop -> goal: their goals are their stops first.
+            goals[1:][stopping] = stops[stopping]
+            try:
+                paths, lengths = plan_routes(m, starts, goals, context)
+                if stopping.any():
+                    rest, rest_len = plan_routes(m, stops[stopping], lay.human_goal[stopping], context)
+                break
+            except NoPathError as err:
+                if attempt == LAYOUT_TRIES - 1:
+                    raise NoPathError(
+                        f"{context}: the family's layout does not fit this map ({LAYOUT_TRIES} layouts drawn, "
+                        f"each with someone where no route reaches); the last: {str(err).removeprefix(context + ': ')}"
+                    ) from err
         routes = list(split_routes(paths[1:], lengths[1:]))
         stop_index = np.full(n, -1)
         if stopping.any():
-            rest, rest_len = plan_routes(m, stops[stopping], lay.human_goal[stopping], context)
             for k, i in enumerate(np.flatnonzero(stopping)):
                 stop_index[i] = len(routes[i]) - 1
                 routes[i] = np.concatenate((routes[i], rest[k, 1 : rest_len[k]]))
