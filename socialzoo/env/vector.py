@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from socialzoo.core.validation import check_int
 from socialzoo.env.gym_env import TaskAdapter, one_robot, robot_row
 from socialzoo.env.tasks.base import batch_actions
 
@@ -35,11 +36,17 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
     first reset; another shape or dtype, such as row indices, is refused before any change); other
     options are the task's (fixed cases: {"split": "test", "cases": [k_0, ..., k_{B-1}]}).
 
+    ## Episode End
+    A row ends on the task's end (terminated) or time limit (truncated), or truncated after
+    `max_episode_steps` steps when given (as Gymnasium's TimeLimit wraps a single env: gymnasium's
+    make_vec passes it to this vector entry point), with the episode's metrics so far.
+
     ## Arguments
     Args:
         num_envs: B.
         config: the task's config object (None: its defaults).
         render_mode: None or "rgb_array" (renders row 0), where the task can draw.
+        max_episode_steps: if set, truncate each row's episode after this many steps.
         task: the task's registry name, "module:Class" path or class (default: `default_task`).
         **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
     """
@@ -56,10 +63,12 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         config: Any = None,
         render_mode: str | None = None,
         *,
+        max_episode_steps: int | None = None,
         task: Any = None,
         **kwargs: Any,
     ) -> None:
         cls = self.task_class(task)
+        check_int(type(self).__name__, "max_episode_steps", max_episode_steps, low=1, allow_none=True)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         cls.check_render_mode(render_mode)
@@ -80,6 +89,9 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         # final_info carries them as float arrays.
         self.metric_types: dict[str, type] = {}
         self._all = np.arange(num_envs)
+        self.max_episode_steps = max_episode_steps
+        # Steps of each row's episode so far (for max_episode_steps).
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._action_shape = (num_envs, 1) + tuple(self.single_action_space.shape or ())
         self._started = False
         self._renderer: Any = None
@@ -95,6 +107,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
             self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
         seeds = np.zeros(self.num_envs, dtype=np.uint64)
         seeds[rows] = self.task.reset(rows, options)
+        self._elapsed[rows] = 0
         self._started = True
         return robot_row(self.task.observations(), slice(None)), {self.task.reset_info_key: seeds}
 
@@ -125,6 +138,9 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         step = self.task.step(action.reshape(self._action_shape))
         terminated = step.terminated[:, 0].copy()
         truncated = step.truncated[:, 0].copy()
+        self._elapsed += 1
+        if self.max_episode_steps is not None:
+            truncated |= self._elapsed >= self.max_episode_steps
         reward = step.reward[:, 0].astype(np.float64)
         info: dict[str, Any] = {key: step.info[key][:, 0].copy() for key in self.task.info_keys}
         ended = np.flatnonzero(terminated | truncated)
@@ -135,6 +151,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
             metrics = self._final_metrics(ended)
             info["final_info"], info["_final_info"] = {"metrics": metrics, "_metrics": mask}, mask
             self.task.reset(ended, {})
+            self._elapsed[ended] = 0
         return robot_row(self.task.observations(), slice(None)), reward, terminated, truncated, info
 
     def _final_observations(self, ended: np.ndarray) -> Any:

@@ -56,6 +56,25 @@ def test_the_vector_env_autoresets_and_matches_the_single_env_on_row_0():
     assert ended >= 1 and "success" in metrics
 
 
+def test_make_vec_max_episode_steps_truncates_rows_as_timelimit_does_a_single_env():
+    """gymnasium.make_vec passes max_episode_steps to the vector entry point (its default mode for
+    these ids); the VectorEnv refused it as an unknown config field."""
+    vec = gym.make_vec(TOY_ID, num_envs=2, max_episode_steps=4)
+    single = gym.make(TOY_ID, max_episode_steps=4)
+    obs, _ = vec.reset(seed=1)
+    one, _ = single.reset(seed=1)
+    for t in range(9):
+        obs, reward, term, trunc, info = vec.step(np.array([3, 3]))
+        one, r, one_term, one_trunc, _ = single.step(3)
+        assert (term[0], trunc[0], reward[0]) == (one_term, one_trunc, r)
+        if one_term or one_trunc:
+            assert trunc.all() and t % 4 == 3 and info["final_info"]["metrics"]["steps"][0] == 4
+            one, _ = single.reset()
+        np.testing.assert_array_equal(obs[0], one)
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        gym.make_vec(TOY_ID, num_envs=2, max_episode_steps=0)
+
+
 def test_pettingzoo_parallel_api_test_passes_with_two_robots():
     from pettingzoo.test import parallel_api_test
 
