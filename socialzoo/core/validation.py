@@ -15,6 +15,25 @@ _FLOAT_TYPES: tuple[Any, ...] = (float, "float")
 _INT_TYPES: tuple[Any, ...] = (int, "int")
 
 
+class UnknownFieldError(ValueError, TypeError):
+    """A config given a keyword that is none of its fields: a ValueError as every bad config is, and
+    a TypeError with Python's own words ("got an unexpected keyword argument 'x'"), as any callable
+    raises for an unknown keyword, so callers that probe for an optional keyword and drop it on that
+    error (TorchRL's GymEnv passes `frameskip` to gymnasium.make) work."""
+
+
+def unknown_fields(where: str, given: Collection[str], known: Collection[str]) -> UnknownFieldError | None:
+    """The error for the keywords of `given` that are not in `known` (named, with the known ones),
+    or None when every one is known."""
+    unknown = sorted(set(given) - set(known))
+    if not unknown:
+        return None
+    return UnknownFieldError(
+        f"{where}: unknown field(s) {unknown}; known: {sorted(known)} "
+        f"(got an unexpected keyword argument {unknown[0]!r})"
+    )
+
+
 def _range_text(low: float | None, high: float | None, low_open: bool, high_open: bool) -> str:
     """The allowed range in words: ">= 0", "> 0", "<= 360" or "in (0, 90]"; "" for any."""
     if low is not None and high is not None:

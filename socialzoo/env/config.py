@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import GroupConfig, HumanConfig, LaserConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.core.validation import check_choice, check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number, unknown_fields
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig, observation_size
@@ -284,10 +284,9 @@ def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[s
 
 
 def _check_known(cls: Any, data: Mapping[str, Any], where: str) -> None:
-    known = {f.name for f in dataclasses.fields(cls)}
-    unknown = set(data) - known
-    if unknown:
-        raise ValueError(f"{where}: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
+    error = unknown_fields(where, data, [f.name for f in dataclasses.fields(cls)])
+    if error is not None:
+        raise error
 
 
 def _override(base: Any, data: dict[str, Any], where: str) -> Any:

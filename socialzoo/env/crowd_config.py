@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.core.validation import check_choice, check_int, check_number
+from socialzoo.core.validation import check_choice, check_int, check_number, unknown_fields
 from socialzoo.env.config import family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
@@ -275,11 +275,10 @@ class CrowdNavConfig:
         cases = changes.get("cases", self.cases)
         if isinstance(cases, CrowdCaseConfig) and any(getattr(cases, k) != v for k, v in follow.items()):
             changes["cases"] = dataclasses.replace(cases, **follow)
-        try:
-            return dataclasses.replace(self, **changes)
-        except TypeError as err:
-            known = sorted(f.name for f in dataclasses.fields(self))
-            raise ValueError(f"CrowdNavConfig: {err}; known fields: {known}") from None
+        error = unknown_fields("CrowdNavConfig", changes, [f.name for f in dataclasses.fields(self)])
+        if error is not None:
+            raise error
+        return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON values (what the registry and run records store)."""
@@ -317,9 +316,9 @@ def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> 
 
 def _replace_nested(config: Any, fields: dict[str, Any], where: str) -> Any:
     """`config` with `fields`; an unknown field raises naming `where` and the known ones."""
-    known = {f.name for f in dataclasses.fields(config)}
-    if unknown := sorted(set(fields) - known):
-        raise ValueError(f"{where}: unknown field(s) {unknown}; known: {sorted(known)}")
+    error = unknown_fields(where, fields, [f.name for f in dataclasses.fields(config)])
+    if error is not None:
+        raise error
     return dataclasses.replace(config, **fields)
 
 

@@ -48,3 +48,16 @@ def test_unknown_fields_are_named():
         EnvConfig().replace(num_robot=2)
     with pytest.raises(ValueError, match=r"EnvConfig.reward: unknown field"):
         EnvConfig().replace(reward={"bonus": 1.0})
+
+
+@pytest.mark.parametrize("env_id", ["socialzoo/Doorway-v2", "socialzoo/CrowdNav-v1"])
+def test_an_unknown_keyword_of_an_id_is_also_pythons_type_error(env_id):
+    """An unknown keyword is a TypeError in Python's words as for any callable (it was a ValueError
+    only), so callers that probe an optional keyword work: TorchRL's GymEnv passes frameskip and
+    drops it on that error. It stays a ValueError naming the field and the known ones."""
+    for error in (TypeError, ValueError):
+        with pytest.raises(
+            error,
+            match=r"unknown field\(s\) \['frameskip'\]; known: .*unexpected keyword argument 'frameskip'",
+        ):
+            gym.make(env_id, frameskip=1)

@@ -23,6 +23,16 @@ def test_torchrl_spec_check_passes():
     check_env_specs(env)
 
 
+def test_torchrl_gym_env_builds_a_registered_id():
+    """TorchRL's GymEnv passes frameskip to gymnasium.make and drops it on Python's TypeError for an
+    unknown keyword; the ids raised a ValueError, so GymEnv("socialzoo/...") failed."""
+    from torchrl.envs import GymEnv
+
+    env = GymEnv("socialzoo/CrowdNav-v1")
+    check_env_specs(env, seed=0)
+    assert env.rollout(5)["next", "observation"].shape == (5, 46)
+
+
 def test_rows_match_the_vector_env_including_episode_ends():
     b, seed = 3, 7
     env = ActionSelectionTorchEnv(b, max_steps=25)
