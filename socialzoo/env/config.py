@@ -155,6 +155,7 @@ class EnvConfig:
             ("num_human_neighbours", 0),
         ):
             check_int("EnvConfig", name, getattr(self, name), low=low)
+        check_family_robots(self.family, self.num_robots, "EnvConfig")
         if self.num_learned_humans > self.max_humans:
             raise ValueError(
                 f"EnvConfig.num_learned_humans ({self.num_learned_humans}) exceeds the human slots "
@@ -263,6 +264,16 @@ def family_map(name: str, where: str) -> str:
         return get_family(name).map_name
     except (ImportError, AttributeError, KeyError, ValueError) as err:
         raise ValueError(f"{where}: scenario family {name!r} cannot be loaded ({err})") from None
+
+
+def check_family_robots(name: str | None, num_robots: int, owner: str) -> None:
+    """Refuse more robots than family `name`'s scenarios hold (ScenarioFamily.max_robots), naming
+    `owner`'s fields, when the config is made rather than at its first reset."""
+    most = None if name is None else get_family(name).max_robots
+    if most is not None and num_robots > most:
+        raise ValueError(
+            f"{owner}.num_robots = {num_robots}, but scenario family {name!r} holds {most} robot(s) per episode"
+        )
 
 
 def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[str, Any]:

@@ -9,7 +9,7 @@ from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
 from socialzoo.core.validation import check_choice, check_int, check_number, unknown_fields
-from socialzoo.env.config import family_map
+from socialzoo.env.config import check_family_robots, family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
@@ -155,6 +155,7 @@ class CrowdNavConfig:
         check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
         check_int("CrowdNavConfig", "observed_people", self.observed_people, low=1, allow_none=True)
         check_int("CrowdNavConfig", "num_robots", self.num_robots, low=1)
+        check_family_robots(self.family, self.num_robots, "CrowdNavConfig")
         if self.max_humans is not None and self.max_humans < self.cases.num_humans:
             raise ValueError(
                 f"CrowdNavConfig.max_humans ({self.max_humans}) is below cases.num_humans ({self.cases.num_humans})"

@@ -30,12 +30,15 @@ class ScenarioFamily:
         description: one line saying what happens.
         splits: fixed seed splits of its own ("val", "test", "train"), if any; a family without
             them plays its map's validation and test seeds.
+        max_robots: the most robots one of its scenarios can hold (None: any number); configs
+            asking for more are refused when made.
     """
 
     name: str = ""
     map_name: str = ""
     description: str = ""
     splits: Mapping[str, SeedSplit] = {}
+    max_robots: int | None = None
 
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
         """The scenario of `seed` with `num_robots` robots, on map m (default: the family's map)."""

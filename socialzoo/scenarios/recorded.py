@@ -213,6 +213,7 @@ class RecordedScene(ScenarioFamily):
 
     scene: str = ""
     map_name = "arena"
+    max_robots = 1  # the robot takes one recorded person's place
 
     def __init__(
         self, recording: Recording | None = None, name: str | None = None, map_name: str = "arena"

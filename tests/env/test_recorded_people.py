@@ -886,3 +886,15 @@ def test_a_pickled_env_of_a_family_of_ones_own_plays_on_where_it_is_not_register
     assert ended  # the copy drew its next episodes itself
     options = {"split": "test", "cases": [0, 1]}
     np.testing.assert_array_equal(vec.reset(options=options)[0], other.reset(options=options)[0])
+
+
+def test_a_config_with_more_robots_than_a_recorded_scene_holds_is_refused_when_made(family) -> None:
+    """A recorded episode has one robot (the one in a person's place): two are refused by the
+    config itself, naming the field and the family, not at the env's first reset."""
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.crowd_config import CrowdNavConfig
+
+    for make in (EnvConfig, CrowdNavConfig):
+        with pytest.raises(ValueError, match=rf"num_robots = 2, but scenario family '{family.name}' holds 1"):
+            make(family=family.name, num_robots=2)
+        assert make(family=family.name).num_robots == 1
