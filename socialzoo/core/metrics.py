@@ -482,9 +482,10 @@ _ENTRIES: tuple[Metric, ...] = (
         better="lower",
         digits=2,
         sources=_REC,
-        description="Mean over the people who left their tracks of the time they left the scene minus their "
-        "recorded exit (by the robot's episode end plus the straight distance left at their speed); NaN "
-        "with nobody.",
+        description="Mean over the people who left their tracks of the time they reached their route's end "
+        "minus their recorded exit: the time they left the scene (or the robot's episode end) plus the "
+        "straight distance left from there at their speed (they leave within the waypoint radius of it); "
+        "NaN with nobody.",
     ),
     _float(
         name="reacting_extra_distance",
@@ -493,8 +494,9 @@ _ENTRIES: tuple[Metric, ...] = (
         better="lower",
         digits=3,
         sources=_REC,
-        description="Mean over the people who left their tracks of the distance they walked from there "
-        "(plus the straight distance left) minus their recorded path from there; NaN with nobody.",
+        description="Mean over the people who left their tracks of the distance they walked from there, plus "
+        "the straight distance left to their route's end from where they left (or were at the robot's "
+        "episode end), minus their recorded path from there; NaN with nobody.",
     ),
     _count(
         name="people_walked_into_robot",

@@ -2,6 +2,12 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    Within socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations,
+        rewards, end flags): only the episode metrics reacting_time_lost and reacting_extra_distance of
+        hybrid people change, on 2026-11-29: every reacting person is counted to its route's end, as one
+        still walking at the episode's end was (the straight way left, and that way at its speed). One
+        who left, within the waypoint radius of that end, was counted to where it left (both read about
+        that way low), and one whose slot's next person entered before it left lacked it in its time.
     Within socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations, rewards, end flags): only
         the episode metric people_walked_into_robot changes, on 2026-11-29: it counts the contacts the
         CrowdNav task judges during a step (the closest approach, blamed where it first came within

@@ -81,10 +81,10 @@ def settle_rows(
     - Who is in a slot: its people who entered at or before i0, counted, minus one (-1: nobody yet); a
       slot beyond the recording's people has nobody in it, ever: absent.
     - Entering: the one the new person follows is folded into the measures (a reacting person leaving its
-      slot adds one, its time lost (to its exit, or to t if it had not left) and its extra distance (with
-      the straight way left if it had not left) to the row's `folded`); the new person follows its track
-      (REPLAY) or walks by its model from its route's second point, a shared slot's person along its own
-      part at its own speed.
+      slot adds one, its time lost (to its exit, or to t if it had not left, plus the straight way left
+      from there at its speed) and its extra distance (with that way left) to the row's `folded`); the new
+      person follows its track (REPLAY) or walks by its model from its route's second point, a shared
+      slot's person along its own part at its own speed.
     - Placing: a follower where its track is, present while recorded; a person a model walks enters on its
       track and leaves where its route ends. A frame the row's own recording does not have is absent (a
       wider recording in another row does not keep this row's people on its last frame).
@@ -114,15 +114,17 @@ def settle_rows(
             if new:
                 if reacted_at[r, s] == reacted_at[r, s]:  # not NaN: it reacted
                     cut = exit_at[r, s] != exit_at[r, s]
+                    own = max(speed[occupants_at[g] + max(occupant[r, s], 0)], 1e-9)
                     folded[r, 0] += 1.0
-                    folded[r, 1] += (t if cut else exit_at[r, s]) - recorded_exit[r, s]
-                    folded[r, 2] += walked[r, s] + (rest[r, s] if cut else 0.0) - recorded_left[r, s]
+                    folded[r, 1] += (t if cut else exit_at[r, s]) + rest[r, s] / own - recorded_exit[r, s]
+                    folded[r, 2] += walked[r, s] + rest[r, s] - recorded_left[r, s]
                 occupant[r, s] = now
                 on_track[r, s] = follows[r, s]
                 gone[r, s] = False
                 reacted_at[r, s] = np.nan
                 exit_at[r, s] = np.nan
                 walked[r, s] = 0.0
+                rest[r, s] = 0.0
                 model[r, s] = replay if follows[r, s] else then[r, s]
                 if shared[g]:
                     o = occupants_at[g] + now
@@ -222,7 +224,7 @@ def account_step(
     before it (was_done (B, R)): its time, the reacting people's measures and the robots'.
 
     The reacting people (when any row has one): the distance each walked in the step, and the straight way
-    left to its route's end (0 for everyone else). A person's walk counts from the step after the one at whose
+    left to its route's end (kept once it left). A person's walk counts from the step after the one at whose
     end it reacted (in that one it walked its track, before the place its recorded distance left starts from)
     to the step it left in (its time counts to that step's end); not in a step during which it entered (its
     slot's position before the step was its previous occupant's). The robots whose episode had not ended: the
@@ -255,7 +257,7 @@ def account_step(
         if not counted[r]:
             continue
         elapsed[r] += dt
-        if off_track:  # as before anyone reacted: every rest stays 0
+        if off_track:  # else nobody walks off a track: every rest stays as it is
             t = step_count[r] * dt
             for s in range(people[r]):
                 reacted = reacted_at[r, s] == reacted_at[r, s]  # NaN: not reacting
@@ -271,9 +273,8 @@ def account_step(
                         pos_after[r, s, 1] - pos_before[r, s, 1],
                     )
                     walked[r, s] += np.sqrt(dx * dx + dy * dy)
-                if not walking:
-                    rest[r, s] = 0.0
-                    continue
+                if not (walking or (reacted and exit_at[r, s] == t)):
+                    continue  # one who left keeps the way left from where it left
                 end = route_len[r, s] - 1
                 ex, ey = route[r, s, end, 0] - pos_after[r, s, 0], route[r, s, end, 1] - pos_after[r, s, 1]
                 rest[r, s] = np.sqrt(ex * ex + ey * ey)
@@ -364,9 +365,10 @@ def row_measures(
     who walked into the robot.
 
     The reacting people are those who left their slot (`folded`) plus those still in one, in slot order:
-    each one's time to its exit (or, not gone yet, the episode's time plus the straight way left at its
-    speed) against its recorded exit, and its distance walked (plus the way left) against the recorded
-    distance left."""
+    each one's time to its exit (or, not gone yet, the episode's time) plus the straight way left to its
+    route's end at its speed, against its recorded exit, and its distance walked plus that way left against
+    the recorded distance left. Every one is counted to its route's end: one who left did so within the
+    waypoint radius of it, and its way left is from where it left."""
     for j in range(rows.shape[0]):
         r, q = rows[j], robots[j]
         count, lost, extra = 0, 0.0, 0.0
@@ -375,9 +377,9 @@ def row_measures(
                 continue
             done = exit_at[r, s] == exit_at[r, s]
             own = max(speed[occupants_at[slot_at[r] + s] + max(occupant[r, s], 0)], 1e-9)
-            at = exit_at[r, s] if done else elapsed[r] + rest[r, s] / own
+            at = (exit_at[r, s] if done else elapsed[r]) + rest[r, s] / own
             lost += at - recorded_exit[r, s]
-            extra += walked[r, s] + (0.0 if done else rest[r, s]) - recorded_left[r, s]
+            extra += walked[r, s] + rest[r, s] - recorded_left[r, s]
             count += 1
         measures[j, 0] = folded[r, 0] + count
         measures[j, 1] = folded[r, 1] + lost

@@ -174,6 +174,34 @@ def test_a_reacting_persons_walk_counts_from_its_reaction_to_the_step_it_left_in
     assert core.replay.walked[0, 0] == pytest.approx(moves, abs=1e-9)
 
 
+def test_a_reacting_person_is_counted_to_its_routes_end_whether_it_left_or_not() -> None:
+    # A lone walker reacts at once (a wide radius) and walks its straight track on undisturbed by its
+    # model. Still walking, it is counted to its route's end (the straight way left at its speed); it
+    # leaves within the waypoint radius (1 m) of that end, 0.875 m short of it, and is counted to it
+    # all the same: its measures read 0 before and after it left (after, they read -0.7 s and -0.875 m,
+    # the way it did not walk, when one who left was counted to where it left).
+    tracks = np.stack((np.arange(25) * 0.5, np.zeros(25)), -1)[None]
+    start = np.array([[50.0, 50.0, 0.0]])
+    scenario = people_scenario(
+        RecordedPeople(dt=DT, tracks=tracks), start, start + [[1.0, 0.0, 0.0]], seed=3, family="test"
+    )
+    core = _core([scenario], "hybrid:sf", react_radius=1000.0)
+    walking = None
+    for _ in range(200):
+        core.step(np.zeros((1, 1, 2)))
+        (summary,) = core.replay.summaries([0], [np.nan])
+        if core.replay.gone[0, 0]:
+            break
+        walking = summary
+    else:
+        pytest.fail("the walker never left")
+    assert walking is not None and summary["people_reacting"] == 1
+    for measures in (walking, summary):
+        assert measures["reacting_extra_distance"] == pytest.approx(0.0, abs=1e-6)
+        assert measures["reacting_time_lost"] == pytest.approx(0.0, abs=1e-6)
+    assert core.replay.rest[0, 0] == pytest.approx(0.875)  # where it left, from its route's end
+
+
 def _to_the_end(robot_start=(50.0, 50.0)) -> Scenario:
     """A person on every frame of a 10-frame recording, walking +x at 1.25 m/s, another on frames 2-9."""
     tracks = np.stack((np.arange(10) * 0.5, np.zeros(10)), -1)[None].repeat(2, 0)
@@ -513,6 +541,32 @@ def test_the_second_person_of_a_shared_slot_walks_its_own_route() -> None:
     assert not mask[35 * 4]  # the first had left before the second entered
 
 
+def test_a_reacting_person_whose_slot_is_taken_before_it_left_is_counted_to_its_routes_end() -> None:
+    # The slot's first person (1.25 m/s, recorded exit 4 s) reacts to a robot parked on its line and is
+    # held there until the slot's second person enters (16 s): its time counts to then plus the straight
+    # way left at its speed, as its distance counts that way (its time lacked it).
+    scenario = dataclasses.replace(_shared_slot(), robot_starts=np.array([[4.6, 0.0, 0.0]]))
+    core = _core([scenario], "hybrid:orca")
+    for _ in range(41 * 4):
+        runner = core.replay
+        rest, walked, left = (
+            float(runner.rest[0, 0]),
+            float(runner.walked[0, 0]),
+            float(runner.recorded_left[0, 0]),
+        )
+        still_walking = np.isnan(runner.exit_at[0, 0]) and not np.isnan(runner.reacted_at[0, 0])
+        core.step(np.zeros((1, 1, 2)))
+        if runner.occupant[0, 0] == 1:
+            break
+    else:
+        pytest.fail("the second person never entered")
+    assert still_walking and rest > 0.5
+    count, lost, extra = runner.folded[0]
+    assert count == 1
+    assert lost == pytest.approx(16.0 + rest / 1.25 - 4.0, abs=1e-9)
+    assert extra == pytest.approx(walked + rest - left, abs=1e-9)
+
+
 def test_a_person_who_enters_and_reacts_at_once_has_walked_nothing_yet() -> None:
     # The second person of the shared slot enters at (-3, 0) beside the robot and reacts on its
     # first step; the slot's position before that step was the first person's, 8 m away.
@@ -788,11 +842,11 @@ def _vector_digests(family_name: str, humans: str) -> tuple[str, str]:
 # reacting_extra_distance, which changed nothing else: the jump of a person entering and reacting
 # in one step, then the recorded distance left from where the person is, the row's own frames only,
 # then the walk counted from the reaction to the step the person left in, then the people who walked
-# into the robot among the contacts the CrowdNav task judges during a step): the kernels keep every
-# value bit for bit.
+# into the robot among the contacts the CrowdNav task judges during a step, then a person who left
+# counted to its route's end): the kernels keep every value bit for bit.
 GOLDEN_RECORDED = {
     "replay": ("e5e46e7a1b5ade60", "6abf74028faf97ba"),
-    "hybrid:orca": ("299387c2d98710da", "9934dc97549e74b3"),
+    "hybrid:orca": ("299387c2d98710da", "38f3195720842091"),
 }
 
 
