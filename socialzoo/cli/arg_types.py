@@ -102,7 +102,15 @@ def config_field(text: str) -> tuple[str, Any]:
 
 def task_config(fields: list[tuple[str, Any]] | None) -> dict[str, Any]:
     """The --task-config fields as a task config's overrides; a dotted key sets a nested config's
-    field (reward.discomfort_dist=0.3 -> {"reward": {"discomfort_dist": 0.3}})."""
+    field (reward.discomfort_dist=0.3 -> {"reward": {"discomfort_dist": 0.3}}). family=MODULE:NAME
+    imports MODULE, which registers the family NAME, as --family does (catalogue.family_name).
+
+    Raises:
+        ValueError: a key given a value and nested fields at once, or a MODULE:NAME that MODULE
+            cannot be imported or registers no family NAME.
+    """
+    from socialzoo.scenarios.catalogue import family_name
+
     config: dict[str, Any] = {}
     for key, value in fields or ():
         *parents, name = key.split(".")
@@ -112,6 +120,8 @@ def task_config(fields: list[tuple[str, Any]] | None) -> dict[str, Any]:
             if not isinstance(node, dict):
                 raise ValueError(f"--task-config {key}: {parent} is given a value and fields at once")
         node[name] = value
+    if isinstance(config.get("family"), str):
+        config["family"] = family_name(config["family"])
     return config
 
 
@@ -123,7 +133,8 @@ def add_task_config_argument(parser: argparse.ArgumentParser) -> None:
         action="append",
         metavar="KEY=VALUE",
         help="a config field of the task ids (repeatable; VALUE read as JSON where it parses, a dotted KEY "
-        "sets a nested field), e.g. family=recorded_zara1, humans=hybrid:orca, "
+        "sets a nested field), e.g. family=recorded_zara1 (MODULE:NAME for a family that MODULE registers), "
+        "humans=hybrid:orca, "
         'humans=\'{"models": "hybrid:orca", "react_radius": 3}\', reward.discomfort_dist=0.3',
     )
 

@@ -138,6 +138,58 @@ def test_task_config_fields_are_read_as_json_or_text_and_nest_by_dots():
         task_config([("reward", 1), ("reward.discomfort_dist", 0.3)])
 
 
+def test_task_config_names_a_family_that_a_module_of_one_s_own_registers(tmp_path, capsys, monkeypatch):
+    """docs/recorded.md: a recording of one's own, registered as a family by one's own module, is
+    benchmarked and replayed with --task-config family=MODULE:NAME, as --family takes it. The value was
+    handed to the config as it was, which refused it (not a registered family), the module never
+    imported."""
+    from socialzoo.scenarios.catalogue import FAMILIES
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    rows = [
+        f"{10 * (k + 3 * p)}\t{p}\t{-4.0 + p + 0.3 * k}\t{0.7 * p}\n" for p in range(4) for k in range(25)
+    ]
+    (tmp_path / "my_tracks.txt").write_text("".join(rows))
+    (tmp_path / "my_scene_own.py").write_text(
+        "from socialzoo.data.tracks import read_tracks\n"
+        "from socialzoo.scenarios.catalogue import register_family\n"
+        "from socialzoo.scenarios.recorded import RecordedScene\n"
+        f"register_family(RecordedScene(read_tracks({str(tmp_path / 'my_tracks.txt')!r}), name='recorded_own'))\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    env = ["--maps", "socialzoo/CrowdNavRecorded-v2", "--task-config", "family=my_scene_own:recorded_own"]
+    try:
+        argv = ["benchmark", *env, "--policies", "orca", "--trials", "1", "--no-figures", "--no-progress"]
+        assert socialzoo_main([*argv, "--out", str(tmp_path / "out")]) == 0
+        table = (tmp_path / "out" / "crowdnav.md").read_text()
+        assert table.startswith("socialzoo/CrowdNavRecorded-v2, family=recorded_own, test cases")
+        argv = [
+            "replay",
+            "--env",
+            "socialzoo/Recorded-v3",
+            *env[2:],
+            "--policy",
+            "goalone",
+            "--max-steps",
+            "10",
+        ]
+        assert socialzoo_main([*argv, "--out", str(tmp_path / "own.html")]) == 0
+        assert "1 episode(s) on socialzoo/Recorded-v3, test case 0" in capsys.readouterr().out
+    finally:
+        FAMILIES.pop("recorded_own", None)
+    argv = [
+        "benchmark",
+        "--maps",
+        "socialzoo/CrowdNavRecorded-v2",
+        "--policies",
+        "orca",
+        "--out",
+        str(tmp_path),
+    ]
+    assert socialzoo_main([*argv, "--task-config", "family=no_such_module_own:recorded_own"]) == 2
+    assert "cannot import 'no_such_module_own'" in capsys.readouterr().err
+
+
 def test_task_config_needs_a_task_id(tmp_path, capsys):
     argv = ["benchmark", "--task-config", "family=x", "--out", str(tmp_path)]
     assert socialzoo_main(argv) == 2
