@@ -45,6 +45,10 @@ _SPLIT_STREAM = 0x7265636F7264  # "record"
 # every recorded position, its graph is a grid of this spacing, m.
 OPEN_MARGIN = 3.0
 OPEN_SPACING = 2.0
+# The open area's graph has at most this many nodes: a larger area gets a wider spacing, as the
+# navigator's all-pairs table (socialzoo.nav.path_table) costs N^3 (2 s for 600 nodes, 15 s for
+# 1,100: a 60 m square; minutes for a 100 m one). The five scenes need 70 to 154.
+MAX_OPEN_NODES = 600
 # The robot's start heading points at its track's first point this far from the start, m.
 _HEADING_REACH = 1.0
 
@@ -322,17 +326,23 @@ class RecordedScene(ScenarioFamily):
 
 def open_area_map(recording: Recording, name: str) -> Map:
     """The scene's open area as a map: four walls OPEN_MARGIN beyond every recorded position, a
-    grid graph (8-neighbour) of OPEN_SPACING inside them, and its nodes as legal poses. The
-    recordings have no walls of their own; a task that plans on a map's graph (the action-selection
-    task's sub-policies) plans straight lines here."""
+    grid graph (8-neighbour) of OPEN_SPACING inside them (wider where that would make more than
+    MAX_OPEN_NODES nodes), and its nodes as legal poses. The recordings have no walls of their own; a
+    task that plans on a map's graph (the action-selection task's sub-policies) plans straight lines
+    here."""
     from socialzoo.maps.map_file import Map
 
     points = np.concatenate([t.positions for t in recording.tracks])
     low, high = points.min(0) - OPEN_MARGIN, points.max(0) + OPEN_MARGIN
     x0, y0, x1, y1 = float(low[0]), float(low[1]), float(high[0]), float(high[1])
     walls = np.array([[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]])
-    xs = np.arange(x0 + OPEN_SPACING / 2, x1 - OPEN_SPACING / 4, OPEN_SPACING)
-    ys = np.arange(y0 + OPEN_SPACING / 2, y1 - OPEN_SPACING / 4, OPEN_SPACING)
+    spacing = max(OPEN_SPACING, math.sqrt((x1 - x0) * (y1 - y0) / MAX_OPEN_NODES))
+    while True:
+        xs = np.arange(x0 + spacing / 2, x1 - spacing / 4, spacing)
+        ys = np.arange(y0 + spacing / 2, y1 - spacing / 4, spacing)
+        if len(xs) * len(ys) <= MAX_OPEN_NODES:
+            break
+        spacing *= 1.05
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
     nodes = np.stack((gx.ravel(), gy.ravel()), -1)
     index = np.arange(len(nodes)).reshape(len(xs), len(ys))

@@ -338,6 +338,22 @@ def test_the_open_area_map_is_the_registered_recordings(tmp_path, monkeypatch) -
     assert [p.name for p in (tmp_path / "maps").iterdir()] == ["recorded_mine.json"]
 
 
+def test_the_open_area_map_of_a_large_recording_keeps_its_graph_small() -> None:
+    # A recording of one's own over a 150 m square (a plaza; or positions left in pixels) made a 2 m
+    # grid of 5,900 nodes, whose all-pairs table (N^3) kept Recorded-v3's first reset busy for tens of
+    # minutes (a 60 m square: 1,100 nodes, 15 s). Its spacing widens instead; a scene's own size keeps 2 m.
+    from socialzoo.scenarios.recorded import MAX_OPEN_NODES, OPEN_SPACING, open_area_map
+
+    corners = [Track(0, 0, np.linspace([0.0, 0.0], [4.0, 0.0], 10)), Track(1, 0, np.full((10, 2), 150.0))]
+    large = Recording(name="plaza", dt=DT, num_frames=10, tracks=tuple(corners), source="test")
+    m = open_area_map(large, "recorded_plaza")
+    assert 0.9 * MAX_OPEN_NODES <= len(m.nodes) <= MAX_OPEN_NODES
+    assert m.walls.min() == -3.0 and m.walls.max() == 153.0
+    small = open_area_map(_recording(count=20), "recorded_small")
+    spacings = np.abs(np.diff(small.nodes, axis=0))
+    assert np.isclose(spacings[spacings > 0].min(), OPEN_SPACING)
+
+
 @pytest.mark.parametrize("humans", ["replay", "hybrid:sf", "orca"])
 def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene, humans: str) -> None:
     from gymnasium.utils.env_checker import check_env
