@@ -129,6 +129,13 @@ def evaluate_stored(
     splits = probe.case_splits()
     if split not in splits:
         raise ValueError(f"{task.env_id}: split must be one of {sorted(splits)}, got {split!r}")
+    if splits[split] == 0:
+        family = getattr(probe.config, "family", None)
+        raise ValueError(
+            f"{task.env_id}: the {split} split"
+            + (f" of family {family}" if family else "")
+            + " holds no cases"
+        )
     total = splits[split] if cases is None else cases
     if not 1 <= total <= splits[split]:
         raise ValueError(

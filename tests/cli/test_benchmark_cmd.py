@@ -190,6 +190,27 @@ def test_task_config_names_a_family_that_a_module_of_one_s_own_registers(tmp_pat
     assert "cannot import 'no_such_module_own'" in capsys.readouterr().err
 
 
+def test_a_task_id_whose_split_holds_no_cases_says_so(tmp_path, capsys, monkeypatch):
+    """A recording of one person has one eligible track, which goes to train (the test split takes at
+    most half): without --trials the error read "0 cases asked of the test split, which holds 0"."""
+    from socialzoo.data.tracks import Recording, Track
+    from socialzoo.scenarios.catalogue import FAMILIES, register_family
+    from socialzoo.scenarios.recorded import RecordedScene
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    alone = Track(0, 0, np.linspace([0.0, 0.0], [8.0, 0.0], 30))
+    register_family(
+        RecordedScene(Recording(name="alone", dt=0.4, num_frames=30, tracks=(alone,), source="test"))
+    )
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v2", "--task-config", "family=recorded_alone"]
+    try:
+        assert socialzoo_main([*argv, "--policies", "orca", "--out", str(tmp_path), "--no-figures"]) == 2
+    finally:
+        FAMILIES.pop("recorded_alone", None)
+    err = capsys.readouterr().err
+    assert "the test split of family recorded_alone holds no cases" in err
+
+
 def test_task_config_needs_a_task_id(tmp_path, capsys):
     argv = ["benchmark", "--task-config", "family=x", "--out", str(tmp_path)]
     assert socialzoo_main(argv) == 2
