@@ -138,6 +138,12 @@ def record_case(
     return record_task_episode(task, policy, label=label), task
 
 
+def step_seconds(task: Any) -> float:
+    """A task's step, s: its config's dt (the action-selection task), else its time_step (the
+    CrowdNav task's decision step)."""
+    return float(getattr(task.config, "dt", getattr(task.config, "time_step", None)))  # type: ignore[arg-type]
+
+
 def record_task_episode(
     task: Any,
     policy: Policy,
@@ -289,10 +295,9 @@ class _Recorder:
         slot_to_kept = np.full(mask.shape[1] + 1, -1, dtype=np.int64)
         slot_to_kept[present] = np.arange(len(present))
         laser = self.laser[0] if self.laser is not None else None
-        dt = getattr(self.task.config, "dt", getattr(self.task.config, "time_step", None))
         return EpisodeTrace(
             label=label,
-            dt=float(dt),  # type: ignore[arg-type]
+            dt=step_seconds(self.task),
             robot_pose=np.array(kept["pose"]),
             robot_vel=np.array(kept["vel"]),
             other_robots=np.array(kept["others"]).reshape(count, -1, 3),

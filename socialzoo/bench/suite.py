@@ -35,8 +35,8 @@ REPLAYS_DIR = "replays"
 # The name of a replay page write_replays writes (POLICY-caseK-HASH.html): the only files of
 # REPLAYS_DIR a rerun removes.
 REPLAY_PAGE = re.compile(r".+-case\d+-[0-9a-f]{8}\.html")
-# Replay pages: one stored state every REPLAY_STRIDE steps, REPLAY_LASER_RAYS laser rays drawn.
-REPLAY_STRIDE = 2
+# Replay pages: REPLAY_LASER_RAYS laser rays drawn (and a state every 50 ms of the task's steps:
+# socialzoo.render.replay_data.default_stride).
 REPLAY_LASER_RAYS = 60
 
 
@@ -705,8 +705,8 @@ def write_replays(
     episode or --replays) are removed. Each new recording is checked against the stored episode."""
     import numpy as np
 
-    from socialzoo.bench.replay import record_task_episode
-    from socialzoo.render.replay_data import Encoding
+    from socialzoo.bench.replay import record_task_episode, step_seconds
+    from socialzoo.render.replay_data import Encoding, default_stride
     from socialzoo.render.replay_html import write_replay_html
 
     replays = []
@@ -723,12 +723,9 @@ def write_replays(
             if path.is_file():
                 replays.append(Replay(name, unit.spec, case, seed, success, rel, None))
                 continue
+            stride = default_stride(step_seconds(task))
             trace = record_task_episode(
-                task,
-                unit.policy,
-                label=unit.spec,
-                laser_rays=REPLAY_LASER_RAYS,
-                laser_stride=REPLAY_STRIDE,
+                task, unit.policy, label=unit.spec, laser_rays=REPLAY_LASER_RAYS, laser_stride=stride
             )
             same = bool(trace.metrics.get("success")) == success and int(
                 trace.metrics.get("steps", -1)
@@ -740,7 +737,7 @@ def write_replays(
                 path,
                 scene,
                 [trace],
-                encoding=Encoding(stride=REPLAY_STRIDE, laser_rays=REPLAY_LASER_RAYS),
+                encoding=Encoding(stride=stride, laser_rays=REPLAY_LASER_RAYS),
             )
             _tell(say, f"replay {rel}: {trace.outcome}")
             replays.append(Replay(name, unit.spec, case, seed, success, rel, same))

@@ -95,8 +95,6 @@ def run_replay(args: argparse.Namespace) -> int:
         "map",
         "--laser-rays",
         "0",
-        "--stride",
-        "1",
         "--out",
         str(args.out),
     ]

@@ -80,7 +80,11 @@ def register(subparsers: Any) -> None:
         "--view", choices=("follow", "map"), default="follow", help="camera the page opens with"
     )
     parser.add_argument(
-        "--stride", type=at_least(1), default=2, help="steps per stored frame (default 2 = 50 ms)"
+        "--stride",
+        type=at_least(1),
+        default=None,
+        help="steps per stored frame (default: those of 50 ms, 2 of the action-selection task's "
+        "25 ms steps, every step of the CrowdNav task's 0.25 s)",
     )
     parser.add_argument(
         "--laser-rays", type=count, default=60, help="laser rays drawn (default 60; 0: no laser)"
@@ -151,9 +155,17 @@ def _flags(args: argparse.Namespace, *names: str) -> str:
 
 
 def _encoding(args: argparse.Namespace) -> Any:
+    """The page's Encoding: --stride, else the steps of 50 ms of each episode's own step."""
     from socialzoo.render.replay_data import Encoding
 
     return Encoding(stride=args.stride, laser_rays=args.laser_rays)
+
+
+def _laser_stride(args: argparse.Namespace, dt: float) -> int:
+    """Steps between the recorder's scans: those between the states the page keeps."""
+    from socialzoo.render.replay_data import default_stride
+
+    return int(args.stride or default_stride(dt))
 
 
 def _replay_case(args: argparse.Namespace) -> int:
@@ -207,7 +219,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
         scenario,
         specs,
         laser_rays=args.laser_rays,
-        laser_stride=args.stride,
+        laser_stride=_laser_stride(args, config.dt),
         world_map=m,
     )
     kind = f"{family} scenario" if family else "scenario"
@@ -259,13 +271,15 @@ def _replay_stored(args: argparse.Namespace) -> int:
                 policy,
                 label=f"{spec.label} (not stored)",
                 laser_rays=rays,
-                laser_stride=args.stride,
+                laser_stride=_laser_stride(args, first.env_config.dt),
                 world_map=m,
             )
             traces.append(trace)
             lines.append(f"  {trace.label}: {_describe(trace)}; not in the store, run fresh")
             continue
-        done = replay_trial(trial, laser_rays=rays, laser_stride=args.stride, world_map=m)
+        done = replay_trial(
+            trial, laser_rays=rays, laser_stride=_laser_stride(args, first.env_config.dt), world_map=m
+        )
         traces.append(done.trace)
         note = " (the code or config changed since it was stored)" if done.code_changed else ""
         if done.mismatches:

@@ -19,6 +19,8 @@ REPLAY_FORMAT = "socialzoo-replay/1"
 # Sub-policy colours of the timeline, in ACTION_NAMES order (GoAlone, Halt, Follow, Pass).
 ACTION_COLORS = ("#3a9d5d", "#d6404e", "#3f78d0", "#a25ad0")
 NO_ACTION_COLOR = "#9a9a9a"
+# The time between the states a page keeps by default, s (Encoding.stride None).
+FRAME_SECONDS = 0.05
 # The metrics the viewer's table shows under a panel, in order, where the episode has them (the
 # action-selection task's and the CrowdNav task's); their labels, units and digits come from the
 # metric registry (socialzoo.core.metrics).
@@ -252,14 +254,15 @@ class Encoding:
     """How an episode is written into the file: what is kept, and to how many decimals.
 
     Attributes:
-        stride: keep one state every `stride` steps (and always the last state).
+        stride: keep one state every `stride` steps (and always the last state); None: the steps
+            of FRAME_SECONDS in the episode's own step (`default_stride`).
         laser_rays: keep at most this many evenly spaced laser rays (0 drops the scan).
         position_decimals: decimals of positions, headings and lengths (3: millimetres).
         velocity_decimals: decimals of velocities and laser ranges.
         value_decimals: decimals of rewards, forces and blames.
     """
 
-    stride: int = 2
+    stride: int | None = None
     laser_rays: int = 60
     position_decimals: int = 3
     velocity_decimals: int = 2
@@ -267,7 +270,14 @@ class Encoding:
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            check_int("Encoding", f.name, getattr(self, f.name), low=1 if f.name == "stride" else 0)
+            if f.name != "stride" or self.stride is not None:
+                check_int("Encoding", f.name, getattr(self, f.name), low=1 if f.name == "stride" else 0)
+
+
+def default_stride(dt: float) -> int:
+    """Steps between the states a page keeps by default: those of FRAME_SECONDS, at least 1 (2 of
+    the action-selection task's 25 ms steps; every one of the CrowdNav task's 0.25 s steps)."""
+    return max(1, round(FRAME_SECONDS / dt))
 
 
 def frame_steps(num_steps: int, stride: int) -> np.ndarray:
@@ -300,11 +310,11 @@ def _json_value(value: Any) -> Any:
 def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dict[str, Any]:
     """The JSON object of one episode (see socialzoo/render/viewer/replay.js for the reader).
 
-    States are kept every `encoding.stride` steps; per-step series (actions, rewards, forces,
-    blames) are kept at every step.
+    States are kept every `encoding.stride` steps (by default those of 50 ms); per-step series
+    (actions, rewards, forces, blames) are kept at every step.
     """
     enc = encoding or Encoding()
-    kept = frame_steps(trace.num_steps, enc.stride)
+    kept = frame_steps(trace.num_steps, enc.stride or default_stride(trace.dt))
     pd, vd = enc.position_decimals, enc.velocity_decimals
     rays = len(trace.laser_angles)
     if enc.laser_rays and rays:

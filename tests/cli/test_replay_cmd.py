@@ -104,6 +104,14 @@ def test_replay_options_reach_the_file(tmp_path):
     assert socialzoo_main([*argv, "--laser-rays", "0", "--out", str(out)]) == 0
     assert embedded(out)["episodes"][0]["laser"]["angles"] == []
 
+    # A task id's case: by default a state every 50 ms of its steps, all of the CrowdNav task's.
+    argv = ["replay", "--env", "socialzoo/CrowdNav-v1", "--policy", "orca", "--out", str(out)]
+    assert socialzoo_main(argv) == 0
+    (episode,) = embedded(out)["episodes"]
+    assert episode["dt"] == 0.25 and episode["frameSteps"] == list(range(episode["steps"] + 1))
+    assert socialzoo_main([*argv, "--stride", "3"]) == 0
+    assert embedded(out)["episodes"][0]["frameSteps"][:3] == [0, 3, 6]
+
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):

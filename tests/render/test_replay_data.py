@@ -62,6 +62,15 @@ def test_encoding_checks():
         Encoding(laser_rays=-2)
 
 
+def test_the_default_stride_keeps_a_state_every_50_ms_of_the_episodes_own_steps(make_trace):
+    """2 of the action-selection task's 25 ms steps; every one of the CrowdNav task's 0.25 s steps
+    (before, 2 steps whatever their length: half a second between the CrowdNav task's frames)."""
+    assert encode_episode(make_trace(steps=9))["frameSteps"] == [0, 2, 4, 6, 8, 9]
+    assert encode_episode(make_trace(steps=5, dt=0.25))["frameSteps"] == [0, 1, 2, 3, 4, 5]
+    assert encode_episode(make_trace(steps=9, dt=0.01), Encoding())["frameSteps"] == [0, 5, 9]
+    assert encode_episode(make_trace(steps=5, dt=0.25), Encoding(stride=2))["frameSteps"] == [0, 2, 4, 5]
+
+
 def test_encode_episode_keeps_frames_and_every_step(make_trace):
     trace = make_trace(steps=9, humans=2, rays=8)
     data = encode_episode(trace, Encoding(stride=4, laser_rays=3))
