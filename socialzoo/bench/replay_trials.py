@@ -124,10 +124,15 @@ def store_path(results: str | Path) -> Path:
         FileNotFoundError: no store there.
     """
     path = Path(results)
+    # A crowd matrix (socialzoo benchmark --humans A,B) keeps a store in each model's folder.
+    inner = sorted(str(p.parent) for p in path.glob(f"*/{STORE_NAME}")) if path.is_dir() else []
     if path.is_dir():
         path = path / STORE_NAME
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no results store (write one with socialzoo benchmark --out DIR)")
+        where = f"; its folders hold one each: {', '.join(inner)}" if inner else ""
+        raise FileNotFoundError(
+            f"{path}: no results store (write one with socialzoo benchmark --out DIR){where}"
+        )
     return path
 
 

@@ -81,6 +81,12 @@ def test_missing_trials_name_what_the_store_holds(results, tmp_path):
         find_trials(results, 1, test_set="gdc1-test")
     with pytest.raises(FileNotFoundError, match="no results store"):
         find_trials(tmp_path, 0)
+    # A crowd matrix's folder (socialzoo benchmark --humans sf,orca): the error names its stores.
+    for column in ("0-sf", "1-orca"):
+        (tmp_path / column).mkdir()
+        shutil.copy(store_path(results), tmp_path / column / "results.sqlite")
+    with pytest.raises(FileNotFoundError, match=r"folders hold one each: .*0-sf, .*1-orca$"):
+        find_trials(tmp_path, 0)
 
 
 def test_policy_rebuilt_from_its_stored_parameters(results):
