@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import shlex
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -207,10 +208,14 @@ def find_trials(
                 )
             if "env" not in stored and "task" in stored:
                 # socialzoo.bench.task_benchmark's trials: a task id's fixed case, not a map's scenario.
+                given = "".join(
+                    " --task-config " + shlex.quote(f"{k}={v if isinstance(v, str) else json.dumps(v)}")
+                    for k, v in stored.get("task_config", {}).items()
+                )
                 raise ValueError(
                     f"{path}: trial {row['test_set']} #{index} is a task id's case (socialzoo benchmark "
-                    f"--maps ID); play it with socialzoo replay --env {stored.get('env_id', 'ID')} "
-                    f"--split {stored.get('split', 'test')} "
+                    f"--maps ID, or socialzoo suite); play it with socialzoo replay --env "
+                    f"{stored.get('env_id', 'ID')}{given} --split {stored.get('split', 'test')} "
                     f"--case {index} --policy {name}"
                 )
             kwargs = run.get("policies", {}).get(name, {}).get("kwargs", {}) if row["_rank"][0] else {}

@@ -591,7 +591,14 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
         by_key: dict[tuple[str, str], SuiteUnit] = {}
         for unit in units:
             store.register_config(
-                unit.digest, {"task": unit.config.to_dict(), "split": unit.split, "policy": unit.spec}
+                unit.digest,
+                {
+                    "task": unit.config.to_dict(),
+                    "split": unit.split,
+                    "policy": unit.spec,
+                    "env_id": unit.task.name,
+                    "task_config": unit.task.given_fields(unit.overrides),
+                },
             )
             have = store.stored_indices(unit.spec, unit.test_set, unit.digest)
             trials += [Trial(unit.spec, unit.runner_set, k) for k in range(unit.cases) if k not in have]

@@ -67,6 +67,15 @@ class TaskId:
             raise ValueError(f"{env_id} is not a task's id (its kwargs name no task)")
         return cls(env_id, task, kwargs, module)
 
+    def given_fields(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The config fields this task (and `overrides`) sets otherwise than its registered id: what
+        `--task-config` must give to play the same episodes from the id (a replay hint)."""
+        import gymnasium as gym
+
+        registered = gym.spec(self.env_id).kwargs
+        fields = {**self.kwargs, **(overrides or {})}
+        return {k: v for k, v in fields.items() if k not in registered or registered[k] != v}
+
     def make(self, batch_size: int = 1, **overrides: Any) -> Any:
         """The task of B = batch_size rows, with config overrides."""
         from socialzoo.env.tasks import make_task
@@ -147,7 +156,14 @@ def evaluate_stored(
     where = str(getattr(config, "map", None) or probe.name)
     with ResultsStore(store_path) as store:
         store.register_config(
-            digest, {"task": config.to_dict(), "split": split, "policy": spec, "env_id": task.name}
+            digest,
+            {
+                "task": config.to_dict(),
+                "split": split,
+                "policy": spec,
+                "env_id": task.name,
+                "task_config": task.given_fields(overrides),
+            },
         )
         have = store.stored_indices(spec, test_set, digest)
         todo = [k for k in range(total) if k not in have]
