@@ -214,6 +214,12 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
             "--humans, --counterfactual, --human-metrics and --quick are options of the benchmark maps, "
             "not of a task id (its config says who walks)",
         )
+    if args.backend != "local" or args.address is not None or args.workers is not None:
+        return fail(
+            "benchmark",
+            "--backend, --address and --workers are options of the benchmark maps: a task id's cases are "
+            "played in this process, --batch-size rows at once",
+        )
     try:
         # --max-steps is a field of the task's config (a task without max_steps refuses it).
         config = given(args, "max_steps") | task_config(args.task_config)

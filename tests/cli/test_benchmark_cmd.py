@@ -242,6 +242,19 @@ def test_a_task_id_takes_max_steps_where_its_config_has_it(tmp_path, capsys):
         assert [row["steps"] for row in store.rows()] == [3]  # the episode stopped at the override
 
 
+@pytest.mark.parametrize(
+    "backend",
+    [["--backend", "ray"], ["--backend", "ray", "--address", "10.255.255.1:6379"], ["--workers", "4"]],
+)
+def test_a_task_id_refuses_the_backend_options_it_would_not_use(tmp_path, capsys, backend):
+    # A task id's cases are played in this process: --backend ray, an --address nothing answers at and
+    # --workers ran locally in one process without a word.
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNav-v1", "--policies", "orca", "--trials", "1"]
+    assert socialzoo_main([*argv, *backend, "--no-figures", "--out", str(tmp_path)]) == 2
+    assert "--backend, --address and --workers are options of the benchmark maps" in capsys.readouterr().err
+    assert not (tmp_path / "results.sqlite").exists()
+
+
 def test_an_interrupted_benchmark_ends_in_a_line_not_a_traceback(tmp_path, capsys, monkeypatch):
     import socialzoo.bench.experiment as experiment
 
