@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import html
 import json
+import os
 import re
 from collections.abc import Sequence
 from functools import cache
@@ -80,5 +81,13 @@ def write_replay_html(
         raise ValueError(f"write_replay_html: {path} must end in .html")
     text = replay_document(scene, traces, encoding=encoding, view=view)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
+    # Whole or not at all (a temporary file, then a rename): a page already there is kept by a rerun
+    # (socialzoo suite's replays), so a half-written one (a killed run, a full disk) would stay half.
+    # Not bench.tables.write_text_atomic: render sits below bench.
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path

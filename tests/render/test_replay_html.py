@@ -56,3 +56,22 @@ def test_write_replay_html(tmp_path, make_trace, make_scene):
     assert path.read_text(encoding="utf-8") == replay_document(make_scene(), [make_trace()])
     with pytest.raises(ValueError, match=r"ep.gif must end in .html"):
         write_replay_html(tmp_path / "ep.gif", make_scene(), [make_trace()])
+
+
+def test_a_page_is_written_whole_or_not_at_all(tmp_path, make_trace, make_scene):
+    # `socialzoo suite` keeps a replay page already there on a rerun, so a page cut short (a full disk, a
+    # killed run) stayed cut short. A file-size limit stands in for the full disk: the write fails half way.
+    resource = pytest.importorskip("resource")
+    signal = pytest.importorskip("signal")
+    size = len(replay_document(make_scene(), [make_trace()]).encode())
+    path = tmp_path / "ep.html"
+    limits = resource.getrlimit(resource.RLIMIT_FSIZE)
+    handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+    try:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size // 2, limits[1]))
+        with pytest.raises(OSError):
+            write_replay_html(path, make_scene(), [make_trace()])
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, limits)
+        signal.signal(signal.SIGXFSZ, handler)
+    assert list(tmp_path.iterdir()) == []  # no page, and no temporary file left
