@@ -69,7 +69,10 @@ def register(subparsers: Any) -> None:
         help="comma-separated metrics of the tables and heatmaps (default: the headline metrics the episodes hold)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.set_defaults(func=run_suite_command)
+    parser.set_defaults(
+        func=run_suite_command,
+        resume_hint="the finished episodes are kept in the results store: the same command resumes",
+    )
 
 
 def run_suite_command(args: argparse.Namespace) -> int:

@@ -114,3 +114,19 @@ def test_bad_options_are_named(tmp_path, capsys):
     )
     assert "unknown metric 'happiness'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_an_interrupted_suite_says_that_the_same_command_resumes(tmp_path, capsys, monkeypatch):
+    # Ctrl-C said only "interrupted", where the benchmark, the demos and reproduce say how to continue.
+    import socialzoo.bench.suite as suite
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(suite, "run_suite", interrupted)
+    argv = ["suite", "--policies", "goalone", "--scenarios", "a", "--seeds", "1", "--out", str(tmp_path)]
+    assert socialzoo_main(argv) == 130
+    assert capsys.readouterr().err == (
+        "socialzoo suite: interrupted; the finished episodes are kept in the results store: "
+        "the same command resumes\n"
+    )
