@@ -24,9 +24,10 @@ EPISODE_KEYS = ("episode_ids", "episode_seeds", "episode_lengths")
 _NPZ_ERRORS = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error)
 
 
-class DemonstrationError(Exception):
-    """A recording that cannot be resumed or read: another config, or damaged files (random
-    bytes, a truncated file, a file of another kind); the message names the file."""
+class DemonstrationError(ValueError):
+    """A recording that cannot be resumed, read or used: another config, damaged files (random
+    bytes, a truncated file, a file of another kind), or one a trainer cannot learn from (too few
+    steps, another policy or observation layout); the message names the file."""
 
 
 def parts_dir(path: str | Path) -> Path:

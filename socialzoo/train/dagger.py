@@ -74,19 +74,20 @@ def expert_of(data: Any) -> Any:
     parameters, acting on the paper observation alone.
 
     Raises:
-        ValueError: demonstrations of another policy, or of another observation layout.
+        DemonstrationError: demonstrations of another policy, or of another observation layout.
     """
+    from socialzoo.agents.demonstrations import DemonstrationError
     from socialzoo.agents.engineered import Ref
 
     config = data.metadata.get("config", {})
     if config.get("policy") != "ref":
-        raise ValueError(
+        raise DemonstrationError(
             f"{data.path}: DAgger's expert is Ref, and these demonstrations are of {config.get('policy')!r}; "
             "record Ref's (`socialzoo demos --episodes 125 --out FILE`)"
         )
     layout = data.observation.get("layout")
     if layout != "paper":
-        raise ValueError(
+        raise DemonstrationError(
             f"{data.path}: Ref labels states from the paper observation layout; these demonstrations "
             f"use {layout!r}"
         )

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.agents.demonstrations import load_demonstrations
+from socialzoo.agents.demonstrations import DemonstrationError, load_demonstrations
 from socialzoo.nav.subpolicies import NUM_ACTIONS
 
 
@@ -68,9 +68,10 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
     their policy header from it.
 
     Raises:
-        ValueError: `steps` < 1, more steps than the recording holds (naming the file and both
-            counts), or a recording whose actions are not sub-policy indices.
-        socialzoo.agents.demonstrations.DemonstrationError: an unreadable file.
+        ValueError: `steps` < 1.
+        socialzoo.agents.demonstrations.DemonstrationError (a ValueError): an unreadable file, one
+            holding fewer steps than asked (naming both counts) or none, or one whose actions are
+            not sub-policy indices.
     """
     path = Path(path)
     arrays, meta = load_demonstrations(path)
@@ -78,17 +79,17 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
     if steps is None:
         steps = total
     if total == 0:
-        raise ValueError(f"{path} holds no demonstration steps")
+        raise DemonstrationError(f"{path} holds no demonstration steps")
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         raise ValueError(f"{path}: demonstration steps must be an int >= 1, got {steps!r}")
     if steps > total:
-        raise ValueError(
+        raise DemonstrationError(
             f"{path} holds {total} demonstration steps, {steps} asked; record more episodes "
             f"(`socialzoo demos --episodes N --out {path}`) or ask for fewer steps"
         )
     action = arrays["action"][:steps].astype(np.int64)
     if action.min() < 0 or action.max() >= NUM_ACTIONS:
-        raise ValueError(f"{path}: actions outside 0..{NUM_ACTIONS - 1}")
+        raise DemonstrationError(f"{path}: actions outside 0..{NUM_ACTIONS - 1}")
     env = meta.get("env_config", {})
     return DemoSteps(
         path=path,

@@ -12,7 +12,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from socialzoo.agents.demonstrations import load_demonstrations
+from socialzoo.agents.demonstrations import DemonstrationError, load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
 from socialzoo.core.validation import check_choice, check_int, check_number
@@ -400,8 +400,8 @@ def train(args: PipsArgs) -> Path:
         The program's path.
 
     Raises:
-        socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file.
-        ValueError: a file that is not in the paper observation layout.
+        socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file, or
+            one that is not in the paper observation layout.
     """
     return run_training(TRAINER, args, lambda run: _synthesize_run(run, args))
 
@@ -411,7 +411,7 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     arrays, meta = load_demonstrations(demos)
     layout = meta.get("env_config", {}).get("observation", {}).get("layout", "paper")
     if layout != "paper":
-        raise ValueError(f"{demos}: PIPS reads the paper observation layout, the file has {layout!r}")
+        raise DemonstrationError(f"{demos}: PIPS reads the paper observation layout, the file has {layout!r}")
     order = episode_order(arrays["episode"], args.seed)
     obs_all, act_all, ep_all = (
         arrays["obs"][order],

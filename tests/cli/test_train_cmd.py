@@ -1,7 +1,11 @@
 """`socialzoo train`: inputs the trainer finds bad are usage errors (exit status 2) naming them."""
 
+import json
+
+import numpy as np
 import pytest
 
+from socialzoo.agents.demonstrations import DEMO_FORMAT
 from socialzoo.cli import main
 from socialzoo.train.ppo import PPOArgs
 from socialzoo.train.run_dir import RunDir
@@ -19,6 +23,46 @@ def test_a_missing_demonstration_file_is_a_usage_error(tmp_path, capsys):
     assert main(["train", "bc", "--out", str(tmp_path / "run"), "--demos", str(demos), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("socialzoo train bc: error: ") and str(demos) in err
+
+
+def _demos(path, policy="ref", layout="paper"):
+    """A demonstration file of 6 steps in 2 episodes (zeros), recorded by `policy`."""
+    n = 6
+    meta = {
+        "format": DEMO_FORMAT,
+        "config": {"policy": policy},
+        "env_config": {"observation": {"layout": layout}},
+    }
+    np.savez_compressed(
+        path, obs=np.zeros((n, 107), np.float32), action=np.arange(n, dtype=np.int64) % 4,
+        next_obs=np.zeros((n, 107), np.float32), reward=np.zeros(n, np.float32),
+        terminated=np.zeros(n, bool), truncated=np.zeros(n, bool),
+        episode=np.repeat(np.arange(2, dtype=np.int64), 3), episode_ids=np.arange(2, dtype=np.int64),
+        episode_seeds=np.arange(2, dtype=np.uint64), episode_lengths=np.full(2, 3, np.int64),
+        metadata=np.array(json.dumps(meta)),
+    )  # fmt: skip
+    return path
+
+
+@pytest.mark.parametrize(
+    ("trainer", "policy", "layout", "extra", "message"),
+    [
+        ("bc", "ref", "paper", ["--no-progress"], "holds 6 demonstration steps, 155400 asked"),
+        ("dagger", "goalone", "paper", ["--steps", "6", "--no-progress"], "DAgger's expert is Ref"),
+        ("pips", "ref", "crowdnav", [], "PIPS reads the paper observation layout"),
+    ],
+)
+def test_demonstrations_a_trainer_cannot_learn_from_are_a_usage_error(
+    tmp_path, capsys, trainer, policy, layout, extra, message
+):
+    # Found following docs/imitation.md with a short recording (`socialzoo demos --episodes 2`, then
+    # `socialzoo train dagger --demos FILE`): a ValueError traceback, exit status 1.
+    demos = _demos(tmp_path / "d.npz", policy, layout)
+    out = tmp_path / ("pips.json" if trainer == "pips" else "run")
+    assert main(["train", trainer, "--demos", str(demos), "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"socialzoo train {trainer}: error: ") and message in err
+    assert not out.exists()
 
 
 def test_a_folder_holding_a_run_of_other_arguments_is_a_usage_error(tmp_path, capsys):
