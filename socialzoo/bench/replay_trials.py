@@ -16,9 +16,10 @@ from socialzoo.agents.base import policy_config
 from socialzoo.bench.experiment import STORE_NAME, config_hash
 from socialzoo.bench.replay import record_episode
 from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.test_sets import TEST_SET_DIR
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.metrics import SUMMARY_KEYS
-from socialzoo.maps.map_file import Map, load_map
+from socialzoo.maps.map_file import Map, load_map, map_sha256
 from socialzoo.render.replay_data import EpisodeTrace
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario
@@ -273,6 +274,24 @@ class TrialReplay:
     trace: EpisodeTrace
     mismatches: list[str]
     code_changed: bool | None
+
+
+def map_change(results: str | Path, trial: StoredTrial, world_map: Map) -> str:
+    """'' or why `trial` cannot reproduce: its map file is no longer the one the run stored (the
+    run's generated test set, DIR/test_sets/NAME.json, records the map's sha256; shipped maps have
+    none there)."""
+    path = store_path(results).parent / TEST_SET_DIR / f"{trial.test_set}.json"
+    try:
+        then = json.loads(path.read_text(encoding="utf-8")).get("map_sha256")
+    except (OSError, ValueError, AttributeError):
+        return ""
+    now = map_sha256(world_map)
+    if not isinstance(then, str) or then == now:
+        return ""
+    return (
+        f"the map {trial.env_config.map} changed since the run stored it (sha256 {then[:12]}... then, "
+        f"{now[:12]}... now)"
+    )
 
 
 def replay_trial(

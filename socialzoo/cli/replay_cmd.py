@@ -243,7 +243,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
 
 def _replay_stored(args: argparse.Namespace) -> int:
     from socialzoo.bench.replay import record_episode, replay_scene
-    from socialzoo.bench.replay_trials import find_trials, replay_trial
+    from socialzoo.bench.replay_trials import find_trials, map_change, replay_trial
     from socialzoo.maps.map_file import load_map
     from socialzoo.render.replay_html import write_replay_html
 
@@ -281,7 +281,10 @@ def _replay_stored(args: argparse.Namespace) -> int:
             trial, laser_rays=rays, laser_stride=_laser_stride(args, first.env_config.dt), world_map=m
         )
         traces.append(done.trace)
-        note = " (the code or config changed since it was stored)" if done.code_changed else ""
+        changed = map_change(args.results, trial, m) or (
+            "the code or config changed since it was stored" if done.code_changed else ""
+        )
+        note = f" ({changed})" if changed else ""
         if done.mismatches:
             failed = True
             lines.append(

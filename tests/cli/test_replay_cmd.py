@@ -168,3 +168,24 @@ def test_replay_usage_errors(tmp_path, capsys, argv, message):
 def test_replay_refuses_other_suffixes(tmp_path, capsys):
     assert socialzoo_main(["replay", "--map", "open_room", "--out", str(tmp_path / "ep.gif")]) == 2
     assert "must end in .html" in capsys.readouterr().err
+
+
+def test_a_trial_on_a_map_file_edited_since_names_the_map(tmp_path, capsys):
+    """A benchmark on a map file, then the file edited in place: the replay does not reproduce,
+    and says that the map changed (it blamed the code or config)."""
+    import json
+
+    from socialzoo.maps.map_file import load_map
+
+    plan = tmp_path / "plan.json"
+    load_map("open_room").save(plan)
+    out = tmp_path / "results"
+    argv = ["benchmark", "--quick", "--policies", "goalone", "--maps", str(plan), "--trials", "1"]
+    argv += ["--max-steps", "30", "--workers", "1", "--no-figures", "--no-progress", "--out", str(out)]
+    assert socialzoo_main(argv) == 0
+    data = json.loads(plan.read_text())
+    data["walls"].append([4.0, 4.0, 4.5, 4.5])  # a post in the room
+    plan.write_text(json.dumps(data))
+    capsys.readouterr()
+    socialzoo_main(["replay", "--results", str(out), "--trial", "0", "--out", str(tmp_path / "t.html")])
+    assert f"the map {plan} changed since the run stored it (sha256 " in capsys.readouterr().out
