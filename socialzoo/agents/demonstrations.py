@@ -25,9 +25,9 @@ _NPZ_ERRORS = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib
 
 
 class DemonstrationError(ValueError):
-    """A recording that cannot be resumed, read or used: another config, damaged files (random
-    bytes, a truncated file, a file of another kind), or one a trainer cannot learn from (too few
-    steps, another policy or observation layout); the message names the file."""
+    """A recording that cannot be resumed or read: another config, or damaged files (random
+    bytes, a truncated file, a file of another kind); or one a trainer cannot use as asked (fewer
+    steps than asked, another demonstrator or observation layout). The message names the file."""
 
 
 def parts_dir(path: str | Path) -> Path:

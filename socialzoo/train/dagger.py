@@ -50,7 +50,7 @@ class Args(bc.Args):
 
 def train(args: Args) -> Path:
     """Run DAgger on the trainer skeleton; returns dagger.safetensors (a finished run of the same
-    arguments in args.out is reused; demonstrations of another policy than Ref raise ValueError).
+    arguments in args.out is reused; demonstrations of another policy than Ref raise DemonstrationError).
 
     `socialzoo train dagger --demos FILE --out DIR` fits a policy to Ref's demonstrations exactly as
     `socialzoo train bc` does (round 0), then for each of `iterations` rounds drives the latest policy over
@@ -74,7 +74,8 @@ def expert_of(data: Any) -> Any:
     parameters, acting on the paper observation alone.
 
     Raises:
-        DemonstrationError: demonstrations of another policy, or of another observation layout.
+        socialzoo.agents.demonstrations.DemonstrationError: demonstrations of another policy, or
+            of another observation layout.
     """
     from socialzoo.agents.demonstrations import DemonstrationError
     from socialzoo.agents.engineered import Ref

@@ -59,6 +59,20 @@ class DemoSteps:
         }
 
 
+def check_steps(path: str | Path, total: int, steps: int, what: str = "demonstration steps") -> None:
+    """Refuse `steps` asked of a recording at `path` that holds `total`.
+
+    Raises:
+        socialzoo.agents.demonstrations.DemonstrationError: steps > total (naming the file and both
+            counts).
+    """
+    if steps > total:
+        raise DemonstrationError(
+            f"{path} holds {total} {what}, {steps} asked; record more episodes "
+            f"(`socialzoo demos --episodes N --out {path}`) or ask for fewer steps"
+        )
+
+
 def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
     """The first `steps` transitions (all when None) of the recording at `path`.
 
@@ -69,9 +83,9 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
 
     Raises:
         ValueError: `steps` < 1.
-        socialzoo.agents.demonstrations.DemonstrationError (a ValueError): an unreadable file, one
-            holding fewer steps than asked (naming both counts) or none, or one whose actions are
-            not sub-policy indices.
+        socialzoo.agents.demonstrations.DemonstrationError: an unreadable file, one that holds fewer
+            steps than asked (naming the file and both counts), or one whose actions are not
+            sub-policy indices.
     """
     path = Path(path)
     arrays, meta = load_demonstrations(path)
@@ -82,11 +96,7 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
         raise DemonstrationError(f"{path} holds no demonstration steps")
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         raise ValueError(f"{path}: demonstration steps must be an int >= 1, got {steps!r}")
-    if steps > total:
-        raise DemonstrationError(
-            f"{path} holds {total} demonstration steps, {steps} asked; record more episodes "
-            f"(`socialzoo demos --episodes N --out {path}`) or ask for fewer steps"
-        )
+    check_steps(path, total, steps)
     action = arrays["action"][:steps].astype(np.int64)
     if action.min() < 0 or action.max() >= NUM_ACTIONS:
         raise DemonstrationError(f"{path}: actions outside 0..{NUM_ACTIONS - 1}")

@@ -83,3 +83,16 @@ def test_bad_numbers_are_usage_errors(tmp_path, steps):
         code = main(["train", "ppo", "--out", str(tmp_path), "--total-steps", steps])
         raise SystemExit(code)
     assert exit_.value.code == 2
+
+
+@pytest.mark.parametrize("trainer", ["bc", "gail", "dagger"])
+def test_more_demonstration_steps_than_recorded_is_a_usage_error(small_demos, tmp_path, trainer, capsys):
+    # Found running `socialzoo train bc --steps 2000` on a 1,600-step recording: a ValueError
+    # traceback, exit status 1.
+    out = tmp_path / ("run/pips.json" if trainer == "pips" else "run")
+    argv = ["train", trainer, "--demos", str(small_demos), "--steps", "10000000", "--out", str(out)]
+    assert main([*argv, *([] if trainer == "pips" else ["--no-progress"])]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"socialzoo train {trainer}: error: ")
+    assert f"{small_demos} holds " in err and "10000000 asked" in err
+    assert not (tmp_path / "run").exists()
