@@ -18,6 +18,7 @@ from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
 from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.data.fetch import sha256
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
+from socialzoo.train.demo_data import check_steps
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
 from socialzoo.train.run_dir import read_record
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
@@ -400,8 +401,9 @@ def train(args: PipsArgs) -> Path:
         The program's path.
 
     Raises:
-        socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file, or
-            one that is not in the paper observation layout.
+        socialzoo.agents.demonstrations.DemonstrationError: an unreadable demonstration file, one
+            that is not in the paper observation layout, or one with fewer steps than args.steps
+            (with sampling "windows", fewer windowed steps).
     """
     return run_training(TRAINER, args, lambda run: _synthesize_run(run, args))
 
@@ -420,6 +422,11 @@ def _synthesize_run(run: TrainingRun, args: PipsArgs) -> dict[str, Any]:
     )
     prev_all = paper_parts(obs_all).prev_action
     used, mask = select_examples(act_all, prev_all, ep_all, args.steps, args.window, args.sampling)
+    # Fewer steps than asked are refused, as the other imitation trainers refuse them: a run
+    # recorded as N steps learned from N.
+    windowed = args.sampling == "windows" and args.window > 0
+    what = f"steps within {args.window} steps of a change of action" if windowed else "demonstration steps"
+    check_steps(demos, int(mask.sum()) if windowed else len(act_all), args.steps, what)
     obs, action, episode, prev = obs_all[:used], act_all[:used], ep_all[:used], prev_all[:used]
     logger.info(
         "PIPS: %d examples (window %d, %s) from the first %d demonstration steps in seed %d's episode order "

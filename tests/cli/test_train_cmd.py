@@ -85,10 +85,10 @@ def test_bad_numbers_are_usage_errors(tmp_path, steps):
     assert exit_.value.code == 2
 
 
-@pytest.mark.parametrize("trainer", ["bc", "gail", "dagger"])
+@pytest.mark.parametrize("trainer", ["bc", "gail", "dagger", "pips"])
 def test_more_demonstration_steps_than_recorded_is_a_usage_error(small_demos, tmp_path, trainer, capsys):
     # Found running `socialzoo train bc --steps 2000` on a 1,600-step recording: a ValueError
-    # traceback, exit status 1.
+    # traceback, exit status 1 (PIPS used the 1,600 steps and said nothing).
     out = tmp_path / ("run/pips.json" if trainer == "pips" else "run")
     argv = ["train", trainer, "--demos", str(small_demos), "--steps", "10000000", "--out", str(out)]
     assert main([*argv, *([] if trainer == "pips" else ["--no-progress"])]) == 2

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from socialzoo.agents.demonstrations import DemonstrationError
 from socialzoo.agents.pips import (
     SAME_UNIT_OPS,
     Atom,
@@ -391,3 +392,15 @@ def test_agreement_with_ref_on_held_out_demonstrations(ref_demos, tmp_path):
     assert held["steps"] >= 500
     assert held["agreement"] >= 0.9
     assert held["agreement"] >= held["majority"] + 0.5 * (1 - held["majority"])
+
+
+@pytest.mark.parametrize("sampling", ["prefix", "windows"])
+def test_more_steps_than_the_file_holds_are_refused(tmp_path, sampling):
+    """PIPS used the steps there were and recorded the steps asked; BC, GAIL and DAgger refuse."""
+    obs, action, episode = synthetic_episodes(np.random.default_rng(6), KNOWN, 2)
+    demos = tmp_path / "demos.npz"
+    write_demos(demos, obs, action, episode)
+    args = PipsArgs(demos=str(demos), out=str(tmp_path / "p.json"), steps=len(action) + 1, sampling=sampling)
+    with pytest.raises(DemonstrationError, match=rf"demos\.npz holds \d+ .*, {len(action) + 1} asked"):
+        train(args)
+    assert not (tmp_path / "p.json").exists()
