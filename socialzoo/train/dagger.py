@@ -25,8 +25,10 @@ ROLLOUT_DIR = "rollouts"
 
 @dataclass(frozen=True, kw_only=True)
 class Args(bc.Args):
-    """DAgger with Ref as the expert, on BC's fit (socialzoo.train.bc.Args: every round fits with
-    BC's epochs, min_updates, batch_size, lr and weight_decay).
+    """DAgger with Ref as the expert, on BC's fit.
+
+    Every round fits as socialzoo.train.bc.Args says: BC's epochs, min_updates, batch_size, lr and
+    weight_decay.
 
     Attributes:
         out: run folder: dagger.safetensors, run.json, tensorboard/, checkpoints/ (one policy per

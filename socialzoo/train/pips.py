@@ -30,9 +30,11 @@ SIDECAR_SUFFIX = ".train.json"
 
 @dataclass(frozen=True, kw_only=True)
 class PipsArgs(SearchOptions):
-    """Arguments of `socialzoo train pips`. The defaults are the paper's set-up: the first 3,500
-    demonstration steps of Ref, windowed around changes of action. The search options
-    (max_depth ... z3_timeout_s) are socialzoo.train.pips_search.SearchOptions.
+    """Synthesise a PIPS program (a readable action-selection program) from Ref demonstrations.
+
+    The defaults are the paper's set-up: the first 3,500 demonstration steps of Ref, windowed around
+    changes of action. The search options (max_depth ... z3_timeout_s) are
+    socialzoo.train.pips_search.SearchOptions.
 
     Attributes:
         demos: demonstration file (.npz, `socialzoo demos --out FILE`), recorded on training scenarios.

@@ -96,3 +96,15 @@ def test_more_demonstration_steps_than_recorded_is_a_usage_error(small_demos, tm
     assert err.startswith(f"socialzoo train {trainer}: error: ")
     assert f"{small_demos} holds " in err and "10000000 asked" in err
     assert not (tmp_path / "run").exists()
+
+
+def test_each_trainer_is_listed_with_a_whole_sentence():
+    # `socialzoo train --help` listed dagger as "DAgger with Ref as the expert, on BC's fit
+    # (socialzoo.train.bc.Args: every round fits with" and pips as "Arguments of `socialzoo train
+    # pips`. The defaults are the paper's set-up: the first 3,500": the first line of a summary
+    # that ran on.
+    from socialzoo.train import TRAINERS, trainer_args
+
+    for name in TRAINERS:
+        doc = (trainer_args(name).__doc__ or "").strip().splitlines()
+        assert doc and doc[0].endswith(".") and (len(doc) == 1 or not doc[1].strip()), name
