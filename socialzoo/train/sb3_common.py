@@ -128,6 +128,8 @@ class SB3Args:
             self.env_config()
         except (TypeError, ValueError) as err:
             raise ValueError(f"{owner}: bad training env ({err})") from None
+        if self.family is not None and self.map != default_map(self.family):
+            check_family_fits(owner, self.family, self.map)
         if self.family is not None:
             from socialzoo.train.validation import family_validation_size
 
@@ -205,6 +207,27 @@ def default_map(family: str | None) -> str:
         if own and own != "arena":
             return own
     return "gdc1"
+
+
+def check_family_fits(owner: str, family: str, map_name: str) -> None:
+    """Refuse a scenario family that lays out no scenario on map `map_name` (a corridor, door or
+    crossing ways it needs that the map lacks, or people where no route reaches): the training env
+    would fail at its first reset, inside the run. Checked on another map than the family's own.
+
+    Raises:
+        ValueError: the family does not fit the map (naming both, and why).
+    """
+    from socialzoo.maps.map_file import load_map
+    from socialzoo.scenarios.catalogue import get_family
+
+    try:
+        m = load_map(map_name)
+    except (OSError, ValueError):
+        return  # the run folder's map check names the map (run_dir.map_digest)
+    try:
+        get_family(family).make(0, m=m)
+    except ValueError as err:
+        raise ValueError(f"{owner}: family {family!r} does not fit map {map_name!r} ({err})") from None
 
 
 def env_id_of(config: EnvConfig) -> str:

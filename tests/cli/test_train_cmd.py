@@ -108,3 +108,26 @@ def test_each_trainer_is_listed_with_a_whole_sentence():
     for name in TRAINERS:
         doc = (trainer_args(name).__doc__ or "").strip().splitlines()
         assert doc and doc[0].endswith(".") and (len(doc) == 1 or not doc[1].strip()), name
+
+
+def test_a_family_that_does_not_fit_the_map_is_a_usage_error(tmp_path, capsys):
+    # Found running `socialzoo train ppo --family frontal_approach --map gdc1`: the first reset,
+    # inside the run, raised "gdc1.json: no corridor ..." (a traceback, exit status 1) and left
+    # run.json and tensorboard/ behind.
+    out = tmp_path / "run"
+    argv = [
+        "train",
+        "ppo",
+        "--family",
+        "frontal_approach",
+        "--map",
+        "gdc1",
+        "--out",
+        str(out),
+        "--no-progress",
+    ]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("socialzoo train ppo: error: ")
+    assert "family 'frontal_approach' does not fit map 'gdc1'" in err and "no corridor" in err
+    assert not out.exists()

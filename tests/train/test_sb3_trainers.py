@@ -124,7 +124,7 @@ def test_trainers_are_registered_with_the_papers_defaults():
     assert ppo.map == dqn.map == "gdc1"
     # A family trains on its own map unless one is named (frontal_approach's corridor is not on gdc1).
     assert PPOArgs(family="frontal_approach").map == "hallway"
-    assert PPOArgs(family="frontal_approach", map="doorway").map == "doorway"
+    assert PPOArgs(family="frontal_approach", map="narrow_hallway").map == "narrow_hallway"
     assert ppo.scenario_repeats == 1 and dqn.scenario_repeats == 20
     assert ppo.num_envs * ppo.n_steps == 2_000 and ppo.normalize and not dqn.normalize
     assert (ppo.learning_rate, ppo.batch_size, ppo.n_epochs, ppo.gamma) == (3e-4, 64, 10, 0.99)
