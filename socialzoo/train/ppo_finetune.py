@@ -144,17 +144,26 @@ def actor_parameters(model: Any) -> list[Any]:
     return [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters()]
 
 
-def finetune(model: Any, warmup: int, steps: int) -> None:
-    """Train the critic alone for `warmup` env steps (the actor frozen), then both for `steps`."""
+def finetune(model: Any, warmup: int, steps: int, bar: Any = None) -> None:
+    """Train the critic alone for `warmup` env steps (the actor frozen), then both for `steps`;
+    `bar` (a progress display, e.g. TrainingRun.progress) advances by the env steps taken."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Progress(BaseCallback):
+        def _on_step(self) -> bool:
+            bar.update(self.training_env.num_envs)
+            return True
+
+    callback = None if bar is None else Progress()
     actor = actor_parameters(model)
     for p in actor:
         p.requires_grad_(False)
     if warmup:
-        model.learn(warmup)
+        model.learn(warmup, callback=callback)
     for p in actor:
         p.requires_grad_(True)
     if steps:
-        model.learn(steps, reset_num_timesteps=not warmup)
+        model.learn(steps, reset_num_timesteps=not warmup, callback=callback)
 
 
 def exported(model: Any, source: MlpPolicy) -> MlpPolicy:
@@ -178,7 +187,9 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     if not np.array_equal(exported(model, source).act(probe), source.act(probe)):
         raise RuntimeError(f"{args.init}: the PPO actor does not act as the file does before training")
     start = time.perf_counter()
-    finetune(model, args.warmup, args.steps)
+    finetune(
+        model, args.warmup, args.steps, run.progress(args.warmup + args.steps, desc="train ppo-finetune")
+    )
     finetuned = {**run.record["args"], "seconds": round(time.perf_counter() - start, 1)}
     header = dict(source.header)
     header["training"] = {**header.get("training", {}), "finetune": finetuned}

@@ -70,3 +70,20 @@ def test_a_run_writes_a_policy_of_the_source_name_and_its_record(tmp_path):
 def test_bad_arguments_name_the_field_and_value(field, value):
     with pytest.raises(ValueError, match=rf"{field}.*{value}"):
         ppo_finetune.Args(init=SHIPPED, **{field: value})
+
+
+def test_the_run_shows_its_progress_in_env_steps():
+    # A default run is 440,000 steps: it showed nothing until it ended.
+    class Bar:
+        n = 0
+
+        def update(self, k):
+            self.n += k
+
+    source = MlpPolicy.load(SHIPPED)
+    model = ppo_finetune.ppo_from_policy(
+        source, EnvConfig().replace(max_steps=60), num_envs=4, n_steps=25, batch_size=50, n_epochs=1
+    )
+    bar = Bar()
+    ppo_finetune.finetune(model, warmup=100, steps=100, bar=bar)
+    assert bar.n == 200
