@@ -49,8 +49,10 @@ def integrate_humans(
     new_vel = np.empty((batch, num, 2))
     near = np.empty((batch, num), dtype=bool)
     chosen = direct is not None and velocity is not None
+    # wall_dist is inf where no wall is within the index's reach: a step that long may still reach one.
+    reach = walls.reach if walls.num_walls else math.inf
     num_near = _euler(
-        pos, vel, accel, max_speed, mask, wall_dist, dt,
+        pos, vel, accel, max_speed, mask, wall_dist, reach, dt,
         velocity if chosen else vel, direct if chosen else mask, chosen, new_pos, new_vel, near,
     )  # fmt: skip
     blocked = np.zeros(mask.shape, dtype=bool)
@@ -63,10 +65,11 @@ def integrate_humans(
 
 @kernel
 def _euler(
-    pos, vel, accel, max_speed, mask, wall_dist, dt, velocity, direct, use_direct, new_pos, new_vel, near,
+    pos, vel, accel, max_speed, mask, wall_dist, reach, dt, velocity, direct, use_direct, new_pos, new_vel, near,
 ):  # fmt: skip
     """`integrate_humans` up to the wall test, in one pass: fills new_pos, new_vel (B, H, 2) and
-    near (B, H) (present humans whose step is at least their distance to a wall); returns how
+    near (B, H) (present humans whose step is at least their distance to a wall, or at least `reach`,
+    beyond which wall_dist does not see); returns how
     many are near. The operations are numpy's, in its order (a speed is capped as
     np.where(speed > cap, cap / np.maximum(speed, 1e-12), 1.0) scales it, a NaN propagates as in
     np.minimum), so the results are the same bit for bit."""
@@ -91,7 +94,7 @@ def _euler(
             new_vel[b, h, 1] = vy
             new_pos[b, h, 0] = pos[b, h, 0] + dt * vx
             new_pos[b, h, 1] = pos[b, h, 1] + dt * vy
-            near[b, h] = mask[b, h] and wall_dist[b, h] <= step_len
+            near[b, h] = mask[b, h] and min(wall_dist[b, h], reach) <= step_len
             if near[b, h]:
                 count += 1
     return count
