@@ -17,7 +17,6 @@ from socialzoo.env.replay import ReplayRunner
 from socialzoo.env.script import ScriptRunner
 from socialzoo.env.world import StepEvents, robot_human_contacts, step_world
 from socialzoo.humans.models import PeopleConfig
-from socialzoo.humans.presets import with_presets
 from socialzoo.maps.map_file import Map
 from socialzoo.nav.distance_field import DistanceField, distance_field
 from socialzoo.nav.graph import graph_of
@@ -85,13 +84,11 @@ class BatchedCore:
             raise ValueError(f"BatchedCore: batch_size must be an int >= 1, got {batch_size!r}")
         b, r = batch_size, num_robots
         people = people or PeopleConfig()
-        # A fitted preset of the people spec replaces its model's parameters (socialzoo.humans.presets).
-        world = with_presets(world, people.presets)
         self.batch_size, self.num_robots, self.max_humans = b, r, max_humans
         self.world, self.walls, self.map = world, walls, m
         self.planner, self.robot_visible = planner, robot_visible
         self.people = People(people, world, b, r, max_humans, walls, m, robot_visible)
-        # A learned people policy's file may say its people walk without forces (People.world).
+        # The world its people walk in: a preset's parameters, a learned policy file's dynamics (People.world).
         self.world = world = self.people.world
         robot = world.robot
         door_reach = robot.radius if robot.radius is not None else robot.half_width

@@ -18,6 +18,7 @@ from socialzoo.env.human_agents import action_velocities, human_observations
 from socialzoo.env.world import step_world
 from socialzoo.humans.group_formation import with_groups
 from socialzoo.humans.models import LEARNED, MODEL_IDS, PeopleConfig, assign_models
+from socialzoo.humans.presets import with_presets
 from socialzoo.maps.map_file import Map
 from socialzoo.scenarios.scenario import Scenario
 
@@ -57,6 +58,8 @@ class People:
 
     Args:
         config: the people's models, walking groups and counterfactual rows.
+        world: the world's parameters; `self.world` is the world its people walk in, with the spec's
+            fitted presets (socialzoo.humans.presets) and a learned policy file's dynamics in place.
         batch_size: B.
         num_robots: R.
         max_humans: H.
@@ -80,7 +83,8 @@ class People:
     ) -> None:
         self.config = config
         self.robot_visible = robot_visible
-        self.world = world
+        # A fitted preset of the spec replaces its model's parameters (socialzoo.humans.presets).
+        self.world = world = with_presets(world, config.presets)
         self.walls = walls
         self.map = m
         self.batch_size = batch_size

@@ -138,7 +138,8 @@ def walk(spec: str, cfg: HumanReportConfig) -> WalkResult:
     scenarios, kinds = people.prepare(test_set.scenarios(range(n), m))
     state = without_robots(scenarios_to_state(scenarios, num_robots=1, max_humans=config.max_humans))
     state.human_model[:] = people.models_of(kinds)
-    world = config.world
+    # With a preset's parameters and a learned policy file's dynamics, as in the env.
+    world = people.world
     tracker = HumanEpisodeMetrics(
         n, config.max_humans, 0, walls, world.human_collision_distance, world.human.waypoint_radius
     )

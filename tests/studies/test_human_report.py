@@ -73,3 +73,10 @@ def test_cli_humans_report(tmp_path, capsys):
     assert (out / "walk_sf.png").is_file() and (out / "walk_groups.png").is_file()
     assert socialzoo_main(["humans", "report", "--humans", "sf@0.5", "--out", str(out)]) == 2
     assert "the shares sum to 0.5, not 1" in capsys.readouterr().err
+
+
+def test_a_preset_walks_with_its_fitted_parameters(tmp_path):
+    # sf-eth-ucy relaxes four times slower and pushes weakly: its people walk otherwise than sf's.
+    config = HumanReportConfig(humans=("sf", "sf-eth-ucy"), **SMALL)
+    plain, fitted = (r.row for r in human_report(config, tmp_path, figures=False)[0])
+    assert plain["mean_speed"] != fitted["mean_speed"]
