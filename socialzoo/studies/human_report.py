@@ -316,9 +316,10 @@ def human_report(
     Returns:
         (results, files written).
     """
+    results = [walk(spec, cfg) for spec in cfg.humans]
+    # Made once the walks are done: an unknown map leaves no empty folder behind.
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    results = [walk(spec, cfg) for spec in cfg.humans]
     files = write_report(results, cfg, out)
     record = {**asdict(cfg), "humans": list(cfg.humans), "env_overrides": dict(cfg.env_overrides)}
     files.append(write_text_atomic(out / "config.json", json.dumps(record, indent=2, default=str) + "\n"))

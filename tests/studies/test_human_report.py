@@ -80,3 +80,10 @@ def test_a_preset_walks_with_its_fitted_parameters(tmp_path):
     config = HumanReportConfig(humans=("sf", "sf-eth-ucy"), **SMALL)
     plain, fitted = (r.row for r in human_report(config, tmp_path, figures=False)[0])
     assert plain["mean_speed"] != fitted["mean_speed"]
+
+
+def test_an_unknown_map_fails_leaving_no_folder(tmp_path, capsys):
+    out = tmp_path / "report"
+    assert socialzoo_main(["humans", "report", "--map", "nowhere", "--out", str(out)]) == 2
+    assert "unknown map 'nowhere'" in capsys.readouterr().err
+    assert not out.exists()
