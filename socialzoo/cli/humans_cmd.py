@@ -119,7 +119,9 @@ def _add_calibrate(commands: Any) -> None:
     )
     parser.add_argument("--windows", type=positive_int, default=3, help="windows per person (default 3)")
     parser.add_argument("--generations", type=positive_int, default=6, help="CMA-ES generations (default 6)")
-    parser.add_argument("--popsize", type=positive_int, default=6, help="CMA-ES population (default 6)")
+    parser.add_argument(
+        "--popsize", type=positive_int, default=6, help="CMA-ES population, 2 or more (default 6)"
+    )
     parser.add_argument("--seed", type=count, default=0, help="seed of the samples and CMA-ES (default 0)")
     parser.add_argument("--no-folds", action="store_true", help="fit on all scenes only")
     parser.add_argument("--no-progress", action="store_true", help="no progress output")

@@ -52,7 +52,7 @@ class CalibrationConfig:
         eval_persons: people sampled per held-out scene for its report.
         eval_windows: windows per person there.
         generations: CMA-ES generations.
-        popsize: CMA-ES population.
+        popsize: CMA-ES population, at least 2.
         sigma: CMA-ES initial step in the [0, 1] search space.
         seed: the samples' and CMA-ES's seed.
         folds: run the leave-one-scene-out folds (else only the fit on all scenes).
@@ -85,6 +85,9 @@ class CalibrationConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ValueError(f"CalibrationConfig.{name} must be an int >= 1, got {value!r}")
+        if self.popsize < 2:
+            # CMA-ES recombines the best half of each generation: cma refuses fewer than 2.
+            raise ValueError(f"CalibrationConfig.popsize must be >= 2 (CMA-ES), got {self.popsize!r}")
         if not (0 < self.sigma <= 1):
             raise ValueError(f"CalibrationConfig.sigma must be in (0, 1], got {self.sigma!r}")
 

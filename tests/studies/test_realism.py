@@ -205,6 +205,16 @@ def test_calibrate_command_on_a_synthetic_cache(cache, tmp_path):
     assert json.loads((out / "orca-eth-ucy.json").read_text())["model"] == "orca"
 
 
+def test_calibrate_refuses_a_population_of_one(tmp_path, capsys):
+    # cma refuses it, after the recordings were read: 'number of weights must be >=2, was 1'.
+    from socialzoo.cli import main
+
+    out = tmp_path / "cal"
+    args = ["humans", "calibrate", "--model", "sf", "--popsize", "1", "--no-folds", "--out", str(out)]
+    assert main(args) == 2 and not out.exists()
+    assert "CalibrationConfig.popsize must be >= 2 (CMA-ES), got 1" in capsys.readouterr().err
+
+
 def test_calibrate_names_a_scene_without_a_window(cache, tmp_path, capsys):
     # A scene whose sampled people are all too short for a 4.8 s window dropped out of the fit's
     # objective silently, and as the held-out scene it gave an ADE of nan, counted "not better".
