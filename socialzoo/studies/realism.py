@@ -70,6 +70,8 @@ class RealismConfig:
             raise ValueError("RealismConfig.models must name at least one model")
         for name in self.models:
             model_spec(name)
+        if len(set(self.models)) != len(self.models):
+            raise ValueError(f"RealismConfig.models has duplicates: {list(self.models)!r}")
         if self.tracks is not None and (not isinstance(self.tracks, int) or self.tracks < 1):
             raise ValueError(f"RealismConfig.tracks must be None or an int >= 1, got {self.tracks!r}")
 

@@ -182,6 +182,9 @@ def test_realism_command_on_a_synthetic_cache(cache, tmp_path, capsys):
     record = json.loads((out / "realism.json").read_text())
     assert record["seed"] == 0 and "numpy" in record["versions"]
     assert main(["humans", "realism", "--scenes", "nowhere", "--cache", str(cache), "--out", str(out)]) == 2
+    # A model named twice ran twice, its rows twice in every table.
+    assert main([*args[:5], "orca,cv,orca", "--out", str(tmp_path / "twice"), "--no-progress"]) == 2
+    assert "RealismConfig.models has duplicates: ['orca', 'cv', 'orca']" in capsys.readouterr().err
     # A track file of your own beside a scene, named after the file or NAME=PATH.
     own = tmp_path / "mine.txt"
     own.write_text((cache / "two.txt").read_text())
