@@ -94,7 +94,8 @@ class MarlArgs:
         init_std: the humans' initial exploration noise (before the tanh).
         mirror_symmetric: the humans' policy acts on a situation and its mirror image alike (no
             handedness; socialzoo.train.mappo.MirrorSymmetric).
-        env_overrides: other EnvConfig fields (JSON object), e.g. {"reward": {...}} for the robots.
+        env_overrides: other EnvConfig fields (JSON object), e.g. {"reward": {...}} for the robots; a
+            nested config's object changes the fields it names, on top of max_humans and reward.
         stats_steps: random-action steps whose observations set the fixed input normalisation.
         checkpoint_every: frames between checkpoints.
         seed: seeds torch, the scenario streams and the minibatch order.
@@ -178,10 +179,12 @@ class MarlArgs:
 
     def env_config(self) -> Any:
         """The EnvConfig a multi-agent run trains on: its map, robots, human slots, time limit and
-        human reward, human-frame actions, then its env_overrides."""
+        human reward, human-frame actions, then its env_overrides (a nested config given there as a
+        dict, such as "scenario" or "human_reward", changes those fields of the run's, not of the
+        defaults: --max-humans and --reward stay)."""
         from socialzoo.env.config import EnvConfig
 
-        overrides = {
+        overrides: dict[str, Any] = {
             "map": self.map,
             "num_robots": self.num_robots,
             "num_learned_humans": self.num_learned_humans,
@@ -190,6 +193,10 @@ class MarlArgs:
             "human_action_scale": self.action_scale,
             "human_reward": dict(self.reward),
             "scenario": {"max_humans": self.max_humans},
-            **dict(self.env_overrides),
         }
+        for key, value in self.env_overrides.items():
+            mine = overrides.get(key)
+            overrides[key] = (
+                {**mine, **value} if isinstance(mine, dict) and isinstance(value, dict) else value
+            )
         return EnvConfig().replace(**overrides)

@@ -216,6 +216,26 @@ def test_bad_arguments_name_the_field(tmp_path):
     assert CotrainArgs(out=tmp_path, num_learned_humans=0).env_config().num_learned_humans == 0
 
 
+def test_env_overrides_of_a_nested_config_keep_the_runs_own_fields(tmp_path):
+    # Found with --max-humans 8 --env-overrides '{"scenario": {"min_humans": 2}}': the run trained
+    # with 25 human slots, the override's dict replacing the run's scenario dict instead of adding to it;
+    # and --env-overrides '{"human_reward": {"wall_clearance": 0}}' dropped --reward for the env's defaults.
+    reward = {"progress": 2.0, "robot_contact": 0.7}
+    args = HumansArgs(
+        out=tmp_path,
+        num_learned_humans=4,
+        max_humans=8,
+        reward=reward,
+        env_overrides={"scenario": {"min_humans": 2}, "human_reward": {"wall_clearance": 0.0}},
+    )
+    config = args.env_config()
+    assert (config.scenario.min_humans, config.scenario.max_humans) == (2, 8)
+    assert (config.human_reward.progress, config.human_reward.robot_contact) == (2.0, 0.7)
+    assert config.human_reward.wall_clearance == 0.0
+    # A plain value still replaces the run's own.
+    assert HumansArgs(out=tmp_path, env_overrides={"map": "gdc1"}, map="open_room").env_config().map == "gdc1"
+
+
 def test_walk_prior_starts_humans_walking_towards_their_waypoint():
     import torch
     from tensordict import TensorDict
