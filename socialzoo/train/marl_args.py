@@ -157,6 +157,7 @@ class MarlArgs:
         ):
             check_int(owner, name, getattr(self, name), low=1)
         check_int(owner, "seed", self.seed, low=0)
+        check_int(owner, "max_humans", self.max_humans, low=0)
         for name in ("lr", "clip_epsilon", "max_grad_norm"):
             check_number(owner, name, getattr(self, name), low=0, low_open=True)
         for name in ("gamma", "lmbda"):
@@ -192,7 +193,12 @@ class MarlArgs:
             "human_action_frame": "human",
             "human_action_scale": self.action_scale,
             "human_reward": dict(self.reward),
-            "scenario": {"max_humans": self.max_humans},
+            # Fewer slots than the scenarios' least head count lower it to them, as the CrowdNav task's
+            # walled cases do (socialzoo.env.crowd_source): --max-humans 3 trains among 3 people.
+            "scenario": {
+                "max_humans": self.max_humans,
+                "min_humans": min(EnvConfig().scenario.min_humans, self.max_humans),
+            },
         }
         for key, value in self.env_overrides.items():
             mine = overrides.get(key)

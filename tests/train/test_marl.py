@@ -236,6 +236,16 @@ def test_env_overrides_of_a_nested_config_keep_the_runs_own_fields(tmp_path):
     assert HumansArgs(out=tmp_path, env_overrides={"map": "gdc1"}, map="open_room").env_config().map == "gdc1"
 
 
+def test_fewer_human_slots_than_the_scenarios_least_head_count_lower_it(tmp_path):
+    # `socialzoo train humans --num-learned-humans 3 --max-humans 3` was refused with
+    # "ScenarioConfig.min_humans (5) exceeds max_humans (3)", a field no flag of the trainer sets.
+    config = HumansArgs(out=tmp_path, num_learned_humans=3, max_humans=3).env_config()
+    assert (config.scenario.min_humans, config.scenario.max_humans) == (3, 3)
+    assert HumansArgs(out=tmp_path).env_config().scenario.min_humans == 5  # the default run's, unchanged
+    with pytest.raises(ValueError, match=r"HumansArgs\.max_humans must be an int >= 0, got -1"):
+        HumansArgs(out=tmp_path, num_learned_humans=0, max_humans=-1)
+
+
 def test_walk_prior_starts_humans_walking_towards_their_waypoint():
     import torch
     from tensordict import TensorDict
