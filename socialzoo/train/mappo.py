@@ -355,11 +355,13 @@ def make_collector(
 # ---------------------------------------------------------------------------- export
 def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanPolicy:
     """The numpy policy of a human actor: deterministic tanh of its mean, same normalisation,
-    mirror-symmetric when the actor is."""
+    mirror-symmetric when the actor is, and the training world's walk of learned people (forces on
+    them or not, their relaxation time), which a world that walks the file takes."""
     mean = actor.module[0].module[0]
     symmetric = isinstance(mean, MirrorSymmetric)
     inner = mean.net if symmetric else mean
     norm, body = inner[0], inner[1]
+    walk = config.world.human
     return LearnedHumanPolicy(
         linear_layers(body),
         "tanh",
@@ -369,6 +371,8 @@ def export_humans(actor: ProbabilisticActor, config: EnvConfig) -> LearnedHumanP
         config.human_action_frame,
         config.human_action_scale,
         mirror_symmetric=symmetric,
+        learned_forces=walk.learned_forces,
+        relaxation_time=walk.learned_tau,
     )
 
 

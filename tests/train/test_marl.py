@@ -319,3 +319,28 @@ def test_mirror_symmetric_humans_act_alike_on_the_left_and_the_right(tmp_path):
             TensorDict({("human", "observation"): obs * torch.from_numpy(signs)}, batch_size=[32])
         )["human", "loc"]
     assert not torch.allclose(out_m, out * torch.tensor([1.0, -1.0]), atol=1e-3)
+
+
+def test_the_humans_file_says_how_its_training_world_walked_learned_people(tmp_path):
+    # Found training with --env-overrides '{"world": {"human": {"learned_forces": false,
+    # "learned_relaxation_time": 4.0}}}': the file said forces on and no relaxation time, so every world
+    # that walked it (benchmark --humans learned:PATH) pushed its people with the social and wall forces
+    # and relaxed them at 0.5 s, not as they were trained.
+    import torch
+
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.human_agents import human_observation_size
+    from socialzoo.train.mappo import export_humans, human_actor
+
+    size = human_observation_size(EnvConfig().num_human_neighbours)
+    actor = human_actor(size, 8, 1, torch.zeros(size), torch.ones(size), walk_prior=0.9)
+    env_id = f"socialzoo/MultiAgent-v{ENV_VERSION}"
+    walks = {"learned_forces": False, "learned_relaxation_time": 4.0}
+    config = EnvConfig(map="open_room", num_learned_humans=1).replace(world={"human": walks})
+    loaded = LearnedHumanPolicy.load(
+        export_humans(actor, config).save(tmp_path / "a.safetensors", env_id, {})
+    )
+    assert (loaded.learned_forces, loaded.relaxation_time) == (False, 4.0)
+    # The default world: forces on, its people's 0.5 s.
+    plain = export_humans(actor, EnvConfig(map="open_room", num_learned_humans=1))
+    assert (plain.learned_forces, plain.relaxation_time) == (True, 0.5)
