@@ -20,8 +20,10 @@ class CotrainTrainer(Trainer):
     """Co-training's final policy is the humans' file, or the robots' when no human is learned."""
 
     def policy_path(self, args: Any) -> Path:
-        """humans.safetensors, or robot.safetensors without learned humans."""
-        return self.folder(args) / (HUMANS_POLICY_FILE if args.num_learned_humans else ROBOT_POLICY_FILE)
+        """humans.safetensors, or robot.safetensors without learned humans (in the run's env config:
+        env_overrides may set them too)."""
+        humans = args.env_config().num_learned_humans
+        return self.folder(args) / (HUMANS_POLICY_FILE if humans else ROBOT_POLICY_FILE)
 
 
 TRAINER = CotrainTrainer("cotrain", policy_file=HUMANS_POLICY_FILE)
@@ -58,7 +60,7 @@ class CotrainArgs(MarlArgs):
 
     def groups_at(self, index: int) -> Sequence[str]:
         """The groups updated on collected batch `index` (robots take the first turn)."""
-        learned = ["robot", "human"] if self.num_learned_humans else ["robot"]
+        learned = ["robot", "human"] if self.env_config().num_learned_humans else ["robot"]
         if self.schedule == "simultaneous" or len(learned) == 1:
             return learned
         return [learned[(index // self.alternate_every) % 2]]

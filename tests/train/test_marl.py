@@ -246,6 +246,22 @@ def test_fewer_human_slots_than_the_scenarios_least_head_count_lower_it(tmp_path
         HumansArgs(out=tmp_path, num_learned_humans=0, max_humans=-1)
 
 
+def test_cotrain_learns_the_groups_of_its_env_config(tmp_path):
+    # `socialzoo train cotrain --schedule alternating --env-overrides '{"num_learned_humans": 0}'` ended
+    # in a KeyError traceback on the humans' first turn, and its final file was looked for as
+    # humans.safetensors: both read --num-learned-humans instead of the env the run trains in.
+    from socialzoo.train.cotrain import TRAINER
+
+    args = CotrainArgs(
+        out=tmp_path, schedule="alternating", alternate_every=1, env_overrides={"num_learned_humans": 0}
+    )
+    assert [list(args.groups_at(i)) for i in range(3)] == [["robot"]] * 3
+    assert TRAINER.policy_path(args).name == "robot.safetensors"
+    both = CotrainArgs(out=tmp_path, schedule="alternating", alternate_every=1)
+    assert [list(both.groups_at(i)) for i in range(3)] == [["robot"], ["human"], ["robot"]]
+    assert TRAINER.policy_path(both).name == "humans.safetensors"
+
+
 def test_walk_prior_starts_humans_walking_towards_their_waypoint():
     import torch
     from tensordict import TensorDict
