@@ -57,7 +57,8 @@ class CrowdOrcaRobot:
     reports (0.43 success).
 
     Args:
-        safety_space: extra radius the robot keeps, m (CrowdNav: 0; 0.15 for its demonstrations).
+        safety_space: extra radius of every agent in the robot's ORCA step, the robot's and each
+            person's, as CrowdNav pads them, m (CrowdNav: 0; 0.15 for its demonstrations).
         orca: ORCA's parameters (default CrowdNav's).
     """
 
@@ -94,7 +95,8 @@ class CrowdOrcaRobot:
         else:
             scale = np.minimum(left[..., None], 1.0) / np.maximum(distance, 1e-9)
             pref[:, :r] = to_goal * scale * config.preferred_speed
-        radius = np.full((b, r + h), config.cases.human_radius + _ORCA_PADDING)
+        # CrowdNav pads the people's radii by the safety space too, not only the robot's.
+        radius = np.full((b, r + h), config.cases.human_radius + _ORCA_PADDING + self.safety_space)
         radius[:, :r] = float(robot.radius) + _ORCA_PADDING + self.safety_space
         max_speed = np.full((b, r + h), config.preferred_speed)
         present = np.concatenate((np.ones((b, r), dtype=bool), s.human_mask), axis=1)
