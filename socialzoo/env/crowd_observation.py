@@ -128,8 +128,9 @@ def joint_state(
     preferred speed, heading, radius, vx, vy) and each person by (px, py, vx, vy, radius, distance,
     radius sum). We keep those features and their order, with two additions that a fixed-size
     batch needs: people slots beyond a case's head count are zeros, and a mask says which slots
-    hold a person. The heading is the robot's heading relative to the goal direction for a
-    unicycle and 0 otherwise, as in CrowdNav (a holonomic robot's heading does not matter).
+    hold a person. The heading is 0 for a holonomic robot, as in CrowdNav (its heading does not
+    matter), and a unicycle's heading relative to the goal direction, wrapped to [-pi, pi)
+    (CrowdNav's theta - rot is not wrapped: the same pose may read 2 pi more or less there).
 
     Args:
         robot_pos: (B, 2) world frame, m.
