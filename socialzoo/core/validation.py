@@ -45,6 +45,17 @@ def _range_text(low: float | None, high: float | None, low_open: bool, high_open
     return ""
 
 
+def is_finite_number(value: Any) -> bool:
+    """Whether `value` is an int or float (not a bool) with a finite float value: NaN, infinities and
+    ints beyond a float's range (10**400, which JSON reads as an int) are not."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # math.isfinite converts an int to a float first
+        return False
+
+
 def check_number(
     owner: str,
     field: str,
@@ -95,7 +106,7 @@ def check_number(
             kind = f"an int {rng}" if rng else "an int"
             raise error(f"{owner}.{field} must be {kind}{or_none}, got {value!r}")
         return value
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+    if not is_finite_number(value):
         raise error(f"{owner}.{field} must be a finite number{or_none}, got {value!r}")
     if not _in_range(value, low, high, low_open, high_open):
         raise error(f"{owner}.{field} must be {rng}, got {value!r}")

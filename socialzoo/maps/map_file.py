@@ -19,6 +19,7 @@ import numpy as np
 
 from socialzoo.core.files import read_text
 from socialzoo.core.geometry import closest_point_on_segment, segments_intersect
+from socialzoo.core.validation import is_finite_number
 from socialzoo.core.walls import WallIndex
 
 logger = logging.getLogger(__name__)
@@ -165,8 +166,9 @@ def _number_rows(value: Any, width: int, where: str, field_name: str, names: str
         if not isinstance(row, list) or len(row) != width or not all(_is_number(v) for v in row):
             raise _fail(where, f"{field_name}[{k}]: expected {width} numbers {names}, got {row!r}")
         for v in row:
-            if not math.isfinite(v):
-                raise _fail(where, f"{field_name}[{k}]: coordinate is {'NaN' if v != v else v}")
+            if not is_finite_number(v):
+                what = "NaN" if v != v else v if isinstance(v, float) else "an int beyond a float's range"
+                raise _fail(where, f"{field_name}[{k}]: coordinate is {what}")
     return np.array(value, dtype=np.float64).reshape(len(value), width)
 
 
@@ -270,7 +272,7 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
             where, f"doors[{k}]: zero length, both ends at {doors[k, :2].tolist()} (a door spans an opening)"
         )
     walkable = data.get("walkable_area")
-    if walkable is not None and not (_is_number(walkable) and math.isfinite(walkable) and walkable > 0):
+    if walkable is not None and not (is_finite_number(walkable) and walkable > 0):
         raise _fail(where, f"walkable_area must be a positive number of m^2, got {walkable!r}")
     provenance = data.get("provenance")
     if provenance is not None and not isinstance(provenance, dict):

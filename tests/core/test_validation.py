@@ -36,6 +36,7 @@ def test_accepted_numbers_come_back_unchanged(kwargs, value):
         ({}, True, "Cfg.x must be a finite number, got True"),
         ({}, "1.0", "Cfg.x must be a finite number, got '1.0'"),
         ({}, None, "Cfg.x must be a finite number, got None"),
+        pytest.param({}, 10**400, f"Cfg.x must be a finite number, got {10**400}", id="int-beyond-float"),
         ({"allow_none": True}, "a", "Cfg.x must be a finite number or None, got 'a'"),
         ({"low": 0}, -0.5, "Cfg.x must be >= 0, got -0.5"),
         ({"low": 0.0, "low_open": True}, 0.0, "Cfg.x must be > 0.0, got 0.0"),

@@ -73,6 +73,10 @@ def _room(**changes):
     [
         ({"walls": [[0, 0, "x", 1]]}, "walls"),
         ({"walls": [[0, 0, float("nan"), 1]]}, r"walls\[0\]"),
+        pytest.param(
+            {"walls": [[0, 0, 10**400, 1]]}, r"walls\[0\]: coordinate is an int beyond", id="int-beyond-float"
+        ),
+        pytest.param({"walkable_area": 10**400}, "walkable_area must be a positive", id="area-beyond-float"),
         ({"format": "other/1"}, "format"),
         ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[0, 7]]}}, r"graph.edges\[0\]"),
         ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[1, 1]]}}, "to itself"),
