@@ -17,6 +17,11 @@ from socialzoo.core.geometry import (
 )
 from socialzoo.core.jit import kernel
 
+# Most cells a grid table may have: building one holds about 40 bytes a cell, so 25 M cells (a
+# 1.25 km square at the default 25 cm) take about 1 GB. Walls spread wider are walls whose
+# coordinates are not metres (a 10 m room drawn in millimetres spans 10 km) or a stray far-off wall.
+MAX_TABLE_CELLS = 25_000_000
+
 
 @dataclass(frozen=True)
 class GridTable:
@@ -100,17 +105,30 @@ class GridTable:
 
 
 def build_grid_table(walls: np.ndarray, cell_size: float, reach: float) -> GridTable:
-    """Index walls (W, 4) on a grid whose cells list every wall within `reach` of them."""
+    """Index walls (W, 4) on a grid whose cells list every wall within `reach` of them.
+
+    Raises:
+        ValueError: a non-positive cell size or reach, or walls spread so wide that the grid would
+            have more than MAX_TABLE_CELLS cells (naming their extent, before any memory is taken).
+    """
     if cell_size <= 0 or reach <= 0:
         raise ValueError(f"cell_size and reach must be positive, got {cell_size}, {reach}")
     a, b = walls[:, 0:2], walls[:, 2:4]
     if len(walls):
-        lo = np.minimum(a, b).min(axis=0) - reach - cell_size
-        hi = np.maximum(a, b).max(axis=0) + reach + cell_size
+        wall_lo, wall_hi = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
+        lo, hi = wall_lo - reach - cell_size, wall_hi + reach + cell_size
     else:
         lo, hi = np.zeros(2), np.full(2, cell_size)
     num_x = max(1, math.ceil((hi[0] - lo[0]) / cell_size))
     num_y = max(1, math.ceil((hi[1] - lo[1]) / cell_size))
+    if num_x * num_y > MAX_TABLE_CELLS:
+        (x0, y0), (x1, y1) = wall_lo, wall_hi
+        raise ValueError(
+            f"the walls span {x1 - x0:.6g} x {y1 - y0:.6g} m (from ({x0:.6g}, {y0:.6g}) to ({x1:.6g}, "
+            f"{y1:.6g})): their {100 * cell_size:g} cm wall grid would have {num_x * num_y:.3g} cells, "
+            f"more than the {MAX_TABLE_CELLS:,} it may have; check that the coordinates are metres "
+            "(a plan in millimetres is 1000 times too large) or remove a stray far-off wall"
+        )
     half_diag = cell_size * math.sqrt(0.5)
     cell_ids: list[np.ndarray] = []
     wall_ids: list[np.ndarray] = []

@@ -559,7 +559,9 @@ def validate_map(
     """Check a map's geometry; raise MapError naming the file and every offending entry.
 
     Rules:
-        - walls (W, 4), nodes (N, 2), legal poses (P, 3) and doors (D, 4) are finite numbers; at least
+        - walls (W, 4), nodes (N, 2), legal poses (P, 3) and doors (D, 4) are finite numbers, the
+          walls spread no wider than their wall grid allows (socialzoo.core.walls.MAX_TABLE_CELLS
+          cells of 25 cm, a 1.25 km square: coordinates in metres); at least
           one node and two legal poses (a scenario needs a distinct start and goal); no door of zero
           length;
         - edges (E, 2) name existing nodes, never a node to itself;
@@ -578,6 +580,11 @@ def validate_map(
     """
     where = m.where
     problems = _array_problems(m)
+    if not problems:
+        try:
+            m.wall_index.table()  # built here, where a refusal can name the file
+        except ValueError as err:  # walls spread too wide for the wall grid (core.walls.MAX_TABLE_CELLS)
+            problems = [str(err)]
     if not problems:
         problems = _graph_problems(m)
     if not problems:

@@ -151,3 +151,13 @@ def test_same_cost_structure_on_a_large_map():
 def test_rejects_nan_walls():
     with pytest.raises(ValueError, match="NaN"):
         WallIndex(np.array([[0.0, 0.0, math.nan, 1.0]]))
+
+
+def test_walls_spread_too_wide_for_the_grid_are_refused_naming_their_extent():
+    # A 10 m room drawn in millimetres: its 25 cm grid would have 1.6e9 cells (12 GB of counts alone).
+    room_mm = np.array([[0, 0, 1e4, 0], [1e4, 0, 1e4, 1e4], [1e4, 1e4, 0, 1e4], [0, 1e4, 0, 0]])
+    with pytest.raises(
+        ValueError, match=r"the walls span 10000 x 10000 m \(from \(0, 0\) to \(10000, 10000\)\)"
+    ):
+        WallIndex(room_mm).table()
+    assert WallIndex(room_mm / 1000).table().num_x == 50  # the same room in metres

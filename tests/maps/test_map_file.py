@@ -93,6 +93,19 @@ def test_bad_maps_fail_naming_the_entry(tmp_path, change, message):
     assert "bad.json" in str(err.value)
 
 
+def test_a_map_in_millimetres_is_refused_naming_the_file_and_its_extent(tmp_path):
+    # Its 25 cm wall grid would take 1.6e9 cells: a bare MemoryError (or the kernel's kill) before.
+    data = _room()
+    del data["region"]
+    data["walls"] = [[1000 * v for v in w] for w in data["walls"]]
+    data["graph"]["nodes"] = [[1000 * v for v in n] for n in data["graph"]["nodes"]]
+    data["legal_poses"] = [[1000 * x, 1000 * y, theta] for x, y, theta in data["legal_poses"]]
+    with pytest.raises(
+        MapError, match=r"bad\.json: the walls span 10000 x 10000 m .* coordinates are metres"
+    ):
+        load_map(_write(tmp_path, data))
+
+
 def test_edge_through_a_wall_is_named(tmp_path):
     data = _room()
     data["walls"] = [*data["walls"], [5, 0, 5, 10]]  # split the room in two
