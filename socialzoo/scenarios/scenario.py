@@ -23,7 +23,12 @@ class ScenarioError(ValueError):
 
 def _frozen_array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) -> np.ndarray:
     """A read-only copy of `value` as `dtype`, checked against `shape` (None = any length)."""
-    arr: np.ndarray = np.array(value, dtype=dtype)
+    try:
+        arr: np.ndarray = np.array(value, dtype=dtype)
+    except OverflowError:  # a JSON int of more digits than the dtype holds
+        raise ValueError(
+            f"Scenario.{what} holds a number beyond the range of {np.dtype(dtype).name}"
+        ) from None
     if arr.size == 0 and len(shape) > 1:
         arr = arr.reshape((0, *(s or 0 for s in shape[1:])))
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)):
@@ -45,14 +50,14 @@ class Scenario:
 
     Attributes:
         map_name: name of the map the scenario belongs to.
-        seed: the seed it was generated from.
+        seed: the seed it was generated from, an int in [0, 2**64).
         robot_starts: (R, 3) start poses (x, y, theta) of the R robots; the benchmark has R = 1.
         robot_goals: (R, 3) goal poses.
         human_spawn: (n, 2) spawn positions (the start pose position plus jitter).
         human_start_index: (n,) legal-pose index of each human's start, -1 if not a legal pose.
         human_goal_index: (n,) legal-pose index of each human's goal, -1 if not a legal pose.
         human_routes: n arrays (L_i, 2), route waypoints from the human's start to its goal.
-        human_speed: (n,) preferred walking speed, m/s.
+        human_speed: (n,) preferred walking speed, m/s, >= 0.
         family: "benchmark" for the SPEC generator, else the scenario family's name.
         human_group: (n,) the walking group of each human (the index of its first member), -1
             for none (socialzoo.humans.group_formation); default none. Saved only when someone walks in a group.
@@ -81,6 +86,16 @@ class Scenario:
     _route_width: int = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        for name in ("map_name", "family"):
+            if not isinstance(getattr(self, name), str):
+                raise ValueError(f"Scenario.{name} must be a string, got {getattr(self, name)!r}")
+        seed = self.seed
+        if (
+            isinstance(seed, (bool, np.bool_))
+            or not isinstance(seed, (int, np.integer))
+            or not 0 <= seed < 2**64
+        ):
+            raise ValueError(f"Scenario.seed must be an int in [0, 2**64), got {seed!r}")
         starts = _frozen_array(self.robot_starts, np.float64, (None, 3), "robot_starts")
         if len(starts) == 0:
             raise ValueError("Scenario.robot_starts must hold at least one robot")
@@ -94,6 +109,13 @@ class Scenario:
         for name in ("human_start_index", "human_goal_index", "human_speed"):
             dtype = np.float64 if name == "human_speed" else np.int64
             object.__setattr__(self, name, _frozen_array(getattr(self, name), dtype, (n,), name))
+        for name, low in (("human_start_index", -1), ("human_goal_index", -1), ("human_speed", 0)):
+            below = np.flatnonzero(getattr(self, name) < low)
+            if len(below):
+                k = int(below[0])
+                raise ValueError(
+                    f"Scenario.{name}[{k}] must be >= {low}, got {getattr(self, name)[k].item()!r}"
+                )
         if len(self.human_routes) != n:
             raise ValueError(f"Scenario.human_routes holds {len(self.human_routes)} routes for {n} humans")
         routes = tuple(
@@ -210,7 +232,8 @@ class Scenario:
 
         Raises:
             ScenarioError: not a JSON object, a wrong format, a missing key, or a value of the wrong
-                type or shape (the message starts with `where` and names the key or field).
+                type or shape or out of range (a negative speed, a seed outside [0, 2**64)); the
+                message starts with `where` and names the key or field.
         """
         if not isinstance(data, dict):
             raise ScenarioError(f"{where}: expected a JSON object, got {type(data).__name__}")
@@ -238,7 +261,7 @@ class Scenario:
             )
         except KeyError as err:
             raise ScenarioError(f"{where}: scenario JSON lacks key {err.args[0]!r}") from None
-        except (TypeError, ValueError) as err:  # a value of the wrong type or shape, named by __post_init__
+        except (TypeError, ValueError, OverflowError) as err:  # a bad value, named by __post_init__
             raise ScenarioError(f"{where}: {err}") from None
 
     def save(self, path: str | Path) -> Path:

@@ -20,7 +20,7 @@ from socialzoo.maps.segments import segments_free
 from socialzoo.scenarios.catalogue import FAMILIES, get_family
 from socialzoo.scenarios.families import LayoutFamily
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
-from socialzoo.scenarios.scenario import Scenario
+from socialzoo.scenarios.scenario import Scenario, ScenarioError
 from socialzoo.scenarios.scenario_sets import TEST_SETS, TestSet, get_test_set
 from socialzoo.scenarios.start_state import _NOISE_STREAM, StartStore, scenarios_to_state, write_scenarios
 
@@ -272,6 +272,31 @@ def test_scenario_arrays_are_read_only_and_validated() -> None:
         dataclasses.replace(s, robot_goals=np.zeros((2, 3)))
     with pytest.raises(ValueError, match="human_routes holds"):
         dataclasses.replace(s, human_routes=s.human_routes[:-1])
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("human_speed", -1.2, r"Scenario.human_speed\[0\] must be >= 0, got -1.2"),
+        ("human_speed", 10**400, "Scenario.human_speed holds a number beyond the range of float64"),
+        ("human_goal_index", -7, r"Scenario.human_goal_index\[0\] must be >= -1, got -7"),
+        ("seed", -5, r"Scenario.seed must be an int in \[0, 2\*\*64\), got -5"),
+        ("seed", 1.7, r"Scenario.seed must be an int in \[0, 2\*\*64\), got 1.7"),
+        ("seed", 2**64, r"Scenario.seed must be an int in \[0, 2\*\*64\), got 18446744073709551616"),
+        ("map_name", 5, "Scenario.map_name must be a string, got 5"),
+    ],
+)
+def test_a_scenario_file_of_impossible_values_is_refused_naming_the_file_and_field(
+    tmp_path: Path, key: str, value: object, message: str
+) -> None:
+    # Each of these loaded and ran: people walking backwards (a negative speed), a seed truncated
+    # (1.7 read as 1) or refused only at reset without the file's name (-5, 2**64).
+    data = generate_scenario(gdc1(), 0).to_json()
+    data[key] = [value] * len(data[key]) if isinstance(data[key], list) else value
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ScenarioError, match=f"s.json: {message}"):
+        Scenario.load(path)
 
 
 # ---------------------------------------------------------------------------- test sets
