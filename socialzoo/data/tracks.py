@@ -127,6 +127,14 @@ class Recording:
         spans.flags.writeable = False
         return spans
 
+    @cached_property
+    def persons(self) -> np.ndarray:
+        """(N,) int64 each track's person id, in the order of `tracks` (read-only): a person whose track a
+        gap split (MAX_GAP_FRAMES) has several tracks with one id."""
+        persons = np.array([t.person for t in self.tracks], dtype=np.int64)
+        persons.flags.writeable = False
+        return persons
+
     def grid(
         self, tracks: Sequence[int] | None = None, first: int = 0, last: int | None = None
     ) -> np.ndarray:

@@ -126,8 +126,9 @@ def replaced_scenario(
     first = me.first_frame
     last = min(recording.num_frames - 1, first + math.ceil(limit / recording.dt))
     spans = recording.spans
-    seen = (spans[:, 0] <= last) & (spans[:, 1] >= first)
-    seen[track] = False
+    # Everyone else: not the replaced person's own other tracks (a gap split it), whose place the robot
+    # takes too (it would meet itself on its way, or at its goal).
+    seen = (spans[:, 0] <= last) & (spans[:, 1] >= first) & (recording.persons != me.person)
     others = np.flatnonzero(seen).tolist()
     grid = recording.grid(others, first, last) if others else np.zeros((0, last - first + 1, 2))
     # People who are never there at once share a person slot (pack_slots): fewer, fuller slots.
@@ -268,8 +269,7 @@ class RecordedScene(ScenarioFamily):
                 rec.num_frames - 1,
                 first[k] + math.ceil(time_budget(rec.tracks[k].positions, rec.dt) / rec.dt),
             )
-            seen = (first <= end) & (last >= first[k])
-            seen[k] = False
+            seen = (first <= end) & (last >= first[k]) & (rec.persons != rec.persons[k])
             if seen.any():
                 most = max(most, int(pack_slots(first[seen], last[seen], rest).max()) + 1)
         return most

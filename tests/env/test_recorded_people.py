@@ -319,6 +319,25 @@ def test_a_person_split_by_a_gap_is_in_one_split() -> None:
     assert sum(len(v) for v in splits.values()) == len(set(np.concatenate(list(splits.values())).tolist()))
 
 
+def test_the_robot_in_a_persons_place_never_meets_that_persons_other_track(tmp_path) -> None:
+    # A tracker's gap splits a person in two tracks (one id): the robot in the place of the first is
+    # that person, so its second track, which starts 0.5 m past the robot's goal while the robot's
+    # budget runs, is nobody else of the episode (it was a person slot, the robot meeting itself).
+    from socialzoo.data.tracks import read_tracks
+
+    rows = [(f * 10, 1, f * 10 / 29, 0.0) for f in range(30)]  # (0, 0) to (10, 0)
+    rows += [(f * 10, 1, 10.5 + (f - 35) * 0.38, 0.0) for f in range(35, 61)]  # after a 5-frame gap
+    rows += [(f * 10, 2, 5.0, -6.0 + f * 0.2) for f in range(61)]  # somebody else
+    path = tmp_path / "gap.txt"
+    path.write_text("\n".join("\t".join(map(str, row)) for row in sorted(rows)))
+    rec = read_tracks(path)
+    first = next(k for k, t in enumerate(rec.tracks) if t.person == 1 and t.first_frame == 0)
+    assert rec.persons.tolist().count(1) == 2
+    scenario = replaced_scenario(rec, first, seed=0, family="test")
+    assert scenario.recorded.persons.tolist() == [2]
+    assert scenario.num_humans == 1
+
+
 def test_the_open_area_map_is_the_registered_recordings(tmp_path, monkeypatch) -> None:
     # The map file is named after the family: a second recording registered under the same
     # name (docs/recorded.md's "recorded_mine") must get its own walls, not the first one's.
