@@ -455,11 +455,12 @@ def run_import(args: argparse.Namespace) -> int:
     """Run `socialzoo map import`; returns the exit status."""
     from socialzoo import __version__
     from socialzoo.maps.map_completion import complete_map
-    from socialzoo.maps.map_file import MapError
+    from socialzoo.maps.map_file import MapError, check_map_name
     from socialzoo.maps.repair import repair_map
     from socialzoo.maps.roadmap import describe_closures
 
     try:
+        check_map_name(args.name, "--name")  # before any reading: the file would not load
         walls, nodes, edges, inputs, merged = _read_source(args)
         common: dict[str, Any] = {
             "nodes": nodes,

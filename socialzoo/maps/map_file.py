@@ -192,6 +192,20 @@ def _text_field(data: dict[str, Any], key: str, where: str, required: bool) -> s
     return str(data[key])
 
 
+def check_map_name(name: str, where: str) -> None:
+    """Refuse a map name that is not one file name: it names files (a benchmark's
+    DIR/test_sets/<name>-test.json, tables, figures), which must stay inside their folder.
+
+    Raises:
+        MapError: a name with '/', a backslash or control characters, or '.' or '..' (naming
+            `where`).
+    """
+    if "/" in name or "\\" in name or name in (".", "..") or not name.isprintable():
+        raise _fail(
+            where, f"name {name!r} must be usable as a file name (no '/', '\\' or control characters)"
+        )
+
+
 def parse_json(text: str, where: str) -> Any:
     """JSON text parsed; MapError naming `where` (and the line and column) for text that is not JSON."""
     try:
@@ -250,6 +264,7 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
     name = _text_field(data, "name", where, required=True)
     if not name:
         raise _fail(where, "name is empty")
+    check_map_name(name, where)
     region: tuple[float, float, float, float] | None = None
     if data.get("region") is not None:
         box = _number_rows([data["region"]], 4, where, "region", "[xmin, ymin, xmax, ymax]")[0]

@@ -365,3 +365,17 @@ def test_map_import_ros_yaml_yaw_negate_and_errors(tmp_path, capsys):
     (tmp_path / "lab.yaml").write_text("image: gone.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
     assert main(["map", "import", "--png", str(yaml), "--name", "lab"]) == 2
     assert f"gone.pgm: no such file (the image named by {yaml})" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["a/b", "../up", ".."])
+def test_import_refuses_a_name_that_is_not_one_file_name(tmp_path, capsys, name):
+    # The name names files (DIR/test_sets/<name>-test.json): '../up' would write outside DIR, and
+    # the import wrote a map that then loaded, or (now) would not load.
+    source = write_vector_map(
+        tmp_path / "w.txt", np.array([[0, 0, 10, 0], [10, 0, 10, 10], [10, 10, 0, 10], [0, 10, 0, 0]])
+    )
+    out = tmp_path / "m.json"
+    assert (
+        main(["map", "import", "--walls", str(source), "--name", name, "--out", str(out), "--no-drive"]) == 2
+    )
+    assert "--name: name" in capsys.readouterr().err and not out.exists()

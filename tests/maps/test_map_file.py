@@ -78,6 +78,8 @@ def _room(**changes):
         ),
         pytest.param({"walkable_area": 10**400}, "walkable_area must be a positive", id="area-beyond-float"),
         ({"format": "other/1"}, "format"),
+        pytest.param({"name": "../elsewhere"}, "must be usable as a file name", id="name-leaves-folder"),
+        pytest.param({"name": ".."}, "must be usable as a file name", id="name-dotdot"),
         ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[0, 7]]}}, r"graph.edges\[0\]"),
         ({"graph": {"nodes": [[5, 5], [6, 6]], "edges": [[1, 1]]}}, "to itself"),
         ({"graph": {"nodes": [[5, 5], [0.05, 5]], "edges": [[0, 1]]}}, r"graph.nodes\[1\]"),
