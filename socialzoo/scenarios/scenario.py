@@ -85,6 +85,22 @@ class Scenario:
     _route_lens: np.ndarray = field(init=False, repr=False)
     _route_width: int = field(init=False, repr=False)
 
+    def first_outside(self, low: np.ndarray, high: np.ndarray) -> str | None:
+        """The first of the robots' starts and goals, the people's spawns and route points that
+        lies outside the box [low, high] (2,), named with its position; None if all lie inside."""
+        parts = (
+            ("robot start", self.robot_starts[:, :2]),
+            ("robot goal", self.robot_goals[:, :2]),
+            ("person spawn", self.human_spawn),
+            ("route point", self._route_points),
+        )
+        for what, points in parts:
+            out = np.flatnonzero(((points < low) | (points > high)).any(axis=1))
+            if len(out):
+                x, y = points[out[0]]
+                return f"{what} {out[0]} at ({x:.2f}, {y:.2f})"
+        return None
+
     def __post_init__(self) -> None:
         for name in ("map_name", "family"):
             if not isinstance(getattr(self, name), str):

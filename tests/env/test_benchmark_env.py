@@ -186,6 +186,19 @@ def test_replay_a_scenario_through_options():
     assert same(a, b)
 
 
+def test_a_scenario_of_another_map_is_refused_naming_both_maps():
+    # It was replayed without a word: gdc1's coordinates on the doorway's walls.
+    env = ActionSelectionEnv(map="gdc1", max_steps=5)
+    env.reset(seed=3)
+    scenario = env.core.scenarios[0]
+    other = ActionSelectionEnv(map="doorway", max_steps=5)
+    with pytest.raises(
+        ValueError, match=r"of scenario .* \(made for map 'gdc1'\) lies outside map 'doorway'"
+    ):
+        other.reset(options={"scenario": scenario})
+    env.reset(options={"scenario": scenario})  # on its own map it plays
+
+
 def rollout_from(env, scenario):
     obs, _ = env.reset(options={"scenario": scenario})
     out = [obs]

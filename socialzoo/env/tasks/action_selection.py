@@ -32,6 +32,8 @@ from socialzoo.scenarios.scenario import Scenario
 
 # The sub-policy given to robots that already left (the core halts them anyway).
 HALT = 1
+# How far a scenario given to reset may reach beyond the map's walls and graph, m.
+_MAP_MARGIN = 1.0
 # Per-step info of the learned-human agents: "contact" (within 0.4 m of anyone after the step),
 # "present" (the slot holds a person), then the other reward terms of
 # socialzoo.env.human_agents.HumanStep.
@@ -152,6 +154,7 @@ class ActionSelectionTask(Task):
         self.learned = np.arange(cfg.num_learned_humans)
         self.speeds = np.array([cfg.world.robot.max_speed, cfg.world.robot.max_angular_speed])
         self.prev_action = np.zeros((b, r), dtype=np.int64)
+        self._map_box: tuple[np.ndarray, np.ndarray] | None = None  # _check_on_map's, on first use
         self.target_human = np.full((b, r), -1, dtype=np.intp)
         self.obs = np.zeros((b, r, cfg.observation_size), dtype=np.float32)
         self.human_obs: np.ndarray | None = None
@@ -183,9 +186,27 @@ class ActionSelectionTask(Task):
                     raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario).__name__}")
             if len(scenarios) != len(rows):
                 raise ValueError(f"options['scenarios']: {len(scenarios)} for {len(rows)} rows")
+            if chosen is None:  # one's own scenarios: made for this map?
+                self._check_on_map(scenarios)
             scenarios = [with_robots(s, m, self.num_robots) for s in scenarios]
         self.reset_rows(rows, scenarios)
         return np.array([int(s.seed) for s in scenarios], dtype=np.uint64)
+
+    def _check_on_map(self, scenarios: list[Scenario]) -> None:
+        """Refuse a given scenario with a point beyond the map's walls and graph (by _MAP_MARGIN):
+        most likely one made for another map (reset(options={"scenario": ...}) takes any Scenario)."""
+        if self._map_box is None:
+            corners = np.vstack((self.map.walls.reshape(-1, 2), self.map.nodes))
+            self._map_box = (corners.min(axis=0) - _MAP_MARGIN, corners.max(axis=0) + _MAP_MARGIN)
+        low, high = self._map_box
+        for scenario in scenarios:
+            where = scenario.first_outside(low, high)
+            if where is not None:
+                raise ValueError(
+                    f"options['scenario']: the {where} of scenario {scenario.family} seed {scenario.seed} "
+                    f"(made for map {scenario.map_name!r}) lies outside map {self.map.name!r} "
+                    f"({low[0]:.1f}..{high[0]:.1f} x {low[1]:.1f}..{high[1]:.1f} m): a scenario of another map?"
+                )
 
     def reset_rows(self, rows: np.ndarray, scenarios: list[Scenario]) -> None:
         """Start new episodes in `rows` from `scenarios` (one per row, with the task's robots)."""
