@@ -151,7 +151,15 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
         parts.append(PeoplePart(model, share, path or None, reacts_as, preset))
     names = [p.model for p in parts]
     if len(set(names)) != len(names):
-        raise PeopleSpecError(f"people spec {spec!r} names a model twice")
+        twice = next(n for n in names if names.count(n) > 1)
+        preset = next((p.preset for p in parts if p.model == twice and p.preset), None)
+        why = (
+            f" (the preset {preset} sets {twice}'s parameters for everyone {twice} walks, so it cannot "
+            f"share a crowd with {twice} itself)"
+            if preset
+            else ""
+        )
+        raise PeopleSpecError(f"people spec {spec!r} names the model {twice!r} twice{why}")
     files = {p.path for p in parts if p.path is not None}
     if len(files) > 1:
         raise PeopleSpecError(
