@@ -262,12 +262,17 @@ def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: di
 
     if args.quick:
         return fail("benchmark", "several --humans make a matrix: without --quick")
+    chosen = given(args, "policies", "maps", "trials", "workers")
+    if args.workers is None and args.backend == "ray":
+        chosen["workers"] = None  # one chunk per CPU of the Ray cluster
     try:
         config = MatrixConfig(
             humans=tuple(map(people_spec, specs)),
             batch_size=args.batch_size,
             env_overrides=overrides,
-            **given(args, "policies", "maps", "trials", "workers"),
+            backend=args.backend,
+            address=args.address,
+            **chosen,
         )
         result = crowd_matrix(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, KeyError, StoreError, FileNotFoundError) as err:

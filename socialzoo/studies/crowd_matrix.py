@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
+from socialzoo.bench.runner import Backend
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, remove_outputs, write_csv, write_text_atomic
@@ -54,7 +55,9 @@ class MatrixConfig:
         maps: maps whose test sets are used ("<map>-test", or "<map>-quick" with quick).
         trials: scenarios per map and cell (the first of each test set); None: all.
         quick: use the quick test sets.
-        workers: local processes.
+        backend: "local" (processes on this machine) or "ray", for every column.
+        address: Ray cluster address (Ray backend); None starts a local Ray.
+        workers: local processes, or Ray chunks (None: one per cluster CPU).
         batch_size: env rows stepped together per worker.
         env_overrides: EnvConfig fields for every cell (e.g. {"max_steps": 1600}); its "people"
             is the matrix's own.
@@ -65,6 +68,8 @@ class MatrixConfig:
     maps: tuple[str, ...] = ("gdc1",)
     trials: int | None = None
     quick: bool = False
+    backend: Backend = "local"
+    address: str | None = None
     workers: int | None = 2
     batch_size: int = 64
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -94,6 +99,8 @@ class MatrixConfig:
             maps=self.maps,
             trials=self.trials,
             quick=self.quick,
+            backend=self.backend,
+            address=self.address,
             workers=self.workers,
             batch_size=self.batch_size,
             env_overrides={**dict(self.env_overrides), "people": {"models": humans, "counterfactual": True}},

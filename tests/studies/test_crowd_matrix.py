@@ -1,6 +1,7 @@
 """The policy x crowd-model matrix (`socialzoo benchmark --humans A,B,...`)."""
 
 import json
+import socket
 
 import pytest
 
@@ -86,3 +87,17 @@ def test_cli_benchmark_with_several_humans_writes_the_matrix(rooms_map_path, tmp
     assert (out / "matrix.csv").is_file() and (out / "0-sf").is_dir() and (out / "1-groups").is_dir()
     assert socialzoo_main([*argv, "--humans", "sf,orca@0.5", "--out", str(out)]) == 2
     assert "the shares sum to 0.5" in capsys.readouterr().err
+
+
+def test_cli_matrix_runs_on_the_backend_it_is_given(rooms_map_path, tmp_path, capsys):
+    # The matrix dropped --backend and --address: a Ray cluster nothing answers at ran every column locally.
+    pytest.importorskip("ray")
+    with socket.socket() as s:  # a local port that nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    argv = ["benchmark", "--policies", "goalone", "--maps", str(rooms_map_path), "--trials", "1", "--humans"]
+    argv += ["sf,orca", "--backend", "ray", "--address", f"127.0.0.1:{port}", "--out", str(tmp_path / "m")]
+    assert socialzoo_main([*argv, "--no-figures", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"socialzoo benchmark: error: cannot reach the Ray cluster at '127.0.0.1:{port}'")
+    assert config(backend="ray", workers=None).benchmark("sf").backend == "ray"
