@@ -604,11 +604,14 @@ _RAY_PORTS = {"ray": 10001, "": 6379}
 
 def check_ray_address(address: str | None, timeout: float = RAY_CONNECT_TIMEOUT) -> None:
     """Check that a Ray cluster's HOST:PORT or ray://HOST[:PORT] accepts a TCP connection within
-    `timeout` seconds, before ray.init waits minutes on an address nothing answers at. None, "auto",
-    "local" and other schemes (resolved by Ray itself) are left to ray.init.
+    `timeout` seconds and answers it as Ray's servers do (gRPC: an HTTP/2 SETTINGS frame), before
+    ray.init waits minutes on an address nothing answers at, or where another server listens (the
+    dashboard's 8265). None, "auto", "local" and other schemes (resolved by Ray itself) are left to
+    ray.init; with RAY_USE_TLS set, only the connection is checked.
 
     Raises:
-        RayAddressError: the host is unknown, or refuses or does not answer a connection on the port.
+        RayAddressError: the host is unknown, or refuses or does not answer a connection on the port,
+            or something other than a gRPC server answers.
     """
     import socket
     from urllib.parse import urlsplit
@@ -628,12 +631,24 @@ def check_ray_address(address: str | None, timeout: float = RAY_CONNECT_TIMEOUT)
     if not host:
         raise RayAddressError(f"Ray address {address!r} names no host (HOST:PORT or ray://HOST:PORT)")
     try:
-        socket.create_connection((host, port), timeout=timeout).close()
+        with socket.create_connection((host, port), timeout=timeout) as connection:
+            if os.environ.get("RAY_USE_TLS", "0").lower() in ("1", "true"):
+                return  # the handshake is TLS's
+            # HTTP/2's client preface; a gRPC server's own begins with a SETTINGS frame (type 4).
+            connection.sendall(b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0]))
+            reply = b""
+            while len(reply) < 9 and (more := connection.recv(9 - len(reply))):
+                reply += more
     except OSError as err:
         reason = f"no answer within {timeout:g} s" if isinstance(err, TimeoutError) else err.strerror or err
         raise RayAddressError(
             f"cannot reach the Ray cluster at {address!r} ({host}:{port}: {reason})"
         ) from None
+    if reply[3:4] != b"\x04":
+        raise RayAddressError(
+            f"cannot reach the Ray cluster at {address!r} ({host}:{port} answers, but not as Ray's gRPC "
+            "servers do: a head's GCS is at HOST:6379, its client server at ray://HOST:10001)"
+        )
 
 
 def start_local_ray(num_cpus: int) -> None:

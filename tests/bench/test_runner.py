@@ -179,6 +179,42 @@ def test_a_ray_address_nothing_answers_at_fails_in_seconds_naming_it(test_set, c
     assert len(err.splitlines()) == 1
 
 
+def serve_once(reply):
+    """A local port whose one connection gets `reply` once the client has spoken (None: silence)."""
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+
+    def answer():
+        connection, _ = server.accept()
+        with connection, server:
+            connection.recv(64)
+            if reply is not None:
+                connection.sendall(reply)
+            time.sleep(1.0)
+
+    threading.Thread(target=answer, daemon=True).start()
+    return server.getsockname()[1]
+
+
+def test_a_ray_address_where_another_server_answers_fails_naming_it(monkeypatch):
+    # ray.init waited minutes (over 4, then killed) on a port that accepts but is no Ray server,
+    # e.g. the dashboard's 8265 given as the cluster's address.
+    monkeypatch.delenv("RAY_USE_TLS", raising=False)
+    port = serve_once(b"HTTP/1.0 400 Bad request\r\n\r\n")
+    start = time.monotonic()
+    with pytest.raises(RayAddressError, match=rf"'127.0.0.1:{port}' \(127.0.0.1:{port} answers, but not as"):
+        check_ray_address(f"127.0.0.1:{port}")
+    assert time.monotonic() - start < 5.0
+    with pytest.raises(RayAddressError, match=r"no answer within 0\.5 s"):
+        check_ray_address(f"ray://127.0.0.1:{serve_once(None)}", timeout=0.5)
+    check_ray_address(f"127.0.0.1:{serve_once(bytes([0, 0, 24, 4, 0, 0, 0, 0, 0]))}")  # gRPC's SETTINGS
+    monkeypatch.setenv("RAY_USE_TLS", "1")  # a TLS handshake is not HTTP/2's: only the connection counts
+    check_ray_address(f"127.0.0.1:{serve_once(None)}")
+
+
 def test_a_chunk_run_again_delivers_every_trial(test_set):
     """Ray reruns the chunk of a worker that died from its start: its first trials arrive twice, and
     the drain waits for the trials still missing instead of stopping at as many results as trials."""
