@@ -189,6 +189,12 @@ def test_heading_match_preference():
     assert pick([(1.0, 0.0), (1.5, 0.0), (2.0, 0.0), (2.5, 0.0)], vel=[against] * 3 + [toward_target]) == 0
     # The third beats the first, and beats the second by the threshold too.
     assert pick([(1.0, 0.0), (1.5, 0.0), (2.0, 0.0)], vel=[against, against, toward_target]) == 2
+    # The reference's order: where only the third beats the first, the second is taken unless the
+    # third beats it by the threshold too (mismatches 100, 89, 65 degrees: the second; docs/benchmark.md).
+    off = [(math.cos(math.radians(d)), math.sin(math.radians(d))) for d in (100, 89, 65)]
+    assert pick([(1.0, 0.0), (1.5, 0.0), (2.0, 0.0)], vel=off) == 1
+    off = [(math.cos(math.radians(d)), math.sin(math.radians(d))) for d in (100, 99, 65)]
+    assert pick([(1.0, 0.0), (1.5, 0.0), (2.0, 0.0)], vel=off) == 2
     # A standing human has no heading: a moving one going the right way is preferred.
     assert pick([(1.0, 0.0), (2.0, 0.0)], vel=[(0.0, 0.0), toward_target]) == 1
     assert pick([(1.0, 0.0), (2.0, 0.0)], vel=[(0.0, 0.0), (0.0, 0.0)]) == 0
