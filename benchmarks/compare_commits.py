@@ -74,6 +74,8 @@ def run(folder: Path, script: Path, args: list[str], cache: Path, metric: str, c
             sys.exit(
                 f"{script.name} prints no {metric!r} (its fields: {', '.join(fig)}): choose one with --metric"
             )
+        if fig[metric] is None:  # not measured in this run (harness_throughput's body when N <= B)
+            continue
         key = " ".join(
             str(v) for k, v in fig.items() if isinstance(v, str) or (k in KEY_NUMBERS and isinstance(v, int))
         )

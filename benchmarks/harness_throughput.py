@@ -20,9 +20,20 @@ import time
 from socialzoo.bench.runner import BatchedRunner, Trial, TrialResult, make_spec
 
 
+def rate(count: int, seconds: float) -> float | None:
+    """`count` per second, or None (JSON's null) for a part that took no time: with N <= B there is
+    no body, and NaN is not JSON."""
+    return count / seconds if seconds > 0 else None
+
+
+def per_s(value: float | int | str | None, digits: int) -> str:
+    """A rate to print, "-" where there is none."""
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
 def measure(
     map_name: str, policies: list[str], trials: int, batch: int, compact: bool = True
-) -> dict[str, float | int | str]:
+) -> dict[str, float | int | str | None]:
     """Run `trials` scenarios of `<map>-quick` per policy once; return the figures."""
     test_set = f"{map_name}-quick"
     spec = make_spec(policies, [test_set], batch_size=batch)
@@ -50,21 +61,21 @@ def measure(
         tail_start, tail_start_cpu, body_trials = when, when_cpu, count
     body_s, tail_s = tail_start - start, end - tail_start
     body_cpu, tail_cpu = tail_start_cpu - start_cpu, end_cpu - tail_start_cpu
-    figures: dict[str, float | int | str] = {
+    figures: dict[str, float | int | str | None] = {
         "name": f"BatchedRunner {test_set} {'+'.join(policies)}{'' if compact else ' (no compaction)'}",
         "batch": b,
         "trials": n,
         "seconds": end - start,
-        "trials_per_s": n / (end - start),
+        "trials_per_s": rate(n, end - start),
         "body_trials": body_trials,
-        "body_trials_per_s": body_trials / body_s if body_s > 0 else float("nan"),
+        "body_trials_per_s": rate(body_trials, body_s),
         "tail_trials": n - body_trials,
         "tail_seconds": tail_s,
-        "tail_trials_per_s": (n - body_trials) / tail_s if tail_s > 0 else float("nan"),
+        "tail_trials_per_s": rate(n - body_trials, tail_s),
         # Per CPU second of this process: steadier than wall time on a shared machine.
         "cpu_seconds": end_cpu - start_cpu,
-        "body_trials_per_cpu_s": body_trials / body_cpu if body_cpu > 0 else float("nan"),
-        "tail_trials_per_cpu_s": (n - body_trials) / tail_cpu if tail_cpu > 0 else float("nan"),
+        "body_trials_per_cpu_s": rate(body_trials, body_cpu),
+        "tail_trials_per_cpu_s": rate(n - body_trials, tail_cpu),
     }
     stats = getattr(runner, "stats", None)  # row counts, where the runner keeps them
     if stats is not None:
@@ -89,17 +100,17 @@ def main() -> None:
     args = p.parse_args()
     fig = measure(args.map, args.policies.split(","), args.trials, args.batch_size, not args.no_compact)
     if args.json:
-        print(json.dumps(fig))
+        print(json.dumps(fig, allow_nan=False))
     else:
         print(
             f"{fig['name']}  B={fig['batch']}  {fig['trials']} trials in {fig['seconds']:.1f} s: "
-            f"{fig['trials_per_s']:.1f} trials/s overall, {fig['body_trials_per_s']:.1f} in the body "
-            f"({fig['body_trials']} trials), {fig['tail_trials_per_s']:.1f} in the tail "
+            f"{per_s(fig['trials_per_s'], 1)} trials/s overall, {per_s(fig['body_trials_per_s'], 1)} in the body "
+            f"({fig['body_trials']} trials), {per_s(fig['tail_trials_per_s'], 1)} in the tail "
             f"({fig['tail_trials']} trials, {fig['tail_seconds']:.1f} s)"
         )
         print(
-            f"  per CPU second: {fig['body_trials_per_cpu_s']:.2f} trials in the body, "
-            f"{fig['tail_trials_per_cpu_s']:.2f} in the tail ({fig['cpu_seconds']:.1f} CPU s in all)"
+            f"  per CPU second: {per_s(fig['body_trials_per_cpu_s'], 2)} trials in the body, "
+            f"{per_s(fig['tail_trials_per_cpu_s'], 2)} in the tail ({fig['cpu_seconds']:.1f} CPU s in all)"
         )
         if "tail_row_steps" in fig:
             print(

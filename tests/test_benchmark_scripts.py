@@ -1,0 +1,29 @@
+"""The scripts of benchmarks/ at their smallest sizes: their --json output is JSON (figures are never
+asserted here; speed is read from the scripts' own output)."""
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def script(name: str):
+    """The module of benchmarks/NAME.py (its folder on the path, for `_common`)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+        spec.loader.exec_module(module)  # type: ignore[union-attr]
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    return module
+
+
+def test_harness_figures_are_json_when_every_trial_is_in_the_tail():
+    # With N <= B every trial has a row from the start: no body, whose rates were NaN, not JSON.
+    figures = script("harness_throughput").measure("gdc1", ["goalone"], trials=1, batch=2)
+    assert figures["body_trials"] == 0
+    assert figures["body_trials_per_s"] is None and figures["body_trials_per_cpu_s"] is None
+    assert json.loads(json.dumps(figures, allow_nan=False))["tail_trials"] == 1
