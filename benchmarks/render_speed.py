@@ -3,14 +3,16 @@
 The states come from a real rollout (humans walking their routes, the robot pure-pursuing its
 global path); each frame carries the full overlay (path, carrot, goal, 180-ray laser scan, action
 label, highlighted human). Prints frames/s; --png DIR saves the last frame of each view, --gif PATH
-also writes and times an animation.
+also writes and times an animation; --json prints one JSON object per view (name, width, height,
+antialias, frames, frames_per_s, and with --gif the follow view's gif_frames, gif_s, gif_mib).
 
-Run: python benchmarks/render_speed.py [--steps 600] [--antialias 2] [--png DIR] [--gif PATH]
+Run: python benchmarks/render_speed.py [--steps 600] [--antialias 2] [--png DIR] [--gif PATH] [--json]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from pathlib import Path
 
@@ -84,6 +86,7 @@ def main() -> None:
     p.add_argument("--antialias", type=int, default=2)
     p.add_argument("--png", type=Path, default=None, help="directory for the last frame of each view")
     p.add_argument("--gif", type=Path, default=None, help="also write a GIF of the follow view here")
+    p.add_argument("--json", action="store_true", help="print one JSON object per view")
     args = p.parse_args()
     m, states, overlays = rollout(args.steps, args.map)
     for view in ("follow", "map"):
@@ -93,7 +96,11 @@ def main() -> None:
         start = time.perf_counter()
         frames = [renderer.render(s, overlay=o) for s, o in zip(states, overlays, strict=True)]
         elapsed = time.perf_counter() - start
-        print(f"{view:<7} 640x480 antialias={args.antialias}: {len(frames) / elapsed:8.1f} frames/s")
+        name = f"{view} 640x480 antialias={args.antialias}"
+        figure = {"name": name, "width": 640, "height": 480, "antialias": args.antialias}
+        figure.update(frames=len(frames), frames_per_s=len(frames) / elapsed)
+        if not args.json:
+            print(f"{view:<7} 640x480 antialias={args.antialias}: {figure['frames_per_s']:8.1f} frames/s")
         if args.png is not None:
             from PIL import Image
 
@@ -105,9 +112,11 @@ def main() -> None:
             start = time.perf_counter()
             write_animation(frames, args.gif, fps=20, stride=2)
             elapsed = time.perf_counter() - start
-            print(
-                f"GIF of {len(frames[::2])} frames: {elapsed:.1f} s, {args.gif.stat().st_size / 2**20:.1f} MiB"
-            )
+            figure.update(gif_frames=len(frames[::2]), gif_s=elapsed, gif_mib=args.gif.stat().st_size / 2**20)
+            if not args.json:
+                print(f"GIF of {figure['gif_frames']} frames: {elapsed:.1f} s, {figure['gif_mib']:.1f} MiB")
+        if args.json:
+            print(json.dumps(figure), flush=True)
 
 
 if __name__ == "__main__":

@@ -27,3 +27,14 @@ def test_harness_figures_are_json_when_every_trial_is_in_the_tail():
     assert figures["body_trials"] == 0
     assert figures["body_trials_per_s"] is None and figures["body_trials_per_cpu_s"] is None
     assert json.loads(json.dumps(figures, allow_nan=False))["tail_trials"] == 1
+
+
+def test_render_speed_prints_json_lines(monkeypatch, capsys, tmp_path):
+    # DEVELOPERS.md and compare_commits.py count on --json in every script; render_speed had none.
+    argv = ["render_speed.py", "--steps", "2", "--map", "hallway", "--json", "--gif", str(tmp_path / "a.gif")]
+    monkeypatch.setattr(sys, "argv", argv)
+    script("render_speed").main()
+    figures = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [f["name"] for f in figures] == ["follow 640x480 antialias=2", "map 640x480 antialias=2"]
+    assert all(f["frames"] == 2 and f["frames_per_s"] > 0 for f in figures)
+    assert figures[0]["gif_frames"] == 1
