@@ -6,8 +6,11 @@ and 253 with 20 on the 2-core machine (the issue's measurement); the goal is at 
 ORCA people at B = 256 (>= 50,000 env-steps/s) and 20x with 20 (>= 5,000).
 
 With 20 people in CrowdNav's own arena (a circle of radius 4 m) a case's people can jam before all
-are placed, and its draw never ends (socialzoo.scenarios.crowd_cases.crowd_case_arrays): a long run
-measures 20 people in CrowdNav++'s arena, `--variant 20 --cases 256x20`.
+are placed (3 of the first 3,000 seeds): CrowdNav's draw would never end, socialzoo's refuses the case
+after 2^24 draws with a ValueError (socialzoo.scenarios.crowd_cases.crowd_case_arrays), which ends
+the run. The default 256x20 case meets one after some 10^5 env-steps of autoreset (on the 2-core
+machine --seconds 3 passes, --seconds 25 does not): a long run measures 20 people in CrowdNav++'s
+arena, `--variant 20 --cases 256x20`.
 
 Run: python benchmarks/crowdnav_throughput.py [--seconds 3] [--json] [--variant SocialForce]
 [--cases 1x5,256x5,1x20,256x20] (B x people per case)
