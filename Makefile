@@ -44,11 +44,13 @@ docs: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/world_throughput.py
 
-# Retrain every shipped learned policy with the recorded commands and seeds (needed after an env
-# version bump: policy files trained on another version of the benchmark env are refused). Training
-# scenarios only: PPO/DQN train on the gdc1 training stream, BC/GAIL/PIPS on Ref demonstrations recorded
-# on it. The shipped DQN normalises observations (chosen on validation scenarios; the paper's did not).
-# About 12 minutes on 2 idle cores (PPO 94 s, DQN 293 s, demos ~3 min, BC 47 s, GAIL 98 s, PIPS 17 s).
+# Retrain every shipped action-selection policy with the recorded commands and seeds (needed after an
+# env version bump: policy files trained on another version of the benchmark env are refused). Training
+# scenarios only: PPO/DQN train on the gdc1 training stream, BC/GAIL/DAgger/PIPS on Ref demonstrations
+# recorded on it. The shipped DQN normalises observations (chosen on validation scenarios; the paper's
+# did not). The other shipped files (crowdnav, suite_crowdnav, humans) are not retrained here: each
+# NAME.run.json records its own command. About 17 minutes on 2 idle cores (PPO 94 s, DQN 293 s,
+# demos ~3 min, BC 47 s, GAIL 98 s, DAgger 4.5 min, PIPS 17 s).
 SHIP := runs/shipped
 policies: $(STAMP)
 	$(VENV)/bin/socialzoo train ppo --out $(SHIP)/ppo --seed 0 --no-progress
