@@ -13,13 +13,13 @@ from dataclasses import asdict, dataclass
 
 @dataclass
 class Figure:
-    """One measured configuration."""
+    """One measured configuration (peak_mem_mib None: not measured)."""
 
     name: str
     batch: int
     env_steps_per_s: float
     agent_steps_per_s: float
-    peak_mem_mib: float
+    peak_mem_mib: float | None
 
 
 def parser(description: str) -> argparse.ArgumentParser:
@@ -58,8 +58,9 @@ def report(fig: Figure, as_json: bool) -> None:
     if as_json:
         print(json.dumps(asdict(fig)))
     else:
+        peak = "" if fig.peak_mem_mib is None else f"  peak {fig.peak_mem_mib:8.1f} MiB"
         print(
             f"{fig.name:<36} B={fig.batch:<5d} {fig.env_steps_per_s:>12,.0f} env-steps/s "
-            f"{fig.agent_steps_per_s:>14,.0f} agent-steps/s  peak {fig.peak_mem_mib:8.1f} MiB"
+            f"{fig.agent_steps_per_s:>14,.0f} agent-steps/s{peak}"
         )
     sys.stdout.flush()

@@ -7,8 +7,9 @@ Prints env-steps/s, agent-steps/s (humans stepped per second) and the peak memor
 size; --json prints one JSON object per line (name, batch, env_steps_per_s, agent_steps_per_s,
 peak_mem_mib). --counterfactual also times whole episodes (GoAlone and the world, the env core
 with rows reset as they end) with and without the counterfactual rows (EnvConfig.people), and
-prints their ratio. Run: python benchmarks/world_throughput.py [--json] [--batches 1 64 256 1024]
-[--humans sf orca] [--counterfactual]
+prints their ratio (their peak memory is not measured: null in --json).
+Run: python benchmarks/world_throughput.py [--json] [--batches 1 64 256 1024] [--humans sf orca]
+[--counterfactual]
 """
 
 from __future__ import annotations
@@ -140,7 +141,7 @@ def main() -> None:
                         )
                 for counterfactual, rate in rates.items():
                     label = f"episodes {humans}" + (" + counterfactual" if counterfactual else "")
-                    report(Figure(label, batch, rate * batch, rate * batch * HUMANS, 0.0), args.json)
+                    report(Figure(label, batch, rate * batch, rate * batch * HUMANS, None), args.json)
                 if not args.json:
                     print(f"{'':36} counterfactual rows cost {rates[False] / rates[True]:.2f}x")
 

@@ -15,6 +15,7 @@ def script(name: str):
     try:
         spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
         module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+        sys.modules[name] = module  # dataclasses look their module up there
         spec.loader.exec_module(module)  # type: ignore[union-attr]
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
@@ -38,3 +39,14 @@ def test_render_speed_prints_json_lines(monkeypatch, capsys, tmp_path):
     assert [f["name"] for f in figures] == ["follow 640x480 antialias=2", "map 640x480 antialias=2"]
     assert all(f["frames"] == 2 and f["frames_per_s"] > 0 for f in figures)
     assert figures[0]["gif_frames"] == 1
+
+
+def test_a_peak_not_measured_is_printed_as_none_not_zero(capsys):
+    # world_throughput --counterfactual's episodes measure no peak and printed "peak 0.0 MiB".
+    common = script("_common")
+    figure = common.Figure("episodes sf", 2, 10.0, 250.0, None)
+    common.report(figure, as_json=True)
+    common.report(figure, as_json=False)
+    as_json, text = capsys.readouterr().out.splitlines()
+    assert json.loads(as_json)["peak_mem_mib"] is None
+    assert "peak" not in text and "agent-steps/s" in text
