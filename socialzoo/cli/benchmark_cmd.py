@@ -43,8 +43,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
             "scenarios of each map's test set (<map>-test: 2000 scenarios; <map>-quick: 100; any other "
             "map, e.g. an imported building's JSON, gets a seeded test set stored in DIR/test_sets/). Trials "
             "go to DIR/results.sqlite as they finish; a rerun reads stored trials and an interrupted "
-            "run resumes. Writes DIR/summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf} "
-            "and config.json."
+            "run resumes. Writes DIR/summary.csv, summary.md, success.{png,pdf}, failures.{png,pdf}, "
+            "metrics.{png,pdf} and config.json."
         ),
     )
     parser.add_argument(
@@ -99,8 +99,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="GoAlone, Ref and the shipped learned policies on gdc1-quick and ghc3-quick (100 trials each), "
-        "plus one Ref episode GIF",
+        help="GoAlone, Ref and the paper's learned policies (PPO, DQN, BC, GAIL, PIPS; shipped files) on "
+        "gdc1-quick and ghc3-quick (100 trials each), plus one Ref episode GIF",
     )
     add_task_config_argument(parser)
     parser.add_argument(
