@@ -260,7 +260,7 @@ class EnteringRoom(SuiteFamily):
     so that it reaches the door LEAVE_FIRST before the robot at GoAlone's speed (at once if the
     robot starts too close for that; 10 s after GoAlone would pass the gate if the robot never
     does). It walks straight out (see `make`) to a legal pose outside at least 4 m from the door on
-    the side away from the robot's start, and back again later. 0-2 more people stand in the room
+    the side away from the robot's start, and stays there (Script.stay). 0-2 more people stand in the room
     for good (stop at their start, never released), 1.2 m from the robot's goal and the leaver's way.
     """
 
@@ -431,8 +431,8 @@ class EnteringElevator(SuiteFamily):
     the door's edges) and walk out to the lobby's sides at t_open (the second 1-2 s later); 0-2 wait
     in the lobby 1.6-3 m to the door's sides and walk into the car's back corners 3-4 s after t_open,
     or later: so as to reach the door a second after the last one leaving is 1 m out of it (at
-    DOORWAY_PACE of their speeds). People walk back along their routes after reaching their ends (a
-    person waits only once: see socialzoo.scenarios.script).
+    DOORWAY_PACE of their speeds). Everyone stays at the end of their route (Script.stay): those
+    leaving in the lobby, those entering in the car.
     """
 
     name = "entering_elevator"
@@ -518,8 +518,7 @@ class ExitingElevator(SuiteFamily):
     (3-6 s) and open for 15-25 s; a robot that drives at it before t_open collides with it. The robot
     starts at the car's centre and goes to a legal pose in the lobby at least 3 m from the door. 1-3
     people wait 1.2-2.2 m in front of the door, 0.7-2.2 m to its sides, and walk into the back of the
-    car 2-3 s after t_open (whether or not the robot is out); they walk back out after reaching it
-    (a person waits only once: see socialzoo.scenarios.script).
+    car 2-3 s after t_open (whether or not the robot is out), and stay in it (Script.stay).
     """
 
     name = "exiting_elevator"
