@@ -22,7 +22,8 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
     `info["final_info"]["metrics"]` hold the last observation and the episode metrics of the one
     that ended (zeros in the other rows; masks "_final_obs", "_final_info", "_metrics"). Row i of
     a VectorEnv seeded with s plays the same episodes whatever the number of envs (row 0 matches a
-    single env seeded with s).
+    single env seeded with s), bit for bit except with learned people, whose network's matrix
+    product rounds by the batch's row count (to float32 rounding: docs/benchmark.md).
 
     ## Action Space
     The task's action space batched: `MultiDiscrete` or `Box((B, ...))`.
