@@ -117,7 +117,8 @@ def fetch_scenes(
 ) -> dict[str, list[Path]]:
     """Bring the files of the scenes into the cache, each checked against its pinned SHA-256.
 
-    A file already in the cache with the right checksum is kept. All-or-nothing: the files are
+    A file already in the cache with the right checksum is kept (when all are, nothing is written,
+    so a complete cache may be read-only). All-or-nothing: the files are
     gathered in a temporary folder inside the cache and moved in only when every one is right, so
     an error leaves nothing new in the cache (a cache folder made by this call is removed again).
 
@@ -143,28 +144,30 @@ def fetch_scenes(
     if source is not None and not source.is_dir():
         raise FileNotFoundError(f"--from {source}: not a folder")
     folder = data_dir() if cache is None else Path(cache)
+    result = {scene: [folder / file.name for file in SCENES[scene]] for scene in chosen}
+    needed: list[tuple[str, SceneFile]] = []
+    for scene in chosen:
+        for file in SCENES[scene]:
+            target = folder / file.name
+            if target.is_file() and sha256(target) == file.sha256:
+                if progress:
+                    logger.info("%s: %s already in %s", scene, file.name, folder)
+            else:
+                needed.append((scene, file))
+    if not needed:  # nothing written, so a complete cache may be read-only
+        return result
     made = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
-    result: dict[str, list[Path]] = {}
     try:
         with tempfile.TemporaryDirectory(prefix=".fetching-", dir=folder) as staging:
-            ready: list[tuple[Path, Path]] = []
-            for scene in chosen:
-                for file in SCENES[scene]:
-                    target = folder / file.name
-                    result.setdefault(scene, []).append(target)
-                    if target.is_file() and sha256(target) == file.sha256:
-                        if progress:
-                            logger.info("%s: %s already in %s", scene, file.name, folder)
-                        continue
-                    staged = Path(staging) / file.name
-                    if source is not None:
-                        _copy(scene, file, source, staged, progress)
-                    else:
-                        _download(scene, file, base_url or BASE_URL, staged, progress)
-                    ready.append((staged, target))
-            for staged, target in ready:
-                os.replace(staged, target)
+            for scene, file in needed:
+                staged = Path(staging) / file.name
+                if source is not None:
+                    _copy(scene, file, source, staged, progress)
+                else:
+                    _download(scene, file, base_url or BASE_URL, staged, progress)
+            for _, file in needed:
+                os.replace(Path(staging) / file.name, folder / file.name)
     except BaseException:
         if made:
             shutil.rmtree(folder, ignore_errors=True)

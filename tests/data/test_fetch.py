@@ -126,6 +126,21 @@ def test_a_missing_file_on_the_server(scenes, server, tmp_path, monkeypatch):
     assert not cache.exists()
 
 
+def test_a_complete_cache_is_only_read(scenes, server, tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    got = fetch_scenes(base_url=server, cache=cache, progress=False)
+
+    def read_only(*args, **kwargs):
+        raise OSError(30, "Read-only file system", str(cache))
+
+    # A shared cache mounted read-only: fetching what it holds already writes nothing, so succeeds.
+    monkeypatch.setattr(fetch.tempfile, "TemporaryDirectory", read_only)
+    assert fetch_scenes(base_url="http://127.0.0.1:9/", cache=cache, progress=False) == got
+    (cache / "two_b.txt").unlink()
+    with pytest.raises(OSError, match="Read-only"):
+        fetch_scenes(["two"], base_url=server, cache=cache, progress=False)
+
+
 def test_an_unknown_scene_fetches_nothing(scenes, tmp_path):
     cache = tmp_path / "cache"
     with pytest.raises(UnknownSceneError, match=r"unknown scene\(s\) 'three'; known: one, two"):
