@@ -166,8 +166,14 @@ def fetch_scenes(
                     _copy(scene, file, source, staged, progress)
                 else:
                     _download(scene, file, base_url or BASE_URL, staged, progress)
+            # pooch downloads through a temporary file of mode 0o600: give every file the mode a new
+            # file gets (a copy's), so a cache shared by a group is readable by it.
+            umask = os.umask(0o022)
+            os.umask(umask)
             for _, file in needed:
-                os.replace(Path(staging) / file.name, folder / file.name)
+                staged = Path(staging) / file.name
+                os.chmod(staged, 0o666 & ~umask)
+                os.replace(staged, folder / file.name)
     except BaseException:
         if made:
             shutil.rmtree(folder, ignore_errors=True)

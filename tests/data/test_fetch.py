@@ -5,6 +5,7 @@ and load_scene. Never touches the internet."""
 import functools
 import hashlib
 import http.server
+import os
 import threading
 
 import numpy as np
@@ -139,6 +140,20 @@ def test_a_complete_cache_is_only_read(scenes, server, tmp_path, monkeypatch):
     (cache / "two_b.txt").unlink()
     with pytest.raises(OSError, match="Read-only"):
         fetch_scenes(["two"], base_url=server, cache=cache, progress=False)
+
+
+def test_fetched_files_get_the_mode_of_a_new_file(scenes, server, tmp_path):
+    umask = os.umask(0o022)
+    try:
+        fetch_scenes(["one"], base_url=server, cache=tmp_path / "cache", progress=False)
+        fetch_scenes(
+            ["two"], source_dir=_write_tree(tmp_path / "src"), cache=tmp_path / "cache", progress=False
+        )
+    finally:
+        os.umask(umask)
+    # Not pooch's 0o600 for a download: a cache shared by a group is readable by all of it.
+    modes = {p.name: p.stat().st_mode & 0o777 for p in (tmp_path / "cache").iterdir()}
+    assert modes == {"one.txt": 0o644, "two_a.txt": 0o644, "two_b.txt": 0o644}
 
 
 def test_an_unknown_scene_fetches_nothing(scenes, tmp_path):
