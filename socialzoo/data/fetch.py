@@ -3,6 +3,7 @@ cache outside the repository, every file checked against its SHA-256, and read a
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import logging
 import os
@@ -120,7 +121,8 @@ def fetch_scenes(
     A file already in the cache with the right checksum is kept (when all are, nothing is written,
     so a complete cache may be read-only). All-or-nothing: the files are
     gathered in a temporary folder inside the cache and moved in only when every one is right, so
-    an error leaves nothing new in the cache (a cache folder made by this call is removed again).
+    an error leaves nothing new in the cache (a cache folder made by this call is removed again,
+    unless another fetch has put files in it meanwhile).
 
     Args:
         scenes: scene names (default: all of SCENES).
@@ -175,8 +177,9 @@ def fetch_scenes(
                 os.chmod(staged, 0o666 & ~umask)
                 os.replace(staged, folder / file.name)
     except BaseException:
-        if made:
-            shutil.rmtree(folder, ignore_errors=True)
+        if made:  # only when empty: another fetch into the same new folder may have moved files in
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         raise
     return result
 

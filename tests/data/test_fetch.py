@@ -156,6 +156,20 @@ def test_fetched_files_get_the_mode_of_a_new_file(scenes, server, tmp_path):
     assert modes == {"one.txt": 0o644, "two_a.txt": 0o644, "two_b.txt": 0o644}
 
 
+def test_a_failed_fetch_keeps_what_another_fetch_put_in_its_new_folder(scenes, tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+
+    def download(scene, file, base_url, staged, progress):
+        # Another fetch into the same new folder finished meanwhile; this one then fails.
+        (cache / "two_a.txt").write_text(FILES["two/test/two_a.txt"])
+        raise DownloadError(f"could not download {file.name}")
+
+    monkeypatch.setattr(fetch, "_download", download)
+    with pytest.raises(DownloadError):
+        fetch_scenes(["one"], base_url="http://127.0.0.1:9/", cache=cache, progress=False)
+    assert [p.name for p in cache.iterdir()] == ["two_a.txt"]
+
+
 def test_an_unknown_scene_fetches_nothing(scenes, tmp_path):
     cache = tmp_path / "cache"
     with pytest.raises(UnknownSceneError, match=r"unknown scene\(s\) 'three'; known: one, two"):
