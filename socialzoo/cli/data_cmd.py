@@ -73,7 +73,7 @@ def run_fetch(args: argparse.Namespace) -> int:
     """`socialzoo data fetch eth-ucy`: print the credit, fetch, say where each scene's files are."""
     from socialzoo.data.fetch import CREDIT, DownloadError, data_dir, fetch_scenes
 
-    cache = args.cache if args.cache is not None else data_dir()
+    cache = data_dir(args.cache)
     print("ETH/UCY pedestrian trajectories. Cite the recordings when you use them:")
     print(CREDIT)
     try:
@@ -100,7 +100,7 @@ def run_list(args: argparse.Namespace) -> int:
     """`socialzoo data list`: a table of the scenes in the cache."""
     from socialzoo.data.fetch import SCENES, data_dir, load_scene
 
-    cache = args.cache if args.cache is not None else data_dir()
+    cache = data_dir(args.cache)
     print(f"cache: {cache}")
     print(f"{'scene':6s}  {'fetched':7s}  {'tracks':>6s}  {'frames':>6s}  {'duration':>9s}  {'at once':>7s}")
     status = 0

@@ -73,10 +73,13 @@ class DownloadError(OSError):
     """A file that could not be downloaded (the message names the URL and the cause)."""
 
 
-def data_dir() -> Path:
-    """The cache folder: $SOCIALZOO_DATA_DIR, else platformdirs.user_cache_dir("socialzoo")/eth-ucy."""
+def data_dir(cache: str | Path | None = None) -> Path:
+    """The cache folder: `cache` when given, else $SOCIALZOO_DATA_DIR, else
+    platformdirs.user_cache_dir("socialzoo")/eth-ucy; a leading ~ is the home folder (as pooch reads it)."""
+    if cache is not None:
+        return Path(cache).expanduser()
     if os.environ.get(ENV_VAR):
-        return Path(os.environ[ENV_VAR])
+        return Path(os.environ[ENV_VAR]).expanduser()
     import platformdirs
 
     return Path(platformdirs.user_cache_dir("socialzoo")) / CACHE_NAME
@@ -142,10 +145,10 @@ def fetch_scenes(
         DownloadError: a download failed.
     """
     chosen = check_scenes(scenes)
-    source = None if source_dir is None else Path(source_dir)
+    source = None if source_dir is None else Path(source_dir).expanduser()
     if source is not None and not source.is_dir():
         raise FileNotFoundError(f"--from {source}: not a folder")
-    folder = data_dir() if cache is None else Path(cache)
+    folder = data_dir(cache)
     result = {scene: [folder / file.name for file in SCENES[scene]] for scene in chosen}
     needed: list[tuple[str, SceneFile]] = []
     for scene in chosen:
@@ -198,7 +201,7 @@ def load_scene(name: str, cache: str | Path | None = None) -> Recording:
         TrackFileError: a file cannot be read.
     """
     (scene,) = check_scenes([name])
-    folder = data_dir() if cache is None else Path(cache)
+    folder = data_dir(cache)
     recordings = []
     for file in SCENES[scene]:
         path = folder / file.name

@@ -254,3 +254,20 @@ def test_data_dir(monkeypatch, tmp_path):
     monkeypatch.delenv("SOCIALZOO_DATA_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert data_dir().parts[-2:] == ("socialzoo", "eth-ucy")
+
+
+def test_a_cache_folder_given_with_a_tilde_is_below_home(scenes, server, tmp_path, monkeypatch):
+    # `SOCIALZOO_DATA_DIR="~/data"` and `--cache=~/data` reach us unexpanded; pooch would expand
+    # the ~ while we did not, so its download landed in one folder and our check looked in another.
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", "~/mine")
+    assert data_dir() == tmp_path / "home" / "mine"
+    assert data_dir("~/other") == tmp_path / "home" / "other"
+    got = fetch_scenes(["one"], base_url=server, progress=False)
+    assert got == {"one": [tmp_path / "home" / "mine" / "one.txt"]}
+    assert load_scene("one").num_frames == 2
+    _write_tree(tmp_path / "home" / "src")
+    fetch_scenes(["two"], source_dir="~/src", cache="~/other", progress=False)
+    assert load_scene("two", cache="~/other").name == "two"
+    assert not (tmp_path / "~").exists()
