@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from concurrent.futures.process import BrokenProcessPool
@@ -146,6 +147,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(
             args.command, f"this needs {err.name}, of the {extra} extra: pip install 'socialzoo[{extra}]'"
         )
+    except BrokenPipeError:
+        # The reader of stdout left (`socialzoo data list | head -1`): not an error of the command.
+        # Nothing more can go there, and Python's flush at exit would raise again.
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError):  # stdout is no file descriptor (captured)
+            pass
+        return BROKEN_PIPE
     except (KeyboardInterrupt, BrokenProcessPool) as err:
         if args.verbose:
             raise
@@ -163,3 +172,5 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 # The exit status of a command stopped by Ctrl-C (SIGINT), as a shell reports it: 128 + 2.
 INTERRUPTED = 130
+# The exit status of a command whose output's reader left, as a shell reports SIGPIPE: 128 + 13.
+BROKEN_PIPE = 141

@@ -3,6 +3,7 @@ folder (--from): the credit printed, the table, and bad input a named error (exi
 left in the cache."""
 
 import hashlib
+import os
 
 import pytest
 
@@ -93,3 +94,16 @@ def test_a_changed_cached_file_is_reported(source, tmp_path, capsys):
     assert main(["data", "list", "--cache", str(cache)]) == 2
     out = capsys.readouterr().out
     assert "one     broken" in out and "fetch it again" in out
+
+
+def test_a_reader_that_leaves_early_ends_the_command_quietly(tmp_path):
+    # `socialzoo data list | head -1` ended in a BrokenPipeError traceback (any command's output).
+    import subprocess
+    import sys
+
+    command = [sys.executable, "-m", "socialzoo", "data", "list"]
+    env = {**os.environ, "SOCIALZOO_DATA_DIR": str(tmp_path)}
+    listing = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    listing.stdout.close()  # the reader leaves before the first line
+    _, err = listing.communicate(timeout=120)
+    assert b"Traceback" not in err and listing.returncode in (0, 141)
