@@ -1,12 +1,26 @@
-"""Shared test fixtures."""
+"""Shared test fixtures, and the reference numerics (tools/reference_numerics.py) that the tests'
+recorded digests hold under, set before anything imports numpy."""
 
 import importlib.util
 import json
 from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
-import pytest
+
+def _load_tool(name: str):
+    """The module of tools/<name>.py (the tools folder is not a package)."""
+    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# Before numpy's first import (here or in a process a test starts, which inherits the settings).
+NUMERICS_PINNED = _load_tool("reference_numerics").use_reference_numerics()
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 # The social_gym 1.0 reference data (MIT, see its LICENSE), kept in the repository.
 REFERENCE_DIR = Path(__file__).resolve().parents[1] / "maps" / "reference" / "socialgym"
@@ -94,15 +108,6 @@ def small_demos(tmp_path_factory):
         env_overrides={"max_steps": DEMO_MAX_STEPS},
     )
     return record_demonstrations(path, config)
-
-
-def _load_tool(name: str):
-    """The module of tools/<name>.py (the tools folder is not a package)."""
-    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="session")

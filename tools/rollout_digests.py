@@ -7,7 +7,9 @@ keeps each id's rollouts bit for bit.
 With --recorded eth,univ (the ETH/UCY cache of `socialzoo data fetch eth-ucy`), it adds the CrowdNav
 task's recorded scenes, replayed and hybrid (ORCA and social force), 16 rows for 300 steps each:
 enough for episodes to end and hybrid people to react. The tool runs against another checkout's
-package with PYTHONPATH=that/checkout.
+package with PYTHONPATH=that/checkout. It runs under the reference numerics
+(tools/reference_numerics.py: numpy's kernels no wider than AVX2), so that its digests compare
+across machines.
 
 A rollout is reset with a fixed seed and stepped with actions drawn from a fixed generator of its
 own (never the spaces' samplers); an ended episode is reset without a seed (the stream goes on).
@@ -22,6 +24,7 @@ import argparse
 import hashlib
 import json
 import math
+import os
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -344,4 +347,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    # The digests are compared across machines: numpy's kernels no wider than AVX2 (see
+    # tools/reference_numerics.py), set before numpy loads, in a fresh process where needed.
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from reference_numerics import reference_settings
+
+    missing = {k: v for k, v in reference_settings().items() if k not in os.environ}
+    if missing:
+        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **missing})
     sys.exit(main())

@@ -4,7 +4,9 @@ The digests (tests/env/golden_rollouts.json) come from tools/rollout_digests.py,
 task-interface refactor (commit 87ad9b0); a change that moves a seeded rollout on purpose bumps the
 ids' version and records the digests again (`python tools/rollout_digests.py --out
 tests/env/golden_rollouts.json`). Each case keeps the digests of its observations, rewards, end
-flags and infos apart, so a failure says which part moved. The one adapter per ecosystem changed
+flags and infos apart, so a failure says which part moved. They hold under the reference numerics
+(tools/reference_numerics.py: numpy's kernels no wider than AVX2, which tests/conftest.py sets),
+on any x86-64 machine. The one adapter per ecosystem changed
 infos only, and their digests were recorded again then (observations, rewards and flags of every
 case unchanged): CrowdNav's env, VectorEnv and ParallelEnv report the task's per-step "closest",
 "force", "blame", "human_collisions" and "wall_collision" (the viewer's charts), its
@@ -45,6 +47,10 @@ CHECKED = [
 
 @pytest.mark.parametrize("case", CHECKED)
 def test_seeded_rollout_is_bit_for_bit_the_recorded_one(case: str, load_tool, tmp_path, monkeypatch) -> None:
+    assert load_tool("reference_numerics").numpy_follows_reference(), (
+        "numpy runs with kernels wider than the digests' reference (tools/reference_numerics.py): "
+        "it was imported before tests/conftest.py could set NPY_DISABLE_CPU_FEATURES"
+    )
     monkeypatch.chdir(tmp_path)  # the tool runs from any folder (the learned case reads a shipped file)
     digests = load_tool("rollout_digests").record([case])[case]
     changed = {
