@@ -162,6 +162,8 @@ def step_world(
         state.human_direction,
         hcfg.waypoint_radius,
         target,
+        # The replay places its replayed people and points a reacting one at its route itself.
+        state.human_model == REPLAY if sparse_people else None,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot

@@ -15,6 +15,7 @@ def advance_waypoints(
     direction: np.ndarray,
     radius: float,
     target: np.ndarray | None = None,
+    keep: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next waypoint index and direction for every human.
 
@@ -33,6 +34,9 @@ def advance_waypoints(
             for its models already: read instead of the route, whose second pass over a long
             recorded route array misses the cache again. A step whose models read no target
             (replayed people only) gathers none and leaves this None.
+        keep: (B, H) bool, people whose waypoint and direction stay as they are, or None (nobody):
+            a recorded scene's replayed people, whom the replay places on their tracks and points
+            at their route itself when they start to react. Their routes are not read.
 
     Returns:
         (waypoint, direction), new arrays of the same shapes.
@@ -42,19 +46,32 @@ def advance_waypoints(
     new_direction = np.empty(np.shape(direction), dtype=np.asarray(direction).dtype)
     # The current waypoints as points[b, h, w if at_waypoint else 0]: one kernel either way.
     points, at_waypoint = (route, True) if target is None else (target[:, :, None], False)
+    kept = _NOBODY if keep is None else keep
     _advance(
-        pos, points, at_waypoint, route_len, waypoint, direction, radius * radius, new_waypoint, new_direction
-    )
+        pos, points, at_waypoint, route_len, waypoint, direction, radius * radius, kept, keep is not None,
+        new_waypoint, new_direction,
+    )  # fmt: skip
     return new_waypoint, new_direction
 
 
+# keep=None's stand-in: one array type for the kernel whether or not anyone is kept.
+_NOBODY = np.zeros((1, 1), dtype=bool)
+
+
 @kernel
-def _advance(pos, points, at_waypoint, route_len, waypoint, direction, radius2, new_waypoint, new_direction):
+def _advance(
+    pos, points, at_waypoint, route_len, waypoint, direction, radius2, keep, keeping, new_waypoint, new_direction
+):  # fmt: skip
     """`advance_waypoints` in one pass over (B, H); the current waypoint is points[b, h, k], k the
-    waypoint index if at_waypoint (points the route), else 0 (points the gathered targets)."""
+    waypoint index if at_waypoint (points the route), else 0 (points the gathered targets); with
+    `keeping`, the people `keep` marks keep theirs (their points are not read)."""
     for b in range(waypoint.shape[0]):
         for h in range(waypoint.shape[1]):
             d, w = direction[b, h], waypoint[b, h]
+            if keeping and keep[b, h]:
+                new_direction[b, h] = d
+                new_waypoint[b, h] = w
+                continue
             k = w if at_waypoint else 0
             dx, dy = pos[b, h, 0] - points[b, h, k, 0], pos[b, h, 1] - points[b, h, k, 1]
             reached = dx * dx + dy * dy < radius2

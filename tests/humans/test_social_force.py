@@ -156,6 +156,24 @@ def test_waypoints_advance_alike_from_the_route_or_the_gathered_targets():
     assert (from_route[0] != waypoint).any() and (from_route[1] != direction).any()
 
 
+def test_kept_people_keep_their_waypoint_and_the_others_advance_as_before():
+    rng = np.random.default_rng(1)
+    route = rng.uniform(-2.0, 2.0, (3, 6, 4, 2))
+    route_len = rng.integers(1, 5, (3, 6))
+    waypoint = rng.integers(0, route_len)
+    direction = rng.choice([-1, 1], (3, 6))
+    pos = np.take_along_axis(route, waypoint[:, :, None, None], axis=2)[:, :, 0]  # all on their waypoint
+    keep = rng.random((3, 6)) < 0.5
+    # A kept person's route is never read: NaN there changes nothing.
+    route_read = np.where(keep[:, :, None, None], np.nan, route)
+    moved = advance_waypoints(pos, route, route_len, waypoint, direction, 0.5)
+    kept = advance_waypoints(pos, route_read, route_len, waypoint, direction, 0.5, keep=keep)
+    for got, all_moved, before in zip(kept, moved, (waypoint, direction), strict=True):
+        np.testing.assert_array_equal(got[keep], before[keep])
+        np.testing.assert_array_equal(got[~keep], all_moved[~keep])
+    assert (moved[0][keep] != waypoint[keep]).any()  # those kept would have moved on
+
+
 def _learned_beside_a_person_and_a_wall():
     """(human_acceleration's first arguments, desired velocities, learned mask): a learned person
     (slot 0) beside a scripted one and a wall."""
