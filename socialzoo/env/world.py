@@ -117,10 +117,10 @@ def step_world(
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
     people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
-    anyone_moved = True
+    anyone_moved, still = True, None
     if sparse_people:
         moved = state.human_mask & (state.human_model != REPLAY)
-        anyone_moved = bool(moved.any())
+        anyone_moved, still = bool(moved.any()), ~moved
         people_step = partial(step_people_packed, moved=moved)
     target = state.human_target if anyone_moved else None
     if target is not None:
@@ -162,8 +162,9 @@ def step_world(
         state.human_direction,
         hcfg.waypoint_radius,
         target,
-        # The replay places its replayed people and points a reacting one at its route itself.
-        state.human_model == REPLAY if sparse_people else None,
+        # Only the people a model moved: the replay places its replayed people, points one who
+        # starts to react or enters a slot at its route itself, and absent slots stay absent.
+        still,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot

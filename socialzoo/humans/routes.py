@@ -35,8 +35,9 @@ def advance_waypoints(
             recorded route array misses the cache again. A step whose models read no target
             (replayed people only) gathers none and leaves this None.
         keep: (B, H) bool, people whose waypoint and direction stay as they are, or None (nobody):
-            a recorded scene's replayed people, whom the replay places on their tracks and points
-            at their route itself when they start to react. Their routes are not read.
+            on a recorded scene all but those a model moved (the replay places its replayed people
+            on their tracks and points one at its route itself when it starts to react or enters
+            a slot). Their routes are not read.
 
     Returns:
         (waypoint, direction), new arrays of the same shapes.
