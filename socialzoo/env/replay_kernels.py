@@ -78,8 +78,10 @@ def settle_rows(
 
     - The frame: a row is on frame i0 = floor(t / frame_dt + on_frame) (past its recording's end too; a
       time within on_frame frames of a frame is on it), w of the way to the next (0 on a frame).
-    - Who is in a slot: its people who entered at or before i0, counted, minus one (-1: nobody yet); a
-      slot beyond the recording's people has nobody in it, ever: absent.
+    - Who is in a slot: the last of its people who entered at or before i0 (-1: nobody yet), found
+      from the one in it before (a slot's people enter in order; a row's time only goes on, and
+      begin_episodes empties the slots); a slot beyond the recording's people has nobody in it, ever:
+      absent.
     - Entering: the one the new person follows is folded into the measures (a reacting person leaving its
       slot adds one, its time lost (to its exit, or to t if it had not left, plus the straight way left
       from there at its speed) and its extra distance (with that way left) to the row's `folded`); the new
@@ -103,13 +105,12 @@ def settle_rows(
         n = people[r]
         for s in range(n):
             g = slot_at[r] + s
-            # Who is in the slot now.
-            count = 0
-            for k in range(occupants_at[g], occupants_at[g] + occupants[g]):
-                if entry[k] <= i0:
-                    count += 1
-            now = count - 1
-            new = count > 0 and now != occupant[r, s]
+            # Who is in the slot now: its people enter in order and a row's time only goes on, so
+            # from the one in it before (-1 at the episode's start) to the last entered by i0.
+            now = occupant[r, s]
+            while now + 1 < occupants[g] and entry[occupants_at[g] + now + 1] <= i0:
+                now += 1
+            new = now >= 0 and now != occupant[r, s]
             # Entering.
             if new:
                 if reacted_at[r, s] == reacted_at[r, s]:  # not NaN: it reacted
