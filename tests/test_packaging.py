@@ -1,54 +1,102 @@
-"""Packaging: every subpackage is listed in pyproject.toml and a built wheel carries the maps, the
-episode viewer's files and the shipped policies."""
+"""Packaging: every folder of the package is listed in pyproject.toml and a wheel carries every file
+of it: the modules, the maps and their reference data, the episode viewer's files, the shipped
+policies, the scenario cards and the JSON Schemas."""
 
 import importlib.metadata
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tarfile
+import warnings
 import zipfile
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 import pytest
 import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
+# Where each source folder of the package lies in an install (pyproject.toml's package-dir).
+INSTALLED_AS = {"socialzoo": "socialzoo", "maps": "socialzoo/_maps"}
 
 
-def test_every_subpackage_is_listed():
+def package_files() -> dict[str, str]:
+    """The committed files of the package, by the name an install gives them:
+    {"socialzoo/_maps/gdc1.json": "maps/gdc1.json", ...}; what `python -m build` reads from a clean
+    checkout."""
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("needs the git checkout (git ls-files)")
+    listed = subprocess.run(
+        ["git", "ls-files", "-z", *INSTALLED_AS], check=True, capture_output=True, text=True, cwd=ROOT
+    ).stdout
+    files = {}
+    for name in filter(None, listed.split("\0")):
+        top, *rest = PurePosixPath(name).parts
+        if (ROOT / name).is_file():  # not deleted in the working tree
+            files["/".join([INSTALLED_AS[top], *rest])] = name
+    return files
+
+
+def test_every_folder_of_the_package_is_listed():
+    """A folder of data alone (agents/shipped, scenarios/cards, ...) is a package to setuptools too:
+    unlisted, a build warned that it was "absent from the `packages` configuration"."""
     listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = {
-        ".".join(p.parent.relative_to(ROOT).parts)
-        for p in (ROOT / "socialzoo").rglob("__init__.py")
-        if "__pycache__" not in p.parts
-    }
+    found = {".".join(PurePosixPath(name).parent.parts) for name in package_files()}
     assert found - listed == set(), f"add these to [tool.setuptools] packages: {sorted(found - listed)}"
     assert "socialzoo._maps" in listed
 
 
-def test_wheel_ships_the_maps(tmp_path):
-    """A non-editable install gets the maps inside the package (socialzoo/_maps/*.json): the wheel
-    built from the sdist, as `python -m build` makes it; the sdist holds no tests."""
-    build_sdist = "import sys; from setuptools import build_meta; build_meta.build_sdist(sys.argv[1])"
-    subprocess.run(
-        [sys.executable, "-c", build_sdist, str(tmp_path)], check=True, capture_output=True, cwd=ROOT
-    )
+def test_a_wheel_would_hold_every_file_of_the_package(tmp_path, monkeypatch):
+    """setuptools' own plan of the wheel's files (build_py over the egg_info file list, which is what
+    `python -m build` does, without building; about a second) holds every committed file under
+    socialzoo/ and maps/, and the plan is made without setuptools' warnings. The social_gym reference
+    data under maps/reference/ was left out, so `socialzoo map drive` on an install lacked two
+    of its buildings."""
+    from setuptools.config.pyprojecttoml import apply_configuration
+    from setuptools.dist import Distribution
+
+    monkeypatch.chdir(ROOT)
+    dist = apply_configuration(Distribution(), "pyproject.toml")
+    dist.script_name = "setup.py"  # as setuptools.build_meta runs it (sdist's defaults look for it)
+    dist.get_command_obj("egg_info").egg_base = str(tmp_path)  # its files, not in the checkout
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        build_py = dist.get_command_obj("build_py")
+        build_py.ensure_finalized()
+        planned = build_py.get_output_mapping()  # {build_lib/socialzoo/...: source}
+    held = {Path(dest).relative_to(build_py.build_lib).as_posix() for dest in planned}
+    missing = set(package_files()) - held
+    assert missing == set(), f"not in the wheel (pyproject.toml's package-data): {sorted(missing)}"
+    said = [str(w.message).splitlines()[0] for w in caught if "setuptools" in w.category.__module__]
+    assert said == []
+
+
+def test_the_sdist_and_its_wheel_hold_every_file_of_the_package(tmp_path):
+    """A non-editable install gets every file of the package, the maps inside it (socialzoo/_maps/):
+    the wheel built from the sdist, as `python -m build` makes it, quietly; the sdist holds no tests.
+    Both from a copy of the checkout's files: an egg-info folder left in the checkout by an earlier
+    build adds the files its SOURCES.txt names to the next sdist."""
+    committed = package_files()
+    source = tmp_path / "source"
+    for name in [*committed.values(), "pyproject.toml", "MANIFEST.in", "README.md", "LICENSE", "NOTICE"]:
+        (source / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(ROOT / name, source / name)
+    build = "import sys; from setuptools import build_meta; getattr(build_meta, sys.argv[1])(sys.argv[2])"
+    run = {"check": True, "capture_output": True, "text": True}
+    subprocess.run([sys.executable, "-c", build, "build_sdist", str(tmp_path)], cwd=source, **run)
     (sdist,) = tmp_path.glob("socialzoo-*.tar.gz")
     with tarfile.open(sdist) as archive:
-        top = {Path(name).parts[1] for name in archive.getnames() if len(Path(name).parts) > 1}
-    assert {"socialzoo", "maps", "pyproject.toml", "LICENSE"} <= top and "tests" not in top
-    pip_wheel = [sys.executable, "-m", "pip", "wheel", str(sdist), "--no-deps", "--no-build-isolation", "-q"]
-    subprocess.run([*pip_wheel, "-w", str(tmp_path)], check=True, capture_output=True)
+        archive.extractall(tmp_path / "unpacked", filter="data")
+        in_sdist = {PurePosixPath(*PurePosixPath(name).parts[1:]).as_posix() for name in archive.getnames()}
+    assert {"socialzoo", "maps", "pyproject.toml", "LICENSE"} <= in_sdist and "tests" not in in_sdist
+    assert set(committed.values()) - in_sdist == set()
+    (unpacked,) = (tmp_path / "unpacked").iterdir()
+    built = subprocess.run([sys.executable, "-c", build, "build_wheel", str(tmp_path)], cwd=unpacked, **run)
+    assert "is absent from the `packages` configuration" not in built.stderr
     (wheel,) = tmp_path.glob("socialzoo-*.whl")
-    names = set(zipfile.ZipFile(wheel).namelist())
-    shipped = {p.name for p in (ROOT / "maps").glob("*.json")}
-    assert shipped and {f"socialzoo/_maps/{name}" for name in shipped} <= names
-    assert "socialzoo/env/world.py" in names
-    viewer = {f"socialzoo/render/viewer/{p.name}" for p in (ROOT / "socialzoo/render/viewer").iterdir()}
-    assert len(viewer) == 3 and viewer <= names  # the episode viewer's page, stylesheet and script
-    policies = {p.name for p in (ROOT / "socialzoo" / "agents" / "shipped").glob("*.*")}
-    assert {f"socialzoo/agents/shipped/{name}" for name in policies} <= names
+    in_wheel = set(zipfile.ZipFile(wheel).namelist())
+    assert set(committed) - in_wheel == set()
 
 
 def _requirement_name(requirement: str) -> str:

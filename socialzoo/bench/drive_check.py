@@ -345,8 +345,8 @@ def _narrowest_ahead(field: object, path: np.ndarray, pos: np.ndarray) -> tuple[
 
 # ---------------------------------------------------------------------------- buildings with people
 
-# The built-in buildings' reference walls (the social_gym data beside the shipped maps, in a source
-# checkout; a wheel leaves it out, and those buildings with it).
+# The built-in buildings' reference walls: the social_gym data beside the shipped maps (maps/reference/
+# in the repository, package data of socialzoo._maps in an install).
 REFERENCE_WALLS = ("reference", "socialgym")
 # Sample the robot's position every this many steps for pictures and "never moved" (0.25 s).
 TRACE_EVERY = 10
@@ -354,10 +354,10 @@ TRACE_EVERY = 10
 
 def builtin_buildings() -> dict[str, np.ndarray]:
     """Walls (W, 4) of the built-in buildings, by name: the second floor plan in the social_gym
-    GDC1 data (below y = -5 m, which the benchmark never uses) and the raw GHC3 walls (where the
-    reference data is installed), then seeded synthetic plans (socialzoo.maps.floorplans: offices
-    along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms with
-    0.9-1.2 m doors, a 150 m corridor)."""
+    GDC1 data (below y = -5 m, which the benchmark never uses) and the raw GHC3 walls (the
+    reference data shipped beside the maps), then seeded synthetic plans (socialzoo.maps.floorplans:
+    offices along corridors, atria with pillars, winding corridors with sharp corners, grids of rooms
+    with 0.9-1.2 m doors, a 150 m corridor)."""
     import importlib.resources
 
     from socialzoo.maps import floorplans
@@ -366,10 +366,9 @@ def builtin_buildings() -> dict[str, np.ndarray]:
 
     out: dict[str, np.ndarray] = {}
     reference = importlib.resources.files(MAPS_PACKAGE).joinpath(*REFERENCE_WALLS)
-    if reference.joinpath("gdc1_walls.txt").is_file():
-        gdc1 = read_table(reference.joinpath("gdc1_walls.txt"), 4, "x1 y1 x2 y2")
-        out["gdc1_floor2"] = drop_zero_length(gdc1[(gdc1[:, 1] < -5.0) & (gdc1[:, 3] < -5.0)])
-        out["ghc3_raw"] = read_table(reference.joinpath("ghc3_walls.txt"), 4, "x1 y1 x2 y2")
+    gdc1 = read_table(reference.joinpath("gdc1_walls.txt"), 4, "x1 y1 x2 y2")
+    out["gdc1_floor2"] = drop_zero_length(gdc1[(gdc1[:, 1] < -5.0) & (gdc1[:, 3] < -5.0)])
+    out["ghc3_raw"] = read_table(reference.joinpath("ghc3_walls.txt"), 4, "x1 y1 x2 y2")
     for seed in (1, 2):
         out[f"office_corridor_{seed}"] = floorplans.office_corridor(seed, num_offices=10).walls
         out[f"atrium_{seed}"] = floorplans.atrium(seed).walls

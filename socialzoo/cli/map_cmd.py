@@ -117,7 +117,7 @@ def register(subparsers: Any) -> None:
             "NAME.navigation.json] --name NAME` does (repairs and the drive check included), to "
             "OUT/NAME.json (what the import said: OUT/NAME.import.txt); without DIR, the built-in "
             "buildings (the second floor plan in the social_gym GDC1 data and the raw GHC3 walls, "
-            "in a source checkout, and seeded synthetic plans), written to OUT/buildings/ first. "
+            "shipped with the package, and seeded synthetic plans), written to OUT/buildings/ first. "
             "GoAlone then runs on the first --episodes scenarios of the test set `socialzoo "
             "benchmark --maps OUT/NAME.json` generates (base seed 20220100, stored in "
             "OUT/test_sets), and a Markdown table gives, per building, the import, GoAlone's "
