@@ -20,6 +20,7 @@ from socialzoo.cli.arg_types import (
     split_commas,
     task_config,
 )
+from socialzoo.cli.people_cmd import people_spec
 
 
 def _lower_name(spec: str) -> str:
@@ -77,7 +78,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--humans",
         default="social_force",
         help="the people, a people spec that the env drives: social_force (sf, the default), orca, groups, "
-        "learned:PATH (a learned human policy file, socialzoo train humans), or a mix such as "
+        "learned:PATH (a learned human policy file, socialzoo train humans), learned (the shipped learned "
+        "humans), or a mix such as "
         "sf@0.5+orca@0.5 or learned:PATH@0.4+sf@0.6. Several, comma-separated "
         "(e.g. sf,orca,groups,learned:PATH), run every policy among every crowd model with counterfactual "
         "rows and write DIR/matrix.md, matrix.csv and matrix.png (success, collisions, force, blame, "
@@ -175,7 +177,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         "address": args.address,
         "batch_size": args.batch_size,
         "env_overrides": overrides,
-        "humans": args.humans,
+        "humans": people_spec(args.humans),
         "human_metrics": args.human_metrics,
         "counterfactual": args.counterfactual,
         **given(args, "policies", "maps", "trials", "workers"),
@@ -257,7 +259,6 @@ _DEFAULT_POLICIES: dict[str, tuple[str, ...]] = {"crowdnav": ("orca", "social_fo
 def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: dict[str, Any]) -> int:
     """`socialzoo benchmark --humans A,B,...`: every policy among every crowd model (the matrix)."""
     from socialzoo.bench.store import StoreError
-    from socialzoo.cli.people_cmd import people_spec
     from socialzoo.studies.crowd_matrix import MatrixConfig, crowd_matrix
 
     if args.quick:

@@ -8,7 +8,7 @@ from typing import Any
 
 from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import count, given, out_dir, positive_int, split_commas
-from socialzoo.cli.people_cmd import add_report
+from socialzoo.cli.people_cmd import add_report, people_spec
 
 SCENES_HELP = (
     "comma-separated scenes (eth, hotel, univ, zara1, zara2) or track files of your own (PATH or NAME=PATH)"
@@ -41,7 +41,12 @@ def _add_compare(commands: Any) -> None:
         "scenarios (human metrics on), and write DIR/comparison.md, comparison.csv and comparison.png "
         "with issue 13's targets (reach rate within 10%, no more collisions).",
     )
-    parser.add_argument("--humans", required=True, help="learned:PATH, a learned human policy file")
+    parser.add_argument(
+        "--humans",
+        required=True,
+        type=people_spec,
+        help="learned:PATH, a learned human policy file, or learned: the shipped learned humans",
+    )
     parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
     parser.add_argument("--trials", type=positive_int, default=None, help="scenarios per map (default: all)")
     sets = parser.add_mutually_exclusive_group()

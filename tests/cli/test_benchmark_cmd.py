@@ -348,3 +348,17 @@ def test_task_ids_of_one_name_in_two_namespaces_get_folders_of_their_own():
         "mine/ToyReach-v0": "mine_ToyReach-v0",
         "my_tasks:theirs/ToyReach-v0": "my_tasks_theirs_ToyReach-v0",
     }
+
+
+def test_humans_learned_alone_are_the_shipped_humans(tmp_path, capsys):
+    """`--humans learned` names the shipped humans' file, as several --humans and `humans report`
+    read it; one spec was refused with "name the learned policy file as learned:PATH", so the
+    docs' command had to name socialzoo/agents/shipped/humans.safetensors, a path in a checkout."""
+    from socialzoo.cli.people_cmd import shipped_humans
+
+    out = tmp_path / "out"
+    small = ["--trials", "1", "--max-steps", "20", "--workers", "1", "--no-figures", "--no-progress"]
+    argv = ["benchmark", "--policies", "goalone", "--maps", "open_room", "--humans", "learned", *small]
+    assert socialzoo_main([*argv, "--out", str(out)]) == 0, capsys.readouterr().err
+    recorded = json.loads((out / "config.json").read_text())
+    assert recorded["benchmark"]["humans"] == f"learned:{shipped_humans()}"

@@ -46,3 +46,13 @@ def test_humans_select_runs(write_walker, tmp_path, capsys):
     assert main(["humans", "select", "--run", str(run), *small, "--no-progress"]) == 0
     assert "chose " in capsys.readouterr().out
     assert (run / "selection" / "humans.safetensors").is_file()
+
+
+def test_humans_compare_takes_the_shipped_humans_as_learned(tmp_path, capsys):
+    """It took only learned:PATH, so the docs named socialzoo/agents/shipped/humans.safetensors,
+    a path that exists only in a source checkout."""
+    out = tmp_path / "cmp"
+    small = ["--trials", "1", "--max-steps", "20", "--workers", "1", "--batch-size", "1"]
+    argv = ["humans", "compare", "--humans", "learned", "--maps", "open_room", *small, "--no-figures"]
+    assert main([*argv, "--no-progress", "--out", str(out)]) == 0, capsys.readouterr().err
+    assert "open_room: reach-rate target" in capsys.readouterr().out
