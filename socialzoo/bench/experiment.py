@@ -27,6 +27,7 @@ from socialzoo.bench.tables import (
     write_tables,
     write_text_atomic,
 )
+from socialzoo.core.files import json_text
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_int
 from socialzoo.data.fetch import sha256
@@ -435,7 +436,7 @@ def run_benchmark(
         )
         store.set_meta("config", json.dumps(run_json, sort_keys=True))
         config_path = out / CONFIG_NAME
-        write_text_atomic(config_path, json.dumps(run_json, indent=2, sort_keys=True) + "\n")
+        write_text_atomic(config_path, json_text(run_json, indent=2, sort_keys=True) + "\n")
         files.append(config_path)
 
         pending: list[Trial] = []

@@ -14,6 +14,7 @@ from typing import Any, Literal, get_args
 
 from socialzoo.bench.runner import BACKENDS, Backend
 from socialzoo.bench.task_benchmark import STORE_FILE, TaskId
+from socialzoo.core.files import json_text
 from socialzoo.core.validation import check_int
 from socialzoo.scenarios.suite import SUITE, SUITE_NAMES
 
@@ -565,7 +566,7 @@ def run_suite(
         ],
         "notes": result.notes,
     }
-    files.append(write_text_atomic(out / CONFIG_FILE, json.dumps(record, indent=2, default=str) + "\n"))
+    files.append(write_text_atomic(out / CONFIG_FILE, json_text(record, indent=2, default=str) + "\n"))
     result.seconds = time.perf_counter() - start
     files.append(write_suite_page(result, out / PAGE_FILE))
     result.files = files

@@ -1,9 +1,10 @@
 """Reading the text and JSON files users point at, with one error style: a file that cannot be read raises the
-loader's own named error, with the file's path and what the file should have been."""
+loader's own named error, with the file's path and what the file should have been. Records go out as strict JSON."""
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -76,3 +77,35 @@ def read_json(
     if kind is not None and not isinstance(data, kind):
         raise error(f"{where}: not a {what} (a JSON {type(data).__name__}, expected a {kind.__name__})")
     return data
+
+
+def finite_json(value: Any) -> Any:
+    """`value` (dicts, lists and tuples of JSON values) with every float that is not finite (NaN, an
+    infinity) as None: JSON has no such numbers, and Python's bare NaN in a file is refused by strict
+    readers (JavaScript's JSON.parse, json.loads with parse_constant); a record reads it back as null."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_json(v) for v in value]
+    return value
+
+
+def json_text(value: Any, **dumps: Any) -> str:
+    """`value` as strict JSON text: non-finite floats as null (finite_json), and allow_nan=False as a
+    guard for any that a `default` converter returns; `dumps`: json.dumps's other options.
+
+    Raises:
+        ValueError: a non-finite float that finite_json did not reach.
+    """
+    return json.dumps(finite_json(value), allow_nan=False, **dumps)
+
+
+def write_json(path: str | os.PathLike[str], data: Any) -> None:
+    """Write `data` as indented strict JSON (json_text) with sorted keys, through a temporary file
+    renamed into place, so a reader never sees half of it."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json_text(data, indent=1, sort_keys=True) + "\n")
+    os.replace(tmp, path)

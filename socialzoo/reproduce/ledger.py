@@ -3,7 +3,6 @@ each part took."""
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import platform
@@ -13,7 +12,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from socialzoo.core.files import read_json
+from socialzoo.core.files import read_json, write_json
 from socialzoo.reproduce.plan import VOLATILE_FIELDS, Settings, settings_hash
 
 logger = logging.getLogger(__name__)
@@ -30,13 +29,6 @@ class LedgerError(ValueError):
 class SettingsMismatch(LedgerError):
     """A work folder that holds items of other settings (or whose settings.json is unreadable, so
     that whose items they are cannot be told)."""
-
-
-def write_json(path: Path, data: Any) -> None:
-    """Write `data` as indented JSON with sorted keys, through a temporary file renamed into place."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
 
 
 def machine() -> dict[str, Any]:

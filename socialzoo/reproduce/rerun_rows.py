@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import summarize, write_csv
+from socialzoo.core.files import write_json
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS, paper_lfd
 from socialzoo.reproduce.results import CSV_FILES, RESULTS_DIR, RUN_FILE, TRAINING_FILE
 from socialzoo.reproduce.seeds import IMPROVEMENT_PAIRS
@@ -212,7 +213,7 @@ def _records(
     path = results / TRAINING_FILE
     training = [t for t in json.loads(path.read_text()) if t.get("trainer") != rerun.policy]
     training += [dict(t) for t in rerun.training]
-    path.write_text(json.dumps(training, indent=1, sort_keys=True) + "\n")
+    write_json(path, training)
     entry = {
         "policy": rerun.policy,
         "commit": rerun.commit,
@@ -221,7 +222,7 @@ def _records(
         "ref_successes": dict(ref_check),
     }
     run["reruns"] = [r for r in run.get("reruns", []) if r.get("policy") != rerun.policy] + [entry]
-    (results / RUN_FILE).write_text(json.dumps(run, indent=1, sort_keys=True) + "\n")
+    write_json(results / RUN_FILE, run)
     return [path, results / RUN_FILE]
 
 
@@ -253,9 +254,9 @@ def replace_reference_rows(base_dir: str | Path, reference_results: str | Path) 
     training += [
         t for t in json.loads((theirs / TRAINING_FILE).read_text()) if str(t["run"]).startswith("reference/")
     ]
-    path.write_text(json.dumps(training, indent=1, sort_keys=True) + "\n")
+    write_json(path, training)
     timings_path = results / TIMINGS_FILE
     timings = json.loads(timings_path.read_text())
     timings[REFERENCE_PART] = json.loads((theirs / TIMINGS_FILE).read_text())[REFERENCE_PART]
-    timings_path.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
+    write_json(timings_path, timings)
     return [target, path, timings_path]

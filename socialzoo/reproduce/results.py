@@ -11,8 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import write_csv
-from socialzoo.core.files import read_json, read_text
-from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine, write_json
+from socialzoo.core.files import read_json, read_text, write_json
+from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
 from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
 from socialzoo.reproduce.seeds import SEEDS_DIR

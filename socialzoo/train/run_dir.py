@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import os
 import re
@@ -15,7 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from socialzoo.core.files import read_json
+from socialzoo.core.files import read_json, write_json
 
 logger = logging.getLogger(__name__)
 
@@ -37,12 +36,6 @@ def plain(value: Any) -> Any:
     if isinstance(value, dict):
         return {str(k): plain(v) for k, v in value.items()}
     return value
-
-
-def _write_json(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
 
 
 class RunDir:
@@ -123,7 +116,7 @@ class RunDir:
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "finished": None,
         }
-        _write_json(self.file, self.record)
+        write_json(self.file, self.record)
 
     def read(self) -> dict[str, Any] | None:
         """The record of this folder, or None."""
@@ -149,7 +142,7 @@ class RunDir:
         """Mark the run finished and record `results` (plain JSON: wall time, final metrics, files)."""
         self.record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         self.record["results"] = recorded(plain(results), self.path, self._paths)
-        _write_json(self.file, self.record)
+        write_json(self.file, self.record)
 
     def checkpoint_path(self, step: int, suffix: str) -> Path:
         """checkpoints/step_<step>.<suffix> (folder created)."""

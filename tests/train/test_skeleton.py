@@ -128,6 +128,31 @@ def test_every_checkpoint_is_evaluated_and_the_best_is_named(tmp_path):
     assert list((tmp_path / "run" / "tensorboard").glob("events.out.tfevents.*"))
 
 
+def strict_json(text):
+    """json.loads as a strict reader (JavaScript's JSON.parse) reads: no bare NaN or Infinity."""
+
+    def refuse(constant):
+        raise ValueError(f"{constant} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_a_metric_without_a_value_is_recorded_as_null(tmp_path):
+    # The validation evaluator's time_to_goal is NaN when no episode reached the goal: run.json wrote a bare NaN.
+    from socialzoo.train.validation import kept_policy
+
+    def evaluator(path):
+        return {"success": 0.0, "time_to_goal": math.nan, "reward": -math.inf}
+
+    policy = run_training(TOY, ToyArgs(out=tmp_path / "run"), toy_fit([]), evaluator=evaluator)
+    record = strict_json((tmp_path / "run" / "run.json").read_text())
+    best = record["results"]["best_checkpoint"]
+    assert best["time_to_goal"] is None and best["reward"] is None and best["step"] == 4
+    # The package reads the record back: resume finds the finished run, the kept policy is the best checkpoint.
+    assert finished_run(TOY, ToyArgs(out=tmp_path / "run"))
+    assert kept_policy(policy) == tmp_path / "run" / "checkpoints" / "step_000000004.txt"
+
+
 def test_checkpoint_schedule_returns_each_step_once():
     schedule = CheckpointSchedule(10, 4)
     assert schedule.steps == [4, 8, 10]
