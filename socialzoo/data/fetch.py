@@ -7,8 +7,11 @@ import contextlib
 import hashlib
 import logging
 import os
+import re
 import shutil
+import socket
 import tempfile
+import time
 from collections.abc import Iterable
 from pathlib import Path
 from typing import NamedTuple
@@ -21,6 +24,12 @@ COMMIT = "1031c7bd1a444273af378c1ec1dcca907ba59830"
 BASE_URL = f"https://raw.githubusercontent.com/StanfordASL/Trajectron-plus-plus/{COMMIT}/experiments/pedestrians/raw/"
 # The cache folder when SOCIALZOO_DATA_DIR is not set: platformdirs.user_cache_dir("socialzoo")/CACHE_NAME.
 ENV_VAR, CACHE_NAME = "SOCIALZOO_DATA_DIR", "eth-ucy"
+# A fetch stages its files in CACHE/.fetching-<pid>-<host>-<random>/; a later fetch removes one whose
+# owner is gone: a process of this host that no longer runs, or, for a folder of another host or one
+# named before the pid and host were in the name, a folder untouched for STALE_STAGING_SECONDS.
+STAGING_PREFIX = ".fetching-"
+STALE_STAGING_SECONDS = 24 * 3600
+_STAGING_NAME = re.compile(r"\.fetching-(\d+)-(.*)-[a-z0-9_]+")
 # Empty frames between the files of a scene made of several (univ).
 JOIN_GAP_FRAMES = 10
 CREDIT = (
@@ -125,7 +134,9 @@ def fetch_scenes(
     so a complete cache may be read-only). All-or-nothing: the files are
     gathered in a temporary folder inside the cache and moved in only when every one is right, so
     an error leaves nothing new in the cache (a cache folder made by this call is removed again,
-    unless another fetch has put files in it meanwhile).
+    unless another fetch has put files in it meanwhile). The temporary folder of a fetch that was
+    killed (SIGKILL, a machine that went down) is removed by the next fetch into the cache once its
+    owner is gone (remove_stale_staging); a concurrent fetch's is never touched.
 
     Args:
         scenes: scene names (default: all of SCENES).
@@ -149,6 +160,7 @@ def fetch_scenes(
     if source is not None and not source.is_dir():
         raise FileNotFoundError(f"--from {source}: not a folder")
     folder = data_dir(cache)
+    remove_stale_staging(folder)
     result = {scene: [folder / file.name for file in SCENES[scene]] for scene in chosen}
     needed: list[tuple[str, SceneFile]] = []
     for scene in chosen:
@@ -164,7 +176,7 @@ def fetch_scenes(
     made = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     try:
-        with tempfile.TemporaryDirectory(prefix=".fetching-", dir=folder) as staging:
+        with tempfile.TemporaryDirectory(prefix=_staging_prefix(), dir=folder) as staging:
             for scene, file in needed:
                 staged = Path(staging) / file.name
                 if source is not None:
@@ -185,6 +197,60 @@ def fetch_scenes(
                 folder.rmdir()
         raise
     return result
+
+
+def _host() -> str:
+    """This machine's name as a file name may hold it."""
+    return re.sub(r"[^A-Za-z0-9.]+", "_", socket.gethostname()) or "host"
+
+
+def _staging_prefix() -> str:
+    """The name of this process's staging folders, less the random end: its pid and host."""
+    return f"{STAGING_PREFIX}{os.getpid()}-{_host()}-"
+
+
+def _running(pid: int) -> bool:
+    """Whether process `pid` of this machine runs (one of another user's counts)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OSError:  # no signals to send (a platform without them): count it as running
+        return True
+    return True
+
+
+def remove_stale_staging(folder: str | Path) -> list[Path]:
+    """Remove the staging folders in cache `folder` whose fetch is gone; returns those removed.
+
+    A folder named by a process of this host goes when that process no longer runs; one of another
+    host (a cache on a shared drive), or named before the pid and host were in the name, when nothing
+    in it changed for STALE_STAGING_SECONDS. A live fetch's folder is kept. A folder that cannot be
+    removed (a read-only cache) is left, without an error.
+    """
+    folder = Path(folder)
+    removed: list[Path] = []
+    try:
+        entries = [p for p in folder.iterdir() if p.name.startswith(STAGING_PREFIX) and p.is_dir()]
+    except OSError:  # no such folder yet, or not readable
+        return removed
+    host, now = _host(), time.time()
+    for path in entries:
+        named, stale = _STAGING_NAME.fullmatch(path.name), False
+        if named and named[2] == host:
+            stale = not _running(int(named[1]))
+        else:
+            with contextlib.suppress(OSError):  # gone meanwhile: nothing to do
+                newest = max([path.stat().st_mtime, *(p.stat().st_mtime for p in path.iterdir())])
+                stale = now - newest > STALE_STAGING_SECONDS
+        if stale:
+            shutil.rmtree(path, ignore_errors=True)
+            if not path.exists():
+                logger.info("removed %s, left by a fetch that was stopped", path)
+                removed.append(path)
+    return removed
 
 
 def load_scene(name: str, cache: str | Path | None = None) -> Recording:

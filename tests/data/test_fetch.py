@@ -6,7 +6,10 @@ import functools
 import hashlib
 import http.server
 import os
+import subprocess
+import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -168,6 +171,79 @@ def test_a_failed_fetch_keeps_what_another_fetch_put_in_its_new_folder(scenes, t
     with pytest.raises(DownloadError):
         fetch_scenes(["one"], base_url="http://127.0.0.1:9/", cache=cache, progress=False)
     assert [p.name for p in cache.iterdir()] == ["two_a.txt"]
+
+
+class _StallingHandler(http.server.BaseHTTPRequestHandler):
+    """Sends the first bytes of a file, then nothing for a while: a fetch in the middle of a download."""
+
+    def do_GET(self):
+        self.send_response(200)
+        self.send_header("Content-Length", "1000")
+        self.end_headers()
+        self.wfile.write(b"0" * 10)
+        self.wfile.flush()
+        time.sleep(5)
+
+    def log_message(self, *args):
+        pass
+
+
+def test_a_killed_fetch_leaves_its_staging_folder_to_the_next_fetch(scenes, tmp_path, monkeypatch):
+    monkeypatch.setenv("NO_PROXY", "127.0.0.1,localhost")
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _StallingHandler)
+    threading.Thread(target=httpd.serve_forever, kwargs={"poll_interval": 0.02}, daemon=True).start()
+    cache = tmp_path / "cache"
+    code = (
+        "from socialzoo.data.fetch import fetch_scenes; "
+        f"fetch_scenes(['hotel'], base_url='http://127.0.0.1:{httpd.server_address[1]}/', cache={str(cache)!r})"
+    )
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    child = subprocess.Popen([sys.executable, "-c", code], env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while not list(cache.glob(".fetching-*/*")) and time.monotonic() < deadline:
+            time.sleep(0.05)  # until the download has begun in the staging folder
+    finally:
+        child.kill()  # SIGKILL: no cleanup runs
+        child.wait()
+        httpd.shutdown()
+        httpd.server_close()
+    assert [p.name.startswith(".fetching-") for p in cache.iterdir()] == [True]
+    _write_tree(tmp_path / "source")
+    fetch_scenes(["one"], source_dir=tmp_path / "source", cache=cache, progress=False)
+    assert [p.name for p in cache.iterdir()] == ["one.txt"]
+
+
+def test_only_staging_folders_whose_fetch_is_gone_are_removed(tmp_path):
+    ended = subprocess.Popen([sys.executable, "-c", ""])
+    ended.wait()
+    running = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    host, old = fetch._host(), time.time() - fetch.STALE_STAGING_SECONDS - 60
+    names = {
+        f".fetching-{os.getpid()}-{host}-abc123": False,  # this process: a fetch in another thread
+        f".fetching-{running.pid}-{host}-def456": False,  # a concurrent fetch
+        f".fetching-{ended.pid}-{host}-ghi789": True,  # killed: its process is gone
+        ".fetching-12-another.host-jkl012": False,  # another machine's fetch, recently active
+        ".fetching-13-another.host-mno345": True,  # another machine's, untouched for long
+        ".fetching-pqr678": False,  # named before pid and host: recent
+        ".fetching-stu901": True,  # and old
+    }
+    try:
+        for name, stale in names.items():
+            (tmp_path / name).mkdir()
+            (tmp_path / name / "part.txt").write_text("0")
+            if stale and f"-{host}-" not in name:  # left untouched for longer than the limit
+                for path in (tmp_path / name / "part.txt", tmp_path / name):
+                    os.utime(path, (old, old))
+        (tmp_path / "one.txt").write_text("kept")
+        removed = fetch.remove_stale_staging(tmp_path)
+    finally:
+        running.kill()
+        running.wait()
+    assert sorted(p.name for p in removed) == sorted(name for name, stale in names.items() if stale)
+    kept = {name for name, stale in names.items() if not stale} | {"one.txt"}
+    assert {p.name for p in tmp_path.iterdir()} == kept
+    assert fetch.remove_stale_staging(tmp_path / "missing") == []
 
 
 def test_an_unknown_scene_fetches_nothing(scenes, tmp_path):
