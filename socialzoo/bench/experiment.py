@@ -354,7 +354,8 @@ def run_benchmark(
     Writes into out_dir: results.sqlite (every trial), config.json (this config, each map's
     resolved env config and test set with its scenario seeds, policy parameters, config
     hashes, package version), summary.csv, summary.md, success.{png,pdf}, metrics.{png,pdf},
-    and ref_episode.gif when config.gif.
+    and ref_episode.gif when config.gif (else an older run's is removed, as are its figures
+    without `figures` and its humans tables without config.human_metrics).
 
     Trials already in the store (same policy, test set, scenario and config hash) are read, not rerun,
     so a repeated run is free and an interrupted one resumes where it stopped.
@@ -516,6 +517,8 @@ def run_benchmark(
     if config.gif:
         first = config.maps[0]
         files.append(write_episode_gif(out / GIF_NAME, env_configs[set_names[first]], sets[first], 0, "ref"))
+    else:  # an older run's animation (--quick) would sit beside tables of other trials
+        remove_outputs(out, [Path(GIF_NAME).stem], [Path(GIF_NAME).suffix[1:]])
     return BenchmarkResult(out, summary, files, len(pending), reused, seconds)
 
 

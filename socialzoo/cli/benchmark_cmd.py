@@ -102,7 +102,8 @@ def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--quick",
         action="store_true",
         help="GoAlone, Ref and the paper's learned policies (PPO, DQN, BC, GAIL, PIPS; shipped files) on "
-        "gdc1-quick and ghc3-quick (100 trials each), plus one Ref episode GIF",
+        "gdc1-quick and ghc3-quick (100 trials each), plus one Ref episode GIF (ref_episode.gif, which a "
+        "rerun without --quick removes)",
     )
     add_task_config_argument(parser)
     parser.add_argument(

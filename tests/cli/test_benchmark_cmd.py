@@ -56,6 +56,22 @@ def test_benchmark_end_to_end(tmp_path, capsys):
     assert (out / "notes.png").read_bytes() == b"mine"
 
 
+def test_a_rerun_without_the_gif_removes_the_older_one(tmp_path, capsys):
+    # The quick benchmark animates a Ref episode; a rerun into the same folder that does not (without
+    # --quick) left the older GIF beside tables it does not belong to.
+    out = tmp_path / "results"
+    argv = ["benchmark", "--maps", "gdc1", "--policies", "goalone", "--trials", "2", "--max-steps", "40"]
+    argv += ["--workers", "1", "--no-figures", "--no-progress", "--out", str(out)]
+    assert socialzoo_main([*argv, "--quick"]) == 0
+    assert (out / "ref_episode.gif").is_file() and "ref_episode.gif" in capsys.readouterr().out
+    (out / "mine.gif").write_bytes(b"mine")
+    assert socialzoo_main(argv) == 0
+    assert "ref_episode.gif" not in capsys.readouterr().out
+    assert sorted(p.name for p in out.iterdir()) == [
+        "config.json", "mine.gif", "results.sqlite", "summary.csv", "summary.md"
+    ]  # fmt: skip
+
+
 def test_benchmark_bad_names(tmp_path, capsys):
     out = tmp_path / "results"
     assert socialzoo_main(["benchmark", "--policies", "goalone,robocop", "--out", str(out)]) == 2
