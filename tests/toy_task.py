@@ -52,8 +52,8 @@ class ToyReachTask(Task):
         self.observation_space = spaces.Box(-np.inf, np.inf, (4 + 4 * NEAREST,), np.float32)
         self.action_space = spaces.Discrete(len(COMMANDS))
 
-    def seed(self, seed: int | None) -> None:
-        self.scenarios.seed(seed)
+    def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
+        self.scenarios.seed(seed, rows)
 
     def case_splits(self) -> dict[str, int]:
         return {"test": 20}

@@ -59,14 +59,14 @@ class CrowdCaseSource:
                 load_map(config.map), batch_size, config.num_robots, scenario, config.family
             )
 
-    def seed(self, seed: int | None) -> None:
-        """Reseed every row's training stream (row 0 with the seed itself)."""
+    def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
+        """Reseed the training streams of `rows` (default all; row 0 with the seed itself); the
+        other rows keep theirs."""
         children = np.random.SeedSequence(seed).spawn(self.batch_size)
-        self._rngs = [
-            np.random.default_rng(seed if row == 0 else children[row]) for row in range(self.batch_size)
-        ]
+        for row in range(self.batch_size) if rows is None else np.asarray(rows).tolist():
+            self._rngs[row] = np.random.default_rng(seed if row == 0 else children[row])
         if self._scenarios is not None:
-            self._scenarios.seed(seed)
+            self._scenarios.seed(seed, rows)
 
     def next(self, rows: np.ndarray) -> list[Scenario] | list[CrowdCase]:
         """The next training case of each row in `rows` (arena cases as CrowdCase arrays)."""

@@ -34,7 +34,9 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
     ## Starting State
     `reset(seed=s)` seeds the rows' training streams and starts every row on its next episode;
     `options={"reset_mask": mask}` ((num_envs,) bools) resets only the masked rows (after the
-    first reset; another shape or dtype, such as row indices, is refused before any change); other
+    first reset; another shape or dtype, such as row indices, is refused before any change), and
+    with a seed reseeds only theirs, as Gymnasium's SyncVectorEnv seeds only the envs it resets
+    (row i gets row i's stream of s; the other rows' episodes go on as before); other
     options are the task's (fixed cases: {"split": "test", "cases": [k_0, ..., k_{B-1}]}).
 
     ## Episode End
@@ -105,7 +107,9 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
             rows = self._masked_rows(options.pop("reset_mask"))
         super().reset(seed=seed)
         if seed is not None or not self._started:
-            self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
+            # As Gymnasium's SyncVectorEnv seeds only the envs it resets: rows outside a mask keep their streams.
+            masked = None if rows is self._all else rows
+            self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)), masked)
         seeds = np.zeros(self.num_envs, dtype=np.uint64)
         seeds[rows] = self.task.reset(rows, options)
         self._elapsed[rows] = 0

@@ -133,6 +133,24 @@ def test_vector_reset_mask_of_another_shape_or_dtype_is_refused_before_anything_
     np.testing.assert_array_equal(obs[[0, 2]], before[[0, 2], 0])
 
 
+@pytest.mark.parametrize("env_id", ["socialzoo/ActionSelection-v2", "socialzoo/CrowdNav-v1"])
+def test_a_seeded_masked_reset_reseeds_only_the_masked_rows(env_id):
+    """As Gymnasium's SyncVectorEnv seeds only the envs it resets; every row's stream was reseeded."""
+
+    def seeds(*resets):
+        vec = gym.make_vec(env_id, num_envs=3)
+        for seed, mask in resets:
+            options = {} if mask is None else {"reset_mask": np.array(mask)}
+            _, info = vec.reset(seed=seed, options=options)
+        return info[vec.unwrapped.task.reset_info_key]
+
+    untouched = seeds((0, None), (None, [False, True, True]))
+    reseeded = seeds((0, None), (5, [True, False, False]), (None, [False, True, True]))
+    np.testing.assert_array_equal(reseeded[1:], untouched[1:])  # rows 1 and 2 went on with their streams
+    # The masked row plays row 0's episodes of seed 5, as in a batch seeded with 5.
+    assert seeds((0, None), (5, [True, False, False]))[0] == seeds((5, None))[0]
+
+
 def test_episode_end_info_and_step_after_end():
     env = ActionSelectionEnv(map="open_room", max_steps=20)
     env.reset(seed=0)

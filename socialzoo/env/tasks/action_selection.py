@@ -160,9 +160,9 @@ class ActionSelectionTask(Task):
         self.human_obs: np.ndarray | None = None
 
     # ------------------------------------------------------------------ episodes
-    def seed(self, seed: int | None) -> None:
-        """Reseed the rows' scenario streams."""
-        self.scenarios.seed(seed)
+    def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
+        """Reseed the scenario streams of `rows` (default all; Task.seed)."""
+        self.scenarios.seed(seed, rows)
 
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
         """Start the rows on their next scenarios, or on the scenarios the options give."""

@@ -71,8 +71,9 @@ class Task(ABC):
 
     # ------------------------------------------------------------------ episodes
     @abstractmethod
-    def seed(self, seed: int | None) -> None:
-        """Reseed every row's training stream (row i of any batch plays the same episodes)."""
+    def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
+        """Reseed the training streams of `rows` (default every row) from `seed`: row i gets the
+        stream row i of any batch seeded with `seed` plays; the other rows keep theirs."""
 
     @abstractmethod
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:

@@ -117,9 +117,9 @@ class CrowdNavTask(Task):
         self._ended: dict[int, dict[str, Any]] = {}
 
     # ------------------------------------------------------------------ episodes
-    def seed(self, seed: int | None) -> None:
-        """Reseed the rows' training streams (CrowdNav's training split only)."""
-        self.source.seed(seed)
+    def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
+        """Reseed the training streams of `rows` (default all; CrowdNav's training split only)."""
+        self.source.seed(seed, rows)
 
     def reset(self, rows: np.ndarray, options: dict[str, Any]) -> np.ndarray:
         """Start the rows on their next training cases, or on fixed validation or test cases."""
