@@ -1,16 +1,18 @@
 """Test sets for maps without a registered one (any imported building): generated on first use, stored beside the
-results with the map's hash, and reused so that reruns are comparable."""
+results with the map's hash, and reused so that reruns are comparable. A scenario family's validation cases too."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from socialzoo.maps.map_file import Map, load_map, map_sha256
+from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
 from socialzoo.scenarios.scenario import Scenario, ScenarioError
 from socialzoo.scenarios.scenario_sets import (
@@ -18,6 +20,8 @@ from socialzoo.scenarios.scenario_sets import (
     CUSTOM_QUICK_SIZE,
     CUSTOM_TEST_SEED,
     CUSTOM_TEST_SIZE,
+    VALIDATION_BASE_SEED,
+    VALIDATION_SIZE,
     TestSet,
 )
 
@@ -49,6 +53,62 @@ class StoredTestSet(TestSet):
         if 0 <= k < len(self.stored):
             return self.stored[k]
         return generate_scenario(m if m is not None else load_map(self.map_name), self.seed(k), self.cfg)
+
+
+@dataclass(frozen=True)
+class FamilyCases(TestSet):
+    """A scenario family's validation cases on a map as a TestSet, the cases the action-selection task
+    plays as its "val" split with config.family (ActionSelectionTask.case_splits): case k is the family's
+    scenario of its "val" split's seed k, or for a family without seed splits of the map's validation seed
+    k (base_seed and count: validation_set's). Made by family_validation_set.
+
+    Attributes:
+        family: the scenario family's registered name.
+    """
+
+    family: str = ""
+
+    def seed(self, k: int) -> int:
+        """Seed of case k, 0 <= k < count."""
+        splits = get_family(self.family).splits
+        if not splits:
+            return super().seed(k)
+        if not 0 <= k < self.count:
+            raise IndexError(f"test set {self.name!r}: case {k} is outside 0..{self.count - 1}")
+        return get_family(self.family).case_seed("val", k)
+
+    def scenario(self, k: int, m: Map | None = None) -> Scenario:
+        """Case k: the family's scenario of seed(k), on `m` (default: the set's map)."""
+        from socialzoo.env.scenario_source import ScenarioStream
+
+        m = self._map(m)
+        return ScenarioStream(m, 1, 1, self.cfg, self.family).make(self.seed(k))
+
+    def scenarios(self, indices: Sequence[int] | None = None, m: Map | None = None) -> list[Scenario]:
+        """Cases at `indices` (default: all), each as `scenario(k)` makes it."""
+        m = self._map(m)
+        return [self.scenario(k, m) for k in (range(self.count) if indices is None else indices)]
+
+
+def family_validation_size(family: str) -> int:
+    """The cases of the action-selection task's "val" split with scenario family `family`: its own
+    "val" split's, or the map's validation set's for a family without seed splits (0: none)."""
+    splits = get_family(family).splits
+    if not splits:
+        return VALIDATION_SIZE
+    return int(splits["val"].size or 0) if "val" in splits else 0
+
+
+def family_validation_set(family: str, map_name: str) -> FamilyCases:
+    """Family `family`'s validation cases on map `map_name` ("<family>-val"; FamilyCases), which a run
+    trained on the family is chosen on, as the checkpoint evaluator (socialzoo.train.validation) does.
+
+    Raises:
+        ValueError: an unknown family.
+    """
+    return FamilyCases(
+        map_name, VALIDATION_BASE_SEED, family_validation_size(family), name=f"{family}-val", family=family
+    )
 
 
 def stored_test_set(

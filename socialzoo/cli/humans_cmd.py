@@ -68,7 +68,8 @@ def _add_select(commands: Any) -> None:
         "select",
         help="choose a learned-human checkpoint of a training run on validation scenarios",
         description="Compare every checkpoint of a `socialzoo train humans` run with the social-force "
-        "humans on the training map's validation scenarios (never a test set), keep the most trained one "
+        "humans on the training map's validation scenarios (a run trained on a scenario family: the family's "
+        "validation cases; never a test set), keep the most trained one "
         "that meets both targets (else the one missing them by the least), and write DIR/selection.md, "
         "selection.csv, selection.json and DIR/humans.safetensors (a copy of the chosen checkpoint).",
     )

@@ -10,6 +10,7 @@ from typing import Any
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
 from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
+from socialzoo.bench.test_sets import family_validation_set
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario_sets import TestSet, validation_set
 from socialzoo.studies.crowd_matrix import run_trials
@@ -52,6 +53,9 @@ class ComparisonConfig:
         workers: local processes.
         batch_size: env rows stepped together per worker.
         env_overrides: EnvConfig fields for both populations (e.g. {"max_steps": 1600}).
+        family: with validation, a scenario family: its validation cases on each map ("<family>-val",
+            socialzoo.bench.test_sets.family_validation_set), played with EnvConfig.family, in place of
+            the map's validation scenarios (for humans trained on the family).
     """
 
     humans: str
@@ -63,6 +67,7 @@ class ComparisonConfig:
     workers: int | None = 2
     batch_size: int = 64
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    family: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.humans, str) or not self.humans.startswith("learned:"):
@@ -70,6 +75,8 @@ class ComparisonConfig:
         object.__setattr__(self, "maps", tuple(self.maps))
         if self.quick and self.validation:
             raise ValueError("ComparisonConfig: quick (test sets) and validation exclude each other")
+        if self.family is not None and not self.validation:
+            raise ValueError(f"ComparisonConfig.family ({self.family!r}) names validation cases: set validation")
         self.benchmark("social_force")  # a bad map, policy, file or count fails here, naming it
         self.benchmark(self.humans)
 
@@ -82,7 +89,7 @@ class ComparisonConfig:
             quick=self.quick,
             workers=self.workers,
             batch_size=self.batch_size,
-            env_overrides=dict(self.env_overrides),
+            env_overrides={**({} if self.family is None else {"family": self.family}), **self.env_overrides},
             humans=humans,
             human_metrics=True,
         )
@@ -135,7 +142,7 @@ def compare_humans(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if config.validation:
-        test_sets = {m: validation_set(m) for m in config.maps} | dict(test_sets or {})
+        test_sets = {m: _validation_set(m, config.family) for m in config.maps} | dict(test_sets or {})
     rows: list[dict[str, Any]] = []
     for population in POPULATIONS:
         humans = "social_force" if population == "social_force" else config.humans
@@ -156,6 +163,11 @@ def compare_humans(
     if figures:
         files.append(plot_comparison(rows, out / "comparison.png"))
     return Comparison(out, rows, targets, files)
+
+
+def _validation_set(map_name: str, family: str | None) -> TestSet:
+    """The validation scenarios of a map, or a family's validation cases on it."""
+    return validation_set(map_name) if family is None else family_validation_set(family, map_name)
 
 
 def check_targets(rows: list[dict[str, Any]]) -> dict[str, dict[str, bool]]:

@@ -74,11 +74,27 @@ def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
 
 def training_map(run_dir: str | Path) -> str:
     """The map a run trained on (run_dir/run.json, args.map)."""
+    return training_world(run_dir)[0]
+
+
+def training_world(run_dir: str | Path) -> tuple[str, str | None]:
+    """The map and the scenario family (None: the benchmark's scenarios) a run trained on:
+    run_dir/run.json's args.map, and its args.family or the family of its env_overrides (a humans
+    or cotrain run takes EnvConfig fields there).
+
+    Raises:
+        ValueError: no map recorded, or a family that is not a name (naming the file).
+    """
     path = Path(run_dir) / "run.json"
     try:
-        return str(json.loads(path.read_text())["args"]["map"])
-    except (OSError, ValueError, KeyError, TypeError) as err:
+        args = json.loads(path.read_text())["args"]
+        map_name = str(args["map"])
+        family = args.get("family") or (args.get("env_overrides") or {}).get("family")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as err:
         raise ValueError(f"{path}: no training map recorded ({err})") from None
+    if family is not None and not isinstance(family, str):
+        raise ValueError(f"{path}: the recorded scenario family must be a name, got {family!r}")
+    return map_name, family
 
 
 def miss_score(learned: Mapping[str, float], social: Mapping[str, float]) -> float:
@@ -111,7 +127,9 @@ def select_humans(
     frames).
 
     Runs the comparison for each checkpoint of a run folder (`socialzoo train humans`) on the validation
-    scenarios of the training map (socialzoo.scenarios.scenario_sets.validation_set) and keeps the most
+    scenarios of the training map (socialzoo.scenarios.scenario_sets.validation_set), or for a run trained
+    on a scenario family (its run.json's env_overrides "family") on the family's validation cases on that
+    map ("<family>-val", socialzoo.bench.test_sets.family_validation_set), and keeps the most
     trained checkpoint that meets both of issue 13's targets there (reach rate within 10% of the social-force
     humans', no more collisions of any kind); when none does, the one that misses them by the least (the
     largest relative excess of collisions, or shortfall of reach rate, smallest). It writes OUT/selection.csv
@@ -134,11 +152,15 @@ def select_humans(
     run = Path(run_dir)
     out = Path(out_dir) if out_dir is not None else run / "selection"
     checkpoints = run_checkpoints(run)
-    map_name = training_map(run) if test_set is None else test_set.map_name
+    map_name, family = training_world(run)
+    if test_set is not None:
+        map_name, family = test_set.map_name, getattr(test_set, "family", None) or None
     if test_set is not None and test_set.name.endswith(("-test", "-quick")):
         raise ValueError(
             f"select_humans chooses a checkpoint: use validation scenarios, not {test_set.name!r}"
         )
+    # A given family's cases (FamilyCases) are played with the family, as ComparisonConfig.family does.
+    given_family = {} if test_set is None or family is None else {"family": family}
     rows: list[dict[str, Any]] = []
     social: dict[str, Any] = {}
     for frames, path in checkpoints:
@@ -150,7 +172,8 @@ def select_humans(
             validation=test_set is None,
             workers=workers,
             batch_size=batch_size,
-            env_overrides=dict(env_overrides or {}),
+            env_overrides={**dict(env_overrides or {}), **given_family},
+            family=family if test_set is None else None,
         )
         sets = None if test_set is None else {map_name: test_set}
         result = compare_humans(config, out / "runs", test_sets=sets, progress=progress, figures=False)
@@ -181,7 +204,8 @@ def select_humans(
     record = {
         "run": str(run),
         "map": map_name,
-        "scenarios": test_set.name if test_set is not None else f"{map_name}-val",
+        "scenarios": test_set.name if test_set is not None else f"{family or map_name}-val",
+        "family": family,
         "trials": trials,
         "robot_policy": policy,
         "rule": "the most trained checkpoint meeting both targets; else the one missing them by the least",

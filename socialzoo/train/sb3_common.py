@@ -131,7 +131,7 @@ class SB3Args:
         if self.family is not None and self.map != default_map(self.family):
             check_family_fits(owner, self.family, self.map)
         if self.family is not None:
-            from socialzoo.train.validation import family_validation_size
+            from socialzoo.bench.test_sets import family_validation_size
 
             cases = family_validation_size(self.family)
             if self.eval_trials > cases:

@@ -44,7 +44,8 @@ def validation_evaluator(
             family without splits its scenarios of the map's validation seeds) in place of "<map>-val".
         max_rows: most env rows stepped together.
 
-    A family's split holds family_validation_size(family) cases; more trials fail at the first evaluation.
+    A family's split holds socialzoo.bench.test_sets.family_validation_size(family) cases; more trials
+    fail at the first evaluation.
 
     Returns:
         path -> {metric: mean over the scenarios} (EVALUATION_METRICS; time_to_goal over the
@@ -89,18 +90,6 @@ def validation_evaluator(
         return out
 
     return evaluate
-
-
-def family_validation_size(family: str) -> int:
-    """The cases of the action-selection task's "val" split with scenario family `family`: its own
-    "val" split's, or the map's validation set's for a family without seed splits (0: none)."""
-    from socialzoo.scenarios.catalogue import get_family
-    from socialzoo.scenarios.scenario_sets import VALIDATION_SIZE
-
-    splits = get_family(family).splits
-    if not splits:
-        return VALIDATION_SIZE
-    return int(splits["val"].size or 0) if "val" in splits else 0
 
 
 def kept_policy(policy: str | Path) -> Path:

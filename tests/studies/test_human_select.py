@@ -3,6 +3,7 @@ refusals of test sets and of folders without checkpoints."""
 
 import json
 
+import numpy as np
 import pytest
 
 from socialzoo.cli import main as socialzoo_main
@@ -75,3 +76,24 @@ def test_test_sets_and_empty_runs_are_refused(rooms_map_path, write_walker, tmp_
         run_checkpoints(empty)
     assert socialzoo_main(["humans", "select", "--run", str(empty)]) == 2
     assert "no learned-human checkpoints" in capsys.readouterr().err
+
+
+def test_a_run_trained_on_a_family_is_chosen_on_the_familys_validation_cases(write_walker, tmp_path):
+    # A humans run of env_overrides {"family": ...} was compared on "<map>-val", the benchmark's scenarios.
+    from socialzoo.env.config import EnvConfig
+    from socialzoo.env.tasks.action_selection import ActionSelectionTask
+
+    run = tmp_path / "run"
+    write_walker(run / "checkpoints" / "step_000001000.humans.safetensors", speed=3.0)
+    args = {"map": "hallway", "env_overrides": {"family": "frontal_approach", "max_steps": 100}}
+    (run / "run.json").write_text(json.dumps({"algo": "humans", "args": args}))
+    result = select_humans(run, trials=2, workers=1, batch_size=2, env_overrides={"max_steps": 100}, progress=False)
+    record = json.loads((result.out_dir / "selection.json").read_text())
+    assert record["scenarios"] == "frontal_approach-val" and record["family"] == "frontal_approach"
+    for population in ("social_force", "learned"):
+        played = json.loads((result.out_dir / "runs" / population / "config.json").read_text())
+        (cases,) = played["test_sets"].values()
+        assert played["benchmark"]["env_overrides"]["family"] == "frontal_approach"
+        # The cases the action-selection task plays as its "val" split with the family.
+        task = ActionSelectionTask(EnvConfig(map="hallway", family="frontal_approach"), 2)
+        assert cases["seeds"] == task.reset(np.arange(2), {"split": "val", "cases": [0, 1]}).tolist()
