@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import logging
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
+from socialzoo.bench.experiment import BenchmarkConfig, hashed_people, run_benchmark
 from socialzoo.bench.runner import Backend
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
@@ -18,6 +21,11 @@ from socialzoo.bench.tables import policy_label, remove_outputs, write_csv, writ
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario_sets import TestSet
+
+logger = logging.getLogger(__name__)
+
+# Characters a column's folder name keeps (any other becomes "_"): safe in a file name everywhere.
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+@=-]")
 
 
 def _cell_format(name: str) -> tuple[str, str, int, float]:
@@ -88,6 +96,11 @@ class MatrixConfig:
             )
         for spec in self.humans:
             self.benchmark(spec)  # a bad spec, policy, map, file or count fails here, naming it
+        folders = [column_folder(spec) for spec in self.humans]
+        if len(set(folders)) != len(folders):
+            raise ValueError(
+                f"MatrixConfig.humans names the same people twice (one learned file twice?): {list(self.humans)!r}"
+            )
 
     def benchmark(self, humans: str) -> BenchmarkConfig:
         """The benchmark run of one column: the env drives the people, with counterfactual rows."""
@@ -135,10 +148,49 @@ def column_label(spec: str) -> str:
     return "+".join(parts)
 
 
-def column_folder(index: int, spec: str) -> str:
-    """The folder of a column: its position and the spec's model names ("2-learned")."""
-    names = "-".join(part.strip().split("@")[0].split(":")[0] for part in spec.split("+"))
-    return f"{index}-{names}"
+def column_folder(spec: str) -> str:
+    """The folder of a column, named by its people spec alone, so that reordering --humans finds each
+    column's results: the spec itself when it is a safe file name ("sf", "sf@0.5+orca@0.5"), else its
+    heading (column_label) made safe, with 8 hex digits of the sha256 of the spec as the config hash
+    reads it (hashed_people: a learned model by its file's contents, wherever the file lies) to keep it
+    unique ("learned_humans.safetensors-" and the 8 digits)."""
+    safe = _UNSAFE.sub("_", column_label(spec))
+    if safe == spec:
+        return spec
+    digest = hashlib.sha256(hashed_people(spec).encode()).hexdigest()[:8]
+    return f"{safe}-{digest}"
+
+
+def _positional_folder_names(spec: str) -> str:
+    """The model names that ended a column's folder before folders were named by spec ("2-learned")."""
+    return "-".join(part.strip().split("@")[0].split(":")[0] for part in spec.split("+"))
+
+
+def adopt_positional_folder(out: Path, spec: str) -> Path:
+    """out/column_folder(spec), renamed from the folder an older version named by the column's
+    position ("<index>-<model names>") when that folder's config.json records this spec and the new
+    one does not exist yet, so that an interrupted or earlier matrix resumes from its stores; the
+    lowest such index wins, any other is left alone."""
+    folder = out / column_folder(spec)
+    if folder.exists():
+        return folder
+    tail = "-" + _positional_folder_names(spec)
+    candidates = sorted(
+        (int(p.name[: -len(tail)]), p)
+        for p in (out.iterdir() if out.is_dir() else ())
+        if p.is_dir() and p.name.endswith(tail) and p.name[: -len(tail)].isdigit()
+    )
+    for _, old in candidates:
+        try:
+            record = json.loads((old / "config.json").read_text(encoding="utf-8"))
+            models = record["benchmark"]["env_overrides"]["people"]["models"]
+        except (OSError, ValueError, KeyError, TypeError):
+            continue  # no run of a known column recorded there
+        if models == spec:
+            old.rename(folder)
+            logger.info("crowd matrix: %s renamed %s (folders are named by people spec)", old, folder.name)
+            return folder
+    return folder
 
 
 def crowd_matrix(
@@ -153,10 +205,12 @@ def crowd_matrix(
 
     Runs the benchmark once per crowd model (a people spec of socialzoo.humans.models: "sf", "orca", "groups",
     "learned:PATH", mixes), each into its own folder with its own results store (a rerun reads its trials
-    back), the env driving the people (EnvConfig.people) with counterfactual rows, so that every cell also
-    says what the robot cost the people. matrix.csv holds every policy x model x map: trials, and the mean
-    with its 90% interval of each metric; matrix.md one table per map and metric, policies as rows, crowd
-    models as columns; matrix.png a heatmap per metric.
+    back, whatever the columns' order: the folder is named by the spec, column_folder; a folder an older
+    version named by position, "1-orca", is renamed to it), the env driving the people (EnvConfig.people)
+    with counterfactual rows, so that every cell also says what the robot cost the people. matrix.csv
+    holds every policy x model x map: trials, and the mean with its 90% interval of each metric;
+    matrix.md one table per map and metric, policies as rows, crowd models as columns; matrix.png a
+    heatmap per metric.
 
     Metrics: success rate, human collisions per episode (steps with a person within 0.4 m), mean force and
     blame per step (SPEC section 9), and the people's time lost and extra distance walked because of the robot
@@ -172,10 +226,10 @@ def crowd_matrix(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
-    for index, spec in enumerate(config.humans):
+    for spec in config.humans:
         result = run_benchmark(
             config.benchmark(spec),
-            out / column_folder(index, spec),
+            adopt_positional_folder(out, spec),
             test_sets=test_sets,
             progress=progress,
             figures=False,

@@ -1,6 +1,9 @@
 """The policy x crowd-model matrix (`socialzoo benchmark --humans A,B,...`)."""
 
 import json
+import logging
+import re
+import shutil
 import socket
 
 import pytest
@@ -48,9 +51,7 @@ def test_matrix_runs_every_policy_among_every_crowd_model(rooms, tmp_path):
     assert "people's time lost" in text and "| GoAlone |" in text
     env = next(
         iter(
-            json.loads((tmp_path / column_folder(1, "orca") / "config.json").read_text())[
-                "env_configs"
-            ].values()
+            json.loads((tmp_path / column_folder("orca") / "config.json").read_text())["env_configs"].values()
         )
     )
     assert env["people"] == {
@@ -67,9 +68,36 @@ def test_matrix_runs_every_policy_among_every_crowd_model(rooms, tmp_path):
     assert not (tmp_path / "matrix.png").exists()
 
 
+def test_columns_are_found_by_their_people_whatever_their_order(rooms, tmp_path, caplog):
+    # Folders were named by position ("0-sf", "1-orca"): reordering --humans ran every column again.
+    crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
+    caplog.set_level(logging.INFO, logger="socialzoo.bench.experiment")
+    swapped = crowd_matrix(
+        config(humans=("orca", "sf")), tmp_path, test_sets=rooms, progress=False, figures=False
+    )
+    assert [r["humans"] for r in swapped.rows] == ["orca", "orca", "sf", "sf"]
+    assert caplog.text.count("4 trials, 4 stored, 0 to run") == 2
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_dir()) == ["orca", "sf"]
+    # Folders of an older version, named by position, are renamed and resumed when their config.json
+    # records the column's spec; one of another spec is left alone.
+    (tmp_path / "sf").rename(tmp_path / "1-sf")
+    (tmp_path / "orca").rename(tmp_path / "0-orca")
+    shutil.copytree(tmp_path / "0-orca", tmp_path / "0-sf")  # orca's people, in a folder that says sf
+    caplog.clear()
+    crowd_matrix(config(), tmp_path, test_sets=rooms, progress=False, figures=False)
+    assert caplog.text.count("4 trials, 4 stored, 0 to run") == 2
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_dir()) == ["0-sf", "orca", "sf"]
+
+
 def test_matrix_labels_and_bad_configs(tmp_path):
     assert column_label("sf@0.5+learned:/x/y/h.safetensors@0.5") == "sf@0.5+learned:h.safetensors@0.5"
-    assert column_folder(3, "learned:/x/h.safetensors") == "3-learned"
+    assert column_folder("sf") == "sf" and column_folder("sf@0.5+orca@0.5") == "sf@0.5+orca@0.5"
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    for folder, weights in (("a", b"one"), ("b", b"one"), ("", b"two")):
+        (tmp_path / folder / "h.safetensors").write_bytes(weights)
+    one, same, other = (column_folder(f"learned:{tmp_path / f / 'h.safetensors'}") for f in ("a", "b", ""))
+    assert re.fullmatch(r"learned_h\.safetensors-[0-9a-f]{8}", one) and one == same and other != one
     with pytest.raises(ValueError, match="unknown model 'robots'"):
         config(humans=("sf", "robots"))
     with pytest.raises(ValueError, match="no such learned policy file"):
@@ -84,7 +112,7 @@ def test_cli_benchmark_with_several_humans_writes_the_matrix(rooms_map_path, tmp
     argv += ["--max-steps", "40", "--workers", "1", "--batch-size", "1", "--no-figures", "--no-progress"]
     assert socialzoo_main([*argv, "--humans", "sf,groups", "--out", str(out)]) == 0
     assert "# Robot policies x crowd models" in capsys.readouterr().out
-    assert (out / "matrix.csv").is_file() and (out / "0-sf").is_dir() and (out / "1-groups").is_dir()
+    assert (out / "matrix.csv").is_file() and (out / "sf").is_dir() and (out / "groups").is_dir()
     assert socialzoo_main([*argv, "--humans", "sf,orca@0.5", "--out", str(out)]) == 2
     assert "the shares sum to 0.5" in capsys.readouterr().err
 
