@@ -186,7 +186,14 @@ class CrowdAttentionPolicy:
 
     @classmethod
     def load(cls, path: str | Path) -> CrowdAttentionPolicy:
-        """Load a policy file, refusing one of another kind or task version (PolicyFileError)."""
+        """Load a policy file, refusing one of another kind or task version (PolicyFileError).
+
+        The file's env id must be of the CrowdNav task's version (CROWD_ENV_VERSION: what a policy
+        observes and how it acts), or a current id of the task with a version of its own
+        (socialzoo/CrowdNavSuite-v2, whose versions mark changes of its scenarios and success rule).
+        """
+        from socialzoo.env.registration import task_ids
+
         tensors, header = read_policy_file(path, check_env_version=False)
         if header.get("policy") != POLICY_NAME:
             raise PolicyFileError(
@@ -196,7 +203,8 @@ class CrowdAttentionPolicy:
             theirs = env_version(str(header["env_id"]))
         except ValueError as err:
             raise PolicyFileError(f"{path}: {err}") from None
-        if theirs != CROWD_ENV_VERSION:
+        current = task_ids().get(str(header["env_id"]), {}).get("task") == "crowdnav"
+        if theirs != CROWD_ENV_VERSION and not current:
             raise PolicyFileError(
                 f"{path}: trained on {header['env_id']} but this socialzoo's CrowdNav task is v{CROWD_ENV_VERSION}; "
                 "retrain it (`socialzoo train crowdnav`)"

@@ -208,13 +208,12 @@ def suite_env_id(task: str) -> str:
     Raises:
         SuiteError: an unknown task.
     """
-    from socialzoo.env.crowd_variants import crowd_env_id
-    from socialzoo.env.registration import ENV_VERSION
+    from socialzoo.env.registration import CROWD_SUITE_ID, SUITE_ID
 
     if task == "action_selection":
-        return f"socialzoo/Suite-v{ENV_VERSION}"
+        return SUITE_ID
     if task == "crowdnav":
-        return crowd_env_id("Suite")
+        return CROWD_SUITE_ID
     raise SuiteError(f"unknown suite task {task!r}; known: {', '.join(TASKS)}")
 
 

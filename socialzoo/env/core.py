@@ -330,7 +330,7 @@ class BatchedCore:
 
     def escort_ok(self) -> np.ndarray:
         """(B, R) whether each robot's goal may count as reached now: the person it escorts (if any)
-        is within its band (socialzoo.scenarios.script)."""
+        is in its place and was kept there all the way (socialzoo.scenarios.script.Script)."""
         assert self.state is not None
         return self.script.escort_ok(self.state)
 

@@ -2,6 +2,17 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    socialzoo/Suite-v3 and socialzoo/CrowdNavSuite-v2 (the suite ids, each one version ahead of its
+        task's other ids; no other id changes), on 2026-11-29: an escort (families following_person,
+        leading_person, accompanying_peer) holds all the way, not only at the goal. The escorted
+        person must stay in its place (within the band, and ahead of the robot that follows it,
+        behind the robot that leads it, beside the robot that accompanies it), never out of it for
+        more than 2 s at a stretch nor for more than a fifth of the time; else the robot cannot
+        count its goal (socialzoo.scenarios.script.Script). The band was checked at the goal only,
+        where the person stops, so GoAlone and a robot that halted 20 s first succeeded in every
+        case. The followed and accompanied persons walk at 0.6-0.9 m/s, a pace the CrowdNav robot
+        (1 m/s) can keep (they walked at the default 0.5-1.3 m/s). Other families' rollouts under
+        these ids are unchanged.
     Within socialzoo/Recorded-v3 and socialzoo/CrowdNavRecorded-v2, rollouts unchanged (observations,
         rewards, end flags): only the episode metrics reacting_time_lost and reacting_extra_distance of
         hybrid people change, on 2026-11-29: every reacting person is counted to its route's end, as one
@@ -140,15 +151,20 @@ CROWD_IDS: dict[str, dict] = {crowd_env_id(name): {"task": "crowdnav", "variant"
 # family ids' 60 s episodes; the CrowdNav task as its Walls variant runs among walls (social-force
 # people of radius 0.2 m, a visible robot, 10 physics substeps, 16 wall rays), 60 s, 20 person slots.
 SUITE_DEFAULT_FAMILY = "frontal_approach"
+# The suite ids' own versions, one ahead of their task's other ids (the Version History's first line).
+SUITE_VERSION = ENV_VERSION + 1
+CROWD_SUITE_VERSION = CROWD_ENV_VERSION + 1
+SUITE_ID = f"socialzoo/Suite-v{SUITE_VERSION}"
+CROWD_SUITE_ID = f"socialzoo/CrowdNavSuite-v{CROWD_SUITE_VERSION}"
 SUITE_IDS: dict[str, dict] = {
-    f"socialzoo/Suite-v{ENV_VERSION}": {
+    SUITE_ID: {
         "task": "action_selection",
         "map": None,
         "family": SUITE_DEFAULT_FAMILY,
         "max_steps": 2400,
         "signals": True,
     },
-    crowd_env_id("Suite"): {
+    CROWD_SUITE_ID: {
         "task": "crowdnav",
         "variant": "Walls",
         "map": None,

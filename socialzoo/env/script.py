@@ -9,7 +9,17 @@ import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.scenarios.scenario import Scenario
-from socialzoo.scenarios.script import ARRIVE_RADIUS, REACH, SLOW_DISTANCE, STOP_RADIUS
+from socialzoo.scenarios.script import (
+    ACCOMPANY,
+    ARRIVE_RADIUS,
+    ESCORT_GRACE,
+    ESCORT_SHARE,
+    FOLLOW,
+    LEAD,
+    REACH,
+    SLOW_DISTANCE,
+    STOP_RADIUS,
+)
 
 # A released person keeps signalling until it is this far from its stop point, m.
 SIGNAL_RADIUS = 3.0
@@ -21,6 +31,8 @@ _EMPTY = (
     ("stop", -1), ("release", np.inf), ("wait", np.inf), ("gate", np.nan), ("gesture", 0),
     ("follow", -1), ("gap", 0.0), ("stay", False),
     ("escort", -1), ("escort_kind", REACH), ("band", 0.0), ("doors", 0.0),
+    ("escort_axis", 0.0), ("escort_time", 0.0), ("escort_out", 0.0), ("escort_stretch", 0.0),
+    ("escort_lost", False),
 )  # fmt: skip
 
 
@@ -32,9 +44,10 @@ class ScriptRunner:
 
     The core (socialzoo.env.core.BatchedCore) asks `ScriptRunner` for the preferred speeds of a
     step (`speeds`), lets the world step, then `settle`s the step: waiting people keep heading for
-    their stop point, releases and signals are updated, and a robot touching a closed door
-    collides. Rows without a script cost nothing; with no script in the batch nothing here runs,
-    so unscripted episodes are the world's exact steps.
+    their stop point, releases and signals are updated, each escort's record is kept (whether its
+    person is in its place, Script's docstring), and a robot touching a closed door collides. Rows
+    without a script cost nothing; with no script in the batch nothing here runs, so unscripted
+    episodes are the world's exact steps.
 
     A waiting person slows down within SLOW_DISTANCE of its stop point (its preferred speed scaled
     by the distance left) and stands within STOP_RADIUS of it (socialzoo.scenarios.script's
@@ -72,6 +85,14 @@ class ScriptRunner:
         self.escort = np.full((b, r), -1, dtype=np.int64)
         self.escort_kind = np.zeros((b, r), dtype=np.int64)
         self.band = np.zeros((b, r, 2))
+        # (B, R, 2) each escorting robot's way: the unit vector from its start to its goal.
+        self.escort_axis = np.zeros((b, r, 2))
+        # (B, R) each escort's time so far, its time with the person out of its place, and the
+        # current stretch out of it, s; and whether the escort is lost (Script's docstring).
+        self.escort_time = np.zeros((b, r))
+        self.escort_out = np.zeros((b, r))
+        self.escort_stretch = np.zeros((b, r))
+        self.escort_lost = np.zeros((b, r), dtype=bool)
         self.doors = np.zeros((b, 0, 6))
         # (B, H) the gesture each person shows now (0: none), observed by the robots.
         self.signal = np.zeros((b, h), dtype=np.int8)
@@ -117,6 +138,10 @@ class ScriptRunner:
                 self._follow_routes(state, np.array([row]))
         if self.active:
             self._update(state, rows)
+            way = state.robot_goal[rows, :, :2] - state.robot_pose[rows, :, :2]
+            length = np.hypot(way[..., 0], way[..., 1])[..., None]
+            escorting = (self.escort[rows] >= 0)[..., None] & (length > 0.0)
+            self.escort_axis[rows] = np.where(escorting, way / np.maximum(length, 1e-12), 0.0)
 
     def _clear(self, rows: np.ndarray) -> None:
         """Empty `rows`' scripts, all at once (what a script in which nobody waits, follows or
@@ -162,6 +187,7 @@ class ScriptRunner:
         self._update(after, rows)
         self._hold_waypoints(after, rows, before)
         self._follow_routes(after, rows)
+        self._keep_escorts(after)
         return self.door_contacts(after)
 
     def door_contacts(self, state: WorldState) -> np.ndarray:
@@ -176,21 +202,44 @@ class ScriptRunner:
         return (near & self.closed[:, None, :]).any(-1)
 
     # ------------------------------------------------------------------ robots
-    def escort_distance(self, state: WorldState) -> np.ndarray:
-        """(B, R) each escorting robot's distance to its person, m; NaN for robots that escort no one."""
+    def escort_in_place(self, state: WorldState) -> np.ndarray:
+        """(B, R) whether each escorting robot's person is in its place now: within the band and
+        ahead of the robot (FOLLOW), behind it (LEAD) or beside it (ACCOMPANY), within 45 degrees,
+        in the frame of the robot's way (Script's docstring); False for robots that escort no one."""
         person = np.maximum(self.escort, 0)
         where = np.take_along_axis(state.human_pos, person[..., None], axis=1)  # (B, R, 2)
-        dist = np.hypot(*(where - state.robot_pose[..., :2]).transpose(2, 0, 1))
-        return np.where(self.escort >= 0, dist, np.nan)
+        offset = where - state.robot_pose[..., :2]
+        dist = np.hypot(offset[..., 0], offset[..., 1])
+        axis = self.escort_axis
+        along = (offset * axis).sum(-1)
+        across = np.abs(offset[..., 0] * axis[..., 1] - offset[..., 1] * axis[..., 0])
+        kind = self.escort_kind
+        placed = np.where(
+            kind == FOLLOW, along > across, np.where(kind == LEAD, -along > across, across >= np.abs(along))
+        )
+        placed &= np.isin(kind, (FOLLOW, LEAD, ACCOMPANY))
+        inside = (dist >= self.band[..., 0]) & (dist <= self.band[..., 1])
+        return (self.escort >= 0) & inside & placed
 
     def escort_ok(self, state: WorldState) -> np.ndarray:
-        """(B, R) whether each robot may count its goal as reached: its escorted person within the
-        band (robots that escort no one: always)."""
-        dist = self.escort_distance(state)
-        inside = (dist >= self.band[..., 0]) & (dist <= self.band[..., 1])
-        return (self.escort < 0) | inside
+        """(B, R) whether each robot may count its goal as reached: its escorted person in its place
+        now and its escort not lost (Script's docstring; robots that escort no one: always)."""
+        kept = ~self.escort_lost & (self.escort_out <= (1.0 - ESCORT_SHARE) * self.escort_time + 1e-9)
+        return (self.escort < 0) | (self.escort_in_place(state) & kept)
 
     # ------------------------------------------------------------------ internals
+    def _keep_escorts(self, state: WorldState) -> None:
+        """Count the step into each escort's record (its time, its time and stretch out of place,
+        lost after a stretch longer than ESCORT_GRACE), after a world step to `state`."""
+        escorting = self.escort >= 0
+        if not escorting.any():
+            return
+        out = escorting & ~self.escort_in_place(state)
+        self.escort_time += np.where(escorting, self.dt, 0.0)
+        self.escort_out += np.where(out, self.dt, 0.0)
+        self.escort_stretch = np.where(out, self.escort_stretch + self.dt, 0.0)
+        self.escort_lost |= self.escort_stretch > ESCORT_GRACE + 1e-9
+
     def _waiting(self, state: WorldState) -> np.ndarray:
         """(B, H) people of scripted rows who wait at their stop, not released yet."""
         return (self.stop >= 0) & ~self.released & state.human_mask & self.scripted[:, None]

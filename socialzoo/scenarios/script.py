@@ -19,6 +19,10 @@ _PERSON = ("stop", "release", "wait", "gate", "gesture", "follow", "gap", "stay"
 SLOW_DISTANCE = 1.0
 STOP_RADIUS = 0.15
 ARRIVE_RADIUS = 0.5
+# An escort (Script's docstring): the longest the person may be out of its place at a stretch, s, and
+# the least share of the escort's time it must be in its place.
+ESCORT_GRACE = 2.0
+ESCORT_SHARE = 0.8
 _ROBOT = ("escort", "escort_kind", "band")
 _FIELDS = (*_PERSON, *_ROBOT, "doors")
 
@@ -52,8 +56,17 @@ class Script:
       within `gap` of it: a person the robot leads, or a crowd pressing on the robot.
 
     Per robot:
-    - escort, escort_kind, band: the person the robot follows, leads or accompanies; the robot's goal
-      counts as reached only while that person is within the distance band (they arrive together).
+    - escort, escort_kind, band: the person the robot follows, leads or accompanies, all the way. The
+      person is in its place while it is within the distance band of the robot and, in the frame of
+      the robot's way (the line from its start to its goal, the suite's escorts being straight walks),
+      ahead of it when the robot follows (within 45 degrees of straight ahead), behind it when the
+      robot leads (within 45 degrees of straight behind), beside it when the robot accompanies (within
+      45 degrees of abreast, either side). The robot's goal counts as reached only while the person is
+      in its place (they arrive together), and only if, from the episode's start, the person was never
+      out of its place for more than ESCORT_GRACE seconds at a stretch and was in it for at least
+      ESCORT_SHARE of the time: a robot that overtakes the person it follows, leaves behind the
+      person it leads or accompanies, or waits while that person walks on, has lost its escort and
+      cannot succeed (its episode runs to the time limit).
 
     Doors: (D, 6) x1, y1, x2, y2, t_open, t_close: a door segment, open from t_open to t_close (s) and
     closed before and after; a robot touching a closed door collides with it as with a wall.
@@ -70,7 +83,7 @@ class Script:
         stay: (n,) bool, the person stays at its route's end once there.
         escort: (R,) int person each robot escorts, -1 none.
         escort_kind: (R,) int REACH (no escort), FOLLOW, LEAD or ACCOMPANY.
-        band: (R, 2) the escorted person's distance band at the goal, m.
+        band: (R, 2) the escorted person's distance band (min, max), m.
         doors: (D, 6) door segments and their open interval, m and s.
     """
 

@@ -15,6 +15,9 @@ from socialzoo.scenarios.script import ACCOMPANY, FOLLOW, LEAD
 if TYPE_CHECKING:
     from socialzoo.maps.map_file import Map
 
+# The walking speeds of a person the robot follows or accompanies, m/s: a pace the suite's slowest
+# robot (the CrowdNav task's, 1 m/s) can keep and still close a gap.
+ESCORTED_SPEED = (0.6, 0.9)
 # Standing groups: members on a circle of this radius, m (facing its centre, as a conversation
 # stands; the world's people have no heading of their own, so only the circle is laid out).
 GROUP_RADIUS = (0.8, 1.0)
@@ -166,10 +169,11 @@ class LeavingGroup(SuiteFamily):
 class FollowingPerson(SuiteFamily):
     """(r) The robot follows a person who walks 12-20 m across the area and stops.
 
-    The person walks a straight line (any direction that fits 1 m inside the walls) and stops at
-    its end for ever; the robot starts 1.5-2.5 m
-    behind it and its goal is 1.0-1.5 m short of the person's stop on the same line. The robot
-    escorts the person (FOLLOW): its goal counts only with the person 0.5-3.0 m away.
+    The person walks a straight line (any direction that fits 1 m inside the walls) at 0.6-0.9 m/s
+    (ESCORTED_SPEED) and stops at its end for ever; the robot starts 1.5-2.5 m behind it and its
+    goal is 1.0-1.5 m short of the person's stop on the same line. The robot escorts the person
+    (FOLLOW, socialzoo.scenarios.script.Script): all the way, the person stays 0.5-3.0 m away and
+    ahead of the robot.
     """
 
     name = "following_person"
@@ -186,7 +190,7 @@ class FollowingPerson(SuiteFamily):
             goal - rng.uniform(1.0, 1.5) * u,
             start[None],
             goal[None],
-            _speeds(rng, 1),
+            rng.uniform(*ESCORTED_SPEED, size=1),
             human_stop=goal[None],
             script={"escort": [0], "escort_kind": [FOLLOW], "band": [[0.5, 3.0]]},
         )
@@ -197,8 +201,8 @@ class LeadingPerson(SuiteFamily):
 
     The robot drives a straight 10-16 m line (any direction that fits 1 m inside the walls); the
     person starts 1-2 m behind it and follows it (Script.follow) at a 1.2 m gap, at 1.6-1.8 m/s so
-    it keeps up with GoAlone. The robot escorts the person (LEAD): its goal counts only with the
-    person 0.5-3.0 m away.
+    it keeps up with GoAlone. The robot escorts the person (LEAD, socialzoo.scenarios.script.Script):
+    all the way, the person stays 0.5-3.0 m away and behind the robot.
     """
 
     name = "leading_person"
@@ -230,9 +234,10 @@ class AccompanyingPeer(SuiteFamily):
     """(t) The robot walks beside a person across the area, and they stop together.
 
     The robot's route is a straight 12-20 m line (any direction that fits 2 m inside the walls);
-    the person walks the parallel line 1 m to its left or right and stops at its end for ever (its
-    route ends at its stop). The robot escorts the person (ACCOMPANY): its goal
-    counts only with the person 0.5-2.0 m away.
+    the person walks the parallel line 1 m to its left or right at 0.6-0.9 m/s (ESCORTED_SPEED) and
+    stops at its end for ever (its route ends at its stop). The robot escorts the person (ACCOMPANY,
+    socialzoo.scenarios.script.Script): all the way, the person stays 0.5-2.0 m away and beside the
+    robot.
     """
 
     name = "accompanying_peer"
@@ -249,7 +254,7 @@ class AccompanyingPeer(SuiteFamily):
             goal,
             (start + side)[None],
             (goal + side)[None],
-            _speeds(rng, 1),
+            rng.uniform(*ESCORTED_SPEED, size=1),
             human_stop=(goal + side)[None],
             script={"escort": [0], "escort_kind": [ACCOMPANY], "band": [[0.5, 2.0]]},
         )

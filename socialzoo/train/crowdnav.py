@@ -11,11 +11,12 @@ import numpy as np
 
 from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.env.crowd_variants import crowd_env_id
+from socialzoo.env.registration import CROWD_SUITE_ID
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
 # The id whose task --families trains on (socialzoo.env.registration.SUITE_IDS).
-SUITE_ID = crowd_env_id("Suite")
+SUITE_ID = CROWD_SUITE_ID
 # The CrowdNavConfig fields --families decides (each family on its own map).
 FAMILY_FIELDS = ("family", "map")
 
@@ -31,7 +32,7 @@ class CrowdNavArgs:
             "SocialForce", "Walls": socialzoo.env.crowd_variants); "" with families.
         families: "" (the variant's own cases), "suite" (the guidelines' 25 scenarios) or a comma
             list of suite names or Fig. 7 letters (socialzoo.scenarios.suite; any other registered
-            family by name): train on the suite id's task (socialzoo/CrowdNavSuite-v1: among walls,
+            family by name): train on the suite id's task (socialzoo/CrowdNavSuite-v2: among walls,
             signals on, 60 s, 20 person slots), one part of num_envs' rows per family, each on its
             family's training seeds; checkpoints evaluated on eval_trials of the families'
             validation cases, spread over them.
@@ -285,7 +286,7 @@ def train(args: CrowdNavArgs) -> Path:
     outcomes alone.
 
     With --families (the guidelines' suite, socialzoo.scenarios.suite, or some of its scenarios) one learner
-    trains on several scenario families at once: the task is the suite id's (socialzoo/CrowdNavSuite-v1, its
+    trains on several scenario families at once: the task is the suite id's (socialzoo/CrowdNavSuite-v2, its
     kwargs read from Gymnasium's registry, so the learner trains on what the suite evaluates: among walls,
     signals on), one CrowdNavVectorEnv per family on the family's own map, side by side as one env
     (socialzoo.env.concat_vector.ConcatVectorEnv); each draws only its family's training seeds, and

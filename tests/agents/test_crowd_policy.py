@@ -9,9 +9,12 @@ import numpy as np
 import pytest
 
 from socialzoo.agents import SHIPPED_DIR, make_policy
-from socialzoo.env.policy_file import read_policy_file
+from socialzoo.env.policy_file import PolicyFileError, read_policy_file, save_policy_file
+from socialzoo.env.registration import CROWD_SUITE_ID
 
-SUITE_ID = "socialzoo/CrowdNavSuite-v1"
+# The suite id the shipped suite policy was trained on: v1, before the escorts held all the way
+# (v2 changed the success rule and the escorted persons' speeds, not what a policy observes).
+TRAINED_ON = "socialzoo/CrowdNavSuite-v1"
 
 
 def test_the_shipped_crowdnav_policy_reads_the_old_layout_and_acts_as_before():
@@ -30,7 +33,7 @@ def test_the_shipped_suite_policy_acts_on_the_suite_ids_observations_with_its_ru
     path = SHIPPED_DIR / "suite_crowdnav.safetensors"
     assert path.stat().st_size < 2**20
     _, header = read_policy_file(path, check_env_version=False)
-    assert header["env_id"] == SUITE_ID and header["observation"]["signals"] is True
+    assert header["env_id"] == TRAINED_ON and header["observation"]["signals"] is True
     record = json.loads((SHIPPED_DIR / "suite_crowdnav.run.json").read_text())
     command = record["command"]
     assert (
@@ -43,14 +46,14 @@ def test_the_shipped_suite_policy_acts_on_the_suite_ids_observations_with_its_ru
         record["results"]["families"] == header["training"]["families"]
         and len(header["training"]["families"]) == 25
     )
-    assert record["results"]["env_id"] == SUITE_ID
+    assert record["results"]["env_id"] == TRAINED_ON
     # The file is the kept checkpoint, chosen on the families' validation cases.
     assert (
         record["results"]["kept_checkpoint"]
         == f"checkpoints/step_{header['training']['steps']:09d}.safetensors"
     )
     for family in ("frontal_approach", "narrow_doorway"):
-        env = gym.make(SUITE_ID, family=family, action="discrete")
+        env = gym.make(CROWD_SUITE_ID, family=family, action="discrete")
         policy = make_policy("suite_crowdnav", task="crowdnav", observation_space=env.observation_space)
         assert policy.task_overrides == {"action": "discrete", "signals": True}
         obs, _ = env.reset(seed=0)
@@ -59,6 +62,23 @@ def test_the_shipped_suite_policy_acts_on_the_suite_ids_observations_with_its_ru
             assert action.shape == (1,) and 0 <= action[0] < 81
             obs, *_ = env.step(int(action[0]))
         env.close()
+
+
+def test_a_suite_policy_of_the_current_suite_id_loads_and_one_of_an_unknown_version_is_refused(tmp_path):
+    """The suite id has a version of its own, one ahead of the CrowdNav task's: a file trained on it
+    now (socialzoo/CrowdNavSuite-v2) loads (it was refused: v2 is not the task's v1)."""
+    from socialzoo.agents.crowd_policy import CrowdAttentionPolicy
+
+    tensors, header = read_policy_file(SHIPPED_DIR / "suite_crowdnav.safetensors", check_env_version=False)
+    current = save_policy_file(
+        tmp_path / "current.safetensors", tensors, {**header, "env_id": CROWD_SUITE_ID}
+    )
+    assert CrowdAttentionPolicy.load(current).header["env_id"] == CROWD_SUITE_ID
+    other = save_policy_file(
+        tmp_path / "other.safetensors", tensors, {**header, "env_id": "socialzoo/CrowdNavSuite-v9"}
+    )
+    with pytest.raises(PolicyFileError, match="CrowdNavSuite-v9"):
+        CrowdAttentionPolicy.load(other)
 
 
 def test_a_policy_trained_in_the_world_frame_is_evaluated_in_it(tmp_path):

@@ -182,7 +182,7 @@ def test_a_policy_of_observations_alone_is_recorded_with_its_flat_batch():
     from socialzoo.bench.replay import record_task_episode
     from socialzoo.bench.task_benchmark import TaskId
 
-    task_id = TaskId.of("socialzoo/CrowdNavSuite-v1")
+    task_id = TaskId.of("socialzoo/CrowdNavSuite-v2")
     probe = task_id.make(1, family="frontal_approach")
     policy = make_policy("suite_crowdnav", task=probe.name, observation_space=probe.observation_space)
     assert not policy.reads_core

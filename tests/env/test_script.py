@@ -11,7 +11,7 @@ import pytest
 
 from socialzoo.env.tasks import make_task
 from socialzoo.scenarios.scenario import Scenario
-from socialzoo.scenarios.script import PROCEED, WAIT, Script
+from socialzoo.scenarios.script import ACCOMPANY, FOLLOW, LEAD, PROCEED, WAIT, Script
 
 DT = 0.025
 
@@ -101,9 +101,10 @@ def test_a_person_following_the_robot_keeps_its_gap():
 
 def test_an_escorting_robot_arrives_only_with_its_person():
     task = _task()
-    # The person stands at its spawn far from the robot's goal; the robot's goal needs it within 2 m.
+    # The person stands at its spawn far from the robot's goal; the robot's goal needs it within 2 m,
+    # behind the robot (LEAD).
     alone = _scenario(
-        {"stop": [0], "escort": [0], "escort_kind": [2], "band": [[0.0, 2.0]]},
+        {"stop": [0], "escort": [0], "escort_kind": [LEAD], "band": [[0.0, 2.0]]},
         robot=(10.0, 4.5),
         goal=(11.0, 4.5),
         people=((3.0, 2.0, 3.0, 2.5),),
@@ -113,7 +114,7 @@ def test_an_escorting_robot_arrives_only_with_its_person():
         step = task.step(np.zeros((1, 1), dtype=np.int64))
     assert not bool(np.asarray(step.detail.reached).any())
     together = dataclasses.replace(
-        alone, human_spawn=np.array([[11.5, 4.0]]), human_routes=(np.array([[11.5, 4.0], [11.5, 4.2]]),)
+        alone, human_spawn=np.array([[9.3, 4.3]]), human_routes=(np.array([[9.3, 4.3], [9.3, 4.4]]),)
     )
     task.reset(np.array([0]), {"scenario": together})
     reached = False
@@ -121,6 +122,63 @@ def test_an_escorting_robot_arrives_only_with_its_person():
         step = task.step(np.zeros((1, 1), dtype=np.int64))
         reached |= bool(np.asarray(step.detail.reached).any())
     assert reached
+
+
+def _lead(speed: float) -> Scenario:
+    """The robot leads a person of `speed` m/s along the corridor (GoAlone drives 1.5 m/s)."""
+    return _scenario(
+        {"follow": [0], "gap": [1.2], "escort": [0], "escort_kind": [LEAD], "band": [[0.5, 3.0]]},
+        robot=(9.0, 4.5),
+        goal=(21.0, 4.5),
+        people=((7.5, 4.5, 7.6, 4.5),),
+        speed=speed,
+    )
+
+
+def test_a_robot_that_outpaces_the_person_it_leads_loses_it():
+    """Before, the band was checked at the goal only: the slow person caught up once the robot
+    stopped there, and the robot succeeded; now it was out of the band too long on the way."""
+    for speed, arrives in ((1.8, True), (0.8, False)):
+        task = _task()
+        task.reset(np.array([0]), {"scenario": _lead(speed)})
+        reached, gaps = False, []
+        for _ in range(1200):
+            step = task.step(np.zeros((1, 1), dtype=np.int64))
+            reached |= bool(np.asarray(step.detail.reached).any())
+            s = task.core.state
+            gaps.append(float(np.linalg.norm(s.human_pos[0, 0] - s.robot_pose[0, 0, :2])))
+        assert reached == arrives, (speed, max(gaps))
+        assert bool(task.core.script.escort_lost[0, 0]) != arrives
+        if not arrives:  # it waited at its goal until the person stood in the band behind it
+            assert gaps[-1] < 3.0 < max(gaps)
+
+
+@pytest.mark.parametrize(
+    ("kind", "person", "arrives"),
+    [
+        (FOLLOW, (12.2, 4.5), True),  # ahead of the robot all the way
+        (FOLLOW, (9.0, 4.5), False),  # behind it
+        (ACCOMPANY, (10.6, 3.8), True),  # beside it on arrival (and at the start)
+        (ACCOMPANY, (12.5, 4.5), False),  # ahead of it
+    ],
+)
+def test_the_person_must_be_ahead_when_following_and_beside_when_accompanying(kind, person, arrives):
+    """A person standing within the band of the robot's goal; the robot drives 10 -> 11 m along the
+    corridor and waits there: it arrives only with the person in its place."""
+    x, y = person
+    scenario = _scenario(
+        {"stop": [0], "escort": [0], "escort_kind": [kind], "band": [[0.5, 3.0]]},
+        robot=(10.0, 4.5),
+        goal=(11.0, 4.5),
+        people=((x, y, x + 0.1, y),),
+    )
+    task = _task()
+    task.reset(np.array([0]), {"scenario": scenario})
+    reached = False
+    for _ in range(200):
+        step = task.step(np.zeros((1, 1), dtype=np.int64))
+        reached |= bool(np.asarray(step.detail.reached).any())
+    assert reached == arrives
 
 
 def test_a_closed_door_is_a_collision_and_an_open_one_is_not():

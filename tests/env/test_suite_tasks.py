@@ -1,5 +1,5 @@
 """Both robot tasks play scenario families by name, with the scenario scripts' signals in their
-observations: the suite's ids (socialzoo/Suite-v2, socialzoo/CrowdNavSuite-v1) through every adapter,
+observations: the suite's ids (socialzoo/Suite-v3, socialzoo/CrowdNavSuite-v2) through every adapter,
 the families' seed splits, named errors, and a person's gesture and a door's state where the robot
 observes them.
 
@@ -33,8 +33,8 @@ from socialzoo.scenarios.families import Layout, SuiteFamily
 from socialzoo.scenarios.scenario import Scenario
 from socialzoo.scenarios.script import WAIT, Script
 
-SUITE = "socialzoo/Suite-v2"
-CROWD_SUITE = "socialzoo/CrowdNavSuite-v1"
+SUITE = "socialzoo/Suite-v3"
+CROWD_SUITE = "socialzoo/CrowdNavSuite-v2"
 # A family with no script, on the intersection map: every id runs on it today.
 PLAIN = "crossing"
 # The hallway's left room is x 0..8, the corridor x 8..22 at y 3.5..5.5.
@@ -382,7 +382,7 @@ def test_a_partial_reset_keeps_the_other_rows_signals_layout():
     assert again.shape == obs.shape
 
 
-@pytest.mark.parametrize("env_id", ["socialzoo/Suite-v2", "socialzoo/CrowdNavSuite-v1"])
+@pytest.mark.parametrize("env_id", ["socialzoo/Suite-v3", "socialzoo/CrowdNavSuite-v2"])
 def test_both_tasks_play_every_suite_scenario(env_id):
     """25 of 25: each family's first test case resets and steps in both tasks, with signals."""
     from socialzoo.scenarios.suite import SUITE_NAMES

@@ -61,7 +61,7 @@ def test_registered_suite_families_play_on_their_card_map():
 
 def test_the_success_criteria_give_the_suite_ids_goal_radius_and_time_limit():
     """The cards are shown beside the suite's results: their goal radius and time limit must be those
-    of the ids the suite plays (socialzoo/Suite-v2, socialzoo/CrowdNavSuite-v1), not EnvConfig's defaults."""
+    of the ids the suite plays (socialzoo/Suite-v3, socialzoo/CrowdNavSuite-v2), not EnvConfig's defaults."""
     import gymnasium as gym
 
     import socialzoo  # noqa: F401  (registers the ids)
@@ -71,8 +71,8 @@ def test_the_success_criteria_give_the_suite_ids_goal_radius_and_time_limit():
     limits = {suite_as.config.max_steps * suite_as.core.world.dt, suite_cn.config.time_limit}
     assert len(limits) == 1
     words = (
-        f"{suite_as.config.goal_radius:g} m in socialzoo/Suite-v2",
-        f"the robot's radius, {suite_cn.core.world.robot.radius:g} m, in socialzoo/CrowdNavSuite-v1",
+        f"{suite_as.config.goal_radius:g} m in socialzoo/Suite-v3",
+        f"the robot's radius, {suite_cn.core.world.robot.radius:g} m, in socialzoo/CrowdNavSuite-v2",
         f"before the time limit ({limits.pop():g} s in both)",
     )
     for card in suite_cards():

@@ -102,7 +102,7 @@ def test_families_are_resolved_split_and_checked():
     from socialzoo.train.crowdnav import validation_cases
 
     suite = CrowdNavArgs(families="suite", num_envs=64, **{k: v for k, v in TINY.items() if k != "num_envs"})
-    assert suite.family_names() == SUITE_NAMES and suite.env_id == "socialzoo/CrowdNavSuite-v1"
+    assert suite.family_names() == SUITE_NAMES and suite.env_id == "socialzoo/CrowdNavSuite-v2"
     assert sum(suite.rows()) == 64 and set(suite.rows()) == {2, 3} and suite.rows()[0] == 3
     counts = [cases for _, cases in validation_cases(suite)]
     assert sum(counts) == 100 and set(counts) == {4}

@@ -47,7 +47,7 @@ class CrowdNavTask(Task):
 
     A robot chooses its velocity (or one of CrowdNav's 81 actions) every 0.25 s to cross an open arena,
     a building among the benchmark's people (the Walls variant), or a scenario family's map among its
-    scripted people (CrowdNavConfig.family: the guidelines' suite, socialzoo/CrowdNavSuite-v1). The task
+    scripted people (CrowdNavConfig.family: the guidelines' suite, socialzoo/CrowdNavSuite-v2). The task
     turns each action into the robot's command, advances the core `physics_substeps` world steps per
     decision, judges the step as CrowdNav judges it (socialzoo.env.crowd_outcome: the closest approach
     along every substep, the goal, the time limit), accumulates the episode metrics and builds each
