@@ -20,8 +20,6 @@ class DemoSteps:
         path: the recording.
         obs: (N, D) float32 observations the demonstrator acted on.
         action: (N,) int64 its sub-policy indices.
-        next_obs: (N, D) float32 observations after the step.
-        done: (N,) bool, the episode ended with this step (terminated or truncated).
         episodes: number of episodes the prefix touches.
         map: the map the demonstrations were recorded on.
         observation: the env's observation config (plain dict) of the recording.
@@ -31,8 +29,6 @@ class DemoSteps:
     path: Path
     obs: np.ndarray
     action: np.ndarray
-    next_obs: np.ndarray
-    done: np.ndarray
     episodes: int
     map: str
     observation: dict[str, Any]
@@ -105,8 +101,6 @@ def load_demo_steps(path: str | Path, steps: int | None = None) -> DemoSteps:
         path=path,
         obs=arrays["obs"][:steps].astype(np.float32),
         action=action,
-        next_obs=arrays["next_obs"][:steps].astype(np.float32),
-        done=(arrays["terminated"][:steps] | arrays["truncated"][:steps]).astype(bool),
         episodes=len(np.unique(arrays["episode"][:steps])),
         map=str(env.get("map", meta.get("config", {}).get("map", "gdc1"))),
         observation=dict(env.get("observation", {})),
