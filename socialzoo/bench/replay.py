@@ -95,7 +95,6 @@ def record_episode(
     policy: Policy,
     *,
     label: str | None = None,
-    laser: LaserConfig | None = None,
     laser_rays: int | None = None,
     laser_stride: int = 1,
     world_map: Map | None = None,
@@ -108,7 +107,6 @@ def record_episode(
         scenario: the scenario to play.
         policy: a socialzoo.agents Policy.
         label: the panel's title (default: the policy's name).
-        laser: the scan drawn in the viewer (default: env_config.world.laser, else LaserConfig()).
         laser_rays: as record_task_episode.
         laser_stride: as record_task_episode.
         world_map: the already loaded map of env_config.map, if at hand.
@@ -121,9 +119,7 @@ def record_episode(
 
     task = ActionSelectionTask(env_config, 1, map_data=world_map)
     task.reset(np.array([0]), {"scenario": scenario})
-    return record_task_episode(
-        task, policy, label=label, laser=laser, laser_rays=laser_rays, laser_stride=laser_stride
-    )
+    return record_task_episode(task, policy, label=label, laser_rays=laser_rays, laser_stride=laser_stride)
 
 
 def record_case(
@@ -149,7 +145,6 @@ def record_task_episode(
     policy: Policy,
     *,
     label: str | None = None,
-    laser: LaserConfig | None = None,
     laser_rays: int | None = None,
     laser_stride: int = 1,
 ) -> EpisodeTrace:
@@ -165,7 +160,6 @@ def record_task_episode(
         task: a socialzoo.env.tasks Task of batch size 1, reset.
         policy: an object with act(observations, task).
         label: the panel's title (default: the policy's name).
-        laser: the scan drawn in the viewer (default: the task's, if it has one).
         laser_rays: scan with this many rays over the same field of view (default: the laser's
             own count; 0: no scan); every ray's range is exact, there are just fewer of them.
         laser_stride: scan every `laser_stride` states (and the last one): a scan of gdc1 costs
@@ -178,8 +172,6 @@ def record_task_episode(
     ):
         raise ValueError(f"record_episode: laser_rays must be None or an int >= 0, got {laser_rays!r}")
     scan = task.viewer_laser()
-    if scan is not None and laser is not None:
-        scan = (laser, *scan[1:])
     if scan is not None and laser_rays:
         scan = (dataclasses.replace(scan[0], num_rays=laser_rays), *scan[1:])
     recorder = _Recorder(task, None if laser_rays == 0 else scan)
