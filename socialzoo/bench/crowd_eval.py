@@ -44,7 +44,6 @@ def evaluate_crowd(
     batch_size: int = 100,
     *,
     indices: Sequence[int] | None = None,
-    on_episodes: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> CrowdEvaluation:
     """Run `act` on the first `cases` cases of a split (all of them by default).
 
@@ -54,9 +53,7 @@ def evaluate_crowd(
         split: "val" or "test".
         cases: how many cases (default the split's size: 100 or 500).
         batch_size: rows stepped together.
-        indices: play only these of the first `cases` cases (socialzoo.bench.task_benchmark plays
-            the ones its store lacks); the result holds them in case order.
-        on_episodes: called with the episodes that ended at each step, as they end.
+        indices: play only these of the first `cases` cases; the result holds them in case order.
 
     Raises:
         ValueError: a training split, more cases than the split holds, or an index outside them.
@@ -81,12 +78,7 @@ def evaluate_crowd(
     from socialzoo.bench.episodes import play_cases
     from socialzoo.bench.task_benchmark import summarize
 
-    def forget_seed(episodes: list[dict[str, Any]]) -> list[dict[str, Any]]:
-        return [{k: v for k, v in e.items() if k != "seed"} for e in episodes]
-
-    deliver = None if on_episodes is None else (lambda episodes: on_episodes(forget_seed(episodes)))
     flat = config.replace(observation="flat")
-    ordered = forget_seed(
-        play_cases("crowdnav", act, split, todo, batch_size, config=flat, on_episodes=deliver)
-    )
+    played = play_cases("crowdnav", act, split, todo, batch_size, config=flat)
+    ordered = [{k: v for k, v in e.items() if k != "seed"} for e in played]  # the episodes without their seed
     return CrowdEvaluation(split=split, episodes=ordered, summary=summarize(ordered))
