@@ -41,33 +41,6 @@ class CrowdRewardConfig:
         )
 
 
-def closest_boundary_distance(
-    robot_pos: np.ndarray,
-    robot_vel: np.ndarray,
-    human_pos: np.ndarray,
-    human_vel: np.ndarray,
-    radius_sum: np.ndarray | float,
-    human_mask: np.ndarray,
-    dt: float,
-) -> np.ndarray:
-    """(B,) the smallest distance between the robot's and a person's boundaries during the step
-    (inf where no person is present); negative means they overlapped.
-
-    Args:
-        robot_pos: (B, 2) robot position at the start of the step.
-        robot_vel: (B, 2) the robot's velocity through the step.
-        human_pos: (B, H, 2) the people's positions at the start of the step.
-        human_vel: (B, H, 2) their velocities at the start of the step.
-        radius_sum: robot radius + person radius, (B, H) or one value.
-        human_mask: (B, H).
-        dt: s.
-    """
-    out = np.empty(len(robot_pos))
-    radius = np.broadcast_to(np.asarray(radius_sum, dtype=np.float64), human_mask.shape)
-    _closest_gaps(robot_pos, robot_vel, human_pos, human_vel, radius, human_mask, dt, out)
-    return out
-
-
 def track_approach(
     closest: np.ndarray,
     moved: np.ndarray,
@@ -80,21 +53,14 @@ def track_approach(
     dt: float,
 ) -> None:
     """Add one world step of the robots' moves from `robot_before` to `robot_after` (B, 2): the
-    closest boundary distance during it (closest_boundary_distance at the robot's velocity through
-    the step) into the running minimum `closest` (B,), and the distance each robot moved into
-    `moved` (B,), in place. The people's arrays are those of closest_boundary_distance, `radius_sum`
-    (B, H)."""
+    smallest distance between the robot's and a person's boundaries during it (the robot at its
+    velocity through the step; inf where nobody is present, negative where they overlapped) into the
+    running minimum `closest` (B,), and the distance each robot moved into `moved` (B,), in place.
+    human_pos, human_vel: (B, H, 2) the people's positions and velocities at the start of the step;
+    radius_sum: (B, H) robot radius + person radius; human_mask: (B, H); dt: s."""
     _track_approach(
         robot_before, robot_after, human_pos, human_vel, radius_sum, human_mask, dt, closest, moved
     )
-
-
-@kernel
-def _closest_gaps(robot_pos, robot_vel, human_pos, human_vel, radius, human_mask, dt, out):
-    """closest_boundary_distance into out (B,)."""
-    for i in range(out.shape[0]):
-        rx, ry, vx, vy = robot_pos[i, 0], robot_pos[i, 1], robot_vel[i, 0], robot_vel[i, 1]
-        out[i] = _row_gap(i, rx, ry, vx, vy, human_pos, human_vel, radius, human_mask, dt)
 
 
 @kernel
@@ -196,7 +162,7 @@ def judge_step(
     A row whose episode had already ended (`done`) gets no reward and no flags.
 
     Args:
-        closest: (B,) closest boundary distance during the step (closest_boundary_distance).
+        closest: (B,) closest boundary distance during the step (track_approach).
         goal_distance_after: (B,) robot-goal distance after the step, m.
         robot_radius: m (the goal tolerance).
         step_start_time: (B,) episode time at the start of the step, s.

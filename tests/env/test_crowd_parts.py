@@ -9,8 +9,8 @@ from socialzoo.env.crowd_observation import flat_size, joint_state
 from socialzoo.env.crowd_outcome import (
     CrowdNavMetrics,
     CrowdRewardConfig,
-    closest_boundary_distance,
     judge_step,
+    track_approach,
 )
 
 
@@ -38,26 +38,20 @@ def test_joint_state_is_robot_centred_with_x_towards_the_goal():
 
 def test_closest_distance_along_the_step_catches_a_pass_through():
     # At the start and end of the step they are 1.2 m apart, but they cross in between.
-    gap = closest_boundary_distance(
-        robot_pos=np.array([[0.0, 0.0]]),
-        robot_vel=np.array([[0.0, 0.0]]),
-        human_pos=np.array([[[-0.6, 0.0]]]),
-        human_vel=np.array([[[4.8, 0.0]]]),
-        radius_sum=0.6,
-        human_mask=np.array([[True]]),
+    closest, moved = np.full(2, np.inf), np.zeros(2)
+    track_approach(
+        closest,
+        moved,
+        robot_before=np.zeros((2, 2)),
+        robot_after=np.zeros((2, 2)),
+        human_pos=np.array([[[-0.6, 0.0]], [[0.0, 0.0]]]),
+        human_vel=np.array([[[4.8, 0.0]], [[0.0, 0.0]]]),
+        radius_sum=np.full((2, 1), 0.6),
+        human_mask=np.array([[True], [False]]),  # row 1: nobody
         dt=0.25,
     )
-    assert math.isclose(gap[0], -0.6)
-    nobody = closest_boundary_distance(
-        np.zeros((1, 2)),
-        np.zeros((1, 2)),
-        np.zeros((1, 1, 2)),
-        np.zeros((1, 1, 2)),
-        0.6,
-        np.array([[False]]),
-        0.25,
-    )
-    assert nobody[0] == math.inf
+    assert math.isclose(closest[0], -0.6) and closest[1] == math.inf
+    assert moved.tolist() == [0.0, 0.0]
 
 
 def test_judgement_follows_crowdnavs_order_and_reward():
