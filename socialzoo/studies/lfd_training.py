@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.validation import check_int
 from socialzoo.studies.lfd import LFD_ALGOS, LFD_SIZES, lfd_run_dir
 from socialzoo.train import trainer_args, trainer_function
 
@@ -56,8 +57,7 @@ class LfdTrainConfig:
             raise ValueError(f"LfdTrainConfig.overrides names trainers not run: {unknown}")
         if not self.sizes or any(not isinstance(s, int) or isinstance(s, bool) or s < 1 for s in self.sizes):
             raise ValueError(f"LfdTrainConfig.sizes must be positive ints, got {self.sizes!r}")
-        if not isinstance(self.demo_episodes, int) or self.demo_episodes < 1:
-            raise ValueError(f"LfdTrainConfig.demo_episodes must be an int >= 1, got {self.demo_episodes!r}")
+        check_int("LfdTrainConfig", "demo_episodes", self.demo_episodes, low=1)
         for algo in self.algos:  # bad overrides fail now, not after hours of training
             self.args(algo, self.sizes[0])
 

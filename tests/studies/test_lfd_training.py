@@ -30,3 +30,6 @@ def test_bad_configs_fail_before_training(small_demos, tmp_path):
         LfdTrainConfig(demos=small_demos, root=tmp_path, overrides={"bc": {"lr_typo": 1.0}})
     with pytest.raises(ValueError, match="trainers not run"):
         LfdTrainConfig(demos=small_demos, root=tmp_path, algos=("bc",), overrides={"gail": {}})
+    # A bool is no episode count (True passed as 1 before).
+    with pytest.raises(ValueError, match=r"LfdTrainConfig\.demo_episodes must be an int >= 1, got True"):
+        LfdTrainConfig(demos=small_demos, root=tmp_path, demo_episodes=True)
