@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from socialzoo.bench.stats import Interval
+from socialzoo.core.validation import check_int
 
 # Intervals over seeds: 95%, as rliable reports them (the per-trial tables keep the paper's 90%).
 SEED_CONFIDENCE = 0.95
@@ -72,8 +73,7 @@ def resample_seed_scores(
     stratum ran the same scenarios) the finite test set's spread. Strata are resampled independently
     of one another.
     """
-    if not isinstance(resamples, int) or isinstance(resamples, bool) or resamples < 1:
-        raise ValueError(f"resamples must be an int >= 1, got {resamples!r}")
+    check_int("resample_seed_scores", "resamples", resamples, low=1)
     columns = []
     for m in _matrices(scores):
         k, n = m.shape

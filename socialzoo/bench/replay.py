@@ -15,6 +15,7 @@ import numpy as np
 from socialzoo.agents import Policy, make_policy
 from socialzoo.core.config import LaserConfig
 from socialzoo.core.laser import laser_scan, ray_angles
+from socialzoo.core.validation import check_int
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.scenario_source import ScenarioStream
 from socialzoo.maps.map_file import Map, load_map
@@ -165,12 +166,8 @@ def record_task_episode(
         laser_stride: scan every `laser_stride` states (and the last one): a scan of gdc1 costs
             about as much as a step.
     """
-    if not isinstance(laser_stride, int) or isinstance(laser_stride, bool) or laser_stride < 1:
-        raise ValueError(f"record_episode: laser_stride must be an int >= 1, got {laser_stride!r}")
-    if laser_rays is not None and (
-        not isinstance(laser_rays, int) or isinstance(laser_rays, bool) or laser_rays < 0
-    ):
-        raise ValueError(f"record_episode: laser_rays must be None or an int >= 0, got {laser_rays!r}")
+    check_int("record_episode", "laser_stride", laser_stride, low=1)
+    check_int("record_episode", "laser_rays", laser_rays, low=0, allow_none=True)
     scan = task.viewer_laser()
     if scan is not None and laser_rays:
         scan = (dataclasses.replace(scan[0], num_rays=laser_rays), *scan[1:])

@@ -746,8 +746,7 @@ def evaluate(
     """
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
-    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
-        raise ValueError(f"workers must be an int >= 1 or None, got {workers!r}")
+    check_int("evaluate", "workers", workers, low=1, allow_none=True)
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
     unique = list(dict.fromkeys(trials))

@@ -10,6 +10,8 @@ from statistics import NormalDist
 
 import numpy as np
 
+from socialzoo.core.validation import check_int
+
 CONFIDENCE = 0.9
 # Bootstrap resamples of a count interval: the Monte Carlo error of its 5% and 95% quantiles is
 # then about 1% of the interval's width.
@@ -204,8 +206,7 @@ def count_interval(
         ValueError: a negative value, a bad confidence or resample count.
     """
     _check_confidence(confidence)
-    if not isinstance(resamples, int) or isinstance(resamples, bool) or resamples < 1:
-        raise ValueError(f"count_interval: resamples must be an int >= 1, got {resamples!r}")
+    check_int("count_interval", "resamples", resamples, low=1)
     x = np.asarray(values, dtype=np.float64).reshape(-1)
     x = x[np.isfinite(x)]
     if np.any(x < 0):

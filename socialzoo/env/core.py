@@ -11,6 +11,7 @@ import numpy as np
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.robot import world_velocity
 from socialzoo.core.state import WorldState
+from socialzoo.core.validation import check_int
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.people import People
 from socialzoo.env.replay import ReplayRunner
@@ -80,8 +81,7 @@ class BatchedCore:
         robot_visible: bool = True,
         contacts_in_step: bool = False,
     ) -> None:
-        if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
-            raise ValueError(f"BatchedCore: batch_size must be an int >= 1, got {batch_size!r}")
+        check_int("BatchedCore", "batch_size", batch_size, low=1)
         b, r = batch_size, num_robots
         people = people or PeopleConfig()
         self.batch_size, self.num_robots, self.max_humans = b, r, max_humans

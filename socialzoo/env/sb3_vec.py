@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium.vector import VectorEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
+from socialzoo.core.validation import check_int
 from socialzoo.env.vector import TaskVectorEnv
 
 
@@ -53,8 +54,7 @@ class SB3VecEnv(VecEnv):
         vector_env: VectorEnv | None = None,
         **kwargs: Any,
     ) -> None:
-        if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
-            raise ValueError(f"SB3VecEnv: num_envs must be an int >= 1, got {num_envs!r}")
+        check_int("SB3VecEnv", "num_envs", num_envs, low=1)
         if vector_env is None:
             vector_env = TaskVectorEnv(num_envs, config, task=task, **kwargs)
         elif vector_env.num_envs != num_envs:

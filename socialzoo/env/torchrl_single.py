@@ -12,7 +12,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, MultiCategorical, OneHot, TensorSpec, Unbounded
 from torchrl.envs import EnvBase
 
-from socialzoo.core.validation import check_seed
+from socialzoo.core.validation import check_int, check_seed
 from socialzoo.env.gym_env import TaskAdapter, one_robot
 from socialzoo.env.tasks.base import Task, batch_actions
 
@@ -116,8 +116,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         **kwargs: Any,
     ) -> None:
         name = type(self).__name__
-        if not isinstance(num_envs, int) or isinstance(num_envs, bool) or num_envs < 1:
-            raise ValueError(f"{name}: num_envs must be an int >= 1, got {num_envs!r}")
+        check_int(name, "num_envs", num_envs, low=1)
         self.task = box_observation(one_robot(self.task_class(task)(config, num_envs, **kwargs), name), name)
         self.config = self.task.config
         super().__init__(device=device, batch_size=torch.Size([num_envs]))

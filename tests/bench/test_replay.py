@@ -169,7 +169,7 @@ def test_bad_recorder_arguments(rooms):
     scenario = benchmark_scenario(config, 1, m)
     with pytest.raises(ValueError, match="laser_stride must be an int >= 1, got 0"):
         record_episode(config, scenario, make_policy("ref"), laser_stride=0)
-    with pytest.raises(ValueError, match="laser_rays must be None or an int >= 0, got -1"):
+    with pytest.raises(ValueError, match="laser_rays must be an int >= 0 or None, got -1"):
         record_episode(config, scenario, make_policy("ref"), laser_rays=-1)
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from socialzoo.core.validation import check_int
+
 if TYPE_CHECKING:
     from socialzoo.env.tasks.base import Task
 
@@ -51,6 +53,5 @@ def make_task(task: str | type[Task], batch_size: int = 1, config: Any = None, *
     Raises:
         ValueError: an unknown task, a bad batch size, or a bad config field (naming it).
     """
-    if not isinstance(batch_size, int) or isinstance(batch_size, bool) or batch_size < 1:
-        raise ValueError(f"batch_size must be an int >= 1, got {batch_size!r}")
+    check_int("make_task", "batch_size", batch_size, low=1)
     return task_class(task)(config, batch_size, **kwargs)
