@@ -8,6 +8,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.policy_file import mlp_forward
@@ -15,18 +16,13 @@ from socialzoo.env.policy_file import mlp_forward
 
 @contextlib.contextmanager
 def single_blas_thread() -> Iterator[None]:
-    """Limit numpy's BLAS to one thread inside the block (threadpoolctl; without it, nothing).
+    """Limit numpy's BLAS to one thread inside the block (threadpoolctl).
 
     The evaluation runs with one BLAS thread: its products are small, and OpenBLAS's own threads, on
     a machine whose cores are already busy with the evaluation's worker processes, cost more in
     waiting than they save (measured: 64 x 256 by 256 x 256 took 27 ms with the default threads
     beside other work, 1.2 ms with one).
     """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - a dependency of the package
-        yield
-        return
     with threadpool_limits(limits=1, user_api="blas"):
         yield
 
