@@ -32,8 +32,7 @@ from socialzoo.agents.demonstrations import (
 from socialzoo.bench.experiment import source_digest
 from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.runner import BatchedRunner, RunSpec, Trial, env_config_for
-from socialzoo.bench.tables import write_text_atomic
-from socialzoo.core.files import json_text
+from socialzoo.core.files import write_json
 from socialzoo.core.validation import check_int
 from socialzoo.env.observation import describe_observation
 from socialzoo.nav.subpolicies import ACTION_NAMES
@@ -261,7 +260,7 @@ def record_demonstrations(path: str | Path, config: DemoConfig, *, progress: boo
             arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
             _write_npz(parts / name, arrays)
             index["chunks"][name] = {"episodes": [lo, hi], "steps": len(arrays["action"])}
-            write_text_atomic(index_path, json_text(index, indent=1, sort_keys=True) + "\n")
+            write_json(index_path, index)
             logger.info("demonstrations: wrote %s (episodes %d-%d)", parts / name, lo, hi - 1)
     finally:
         bar.close()

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.guideline_metrics import GuidelineParams, Trajectories, guideline_metrics
-from socialzoo.bench.tables import write_text_atomic
+from socialzoo.core.files import write_text_atomic
 
 FORMAT = "socialzoo-episode-log"
 VERSION = 1

@@ -25,9 +25,8 @@ from socialzoo.bench.tables import (
     remove_outputs,
     summarize,
     write_tables,
-    write_text_atomic,
 )
-from socialzoo.core.files import json_text
+from socialzoo.core.files import json_text, write_text_atomic
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_int
 from socialzoo.data.fetch import sha256

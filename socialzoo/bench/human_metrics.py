@@ -253,7 +253,8 @@ def write_humans_tables(summary: list[dict[str, Any]], out_dir: Any, *, title: s
     """humans.csv (every column) and humans.md (a table per map, metrics as rows) in out_dir."""
     from pathlib import Path
 
-    from socialzoo.bench.tables import interval_text, markdown_table, write_csv, write_text_atomic
+    from socialzoo.bench.tables import interval_text, markdown_table, write_csv
+    from socialzoo.core.files import write_text_atomic
 
     out = Path(out_dir)
     columns = ["policy", "map", "trials"] + [

@@ -483,8 +483,9 @@ def run_suite(
         write_suite_page,
         write_suite_tables,
     )
-    from socialzoo.bench.tables import remove_outputs, write_text_atomic
+    from socialzoo.bench.tables import remove_outputs
     from socialzoo.bench.task_benchmark import evaluate_stored, summarize, table_entry
+    from socialzoo.core.files import write_text_atomic
     from socialzoo.core.metrics import names as metric_names
 
     start = time.perf_counter()

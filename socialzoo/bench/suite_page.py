@@ -23,9 +23,9 @@ from socialzoo.bench.tables import (
     policy_labels,
     value_key,
     write_csv,
-    write_text_atomic,
 )
 from socialzoo.bench.task_benchmark import STORE_FILE
+from socialzoo.core.files import write_text_atomic
 from socialzoo.core.metrics import axis_label, metric
 
 if TYPE_CHECKING:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 from collections import Counter
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -23,7 +22,7 @@ from socialzoo.bench.stats import (
     mean_interval,
     rate_interval,
 )
-from socialzoo.core.files import read_text
+from socialzoo.core.files import read_text, write_text_atomic
 from socialzoo.core.metrics import METRICS, metric, registered, table_heading
 from socialzoo.env.metrics import failure_cause
 
@@ -319,21 +318,6 @@ def write_csv(
             cells = {c: "" if isinstance(v, float) and math.isnan(v) else v for c, v in cells.items()}
         writer.writerow(cells)
     return write_text_atomic(path, text.getvalue())
-
-
-def write_text_atomic(path: str | Path, text: str) -> Path:
-    """Write a text file whole or not at all: a reader, or another run writing the same file at
-    the same time, never sees half of it (a temporary file of this process, then a rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with tmp.open("w", encoding="utf-8", newline="") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
 
 
 def remove_outputs(folder: str | Path, stems: Iterable[str], suffixes: Sequence[str]) -> None:

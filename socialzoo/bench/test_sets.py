@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from socialzoo.core.files import write_text_atomic
 from socialzoo.maps.map_file import Map, load_map, map_sha256
 from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
@@ -201,7 +202,4 @@ def _write(path: Path, base: TestSet, m: Map, digest: str, scenarios: list[Scena
         "scenario": dataclasses.asdict(base.cfg),
         "scenarios": [s.to_json() for s in scenarios],
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, separators=(",", ":")) + "\n")
-    tmp.replace(path)
+    write_text_atomic(path, json.dumps(data, separators=(",", ":")) + "\n")

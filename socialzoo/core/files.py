@@ -1,5 +1,6 @@
 """Reading the text and JSON files users point at, with one error style: a file that cannot be read raises the
-loader's own named error, with the file's path and what the file should have been. Records go out as strict JSON."""
+loader's own named error, with the file's path and what the file should have been; and writing files whole or
+not at all, records as strict JSON."""
 
 from __future__ import annotations
 
@@ -102,10 +103,22 @@ def json_text(value: Any, **dumps: Any) -> str:
     return json.dumps(finite_json(value), allow_nan=False, **dumps)
 
 
-def write_json(path: str | os.PathLike[str], data: Any) -> None:
-    """Write `data` as indented strict JSON (json_text) with sorted keys, through a temporary file
-    renamed into place, so a reader never sees half of it."""
+def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
+    """Write a text file whole or not at all: a reader, or another run writing the same file at
+    the same time, never sees half of it (a temporary file of this process, then a rename)."""
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json_text(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with tmp.open("w", encoding="utf-8", newline="") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def write_json(path: str | os.PathLike[str], data: Any) -> Path:
+    """Write `data` as indented strict JSON (json_text) with sorted keys, whole or not at all
+    (`write_text_atomic`): a reader never sees half of it."""
+    return write_text_atomic(path, json_text(data, indent=1, sort_keys=True) + "\n")

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import html
 import json
-import os
 import re
 from collections.abc import Sequence
 from functools import cache
 from importlib import resources
 from pathlib import Path
 
+from socialzoo.core.files import write_text_atomic
 from socialzoo.render.replay_data import Encoding, EpisodeTrace, ReplayScene, encode_replay
 
 
@@ -80,14 +80,6 @@ def write_replay_html(
     if path.suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"write_replay_html: {path} must end in .html")
     text = replay_document(scene, traces, encoding=encoding, view=view)
-    path.parent.mkdir(parents=True, exist_ok=True)
     # Whole or not at all (a temporary file, then a rename): a page already there is kept by a rerun
     # (socialzoo suite's replays), so a half-written one (a killed run, a full disk) would stay half.
-    # Not bench.tables.write_text_atomic: render sits below bench.
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    return write_text_atomic(path, text)

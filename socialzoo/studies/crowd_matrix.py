@@ -17,7 +17,8 @@ from socialzoo.bench.experiment import BenchmarkConfig, hashed_people, run_bench
 from socialzoo.bench.runner import Backend
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, remove_outputs, write_csv, write_text_atomic
+from socialzoo.bench.tables import policy_label, remove_outputs, write_csv
+from socialzoo.core.files import write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario_sets import TestSet

@@ -9,8 +9,9 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.human_metrics import HUMAN_METRIC_KEYS, HUMAN_METRIC_LABELS, summarize_humans
-from socialzoo.bench.tables import markdown_table, write_csv, write_text_atomic
+from socialzoo.bench.tables import markdown_table, write_csv
 from socialzoo.bench.test_sets import family_validation_set
+from socialzoo.core.files import write_text_atomic
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario_sets import TestSet, validation_set
 from socialzoo.studies.crowd_matrix import run_trials

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from socialzoo.bench.human_metrics import HumanEpisodeMetrics
-from socialzoo.bench.tables import write_csv, write_text_atomic
+from socialzoo.bench.tables import write_csv
+from socialzoo.core.files import write_text_atomic
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.people import People, without_robots

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import write_text_atomic
+from socialzoo.core.files import write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.human_compare import (
     COLLISION_KEYS,
