@@ -117,12 +117,13 @@ def step_world(
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
     people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
-    anyone_moved, still = True, None
+    anyone_moved, moved = True, None
     if sparse_people:
         moved = state.human_mask & (state.human_model != REPLAY)
-        anyone_moved, still = bool(moved.any()), ~moved
+        anyone_moved = bool(moved.any())
         people_step = partial(step_people_packed, moved=moved)
-    target = state.human_target if anyone_moved else None
+    # The targets of the people a model moves (on a recorded scene only theirs are read).
+    target = state.human_target_of(moved) if anyone_moved else None
     if target is not None:
         human_pos, human_vel, blocked = people_step(
             state.human_pos,
@@ -164,7 +165,7 @@ def step_world(
         target,
         # Only the people a model moved: the replay places its replayed people, points one who
         # starts to react or enters a slot at its route itself, and absent slots stay absent.
-        still,
+        None if moved is None else ~moved,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot
