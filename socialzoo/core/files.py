@@ -83,9 +83,13 @@ def read_json(
 def finite_json(value: Any) -> Any:
     """`value` (dicts, lists and tuples of JSON values) with every float that is not finite (NaN, an
     infinity) as None: JSON has no such numbers, and Python's bare NaN in a file is refused by strict
-    readers (JavaScript's JSON.parse, json.loads with parse_constant); a record reads it back as null."""
+    readers (JavaScript's JSON.parse, json.loads with parse_constant); a record reads it back as null.
+    A numpy float scalar (np.float32, which json cannot write) is a Python float here."""
     if isinstance(value, float):
         return value if math.isfinite(value) else None
+    if getattr(getattr(value, "dtype", None), "kind", None) == "f" and getattr(value, "shape", None) == ():
+        number = float(value)
+        return number if math.isfinite(number) else None
     if isinstance(value, dict):
         return {k: finite_json(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):

@@ -4,7 +4,6 @@ ADE of socialzoo.studies.realism, leave-one-scene-out, and the presets fitted on
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import math
 import sys
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 
 # The shipped presets (fitted on all five scenes) live with the crowd models.
+from socialzoo.core.files import json_text
 from socialzoo.humans.presets import PRESETS as PRESETS
 
 _LOG = logging.getLogger(__name__)
@@ -298,8 +298,8 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
         "versions": versions(),
         "seconds": round(time.perf_counter() - started, 1),
     }
-    (out / "calibration.json").write_text(json.dumps(record, indent=2) + "\n")
-    (out / f"{config.model}-eth-ucy.json").write_text(json.dumps(preset, indent=2) + "\n")
+    (out / "calibration.json").write_text(json_text(record, indent=2) + "\n")
+    (out / f"{config.model}-eth-ucy.json").write_text(json_text(preset, indent=2) + "\n")
     _write_tables(record, out)
     return record
 

@@ -18,7 +18,7 @@ from socialzoo.bench.runner import Backend
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, remove_outputs, write_csv
-from socialzoo.core.files import write_text_atomic
+from socialzoo.core.files import json_text, write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario_sets import TestSet
@@ -256,7 +256,7 @@ def crowd_matrix(
                     row[f"{key}_high"] = ci.high * scale
                 rows.append(row)
     files = [write_matrix_csv(rows, out / "matrix.csv"), write_matrix_md(rows, config, out / "matrix.md")]
-    files.append(write_text_atomic(out / "matrix.json", json.dumps(rows, indent=1, default=float) + "\n"))
+    files.append(write_text_atomic(out / "matrix.json", json_text(rows, indent=1, default=float) + "\n"))
     if figures:
         files.append(plot_matrix(rows, config, out / "matrix.png"))
     else:  # an older run's heatmaps would not match these tables

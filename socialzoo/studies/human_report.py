@@ -4,7 +4,6 @@ robot, measured as pedestrian studies measure crowds."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import re
 from collections.abc import Mapping
@@ -16,7 +15,7 @@ import numpy as np
 
 from socialzoo.bench.human_metrics import HumanEpisodeMetrics
 from socialzoo.bench.tables import write_csv
-from socialzoo.core.files import write_text_atomic
+from socialzoo.core.files import json_text, write_text_atomic
 from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.people import People, without_robots
@@ -323,7 +322,7 @@ def human_report(
     out.mkdir(parents=True, exist_ok=True)
     files = write_report(results, cfg, out)
     record = {**asdict(cfg), "humans": list(cfg.humans), "env_overrides": dict(cfg.env_overrides)}
-    files.append(write_text_atomic(out / "config.json", json.dumps(record, indent=2, default=str) + "\n"))
+    files.append(write_text_atomic(out / "config.json", json_text(record, indent=2, default=str) + "\n"))
     if figures:
         files += [plot_walk(r, out) for r in results]
     return results, files

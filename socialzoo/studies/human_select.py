@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.core.files import write_text_atomic
+from socialzoo.core.files import json_text, write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.human_compare import (
     COLLISION_KEYS,
@@ -213,7 +213,7 @@ def select_humans(
         "checkpoints": rows[:-1],
         "social_force": rows[-1],
     }
-    write_text_atomic(out / "selection.json", json.dumps(record, indent=1) + "\n")
+    write_text_atomic(out / "selection.json", json_text(record, indent=1) + "\n")
     _write_tables(rows, best, out, record["scenarios"])
     return Selection(chosen, int(best["frames"]), bool(best["met"]), rows, out)
 

@@ -4,7 +4,6 @@ replayed, against its own track (issue 37, item 4; protocol: docs/humans.md, "Re
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import platform
 import sys
@@ -18,6 +17,7 @@ import numpy as np
 from socialzoo.bench.progress import progress_bar
 from socialzoo.bench.tables import markdown_table as table_lines
 from socialzoo.bench.tables import write_csv
+from socialzoo.core.files import json_text
 from socialzoo.studies.realism_cases import (
     OBS_FRAMES,
     PRED_FRAMES,
@@ -124,7 +124,7 @@ def run_realism(
         "versions": versions(),
         "seconds": round(time.perf_counter() - started, 1),
     }
-    (out / "realism.json").write_text(json.dumps(record, indent=2, default=str) + "\n")
+    (out / "realism.json").write_text(json_text(record, indent=2, default=str) + "\n")
     return results
 
 

@@ -18,6 +18,15 @@ def test_numbers_json_has_no_word_for_are_written_as_null(tmp_path):
     assert not list(tmp_path.glob("*.tmp"))
 
 
+def test_numpy_float_scalars_are_numbers_and_their_nan_is_null():
+    record = {"a": np.float32(0.5), "b": np.float32("nan"), "c": [np.float16("-inf"), np.int64(3)]}
+    text = json_text(record, default=int)
+    assert json.loads(text, parse_constant=pytest.fail) == {"a": 0.5, "b": None, "c": [None, 3]}
+
+
 def test_a_nan_that_a_converter_returns_is_refused():
+    class Reading:
+        """A value json cannot write, which the converter turns into NaN."""
+
     with pytest.raises(ValueError, match="not JSON compliant"):
-        json_text({"x": np.float32(1)}, default=lambda v: math.nan)
+        json_text({"x": Reading()}, default=lambda v: math.nan)

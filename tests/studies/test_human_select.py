@@ -54,7 +54,7 @@ def test_select_humans_compares_every_checkpoint_and_keeps_one(rooms_map_path, w
     assert result.met == fast["met"] and social["file"] == "social_force"
     out = run / "selection"
     assert (out / "humans.safetensors").read_bytes() == result.chosen.read_bytes()
-    record = json.loads((out / "selection.json").read_text())
+    record = json.loads((out / "selection.json").read_text(), parse_constant=pytest.fail)
     assert record["chosen"]["frames"] == 1000 and record["scenarios"] == "rooms-val"
     assert len(record["checkpoints"]) == 2 and "(chosen)" in (out / "selection.md").read_text()
     assert (out / "selection.csv").read_text().count("\n") == 4

@@ -179,7 +179,7 @@ def test_realism_command_on_a_synthetic_cache(cache, tmp_path, capsys):
     assert main([*args, "--out", str(out), "--no-progress", "--no-figures"]) == 0
     table = (out / "realism.md").read_text()
     assert "| one | cv |" in table and "| overall | orca |" in table
-    record = json.loads((out / "realism.json").read_text())
+    record = json.loads((out / "realism.json").read_text(), parse_constant=pytest.fail)
     assert record["seed"] == 0 and "numpy" in record["versions"]
     assert main(["humans", "realism", "--scenes", "nowhere", "--cache", str(cache), "--out", str(out)]) == 2
     # A model named twice ran twice, its rows twice in every table.
@@ -203,7 +203,7 @@ def test_calibrate_command_on_a_synthetic_cache(cache, tmp_path):
     args = ["humans", "calibrate", "--model", "orca", "--scenes", "one,two", "--cache", str(cache)]
     tiny = ["--persons", "2", "--windows", "1", "--generations", "1", "--popsize", "2", "--no-progress"]
     assert main([*args, *tiny, "--out", str(out)]) == 0
-    record = json.loads((out / "calibration.json").read_text())
+    record = json.loads((out / "calibration.json").read_text(), parse_constant=pytest.fail)
     assert [f["held_out"] for f in record["folds"]] == ["one", "two"]
     assert json.loads((out / "orca-eth-ucy.json").read_text())["model"] == "orca"
 

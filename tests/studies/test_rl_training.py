@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from socialzoo.studies.rl_training import train_curve_runs
 
 TINY = {"map": "open_room", "family": "circle_crossing", "max_steps": 100, "total_steps": 200}
@@ -52,7 +54,7 @@ def test_steps_to_reference_trains_evaluates_and_writes_the_answer(tmp_path, roo
     ref = record["reference"]["success_rate"]
     expected = next((r["step"] for r in record["checkpoints"] if r["success_rate"] >= ref), None)
     assert record["steps"] == expected and all(0.0 <= x <= 1.0 for x in rates)
-    saved = json.loads((tmp_path / "steps_to_ref.json").read_text())
+    saved = json.loads((tmp_path / "steps_to_ref.json").read_text(), parse_constant=pytest.fail)
     assert saved["steps"] == record["steps"] and saved["total_steps"] == 200
     assert {"steps_to_ref.csv", "steps_to_ref.png", "steps_to_ref.pdf"} <= {
         p.name for p in tmp_path.iterdir()
