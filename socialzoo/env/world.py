@@ -150,9 +150,11 @@ def step_world(
     if robot_visible and anyone_moved:
         # People the social force moves (its own and learned people, whose desired velocity it
         # follows) do not press deeper into a robot they touch (socialzoo.humans.motion.
-        # keep_off_robots: the model has no body force); ORCA people keep off by construction.
+        # keep_off_robots: the model has no body force); ORCA people keep off by construction, and
+        # on a recorded scene the replay places its replayed people.
         human_pos, human_vel = keep_off_robots(
-            state.human_pos, human_pos, human_vel, state.human_mask & (state.human_model != ORCA),
+            state.human_pos, human_pos, human_vel,
+            (state.human_mask if moved is None else moved) & (state.human_model != ORCA),
             state.robot_pose[..., :2], cfg.human_collision_distance, walls,
         )  # fmt: skip
     waypoint, direction = advance_waypoints(

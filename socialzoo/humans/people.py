@@ -84,21 +84,23 @@ def _orca_agents(  # type: ignore[no-untyped-def]
 
 @kernel
 def _census(mask, model, group, orca, replay):
-    """(any present ORCA person, any present person a force walks, anyone in a walking group) of
-    people (B, H) in one pass: a step with social-force people only skips the others' code, and
-    one with ORCA people and people on their recorded tracks (whose step the replay overwrites)
-    skips the forces."""
-    has_orca = has_other = has_group = False
+    """(any present ORCA person, any present person a force walks, anyone in a walking group, any
+    present person on a recorded track) of people (B, H) in one pass: a step with social-force
+    people only skips the others' code, and one with ORCA people and people on their recorded
+    tracks (whose step the replay overwrites) skips the forces."""
+    has_orca = has_other = has_group = has_replay = False
     for b in range(mask.shape[0]):
         for h in range(mask.shape[1]):
             if mask[b, h]:
                 if model[b, h] == orca:
                     has_orca = True
-                elif model[b, h] != replay:
+                elif model[b, h] == replay:
+                    has_replay = True
+                else:
                     has_other = True
             if group[b, h] >= 0:
                 has_group = True
-    return has_orca, has_other, has_group
+    return has_orca, has_other, has_group, has_replay
 
 
 def step_people(
@@ -129,7 +131,8 @@ def step_people(
         target: (B, H, 2) waypoints, world frame, m.
         pref_speed: (B, H) preferred speeds, m/s (the social force's speed cap).
         mask: (B, H) present people.
-        model: (B, H) SOCIAL_FORCE, ORCA or LEARNED (socialzoo.humans.models).
+        model: (B, H) SOCIAL_FORCE, ORCA or LEARNED (socialzoo.humans.models); REPLAY people
+            (on recorded tracks, which the replay places) stand where they are.
         group: (B, H) walking group (its first member's slot), -1 for none.
         robot_pos: (B, R, 2) robots the people react to, world frame, m (R = 0: none).
         robot_vel: (B, R, 2) their velocity vectors, m/s.
@@ -141,7 +144,7 @@ def step_people(
     Returns:
         (pos, vel, blocked): the new positions and velocities, and the people a wall stopped.
     """
-    has_orca, has_other, has_group = _census(mask, model, group, ORCA, REPLAY)
+    has_orca, has_other, has_group, has_replay = _census(mask, model, group, ORCA, REPLAY)
     orca = mask & (model == ORCA) if has_orca else None
     if has_orca and not has_other:
         # Nobody feels a force: only the wall distances of the motion step are needed.
@@ -158,7 +161,10 @@ def step_people(
         velocity = orca_people_velocities(
             pos, vel, target, pref_speed, mask, orca, robot_pos, robot_vel, walls, cfg
         )
-    return integrate_humans(pos, vel, accel, pref_speed, mask, walls, wall_dist, cfg.dt, velocity, orca)
+    # Replayed people are where their recording puts them after the step, at its velocity
+    # (socialzoo.env.replay), so the motion step leaves them standing where they were.
+    moving = mask & (model != REPLAY) if has_replay else mask
+    return integrate_humans(pos, vel, accel, pref_speed, moving, walls, wall_dist, cfg.dt, velocity, orca)
 
 
 def step_people_packed(

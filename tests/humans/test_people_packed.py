@@ -76,3 +76,17 @@ def test_packed_learned_people_step_exactly_as_unpacked() -> None:
     stepped = mask & moved.any(axis=1, where=mask, keepdims=True)
     for whole, part in zip(full, packed, strict=True):
         assert np.array_equal(whole[stepped], part[stepped])
+
+
+def test_people_on_their_recorded_tracks_are_left_where_they_are() -> None:
+    # The replay puts them where their recording says, at its velocity, after the step; the motion
+    # step moves the others and leaves them standing where they were.
+    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
+    args = _crowd(1)
+    pos, vel, mask, model = args[0], args[1], args[4], args[5]
+    new_pos, new_vel, _ = step_people(*args, walls, WorldConfig(dt=0.1))
+    replayed = mask & (model == REPLAY)
+    assert replayed.any() and (vel[replayed] != 0).all()
+    assert np.array_equal(new_pos[replayed], pos[replayed]) and not new_vel[replayed].any()
+    walking = mask & (model != REPLAY)
+    assert (new_pos[walking] != pos[walking]).any(axis=1).all()
