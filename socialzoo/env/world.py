@@ -167,7 +167,7 @@ def step_world(
         target,
         # Only the people a model moved: the replay places its replayed people, points one who
         # starts to react or enters a slot at its route itself, and absent slots stay absent.
-        None if moved is None else ~moved,
+        moved,
     )
     robot_pose, robot_vel = step_robot(
         state.robot_pose, state.robot_vel, robot_command, robot_halt, cfg.dt, cfg.robot

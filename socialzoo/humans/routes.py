@@ -15,7 +15,7 @@ def advance_waypoints(
     direction: np.ndarray,
     radius: float,
     target: np.ndarray | None = None,
-    keep: np.ndarray | None = None,
+    moving: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next waypoint index and direction for every human.
 
@@ -34,10 +34,10 @@ def advance_waypoints(
             for its models already: read instead of the route, whose second pass over a long
             recorded route array misses the cache again. A step whose models read no target
             (replayed people only) gathers none and leaves this None.
-        keep: (B, H) bool, people whose waypoint and direction stay as they are, or None (nobody):
-            on a recorded scene all but those a model moved (the replay places its replayed people
-            on their tracks and points one at its route itself when it starts to react or enters
-            a slot). Their routes are not read.
+        moving: (B, H) bool, the people whose waypoint advances, or None (everyone); the others
+            keep theirs and their routes are not read (on a recorded scene only the people a model
+            moved advance: the replay places its replayed people on their tracks and points one at
+            its route itself when it starts to react or enters a slot).
 
     Returns:
         (waypoint, direction), new arrays of the same shapes.
@@ -47,29 +47,29 @@ def advance_waypoints(
     new_direction = np.empty(np.shape(direction), dtype=np.asarray(direction).dtype)
     # The current waypoints as points[b, h, w if at_waypoint else 0]: one kernel either way.
     points, at_waypoint = (route, True) if target is None else (target[:, :, None], False)
-    kept = _NOBODY if keep is None else keep
+    everyone = moving is None
     _advance(
-        pos, points, at_waypoint, route_len, waypoint, direction, radius * radius, kept, keep is not None,
-        new_waypoint, new_direction,
+        pos, points, at_waypoint, route_len, waypoint, direction, radius * radius,
+        _EVERYONE if everyone else moving, everyone, new_waypoint, new_direction,
     )  # fmt: skip
     return new_waypoint, new_direction
 
 
-# keep=None's stand-in: one array type for the kernel whether or not anyone is kept.
-_NOBODY = np.zeros((1, 1), dtype=bool)
+# moving=None's stand-in: one array type for the kernel whether or not everyone moves.
+_EVERYONE = np.ones((1, 1), dtype=bool)
 
 
 @kernel
 def _advance(
-    pos, points, at_waypoint, route_len, waypoint, direction, radius2, keep, keeping, new_waypoint, new_direction
+    pos, points, at_waypoint, route_len, waypoint, direction, radius2, moving, everyone, new_waypoint, new_direction
 ):  # fmt: skip
     """`advance_waypoints` in one pass over (B, H); the current waypoint is points[b, h, k], k the
-    waypoint index if at_waypoint (points the route), else 0 (points the gathered targets); with
-    `keeping`, the people `keep` marks keep theirs (their points are not read)."""
+    waypoint index if at_waypoint (points the route), else 0 (points the gathered targets); unless
+    `everyone`, only the people `moving` marks advance (the others' points are not read)."""
     for b in range(waypoint.shape[0]):
         for h in range(waypoint.shape[1]):
             d, w = direction[b, h], waypoint[b, h]
-            if keeping and keep[b, h]:
+            if not (everyone or moving[b, h]):
                 new_direction[b, h] = d
                 new_waypoint[b, h] = w
                 continue

@@ -167,7 +167,7 @@ def test_kept_people_keep_their_waypoint_and_the_others_advance_as_before():
     # A kept person's route is never read: NaN there changes nothing.
     route_read = np.where(keep[:, :, None, None], np.nan, route)
     moved = advance_waypoints(pos, route, route_len, waypoint, direction, 0.5)
-    kept = advance_waypoints(pos, route_read, route_len, waypoint, direction, 0.5, keep=keep)
+    kept = advance_waypoints(pos, route_read, route_len, waypoint, direction, 0.5, moving=~keep)
     for got, all_moved, before in zip(kept, moved, (waypoint, direction), strict=True):
         np.testing.assert_array_equal(got[keep], before[keep])
         np.testing.assert_array_equal(got[~keep], all_moved[~keep])
