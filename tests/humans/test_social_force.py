@@ -140,12 +140,16 @@ def test_waypoints_shuttle_between_ends():
     assert waypoint[0, 0] == 0
 
 
+def _random_routes(rng: np.random.Generator, h: int):
+    """(route, route_len, waypoint, direction) of 3 worlds of h people on random routes of up to 4 points."""
+    route = rng.uniform(-2.0, 2.0, (3, h, 4, 2))
+    route_len = rng.integers(1, 5, (3, h))
+    return route, route_len, rng.integers(0, route_len), rng.choice([-1, 1], (3, h))
+
+
 def test_waypoints_advance_alike_from_the_route_or_the_gathered_targets():
     rng = np.random.default_rng(0)
-    route = rng.uniform(-2.0, 2.0, (3, 5, 4, 2))
-    route_len = rng.integers(1, 5, (3, 5))
-    waypoint = rng.integers(0, route_len)
-    direction = rng.choice([-1, 1], (3, 5))
+    route, route_len, waypoint, direction = _random_routes(rng, 5)
     # Half the people stand on their waypoint, so some advance and some turn back.
     target = np.take_along_axis(route, waypoint[:, :, None, None], axis=2)[:, :, 0]
     pos = np.where(rng.random((3, 5, 1)) < 0.5, target, target + 3.0)
@@ -158,10 +162,7 @@ def test_waypoints_advance_alike_from_the_route_or_the_gathered_targets():
 
 def test_kept_people_keep_their_waypoint_and_the_others_advance_as_before():
     rng = np.random.default_rng(1)
-    route = rng.uniform(-2.0, 2.0, (3, 6, 4, 2))
-    route_len = rng.integers(1, 5, (3, 6))
-    waypoint = rng.integers(0, route_len)
-    direction = rng.choice([-1, 1], (3, 6))
+    route, route_len, waypoint, direction = _random_routes(rng, 6)
     pos = np.take_along_axis(route, waypoint[:, :, None, None], axis=2)[:, :, 0]  # all on their waypoint
     keep = rng.random((3, 6)) < 0.5
     # A kept person's route is never read: NaN there changes nothing.
