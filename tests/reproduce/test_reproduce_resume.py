@@ -113,10 +113,12 @@ def test_a_terminated_command_records_its_part_and_resumes(tmp_path):
     work = tmp_path / settings_hash(quick_settings())
     command = [sys.executable, "-m", "socialzoo", "reproduce", "--out", str(tmp_path), "--quick"]
     child = subprocess.Popen([*command, "--only", "demos", "--no-progress"])
+    # Stop it inside the demos part, whose first act is to make its folder (a fixed sleep after the
+    # settings file appeared was too short on a loaded machine).
     deadline = time.monotonic() + 120
-    while not (work / "settings.json").exists() and child.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.1)
-    time.sleep(0.5)  # inside the demos part
+    while not (work / "demos").is_dir() and child.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert child.poll() is None, "the demos part ended before it could be stopped"
     child.send_signal(signal.SIGTERM)
     assert child.wait(timeout=60) != 0
     sessions = json.loads((work / "timings.json").read_text())["demos"]["sessions"]
