@@ -18,6 +18,7 @@ __all__ = [
     "check_policy_spec",
     "make_policy",
     "policy_file",
+    "policy_file_or_shipped",
     "register_policy",
     "shipped_policy_file",
     "split_policy_spec",
@@ -149,6 +150,17 @@ def policy_file(spec: str) -> Path | None:
     if path is not None:
         return Path(path)
     return shipped_policy_file(key) if hasattr(_policy_class(key), "load") else None
+
+
+def policy_file_or_shipped(value: str | Path) -> Path:
+    """`value` as a file path; where no such file exists and `value` is a learned policy's registry
+    name with a shipped file ("dagger"), that file: so a command that takes a policy file also
+    takes a shipped policy by name, from a checkout or an installed package alike."""
+    path = Path(value)
+    key = str(value).strip().lower()
+    if not path.exists() and key in POLICIES and hasattr(_policy_class(key), "load"):
+        return shipped_policy_file(key) or path
+    return path
 
 
 def check_policy_spec(spec: str) -> str:

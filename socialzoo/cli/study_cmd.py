@@ -30,8 +30,8 @@ def register(subparsers: Any) -> None:
         "--learned",
         nargs="*",
         default=[],
-        metavar="NAME:FILE",
-        help="learned MlpPolicy files to trace beside Ref",
+        metavar="NAME[:FILE]",
+        help="learned MlpPolicy files to trace beside Ref (a name alone: its shipped file, e.g. dagger)",
     )
     tradeoff.add_argument(
         "--halt-offsets",

@@ -12,12 +12,15 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.agents import POLICIES, check_policy_spec, policy_file, split_policy_spec
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.bench.runner import RunSpec, Trial, env_config_for, run_chunk
 from socialzoo.core.validation import check_int
 from socialzoo.nav.subpolicies import HALT
 from socialzoo.scenarios.scenario_sets import validation_set
 
+# The class of the policies whose Halt score the study shifts (socialzoo.agents.POLICIES).
+_MLP_POLICY = "socialzoo.agents.mlp:MlpPolicy"
 GRID = {
     "corridor_half_width": (0.45, 0.62, 0.8),
     "lookahead_margin": (0.4, 0.9, 1.5),
@@ -33,7 +36,8 @@ class RefTradeoffConfig:
         trials: validation scenarios per setting (the first ones of `<map>-val`).
         workers: settings evaluated side by side (local processes).
         map: the map whose validation set is driven.
-        learned: learned MlpPolicy files ("NAME:FILE") traced beside Ref.
+        learned: learned MlpPolicy files traced beside Ref: "NAME:FILE", or a learned policy's
+            name alone ("dagger") for its shipped file.
         halt_offsets: Halt score offsets of each learned policy.
     """
 
@@ -47,8 +51,13 @@ class RefTradeoffConfig:
         check_int("RefTradeoffConfig", "trials", self.trials, low=1)
         check_int("RefTradeoffConfig", "workers", self.workers, low=1)
         for spec in self.learned:
-            if ":" not in spec:
-                raise ValueError(f"RefTradeoffConfig.learned must be NAME:FILE specs, got {spec!r}")
+            try:
+                check_policy_spec(spec)
+            except ValueError as err:
+                raise ValueError(f"RefTradeoffConfig.learned: {err}") from None
+            if POLICIES[split_policy_spec(spec)[0]] != _MLP_POLICY:
+                mlp = ", ".join(k for k, v in POLICIES.items() if v == _MLP_POLICY)
+                raise ValueError(f"RefTradeoffConfig.learned: {spec!r} is not a learned MlpPolicy ({mlp})")
 
 
 @dataclass(frozen=True)
@@ -96,16 +105,20 @@ def evaluate(map_name: str, trials: int, params: dict[str, float], policy: str =
 
 def with_halt_offset(spec: str, offset: float, folder: Path) -> str:
     """The spec ("NAME:FILE") of a copy of the learned policy `spec` (an MlpPolicy file's
-    "NAME:FILE") whose Halt score is raised by `offset`, written into `folder`."""
-    name, _, path = spec.partition(":")
+    "NAME:FILE", or a learned policy's name for its shipped file) whose Halt score is raised by
+    `offset`, written into `folder`."""
+    name = split_policy_spec(spec)[0]
+    path = policy_file(spec)
+    if path is None:
+        raise ValueError(f"policy {spec!r} has no file")
     policy = MlpPolicy.load(path)
     weight, bias = policy.layers[-1]
     shifted = bias.copy()
     shifted[HALT] += offset
     policy.layers = [*policy.layers[:-1], (weight, shifted)]
     header = dict(policy.header)
-    header["training"] = {**header.get("training", {}), "halt_offset": offset, "from": path}
-    out = policy.save(folder / f"{Path(path).stem}_{len(list(folder.iterdir()))}.safetensors", header)
+    header["training"] = {**header.get("training", {}), "halt_offset": offset, "from": spec}
+    out = policy.save(folder / f"{path.stem}_{len(list(folder.iterdir()))}.safetensors", header)
     return f"{name}:{out}"
 
 
@@ -124,11 +137,11 @@ def run_ref_tradeoff(config: RefTradeoffConfig) -> RefTradeoff:
     success, mean blame, human-collision and not-reached episodes, and whether some other setting has at least
     its success with less blame ("dominated"). The paper's setting is (0.62, 0.9, 0.8).
 
-    `learned` ("NAME:FILE") adds a learned policy's own trade-off on the same scenarios: the policy with its
-    Halt score raised by each of `halt_offsets` (a copy of the file with the last layer's Halt bias shifted,
-    written to a temporary folder), so it halts more (positive) or less (negative). Its rows say whether some
-    Ref setting has at least their success with less blame: a learner that gets past Ref's front has a row
-    that no Ref setting dominates at Ref's success or more.
+    `learned` ("NAME:FILE", or a learned policy's name for its shipped file) adds a learned policy's own trade-off
+    on the same scenarios: the policy with its Halt score raised by each of `halt_offsets` (a copy of the file with
+    the last layer's Halt bias shifted, written to a temporary folder), so it halts more (positive) or less
+    (negative). Its rows say whether some Ref setting has at least their success with less blame: a learner that
+    gets past Ref's front has a row that no Ref setting dominates at Ref's success or more.
     """
     settings = ref_settings()
     start = time.perf_counter()

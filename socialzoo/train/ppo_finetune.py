@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.agents import policy_file_or_shipped
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
 from socialzoo.train.checks import check_int, check_number
@@ -29,7 +30,8 @@ class Args:
     """Fine-tune a learned policy file with PPO (Stable-Baselines3) on the benchmark reward.
 
     Attributes:
-        init: the MlpPolicy file to start from (an MLP with an observation normaliser).
+        init: the MlpPolicy file to start from (an MLP with an observation normaliser), or a
+            learned policy's name for its shipped file ("dagger").
         out: the run folder: run.json and the fine-tuned ppo_finetune.safetensors.
         w_blame: reward weight of blame (benchmark: -0.1).
         w_collision: reward weight of collisions (benchmark: 0).
@@ -55,7 +57,7 @@ class Args:
     threads: int = 1
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "init", Path(self.init))
+        object.__setattr__(self, "init", policy_file_or_shipped(self.init))
         object.__setattr__(self, "out", Path(self.out))
         for name in ("warmup", "steps", "seed"):
             check_int(self, name, 0)
@@ -71,8 +73,9 @@ def train(args: Args) -> Path:
     """Fine-tune on the trainer skeleton; returns DIR/ppo_finetune.safetensors (a finished run of
     the same arguments in args.out is reused).
 
-    Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init FILE`; a ReLU or tanh MLP with its
-    observation normaliser, such as the shipped DAgger or BC): the actor's layers are copied from the file and
+    Starts Stable-Baselines3 PPO from an MlpPolicy file (`--init FILE`, or a learned policy's name for its
+    shipped file; a ReLU or tanh MLP with its observation normaliser, such as the shipped DAgger or BC: `--init
+    dagger`): the actor's layers are copied from the file and
     the file's normaliser is kept fixed (VecNormalize's observation statistics never update), so the untrained
     model acts exactly as the file does (checked before training). The critic, new, first learns for
     `--warmup` steps with the actor frozen; then PPO trains both with a small learning rate for `--steps`

@@ -49,6 +49,10 @@ def test_a_halt_offset_copy_changes_only_the_halt_score(tmp_path):
     shift = halts.scores(obs) - original.scores(obs)
     assert np.allclose(shift[:, HALT], 1e3) and np.allclose(np.delete(shift, HALT, axis=1), 0.0, atol=1e-4)
     assert halts.header["training"]["halt_offset"] == 1e3
+    # A learned policy named alone is its shipped file.
+    by_name = MlpPolicy.load(ref_tradeoff.with_halt_offset("dagger", 0.0, tmp_path).partition(":")[2])
+    assert np.array_equal(by_name.act(obs), original.act(obs))
+    assert by_name.header["training"]["from"] == "dagger"
 
 
 def test_the_table_marks_dominated_rows_and_counts_the_policies():
@@ -73,7 +77,9 @@ def test_the_table_marks_dominated_rows_and_counts_the_policies():
     ("words", "message"),
     [
         (["--halt-offsets=1,x"], "comma-separated numbers"),
-        (["--learned", "no-colon"], "NAME:FILE"),
+        (["--learned", "no-colon"], "unknown policy 'no-colon'"),
+        (["--learned", "ref"], "'ref' is not a learned MlpPolicy"),
+        (["--learned", "dagger:missing.safetensors"], "no such file"),
         (["--trials", "0"], "positive integer"),
     ],
 )

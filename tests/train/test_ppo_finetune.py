@@ -46,6 +46,15 @@ def test_warmup_trains_the_critic_alone_then_ppo_moves_the_actor():
     np.testing.assert_array_equal(model.get_env().obs_rms.var, source.normalizer.var.astype(np.float64))
 
 
+def test_init_takes_a_shipped_policy_by_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # no file named "dagger" here
+    assert ppo_finetune.Args(init="dagger").init == SHIPPED
+    assert ppo_finetune.Args(init="DAgger").init == SHIPPED
+    (tmp_path / "dagger").write_text("a file of that name is the file")
+    assert ppo_finetune.Args(init="dagger").init == Path("dagger")
+    assert ppo_finetune.Args(init="ref").init == Path("ref")  # an engineered policy has no file
+
+
 def test_a_policy_without_a_normaliser_is_refused():
     source = MlpPolicy.load(SHIPPED)
     bare = MlpPolicy(source.name, source.layers, source.activation, source.observation, None)
