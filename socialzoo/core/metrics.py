@@ -100,103 +100,105 @@ class Metric:
         return f"{self.label}, {self.unit}" if self.unit else self.label
 
 
-_AS, _CN, _PEOPLE, _HUMANS = ("action_selection",), ("crowdnav",), ("people",), ("humans",)
-_GL = ("guidelines",)
-_REC = ("recorded",)
-_BOTH = ("action_selection", "crowdnav")
-# An entry of each kind with the fields its kind fixes: a flag (its mean is a share, printed to 3 digits), a count
-# of events per episode (fewer is better, 2 digits) and a float (NaN where undefined); the rest are Metric(...).
-_flag = partial(Metric, unit="", kind="bool", digits=3)
-_count = partial(Metric, unit="", better="lower", kind="int", count=True, digits=2)
-_float = partial(Metric, kind="float")
+class _Entries:
+    """Registry entries of the metrics one source computes (`sources`, filled in), one helper a
+    kind with the fields its kind fixes: a flag (its mean is a share, printed to 3 digits), a count
+    of events per episode (fewer is better, 2 digits) and a float (NaN where undefined; no unit and
+    `digits` decimals unless the entry says otherwise). Other entries are Metric(...)."""
+
+    def __init__(self, *sources: str, digits: int = 4) -> None:
+        self.flag = partial(Metric, sources=sources, unit="", kind="bool", digits=3)
+        self.count = partial(
+            Metric, sources=sources, unit="", better="lower", kind="int", count=True, digits=2
+        )
+        self.float = partial(Metric, sources=sources, unit="", kind="float", digits=digits)
+
+
+_as = _Entries("action_selection")
+_cn = _Entries("crowdnav")
+_both = _Entries("action_selection", "crowdnav")
+_people = _Entries("people")
+_rec = _Entries("recorded")
+_humans = _Entries("humans", digits=3)
+_gl = _Entries("guidelines", digits=3)
 
 _ENTRIES: tuple[Metric, ...] = (
     # ---------------------------------------------------------------- the robot's episode
-    _flag(
+    _both.flag(
         name="success",
         label="success",
         better="higher",
-        sources=_BOTH,
         description="The episode reached its goal without a collision. Action selection: the goal "
         "was reached (within EnvConfig.goal_radius, 0.5 m) with no human collision step and no wall "
         "collision; CrowdNav: the robot reached its goal before a collision or the time limit.",
     ),
-    _flag(
+    _as.flag(
         name="reached",
         label="goal reached",
         better="higher",
-        sources=_AS,
         description="The robot centre came within the goal radius of its goal (0.5 m), collisions or not.",
     ),
-    _float(
+    _as.float(
         name="time_to_goal",
         label="time to goal",
         unit="s",
         better="lower",
         success_only=True,
         digits=2,
-        sources=_AS,
         description="Episode time when the goal was reached, NaN when it was not; means are over "
         "the successful episodes (the paper's figure).",
     ),
-    _float(
+    _as.float(
         name="distance_from_goal",
         label="distance from goal",
         unit="m",
         better="lower",
         digits=2,
-        sources=_AS,
         description="Distance between the robot centre and the goal at the end of the episode.",
     ),
-    _float(
+    _as.float(
         name="distance_travelled",
         label="distance travelled",
         unit="m",
         better="neither",
         digits=2,
-        sources=_AS,
         description="Sum of the robot's step displacements (short where it stopped early, so no "
         "direction on its own).",
     ),
-    _flag(
+    _cn.flag(
         name="collision",
         label="collision",
         better="lower",
-        sources=_CN,
         description="The episode ended in a collision: the robot's and a person's boundaries "
         "overlapped during a step (their closest approach along the step below 0).",
     ),
-    _flag(
+    _cn.flag(
         name="timeout",
         label="timeout",
         better="lower",
-        sources=_CN,
         description="The time limit ended the episode (a step starting 1 s or less before it).",
     ),
-    _float(
+    _cn.float(
         name="navigation_time",
         label="navigation time",
         unit="s",
         better="lower",
         success_only=True,
         digits=2,
-        sources=_CN,
         description="Episode time at the end of a successful episode (CrowdNav's success_times), "
         "NaN otherwise.",
     ),
-    _float(
+    _cn.float(
         name="path_length",
         label="path length",
         unit="m",
         better="neither",
         digits=2,
-        sources=_CN,
         description="Distance the robot moved during the episode.",
     ),
-    _count(
+    _cn.count(
         name="discomfort_steps",
         label="discomfort steps",
-        sources=_CN,
         description="Steps in discomfort: a person's boundary within discomfort_dist (0.2 m) of "
         "the robot's during the step, without a collision or the episode's end.",
     ),
@@ -207,496 +209,418 @@ _ENTRIES: tuple[Metric, ...] = (
         better="neither",
         kind="int",
         digits=1,
-        sources=_BOTH,
+        sources=("action_selection", "crowdnav"),
         description="Steps of the episode.",
     ),
-    _float(
+    _as.float(
         name="duration",
         label="duration",
         unit="s",
         better="neither",
         digits=2,
-        sources=_AS,
         description="Episode time: steps x the step duration.",
     ),
-    _float(
+    _cn.float(
         name="discomfort_frequency",
         label="discomfort frequency",
-        unit="",
         better="lower",
-        sources=_CN,
         description="Share of the episode's steps in discomfort (CrowdNav's frequency of being in danger).",
     ),
-    _float(
+    _cn.float(
         name="min_separation",
         label="minimum separation",
         unit="m",
         better="higher",
-        sources=_CN,
         description="Smallest boundary distance between the robot and a person during the episode "
         "(negative: they overlapped); NaN with nobody.",
     ),
-    _float(
+    _cn.float(
         name="intrusion_ratio",
         label="intrusion ratio",
-        unit="",
         better="lower",
-        sources=_CN,
         description="Share of the episode's steps with a person's boundary within discomfort_dist "
         "(0.2 m) of the robot's during the step, a collision step included: CrowdNav's danger zone on the "
         "people's present positions. CrowdNav++'s intrusion ratio differs: there a step intrudes when the "
         "robot's centre is within the radii's sum of a person's true positions over the next 5 steps, "
         "and the episode's last step never counts.",
     ),
-    _float(
+    _cn.float(
         name="return",
         label="return",
-        unit="",
         better="higher",
-        sources=_CN,
         description="Sum of the episode's CrowdNav rewards.",
     ),
-    _float(
+    _cn.float(
         name="discounted_return",
         label="discounted return",
-        unit="",
         better="higher",
-        sources=_CN,
         description="Sum over steps t of gamma ** (t dt v_pref) r_t, CrowdNav's total reward "
         "(gamma 0.9 per second at the preferred speed).",
     ),
-    _float(
+    _both.float(
         name="mean_force",
         label="force (mean per step)",
-        unit="",
         better="lower",
-        sources=_BOTH,
         description="Mean over the episode's steps of the social force term f = exp(-d^4), d the "
         "distance to the nearest visible human (SPEC section 9, socialzoo.env.reward).",
     ),
-    _float(
+    _as.float(
         name="max_force",
         label="force (max per episode)",
-        unit="",
         better="lower",
-        sources=_AS,
         description="Largest social force term f = exp(-d^4) of the episode's steps.",
     ),
-    _float(
+    _both.float(
         name="mean_blame",
         label="blame (mean per step)",
-        unit="",
         better="lower",
-        sources=_BOTH,
         description="Mean over the episode's steps of the blame b = 1 - erf(dist(h, S)), S the "
         "robot's next 0.5 s of motion and h the nearest visible human (SPEC section 9).",
     ),
-    _float(
+    _as.float(
         name="max_blame",
         label="blame (max per episode)",
-        unit="",
         better="lower",
-        sources=_AS,
         description="Largest blame b = 1 - erf(dist(h, S)) of the episode's steps.",
     ),
-    _count(
+    _as.count(
         name="human_collisions",
         label="human collision steps",
-        sources=_AS,
         description="Steps with at least one human centre closer than the collision distance "
         "(0.4 m) to the robot's (SPEC: counted each step); the episode goes on.",
     ),
-    _count(
+    _as.count(
         name="human_contacts",
         label="human contacts",
-        sources=_AS,
         description="Sum over the episode's steps of the humans in collision with the robot.",
     ),
-    _count(
+    _as.count(
         name="wall_collisions",
         label="wall collision steps",
-        sources=_AS,
         description="Steps with the robot's footprint touching a wall (the first ends the episode).",
     ),
-    _float(
+    _as.float(
         name="average_step_reward",
         label="average step reward",
-        unit="",
         better="higher",
-        sources=_AS,
         description="The episode's total reward divided by its steps.",
     ),
-    _float(
+    _as.float(
         name="total_reward",
         label="total reward",
-        unit="",
         better="higher",
         digits=2,
-        sources=_AS,
         description="Sum of the episode's rewards (socialzoo.env.reward).",
     ),
-    _float(
+    _as.float(
         name="min_human_distance",
         label="minimum distance to a human",
         unit="m",
         better="higher",
-        sources=_AS,
         description="Smallest centre distance between the robot and any present human (visible or "
         "not) over the episode; NaN with nobody.",
     ),
-    _float(
+    _as.float(
         name="personal_space_intrusion_time",
         label="personal-space intrusion time",
         unit="s",
         better="lower",
-        sources=_AS,
         description="Time with the robot centre inside a human's intimate zone: a centre distance "
         "below personal_space + human_radius (0.45 + 0.2 m, MetricsConfig).",
     ),
-    _float(
+    _as.float(
         name="path_irregularity",
         label="path irregularity",
         unit="rad",
         better="lower",
-        sources=_AS,
         description="Total rotation of the robot minus the rotation needed to face the goal from "
         "the start, floored at 0: Guzzi et al. 2013's unnecessary turning, not divided by the path length "
         "as their path irregularity (rad/m) is; divide by distance_travelled for theirs.",
     ),
-    _float(
+    _as.float(
         name="path_length_ratio",
         label="path length ratio",
-        unit="",
         better="higher",
-        sources=_AS,
         description="Straight start-goal distance over the distance travelled: 1 for a straight "
         "drive (a little above 1 at most, the goal counting as reached 0.5 m short); NaN when the "
         "robot did not move.",
     ),
-    _float(
+    _as.float(
         name="jerk",
         label="jerk",
         unit="m/s^3",
         better="lower",
-        sources=_AS,
         description="Mean over the episode's steps of |a_t - a_(t-1)| / dt, a the linear "
         "acceleration from the speed, the robot at rest before the first step.",
     ),
-    _flag(
+    _as.flag(
         name="stuck",
         label="episodes stuck (share; no progress for 10 s while not halting)",
         better="lower",
         digits=4,
-        sources=_AS,
         description="The robot went MetricsConfig.stuck_time (10 s) of steps without its route "
         "left falling by stuck_progress (0.25 m) below its least value while it was not halting.",
     ),
-    _float(
+    _as.float(
         name="max_time_without_progress",
         label="longest time without progress",
         unit="s",
         better="lower",
         digits=2,
-        sources=_AS,
         description="The longest stretch without progress towards the goal while not halting (see stuck).",
     ),
     # ---------------------------------------------------------------- the people (socialzoo.env.people)
-    _count(
+    _people.count(
         name="group_intrusions",
         label="group intrusions",
-        sources=_PEOPLE,
         description="Times the robot's centre crossed the line between two members of a walking "
         "group (within 3 m of each other) between their positions.",
     ),
-    _float(
+    _people.float(
         name="people_time_lost",
         label="people's time lost (mean per person)",
         unit="s",
         better="lower",
         digits=2,
-        sources=_PEOPLE,
         description="Mean over the people of the time they reach their route's goal end with the "
         "robot minus without it (the counterfactual rows; by the robot's episode end plus the "
         "route left at the preferred speed); NaN with nobody.",
     ),
-    _float(
+    _people.float(
         name="people_time_lost_max",
         label="people's time lost (max per person)",
         unit="s",
         better="lower",
         digits=2,
-        sources=_PEOPLE,
         description="The largest time lost by a person of the episode (see people_time_lost).",
     ),
-    _float(
+    _people.float(
         name="people_extra_distance",
         label="people's extra distance (mean per person)",
         unit="m",
         better="lower",
         digits=3,
-        sources=_PEOPLE,
         description="Mean over the people of the distance walked with the robot minus without it, "
         "each plus its route left (the counterfactual rows); NaN with nobody.",
     ),
     # ---------------------------------------------------------------- recorded scenes (socialzoo.env.replay)
-    _float(
+    _rec.float(
         name="person_time",
         label="replaced person's time",
         unit="s",
         better="neither",
         digits=2,
-        sources=_REC,
         description="The recorded time of the person the robot took the place of, from its entry to its exit.",
     ),
-    _float(
+    _rec.float(
         name="person_time_ratio",
         label="time against the replaced person",
-        unit="",
         better="lower",
         digits=3,
         success_only=True,
-        sources=_REC,
         description="The robot's time to its goal over the replaced person's recorded time (success only).",
     ),
-    _float(
+    _rec.float(
         name="person_path_deviation",
         label="deviation from the replaced person's path",
         unit="m",
         better="lower",
         digits=3,
-        sources=_REC,
         description="Mean over the robot's steps of its distance to the replaced person's recorded path (a "
         "polyline through its positions).",
     ),
-    _count(
+    _rec.count(
         name="people_reacting",
         label="people who left their tracks",
         digits=4,
-        sources=_REC,
         description="Recorded people of a hybrid crowd who left their tracks because the robot came near.",
     ),
-    _float(
+    _rec.float(
         name="reacting_time_lost",
         label="reacting people's time lost (mean)",
         unit="s",
         better="lower",
         digits=2,
-        sources=_REC,
         description="Mean over the people who left their tracks of the time they reached their route's end "
         "minus their recorded exit: the time they left the scene (or the robot's episode end) plus the "
         "straight distance left from there at their speed (they leave within the waypoint radius of it); "
         "NaN with nobody.",
     ),
-    _float(
+    _rec.float(
         name="reacting_extra_distance",
         label="reacting people's extra distance (mean)",
         unit="m",
         better="lower",
         digits=3,
-        sources=_REC,
         description="Mean over the people who left their tracks of the distance they walked from there, plus "
         "the straight distance left to their route's end from where they left (or were at the robot's "
         "episode end), minus their recorded path from there; NaN with nobody.",
     ),
-    _count(
+    _rec.count(
         name="people_walked_into_robot",
         label="collisions people walked into",
         digits=4,
-        sources=_REC,
         description="Contacts with a person that began with the person closing in on the robot faster than "
         "the robot on the person (their velocities along the line between them); in the CrowdNav task the "
         "contacts its collision judges during a step.",
     ),
     # ---------------------------------------------------------------- the humans (socialzoo.bench.human_metrics)
-    _float(
+    _humans.float(
         name="humans_goal_rate",
         label="route goal reach rate",
-        unit="",
         better="higher",
-        digits=3,
-        sources=_HUMANS,
         description="Share of the humans with a route of two or more waypoints that reached its "
         "goal end (turned back there) during the episode.",
     ),
-    _float(
+    _humans.float(
         name="humans_waypoints_per_min",
         label="waypoints reached per human",
         unit="1/min",
         better="higher",
         digits=2,
-        sources=_HUMANS,
         description="Route waypoints reached per human and minute.",
     ),
-    _count(
+    _humans.count(
         name="humans_hh_collisions",
         label="human-human collisions per episode",
-        sources=_HUMANS,
         description="Times two humans came within 0.4 m of each other (each pair once per contact, at its start).",
     ),
-    _count(
+    _humans.count(
         name="humans_hw_collisions",
         label="human-wall collisions per episode",
-        sources=_HUMANS,
         description="Times a human's centre came within its radius (0.2 m) of a wall, or a wall stopped its move.",
     ),
-    _count(
+    _humans.count(
         name="humans_hr_collisions",
         label="human-robot collisions per episode",
         digits=3,
-        sources=_HUMANS,
         description="Times a human came within the robot collision distance (0.4 m) of a robot.",
     ),
-    _float(
+    _humans.float(
         name="humans_min_human_distance",
         label="min human-human distance",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_HUMANS,
         description="Smallest centre distance between two humans over the episode; NaN with a single human.",
     ),
-    _float(
+    _humans.float(
         name="humans_min_wall_distance",
         label="min human-wall distance",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_HUMANS,
         description="Smallest distance between a human centre and a wall over the episode; NaN when "
         "it never fell within the wall index's reach (1 m).",
     ),
-    _float(
+    _humans.float(
         name="humans_min_robot_distance",
         label="min human-robot distance",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_HUMANS,
         description="Smallest centre distance between a human and a robot over the episode.",
     ),
-    _float(
+    _humans.float(
         name="humans_mean_speed",
         label="mean speed",
         unit="m/s",
         better="neither",
-        digits=3,
-        sources=_HUMANS,
         description="Mean speed over the humans and steps.",
     ),
-    _float(
+    _humans.float(
         name="humans_path_ratio",
         label="path length / route length",
-        unit="",
         better="lower",
-        digits=3,
-        sources=_HUMANS,
         description="Distance walked until the route's goal end was first reached over the route's "
         "length from the spawn (to the waypoint radius), mean over the humans that reached it: 1 "
         "walks the route, more is a detour; NaN for none.",
     ),
     # ---------------------------------------------------------------- Table I of the evaluation guidelines
     # (Francis et al., ACM THRI 2025; socialzoo.bench.guideline_metrics, from any trajectory)
-    _flag(
+    _gl.flag(
         name="gl_success",
         label="success (guidelines)",
         better="higher",
-        sources=_GL,
         description="Table I's S: the robot centre came within the goal radius of its goal with no contact "
         "(wall, person or other robot) up to that sample.",
     ),
-    _count(
+    _gl.count(
         name="gl_collisions",
         label="collisions (guidelines)",
-        sources=_GL,
         description="Table I's C: the episode's collisions of every kind, wall, human and other robot "
         "(gl_wall_collisions + gl_human_collisions + gl_robot_collisions).",
     ),
-    _count(
+    _gl.count(
         name="gl_wall_collisions",
         label="wall collisions (guidelines)",
-        sources=_GL,
         description="Table I's WC: starts of a wall contact (the robot's disc overlapping a wall, or the "
         "simulator's wall flag), a contact lasting several steps counted once.",
     ),
-    _count(
+    _gl.count(
         name="gl_human_collisions",
         label="human collisions (guidelines)",
-        sources=_GL,
         description="Table I's HC: starts of a contact with a person (discs overlapping, or the simulator's "
         "flag), per person, a contact lasting several steps counted once.",
     ),
-    _count(
+    _gl.count(
         name="gl_robot_collisions",
         label="robot collisions (guidelines)",
-        sources=_GL,
         description="Table I's AC: starts of a contact with another robot (discs overlapping, or the "
         "simulator's flag), per robot.",
     ),
-    _flag(
+    _gl.flag(
         name="gl_timeout",
         label="timeout (guidelines)",
         better="lower",
-        sources=_GL,
         description="Table I's TO: the episode reached its time limit with neither the goal nor a collision "
         "(without a time limit: it ended with neither).",
     ),
-    _count(
+    _gl.count(
         name="gl_failure_to_progress",
         label="failures to progress (guidelines)",
-        sources=_GL,
         description="Table I's FP: stretches in which some window of 10 s (GuidelineParams.progress_time) "
         "never brought the robot 0.25 m (progress_distance) closer to its goal than at the "
         "window's start.",
     ),
-    _float(
+    _gl.float(
         name="gl_stalled_time",
         label="stalled time (guidelines)",
         unit="s",
         better="lower",
         digits=2,
-        sources=_GL,
         description="Table I's ST: time of the steps whose robot speed was below 0.05 m/s "
         "(GuidelineParams.stall_speed).",
     ),
-    _float(
+    _gl.float(
         name="gl_time_to_goal",
         label="time to goal (guidelines)",
         unit="s",
         better="lower",
         success_only=True,
         digits=2,
-        sources=_GL,
         description="Table I's T: time of the first sample within the goal radius, NaN unless the episode "
         "succeeded.",
     ),
-    _float(
+    _gl.float(
         name="gl_path_length",
         label="path length (guidelines)",
         unit="m",
         better="neither",
         digits=2,
-        sources=_GL,
         description="Table I's PL: sum of the robot's displacements between samples, up to the goal.",
     ),
-    _float(
+    _gl.float(
         name="gl_spl",
         label="success weighted by path length",
-        unit="",
         better="higher",
-        digits=3,
-        sources=_GL,
         description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), l the shortest path's length (the "
         "straight line unless the log gives it) and p the path length.",
     ),
     # gl_velocity_min/avg/max, gl_acceleration_min/avg/max, gl_jerk_min/avg/max: Table I's V, A and J
     *(
-        _float(
+        _gl.float(
             name=f"gl_{quantity}_{stat}",
             label=f"{quantity} ({stat}, guidelines)",
             unit=unit,
             better="neither",
-            digits=3,
-            sources=_GL,
             description=f"Table I's {symbol}_{stat}: the {word} {what}.",
         )
         for quantity, symbol, unit, what in (
@@ -711,64 +635,53 @@ _ENTRIES: tuple[Metric, ...] = (
         )
         for stat, word in (("min", "smallest"), ("avg", "mean"), ("max", "largest"))
     ),
-    _float(
+    _gl.float(
         name="gl_clearing_distance_min",
         label="clearing distance (min, guidelines)",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_GL,
         description="Table I's CD_min: the smallest gap between the robot's disc and a wall over the episode "
         "(negative: overlap); NaN without walls.",
     ),
-    _float(
+    _gl.float(
         name="gl_clearing_distance_avg",
         label="clearing distance (mean, guidelines)",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_GL,
         description="Table I's CD_avg: the mean over the episode's samples of the gap between the robot's "
         "disc and the nearest wall; NaN without walls.",
     ),
-    _float(
+    _gl.float(
         name="gl_personal_space_compliance",
         label="personal space compliance (guidelines)",
-        unit="",
         better="higher",
-        digits=3,
-        sources=_GL,
         description="Table I's SC (PSC, Pérez-D'Arpino et al. 2021): share of the episode's samples with "
         "every person's disc at least 0.5 m (GuidelineParams.personal_space) from the robot's.",
     ),
-    _float(
+    _gl.float(
         name="gl_min_distance_to_human",
         label="minimum distance to a human (guidelines)",
         unit="m",
         better="higher",
-        digits=3,
-        sources=_GL,
         description="Table I's DH_min: the smallest gap between the robot's disc and a person's over the "
         "episode (negative: overlap); NaN with nobody.",
     ),
-    _float(
+    _gl.float(
         name="gl_min_time_to_collision",
         label="minimum time to collision (guidelines)",
         unit="s",
         better="higher",
         digits=2,
-        sources=_GL,
         description="Table I's TTC: the least time, over samples and people, until the robot's and a person's "
         "discs would touch if both kept their velocities; inf when never on a collision course, "
         "NaN with nobody.",
     ),
-    _float(
+    _gl.float(
         name="gl_aggregated_time",
         label="aggregated time (guidelines)",
         unit="s",
         better="lower",
         digits=2,
-        sources=_GL,
         description="Table I's AT: time when the last of the cooperative set (the robot and the other robots "
         "with goals) first reached its goal; NaN when one never did.",
     ),
