@@ -272,7 +272,4 @@ class WorldConfig:
     groups: GroupConfig = field(default_factory=GroupConfig)
 
     def __post_init__(self) -> None:
-        check_number("WorldConfig", "dt", self.dt, low=0, low_open=True)
-        check_number(
-            "WorldConfig", "human_collision_distance", self.human_collision_distance, low=0, low_open=True
-        )
+        check_fields(self)

@@ -169,7 +169,7 @@ def check_choice(owner: str, field: str, value: Any, choices: Collection[Any]) -
 
 
 def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collection[str] = ()) -> None:
-    """Check every number field of a config dataclass: finite and > 0 unless listed otherwise.
+    """Check every number field of a config dataclass: finite and > 0 (an int: >= 1) unless listed otherwise.
 
     Number fields are those annotated `float` or `int` (an int field must hold an int); fields of
     other types are left to the caller.
@@ -189,7 +189,7 @@ def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collect
     if unknown:
         raise TypeError(f"check_fields({owner}): not number fields: {sorted(unknown)}")
     for name, integer in numbers.items():
-        low = None if name in signed else 0
-        check_number(
-            owner, name, getattr(obj, name), low=low, low_open=name not in nonnegative, integer=integer
-        )
+        # A positive int field is worded as one >= 1, as check_int(low=1) words it.
+        low = None if name in signed else 1 if integer and name not in nonnegative else 0
+        open_low = low == 0 and name not in nonnegative
+        check_number(owner, name, getattr(obj, name), low=low, low_open=open_low, integer=integer)

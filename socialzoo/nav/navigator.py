@@ -10,7 +10,7 @@ from typing import Protocol
 import numpy as np
 
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_fields, check_int, check_number
 from socialzoo.nav.distance_field import DistanceField, field_distance
 from socialzoo.nav.recovery import RecoveryConfig, RecoveryState
 
@@ -108,19 +108,7 @@ class Sight:
     min_ahead: float = 0.5
 
     def __post_init__(self) -> None:
-        for name, positive in (
-            ("clearance", True),
-            ("tolerance", False),
-            ("step", True),
-            ("spacing", True),
-            ("min_ahead", False),
-        ):
-            value = getattr(self, name)
-            ok = isinstance(value, (int, float)) and math.isfinite(value) and (value > 0 or not positive)
-            if not ok or value < 0:
-                raise ValueError(
-                    f"Sight.{name} must be a {'positive' if positive else 'non-negative'} number, got {value!r}"
-                )
+        check_fields(self, nonnegative=("tolerance", "min_ahead"))
 
 
 def track(

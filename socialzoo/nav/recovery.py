@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_fields
 from socialzoo.nav.distance_field import DistanceField
 
 
@@ -42,10 +42,7 @@ class RecoveryConfig:
     max_avoided: int = 4
 
     def __post_init__(self) -> None:
-        for name in ("after", "progress", "backoff_time", "crowd_radius", "human_gap"):
-            check_number("RecoveryConfig", name, getattr(self, name), low=0, low_open=True)
-        check_number("RecoveryConfig", "backoff_speed", self.backoff_speed, low=0)
-        check_int("RecoveryConfig", "max_avoided", self.max_avoided, low=0)
+        check_fields(self, nonnegative=("backoff_speed", "max_avoided"))
 
 
 def backoff_commands(

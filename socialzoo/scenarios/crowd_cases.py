@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Literal, get_args
 import numpy as np
 
 from socialzoo.core.jit import kernel
-from socialzoo.core.validation import check_choice, check_int, check_number
+from socialzoo.core.validation import check_choice, check_fields, check_int
 from socialzoo.scenarios.catalogue import ScenarioFamily, SeedSplit
 from socialzoo.scenarios.families import antipode, circle_point
 from socialzoo.scenarios.scenario import Scenario
@@ -68,12 +68,8 @@ class CrowdCaseConfig:
 
     def __post_init__(self) -> None:
         check_choice("CrowdCaseConfig", "layout", self.layout, LAYOUTS)
-        check_int("CrowdCaseConfig", "num_humans", self.num_humans, low=0)
-        for name in ("circle_radius", "square_width", "human_radius", "robot_radius", "human_speed"):
-            check_number("CrowdCaseConfig", name, getattr(self, name), low=0, low_open=True)
-        check_number("CrowdCaseConfig", "discomfort_dist", self.discomfort_dist, low=0)
+        check_fields(self, nonnegative=("num_humans", "discomfort_dist", "min_robot_route"))
         check_choice("CrowdCaseConfig", "robot_layout", self.robot_layout, ("crossing", "random"))
-        check_number("CrowdCaseConfig", "min_robot_route", self.min_robot_route, low=0)
         if self.robot_layout == "random" and self.min_robot_route >= 2 * math.sqrt(2) * self.circle_radius:
             raise ValueError(
                 f"CrowdCaseConfig.min_robot_route ({self.min_robot_route}) leaves no start-goal pair in the "

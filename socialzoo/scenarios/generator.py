@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.core.validation import check_fields
 from socialzoo.core.walls import WallIndex
 from socialzoo.maps.map_file import Map
 from socialzoo.maps.segments import segments_free
@@ -53,21 +53,17 @@ class ScenarioConfig:
     max_route_length: float = MAX_ROUTE_LENGTH
 
     def __post_init__(self) -> None:
-        for name, low in (("min_humans", 0), ("max_humans", 0), ("repeats", 1), ("spawn_tries", 1)):
-            check_int("ScenarioConfig", name, getattr(self, name), low=low)
+        check_fields(
+            self, nonnegative=("min_humans", "max_humans", "spawn_jitter", "speed_std", "spawn_clearance")
+        )
         if self.min_humans > self.max_humans:
             raise ValueError(
                 f"ScenarioConfig.min_humans ({self.min_humans}) exceeds max_humans ({self.max_humans})"
             )
-        for name in ("spawn_jitter", "speed_std", "spawn_clearance"):
-            check_number("ScenarioConfig", name, getattr(self, name), low=0.0)
-        for name in ("speed_mean", "min_speed", "max_speed"):
-            check_number("ScenarioConfig", name, getattr(self, name), low=0.0, low_open=True)
         if self.min_speed > self.max_speed:
             raise ValueError(
                 f"ScenarioConfig.min_speed ({self.min_speed}) exceeds max_speed ({self.max_speed})"
             )
-        check_number("ScenarioConfig", "max_route_length", self.max_route_length, low=0.0, low_open=True)
 
 
 def _bad_spawns(

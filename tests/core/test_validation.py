@@ -92,7 +92,7 @@ def test_check_fields_positive_unless_listed():
         check_fields(Sample(), signed=("weight",))
     with pytest.raises(ValueError, match=r"^Sample\.weight must be >= 0, got -2\.0$"):
         check_fields(Sample(), nonnegative=("margin", "weight"))
-    with pytest.raises(ValueError, match=r"^Sample\.count must be an int > 0, got 2\.5$"):
+    with pytest.raises(ValueError, match=r"^Sample\.count must be an int >= 1, got 2\.5$"):
         check_fields(Sample(count=2.5), nonnegative=("margin",), signed=("weight",))
     with pytest.raises(ValueError, match=r"^Sample\.speed must be a finite number, got nan$"):
         check_fields(Sample(speed=math.nan), nonnegative=("margin",), signed=("weight",))
@@ -105,7 +105,7 @@ def test_check_fields_positive_unless_listed():
     [
         (lambda: RobotConfig(length=0.0), r"RobotConfig\.length must be > 0, got 0\.0"),
         (lambda: HumanConfig(social_strength=-1.0), r"HumanConfig\.social_strength must be >= 0, got -1\.0"),
-        (lambda: LaserConfig(num_rays=0), r"LaserConfig\.num_rays must be an int > 0, got 0"),
+        (lambda: LaserConfig(num_rays=0), r"LaserConfig\.num_rays must be an int >= 1, got 0"),
         (lambda: LaserConfig(fov_deg=400.0), r"LaserConfig\.fov_deg must be <= 360, got 400\.0"),
         (lambda: WorldConfig(dt=math.inf), r"WorldConfig\.dt must be a finite number, got inf"),
     ],

@@ -184,5 +184,5 @@ def test_carrot_in_sight_waits_at_a_door_frame_but_never_at_the_robot():
     grazing = np.array([[-3.0, 0.05], [4.0, 0.05]])
     near_wall = track(np.array([0.0, 0.05]), grazing, np.array(2), sight=sight)[0]
     assert near_wall[0] >= 0.5 - 1e-9
-    with pytest.raises(ValueError, match=r"Sight\.min_ahead must be a non-negative number, got -1"):
+    with pytest.raises(ValueError, match=r"Sight\.min_ahead must be >= 0, got -1"):
         Sight(sight.field, 0.37, min_ahead=-1)
