@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -291,27 +291,22 @@ def _human_attributes(sel: str, parts: PaperParts) -> dict[str, np.ndarray]:
     return {k: np.where(found, v, absent[k]) for k, v in values.items()}
 
 
-def _header_atom(name: str, parts: PaperParts) -> np.ndarray:
-    goal, target, vel = parts.goal, parts.target, parts.robot_vel
-    if name == "goal_dist":
-        return np.hypot(goal[:, 0], goal[:, 1])
-    if name == "goal_bearing":
-        return np.abs(np.arctan2(goal[:, 1], goal[:, 0]))
-    if name == "target_dist":
-        return np.hypot(target[:, 0], target[:, 1])
-    if name == "target_bearing":
-        return np.abs(np.arctan2(target[:, 1], target[:, 0]))
-    if name == "robot_v":
-        return vel[:, 0].copy()
-    if name == "robot_omega":
-        return vel[:, 1].copy()
-    xy = parts.slots[..., 0:2]
-    seen = (xy != 0.0).any(axis=-1)
-    if name == "num_visible":
-        return seen.sum(axis=1).astype(np.float64)
-    if name == "num_ahead":
-        return (seen & (xy[..., 0] > 0.0)).sum(axis=1).astype(np.float64)
-    raise KeyError(name)
+def _seen(parts: PaperParts) -> np.ndarray:
+    """(N, K) bool: the slots that hold a visible human (an empty slot is all zero)."""
+    return (parts.slots[..., 0:2] != 0.0).any(axis=-1)
+
+
+# The robot's own features (_HEADER), each from the observations' parts.
+_HEADER_VALUES: dict[str, Callable[[PaperParts], np.ndarray]] = {
+    "goal_dist": lambda p: np.hypot(p.goal[:, 0], p.goal[:, 1]),
+    "goal_bearing": lambda p: np.abs(np.arctan2(p.goal[:, 1], p.goal[:, 0])),
+    "target_dist": lambda p: np.hypot(p.target[:, 0], p.target[:, 1]),
+    "target_bearing": lambda p: np.abs(np.arctan2(p.target[:, 1], p.target[:, 0])),
+    "robot_v": lambda p: p.robot_vel[:, 0].copy(),
+    "robot_omega": lambda p: p.robot_vel[:, 1].copy(),
+    "num_visible": lambda p: _seen(p).sum(axis=1).astype(np.float64),
+    "num_ahead": lambda p: (_seen(p) & (p.slots[..., 0] > 0.0)).sum(axis=1).astype(np.float64),
+}
 
 
 def atom_values(obs_or_parts: np.ndarray | PaperParts, names: set[str] | list[str]) -> dict[str, np.ndarray]:
@@ -337,7 +332,7 @@ def atom_values(obs_or_parts: np.ndarray | PaperParts, names: set[str] | list[st
             sel, attr = name.split(".")
             by_selector.setdefault(sel, []).append(attr)
         else:
-            out[name] = _header_atom(name, parts)
+            out[name] = _HEADER_VALUES[name](parts)
     for sel, attrs in by_selector.items():
         values = _human_attributes(sel, parts)
         for attr in attrs:
