@@ -25,6 +25,7 @@ from socialzoo.agents.pips_features import (
     paper_parts,
 )
 from socialzoo.core.files import read_json
+from socialzoo.core.validation import is_finite_number
 from socialzoo.env.policy_file import PolicyFileError
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
@@ -341,6 +342,14 @@ def _fields(node: Any, where: str, required: set[str]) -> dict[str, Any]:
     return node
 
 
+def _op_args(node: Any, where: str) -> tuple[Any, list[Any]]:
+    """The operator and the argument list of an {"op", "args"} node (an operator or a junction)."""
+    node = _fields(node, where, {"op", "args"})
+    if not isinstance(node["args"], list):
+        raise ProgramError(f"{where}: 'args' must be a list")
+    return node["op"], node["args"]
+
+
 def _expr_from_json(node: Any, where: str) -> Expr:
     if isinstance(node, dict) and "feature" in node:
         name = _fields(node, where, {"feature"})["feature"]
@@ -351,10 +360,7 @@ def _expr_from_json(node: Any, where: str) -> Expr:
         except KeyError as err:
             raise ProgramError(f"{where}: {err.args[0]}") from None
         return Atom(name)
-    node = _fields(node, where, {"op", "args"})
-    op, args = node["op"], node["args"]
-    if not isinstance(args, list):
-        raise ProgramError(f"{where}: 'args' must be a list")
+    op, args = _op_args(node, where)
     expr = Op(op, tuple(_expr_from_json(a, f"{where}.args[{i}]") for i, a in enumerate(args)))
     try:
         expr_unit(expr)
@@ -368,11 +374,7 @@ def _predicate_from_json(node: Any, where: str) -> Predicate:
         node = _fields(node, where, {"cmp", "expr", "threshold", "unit"})
         expr = _expr_from_json(node["expr"], f"{where}.expr")
         threshold = node["threshold"]
-        if (
-            isinstance(threshold, bool)
-            or not isinstance(threshold, (int, float))
-            or not math.isfinite(threshold)
-        ):
+        if not is_finite_number(threshold):
             raise ProgramError(f"{where}: threshold must be a finite number, got {threshold!r}")
         try:
             unit = Unit.parse(node["unit"]) if isinstance(node["unit"], str) else None
@@ -384,13 +386,8 @@ def _predicate_from_json(node: Any, where: str) -> Predicate:
             )
         pred: Predicate = Compare(expr, node["cmp"], float(threshold))
     else:
-        node = _fields(node, where, {"op", "args"})
-        if not isinstance(node["args"], list):
-            raise ProgramError(f"{where}: 'args' must be a list")
-        pred = Junction(
-            node["op"],
-            tuple(_predicate_from_json(a, f"{where}.args[{i}]") for i, a in enumerate(node["args"])),
-        )
+        op, args = _op_args(node, where)
+        pred = Junction(op, tuple(_predicate_from_json(a, f"{where}.args[{i}]") for i, a in enumerate(args)))
     try:
         check_predicate(pred)
     except (ProgramError, UnitError) as err:
