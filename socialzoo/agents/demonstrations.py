@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core.files import read_json
+
 DEMO_FORMAT = "socialzoo-demos/1"
 # Per-transition arrays of a recording, in order.
 TRANSITION_KEYS = ("obs", "action", "next_obs", "reward", "terminated", "truncated", "episode")
@@ -69,15 +71,8 @@ def read_index(parts: Path) -> dict[str, Any]:
     index_path = parts / "index.json"
     if not index_path.exists():
         raise DemonstrationError(f"{parts}: no index.json; not a demonstration recording")
-    try:
-        index = json.loads(index_path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError) as err:  # UnicodeDecodeError and JSONDecodeError too
-        raise DemonstrationError(f"{index_path}: unreadable recording index ({err})") from None
-    if (
-        not isinstance(index, dict)
-        or not isinstance(index.get("metadata"), dict)
-        or not isinstance(index.get("chunks"), dict)
-    ):
+    index = read_json(index_path, "recording index", DemonstrationError, kind=dict)
+    if not isinstance(index.get("metadata"), dict) or not isinstance(index.get("chunks"), dict):
         raise DemonstrationError(
             f"{index_path}: not a recording index (an object with 'metadata' and 'chunks' objects)"
         )
