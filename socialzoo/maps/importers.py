@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.core.files import read_text
+from socialzoo.core.files import read_json, read_text
 from socialzoo.core.validation import check_number
-from socialzoo.maps.map_file import MapError, parse_json
+from socialzoo.maps.map_file import MapError
 
 logger = logging.getLogger(__name__)
 
@@ -173,12 +173,12 @@ def read_amrl_nav_graph(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.nd
 
     Raises:
         FileNotFoundError: no such file.
-        MapError: not UTF-8 text, invalid JSON (with its line and column), a missing key, a node id
+        MapError: not UTF-8 text, not JSON (with its line and column), a missing key, a node id
             that is not a string or an integer, a repeated node id, an edge naming an unknown node
             or joining a node to itself; the message names the file.
     """
     where = os.fspath(path)
-    data = parse_json(_read_text(path), where)
+    data = read_json(path, "building file", MapError)
     if not isinstance(data, dict) or not isinstance(data.get("nodes"), list):
         raise MapError(f"{where}: expected an object with a 'nodes' list (and an 'edges' list)")
     raw_edges = data.get("edges", [])

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.core import files
 from socialzoo.core.files import read_text
 from socialzoo.core.geometry import closest_point_on_segment, segments_intersect
 from socialzoo.core.validation import is_finite_number
@@ -207,13 +208,9 @@ def check_map_name(name: str, where: str) -> None:
 
 
 def parse_json(text: str, where: str) -> Any:
-    """JSON text parsed; MapError naming `where` (and the line and column) for text that is not JSON."""
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as err:
-        raise _fail(where, f"invalid JSON at line {err.lineno} column {err.colno}: {err.msg}") from None
-    except (ValueError, RecursionError) as err:  # a number or a nesting past Python's limits
-        raise _fail(where, f"invalid JSON: {err}") from None
+    """JSON text parsed; MapError naming `where` (and the line and column) for text that is not JSON
+    (socialzoo.core.files.parse_json's, for a map file)."""
+    return files.parse_json(text, where, "map file", MapError)
 
 
 _KNOWN_FIELDS = {
@@ -243,7 +240,7 @@ def map_from_json(data: dict[str, Any] | str, where: str = "<map>") -> Map:
         act as points and do no harm (the importers drop them from raw data).
 
     Raises:
-        MapError: invalid JSON text, a wrong or missing format tag, a missing field, or an entry of
+        MapError: text that is not JSON, a wrong or missing format tag, a missing field, or an entry of
             the wrong type or shape or with a NaN or infinite coordinate, or a door of zero length.
             Run `validate_map` for the geometric checks.
     """

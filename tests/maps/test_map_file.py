@@ -127,7 +127,8 @@ def test_unreachable_pose_is_named(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("text", "message"), [("{not json", "invalid JSON"), ("[]", "JSON object"), ("{}", "format")]
+    ("text", "message"),
+    [("{not json", r"not a map file \(not JSON"), ("[]", "JSON object"), ("{}", "format")],
 )
 def test_malformed_files(tmp_path, text, message):
     with pytest.raises(MapError, match=message):
