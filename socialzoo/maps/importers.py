@@ -16,7 +16,7 @@ import numpy as np
 
 from socialzoo.core.files import read_json, read_text
 from socialzoo.core.validation import check_number
-from socialzoo.maps.map_file import MapError
+from socialzoo.maps.map_file import MapError, graph_components
 
 logger = logging.getLogger(__name__)
 
@@ -95,9 +95,6 @@ def merge_duplicate_walls(walls: np.ndarray, tolerance: float = MERGE_TOLERANCE)
     Returns:
         (walls (W', 4), the number of walls merged away, W - W').
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     n = len(walls)
     start, end = walls[:, :2], walls[:, 2:]
@@ -124,7 +121,7 @@ def merge_duplicate_walls(walls: np.ndarray, tolerance: float = MERGE_TOLERANCE)
     a, b = a[on_line & (overlap > tolerance)], b[on_line & (overlap > tolerance)]
     if len(a) == 0:
         return walls, 0
-    _, label = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    label = graph_components(n, np.stack((a, b), axis=1))
     out = walls.copy()
     keep = np.ones(n, dtype=bool)
     for group in np.split(np.argsort(label, kind="stable"), np.flatnonzero(np.diff(np.sort(label))) + 1):

@@ -511,20 +511,16 @@ def graph_components(num_nodes: int, edges: np.ndarray) -> np.ndarray:
     Returns:
         int (N,).
     """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    parent = list(range(num_nodes))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i, j in edges.tolist():
-        ri, rj = root(i), root(j)
-        if ri != rj:
-            parent[max(ri, rj)] = min(ri, rj)
-    return np.array([root(i) for i in range(num_nodes)], dtype=np.int64)
+    if num_nodes == 0:
+        return np.zeros(0, dtype=np.int64)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(num_nodes, num_nodes))
+    label = connected_components(graph, directed=False)[1]
+    # Each component's first node in index order is its smallest: name the component by it.
+    return np.unique(label, return_index=True)[1][label].astype(np.int64)
 
 
 def _index_list(indices: np.ndarray, limit: int = 20) -> str:

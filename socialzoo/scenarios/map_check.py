@@ -147,14 +147,16 @@ def check_map(
         pose_clear = np.minimum(nearest_walls(index, poses[:, :2])[0], index.fine.reach)
     else:
         node_clear, pose_clear = np.full(len(nodes), math.inf), np.full(len(poses), math.inf)
-    ok_edges = len(edges) and ((edges >= 0) & (edges < len(nodes))).all()
+    in_range = ((edges >= 0) & (edges < len(nodes))).all(axis=1)
+    ok_edges = len(edges) and in_range.all()
     if ok_edges and index.num_walls:
         edge_clear = np.minimum(
             segment_clearance(index, nodes[edges[:, 0]], nodes[edges[:, 1]])[0], CLEARANCE_CAP
         )
     else:
         edge_clear = np.full(len(edges), CLEARANCE_CAP)
-    components = len(np.unique(graph_components(len(nodes), edges))) if ok_edges or len(nodes) else 0
+    # The components of the edges between existing nodes (validation lists the others).
+    components = len(np.unique(graph_components(len(nodes), edges[in_range])))
     entries = (m.provenance or {}).get("repairs", [])
     repairs = Counter(str(r.get("kind", "?")) if isinstance(r, dict) else "?" for r in entries)
     return MapCheck(

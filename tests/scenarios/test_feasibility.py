@@ -57,6 +57,15 @@ def test_route_stats_and_the_map_check():
     assert "6 of 12 pose pairs feasible (50%, route <= 25 m)" in text
 
 
+@pytest.mark.parametrize("edge", [(0, 99), (0, -1)])
+def test_map_check_reports_an_edge_to_a_missing_node(edge):
+    # It lists the problem and counts the components of the other edges (it raised IndexError).
+    m = dataclasses.replace(load_map("doorway"), edges=np.array([edge, (0, 1)]))
+    check = check_map(m)
+    assert any("names a node outside" in p for p in check.problems)
+    assert check.num_components == len(m.nodes) - 1
+
+
 def test_benchmark_maps_have_every_pair_feasible():
     for name in ("gdc1", "ghc3"):
         m = load_map(name)
