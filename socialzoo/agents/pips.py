@@ -24,7 +24,7 @@ from socialzoo.agents.pips_features import (
     atom_values,
     paper_parts,
 )
-from socialzoo.core.files import read_json
+from socialzoo.core.files import read_json, write_text_atomic
 from socialzoo.core.validation import is_finite_number
 from socialzoo.env.policy_file import PolicyFileError
 from socialzoo.nav.subpolicies import ACTION_NAMES
@@ -307,10 +307,8 @@ class Program:
         }
 
     def save(self, path: str | Path) -> Path:
-        """Write the program as JSON; returns the path."""
-        path = Path(path)
-        path.write_text(json.dumps(self.to_json(), indent=1) + "\n")
-        return path
+        """Write the program as JSON, whole or not at all (core.files.write_text_atomic); returns the path."""
+        return write_text_atomic(path, json.dumps(self.to_json(), indent=1) + "\n")
 
 
 def _expr_to_json(expr: Expr) -> Any:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.core.files import read_json, read_text
+from socialzoo.core.files import read_json, read_text, write_text_atomic
 from socialzoo.core.validation import check_number
 from socialzoo.maps.map_file import MapError, graph_components
 
@@ -443,7 +443,5 @@ def read_floor_plan(
 
 def write_vector_map(path: str | os.PathLike[str], walls: np.ndarray) -> Path:
     """Write walls (W, 4) as an AMRL vector map ("x1, y1, x2, y2" per line); returns the path."""
-    path = Path(path)
     lines = [", ".join(f"{v:.6f}" for v in w) for w in np.asarray(walls, dtype=np.float64).reshape(-1, 4)]
-    path.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
-    return path
+    return write_text_atomic(path, "".join(line + "\n" for line in lines))

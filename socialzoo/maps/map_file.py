@@ -141,10 +141,8 @@ class Map:
         return data
 
     def save(self, path: str | Path) -> Path:
-        """Write the map as JSON; returns the path."""
-        path = Path(path)
-        path.write_text(json.dumps(self.to_json(), indent=None, separators=(",", ":")) + "\n")
-        return path
+        """Write the map as JSON, whole or not at all (core.files.write_text_atomic); returns the path."""
+        return files.write_text_atomic(path, json.dumps(self.to_json(), separators=(",", ":")) + "\n")
 
 
 # ----------------------------------------------------------------------------- reading JSON

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.core.files import read_json
+from socialzoo.core.files import read_json, write_text_atomic
 from socialzoo.scenarios.recorded_people import RecordedPeople
 from socialzoo.scenarios.script import Script
 
@@ -281,10 +281,8 @@ class Scenario:
             raise ScenarioError(f"{where}: {err}") from None
 
     def save(self, path: str | Path) -> Path:
-        """Write the scenario as JSON; returns the path."""
-        path = Path(path)
-        path.write_text(json.dumps(self.to_json(), separators=(",", ":")) + "\n")
-        return path
+        """Write the scenario as JSON, whole or not at all (core.files.write_text_atomic); returns the path."""
+        return write_text_atomic(path, json.dumps(self.to_json(), separators=(",", ":")) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> Scenario:
