@@ -36,7 +36,8 @@ class Metric:
 
     Attributes:
         name: the key of a summary, a trial row and a store column (an identifier).
-        label: a short lowercase phrase for tables, axes and the viewer, without the unit.
+        label: a short lowercase phrase for tables, axes and the viewer, without the unit; by
+            default the name with spaces for underscores ("time_to_goal": "time to goal").
         unit: the SI unit of a value ("s", "m", "m/s", "m/s^3", "rad", "1/min"); "" for a number
             without one (flags, shares, ratios, counts, the reward's units).
         better: "higher" or "lower" is better, or "neither" (a size, not a quality: steps,
@@ -53,7 +54,7 @@ class Metric:
     """
 
     name: str
-    label: str
+    label: str = ""
     unit: str
     better: Direction
     kind: Kind
@@ -64,6 +65,8 @@ class Metric:
     digits: int = 4
 
     def __post_init__(self) -> None:
+        if self.label == "" and isinstance(self.name, str):
+            object.__setattr__(self, "label", self.name.replace("_", " "))
         problems = []
         if not self.name.isidentifier():
             problems.append(f"name must be an identifier, got {self.name!r}")
@@ -126,7 +129,6 @@ _ENTRIES: tuple[Metric, ...] = (
     # ---------------------------------------------------------------- the robot's episode
     _both.flag(
         name="success",
-        label="success",
         better="higher",
         description="The episode reached its goal without a collision. Action selection: the goal "
         "was reached (within EnvConfig.goal_radius, 0.5 m) with no human collision step and no wall "
@@ -140,7 +142,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="time_to_goal",
-        label="time to goal",
         unit="s",
         better="lower",
         success_only=True,
@@ -150,7 +151,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="distance_from_goal",
-        label="distance from goal",
         unit="m",
         better="lower",
         digits=2,
@@ -158,7 +158,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="distance_travelled",
-        label="distance travelled",
         unit="m",
         better="neither",
         digits=2,
@@ -167,20 +166,17 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.flag(
         name="collision",
-        label="collision",
         better="lower",
         description="The episode ended in a collision: the robot's and a person's boundaries "
         "overlapped during a step (their closest approach along the step below 0).",
     ),
     _cn.flag(
         name="timeout",
-        label="timeout",
         better="lower",
         description="The time limit ended the episode (a step starting 1 s or less before it).",
     ),
     _cn.float(
         name="navigation_time",
-        label="navigation time",
         unit="s",
         better="lower",
         success_only=True,
@@ -190,7 +186,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.float(
         name="path_length",
-        label="path length",
         unit="m",
         better="neither",
         digits=2,
@@ -198,13 +193,11 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.count(
         name="discomfort_steps",
-        label="discomfort steps",
         description="Steps in discomfort: a person's boundary within discomfort_dist (0.2 m) of "
         "the robot's during the step, without a collision or the episode's end.",
     ),
     Metric(
         name="steps",
-        label="steps",
         unit="",
         better="neither",
         kind="int",
@@ -214,7 +207,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="duration",
-        label="duration",
         unit="s",
         better="neither",
         digits=2,
@@ -222,7 +214,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.float(
         name="discomfort_frequency",
-        label="discomfort frequency",
         better="lower",
         description="Share of the episode's steps in discomfort (CrowdNav's frequency of being in danger).",
     ),
@@ -236,7 +227,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.float(
         name="intrusion_ratio",
-        label="intrusion ratio",
         better="lower",
         description="Share of the episode's steps with a person's boundary within discomfort_dist "
         "(0.2 m) of the robot's during the step, a collision step included: CrowdNav's danger zone on the "
@@ -246,13 +236,11 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _cn.float(
         name="return",
-        label="return",
         better="higher",
         description="Sum of the episode's CrowdNav rewards.",
     ),
     _cn.float(
         name="discounted_return",
-        label="discounted return",
         better="higher",
         description="Sum over steps t of gamma ** (t dt v_pref) r_t, CrowdNav's total reward "
         "(gamma 0.9 per second at the preferred speed).",
@@ -291,7 +279,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.count(
         name="human_contacts",
-        label="human contacts",
         description="Sum over the episode's steps of the humans in collision with the robot.",
     ),
     _as.count(
@@ -301,13 +288,11 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="average_step_reward",
-        label="average step reward",
         better="higher",
         description="The episode's total reward divided by its steps.",
     ),
     _as.float(
         name="total_reward",
-        label="total reward",
         better="higher",
         digits=2,
         description="Sum of the episode's rewards (socialzoo.env.reward).",
@@ -330,7 +315,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="path_irregularity",
-        label="path irregularity",
         unit="rad",
         better="lower",
         description="Total rotation of the robot minus the rotation needed to face the goal from "
@@ -339,7 +323,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="path_length_ratio",
-        label="path length ratio",
         better="higher",
         description="Straight start-goal distance over the distance travelled: 1 for a straight "
         "drive (a little above 1 at most, the goal counting as reached 0.5 m short); NaN when the "
@@ -347,7 +330,6 @@ _ENTRIES: tuple[Metric, ...] = (
     ),
     _as.float(
         name="jerk",
-        label="jerk",
         unit="m/s^3",
         better="lower",
         description="Mean over the episode's steps of |a_t - a_(t-1)| / dt, a the linear "
@@ -372,7 +354,6 @@ _ENTRIES: tuple[Metric, ...] = (
     # ---------------------------------------------------------------- the people (socialzoo.env.people)
     _people.count(
         name="group_intrusions",
-        label="group intrusions",
         description="Times the robot's centre crossed the line between two members of a walking "
         "group (within 3 m of each other) between their positions.",
     ),
