@@ -52,7 +52,6 @@ class RobotConfig:
     def __post_init__(self) -> None:
         check_fields(self)
         check_choice("RobotConfig", "kinematics", self.kinematics, KINEMATICS)
-        check_number("RobotConfig", "radius", self.radius, low=0, low_open=True, allow_none=True)
         check_number("RobotConfig", "max_rotation", self.max_rotation, low=0, low_open=True, high=math.pi)
 
     @property
@@ -119,10 +118,6 @@ class HumanConfig:
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("obstacle_strength", "social_strength"))
-        if self.learned_relaxation_time is not None:
-            check_number(
-                "HumanConfig", "learned_relaxation_time", self.learned_relaxation_time, low=0, low_open=True
-            )
 
     @property
     def learned_tau(self) -> float:
@@ -183,8 +178,6 @@ class OrcaConfig:
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("max_neighbors",))
-        check_number("OrcaConfig", "max_speed", self.max_speed, low=0, low_open=True, allow_none=True)
-        check_number("OrcaConfig", "robot_radius", self.robot_radius, low=0, low_open=True, allow_none=True)
         if not isinstance(self.robot_visible, bool):
             raise ValueError(f"OrcaConfig.robot_visible must be a bool, got {self.robot_visible!r}")
 

@@ -10,9 +10,9 @@ from dataclasses import fields
 from typing import Any
 
 # Field annotations (as written, or as strings under `from __future__ import annotations`) that
-# `check_fields` checks.
-_FLOAT_TYPES: tuple[Any, ...] = (float, "float")
-_INT_TYPES: tuple[Any, ...] = (int, "int")
+# `check_fields` checks; an optional one may also be None.
+_FLOAT_TYPES: tuple[Any, ...] = (float, "float", float | None, "float | None")
+_INT_TYPES: tuple[Any, ...] = (int, "int", int | None, "int | None")
 
 
 class UnknownFieldError(ValueError, TypeError):
@@ -171,8 +171,8 @@ def check_choice(owner: str, field: str, value: Any, choices: Collection[Any]) -
 def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collection[str] = ()) -> None:
     """Check every number field of a config dataclass: finite and > 0 (an int: >= 1) unless listed otherwise.
 
-    Number fields are those annotated `float` or `int` (an int field must hold an int); fields of
-    other types are left to the caller.
+    Number fields are those annotated `float` or `int` (an int field must hold an int), or
+    `float | None` or `int | None` (None passes); fields of other types are left to the caller.
 
     Args:
         obj: the dataclass instance; messages name its class.
@@ -184,12 +184,16 @@ def check_fields(obj: Any, *, nonnegative: Collection[str] = (), signed: Collect
         TypeError: `nonnegative` or `signed` names a field `obj` does not have as a number field.
     """
     owner = type(obj).__name__
-    numbers = {f.name: f.type in _INT_TYPES for f in fields(obj) if f.type in _FLOAT_TYPES + _INT_TYPES}
+    numbers = {f.name: f.type for f in fields(obj) if f.type in _FLOAT_TYPES + _INT_TYPES}
     unknown = (set(nonnegative) | set(signed)) - set(numbers)
     if unknown:
         raise TypeError(f"check_fields({owner}): not number fields: {sorted(unknown)}")
-    for name, integer in numbers.items():
+    for name, kind in numbers.items():
+        integer = kind in _INT_TYPES
         # A positive int field is worded as one >= 1, as check_int(low=1) words it.
         low = None if name in signed else 1 if integer and name not in nonnegative else 0
         open_low = low == 0 and name not in nonnegative
-        check_number(owner, name, getattr(obj, name), low=low, low_open=open_low, integer=integer)
+        optional = str(kind).endswith("None")
+        check_number(
+            owner, name, getattr(obj, name), low=low, low_open=open_low, integer=integer, allow_none=optional
+        )

@@ -84,6 +84,7 @@ class Sample:
     weight: float = -2.0
     count: int = 3
     name: str = "not a number"
+    limit: float | None = None
 
 
 def test_check_fields_positive_unless_listed():
@@ -98,6 +99,16 @@ def test_check_fields_positive_unless_listed():
         check_fields(Sample(speed=math.nan), nonnegative=("margin",), signed=("weight",))
     with pytest.raises(TypeError, match="not number fields: \\['name', 'wieght'\\]"):
         check_fields(Sample(), signed=("wieght", "name"))
+
+
+def test_check_fields_checks_an_optional_number_unless_none():
+    lenient = {"nonnegative": ("margin",), "signed": ("weight",)}
+    check_fields(Sample(limit=None), **lenient)
+    check_fields(Sample(limit=0.5), **lenient)
+    with pytest.raises(ValueError, match=r"^Sample\.limit must be > 0, got -1\.0$"):
+        check_fields(Sample(limit=-1.0), **lenient)
+    with pytest.raises(ValueError, match=r"^Sample\.limit must be a finite number or None, got 'x'$"):
+        check_fields(Sample(limit="x"), **lenient)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
