@@ -4,7 +4,7 @@ exactly (drawn by socialzoo.scenarios.generator for the benchmark, by socialzoo.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -187,17 +187,11 @@ class Scenario:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Scenario):
             return NotImplemented
+        # Every array field (robot_starts ... human_group; the derived ones follow from them).
         same_arrays = all(
-            _same(getattr(self, name), getattr(other, name))
-            for name in (
-                "robot_starts",
-                "robot_goals",
-                "human_spawn",
-                "human_start_index",
-                "human_goal_index",
-                "human_speed",
-                "human_group",
-            )
+            _same(getattr(self, f.name), getattr(other, f.name))
+            for f in fields(self)
+            if f.init and isinstance(getattr(self, f.name), np.ndarray)
         )
         return (
             same_arrays
