@@ -4,12 +4,12 @@ test cases (docs/crowdnav.md)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from socialzoo.core.state import WorldState
 from socialzoo.env.crowd_config import CrowdNavConfig
+from socialzoo.env.scenario_source import ScenarioStream, reseed_rows
 from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.crowd_cases import SPLIT_SIZE, CrowdCase, Split, crowd_family
 from socialzoo.scenarios.scenario import Scenario
@@ -50,7 +50,6 @@ class CrowdCaseSource:
             get_family(config.family) if config.family is not None and config.map is None else None
         )
         if config.map is not None:
-            from socialzoo.env.scenario_source import ScenarioStream
             from socialzoo.maps.map_file import load_map
             from socialzoo.scenarios.generator import ScenarioConfig
 
@@ -62,9 +61,7 @@ class CrowdCaseSource:
     def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
         """Reseed the training streams of `rows` (default all; row 0 with the seed itself); the
         other rows keep theirs."""
-        children = np.random.SeedSequence(seed).spawn(self.batch_size)
-        for row in range(self.batch_size) if rows is None else np.asarray(rows).tolist():
-            self._rngs[row] = np.random.default_rng(seed if row == 0 else children[row])
+        reseed_rows(self._rngs, seed, rows)
         if self._scenarios is not None:
             self._scenarios.seed(seed, rows)
 
@@ -91,40 +88,18 @@ class CrowdCaseSource:
             family = self.open_family or self.family
             return [family.make(family.case_seed(split, int(k)), r) for k in indices]
         assert self._scenarios is not None
-        return self._scenarios.cases(self.case_sets()[split], indices)
-
-    def case_sets(self) -> dict[str, Any]:
-        """Among walls, split name -> its TestSet, or for a family with splits of its own the
-        split's name ("val" and "test"): a family's own splits, else the map's case sets
-        (socialzoo.scenarios.scenario_sets.map_case_sets: a map without a registered test set has
-        the generated one)."""
-        from socialzoo.scenarios.scenario_sets import map_case_sets
-
-        stream = self._scenarios
-        assert stream is not None
-        if stream.scenario_family is not None:
-            splits = stream.scenario_family.splits
-            if splits:
-                return {k: k for k in ("val", "test") if k in splits and splits[k].size is not None}
-        return dict(map_case_sets(stream.map))
+        return self._scenarios.cases(split, indices)
 
     def case_splits(self) -> dict[str, int]:
-        """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, else those
-        of `case_sets`."""
+        """The fixed case sets and their sizes: CrowdNav's (100 and 500) in the arena, a family in
+        the open's own splits, else those of the scenario stream
+        (socialzoo.env.scenario_source.ScenarioStream.case_sets)."""
         if self.open_family is not None:
             splits = self.open_family.splits
             return {k: int(splits[k].size or 0) for k in ("val", "test") if k in splits}
-        if self.config.map is None:
+        if self._scenarios is None:
             return dict(SPLIT_SIZE)
-        return {
-            name: self._split_size(cases) if isinstance(cases, str) else len(cases)
-            for name, cases in self.case_sets().items()
-        }
-
-    def _split_size(self, split: str) -> int:
-        size = self._scenarios.scenario_family.splits[split].size  # type: ignore[union-attr]
-        assert size is not None
-        return size
+        return self._scenarios.case_sizes()
 
 
 def write_cases(

@@ -125,6 +125,17 @@ def _spot_near_poses(
     return int(anchor[k]), np.array([spot[k, 0], spot[k, 1], poses[anchor[k], 2]])
 
 
+def reseed_rows(rngs: list[np.random.Generator], seed: int | None, rows: Any = None) -> list[int]:
+    """Reseed the per-row generators `rngs` of `rows` (default all) from `seed`: row i gets
+    SeedSequence(seed).spawn(len(rngs))[i], row 0 the seed itself (so a single env seeded with s
+    matches row 0 of any batch); the other rows keep theirs. Returns the rows."""
+    children = np.random.SeedSequence(seed).spawn(len(rngs))
+    rows = list(range(len(rngs))) if rows is None else np.asarray(rows).tolist()
+    for row in rows:
+        rngs[row] = np.random.default_rng(seed if row == 0 else children[row])
+    return rows
+
+
 class ScenarioStream:
     """Seeded scenarios for every row of a batch.
 
@@ -169,11 +180,7 @@ class ScenarioStream:
 
     def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
         """Reseed rows (default all): row i of a batch seeded with s uses SeedSequence(s).spawn."""
-        rows = np.arange(len(self._rngs)) if rows is None else np.asarray(rows)
-        children = np.random.SeedSequence(seed).spawn(len(self._rngs))
-        for row in rows:
-            # Row 0 of any batch uses the seed itself, so a single env seeded with s matches it.
-            self._rngs[row] = np.random.default_rng(seed if row == 0 else children[row])
+        for row in reseed_rows(self._rngs, seed, rows):
             self._current[row] = None
             self._uses[row] = 0
 
@@ -201,9 +208,31 @@ class ScenarioStream:
             scenario = self.scenario_family.make(seed, self.num_robots, m=self.map)
         return with_robots(scenario, self.map, self.num_robots)
 
-    def cases(self, case_set: TestSet | str, indices: Any) -> list[Scenario]:
-        """Cases `indices` of a fixed set: a family's own split (by its name), a registered test
+    def case_sets(self) -> dict[str, TestSet | str]:
+        """The fixed case sets by split name: for a family with fixed splits of its own, each split's
+        name (its "val" and "test"; "train" is the training stream's); else the map's TestSets
+        (socialzoo.scenarios.scenario_sets.map_case_sets: the map's validation scenarios, never a
+        test set, as "val"; its registered test sets as "test" for "<map>-test" and by their own
+        names; a map without a registered test set has the generated one)."""
+        from socialzoo.scenarios.scenario_sets import map_case_sets
+
+        splits = {} if self.scenario_family is None else self.scenario_family.splits
+        if splits:
+            return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
+        return dict(map_case_sets(self.map))
+
+    def case_sizes(self) -> dict[str, int]:
+        """The number of cases of each of `case_sets`."""
+        splits = {} if self.scenario_family is None else self.scenario_family.splits
+        return {
+            name: int(splits[cases].size or 0) if isinstance(cases, str) else len(cases)
+            for name, cases in self.case_sets().items()
+        }
+
+    def cases(self, split: str, indices: Any) -> list[Scenario]:
+        """Cases `indices` of split `split` of `case_sets`: a family's own split, a registered test
         set's seeds as the family's scenarios, or without a family the test set's own scenarios."""
+        case_set = self.case_sets()[split]
         if self.scenario_family is None:
             assert isinstance(case_set, TestSet)
             return [

@@ -171,7 +171,7 @@ class ActionSelectionTask(Task):
         options = dict(options)
         chosen = fixed_cases(options, rows, self.case_splits(), self.name)
         if chosen is not None:
-            options["scenarios"] = self.scenarios.cases(self._case_sets()[chosen[0]], chosen[1])
+            options["scenarios"] = self.scenarios.cases(*chosen)
         scenarios = options.pop("scenarios", None)
         one = options.pop("scenario", None)
         if one is not None:
@@ -222,25 +222,10 @@ class ActionSelectionTask(Task):
         self._observe(rows)
 
     def case_splits(self) -> dict[str, int]:
-        """The map's validation scenarios ("val", never a test set), and its registered test sets
-        ("test" for "<map>-test", and each by its own name, e.g. "gdc1-quick"); a scenario
-        family's cases are the family's scenarios of the same seeds."""
-        family = self.scenarios.scenario_family
-        return {
-            name: family.splits[name].size if isinstance(cases, str) else len(cases)  # type: ignore[union-attr,misc]
-            for name, cases in self._case_sets().items()
-        }
-
-    def _case_sets(self) -> dict[str, Any]:
-        """Split name -> its TestSet, or for a family with fixed splits of its own the split's name
-        (its "val" and "test"; "train" is the training stream's)."""
-        from socialzoo.scenarios.scenario_sets import map_case_sets
-
-        if self.scenarios.scenario_family is not None:
-            splits = self.scenarios.scenario_family.splits
-            if splits:
-                return {k: k for k, v in splits.items() if k != "train" and v.size is not None}
-        return dict(map_case_sets(self.map))
+        """The stream's fixed case sets (socialzoo.env.scenario_source.ScenarioStream.case_sets: the
+        map's validation scenarios and registered test sets, or a scenario family's own splits; a
+        family without splits plays the map's sets' seeds as its scenarios)."""
+        return self.scenarios.case_sizes()
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
         """Advance every row one 0.025 s step.

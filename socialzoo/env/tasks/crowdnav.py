@@ -166,7 +166,7 @@ class CrowdNavTask(Task):
     def case_splits(self) -> dict[str, int]:
         """CrowdNav's validation and test cases (100 and 500); among walls the map's validation
         scenarios and its registered test set; with a scenario family the family's own "val" and
-        "test" splits (socialzoo.env.crowd_source.CrowdCaseSource.case_sets)."""
+        "test" splits (socialzoo.env.crowd_source.CrowdCaseSource.case_splits)."""
         return self.source.case_splits()
 
     def step(self, action: np.ndarray, human_action: np.ndarray | None = None) -> TaskStep:
