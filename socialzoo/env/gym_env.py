@@ -32,10 +32,24 @@ def robot_row(observations: Any, row: int | slice, robot: int = 0) -> Any:
 
 class TaskAdapter:
     """What every adapter of a task shares: the task it steps, named or its class's `default_task`,
-    and that task's batched core."""
+    that task's batched core, and the renderer it draws with (made on the first frame)."""
 
     default_task: ClassVar[str | None] = None
     task: Task
+    render_mode: str | None = None
+    _renderer: Any = None
+
+    def make_task(
+        self, task: Any, config: Any, batch_size: int, kwargs: dict[str, Any], render_mode: str | None = None
+    ) -> type[Task]:
+        """Build the adapter's task of `batch_size` rows (`config` and its keyword arguments) once
+        `render_mode` is one it can draw; sets task, config and render_mode, returns the task class."""
+        cls = self.task_class(task)
+        cls.check_render_mode(render_mode)
+        self.task = cls(config, batch_size, **kwargs)
+        self.config = self.task.config
+        self.render_mode = render_mode
+        return cls
 
     def task_class(self, task: Any) -> type[Task]:
         """The Task class of `task` (a name, "module:Class" path or class), or of `default_task`."""
@@ -48,6 +62,27 @@ class TaskAdapter:
     def core(self) -> Any:
         """The task's batched core."""
         return self.task.core  # type: ignore[attr-defined]
+
+    def draw(self, mode: str, view: str = "follow", row: int = 0) -> np.ndarray | None:
+        """Row `row`'s frame from the task's renderer for `mode` (socialzoo.env.tasks.base.Task.make_renderer)."""
+        if self._renderer is None:
+            self._renderer = self.task.make_renderer(mode, view=view)
+        return self._renderer.render(row=row)
+
+    def show(self, reset: bool = False) -> None:
+        """After a reset (`reset`) or a step: start the renderer's new episode, and draw the frame
+        in render_mode "human"."""
+        if reset and self._renderer is not None:
+            self._renderer.reset()
+        if self.render_mode == "human":
+            self.render()  # type: ignore[attr-defined]
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderer's window or figure, if one was opened (Gymnasium's VectorEnv.close
+        calls this; the other adapters' close)."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
 
 
 class TaskEnv(TaskAdapter, gym.Env):
@@ -79,15 +114,11 @@ class TaskEnv(TaskAdapter, gym.Env):
     def __init__(
         self, config: Any = None, render_mode: str | None = None, *, task: Any = None, **kwargs: Any
     ) -> None:
-        cls = self.task_class(task)
-        cls.check_render_mode(render_mode)
-        self.task = one_robot(cls(config, 1, **kwargs), type(self).__name__)
-        self.config = self.task.config
+        cls = self.make_task(task, config, 1, kwargs, render_mode)
+        one_robot(self.task, type(self).__name__)
         self.metadata = {"render_modes": list(cls.render_modes), "render_fps": cls.render_fps}
-        self.render_mode = render_mode
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
-        self._renderer: Any = None
         self._needs_reset = True
         self._seeded = False
 
@@ -105,10 +136,7 @@ class TaskEnv(TaskAdapter, gym.Env):
             self._seeded = True
         seeds = self.task.reset(_ROW, dict(options or {}))
         self._needs_reset = False
-        if self._renderer is not None:
-            self._renderer.reset()
-        if self.render_mode == "human":
-            self.render()
+        self.show(reset=True)
         return robot_row(self.task.observations(), 0), {self.task.reset_info_key: int(seeds[0])}
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
@@ -131,8 +159,7 @@ class TaskEnv(TaskAdapter, gym.Env):
         if terminated or truncated:
             info["metrics"] = self.task.episode_metrics(_ROW)[0]
             self._needs_reset = True
-        if self.render_mode == "human":
-            self.render()
+        self.show()
         return robot_row(self.task.observations(), 0), float(step.reward[0, 0]), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
@@ -140,15 +167,11 @@ class TaskEnv(TaskAdapter, gym.Env):
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        if self._renderer is None:
-            self._renderer = self.task.make_renderer(self.render_mode)
-        return self._renderer.render()
+        return self.draw(self.render_mode)
 
     def close(self) -> None:
         """Close the renderer's window or figure, if one was opened."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self.close_extras()
 
 
 class ActionSelectionEnv(TaskEnv):

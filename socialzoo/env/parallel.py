@@ -14,7 +14,7 @@ from pettingzoo.utils.wrappers import BaseParallelWrapper
 from socialzoo.core.state import WorldState
 from socialzoo.core.validation import check_int, check_seed
 from socialzoo.env.gym_env import TaskAdapter, robot_row
-from socialzoo.env.tasks.base import Task, agent_action
+from socialzoo.env.tasks.base import agent_action
 from socialzoo.scenarios.scenario import Scenario
 
 # Entries of the global state per robot: pose (x, y, theta), velocity (v, omega), goal (x, y, theta).
@@ -88,17 +88,13 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         task: Any = None,
         **kwargs: Any,
     ) -> None:
-        cls = self.task_class(task)
-        cls.check_render_mode(render_mode)
         check_int(type(self).__name__, "max_cycles", max_cycles, low=1, allow_none=True)
-        self.task: Task = cls(config, 1, **kwargs)
-        self.config = self.task.config
+        cls = self.make_task(task, config, 1, kwargs, render_mode)
         self.metadata = {
             **type(self).metadata,
             "render_modes": list(cls.render_modes),
             "render_fps": cls.render_fps,
         }
-        self.render_mode = render_mode
         self.max_cycles = max_cycles
         self.episode_info = bool(episode_info)
         task_ = self.task
@@ -117,7 +113,6 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         self.stream_seed: int | None = None
         self.num_cycles = 0
         self._started = False
-        self._renderer: Any = None
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The observation space of `agent` (the same object at every call)."""
@@ -157,10 +152,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         self._started = True
         self.num_cycles = 0
         self.agents = self.possible_agents[:]
-        if self._renderer is not None:
-            self._renderer.reset()
-        if self.render_mode == "human":
-            self.render()
+        self.show(reset=True)
         infos: dict[str, dict[str, Any]] = {a: self.task.initial_info() for a in self.robots}
         present = self.task.human_present()
         for j, a in enumerate(self.humans):
@@ -237,8 +229,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
                 truncations[agent] = humans_out
                 infos[agent] = {key: bool(step.human_info[key][0, j]) for key in HUMAN_INFO_KEYS}
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
-        if self.render_mode == "human":
-            self.render()
+        self.show()
         return observations, rewards, terminations, truncations, infos
 
     def _action_arrays(self, actions: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray | None]:
@@ -301,15 +292,11 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
             return None
         if not self._started:
             raise RuntimeError(f"{type(self).__name__}: call reset() before render()")
-        if self._renderer is None:
-            self._renderer = self.task.make_renderer(self.render_mode, view="map")
-        return self._renderer.render()
+        return self.draw(self.render_mode, view="map")
 
     def close(self) -> None:
         """Close the renderer's window or figure, if one was opened."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self.close_extras()
 
 
 class SocialNavParallelEnv(TaskParallelEnv):

@@ -70,15 +70,12 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         task: Any = None,
         **kwargs: Any,
     ) -> None:
-        cls = self.task_class(task)
         check_int(type(self).__name__, "max_episode_steps", max_episode_steps, low=1, allow_none=True)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        cls.check_render_mode(render_mode)
-        self.task = one_robot(cls(config, num_envs, **kwargs), type(self).__name__)
-        self.config = self.task.config
+        cls = self.make_task(task, config, num_envs, kwargs, render_mode)
+        one_robot(self.task, type(self).__name__)
         self.num_envs = num_envs
-        self.render_mode = render_mode
         self.metadata = {
             "autoreset_mode": AutoresetMode.SAME_STEP,
             "render_modes": [m for m in cls.render_modes if m == "rgb_array"],
@@ -97,7 +94,6 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._action_shape = (num_envs, 1) + tuple(self.single_action_space.shape or ())
         self._started = False
-        self._renderer: Any = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Reset every row, or the rows of options["reset_mask"] (see the class docstring)."""
@@ -190,17 +186,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
 
     def render(self) -> np.ndarray | None:
         """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""
-        if self.render_mode is None:
-            return None
-        if self._renderer is None:
-            self._renderer = self.task.make_renderer("rgb_array")
-        return self._renderer.render(row=0)
-
-    def close_extras(self, **kwargs: Any) -> None:
-        """Close the renderer, if one was opened (Gymnasium's VectorEnv.close calls this)."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        return None if self.render_mode is None else self.draw("rgb_array")
 
 
 class ActionSelectionVectorEnv(TaskVectorEnv):
