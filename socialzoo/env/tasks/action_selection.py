@@ -9,7 +9,6 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium import spaces
 
-from socialzoo.core.state import WorldState
 from socialzoo.env.config import EnvConfig
 from socialzoo.env.core import BatchedCore
 from socialzoo.env.human_agents import (
@@ -105,6 +104,7 @@ class ActionSelectionTask(Task):
     render_modes: ClassVar[tuple[str, ...]] = ("human", "rgb_array")
     render_fps: ClassVar[int] = 40
     reset_info_key: ClassVar[str] = "scenario_seed"
+    neutral_info: ClassVar[dict[str, Any]] = INITIAL_INFO
 
     def __init__(
         self,
@@ -483,15 +483,6 @@ class ActionSelectionTask(Task):
         return new
 
     # ------------------------------------------------------------------ per-robot info
-    @property
-    def info_keys(self) -> tuple[str, ...]:
-        """reached, wall_collision, human_collisions, force, blame, progress, target_human."""
-        return tuple(INITIAL_INFO)
-
-    def initial_info(self) -> dict[str, Any]:
-        """Neutral values (no target: -1)."""
-        return dict(INITIAL_INFO)
-
     def idle_action(self) -> Any:
         """Halt, or a zero velocity."""
         return HALT if self.config.robot_action == "subpolicy" else super().idle_action()
@@ -512,13 +503,6 @@ class ActionSelectionTask(Task):
         state = self.core.state
         assert state is not None
         return state.human_mask[:, self.learned]
-
-    # ------------------------------------------------------------------ world view
-    @property
-    def world_state(self) -> WorldState:
-        """The core's WorldState."""
-        assert self.core.state is not None
-        return self.core.state
 
     # ------------------------------------------------------------------ the episode viewer
     def action_labels(self) -> tuple[str, ...]:

@@ -52,12 +52,15 @@ class Task(ABC):
         num_human_slots: H, person slots of each world (the global state's).
         num_human_agents: L, human slots driven by learners (agents "human_0" ..); 0 for most tasks.
         reset_info_key: the key of the reset info holding each row's scenario seed.
+        neutral_info: a robot's per-step info keys, in order, with their values at reset.
     """
 
     name: ClassVar[str]
     render_modes: ClassVar[tuple[str, ...]] = ()
     render_fps: ClassVar[int] = 4
     reset_info_key: ClassVar[str] = "scenario_seed"
+    # A robot's per-step info keys (TaskStep.info), in order, with their values at reset.
+    neutral_info: ClassVar[dict[str, Any]] = {}
 
     config: Any
     batch_size: int
@@ -117,13 +120,13 @@ class Task(ABC):
 
     # ------------------------------------------------------------------ per-robot info
     @property
-    @abstractmethod
     def info_keys(self) -> tuple[str, ...]:
-        """The per-step info keys of a robot (TaskStep.info)."""
+        """The per-step info keys of a robot (TaskStep.info): those of `neutral_info`, in order."""
+        return tuple(self.neutral_info)
 
     def initial_info(self) -> dict[str, Any]:
-        """A robot's info at reset: info_keys with neutral values."""
-        return {}
+        """A robot's info at reset: info_keys with neutral values (a copy of `neutral_info`)."""
+        return dict(self.neutral_info)
 
     def robot_info(self, step: TaskStep, row: int, robot: int) -> dict[str, Any]:
         """The per-step info dict of one robot: plain Python values (bool, int, float) under info_keys."""
@@ -148,9 +151,12 @@ class Task(ABC):
 
     # ------------------------------------------------------------------ world view
     @property
-    @abstractmethod
     def world_state(self) -> Any:
-        """The batched WorldState (socialzoo.core.state) of the worlds the task steps."""
+        """The batched WorldState (socialzoo.core.state) of the worlds the task steps: by default
+        its core's (`self.core.state`, once reset)."""
+        state = self.core.state  # type: ignore[attr-defined]
+        assert state is not None
+        return state
 
     # ------------------------------------------------------------------ the episode viewer
     def action_labels(self) -> tuple[str, ...]:

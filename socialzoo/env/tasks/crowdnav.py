@@ -35,8 +35,14 @@ from socialzoo.scenarios.scenario import Scenario
 
 # The per-step info of a robot: its closest approach to anyone during the step (m, negative: an
 # overlap), the benchmark's social force and blame terms after it, whether it collided with a person
-# (or another robot) or with a wall.
-INFO_KEYS = ("closest", "force", "blame", "human_collisions", "wall_collision")
+# (or another robot) or with a wall; at reset nothing approached or touched yet.
+INITIAL_INFO: dict[str, Any] = {
+    "closest": float("inf"),
+    "force": 0.0,
+    "blame": 0.0,
+    "human_collisions": 0,
+    "wall_collision": False,
+}
 # CrowdNav's people cover their last metre in about a second: their preferred speed is the distance
 # to the goal per this time, capped at their preferred speed (s).
 _ARRIVAL_TIME = 1.0
@@ -70,6 +76,7 @@ class CrowdNavTask(Task):
     render_fps: ClassVar[int] = 4
     render_modes: ClassVar[tuple[str, ...]] = ("human", "rgb_array")
     reset_info_key: ClassVar[str] = "case_seed"
+    neutral_info: ClassVar[dict[str, Any]] = INITIAL_INFO
 
     def __init__(self, config: CrowdNavConfig | None = None, batch_size: int = 1, **overrides: Any) -> None:
         self.config = cfg = resolve_config(config, overrides)
@@ -481,21 +488,6 @@ class CrowdNavTask(Task):
         return summary
 
     # ------------------------------------------------------------------ per-robot info
-    @property
-    def info_keys(self) -> tuple[str, ...]:
-        """closest, force, blame, human_collisions, wall_collision."""
-        return INFO_KEYS
-
-    def initial_info(self) -> dict[str, Any]:
-        """Nothing approached or touched yet."""
-        return {
-            "closest": float("inf"),
-            "force": 0.0,
-            "blame": 0.0,
-            "human_collisions": 0,
-            "wall_collision": False,
-        }
-
     def idle_action(self) -> Any:
         """Stop: action 0, a zero velocity, or a unicycle's speed 0 (the lowest of its range)."""
         if self.config.action == "discrete":
@@ -505,12 +497,6 @@ class CrowdNavTask(Task):
         return np.zeros(2)
 
     # ------------------------------------------------------------------ world view
-    @property
-    def world_state(self) -> WorldState:
-        """The core's WorldState."""
-        assert self.core.state is not None
-        return self.core.state
-
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         """socialzoo.env.rendering.CoreRenderer of the task. In the open (the arena, a recorded
         scene) the frames show no walls, and the map view shows the arena's cases with 1 m to
