@@ -127,13 +127,9 @@ class EnvConfig:
     def __post_init__(self) -> None:
         if isinstance(self.people, str):  # a people spec, as the CrowdNav task and the CLI take it
             object.__setattr__(self, "people", PeopleConfig(models=self.people))
-        if self.family is not None and self.family not in FAMILIES:
-            raise ValueError(
-                f"EnvConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
-            )
         home = "gdc1"  # the benchmark's map
         if self.family is not None:
-            home = family_map(self.family, "EnvConfig.family")  # refuses a family that cannot load
+            home = family_map(self.family, "EnvConfig.family")
         if self.map is None and home == OPEN:
             # The task plans on a map's graph: a family in the open gives its open area as one.
             opening = getattr(get_family(self.family), "open_map", None)  # type: ignore[arg-type]
@@ -258,8 +254,11 @@ def family_map(name: str, where: str) -> str:
     """The map registered family `name` is designed for (its map_name).
 
     Raises:
-        ValueError: the family cannot be loaded (naming `where`, the family and why).
+        ValueError: an unknown family, or one that cannot be loaded (naming `where`, the family
+            and why).
     """
+    if not isinstance(name, str) or name not in FAMILIES:
+        raise ValueError(f"{where} must be None or one of {sorted(FAMILIES)}, got {name!r}")
     try:
         return get_family(name).map_name
     except (ImportError, AttributeError, KeyError, ValueError) as err:
@@ -282,7 +281,7 @@ def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[s
     for key in data:
         if key in RENAMED_FIELDS:
             raise ValueError(f"EnvConfig: {key} was renamed {RENAMED_FIELDS[key]}")
-    _check_known(EnvConfig, data, "EnvConfig")
+    check_known(EnvConfig, data, "EnvConfig")
     return {
         key: _override(_NESTED[key]() if base is None else getattr(base, key), value, f"EnvConfig.{key}")
         if key in _NESTED and isinstance(value, dict)
@@ -294,14 +293,16 @@ def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[s
     }
 
 
-def _check_known(cls: Any, data: Mapping[str, Any], where: str) -> None:
+def check_known(cls: Any, data: Mapping[str, Any], where: str) -> None:
+    """Refuse keys of `data` that are no field of dataclass `cls` (or of its instance), naming
+    `where`, the unknown fields and the known ones (socialzoo.core.validation.UnknownFieldError)."""
     error = unknown_fields(where, data, [f.name for f in dataclasses.fields(cls)])
     if error is not None:
         raise error
 
 
 def _override(base: Any, data: dict[str, Any], where: str) -> Any:
-    _check_known(base, data, where)
+    check_known(base, data, where)
     resolved: dict[str, Any] = {}
     for key, value in data.items():
         nested = _WORLD_NESTED.get(key) if isinstance(base, WorldConfig) else None

@@ -8,13 +8,13 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.core.validation import check_choice, check_int, check_number, unknown_fields
-from socialzoo.env.config import check_family_robots, family_map
+from socialzoo.core.validation import check_choice, check_int, check_number
+from socialzoo.env.config import check_family_robots, check_known, family_map
 from socialzoo.env.crowd_observation import OBSERVATION_KINDS, ObservationKind
 from socialzoo.env.crowd_outcome import CrowdRewardConfig
 from socialzoo.env.crowd_variants import VARIANTS
 from socialzoo.humans.models import PeopleConfig, PeopleSpecError
-from socialzoo.scenarios.catalogue import FAMILIES, get_family
+from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
 
 CrowdAction = Literal["continuous", "discrete"]
@@ -184,10 +184,6 @@ class CrowdNavConfig:
         """Refuse a family that is unknown, cannot load or is CrowdNav's arena; map None: its map."""
         if self.family is None:
             return
-        if not isinstance(self.family, str) or self.family not in FAMILIES:
-            raise ValueError(
-                f"CrowdNavConfig.family must be None or one of {sorted(FAMILIES)}, got {self.family!r}"
-            )
         home = family_map(self.family, "CrowdNavConfig.family")
         if self.family in ARENA_LAYOUTS:
             raise ValueError(
@@ -276,9 +272,7 @@ class CrowdNavConfig:
         cases = changes.get("cases", self.cases)
         if isinstance(cases, CrowdCaseConfig) and any(getattr(cases, k) != v for k, v in follow.items()):
             changes["cases"] = dataclasses.replace(cases, **follow)
-        error = unknown_fields("CrowdNavConfig", changes, [f.name for f in dataclasses.fields(self)])
-        if error is not None:
-            raise error
+        check_known(self, changes, "CrowdNavConfig")
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
@@ -317,9 +311,7 @@ def resolve_config(config: CrowdNavConfig | None, overrides: dict[str, Any]) -> 
 
 def _replace_nested(config: Any, fields: dict[str, Any], where: str) -> Any:
     """`config` with `fields`; an unknown field raises naming `where` and the known ones."""
-    error = unknown_fields(where, fields, [f.name for f in dataclasses.fields(config)])
-    if error is not None:
-        raise error
+    check_known(config, fields, where)
     return dataclasses.replace(config, **fields)
 
 
