@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from socialzoo.core.validation import check_choice, check_number
 from socialzoo.env.human_agents import human_mirror_signs, human_observation_size
 from socialzoo.env.policy_file import (
     ACTIVATIONS,
@@ -85,16 +85,12 @@ class LearnedHumanPolicy:
         learned_forces: bool = True,
         relaxation_time: float | None = None,
     ) -> None:
-        if activation not in ACTIVATIONS:
-            raise ValueError(
-                f"LearnedHumanPolicy: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}"
-            )
-        if action_frame not in ACTION_FRAMES:
-            raise ValueError(
-                f"LearnedHumanPolicy: action_frame must be one of {ACTION_FRAMES}, got {action_frame!r}"
-            )
-        if not (isinstance(action_scale, (int, float)) and math.isfinite(action_scale) and action_scale > 0):
-            raise ValueError(f"LearnedHumanPolicy: action_scale must be a number > 0, got {action_scale!r}")
+        check_choice("LearnedHumanPolicy", "activation", activation, sorted(ACTIVATIONS))
+        check_choice("LearnedHumanPolicy", "action_frame", action_frame, ACTION_FRAMES)
+        check_number("LearnedHumanPolicy", "action_scale", action_scale, low=0, low_open=True)
+        check_number(
+            "LearnedHumanPolicy", "relaxation_time", relaxation_time, low=0, low_open=True, allow_none=True
+        )
         self.layers = checked_layers("LearnedHumanPolicy", weights)
         if self.layers[-1][0].shape[0] != 2:
             raise ValueError(
@@ -125,14 +121,6 @@ class LearnedHumanPolicy:
         self.action_scale = float(action_scale)
         self.mirror_symmetric = bool(mirror_symmetric)
         self.learned_forces = bool(learned_forces)
-        if relaxation_time is not None and not (
-            isinstance(relaxation_time, (int, float))
-            and math.isfinite(relaxation_time)
-            and relaxation_time > 0
-        ):
-            raise ValueError(
-                f"LearnedHumanPolicy: relaxation_time must be a number > 0, got {relaxation_time!r}"
-            )
         self.relaxation_time = None if relaxation_time is None else float(relaxation_time)
         self._mirror = human_mirror_signs(self.num_neighbours)
         self.header = dict(header or {})

@@ -55,7 +55,7 @@ def test_bad_files_and_specs_are_named(walker_policy_path, tmp_path):
         LearnedHumanPolicy(
             policy.layers, "tanh", policy.obs_loc, 0 * policy.obs_scale, policy.num_neighbours, "human"
         )
-    with pytest.raises(ValueError, match="action_scale must be a number > 0"):
+    with pytest.raises(ValueError, match=r"LearnedHumanPolicy\.action_scale must be > 0, got 0\.0"):
         LearnedHumanPolicy(
             policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human", 0.0
         )
@@ -184,7 +184,7 @@ def test_the_file_says_its_peoples_relaxation_time_and_the_world_takes_it(walker
     taken = human_of(f"learned:{path}")
     assert taken.learned_tau == 2.0 and taken.relaxation_time == 0.7  # the other people's stays
     assert human_of(f"learned:{walker_policy_path}").learned_tau == 0.7
-    with pytest.raises(ValueError, match="relaxation_time must be a number > 0"):
+    with pytest.raises(ValueError, match=r"LearnedHumanPolicy\.relaxation_time must be > 0, got -1\.0"):
         LearnedHumanPolicy(
             policy.layers, "tanh", policy.obs_loc, policy.obs_scale, policy.num_neighbours, "human",
             relaxation_time=-1.0,
