@@ -27,7 +27,7 @@ from socialzoo.env.crowd_source import CrowdCaseSource, write_cases
 from socialzoo.env.observation import nearest_door
 from socialzoo.env.outcome import STILL_SPEED
 from socialzoo.env.reward import RewardConfig, force_and_blame
-from socialzoo.env.tasks.base import Task, TaskStep, fixed_cases
+from socialzoo.env.tasks.base import Task, TaskStep, batch_actions, fixed_cases
 from socialzoo.maps.map_file import load_map
 from socialzoo.nav.local_planner import LocalPlannerConfig
 from socialzoo.scenarios.crowd_cases import CrowdCase, case_scenario
@@ -266,24 +266,16 @@ class CrowdNavTask(Task):
 
         Raises:
             ValueError: a wrong shape, a NaN or infinite value, a velocity outside [-1, 1], or an
-                index outside the discrete actions; the message names the row.
+                index outside the discrete actions (socialzoo.env.tasks.base.batch_actions); the
+                message names the robot.
         """
         b, r = self.batch_size, self.num_robots
         action = np.asarray(action)
         robot = self.config.robot
         if self.action_table is not None:
-            if action.size != b * r or not np.issubdtype(action.dtype, np.integer):
-                raise ValueError(
-                    f"CrowdNav: discrete actions must be {b} x {r} integers, got {action.dtype} {action.shape}"
-                )
-            flat = action.reshape(b * r)
-            bad = np.flatnonzero((flat < 0) | (flat >= len(self.action_table)))
-            if len(bad):
-                top = len(self.action_table) - 1
-                raise ValueError(
-                    f"CrowdNav: action {int(flat[bad[0]])} of robot {int(bad[0])} is not in 0..{top}"
-                )
-            chosen = self.action_table[flat]
+            shaped = action.reshape(b, r) if action.size == b * r else action
+            index = batch_actions(self.action_space, shaped, (b, r), "CrowdNav")
+            chosen = self.action_table[index.reshape(-1)]
             if robot.kinematics == "unicycle":  # (speed, turn per step) -> (v, omega)
                 chosen = np.stack((chosen[:, 0], chosen[:, 1] / self.config.time_step), axis=-1)
             else:
