@@ -63,6 +63,7 @@ class People:
         batch_size: B.
         num_robots: R.
         max_humans: H.
+        walls: the map's wall index (learned people observe its walls; counterfactual rows walk among them).
         m: the map (None without one: no walking groups then).
         robot_visible: whether the people see the robots (learned people observe them only then).
 
