@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -65,18 +65,9 @@ class HumanRewardConfig:
     wall_margin: float = 0.4
 
     def __post_init__(self) -> None:
-        check_fields(
-            self,
-            nonnegative=(
-                "progress",
-                "waypoint_bonus",
-                "speed",
-                "human_contact",
-                "robot_contact",
-                "wall_contact",
-                "wall_clearance",
-            ),
-        )
+        # Every weight may be 0; the distances must be > 0.
+        distances = ("contact_distance", "wall_distance", "wall_margin")
+        check_fields(self, nonnegative=[f.name for f in fields(self) if f.name not in distances])
         if not self.wall_margin > self.wall_distance:
             raise ValueError(
                 f"HumanRewardConfig.wall_margin ({self.wall_margin}) must exceed wall_distance "
