@@ -20,6 +20,7 @@ from socialzoo.cli.arg_types import (
     split_commas,
     task_config,
 )
+from socialzoo.cli.dataclass_args import dataclass_from_namespace
 from socialzoo.cli.people_cmd import people_spec
 
 
@@ -133,7 +134,7 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--episodes", type=positive_int, required=True, help="number of episodes")
     parser.add_argument("--out", type=out_path, required=True, help="output .npz file")
     parser.add_argument("--map", default="gdc1", help="map (default gdc1, the training map)")
-    parser.add_argument("--policy", default="ref", help="demonstrating policy (default ref)")
+    parser.add_argument("--policy", type=str.lower, default="ref", help="demonstrating policy (default ref)")
     parser.add_argument("--chunk-episodes", type=positive_int, default=25, help="episodes per chunk file")
     parser.add_argument("--batch-size", type=positive_int, default=64, help="env rows stepped together")
     parser.add_argument(
@@ -290,14 +291,7 @@ def run_demos_command(args: argparse.Namespace) -> int:
     from socialzoo.bench.demonstrations import DemoConfig, record_demonstrations
 
     try:
-        config = DemoConfig(
-            policy=args.policy.lower(),
-            map=args.map,
-            episodes=args.episodes,
-            chunk_episodes=args.chunk_episodes,
-            batch_size=args.batch_size,
-            env_overrides=given(args, "max_steps"),
-        )
+        config = dataclass_from_namespace(DemoConfig, args, env_overrides=given(args, "max_steps"))
         path = record_demonstrations(args.out, config, progress=not args.no_progress)
         arrays, _ = load_demonstrations(path)
     except (ValueError, KeyError, DemonstrationError) as err:

@@ -134,11 +134,12 @@ def _literal_parser(choices: list[Any]) -> Any:
     return parse_choice
 
 
-def dataclass_from_namespace(cls: type, namespace: argparse.Namespace) -> Any:
-    """Build `cls` from the options `add_dataclass_arguments` added (tuples from lists)."""
-    values = {}
+def dataclass_from_namespace(cls: type, namespace: argparse.Namespace, **values: Any) -> Any:
+    """Build `cls` from `values` and, for its other init fields, the namespace's options of the same
+    name (tuples from lists): the options `add_dataclass_arguments` added, or a subcommand's own
+    options named as its config's fields."""
     for field in dataclasses.fields(cls):
-        if field.init and hasattr(namespace, field.name):
+        if field.init and field.name not in values and hasattr(namespace, field.name):
             value = getattr(namespace, field.name)
             values[field.name] = tuple(value) if isinstance(value, list) else value
     return cls(**values)

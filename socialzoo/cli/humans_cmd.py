@@ -7,12 +7,15 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import count, given, out_dir, positive_int, split_commas
+from socialzoo.cli.arg_types import comma_list, count, given, out_dir, positive_int
+from socialzoo.cli.dataclass_args import dataclass_from_namespace
 from socialzoo.cli.people_cmd import add_report, people_spec
 
 SCENES_HELP = (
     "comma-separated scenes (eth, hotel, univ, zara1, zara2) or track files of your own (PATH or NAME=PATH)"
 )
+# The --scenes, --models and --maps options: tuples, as their configs' fields.
+_scenes, _models, _maps = comma_list("scenes"), comma_list("models"), comma_list("maps")
 
 
 def register(subparsers: Any) -> None:
@@ -47,7 +50,9 @@ def _add_compare(commands: Any) -> None:
         type=people_spec,
         help="learned:PATH, a learned human policy file, or learned: the shipped learned humans",
     )
-    parser.add_argument("--maps", default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)")
+    parser.add_argument(
+        "--maps", type=_maps, default="gdc1,ghc3", help="comma-separated maps (default gdc1,ghc3)"
+    )
     parser.add_argument("--trials", type=positive_int, default=None, help="scenarios per map (default: all)")
     sets = parser.add_mutually_exclusive_group()
     sets.add_argument("--quick", action="store_true", help="the quick test sets (100 scenarios)")
@@ -91,9 +96,10 @@ def _add_realism(commands: Any) -> None:
         "(socialzoo.studies.realism), and write DIR/realism.csv, realism.md, realism.json, ade.png and "
         "speeds.png. The scenes come from the data cache (`socialzoo data fetch eth-ucy`).",
     )
-    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
+    parser.add_argument("--scenes", type=_scenes, default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
     parser.add_argument(
         "--models",
+        type=_models,
         default="cv,sf,orca,groups",
         help="comma-separated: cv, sf, orca, groups, learned:PATH, sf-eth-ucy, orca-eth-ucy",
     )
@@ -117,7 +123,7 @@ def _add_calibrate(commands: Any) -> None:
         "scenes, DIR/<model>-eth-ucy.json.",
     )
     parser.add_argument("--model", required=True, choices=("sf", "orca"), help="the model to fit")
-    parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
+    parser.add_argument("--scenes", type=_scenes, default="eth,hotel,univ,zara1,zara2", help=SCENES_HELP)
     parser.add_argument("--out", type=out_dir, required=True, help="output directory")
     parser.add_argument("--cache", default=None, help="the scenes' cache folder (default: the data dir)")
     parser.add_argument(
@@ -141,14 +147,8 @@ def run_realism(args: argparse.Namespace) -> int:
     from socialzoo.studies.realism import run_realism as run
 
     try:
-        check_recordings(split_commas(args.scenes))
-        config = RealismConfig(
-            scenes=split_commas(args.scenes),
-            models=split_commas(args.models),
-            tracks=args.tracks,
-            seed=args.seed,
-            cache=args.cache,
-        )
+        check_recordings(args.scenes)
+        config = dataclass_from_namespace(RealismConfig, args)
         results = run(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, UnknownSceneError, FileNotFoundError) as err:
         return fail("humans realism", err)
@@ -167,18 +167,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
     from socialzoo.studies.calibration import CalibrationConfig, calibrate
 
     try:
-        check_recordings(split_commas(args.scenes))
-        config = CalibrationConfig(
-            model=args.model,
-            scenes=split_commas(args.scenes),
-            persons=args.persons,
-            windows=args.windows,
-            generations=args.generations,
-            popsize=args.popsize,
-            seed=args.seed,
-            folds=not args.no_folds,
-            cache=args.cache,
-        )
+        check_recordings(args.scenes)
+        config = dataclass_from_namespace(CalibrationConfig, args, folds=not args.no_folds)
         result = calibrate(config, args.out, progress=not args.no_progress)
     except (ValueError, UnknownSceneError, FileNotFoundError, ImportError) as err:
         return fail("humans calibrate", err)
@@ -205,17 +195,7 @@ def run_compare(args: argparse.Namespace) -> int:
     from socialzoo.studies.human_compare import ComparisonConfig, compare_humans
 
     try:
-        config = ComparisonConfig(
-            humans=args.humans,
-            policy=args.policy,
-            maps=split_commas(args.maps),
-            trials=args.trials,
-            quick=args.quick,
-            validation=args.validation,
-            workers=args.workers,
-            batch_size=args.batch_size,
-            env_overrides=given(args, "max_steps"),
-        )
+        config = dataclass_from_namespace(ComparisonConfig, args, env_overrides=given(args, "max_steps"))
     except (ValueError, KeyError) as err:
         return fail("humans compare", err)
     result = compare_humans(config, args.out, progress=not args.no_progress, figures=not args.no_figures)

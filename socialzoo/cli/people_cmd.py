@@ -9,6 +9,7 @@ from typing import Any
 
 from socialzoo.cli import fail
 from socialzoo.cli.arg_types import comma_list, out_dir, positive_int
+from socialzoo.cli.dataclass_args import dataclass_from_namespace
 
 
 def shipped_humans() -> str:
@@ -60,9 +61,7 @@ def run_report(args: argparse.Namespace) -> int:
     from socialzoo.studies.human_report import HumanReportConfig, human_report
 
     try:
-        config = HumanReportConfig(
-            humans=args.humans, map=args.map, scenarios=args.scenarios, seconds=args.seconds
-        )
+        config = dataclass_from_namespace(HumanReportConfig, args)
         _, files = human_report(config, args.out, figures=not args.no_figures)
     except (ValueError, FileNotFoundError) as err:
         return fail("humans report", err)

@@ -8,6 +8,7 @@ from typing import Any
 
 from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import positive_int
+from socialzoo.cli.dataclass_args import dataclass_from_namespace
 
 
 def register(subparsers: Any) -> None:
@@ -56,14 +57,7 @@ def run_ref_tradeoff_command(args: argparse.Namespace) -> int:
     from socialzoo.studies.ref_tradeoff import RefTradeoffConfig, run_ref_tradeoff, tradeoff_table
 
     try:
-        config = RefTradeoffConfig(
-            trials=args.trials,
-            workers=args.workers,
-            map=args.map,
-            learned=tuple(args.learned),
-            halt_offsets=args.halt_offsets,
-        )
-        result = run_ref_tradeoff(config)
+        result = run_ref_tradeoff(dataclass_from_namespace(RefTradeoffConfig, args))
     except (ValueError, KeyError, FileNotFoundError) as err:
         return fail("study ref-tradeoff", err)
     print(tradeoff_table(result), end="")
