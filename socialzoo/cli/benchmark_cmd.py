@@ -170,22 +170,15 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         return run_task_ids(args, ids)
     if args.task_config:
         return fail("benchmark", "--task-config sets a task id's config: name the id in --maps")
-    overrides = given(args, "max_steps")
     specs = list(split_commas(args.humans))
     if len(specs) > 1:
-        return run_matrix_command(args, specs, overrides)
-    chosen: dict[str, Any] = {
-        "backend": args.backend,
-        "address": args.address,
-        "batch_size": args.batch_size,
-        "env_overrides": overrides,
+        return run_matrix_command(args, specs)
+    chosen = {
+        **_runner_choices(args),
         "humans": people_spec(args.humans),
         "human_metrics": args.human_metrics,
         "counterfactual": args.counterfactual,
-        **given(args, "policies", "maps", "trials", "workers"),
     }
-    if args.workers is None and args.backend == "ray":
-        chosen["workers"] = None  # one chunk per CPU of the Ray cluster
     try:
         config = quick_config(**chosen) if args.quick else BenchmarkConfig(**chosen)
         result = run_benchmark(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
@@ -258,25 +251,31 @@ ENV_ID = re.compile(r"(?:[A-Za-z_][\w.]*:)?[A-Za-z0-9_.-]+/[A-Za-z0-9_.]+-v\d+")
 _DEFAULT_POLICIES: dict[str, tuple[str, ...]] = {"crowdnav": ("orca", "social_force", "crowdnav")}
 
 
-def run_matrix_command(args: argparse.Namespace, specs: list[str], overrides: dict[str, Any]) -> int:
+def _runner_choices(args: argparse.Namespace) -> dict[str, Any]:
+    """The options a benchmark run and the matrix's runs share, as their configs' fields: those not given
+    keep the config's defaults, but no --workers with --backend ray is None (one chunk per CPU of
+    the Ray cluster)."""
+    chosen = {
+        "backend": args.backend,
+        "address": args.address,
+        "batch_size": args.batch_size,
+        "env_overrides": given(args, "max_steps"),
+        **given(args, "policies", "maps", "trials", "workers"),
+    }
+    if args.workers is None and args.backend == "ray":
+        chosen["workers"] = None
+    return chosen
+
+
+def run_matrix_command(args: argparse.Namespace, specs: list[str]) -> int:
     """`socialzoo benchmark --humans A,B,...`: every policy among every crowd model (the matrix)."""
     from socialzoo.bench.store import StoreError
     from socialzoo.studies.crowd_matrix import MatrixConfig, crowd_matrix
 
     if args.quick:
         return fail("benchmark", "several --humans make a matrix: without --quick")
-    chosen = given(args, "policies", "maps", "trials", "workers")
-    if args.workers is None and args.backend == "ray":
-        chosen["workers"] = None  # one chunk per CPU of the Ray cluster
     try:
-        config = MatrixConfig(
-            humans=tuple(map(people_spec, specs)),
-            batch_size=args.batch_size,
-            env_overrides=overrides,
-            backend=args.backend,
-            address=args.address,
-            **chosen,
-        )
+        config = MatrixConfig(humans=tuple(map(people_spec, specs)), **_runner_choices(args))
         result = crowd_matrix(config, args.out, progress=not args.no_progress, figures=not args.no_figures)
     except (ValueError, KeyError, StoreError, FileNotFoundError) as err:
         return fail("benchmark", err)
