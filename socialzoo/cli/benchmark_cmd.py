@@ -21,7 +21,7 @@ from socialzoo.cli.arg_types import (
     task_config,
 )
 from socialzoo.cli.dataclass_args import dataclass_from_namespace
-from socialzoo.cli.people_cmd import people_spec
+from socialzoo.cli.humans_cmd import people_spec
 
 
 def _lower_name(spec: str) -> str:

@@ -370,7 +370,7 @@ def test_humans_learned_alone_are_the_shipped_humans(tmp_path, capsys):
     """`--humans learned` names the shipped humans' file, as several --humans and `humans report`
     read it; one spec was refused with "name the learned policy file as learned:PATH", so the
     docs' command had to name socialzoo/agents/shipped/humans.safetensors, a path in a checkout."""
-    from socialzoo.cli.people_cmd import shipped_humans
+    from socialzoo.cli.humans_cmd import shipped_humans
 
     out = tmp_path / "out"
     small = ["--trials", "1", "--max-steps", "20", "--workers", "1", "--no-figures", "--no-progress"]
