@@ -139,6 +139,18 @@ def add_task_config_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """--map and --family: where one episode is played (demo, replay)."""
+    parser.add_argument(
+        "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
+    )
+    parser.add_argument(
+        "--family",
+        default=None,
+        help="a scenario family instead of the benchmark's (MODULE:NAME for a family that MODULE registers)",
+    )
+
+
 def add_backend_arguments(parser: argparse.ArgumentParser, what: str) -> None:
     """--backend, --address, --workers and --batch-size of the evaluation runner (`what` runs there)."""
     parser.add_argument("--backend", choices=("local", "ray"), default="local", help=f"where {what} run")

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import count, out_path, positive_int
+from socialzoo.cli.arg_types import add_scenario_arguments, count, out_path, positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -19,14 +19,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--policy", default="ref", help="policy name (goalone, ref, ...; default ref)")
     parser.add_argument("--policy-path", type=Path, default=None, help="saved file of a learned policy")
-    parser.add_argument(
-        "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
-    )
-    parser.add_argument(
-        "--family",
-        default=None,
-        help="a scenario family instead of the benchmark's (MODULE:NAME for a family that MODULE registers)",
-    )
+    add_scenario_arguments(parser)
     parser.add_argument("--seed", type=count, default=0, help="scenario seed (default 0)")
     parser.add_argument("--view", choices=("follow", "map"), default="follow", help="camera")
     parser.add_argument("--stride", type=positive_int, default=4, help="steps per frame (default 4 = 0.1 s)")

@@ -10,6 +10,7 @@ from typing import Any
 
 from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import (
+    add_scenario_arguments,
     add_task_config_argument,
     at_least,
     comma_list,
@@ -46,14 +47,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--policy-path", type=Path, default=None, help="saved file of the (single) learned policy"
     )
-    parser.add_argument(
-        "--map", default=None, help="map name or JSON path (default: the --family's own map, else gdc1)"
-    )
-    parser.add_argument(
-        "--family",
-        default=None,
-        help="a scenario family instead of the benchmark's (MODULE:NAME for a family that MODULE registers)",
-    )
+    add_scenario_arguments(parser)
     parser.add_argument("--seed", type=count, default=None, help="scenario seed (default 0)")
     parser.add_argument(
         "--max-steps", type=at_least(1), default=None, help="episode time limit override, steps"
