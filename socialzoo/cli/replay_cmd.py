@@ -148,11 +148,21 @@ def _flags(args: argparse.Namespace, *names: str) -> str:
     return ", ".join(f"--{name.replace('_', '-')}" for name in given(args, *names))
 
 
-def _encoding(args: argparse.Namespace) -> Any:
-    """The page's Encoding: --stride, else the steps of 50 ms of each episode's own step."""
+def _write_page(args: argparse.Namespace, scene: Any, traces: list[Any], what: str, lines: list[str]) -> None:
+    """Write the page of `traces` to --out (states every --stride steps, else those of 50 ms of each
+    episode's own step) and say so: its path, `what` it shows and its size, then `lines`."""
     from socialzoo.render.replay_data import Encoding
+    from socialzoo.render.replay_html import write_replay_html
 
-    return Encoding(stride=args.stride, laser_rays=args.laser_rays)
+    encoding = Encoding(stride=args.stride, laser_rays=args.laser_rays)
+    path = write_replay_html(args.out, scene, traces, encoding=encoding, view=args.view)
+    print(f"{path}: {what}; {_size(path)}")
+    print("\n".join(lines))
+
+
+def _described(traces: list[Any]) -> list[str]:
+    """A line per episode: its label and how it ended."""
+    return [f"  {trace.label}: {_describe(trace)}" for trace in traces]
 
 
 def _laser_stride(args: argparse.Namespace, dt: float) -> int:
@@ -167,7 +177,6 @@ def _replay_case(args: argparse.Namespace) -> int:
     from socialzoo.agents import make_policy
     from socialzoo.bench.replay import record_case
     from socialzoo.bench.task_benchmark import TaskId
-    from socialzoo.render.replay_html import write_replay_html
 
     task_id = TaskId.of(args.env)
     overrides = given(args, "max_steps") | task_config(args.task_config)
@@ -186,10 +195,8 @@ def _replay_case(args: argparse.Namespace) -> int:
     title = f"{' vs '.join(t.label for t in traces)} on {args.env}, {args.split} case {case}"
     title += "".join(f", {k}={v}" for k, v in task_config(args.task_config).items())
     scene = task.viewer_scene(title, f"the {probe.name} task", traces)
-    path = write_replay_html(args.out, scene, traces, encoding=_encoding(args), view=args.view)
-    print(f"{path}: {len(traces)} episode(s) on {args.env}, {args.split} case {case}; {_size(path)}")
-    for trace in traces:
-        print(f"  {trace.label}: {_describe(trace)}")
+    what = f"{len(traces)} episode(s) on {args.env}, {args.split} case {case}"
+    _write_page(args, scene, traces, what, _described(traces))
     return 0
 
 
@@ -197,7 +204,6 @@ def _replay_seed(args: argparse.Namespace) -> int:
     from socialzoo.bench.replay import PolicySpec, benchmark_scenario, record_policies, replay_scene
     from socialzoo.env.config import EnvConfig
     from socialzoo.maps.map_file import load_map
-    from socialzoo.render.replay_html import write_replay_html
     from socialzoo.scenarios.catalogue import family_name
 
     specs = _specs(args) or [PolicySpec.parse("ref")]
@@ -222,16 +228,8 @@ def _replay_seed(args: argparse.Namespace) -> int:
         f"{len(scenario.human_spawn)} humans; time limit {config.max_steps * config.dt:.0f} s "
         f"({config.max_steps} steps of {config.dt * 1000:.0f} ms)"
     )
-    path = write_replay_html(
-        args.out,
-        replay_scene(config, m, title, subtitle),
-        traces,
-        encoding=_encoding(args),
-        view=args.view,
-    )
-    print(f"{path}: {len(traces)} episode(s) on {m.name}, seed {seed}; {_size(path)}")
-    for trace in traces:
-        print(f"  {trace.label}: {_describe(trace)}")
+    scene = replay_scene(config, m, title, subtitle)
+    _write_page(args, scene, traces, f"{len(traces)} episode(s) on {m.name}, seed {seed}", _described(traces))
     return 0
 
 
@@ -239,7 +237,6 @@ def _replay_stored(args: argparse.Namespace) -> int:
     from socialzoo.bench.replay import record_episode, replay_scene
     from socialzoo.bench.replay_trials import find_trials, map_change, replay_trial
     from socialzoo.maps.map_file import load_map
-    from socialzoo.render.replay_html import write_replay_html
 
     specs = _specs(args)
     stored = find_trials(args.results, args.trial, test_set=args.test_set)
@@ -296,13 +293,8 @@ def _replay_stored(args: argparse.Namespace) -> int:
         f"{m.name}, seed {first.seed}, {len(scenario.human_spawn)} humans; results {args.results}; "
         f"time limit {config.max_steps * config.dt:.0f} s"
     )
-    path = write_replay_html(
-        args.out, replay_scene(config, m, title, subtitle), traces, encoding=_encoding(args), view=args.view
-    )
-    print(
-        f"{path}: {first.test_set} scenario #{first.index} (seed {first.seed}), {len(traces)} episode(s); {_size(path)}"
-    )
-    print("\n".join(lines))
+    what = f"{first.test_set} scenario #{first.index} (seed {first.seed}), {len(traces)} episode(s)"
+    _write_page(args, replay_scene(config, m, title, subtitle), traces, what, lines)
     if failed:
         print("socialzoo replay: the replay differs from the stored trial (see above)", file=sys.stderr)
         return 1
