@@ -251,15 +251,20 @@ def _picture_path(args: argparse.Namespace) -> tuple[Path | None, str]:
     return file.with_name(f"{file.stem}-{suffix}.png"), ""
 
 
-def _save_picture(save: Any, out: Path) -> None:
-    """Call save(out), creating out's folder; an OSError becomes a ValueError that names out."""
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        save(out)
-    except OSError as err:
-        raise ValueError(
-            f"cannot write the picture {out} ({err.strerror or err}): choose another with --picture PATH"
-        ) from None
+def _save_picture(save: Any, out: Path | None, why_none: str) -> int:
+    """Call save(out), creating out's folder, and say where the picture went (nowhere: `why_none`);
+    returns 0, or 2 when it cannot be written (the error names out)."""
+    if out is not None:
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            save(out)
+        except OSError as err:
+            return fail(
+                "map",
+                f"cannot write the picture {out} ({err.strerror or err}): choose another with --picture PATH",
+            )
+    print(f"  picture: {out or why_none}")
+    return 0
 
 
 def run_list(args: argparse.Namespace) -> int:
@@ -286,15 +291,7 @@ def run_show(args: argparse.Namespace) -> int:
     except (MapError, FileNotFoundError, KeyError, ValueError) as err:
         return fail("map", err)
     print(f"{args.map}: {m.name}, {m.num_walls} walls, {m.num_nodes} nodes, {len(m.legal_poses)} legal poses")
-    if out is None:
-        print(f"  picture: {why_none}")
-        return 0
-    try:
-        _save_picture(lambda path: save_map_png(m, path, show_graph=not args.no_graph), out)
-    except ValueError as err:
-        return fail("map", err)
-    print(f"  picture: {out}")
-    return 0
+    return _save_picture(lambda path: save_map_png(m, path, show_graph=not args.no_graph), out, why_none)
 
 
 def run_validate(args: argparse.Namespace) -> int:
@@ -312,6 +309,7 @@ def run_validate(args: argparse.Namespace) -> int:
 def run_check(args: argparse.Namespace) -> int:
     """Run `socialzoo map check`; returns the exit status."""
     from socialzoo.maps.map_file import MapError, load_map, read_map
+    from socialzoo.render.map_plot import save_map_check_png
     from socialzoo.scenarios.feasibility import MAX_ROUTE_LENGTH
     from socialzoo.scenarios.map_check import check_map
 
@@ -338,17 +336,10 @@ def run_check(args: argparse.Namespace) -> int:
             print(f"  {line}")
     elif args.drive is not None:
         print("  drive: skipped (the map is invalid)")
-    if out is None:
-        print(f"  picture: {why_none}")
-    else:
-        from socialzoo.render.map_plot import save_map_check_png
-
-        try:
-            _save_picture(lambda path: save_map_check_png(m, report, path, drive), out)
-        except ValueError as err:
-            return fail("map", err)
-        print(f"  picture: {out}")
-    if not report.valid:
+    if (
+        _save_picture(lambda path: save_map_check_png(m, report, path, drive), out, why_none)
+        or not report.valid
+    ):
         return 2
     return 1 if drive is not None and not drive.complete else 0
 
