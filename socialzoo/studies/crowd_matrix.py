@@ -320,10 +320,9 @@ def write_matrix_md(rows: list[dict[str, Any]], config: MatrixConfig, path: Path
 
 def plot_matrix(rows: list[dict[str, Any]], config: MatrixConfig, path: Path) -> Path:
     """A heatmap per metric (the first map): policies as rows, crowd models as columns."""
-    from socialzoo.bench.figures import pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
     plt = pyplot()
-
     map_name = rows[0]["map"] if rows else ""
     by = {(r["policy"], r["humans"]): r for r in rows if r["map"] == map_name}
     columns = [column_label(spec) for spec in config.humans]
@@ -346,6 +345,4 @@ def plot_matrix(rows: list[dict[str, Any]], config: MatrixConfig, path: Path) ->
         fig.colorbar(image, ax=ax, shrink=0.8)
     fig.suptitle(f"robot policies x crowd models ({map_name})")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path.parent, path.stem, (path.suffix[1:],), dpi=110)[0]

@@ -77,7 +77,9 @@ class ComparisonConfig:
         if self.quick and self.validation:
             raise ValueError("ComparisonConfig: quick (test sets) and validation exclude each other")
         if self.family is not None and not self.validation:
-            raise ValueError(f"ComparisonConfig.family ({self.family!r}) names validation cases: set validation")
+            raise ValueError(
+                f"ComparisonConfig.family ({self.family!r}) names validation cases: set validation"
+            )
         self.benchmark("social_force")  # a bad map, policy, file or count fails here, naming it
         self.benchmark(self.humans)
 
@@ -244,7 +246,7 @@ def plot_comparison(rows: list[dict[str, Any]], path: Path) -> Path:
     maps along x, the two populations side by side, 90% intervals as error bars."""
     import numpy as np
 
-    from socialzoo.bench.figures import pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
     plt = pyplot()
     panels = [(k, HUMAN_METRIC_LABELS[k][0], True) for k in HUMAN_METRIC_KEYS]
@@ -278,6 +280,4 @@ def plot_comparison(rows: list[dict[str, Any]], path: Path) -> Path:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path.parent, path.stem, (path.suffix[1:],), dpi=110)[0]

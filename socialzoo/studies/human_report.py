@@ -249,10 +249,9 @@ def write_report(results: list[WalkResult], cfg: HumanReportConfig, out_dir: Pat
 def plot_walk(result: WalkResult, out_dir: Path) -> Path:
     """walk_<model>.png: speed histogram, speed against local density with Weidmann's curve, time
     to goal."""
-    from socialzoo.bench.figures import pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
     plt = pyplot()
-
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
     ax = axes[0]
     ax.hist(result.speed, bins=np.linspace(0.0, 1.6, 33), color="tab:blue")
@@ -284,10 +283,7 @@ def plot_walk(result: WalkResult, out_dir: Path) -> Path:
     ax.set_title(f"reach rate {result.row['reach_rate']:.2f}")
     fig.suptitle(f"people: {result.spec}")
     fig.tight_layout()
-    path = out_dir / f"walk_{model_slug(result.spec)}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out_dir, f"walk_{model_slug(result.spec)}", ("png",), dpi=110)[0]
 
 
 def human_report(

@@ -13,6 +13,7 @@ from typing import Any
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.runner import Backend
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
+from socialzoo.core.files import write_text_atomic
 
 logger = logging.getLogger(__name__)
 
@@ -211,7 +212,4 @@ def write_lfd_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: in
             f"| {_cell(r['paper_success_pct'], 0)} | {_cell(r['average_step_reward'], 3)} "
             f"| {_cell(r['paper_average_step_reward'], 2)} |"
         )
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return write_text_atomic(path, "\n".join(lines) + "\n")

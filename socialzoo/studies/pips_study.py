@@ -12,6 +12,7 @@ from typing import Any
 
 from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
+from socialzoo.core.files import write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
@@ -253,10 +254,7 @@ def write_study_md(
             "% success."
             for b in baselines
         ]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return write_text_atomic(path, "\n".join(lines) + "\n")
 
 
 def plot_study(
@@ -267,10 +265,9 @@ def plot_study(
     baselines: Sequence[Mapping[str, Any]] = (),
 ) -> Path:
     """Success (with 90% intervals) against demonstration steps, one line per window (PNG)."""
-    from socialzoo.bench.figures import pyplot
+    from socialzoo.bench.figures import pyplot, save_figure
 
     plt = pyplot()
-
     fig, ax = plt.subplots(figsize=(6.0, 3.8))
     windows = sorted({r["window"] for r in rows}, reverse=True)
     for i, window in enumerate(windows):
@@ -301,7 +298,4 @@ def plot_study(
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path.parent, path.stem, (path.suffix[1:],), dpi=120)[0]

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from socialzoo.core.files import json_text
+from socialzoo.core.files import json_text, write_text_atomic
 from socialzoo.train import trainer_args, trainer_function
 
 if TYPE_CHECKING:
@@ -141,7 +141,7 @@ def steps_to_reference(
         "changes": changes,
         "command": " ".join(sys.argv),
     }
-    (out / STEPS_FILE).write_text(json_text(record, indent=1, default=str) + "\n")
+    write_text_atomic(out / STEPS_FILE, json_text(record, indent=1, default=str) + "\n")
     if figure:
         plot_curves(found["checkpoints"], out, [found["reference"]], stem="steps_to_ref")
     return record
