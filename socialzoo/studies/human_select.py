@@ -4,7 +4,6 @@ humans (socialzoo.studies.human_compare) for every checkpoint of a training run,
 from __future__ import annotations
 
 import json
-import re
 import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -21,8 +20,8 @@ from socialzoo.studies.human_compare import (
     compare_humans,
     write_comparison_csv,
 )
+from socialzoo.studies.rl_curves import step_files
 
-CHECKPOINT = re.compile(r"step_(\d+)\.humans\.safetensors$")
 SELECTED_FILE = "humans.safetensors"
 # Per checkpoint: (column, summary key of the learned population).
 COLUMNS: tuple[tuple[str, str], ...] = (
@@ -61,15 +60,7 @@ def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
     Raises:
         FileNotFoundError: no such folder, or no checkpoint in it (naming the folder).
     """
-    folder = Path(run_dir) / "checkpoints"
-    found = sorted(
-        (int(m.group(1)), p)
-        for p in folder.glob("step_*.humans.safetensors")
-        if (m := CHECKPOINT.search(p.name))
-    )
-    if not found:
-        raise FileNotFoundError(f"{folder}: no learned-human checkpoints (step_*.humans.safetensors)")
-    return found
+    return step_files(run_dir, ".humans.safetensors", "learned-human checkpoints")
 
 
 def training_map(run_dir: str | Path) -> str:

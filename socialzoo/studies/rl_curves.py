@@ -26,7 +26,6 @@ CURVE_TEST_SET = "gdc1-test"
 CURVE_TRIALS = 100
 # Our own validation scenarios on gdc1 (base seed apart from every test set's): for choices.
 VALIDATION_SET = validation_set("gdc1")
-_CHECKPOINT = re.compile(r"step_(\d+)\.safetensors$")
 # The label of a run of another seed than the first: "<learner>-s<seed>" (socialzoo.reproduce).
 _SEED_SUFFIX = re.compile(r"-s\d+$")
 # Curves: (metric, axis label, scale), the labels from the metric registry; flags as percentages.
@@ -53,6 +52,21 @@ CSV_COLUMNS = (
 )
 
 
+def step_files(run_dir: str | Path, suffix: str, what: str) -> list[tuple[int, Path]]:
+    """(step, file) of every run_dir/checkpoints/step_<N><suffix> (N digits only), by step: the
+    checkpoints of a training run.
+
+    Raises:
+        FileNotFoundError: there is none (the error names the folder, `what` and the file pattern).
+    """
+    folder = Path(run_dir) / "checkpoints"
+    name = re.compile(rf"step_(\d+){re.escape(suffix)}")
+    found = sorted((int(m[1]), p) for p in folder.glob(f"step_*{suffix}") if (m := name.fullmatch(p.name)))
+    if not found:
+        raise FileNotFoundError(f"{folder}: no {what} (step_*{suffix})")
+    return found
+
+
 def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
     """(step, policy file) of every checkpoint a training run wrote, by step.
 
@@ -61,13 +75,7 @@ def run_checkpoints(run_dir: str | Path) -> list[tuple[int, Path]]:
     Raises:
         FileNotFoundError: the folder has no checkpoints.
     """
-    folder = Path(run_dir) / "checkpoints"
-    found = sorted(
-        (int(m.group(1)), p) for p in folder.glob("step_*.safetensors") if (m := _CHECKPOINT.search(p.name))
-    )
-    if not found:
-        raise FileNotFoundError(f"{folder}: no checkpoints (step_*.safetensors) of a training run")
-    return found
+    return step_files(run_dir, ".safetensors", "checkpoints of a training run")
 
 
 def _policy_key(path: Path) -> str:
