@@ -7,7 +7,7 @@ import json
 import logging
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -108,17 +108,12 @@ class MatrixConfig:
         path = PeopleConfig(models=humans).learned_path
         if path is not None and not Path(path).is_file():
             raise ValueError(f"MatrixConfig.humans: no such learned policy file {path!r}")
-        return BenchmarkConfig(
-            policies=self.policies,
-            maps=self.maps,
-            trials=self.trials,
-            quick=self.quick,
-            backend=self.backend,
-            address=self.address,
-            workers=self.workers,
-            batch_size=self.batch_size,
-            env_overrides={**dict(self.env_overrides), "people": {"models": humans, "counterfactual": True}},
-        )
+        # Every other field of the matrix is the benchmark's field of the same name.
+        shared = {
+            f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("humans", "env_overrides")
+        }
+        people = {"models": humans, "counterfactual": True}
+        return BenchmarkConfig(**shared, env_overrides={**dict(self.env_overrides), "people": people})
 
 
 @dataclass
