@@ -280,10 +280,13 @@ def write_matrix_csv(rows: list[dict[str, Any]], path: Path) -> Path:
     return write_csv(rows, path, columns, blank_nan=False, lineterminator="\n")
 
 
-def _cell(row: dict[str, Any] | None, key: str, digits: int) -> str:
-    if row is None or not np.isfinite(row[f"{key}_mean"]):
+def interval_cell(row: Mapping[str, Any] | None, key: str, digits: int, bounds: str = "") -> str:
+    """A metric's mean with its interval, "0.12 [0.10, 0.14]", from a row's KEY_mean, KEY_{bounds}low and
+    KEY_{bounds}high; the mean alone where the interval is missing, "-" where the mean (or the row) is."""
+    keys = (f"{key}_mean", f"{key}_{bounds}low", f"{key}_{bounds}high")
+    mean, low, high = (np.nan if row is None or row.get(k) is None else float(row[k]) for k in keys)
+    if not np.isfinite(mean):
         return "-"
-    mean, low, high = row[f"{key}_mean"], row[f"{key}_low"], row[f"{key}_high"]
     if not (np.isfinite(low) and np.isfinite(high)):
         return f"{mean:.{digits}f}"
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
@@ -307,7 +310,9 @@ def write_matrix_md(rows: list[dict[str, Any]], config: MatrixConfig, path: Path
             lines += [f"### {label}", "", "| policy | " + " | ".join(map(column_label, config.humans)) + " |"]
             lines.append("|---|" + "---|" * len(config.humans))
             for policy in config.policies:
-                cells = [_cell(by.get((policy, spec, map_name)), key, digits) for spec in config.humans]
+                cells = [
+                    interval_cell(by.get((policy, spec, map_name)), key, digits) for spec in config.humans
+                ]
                 lines.append(f"| {policy_label(policy)} | " + " | ".join(cells) + " |")
             lines.append("")
     return write_text_atomic(path, "\n".join(lines))

@@ -14,7 +14,7 @@ from socialzoo.bench.test_sets import family_validation_set
 from socialzoo.core.files import write_text_atomic
 from socialzoo.core.metrics import metric, registered
 from socialzoo.scenarios.scenario_sets import TestSet, validation_set
-from socialzoo.studies.crowd_matrix import run_trials
+from socialzoo.studies.crowd_matrix import interval_cell, run_trials
 
 POPULATIONS = ("social_force", "learned")
 
@@ -197,16 +197,6 @@ def write_comparison_csv(rows: list[dict[str, Any]], path: Path) -> Path:
     return write_csv(rows, path, blank_nan=False, lineterminator="\n")
 
 
-def _cell(row: dict[str, Any], key: str, digits: int) -> str:
-    mean = row.get(f"{key}_mean", float("nan"))
-    if mean != mean:
-        return "-"
-    low, high = row.get(f"{key}_ci_low"), row.get(f"{key}_ci_high")
-    if low is None or high is None or low != low or high != high:
-        return f"{mean:.{digits}f}"
-    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
-
-
 def write_comparison_md(
     rows: list[dict[str, Any]], targets: dict[str, dict[str, bool]], path: Path, config: ComparisonConfig
 ) -> Path:
@@ -224,7 +214,10 @@ def write_comparison_md(
         present = [p for p in POPULATIONS if p in by]
         header = ["metric", *(f"{p.replace('_', '-')} ({by[p]['trials']})" for p in present)]
         cells = [
-            [HUMAN_METRIC_LABELS[key][0], *(_cell(by[p], key, HUMAN_METRIC_LABELS[key][1]) for p in present)]
+            [
+                HUMAN_METRIC_LABELS[key][0],
+                *(interval_cell(by[p], key, HUMAN_METRIC_LABELS[key][1], "ci_") for p in present),
+            ]
             for key in HUMAN_METRIC_KEYS
         ]
         cells += [
