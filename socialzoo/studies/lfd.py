@@ -189,10 +189,11 @@ def _order(name: str) -> tuple[int, str]:
     return (known.index(name) if name in known else len(known), name)
 
 
-def _cell(value: Any, digits: int) -> str:
+def number_cell(value: Any, fmt: str) -> str:
+    """A table cell: `value` in format `fmt` (".2f", ","), empty where it is None or NaN."""
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
-    return f"{value:.{digits}f}"
+    return format(value, fmt)
 
 
 def write_lfd_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: int) -> Path:
@@ -209,7 +210,7 @@ def write_lfd_md(rows: Sequence[Mapping[str, Any]], path: str | Path, trials: in
         lines.append(
             f"| {policy_label(r['policy'])} | {r['demonstration_steps']:,} "
             f"| {interval_text(r, 'success', 1, 100.0)} "
-            f"| {_cell(r['paper_success_pct'], 0)} | {_cell(r['average_step_reward'], 3)} "
-            f"| {_cell(r['paper_average_step_reward'], 2)} |"
+            f"| {number_cell(r['paper_success_pct'], '.0f')} | {number_cell(r['average_step_reward'], '.3f')} "
+            f"| {number_cell(r['paper_average_step_reward'], '.2f')} |"
         )
     return write_text_atomic(path, "\n".join(lines) + "\n")

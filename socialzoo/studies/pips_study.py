@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,6 +13,7 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.core.files import write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
+from socialzoo.studies.lfd import number_cell
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
@@ -214,12 +214,6 @@ def _window_label(window: int) -> str:
     return "none (every step)" if window == 0 else f"{window} steps"
 
 
-def _cell(value: Any, fmt: str) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return ""
-    return format(value, fmt)
-
-
 def write_study_md(
     rows: Sequence[Mapping[str, Any]],
     path: str | Path,
@@ -243,9 +237,9 @@ def write_study_md(
         agree = r.get("heldout_agreement")
         lines.append(
             f"| {r['demonstration_steps']:,} | {_window_label(r['window'])} | {success} "
-            f"| {_cell(r.get('examples'), ',')} | {_cell(r.get('changes_of_action'), 'd')} "
-            f"| {_cell(r.get('synthesis_seconds'), '.1f')} | {_cell(r.get('comparisons'), 'd')} "
-            f"| {_cell(None if agree is None else 100 * agree, '.1f')} |"
+            f"| {number_cell(r.get('examples'), ',')} | {number_cell(r.get('changes_of_action'), 'd')} "
+            f"| {number_cell(r.get('synthesis_seconds'), '.1f')} | {number_cell(r.get('comparisons'), 'd')} "
+            f"| {number_cell(None if agree is None else 100 * agree, '.1f')} |"
         )
     if baselines:
         lines.append("")
