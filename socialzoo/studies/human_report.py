@@ -25,11 +25,10 @@ from socialzoo.maps.map_file import load_map
 from socialzoo.scenarios.generator import ScenarioConfig
 from socialzoo.scenarios.scenario_sets import validation_set
 from socialzoo.scenarios.start_state import scenarios_to_state
+from socialzoo.studies.human_compare import REACH_TOLERANCE
 
 # Weidmann (1993): free speed, the fit's gamma and the jam density.
 WEIDMANN_V0, WEIDMANN_GAMMA, WEIDMANN_RHO_MAX = 1.34, 1.913, 5.4
-# Targets of the learned humans, relative to the social force.
-REACH_TOLERANCE = 0.10
 # Speed samples are taken every this many steps (0.25 s at dt = 0.025 s).
 SAMPLE_EVERY = 10
 COLUMNS = (
@@ -233,7 +232,8 @@ def write_report(results: list[WalkResult], cfg: HumanReportConfig, out_dir: Pat
     if checks:
         lines += [
             "",
-            "Learned humans against the social force (reach rate within 10%, no more wall contacts):",
+            f"Learned humans against the social force (reach rate within {REACH_TOLERANCE:.0%}, "
+            "no more wall contacts):",
             "",
         ]
         for model, ok in checks.items():
