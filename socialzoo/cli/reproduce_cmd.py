@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import out_dir
+from socialzoo.cli.arg_types import out_dir, positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -25,7 +25,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--quick", action="store_true", help="a small version of everything (minutes)")
     parser.add_argument(
         "--seeds",
-        type=int,
+        type=positive_int,
         default=1,
         metavar="K",
         help="train every learned policy with K seeds (seed, seed+1, ...) and report the aggregates over them",
@@ -103,8 +103,6 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         reference = reference_sets(args.reference)
     except ValueError as err:
         return fail("reproduce", f"--reference: {err}")
-    if args.seeds < 1:
-        return fail("reproduce", f"--seeds must be at least 1, got {args.seeds}")
     try:
         volatile = {} if args.workers is None else {"workers": args.workers}
         settings = (quick_settings if args.quick else full_settings)(
