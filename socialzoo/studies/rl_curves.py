@@ -13,7 +13,7 @@ from typing import Any
 
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
-from socialzoo.bench.tables import policy_label, summarize, write_csv
+from socialzoo.bench.tables import policy_label, summarize, value_key, write_csv
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.scenarios.scenario_sets import TestSet, get_test_set, validation_set
 
@@ -215,10 +215,7 @@ def plot_curves(
     bases = list(dict.fromkeys(_SEED_SUFFIX.sub("", label) for label in labels))
     colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
     for ax, (key, ylabel, scale) in zip(axes, CURVE_PANELS, strict=True):
-        mean_key = "success_rate" if key == "success" else f"{key}_mean"
-        low_key, high_key = (
-            ("success_ci_low", "success_ci_high") if key == "success" else (f"{key}_ci_low", f"{key}_ci_high")
-        )
+        mean_key, low_key, high_key = value_key(key), f"{key}_ci_low", f"{key}_ci_high"
         for label in labels:
             points = [r for r in rows if r["label"] == label]
             x = [r["step"] / 1000 for r in points]
