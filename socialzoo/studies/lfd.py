@@ -38,6 +38,8 @@ PAPER_LFD: dict[tuple[str, int], tuple[float, float]] = {
     ("gail", 38_800): (21.0, 0.02),
     ("gail", 3_500): (27.0, 0.01),
 }
+# A benchmark summary entry's success columns (socialzoo.bench.tables.summarize), as the study tables keep them.
+SUCCESS_COLUMNS = ("trials", "success_rate", "success_ci_low", "success_ci_high")
 TABLE_CSV = "lfd.csv"
 TABLE_MD = "lfd.md"
 CSV_COLUMNS = (
@@ -165,10 +167,7 @@ def run_lfd_evaluation(
             {
                 "policy": name,
                 "demonstration_steps": size,
-                "trials": entry["trials"],
-                "success_rate": entry["success_rate"],
-                "success_ci_low": entry["success_ci_low"],
-                "success_ci_high": entry["success_ci_high"],
+                **{k: entry[k] for k in SUCCESS_COLUMNS},
                 "average_step_reward": entry["average_step_reward_mean"],
                 "average_step_reward_ci_low": entry["average_step_reward_ci_low"],
                 "average_step_reward_ci_high": entry["average_step_reward_ci_high"],

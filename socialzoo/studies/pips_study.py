@@ -13,7 +13,7 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.core.files import write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
-from socialzoo.studies.lfd import number_cell
+from socialzoo.studies.lfd import SUCCESS_COLUMNS, number_cell
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
@@ -179,10 +179,7 @@ def run_pips_study(
                 "policy": "pips",
                 "demonstration_steps": steps,
                 "window": window,
-                "trials": entry["trials"],
-                "success_rate": entry["success_rate"],
-                "success_ci_low": entry["success_ci_low"],
-                "success_ci_high": entry["success_ci_high"],
+                **{k: entry[k] for k in SUCCESS_COLUMNS},
                 "synthesis_seconds": record.get("synthesis_seconds"),
                 "examples": demos.get("examples"),
                 "changes_of_action": demos.get("changes_of_action"),
@@ -195,7 +192,7 @@ def run_pips_study(
     base_rows = [
         {
             **dict.fromkeys(CSV_COLUMNS),
-            **{k: by_spec[b][k] for k in ("trials", "success_rate", "success_ci_low", "success_ci_high")},
+            **{k: by_spec[b][k] for k in SUCCESS_COLUMNS},
             "policy": b,
         }
         for b in baselines
