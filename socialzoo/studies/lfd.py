@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -78,16 +79,20 @@ def find_lfd_policies(
         policies: policy names to look for.
         sizes: demonstration sizes to look for; None: every size found.
     """
+    found = study_files(root, rf"({'|'.join(map(re.escape, policies))})_(\d+)", lfd_policy_file)
+    return {key: path for key, path in found.items() if sizes is None or key[1] in sizes}
+
+
+def study_files(root: str | Path, folder: str, file_of: Callable[..., Path]) -> dict[tuple[Any, ...], Path]:
+    """The files of a study's runs under `root`: for each folder whose name matches the regular expression
+    `folder`, keyed by its groups (digits as ints), file_of(root, *key) where that file exists."""
     root = Path(root)
     found = {}
-    for policy in policies:
-        for folder in sorted(root.glob(f"{policy}_*")) if root.is_dir() else ():
-            size_text = folder.name[len(policy) + 1 :]
-            if not size_text.isdigit() or (sizes is not None and int(size_text) not in sizes):
-                continue
-            path = lfd_policy_file(root, policy, int(size_text))
-            if path.is_file():
-                found[(policy, int(size_text))] = path
+    for path in sorted(root.iterdir()) if root.is_dir() else ():
+        if match := re.fullmatch(folder, path.name):
+            key = tuple(int(g) if g.isdigit() else g for g in match.groups())
+            if (file := file_of(root, *key)).is_file():
+                found[key] = file
     return found
 
 

@@ -13,7 +13,7 @@ from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 from socialzoo.bench.tables import interval_text, policy_label, write_csv
 from socialzoo.core.files import write_text_atomic
 from socialzoo.scenarios.scenario_sets import TestSet
-from socialzoo.studies.lfd import SUCCESS_COLUMNS, number_cell
+from socialzoo.studies.lfd import SUCCESS_COLUMNS, number_cell, study_files
 from socialzoo.studies.rl_curves import VALIDATION_SET
 
 logger = logging.getLogger(__name__)
@@ -58,15 +58,7 @@ def study_program_file(root: str | Path, steps: int, window: int) -> Path:
 
 def find_study_programs(root: str | Path) -> dict[tuple[int, int], Path]:
     """The synthesised programs under `root`, keyed (steps, window)."""
-    found = {}
-    for folder in sorted(Path(root).glob("pips_*_w*")) if Path(root).is_dir() else ():
-        steps_text, _, window_text = folder.name[len("pips_") :].partition("_w")
-        if not (steps_text.isdigit() and window_text.isdigit()):
-            continue
-        path = study_program_file(root, int(steps_text), int(window_text))
-        if path.is_file():
-            found[(int(steps_text), int(window_text))] = path
-    return found
+    return study_files(root, r"pips_(\d+)_w(\d+)", study_program_file)
 
 
 def _comparisons(program: str | Path) -> int:
