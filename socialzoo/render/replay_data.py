@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.metrics import added_names, metric, registered
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_fields, check_int
 from socialzoo.nav.subpolicies import ACTION_NAMES
 
 REPLAY_FORMAT = "socialzoo-replay/1"
@@ -124,8 +124,7 @@ class EpisodeTrace:
     def __post_init__(self) -> None:
         if not isinstance(self.label, str):
             raise ValueError(f"EpisodeTrace.label must be a string, got {self.label!r}")
-        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0):
-            raise ValueError(f"EpisodeTrace.dt must be a number > 0, got {self.dt!r}")
+        check_fields(self)  # dt and laser_max_range: finite and > 0
         pose = _array(self.robot_pose, np.float64, (None, 3), "robot_pose")
         states = len(pose)
         if states < 1:
@@ -162,8 +161,6 @@ class EpisodeTrace:
         set_(self, "laser_steps", scanned)
         ranges = _array(self.laser_ranges, np.float64, (len(scanned), rays), "laser_ranges")
         set_(self, "laser_ranges", ranges)
-        if not (isinstance(self.laser_max_range, (int, float)) and self.laser_max_range > 0):
-            raise ValueError(f"EpisodeTrace.laser_max_range must be > 0, got {self.laser_max_range!r}")
         action = _array(self.action, np.int64, (steps,), "action")
         if len(action) and action.min() < -1:
             raise ValueError(
@@ -243,10 +240,7 @@ class ReplayScene:
                 f"ReplayScene.bounds must be finite (xmin, ymin, xmax, ymax), got {self.bounds!r}"
             )
         object.__setattr__(self, "bounds", bounds)
-        for name in ("robot_length", "robot_width", "human_radius", "goal_radius"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"ReplayScene.{name} must be a number > 0, got {value!r}")
+        check_fields(self)  # the bodies' sizes and the goal radius: finite and > 0
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -43,14 +43,14 @@ def test_trace_checks_its_arrays(make_trace):
         make_trace(laser_steps=np.array([1, 2]), laser_ranges=np.zeros((2, 8)))
     with pytest.raises(ValueError, match=r"laser_ranges must have shape \(10, 8\)"):
         make_trace(laser_ranges=np.zeros((10, 7)))
-    with pytest.raises(ValueError, match=r"dt must be a number > 0"):
+    with pytest.raises(ValueError, match=r"EpisodeTrace.dt must be > 0, got 0.0"):
         make_trace(dt=0.0)
 
 
 def test_scene_checks(make_scene):
     with pytest.raises(ValueError, match=r"ReplayScene.bounds must be finite"):
         make_scene(bounds=(0, 0, 0, 1))
-    with pytest.raises(ValueError, match=r"ReplayScene.robot_width must be a number > 0"):
+    with pytest.raises(ValueError, match=r"ReplayScene.robot_width must be > 0, got -1"):
         make_scene(robot_width=-1)
     assert make_scene(walls=np.zeros((0, 4))).walls.shape == (0, 4)
 
