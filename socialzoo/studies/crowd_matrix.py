@@ -56,18 +56,14 @@ METRICS: tuple[tuple[str, str, int, float], ...] = tuple(
 
 @dataclass(frozen=True, kw_only=True)
 class MatrixConfig:
-    """A policy x crowd-model matrix.
+    """A policy x crowd-model matrix: every column a benchmark run, whose quick, backend, address, workers
+    and batch_size are the matrix's, as BenchmarkConfig's fields of those names.
 
     Attributes:
         policies: robot policy specs (socialzoo.agents).
         humans: people specs, one column each.
         maps: maps whose test sets are used ("<map>-test", or "<map>-quick" with quick).
         trials: scenarios per map and cell (the first of each test set); None: all.
-        quick: use the quick test sets.
-        backend: "local" (processes on this machine) or "ray", for every column.
-        address: Ray cluster address (Ray backend); None starts a local Ray.
-        workers: local processes, or Ray chunks (None: one per cluster CPU).
-        batch_size: env rows stepped together per worker.
         env_overrides: EnvConfig fields for every cell (e.g. {"max_steps": 1600}); its "people"
             is the matrix's own.
     """
