@@ -165,11 +165,17 @@ def _described(traces: list[Any]) -> list[str]:
     return [f"  {trace.label}: {_describe(trace)}" for trace in traces]
 
 
-def _laser_stride(args: argparse.Namespace, dt: float) -> int:
-    """Steps between the recorder's scans: those between the states the page keeps."""
+def _recording(args: argparse.Namespace, dt: float, world_map: Any) -> dict[str, Any]:
+    """What the recorders (of fresh episodes, of stored trials replayed) keep of an episode on
+    `world_map`: --laser-rays rays, scanned in the states the page keeps (every --stride steps, else
+    those of 50 ms of the step dt)."""
     from socialzoo.render.replay_data import default_stride
 
-    return int(args.stride or default_stride(dt))
+    return {
+        "laser_rays": args.laser_rays,
+        "laser_stride": int(args.stride or default_stride(dt)),
+        "world_map": world_map,
+    }
 
 
 def _replay_case(args: argparse.Namespace) -> int:
@@ -214,14 +220,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
         config = config.replace(max_steps=args.max_steps)
     m = load_map(config.map)
     scenario = benchmark_scenario(config, seed, m)
-    traces = record_policies(
-        config,
-        scenario,
-        specs,
-        laser_rays=args.laser_rays,
-        laser_stride=_laser_stride(args, config.dt),
-        world_map=m,
-    )
+    traces = record_policies(config, scenario, specs, **_recording(args, config.dt, m))
     kind = f"{family} scenario" if family else "scenario"
     title = f"{' vs '.join(t.label for t in traces)} on {m.name}, {kind} seed {seed}"
     subtitle = (
@@ -243,7 +242,7 @@ def _replay_stored(args: argparse.Namespace) -> int:
     first = stored[0]
     m = load_map(first.env_config.map)
     scenario = first.scenario(m)
-    rays = args.laser_rays
+    recording = _recording(args, first.env_config.dt, m)
     by_name = {t.policy: t for t in stored}
     # The stored trials asked for (all of them by default); a policy the store lacks, or one
     # loaded from a file given here, runs fresh on the trial's scenario and env config.
@@ -257,20 +256,12 @@ def _replay_stored(args: argparse.Namespace) -> int:
         if trial is None:
             assert spec is not None and policy is not None
             trace = record_episode(
-                first.env_config,
-                scenario,
-                policy,
-                label=f"{spec.label} (not stored)",
-                laser_rays=rays,
-                laser_stride=_laser_stride(args, first.env_config.dt),
-                world_map=m,
+                first.env_config, scenario, policy, label=f"{spec.label} (not stored)", **recording
             )
             traces.append(trace)
             lines.append(f"  {trace.label}: {_describe(trace)}; not in the store, run fresh")
             continue
-        done = replay_trial(
-            trial, laser_rays=rays, laser_stride=_laser_stride(args, first.env_config.dt), world_map=m
-        )
+        done = replay_trial(trial, **recording)
         traces.append(done.trace)
         changed = map_change(args.results, trial, m) or (
             "the code or config changed since it was stored" if done.code_changed else ""
