@@ -31,8 +31,16 @@ def _lower_name(spec: str) -> str:
 
 
 _policy_specs = comma_list("policies", _lower_name)
-# Shipped map names lower-cased, map file paths kept as written.
-_map_names = comma_list("map names or paths", lambda n: n if n.endswith(".json") or "/" in n else n.lower())
+
+
+def _map_name(name_or_path: str) -> str:
+    """A shipped map's name lower-cased, a map file's path kept as written."""
+    from socialzoo.maps.map_file import names_a_file  # the CLI starts without numpy
+
+    return name_or_path if names_a_file(name_or_path) else name_or_path.lower()
+
+
+_map_names = comma_list("map names or paths", _map_name)
 
 
 def add_benchmark_parser(subparsers: Any) -> argparse.ArgumentParser:

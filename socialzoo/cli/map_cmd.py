@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -217,9 +216,9 @@ def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_pic
 
 def _map_file(name_or_path: str) -> Path | None:
     """MAP's file when it is a path (socialzoo.maps.map_file.load_map's rule), None for a shipped name."""
-    if name_or_path.endswith(".json") or "/" in name_or_path or os.sep in name_or_path:
-        return Path(name_or_path)
-    return None
+    from socialzoo.maps.map_file import names_a_file
+
+    return Path(name_or_path) if names_a_file(name_or_path) else None
 
 
 def _picture_path(args: argparse.Namespace) -> tuple[Path | None, str]:

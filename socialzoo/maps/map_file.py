@@ -353,6 +353,12 @@ def _load_shipped(name: str) -> Map:
     return m
 
 
+def names_a_file(name_or_path: str) -> bool:
+    """Whether a map argument is a file path (it ends in .json or has a folder separator) rather
+    than a shipped map's name: load_map's rule, which the CLI follows too."""
+    return name_or_path.endswith(".json") or "/" in name_or_path or os.sep in name_or_path
+
+
 def load_map(name_or_path: str | os.PathLike[str]) -> Map:
     """A shipped map by name (e.g. "gdc1") or a map file by path (anything ending in .json).
 
@@ -367,7 +373,7 @@ def load_map(name_or_path: str | os.PathLike[str]) -> Map:
         MapError: an unknown map name, or an invalid map (the message names the file and entry).
     """
     text = os.fspath(name_or_path)
-    if isinstance(name_or_path, os.PathLike) or text.endswith(".json") or "/" in text or os.sep in text:
+    if isinstance(name_or_path, os.PathLike) or names_a_file(text):
         return read_map(text)
     names = list_maps()
     if text not in names:

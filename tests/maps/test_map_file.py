@@ -151,3 +151,13 @@ def test_round_trip(tmp_path):
     again = load_map(m.save(tmp_path / "copy.json"))
     for field in ("walls", "nodes", "edges", "legal_poses"):
         np.testing.assert_array_equal(getattr(m, field), getattr(again, field))
+
+
+def test_a_map_argument_names_a_file_by_its_suffix_or_a_folder():
+    from socialzoo.cli.benchmark_cmd import _map_names
+    from socialzoo.maps.map_file import names_a_file
+
+    assert not any(names_a_file(a) for a in ("gdc1", "GDC1", "b.JSON"))
+    assert all(names_a_file(a) for a in ("b.json", "dir/b", "./b"))
+    # The benchmark lower-cases shipped names only (the same rule as load_map's).
+    assert list(_map_names("GDC1,Dir/B,My.json")) == ["gdc1", "Dir/B", "My.json"]
