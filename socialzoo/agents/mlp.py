@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -12,9 +11,8 @@ import numpy as np
 from socialzoo.agents.base import check_observations
 from socialzoo.env.policy_file import ACTIVATIONS as ACTIVATIONS
 from socialzoo.env.policy_file import (
+    FileNetwork,
     PolicyFileError,
-    checked_layers,
-    mlp_forward,
     mlp_layers,
     mlp_parts,
     read_policy_file,
@@ -56,7 +54,7 @@ class ObservationNormalizer:
         return np.clip(out, -self.clip, self.clip).astype(np.float32)
 
 
-class MlpPolicy:
+class MlpPolicy(FileNetwork):
     """A greedy policy over a multilayer perceptron.
 
     Every neural baseline (PPO and DQN trained with Stable-Baselines3, BC and GAIL trained with TorchRL) is
@@ -86,27 +84,14 @@ class MlpPolicy:
         normalizer: ObservationNormalizer | None = None,
         header: dict[str, Any] | None = None,
     ) -> None:
-        if activation not in ACTIVATIONS:
-            raise ValueError(
-                f"MlpPolicy: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}"
-            )
-        self.layers = checked_layers("MlpPolicy", weights)
+        super().__init__("MlpPolicy", weights, activation, header)
         self.name = name
-        self.activation = activation
         self.observation = dict(observation)
         self.normalizer = normalizer
         if normalizer is not None and normalizer.mean.shape[0] != self.input_size:
             raise ValueError(
                 f"MlpPolicy: normaliser of size {normalizer.mean.shape[0]} for a network of {self.input_size} inputs"
             )
-        self.header = dict(header or {})
-        self.path: Path | None = None
-        self.digest: str | None = None
-
-    @property
-    def input_size(self) -> int:
-        """D, the length of the observations the network takes."""
-        return int(self.layers[0][0].shape[1])
 
     @property
     def num_actions(self) -> int:
@@ -123,7 +108,7 @@ class MlpPolicy:
                 f"{layout!r} layout of {self.input_size} numbers (observation {self.observation})"
             )
         x = self.normalizer(obs) if self.normalizer is not None else obs
-        return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
+        return self.forward(x)
 
     def act(self, obs: np.ndarray, task: Task | None = None) -> np.ndarray:
         """Greedy actions of shape obs.shape[:-1] (see socialzoo.agents.base.Policy.act)."""
@@ -131,10 +116,6 @@ class MlpPolicy:
         lead = obs.shape[:-1]
         scores = self.scores(obs.reshape(-1, obs.shape[-1]))
         return np.argmax(scores, axis=1).astype(np.int64).reshape(lead)
-
-    def config(self) -> dict[str, Any]:
-        """What identifies this policy for the results store: the file's digest and training record."""
-        return {"file_sha256": self.digest, "training": self.header.get("training", {})}
 
     # ---------------------------------------------------------------- files
     def save(self, path: str | Path, header: dict[str, Any]) -> Path:
@@ -182,8 +163,7 @@ class MlpPolicy:
             )
         except (KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{path}: {err}") from None
-        policy.path = Path(path)
-        policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        policy.loaded_from(path)
         return policy
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -12,10 +11,8 @@ import numpy as np
 from socialzoo.core.validation import check_choice, check_number
 from socialzoo.env.human_agents import human_mirror_signs, human_observation_size
 from socialzoo.env.policy_file import (
-    ACTIVATIONS,
+    FileNetwork,
     PolicyFileError,
-    checked_layers,
-    mlp_forward,
     mlp_layers,
     mlp_parts,
     read_policy_file,
@@ -27,7 +24,7 @@ POLICY_NAME = "learned_humans"
 ACTION_FRAMES = ("world", "human")
 
 
-class LearnedHumanPolicy:
+class LearnedHumanPolicy(FileNetwork):
     """Deterministic actions of learned humans from a multilayer perceptron.
 
     A human policy maps each learned human's observation (socialzoo.env.human_agents, (..., D_h))
@@ -85,13 +82,12 @@ class LearnedHumanPolicy:
         learned_forces: bool = True,
         relaxation_time: float | None = None,
     ) -> None:
-        check_choice("LearnedHumanPolicy", "activation", activation, sorted(ACTIVATIONS))
+        super().__init__("LearnedHumanPolicy", weights, activation, header)
         check_choice("LearnedHumanPolicy", "action_frame", action_frame, ACTION_FRAMES)
         check_number("LearnedHumanPolicy", "action_scale", action_scale, low=0, low_open=True)
         check_number(
             "LearnedHumanPolicy", "relaxation_time", relaxation_time, low=0, low_open=True, allow_none=True
         )
-        self.layers = checked_layers("LearnedHumanPolicy", weights)
         if self.layers[-1][0].shape[0] != 2:
             raise ValueError(
                 f"LearnedHumanPolicy: the last layer gives {self.layers[-1][0].shape[0]} outputs, not 2"
@@ -115,7 +111,6 @@ class LearnedHumanPolicy:
             and (self.obs_scale > 0).all()
         ):
             raise ValueError("LearnedHumanPolicy: normalisation must be finite with scale > 0")
-        self.activation = activation
         self.num_neighbours = int(num_neighbours)
         self.action_frame = action_frame
         self.action_scale = float(action_scale)
@@ -123,14 +118,6 @@ class LearnedHumanPolicy:
         self.learned_forces = bool(learned_forces)
         self.relaxation_time = None if relaxation_time is None else float(relaxation_time)
         self._mirror = human_mirror_signs(self.num_neighbours)
-        self.header = dict(header or {})
-        self.path: Path | None = None
-        self.digest: str | None = None
-
-    @property
-    def input_size(self) -> int:
-        """D, the length of the observations the network takes."""
-        return int(self.layers[0][0].shape[1])
 
     def env_overrides(self) -> dict[str, Any]:
         """EnvConfig fields the observations and actions of this policy need."""
@@ -161,12 +148,7 @@ class LearnedHumanPolicy:
 
     def _mean(self, obs: np.ndarray) -> np.ndarray:
         """(N, 2) the network's pre-tanh mean for (N, D) raw observations."""
-        x = (obs - self.obs_loc) / self.obs_scale
-        return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
-
-    def config(self) -> dict[str, Any]:
-        """What identifies this policy for the results store: the file's digest and training record."""
-        return {"file_sha256": self.digest, "training": self.header.get("training", {})}
+        return self.forward((obs - self.obs_loc) / self.obs_scale)
 
     # ---------------------------------------------------------------- files
     def save(self, path: str | Path, env_id: str, training: dict[str, Any]) -> Path:
@@ -229,8 +211,7 @@ class LearnedHumanPolicy:
             )
         except (KeyError, TypeError, ValueError) as err:
             raise PolicyFileError(f"{path}: {err}") from None
-        policy.path = Path(path)
-        policy.digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        policy.loaded_from(path)
         return policy
 
 

@@ -3,6 +3,7 @@ header; and the numpy forward pass of the networks they hold (mlp_forward, the o
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 from collections.abc import Callable, Mapping, Sequence
@@ -186,6 +187,42 @@ def checked_layers(owner: str, weights: Sequence[tuple[Any, Any]]) -> list[tuple
                 f"{owner}: layer {i} takes {w.shape[1]} inputs, the layer before gives {layers[i - 1][0].shape[0]}"
             )
     return layers
+
+
+class FileNetwork:
+    """What a policy that holds a policy file's network keeps (the robots' MlpPolicy and the learned
+    humans' policy): its layers (weights (out, in) and biases, checked to chain), the hidden-layer
+    activation (a key of ACTIVATIONS), the file's header, and the file it was loaded from (path and
+    sha256, None until `loaded_from`). Errors start with `owner`, the subclass's name."""
+
+    def __init__(
+        self, owner: str, weights: Sequence[tuple[Any, Any]], activation: str, header: dict[str, Any] | None
+    ) -> None:
+        if activation not in ACTIVATIONS:
+            raise ValueError(f"{owner}: activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}")
+        self.layers = checked_layers(owner, weights)
+        self.activation = activation
+        self.header = dict(header or {})
+        self.path: Path | None = None
+        self.digest: str | None = None
+
+    @property
+    def input_size(self) -> int:
+        """D, the length of the observations the network takes."""
+        return int(self.layers[0][0].shape[1])
+
+    def forward(self, x: np.ndarray) -> np.ndarray:
+        """The network's outputs for inputs x (N, D) (mlp_forward)."""
+        return mlp_forward(x, [(w.T, b) for w, b in self.layers], self.activation)
+
+    def config(self) -> dict[str, Any]:
+        """What identifies this policy for the results store: the file's digest and training record."""
+        return {"file_sha256": self.digest, "training": self.header.get("training", {})}
+
+    def loaded_from(self, path: str | Path) -> None:
+        """Record the file this policy was read from: its path and the sha256 of its bytes."""
+        self.path = Path(path)
+        self.digest = hashlib.sha256(self.path.read_bytes()).hexdigest()
 
 
 def mlp_parts(layers: Sequence[tuple[Any, Any]], activation: str, output: str) -> tuple[dict, dict]:
