@@ -56,6 +56,7 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
         recovery=None if navigator is None else navigator.recovery,
         sight_lines=core.sight is not None,
         robot_visible=core.robot_visible,
+        contacts_in_step=core.replay.contacts_in_step,
     )
     # A reset sets up every part of a row; the running episode then overwrites what it changed.
     new.reset_rows(np.arange(len(index)), scenarios)

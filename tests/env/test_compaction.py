@@ -101,6 +101,14 @@ def test_kept_rows_step_on_as_in_the_full_batch(stepped_task):
     assert plain(small.metrics.summaries()) == plain(full.metrics.summaries(robot_rows))
 
 
+def test_a_compacted_core_judges_recorded_contacts_as_the_full_one(stepped_task, monkeypatch):
+    # The CrowdNav task's cores count people walking into the robot by its in-step judgement
+    # (contacts_in_step); a compacted core built without it would count world contacts instead.
+    for judged_in_step in (True, False):
+        monkeypatch.setattr(stepped_task.core.replay, "contacts_in_step", judged_in_step)
+        assert compact_core(stepped_task.core, KEEP).replay.contacts_in_step is judged_in_step
+
+
 def test_bad_rows(stepped_task):
     for rows in ([], [1, 1], [B]):
         with pytest.raises(ValueError, match=r"distinct rows of 0\.\.4"):
