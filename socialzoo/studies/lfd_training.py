@@ -13,6 +13,7 @@ from typing import Any
 from socialzoo.core.validation import check_int
 from socialzoo.studies.lfd import LFD_ALGOS, LFD_SIZES, lfd_run_dir
 from socialzoo.train import trainer_args, trainer_function
+from socialzoo.train.checks import check_sizes
 
 logger = logging.getLogger(__name__)
 
@@ -55,8 +56,7 @@ class LfdTrainConfig:
         unknown = sorted(set(self.overrides) - set(self.algos))
         if unknown:
             raise ValueError(f"LfdTrainConfig.overrides names trainers not run: {unknown}")
-        if not self.sizes or any(not isinstance(s, int) or isinstance(s, bool) or s < 1 for s in self.sizes):
-            raise ValueError(f"LfdTrainConfig.sizes must be positive ints, got {self.sizes!r}")
+        check_sizes(self, "sizes")
         check_int("LfdTrainConfig", "demo_episodes", self.demo_episodes, low=1)
         for algo in self.algos:  # bad overrides fail now, not after hours of training
             self.args(algo, self.sizes[0])

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.studies.pips_study import STUDY_STEPS, STUDY_WINDOWS, study_program_file
+from socialzoo.train.checks import check_sizes
 from socialzoo.train.pips import TRAINER, PipsArgs, sidecar_path, train
 from socialzoo.train.skeleton import finished_run
 
@@ -48,9 +49,8 @@ class PipsStudyConfig:
         object.__setattr__(self, "windows", tuple(self.windows))
         object.__setattr__(self, "overrides", dict(self.overrides))
         for name, low in (("steps", 1), ("windows", 0)):
+            check_sizes(self, name, low=low)
             values = getattr(self, name)
-            if not values or any(not isinstance(v, int) or isinstance(v, bool) or v < low for v in values):
-                raise ValueError(f"PipsStudyConfig.{name} must be ints >= {low}, got {values!r}")
             if len(set(values)) != len(values):
                 raise ValueError(f"PipsStudyConfig.{name} has duplicates: {values!r}")
         names = {f.name for f in dataclasses.fields(PipsArgs)}

@@ -48,10 +48,9 @@ class Args(ImitationArgs):
         super().__post_init__()
         if self.validation is not None:
             object.__setattr__(self, "validation", Path(self.validation))
-        for name in ("epochs", "batch_size"):
-            check_int(self, name, 1)
-        check_int(self, "min_updates", 0)
-        check_number(self, "weight_decay", 0.0)
+        check_int(self, "epochs", "batch_size", low=1)
+        check_int(self, "min_updates", low=0)
+        check_number(self, "weight_decay", low=0.0)
 
 
 def agreement(net: Any, obs: np.ndarray, action: np.ndarray, batch: int = 8192) -> float:

@@ -3,7 +3,8 @@ the field and the value. Free of torch, so listing the trainers stays cheap."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from collections.abc import Callable
+from typing import Any, Literal, get_args
 
 from socialzoo.core import validation
 
@@ -12,25 +13,63 @@ Activation = Literal["tanh", "relu"]
 
 
 def owner(args: Any) -> str:
-    """How messages name a trainer's arguments: "bc Args" for socialzoo.train.bc.Args."""
-    return f"{type(args).__module__.rsplit('.', 1)[-1]} Args"
+    """How messages name a trainer's arguments: the class's name ("PPOArgs"), and for a class named
+    plain Args its module's ("bc Args" for socialzoo.train.bc.Args)."""
+    name = type(args).__name__
+    return f"{type(args).__module__.rsplit('.', 1)[-1]} Args" if name == "Args" else name
 
 
-def check_int(args: Any, name: str, low: int, optional: bool = False) -> None:
-    """Raise ValueError unless args.<name> is an int >= low (or None when optional)."""
-    validation.check_int(owner(args), name, getattr(args, name), low=low, allow_none=optional)
+def coerce(args: Any, **kinds: Callable[[Any], Any]) -> None:
+    """Set each named field of frozen dataclass `args` to kind(its value): out=Path, net_arch=tuple."""
+    for name, kind in kinds.items():
+        object.__setattr__(args, name, kind(getattr(args, name)))
+
+
+def check_int(args: Any, *names: str, low: int, high: int | None = None, optional: bool = False) -> None:
+    """Raise ValueError unless each args.<name> is an int >= low (<= high if given; or None when
+    optional)."""
+    for name in names:
+        validation.check_int(owner(args), name, getattr(args, name), low=low, high=high, allow_none=optional)
 
 
 def check_number(
-    args: Any, name: str, low: float, *, strict: bool = False, high: float | None = None
+    args: Any,
+    *names: str,
+    low: float,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
 ) -> None:
-    """Raise ValueError unless args.<name> is a finite number >= low (> low when strict), <= high if
-    given."""
-    validation.check_number(owner(args), name, getattr(args, name), low=low, high=high, low_open=strict)
+    """Raise ValueError unless each args.<name> is a finite number >= low (> low with low_open),
+    <= high if given (< high with high_open)."""
+    for name in names:
+        value = getattr(args, name)
+        validation.check_number(
+            owner(args), name, value, low=low, high=high, low_open=low_open, high_open=high_open
+        )
 
 
-def check_sizes(args: Any, name: str) -> None:
-    """Raise ValueError unless args.<name> is a non-empty tuple of positive ints."""
-    value = getattr(args, name)
-    if not value or any(not isinstance(h, int) or isinstance(h, bool) or h < 1 for h in value):
-        raise ValueError(f"{owner(args)}.{name} must be positive ints, got {value!r}")
+def check_sizes(args: Any, *names: str, low: int = 1) -> None:
+    """Raise ValueError unless each args.<name> is a non-empty sequence of ints >= low (layer sizes,
+    demonstration sizes)."""
+    for name in names:
+        value = getattr(args, name)
+        if not value or any(not isinstance(n, int) or isinstance(n, bool) or n < low for n in value):
+            raise ValueError(f"{owner(args)}.{name} must be ints >= {low}, got {value!r}")
+
+
+def check_choice(args: Any, name: str, choices: Any) -> None:
+    """Raise ValueError unless args.<name> is one of `choices`, a collection or the Literal type of
+    the field (the message lists them)."""
+    validation.check_choice(owner(args), name, getattr(args, name), get_args(choices) or choices)
+
+
+def check_block(args: Any, block: int, what: str) -> None:
+    """Raise ValueError unless args.checkpoint_every and args.total_steps are multiples of `block` env
+    steps (a rollout, or a training interval, named by `what`), so that each checkpoint holds the policy
+    at its step."""
+    for name in ("checkpoint_every", "total_steps"):
+        if getattr(args, name) % block:
+            raise ValueError(
+                f"{owner(args)}.{name} ({getattr(args, name)}) must be a multiple of {what} ({block})"
+            )

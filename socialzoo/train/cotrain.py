@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.train.checks import check_choice, check_int, check_number
 from socialzoo.train.marl_args import HUMANS_POLICY_FILE, ROBOT_POLICY_FILE, MarlArgs
 from socialzoo.train.skeleton import Trainer
 
@@ -52,10 +52,9 @@ class CotrainArgs(MarlArgs):
     robot_lr: float = 3e-4
 
     def __post_init__(self) -> None:
-        if self.schedule not in SCHEDULES:
-            raise ValueError(f"CotrainArgs.schedule must be one of {SCHEDULES}, got {self.schedule!r}")
-        check_int("CotrainArgs", "alternate_every", self.alternate_every, low=1)
-        check_number("CotrainArgs", "robot_lr", self.robot_lr, low=0, low_open=True)
+        check_choice(self, "schedule", SCHEDULES)
+        check_int(self, "alternate_every", low=1)
+        check_number(self, "robot_lr", low=0, low_open=True)
         super().__post_init__()
 
     def groups_at(self, index: int) -> Sequence[str]:

@@ -9,9 +9,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.env.crowd_variants import crowd_env_id
 from socialzoo.env.registration import CROWD_SUITE_ID
+from socialzoo.train.checks import check_block, check_choice, check_int, check_number, check_sizes, coerce
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
@@ -100,50 +100,25 @@ class CrowdNavArgs:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "out", Path(self.out))
-        for name in ("net_arch", "embed", "value", "attention"):
-            value = tuple(getattr(self, name))
-            object.__setattr__(self, name, value)
-            if not value or any(not isinstance(n, int) or isinstance(n, bool) or n < 1 for n in value):
-                raise ValueError(f"CrowdNavArgs.{name} must be positive layer sizes, got {value!r}")
-        for name in (
-            "total_steps",
-            "checkpoint_every",
-            "num_envs",
-            "n_steps",
-            "batch_size",
-            "n_epochs",
-            "threads",
-        ):
-            check_int("CrowdNavArgs", name, getattr(self, name), low=1)
-        check_int("CrowdNavArgs", "seed", self.seed, low=0)
+        coerce(self, out=Path, net_arch=tuple, embed=tuple, value=tuple, attention=tuple)
+        check_sizes(self, "net_arch", "embed", "value", "attention")
+        check_int(self, "total_steps", "checkpoint_every", "num_envs", "n_steps", "batch_size", low=1)
+        check_int(self, "n_epochs", "threads", low=1)
+        check_int(self, "seed", low=0)
         families = self.family_names()
-        check_int("CrowdNavArgs", "eval_trials", self.eval_trials, low=0, high=100 * max(1, len(families)))
+        check_int(self, "eval_trials", low=0, high=100 * max(1, len(families)))
         if families and self.num_envs < len(families):
             raise ValueError(
                 f"CrowdNavArgs.num_envs ({self.num_envs}) must be at least the number of families "
                 f"({len(families)}): each family's part needs a row"
             )
-        for name, low, high in (
-            ("learning_rate", 0.0, 1.0),
-            ("gamma", 0.0, 1.0),
-            ("gae_lambda", 0.0, 1.0),
-            ("clip_range", 0.0, 10.0),
-            ("ent_coef", 0.0, 10.0),
-            ("vf_coef", 0.0, 10.0),
-            ("max_grad_norm", 0.0, 1e6),
-            ("progress_reward", 0.0, 100.0),
-            ("collision_penalty", -100.0, 0.0),
-        ):
-            check_number("CrowdNavArgs", name, getattr(self, name), low=low, high=high)
-        check_choice("CrowdNavArgs", "action", self.action, ("discrete", "continuous"))
-        rollout = self.num_envs * self.n_steps
-        for name in ("checkpoint_every", "total_steps"):
-            if getattr(self, name) % rollout:
-                raise ValueError(
-                    f"CrowdNavArgs.{name} ({getattr(self, name)}) must be a multiple of the rollout, "
-                    f"num_envs * n_steps ({rollout})"
-                )
+        check_number(self, "learning_rate", "gamma", "gae_lambda", low=0.0, high=1.0)
+        check_number(self, "clip_range", "ent_coef", "vf_coef", low=0.0, high=10.0)
+        check_number(self, "max_grad_norm", low=0.0, high=1e6)
+        check_number(self, "progress_reward", low=0.0, high=100.0)
+        check_number(self, "collision_penalty", low=-100.0, high=0.0)
+        check_choice(self, "action", ("discrete", "continuous"))
+        check_block(self, self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
         try:
             self.tasks()
         except (TypeError, ValueError) as err:

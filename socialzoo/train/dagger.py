@@ -46,8 +46,8 @@ class Args(bc.Args):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_int(self, "iterations", 0)
-        check_int(self, "episodes", 1)
+        check_int(self, "iterations", low=0)
+        check_int(self, "episodes", low=1)
 
 
 def train(args: Args) -> Path:

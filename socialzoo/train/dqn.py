@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.train.checks import check_int, check_number
 from socialzoo.train.sb3_common import SB3Args, SB3Trainer, run_sb3
 
 TRAINER = SB3Trainer("dqn", policy_file="dqn.safetensors", model="DQN", activation="ReLU")
@@ -61,12 +61,11 @@ class DQNArgs(SB3Args):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("buffer_size", "train_freq", "gradient_steps", "target_update_interval"):
-            check_int("DQNArgs", name, getattr(self, name), low=1)
-        check_int("DQNArgs", "learning_starts", self.learning_starts, low=0)
+        check_int(self, "buffer_size", "train_freq", "gradient_steps", "target_update_interval", low=1)
+        check_int(self, "learning_starts", low=0)
         self.check_block(self.num_envs * self.train_freq, "num_envs * train_freq")
-        for name in ("tau", "exploration_fraction", "exploration_initial_eps", "exploration_final_eps"):
-            check_number("DQNArgs", name, getattr(self, name), low=0.0, high=1.0)
+        names = ("tau", "exploration_fraction", "exploration_initial_eps", "exploration_final_eps")
+        check_number(self, *names, low=0.0, high=1.0)
 
 
 def train(args: DQNArgs) -> Path:

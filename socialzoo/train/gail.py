@@ -10,7 +10,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from socialzoo.train.checks import Activation, check_int, check_number, check_sizes
+from socialzoo.train.checks import Activation, check_choice, check_int, check_number, check_sizes, coerce
 from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
@@ -80,27 +80,14 @@ class Args(ImitationArgs):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        object.__setattr__(self, "disc_hidden", tuple(self.disc_hidden))
-        for name in (
-            "total_steps",
-            "num_envs",
-            "rollout_len",
-            "scenario_repeats",
-            "max_episode_steps",
-            "disc_epochs",
-            "ppo_epochs",
-            "minibatch",
-        ):
-            check_int(self, name, 1)
+        coerce(self, disc_hidden=tuple)
+        check_int(self, "total_steps", "num_envs", "rollout_len", "scenario_repeats", low=1)
+        check_int(self, "max_episode_steps", "disc_epochs", "ppo_epochs", "minibatch", low=1)
         check_sizes(self, "disc_hidden")
-        if self.reward not in ("logit", "positive", "negative"):
-            raise ValueError(f"gail Args.reward must be logit, positive or negative, got {self.reward!r}")
-        for name in ("disc_lr", "clip_epsilon", "max_grad_norm"):
-            check_number(self, name, 0.0, strict=True)
-        for name in ("grad_penalty", "entropy_coeff", "critic_coeff"):
-            check_number(self, name, 0.0)
-        for name in ("gamma", "gae_lambda"):
-            check_number(self, name, 0.0, high=1.0)
+        check_choice(self, "reward", GailReward)
+        check_number(self, "disc_lr", "clip_epsilon", "max_grad_norm", low=0.0, low_open=True)
+        check_number(self, "grad_penalty", "entropy_coeff", "critic_coeff", low=0.0)
+        check_number(self, "gamma", "gae_lambda", low=0.0, high=1.0)
 
     @property
     def frames_per_batch(self) -> int:

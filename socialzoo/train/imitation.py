@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.train.checks import Activation, check_int, check_number, check_sizes, owner
+from socialzoo.train.checks import Activation, check_choice, check_int, check_number, check_sizes, coerce
 from socialzoo.train.skeleton import TrainingRun
 
 # The imitation trainers' arguments that name input files (socialzoo.train.skeleton.Trainer.inputs).
@@ -51,18 +51,13 @@ class ImitationArgs:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "demos", Path(self.demos))
-        object.__setattr__(self, "out", Path(self.out))
-        object.__setattr__(self, "hidden", tuple(self.hidden))
-        check_int(self, "steps", 1, optional=True)
-        for name in ("checkpoint_every", "threads"):
-            check_int(self, name, 1)
-        for name in ("seed", "eval_trials"):
-            check_int(self, name, 0)
+        coerce(self, demos=Path, out=Path, hidden=tuple)
+        check_int(self, "steps", low=1, optional=True)
+        check_int(self, "checkpoint_every", "threads", low=1)
+        check_int(self, "seed", "eval_trials", low=0)
         check_sizes(self, "hidden")
-        if self.activation not in ("tanh", "relu"):
-            raise ValueError(f"{owner(self)}.activation must be 'tanh' or 'relu', got {self.activation!r}")
-        check_number(self, "lr", 0.0, strict=True)
+        check_choice(self, "activation", Activation)
+        check_number(self, "lr", low=0.0, low_open=True)
 
 
 @dataclass

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.train.checks import check_choice, check_int, check_number
 
 Algo = Literal["mappo", "ippo"]
 CollectorKind = Literal["single", "multiprocess", "ray"]
@@ -140,32 +140,17 @@ class MarlArgs:
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
-        if self.algo not in ALGOS:
-            raise ValueError(f"{owner}.algo must be one of {ALGOS}, got {self.algo!r}")
-        if self.collector not in COLLECTORS:
-            raise ValueError(f"{owner}.collector must be one of {COLLECTORS}, got {self.collector!r}")
-        for name in ("frames", "batch_size", "frames_per_batch", "workers", "epochs", "minibatch_size"):
-            check_int(owner, name, getattr(self, name), low=1)
-        for name in (
-            "hidden",
-            "depth",
-            "stats_steps",
-            "checkpoint_every",
-            "num_robots",
-            "max_steps",
-            "threads",
-        ):
-            check_int(owner, name, getattr(self, name), low=1)
-        check_int(owner, "seed", self.seed, low=0)
-        check_int(owner, "max_humans", self.max_humans, low=0)
-        for name in ("lr", "clip_epsilon", "max_grad_norm"):
-            check_number(owner, name, getattr(self, name), low=0, low_open=True)
-        for name in ("gamma", "lmbda"):
-            check_number(owner, name, getattr(self, name), low=0, high=1)
-        check_number(owner, "entropy_coef", self.entropy_coef, low=0)
-        check_number(owner, "action_scale", self.action_scale, low=0, low_open=True)
-        check_number(owner, "walk_prior", self.walk_prior, low=0, high=self.action_scale, high_open=True)
-        check_number(owner, "init_std", self.init_std, low=0, low_open=True)
+        check_choice(self, "algo", ALGOS)
+        check_choice(self, "collector", COLLECTORS)
+        check_int(self, "frames", "batch_size", "frames_per_batch", "workers", "epochs", low=1)
+        check_int(self, "minibatch_size", "hidden", "depth", "stats_steps", "checkpoint_every", low=1)
+        check_int(self, "num_robots", "max_steps", "threads", low=1)
+        check_int(self, "seed", "max_humans", low=0)
+        check_number(self, "lr", "clip_epsilon", "max_grad_norm", low=0, low_open=True)
+        check_number(self, "action_scale", "init_std", low=0, low_open=True)
+        check_number(self, "gamma", "lmbda", low=0, high=1)
+        check_number(self, "entropy_coef", low=0)
+        check_number(self, "walk_prior", low=0, high=self.action_scale, high_open=True)
         if self.collector == "single" and self.workers != 1:
             raise ValueError(f"{owner}.workers must be 1 with collector='single', got {self.workers}")
         per_worker = self.workers * self.batch_size

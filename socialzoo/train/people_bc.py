@@ -99,17 +99,13 @@ class Args:
         object.__setattr__(self, "out", Path(self.out))
         if self.cache is not None:
             object.__setattr__(self, "cache", Path(self.cache))
-        check_int(self, "window", 2)
-        for name in ("hidden", "depth", "batch_size", "max_epochs", "patience", "threads"):
-            check_int(self, name, 1)
-        check_int(self, "num_neighbours", 0)
-        check_int(self, "noisy_copies", 0)
-        check_int(self, "label_frames", 1)
-        check_number(self, "velocity_noise", 0.0)
-        check_number(self, "relaxation_time", 0.0, strict=True)
-        check_number(self, "val_fraction", 0.0, strict=True, high=0.5)
-        check_number(self, "action_scale", 0.0, strict=True)
-        check_number(self, "lr", 0.0, strict=True)
+        check_int(self, "window", low=2)
+        check_int(self, "hidden", "depth", "batch_size", "max_epochs", "patience", "threads", low=1)
+        check_int(self, "label_frames", low=1)
+        check_int(self, "num_neighbours", "noisy_copies", low=0)
+        check_number(self, "velocity_noise", low=0.0)
+        check_number(self, "relaxation_time", "action_scale", "lr", low=0.0, low_open=True)
+        check_number(self, "val_fraction", low=0.0, low_open=True, high=0.5)
 
     @property
     def scene_names(self) -> tuple[str, ...]:

@@ -15,9 +15,9 @@ import numpy as np
 from socialzoo.agents.demonstrations import DemonstrationError, load_demonstrations
 from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicate_eval, predicate_str
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
-from socialzoo.core.validation import check_choice, check_int, check_number
 from socialzoo.data.fetch import sha256
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
+from socialzoo.train.checks import check_choice, check_int, check_number
 from socialzoo.train.demo_data import check_steps
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
 from socialzoo.train.run_dir import read_record
@@ -70,16 +70,15 @@ class PipsArgs(SearchOptions):
             raise ValueError(f"PipsArgs.demos must be a file path, got {self.demos!r}")
         if not isinstance(self.out, str) or not self.out.endswith(".json"):
             raise ValueError(f"PipsArgs.out must be a .json path, got {self.out!r}")
-        for name in ("steps", "max_pred_size", "beam", "pool", "partners", "min_positives", "z3_candidates"):
-            check_int("PipsArgs", name, getattr(self, name), low=1)
-        for name in ("window", "max_depth", "seed", "heldout_steps"):
-            check_int("PipsArgs", name, getattr(self, name), low=0)
+        check_int(self, "steps", "max_pred_size", "beam", "pool", "partners", "min_positives", low=1)
+        check_int(self, "z3_candidates", low=1)
         if self.max_pred_size > 3:
             raise ValueError(f"PipsArgs.max_pred_size must be at most 3, got {self.max_pred_size!r}")
-        for name in ("complexity_cost", "z3_timeout_s", "time_budget_s"):
-            check_number("PipsArgs", name, getattr(self, name), low=0, low_open=name != "complexity_cost")
-        check_choice("PipsArgs", "sampling", self.sampling, ("prefix", "windows"))
-        check_choice("PipsArgs", "solver", self.solver, ("z3", "exact"))
+        check_int(self, "window", "max_depth", "seed", "heldout_steps", low=0)
+        check_number(self, "complexity_cost", low=0)
+        check_number(self, "z3_timeout_s", "time_budget_s", low=0, low_open=True)
+        check_choice(self, "sampling", ("prefix", "windows"))
+        check_choice(self, "solver", ("z3", "exact"))
 
 
 @dataclass(frozen=True)

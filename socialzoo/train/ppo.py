@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from socialzoo.core.validation import check_int, check_number
+from socialzoo.train.checks import check_int, check_number
 from socialzoo.train.sb3_common import SB3Args, SB3Trainer, run_sb3
 
 TRAINER = SB3Trainer("ppo", policy_file="ppo.safetensors", model="PPO", activation="Tanh")
@@ -38,12 +38,10 @@ class PPOArgs(SB3Args):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("n_steps", "n_epochs"):
-            check_int("PPOArgs", name, getattr(self, name), low=1)
+        check_int(self, "n_steps", "n_epochs", low=1)
         self.check_block(self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
-        check_number("PPOArgs", "gae_lambda", self.gae_lambda, low=0.0, high=1.0)
-        for name in ("clip_range", "ent_coef", "vf_coef"):
-            check_number("PPOArgs", name, getattr(self, name), low=0.0, high=10.0)
+        check_number(self, "gae_lambda", low=0.0, high=1.0)
+        check_number(self, "clip_range", "ent_coef", "vf_coef", low=0.0, high=10.0)
 
 
 def train(args: PPOArgs) -> Path:

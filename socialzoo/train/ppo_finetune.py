@@ -14,7 +14,7 @@ import numpy as np
 from socialzoo.agents import policy_file_or_shipped
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
-from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.checks import check_int, check_number, coerce
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("ppo-finetune", policy_file="ppo_finetune.safetensors", inputs=("init",))
@@ -57,16 +57,13 @@ class Args:
     threads: int = 1
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "init", policy_file_or_shipped(self.init))
-        object.__setattr__(self, "out", Path(self.out))
-        for name in ("warmup", "steps", "seed"):
-            check_int(self, name, 0)
-        check_int(self, "threads", 1)
-        check_number(self, "lr", 0.0, strict=True, high=1.0)
-        check_number(self, "clip", 0.0, strict=True, high=10.0)
-        check_number(self, "gamma", 0.0, high=1.0)
-        for name in ("w_blame", "w_collision"):
-            check_number(self, name, -1e6, high=1e6)
+        coerce(self, init=policy_file_or_shipped, out=Path)
+        check_int(self, "warmup", "steps", "seed", low=0)
+        check_int(self, "threads", low=1)
+        check_number(self, "lr", low=0.0, low_open=True, high=1.0)
+        check_number(self, "clip", low=0.0, low_open=True, high=10.0)
+        check_number(self, "gamma", low=0.0, high=1.0)
+        check_number(self, "w_blame", "w_collision", low=-1e6, high=1e6)
 
 
 def train(args: Args) -> Path:

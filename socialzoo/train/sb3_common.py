@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.core.metrics import registered
-from socialzoo.core.validation import check_int, check_number
 from socialzoo.env.config import EnvConfig
+from socialzoo.train.checks import check_block, check_int, check_number, check_sizes, coerce
 from socialzoo.train.skeleton import CheckpointSchedule, Trainer, TrainingRun, run_training
 
 logger = logging.getLogger(__name__)
@@ -95,29 +95,21 @@ class SB3Args:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "out", Path(self.out))
-        object.__setattr__(self, "net_arch", tuple(self.net_arch))
+        coerce(self, out=Path, net_arch=tuple)
         owner = type(self).__name__
         if not self.map:
             object.__setattr__(self, "map", default_map(self.family))
-        for name in ("total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs"):
-            check_int(owner, name, getattr(self, name), low=1)
-        for name in ("batch_size", "threads"):
-            check_int(owner, name, getattr(self, name), low=1)
-        for name in ("seed", "eval_trials", "eval_every"):
-            check_int(owner, name, getattr(self, name), low=0)
+        check_int(self, "total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs", low=1)
+        check_int(self, "batch_size", "threads", low=1)
+        check_int(self, "seed", "eval_trials", "eval_every", low=0)
         if self.eval_every % self.checkpoint_every:
             raise ValueError(
                 f"{owner}.eval_every ({self.eval_every}) must be a multiple of checkpoint_every "
                 f"({self.checkpoint_every})"
             )
-        check_number(owner, "learning_rate", self.learning_rate, low=0.0, high=1.0)
-        check_number(owner, "gamma", self.gamma, low=0.0, high=1.0)
-        check_number(owner, "max_grad_norm", self.max_grad_norm, low=0.0, high=1e6)
-        if not self.net_arch or any(
-            not isinstance(n, int) or isinstance(n, bool) or n < 1 for n in self.net_arch
-        ):
-            raise ValueError(f"{owner}.net_arch must be positive layer sizes, got {self.net_arch!r}")
+        check_number(self, "learning_rate", "gamma", low=0.0, high=1.0)
+        check_number(self, "max_grad_norm", low=0.0, high=1e6)
+        check_sizes(self, "net_arch")
         for name, given in self._overridden().items():
             if given != getattr(self, name):
                 raise ValueError(
@@ -151,14 +143,9 @@ class SB3Args:
         return found
 
     def check_block(self, block: int, what: str) -> None:
-        """Raise ValueError unless checkpoints and the end of training fall on `block` env steps (a
-        rollout, or a training interval), so that each checkpoint holds the policy at its step."""
-        owner = type(self).__name__
-        for name in ("checkpoint_every", "total_steps"):
-            if getattr(self, name) % block:
-                raise ValueError(
-                    f"{owner}.{name} ({getattr(self, name)}) must be a multiple of {what} ({block})"
-                )
+        """Raise ValueError unless checkpoints and the end of training fall on `block` env steps
+        (socialzoo.train.checks.check_block)."""
+        check_block(self, block, what)
 
     def model_kwargs(self, activation: str) -> dict[str, Any]:
         """The SB3 model's keyword arguments: those every trainer sets from these fields, then the
