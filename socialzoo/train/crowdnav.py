@@ -19,6 +19,9 @@ TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
 SUITE_ID = CROWD_SUITE_ID
 # The CrowdNavConfig fields --families decides (each family on its own map).
 FAMILY_FIELDS = ("family", "map")
+# The CrowdNavArgs fields passed to stable_baselines3.PPO by name.
+PPO_FIELDS = ("n_steps", "batch_size", "n_epochs", "learning_rate", "gamma", "gae_lambda", "clip_range")
+PPO_FIELDS += ("ent_coef", "vf_coef", "max_grad_norm", "seed")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -304,15 +307,13 @@ def _validation(args: CrowdNavArgs) -> Any:
 
 def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
     import torch
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
 
     from socialzoo.env.concat_vector import ConcatVectorEnv
     from socialzoo.env.sb3_vec import SB3VecEnv
     from socialzoo.env.vector import CrowdNavVectorEnv
     from socialzoo.train.crowd_attention import CrowdAttentionExtractor
-    from socialzoo.train.sb3_common import learn_with_checkpoints
+    from socialzoo.train.sb3_common import learn_with_checkpoints, sb3_model
 
     task = args.task()
     families = args.family_names()
@@ -324,36 +325,20 @@ def _fit(run: TrainingRun, args: CrowdNavArgs) -> Mapping[str, Any]:
         vector_env = CrowdNavVectorEnv(args.num_envs, task)
     venv: Any = VecMonitor(SB3VecEnv(args.num_envs, vector_env=vector_env))
     venv = training_reward(venv, args.progress_reward, args.collision_penalty - task.reward.collision_penalty)
-    model = PPO(
-        "MlpPolicy",
-        venv,
-        n_steps=args.n_steps,
-        batch_size=args.batch_size,
-        n_epochs=args.n_epochs,
-        learning_rate=args.learning_rate,
-        gamma=args.gamma,
-        gae_lambda=args.gae_lambda,
-        clip_range=args.clip_range,
-        ent_coef=args.ent_coef,
-        vf_coef=args.vf_coef,
-        max_grad_norm=args.max_grad_norm,
-        policy_kwargs={
-            "net_arch": list(args.net_arch),
-            "activation_fn": torch.nn.Tanh,
-            "features_extractor_class": CrowdAttentionExtractor,
-            "features_extractor_kwargs": {
-                "slots": task.observed_slots,
-                "embed": args.embed,
-                "value": args.value,
-                "attention": args.attention,
-                "signals": task.signals,
-            },
+    kwargs = {name: getattr(args, name) for name in PPO_FIELDS}
+    policy_kwargs = {
+        "net_arch": list(args.net_arch),
+        "activation_fn": torch.nn.Tanh,
+        "features_extractor_class": CrowdAttentionExtractor,
+        "features_extractor_kwargs": {
+            "slots": task.observed_slots,
+            "embed": args.embed,
+            "value": args.value,
+            "attention": args.attention,
+            "signals": task.signals,
         },
-        seed=args.seed,
-        device="cpu",
-        verbose=0,
-    )
-    model.set_logger(configure(str(run.path / "tensorboard"), ["tensorboard"]))
+    }
+    model = sb3_model(run, "PPO", venv, {**kwargs, "policy_kwargs": policy_kwargs})
 
     def save(path: Path, step: int) -> None:
         export_crowd_policy(model, task, run, step).save(path, crowd_tensors(model))

@@ -333,32 +333,35 @@ def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
         evaluator = validation_evaluator(
             trainer.name, args.map, args.eval_trials, env_overrides=overrides, family=args.family
         )
-    return run_training(trainer, args, lambda run: _fit(run, args), evaluator=evaluator)
+    return run_training(trainer, args, lambda run: _fit(run, trainer, args), evaluator=evaluator)
 
 
-def _model(trainer: SB3Trainer, args: SB3Args, venv: Any) -> Any:
+def sb3_model(run: TrainingRun, model: str, venv: Any, kwargs: Mapping[str, Any]) -> Any:
+    """stable_baselines3.<model>("MlpPolicy", venv, **kwargs) on the CPU, silent, logging to the run's
+    tensorboard/."""
     import stable_baselines3
+    from stable_baselines3.common.logger import configure
 
     with warnings.catch_warnings():
         # PPO warns that 2,000 is no multiple of 64: the last minibatch holds 16 samples, and an
         # epoch has 32 minibatches, as with SB3's default rollout of 2,048.
         warnings.filterwarnings("ignore", message=".*mini-batch size.*")
-        model_class = getattr(stable_baselines3, trainer.model)
-        return model_class("MlpPolicy", venv, **args.model_kwargs(trainer.activation))
+        made = getattr(stable_baselines3, model)(
+            "MlpPolicy", venv, **{"device": "cpu", "verbose": 0, **kwargs}
+        )
+    made.set_logger(configure(str(run.path / "tensorboard"), ["tensorboard"]))
+    return made
 
 
-def _fit(run: TrainingRun, args: SB3Args) -> Mapping[str, Any]:
-    from stable_baselines3.common.logger import configure
-
+def _fit(run: TrainingRun, trainer: SB3Trainer, args: SB3Args) -> Mapping[str, Any]:
     from socialzoo.train.run_dir import plain
     from socialzoo.train.sb3_export import export_policy
 
     config = args.env_config()
     observation = plain(config.observation)
     venv, norm = make_training_env(args, config)
-    model = _model(run.trainer, args, venv)
-    model.set_logger(configure(str(run.path / "tensorboard"), ["tensorboard"]))
-    algo = run.trainer.name
+    model = sb3_model(run, trainer.model, venv, args.model_kwargs(trainer.activation))
+    algo = trainer.name
 
     def save(path: Path, step: int) -> None:
         policy, output = export_policy(model, algo, observation, norm)
