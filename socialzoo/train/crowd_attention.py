@@ -11,15 +11,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
 from socialzoo.env.crowd_observation import human_features, robot_features
-
-
-def _mlp(sizes: Sequence[int], last_relu: bool) -> nn.Sequential:
-    layers: list[nn.Module] = []
-    for i in range(len(sizes) - 1):
-        layers.append(nn.Linear(sizes[i], sizes[i + 1]))
-        if i < len(sizes) - 2 or last_relu:
-            layers.append(nn.ReLU())
-    return nn.Sequential(*layers)
+from socialzoo.train.policy_net import mlp
 
 
 class CrowdAttention(nn.Module):
@@ -57,9 +49,12 @@ class CrowdAttention(nn.Module):
         self.signals = signals
         self.robot_dim = len(robot_features(signals))
         self.human_dim = len(human_features(signals))
-        self.embed = _mlp([self.robot_dim + self.human_dim, *embed], last_relu=True)
-        self.value = _mlp([embed[-1], *value], last_relu=False)
-        self.score = _mlp([2 * embed[-1], *attention, 1], last_relu=False)
+        width = embed[-1]
+        self.embed = nn.Sequential(
+            *mlp(self.robot_dim + self.human_dim, embed[:-1], width, "relu", None), nn.ReLU()
+        )
+        self.value = mlp(width, value[:-1], value[-1], "relu", None)
+        self.score = mlp(2 * width, attention, 1, "relu", None)
         self.features_dim = self.robot_dim + value[-1]
 
     @property
