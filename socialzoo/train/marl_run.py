@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import logging
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -40,19 +41,10 @@ ROBOT_POLICY_NAME = "mappo"
 
 
 def _settings(args: Any, prefix: str = "") -> PPOSettings:
-    """PPO settings from the run's arguments (prefix "robot_" for the robots' own learning rate)."""
-    lr = getattr(args, f"{prefix}lr", args.lr)
-    return PPOSettings(
-        algo=args.algo,
-        lr=lr,
-        gamma=args.gamma,
-        lmbda=args.lmbda,
-        clip_epsilon=args.clip_epsilon,
-        entropy_coef=args.entropy_coef,
-        epochs=args.epochs,
-        minibatch_size=args.minibatch_size,
-        max_grad_norm=args.max_grad_norm,
-    )
+    """PPO settings from the run's arguments of the same names (prefix "robot_" for the robots' own
+    learning rate)."""
+    settings = {f.name: getattr(args, f.name) for f in dataclasses.fields(PPOSettings)}
+    return PPOSettings(**{**settings, "lr": getattr(args, f"{prefix}lr", args.lr)})
 
 
 def run_marl(
