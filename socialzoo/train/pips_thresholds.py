@@ -250,21 +250,12 @@ def sketch_eval(sketch: Sketch, columns: list[np.ndarray], thresholds: list[floa
 
 def centre_thresholds(sketch: Sketch, columns: list[np.ndarray], thresholds: list[float]) -> list[float]:
     """Move each threshold to the middle of the gap between example values it falls in (the
-    same examples on each side, so the same classification)."""
+    same examples on each side, so the same classification); a ">=" comparison is `-f <= -t`."""
     out = list(thresholds)
     for i, col in enumerate(columns):
-        midpoint = _midpoint if _leaf_cmp(sketch, i) == "<=" else _ge_midpoint
-        out[i] = midpoint(col, thresholds[i])
+        sign = 1.0 if _leaf_cmp(sketch, i) == "<=" else -1.0
+        out[i] = sign * _midpoint(sign * col, sign * thresholds[i])
     return out
-
-
-def _ge_midpoint(values: np.ndarray, t: float) -> float:
-    """A threshold classifying `values` as `>= t` does, midway to the next value below t."""
-    at_or_above = values[values >= t]
-    below = values[values < t]
-    hi = float(at_or_above.min()) if len(at_or_above) else t
-    lo = float(below.max()) if len(below) else hi - 1.0
-    return 0.5 * (lo + hi)
 
 
 def _leaf_cmp(sketch: Sketch, index: int) -> str | None:
