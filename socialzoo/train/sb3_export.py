@@ -96,20 +96,16 @@ def export_policy(
     from stable_baselines3 import DQN, PPO
 
     if isinstance(model, PPO):
-        where = "PPO policy"
-        _check_flat_features(model.policy, where)  # the actor's extractor (shared or not)
-        hidden, acts = _layers(list(model.policy.mlp_extractor.policy_net.children()), where)
-        head, _ = _layers([model.policy.action_net], where)
-        weights = hidden + head
-        # The policy MLP ends with an activation, then action_net gives the logits.
-        activation = _activation(acts, len(weights), where)
-        output = "logits"
+        # The actor's extractor (shared or not); the policy MLP ends with an activation, then
+        # action_net gives the logits.
+        where, acting, output = "PPO policy", model.policy, "logits"
+        modules = [*model.policy.mlp_extractor.policy_net.children(), model.policy.action_net]
     elif isinstance(model, DQN):
-        where = "DQN q_net"
-        _check_flat_features(model.q_net, where)
-        weights, acts = _layers(list(model.q_net.q_net.children()), where)
-        activation = _activation(acts, len(weights), where)
-        output = "q_values"
+        where, acting, output = "DQN q_net", model.q_net, "q_values"
+        modules = list(model.q_net.q_net.children())
     else:
         raise ExportError(f"cannot export a {type(model).__name__}: PPO or DQN only")
+    _check_flat_features(acting, where)
+    weights, acts = _layers(modules, where)
+    activation = _activation(acts, len(weights), where)
     return MlpPolicy(name, weights, activation, observation, normalizer_of(vec_normalize)), output
