@@ -18,8 +18,6 @@ from socialzoo.train.checks import check_int, check_number, coerce
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("ppo-finetune", policy_file="ppo_finetune.safetensors", inputs=("init",))
-# torch activation class of an MlpPolicy activation.
-_TORCH_ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh"}
 # PPO's settings besides the arguments: 50 rows x 40 steps a rollout, minibatches of 500, 4 epochs.
 NUM_ENVS = 50
 PPO_SETTINGS: dict[str, Any] = {"n_steps": 40, "batch_size": 500, "n_epochs": 4, "ent_coef": 0.0}
@@ -98,9 +96,10 @@ def ppo_from_policy(
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from socialzoo.env.sb3_vec import SB3VecEnv
+    from socialzoo.train.policy_net import ACTIVATION_MODULES
 
     fixed = source.normalizer
-    if fixed is None or source.activation not in _TORCH_ACTIVATIONS:
+    if fixed is None or source.activation not in ACTIVATION_MODULES:
         raise ValueError(
             f"{source.path}: fine-tuning needs an MLP with an observation normaliser and a ReLU or tanh "
             f"activation (this one: normaliser {fixed is not None}, activation {source.activation!r})"
@@ -123,7 +122,7 @@ def ppo_from_policy(
         verbose=0,
         policy_kwargs={
             "net_arch": {"pi": hidden, "vf": hidden},
-            "activation_fn": getattr(torch.nn, _TORCH_ACTIVATIONS[source.activation]),
+            "activation_fn": ACTIVATION_MODULES[source.activation],
         },
         **ppo,
     )
