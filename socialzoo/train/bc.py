@@ -65,6 +65,15 @@ def agreement(net: Any, obs: np.ndarray, action: np.ndarray, batch: int = 8192) 
     return hits / max(len(obs), 1)
 
 
+def agreements(net: Any, obs: np.ndarray, action: np.ndarray, validation: Any) -> dict[str, float]:
+    """The network's `agreement` with (obs, action), "train_agreement", and with the demonstrations
+    `validation` (DemoSteps or None), "validation_agreement" (only when given)."""
+    found = {"train_agreement": agreement(net, obs, action)}
+    if validation is not None:
+        found["validation_agreement"] = agreement(net, validation.obs, validation.action)
+    return found
+
+
 def train(args: Args) -> Path:
     """Run behaviour cloning on the trainer skeleton; returns bc.safetensors (a finished run of the
     same arguments in args.out is reused; a short demonstration file raises ValueError).
@@ -175,24 +184,18 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
             run.checkpoint(due, lambda path, due=due: parts.save(path, updates=due))
 
     def after_pass(step: int, loss: float) -> None:
-        train_agreement = agreement(net, data.obs, data.action)
-        writer.add_scalar("bc/train_agreement", train_agreement, step)
-        bar.set_postfix(loss=f"{loss:.3f}", agree=f"{train_agreement:.3f}")
-        if validation is not None:
-            writer.add_scalar(
-                "bc/validation_agreement", agreement(net, validation.obs, validation.action), step
-            )
+        found = agreements(net, data.obs, data.action, validation)
+        for key, value in found.items():
+            writer.add_scalar(f"bc/{key}", value, step)
+        bar.set_postfix(loss=f"{loss:.3f}", agree=f"{found['train_agreement']:.3f}")
 
     fit_actions(
         bc_loss_module(net), data.obs, data.action, args, parts.generator,
         after_update=after_update, after_pass=after_pass,
     )  # fmt: skip
     parts.save(run.policy, updates=updates)
-    results: dict[str, Any] = {
+    return {
         "updates": updates,
         "demonstration_steps": len(data),
-        "train_agreement": agreement(net, data.obs, data.action),
+        **agreements(net, data.obs, data.action, validation),
     }
-    if validation is not None:
-        results["validation_agreement"] = agreement(net, validation.obs, validation.action)
-    return results

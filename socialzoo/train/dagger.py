@@ -118,12 +118,10 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
         obs, action = np.concatenate(obs_sets), np.concatenate(action_sets)
         loss = bc.fit_actions(bc.bc_loss_module(net), obs, action, args, parts.generator)
         writer.add_scalar("dagger/loss", loss, k)
-        train_agreement = bc.agreement(net, obs, action)
-        writer.add_scalar("dagger/train_agreement", train_agreement, k)
+        found = bc.agreements(net, obs, action, validation)
+        for key, value in found.items():
+            writer.add_scalar(f"dagger/{key}", value, k)
         writer.add_scalar("dagger/steps", len(obs), k)
-        if validation is not None:
-            validation_agreement = bc.agreement(net, validation.obs, validation.action)
-            writer.add_scalar("dagger/validation_agreement", validation_agreement, k)
         steps = len(obs)
         policy = run.checkpoint(k, lambda path, k=k, steps=steps: parts.save(path, round=k, steps=steps))
         bar.update(1)
@@ -145,15 +143,12 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
         obs_sets.append(learner_obs)
         action_sets.append(labels)
     parts.save(run.policy, rounds=args.iterations + 1, steps=len(obs))
-    results: dict[str, Any] = {
+    return {
         "rounds": args.iterations + 1,
         "demonstration_steps": len(data),
         "rollout_steps": int(len(obs) - len(data)),
         "updates_last_round": bc.update_count(len(obs), args),
-        "train_agreement": train_agreement,
         # Per round: the fraction of the learner's own states where its action was not Ref's.
         "closed_loop_disagreement": disagreement,
+        **found,
     }
-    if validation is not None:
-        results["validation_agreement"] = validation_agreement
-    return results
