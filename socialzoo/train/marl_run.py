@@ -76,12 +76,11 @@ def run_marl(
 
 def _learners(
     args: Any, cfg: Any, learned: Sequence[str], robot_policy: str | None
-) -> tuple[dict[str, GroupLearner], dict[str, Any]]:
-    """The learner and the actor of each learned group, with input normalisation from random-action
-    steps of a small env of their own."""
+) -> dict[str, GroupLearner]:
+    """The learner (actor, critic, loss) of each learned group, with input normalisation from
+    random-action steps of a small env of their own."""
     stats_env = make_env(cfg.to_dict(), min(args.batch_size, 16), args.seed + 1_000_003, robot_policy)
     learners: dict[str, GroupLearner] = {}
-    nets: dict[str, Any] = {}
     if "robot" in learned:
         loc, scale = observation_stats(stats_env, "robot", args.stats_steps)
         actor = robot_actor(cfg.observation.size, NUM_ACTIONS, args.hidden, args.depth, loc, scale)
@@ -89,7 +88,6 @@ def _learners(
             "robot", cfg.observation.size, cfg.num_robots, args.algo, args.hidden, args.depth, loc, scale
         )
         learners["robot"] = GroupLearner("robot", actor, value, _settings(args, "robot_"))
-        nets["robot"] = actor
     if "human" in learned:
         size = stats_env.observation_spec["human", "observation"].shape[-1]
         loc, scale = observation_stats(stats_env, "human", args.stats_steps)
@@ -109,9 +107,8 @@ def _learners(
         )
         value = critic("human", size, cfg.num_learned_humans, args.algo, args.hidden, args.depth, loc, scale)
         learners["human"] = GroupLearner("human", actor, value, _settings(args))
-        nets["human"] = actor
     stats_env.close()
-    return learners, nets
+    return learners
 
 
 def _fit(
@@ -126,7 +123,8 @@ def _fit(
         raise ValueError(
             f"{run.trainer.name}: nothing to learn (no learned humans and the robots run a policy)"
         )
-    learners, nets = _learners(args, cfg, learned, robot_policy)
+    learners = _learners(args, cfg, learned, robot_policy)
+    nets = {group: learner.actor for group, learner in learners.items()}
     groups = ["robot"] + (["human"] if cfg.num_learned_humans else [])
     policy = TensorDictSequential(*nets.values())
     workers = args.workers if args.collector != "single" else 1
