@@ -6,7 +6,7 @@ import itertools
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -173,15 +173,9 @@ class GuardReport:
     solver: str
 
     def to_json(self) -> dict[str, Any]:
-        """The transition as plain JSON, action names spelled out."""
-        return {
-            "from": ACTION_NAMES[self.state],
-            "to": ACTION_NAMES[self.target],
-            "examples": self.examples,
-            "positives": self.positives,
-            "correct": self.correct,
-            "solver": self.solver,
-        }
+        """The transition as plain JSON, action names spelled out, then the fit's fields."""
+        fit = {k: v for k, v in asdict(self).items() if k not in ("state", "target")}
+        return {"from": ACTION_NAMES[self.state], "to": ACTION_NAMES[self.target], **fit}
 
 
 def _decision_list(
