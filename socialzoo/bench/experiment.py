@@ -16,7 +16,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.runner import BACKENDS, Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
+from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import (
     PAPER_LAYOUT,
@@ -94,6 +94,7 @@ class BenchmarkConfig:
 
     def __post_init__(self) -> None:
         from socialzoo.agents import check_policy_spec
+        from socialzoo.bench.runner import check_backend
 
         try:
             check_humans(self.humans)
@@ -122,8 +123,7 @@ class BenchmarkConfig:
         if unknown:
             raise ValueError(f"BenchmarkConfig.policy_kwargs names policies not evaluated: {unknown}")
         check_int("BenchmarkConfig", "trials", self.trials, low=1, allow_none=True)
-        if self.backend not in BACKENDS:
-            raise ValueError(f"BenchmarkConfig.backend must be one of {BACKENDS}, got {self.backend!r}")
+        check_backend(self.backend, "BenchmarkConfig.backend")
         if self.address is not None and self.backend != "ray":
             raise ValueError(f"BenchmarkConfig.address is for the Ray backend, got backend {self.backend!r}")
         check_int("BenchmarkConfig", "workers", self.workers, low=1, allow_none=True)

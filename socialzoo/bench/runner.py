@@ -3,6 +3,7 @@ refilling each row as its episode ends, locally over processes or on a Ray clust
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import multiprocessing
@@ -11,7 +12,7 @@ import queue as queue_module
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Literal
 
@@ -28,6 +29,16 @@ logger = logging.getLogger(__name__)
 
 Backend = Literal["local", "ray"]
 BACKENDS: tuple[str, ...] = ("local", "ray")
+
+
+def check_backend(backend: str, where: str = "backend") -> str:
+    """`backend`, or ValueError naming `where` (e.g. "BenchmarkConfig.backend"), the value and the
+    known ones."""
+    if backend not in BACKENDS:
+        raise ValueError(f"{where}: unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+    return backend
+
+
 # Seconds without any result, once every worker has returned, before the run is declared lost.
 _DRAIN_TIMEOUT = 60.0
 # Tail: shrink the core when at most this share of its rows is live. A compaction costs ~2-3 steps;
@@ -513,34 +524,42 @@ def _chunk(trials: list[Trial], spec: RunSpec, result_queue: Any = None) -> int:
     return len(trials)
 
 
-def _terminate(pool: Any) -> None:
-    # concurrent.futures offers no way to stop running tasks before Python 3.14
-    # (ProcessPoolExecutor.terminate_workers): end the worker processes themselves, or an
-    # interrupted run would wait for every chunk to finish.
-    for process in list(getattr(pool, "_processes", {}).values()):
-        process.terminate()
+@contextlib.contextmanager
+def spawn_pool(workers: int, initializer: Callable[..., None], initargs: tuple[Any, ...]) -> Iterator[Any]:
+    """A ProcessPoolExecutor of `workers` spawned processes (both backends' local pool: the
+    evaluation's and the trainings'), each started with initializer(*initargs).
+
+    Spawned, not forked: the parent may hold threads (torch, tqdm's monitor) that fork would copy
+    mid-state. On any exception in the block (Ctrl-C included) the worker processes are ended at
+    once, since concurrent.futures offers no way to stop running tasks before Python 3.14
+    (ProcessPoolExecutor.terminate_workers): an interrupted run would otherwise wait for every task
+    to finish.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=context, initializer=initializer, initargs=initargs
+    )
+    try:
+        yield pool
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _evaluate_local(chunks: list[list[Trial]], spec: RunSpec, deliver: ResultSink) -> None:
-    from concurrent.futures import ProcessPoolExecutor
-
     if len(chunks) == 1:
         run_chunk(chunks[0], spec, sink=deliver)
         return
-    # spawn, not fork: the parent may hold threads (torch, tqdm's monitor) that fork would copy mid-state.
-    ctx = multiprocessing.get_context("spawn")
-    result_queue = ctx.Queue()
-    pool = ProcessPoolExecutor(
-        max_workers=len(chunks),
-        mp_context=ctx,
-        initializer=_init_worker,
-        initargs=(result_queue, os.getpid()),
-    )
-    try:
+    result_queue = multiprocessing.get_context("spawn").Queue()
+    with spawn_pool(len(chunks), _init_worker, (result_queue, os.getpid())) as pool:
         futures = [pool.submit(_chunk, chunk, spec) for chunk in chunks]
-        expected = sum(len(c) for c in chunks)
         _drain(
-            expected,
+            sum(len(c) for c in chunks),
             lambda timeout: result_queue.get(timeout=timeout),
             queue_module.Empty,
             lambda: [f for f in futures if f.done()],
@@ -548,11 +567,6 @@ def _evaluate_local(chunks: list[list[Trial]], spec: RunSpec, deliver: ResultSin
             len(futures),
             deliver,
         )
-    except BaseException:
-        _terminate(pool)
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _drain(
@@ -668,21 +682,33 @@ def start_local_ray(num_cpus: int) -> None:
     )
 
 
+@contextlib.contextmanager
+def ray_session(workers: int, address: str | None = None) -> Iterator[None]:
+    """Ray for the block: the one already initialised (a cluster, or `ray.init(num_cpus=2)` in a
+    test) as it is; else the cluster at `address` (checked first: check_ray_address), else a local
+    Ray of `workers` CPUs (start_local_ray); one this call started is shut down after."""
+    import ray
+
+    started = not ray.is_initialized()
+    if started and address:
+        check_ray_address(address)
+        ray.init(address=address, logging_level=logging.WARNING)
+    elif started:
+        start_local_ray(workers)
+    try:
+        yield
+    finally:
+        if started:
+            ray.shutdown()
+
+
 def _evaluate_ray(
     trials: list[Trial], spec: RunSpec, workers: int | None, address: str | None, deliver: ResultSink
 ) -> None:
     import ray
     from ray.util.queue import Empty, Queue
 
-    started = False
-    if not ray.is_initialized():
-        if address:
-            check_ray_address(address)
-            ray.init(address=address, logging_level=logging.WARNING)
-        else:
-            start_local_ray(workers or 2)
-        started = True
-    try:
+    with ray_session(workers or 2, address):
         if workers is None:
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
         chunks = split_trials(trials, workers)
@@ -705,9 +731,6 @@ def _evaluate_ray(
             raise
         finally:
             result_queue.shutdown()
-    finally:
-        if started:
-            ray.shutdown()
 
 
 # ---------------------------------------------------------------------------- entry point
@@ -744,8 +767,7 @@ def evaluate(
             any exception of a worker.
         RayAddressError: a Ray address nothing answers at (a ValueError; within seconds).
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+    check_backend(backend)
     check_int("evaluate", "workers", workers, low=1, allow_none=True)
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")

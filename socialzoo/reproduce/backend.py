@@ -5,19 +5,13 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import Any
+
+from socialzoo.bench.runner import BACKENDS, Backend, check_backend
 
 logger = logging.getLogger(__name__)
 
-Backend = Literal["local", "ray"]
-BACKENDS: tuple[str, ...] = ("local", "ray")
-
-
-def check_backend(backend: str) -> str:
-    """`backend`, or ValueError naming it and the known ones."""
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    return backend
+__all__ = ["BACKENDS", "Backend", "check_backend", "run_tasks"]
 
 
 def run_tasks(
@@ -32,10 +26,10 @@ def run_tasks(
     ended.
 
     Each training uses one CPU thread (the trainers' `threads`), so on the local backend `workers`
-    processes train `workers` policies at once (spawned, not forked: the parent may hold torch's
-    threads). A Ray already initialised (a cluster, or `ray.init(num_cpus=2)` in a test) is used as it
-    is; otherwise a local Ray with `workers` CPUs is started and shut down after, its workers at the
-    usual priority (socialzoo.bench.runner.start_local_ray).
+    processes train `workers` policies at once (socialzoo.bench.runner.spawn_pool). A Ray already
+    initialised (a cluster, or `ray.init(num_cpus=2)` in a test) is used as it is; otherwise a local
+    Ray with `workers` CPUs is started and shut down after, its workers at the usual priority
+    (socialzoo.bench.runner.ray_session).
     """
     check_backend(backend)
     if len(inputs) <= 1 or (backend == "local" and workers <= 1):
@@ -44,13 +38,9 @@ def run_tasks(
         return _run_local(function, inputs, workers)
     import ray
 
-    started = False
-    if not ray.is_initialized():
-        from socialzoo.bench.runner import start_local_ray
+    from socialzoo.bench.runner import ray_session
 
-        start_local_ray(workers)
-        started = True
-    try:
+    with ray_session(workers):
         task = ray.remote(num_cpus=1, max_retries=0)(function)
         refs = [task.remote(x) for x in inputs]
         try:
@@ -60,34 +50,17 @@ def run_tasks(
                 ray.cancel(ref, force=True)
             raise
         return [ray.get(ref) for ref in refs]
-    finally:
-        if started:
-            ray.shutdown()
 
 
 def _run_local(function: Callable[[Any], Any], inputs: Sequence[Any], workers: int) -> list[Any]:
     """The inputs in min(workers, len(inputs)) spawned processes, results in input order."""
-    import multiprocessing
     import os
-    from concurrent.futures import ProcessPoolExecutor, wait
+    from concurrent.futures import wait
 
-    from socialzoo.bench.runner import exit_with_parent
+    from socialzoo.bench.runner import exit_with_parent, spawn_pool
 
-    context = multiprocessing.get_context("spawn")
     # A worker ends when this process is killed outright (it would otherwise train on, then wait forever).
-    pool = ProcessPoolExecutor(
-        max_workers=min(workers, len(inputs)),
-        mp_context=context,
-        initializer=exit_with_parent,
-        initargs=(os.getpid(),),
-    )
-    try:
+    with spawn_pool(min(workers, len(inputs)), exit_with_parent, (os.getpid(),)) as pool:
         futures = [pool.submit(function, x) for x in inputs]
         wait(futures)
         return [f.result() for f in futures]
-    except BaseException:
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()  # Ctrl-C: end the trainings now, not when they finish
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
