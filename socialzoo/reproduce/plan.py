@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import check_fields, check_int, unknown_fields
 from socialzoo.studies.lfd import LFD_SIZES
 
 # The parts, in the order they run (later parts reuse what earlier ones trained).
@@ -88,25 +88,9 @@ class Settings:
     def __post_init__(self) -> None:
         if self.name not in ("full", "quick"):
             raise ValueError(f"Settings.name must be 'full' or 'quick', got {self.name!r}")
-        check_int("Settings", "seed", self.seed, low=0)
-        check_int("Settings", "select_trials", self.select_trials, low=0)
-        if self.seed_trials is not None:
-            check_int("Settings", "seed_trials", self.seed_trials, low=1)
-        for name in (
-            "rl_total_steps",
-            "rl_checkpoint_every",
-            "seeds",
-            "select_every",
-            "curve_trials",
-            "demo_episodes",
-            "pips_steps",
-            "lfd_trials",
-            "performance_trials",
-            "transfer_trials",
-            "workers",
-            "batch_size",
-        ):
-            check_int("Settings", name, getattr(self, name), low=1)
+        # Every int field > 0, but the first seed and select_trials (0: keep the final policy).
+        check_fields(self, nonnegative=("seed", "select_trials"))
+        check_int("Settings", "seed_trials", self.seed_trials, low=1, allow_none=True)
         if self.select_every % self.rl_checkpoint_every:
             raise ValueError(
                 f"Settings.select_every ({self.select_every}) must be a multiple of "
@@ -155,10 +139,9 @@ class Settings:
         Raises:
             ValueError: unknown fields (named).
         """
-        names = {f.name for f in dataclasses.fields(cls)}
-        bad = sorted(set(data) - names)
-        if bad:
-            raise ValueError(f"Settings: unknown field(s) {bad}")
+        error = unknown_fields("Settings", data, [f.name for f in dataclasses.fields(cls)])
+        if error is not None:
+            raise error
         return cls(**dict(data))
 
 
