@@ -74,17 +74,25 @@ def resample_seed_scores(
     of one another.
     """
     check_int("resample_seed_scores", "resamples", resamples, low=1)
-    columns = []
-    for m in _matrices(scores):
-        k, n = m.shape
-        if scenarios and n > 1:
-            counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples)  # (R, N) draws per scenario
-            rates = counts @ m.T / n  # (R, K): each seed's rate on the resampled scenarios
-        else:
-            rates = np.broadcast_to(m.mean(axis=1), (resamples, k))
-        picks = rng.integers(0, k, size=(resamples, k))
-        columns.append(np.take_along_axis(rates, picks, axis=1))
+    columns = [_resample_stratum([m], resamples, rng, scenarios)[0] for m in _matrices(scores)]
     return np.concatenate(columns, axis=1)
+
+
+def _resample_stratum(
+    mats: Sequence[np.ndarray], resamples: int, rng: np.random.Generator, scenarios: bool
+) -> list[np.ndarray]:
+    """(resamples, K) seed scores of each of one stratum's (K, N) matrices (policies on the same N
+    scenarios): one scenario draw shared by all of them, then each one's seeds drawn on their own."""
+    n = mats[0].shape[1]
+    if scenarios and n > 1:
+        counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples)  # (R, N) draws per scenario
+        rates = [counts @ m.T / n for m in mats]  # (R, K): each seed's rate on the resampled scenarios
+    else:
+        rates = [np.broadcast_to(m.mean(axis=1), (resamples, m.shape[0])) for m in mats]
+    return [
+        np.take_along_axis(r, rng.integers(0, r.shape[1], size=(resamples, r.shape[1])), axis=1)
+        for r in rates
+    ]
 
 
 def _levels(confidence: float) -> list[float]:
@@ -187,15 +195,7 @@ def probability_of_improvement(
     values, samples = [], []
     for a, b in zip(xs, ys, strict=True):
         values.append(float(_improvement(a.mean(axis=1)[None, :], b.mean(axis=1)[None, :])[0]))
-        n = a.shape[1]
-        if scenarios and n > 1:
-            counts = rng.multinomial(n, np.full(n, 1.0 / n), size=resamples)
-            ra, rb = counts @ a.T / n, counts @ b.T / n
-        else:
-            ra = np.broadcast_to(a.mean(axis=1), (resamples, a.shape[0]))
-            rb = np.broadcast_to(b.mean(axis=1), (resamples, b.shape[0]))
-        pa = np.take_along_axis(ra, rng.integers(0, a.shape[0], size=(resamples, a.shape[0])), axis=1)
-        pb = np.take_along_axis(rb, rng.integers(0, b.shape[0], size=(resamples, b.shape[0])), axis=1)
+        pa, pb = _resample_stratum([a, b], resamples, rng, scenarios)
         samples.append(_improvement(pa, pb))
     per_resample = np.mean(samples, axis=0)
     low, high = np.quantile(per_resample, _levels(confidence))
