@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import numbers
 from collections import Counter
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -385,15 +386,19 @@ def _csv_value(value: Any) -> Any:
     return value
 
 
-def _fmt(value: float, digits: int) -> str:
-    return "n/a" if not math.isfinite(value) else f"{value:.{digits}f}"
+def number_text(value: Any, digits: int) -> str:
+    """`value` with `digits` decimals; "n/a" for None, NaN, an infinity or anything not a number
+    (a cell of every table's Markdown)."""
+    if not isinstance(value, numbers.Real) or not math.isfinite(value):
+        return "n/a"
+    return f"{value:.{digits}f}"
 
 
 def _fmt_ci(mean: float, low: float, high: float, digits: int) -> str:
     if not math.isfinite(mean):
         return "n/a"
     if not (math.isfinite(low) and math.isfinite(high)):
-        return _fmt(mean, digits)
+        return number_text(mean, digits)
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
 
 
@@ -491,15 +496,15 @@ def _column_cell(entry: Mapping[str, Any], name: str) -> str:
     digits = 3 if metric(name).kind == "bool" else metric(name).digits
     if name == "success":
         return interval_text(entry, name, digits)
-    return _fmt(entry[value_key(name)], digits)
+    return number_text(entry[value_key(name)], digits)
 
 
 def _failure_table(summary: Sequence[Mapping[str, Any]], labels: Mapping[str, str]) -> list[str]:
     """Markdown lines of the failures by cause: one row per policy and map, each cause's share of
     the episodes (%), in the order of precedence of socialzoo.env.metrics.failure_cause."""
     rows = [
-        [labels[e["policy"]], str(e["map"]), _fmt(100 * e["success_rate"], 1)]
-        + [_fmt(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
+        [labels[e["policy"]], str(e["map"]), number_text(100 * e["success_rate"], 1)]
+        + [number_text(100 * e.get(f"failure_{c}_rate", math.nan), 1) for c in FAILURE_LABELS]
         for e in summary
     ]
     return [

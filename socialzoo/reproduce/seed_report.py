@@ -7,7 +7,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from socialzoo.bench.tables import policy_label
+from socialzoo.bench.tables import number_text, policy_label
 
 EXPERIMENT_TITLES = {
     "performance": "gdc1-test",
@@ -16,8 +16,10 @@ EXPERIMENT_TITLES = {
 }
 
 
-def _pct(value: Any, digits: int = 1) -> str:
-    return "n/a" if not isinstance(value, float) or math.isnan(value) else f"{value:.{digits}f}"
+def _pct_interval(r: Mapping[str, Any], name: str, unit: str = "") -> str:
+    """A seeds row's "<name>_pct" with its interval: "61.5 [52.0, 70.0]" ("61.5% [...]" with unit "%")."""
+    low, high = (number_text(r[f"{name}_ci_{end}_pct"], 1) for end in ("low", "high"))
+    return f"{number_text(r[f'{name}_pct'], 1)}{unit} [{low}, {high}]"
 
 
 def selection_section(rows: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -44,9 +46,10 @@ def selection_section(rows: Sequence[Mapping[str, Any]]) -> list[str]:
         )
         lines.append(
             f"| rl/{r['run']} | {int(r['seed'])} | {int(r['validation_trials'])} | {int(r['evaluated_checkpoints'])} "
-            f"| {int(r['kept_step']):,} | {_pct(100 * r['kept_validation_success'])} "
-            f"| {_pct(100 * r['kept_curve_success'])} | {last} | {_pct(100 * r['last_validation_success'])} "
-            f"| {_pct(100 * r['last_curve_success'])} |"
+            f"| {int(r['kept_step']):,} | {number_text(100 * r['kept_validation_success'], 1)} "
+            f"| {number_text(100 * r['kept_curve_success'], 1)} | {last} "
+            f"| {number_text(100 * r['last_validation_success'], 1)} "
+            f"| {number_text(100 * r['last_curve_success'], 1)} |"
         )
     return [*lines, ""]
 
@@ -67,9 +70,8 @@ def seeds_table(rows: Sequence[Mapping[str, Any]], experiment: str) -> list[str]
         seeds = ", ".join(f"{float(v):.1f}" for v in str(r["seed_success_pct"]).split(";") if v)
         lines.append(
             f"| {policy_label(str(r['policy']))} |{steps} {int(r['seeds'])} | {int(r['scenarios']):,} "
-            f"| {_pct(r['mean_pct'])} [{_pct(r['mean_ci_low_pct'])}, {_pct(r['mean_ci_high_pct'])}] "
-            f"| {_pct(r['iqm_pct'])} [{_pct(r['iqm_ci_low_pct'])}, {_pct(r['iqm_ci_high_pct'])}] "
-            f"| {seeds} | {_pct(r['paper_pct'])} | {r['paper_where']} |"
+            f"| {_pct_interval(r, 'mean')} | {_pct_interval(r, 'iqm')} "
+            f"| {seeds} | {number_text(r['paper_pct'], 1)} | {r['paper_where']} |"
         )
     return lines
 
@@ -153,7 +155,7 @@ def seed_note(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -
     if r is None:
         return None
     return (
-        f"Over {int(r['seeds'])} training seeds: {_pct(r['min_pct'])}% to {_pct(r['max_pct'])}%, "
-        f"mean {_pct(r['mean_pct'])}% [{_pct(r['mean_ci_low_pct'])}, {_pct(r['mean_ci_high_pct'])}]; "
+        f"Over {int(r['seeds'])} training seeds: {number_text(r['min_pct'], 1)}% to {number_text(r['max_pct'], 1)}%, "
+        f"mean {_pct_interval(r, 'mean', '%')}; "
         f"the paper's number is {r['paper_where']}."
     )

@@ -8,14 +8,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import interval_text, policy_label, write_csv
+from socialzoo.bench.tables import interval_text, number_text, policy_label, write_csv
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_POLICIES, PAPER_SUCCESS
-
-
-def _num(value: Any, digits: int) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "n/a"
-    return f"{float(value):.{digits}f}"
 
 
 def outside(paper: float | None, low: float, high: float) -> bool:
@@ -113,8 +107,8 @@ def lfd_markdown(table: Sequence[Mapping[str, Any]]) -> str:
         lines.append(
             f"| {policy_label(str(t['policy']))} | {t['demonstration_steps']:,} | {t['trials']} "
             f"| {interval_text(r, 'success', 1, 100.0)} "
-            f"| {_num(t['paper_success_pct'], 0)} | {_num(t['average_step_reward'], 3)} "
-            f"| {_num(t['paper_average_step_reward'], 2)} | {'yes' if t['differs'] else ''} |"
+            f"| {number_text(t['paper_success_pct'], 0)} | {number_text(t['average_step_reward'], 3)} "
+            f"| {number_text(t['paper_average_step_reward'], 2)} | {'yes' if t['differs'] else ''} |"
         )
     return "\n".join(lines)
 
