@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.reproduce.backend import run_tasks
-from socialzoo.reproduce.paper import PAPER_POLICIES
+from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_POLICIES
 from socialzoo.reproduce.plan import REFERENCE_PART
 from socialzoo.reproduce.runs import (
     REFERENCE_FILE,
@@ -156,38 +156,35 @@ def final_policies(ctx: Context) -> tuple[dict[int, dict[str, Path]], int]:
     return out, made + trained
 
 
-def _benchmark(ctx: Context, map_name: str, trials: int, folder: str) -> int:
-    """The seven policies (the learned ones of the first seed) on the first `trials` scenarios of
-    the map's test set into <folder>/, and, with several seeds, the other seeds' learned policies
-    on the first settings.seed_trials (or `trials`) into <folder>/seeds/."""
+def _evaluate(ctx: Context, experiment: str, first_seed: bool, folder: Path, **config: Any) -> Any:
+    """run_benchmark of a BenchmarkConfig (`config`) on the map of `experiment` ("performance" or
+    "transfer"), with the run's backend, workers, batch size and env overrides (unless `config`
+    gives them), on its first settings.<experiment>_trials scenarios: for the first seed's
+    policies all of them, for later seeds' at most settings.seed_trials."""
     from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
 
     s = ctx.settings
+    trials = getattr(s, f"{experiment}_trials")
+    trials = trials if first_seed else min(trials, s.seed_trials or trials)
+    common = {"backend": ctx.backend, "workers": s.workers, "batch_size": s.batch_size}
+    config = {**common, "env_overrides": dict(s.eval_env_overrides), **config}
+    config = BenchmarkConfig(maps=(EXPERIMENT_MAPS[experiment][0],), trials=trials, **config)
+    return run_benchmark(config, folder, progress=ctx.progress, figures=False)
+
+
+def _benchmark(ctx: Context, experiment: str) -> int:
+    """The seven policies (the learned ones of the first seed) on the first `<experiment>_trials`
+    scenarios of the experiment's map's test set into <experiment>/, and, with several seeds, the
+    other seeds' learned policies on the first settings.seed_trials (or as many) into
+    <experiment>/seeds/."""
+    s = ctx.settings
     files, made = final_policies(ctx)
-    common = {
-        "maps": (map_name,),
-        "backend": ctx.backend,
-        "workers": s.workers,
-        "batch_size": s.batch_size,
-        "env_overrides": dict(s.eval_env_overrides),
-    }
-    config = BenchmarkConfig(
-        policies=PAPER_POLICIES,
-        trials=trials,
-        policy_kwargs={name: {"path": str(path)} for name, path in files[s.seed].items()},
-        **common,
-    )
-    result = run_benchmark(config, ctx.ledger.path(folder), progress=ctx.progress, figures=False)
-    made += result.computed
+    kwargs = {name: {"path": str(path)} for name, path in files[s.seed].items()}
+    folder = ctx.ledger.path(experiment)
+    made += _evaluate(ctx, experiment, True, folder, policies=PAPER_POLICIES, policy_kwargs=kwargs).computed
     others = [f"{name}:{path}" for seed in s.seed_list[1:] for name, path in files[seed].items()]
     if others:
-        config = BenchmarkConfig(
-            policies=tuple(others), trials=min(trials, s.seed_trials or trials), **common
-        )
-        result = run_benchmark(
-            config, ctx.ledger.path(folder, SEEDS_FOLDER), progress=ctx.progress, figures=False
-        )
-        made += result.computed
+        made += _evaluate(ctx, experiment, False, folder / SEEDS_FOLDER, policies=tuple(others)).computed
     write_seed_results(ctx)
     return made
 
@@ -195,13 +192,13 @@ def _benchmark(ctx: Context, map_name: str, trials: int, folder: str) -> int:
 def run_performance(ctx: Context) -> int:
     """The seven policies on the first `performance_trials` gdc1-test scenarios (and the other
     seeds' learned policies)."""
-    return _benchmark(ctx, "gdc1", ctx.settings.performance_trials, "performance")
+    return _benchmark(ctx, "performance")
 
 
 def run_transfer(ctx: Context) -> int:
     """The seven policies on the first `transfer_trials` ghc3-test scenarios (and the other seeds'
     learned policies)."""
-    return _benchmark(ctx, "ghc3", ctx.settings.transfer_trials, "transfer")
+    return _benchmark(ctx, "transfer")
 
 
 def run_reference(ctx: Context) -> int:
@@ -247,7 +244,6 @@ REFERENCE_COLUMNS = (
 def _reference_set(ctx: Context, quirks: str) -> tuple[int, list[dict[str, Any]]]:
     """One quirk set of `run_reference`: its trainings, evaluations and rows."""
     from socialzoo.agents.mlp import evaluation_file
-    from socialzoo.bench.experiment import BenchmarkConfig, run_benchmark
     from socialzoo.env.quirks import ReferenceQuirks
     from socialzoo.reproduce.results import read_csv
 
@@ -264,23 +260,13 @@ def _reference_set(ctx: Context, quirks: str) -> tuple[int, list[dict[str, Any]]
         specs[int(args.seed)][name] = f"{name}:{evaluation_file(name, path, chosen, folder)}"
     env = {**dict(s.eval_env_overrides), "quirks": dataclasses.asdict(chosen)}
     rows = []
-    for experiment, map_name, trials in (
-        ("performance", "gdc1", s.performance_trials),
-        ("transfer", "ghc3", s.transfer_trials),
-    ):
+    for experiment in EXPERIMENT_MAPS:
         for seed in s.seed_list:
-            n = trials if seed == s.seed else min(trials, s.seed_trials or trials)
             folder = reference_folder(ctx, quirks, experiment, *([] if seed == s.seed else [f"s{seed}"]))
-            config = BenchmarkConfig(
-                policies=tuple(specs[seed].values()),
-                trials=n,
-                maps=(map_name,),
-                backend=ctx.backend,
-                workers=s.workers,
-                batch_size=s.batch_size,
-                env_overrides=env,
-            )
-            made += run_benchmark(config, folder, progress=ctx.progress, figures=False).computed
+            policies = tuple(specs[seed].values())
+            made += _evaluate(
+                ctx, experiment, seed == s.seed, folder, policies=policies, env_overrides=env
+            ).computed
             by_spec = {str(r["policy"]): r for r in read_csv(folder / "summary.csv")}
             for name, spec in specs[seed].items():
                 r = by_spec[spec]
