@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
-from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.store import ResultsStore, trial_row
 from socialzoo.bench.tables import (
     PAPER_LAYOUT,
     TableLayout,
@@ -451,18 +451,7 @@ def run_benchmark(
         logger.info("benchmark: %d trials, %d stored, %d to run", total, reused, len(pending))
 
         def deliver(batch: list[TrialResult]) -> None:
-            store.add(
-                {
-                    "policy": r.trial.policy,
-                    "map": r.map,
-                    "test_set": r.trial.test_set,
-                    "scenario_index": r.trial.index,
-                    "seed": r.seed,
-                    "config_hash": hashes[(r.trial.policy, r.trial.test_set)],
-                    "metrics": r.metrics,
-                }
-                for r in batch
-            )
+            store.add(trial_row(r, hashes[(r.trial.policy, r.trial.test_set)]) for r in batch)
             if on_results is not None:
                 on_results(batch)
 

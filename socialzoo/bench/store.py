@@ -414,6 +414,22 @@ class ResultsStore:
         return list(self._kinds)
 
 
+def trial_row(result: Any, config_hash: str, **names: Any) -> dict[str, Any]:
+    """A finished trial (socialzoo.bench.runner.TrialResult) as a row of `ResultsStore.add`, under
+    `config_hash`; `names` replace what the trial's own would store (the policy under a label, the
+    test set or map under the name a run keeps it by, metrics converted)."""
+    return {
+        "policy": result.trial.policy,
+        "map": result.map,
+        "test_set": result.trial.test_set,
+        "scenario_index": result.trial.index,
+        "seed": result.seed,
+        "config_hash": config_hash,
+        "metrics": result.metrics,
+        **names,
+    }
+
+
 def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 

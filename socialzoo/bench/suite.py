@@ -585,7 +585,7 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
     """Play every unit's cases the store lacks on the run's backend, storing each episode as it ends
     under the key `evaluate_stored` reads it by; returns how many were played."""
     from socialzoo.bench.runner import CaseSet, RunSpec, Trial, TrialResult, evaluate
-    from socialzoo.bench.store import ResultsStore
+    from socialzoo.bench.store import ResultsStore, trial_row
 
     with ResultsStore(store_path) as store:
         trials: list[Trial] = []
@@ -621,17 +621,14 @@ def _play_missing(units: Sequence[SuiteUnit], store_path: Path, config: SuiteCon
             rows = []
             for r in results:
                 unit = by_key[(r.trial.policy, r.trial.test_set)]
-                rows.append(
-                    {
-                        "policy": unit.spec,
-                        "map": unit.where,
-                        "test_set": unit.test_set,
-                        "scenario_index": r.trial.index,
-                        "seed": r.seed,
-                        "config_hash": unit.digest,
-                        "metrics": {k: float(v) for k, v in r.metrics.items()},
-                    }
-                )
+                metrics = {k: float(v) for k, v in r.metrics.items()}
+                names = {
+                    "policy": unit.spec,
+                    "map": unit.where,
+                    "test_set": unit.test_set,
+                    "metrics": metrics,
+                }
+                rows.append(trial_row(r, unit.digest, **names))
             store.add(rows)
 
         evaluate(

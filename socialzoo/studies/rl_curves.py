@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.runner import Backend, RunSpec, Trial, TrialResult, env_config_for, evaluate
-from socialzoo.bench.store import ResultsStore
+from socialzoo.bench.store import ResultsStore, trial_row
 from socialzoo.bench.tables import policy_label, summarize, value_key, write_csv
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.scenarios.scenario_sets import TestSet, get_test_set, validation_set
@@ -144,15 +144,7 @@ def evaluate_policies(
 
     def deliver(batch: list[TrialResult]) -> None:
         store.add(
-            {
-                "policy": label_of[r.trial.policy],
-                "map": r.map,
-                "test_set": name,
-                "scenario_index": r.trial.index,
-                "seed": r.seed,
-                "config_hash": hashes[label_of[r.trial.policy]],
-                "metrics": r.metrics,
-            }
+            trial_row(r, hashes[label_of[r.trial.policy]], policy=label_of[r.trial.policy], test_set=name)
             for r in batch
         )
 
