@@ -8,7 +8,7 @@ import io
 import math
 import numbers
 from collections import Counter
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -348,33 +348,55 @@ def read_summary_csv(path: str | Path) -> list[dict[str, Any]]:
         SummaryError: not a summary CSV (random bytes, a file of another kind, a row cut short);
             the message names the file and the line.
     """
+    return read_csv_rows(path, "summary CSV", SummaryError, _summary_cell, SUMMARY_KEY_COLUMNS)
+
+
+def _summary_cell(key: str, cell: str) -> Any:
+    if key in ("policy", "map", "test_set"):
+        return cell
+    try:
+        if key == "trials" or key.endswith("_n"):
+            return int(cell)
+        return float(cell) if cell != "" else math.nan
+    except ValueError:
+        raise ValueError(f"{key} is {cell!r}, not a number") from None
+
+
+def read_csv_rows(
+    path: str | Path,
+    what: str,
+    error: type[Exception],
+    cell: Callable[[str, str], Any],
+    required: Sequence[str] = (),
+) -> list[dict[str, Any]]:
+    """The rows of a CSV file (`what` and `error` as socialzoo.core.files.read_text), each cell as
+    cell(column, text), whose ValueError says what is wrong with it; the header must hold the
+    `required` columns. The reader of every table read back.
+
+    Raises:
+        FileNotFoundError: no such file.
+        `error`: not UTF-8 CSV (a NUL byte, a quote left open), a header without a `required`
+            column, a row whose cells do not match the header, or a cell `cell` refuses; the
+            message names the file and the line.
+    """
     path = Path(path)
-    text = read_text(path, "summary CSV", SummaryError)
-    reader = csv.DictReader(io.StringIO(text, newline=""))
+    reader = csv.DictReader(io.StringIO(read_text(path, what, error), newline=""))
     out = []
     try:
         header = reader.fieldnames or []
-        missing = [c for c in SUMMARY_KEY_COLUMNS if c not in header]
+        missing = [c for c in required if c not in header]
         if missing:
-            raise SummaryError(f"{path}: not a summary CSV (no column {', '.join(missing)} in its header)")
+            raise error(f"{path}: not a {what} (no column {', '.join(missing)} in its header)")
         for raw in reader:
             where = f"{path}:{reader.line_num}"
             if None in raw or None in raw.values():  # DictReader's marks of too many or too few cells
-                raise SummaryError(f"{where}: the row's cells do not match the {len(header)} columns")
-            entry: dict[str, Any] = {}
-            for key, cell in raw.items():
-                try:
-                    if key in ("policy", "map", "test_set"):
-                        entry[key] = cell
-                    elif key == "trials" or key.endswith("_n"):
-                        entry[key] = int(cell)
-                    else:
-                        entry[key] = float(cell) if cell != "" else math.nan
-                except ValueError:
-                    raise SummaryError(f"{where}: {key} is {cell!r}, not a number") from None
-            out.append(entry)
+                raise error(f"{where}: the row's cells do not match the {len(header)} columns")
+            try:
+                out.append({key: cell(key, text) for key, text in raw.items()})
+            except ValueError as err:
+                raise error(f"{where}: {err}") from None
     except csv.Error as err:  # a NUL byte or a quote left open
-        raise SummaryError(f"{path}:{reader.line_num}: not a summary CSV ({err})") from None
+        raise error(f"{path}:{reader.line_num}: not a {what} ({err})") from None
     return out
 
 

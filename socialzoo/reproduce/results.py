@@ -3,15 +3,13 @@ REPRODUCTION.md is drawn (socialzoo.reproduce.report)."""
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import shutil
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import write_csv
-from socialzoo.core.files import read_json, read_text, write_json
+from socialzoo.bench.tables import read_csv_rows, write_csv
+from socialzoo.core.files import read_json, write_json
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
 from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
@@ -216,7 +214,7 @@ def collect(ledger: Ledger, out_dir: str | Path, parts: tuple[str, ...]) -> Path
     return results
 
 
-def _cell(value: str, column: str) -> Any:
+def _cell(column: str, value: str) -> Any:
     if column in TEXT_COLUMNS:
         return value
     if value == "":
@@ -235,18 +233,7 @@ def read_csv(path: str | Path) -> list[dict[str, Any]]:
         ResultsError: not UTF-8 CSV, or a row whose cells do not match the header (a file cut
             short); the message names the file and line.
     """
-    path = Path(path)
-    text = read_text(path, "results file", ResultsError)
-    reader = csv.DictReader(io.StringIO(text, newline=""))
-    rows = []
-    try:
-        for row in reader:
-            if None in row or None in row.values():  # DictReader's marks of too many or too few cells
-                raise ResultsError(f"{path}:{reader.line_num}: the row's cells do not match the header")
-            rows.append({k: _cell(v, k) for k, v in row.items()})
-    except csv.Error as err:  # a NUL byte or a quote left open
-        raise ResultsError(f"{path}:{reader.line_num}: not a CSV file ({err})") from None
-    return rows
+    return read_csv_rows(path, "results file", ResultsError, _cell)
 
 
 def _read_json(path: Path, kind: type) -> Any:

@@ -3,8 +3,6 @@ which checkpoint each RL run kept (chosen on validation scenarios)."""
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from pathlib import Path
 from typing import Any
@@ -126,22 +124,17 @@ def selection_rows(ctx: Context) -> list[dict[str, Any]]:
 
 
 def _evaluations(path: Path) -> list[dict[str, float]]:
-    if not path.is_file():
-        return []
-    return [
-        {"step": int(row["step"]), "success": float(row["success"])}
-        for row in csv.DictReader(io.StringIO(path.read_text()))
-    ]
+    from socialzoo.reproduce.results import read_csv
+
+    rows = read_csv(path) if path.is_file() else []
+    return [{"step": int(row["step"]), "success": row["success"]} for row in rows]
 
 
 def _curve_success(path: Path) -> dict[tuple[str, int], float]:
-    if not path.is_file():
-        return {}
-    return {
-        (row["label"], int(float(row["step"]))): float(row["success_rate"])
-        for row in csv.DictReader(io.StringIO(path.read_text()))
-        if row["step"]
-    }
+    from socialzoo.reproduce.results import read_csv
+
+    rows = read_csv(path) if path.is_file() else []
+    return {(r["label"], int(r["step"])): r["success_rate"] for r in rows if math.isfinite(r["step"])}
 
 
 def write_seed_results(ctx: Context) -> list[Path]:
