@@ -4,7 +4,8 @@ each table is a list of rows (written as CSV) and Markdown."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -164,18 +165,13 @@ def curves_markdown(table: Sequence[Mapping[str, Any]]) -> str:
 def build_tables(results: Mapping[str, Any]) -> dict[str, tuple[list[dict[str, Any]], str]]:
     """name -> (rows, Markdown) of every table the results allow ("performance", "transfer",
     "lfd", "rl_curves")."""
-    tables: dict[str, tuple[list[dict[str, Any]], str]] = {}
-    for experiment in EXPERIMENT_MAPS:
-        if results.get(experiment):
-            table = experiment_table(results[experiment], experiment)
-            tables[experiment] = (table, experiment_markdown(table))
-    if results.get("lfd"):
-        table = lfd_table(results["lfd"])
-        tables["lfd"] = (table, lfd_markdown(table))
-    if results.get("rl_curves"):
-        table = curves_table(results["rl_curves"])
-        tables["rl_curves"] = (table, curves_markdown(table))
-    return tables
+    builders: dict[str, tuple[Callable[..., list[dict[str, Any]]], Callable[..., str]]] = {
+        **{e: (partial(experiment_table, experiment=e), experiment_markdown) for e in EXPERIMENT_MAPS},
+        "lfd": (lfd_table, lfd_markdown),
+        "rl_curves": (curves_table, curves_markdown),
+    }
+    tables = {name: table(results[name]) for name, (table, _) in builders.items() if results.get(name)}
+    return {name: (rows, builders[name][1](rows)) for name, rows in tables.items()}
 
 
 def write_tables(tables: Mapping[str, tuple[list[dict[str, Any]], str]], out_dir: str | Path) -> list[Path]:
