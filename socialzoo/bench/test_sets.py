@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from socialzoo.core.files import write_text_atomic
+from socialzoo.core.files import read_json, write_text_atomic
 from socialzoo.maps.map_file import Map, load_map, map_sha256
 from socialzoo.scenarios.catalogue import get_family
 from socialzoo.scenarios.generator import ScenarioConfig, generate_scenario
@@ -164,11 +164,8 @@ def stored_test_set(
 
 
 def _read(path: Path, digest: str, base: TestSet) -> list[Scenario]:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError) as err:  # UnicodeDecodeError and JSONDecodeError too
-        raise TestSetError(f"{path}: not a readable test set file ({err})") from None
-    if not isinstance(data, dict) or data.get("format") != TEST_SET_FORMAT:
+    data = read_json(path, "test set file", TestSetError, kind=dict)
+    if data.get("format") != TEST_SET_FORMAT:
         raise TestSetError(f"{path}: not a {TEST_SET_FORMAT} file")
     if data.get("map_sha256") != digest:
         raise TestSetError(
