@@ -1,5 +1,5 @@
 """Confidence intervals for benchmark tables and figures: Student-t for means, Wilson score for success rates and
-bootstrap (BCa) for mean counts per episode (90% by default, as in the paper); pure Python and numpy."""
+bootstrap (BCa) for mean counts per episode (90% by default, as in the paper); numpy and scipy."""
 
 from __future__ import annotations
 
@@ -41,74 +41,28 @@ def _check_confidence(confidence: float) -> None:
         raise ValueError(f"confidence must be a number in (0, 1), got {confidence!r}")
 
 
-def _betacf(a: float, b: float, x: float) -> float:
-    """Continued fraction of the regularized incomplete beta function (modified Lentz)."""
-    tiny = 1e-300
-    qab, qap, qam = a + b, a + 1.0, a - 1.0
-    c, d = 1.0, 1.0 - qab * x / qap
-    d = 1.0 / (d if abs(d) > tiny else tiny)
-    h = d
-    for m in range(1, 1000):
-        m2 = 2 * m
-        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > tiny else tiny)
-        c = 1.0 + aa / c
-        c = c if abs(c) > tiny else tiny
-        h *= d * c
-        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > tiny else tiny)
-        c = 1.0 + aa / c
-        c = c if abs(c) > tiny else tiny
-        step = d * c
-        h *= step
-        if abs(step - 1.0) < 1e-15:
-            break
-    return h
-
-
 def betainc(a: float, b: float, x: float) -> float:
-    """Regularized incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1."""
-    if x <= 0.0:
-        return 0.0
-    if x >= 1.0:
-        return 1.0
-    log_front = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
-    front = math.exp(log_front)
-    if x < (a + 1.0) / (a + b + 2.0):
-        return front * _betacf(a, b, x) / a
-    return 1.0 - front * _betacf(b, a, 1.0 - x) / b
+    """Regularized incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1 (scipy.special.betainc)."""
+    from scipy.special import betainc as regularized
+
+    return float(regularized(a, b, min(max(x, 0.0), 1.0)))
 
 
 def student_t_cdf(t: float, df: float) -> float:
-    """P(T <= t) for Student's t with `df` degrees of freedom."""
-    tail = 0.5 * betainc(0.5 * df, 0.5, df / (df + t * t))
-    return 1.0 - tail if t >= 0 else tail
+    """P(T <= t) for Student's t with `df` degrees of freedom (scipy.stats.t)."""
+    from scipy.stats import t as student_t
+
+    return float(student_t.cdf(t, df))
 
 
 @lru_cache(maxsize=4096)
 def student_t_ppf(q: float, df: float) -> float:
-    """The q-quantile of Student's t with `df` > 0 degrees of freedom (bisection, |error| < 1e-12).
+    """The q-quantile of Student's t with `df` > 0 degrees of freedom (scipy.stats.t)."""
+    from scipy.stats import t as student_t
 
-    Computed here, so scipy is not needed.
-    """
     if not 0.0 < q < 1.0:
         raise ValueError(f"student_t_ppf: q must be in (0, 1), got {q!r}")
-    if q < 0.5:
-        return -student_t_ppf(1.0 - q, df)
-    lo, hi = 0.0, 1.0
-    while student_t_cdf(hi, df) < q:
-        lo, hi = hi, 2.0 * hi
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if student_t_cdf(mid, df) < q:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-12:
-            break
-    return 0.5 * (lo + hi)
+    return float(student_t.ppf(q, df))
 
 
 def mean_interval(values: np.ndarray | list[float], confidence: float = CONFIDENCE) -> Interval:
