@@ -167,9 +167,9 @@ def _evaluate(ctx: Context, experiment: str, first_seed: bool, folder: Path, **c
     trials = getattr(s, f"{experiment}_trials")
     trials = trials if first_seed else min(trials, s.seed_trials or trials)
     common = {"backend": ctx.backend, "workers": s.workers, "batch_size": s.batch_size}
-    config = {**common, "env_overrides": dict(s.eval_env_overrides), **config}
-    config = BenchmarkConfig(maps=(EXPERIMENT_MAPS[experiment][0],), trials=trials, **config)
-    return run_benchmark(config, folder, progress=ctx.progress, figures=False)
+    fields = {**common, "env_overrides": dict(s.eval_env_overrides), **config}
+    benchmark = BenchmarkConfig(maps=(EXPERIMENT_MAPS[experiment][0],), trials=trials, **fields)
+    return run_benchmark(benchmark, folder, progress=ctx.progress, figures=False)
 
 
 def _benchmark(ctx: Context, experiment: str) -> int:
