@@ -12,8 +12,7 @@ from socialzoo.bench.tables import read_csv_rows, write_csv
 from socialzoo.core.files import read_json, write_json
 from socialzoo.reproduce.ledger import TIMINGS_FILE, Ledger, machine
 from socialzoo.reproduce.paper import paper_lfd
-from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER
-from socialzoo.reproduce.seeds import SEEDS_DIR
+from socialzoo.reproduce.runs import ALONE_FOLDER, DEMOS_FILE, REFERENCE_FILE, REFERENCE_FOLDER, SEEDS_DIR
 
 RESULTS_DIR = "results"
 RUN_FILE = "run.json"

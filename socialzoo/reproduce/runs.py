@@ -16,6 +16,8 @@ RL_ALGOS: tuple[str, ...] = ("ppo", "dqn")
 LFD_TRAINERS: tuple[str, ...] = ("bc", "gail")
 # The folder, inside a benchmark part's, of the later seeds' learned policies.
 SEEDS_FOLDER = "seeds"
+# The folder, in the work folder, of the seed results (socialzoo.reproduce.seeds.write_seed_results).
+SEEDS_DIR = "seeds"
 
 
 @dataclass(frozen=True)

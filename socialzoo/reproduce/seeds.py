@@ -8,9 +8,16 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_SUCCESS, paper_lfd
-from socialzoo.reproduce.runs import SEEDS_FOLDER, Context, finished, lfd_eval_dir, lfd_items, rl_items
+from socialzoo.reproduce.runs import (
+    SEEDS_DIR,
+    SEEDS_FOLDER,
+    Context,
+    finished,
+    lfd_eval_dir,
+    lfd_items,
+    rl_items,
+)
 
-SEEDS_DIR = "seeds"
 SELECTION_CSV = "selection.csv"
 # Probability-of-improvement pairs (X, Y): P(a seed of X succeeds more often than one of Y).
 IMPROVEMENT_PAIRS: tuple[tuple[str, str], ...] = (
