@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from socialzoo.bench.runner import SHRINK
 from socialzoo.core.geometry import closest_point_on_segment
 from socialzoo.env.config import EnvConfig
 from socialzoo.maps.map_file import Map
@@ -31,8 +32,6 @@ DRIVE_CAUSES = (
 )
 # How far along the plan past the stopping point a narrow gap counts as blocking it, m.
 LOOK_AHEAD = 2.0
-# Shrink the batch to its live rows once at most this share of them is live (the tail).
-_SHRINK = 0.75
 # A robot that stayed within this of its final position over the last stuck_time seconds
 # stopped; one that went farther oscillated, m.
 STILL_RADIUS = 1.0
@@ -257,7 +256,7 @@ def drive_map(
         if progress is not None:
             progress(len(results), len(todo))
         live = np.flatnonzero(row_job >= 0)
-        if not pending and 0 < len(live) <= _SHRINK * len(row_job):
+        if not pending and 0 < len(live) <= SHRINK * len(row_job):
             # The tail: step only the routes still driving (each continues exactly as before).
             task = task.compact(live)
             row_job, trace = row_job[live], trace[live]

@@ -36,11 +36,8 @@ class StoredTrial:
     """One trial of a results store, with what it takes to run it again.
 
     Attributes:
-        policy: the policy's registry name.
-        test_set: the test set's name.
-        index: the scenario index in the test set.
-        seed: the scenario's seed.
-        map: the map's name.
+        policy, test_set, index, seed, map: as the TrialResult that stored it
+            (socialzoo.bench.runner.TrialResult and its Trial).
         config_hash: the trial's config hash in the store.
         env_config: the env config the trial ran with.
         policy_kwargs: make_policy keyword arguments of the run that stored it (e.g. a path).

@@ -41,9 +41,10 @@ def check_backend(backend: str, where: str = "backend") -> str:
 
 # Seconds without any result, once every worker has returned, before the run is declared lost.
 _DRAIN_TIMEOUT = 60.0
-# Tail: shrink the core when at most this share of its rows is live. A compaction costs ~2-3 steps;
-# 0.75 steps 19% fewer tail rows than 0.5 (gdc1-quick, B = 64), in 12 compactions instead of 6.
-_SHRINK = 0.75
+# Tail: shrink the core when at most this share of its rows is live (here and in the drive check,
+# socialzoo.bench.drive_check). A compaction costs ~2-3 steps; 0.75 steps 19% fewer tail rows than
+# 0.5 (gdc1-quick, B = 64), in 12 compactions instead of 6.
+SHRINK = 0.75
 
 
 @dataclass(frozen=True, order=True)
@@ -409,7 +410,7 @@ class BatchedRunner:
             live = [row for row, t in enumerate(row_trial) if t is not None]
             if table_one is not None:
                 table_one.forget(np.array(live, dtype=np.intp))
-            if compact and not pending and 0 < len(live) <= _SHRINK * len(row_trial):
+            if compact and not pending and 0 < len(live) <= SHRINK * len(row_trial):
                 smaller = task.compact(np.array(live))
                 if smaller is None:
                     continue
