@@ -244,7 +244,7 @@ def summarize_humans(
                 ci = count_interval(values, confidence, rng=cell_generator(0, policy, map_name, key))
             else:
                 ci = mean_interval(values, confidence)
-            entry |= {f"{key}_mean": ci.value, f"{key}_ci_low": ci.low, f"{key}_ci_high": ci.high}
+            entry |= ci.entry(key)
         out.append(entry)
     return out
 

@@ -35,6 +35,10 @@ class Interval:
     high: float
     n: int
 
+    def entry(self, name: str, value: str = "mean") -> dict[str, float]:
+        """The interval as a summary entry's keys: "<name>_<value>", "<name>_ci_low", "<name>_ci_high"."""
+        return {f"{name}_{value}": self.value, f"{name}_ci_low": self.low, f"{name}_ci_high": self.high}
+
 
 def _check_confidence(confidence: float) -> None:
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):

@@ -252,16 +252,13 @@ def summarize(
             "map": map_name,
             "test_set": ",".join(sorted({str(r["test_set"]) for r in group})),
             "trials": len(group),
-            "success_rate": rate.value,
-            "success_ci_low": rate.low,
-            "success_ci_high": rate.high,
+            **rate.entry("success", "rate"),
         }
         causes = [failure_cause(r) for r in group]
         for cause in FAILURE_LABELS:
-            share = rate_interval(causes.count(cause), len(group), confidence)
-            entry[f"failure_{cause}_rate"] = share.value
-            entry[f"failure_{cause}_ci_low"] = share.low
-            entry[f"failure_{cause}_ci_high"] = share.high
+            entry |= rate_interval(causes.count(cause), len(group), confidence).entry(
+                f"failure_{cause}", "rate"
+            )
         for name in metrics:
             values = np.array(
                 [math.nan if r.get(name) is None else float(r[name]) for r in group], dtype=np.float64
@@ -272,9 +269,7 @@ def summarize(
                 ci = count_interval(values, confidence, rng=cell_generator(seed, policy, map_name, name))
             else:
                 ci = mean_interval(values, confidence)
-            entry[f"{name}_mean"] = ci.value
-            entry[f"{name}_ci_low"] = ci.low
-            entry[f"{name}_ci_high"] = ci.high
+            entry |= ci.entry(name)
             if metric(name).success_only:
                 entry[f"{name}_n"] = ci.n
         out.append(entry)
