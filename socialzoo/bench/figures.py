@@ -21,7 +21,13 @@ METRIC_PANELS: tuple[tuple[str, str], ...] = tuple(
 )
 # Characters per line of a policy's label (a group is about 1.2 inches wide at 10 points).
 _TICK_CHARS = 14
+# Paul Tol's bright palette (colour-blind safe), for every figure's series.
 _COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
+
+
+def series_color(i: int) -> str:
+    """The colour of a figure's i-th series (policy, window, ...), cycling through the palette."""
+    return _COLORS[i % len(_COLORS)]
 
 
 def pyplot() -> Any:
@@ -101,7 +107,7 @@ def _bars(
             width * 0.92,
             yerr=[err_low, err_high],
             capsize=3,
-            color=_COLORS[j % len(_COLORS)],
+            color=series_color(j),
             label=_map_label(m),
         )
     _policy_ticks(ax, policies)

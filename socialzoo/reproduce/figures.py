@@ -16,18 +16,17 @@ FORMATS: tuple[str, ...] = ("png", "pdf")
 def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Path]:
     """lfd.{png,pdf}: success % of each LfD policy against its demonstration steps (log scale),
     with 90% intervals, and the paper's numbers as black crosses."""
-    from socialzoo.bench.figures import pyplot, save_figure
+    from socialzoo.bench.figures import pyplot, save_figure, series_color
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
-    colors = ("#4477aa", "#ee6677", "#228833")
     for i, policy in enumerate(dict.fromkeys(str(r["policy"]) for r in rows)):
         points = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["demonstration_steps"])
         x = [r["demonstration_steps"] for r in points]
         y = [100 * r["success_rate"] for r in points]
         low = [100 * (r["success_rate"] - r["success_ci_low"]) for r in points]
         high = [100 * (r["success_ci_high"] - r["success_rate"]) for r in points]
-        color = colors[i % len(colors)]
+        color = series_color(i)
         ax.errorbar(x, y, yerr=[low, high], color=color, marker="o", capsize=3, label=policy_label(policy))
         paper = [(r["demonstration_steps"], r["paper_success_pct"]) for r in points]
         paper = [(px, py) for px, py in paper if isinstance(py, float) and math.isfinite(py)]

@@ -248,7 +248,7 @@ def plot_study(
     baselines: Sequence[Mapping[str, Any]] = (),
 ) -> Path:
     """Success (with 90% intervals) against demonstration steps, one line per window (PNG)."""
-    from socialzoo.bench.figures import pyplot, save_figure
+    from socialzoo.bench.figures import pyplot, save_figure, series_color
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.0, 3.8))
@@ -262,7 +262,7 @@ def plot_study(
             [100 * (r["success_ci_high"] - r["success_rate"]) for r in cells],
         ]
         ax.errorbar(
-            x, y, yerr=err, marker="o", capsize=3, color=("#4477aa", "#ee6677", "#228833")[i % 3],
+            x, y, yerr=err, marker="o", capsize=3, color=series_color(i),
             label=f"window: {_window_label(window)}",
         )  # fmt: skip
     for b in baselines:

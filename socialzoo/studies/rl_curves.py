@@ -199,13 +199,12 @@ def plot_curves(
     """<stem>.{png,pdf} (default rl_curves): success, time to goal and average step reward against
     training steps, one line per run with its 90% band; `references` (curve rows without steps,
     e.g. Ref) as horizontal lines."""
-    from socialzoo.bench.figures import pyplot, save_figure
+    from socialzoo.bench.figures import pyplot, save_figure, series_color
 
     plt = pyplot()
     fig, axes = plt.subplots(1, len(CURVE_PANELS), figsize=(4.2 * len(CURVE_PANELS), 3.4))
     labels = list(dict.fromkeys(r["label"] for r in rows))
     bases = list(dict.fromkeys(_SEED_SUFFIX.sub("", label) for label in labels))
-    colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377")
     for ax, (key, ylabel, scale) in zip(axes, CURVE_PANELS, strict=True):
         mean_key, low_key, high_key = value_key(key), f"{key}_ci_low", f"{key}_ci_high"
         for label in labels:
@@ -216,7 +215,7 @@ def plot_curves(
             high = [scale * r[high_key] if math.isfinite(r[high_key]) else math.nan for r in points]
             # Runs of one learner with several seeds ("ppo", "ppo-s1", ...) share its colour.
             base = _SEED_SUFFIX.sub("", label)
-            color = colors[bases.index(base) % len(colors)]
+            color = series_color(bases.index(base))
             seeds = sum(_SEED_SUFFIX.sub("", other) == base for other in labels)
             first = label == next(o for o in labels if _SEED_SUFFIX.sub("", o) == base)
             name = policy_label(base) + (f" ({seeds} seeds)" if seeds > 1 else "")

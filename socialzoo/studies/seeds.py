@@ -236,7 +236,7 @@ def plot_profiles(
 ) -> list[Path]:
     """profiles.{png,pdf}: one panel per (experiment, map): each policy's share of seeds whose
     success exceeds tau, against tau, with its bootstrap band."""
-    from socialzoo.bench.figures import pyplot, save_figure
+    from socialzoo.bench.figures import pyplot, save_figure, series_color
     from socialzoo.bench.tables import policy_label
 
     rows = [r for r in rows if _no_size(r["demonstration_steps"])]  # the LfD sizes are not drawn
@@ -245,13 +245,12 @@ def plot_profiles(
         return []
     plt = pyplot()
     fig, axes = plt.subplots(1, len(panels), figsize=(4.4 * len(panels), 3.4), squeeze=False)
-    colors = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377", "#bbbbbb")
     for ax, (experiment, map_name) in zip(axes[0], panels, strict=True):
         mine = [r for r in rows if r["experiment"] == experiment and r["map"] == map_name]
         for i, policy in enumerate(dict.fromkeys(str(r["policy"]) for r in mine)):
             points = [r for r in mine if r["policy"] == policy]
             x = [100 * float(r["tau"]) for r in points]
-            color = colors[i % len(colors)]
+            color = series_color(i)
             ax.step(x, [r["share"] for r in points], where="post", color=color, label=policy_label(policy))
             ax.fill_between(
                 x,
