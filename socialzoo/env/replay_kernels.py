@@ -135,6 +135,11 @@ def settle_rows(
                 else:
                     waypoint[r, s] = min(1, route_len[r, s] - 1)
                 direction[r, s] = 1
+            if not on_track[r, s] and (now < 0 or (gone[r, s] and not new)):
+                # Off its track with nobody in the slot yet, or its person left for good: absent with
+                # nothing to place or react (what the placing below gives, without reading the track).
+                mask[r, s] = False
+                continue
             # Placing.
             x0 = y0 = x1 = y1 = np.nan
             vx = vy = 0.0
