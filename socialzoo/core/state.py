@@ -85,8 +85,8 @@ class WorldState:
 
     def human_target_of(self, walking: np.ndarray | None) -> np.ndarray:
         """(B, H, 2) human_target of the people `walking` (B, H) marks, and each other person's own
-        position (a target it stands on); None: everyone's. A recorded scene's step reads only its
-        model-moved people's targets, and the route array it gathers them from is cold."""
+        position (a target it stands on); None: everyone's. A recorded scene's step gathers its
+        model-moved people's in socialzoo.humans.people.step_people_packed's packing instead."""
         target = np.empty(self.human_waypoint.shape + (2,), dtype=self.human_route.dtype)
         everyone = walking is None
         _waypoint_points(

@@ -121,10 +121,14 @@ def step_world(
     if sparse_people:
         moved = state.human_mask & (state.human_model != REPLAY)
         anyone_moved = bool(moved.any())
-        people_step = partial(step_people_packed, moved=moved)
-    # The targets of the people a model moves (on a recorded scene only theirs are read).
-    target = state.human_target_of(moved) if anyone_moved else None
-    if target is not None:
+        people_step = partial(
+            step_people_packed, moved=moved, route=state.human_route, waypoint=state.human_waypoint
+        )
+    # Every person's target, but on a recorded scene none: its packing gathers those of the people it
+    # steps (only the moved people's are read, and a pass over every slot of the cold route array cost
+    # more than the rest of the gather), and advance_waypoints reads theirs from the route.
+    target = None if sparse_people else state.human_target_of(None)
+    if anyone_moved:
         human_pos, human_vel, blocked = people_step(
             state.human_pos,
             state.human_vel,
@@ -141,9 +145,7 @@ def step_world(
             human_learned,
         )
     else:
-        # Nobody moved (replayed people only: step_people_packed would leave each where it stood),
-        # so no model reads the waypoints and their gather from the cold route array is skipped
-        # (advance_waypoints reads the route itself).
+        # Nobody moved (replayed people only: step_people_packed would leave each where it stood).
         human_pos, human_vel = state.human_pos.copy(), state.human_vel.copy()
         blocked = np.zeros(state.human_mask.shape, dtype=bool)
     # A step that moved nobody (replayed people only, each where it stood) presses nobody into a robot.

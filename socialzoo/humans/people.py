@@ -170,7 +170,7 @@ def step_people(
 def step_people_packed(
     pos: np.ndarray,
     vel: np.ndarray,
-    target: np.ndarray,
+    target: np.ndarray | None,
     pref_speed: np.ndarray,
     mask: np.ndarray,
     model: np.ndarray,
@@ -182,6 +182,8 @@ def step_people_packed(
     desired_vel: np.ndarray | None = None,
     learned: np.ndarray | None = None,
     moved: np.ndarray | None = None,
+    route: np.ndarray | None = None,
+    waypoint: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`step_people` over the rows where some present person is `moved` (B, H), each with only its
     present people, packed in slot order into as many slots as the fullest of those rows has.
@@ -190,6 +192,11 @@ def step_people_packed(
     left, and whose replayed people no model moves). Every kernel loops per world over present
     people in slot order (pairs of an absent person add nothing), so each stepped person moves
     exactly as unpacked; the others keep their position and velocity.
+
+    `target` may be None with `route` (B, H, L, 2) and `waypoint` (B, H) given: the packing then
+    gathers the targets of the packed slots only, route[waypoint] of the people it steps and its
+    own position for every other packed slot (WorldState.human_target_of(moved) at those slots,
+    without its pass over every slot of the batch).
     """
     new_pos, new_vel = pos.copy(), vel.copy()
     blocked = np.zeros(mask.shape, dtype=bool)
@@ -199,8 +206,14 @@ def step_people_packed(
         return new_pos, new_vel, blocked
     # One compiled pass packs what every step reads (seven numpy takes and the groups' renumbering
     # cost 1.7 times more); learned people's desired velocities, when given, by flat takes.
+    if target is None:
+        if route is None or waypoint is None:
+            raise ValueError("step_people_packed: target=None needs route and waypoint to gather it from")
+        points, index, gather = route, waypoint, True
+    else:
+        points, index, gather = target[:, :, None], _NO_WAYPOINT, False
     rows, flat, p_pos, p_vel, p_target, p_pref, inside, p_model, p_group = _pack_people(
-        pos, vel, target, pref_speed, mask, model, group, moving
+        pos, vel, points, index, gather, pref_speed, mask, model, group, moving
     )
 
     def packed(array: np.ndarray) -> np.ndarray:
@@ -216,13 +229,19 @@ def step_people_packed(
     return new_pos, new_vel, blocked
 
 
+# target given: one array type for _pack_people's waypoints, which it does not read then.
+_NO_WAYPOINT = np.zeros((1, 1), dtype=np.int64)
+
+
 @kernel
-def _pack_people(pos, vel, target, pref_speed, mask, model, group, moving):  # type: ignore[no-untyped-def]
+def _pack_people(pos, vel, points, waypoint, gather, pref_speed, mask, model, group, moving):  # type: ignore[no-untyped-def]
     """The packing of step_people_packed: rows (n,), the rows where someone is `moving`; flat
     (n * W,), each of those rows' present slots in slot order, then its first absent ones (W: the
     most present people of those rows), as flat indices into (B * H); then pos, vel, target,
     pref_speed, mask, model and group (n, W, ...) at those slots, walking groups (their first
-    member's slot) renumbered to the packed slots (-1 where that slot is not packed)."""
+    member's slot) renumbered to the packed slots (-1 where that slot is not packed). The target is
+    points[b, h, 0] (points: the targets), or with `gather` (points: the routes) points[b, h,
+    waypoint[b, h]] of a moving person and its position for any other slot."""
     b, h = mask.shape
     present = np.zeros(b, dtype=np.int64)  # each row's present people; -1: a row not packed
     n, width = 0, 0
@@ -265,7 +284,13 @@ def _pack_people(pos, vel, target, pref_speed, mask, model, group, moving):  # t
             where[s] = k
             p_pos[j, k, 0], p_pos[j, k, 1] = pos[r, s, 0], pos[r, s, 1]
             p_vel[j, k, 0], p_vel[j, k, 1] = vel[r, s, 0], vel[r, s, 1]
-            p_target[j, k, 0], p_target[j, k, 1] = target[r, s, 0], target[r, s, 1]
+            if not gather:
+                p_target[j, k, 0], p_target[j, k, 1] = points[r, s, 0, 0], points[r, s, 0, 1]
+            elif moving[r, s]:
+                w = waypoint[r, s]
+                p_target[j, k, 0], p_target[j, k, 1] = points[r, s, w, 0], points[r, s, w, 1]
+            else:
+                p_target[j, k, 0], p_target[j, k, 1] = pos[r, s, 0], pos[r, s, 1]
             p_pref[j, k], p_mask[j, k], p_model[j, k] = pref_speed[r, s], mask[r, s], model[r, s]
         for k in range(width):
             first = group[r, flat[j * width + k] - r * h]

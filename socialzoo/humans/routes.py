@@ -32,8 +32,8 @@ def advance_waypoints(
         radius: reach radius, m.
         target: (B, H, 2) route[waypoint] (WorldState.human_target) where the caller gathered it
             for its models already: read instead of the route, whose second pass over a long
-            recorded route array misses the cache again. A step whose models read no target
-            (replayed people only) gathers none and leaves this None.
+            recorded route array misses the cache again. A recorded scene's step gathers none (its
+            packing gathers those of the people it steps) and leaves this None.
         moving: (B, H) bool, the people whose waypoint advances, or None (everyone); the others
             keep theirs and their routes are not read (on a recorded scene only the people a model
             moved advance: the replay places its replayed people on their tracks and points one at

@@ -90,3 +90,24 @@ def test_people_on_their_recorded_tracks_are_left_where_they_are() -> None:
     assert np.array_equal(new_pos[replayed], pos[replayed]) and not new_vel[replayed].any()
     walking = mask & (model != REPLAY)
     assert (new_pos[walking] != pos[walking]).any(axis=1).all()
+
+
+def test_packing_gathers_the_moved_peoples_targets_from_their_routes() -> None:
+    """Without targets, the packing gathers route[waypoint] of the people it steps and the position of
+    every other packed slot: the step of the targets WorldState.human_target_of(moved) gives, bit for bit."""
+    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
+    cfg = WorldConfig(dt=0.1)
+    rng = np.random.default_rng(3)
+    for seed in range(3):
+        args = list(_crowd(seed))
+        pos, mask, model = args[0], args[4], args[5]
+        route = rng.uniform(-6, 6, mask.shape + (4, 2))
+        waypoint = rng.integers(0, 4, mask.shape)
+        moved = mask & (model != REPLAY)
+        b, h = np.indices(mask.shape)
+        args[2] = np.where(moved[..., None], route[b, h, waypoint], pos)
+        given = step_people_packed(*args, walls, cfg, moved=moved)
+        args[2] = None
+        gathered = step_people_packed(*args, walls, cfg, moved=moved, route=route, waypoint=waypoint)
+        for a, c in zip(given, gathered, strict=True):
+            assert np.array_equal(a, c)
