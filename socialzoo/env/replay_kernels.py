@@ -135,9 +135,17 @@ def settle_rows(
                 else:
                     waypoint[r, s] = min(1, route_len[r, s] - 1)
                 direction[r, s] = 1
-            if not on_track[r, s] and (now < 0 or (gone[r, s] and not new)):
-                # Off its track with nobody in the slot yet, or its person left for good: absent with
-                # nothing to place or react (what the placing below gives, without reading the track).
+            # Slots that are absent with nothing to place or react, settled as the placing below
+            # settles them without reading their tracks: off its track, nobody in the slot yet or its
+            # person left for good; on its track, past its person's last frame (each run of a slot's
+            # recorded frames is one person: its frames are absent until the next one enters).
+            if on_track[r, s]:
+                if now >= 0 and exit_[occupants_at[g] + now] < i0:
+                    mask[r, s] = False
+                    if np.isnan(exit_at[r, s]):
+                        exit_at[r, s] = t
+                    continue
+            elif now < 0 or (gone[r, s] and not new):
                 mask[r, s] = False
                 continue
             # Placing.
