@@ -29,7 +29,9 @@ def trainings(root: Path, steps: int, seeds: int) -> list[tuple[str, object]]:
 
     def args(algo: str, seed: int) -> object:
         out = root / f"{algo}-s{seed}"
-        return trainer_args(algo)(out=out, seed=seed, total_steps=steps, checkpoint_every=steps, progress=False)
+        return trainer_args(algo)(
+            out=out, seed=seed, total_steps=steps, checkpoint_every=steps, progress=False
+        )
 
     return [(algo, args(algo, seed)) for seed in range(seeds) for algo in ("ppo", "dqn")]
 

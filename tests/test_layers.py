@@ -259,7 +259,11 @@ def test_no_import_cycle():
         ),
         ("socialzoo.nav.graph", "from ..env import core", "imports socialzoo.env: env (rank 5)"),
         ("socialzoo.nav.graph", "from socialzoo.humans import routes", "humans (rank 4) is above nav"),
-        ("socialzoo.humans.motion", "from socialzoo.render.frames import draw", "render and humans are peers"),
+        (
+            "socialzoo.humans.motion",
+            "from socialzoo.render.frames import draw",
+            "render and humans are peers",
+        ),
         ("socialzoo.env.parallel", "from socialzoo import bench", "imports socialzoo.bench"),
         ("socialzoo.agents.reg", 'POLICIES = {"ppo": "socialzoo.train.ppo:PPOPolicy"}', "train (rank 8)"),
         # Studies sit above the harness and the trainers they compose, below reproduce.
@@ -288,7 +292,10 @@ def test_the_checker_catches_an_upward_import(module, source, expected):
 @pytest.mark.parametrize(
     ("module", "source"),
     [
-        ("socialzoo.env.core", "from socialzoo.core.state import WorldState\nfrom socialzoo.maps import map_file"),
+        (
+            "socialzoo.env.core",
+            "from socialzoo.core.state import WorldState\nfrom socialzoo.maps import map_file",
+        ),
         ("socialzoo.env.core", "from . import reward\nfrom .world import step_world"),
         ("socialzoo.core.config", "from socialzoo import __version__\nimport socialzoo"),
         ("socialzoo.maps.map_file", 'MAPS_PACKAGE = "socialzoo._maps"'),

@@ -21,8 +21,12 @@ from socialzoo.reproduce.results import RESULTS_DIR
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--from", dest="source", type=Path, required=True, help="the reference run's --out DIR")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "--from", dest="source", type=Path, required=True, help="the reference run's --out DIR"
+    )
     parser.add_argument("--root", type=Path, default=Path("."))
     args = parser.parse_args()
     for path in replace_reference_rows(args.root / PUBLISHED_DIR, args.source / RESULTS_DIR):

@@ -195,13 +195,35 @@ def test_a_subset_of_cases_plays_as_in_the_full_run():
 
 
 def test_a_learner_of_five_people_evaluates_on_twenty_through_its_nearest_five(tmp_path, capsys):
-    args = ["crowdnav", "eval", "--variant", "20", "--cases", "3", "--policies", "crowdnav", "--out", str(tmp_path)]
+    args = [
+        "crowdnav",
+        "eval",
+        "--variant",
+        "20",
+        "--cases",
+        "3",
+        "--policies",
+        "crowdnav",
+        "--out",
+        str(tmp_path),
+    ]
     assert main(args) == 2 and "reads observations of 46 numbers" in capsys.readouterr().err
     assert main([*args, "--observed-people", "5"]) == 0
     assert "3 episodes played, 0 read from the store" in capsys.readouterr().out
     assert "socialzoo/CrowdNav20-v1, observed_people=5, test cases" in (tmp_path / "crowdnav.md").read_text()
     # The store keeps each config's episodes apart: the same robot with every person observed plays anew.
-    orca = ["crowdnav", "eval", "--variant", "20", "--cases", "2", "--policies", "orca", "--out", str(tmp_path)]
+    orca = [
+        "crowdnav",
+        "eval",
+        "--variant",
+        "20",
+        "--cases",
+        "2",
+        "--policies",
+        "orca",
+        "--out",
+        str(tmp_path),
+    ]
     assert main([*orca, "--observed-people", "5"]) == 0
     assert "2 episodes played, 0 read from the store" in capsys.readouterr().out
     assert main(orca) == 0 and "2 episodes played, 0 read from the store" in capsys.readouterr().out

@@ -58,7 +58,11 @@ def nested_pairs(where, a, b, depth=0):
         return
     yield where, a, b
     for name, value in vars(a).items():
-        if hasattr(value, "__dict__") and type(value).__module__.startswith("socialzoo.") and not callable(value):
+        if (
+            hasattr(value, "__dict__")
+            and type(value).__module__.startswith("socialzoo.")
+            and not callable(value)
+        ):
             yield from nested_pairs(f"{where}.{name}", value, getattr(b, name), depth + 1)
 
 

@@ -32,7 +32,10 @@ def _rows(task: CrowdNavTask) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("signals", [False, True])
 def test_the_nearest_people_are_the_same_people_sorted_by_distance(signals: bool) -> None:
     kwargs = {"variant": "20", "signals": signals}
-    full, nearest = CrowdNavTask(batch_size=3, **kwargs), CrowdNavTask(batch_size=3, observed_people=20, **kwargs)
+    full, nearest = (
+        CrowdNavTask(batch_size=3, **kwargs),
+        CrowdNavTask(batch_size=3, observed_people=20, **kwargs),
+    )
     for task in (full, nearest):
         task.seed(5)
         task.reset(np.arange(3), {})
@@ -104,7 +107,11 @@ def test_a_crowdnav_learner_plays_a_scene_of_more_slots_through_its_nearest_peop
         tracks.append(Track(person, int(rng.integers(0, 300)), np.linspace(a, b, frames)))
     tracks.sort(key=lambda t: (t.first_frame, t.person))
     recording = Recording(
-        name="crowd", dt=0.4, num_frames=max(t.last_frame for t in tracks) + 1, tracks=tuple(tracks), source="test"
+        name="crowd",
+        dt=0.4,
+        num_frames=max(t.last_frame for t in tracks) + 1,
+        tracks=tuple(tracks),
+        source="test",
     )
     name = "recorded_test_observed_people"
     if name not in FAMILIES:

@@ -96,5 +96,7 @@ def test_reference_sets_are_checked():
     assert reference_sets(False) == () and reference_sets(None) == () and reference_sets(()) == ()
     assert reference_sets(True) == ("all",)
     assert reference_sets("goal_distance_x_only, all,goal_distance_x_only") == ("goal_distance_x_only", "all")
-    with pytest.raises(ValueError, match="unknown reference quirk 'x_only'; known: all, goal_distance_x_only"):
+    with pytest.raises(
+        ValueError, match="unknown reference quirk 'x_only'; known: all, goal_distance_x_only"
+    ):
         reference_sets("x_only")

@@ -226,7 +226,9 @@ def test_reference_rows_of_a_later_run_replace_the_published_ones(tmp_path):
         [{"run": "rl/dqn", "trainer": "dqn"}, {"run": "reference/rl/dqn", "trainer": "dqn", "old": True}],
         {"performance": {"seconds": 1.0}, "reference": {"seconds": 2.0}},
     )  # fmt: skip
-    later_csv = "quirks,experiment,policy,seed\r\nall,performance,dqn,0\r\ngoal_distance_x_only,performance,dqn,0\r\n"
+    later_csv = (
+        "quirks,experiment,policy,seed\r\nall,performance,dqn,0\r\ngoal_distance_x_only,performance,dqn,0\r\n"
+    )
     later_training = [
         {"run": "rl/ppo", "trainer": "ppo"},  # the default run trained again in the reference's work folder
         {"run": "reference/rl/dqn", "trainer": "dqn"},

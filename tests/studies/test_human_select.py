@@ -87,7 +87,9 @@ def test_a_run_trained_on_a_family_is_chosen_on_the_familys_validation_cases(wri
     write_walker(run / "checkpoints" / "step_000001000.humans.safetensors", speed=3.0)
     args = {"map": "hallway", "env_overrides": {"family": "frontal_approach", "max_steps": 100}}
     (run / "run.json").write_text(json.dumps({"algo": "humans", "args": args}))
-    result = select_humans(run, trials=2, workers=1, batch_size=2, env_overrides={"max_steps": 100}, progress=False)
+    result = select_humans(
+        run, trials=2, workers=1, batch_size=2, env_overrides={"max_steps": 100}, progress=False
+    )
     record = json.loads((result.out_dir / "selection.json").read_text())
     assert record["scenarios"] == "frontal_approach-val" and record["family"] == "frontal_approach"
     for population in ("social_force", "learned"):
