@@ -80,23 +80,10 @@ class WorldState:
     def human_target(self) -> np.ndarray:
         """(B, H, 2) the waypoint each human walks to, m."""
         # A kernel's gather: numpy's take of a flat index (three broadcast index arrays cost more
-        # still) took twice as long on a batch step's cold route array.
-        return self.human_target_of(None)
-
-    def human_target_of(self, walking: np.ndarray | None) -> np.ndarray:
-        """(B, H, 2) human_target of the people `walking` (B, H) marks, and each other person's own
-        position (a target it stands on); None: everyone's. A recorded scene's step gathers its
-        model-moved people's in socialzoo.humans.people.step_people_packed's packing instead."""
+        # still) took twice as long on a batch step's cold route array. A recorded scene's step
+        # gathers its model-moved people's in socialzoo.humans.people.step_people_packed's packing.
         target = np.empty(self.human_waypoint.shape + (2,), dtype=self.human_route.dtype)
-        everyone = walking is None
-        _waypoint_points(
-            self.human_route,
-            self.human_waypoint,
-            _EVERYONE if everyone else walking,
-            everyone,
-            self.human_pos,
-            target,
-        )
+        _waypoint_points(self.human_route, self.human_waypoint, target)
         return target
 
     def copy(self) -> WorldState:
@@ -174,18 +161,10 @@ def pad_to(array: np.ndarray, shape: tuple[int, ...], name: str) -> np.ndarray:
     return np.pad(array, widths, mode="constant", constant_values=fill)
 
 
-# walking=None's stand-in: one array type for the kernel whether or not everyone walks.
-_EVERYONE = np.ones((1, 1), dtype=bool)
-
-
 @kernel
-def _waypoint_points(route, waypoint, walking, everyone, pos, out):  # type: ignore[no-untyped-def]
-    """WorldState.human_target_of into out (B, H, 2): route (B, H, L, 2) at each waypoint (B, H)
-    where `everyone` or `walking` (B, H), else the person's position pos (B, H, 2)."""
+def _waypoint_points(route, waypoint, out):  # type: ignore[no-untyped-def]
+    """WorldState.human_target into out (B, H, 2): route (B, H, L, 2) at each waypoint (B, H)."""
     for b in range(waypoint.shape[0]):
         for h in range(waypoint.shape[1]):
-            if everyone or walking[b, h]:
-                w = waypoint[b, h]
-                out[b, h, 0], out[b, h, 1] = route[b, h, w, 0], route[b, h, w, 1]
-            else:
-                out[b, h, 0], out[b, h, 1] = pos[b, h, 0], pos[b, h, 1]
+            w = waypoint[b, h]
+            out[b, h, 0], out[b, h, 1] = route[b, h, w, 0], route[b, h, w, 1]

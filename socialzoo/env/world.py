@@ -127,7 +127,7 @@ def step_world(
     # Every person's target, but on a recorded scene none: its packing gathers those of the people it
     # steps (only the moved people's are read, and a pass over every slot of the cold route array cost
     # more than the rest of the gather), and advance_waypoints reads theirs from the route.
-    target = None if sparse_people else state.human_target_of(None)
+    target = None if sparse_people else state.human_target
     if anyone_moved:
         human_pos, human_vel, blocked = people_step(
             state.human_pos,

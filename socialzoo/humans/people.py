@@ -195,8 +195,8 @@ def step_people_packed(
 
     `target` may be None with `route` (B, H, L, 2) and `waypoint` (B, H) given: the packing then
     gathers the targets of the packed slots only, route[waypoint] of the people it steps and its
-    own position for every other packed slot (WorldState.human_target_of(moved) at those slots,
-    without its pass over every slot of the batch).
+    own position for every other packed slot (those slots of WorldState.human_target where
+    `moved`, and of pos elsewhere, without a pass over every slot of the batch).
     """
     new_pos, new_vel = pos.copy(), vel.copy()
     blocked = np.zeros(mask.shape, dtype=bool)

@@ -26,12 +26,3 @@ def test_human_target_is_each_route_at_its_waypoint() -> None:
     route, waypoint = state.human_route, state.human_waypoint
     assert np.array_equal(state.human_target, route[rows, slots, waypoint])
     assert state.human_target.dtype == route.dtype and state.human_target.shape == (b, h, 2)
-
-
-def test_the_targets_of_some_people_are_theirs_and_the_others_stand_on_their_place() -> None:
-    state = _state_with_routes(3, 5, 4)
-    walking = np.random.default_rng(1).random((3, 5)) < 0.5
-    target = state.human_target_of(walking)
-    np.testing.assert_array_equal(target[walking], state.human_target[walking])
-    np.testing.assert_array_equal(target[~walking], state.human_pos[~walking])
-    np.testing.assert_array_equal(state.human_target_of(None), state.human_target)

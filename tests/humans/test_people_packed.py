@@ -94,7 +94,7 @@ def test_people_on_their_recorded_tracks_are_left_where_they_are() -> None:
 
 def test_packing_gathers_the_moved_peoples_targets_from_their_routes() -> None:
     """Without targets, the packing gathers route[waypoint] of the people it steps and the position of
-    every other packed slot: the step of the targets WorldState.human_target_of(moved) gives, bit for bit."""
+    every other packed slot: the step of those targets given, bit for bit."""
     walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
     cfg = WorldConfig(dt=0.1)
     rng = np.random.default_rng(3)
