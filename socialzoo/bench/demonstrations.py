@@ -137,7 +137,7 @@ def _write_npz(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
     """Write a compressed .npz atomically (a killed write leaves no half file under `path`)."""
     tmp = path.with_name(path.name + ".tmp")
     with tmp.open("wb") as f:
-        np.savez_compressed(f, **arrays)
+        np.savez_compressed(f, **arrays)  # type: ignore[arg-type]  # numpy's stub reads **kwds as allow_pickle
     os.replace(tmp, path)
 
 

@@ -239,9 +239,11 @@ def drive_map(
     start_rows(np.arange(b))
     while (row_job >= 0).any():
         task.step(np.full((task.batch_size, 1), GO_ALONE, dtype=np.int64))
-        count = task.core.state.step_count
+        state = task.core.state
+        assert state is not None  # reset above
+        count = state.step_count
         sample = np.flatnonzero(count % every == 0)
-        trace[sample, (count[sample] // every) % window] = task.core.state.robot_pose[sample, 0, :2]
+        trace[sample, (count[sample] // every) % window] = state.robot_pose[sample, 0, :2]
         # A route without progress for stuck_time is judged at once: it has failed (`stuck`).
         stuck = task.metrics.without_progress >= config.metrics.stuck_time - 1e-9
         finished = np.flatnonzero((row_job >= 0) & (task.core.done[:, 0] | stuck))
@@ -364,10 +366,11 @@ def builtin_buildings() -> dict[str, np.ndarray]:
     from socialzoo.maps.map_file import MAPS_PACKAGE
 
     out: dict[str, np.ndarray] = {}
-    reference = importlib.resources.files(MAPS_PACKAGE).joinpath(*REFERENCE_WALLS)
-    gdc1 = read_table(reference.joinpath("gdc1_walls.txt"), 4, "x1 y1 x2 y2")
+    # The installed package's folder (maps are read from files on disk, not from a zip).
+    reference = Path(str(importlib.resources.files(MAPS_PACKAGE).joinpath(*REFERENCE_WALLS)))
+    gdc1 = read_table(reference / "gdc1_walls.txt", 4, "x1 y1 x2 y2")
     out["gdc1_floor2"] = drop_zero_length(gdc1[(gdc1[:, 1] < -5.0) & (gdc1[:, 3] < -5.0)])
-    out["ghc3_raw"] = read_table(reference.joinpath("ghc3_walls.txt"), 4, "x1 y1 x2 y2")
+    out["ghc3_raw"] = read_table(reference / "ghc3_walls.txt", 4, "x1 y1 x2 y2")
     for seed in (1, 2):
         out[f"office_corridor_{seed}"] = floorplans.office_corridor(seed, num_offices=10).walls
         out[f"atrium_{seed}"] = floorplans.atrium(seed).walls
@@ -477,7 +480,7 @@ def draw_failure(
     pts = np.concatenate((trace, plan, scenario.robot_start[None, :2], scenario.robot_goal[None, :2]))
     lo, hi = pts.min(axis=0) - 3.0, pts.max(axis=0) + 3.0
     walls = np.asarray(m.walls).reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(walls, colors="0.1", linewidths=0.8))
+    ax.add_collection(LineCollection(list(walls), colors="0.1", linewidths=0.8))
     if len(m.edges):
         ax.add_collection(LineCollection(m.nodes[m.edges], colors="tab:blue", linewidths=0.5, alpha=0.4))
     ax.plot(plan[:, 0], plan[:, 1], "--", color="tab:blue", lw=1)

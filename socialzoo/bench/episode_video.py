@@ -74,4 +74,6 @@ def animate_episode(
                 yield renderer.frame(0)
 
     written = write_animation(frames(), path, fps=fps)
-    return EpisodeVideo(path=Path(written), frames=count, metrics=task.episode_metrics([0])[0])
+    return EpisodeVideo(
+        path=Path(written), frames=count, metrics=task.episode_metrics(np.zeros(1, dtype=np.intp))[0]
+    )

@@ -245,7 +245,7 @@ def config_hash(
     payload = {
         "env_id": env_id_for(test_set.map_name),
         "env": env,
-        "map_sha256": map_sha256(load_map(env_config.map)),
+        "map_sha256": map_sha256(load_map(env_config.map_name)),
         "policy": {
             "name": policy,
             "config": policy_config(policy_object),
@@ -575,6 +575,6 @@ def write_episode_gif(
     from socialzoo.bench.episode_video import animate_episode
     from socialzoo.maps.map_file import load_map
 
-    scenario = test_set.scenario(index, load_map(env_config.map))
+    scenario = test_set.scenario(index, load_map(env_config.map_name))
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
     return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path

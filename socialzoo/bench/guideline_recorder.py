@@ -166,11 +166,11 @@ class GuidelineRecorder:
         # Row i's episode is its last lengths[i] samples: shift each to start at 0 (pad at the end).
         offset = n - lengths
         index = np.minimum(offset[:, None] + np.arange(n)[None, :], n - 1)
-        fields = {
+        fields: dict[str, np.ndarray | None] = {
             key: np.take_along_axis(value[rows], index.reshape(index.shape + (1,) * (value.ndim - 2)), axis=1)
             for key, value in stacked.items()
         }
-        if not fields["others_pos"].shape[2]:
+        if not stacked["others_pos"].shape[2]:
             fields["others_pos"] = None
         f = self.frame
         traj = Trajectories(

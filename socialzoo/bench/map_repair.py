@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.bench.drive_check import DriveReport, drive_map, pose_pairs
+from socialzoo.bench.drive_check import DriveReport, RouteDrive, drive_map, pose_pairs
 from socialzoo.maps.map_file import Map, MapError, graph_components, validate_map
 from socialzoo.maps.repair import Repair
 from socialzoo.maps.segments import segments_clear
@@ -72,7 +72,7 @@ def repair_by_driving(
 
     # Poses the robot cannot reach or leave: move them where the join is drivable, else drop.
     moved: list[int] = []
-    stuck_at = {}
+    stuck_at: dict[int, RouteDrive] = {}
     for r in failures:
         if r.cause == "goal_unreachable":
             stuck_at.setdefault(r.goal, r)

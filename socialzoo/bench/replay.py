@@ -70,7 +70,7 @@ class PolicySpec:
 def benchmark_scenario(env_config: EnvConfig, seed: int, world_map: Map | None = None) -> Scenario:
     """The scenario of `seed` as `socialzoo demo` makes it: the env config's scenario generator
     (the benchmark's, or its scenario family's) with the config's robot count."""
-    m = world_map if world_map is not None else load_map(env_config.map)
+    m = world_map if world_map is not None else load_map(env_config.map_name)
     stream = ScenarioStream(m, 1, env_config.num_robots, env_config.scenario, env_config.family)
     return stream.make(seed)
 
@@ -340,7 +340,7 @@ def record_policies(
     """
     if not policies:
         raise ValueError("record_policies: at least one policy is needed")
-    m = world_map if world_map is not None else load_map(env_config.map)
+    m = world_map if world_map is not None else load_map(env_config.map_name)
     built = [(spec, spec.build()) for spec in policies]  # fail on a bad name before any episode runs
     traces = []
     for spec, policy in built:

@@ -62,7 +62,7 @@ class StoredTrial:
     def scenario(self, world_map: Map | None = None) -> Scenario:
         """The trial's scenario, generated as the runner generates it: from the seed and the test
         set's scenario settings (the env config's when the store does not record the test set)."""
-        m = world_map if world_map is not None else load_map(self.env_config.map)
+        m = world_map if world_map is not None else load_map(self.env_config.map_name)
         cfg = self.env_config.scenario
         if self.test_set_info is not None and "scenario" in self.test_set_info:
             cfg = ScenarioConfig(**self.test_set_info["scenario"])
@@ -314,7 +314,7 @@ def replay_trial(
         ValueError: the policy cannot be rebuilt with the stored parameters.
     """
     policy = trial.build_policy()
-    m = world_map if world_map is not None else load_map(trial.env_config.map)
+    m = world_map if world_map is not None else load_map(trial.env_config.map_name)
     trace = record_episode(
         trial.env_config,
         trial.scenario(m),

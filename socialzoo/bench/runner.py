@@ -339,13 +339,13 @@ class BatchedRunner:
                 stacked = [(index[name], rows) for name, rows in policy_rows.items() if name in index]
                 if not stacked:
                     continue
-                rows = np.concatenate([np.asarray(r) for _, r in stacked])
+                stack_rows = np.concatenate([np.asarray(r) for _, r in stacked])
                 which = np.concatenate([np.full(len(r), i) for i, r in stacked])
-                obs_rows = observations[rows]
+                obs_rows = observations[stack_rows]
                 chosen = stack.act(
                     obs_rows.reshape(-1, obs_rows.shape[-1]), np.repeat(which, task.num_robots)
                 )
-                actions[rows] = chosen.reshape((len(rows), task.num_robots) + shape)
+                actions[stack_rows] = chosen.reshape((len(stack_rows), task.num_robots) + shape)
             for policy_name, rows in policy_rows.items():
                 if policy_name in stacked_names:
                     continue

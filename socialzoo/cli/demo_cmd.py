@@ -40,7 +40,7 @@ def run_demo(args: argparse.Namespace) -> int:
 
     try:
         config = EnvConfig(map=args.map, family=args.family and family_name(args.family))
-        m = load_map(config.map)
+        m = load_map(config.map_name)
         scenario = ScenarioStream.for_config(m, 1, config).make(args.seed)
         policy = (
             make_policy(args.policy, path=args.policy_path) if args.policy_path else make_policy(args.policy)

@@ -218,7 +218,7 @@ def _replay_seed(args: argparse.Namespace) -> int:
     config = EnvConfig(map=args.map, family=family)  # no --map: the family's, else gdc1
     if args.max_steps is not None:
         config = config.replace(max_steps=args.max_steps)
-    m = load_map(config.map)
+    m = load_map(config.map_name)
     scenario = benchmark_scenario(config, seed, m)
     traces = record_policies(config, scenario, specs, **_recording(args, config.dt, m))
     kind = f"{family} scenario" if family else "scenario"
@@ -240,7 +240,7 @@ def _replay_stored(args: argparse.Namespace) -> int:
     specs = _specs(args)
     stored = find_trials(args.results, args.trial, test_set=args.test_set)
     first = stored[0]
-    m = load_map(first.env_config.map)
+    m = load_map(first.env_config.map_name)
     scenario = first.scenario(m)
     recording = _recording(args, first.env_config.dt, m)
     by_name = {t.policy: t for t in stored}

@@ -188,6 +188,13 @@ class EnvConfig:
             )
 
     @property
+    def map_name(self) -> str:
+        """The map, a shipped name or a file path: `map` once built (None stands for the family's
+        map, else gdc1, and is replaced by it)."""
+        assert self.map is not None  # __post_init__ set it
+        return self.map
+
+    @property
     def max_humans(self) -> int:
         """Human slots per world (H): the scenario generator's maximum head count, or a family's
         largest scenario where that is larger (a recorded scene's: socialzoo.scenarios.recorded)."""

@@ -143,7 +143,9 @@ def _seeds_row(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) 
 def paper_outside_seeds(rows: Sequence[Mapping[str, Any]], experiment: str, policy: str) -> bool:
     """True when several seeds ran and the paper's number lies below all of them or above all."""
     r = _seeds_row(rows, experiment, policy)
-    paper = None if r is None else r.get("paper_pct")
+    if r is None:
+        return False
+    paper = r.get("paper_pct")
     if paper is None or paper == "" or math.isnan(float(paper)):
         return False
     return not float(r["min_pct"]) <= float(paper) <= float(r["max_pct"])
