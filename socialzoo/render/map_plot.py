@@ -40,7 +40,7 @@ def save_map_png(m: Map, path: str | Path, *, show_graph: bool = True, show_pose
 
     ax = _axes((10, 8))
     walls = np.asarray(m.walls).reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(walls, colors="0.15", linewidths=0.8, label="walls"))
+    ax.add_collection(LineCollection(list(walls), colors="0.15", linewidths=0.8, label="walls"))
     if show_graph and len(m.edges):
         ax.add_collection(
             LineCollection(m.nodes[m.edges], colors="tab:blue", linewidths=0.6, alpha=0.6, label="graph")
@@ -94,14 +94,16 @@ def save_map_check_png(m: Map, check: Any, path: str | Path, drive: Any = None) 
     from matplotlib.collections import LineCollection
 
     ax = _axes((11, 9))
-    ax.add_collection(LineCollection(np.asarray(m.walls).reshape(-1, 2, 2), colors="0.15", linewidths=0.8))
+    ax.add_collection(
+        LineCollection(list(np.asarray(m.walls).reshape(-1, 2, 2)), colors="0.15", linewidths=0.8)
+    )
     edges = np.asarray(m.edges, dtype=np.int64).reshape(-1, 2)
     if len(edges) and ((edges >= 0) & (edges < len(m.nodes))).all():
         tight = np.zeros(len(edges), dtype=bool)
         tight[list(check.tight_edges)] = True
         colours = np.where(tight[:, None], [[0.85, 0.1, 0.1, 0.9]], [[0.12, 0.47, 0.71, 0.6]])
         ax.add_collection(
-            LineCollection(m.nodes[edges], colors=colours, linewidths=np.where(tight, 1.6, 0.7))
+            LineCollection(list(m.nodes[edges]), colors=colours, linewidths=np.where(tight, 1.6, 0.7))
         )
     if len(m.nodes):
         ax.plot(m.nodes[:, 0], m.nodes[:, 1], "o", color="tab:blue", markersize=2.5)

@@ -45,7 +45,7 @@ VIEWER_METRICS = registered(
 
 def _array(value: Any, dtype: type, shape: tuple[int | None, ...], what: str) -> np.ndarray:
     """`value` as a read-only array of `dtype`, checked against `shape` (None = any length)."""
-    arr = np.array(value, dtype=dtype)
+    arr: np.ndarray = np.array(value, dtype=dtype)
     if arr.size == 0 and len(shape) > 1 and arr.ndim != len(shape):
         arr = arr.reshape((0, *(s or 0 for s in shape[1:])))
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)):
@@ -315,6 +315,8 @@ def encode_episode(trace: EpisodeTrace, encoding: Encoding | None = None) -> dic
         ray_index = np.unique(np.linspace(0, rays - 1, min(rays, enc.laser_rays)).round().astype(int))
     else:
         ray_index = np.zeros(0, dtype=int)
+    # Both are arrays once the trace is built (None at construction stands for "nobody").
+    assert trace.human_present is not None and trace.other_robots is not None
     # The latest scan at or before each kept state.
     scan = np.searchsorted(trace.laser_steps, kept, side="right") - 1
     present = trace.human_present[kept]
@@ -395,7 +397,7 @@ def encode_replay(
     # The legend shows what the page draws: the task's actions, the bodies, and the scan and the
     # followed person only where an episode has them.
     legend = ["robot", "humans", "goal", "carrot"]
-    if any(t.other_robots.shape[1] for t in traces):
+    if any(t.other_robots is not None and t.other_robots.shape[1] for t in traces):
         legend.insert(1, "other robots")
     if any(t.laser_ranges.shape[1] for t in traces):
         legend.append("laser")

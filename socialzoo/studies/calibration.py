@@ -113,7 +113,7 @@ def to_unit(model: str, values: dict[str, float]) -> np.ndarray:
     )
 
 
-def from_unit(model: str, x: Sequence[float]) -> dict[str, float]:
+def from_unit(model: str, x: Sequence[float] | np.ndarray) -> dict[str, float]:
     """A point of the search space to parameter values."""
     out = {}
     for (sec, name, lo, hi), u in zip(PARAMETERS[model], x, strict=True):
@@ -282,10 +282,10 @@ def calibrate(config: CalibrationConfig, out: Path, *, progress: bool = True) ->
             )
     values, all_ade, evals = fit(config, list(fit_samples.values()), log, "all scenes")
     default_all = mean_ade(config.model, base, list(fit_samples.values()))
-    preset = {"model": config.model}
+    preset: dict[str, Any] = {"model": config.model}
     for key, v in values.items():
         sec, name = key.split(".", 1)
-        preset.setdefault(sec, {})[name] = round(v, 4)  # type: ignore[index]
+        preset.setdefault(sec, {})[name] = round(v, 4)
     record = {
         "command": " ".join(["socialzoo", *sys.argv[1:]]),
         "config": dataclasses.asdict(config),

@@ -192,10 +192,11 @@ def select_humans(
     chosen = Path(best["file"])
     out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(chosen, out / SELECTED_FILE)
+    scenarios = test_set.name if test_set is not None else f"{family or map_name}-val"
     record = {
         "run": str(run),
         "map": map_name,
-        "scenarios": test_set.name if test_set is not None else f"{family or map_name}-val",
+        "scenarios": scenarios,
         "family": family,
         "trials": trials,
         "robot_policy": policy,
@@ -205,7 +206,7 @@ def select_humans(
         "social_force": rows[-1],
     }
     write_text_atomic(out / "selection.json", json_text(record, indent=1) + "\n")
-    _write_tables(rows, best, out, record["scenarios"])
+    _write_tables(rows, best, out, scenarios)
     return Selection(chosen, int(best["frames"]), bool(best["met"]), rows, out)
 
 

@@ -71,8 +71,8 @@ class ModelSpec:
         """`base` with this model's overrides."""
         return dataclasses.replace(
             base,
-            human=dataclasses.replace(base.human, **dict(self.human)),
-            orca=dataclasses.replace(base.orca, **dict(self.orca)),
+            human=dataclasses.replace(base.human, **dict[str, Any](self.human)),
+            orca=dataclasses.replace(base.orca, **dict[str, Any](self.orca)),
         )
 
 

@@ -148,7 +148,7 @@ def evaluate_policies(
             for r in batch
         )
 
-    spec = RunSpec(
+    run_spec = RunSpec(
         test_sets={name: test_set},
         env_configs={name: env_config},
         policies={s: {} for s in policies.values()},
@@ -156,7 +156,7 @@ def evaluate_policies(
     )
     evaluate(
         pending,
-        spec,
+        run_spec,
         backend=backend,
         workers=workers,
         on_results=deliver,
