@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from collections.abc import Callable, Mapping
@@ -181,7 +182,7 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
         if step % 50 == 0 or step == updates:
             writer.add_scalar("bc/loss", loss, step)
         for due in schedule.due(step):
-            run.checkpoint(due, lambda path, due=due: parts.save(path, updates=due))
+            run.checkpoint(due, functools.partial(parts.save, updates=due))
 
     def after_pass(step: int, loss: float) -> None:
         found = agreements(net, data.obs, data.action, validation)

@@ -20,8 +20,8 @@ SUITE_ID = CROWD_SUITE_ID
 # The CrowdNavConfig fields --families decides (each family on its own map).
 FAMILY_FIELDS = ("family", "map")
 # The CrowdNavArgs fields passed to stable_baselines3.PPO by name.
-PPO_FIELDS = ("n_steps", "batch_size", "n_epochs", "learning_rate", "gamma", "gae_lambda", "clip_range")
-PPO_FIELDS += ("ent_coef", "vf_coef", "max_grad_norm", "seed")
+PPO_FIELDS: tuple[str, ...] = ("n_steps", "batch_size", "n_epochs", "learning_rate", "gamma", "gae_lambda")
+PPO_FIELDS += ("clip_range", "ent_coef", "vf_coef", "max_grad_norm", "seed")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -234,12 +234,13 @@ def training_reward(venv: Any, progress: float, collision_extra: float) -> Any:
 
     class TrainingReward(VecEnvWrapper):
         def reset(self) -> np.ndarray:
-            obs = self.venv.reset()
+            obs = np.asarray(self.venv.reset())
             self.distance = obs[:, 0].astype(np.float64)
             return obs
 
         def step_wait(self) -> Any:
             obs, reward, done, infos = self.venv.step_wait()
+            obs = np.asarray(obs)
             after = obs[:, 0].astype(np.float64)
             extra = np.zeros(len(reward))
             for row in np.flatnonzero(done):

@@ -3,6 +3,7 @@ policy reaches, labelled by the expert, Ref."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -123,7 +124,7 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
             writer.add_scalar(f"dagger/{key}", value, k)
         writer.add_scalar("dagger/steps", len(obs), k)
         steps = len(obs)
-        policy = run.checkpoint(k, lambda path, k=k, steps=steps: parts.save(path, round=k, steps=steps))
+        policy = run.checkpoint(k, functools.partial(parts.save, round=k, steps=steps))
         bar.update(1)
         if k == args.iterations:
             break

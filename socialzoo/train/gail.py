@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -280,7 +281,7 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
         )
         if schedule.due(frames):
             # One checkpoint per batch, at the frames collected (a batch may pass several steps).
-            run.checkpoint(frames, lambda path, done=frames: parts.save(path, env_steps=done))
+            run.checkpoint(frames, functools.partial(parts.save, env_steps=frames))
     collector.shutdown()
     parts.save(run.policy, env_steps=frames)
     return {

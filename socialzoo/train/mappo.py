@@ -65,6 +65,9 @@ def env_factories(
 class Normalize(nn.Module):
     """(x - loc) / scale with fixed statistics (buffers: saved with the network, not trained)."""
 
+    loc: torch.Tensor
+    scale: torch.Tensor
+
     def __init__(self, loc: torch.Tensor, scale: torch.Tensor) -> None:
         super().__init__()
         self.register_buffer("loc", loc.detach().clone().float())
@@ -83,6 +86,9 @@ class MirrorSymmetric(nn.Module):
     human with no handedness. Without it, shared-parameter humans drift into a side convention
     (keep right, to pass each other), which pushes them against the walls of narrow corridors.
     """
+
+    in_signs: torch.Tensor
+    out_signs: torch.Tensor
 
     def __init__(self, net: nn.Module, in_signs: torch.Tensor, out_signs: torch.Tensor) -> None:
         super().__init__()
@@ -139,6 +145,7 @@ def human_actor(
         )
     body = mlp(obs_size, [hidden] * depth, 2, "tanh", None)
     last = body[-1]
+    assert isinstance(last, nn.Linear)
     with torch.no_grad():
         # Small output weights: the prior, not the random initialisation, decides the first moves.
         last.weight.mul_(0.1)
@@ -422,7 +429,7 @@ def train_loop(
     writer: Any,
     bar: Any,
     seed: int,
-    on_batch: Callable[[list[dict[str, float]]], None] | None = None,
+    on_batch: Callable[[list[dict[str, float]]], Any] | None = None,
 ) -> LoopResult:
     """Collect, update, log and checkpoint until the collector has given `total_frames` frames.
 

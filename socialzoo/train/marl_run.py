@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import functools
 import logging
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -164,7 +165,7 @@ def _fit(
 
     def checkpoint(frames: int) -> list[Path]:
         return [
-            run.checkpoint(frames, lambda path, save=save: save(path, frames), suffix)
+            run.checkpoint(frames, functools.partial(save, frames=frames), suffix)
             for suffix, _, save in savers
         ]
 
@@ -191,7 +192,7 @@ def _fit(
             run.writer,
             bar,
             args.seed,
-            on_batch=lambda history: write_history(run.path / HISTORY_FILE, history),
+            on_batch=functools.partial(write_history, run.path / HISTORY_FILE),
         )
     finally:
         collector.shutdown()

@@ -34,6 +34,9 @@ def normalizer_stats(obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class Normalize(nn.Module):
     """clip((x - mean) / sqrt(var + epsilon), -clip, clip) with fixed (D,) statistics (buffers)."""
 
+    mean: torch.Tensor
+    var: torch.Tensor
+
     def __init__(self, mean: np.ndarray, var: np.ndarray) -> None:
         super().__init__()
         self.register_buffer("mean", torch.as_tensor(np.asarray(mean), dtype=torch.float64))
@@ -151,7 +154,8 @@ def to_mlp_policy(name: str, net: nn.Sequential, observation: Any, activation: A
     built with `activation`), registered as `name` ("bc", "gail"), for the env's ObservationConfig
     `observation` (or its plain dict)."""
     normalizer = next((m.to_numpy() for m in net if isinstance(m, Normalize)), None)
-    obs = dataclasses.asdict(observation) if dataclasses.is_dataclass(observation) else dict(observation)
+    is_config = dataclasses.is_dataclass(observation) and not isinstance(observation, type)
+    obs = dataclasses.asdict(observation) if is_config else dict(observation)
     return MlpPolicy(name, linear_layers(net), activation, obs, normalizer)
 
 

@@ -93,6 +93,7 @@ def ppo_from_policy(
     """
     import torch
     from stable_baselines3 import PPO
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from socialzoo.env.sb3_vec import SB3VecEnv
@@ -110,9 +111,11 @@ def ppo_from_policy(
         clip_obs=fixed.clip,
         epsilon=fixed.epsilon,
     )
-    venv.obs_rms.mean = fixed.mean.astype(np.float64)
-    venv.obs_rms.var = fixed.var.astype(np.float64)
-    venv.obs_rms.update = lambda batch: None  # the source's statistics stay as they are
+    rms = venv.obs_rms  # one RunningMeanStd: the observations are one array
+    assert isinstance(rms, RunningMeanStd)
+    rms.mean = fixed.mean.astype(np.float64)
+    rms.var = fixed.var.astype(np.float64)
+    setattr(rms, "update", lambda batch: None)  # noqa: B010  # the source's statistics stay as they are
     hidden = [int(w.shape[0]) for w, _ in source.layers[:-1]]
     model = PPO(
         "MlpPolicy",
@@ -132,6 +135,7 @@ def ppo_from_policy(
     ]
     with torch.no_grad():
         for layer, (w, b) in zip(linears, source.layers, strict=True):
+            assert isinstance(layer, torch.nn.Linear)
             layer.weight.copy_(torch.as_tensor(w))
             layer.bias.copy_(torch.as_tensor(b))
     return model
@@ -180,8 +184,10 @@ def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
         source, config, seed=args.seed, learning_rate=args.lr, clip_range=args.clip, gamma=args.gamma,
         **PPO_SETTINGS,
     )  # fmt: skip
+    normalizer = source.normalizer
+    assert normalizer is not None  # ppo_from_policy refuses a policy without one
     probe = np.random.default_rng(0).normal(
-        source.normalizer.mean, np.sqrt(source.normalizer.var), (512, source.input_size)
+        normalizer.mean, np.sqrt(normalizer.var), (512, source.input_size)
     )
     if not np.array_equal(exported(model, source).act(probe), source.act(probe)):
         raise RuntimeError(f"{args.init}: the PPO actor does not act as the file does before training")

@@ -4,6 +4,7 @@ env, and the SB3 callback that feeds the trainer skeleton's checkpoints, logs an
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import warnings
 from collections.abc import Callable, Mapping
@@ -136,7 +137,9 @@ class SB3Args:
         """The env_overrides values of the EnvConfig fields that env_config sets from this
         dataclass's own fields (map, family, max_steps, scenario_repeats), by the field's name."""
         given = dict(self.env_overrides)
-        found = {name: given[name] for name in ("map", "family", "max_steps") if name in given}
+        found: dict[str, Any] = {
+            name: given[name] for name in ("map", "family", "max_steps") if name in given
+        }
         scenario = given.get("scenario")
         if isinstance(scenario, Mapping) and "repeats" in scenario:
             found["scenario_repeats"] = scenario["repeats"]
@@ -270,6 +273,11 @@ def learn_with_checkpoints(
     return steps, last
 
 
+def _save_at(save: Callable[[Path, int], None], step: int, path: Path) -> None:
+    """save(path, step): a checkpoint writer of one step (functools.partial binds save and step)."""
+    save(path, step)
+
+
 def checkpoint_callback(
     run: TrainingRun, schedule: CheckpointSchedule, save: Callable[[Path, int], None]
 ) -> Any:
@@ -288,7 +296,7 @@ def checkpoint_callback(
             for step in schedule.due(self.num_timesteps):
                 if step != self.num_timesteps:
                     logger.warning("checkpoint %d written at step %d", step, self.num_timesteps)
-                run.checkpoint(step, lambda path, step=step: save(path, step), POLICY_SUFFIX)
+                run.checkpoint(step, functools.partial(_save_at, save, step), POLICY_SUFFIX)
 
         def _on_rollout_start(self) -> None:
             self._save_due()

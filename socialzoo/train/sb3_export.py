@@ -95,6 +95,7 @@ def export_policy(
     """
     from stable_baselines3 import DQN, PPO
 
+    acting: Any
     if isinstance(model, PPO):
         # The actor's extractor (shared or not); the policy MLP ends with an activation, then
         # action_net gives the logits.
