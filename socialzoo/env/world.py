@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
@@ -116,23 +114,12 @@ def step_world(
     hcfg = cfg.human
     # Each human's model (social force, ORCA, learned; walking groups) by WorldState.human_model
     # and human_group: socialzoo.humans.people.
-    people_step: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = step_people
-    anyone_moved, moved = True, None
+    anyone_moved, moved, target = True, None, None
     if sparse_people:
         moved = state.human_mask & (state.human_model != REPLAY)
         anyone_moved = bool(moved.any())
-        people_step = partial(
-            step_people_packed, moved=moved, route=state.human_route, waypoint=state.human_waypoint
-        )
-    # Every person's target, but on a recorded scene none: its packing gathers those of the people it
-    # steps (only the moved people's are read, and a pass over every slot of the cold route array cost
-    # more than the rest of the gather), and advance_waypoints reads theirs from the route.
-    target = None if sparse_people else state.human_target
     if anyone_moved:
-        human_pos, human_vel, blocked = people_step(
-            state.human_pos,
-            state.human_vel,
-            target,
+        rest = (
             state.human_pref_speed,
             state.human_mask,
             state.human_model,
@@ -144,6 +131,16 @@ def step_world(
             human_desired_vel,
             human_learned,
         )
+        if sparse_people:
+            # A recorded scene's packing gathers the targets of the people it steps (a pass over every
+            # slot of the cold route array cost more than the rest of the gather), and
+            # advance_waypoints reads the moved people's from the route (target None).
+            human_pos, human_vel, blocked = step_people_packed(
+                state.human_pos, state.human_vel, state.human_route, state.human_waypoint, *rest, moved=moved
+            )
+        else:
+            target = state.human_target
+            human_pos, human_vel, blocked = step_people(state.human_pos, state.human_vel, target, *rest)
     else:
         # Nobody moved (replayed people only: step_people_packed would leave each where it stood).
         human_pos, human_vel = state.human_pos.copy(), state.human_vel.copy()

@@ -170,7 +170,8 @@ def step_people(
 def step_people_packed(
     pos: np.ndarray,
     vel: np.ndarray,
-    target: np.ndarray | None,
+    route: np.ndarray,
+    waypoint: np.ndarray,
     pref_speed: np.ndarray,
     mask: np.ndarray,
     model: np.ndarray,
@@ -182,8 +183,6 @@ def step_people_packed(
     desired_vel: np.ndarray | None = None,
     learned: np.ndarray | None = None,
     moved: np.ndarray | None = None,
-    route: np.ndarray | None = None,
-    waypoint: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`step_people` over the rows where some present person is `moved` (B, H), each with only its
     present people, packed in slot order into as many slots as the fullest of those rows has.
@@ -193,10 +192,10 @@ def step_people_packed(
     people in slot order (pairs of an absent person add nothing), so each stepped person moves
     exactly as unpacked; the others keep their position and velocity.
 
-    `target` may be None with `route` (B, H, L, 2) and `waypoint` (B, H) given: the packing then
-    gathers the targets of the packed slots only, route[waypoint] of the people it steps and its
-    own position for every other packed slot (those slots of WorldState.human_target where
-    `moved`, and of pos elsewhere, without a pass over every slot of the batch).
+    Takes `step_people`'s arguments, but the people's routes (B, H, L, 2) and waypoints (B, H) for
+    their targets: the packing gathers the targets of the packed slots only, route[waypoint] of the
+    people it steps and its own position for every other packed slot (only the stepped people's
+    are read), without a pass over every slot of the batch's cold route array.
     """
     new_pos, new_vel = pos.copy(), vel.copy()
     blocked = np.zeros(mask.shape, dtype=bool)
@@ -206,14 +205,8 @@ def step_people_packed(
         return new_pos, new_vel, blocked
     # One compiled pass packs what every step reads (seven numpy takes and the groups' renumbering
     # cost 1.7 times more); learned people's desired velocities, when given, by flat takes.
-    if target is None:
-        if route is None or waypoint is None:
-            raise ValueError("step_people_packed: target=None needs route and waypoint to gather it from")
-        points, index, gather = route, waypoint, True
-    else:
-        points, index, gather = target[:, :, None], _NO_WAYPOINT, False
     rows, flat, p_pos, p_vel, p_target, p_pref, inside, p_model, p_group = _pack_people(
-        pos, vel, points, index, gather, pref_speed, mask, model, group, moving
+        pos, vel, route, waypoint, pref_speed, mask, model, group, moving
     )
 
     def packed(array: np.ndarray) -> np.ndarray:
@@ -229,19 +222,14 @@ def step_people_packed(
     return new_pos, new_vel, blocked
 
 
-# target given: one array type for _pack_people's waypoints, which it does not read then.
-_NO_WAYPOINT = np.zeros((1, 1), dtype=np.int64)
-
-
 @kernel
-def _pack_people(pos, vel, points, waypoint, gather, pref_speed, mask, model, group, moving):  # type: ignore[no-untyped-def]
+def _pack_people(pos, vel, route, waypoint, pref_speed, mask, model, group, moving):  # type: ignore[no-untyped-def]
     """The packing of step_people_packed: rows (n,), the rows where someone is `moving`; flat
     (n * W,), each of those rows' present slots in slot order, then its first absent ones (W: the
     most present people of those rows), as flat indices into (B * H); then pos, vel, target,
     pref_speed, mask, model and group (n, W, ...) at those slots, walking groups (their first
     member's slot) renumbered to the packed slots (-1 where that slot is not packed). The target is
-    points[b, h, 0] (points: the targets), or with `gather` (points: the routes) points[b, h,
-    waypoint[b, h]] of a moving person and its position for any other slot."""
+    route[b, h, waypoint[b, h]] of a moving person and its position for any other slot."""
     b, h = mask.shape
     present = np.zeros(b, dtype=np.int64)  # each row's present people; -1: a row not packed
     n, width = 0, 0
@@ -284,11 +272,9 @@ def _pack_people(pos, vel, points, waypoint, gather, pref_speed, mask, model, gr
             where[s] = k
             p_pos[j, k, 0], p_pos[j, k, 1] = pos[r, s, 0], pos[r, s, 1]
             p_vel[j, k, 0], p_vel[j, k, 1] = vel[r, s, 0], vel[r, s, 1]
-            if not gather:
-                p_target[j, k, 0], p_target[j, k, 1] = points[r, s, 0, 0], points[r, s, 0, 1]
-            elif moving[r, s]:
+            if moving[r, s]:
                 w = waypoint[r, s]
-                p_target[j, k, 0], p_target[j, k, 1] = points[r, s, w, 0], points[r, s, w, 1]
+                p_target[j, k, 0], p_target[j, k, 1] = route[r, s, w, 0], route[r, s, w, 1]
             else:
                 p_target[j, k, 0], p_target[j, k, 1] = pos[r, s, 0], pos[r, s, 1]
             p_pref[j, k], p_mask[j, k], p_model[j, k] = pref_speed[r, s], mask[r, s], model[r, s]

@@ -31,6 +31,18 @@ def _crowd(seed: int):
     )  # fmt: skip
 
 
+def _routed(args):
+    """`_crowd`'s step arguments for step_people_packed: each person's target as the point at a
+    random waypoint of a random 4-point route, in place of the target."""
+    target = args[2]
+    rng = np.random.default_rng(11)
+    route = rng.uniform(-6, 6, target.shape[:2] + (4, 2))
+    waypoint = rng.integers(0, 4, target.shape[:2])
+    b, h = np.indices(waypoint.shape)
+    route[b, h, waypoint] = target
+    return (args[0], args[1], route, waypoint, *args[3:])
+
+
 def test_packed_people_step_exactly_as_unpacked() -> None:
     walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
     cfg = WorldConfig(dt=0.1)
@@ -39,7 +51,7 @@ def test_packed_people_step_exactly_as_unpacked() -> None:
         mask, model = args[4], args[5]
         moved = model != REPLAY
         full = step_people(*args, walls, cfg)
-        packed = step_people_packed(*args, walls, cfg, moved=moved)
+        packed = step_people_packed(*_routed(args), walls, cfg, moved=moved)
         stepped = mask & moved.any(axis=1, where=mask, keepdims=True)
         for whole, part in zip(full[:2], packed[:2], strict=True):
             assert np.array_equal(whole[stepped], part[stepped])
@@ -53,7 +65,7 @@ def test_nobody_moved_returns_new_arrays_equal_to_the_old() -> None:
     args = _crowd(0)
     pos, vel, mask = args[0], args[1], args[4]
     new_pos, new_vel, blocked = step_people_packed(
-        *args, walls, WorldConfig(dt=0.1), moved=np.zeros_like(mask)
+        *_routed(args), walls, WorldConfig(dt=0.1), moved=np.zeros_like(mask)
     )
     assert np.array_equal(new_pos, pos) and np.array_equal(new_vel, vel) and not blocked.any()
     assert blocked.shape == mask.shape and new_pos is not pos and new_vel is not vel
@@ -72,7 +84,7 @@ def test_packed_learned_people_step_exactly_as_unpacked() -> None:
     learned = mask & (model == LEARNED)
     moved = model != REPLAY
     full = step_people(*args, walls, cfg, desired, learned)
-    packed = step_people_packed(*args, walls, cfg, desired, learned, moved=moved)
+    packed = step_people_packed(*_routed(args), walls, cfg, desired, learned, moved=moved)
     stepped = mask & moved.any(axis=1, where=mask, keepdims=True)
     for whole, part in zip(full, packed, strict=True):
         assert np.array_equal(whole[stepped], part[stepped])
@@ -90,24 +102,3 @@ def test_people_on_their_recorded_tracks_are_left_where_they_are() -> None:
     assert np.array_equal(new_pos[replayed], pos[replayed]) and not new_vel[replayed].any()
     walking = mask & (model != REPLAY)
     assert (new_pos[walking] != pos[walking]).any(axis=1).all()
-
-
-def test_packing_gathers_the_moved_peoples_targets_from_their_routes() -> None:
-    """Without targets, the packing gathers route[waypoint] of the people it steps and the position of
-    every other packed slot: the step of those targets given, bit for bit."""
-    walls = WallIndex(np.array([[-5.0, -5.0, 5.0, -5.0], [5.0, -5.0, 5.0, 5.0]]))
-    cfg = WorldConfig(dt=0.1)
-    rng = np.random.default_rng(3)
-    for seed in range(3):
-        args = list(_crowd(seed))
-        pos, mask, model = args[0], args[4], args[5]
-        route = rng.uniform(-6, 6, mask.shape + (4, 2))
-        waypoint = rng.integers(0, 4, mask.shape)
-        moved = mask & (model != REPLAY)
-        b, h = np.indices(mask.shape)
-        args[2] = np.where(moved[..., None], route[b, h, waypoint], pos)
-        given = step_people_packed(*args, walls, cfg, moved=moved)
-        args[2] = None
-        gathered = step_people_packed(*args, walls, cfg, moved=moved, route=route, waypoint=waypoint)
-        for a, c in zip(given, gathered, strict=True):
-            assert np.array_equal(a, c)
