@@ -254,6 +254,21 @@ def table_entry(policy: str, map_name: str, test_set: str, summary: dict[str, An
     return entry
 
 
+def task_policies(
+    task: TaskId, policies: Sequence[str], config: Mapping[str, Any] | None = None
+) -> tuple[Any, list[tuple[str, Any]]]:
+    """(a one-row task of the id with `config`, each spec with its policy for that task): every
+    policy is built, and refused, before any of them plays (socialzoo.agents.make_policy).
+
+    Raises:
+        ValueError, PolicyTaskError: an unknown policy, or one of another task or observation size.
+    """
+    from socialzoo.agents import make_policy
+
+    probe = task.make(1, **dict(config or {}))
+    return probe, [(spec, make_policy(spec, task=probe)) for spec in policies]
+
+
 def run_task_benchmark(
     env_id: str,
     policies: Sequence[str],
@@ -272,8 +287,10 @@ def run_task_benchmark(
 
     A policy acts in the task the id names (socialzoo.agents.make_policy refuses another task's,
     or a learned one of another observation size); a learned policy that declares task overrides
-    (CrowdNav's learned policy: its discrete or continuous actions) acts with them. `say` gets
-    one line per policy (success, episodes played and read from the store), as the CLI prints.
+    (CrowdNav's learned policy: its discrete or continuous actions) acts with them. Every policy
+    is built first: one that the task refuses stops the run before any plays. `say` gets one line
+    per policy (success, episodes played and read from the store), as the CLI prints; without
+    `say` the line is logged.
     `config` overrides the id's task config for every policy (e.g. CrowdNav's observed_people);
     the store keeps episodes of each config apart (its digest).
 
@@ -284,17 +301,15 @@ def run_task_benchmark(
         ValueError, PolicyTaskError, StoreError: an unknown id, policy, split or count; a policy
             of another task; an unusable store.
     """
-    from socialzoo.agents import make_policy
     from socialzoo.bench.tables import remove_outputs, task_layout, write_tables
 
     task = TaskId.of(env_id)
+    config = dict(config or {})
+    probe, built = task_policies(task, policies, config)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    config = dict(config or {})
-    probe = task.make(1, **config)
     rows = []
-    for spec in policies:
-        policy = make_policy(spec, task=probe)
+    for spec, policy in built:
         overrides = config | dict(getattr(policy, "task_overrides", {}) or {})
         episodes, played = evaluate_stored(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides
@@ -306,9 +321,7 @@ def run_task_benchmark(
             f"{spec}: success {summary.get('success_rate', math.nan):.3f} "
             f"({played} episodes played, {read} read from the store)"  # as the maps' and the suite's runs say
         )
-        logger.info(line)
-        if say is not None:
-            say(line)
+        (say or logger.info)(line)  # the CLI prints it; a library caller gets it logged (not both)
     title = f"{env_id}{''.join(f', {k}={v}' for k, v in config.items())}, {split} cases ({probe.name} task)"
     files = write_tables(rows, out, name=probe.name, title=title, layout=task_layout(rows))
     from socialzoo.bench.figures import FIGURE_FORMATS, plot_success

@@ -208,7 +208,7 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
     task's id): each id's policies on the first --trials cases of its test split, stored and reused
     by reruns, with tables and the success figure (socialzoo.bench.task_benchmark), one folder per id."""
     from socialzoo.bench.store import StoreError
-    from socialzoo.bench.task_benchmark import TaskId, run_task_benchmark
+    from socialzoo.bench.task_benchmark import TaskId, run_task_benchmark, task_policies
 
     if len(ids) != len(args.maps):
         others = sorted(set(args.maps) - set(ids))
@@ -229,12 +229,16 @@ def run_task_ids(args: argparse.Namespace, ids: list[str]) -> int:
         # --max-steps is a field of the task's config (a task without max_steps refuses it).
         config = given(args, "max_steps") | task_config(args.task_config)
         folders = _id_folders(ids)
+        chosen = {}
         for env_id in ids:
             task = TaskId.of(env_id)
             default = _DEFAULT_POLICIES.get(task.task, ())
-            policies = list(args.policies) if args.policies else list(default)
-            if not policies:
+            chosen[env_id] = list(args.policies) if args.policies else list(default)
+            if not chosen[env_id]:
                 raise ValueError(f"{env_id}: name the policies to run (--policies)")
+            if len(ids) > 1:  # every id's policies are refused before the first id plays
+                task_policies(task, chosen[env_id], config)
+        for env_id, policies in chosen.items():
             out = Path(args.out) / folders[env_id] if len(ids) > 1 else Path(args.out)
             _, files = run_task_benchmark(
                 env_id,

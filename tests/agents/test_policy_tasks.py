@@ -119,3 +119,27 @@ def test_a_policy_file_of_another_task_is_refused_as_such_not_as_outdated(tmp_pa
     )
     with pytest.raises(PolicyFileError, match=r"retrain it"):
         make_policy(f"ppo:{old}")
+
+
+def test_a_task_benchmark_refuses_a_policy_of_another_task_before_any_policy_plays(tmp_path):
+    """The refused policy comes second: the first must not have played (nor stored a trial) by then."""
+    from socialzoo.bench.task_benchmark import run_task_benchmark
+
+    lines = []
+    with pytest.raises(PolicyTaskError, match=r"'goalone' acts in task 'action_selection', not 'crowdnav'"):
+        run_task_benchmark(
+            "socialzoo/CrowdNav-v1", ["orca", "goalone"], tmp_path / "one", cases=2, say=lines.append
+        )
+    assert lines == [] and not (tmp_path / "one").exists()
+
+
+def test_the_benchmark_of_several_ids_refuses_before_the_first_id_plays(tmp_path, capsys):
+    from socialzoo.cli import main
+
+    ids = "socialzoo/CrowdNav-v1,socialzoo/ActionSelection-v2"
+    code = main(
+        ["benchmark", "--maps", ids, "--policies", "orca", "--trials", "2", "--out", str(tmp_path / "two")]
+    )
+    assert code == 2
+    assert "'orca' acts in task 'crowdnav', not 'action_selection'" in capsys.readouterr().err
+    assert not (tmp_path / "two").exists()
