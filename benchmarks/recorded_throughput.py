@@ -15,18 +15,24 @@ With --warmup S, each case first runs S seconds untimed: a recorded scene builds
 the first time the track is drawn and keeps it, so a short run from a cold start mostly measures
 those builds, and a long training run does not.
 
+With --rounds N, every case (its env built and warmed up first) runs --seconds per round, the cases
+one after another, N rounds: the arena and each scene are measured close in time, round after round,
+and each case also gets its ratio to the 20-person arena per round, median (min-max) over the rounds.
+The machine's speed drifts within a run; a ratio of one round compares like with like.
+
 With --memory STEPS, it prints instead what the replay holds of the recordings after STEPS steps of each
 scene in replay at B = 256: the bytes of its bank of recordings (socialzoo.env.recording_bank), or, run with
 an older socialzoo on the path (PYTHONPATH=old/checkout), of the rows' own copies of their recordings; and of
 all of the replay's arrays.
 
 Run: SOCIALZOO_DATA_DIR=DIR python benchmarks/recorded_throughput.py [--scenes eth,zara1] [--seconds 5]
-[--warmup 0] [--floor] [--memory STEPS] [--json]
+[--warmup 0] [--rounds 1] [--floor] [--memory STEPS] [--json]
 """
 
 from __future__ import annotations
 
 import json
+import statistics
 import time
 
 import numpy as np
@@ -41,33 +47,52 @@ ROW_COPIES = ("tracks", "track_vel", "route_frame", "entry", "exit", "first", "l
               "robot_track")  # fmt: skip
 
 
-def measure(seconds: float, warmup: float = 0.0, **config: object) -> dict[str, float]:
-    """env-steps/s, person slots per row, and microseconds per present person-step and per row-step
-    of one vector env (after `warmup` s)."""
-    env = CrowdNavVectorEnv(BATCH, **config)
-    env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    actions = rng.uniform(-1, 1, (64, BATCH, 2)).astype(np.float32)
-    for k in range(3):
-        env.step(actions[k])
-    start, k = time.perf_counter(), 0
-    while time.perf_counter() - start < warmup:
-        env.step(actions[k % 64])
-        k += 1
-    core = env.task.core
-    steps, people, start = 0, 0, time.perf_counter()
-    while time.perf_counter() - start < seconds:
-        env.step(actions[steps % 64])
-        people += int(core.state.human_mask.sum())
-        steps += 1
-    wall = time.perf_counter() - start
-    return {
-        "env_steps_per_s": round(steps * BATCH / wall),
-        "people_per_row": round(people / steps / BATCH, 1),
-        "slots": core.max_humans,
-        "us_per_person_step": round(wall / max(people, 1) * 1e6, 3),
-        "us_per_row_step": round(wall / (steps * BATCH) * 1e6, 3),
-    }
+class Case:
+    """One vector env stepped with random velocity actions and autoreset, its time and present people
+    added up over every slice it is run for."""
+
+    def __init__(self, warmup: float = 0.0, **config: object) -> None:
+        self.env = CrowdNavVectorEnv(BATCH, **config)
+        self.env.reset(seed=0)
+        self.actions = np.random.default_rng(0).uniform(-1, 1, (64, BATCH, 2)).astype(np.float32)
+        self.steps = self.people = 0
+        self.wall = 0.0
+        for k in range(3):
+            self.env.step(self.actions[k])
+        self._k, start = 3, time.perf_counter()
+        while time.perf_counter() - start < warmup:
+            self.step()
+
+    def step(self) -> None:
+        self.env.step(self.actions[self._k % 64])
+        self._k += 1
+
+    def run(self, seconds: float) -> dict[str, float]:
+        """Step for `seconds`; this slice's figures (figures() gives every slice's together)."""
+        core = self.env.task.core
+        steps, people, start = 0, 0, time.perf_counter()
+        while time.perf_counter() - start < seconds:
+            self.step()
+            people += int(core.state.human_mask.sum())
+            steps += 1
+        wall = time.perf_counter() - start
+        self.steps, self.people, self.wall = self.steps + steps, self.people + people, self.wall + wall
+        return self.figures(steps, people, wall)
+
+    def figures(
+        self, steps: int | None = None, people: int | None = None, wall: float | None = None
+    ) -> dict[str, float]:
+        """env-steps/s, person slots per row, and microseconds per present person-step and per row-step."""
+        steps = self.steps if steps is None else steps
+        people = self.people if people is None else people
+        wall = self.wall if wall is None else wall
+        return {
+            "env_steps_per_s": round(steps * BATCH / wall),
+            "people_per_row": round(people / steps / BATCH, 1),
+            "slots": self.env.task.core.max_humans,
+            "us_per_person_step": round(wall / max(people, 1) * 1e6, 3),
+            "us_per_row_step": round(wall / (steps * BATCH) * 1e6, 3),
+        }
 
 
 def memory(scene: str, steps: int) -> dict[str, float]:
@@ -101,6 +126,9 @@ def main() -> None:
         "--scenes", default="eth,zara1", help="recorded scenes (socialzoo data fetch eth-ucy first)"
     )
     p.add_argument("--warmup", type=float, default=0.0, help="untimed seconds before each case's measurement")
+    p.add_argument(
+        "--rounds", type=int, default=1, help="run every case --seconds per round, interleaved, ROUNDS times"
+    )
     p.add_argument(
         "--floor", action="store_true", help="also the arena with 1 person and 5 people in many slots"
     )
@@ -140,15 +168,30 @@ def main() -> None:
             ("CrowdNav 1 ORCA person", {"cases": CrowdCaseConfig(num_humans=1)}),
             (f"CrowdNav 5 in {slots} slots", {"variant": "", "max_humans": slots}),
         ]
-    for label, config in cases:
-        measured = measure(args.seconds, args.warmup, **config)
-        figure = {"case": label, "batch": BATCH, "warmup_s": args.warmup, **measured}
+    built = [(label, Case(args.warmup, **config)) for label, config in cases]
+    # Rounds interleave the cases: each round runs every case once, so the arena (the first case)
+    # and a scene are measured minutes apart at most, and each round gives its own ratio.
+    ratios: dict[str, list[float]] = {label: [] for label, _ in built}
+    for _ in range(args.rounds):
+        arena = None
+        for label, case in built:
+            cost = case.run(args.seconds)["us_per_person_step"]
+            arena = cost if arena is None else arena
+            ratios[label].append(cost / arena)
+    for label, case in built:
+        figure: dict[str, object] = {"case": label, "batch": BATCH, "warmup_s": args.warmup, **case.figures()}
+        spread = ""
+        if args.rounds > 1 and label != built[0][0]:
+            r = ratios[label]
+            figure |= {"rounds": args.rounds, "ratio_median": round(statistics.median(r), 3),
+                       "ratio_min": round(min(r), 3), "ratio_max": round(max(r), 3)}  # fmt: skip
+            spread = f"  ratio to the arena {statistics.median(r):.2f} ({min(r):.2f}-{max(r):.2f})"
         print(
             json.dumps(figure)
             if args.json
             else f"{label:26s} B={BATCH}  {figure['env_steps_per_s']:10,} env-steps/s  "
             f"{figure['people_per_row']:5.1f} people/row  {figure['us_per_person_step']:7.3f} us/person-step  "
-            f"{figure['us_per_row_step']:6.2f} us/row-step"
+            f"{figure['us_per_row_step']:6.2f} us/row-step{spread}"
         )
 
 
