@@ -4,7 +4,7 @@ env's, the next B_1 the second's, and so on."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -27,7 +27,7 @@ class ConcatVectorEnv(VectorEnv):
         ValueError: no part, or parts whose single spaces differ (naming the first that does).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"autoreset_mode": AutoresetMode.SAME_STEP}
+    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.SAME_STEP}
 
     def __init__(self, parts: Sequence[VectorEnv]) -> None:
         if not parts:

@@ -109,7 +109,7 @@ class TaskEnv(TaskAdapter, gym.Env):
             (map="ghc3", variant="Square", ...) and its own options (map_data=...).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 40}
+    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 40}
 
     def __init__(
         self, config: Any = None, render_mode: str | None = None, *, task: Any = None, **kwargs: Any

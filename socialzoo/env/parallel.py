@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium
 import numpy as np
@@ -71,7 +71,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
+    metadata: dict[str, Any] = {
         "name": "socialzoo_parallel_v2",
         "render_modes": ["human", "rgb_array"],
         "render_fps": 40,
@@ -309,7 +309,7 @@ class CrowdNavParallelEnv(TaskParallelEnv):
     """Several robots of the CrowdNav task (socialzoo.env.tasks.crowdnav), each seeing the others
     as people; a robot that left stands still where it is, still an obstacle to the others."""
 
-    metadata: ClassVar[dict[str, Any]] = {**TaskParallelEnv.metadata, "name": "socialzoo_crowdnav_v2"}
+    metadata: dict[str, Any] = {**TaskParallelEnv.metadata, "name": "socialzoo_crowdnav_v2"}
     default_task = "crowdnav"
 
 

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from socialzoo.render.frames import HumanWindow
 
 
 class CoreRenderer:
@@ -51,7 +54,7 @@ class CoreRenderer:
             human_radius=world.human.radius,
             dt=world.dt,
         )
-        self.window = None
+        self.window: HumanWindow | None = None
 
     def reset(self) -> None:
         """Forget trails (a new episode)."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -64,7 +64,7 @@ class SB3VecEnv(VecEnv):
         # Any of socialzoo's batched VectorEnvs (same-step autoreset, final_obs and final_info
         # metrics), e.g. the CrowdNav task's CrowdNavVectorEnv.
         self.vector_env = vector_env
-        self.config = self.vector_env.config
+        self.config = cast(Any, self.vector_env).config  # every socialzoo VectorEnv has one
         self.render_mode = None
         super().__init__(
             num_envs, self.vector_env.single_observation_space, self.vector_env.single_action_space

@@ -167,6 +167,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
         def info(keys: tuple[str, ...], n: int) -> Composite:
             return Composite({k: Unbounded(shape=(b, n), dtype=torch.float32) for k in keys}, shape=(b, n))
 
+        assert task.observation_space.shape is not None  # a Box (box_observation)
         obs[ROBOT] = Composite(
             observation=Unbounded(shape=(b, r, *task.observation_space.shape), dtype=torch.float32),
             mask=Categorical(2, shape=(b, r), dtype=torch.bool),
@@ -183,7 +184,7 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
                 robot_action = vector_action_spec(space, (b, r))
             action[ROBOT] = Composite(action=robot_action, shape=(b, r))
         if h:
-            assert task.human_observation_space is not None
+            assert task.human_observation_space is not None and task.human_observation_space.shape is not None
             obs[HUMAN] = Composite(
                 observation=Unbounded(shape=(b, h, *task.human_observation_space.shape), dtype=torch.float32),
                 mask=Categorical(2, shape=(b, h), dtype=torch.bool),

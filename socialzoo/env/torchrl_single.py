@@ -125,6 +125,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
         self._started = False
         b = num_envs
         flag = Categorical(2, shape=(b, 1), dtype=torch.bool, device=self.device)
+        assert self.task.observation_space.shape is not None  # a Box (box_observation)
         self.observation_spec = Composite(
             observation=Unbounded(
                 (b, *self.task.observation_space.shape), dtype=torch.float32, device=self.device
@@ -163,6 +164,7 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         space, who = self.task.action_space, type(self).__name__
+        assert space.shape is not None  # Discrete, MultiDiscrete or Box (__init__ refused any other)
         values = tensordict.get("action").detach().cpu().numpy()
         if isinstance(space, spaces.Discrete) and not self.categorical_action_encoding:
             values = one_hot_indices(values, int(space.n), self.num_envs, who)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import operator
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -54,7 +54,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
+    metadata: dict[str, Any] = {
         "autoreset_mode": AutoresetMode.SAME_STEP,
         "render_modes": ["rgb_array"],
         "render_fps": 40,
@@ -184,7 +184,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         table[:, ended] = np.array([values(s) for s in summaries], dtype=np.float64).T
         return dict(zip(keys, table, strict=True))
 
-    def render(self) -> np.ndarray | None:
+    def render(self) -> np.ndarray | None:  # type: ignore[override]  # row 0's frame, not a tuple of B
         """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""
         return None if self.render_mode is None else self.draw("rgb_array")
 

@@ -72,6 +72,12 @@ class Task(ABC):
     human_observation_space: spaces.Space | None = None
     human_action_space: spaces.Space | None = None
 
+    @abstractmethod
+    def __init__(self, config: Any = None, batch_size: int = 1, **overrides: Any) -> None:
+        """A task of `batch_size` rows: `config` (the task's config class; None: its defaults) with
+        plain-value `overrides` of its fields (and the task's own keyword options, such as map_data).
+        What make_task and every adapter call."""
+
     # ------------------------------------------------------------------ episodes
     @abstractmethod
     def seed(self, seed: int | None, rows: np.ndarray | None = None) -> None:
