@@ -62,6 +62,7 @@ def compact_core(core: BatchedCore, rows: Sequence[int] | np.ndarray) -> Batched
     new.reset_rows(np.arange(len(index)), scenarios)
     new.state = core.state.rows(index)
     if navigator is not None:
+        assert new.navigator is not None  # built from the same planner as the core's
         plans = navigator.plans
         new.navigator.plans = GlobalPlans(
             paths=plans.paths[index].copy(), lengths=plans.lengths[index].copy()

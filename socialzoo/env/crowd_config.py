@@ -264,7 +264,7 @@ class CrowdNavConfig:
             if isinstance(changes.get(name), dict):
                 changes[name] = _replace_nested(getattr(self, name), changes[name], f"CrowdNavConfig.{name}")
         robot, reward = changes.get("robot", self.robot), changes.get("reward", self.reward)
-        follow = {
+        follow: dict[str, Any] = {
             "robot_radius": getattr(robot, "radius", None),
             "discomfort_dist": getattr(reward, "discomfort_dist", None),
         }

@@ -115,7 +115,7 @@ class ActionSelectionTask(Task):
         **overrides: Any,
     ) -> None:
         self.config = cfg = EnvConfig.resolve(config, overrides)
-        m = map_data if map_data is not None else load_map(cfg.map)
+        m = map_data if map_data is not None else load_map(cfg.map_name)
         b, r = batch_size, cfg.num_robots
         self.core = BatchedCore(
             b,
@@ -215,6 +215,7 @@ class ActionSelectionTask(Task):
         if len(rows) == 0:
             return
         core.reset_rows(rows, scenarios)
+        assert core.state is not None
         self.prev_action[rows] = 0
         self.target_human[rows] = -1
         pose, goal = core.state.robot_pose[rows], core.state.robot_goal[rows][..., :2]
@@ -262,6 +263,8 @@ class ActionSelectionTask(Task):
         before = core.state
         events = core.step(command, halt, desired, learned)
         after = core.state
+        # check_reset passed; the task's planner gives its core a navigator.
+        assert before is not None and after is not None and core.navigator is not None
         core.follow_routes(moving)
         if subpolicy:
             # A copy: reset_rows zeroes rows of prev_action, which must never write into the
@@ -332,6 +335,7 @@ class ActionSelectionTask(Task):
         """
         core = self.core
         state = core.state
+        assert state is not None
         b, r = self.batch_size, self.num_robots
         if self.config.robot_action == "velocity":
             action = _unit_actions(action, (b, r, 2), "velocity actions", "velocity action")
@@ -363,6 +367,8 @@ class ActionSelectionTask(Task):
         """Commands (B, R, 2) with those of recovering robots (the navigator's back-off) in place
         of their planner's, for robots still driving their plan."""
         core = self.core
+        # A planner's core (navigator, wall field) after a reset.
+        assert core.navigator is not None and core.field is not None and core.state is not None
         rows, robots = np.nonzero(core.navigator.backing_off & moving)
         if len(rows) == 0:
             return command
@@ -392,6 +398,7 @@ class ActionSelectionTask(Task):
             )
         action = _unit_actions(human_action, (self.batch_size, num, 2), "human_action", "human action")
         s = self.core.state
+        assert s is not None
         desired = np.zeros(s.human_pos.shape)
         desired[:, self.learned] = action_velocities(
             s, self.learned, action, self.config.human_action_frame, self.config.human_action_scale
@@ -405,6 +412,7 @@ class ActionSelectionTask(Task):
         returns the visibility (B*R, H)."""
         core = self.core
         s = core.state
+        assert s is not None
         b, r = self.batch_size, self.num_robots
         visible = core.see()
         obs = build_observation(
@@ -432,6 +440,7 @@ class ActionSelectionTask(Task):
     def _signals(self) -> Signals:
         """What each robot (B R) observes of the scripts: the people's gestures, the nearest door."""
         core, script = self.core, self.core.script
+        assert core.state is not None
         pos = core.state.robot_pose[..., :2].reshape(-1, 2)
         offset, closed = nearest_door(pos, core.per_robot(script.doors), core.per_robot(script.closed))
         return Signals(core.per_robot(script.signal), offset, closed)
@@ -439,6 +448,7 @@ class ActionSelectionTask(Task):
     def _min_human_distance(self) -> np.ndarray:
         """(B*R,) centre distance from each robot to the nearest present human, inf for none."""
         s = self.core.state
+        assert s is not None
         diff = s.robot_pose[:, :, None, :2] - s.human_pos[:, None, :, :]
         dist2 = np.where(s.human_mask[:, None, :], (diff**2).sum(-1), np.inf)
         return np.sqrt(dist2.min(axis=-1, initial=np.inf)).reshape(-1)

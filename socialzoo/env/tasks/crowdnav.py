@@ -4,7 +4,7 @@ CrowdNav's settings as the defaults (socialzoo.env.crowd_config.CrowdNavConfig; 
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 
@@ -200,6 +200,7 @@ class CrowdNavTask(Task):
                 self._arrive(before)
             events = core.step(command)
             after = core.state
+            assert after is not None
             robot_before = before.robot_pose[..., :2].reshape(b * r, 2)
             robot_after = after.robot_pose[..., :2].reshape(b * r, 2)
             # The other robots move at their velocity through the step (none with one robot).
@@ -257,7 +258,7 @@ class CrowdNavTask(Task):
                 "human_collisions": (outcome.collision & ~wall_collision).astype(np.int64).reshape(b, r),
                 "wall_collision": wall_collision.reshape(b, r),
             },
-            time_up=truncated.any(axis=1),
+            time_up=cast(np.ndarray, truncated.any(axis=1)),  # (B,): numpy's stub allows a scalar
         )
 
     def commands(self, action: np.ndarray) -> np.ndarray:
