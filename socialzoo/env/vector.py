@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import operator
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -48,7 +48,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
     Args:
         num_envs: B.
         config: the task's config object (None: its defaults).
-        render_mode: None or "rgb_array" (renders row 0), where the task can draw.
+        render_mode: None or "rgb_array" (render() draws every row), where the task can draw.
         max_episode_steps: if set, truncate each row's episode after this many steps.
         task: the task's registry name, "module:Class" path or class (default: `default_task`).
         **kwargs: the task's keyword arguments (config fields as plain values, map_data=...).
@@ -184,9 +184,15 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         table[:, ended] = np.array([values(s) for s in summaries], dtype=np.float64).T
         return dict(zip(keys, table, strict=True))
 
-    def render(self) -> np.ndarray | None:  # type: ignore[override]  # row 0's frame, not a tuple of B
-        """Row 0's frame as (H, W, 3) uint8, or None without render_mode."""
-        return None if self.render_mode is None else self.draw("rgb_array")
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Every row's frame, (H, W, 3) uint8 each, as Gymnasium's vector envs render (a tuple of
+        num_envs frames, which its vector RecordVideo tiles); None without render_mode. Drawing
+        costs one frame per row: `draw("rgb_array", row=k)` draws row k alone."""
+        if self.render_mode is None:
+            return None
+        return tuple(
+            cast(np.ndarray, self.draw("rgb_array", row=k)) for k in range(self.num_envs)
+        )  # drawn, not shown
 
 
 class ActionSelectionVectorEnv(TaskVectorEnv):

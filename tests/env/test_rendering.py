@@ -77,3 +77,25 @@ def test_the_crowdnav_task_renders(env_id):
         reach = task.config.cases.circle_radius + 1.0
         assert frames.map.region == (-reach, -reach, reach, reach) and len(frames.map.walls) == 0
     env.close()
+
+
+@pytest.mark.parametrize("task", ["action_selection", "crowdnav"])
+def test_a_vector_env_renders_every_row_as_gymnasium_vector_envs_do(task):
+    """Gymnasium's VectorEnv.render gives one frame per env (its vector RecordVideo asserts a
+    sequence of num_envs frames); the task's vector env rendered row 0's frame alone."""
+    from collections.abc import Sequence
+
+    from socialzoo.env.vector import TaskVectorEnv
+
+    env = TaskVectorEnv(
+        3, render_mode="rgb_array", task=task, **({"map": "open_room"} if task != "crowdnav" else {})
+    )
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    frames = env.render()
+    assert isinstance(frames, Sequence) and len(frames) == env.num_envs
+    for k, frame in enumerate(frames):
+        assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8
+        assert np.array_equal(frame, env.draw("rgb_array", row=k))
+    assert not np.array_equal(frames[0], frames[1])  # each row's own world
+    assert TaskVectorEnv(2, task=task).render() is None
