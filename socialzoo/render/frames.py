@@ -504,7 +504,7 @@ class HumanWindow:
     matplotlib is imported here, when the first window is made, never at module import.
 
     Args:
-        title: window title.
+        title: window title (several windows may share one: each has its own figure).
         fps: frames per second to pace the display at; None draws as fast as it can.
     """
 
@@ -514,7 +514,12 @@ class HumanWindow:
         self._plt = plt
         plt.ion()
         self.fig: Any
-        self.fig, self.ax = plt.subplots(num=title)
+        # A figure of its own, titled after it is made: plt.subplots(num=title) would reuse (or, in
+        # matplotlib 3.11, refuse) the figure of another window with the same title, so a second
+        # env rendering to a window in the same process raised.
+        self.fig, self.ax = plt.subplots()
+        if self.fig.canvas.manager is not None:
+            self.fig.canvas.manager.set_window_title(title)
         self.ax.set_axis_off()
         self.fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
         self._image: Any = None

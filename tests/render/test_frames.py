@@ -227,6 +227,21 @@ def test_human_window_with_agg():
         window.show(np.zeros((HEIGHT, WIDTH, 3), np.uint8))
 
 
+def test_two_windows_of_one_title_are_open_at_once():
+    """Two envs with render_mode="human" in one process (two policies side by side, an env and its
+    copy) each get a window: the second used to raise matplotlib's "Figure 'socialzoo' already exists"."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    first, second = HumanWindow(), HumanWindow()
+    assert first.is_open and second.is_open and first.fig is not second.fig
+    first.show(np.zeros((HEIGHT, WIDTH, 3), np.uint8))
+    second.show(np.full((HEIGHT, WIDTH, 3), 255, np.uint8))
+    first.close()
+    assert not first.is_open and second.is_open
+    second.show(np.zeros((HEIGHT, WIDTH, 3), np.uint8))
+    second.close()
+
+
 def test_import_does_not_load_matplotlib():
     code = (
         "import sys, socialzoo.render.frames, socialzoo.render.animation; print('matplotlib' in sys.modules)"
