@@ -10,6 +10,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from socialzoo.env.vector import checked_reset_mask
+
 
 class ConcatVectorEnv(VectorEnv):
     """The parts' rows end to end (below).
@@ -48,6 +50,9 @@ class ConcatVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.config = getattr(first, "config", None)
         self.render_mode = None
+        # Each part's observations after its last reset or step (None before the first reset), for
+        # a reset whose mask leaves a part out.
+        self._last_obs: list[Any] | None = None
 
     @property
     def metric_types(self) -> dict[str, type]:
@@ -58,12 +63,31 @@ class ConcatVectorEnv(VectorEnv):
         return types
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
-        """Reset every part; part i is seeded from (seed, i), so the parts draw different episodes."""
-        results = []
-        for i, part in enumerate(self.parts):
+        """Reset every part; part i is seeded from (seed, i), so the parts draw different episodes.
+
+        options["reset_mask"] ((num_envs,) bools, after the first reset) resets only the masked
+        rows: each part gets its slice of the mask (and, with a seed, reseeds only those rows), and
+        a part with no masked row is left as it is (its rows' reset infos are zeros). Other options
+        go to every part.
+        """
+        options = dict(options or {})
+        slices: list[np.ndarray | None] = [None] * len(self.parts)
+        if "reset_mask" in options:
+            mask = checked_reset_mask(
+                options.pop("reset_mask"), self.num_envs, self._last_obs is not None, type(self).__name__
+            )
+            slices = [mask[lo:hi] for lo, hi in zip(self.bounds, self.bounds[1:], strict=False)]
+        results: list[tuple[Any, dict[str, Any]]] = []
+        for i, (part, part_mask) in enumerate(zip(self.parts, slices, strict=True)):
+            if part_mask is not None and not part_mask.any():
+                assert self._last_obs is not None  # checked_reset_mask refuses a mask before the first reset
+                results.append((self._last_obs[i], {}))
+                continue
             part_seed = None if seed is None else int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
-            results.append(part.reset(seed=part_seed, options=options))
-        return self._join([o for o, _ in results]), self._join_info([info for _, info in results])
+            part_options = options if part_mask is None else {**options, "reset_mask": part_mask}
+            results.append(part.reset(seed=part_seed, options=part_options))
+        self._last_obs = [o for o, _ in results]
+        return self._join(self._last_obs), self._join_info([info for _, info in results])
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every part with its rows' actions."""
@@ -73,8 +97,9 @@ class ConcatVectorEnv(VectorEnv):
             for part, lo, hi in zip(self.parts, self.bounds, self.bounds[1:], strict=False)
         ]
         obs, reward, terminated, truncated, infos = zip(*out, strict=True)
+        self._last_obs = list(obs)
         return (
-            self._join(list(obs)),
+            self._join(self._last_obs),
             np.concatenate(reward),
             np.concatenate(terminated),
             np.concatenate(truncated),

@@ -14,6 +14,26 @@ from socialzoo.env.gym_env import TaskAdapter, one_robot, robot_row
 from socialzoo.env.tasks.base import batch_actions
 
 
+def checked_reset_mask(mask: Any, num_envs: int, started: bool, name: str) -> np.ndarray:
+    """options["reset_mask"] of a vector env of `num_envs` rows: (num_envs,) bools, as Gymnasium's
+    vector envs take it.
+
+    Raises:
+        RuntimeError: naming `name`, on the first reset (`started` False: every row must start).
+        ValueError: naming `name`, a mask of another shape or dtype (row indices, one entry per
+            ended row); nothing is reset then.
+    """
+    if not started:
+        raise RuntimeError(f"{name}: the first reset must reset every row (no reset_mask)")
+    array = np.asarray(mask)
+    if array.dtype != np.bool_ or array.shape != (num_envs,):
+        raise ValueError(
+            f"{name}: options['reset_mask'] must be {num_envs} bools, one per row, "
+            f"got {array.dtype} of shape {array.shape}"
+        )
+    return array
+
+
 class TaskVectorEnv(TaskAdapter, VectorEnv):
     """num_envs rows of a one-robot task in one batched world (below).
 
@@ -113,23 +133,8 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         return robot_row(self.task.observations(), slice(None)), {self.task.reset_info_key: seeds}
 
     def _masked_rows(self, mask: Any) -> np.ndarray:
-        """The rows a reset mask names: (num_envs,) bools, as Gymnasium's vector envs take it.
-
-        Raises:
-            RuntimeError: on the first reset (every row must start).
-            ValueError: a mask of another shape or dtype (row indices, one entry per ended row);
-                nothing is reset then.
-        """
-        name = type(self).__name__
-        if not self._started:
-            raise RuntimeError(f"{name}: the first reset must reset every row (no reset_mask)")
-        array = np.asarray(mask)
-        if array.dtype != np.bool_ or array.shape != (self.num_envs,):
-            raise ValueError(
-                f"{name}: options['reset_mask'] must be {self.num_envs} bools, one per row, "
-                f"got {array.dtype} of shape {array.shape}"
-            )
-        return np.flatnonzero(array)
+        """The rows a reset mask names (`checked_reset_mask`)."""
+        return np.flatnonzero(checked_reset_mask(mask, self.num_envs, self._started, type(self).__name__))
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every row; rows whose episode ended are reset in the same call."""

@@ -46,6 +46,34 @@ def test_the_same_seed_gives_the_same_rollout():
     assert np.array_equal(roll(), roll())
 
 
+def test_a_reset_mask_resets_each_parts_own_rows():
+    """options["reset_mask"] names rows of the whole env: each part resets its slice of it (a part
+    with no masked row is left as it is), as Gymnasium's vector envs take the mask. Every part
+    refused the whole (5,) mask before."""
+    venv, alone = ConcatVectorEnv(_parts()), ConcatVectorEnv(_parts())
+    venv.reset(seed=3)
+    alone.reset(seed=3)
+    for _ in range(5):
+        obs = venv.step(np.ones(5, dtype=np.int64))[0]
+        alone.step(np.ones(5, dtype=np.int64))
+    mask = np.array([False, False, False, True, False])  # one row of part 1, none of part 0
+    new_obs, info = venv.reset(seed=8, options={"reset_mask": mask})
+    part_obs, part_info = alone.parts[1].reset(seed=alone_seed(8, 1), options={"reset_mask": mask[2:]})
+    assert np.array_equal(new_obs[:2], obs[:2])  # part 0 untouched
+    assert np.array_equal(new_obs[2:], part_obs)
+    assert info["scenario_seed"].tolist() == [0, 0, *part_info["scenario_seed"].tolist()]
+    assert not np.array_equal(new_obs[3], obs[3]) and np.array_equal(new_obs[[2, 4]], obs[[2, 4]])
+    with pytest.raises(ValueError, match=r"ConcatVectorEnv: options\['reset_mask'\] must be 5 bools"):
+        venv.reset(options={"reset_mask": np.array([3])})
+    with pytest.raises(RuntimeError, match="first reset"):
+        ConcatVectorEnv(_parts()).reset(options={"reset_mask": mask})
+
+
+def alone_seed(seed: int, part: int) -> int:
+    """The seed ConcatVectorEnv gives part `part` for `seed`."""
+    return int(np.random.SeedSequence([seed, part]).generate_state(1)[0])
+
+
 def test_parts_whose_spaces_differ_are_refused():
     other = TaskVectorEnv(1, task="crowdnav")
     with pytest.raises(ValueError, match="part 1's observation space"):
