@@ -14,15 +14,24 @@ from socialzoo.core.validation import check_int
 from socialzoo.env.vector import TaskVectorEnv
 
 
+def observation_row(observations: Any, row: int) -> Any:
+    """Row `row` of (B, ...) observations: an array, or a dict of them (a Dict observation space,
+    such as CrowdNav's observation="dict") as a dict of that row's arrays."""
+    if isinstance(observations, dict):
+        return {key: values[row] for key, values in observations.items()}
+    return observations[row]
+
+
 class SB3VecEnv(VecEnv):
     """num_envs rows of a one-robot task as one SB3 VecEnv (below).
 
     It adapts `socialzoo.env.vector.TaskVectorEnv` (same rows, same seeded episodes) to SB3's
     conventions: `step` returns (obs, rewards, dones, infos) with dones = terminated | truncated; a
     row whose episode ended is reset within the step and its info holds `terminal_observation`
-    (the last observation of the ended episode), `TimeLimit.truncated` (True when the time limit,
-    not the task's own end, ended it) and `metrics` (the episode's metrics). SB3 algorithms,
-    VecNormalize and VecMonitor work on it unchanged.
+    (the last observation of the ended episode; a dict of arrays for a Dict observation space),
+    `TimeLimit.truncated` (True when the time limit, not the task's own end, ended it) and
+    `metrics` (the episode's metrics). SB3 algorithms, VecNormalize and VecMonitor work on it
+    unchanged.
 
     Row 0 of a VecEnv seeded with s plays the same episodes as the task's single env reset with
     seed s and then without a seed; row i plays those of row i of a TaskVectorEnv seeded with s,
@@ -125,7 +134,7 @@ class SB3VecEnv(VecEnv):
             types = getattr(self.vector_env, "metric_types", {})
             for row in ended.tolist():
                 infos[row] = {
-                    "terminal_observation": final_obs[row],
+                    "terminal_observation": observation_row(final_obs, row),
                     "TimeLimit.truncated": bool(truncated[row] and not terminated[row]),
                     "metrics": {key: types.get(key, float)(values[row]) for key, values in metrics.items()},
                 }

@@ -154,6 +154,27 @@ def test_sb3_conventions_shapes_and_infos():
     assert seen_done
 
 
+def test_dict_observations_end_episodes_with_a_dict_terminal_observation():
+    """CrowdNav's observation="dict" (SB3's MultiInputPolicy): a row whose episode ended gets its
+    last observation as a dict of that row's arrays. step raised KeyError(0) on the first end
+    (it indexed the dict of (B, ...) arrays by the row)."""
+    venv = SB3VecEnv(2, task="crowdnav", observation="dict", time_limit=2.0)
+    single = gym.make("socialzoo/CrowdNav-v1", observation="dict", time_limit=2.0)
+    venv.seed(3)
+    venv.reset()
+    obs, _ = single.reset(seed=3)
+    actions = np.zeros((2, 2), np.float32)
+    for _ in range(20):
+        _, _, dones, infos = venv.step(actions)
+        obs, _, terminated, truncated, _ = single.step(actions[0])
+        assert bool(dones[0]) == (terminated or truncated)
+        if dones[0]:
+            break
+    last = infos[0]["terminal_observation"]
+    assert venv.observation_space.contains(last)
+    assert last.keys() == obs.keys() and all(np.array_equal(last[k], obs[k]) for k in obs)
+
+
 def test_reset_infos_hold_the_tasks_own_reset_info():
     """CrowdNav's reset info is "case_seed": SB3's reset_infos used to call it "scenario_seed"."""
     venv = SB3VecEnv(3, task="crowdnav")
