@@ -67,24 +67,38 @@ class ConcatVectorEnv(VectorEnv):
 
         options["reset_mask"] ((num_envs,) bools, after the first reset) resets only the masked
         rows: each part gets its slice of the mask (and, with a seed, reseeds only those rows), and
-        a part with no masked row is left as it is (its rows' reset infos are zeros). Other options
-        go to every part.
+        a part with no masked row is left as it is (its rows' reset infos are zeros).
+        options["cases"] (one case per reset row, with its "split") go to the parts in row order,
+        each part's from its own split. Other options go to every part.
+
+        Raises:
+            ValueError: a bad reset_mask, or cases that are not one per row to reset.
         """
         options = dict(options or {})
+        name = type(self).__name__
         slices: list[np.ndarray | None] = [None] * len(self.parts)
         if "reset_mask" in options:
             mask = checked_reset_mask(
-                options.pop("reset_mask"), self.num_envs, self._last_obs is not None, type(self).__name__
+                options.pop("reset_mask"), self.num_envs, self._last_obs is not None, name
             )
             slices = [mask[lo:hi] for lo, hi in zip(self.bounds, self.bounds[1:], strict=False)]
+        counts = [size if m is None else int(m.sum()) for m, size in zip(slices, self.sizes, strict=True)]
+        cases = options.pop("cases", None)
+        if cases is not None and len(cases) != sum(counts):
+            raise ValueError(f"{name}: {sum(counts)} rows to reset but {len(cases)} cases")
+        first_case = np.cumsum([0, *counts])
         results: list[tuple[Any, dict[str, Any]]] = []
         for i, (part, part_mask) in enumerate(zip(self.parts, slices, strict=True)):
-            if part_mask is not None and not part_mask.any():
+            if counts[i] == 0:
                 assert self._last_obs is not None  # checked_reset_mask refuses a mask before the first reset
                 results.append((self._last_obs[i], {}))
                 continue
             part_seed = None if seed is None else int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
-            part_options = options if part_mask is None else {**options, "reset_mask": part_mask}
+            part_options = dict(options)
+            if part_mask is not None:
+                part_options["reset_mask"] = part_mask
+            if cases is not None:
+                part_options["cases"] = list(cases[first_case[i] : first_case[i + 1]])
             results.append(part.reset(seed=part_seed, options=part_options))
         self._last_obs = [o for o, _ in results]
         return self._join(self._last_obs), self._join_info([info for _, info in results])

@@ -69,6 +69,28 @@ def test_a_reset_mask_resets_each_parts_own_rows():
         ConcatVectorEnv(_parts()).reset(options={"reset_mask": mask})
 
 
+def test_fixed_cases_are_one_per_row_end_to_end():
+    """options {"split": NAME, "cases": [one per reset row]} (TaskVectorEnv's, and SB3VecEnv's
+    set_options) give each part its own rows' cases, from its own split; with a reset_mask, one
+    case per masked row. Every part was given the whole list and refused it before."""
+    venv = ConcatVectorEnv(_parts())
+    obs, info = venv.reset(options={"split": "val", "cases": [4, 5, 6, 7, 8]})
+    first = _parts()
+    expected = [
+        part.reset(options={"split": "val", "cases": c})
+        for part, c in zip(first, ([4, 5], [6, 7, 8]), strict=True)
+    ]
+    assert np.array_equal(obs, np.concatenate([o for o, _ in expected]))
+    assert info["scenario_seed"].tolist() == [s for _, i in expected for s in i["scenario_seed"].tolist()]
+    mask = np.array([False, True, True, False, False])
+    obs, info = venv.reset(options={"split": "val", "cases": [1, 2], "reset_mask": mask})
+    part_0 = first[0].reset(options={"split": "val", "cases": [1], "reset_mask": mask[:2]})[0]
+    part_1 = first[1].reset(options={"split": "val", "cases": [2], "reset_mask": mask[2:]})[0]
+    assert np.array_equal(obs, np.concatenate([part_0, part_1]))
+    with pytest.raises(ValueError, match="ConcatVectorEnv: 5 rows to reset but 3 cases"):
+        venv.reset(options={"split": "val", "cases": [0, 1, 2]})
+
+
 def alone_seed(seed: int, part: int) -> int:
     """The seed ConcatVectorEnv gives part `part` for `seed`."""
     return int(np.random.SeedSequence([seed, part]).generate_state(1)[0])
