@@ -116,7 +116,7 @@ class TaskEnv(TaskAdapter, gym.Env):
     ) -> None:
         cls = self.make_task(task, config, 1, kwargs, render_mode)
         one_robot(self.task, type(self).__name__)
-        self.metadata = {"render_modes": list(cls.render_modes), "render_fps": cls.render_fps}
+        self.metadata = {"render_modes": list(cls.render_modes), "render_fps": self.task.frames_per_second}
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
         self._needs_reset = True

@@ -93,7 +93,7 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         self.metadata = {
             **type(self).metadata,
             "render_modes": list(cls.render_modes),
-            "render_fps": cls.render_fps,
+            "render_fps": self.task.frames_per_second,
         }
         self.max_cycles = max_cycles
         self.episode_info = bool(episode_info)

@@ -89,7 +89,8 @@ class CoreRenderer:
         from socialzoo.render.frames import HumanWindow
 
         if self.window is None:
-            self.window = HumanWindow(fps=1.0 / self.task.core.world.dt)
+            # One frame per step of the task, which may be several physics steps (CrowdNav's substeps).
+            self.window = HumanWindow(fps=self.task.frames_per_second)
         self.window.show(frame)
         return None
 

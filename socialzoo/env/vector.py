@@ -99,7 +99,7 @@ class TaskVectorEnv(TaskAdapter, VectorEnv):
         self.metadata = {
             "autoreset_mode": AutoresetMode.SAME_STEP,
             "render_modes": [m for m in cls.render_modes if m == "rgb_array"],
-            "render_fps": cls.render_fps,
+            "render_fps": self.task.frames_per_second,
         }
         self.single_observation_space = self.task.observation_space
         self.single_action_space = self.task.action_space

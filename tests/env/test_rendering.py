@@ -99,3 +99,35 @@ def test_a_vector_env_renders_every_row_as_gymnasium_vector_envs_do(task):
         assert np.array_equal(frame, env.draw("rgb_array", row=k))
     assert not np.array_equal(frames[0], frames[1])  # each row's own world
     assert TaskVectorEnv(2, task=task).render() is None
+
+
+@pytest.mark.parametrize(
+    ("env_id", "overrides", "fps"),
+    [
+        ("socialzoo/CrowdNavWalls-v1", {}, 4.0),  # 0.25 s steps of 10 physics substeps each
+        ("socialzoo/CrowdNav-v1", {"time_step": 0.1}, 10.0),
+        ("socialzoo/ActionSelection-v2", {"map": "open_room"}, 40.0),
+        ("socialzoo/ActionSelection-v2", {"map": "open_room", "world": {"dt": 0.05}}, 20.0),
+    ],
+)
+def test_frames_come_at_the_pace_of_the_tasks_step(env_id, overrides, fps):
+    """render_mode "human" shows a frame per step for one step's simulated time, and the adapters'
+    metadata["render_fps"] (which Gymnasium's RecordVideo writes videos at) is one frame per step.
+    The window paced frames by the physics step (40 fps for 0.25 s steps of 10 substeps: 10x too
+    fast) and the metadata kept CrowdNav's default 4 whatever its time_step."""
+    import gymnasium as gym
+    import matplotlib
+
+    from socialzoo.env.parallel import TaskParallelEnv
+    from socialzoo.env.vector import TaskVectorEnv
+
+    matplotlib.use("Agg")
+    env = gym.make(env_id, render_mode="human", **overrides)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    assert env.unwrapped._renderer.window.fps == pytest.approx(fps)
+    assert env.metadata["render_fps"] == pytest.approx(fps)
+    env.close()
+    kwargs = {**gym.spec(env_id).kwargs, **overrides}
+    assert TaskVectorEnv(1, **kwargs).metadata["render_fps"] == pytest.approx(fps)
+    assert TaskParallelEnv(**kwargs).metadata["render_fps"] == pytest.approx(fps)

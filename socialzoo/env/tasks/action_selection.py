@@ -545,6 +545,11 @@ class ActionSelectionTask(Task):
             action_names=self.action_labels(),
         )
 
+    @property
+    def frames_per_second(self) -> float:
+        """One frame per step, the world's dt (40 at the benchmark's 0.025 s)."""
+        return 1.0 / self.config.dt
+
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         """socialzoo.env.rendering.CoreRenderer of the task."""
         from socialzoo.env.rendering import CoreRenderer

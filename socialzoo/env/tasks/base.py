@@ -48,7 +48,8 @@ class Task(ABC):
     Class attributes:
         name: the task's registry name (socialzoo.env.tasks.TASKS).
         render_modes: the render modes the task can draw ("rgb_array", "human").
-        render_fps: frames per second of one step.
+        render_fps: frames per second of one step (`frames_per_second` unless the step is a
+            config field).
         num_human_slots: H, person slots of each world (the global state's).
         num_human_agents: L, human slots driven by learners (agents "human_0" ..); 0 for most tasks.
         reset_info_key: the key of the reset info holding each row's scenario seed.
@@ -123,6 +124,13 @@ class Task(ABC):
         """A task of len(rows) rows that continues the episodes of `rows`, in that order, for an
         evaluation's tail; None when the task cannot (the caller keeps stepping every row)."""
         return None
+
+    @property
+    def frames_per_second(self) -> float:
+        """Steps per simulated second: the pace of render_mode "human" and the adapters'
+        metadata["render_fps"]; the class's `render_fps` (a task whose step is a config field
+        gives its own)."""
+        return float(self.render_fps)
 
     # ------------------------------------------------------------------ per-robot info
     @property

@@ -490,6 +490,12 @@ class CrowdNavTask(Task):
         return np.zeros(2)
 
     # ------------------------------------------------------------------ world view
+    @property
+    def frames_per_second(self) -> float:
+        """One frame per decision step (config.time_step; 4 at CrowdNav's 0.25 s), however many
+        physics substeps it takes."""
+        return 1.0 / self.config.time_step
+
     def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
         """socialzoo.env.rendering.CoreRenderer of the task. In the open (the arena, a recorded
         scene) the frames show no walls, and the map view shows the arena's cases with 1 m to
