@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from socialzoo.env.tasks.base import batch_actions
 from socialzoo.env.vector import checked_reset_mask
 
 
@@ -104,8 +105,15 @@ class ConcatVectorEnv(VectorEnv):
         return self._join(self._last_obs), self._join_info([info for _, info in results])
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        """Step every part with its rows' actions."""
-        actions = np.asarray(actions)
+        """Step every part with its rows' actions.
+
+        Raises:
+            ValueError: actions of another row count, or a bad action in any row (naming its
+                row), before any part steps.
+        """
+        # Checked as a whole first: a part refusing its rows after an earlier part stepped would
+        # leave the parts' episodes out of step, and extra rows would go unnoticed.
+        actions = batch_actions(self.single_action_space, actions, (self.num_envs,), type(self).__name__)
         out = [
             part.step(actions[lo:hi])
             for part, lo, hi in zip(self.parts, self.bounds, self.bounds[1:], strict=False)

@@ -96,6 +96,30 @@ def alone_seed(seed: int, part: int) -> int:
     return int(np.random.SeedSequence([seed, part]).generate_state(1)[0])
 
 
+def test_bad_actions_are_refused_before_any_part_steps():
+    """A batch of another row count, or a bad action in a later part's rows, raises naming
+    ConcatVectorEnv before any part steps. Extra rows were dropped silently, and a NaN in part 1's
+    rows raised from part 1 after part 0 had stepped, so the parts' episodes fell out of step."""
+    venv = ConcatVectorEnv(
+        [TaskVectorEnv(n, task="crowdnav", variant=v) for n, v in ((2, ""), (1, "Square"))]
+    )
+    venv.reset(seed=0)
+    before = [part.core.state.copy() for part in venv.parts]
+    bad_batches = {
+        r"actions must have shape \(3, 2\), got \(4, 2\)": np.zeros((4, 2)),
+        r"action nan at \(2, 0\) is not a finite number in \[-1.0, 1.0\]": np.array(
+            [[0, 0], [0, 0], [np.nan, 0]]
+        ),
+        r"action 2.0 at \(1, 1\)": np.array([[0, 0], [0, 2.0], [0, 0]]),
+    }
+    for match, actions in bad_batches.items():
+        with pytest.raises(ValueError, match="ConcatVectorEnv: " + match):
+            venv.step(actions)
+    for part, state in zip(venv.parts, before, strict=True):
+        np.testing.assert_array_equal(part.core.state.robot_pose, state.robot_pose)
+        assert int(part.core.state.step_count[0]) == int(state.step_count[0])
+
+
 def test_parts_whose_spaces_differ_are_refused():
     other = TaskVectorEnv(1, task="crowdnav")
     with pytest.raises(ValueError, match="part 1's observation space"):

@@ -312,8 +312,8 @@ def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
 
 def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who: str) -> np.ndarray:
     """A batch of actions of `space` with leading shape `batch` (int64 indices for Discrete and
-    MultiDiscrete, float64 for Box); integral floats count as indices. Raises naming the first bad
-    entry."""
+    MultiDiscrete, float64 for Box, each entry finite and within its own bounds); integral floats
+    count as indices. Raises naming `who` and the first bad entry."""
     array = np.asarray(values)
     shape = batch + tuple(space.shape or ())
     if isinstance(space, (spaces.Discrete, spaces.MultiDiscrete)):
@@ -339,4 +339,13 @@ def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who:
         raise ValueError(f"{who}: actions must have shape {shape}, got {array.shape}")
     if not (np.issubdtype(array.dtype, np.number) or array.dtype == np.bool_):
         raise ValueError(f"{who}: actions must be numbers, got {array.dtype} {values!r}")
-    return array.astype(np.float64)
+    array = array.astype(np.float64)
+    if isinstance(space, spaces.Box):
+        low, high = np.broadcast_to(space.low, shape), np.broadcast_to(space.high, shape)
+        bad = np.argwhere(~np.isfinite(array) | (array < low) | (array > high))
+        if len(bad):
+            where = tuple(int(i) for i in bad[0])
+            raise ValueError(
+                f"{who}: action {array[where]} at {where} is not a finite number in [{low[where]}, {high[where]}]"
+            )
+    return array
