@@ -268,7 +268,7 @@ class CrowdNavTask(Task):
         Raises:
             ValueError: a wrong shape, a NaN or infinite value, a velocity outside [-1, 1], or an
                 index outside the discrete actions (socialzoo.env.tasks.base.batch_actions); the
-                message names the robot.
+                message names the row and the robot.
         """
         b, r = self.batch_size, self.num_robots
         action = np.asarray(action)
@@ -293,8 +293,10 @@ class CrowdNavTask(Task):
             action, unicycle, self.config.preferred_speed, robot.max_rotation, self.config.time_step, command
         )
         if k >= 0:
+            row, robot_index = divmod(k, r)
             raise ValueError(
-                f"CrowdNav: velocity action {action[k].tolist()} of robot {k} is not finite in [-1, 1]"
+                f"CrowdNav: velocity action {action[k].tolist()} of row {row}'s robot {robot_index} "
+                "is not finite in [-1, 1]"
             )
         return (command if unicycle else self._to_world(command)).reshape(b, r, 2)
 
