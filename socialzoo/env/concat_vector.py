@@ -4,7 +4,7 @@ env's, the next B_1 the second's, and so on."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -22,12 +22,14 @@ class ConcatVectorEnv(VectorEnv):
     the same single observation and action spaces and reset in the same step
     (AutoresetMode.SAME_STEP, as socialzoo's TaskVectorEnv does); their infos are joined key by
     key, row arrays end to end (a key a part lacks is zeros, or False for a mask, in its rows).
+    `render()` gives the parts' frames in row order, when they were made with a render_mode.
 
     Args:
         parts: the VectorEnvs, at least one.
 
     Raises:
-        ValueError: no part, or parts whose single spaces differ (naming the first that does).
+        ValueError: no part, or parts whose single spaces or render modes differ (naming the first
+            that does).
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.SAME_STEP}
@@ -41,6 +43,11 @@ class ConcatVectorEnv(VectorEnv):
                 raise ValueError(f"ConcatVectorEnv: part {i}'s observation space differs from part 0's")
             if part.single_action_space != first.single_action_space:
                 raise ValueError(f"ConcatVectorEnv: part {i}'s action space differs from part 0's")
+            if part.render_mode != first.render_mode:
+                raise ValueError(
+                    f"ConcatVectorEnv: part {i}'s render_mode {part.render_mode!r} differs from part 0's "
+                    f"{first.render_mode!r}"
+                )
         self.parts = list(parts)
         self.sizes = [part.num_envs for part in parts]
         self.bounds = np.cumsum([0, *self.sizes])
@@ -50,7 +57,8 @@ class ConcatVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.config = getattr(first, "config", None)
-        self.render_mode = None
+        self.render_mode = first.render_mode
+        self.metadata = {**first.metadata, "autoreset_mode": AutoresetMode.SAME_STEP}
         # Each part's observations after its last reset or step (None before the first reset), for
         # a reset whose mask leaves a part out.
         self._last_obs: list[Any] | None = None
@@ -127,6 +135,16 @@ class ConcatVectorEnv(VectorEnv):
             np.concatenate(truncated),
             self._join_info(list(infos)),
         )
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Every row's frame, the parts' in row order (a tuple of num_envs frames, as Gymnasium's
+        vector envs render); None when the parts have no render_mode."""
+        if self.render_mode is None:
+            return None
+        frames: list[np.ndarray] = []
+        for part in self.parts:  # each gives a tuple of frames: the parts share the render_mode
+            frames.extend(cast(tuple[np.ndarray, ...], part.render()))
+        return tuple(frames)
 
     def close_extras(self, **kwargs: Any) -> None:
         """Close every part."""

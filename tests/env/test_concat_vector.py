@@ -120,6 +120,32 @@ def test_bad_actions_are_refused_before_any_part_steps():
         assert int(part.core.state.step_count[0]) == int(state.step_count[0])
 
 
+def test_it_renders_every_parts_rows_as_a_vector_env_does():
+    """render() gives every row's frame, the parts' in row order (a tuple of num_envs frames, as
+    Gymnasium's vector envs and TaskVectorEnv give them); None when the parts draw nothing.
+    It raised NotImplementedError (Gymnasium's VectorEnv.render) whatever the parts' render_mode."""
+    parts = [
+        TaskVectorEnv(n, task="crowdnav", variant=v, render_mode="rgb_array")
+        for n, v in ((2, ""), (1, "Square"))
+    ]
+    venv = ConcatVectorEnv(parts)
+    assert venv.render_mode == "rgb_array" and venv.metadata["render_fps"] == parts[0].metadata["render_fps"]
+    venv.reset(seed=0)
+    venv.step(np.zeros((3, 2)))
+    frames = venv.render()
+    assert isinstance(frames, tuple) and len(frames) == 3
+    expected = [
+        parts[0].draw("rgb_array", row=0),
+        parts[0].draw("rgb_array", row=1),
+        parts[1].draw("rgb_array"),
+    ]
+    assert all(np.array_equal(f, e) for f, e in zip(frames, expected, strict=True))
+    silent = ConcatVectorEnv([TaskVectorEnv(1, task="crowdnav")])
+    assert silent.render_mode is None and silent.render() is None
+    with pytest.raises(ValueError, match="part 1's render_mode None differs from part 0's 'rgb_array'"):
+        ConcatVectorEnv([parts[0], TaskVectorEnv(1, task="crowdnav")])
+
+
 def test_parts_whose_spaces_differ_are_refused():
     other = TaskVectorEnv(1, task="crowdnav")
     with pytest.raises(ValueError, match="part 1's observation space"):
