@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any, cast
 
@@ -44,14 +45,17 @@ class SB3VecEnv(VecEnv):
 
     Attributes and methods (`get_attr`, `set_attr`, `env_method`) are those of the one batched env
     that every row shares (`self.vector_env`): `get_attr("config")` gives its config once per
-    asked row. Spaces are the task's per row; rewards are float32.
+    asked row. Spaces are the task's per row; rewards are float32. With render_mode="rgb_array"
+    (a keyword of the vector env) `get_images` gives every row's frame, which SB3's `render` and
+    `VecVideoRecorder` tile.
 
     Args:
         num_envs: B, the rows stepped together.
         config: the task's config object (None: its defaults).
         task: the task's registry name, "module:Class" path or class (default: action selection).
         vector_env: an already built TaskVectorEnv of num_envs rows instead of task and config.
-        **kwargs: the task's keyword arguments, e.g. map="ghc3", scenario={"repeats": 20}, map_data=.
+        **kwargs: the task's keyword arguments, e.g. map="ghc3", scenario={"repeats": 20}, map_data=,
+            and the vector env's (render_mode, max_episode_steps).
     """
 
     def __init__(
@@ -74,7 +78,9 @@ class SB3VecEnv(VecEnv):
         # metrics), e.g. the CrowdNav task's CrowdNavVectorEnv.
         self.vector_env = vector_env
         self.config = cast(Any, self.vector_env).config  # every socialzoo VectorEnv has one
-        self.render_mode = None
+        # The vector env's (render_mode="rgb_array" among the task's keywords): SB3's render and
+        # VecVideoRecorder read it and tile get_images' frames.
+        self.render_mode = getattr(self.vector_env, "render_mode", None)
         super().__init__(
             num_envs, self.vector_env.single_observation_space, self.vector_env.single_action_space
         )
@@ -139,6 +145,17 @@ class SB3VecEnv(VecEnv):
                     "metrics": {key: types.get(key, float)(values[row]) for key, values in metrics.items()},
                 }
         return obs, reward.astype(np.float32), dones, infos
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        """Every row's frame (the vector env's render), for SB3's render and VecVideoRecorder;
+        Nones, with a warning as SB3's DummyVecEnv gives, without render_mode="rgb_array"."""
+        if self.render_mode != "rgb_array":
+            warnings.warn(
+                f"SB3VecEnv: the render mode is {self.render_mode!r}; get_images needs render_mode='rgb_array'",
+                stacklevel=2,
+            )
+            return [None] * self.num_envs
+        return list(cast(tuple[np.ndarray, ...], self.vector_env.render()))
 
     def close(self) -> None:
         """Release the batched env."""

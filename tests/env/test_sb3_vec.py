@@ -175,6 +175,25 @@ def test_dict_observations_end_episodes_with_a_dict_terminal_observation():
     assert last.keys() == obs.keys() and all(np.array_equal(last[k], obs[k]) for k in obs)
 
 
+def test_it_renders_its_rows_as_sb3_vec_envs_do():
+    """render_mode="rgb_array" (a TaskVectorEnv keyword) gives SB3's get_images (one frame per row,
+    what VecVideoRecorder and VecEnv.render tile); the VecEnv kept render_mode None and had no
+    get_images (NotImplementedError), so render() warned and drew nothing."""
+    from stable_baselines3.common.vec_env.base_vec_env import tile_images
+
+    venv = SB3VecEnv(2, task="crowdnav", render_mode="rgb_array")
+    assert venv.render_mode == "rgb_array" and venv.get_attr("render_mode") == ["rgb_array"] * 2
+    venv.seed(0)
+    venv.reset()
+    venv.step(np.zeros((2, 2), np.float32))
+    images = venv.get_images()
+    assert len(images) == 2 and all(
+        np.array_equal(i, venv.vector_env.draw("rgb_array", row=k)) for k, i in enumerate(images)
+    )
+    assert np.array_equal(venv.render(), tile_images(images))
+    assert SB3VecEnv(1, task="crowdnav").render_mode is None
+
+
 def test_reset_infos_hold_the_tasks_own_reset_info():
     """CrowdNav's reset info is "case_seed": SB3's reset_infos used to call it "scenario_seed"."""
     venv = SB3VecEnv(3, task="crowdnav")
