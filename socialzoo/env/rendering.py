@@ -56,6 +56,11 @@ class CoreRenderer:
         )
         self.window: HumanWindow | None = None
 
+    def __getstate__(self) -> dict[str, Any]:
+        """The renderer without its window (pyplot and an open figure do not pickle): a copy or
+        an unpickled renderer opens a window of its own at its next frame."""
+        return {**self.__dict__, "window": None}
+
     def reset(self) -> None:
         """Forget trails (a new episode)."""
         self.frames.reset()

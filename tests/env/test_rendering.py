@@ -131,3 +131,26 @@ def test_frames_come_at_the_pace_of_the_tasks_step(env_id, overrides, fps):
     kwargs = {**gym.spec(env_id).kwargs, **overrides}
     assert TaskVectorEnv(1, **kwargs).metadata["render_fps"] == pytest.approx(fps)
     assert TaskParallelEnv(**kwargs).metadata["render_fps"] == pytest.approx(fps)
+
+
+def test_an_env_showing_a_window_can_be_copied_and_pickled():
+    """copy.deepcopy or pickle of an env whose "human" window is open (a lookahead copy, a
+    snapshot) raised "cannot pickle 'module' object" (the window's pyplot and figure); the copy
+    now opens a window of its own at its next frame and the original keeps its."""
+    import copy
+    import pickle
+
+    import gymnasium as gym
+    import matplotlib
+
+    matplotlib.use("Agg")
+    env = gym.make("socialzoo/CrowdNav-v1", render_mode="human")
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    window = env.unwrapped._renderer.window
+    for twin in (copy.deepcopy(env), pickle.loads(pickle.dumps(env))):
+        twin.step(twin.action_space.sample())
+        assert twin.unwrapped._renderer.window.is_open and twin.unwrapped._renderer.window is not window
+        twin.close()
+    assert window.is_open
+    env.close()
