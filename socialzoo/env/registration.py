@@ -205,21 +205,34 @@ RECORDED_IDS: dict[str, dict] = {
 
 
 def register_task(env_id: str, task: str, **kwargs: object) -> None:
-    """Register `env_id` as the Gymnasium env and VectorEnv of `task` (idempotent).
+    """Register `env_id` as the Gymnasium env and VectorEnv of `task` (idempotent: the same
+    registration again does nothing).
 
     Args:
         env_id: "namespace/Name-vN".
         task: the task's registry name (socialzoo.env.tasks.TASKS) or its "module:Class" path.
         **kwargs: the task's config fields as plain JSON values.
+
+    Raises:
+        ValueError: `env_id` is registered already with other kwargs or entry points (an id names
+            one set-up: register the other one under another id or version).
     """
-    if env_id not in gym.registry:
-        gym.register(
-            id=env_id,
-            entry_point=ENTRY,
-            vector_entry_point=VECTOR_ENTRY,
-            kwargs={"task": task, **kwargs},
-            disable_env_checker=False,
-        )
+    wanted = {"task": task, **kwargs}
+    if env_id in gym.registry:
+        spec = gym.spec(env_id)
+        if (spec.entry_point, spec.vector_entry_point, spec.kwargs) != (ENTRY, VECTOR_ENTRY, wanted):
+            raise ValueError(
+                f"register_task: {env_id} is already registered with {spec.kwargs} "
+                f"(entry point {spec.entry_point}); got {wanted} (register it under another id or version)"
+            )
+        return
+    gym.register(
+        id=env_id,
+        entry_point=ENTRY,
+        vector_entry_point=VECTOR_ENTRY,
+        kwargs=wanted,
+        disable_env_checker=False,
+    )
 
 
 def task_ids() -> dict[str, dict]:

@@ -308,3 +308,16 @@ def test_the_viewer_shows_a_metric_that_a_module_of_one_s_own_registers(tmp_path
     text = page.read_text()
     assert '["twice_steps_own","twice the steps",' in text.replace(", ", ",")
     assert '"twice_steps_own":40' in text.replace(" ", "")
+
+
+def test_registering_an_id_again_with_other_kwargs_is_refused():
+    """register_task of an id already registered with other kwargs kept the first ones silently
+    (gym.make then played max_steps=120 where 30 was asked); the same registration again stays a
+    no-op, another one is refused naming the id and both kwargs."""
+    register_task(TOY_ID, TOY, max_steps=120)  # the module's own registration, again: nothing changes
+    with pytest.raises(
+        ValueError,
+        match=r"socialzoo-test/ToyReach-v0 is already registered with .*'max_steps': 120.*'max_steps': 30",
+    ):
+        register_task(TOY_ID, TOY, max_steps=30)
+    assert gym.spec(TOY_ID).kwargs["max_steps"] == 120
