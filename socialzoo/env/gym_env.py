@@ -38,6 +38,8 @@ class TaskAdapter:
     task: Task
     render_mode: str | None = None
     _renderer: Any = None
+    # True from the first reset on: the task's worlds exist only then.
+    _started: bool = False
 
     def make_task(
         self, task: Any, config: Any, batch_size: int, kwargs: dict[str, Any], render_mode: str | None = None
@@ -64,7 +66,13 @@ class TaskAdapter:
         return self.task.core  # type: ignore[attr-defined]
 
     def draw(self, mode: str, view: str = "follow", row: int = 0) -> np.ndarray | None:
-        """Row `row`'s frame from the task's renderer for `mode` (socialzoo.env.tasks.base.Task.make_renderer)."""
+        """Row `row`'s frame from the task's renderer for `mode` (socialzoo.env.tasks.base.Task.make_renderer).
+
+        Raises:
+            RuntimeError: before the first reset (there is no world to draw yet).
+        """
+        if not self._started:
+            raise RuntimeError(f"{type(self).__name__}: call reset() before render()")
         if self._renderer is None:
             self._renderer = self.task.make_renderer(mode, view=view)
         return self._renderer.render(row=row)
@@ -120,7 +128,7 @@ class TaskEnv(TaskAdapter, gym.Env):
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
         self._needs_reset = True
-        self._seeded = False
+        self._started = False
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Start an episode.
@@ -131,9 +139,9 @@ class TaskEnv(TaskAdapter, gym.Env):
             options: the task's reset options (a fixed case or a scenario to replay).
         """
         super().reset(seed=seed)
-        if seed is not None or not self._seeded:
+        if seed is not None or not self._started:
             self.task.seed(seed if seed is not None else int(self.np_random.integers(2**63 - 1)))
-            self._seeded = True
+            self._started = True
         seeds = self.task.reset(_ROW, dict(options or {}))
         self._needs_reset = False
         self.show(reset=True)

@@ -290,8 +290,6 @@ class TaskParallelEnv(TaskAdapter, ParallelEnv[str, Any, Any]):
         if self.render_mode is None:
             gymnasium.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        if not self._started:
-            raise RuntimeError(f"{type(self).__name__}: call reset() before render()")
         return self.draw(self.render_mode, view="map")
 
     def close(self) -> None:

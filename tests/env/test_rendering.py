@@ -154,3 +154,19 @@ def test_an_env_showing_a_window_can_be_copied_and_pickled():
         twin.close()
     assert window.is_open
     env.close()
+
+
+@pytest.mark.parametrize("task", ["action_selection", "crowdnav"])
+def test_rendering_before_the_first_reset_says_to_reset(task):
+    """render() before reset() raised AttributeError "'NoneType' object has no attribute
+    'step_count'" from the renderer (TaskVectorEnv, which gymnasium.make_vec does not wrap, and the
+    unwrapped TaskEnv); it now says to reset first, as the ParallelEnv did."""
+    from socialzoo.env.gym_env import TaskEnv
+    from socialzoo.env.vector import TaskVectorEnv
+
+    for env in (
+        TaskVectorEnv(2, task=task, render_mode="rgb_array"),
+        TaskEnv(task=task, render_mode="rgb_array"),
+    ):
+        with pytest.raises(RuntimeError, match=f"{type(env).__name__}: call reset\\(\\) before render\\(\\)"):
+            env.render()
