@@ -1,6 +1,7 @@
 """Every loader a user can point at a file refuses damaged and foreign files with its own named
 error, and that error names the file: random bytes, a valid head with a random tail, truncated
-copies, an empty file, a missing file, and every other kind of file the package reads or writes.
+copies, an empty file, a missing file, a folder in the file's place, and every other kind of file the
+package reads or writes.
 
 One table (LOADERS) lists each loader with a maker of a small valid sample, the kind of that
 sample, and the error class it must raise; the corrupted files are derived from the samples, so
@@ -403,3 +404,19 @@ def test_files_of_other_kinds_are_refused(
         path = _case(loader, samples, tmp_path / kind, data)
         problems.append(_problem(loader, path, f"a {kind} file", loader.error))
     _assert_refused(loader, problems)
+
+
+@pytest.mark.parametrize(
+    "loader",
+    _params({
+        "stored_test_set": "a folder test_sets/MAP-quick.json is taken for no file: IsADirectoryError",
+        "reproduce results.load(run.json)": "a folder results/run.json is taken for no file",
+    }),
+)  # fmt: skip
+def test_a_folder_in_place_of_the_file_is_refused(
+    loader: Loader, samples: dict[str, Path], tmp_path: Path
+) -> None:
+    path = _case(loader, samples, tmp_path / "folder", None)
+    path.mkdir()  # `mkdir -p DIR/results.sqlite`, or a path typed with a slash too many
+    (path / "inside.txt").write_text("a folder given where a file belongs\n")
+    _assert_refused(loader, [_problem(loader, path, "a folder", loader.error)])

@@ -93,8 +93,8 @@ class ResultsStore:
 
     A new (or empty) file is created with the schema. An existing file must be a store of this
     format and schema version; anything else (random bytes, a truncated or otherwise corrupted
-    database, a file of another kind) raises StoreError naming the file, and the file is left
-    untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
+    database, a file of another kind, a folder) raises StoreError naming the file, and the file is
+    left untouched. Each `add` is one committed transaction (SQLite WAL journal), so a killed run
     loses at most the trials it had not handed over yet.
 
     Several processes (two benchmark runs on the same output directory, say) may open and write
@@ -112,6 +112,10 @@ class ResultsStore:
     def __init__(self, path: str | Path, *, timeout: float = BUSY_TIMEOUT) -> None:
         self.path = Path(path)
         self.timeout = timeout
+        if self.path.is_dir():
+            # Else a traceback (IsADirectoryError) or, for a folder of size 0, SQLite's "unable to
+            # open database file".
+            raise StoreError(f"{self.path} is a folder, not a results store: choose another output directory")
         if self.path.exists() and self.path.stat().st_size > 0:
             self._check_header()
         else:
