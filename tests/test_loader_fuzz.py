@@ -409,7 +409,6 @@ def test_files_of_other_kinds_are_refused(
 @pytest.mark.parametrize(
     "loader",
     _params({
-        "stored_test_set": "a folder test_sets/MAP-quick.json is taken for no file: IsADirectoryError",
         "reproduce results.load(run.json)": "a folder results/run.json is taken for no file",
     }),
 )  # fmt: skip

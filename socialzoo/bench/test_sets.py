@@ -135,8 +135,8 @@ def stored_test_set(
 
     Raises:
         TestSetError: (a ValueError) the stored file belongs to another version of the map (its
-            hash differs), or is not a test set file (random bytes, a truncated file or a file of
-            another kind included); the message names the file.
+            hash differs), or is not a test set file (random bytes, a truncated file, a file of
+            another kind or a folder included); the message names the file.
         ValueError: trials exceeds the set's size.
         FileNotFoundError, MapError: the map cannot be loaded.
     """
@@ -152,7 +152,7 @@ def stored_test_set(
     cfg = ScenarioConfig()
     base = TestSet(map_ref, CUSTOM_QUICK_SEED if quick else CUSTOM_TEST_SEED, size, cfg=cfg, name=name)
     scenarios: list[Scenario] = []
-    if path.is_file():
+    if path.exists():  # a folder there too: _read refuses it, where writing would end in a traceback
         scenarios = _read(path, digest, base)
     if len(scenarios) < need:
         logger.info("%s: generating scenarios %d..%d", name, len(scenarios), need - 1)
