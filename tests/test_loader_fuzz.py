@@ -406,12 +406,7 @@ def test_files_of_other_kinds_are_refused(
     _assert_refused(loader, problems)
 
 
-@pytest.mark.parametrize(
-    "loader",
-    _params({
-        "reproduce results.load(run.json)": "a folder results/run.json is taken for no file",
-    }),
-)  # fmt: skip
+@pytest.mark.parametrize("loader", ALL)
 def test_a_folder_in_place_of_the_file_is_refused(
     loader: Loader, samples: dict[str, Path], tmp_path: Path
 ) -> None:

@@ -253,7 +253,7 @@ def load(results_dir: str | Path) -> dict[str, Any]:
     """
     folder = Path(results_dir)
     run_file = folder / RUN_FILE
-    if not run_file.is_file():
+    if not run_file.exists():  # a folder there is refused by _read_json, not taken for no file
         raise FileNotFoundError(f"{folder}: no {RUN_FILE}; not the results of `socialzoo reproduce`")
     data: dict[str, Any] = {"run": _read_json(run_file, dict)}
     missing = [k for k in RUN_KEYS if k not in data["run"]]
