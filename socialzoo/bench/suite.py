@@ -506,7 +506,7 @@ def run_suite(
             unit.split,
             unit.cases,
             config.batch_size,
-            **unit.overrides,
+            unit.overrides,
         )
         if late:  # the backend stored them all, unless its rows were keyed otherwise than evaluate_stored's
             logger.warning(

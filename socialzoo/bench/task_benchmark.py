@@ -115,10 +115,11 @@ def evaluate_stored(
     split: str = "test",
     cases: int | None = None,
     batch_size: int = 100,
-    **overrides: Any,
+    overrides: Mapping[str, Any] | None = None,
 ) -> tuple[list[dict[str, Any]], int]:
     """The episodes of `policy` (named `spec`) on the first `cases` cases of a split, playing only
-    those the store at store_path lacks and storing each as it ends.
+    those the store at store_path lacks and storing each as it ends. `overrides`: the task's config
+    fields, a mapping (not keywords: CrowdNav's config has a field `cases` of its own).
 
     Cases are played by socialzoo.bench.episodes.play_cases, so an interrupted run resumes where it
     stopped and a repeated one reads instead of playing. An episode is keyed like a benchmark trial:
@@ -134,6 +135,7 @@ def evaluate_stored(
     from socialzoo.bench.episodes import play_cases
     from socialzoo.bench.store import TRIAL_COLUMNS, ResultsStore
 
+    overrides = dict(overrides or {})
     probe = task.make(1, **overrides)
     splits = probe.case_splits()
     if split not in splits:
@@ -312,7 +314,7 @@ def run_task_benchmark(
     for spec, policy in built:
         overrides = config | dict(getattr(policy, "task_overrides", {}) or {})
         episodes, played = evaluate_stored(
-            out / STORE_FILE, task, spec, policy, split, cases, batch_size, **overrides
+            out / STORE_FILE, task, spec, policy, split, cases, batch_size, overrides
         )
         summary = summarize(episodes)
         rows.append(table_entry(spec, env_id.split("/")[-1], f"{probe.name}-{split}", summary))

@@ -174,7 +174,7 @@ def test_stored_episodes_resume_after_an_interruption_and_follow_the_policy(tmp_
         config, "val", "orca", robot
     )
     assert evaluate_stored(store, task, "orca", other, "val", cases=2)[1] == 2
-    assert evaluate_stored(store, task, "orca", robot, "val", cases=2, time_limit=20.0)[1] == 2
+    assert evaluate_stored(store, task, "orca", robot, "val", cases=2, overrides={"time_limit": 20.0})[1] == 2
     # A learned policy's file is part of its key: a retrained file under the same path is new.
     from socialzoo.agents import SHIPPED_DIR
 

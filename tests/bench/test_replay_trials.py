@@ -157,7 +157,13 @@ def test_a_suite_trial_names_the_family_its_replay_needs(tmp_path):
     task = TaskId.of("socialzoo/CrowdNavSuite-v2")
     task = TaskId(task.env_id, task.task, {**task.kwargs, "family": "crossing"})
     evaluate_stored(
-        tmp_path / "results.sqlite", task, "orca", CrowdOrcaRobot(), "val", cases=1, time_limit=10.0
+        tmp_path / "results.sqlite",
+        task,
+        "orca",
+        CrowdOrcaRobot(),
+        "val",
+        cases=1,
+        overrides={"time_limit": 10.0},
     )
     given = r"--env socialzoo/CrowdNavSuite-v2 --task-config family=crossing --task-config time_limit=10.0 "
     with pytest.raises(ValueError, match=given + r"--split val --case 0 --policy orca"):

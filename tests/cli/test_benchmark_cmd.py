@@ -258,6 +258,30 @@ def test_a_task_id_takes_max_steps_where_its_config_has_it(tmp_path, capsys):
         assert [row["steps"] for row in store.rows()] == [3]  # the episode stopped at the override
 
 
+def test_a_task_id_takes_its_config_field_cases(tmp_path, capsys):
+    # CrowdNav's config has a field `cases` (the case generator: num_humans, circle_radius, ...), and
+    # the benchmark passed the config to evaluate_stored as keywords beside its own `cases` (the count):
+    # `--task-config cases.num_humans=3` ended in a TypeError traceback ("got multiple values for
+    # argument 'cases'"), though `socialzoo replay --env` took it.
+    argv = [
+        "benchmark",
+        "--maps",
+        "socialzoo/CrowdNav-v1",
+        "--policies",
+        "orca",
+        "--trials",
+        "1",
+        "--no-figures",
+    ]
+    assert socialzoo_main([*argv, "--task-config", "cases.num_humans=3", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    from socialzoo.bench.store import ResultsStore
+
+    with ResultsStore(tmp_path / "results.sqlite") as store:
+        (row,) = store.rows()
+        assert store.config(row["config_hash"])["task"]["cases"]["num_humans"] == 3
+
+
 @pytest.mark.parametrize(
     "backend",
     [["--backend", "ray"], ["--backend", "ray", "--address", "10.255.255.1:6379"], ["--workers", "4"]],
