@@ -31,6 +31,7 @@ from socialzoo.agents.demonstrations import (
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.agents.pips import PipsPolicy, ProgramError, load_program
 from socialzoo.bench import test_sets
+from socialzoo.bench.episode_log import EpisodeLogError, make_episode_log, read_episode_log, write_episode_log
 from socialzoo.bench.store import ResultsStore, StoreError
 from socialzoo.bench.tables import PAPER_LAYOUT, SummaryError, read_summary_csv, write_summary_csv
 from socialzoo.env.human_policy import LearnedHumanPolicy
@@ -147,6 +148,21 @@ def _write_timings(path: Path) -> None:
         session["computed"] = 0
 
 
+def _write_episode_log(path: Path) -> None:
+    people = np.array([[[3.0, 3.0]], [[3.0, 3.2]], [[3.0, 3.4]]])
+    log = make_episode_log(
+        dt=0.5,
+        robot_pos=[[0, 0], [0.5, 0], [1, 0]],
+        goal=[1, 0],
+        robot_radius=0.3,
+        goal_radius=0.2,
+        people_pos=people,
+        walls=[[0, 1, 2, 1]],
+        label="fuzz",
+    )
+    write_episode_log(path, log)
+
+
 @dataclass(frozen=True)
 class _Args:
     seed: int = 0
@@ -217,6 +233,7 @@ LOADERS = [
            f"test_sets/{MAP}-quick.json", missing_ok=True),
     Loader("read_summary_csv", read_summary_csv, _write_summary, SummaryError, "summary-csv", "summary.csv",
            line_based=True),
+    Loader("read_episode_log", read_episode_log, _write_episode_log, EpisodeLogError, "episode-log", "e.json"),
     # Records of runs and reproductions.
     Loader("reproduce results.load(run.json)", lambda p: results.load(p.parent), _write_results_run,
            results.ResultsError, "results-run", "results/run.json"),

@@ -226,17 +226,24 @@ def read_episode_log(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The log in file `path`, validated (validate_log).
 
     Raises:
-        EpisodeLogError: the file cannot be read or is not JSON, or the log is invalid.
+        EpisodeLogError: the file cannot be read, is not UTF-8 text or is not JSON (a number or a
+            nesting past Python's limits included), or the log is invalid.
     """
     source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise EpisodeLogError(
+            source, "(file)", f"is not UTF-8 text: {err.reason} at byte {err.start}"
+        ) from None
     except OSError as err:
         raise EpisodeLogError(source, "(file)", f"cannot be read: {err.strerror or err}") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as err:
         raise EpisodeLogError(source, "(file)", f"is not JSON: {err}") from None
+    except (ValueError, RecursionError) as err:  # json.loads's other refusals: [[[... deep, 5000 digits
+        raise EpisodeLogError(source, "(file)", f"is not JSON: {type(err).__name__}: {err}") from None
     validate_log(data, source)
     return dict(data)
 
