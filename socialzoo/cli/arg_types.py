@@ -64,6 +64,15 @@ def out_dir(text: str) -> Path:
     return path
 
 
+def out_file(text: str) -> Path:
+    """argparse type of an output file (--out FILE): out_path, and not the name of an existing folder
+    (the command would end in an IsADirectoryError traceback when it writes the file, after its run)."""
+    path = out_path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: it is a folder, not a file")
+    return path
+
+
 def given(args: argparse.Namespace, *names: str) -> dict[str, Any]:
     """The options among `names` that the command line set (not None), by name (for --max-steps:
     the env overrides)."""

@@ -15,7 +15,7 @@ from socialzoo.cli.arg_types import (
     comma_list,
     given,
     out_dir,
-    out_path,
+    out_file,
     positive_int,
     split_commas,
     task_config,
@@ -140,7 +140,7 @@ def add_demos_parser(subparsers: Any) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--episodes", type=positive_int, required=True, help="number of episodes")
-    parser.add_argument("--out", type=out_path, required=True, help="output .npz file")
+    parser.add_argument("--out", type=out_file, required=True, help="output .npz file")
     parser.add_argument("--map", default="gdc1", help="map (default gdc1, the training map)")
     parser.add_argument("--policy", type=str.lower, default="ref", help="demonstrating policy (default ref)")
     parser.add_argument("--chunk-episodes", type=positive_int, default=25, help="episodes per chunk file")

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import add_scenario_arguments, count, out_path, positive_int
+from socialzoo.cli.arg_types import add_scenario_arguments, count, out_file, positive_int
 
 
 def register(subparsers: Any) -> None:
@@ -25,7 +25,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--stride", type=positive_int, default=4, help="steps per frame (default 4 = 0.1 s)")
     parser.add_argument("--fps", type=float, default=20.0, help="frames per second of the file")
     parser.add_argument("--max-frames", type=positive_int, default=800, help="longest animation, frames")
-    parser.add_argument("--out", type=out_path, default=Path("episode.gif"), help=".gif or .mp4 file")
+    parser.add_argument("--out", type=out_file, default=Path("episode.gif"), help=".gif or .mp4 file")
     parser.set_defaults(func=run_demo)
 
 

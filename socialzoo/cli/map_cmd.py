@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.cli import command_help, fail
-from socialzoo.cli.arg_types import count, out_dir, out_path, positive_float, positive_int
+from socialzoo.cli.arg_types import count, out_dir, out_file, out_path, positive_float, positive_int
 
 # A building of `map drive`'s folder: NAME.vectormap.txt, with NAME.navigation.json beside it.
 VECTOR_MAP, NAVIGATION = ".vectormap.txt", ".navigation.json"
@@ -193,7 +193,7 @@ def _add_import_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--source", default="", help="provenance text stored in the map")
     parser.add_argument("--licence", default="", help="licence text stored in the map")
-    parser.add_argument("--out", type=out_path, default=None, help="output JSON (default NAME.json)")
+    parser.add_argument("--out", type=out_file, default=None, help="output JSON (default NAME.json)")
 
 
 def _add_picture_options(parser: argparse.ArgumentParser, suffix: str, *, no_picture: bool) -> None:

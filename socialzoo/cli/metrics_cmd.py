@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.cli import command_help
-from socialzoo.cli.arg_types import out_path
+from socialzoo.cli.arg_types import out_file
 
 
 def _non_negative(text: str) -> float:
@@ -36,7 +36,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("logs", nargs="+", type=Path, metavar="LOG.json", help="episode logs")
     parser.add_argument(
-        "--out", type=out_path, help="also write every log's table to this CSV (log, metric, value, unit)"
+        "--out", type=out_file, help="also write every log's table to this CSV (log, metric, value, unit)"
     )
     parser.add_argument(
         "--personal-space", type=_non_negative, default=0.5, help="personal space, m (default 0.5)"

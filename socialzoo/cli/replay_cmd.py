@@ -16,7 +16,7 @@ from socialzoo.cli.arg_types import (
     comma_list,
     count,
     given,
-    out_path,
+    out_file,
     task_config,
 )
 
@@ -83,7 +83,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--laser-rays", type=count, default=60, help="laser rays drawn (default 60; 0: no laser)"
     )
-    parser.add_argument("--out", type=out_path, default=Path("episode.html"), help="the .html file to write")
+    parser.add_argument("--out", type=out_file, default=Path("episode.html"), help="the .html file to write")
     parser.set_defaults(func=run_replay)
 
 

@@ -5,7 +5,7 @@ import argparse
 import pytest
 
 from socialzoo.cli import main
-from socialzoo.cli.arg_types import out_dir, out_path
+from socialzoo.cli.arg_types import out_dir, out_file, out_path
 
 
 def test_out_path_takes_a_path_whose_folders_can_be_made(tmp_path):
@@ -79,6 +79,27 @@ def test_an_out_folder_that_is_a_file_is_a_usage_error(tmp_path, capsys, words):
     assert "it is a file, not a folder" in _refused_out(capsys, words, afile)
     assert out_path(str(afile)) == afile  # a file output may replace a file
     assert out_dir(str(tmp_path / "new")) == tmp_path / "new"
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ("demos", "--episodes", "1"),
+        ("demo",),
+        ("replay",),
+        ("metrics", "log.json"),
+        ("map", "import", "--walls", "walls.txt", "--name", "box"),
+    ],
+    ids=" ".join,
+)
+def test_an_out_file_that_is_a_folder_is_a_usage_error(tmp_path, capsys, words):
+    # A folder named as the output file passed out_path and the command ended in an
+    # IsADirectoryError traceback when it wrote the file, after the episode or the import had run.
+    folder = tmp_path / "episode.html"
+    folder.mkdir()
+    assert "it is a folder, not a file" in _refused_out(capsys, words, folder)
+    assert out_path(str(folder)) == folder  # an output folder may be one that is there
+    assert out_file(str(tmp_path / "new.csv")) == tmp_path / "new.csv"
 
 
 @pytest.mark.parametrize(
