@@ -356,7 +356,7 @@ def guideline_metrics(traj: Trajectories, params: GuidelineParams | None = None)
 
     # ---- failure to progress: windows of progress_time without progress_distance of progress
     left = to_goal if traj.goal_distance is None else _float(traj.goal_distance, (b, n), "goal_distance")
-    w = max(1, round(p.progress_time / dt))
+    w = max(1, round(min(p.progress_time / dt, n)))  # a window as long as the episode finds none
     if n > w:
         windows = np.lib.stride_tricks.sliding_window_view(left, w + 1, axis=1)  # (B, N - w, w + 1)
         stuck = windows[:, :, 1:].min(axis=2) > windows[:, :, 0] - p.progress_distance

@@ -214,6 +214,10 @@ def test_failure_to_progress_and_stalled_time():
         ]
         == 0
     )
+    # Nor does a window of 1e308 s (`socialzoo metrics --progress-time 1e308`): its length in
+    # samples, 1e308 / dt, overflowed to inf and round(inf) raised OverflowError.
+    huge = GuidelineParams(progress_time=1e308)
+    assert episode_metrics(huge, dt=0.5, robot_pos=line(0, 1, 1), goal=[10, 0])["gl_failure_to_progress"] == 0
     # Progress measured along a given route distance: 10, 9.9, 9.8, ... falls 0.2 per 2 s < 0.25.
     left = 10 - 0.1 * np.arange(9)
     found = episode_metrics(params, dt=1.0, robot_pos=line(*range(9)), goal=[10, 0], goal_distance=left)
