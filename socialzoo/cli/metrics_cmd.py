@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import out_file
 
 
@@ -32,7 +33,8 @@ def register(subparsers: Any) -> None:
         "socialzoo/bench/schemas/episode_log.schema.json; docs/guideline_metrics.md) with the metrics "
         "of Table I of the social-navigation evaluation guidelines (Francis et al., ACM THRI 2025): "
         "one table of metric, value and unit per log. Every log is checked first; a log that breaks "
-        "the schema stops the command with its file and field, and nothing is written.",
+        "the schema stops the command with its file and field, and nothing is written; so does an --out "
+        "that names one of the logs.",
     )
     parser.add_argument("logs", nargs="+", type=Path, metavar="LOG.json", help="episode logs")
     parser.add_argument(
@@ -90,6 +92,14 @@ def format_table(title: str, found: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether paths a and b name one file (through links, ./ and ../ alike)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them is not there: no file to lose
+        return False
+
+
 def run_metrics(args: argparse.Namespace) -> int:
     """Read and check every log, then print (and write) their tables; 2 on a bad log or option."""
     from socialzoo.bench.episode_log import EpisodeLogError, log_metrics, read_episode_log
@@ -105,6 +115,8 @@ def run_metrics(args: argparse.Namespace) -> int:
     except ValueError as err:
         print(f"socialzoo metrics: {err}", file=sys.stderr)
         return 2
+    if args.out is not None and any(_same_file(args.out, log) for log in args.logs):
+        return fail("metrics", f"--out {args.out} is one of the logs: the table would be written over it")
     scored = []
     try:
         for path in args.logs:  # every log is read and checked before anything is printed or written

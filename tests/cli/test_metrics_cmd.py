@@ -55,3 +55,17 @@ def test_thresholds_are_options(tmp_path, capsys):
     assert "gl_stalled_time                 1.00  s" in capsys.readouterr().out  # both steps at 0.2 m/s
     assert main(["metrics", str(log), "--progress-time", "0"]) == 2
     assert "progress_time must be > 0" in capsys.readouterr().err
+
+
+def test_an_out_that_is_one_of_the_logs_is_refused_and_the_log_kept(tmp_path, capsys, monkeypatch):
+    # `socialzoo metrics run.json --out run.json` (a --out typed where a log was meant) wrote the
+    # CSV over the episode log it had just read: the log was lost.
+    log = _log(tmp_path, "run", [0, 1, 2])
+    before = log.read_bytes()
+    monkeypatch.chdir(tmp_path)
+    for out in (str(log), "run.json", "./sub/../run.json"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        assert main(["metrics", str(log), "--out", out]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("socialzoo metrics: error: --out") and "run.json" in err
+        assert log.read_bytes() == before
