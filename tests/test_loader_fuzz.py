@@ -47,6 +47,7 @@ from socialzoo.maps.map_file import MapError, load_map, read_map
 from socialzoo.reproduce import results
 from socialzoo.reproduce.ledger import Ledger, LedgerError
 from socialzoo.reproduce.plan import quick_settings, settings_hash
+from socialzoo.scenarios.cards import CardError, card_path, load_card
 from socialzoo.scenarios.generator import generate_scenario
 from socialzoo.scenarios.scenario import Scenario, ScenarioError
 from socialzoo.train.demo_data import load_demo_steps
@@ -218,6 +219,8 @@ LOADERS = [
            MapError, "pedsim", "scene.xml"),
     Loader("Scenario.load", Scenario.load, lambda p: generate_scenario(load_map(MAP), 0).save(p),
            ScenarioError, "scenario", "s.json"),
+    Loader("load_card", load_card, _copy(card_path("frontal_approach")), CardError, "card",
+           "frontal_approach.toml"),
     # Demonstrations.
     Loader("read_metadata", read_metadata, _write_demos, DemonstrationError, "demos", "d.npz"),
     Loader("load_demonstrations", load_demonstrations, _write_demos, DemonstrationError, "demos", "d.npz"),

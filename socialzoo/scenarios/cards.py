@@ -165,7 +165,7 @@ def load_card(path_or_name: str | Path) -> ScenarioCard:
     splits) and the metric registry (socialzoo.core.metrics).
 
     Raises:
-        CardError: the file cannot be read or is not TOML, a field is missing or has the wrong
+        CardError: the file cannot be read or is not UTF-8 TOML, a field is missing or has the wrong
             type, the family is not a suite scenario, the letter or title disagrees with the suite,
             a range is out of order, a metric is not registered, the seed splits are not the
             suite's; the message names the file and the field.
@@ -180,6 +180,8 @@ def load_card(path_or_name: str | Path) -> ScenarioCard:
 
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as err:
+        raise CardError(source, "(file)", f"is not UTF-8 text: {err.reason} at byte {err.start}") from None
     except OSError as err:
         raise CardError(source, "(file)", f"cannot be read: {err.strerror or err}") from None
     except tomllib.TOMLDecodeError as err:
