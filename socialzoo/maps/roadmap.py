@@ -176,6 +176,11 @@ class Roadmap:
 # ----------------------------------------------------------------------------- walls
 
 
+def _fixed(value: float, digits: int) -> str:
+    """`value` with `digits` decimals, or in 3 significant digits past 1e12 (1e+200, not 201 digits)."""
+    return f"{value:.{digits}f}" if abs(value) < 1e12 else f"{value:.3g}"
+
+
 def _bounds(walls: np.ndarray, region: Box | None, margin: float) -> Box:
     pts = walls.reshape(-1, 2)
     if region is None:
@@ -270,15 +275,18 @@ def free_space(
     walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     res = config.resolution
     x0, y0, x1, y1 = _bounds(walls, region, config.margin)
-    shape = (max(1, math.ceil((x1 - x0) / res)), max(1, math.ceil((y1 - y0) / res)))
-    if shape[0] * shape[1] > MAX_GRID_CELLS:
+    # Counted in floating point, where a plan in the wrong units (1e200 m across) is inf cells, not
+    # an OverflowError of math.ceil or of the message's int-to-float.
+    cells = max(1.0, float(np.ceil((x1 - x0) / res))) * max(1.0, float(np.ceil((y1 - y0) / res)))
+    if cells > MAX_GRID_CELLS:
         raise ValueError(
-            f"the plan spans {x1 - x0:.0f} x {y1 - y0:.0f} m (from ({x0:.1f}, {y0:.1f}) to ({x1:.1f}, "
-            f"{y1:.1f}), margin included): its {100 * res:.0f} cm free-space grid would have "
-            f"{shape[0] * shape[1] / 1e6:.0f} M cells, more than the {MAX_GRID_CELLS / 1e6:.0f} M "
+            f"the plan spans {_fixed(x1 - x0, 0)} x {_fixed(y1 - y0, 0)} m (from ({_fixed(x0, 1)}, "
+            f"{_fixed(y0, 1)}) to ({_fixed(x1, 1)}, {_fixed(y1, 1)}), margin included): its {100 * res:.0f} cm "
+            f"free-space grid would have {_fixed(cells / 1e6, 0)} M cells, more than the {MAX_GRID_CELLS / 1e6:.0f} M "
             f"(about 7 GB of memory) an import handles; import a part of it with a region (map import "
             f"--region XMIN YMIN XMAX YMAX), or check that its coordinates are metres"
         )
+    shape = (max(1, math.ceil((x1 - x0) / res)), max(1, math.ceil((y1 - y0) / res)))
     index = index or WallIndex(walls)
     origin = np.array([x0, y0])
     clearance = _grid_clearance(index, origin, shape, res)

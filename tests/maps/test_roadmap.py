@@ -77,6 +77,11 @@ def test_a_plan_too_large_for_the_grid_is_refused_before_any_is_made():
     assert "metres" in message
     # A region within the limit is the way out.
     assert free_space(walls, region=(-1.0, -1.0, 20.0, 20.0)).interior.any()
+    # A plan in the wrong units is refused the same way: the cells of a span of 1e200 m, and the span
+    # of walls at -1e308 and 1e308 (inf m), were an OverflowError (math.ceil(inf), int to float).
+    for far in (_box(0, 0, 1e200, 1e200), [[-1e308, 0, 1e308, 0], [1e308, 0, 1e308, 5]]):
+        with pytest.raises(ValueError, match=r"M cells, more than the 100 M"):
+            free_space(np.array(far, dtype=np.float64))
 
 
 def test_a_region_beside_the_plan_is_refused_by_name():
