@@ -7,10 +7,11 @@ from collections.abc import Sequence
 from typing import Any, cast
 
 import numpy as np
+from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from socialzoo.env.tasks.base import batch_actions
+from socialzoo.env.tasks.base import batch_actions, check_box_batch
 from socialzoo.env.vector import checked_reset_mask
 
 
@@ -121,7 +122,10 @@ class ConcatVectorEnv(VectorEnv):
         """
         # Checked as a whole first: a part refusing its rows after an earlier part stepped would
         # leave the parts' episodes out of step, and extra rows would go unnoticed.
-        actions = batch_actions(self.single_action_space, actions, (self.num_envs,), type(self).__name__)
+        name = type(self).__name__
+        actions = batch_actions(self.single_action_space, actions, (self.num_envs,), name)
+        if isinstance(self.single_action_space, spaces.Box):
+            check_box_batch(self.single_action_space, actions, name)
         out = [
             part.step(actions[lo:hi])
             for part, lo, hi in zip(self.parts, self.bounds, self.bounds[1:], strict=False)

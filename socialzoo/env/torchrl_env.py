@@ -15,7 +15,7 @@ from socialzoo.core.validation import check_int, check_seed
 from socialzoo.env.gym_env import TaskAdapter
 from socialzoo.env.parallel import STATE_HUMAN_SIZE, STATE_ROBOT_SIZE, global_state
 from socialzoo.env.tasks.action_selection import HUMAN_INFO_KEYS
-from socialzoo.env.tasks.base import TaskStep, batch_actions
+from socialzoo.env.tasks.base import TaskStep
 from socialzoo.env.torchrl_single import box_observation, reset_rows, vector_action_spec
 
 ROBOT = "robot"
@@ -260,8 +260,6 @@ class SocialNavTorchEnv(TaskAdapter, EnvBase):
             robot_action = np.asarray(self.robot_policy.act(task.observations(), task)).reshape(shape)
         else:
             robot_action = tensordict.get((ROBOT, "action")).detach().cpu().numpy().reshape(shape)
-        # Checked here, as the other adapters check theirs: a bad entry is named by its row and robot.
-        robot_action = batch_actions(task.action_space, robot_action, (b, r), type(self).__name__)
         human_action = None
         if h:
             human_action = tensordict.get((HUMAN, "action")).detach().cpu().numpy().astype(np.float64)

@@ -312,8 +312,8 @@ def agent_action(space: spaces.Space, value: Any, who: str) -> Any:
 
 def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who: str) -> np.ndarray:
     """A batch of actions of `space` with leading shape `batch` (int64 indices for Discrete and
-    MultiDiscrete, float64 for Box, each entry finite and within its own bounds); integral floats
-    count as indices. Raises naming `who` and the first bad entry."""
+    MultiDiscrete, float64 for Box); integral floats count as indices. Raises naming `who` and the
+    first bad entry (a Box's values are the task's to range-check, or `check_box_batch`'s)."""
     array = np.asarray(values)
     shape = batch + tuple(space.shape or ())
     if isinstance(space, (spaces.Discrete, spaces.MultiDiscrete)):
@@ -339,13 +339,17 @@ def batch_actions(space: spaces.Space, values: Any, batch: tuple[int, ...], who:
         raise ValueError(f"{who}: actions must have shape {shape}, got {array.shape}")
     if not (np.issubdtype(array.dtype, np.number) or array.dtype == np.bool_):
         raise ValueError(f"{who}: actions must be numbers, got {array.dtype} {values!r}")
-    array = array.astype(np.float64)
-    if isinstance(space, spaces.Box):
-        low, high = np.broadcast_to(space.low, shape), np.broadcast_to(space.high, shape)
-        bad = np.argwhere(~np.isfinite(array) | (array < low) | (array > high))
-        if len(bad):
-            where = tuple(int(i) for i in bad[0])
-            raise ValueError(
-                f"{who}: action {array[where]} at {where} is not a finite number in [{low[where]}, {high[where]}]"
-            )
-    return array
+    return array.astype(np.float64)
+
+
+def check_box_batch(space: spaces.Box, actions: np.ndarray, who: str) -> None:
+    """Raise ValueError naming `who` and the first entry of `actions` (a batch of `space`'s actions,
+    float64) that is not a finite number within its own bounds. Apart from batch_actions: the tasks
+    check their own ranges in their step, so the adapters of one task need no second check."""
+    bad = ~np.isfinite(actions) | (actions < space.low) | (actions > space.high)
+    if bad.any():
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        low, high = np.broadcast_to(space.low, actions.shape), np.broadcast_to(space.high, actions.shape)
+        raise ValueError(
+            f"{who}: action {actions[where]} at {where} is not a finite number in [{low[where]}, {high[where]}]"
+        )
