@@ -90,7 +90,9 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
     place). The multi-agent view (robots and learned humans in groups)
     is socialzoo.env.torchrl_env.
 
-    Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does.
+    Seeding: `set_seed(s)` seeds the rows' training streams as TaskVectorEnv.reset(seed=s) does;
+    each row's next episode comes from its new stream (a reset right after set_seed starts the rows
+    it resets on it; the others finish their episodes first).
 
     Args:
         num_envs: B.
@@ -150,13 +152,14 @@ class TaskTorchEnv(TaskAdapter, EnvBase):
 
     # ------------------------------------------------------------------ TorchRL hooks
     def _set_seed(self, seed: int | None) -> None:
+        # Only the streams: the rows' episodes go on until a reset, which restarts the rows its
+        # "_reset" names (TorchRL keeps the other rows' data, so their episodes must go on too).
         self.task.seed(check_seed(type(self).__name__ + ".set_seed", seed))
-        self._started = False
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
         rows = np.arange(self.num_envs)
         mask = tensordict.get("_reset", None) if tensordict is not None else None
-        if mask is not None and self._started:
+        if mask is not None and self._started:  # the first reset starts every row
             rows = reset_rows(mask, self.num_envs, type(self).__name__)
         self.task.reset(rows, {})
         self._started = True

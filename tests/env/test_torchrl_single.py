@@ -80,6 +80,30 @@ def test_partial_reset_touches_only_the_masked_rows():
     assert env.core.state.step_count[1] == 0 and env.core.state.step_count[0] == 5
 
 
+def test_a_partial_reset_after_set_seed_touches_only_the_masked_rows_too():
+    """set_seed mid-run, then a reset of some rows (TorchRL's "_reset"): TorchRL keeps the other
+    rows' data, so the env must keep their episodes. It restarted every row after set_seed, so
+    those rows' observations in the tensordict were the old episode's while the env played a new
+    one (SocialNavTorchEnv already kept them)."""
+    env = CrowdNavTorchEnv(2)
+    env.set_seed(1)
+    td = env.reset()
+    for _ in range(3):
+        td["action"] = torch.zeros(2, 2)
+        td = step_mdp(env.step(td))
+    env.set_seed(2)
+    td["_reset"] = torch.tensor([[True], [False]])
+    out = env.reset(td)
+    fresh = CrowdNavTorchEnv(2)
+    fresh.set_seed(2)
+    assert torch.equal(out["observation"][0], fresh.reset()["observation"][0])  # row 0 on seed 2's stream
+    assert torch.equal(out["observation"][1], td["observation"][1])  # row 1 as TorchRL kept it ...
+    np.testing.assert_array_equal(
+        env.task.observations()[1, 0], td["observation"][1].numpy()
+    )  # ... and so the env
+    assert env.core.state.step_count[1] == 3 and env.core.state.step_count[0] == 0
+
+
 def test_scenarios_repeat_as_configured():
     from tensordict import TensorDict
 
