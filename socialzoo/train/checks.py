@@ -32,6 +32,18 @@ def check_int(args: Any, *names: str, low: int, high: int | None = None, optiona
         validation.check_int(owner(args), name, getattr(args, name), low=low, high=high, allow_none=optional)
 
 
+# The largest seed a trainer takes: torch.manual_seed's, and for the trainers on Stable-Baselines3,
+# which also seeds numpy's legacy generator (np.random.seed), that generator's.
+MAX_SEED = 2**64 - 1
+MAX_SB3_SEED = 2**32 - 1
+
+
+def check_seed(args: Any, high: int = MAX_SEED) -> None:
+    """Raise ValueError unless args.seed is an int in [0, high] (a larger one ended the run in a
+    traceback when the trainer seeded torch or numpy)."""
+    check_int(args, "seed", low=0, high=high)
+
+
 def check_number(
     args: Any,
     *names: str,

@@ -11,7 +11,16 @@ import numpy as np
 
 from socialzoo.env.crowd_variants import crowd_env_id
 from socialzoo.env.registration import CROWD_SUITE_ID
-from socialzoo.train.checks import check_block, check_choice, check_int, check_number, check_sizes, coerce
+from socialzoo.train.checks import (
+    MAX_SB3_SEED,
+    check_block,
+    check_choice,
+    check_int,
+    check_number,
+    check_seed,
+    check_sizes,
+    coerce,
+)
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("crowdnav", policy_file="crowdnav.safetensors")
@@ -107,7 +116,7 @@ class CrowdNavArgs:
         check_sizes(self, "net_arch", "embed", "value", "attention")
         check_int(self, "total_steps", "checkpoint_every", "num_envs", "n_steps", "batch_size", low=1)
         check_int(self, "n_epochs", "threads", low=1)
-        check_int(self, "seed", low=0)
+        check_seed(self, MAX_SB3_SEED)
         families = self.family_names()
         check_int(self, "eval_trials", low=0, high=100 * max(1, len(families)))
         if families and self.num_envs < len(families):

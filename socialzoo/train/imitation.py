@@ -8,7 +8,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from socialzoo.train.checks import Activation, check_choice, check_int, check_number, check_sizes, coerce
+from socialzoo.train.checks import (
+    Activation,
+    check_choice,
+    check_int,
+    check_number,
+    check_seed,
+    check_sizes,
+    coerce,
+)
 from socialzoo.train.skeleton import TrainingRun
 
 # The imitation trainers' arguments that name input files (socialzoo.train.skeleton.Trainer.inputs).
@@ -54,7 +62,8 @@ class ImitationArgs:
         coerce(self, demos=Path, out=Path, hidden=tuple)
         check_int(self, "steps", low=1, optional=True)
         check_int(self, "checkpoint_every", "threads", low=1)
-        check_int(self, "seed", "eval_trials", low=0)
+        check_int(self, "eval_trials", low=0)
+        check_seed(self)
         check_sizes(self, "hidden")
         check_choice(self, "activation", Activation)
         check_number(self, "lr", low=0.0, low_open=True)

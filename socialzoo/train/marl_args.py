@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from socialzoo.train.checks import check_choice, check_int, check_number
+from socialzoo.train.checks import check_choice, check_int, check_number, check_seed
 
 Algo = Literal["mappo", "ippo"]
 CollectorKind = Literal["single", "multiprocess", "ray"]
@@ -145,7 +145,8 @@ class MarlArgs:
         check_int(self, "frames", "batch_size", "frames_per_batch", "workers", "epochs", low=1)
         check_int(self, "minibatch_size", "hidden", "depth", "stats_steps", "checkpoint_every", low=1)
         check_int(self, "num_robots", "max_steps", "threads", low=1)
-        check_int(self, "seed", "max_humans", low=0)
+        check_int(self, "max_humans", low=0)
+        check_seed(self)
         check_number(self, "lr", "clip_epsilon", "max_grad_norm", low=0, low_open=True)
         check_number(self, "action_scale", "init_std", low=0, low_open=True)
         check_number(self, "gamma", "lmbda", low=0, high=1)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.checks import check_int, check_number, check_seed
 from socialzoo.train.people_closed_loop import HORIZON, closed_loop_ade, subject_cases
 from socialzoo.train.people_demos import Demonstrations, demonstrations
 from socialzoo.train.people_replay import WORLD_DT, replay_world
@@ -103,6 +103,7 @@ class Args:
         check_int(self, "hidden", "depth", "batch_size", "max_epochs", "patience", "threads", low=1)
         check_int(self, "label_frames", low=1)
         check_int(self, "num_neighbours", "noisy_copies", low=0)
+        check_seed(self)
         check_number(self, "velocity_noise", low=0.0)
         check_number(self, "relaxation_time", "action_scale", "lr", low=0.0, low_open=True)
         check_number(self, "val_fraction", low=0.0, low_open=True, high=0.5)

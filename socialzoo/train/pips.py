@@ -17,7 +17,7 @@ from socialzoo.agents.pips import Program, Transition, predicate_atoms, predicat
 from socialzoo.agents.pips_features import PaperParts, atom_values, paper_parts
 from socialzoo.data.fetch import sha256
 from socialzoo.nav.subpolicies import ACTION_NAMES, GO_ALONE, NUM_ACTIONS
-from socialzoo.train.checks import check_choice, check_int, check_number
+from socialzoo.train.checks import check_choice, check_int, check_number, check_seed
 from socialzoo.train.demo_data import check_steps
 from socialzoo.train.pips_search import SearchOptions, SearchSettings, search_guard
 from socialzoo.train.run_dir import read_record
@@ -74,7 +74,8 @@ class PipsArgs(SearchOptions):
         check_int(self, "z3_candidates", low=1)
         if self.max_pred_size > 3:
             raise ValueError(f"PipsArgs.max_pred_size must be at most 3, got {self.max_pred_size!r}")
-        check_int(self, "window", "max_depth", "seed", "heldout_steps", low=0)
+        check_int(self, "window", "max_depth", "heldout_steps", low=0)
+        check_seed(self)
         check_number(self, "complexity_cost", low=0)
         check_number(self, "z3_timeout_s", "time_budget_s", low=0, low_open=True)
         check_choice(self, "sampling", ("prefix", "windows"))

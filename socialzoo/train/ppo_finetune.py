@@ -14,7 +14,7 @@ import numpy as np
 from socialzoo.agents import policy_file_or_shipped
 from socialzoo.agents.mlp import MlpPolicy
 from socialzoo.env.config import EnvConfig
-from socialzoo.train.checks import check_int, check_number, coerce
+from socialzoo.train.checks import MAX_SB3_SEED, check_int, check_number, check_seed, coerce
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
 TRAINER = Trainer("ppo-finetune", policy_file="ppo_finetune.safetensors", inputs=("init",))
@@ -56,7 +56,8 @@ class Args:
 
     def __post_init__(self) -> None:
         coerce(self, init=policy_file_or_shipped, out=Path)
-        check_int(self, "warmup", "steps", "seed", low=0)
+        check_int(self, "warmup", "steps", low=0)
+        check_seed(self, MAX_SB3_SEED)
         check_int(self, "threads", low=1)
         check_number(self, "lr", low=0.0, low_open=True, high=1.0)
         check_number(self, "clip", low=0.0, low_open=True, high=10.0)

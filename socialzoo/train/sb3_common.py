@@ -14,7 +14,15 @@ from typing import Any
 
 from socialzoo.core.metrics import registered
 from socialzoo.env.config import EnvConfig
-from socialzoo.train.checks import check_block, check_int, check_number, check_sizes, coerce
+from socialzoo.train.checks import (
+    MAX_SB3_SEED,
+    check_block,
+    check_int,
+    check_number,
+    check_seed,
+    check_sizes,
+    coerce,
+)
 from socialzoo.train.skeleton import CheckpointSchedule, Trainer, TrainingRun, run_training
 
 logger = logging.getLogger(__name__)
@@ -102,7 +110,8 @@ class SB3Args:
             object.__setattr__(self, "map", default_map(self.family))
         check_int(self, "total_steps", "checkpoint_every", "max_steps", "scenario_repeats", "num_envs", low=1)
         check_int(self, "batch_size", "threads", low=1)
-        check_int(self, "seed", "eval_trials", "eval_every", low=0)
+        check_int(self, "eval_trials", "eval_every", low=0)
+        check_seed(self, MAX_SB3_SEED)
         if self.eval_every % self.checkpoint_every:
             raise ValueError(
                 f"{owner}.eval_every ({self.eval_every}) must be a multiple of checkpoint_every "

@@ -85,6 +85,28 @@ def test_bad_numbers_are_usage_errors(tmp_path, steps):
     assert exit_.value.code == 2
 
 
+SB3_TRAINERS = ["crowdnav", "dqn", "ppo"]
+TORCH_TRAINERS = ["bc", "cotrain", "dagger", "gail", "humans", "people-bc"]
+
+
+@pytest.mark.parametrize(
+    ("trainer", "seed", "high"),
+    [(t, "4294967296", 2**32 - 1) for t in SB3_TRAINERS]
+    + [(t, "18446744073709551616", 2**64 - 1) for t in TORCH_TRAINERS]
+    + [("people-bc", "-1", 2**64 - 1)],
+)
+def test_a_seed_out_of_range_is_a_usage_error(tmp_path, capsys, trainer, seed, high):
+    # `socialzoo train ppo --seed 4294967296` trained until SB3 seeded numpy's legacy generator
+    # ("Seed must be between 0 and 2**32 - 1"), --seed 2**64 until torch.manual_seed ("Overflow when
+    # unpacking long long"): tracebacks, exit status 1. people-bc did not check its seed at all:
+    # --seed -1 was numpy's "expected non-negative integer".
+    assert main(["train", trainer, "--seed", seed, "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"socialzoo train {trainer}: error: ") and "Traceback" not in err
+    assert f"seed must be an int in [0, {high}], got {seed}" in err
+    assert not (tmp_path / "run").exists()
+
+
 @pytest.mark.parametrize("trainer", ["bc", "gail", "dagger", "pips"])
 def test_more_demonstration_steps_than_recorded_is_a_usage_error(small_demos, tmp_path, trainer, capsys):
     # Found running `socialzoo train bc --steps 2000` on a 1,600-step recording: a ValueError
