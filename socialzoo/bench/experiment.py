@@ -318,25 +318,31 @@ def _resolve_test_sets(
     """Test set per map: given ones first, else the registry's (a map file with a shipped map's contents
     included: scenario_sets.shipped_map), else one generated for the map and stored in out_dir
     (socialzoo.bench.test_sets: any shipped map or map file)."""
-    from socialzoo.bench.test_sets import stored_test_set
+    from socialzoo.bench.test_sets import stored_set_name, stored_test_set
     from socialzoo.scenarios.scenario_sets import shipped_map
 
-    out: dict[str, TestSet] = {}
+    given: dict[str, TestSet] = {}
+    # Every map's test set by name first: two map files of one name are refused before the first
+    # one's set is generated (the second's then clashed with the file it wrote: "the map now has
+    # sha256 ...: use another --out directory").
+    names: dict[str, str] = {}
     for m in config.maps:
         name = config.test_set_name(shipped_map(m) or m)
         if test_sets is not None and m in test_sets:
-            out[m] = test_sets[m]
+            given[m] = test_sets[m]
         elif name in TEST_SETS:
-            out[m] = TEST_SETS[name]
-        else:
-            out[m] = stored_test_set(m, out_dir, config.trials, quick=config.quick)
-        same = [k for k in out if k != m and (out[k].name or k) == (out[m].name or m)]
+            given[m] = TEST_SETS[name]
+        names[m] = (given[m].name or m) if m in given else stored_set_name(m, config.quick)
+        same = [k for k in names if k != m and names[k] == names[m]]
         if same:
             raise ValueError(
-                f"maps {same[0]!r} and {m!r} both give test set {out[m].name or m!r} (one map, or two of "
+                f"maps {same[0]!r} and {m!r} both give test set {names[m]!r} (one map, or two of "
                 "one name): benchmark one of them"
             )
-    return out
+    return {
+        m: given[m] if m in given else stored_test_set(m, out_dir, config.trials, quick=config.quick)
+        for m in config.maps
+    }
 
 
 def run_benchmark(

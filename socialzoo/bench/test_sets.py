@@ -112,6 +112,12 @@ def family_validation_set(family: str, map_name: str) -> FamilyCases:
     )
 
 
+def stored_set_name(map_ref: str, quick: bool = False) -> str:
+    """The name of the test set stored_test_set keeps for a map: its name field, then -test or -quick
+    (two map files of one name share it). Raises as load_map does."""
+    return f"{load_map(map_ref).name}-{'quick' if quick else 'test'}"
+
+
 def stored_test_set(
     map_ref: str, out_dir: str | Path, trials: int | None, quick: bool = False
 ) -> StoredTestSet:
@@ -141,12 +147,11 @@ def stored_test_set(
         FileNotFoundError, MapError: the map cannot be loaded.
     """
     m = load_map(map_ref)
-    kind = "quick" if quick else "test"
     size = CUSTOM_QUICK_SIZE if quick else CUSTOM_TEST_SIZE
     need = size if trials is None else trials
     if need > size:
         raise ValueError(f"{need} trials asked on map {map_ref!r}, but its generated test set holds {size}")
-    name = f"{m.name}-{kind}"
+    name = stored_set_name(map_ref, quick)
     path = Path(out_dir) / TEST_SET_DIR / f"{name}.json"
     digest = map_sha256(m)
     cfg = ScenarioConfig()

@@ -378,6 +378,24 @@ def test_a_copy_of_a_shipped_map_file_has_its_registered_sets_and_an_edited_one_
     assert "both give test set 'gdc1-test'" in capsys.readouterr().err
 
 
+def test_two_map_files_of_one_name_are_refused_before_any_test_set_is_made(tmp_path, capsys):
+    # Two imported buildings both named "twin" (their name field) in one --maps: the first one's test
+    # set was generated into OUT/test_sets/twin-test.json, then the second's was refused as "generated
+    # on map 'a.json' ...: use another --out directory", advice that the next run would meet again.
+    from socialzoo.maps.map_file import load_map
+
+    data = {**load_map("open_room").to_json(), "name": "twin"}
+    (tmp_path / "a.json").write_text(json.dumps(data))
+    data["walls"] = [*data["walls"], [4.0, 4.0, 4.5, 4.5]]
+    (tmp_path / "b.json").write_text(json.dumps(data))
+    maps = f"{tmp_path / 'a.json'},{tmp_path / 'b.json'}"
+    argv = ["benchmark", "--policies", "goalone", "--maps", maps, "--trials", "2", "--no-figures"]
+    assert socialzoo_main([*argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "both give test set 'twin-test' (one map, or two of one name)" in err and "sha256" not in err
+    assert not (tmp_path / "out" / "test_sets").exists()
+
+
 def test_task_ids_of_one_name_in_two_namespaces_get_folders_of_their_own():
     # a/X-v0 and b/X-v0 both wrote to OUT/X-v0, the second run's tables over the first's.
     from socialzoo.cli.benchmark_cmd import _id_folders
