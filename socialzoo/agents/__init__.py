@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.agents.base import LoadablePolicy, Policy
+from socialzoo.core.files import no_file
 
 __all__ = [
     "POLICIES",
@@ -176,7 +177,7 @@ def check_policy_spec(spec: str) -> str:
         if not hasattr(cls, "load"):
             raise ValueError(f"policy {key!r} is not loaded from a file; name it without ':PATH'")
         if not Path(path).is_file():
-            raise ValueError(f"policy {spec!r}: no such file {path!r}")
+            raise ValueError(f"policy {spec!r}: {no_file(path)}")
     elif hasattr(cls, "load") and shipped_policy_file(key) is None:
         trainer = POLICY_TRAINERS.get(key, key)
         raise ValueError(

@@ -26,7 +26,7 @@ from socialzoo.bench.tables import (
     summarize,
     write_tables,
 )
-from socialzoo.core.files import json_text, write_text_atomic
+from socialzoo.core.files import json_text, no_file, write_text_atomic
 from socialzoo.core.metrics import names as metric_names
 from socialzoo.core.validation import check_int
 from socialzoo.data.fetch import sha256
@@ -297,7 +297,7 @@ def check_humans(humans: str) -> str:
 
     for part in parse_people(humans):
         if part.path is not None and not Path(part.path).is_file():
-            raise ValueError(f"humans {humans!r}: no such learned policy file {part.path!r}")
+            raise ValueError(f"humans {humans!r}: {no_file(part.path, 'learned policy file')}")
     return humans
 
 

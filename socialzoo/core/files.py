@@ -43,6 +43,13 @@ def read_text(
         raise error(f"{where}: unreadable {what} ({err.strerror or err})") from None
 
 
+def no_file(path: str | os.PathLike[str], what: str = "file") -> str:
+    """Why `path` names no `what` to read, for a message: "no such WHAT 'P'", or "'P' is a folder, not a
+    WHAT" (a folder is not missing, and saying so sends the user looking for the wrong mistake)."""
+    where = os.fspath(path)
+    return f"{where!r} is a folder, not a {what}" if Path(path).is_dir() else f"no such {what} {where!r}"
+
+
 def parse_json(text: str, where: str, what: str, error: type[Exception]) -> Any:
     """The JSON value of `text` read from `where`.
 

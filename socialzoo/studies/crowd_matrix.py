@@ -18,7 +18,7 @@ from socialzoo.bench.runner import Backend
 from socialzoo.bench.stats import mean_interval, rate_interval
 from socialzoo.bench.store import ResultsStore
 from socialzoo.bench.tables import policy_label, remove_outputs, write_csv
-from socialzoo.core.files import json_text, write_text_atomic
+from socialzoo.core.files import json_text, no_file, write_text_atomic
 from socialzoo.core.metrics import axis_label, metric, registered
 from socialzoo.humans.models import PeopleConfig
 from socialzoo.scenarios.scenario_sets import TestSet
@@ -103,7 +103,7 @@ class MatrixConfig:
         """The benchmark run of one column: the env drives the people, with counterfactual rows."""
         path = PeopleConfig(models=humans).learned_path
         if path is not None and not Path(path).is_file():
-            raise ValueError(f"MatrixConfig.humans: no such learned policy file {path!r}")
+            raise ValueError(f"MatrixConfig.humans: {no_file(path, 'learned policy file')}")
         # Every other field of the matrix is the benchmark's field of the same name.
         shared = {
             f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("humans", "env_overrides")

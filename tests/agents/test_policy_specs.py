@@ -41,6 +41,9 @@ def test_learned_policies_load_from_a_path_or_the_shipped_file(tmp_path, monkeyp
 def test_bad_specs_are_refused_before_anything_runs(tmp_path):
     with pytest.raises(ValueError, match="no such file"):
         check_policy_spec(f"ppo:{tmp_path / 'missing.safetensors'}")
+    # A folder was "no such file", though it is there: the user looks for a typo instead.
+    with pytest.raises(ValueError, match=r"policy 'ppo:.*': '.*' is a folder, not a file"):
+        check_policy_spec(f"ppo:{tmp_path}")
     with pytest.raises(ValueError, match="not loaded from a file"):
         check_policy_spec(f"ref:{tmp_path}")
     from socialzoo.bench.experiment import BenchmarkConfig

@@ -132,6 +132,10 @@ def test_config_hash_follows_the_policy_file_digest(
 def test_bad_human_specs_fail_naming_them(tmp_path):
     with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*no such learned policy file"):
         config(f"learned:{tmp_path / 'missing.safetensors'}")
+    with pytest.raises(
+        ValueError, match=r"BenchmarkConfig.humans: .* is a folder, not a learned policy file"
+    ):
+        config(f"learned:{tmp_path}")
     with pytest.raises(ValueError, match=r"BenchmarkConfig.humans: .*unknown model 'robots'"):
         config("robots")
     with pytest.raises(ValueError, match="name the learned policy file as learned:PATH"):

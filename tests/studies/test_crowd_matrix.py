@@ -102,6 +102,8 @@ def test_matrix_labels_and_bad_configs(tmp_path):
         config(humans=("sf", "robots"))
     with pytest.raises(ValueError, match="no such learned policy file"):
         config(humans=(f"learned:{tmp_path / 'none.safetensors'}",))
+    with pytest.raises(ValueError, match="is a folder, not a learned policy file"):
+        config(humans=(f"learned:{tmp_path}",))
     with pytest.raises(ValueError, match="must not set people"):
         config(env_overrides={"people": {"models": "orca"}})
 
