@@ -4,13 +4,12 @@ cache (never into the repository) and see what is there (socialzoo.data)."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from socialzoo.cli import command_help
+from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import split_commas
 
 if TYPE_CHECKING:
@@ -79,7 +78,7 @@ def run_fetch(args: argparse.Namespace) -> int:
     try:
         fetched = fetch_scenes(args.scenes, source_dir=args.source_dir, cache=cache)
     except (ValueError, OSError) as exc:  # a failed download: 1, anything else: 2
-        print(f"socialzoo data fetch: {exc}", file=sys.stderr)
+        fail("data fetch", exc)
         return 1 if isinstance(exc, DownloadError) else 2
     print(f"cache: {cache}")
     for scene, paths in fetched.items():

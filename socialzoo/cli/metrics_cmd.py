@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -113,8 +112,7 @@ def run_metrics(args: argparse.Namespace) -> int:
             progress_distance=args.progress_distance,
         )
     except ValueError as err:
-        print(f"socialzoo metrics: {err}", file=sys.stderr)
-        return 2
+        return fail("metrics", err)
     if args.out is not None and any(_same_file(args.out, log) for log in args.logs):
         return fail("metrics", f"--out {args.out} is one of the logs: the table would be written over it")
     scored = []
@@ -123,8 +121,7 @@ def run_metrics(args: argparse.Namespace) -> int:
             log = read_episode_log(path)
             scored.append((path, log, log_metrics(log, params, str(path))))
     except EpisodeLogError as err:
-        print(f"socialzoo metrics: invalid episode log: {err}", file=sys.stderr)
-        return 2
+        return fail("metrics", f"invalid episode log: {err}")
     rows: list[dict[str, Any]] = []
     for path, log, found in scored:
         title = f"{path}" + (f" ({log['label']})" if log.get("label") else "")

@@ -70,6 +70,7 @@ def test_a_wrong_file_is_refused_and_nothing_cached(source, tmp_path, capsys):
     cache = tmp_path / "cache"
     assert main(["data", "fetch", "eth-ucy", "--from", str(source), "--cache", str(cache)]) == 2
     err = capsys.readouterr().err
+    assert err.startswith("socialzoo data fetch: error: ") and "Traceback" not in err
     assert "no two_b.txt below" in err and "pinned SHA-256" in err
     assert not cache.exists()
 

@@ -45,6 +45,8 @@ def test_a_bad_log_names_file_and_field_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "table.csv"
     assert main(["metrics", str(good), str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr()
+    # One line in the CLI's form, "socialzoo COMMAND: error: ...", as every other command's input errors.
+    assert err.err.startswith("socialzoo metrics: error: invalid episode log: ")
     assert f"{bad}: robot.goal_radius: 'half a metre' is not of type 'number'" in err.err
     assert err.out == "" and not out.exists()
 
@@ -54,7 +56,8 @@ def test_thresholds_are_options(tmp_path, capsys):
     assert main(["metrics", str(log), "--stall-speed", "0.5"]) == 0
     assert "gl_stalled_time                 1.00  s" in capsys.readouterr().out  # both steps at 0.2 m/s
     assert main(["metrics", str(log), "--progress-time", "0"]) == 2
-    assert "progress_time must be > 0" in capsys.readouterr().err
+    assert (err := capsys.readouterr().err).startswith("socialzoo metrics: error: ")
+    assert "progress_time must be > 0" in err
 
 
 def test_an_out_that_is_one_of_the_logs_is_refused_and_the_log_kept(tmp_path, capsys, monkeypatch):
