@@ -76,7 +76,7 @@ class TaskId:
         fields = {**self.kwargs, **(overrides or {})}
         return {k: v for k, v in fields.items() if k not in registered or registered[k] != v}
 
-    def make(self, batch_size: int = 1, **overrides: Any) -> Any:
+    def make(self, batch_size: int = 1, /, **overrides: Any) -> Any:
         """The task of B = batch_size rows, with config overrides."""
         from socialzoo.env.tasks import make_task
 

@@ -7,6 +7,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
+from socialzoo.env.tasks import make_task as build_task
 from socialzoo.env.tasks import task_class
 from socialzoo.env.tasks.base import Task, agent_action
 
@@ -48,7 +49,7 @@ class TaskAdapter:
         `render_mode` is one it can draw; sets task, config and render_mode, returns the task class."""
         cls = self.task_class(task)
         cls.check_render_mode(render_mode)
-        self.task = cls(config, batch_size, **kwargs)
+        self.task = build_task(cls, batch_size, config, **kwargs)
         self.config = self.task.config
         self.render_mode = render_mode
         return cls

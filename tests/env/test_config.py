@@ -61,3 +61,25 @@ def test_an_unknown_keyword_of_an_id_is_also_pythons_type_error(env_id):
             match=r"unknown field\(s\) \['frameskip'\]; known: .*unexpected keyword argument 'frameskip'",
         ):
             gym.make(env_id, frameskip=1)
+
+
+@pytest.mark.parametrize("name", ["batch_size", "config", "task"])
+def test_a_task_constructors_own_argument_given_as_a_config_field_is_named(name):
+    """`--task-config batch_size=2` (or config=, task=) met the task constructor's own argument as a
+    second value: a TypeError traceback from the benchmark, the replay and gym.make alike."""
+    from socialzoo.bench.task_benchmark import TaskId
+    from socialzoo.core.validation import UnknownFieldError
+
+    message = rf"task 'crowdnav': '{name}' is not a config field"
+    with pytest.raises(UnknownFieldError, match=message):
+        TaskId.of("socialzoo/CrowdNav-v1").make(1, **{name: 2})
+    if name == "batch_size":  # gym.make's config= and task= are the adapter's own arguments
+        with pytest.raises(ValueError, match=message):
+            gym.make("socialzoo/CrowdNav-v1", batch_size=2)
+
+
+def test_map_data_must_be_a_loaded_map():
+    from socialzoo.env.tasks import make_task
+
+    with pytest.raises(ValueError, match=r"map_data must be a loaded Map .* got 'x'"):
+        make_task("action_selection", 1, None, map="open_room", map_data="x")

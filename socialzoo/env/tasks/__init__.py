@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from socialzoo.core.validation import check_int
+from socialzoo.core.validation import UnknownFieldError, check_int
 
 if TYPE_CHECKING:
     from socialzoo.env.tasks.base import Task
@@ -47,11 +47,27 @@ def task_class(task: str | type[Task]) -> type[Task]:
     return found
 
 
-def make_task(task: str | type[Task], batch_size: int = 1, config: Any = None, **kwargs: Any) -> Task:
+# A task's constructor takes these itself (Task.__init__(config, batch_size, **overrides)): as config
+# fields they would meet them as the same keyword.
+_NOT_FIELDS = {
+    "batch_size": "the batch size is the adapter's (num_envs) or the run's (--batch-size)",
+    "config": "the config object is given whole, or its fields one by one",
+    "task": "the task is the id's",
+}
+
+
+def make_task(task: str | type[Task], batch_size: int = 1, config: Any = None, /, **kwargs: Any) -> Task:
     """A task of B = batch_size rows: `config` (the task's config class) with plain overrides.
 
     Raises:
-        ValueError: an unknown task, a bad batch size, or a bad config field (naming it).
+        ValueError: an unknown task, a bad batch size, or a bad config field (naming it; also one of
+            the constructor's own arguments given as a field, such as --task-config batch_size=2).
     """
     check_int("make_task", "batch_size", batch_size, low=1)
-    return task_class(task)(config, batch_size, **kwargs)
+    cls = task_class(task)
+    for name in sorted(_NOT_FIELDS.keys() & kwargs.keys()):  # a TypeError too, as Python's own would be
+        raise UnknownFieldError(
+            f"task {cls.name!r}: {name!r} is not a config field ({_NOT_FIELDS[name]}; got multiple values "
+            f"for argument {name!r})"
+        )
+    return cls(config, batch_size, **kwargs)

@@ -115,6 +115,8 @@ class ActionSelectionTask(Task):
         **overrides: Any,
     ) -> None:
         self.config = cfg = EnvConfig.resolve(config, overrides)
+        if map_data is not None and not isinstance(map_data, Map):  # e.g. --task-config map_data=x
+            raise ValueError(f"map_data must be a loaded Map (config.map names a file), got {map_data!r}")
         m = map_data if map_data is not None else load_map(cfg.map_name)
         b, r = batch_size, cfg.num_robots
         self.core = BatchedCore(
