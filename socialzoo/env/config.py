@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from socialzoo.core.config import GroupConfig, HumanConfig, LaserConfig, OrcaConfig, RobotConfig, WorldConfig
+from socialzoo.core.files import no_file
 from socialzoo.core.validation import check_choice, check_int, check_number, unknown_fields
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
@@ -172,7 +173,7 @@ class EnvConfig:
             return  # reported with the other nested configs
         path = self.people.learned_path
         if path is not None and not Path(path).is_file():
-            raise ValueError(f"EnvConfig.people.models: no such learned policy file {path!r}")
+            raise ValueError(f"EnvConfig.people.models: {no_file(path, 'learned policy file')}")
         if self.people.counterfactual and self.num_learned_humans:
             raise ValueError(
                 "EnvConfig.people.counterfactual needs people the env drives itself, but "

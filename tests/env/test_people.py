@@ -217,6 +217,8 @@ def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_pa
         EnvConfig().replace(world={"orca": {"radius": -0.1}})
     with pytest.raises(ValueError, match="no such learned policy file"):
         EnvConfig().replace(people={"models": f"learned:{tmp_path / 'none.safetensors'}"})
+    with pytest.raises(ValueError, match="is a folder, not a learned policy file"):
+        EnvConfig().replace(people={"models": f"learned:{tmp_path}"})
     with pytest.raises(ValueError, match="counterfactual needs people the env drives itself"):
         EnvConfig().replace(num_learned_humans=2, people={"counterfactual": True})
     # Learned-human agents among recorded people (socialzoo/Recorded-v3 with num_learned_humans):
