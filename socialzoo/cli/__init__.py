@@ -4,11 +4,14 @@ subcommand runs, so no command pays for torch, ray or matplotlib unless it runs 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import os
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 from concurrent.futures.process import BrokenProcessPool
 
 from socialzoo import __version__
@@ -129,8 +132,8 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for a usage or input error, 130 when
-    interrupted by Ctrl-C, 1 when a worker process was killed: a line on stderr instead of a
-    traceback, which --verbose keeps)."""
+    interrupted by Ctrl-C and 143 by SIGTERM, 1 when a worker process was killed: a line on stderr
+    instead of a traceback, which --verbose keeps)."""
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(words)
     _refuse_moved(parser, words)
@@ -139,7 +142,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(name)s: %(message)s"
     )
     try:
-        return int(args.func(args))
+        with _terminate_as_interrupt():
+            return int(args.func(args))
     except ModuleNotFoundError as err:
         extra = EXTRA_MODULES.get((err.name or "").partition(".")[0])
         if extra is None:
@@ -167,7 +171,36 @@ def main(argv: Sequence[str] | None = None) -> int:
             "interrupted" if interrupted else "error: a worker process was killed (the out-of-memory killer?)"
         )
         print(f"socialzoo {args.command}: {what}" + (f"; {hint}" if hint else ""), file=sys.stderr)
+        if isinstance(err, Terminated):
+            return 128 + err.signum  # as a shell reports a command ended by that signal
         return INTERRUPTED if interrupted else 1
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a `kill`, a job scheduler's stop) raised where the command was, so that the run ends
+    as Ctrl-C ends it: its worker processes stopped, what it stored kept, a line saying how to go on."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"signal {signum}")
+        self.signum = signum
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM ends the command as Ctrl-C does (Terminated) while it runs; the handler before is put
+    back after (a caller of main(), such as a test, keeps its own). Only the main thread can set it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
 
 
 # The exit status of a command stopped by Ctrl-C (SIGINT), as a shell reports it: 128 + 2.

@@ -76,17 +76,13 @@ def register(subparsers: Any) -> None:
     )
 
 
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
 def _interrupt_on_signals() -> None:
-    """Make SIGTERM, and SIGINT even where the shell ignores it (a command started with `&`),
-    raise KeyboardInterrupt, so a stopped run records the time of its interrupted part."""
+    """Make SIGINT raise KeyboardInterrupt even where the shell ignores it (a command started with
+    `&`), so a stopped run records the time of its interrupted part (SIGTERM does so for every
+    command: socialzoo.cli.main)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, _interrupt)
 
 
 def run_reproduce_command(args: argparse.Namespace) -> int:

@@ -313,6 +313,32 @@ def test_an_interrupted_benchmark_ends_in_a_line_not_a_traceback(tmp_path, capsy
         socialzoo_main(["-v", *argv])
 
 
+def test_a_terminated_benchmark_ends_as_an_interrupted_one(tmp_path, capsys, monkeypatch):
+    """SIGTERM (kill, a job scheduler) killed the command outright: status -15, no line, and the
+    multiprocessing resource tracker's "leaked semaphore" warning. It now ends as Ctrl-C does, with
+    the shell's 128 + 15, and the caller's own SIGTERM handler is back afterwards."""
+    import os
+    import signal
+    import time
+
+    import socialzoo.bench.experiment as experiment
+
+    def terminated(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises within this sleep
+        raise AssertionError("SIGTERM did not stop the run")
+
+    monkeypatch.setattr(experiment, "run_benchmark", terminated)
+    before = signal.getsignal(signal.SIGTERM)
+    argv = ["benchmark", "--policies", "goalone", "--maps", "gdc1", "--trials", "2", "--out", str(tmp_path)]
+    assert socialzoo_main(argv) == 143
+    assert capsys.readouterr().err == (
+        "socialzoo benchmark: interrupted; the finished trials are kept in the results store: "
+        "the same command resumes\n"
+    )
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
 def test_a_killed_worker_ends_the_benchmark_in_a_line(tmp_path, capsys, monkeypatch):
     from concurrent.futures.process import BrokenProcessPool
 
