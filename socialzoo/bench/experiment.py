@@ -389,6 +389,12 @@ def run_benchmark(
     from socialzoo.agents.base import policy_config
 
     out = Path(out_dir)
+    # Every policy is built (a bad policy file refused) and the store opened (an unusable one refused)
+    # before any test set is made: generating a new map's 2000 scenarios takes minutes.
+    policy_kwargs = {p: dict(config.policy_kwargs.get(p, {})) for p in config.policies}
+    policies = {p: make_policy(p, **policy_kwargs[p]) for p in config.policies}
+    if (out / STORE_NAME).exists():
+        ResultsStore(out / STORE_NAME).close()
     sets = _resolve_test_sets(config, test_sets, out)
     counts = {}
     for m, ts in sets.items():
@@ -403,8 +409,6 @@ def run_benchmark(
         set_names[m]: env_config_for(ts, **{**people_overrides(config), **dict(config.env_overrides)})
         for m, ts in sets.items()
     }
-    policy_kwargs = {p: dict(config.policy_kwargs.get(p, {})) for p in config.policies}
-    policies = {p: make_policy(p, **policy_kwargs[p]) for p in config.policies}
     policy_configs = {p: policy_config(policies[p]) for p in config.policies}
     spec = RunSpec(
         test_sets={set_names[m]: ts for m, ts in sets.items()},

@@ -326,3 +326,24 @@ def test_the_summary_has_what_the_robot_cost_the_people_when_the_run_records_it(
         assert f"{name}_mean" in header and f"{name}_ci_low" in header
         assert math.isfinite(result.summary[0][f"{name}_mean"])
     assert "## People's time lost (mean per person), s" in (tmp_path / "summary.md").read_text()
+
+
+def test_a_bad_policy_file_or_store_is_refused_before_a_test_set_is_made(rooms_map_path, tmp_path):
+    """A map without a registered test set gets one generated (2000 scenarios: minutes) before the
+    run: a policy file that cannot be read, or an unusable store, was refused only after that."""
+    bad = tmp_path / "bad.safetensors"
+    bad.write_text("garbage")
+    out = tmp_path / "out"
+    with pytest.raises(ValueError, match="not a safetensors policy file"):
+        run_benchmark(
+            config(maps=(str(rooms_map_path),), policies=("goalone", f"ppo:{bad}"), trials=2),
+            out,
+            progress=False,
+            figures=False,
+        )
+    assert not out.exists()
+    out.mkdir()
+    (out / STORE_NAME).write_text("not a database")
+    with pytest.raises(StoreError, match="not an SQLite database"):
+        run_benchmark(config(maps=(str(rooms_map_path),), trials=2), out, progress=False, figures=False)
+    assert sorted(p.name for p in out.iterdir()) == [STORE_NAME]  # no test_sets/ made
