@@ -115,7 +115,7 @@ class ResultsStore:
         if self.path.is_dir():
             # Else a traceback (IsADirectoryError) or, for a folder of size 0, SQLite's "unable to
             # open database file".
-            raise StoreError(f"{self.path} is a folder, not a results store: choose another output directory")
+            raise StoreError(f"{self.path} is a folder, not a results store: choose another directory")
         if self.path.exists() and self.path.stat().st_size > 0:
             self._check_header()
         else:
@@ -151,7 +151,7 @@ class ResultsStore:
         if head[: len(_SQLITE_MAGIC)] != _SQLITE_MAGIC:
             raise StoreError(
                 f"{self.path} is not a socialzoo results store (not an SQLite database); "
-                "refusing to use or overwrite it: choose another output directory"
+                "refusing to use or overwrite it: choose another directory"
             )
         # SQLite reads a page cut short as zeros and keeps no checksums, so a file cut inside its
         # last page can open without complaint with rows silently changed: a database file is a

@@ -189,3 +189,13 @@ def test_a_trial_on_a_map_file_edited_since_names_the_map(tmp_path, capsys):
     capsys.readouterr()
     socialzoo_main(["replay", "--results", str(out), "--trial", "0", "--out", str(tmp_path / "t.html")])
     assert f"the map {plan} changed since the run stored it (sha256 " in capsys.readouterr().out
+
+
+def test_a_replay_of_a_file_that_is_no_store_does_not_speak_of_an_output_directory(tmp_path, capsys):
+    """--results is read, not written: the store's refusal ended in "choose another output directory"."""
+    (tmp_path / "results.sqlite").write_text("not a database")
+    argv = ["replay", "--results", str(tmp_path), "--trial", "0", "--out", str(tmp_path / "ep.html")]
+    assert socialzoo_main(argv) == 2
+    err = capsys.readouterr().err
+    assert "is not a socialzoo results store" in err and "choose another directory" in err
+    assert "output" not in err
