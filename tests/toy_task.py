@@ -147,10 +147,10 @@ class ToyReachTask(Task):
     def world_state(self) -> Any:
         return self.core.state
 
-    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
+    def make_renderer(self, render_mode: str, view: str = "follow", **frame: Any) -> Any:
         from socialzoo.env.rendering import CoreRenderer
 
-        return CoreRenderer(self, render_mode, view=view)
+        return CoreRenderer(self, render_mode, view=view, **frame)
 
 
 class ToyVelocityTask(ToyReachTask):

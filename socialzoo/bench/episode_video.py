@@ -1,4 +1,4 @@
-"""One episode of a policy, animated with the envs' renderer (socialzoo.env.rendering.CoreRenderer):
+"""One episode of a policy in any task, animated with the task's renderer (Task.make_renderer, the envs'):
 the `socialzoo demo` command and the quick benchmark's GIF."""
 
 from __future__ import annotations
@@ -10,8 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.env.config import EnvConfig
-from socialzoo.scenarios.scenario import Scenario
+from socialzoo.bench.replay import episode_outcome, play_episode, step_seconds
 
 
 @dataclass(frozen=True)
@@ -21,18 +20,24 @@ class EpisodeVideo:
     Attributes:
         path: the GIF or MP4 file.
         frames: frames written.
-        metrics: the episode's metrics (socialzoo.env.metrics.SUMMARY_KEYS).
+        steps: the steps played.
+        seconds: the simulated time played, s.
+        outcome: how robot 0's episode ended (socialzoo.bench.replay.episode_outcome), or "not over"
+            when the animation stopped at its longest first.
+        metrics: the episode's metrics (its task's episode_metrics; those so far if not over).
     """
 
     path: Path
     frames: int
+    steps: int
+    seconds: float
+    outcome: str
     metrics: dict[str, Any]
 
 
 def animate_episode(
     path: str | Path,
-    env_config: EnvConfig,
-    scenario: Scenario,
+    task: Any,
     policy: Any,
     *,
     label: str = "",
@@ -41,39 +46,52 @@ def animate_episode(
     fps: float = 20.0,
     max_frames: int = 600,
     size: tuple[int, int] = (480, 360),
-    human_policy: Any = None,
 ) -> EpisodeVideo:
-    """Run `policy` (a socialzoo.agents Policy) on one scenario and write the animation.
+    """Run `policy` on row 0 of a task of one row (any task, already reset: see
+    socialzoo.bench.replay.scenario_task and case_task) and write the animation.
 
-    One frame every `stride` steps (at the defaults 100 ms of simulated time per frame, played at
-    twice real time); the episode stops after `max_frames` frames if it has not ended.
-    `human_policy` (socialzoo.env.human_policy.LearnedHumanPolicy) drives the env config's
-    learned human slots.
+    One frame every `stride` steps and one of the episode's last state (at the action-selection task's
+    defaults 100 ms of simulated time per frame, played at twice real time); the animation stops after
+    `max_frames` frames if the episode has not ended.
     """
-    from socialzoo.env.rendering import CoreRenderer
-    from socialzoo.env.tasks.action_selection import ActionSelectionTask
     from socialzoo.render.animation import write_animation
 
-    task = ActionSelectionTask(env_config, 1)
-    task.reset_rows(np.array([0]), [scenario])
-    renderer = CoreRenderer(
-        task, "rgb_array", view, width=size[0], height=size[1], info=(label,) if label else ()
+    renderer = task.make_renderer(
+        "rgb_array", view, width=size[0], height=size[1], info=(label,) if label else ()
     )
-    count = 0
+    played = _Played()
 
     def frames() -> Iterator[np.ndarray]:
-        nonlocal count
-        yield renderer.frame(0)
-        count, step = 1, 0
-        while not task.core.done.all() and count < max_frames:
-            action = np.asarray(policy.act(task.obs, task)).reshape(task.core.done.shape)
-            task.step(action, None if human_policy is None else human_policy.act(task.human_obs))
-            step += 1
-            if step % stride == 0 or task.core.done.all():
-                count += 1
-                yield renderer.frame(0)
+        yield renderer.render(0)
+        played.frames = 1
+        if max_frames <= 1:
+            return
+        for _, step, ended in play_episode(task, policy):
+            played.steps += 1
+            if played.steps % stride == 0 or ended:
+                played.frames += 1
+                yield renderer.render(0)
+            if ended:
+                metrics = task.episode_metrics(np.zeros(1, dtype=np.intp))[0]
+                played.outcome = episode_outcome(metrics, step)
+            elif played.frames >= max_frames:
+                return
 
     written = write_animation(frames(), path, fps=fps)
     return EpisodeVideo(
-        path=Path(written), frames=count, metrics=task.episode_metrics(np.zeros(1, dtype=np.intp))[0]
+        path=Path(written),
+        frames=played.frames,
+        steps=played.steps,
+        seconds=played.steps * step_seconds(task),
+        outcome=played.outcome,
+        metrics=task.episode_metrics(np.zeros(1, dtype=np.intp))[0],
     )
+
+
+@dataclass
+class _Played:
+    """What the animation's frames played so far."""
+
+    frames: int = 0
+    steps: int = 0
+    outcome: str = "not over"

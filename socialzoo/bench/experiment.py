@@ -583,8 +583,10 @@ def write_episode_gif(
     (socialzoo.bench.episode_video.animate_episode at its defaults), among the env config's people."""
     from socialzoo.agents import make_policy
     from socialzoo.bench.episode_video import animate_episode
+    from socialzoo.bench.replay import scenario_task
     from socialzoo.maps.map_file import load_map
 
-    scenario = test_set.scenario(index, load_map(env_config.map_name))
+    m = load_map(env_config.map_name)
+    task = scenario_task(env_config, test_set.scenario(index, m), m)
     label = f"{policy_label(policy)}, {test_set.name or test_set.map_name} #{index}"
-    return animate_episode(path, env_config, scenario, make_policy(policy), label=label).path
+    return animate_episode(path, task, make_policy(policy), label=label).path

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -75,17 +75,22 @@ def benchmark_scenario(env_config: EnvConfig, seed: int, world_map: Map | None =
     return stream.make(seed)
 
 
-def _outcome(metrics: dict[str, Any], wall: bool, truncated: bool) -> str:
-    """One phrase for how the episode ended."""
+def episode_outcome(metrics: dict[str, Any], last: Any) -> str:
+    """One phrase for how robot 0's episode of row 0 ended: its metrics and its last TaskStep."""
+    info = last.info
+
+    def value(key: str) -> bool:
+        return bool(info[key][0, 0]) if key in info else False
+
     if metrics.get("success"):
         return "success"
     if metrics.get("reached"):
         return "goal reached after a collision"
-    if wall:
+    if last.terminated[0, 0] and value("wall_collision") and not value("reached"):
         return "wall collision"
     if metrics.get("collision"):
         return "collision"
-    if truncated:
+    if last.truncated[0, 0]:
         return "time limit"
     return "ended"
 
@@ -116,22 +121,42 @@ def record_episode(
         The EpisodeTrace, with the episode's metrics (the same as the benchmark's for this
         scenario, env config and policy).
     """
+    task = scenario_task(env_config, scenario, world_map)
+    return record_task_episode(task, policy, label=label, laser_rays=laser_rays, laser_stride=laser_stride)
+
+
+def scenario_task(env_config: EnvConfig, scenario: Scenario, world_map: Map | None = None) -> Any:
+    """An action-selection task of one row of env_config, reset to play `scenario` (world_map: the
+    already loaded map of env_config.map, if at hand)."""
     from socialzoo.env.tasks.action_selection import ActionSelectionTask
 
     task = ActionSelectionTask(env_config, 1, map_data=world_map)
     task.reset(np.array([0]), {"scenario": scenario})
-    return record_task_episode(task, policy, label=label, laser_rays=laser_rays, laser_stride=laser_stride)
+    return task
+
+
+def case_task(env_id: str, split: str, case: int, **overrides: Any) -> Any:
+    """A task of one row of any registered task id (socialzoo.bench.task_benchmark.TaskId), reset to
+    play case `case` of a split; `overrides` are the task's config fields."""
+    from socialzoo.bench.task_benchmark import TaskId
+
+    task = TaskId.of(env_id).make(1, **overrides)
+    task.reset(np.array([0]), {"split": split, "cases": [case]})
+    return task
+
+
+def acting_overrides(policy: Policy, overrides: dict[str, Any]) -> dict[str, Any]:
+    """The config fields of the task a policy acts in: `overrides` and those the policy needs
+    (its task_overrides, such as a CrowdNav learner's robot kinematics)."""
+    return {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
 
 
 def record_case(
     env_id: str, policy: Policy, split: str, case: int, *, label: str | None = None, **overrides: Any
 ) -> tuple[EpisodeTrace, Any]:
     """(the trace, the task) of `policy` on case `case` of a split of any registered task id
-    (socialzoo.bench.task_benchmark.TaskId); `overrides` are the task's config fields."""
-    from socialzoo.bench.task_benchmark import TaskId
-
-    task = TaskId.of(env_id).make(1, **overrides)
-    task.reset(np.array([0]), {"split": split, "cases": [case]})
+    (case_task); `overrides` are the task's config fields."""
+    task = case_task(env_id, split, case, **overrides)
     return record_task_episode(task, policy, label=label), task
 
 
@@ -174,24 +199,35 @@ def record_task_episode(
     recorder = _Recorder(task, None if laser_rays == 0 else scan)
     recorder.keep_state(scan=True)
     named = bool(task.action_labels())  # the timeline shows actions that have names
-    # Every robot of the row acts (robot 0 is recorded, the others drawn); the action space is one robot's.
+    for action, step, ended in play_episode(task, policy):
+        recorder.keep_step(int(action.reshape(-1)[0]) if named else -1, step)
+        recorder.keep_state(scan=len(recorder.actions) % laser_stride == 0 or ended)
+    name = getattr(policy, "name", type(policy).__name__)
+    return recorder.trace(label or str(name))
+
+
+def play_episode(task: Any, policy: Policy) -> Iterator[tuple[np.ndarray, Any, bool]]:
+    """Step `policy` on row 0 of a task of one row (already reset) until robot 0's episode ends,
+    yielding each step's actions (1, R, *action_space.shape), its TaskStep, and whether robot 0's
+    episode ended with it; the task is stepped again only when the next step is asked for (an
+    episode's viewer and animation read its state in between, and may stop early).
+
+    Every robot of the row acts (robot 0 is the one followed); a policy of observations alone
+    (reads_core False) takes them as the runner gives them, a (N, D) batch."""
     shape = (1, task.world_state.robot_pose.shape[1], *(task.action_space.shape or ()))
     reads_core = getattr(policy, "reads_core", True)
     while True:
         obs = task.observations()
         if reads_core:
             action = np.asarray(policy.act(obs, task)).reshape(shape)
-        else:  # a policy of observations alone takes a (N, D) batch (the runner gives it the same)
+        else:
             flat = obs.reshape(-1, obs.shape[-1]) if isinstance(obs, np.ndarray) and obs.ndim == 3 else obs
             action = np.asarray(policy.act(flat)).reshape(shape)
         step = task.step(action)
-        recorder.keep_step(int(action.reshape(-1)[0]) if named else -1, step)
         ended = bool(step.terminated[0, 0] or step.truncated[0, 0])
-        recorder.keep_state(scan=len(recorder.actions) % laser_stride == 0 or ended)
+        yield action, step, ended
         if ended:
-            break
-    name = getattr(policy, "name", type(policy).__name__)
-    return recorder.trace(label or str(name))
+            return
 
 
 class _Recorder:
@@ -215,8 +251,7 @@ class _Recorder:
         self.steps: dict[str, list[Any]] = {
             k: [] for k in ("target", "reward", "force", "blame", "contacts", "wall")
         }
-        self.wall_end = False
-        self.truncated = False
+        self.last: Any = None  # the last TaskStep
 
     def keep_state(self, scan: bool) -> None:
         """Keep the task's current state (and scan it when `scan`)."""
@@ -268,10 +303,7 @@ class _Recorder:
         steps["blame"].append(float(value("blame", 0.0)))
         steps["contacts"].append(int(value("human_collisions", 0)))
         steps["wall"].append(bool(value("wall_collision", False)))
-        self.wall_end = bool(
-            step.terminated[0, 0] and value("wall_collision", False) and not value("reached", False)
-        )
-        self.truncated = bool(step.truncated[0, 0])
+        self.last = step
 
     def trace(self, label: str) -> EpisodeTrace:
         """The EpisodeTrace of what was kept, with the episode's metrics."""
@@ -309,7 +341,7 @@ class _Recorder:
             human_collisions=np.array(steps["contacts"], dtype=np.int64),
             wall_collision=np.array(steps["wall"], dtype=bool),
             metrics=metrics,
-            outcome=_outcome(metrics, self.wall_end, self.truncated),
+            outcome=episode_outcome(metrics, self.last),
         )
 
 

@@ -79,6 +79,11 @@ def given(args: argparse.Namespace, *names: str) -> dict[str, Any]:
     return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
 
 
+def given_flags(args: argparse.Namespace, *names: str) -> str:
+    """The options among `names` that the command line set, as "--a, --b" ("" for none)."""
+    return ", ".join(f"--{name.replace('_', '-')}" for name in given(args, *names))
+
+
 def split_commas(text: str) -> tuple[str, ...]:
     """The items of comma-separated text, stripped, empty ones left out."""
     return tuple(item.strip() for item in text.split(",") if item.strip())
@@ -146,6 +151,20 @@ def add_task_config_argument(parser: argparse.ArgumentParser) -> None:
         "humans=hybrid:orca, "
         'humans=\'{"models": "hybrid:orca", "react_radius": 3}\', reward.discomfort_dist=0.3',
     )
+
+
+def add_case_arguments(parser: argparse.ArgumentParser) -> None:
+    """--env, --case, --split and --task-config: one fixed case of any registered task id, where one
+    episode is played (demo, replay) instead of a benchmark map's scenario."""
+    parser.add_argument(
+        "--env",
+        default=None,
+        help="a registered task id (socialzoo/CrowdNav-v1, any task's id; MODULE:ID for an id that MODULE "
+        "registers): play its fixed case --case of --split instead of a benchmark map's scenario",
+    )
+    parser.add_argument("--case", type=count, default=None, help="the case of --env to play (default 0)")
+    parser.add_argument("--split", default=None, help="the case split of --env (default test)")
+    add_task_config_argument(parser)
 
 
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:

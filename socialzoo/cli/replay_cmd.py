@@ -10,12 +10,13 @@ from typing import Any
 
 from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import (
+    add_case_arguments,
     add_scenario_arguments,
-    add_task_config_argument,
     at_least,
     comma_list,
     count,
     given,
+    given_flags,
     out_file,
     task_config,
 )
@@ -52,15 +53,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--max-steps", type=at_least(1), default=None, help="episode time limit override, steps"
     )
-    parser.add_argument(
-        "--env",
-        default=None,
-        help="a registered task id (socialzoo/CrowdNav-v1, any task's id; MODULE:ID for an id that MODULE "
-        "registers): play its fixed case --case of --split instead of a benchmark map's scenario",
-    )
-    parser.add_argument("--case", type=count, default=None, help="the case of --env to play (default 0)")
-    parser.add_argument("--split", default="test", help="the case split of --env (default test)")
-    add_task_config_argument(parser)
+    add_case_arguments(parser)
     parser.add_argument(
         "--results", type=Path, default=None, help="a socialzoo benchmark --out directory (with --trial)"
     )
@@ -122,15 +115,15 @@ def run_replay(args: argparse.Namespace) -> int:
         if args.out.suffix.lower() not in (".html", ".htm"):
             raise ValueError(f"--out {args.out} must end in .html")
         if args.env is not None:
-            if clash := _flags(args, "map", "family", "seed", "results", "trial"):
+            if clash := given_flags(args, "map", "family", "seed", "results", "trial"):
                 raise ValueError(f"{clash} cannot be combined with --env: a task id plays its own cases")
             return _replay_case(args)
-        if args.case is not None or args.task_config:
-            raise ValueError("--case and --task-config go with --env")
+        if clash := given_flags(args, "case", "split", "task_config"):
+            raise ValueError(f"{clash} cannot be used without --env")
         if (args.results is None) != (args.trial is None):
             raise ValueError("--results and --trial go together")
         if args.results is not None:
-            if clash := _flags(args, "map", "family", "seed", "max_steps"):
+            if clash := given_flags(args, "map", "family", "seed", "max_steps"):
                 raise ValueError(
                     f"{clash} cannot be combined with --results: "
                     "a stored trial runs with its own map, scenario and env config"
@@ -141,11 +134,6 @@ def run_replay(args: argparse.Namespace) -> int:
         return _replay_seed(args)
     except (MapError, StoreError, FileNotFoundError, ValueError, KeyError) as err:
         return fail("replay", err)
-
-
-def _flags(args: argparse.Namespace, *names: str) -> str:
-    """The options among `names` that the command line gave, as "--a, --b" ("" for none)."""
-    return ", ".join(f"--{name.replace('_', '-')}" for name in given(args, *names))
 
 
 def _write_page(args: argparse.Namespace, scene: Any, traces: list[Any], what: str, lines: list[str]) -> None:
@@ -181,7 +169,7 @@ def _recording(args: argparse.Namespace, dt: float, world_map: Any) -> dict[str,
 def _replay_case(args: argparse.Namespace) -> int:
     """`socialzoo replay --env ID --case K`: every policy on one fixed case of any task id."""
     from socialzoo.agents import make_policy
-    from socialzoo.bench.replay import record_case
+    from socialzoo.bench.replay import acting_overrides, record_case
     from socialzoo.bench.task_benchmark import TaskId
 
     task_id = TaskId.of(args.env)
@@ -190,18 +178,18 @@ def _replay_case(args: argparse.Namespace) -> int:
     specs = _specs(args)
     if not specs:
         raise ValueError(f"name the policies to play on {args.env} (--policy)")
-    case = 0 if args.case is None else args.case
+    case, split = args.case or 0, args.split or "test"
     # Every policy is built before any episode runs.
     policies = [make_policy(s.name, task=probe, **s.kwargs) for s in specs]
     traces, task = [], probe
     for spec, policy in zip(specs, policies, strict=True):
-        acting = {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
-        trace, task = record_case(args.env, policy, args.split, case, label=spec.label, **acting)
+        acting = acting_overrides(policy, overrides)
+        trace, task = record_case(args.env, policy, split, case, label=spec.label, **acting)
         traces.append(trace)
-    title = f"{' vs '.join(t.label for t in traces)} on {args.env}, {args.split} case {case}"
+    title = f"{' vs '.join(t.label for t in traces)} on {args.env}, {split} case {case}"
     title += "".join(f", {k}={v}" for k, v in task_config(args.task_config).items())
     scene = task.viewer_scene(title, f"the {probe.name} task", traces)
-    what = f"{len(traces)} episode(s) on {args.env}, {args.split} case {case}"
+    what = f"{len(traces)} episode(s) on {args.env}, {split} case {case}"
     _write_page(args, scene, traces, what, _described(traces))
     return 0
 

@@ -170,3 +170,27 @@ def test_rendering_before_the_first_reset_says_to_reset(task):
     ):
         with pytest.raises(RuntimeError, match=f"{type(env).__name__}: call reset\\(\\) before render\\(\\)"):
             env.render()
+
+
+def test_the_map_view_of_a_recorded_scene_shows_where_its_people_and_robot_are(tmp_path, monkeypatch):
+    """The CrowdNav task's map view in the open showed 5 m around the origin for any family: a
+    recorded scene far from the origin (real scenes' coordinates are the camera's) was off the
+    picture. It now shows the rows' scenarios: robots' starts and goals, people's routes."""
+    from socialzoo.data.tracks import Recording, Track
+    from socialzoo.env.tasks.crowdnav import CrowdNavTask
+    from socialzoo.scenarios.catalogue import register_family
+    from socialzoo.scenarios.recorded import RecordedScene
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))
+    walkers = [Track(p, 3 * p, np.linspace([40.0 + p, 20.0], [48.0 - p, 30.0], 30)) for p in range(4)]
+    register_family(
+        RecordedScene(Recording(name="far", dt=0.4, num_frames=40, tracks=tuple(walkers), source="test"))
+    )
+    task = CrowdNavTask(None, 2, family="recorded_far")
+    task.reset(np.arange(2), {})
+    x0, y0, x1, y1 = task.make_renderer("rgb_array", view="map").frames.map.region
+    state = task.core.state
+    for points in (state.robot_pose[..., :2], state.robot_goal[..., :2], state.human_pos[state.human_mask]):
+        xy = points.reshape(-1, 2)
+        assert ((xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1)).all()
+    assert x0 > 30.0 and y0 > 10.0  # the scene, not the origin

@@ -164,6 +164,78 @@ def test_socialzoo_replay_writes_a_page_of_a_case_with_the_tasks_own_legend(tmp_
     assert data(velocity)["actions"]["names"] == []  # a velocity task: no sub-policy legend
 
 
+def test_socialzoo_demo_animates_a_case_of_any_task_id(tmp_path, capsys):
+    """`socialzoo demo` animated only the action-selection task (its episode loop built an
+    ActionSelectionTask): a velocity policy on the CrowdNav task, or the toy task's own policy,
+    had no animation. It now plays a fixed case of any registered id (--env, --case, --split), with
+    the task's own renderer, one frame per step of the CrowdNav task's 0.25 s."""
+    import imageio.v3 as iio
+
+    from socialzoo.cli import main
+
+    toy = tmp_path / "toy.gif"
+    argv = ["demo", "--env", TOY_ID, "--policy", "toy_heading", "--case", "2", "--stride", "1"]
+    assert main([*argv, "--out", str(toy)]) == 0
+    said = capsys.readouterr().out
+    steps = int(said.rsplit("(", 1)[1].split()[0])
+    assert said.startswith(f"{toy}: {steps + 1} frames; ") and 0 < steps <= 120
+    assert len(iio.imread(toy, index=None)) == steps + 1
+    crowd = tmp_path / "crowd.gif"
+    assert (
+        main(
+            ["demo", "--env", "socialzoo/CrowdNav-v1", "--policy", "orca", "--case", "3", "--out", str(crowd)]
+        )
+        == 0
+    )
+    said = capsys.readouterr().out
+    steps = int(said.rsplit("(", 1)[1].split()[0])
+    frames = iio.imread(crowd, index=None)
+    assert len(frames) == steps + 1 and np.ptp(frames) > 0  # every 0.25 s step, and the first state
+    # The same case in the viewer ends the same way.
+    page = tmp_path / "crowd.html"
+    assert (
+        main(
+            [
+                "replay",
+                "--env",
+                "socialzoo/CrowdNav-v1",
+                "--policy",
+                "orca",
+                "--case",
+                "3",
+                "--out",
+                str(page),
+            ]
+        )
+        == 0
+    )
+    assert f"({steps} steps)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "error"),
+    [
+        (["--env", TOY_ID], f"name the policy to play on {TOY_ID} (--policy)"),
+        (
+            ["--env", TOY_ID, "--policy", "ref"],
+            "policy 'ref' acts in task 'action_selection', not 'toy_reach'",
+        ),
+        (
+            ["--env", TOY_ID, "--policy", "toy_heading", "--map", "gdc1"],
+            "--map cannot be combined with --env",
+        ),
+        (["--policy", "ref", "--case", "1"], "--case cannot be used without --env"),
+        (["--env", TOY_ID, "--policy", "toy_heading", "--split", "nosuch"], "nosuch"),
+    ],
+)
+def test_socialzoo_demo_refuses_a_policy_or_options_that_do_not_fit_the_task(tmp_path, capsys, argv, error):
+    from socialzoo.cli import main
+
+    out = tmp_path / "x.gif"
+    assert main(["demo", *argv, "--out", str(out)]) == 2
+    assert error in capsys.readouterr().err and not out.exists()
+
+
 def test_a_multidiscrete_action_passes_every_adapter_and_checker():
     from gymnasium.utils.env_checker import check_env
     from pettingzoo.test import parallel_api_test

@@ -552,11 +552,11 @@ class ActionSelectionTask(Task):
         """One frame per step, the world's dt (40 at the benchmark's 0.025 s)."""
         return 1.0 / self.config.dt
 
-    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
+    def make_renderer(self, render_mode: str, view: str = "follow", **frame: Any) -> Any:
         """socialzoo.env.rendering.CoreRenderer of the task."""
         from socialzoo.env.rendering import CoreRenderer
 
-        return CoreRenderer(self, render_mode, view=view)
+        return CoreRenderer(self, render_mode, view=view, **frame)
 
 
 def _unit_actions(values: Any, shape: tuple[int, ...], name: str, item: str) -> np.ndarray:

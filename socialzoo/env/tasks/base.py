@@ -221,8 +221,9 @@ class Task(ABC):
             action_names=self.action_labels(),
         )
 
-    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
-        """A renderer with `render(row=0)` and `close()` for one of `render_modes`."""
+    def make_renderer(self, render_mode: str, view: str = "follow", **frame: Any) -> Any:
+        """A renderer with `render(row=0)` and `close()` for one of `render_modes`; `frame` are the
+        frames' options (socialzoo.env.rendering.CoreRenderer's width, height and info lines)."""
         raise ValueError(f"task {self.name!r} cannot render (render_modes {self.render_modes})")
 
     @classmethod

@@ -498,10 +498,12 @@ class CrowdNavTask(Task):
         physics substeps it takes."""
         return 1.0 / self.config.time_step
 
-    def make_renderer(self, render_mode: str, view: str = "follow") -> Any:
+    def make_renderer(self, render_mode: str, view: str = "follow", **frame: Any) -> Any:
         """socialzoo.env.rendering.CoreRenderer of the task. In the open (the arena, a recorded
         scene) the frames show no walls, and the map view shows the arena's cases with 1 m to
-        spare (a scene of another family: 5 m around the origin; follow the robot instead)."""
+        spare, or a family's scenes (a recorded scene's) around the robots' starts and goals and
+        the people's routes of the rows' scenarios when it is made, with 1 m to spare (5 m around
+        the origin before any reset)."""
         from socialzoo.env.rendering import CoreRenderer
         from socialzoo.maps.map_file import Map
 
@@ -510,15 +512,27 @@ class CrowdNavTask(Task):
             cases = self.config.cases
             half = cases.square_width / 2 if cases.layout == "square_crossing" else cases.circle_radius
             reach = half + 1.0 if self.config.family is None else 5.0
+            region = (-reach, -reach, reach, reach)
+            places = [
+                np.concatenate([s.robot_starts[:, :2], s.robot_goals[:, :2], s.human_spawn, *s.human_routes])
+                for s in self.core.scenarios
+                if s is not None
+            ]
+            if self.config.family is not None and places:
+                low, high = (
+                    np.min([p.min(0) for p in places], 0) - 1.0,
+                    np.max([p.max(0) for p in places], 0) + 1.0,
+                )
+                region = (float(low[0]), float(low[1]), float(high[0]), float(high[1]))
             world_map = Map(
                 name="open",
                 walls=np.zeros((0, 4)),
                 nodes=np.zeros((0, 2)),
                 edges=np.zeros((0, 2), dtype=np.int64),
                 legal_poses=np.zeros((0, 3)),
-                region=(-reach, -reach, reach, reach),
+                region=region,
             )
-        return CoreRenderer(self, render_mode, view=view, world_map=world_map)
+        return CoreRenderer(self, render_mode, view=view, world_map=world_map, **frame)
 
     def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
         """The arena (or the map's walls) around every trace; the robot's disc as a square of its
