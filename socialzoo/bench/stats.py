@@ -69,7 +69,9 @@ def student_t_ppf(q: float, df: float) -> float:
     return float(student_t.ppf(q, df))
 
 
-def mean_interval(values: np.ndarray | list[float], confidence: float = CONFIDENCE) -> Interval:
+def mean_interval(
+    values: np.ndarray | list[float], confidence: float = CONFIDENCE, *, infinite: bool = False
+) -> Interval:
     """Mean of the finite values with a Student-t confidence interval.
 
     NaN values (e.g. time to goal of a failed episode) are left out; n counts the rest.
@@ -77,6 +79,9 @@ def mean_interval(values: np.ndarray | list[float], confidence: float = CONFIDEN
     Args:
         values: numbers.
         confidence: two-sided level, e.g. 0.9.
+        infinite: an infinity is a value (e.g. the time to collision of an episode never on a
+            collision course), not a gap: with one among the values the mean is that infinity
+            (NaN for both signs) and the bounds NaN. False: infinities are left out as NaN is.
 
     Returns:
         Interval(mean, mean - t * s / sqrt(n), mean + t * s / sqrt(n), n), with s the sample
@@ -85,6 +90,10 @@ def mean_interval(values: np.ndarray | list[float], confidence: float = CONFIDEN
     """
     _check_confidence(confidence)
     x = np.asarray(values, dtype=np.float64).reshape(-1)
+    if infinite and np.isinf(x).any():
+        x = x[~np.isnan(x)]
+        with np.errstate(invalid="ignore"):  # inf - inf: NaN, as documented
+            return Interval(float(x.mean()), math.nan, math.nan, len(x))
     x = x[np.isfinite(x)]
     n = len(x)
     if n == 0:

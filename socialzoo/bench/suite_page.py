@@ -123,11 +123,14 @@ def plot_heatmap(result: SuiteResult, name: str, out_dir: Path) -> Path:
         low, high = 0.0, 100.0
     elif high <= low:
         low, high = low - 0.5, high + 0.5
-    image = ax.imshow(np.ma.masked_invalid(values), cmap=cmap, vmin=low, vmax=high, aspect="auto")
+    # An infinite mean (a time to collision: never on a collision course) takes the colour of its end
+    # of the scale; only a missing value (NaN) is grey.
+    shown = np.where(np.isinf(values), np.where(values > 0, high, low), values)
+    image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, vmin=low, vmax=high, aspect="auto")
     for i in range(rows):
         for j in range(cols):
             value = values[i, j]
-            text = "n/a" if not math.isfinite(value) else f"{value:.{min(digits, 2)}f}"
+            text = "n/a" if math.isnan(value) else f"{value:.{min(digits, 2)}f}"
             ax.text(j, i, text, ha="center", va="center", fontsize=7)
     ax.set_xticks(range(cols))
     ax.set_xticklabels([s.label for s in result.scenarios], rotation=45, ha="right", fontsize=8)

@@ -412,6 +412,8 @@ def number_text(value: Any, digits: int) -> str:
 
 
 def _fmt_ci(mean: float, low: float, high: float, digits: int) -> str:
+    if math.isinf(mean):  # a mean over values one of which is infinite (a time to collision: never)
+        return "inf" if mean > 0 else "-inf"
     if not math.isfinite(mean):
         return "n/a"
     if not (math.isfinite(low) and math.isfinite(high)):
@@ -432,8 +434,8 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list
 
 def interval_text(entry: Mapping[str, Any] | None, name: str, digits: int, scale: float = 1.0) -> str:
     """A metric's value in a summary entry (`value_key`) with its interval, times `scale`:
-    "0.12 [0.10, 0.14]"; the value alone where the interval is missing, "n/a" where the value is,
-    "-" where the table has no entry."""
+    "0.12 [0.10, 0.14]"; the value alone where the interval is missing, "inf" where it is infinite,
+    "n/a" where it is missing, "-" where the table has no entry."""
     if entry is None:
         return "-"
     keys = (value_key(name), f"{name}_ci_low", f"{name}_ci_high")

@@ -213,7 +213,9 @@ def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> d
     interval ("<name>_ci"), a number's mean ("<name>") with a Student-t interval, NaN values left
     out; "episodes" counts them. With CrowdNav's discomfort steps, "discomfort_frequency" is
     pooled over every step of every episode (its "frequency of being in danger"). The metrics are
-    those of the registry (socialzoo.core.metrics); a NaN value is e.g. the time of a failed episode."""
+    those of the registry (socialzoo.core.metrics); a NaN value is e.g. the time of a failed episode.
+    An infinite value is a value: the time to collision (gl_min_time_to_collision) of an episode never
+    on a collision course makes its mean infinite (no interval), rather than being left out."""
     from socialzoo.bench.stats import mean_interval, rate_interval
 
     n = len(episodes)
@@ -224,7 +226,7 @@ def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> d
             rate = rate_interval(int(sum(bool(e[key]) for e in episodes)), n, confidence)
             out[f"{key}_rate"], out[f"{key}_ci"] = rate.value, [rate.low, rate.high]
         else:
-            mean = mean_interval([float(e[key]) for e in episodes], confidence)
+            mean = mean_interval([float(e[key]) for e in episodes], confidence, infinite=True)
             out[key], out[f"{key}_ci"] = mean.value, [mean.low, mean.high]
     if "discomfort_steps" in keys and "steps" in keys:
         steps = sum(e["steps"] for e in episodes)

@@ -95,3 +95,11 @@ def test_coverage_on_clumped_collision_counts():
         ci = count_interval(counts, rng=gen, resamples=1000)
         covered += ci.low <= truth <= ci.high
     assert 0.82 <= covered / trials <= 0.96
+
+
+def test_an_infinity_is_a_value_where_asked():
+    assert mean_interval([math.inf, 1.0, math.nan, 2.0]).value == 1.5  # left out by default
+    kept = mean_interval([math.inf, 1.0, math.nan, 2.0], infinite=True)
+    assert kept.value == math.inf and kept.n == 3 and math.isnan(kept.low) and math.isnan(kept.high)
+    assert math.isnan(mean_interval([math.inf, -math.inf], infinite=True).value)
+    assert mean_interval([1.0, 3.0], infinite=True) == mean_interval([1.0, 3.0])

@@ -274,3 +274,38 @@ def test_every_suite_scenario_has_a_task_once_registered(stand_ins):
     assert len(SUITE_NAMES) == 25
     for scenario in resolve_scenarios(["a", "b"]):
         assert suite_task("action_selection", scenario).kwargs["family"] == scenario.name
+
+
+def test_an_infinite_time_to_collision_counts_in_the_mean_the_table_and_the_heatmap(monkeypatch, tmp_path):
+    """An episode never on a collision course has gl_min_time_to_collision inf, the best value; the
+    suite's mean used to leave it out as if undefined: robot crowding, GoAlone, seeds 100-101 (inf and
+    1.61 s) read "1.61", and leaving a group (inf, inf) read "n/a"."""
+    from types import SimpleNamespace
+
+    import socialzoo.bench.suite_page as suite_page
+    from socialzoo.bench.tables import interval_text
+    from socialzoo.bench.task_benchmark import summarize, table_entry
+
+    name = "gl_min_time_to_collision"
+    entries = {
+        scenario: table_entry("goalone", scenario, "test", summarize([{name: v} for v in values]))
+        for scenario, values in (("y", [math.inf, 1.61]), ("q", [math.inf, math.inf]), ("a", [3.0, 4.0]))
+    }
+    assert entries["y"][f"{name}_mean"] == math.inf
+    assert [interval_text(e, name, 2) for e in entries.values()] == ["inf", "inf", "3.50 [-2.85, 9.85]"]
+    # NaN (nobody there) is still no value.
+    assert summarize([{name: v} for v in (math.nan, 1.0, 2.0)])[name] == 1.5
+
+    figures = []
+    monkeypatch.setattr(suite_page, "save_figure", lambda fig, *a, **k: figures.append(fig) or [tmp_path])
+    result = SimpleNamespace(
+        scenarios=[SimpleNamespace(name=s, label=s) for s in entries],
+        policies=["goalone"],
+        entry=lambda policy, scenario: entries[scenario],
+    )
+    suite_page.plot_heatmap(result, name, tmp_path)
+    ax = figures[0].axes[0]
+    assert [t.get_text() for t in ax.texts] == ["inf", "inf", "3.50"]
+    shown = ax.images[0].get_array()
+    assert not np.ma.getmaskarray(shown).any()  # coloured as the best end of the scale, not grey
+    assert shown[0, 0] == shown[0, 1] == ax.images[0].norm.vmax > shown[0, 2] == 3.5
