@@ -391,8 +391,8 @@ def trace_episode_log(
     Args:
         trace: the EpisodeTrace.
         scene: its ReplayScene.
-        robot_radius: the robot's disc for the gaps (default: the circle round the footprint,
-            hypot(length, width) / 2).
+        robot_radius: the robot's disc for the gaps (default: the scene's robot_radius for a
+            round robot, else the circle round the footprint, hypot(length, width) / 2).
         shortest_path_length: SPL's l, m (default: none in the log: the straight line).
         time_limit: the episode's time limit, s (for the timeout).
         source: the log's source line.
@@ -400,7 +400,12 @@ def trace_episode_log(
     pose = np.asarray(trace.robot_pose, dtype=np.float64)
     speed = np.asarray(trace.robot_vel, dtype=np.float64)[:, 0]
     vel = speed[:, None] * np.stack([np.cos(pose[:, 2]), np.sin(pose[:, 2])], axis=1)
-    radius = math.hypot(scene.robot_length, scene.robot_width) / 2 if robot_radius is None else robot_radius
+    if robot_radius is not None:
+        radius = robot_radius
+    elif scene.robot_radius is not None:  # a round robot (CrowdNav's), not the circle round its square
+        radius = scene.robot_radius
+    else:
+        radius = math.hypot(scene.robot_length, scene.robot_width) / 2
     human = np.concatenate([[False], np.asarray(trace.human_collisions) > 0])
     wall = np.concatenate([[False], np.asarray(trace.wall_collision, dtype=bool)])
     return make_episode_log(

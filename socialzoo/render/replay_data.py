@@ -207,6 +207,9 @@ class ReplayScene:
         subtitle: a second line (scenario, seed, env config), may be empty.
         action_names: the names of the task's discrete actions, drawn on the action timeline and
             in the legend (the sub-policies by default; empty for a velocity task: no legend).
+        robot_radius: a round robot's radius, m (drawn as the square of its diameter, the
+            footprint above); None: a box footprint. The episode log of a trace takes it as the
+            robot's disc (socialzoo.bench.episode_log.trace_episode_log).
     """
 
     title: str
@@ -219,6 +222,7 @@ class ReplayScene:
     goal_radius: float
     subtitle: str = ""
     action_names: tuple[str, ...] = ACTION_NAMES
+    robot_radius: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "action_names", tuple(str(n) for n in self.action_names))

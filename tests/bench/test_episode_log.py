@@ -2,6 +2,7 @@
 arrays score directly, a recorded replay becomes a log that agrees with the env's own metrics, and
 a log that breaks the schema is a named error naming the file and the field, with nothing written."""
 
+import dataclasses
 import json
 import math
 
@@ -389,3 +390,31 @@ def test_a_person_without_velocities_beside_one_with_them():
         "velocities": [[-1, 0], None, None],
     }
     assert log_metrics({**log, "people": [stepper]})["gl_min_time_to_collision"] == 3.0
+
+
+def test_the_log_of_a_crowdnav_episode_has_the_robot_s_own_disc():
+    """The CrowdNav robot is a disc of 0.3 m, drawn as a 0.6 m square: its log took the circle round
+    the square (0.42 m), so ORCA on frontal approach, test case 0, read an overlap (-0.07 m) and a
+    time to collision of 0 where the live path read 0.05 m and 4.8 s."""
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.replay import record_task_episode
+    from socialzoo.env.tasks import make_task
+
+    task = make_task("crowdnav", 1)
+    task.reset(np.array([0]), {"split": next(iter(task.case_splits())), "cases": [0]})
+    trace = record_task_episode(task, make_policy("orca", task=task), label="orca", laser_rays=0)
+    scene = task.viewer_scene("t", "", [trace])
+    log = trace_episode_log(trace, scene)
+    radius = float(task.config.robot.radius)
+    found = log_metrics(log)
+    pos, people = np.asarray(trace.robot_pose)[:, None, :2], np.asarray(trace.human_pos)
+    gaps = np.linalg.norm(people - pos, axis=2) - radius - scene.human_radius
+    gaps = np.where(np.asarray(trace.human_present), gaps, np.inf)
+    assert gaps.min() > 0 and found["gl_min_distance_to_human"] == pytest.approx(
+        gaps.min()
+    )  # ends at its goal
+    assert log["robot"]["radius"] == scene.robot_radius == radius
+    # A box footprint keeps the circle round it.
+    assert trace_episode_log(trace, dataclasses.replace(scene, robot_radius=None))["robot"]["radius"] == (
+        pytest.approx(math.hypot(2 * radius, 2 * radius) / 2)
+    )

@@ -535,17 +535,18 @@ class CrowdNavTask(Task):
         return CoreRenderer(self, render_mode, view=view, world_map=world_map, **frame)
 
     def viewer_scene(self, title: str, subtitle: str, traces: Any) -> Any:
-        """The arena (or the map's walls) around every trace; the robot's disc as a square of its
-        diameter; the people's radius."""
+        """The arena (or the map's walls) around every trace; the robot's disc (its radius, drawn as
+        a square of its diameter); the people's radius."""
         import dataclasses
 
         scene = super().viewer_scene(title, subtitle, traces)
-        diameter = 2.0 * float(self.config.robot.radius)  # type: ignore[arg-type]
+        radius = float(self.config.robot.radius)  # type: ignore[arg-type]
         return dataclasses.replace(
             scene,
             map_name=self.config.map or "arena",
-            robot_length=diameter,
-            robot_width=diameter,
+            robot_length=2.0 * radius,
+            robot_width=2.0 * radius,
+            robot_radius=radius,
             human_radius=self.config.cases.human_radius,
             goal_radius=float(self.config.robot.radius),  # type: ignore[arg-type]
         )
