@@ -592,8 +592,9 @@ _ENTRIES: tuple[Metric, ...] = (
         name="gl_spl",
         label="success weighted by path length",
         better="higher",
-        description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), l the shortest path's length (the "
-        "straight line unless the log gives it) and p the path length.",
+        description="Table I's SPL (Anderson et al. 2018): S l / max(p, l), p the path length and l the shortest "
+        "path's length: an episode log's shortest_path_length, on socialzoo's own episodes the navigator's route "
+        "length at the start (at least the straight line), else the straight line.",
     ),
     # gl_velocity_min/avg/max, gl_acceleration_min/avg/max, gl_jerk_min/avg/max: Table I's V, A and J
     *(
