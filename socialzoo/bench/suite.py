@@ -515,7 +515,12 @@ def run_suite(
         played += late
         episodes_of[(unit.spec, unit.scenario.name)] = episodes
         entries.append(
-            table_entry(unit.spec, unit.scenario.name, unit.test_set, summarize(episodes, CONFIDENCE))
+            table_entry(
+                unit.spec,
+                unit.scenario.name,
+                unit.test_set,
+                summarize(episodes, CONFIDENCE, cell=(unit.spec, unit.scenario.name)),
+            )
         )
     reused = len(units) * config.seeds - played
     scenarios = list(dict.fromkeys(u.scenario for u in units))

@@ -37,6 +37,8 @@ CONFIG_FILE = "config.json"
 TABLES_DIR = "tables"
 HEATMAPS_DIR = "heatmaps"
 PAGE_FILE = "results.html"
+# Which interval each kind of value has (socialzoo.bench.task_benchmark.summarize), for the tables and the page.
+INTERVAL_KINDS = "rates: Wilson score; counts per episode: BCa bootstrap; other means: Student-t"
 
 
 def metric_scale(name: str) -> float:
@@ -60,7 +62,7 @@ def write_suite_tables(result: SuiteResult, out: Path) -> list[Path]:
         "# Scenario suite results",
         "",
         f"{result.config.task} task; {result.config.seeds} seeds per policy and scenario; values in brackets: "
-        f"two-sided {result.confidence:.0%} confidence intervals (rates: Wilson score; means: Student-t).",
+        f"two-sided {result.confidence:.0%} confidence intervals ({INTERVAL_KINDS}).",
     ]
     for name in result.metrics:
         scale, digits = metric_scale(name), metric_digits(name)
@@ -310,8 +312,8 @@ def _tables(result: SuiteResult) -> list[str]:
     parts = [
         '<section id="tables">',
         "<h2>Tables</h2>",
-        f"<p>Mean over seeds with its two-sided {result.confidence:.0%} confidence interval (rates: Wilson score; "
-        "means: Student-t; a success-only metric over the successful episodes).</p>",
+        f"<p>Mean over seeds with its two-sided {result.confidence:.0%} confidence interval ({INTERVAL_KINDS}; "
+        "a success-only metric over the successful episodes).</p>",
     ]
     header = "".join(f"<th>{html.escape(s.label)}</th>" for s in result.scenarios)
     for name in result.metrics:

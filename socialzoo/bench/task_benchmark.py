@@ -208,15 +208,30 @@ def evaluate_stored(
     return episodes, len(todo)
 
 
-def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> dict[str, Any]:
+def summarize(
+    episodes: Sequence[dict[str, Any]], confidence: float = 0.95, cell: Sequence[str] = ()
+) -> dict[str, Any]:
     """Every registered metric of the episodes: a flag's rate ("<name>_rate") with a Wilson
-    interval ("<name>_ci"), a number's mean ("<name>") with a Student-t interval, NaN values left
-    out; "episodes" counts them. With CrowdNav's discomfort steps, "discomfort_frequency" is
-    pooled over every step of every episode (its "frequency of being in danger"). The metrics are
-    those of the registry (socialzoo.core.metrics); a NaN value is e.g. the time of a failed episode.
-    An infinite value is a value: the time to collision (gl_min_time_to_collision) of an episode never
-    on a collision course makes its mean infinite (no interval), rather than being left out."""
-    from socialzoo.bench.stats import mean_interval, rate_interval
+    interval ("<name>_ci"), a count's mean (the registry's counts, e.g. gl_collisions) with a
+    bootstrap (BCa) interval as the maps' tables give it (socialzoo.bench.tables.summarize: never
+    below 0, [0, -ln((1 - confidence) / 2) / n] with no count at all), any other number's mean
+    ("<name>") with a Student-t interval, NaN values left out; "episodes" counts them. With
+    CrowdNav's discomfort steps, "discomfort_frequency" is pooled over every step of every episode
+    (its "frequency of being in danger"). The metrics are those of the registry
+    (socialzoo.core.metrics); a NaN value is e.g. the time of a failed episode. An infinite value is
+    a value: the time to collision (gl_min_time_to_collision) of an episode never on a collision
+    course makes its mean infinite (no interval), rather than being left out.
+
+    Args:
+        episodes: the episodes' metrics.
+        confidence: the two-sided level of every interval.
+        cell: the names of the table cell (policy, scenario): with the metric's name they seed the
+            bootstrap's resamples (socialzoo.bench.aggregates.cell_generator), so an interval is
+            reproducible and does not move when other cells are added.
+    """
+    from socialzoo.bench.aggregates import cell_generator
+    from socialzoo.bench.stats import count_interval, mean_interval, rate_interval
+    from socialzoo.bench.tables import BOOTSTRAP_SEED
 
     n = len(episodes)
     out: dict[str, Any] = {"episodes": n}
@@ -226,7 +241,12 @@ def summarize(episodes: Sequence[dict[str, Any]], confidence: float = 0.95) -> d
             rate = rate_interval(int(sum(bool(e[key]) for e in episodes)), n, confidence)
             out[f"{key}_rate"], out[f"{key}_ci"] = rate.value, [rate.low, rate.high]
         else:
-            mean = mean_interval([float(e[key]) for e in episodes], confidence, infinite=True)
+            values = [float(e[key]) for e in episodes]
+            if METRICS[key].count:
+                rng = cell_generator(BOOTSTRAP_SEED, *cell, key)
+                mean = count_interval(values, confidence, rng=rng)
+            else:
+                mean = mean_interval(values, confidence, infinite=True)
             out[key], out[f"{key}_ci"] = mean.value, [mean.low, mean.high]
     if "discomfort_steps" in keys and "steps" in keys:
         steps = sum(e["steps"] for e in episodes)
@@ -318,7 +338,7 @@ def run_task_benchmark(
         episodes, played = evaluate_stored(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, overrides
         )
-        summary = summarize(episodes)
+        summary = summarize(episodes, cell=(spec, env_id))
         rows.append(table_entry(spec, env_id.split("/")[-1], f"{probe.name}-{split}", summary))
         read = summary["episodes"] - played
         line = (

@@ -309,3 +309,31 @@ def test_an_infinite_time_to_collision_counts_in_the_mean_the_table_and_the_heat
     shown = ax.images[0].get_array()
     assert not np.ma.getmaskarray(shown).any()  # coloured as the best end of the scale, not grey
     assert shown[0, 0] == shown[0, 1] == ax.images[0].norm.vmax > shown[0, 2] == 3.5
+
+
+def test_a_count_has_the_maps_tables_bootstrap_interval_never_below_zero():
+    """The registry's counts (gl_collisions, ...) got a Student-t interval in the suite's tables: GoAlone's
+    collisions on entering an elevator over 3 seeds (1, 0, 0) read "0.33 [-1.10, 1.77]", and 6 seeds
+    without a collision "0.00 [0.00, 0.00]", where `socialzoo benchmark`'s tables give counts the BCa
+    bootstrap (docs/benchmark.md) that the registry promises (Metric.count)."""
+    from socialzoo.bench import tables
+    from socialzoo.bench.stats import mean_interval
+    from socialzoo.bench.task_benchmark import summarize
+
+    name = "gl_collisions"
+    some = summarize([{name: v} for v in (1, 0, 0)])
+    low, high = some[f"{name}_ci"]
+    assert 0.0 <= low <= some[name] <= high
+    none = summarize([{name: 0}] * 6)
+    assert none[f"{name}_ci"] == [0.0, pytest.approx(-math.log(0.025) / 6)]
+    # The maps' tables' interval, from the same cell's generator.
+    rows = [
+        {"policy": "goalone", "map": "entering_elevator", "test_set": "t", "success": True, name: v}
+        for v in (1, 0, 0)
+    ]
+    (maps,) = tables.summarize(rows, confidence=0.95, metrics=(name,))
+    cell = summarize([{name: v} for v in (1, 0, 0)], cell=("goalone", "entering_elevator"))
+    assert cell[f"{name}_ci"] == [maps[f"{name}_ci_low"], maps[f"{name}_ci_high"]]
+    # Other numbers keep their Student-t interval.
+    t = mean_interval([1.0, 2.0, 3.0], 0.95)
+    assert summarize([{"gl_path_length": v} for v in (1.0, 2.0, 3.0)])["gl_path_length_ci"] == [t.low, t.high]
