@@ -298,7 +298,8 @@ def make_episode_log(
     """An episode log (a dict in the schema) of one episode's arrays: robot_pos (N, 2),
     people_pos (N, H, 2) with people_mask (N, H), walls (W, 4), others_pos (N, K, 2), flags (N,);
     the rest as in socialzoo.bench.guideline_metrics.Trajectories without the batch axis. Sample k
-    is at time k dt. Absent people's positions are written as null.
+    is at time k dt. Absent people's positions are written as null; another robot whose others_goal
+    (K, 2) is NaN, outside the cooperative set, is written without a goal.
 
     Raises:
         EpisodeLogError: the result breaks the schema (shapes that do not agree, non-finite numbers).
@@ -356,7 +357,9 @@ def make_episode_log(
             if vels is not None:
                 entry["velocities"] = _point_list(np.asarray(vels, dtype=np.float64)[:, j], here[:, j])
             if group == "other_robots" and others_goal is not None:
-                entry["goal"] = [float(v) for v in np.asarray(others_goal, dtype=np.float64)[j, :2]]
+                goal_j = np.asarray(others_goal, dtype=np.float64)[j, :2]
+                if np.isfinite(goal_j).all():  # a NaN goal: outside the cooperative set, no goal in the log
+                    entry["goal"] = goal_j.tolist()
             entries.append(entry)
         log[group] = entries
     if walls is not None:

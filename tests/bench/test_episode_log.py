@@ -418,3 +418,22 @@ def test_the_log_of_a_crowdnav_episode_has_the_robot_s_own_disc():
     assert trace_episode_log(trace, dataclasses.replace(scene, robot_radius=None))["robot"]["radius"] == (
         pytest.approx(math.hypot(2 * radius, 2 * radius) / 2)
     )
+
+
+def test_a_robot_outside_the_cooperative_set_is_written_without_a_goal():
+    # Trajectories marks another robot outside the cooperative set with a NaN goal; make_episode_log
+    # wrote that NaN into the log and refused its own log ("other_robots[1].goal[0]: must be a finite
+    # number"). The log's way to say it is a robot without a goal.
+    t = np.arange(5.0)
+    arrays = dict(
+        dt=1.0,
+        robot_pos=np.stack([t, 0 * t], axis=1),
+        goal=[4, 0],
+        robot_radius=0.3,
+        goal_radius=0.2,
+        others_pos=np.stack([np.stack([t, 0 * t + 5], axis=1), np.full((5, 2), 9.0)], axis=1),
+        others_goal=[[4, 5], [np.nan, np.nan]],
+    )
+    log = make_episode_log(**arrays)
+    assert "goal" in log["other_robots"][0] and "goal" not in log["other_robots"][1]
+    assert log_metrics(log)["gl_aggregated_time"] == episode_metrics(**arrays)["gl_aggregated_time"] == 4.0
