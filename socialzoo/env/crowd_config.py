@@ -58,7 +58,8 @@ class CrowdNavConfig:
         action: "continuous" (Box [-1, 1]^2 scaled to the robot's speed: (vx, vy) for a holonomic
             robot, (speed, turn) for a unicycle) or "discrete" (CrowdNav's 81 actions).
         observation: "flat" or "dict" (socialzoo.env.crowd_observation).
-        max_humans: person slots of the observation and the state (default: cases.num_humans).
+        max_humans: person slots of the observation and the state (default: cases.num_humans, or a
+            family's largest scenario where that holds more people; given, at least that many).
         observed_people: None (CrowdNav's): the observation holds every person slot, in slot order.
             A count K: it holds the K present people nearest the robot, nearest first (empty slots
             after them when fewer are present), whatever the world's slots: a policy trained with K
@@ -128,6 +129,9 @@ class CrowdNavConfig:
                 )
         if not isinstance(self.robot_visible, bool):
             raise ValueError(f"CrowdNavConfig.robot_visible must be a bool, got {self.robot_visible!r}")
+        check_int(
+            "CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True
+        )  # the family reads it
         self._resolve_family()
         check_number("CrowdNavConfig", "time_step", self.time_step, low=0, low_open=True)
         check_int("CrowdNavConfig", "physics_substeps", self.physics_substeps, low=1)
@@ -152,7 +156,6 @@ class CrowdNavConfig:
             raise ValueError("CrowdNavConfig.humans: counterfactual runs are the action-selection task's")
         check_choice("CrowdNavConfig", "action", self.action, CROWD_ACTIONS)
         check_choice("CrowdNavConfig", "observation", self.observation, OBSERVATION_KINDS)
-        check_int("CrowdNavConfig", "max_humans", self.max_humans, low=0, allow_none=True)
         check_int("CrowdNavConfig", "observed_people", self.observed_people, low=1, allow_none=True)
         check_int("CrowdNavConfig", "num_robots", self.num_robots, low=1)
         check_family_robots(self.family, self.num_robots, "CrowdNavConfig")
@@ -192,12 +195,21 @@ class CrowdNavConfig:
             )
         if self.map is None and home != ARENA:
             object.__setattr__(self, "map", home)
+        # A family whose scenarios hold more people than the cases' count (a recorded scene's) sizes
+        # the person slots; slots given that are too few for it would fail at the first reset of
+        # such a scenario, after a run has begun.
+        most = getattr(get_family(self.family), "max_people", None)
+        if most is None:
+            return
         if self.max_humans is None:
-            # A family whose scenarios hold more people than the cases' count (a recorded scene's)
-            # sizes the person slots.
-            most = getattr(get_family(self.family), "max_people", None)
-            if most is not None and most > self.cases.num_humans:
+            if most > self.cases.num_humans:
                 object.__setattr__(self, "max_humans", int(most))
+        elif self.max_humans < most:
+            raise ValueError(
+                f"CrowdNavConfig.max_humans ({self.max_humans}) is below the {most} people of the largest "
+                f"scenario of family {self.family!r}: give max_humans >= {most}, or None to size the person "
+                "slots to the family"
+            )
 
     @property
     def people(self) -> PeopleConfig:

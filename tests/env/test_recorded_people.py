@@ -987,3 +987,26 @@ def test_a_config_with_more_robots_than_a_recorded_scene_holds_is_refused_when_m
         with pytest.raises(ValueError, match=rf"num_robots = 2, but scenario family '{family.name}' holds 1"):
             make(family=family.name, num_robots=2)
         assert make(family=family.name).num_robots == 1
+
+
+def test_crowdnav_slots_too_few_for_a_family_are_refused_before_a_run(
+    family: RecordedScene, tmp_path
+) -> None:
+    # `socialzoo suite --task crowdnav --scenarios recorded_eth` (socialzoo/CrowdNavSuite-v2: 20 person
+    # slots; the scene's largest scenario: 44 people) stopped with a traceback at the first reset,
+    # "scenario 0 has 43 humans, more than max_humans=20", after its results store was begun.
+    from socialzoo.bench.suite import SuiteConfig, SuiteError, run_suite
+    from socialzoo.env.crowd_config import CrowdNavConfig
+
+    most = family.max_people
+    assert most > 20
+    with pytest.raises(ValueError, match=rf"max_humans \(20\) is below the {most} people of the largest"):
+        CrowdNavConfig(family=family.name, max_humans=20)
+    assert CrowdNavConfig(family=family.name).max_humans == most  # None: sized to the family, as before
+    assert CrowdNavConfig(family=family.name, max_humans=most).max_humans == most
+    config = SuiteConfig(task="crowdnav", scenarios=(family.name,), policies=("orca",), seeds=1, replays=0)
+    with pytest.raises(
+        SuiteError, match=rf"{family.name}: the crowdnav task cannot be built .*max_humans \(20\)"
+    ):
+        run_suite(config, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
