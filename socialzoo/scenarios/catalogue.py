@@ -148,7 +148,7 @@ def family_name(text: str) -> str:
     if sep:
         try:
             importlib.import_module(module)
-        except ImportError as err:
+        except (ImportError, ValueError, TypeError) as err:  # also an empty or relative name (":x", ".m:x")
             raise ValueError(f"scenario family {text}: cannot import {module!r} ({err})") from None
         if name not in FAMILIES:
             raise ValueError(f"scenario family {text}: importing {module!r} registers no family {name!r}")

@@ -337,3 +337,12 @@ def test_a_count_has_the_maps_tables_bootstrap_interval_never_below_zero():
     # Other numbers keep their Student-t interval.
     t = mean_interval([1.0, 2.0, 3.0], 0.95)
     assert summarize([{"gl_path_length": v} for v in (1.0, 2.0, 3.0)])["gl_path_length_ci"] == [t.low, t.high]
+
+
+def test_a_module_that_cannot_be_a_module_is_named():
+    # `socialzoo suite --scenarios .x:fam` ended in a TypeError traceback from importlib (a relative
+    # name), and `--scenarios :a` printed "error: Empty module name" without the name given.
+    with pytest.raises(SuiteError, match=r"scenario family \.x:fam: cannot import '\.x'"):
+        resolve_scenarios([".x:fam"])
+    with pytest.raises(SuiteError, match="scenario family :a: cannot import ''"):
+        resolve_scenarios([":a"])
