@@ -55,7 +55,7 @@ class EpisodeFrame:
 class GuidelineRecorder:
     """Records B rows of a task's core and gives the Table I metrics of finished episodes.
 
-    Per sample: robot 0's centre, world velocity and distance to the nearest wall, the people's
+    Per sample: robot 0's centre, world velocity and distance to the nearest wall (or closed door), the people's
     centres, velocities and presence, the other robots' centres, and the world's own contact flags
     (the world step's collision rules, socialzoo.env.world.robot_collisions: a person's centre within
     the collision distance, the footprint touching a wall; a robot touching a closed door of a
@@ -140,7 +140,11 @@ class GuidelineRecorder:
         s: WorldState = core.state
         robot = core.world.robot
         wall, human = robot_collisions(s, core.walls, core.world)
-        wall = wall | core.script.door_contacts(s) if core.script.active else wall
+        # Measured as it is sampled: one pass over the walls per step, not per episode and sample.
+        wall_distance = wall_distances(s.robot_pose[:, 0, :2], self.walls)
+        if core.script.active:  # a closed door of a scenario script is a wall, for contacts and clearance
+            wall = wall | core.script.door_contacts(s)
+            wall_distance = np.minimum(wall_distance, core.script.closed_door_distances(s)[:, 0])
         return {
             "robot_pos": s.robot_pose[:, 0, :2].copy(),
             "robot_vel": robot_velocity_vectors(s, robot)[:, 0].copy(),
@@ -148,8 +152,7 @@ class GuidelineRecorder:
             "people_vel": s.human_vel.copy(),
             "people_mask": s.human_mask.copy(),
             "others_pos": s.robot_pose[:, 1:, :2].copy(),
-            # Measured as it is sampled: one pass over the walls per step, not per episode and sample.
-            "wall_distance": wall_distances(s.robot_pose[:, 0, :2], self.walls),
+            "wall_distance": wall_distance,
             "wall_contact": wall[:, 0].copy(),
             "human_contact": human[:, 0].copy(),
         }

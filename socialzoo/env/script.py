@@ -192,14 +192,18 @@ class ScriptRunner:
 
     def door_contacts(self, state: WorldState) -> np.ndarray:
         """(B, R) robots whose centre is within door_reach of a door closed now."""
+        return self.closed_door_distances(state) < self.door_reach
+
+    def closed_door_distances(self, state: WorldState) -> np.ndarray:
+        """(B, R) each robot centre's distance to the nearest door closed now, m (inf: none closed)."""
         if self.doors.shape[1] == 0:
-            return np.zeros(state.robot_pose.shape[:2], dtype=bool)
+            return np.full(state.robot_pose.shape[:2], np.inf)
         pos = state.robot_pose[:, :, None, :2]  # (B, R, 1, 2)
         a, b = self.doors[:, None, :, 0:2], self.doors[:, None, :, 2:4]  # (B, 1, D, 2)
         ab = b - a
         t = np.clip(((pos - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0)
-        near = np.hypot(*(a + t[..., None] * ab - pos).transpose(3, 0, 1, 2)) < self.door_reach
-        return (near & self.closed[:, None, :]).any(-1)
+        dist = np.hypot(*(a + t[..., None] * ab - pos).transpose(3, 0, 1, 2))  # (B, R, D)
+        return np.where(self.closed[:, None, :], dist, np.inf).min(-1)
 
     # ------------------------------------------------------------------ robots
     def escort_in_place(self, state: WorldState) -> np.ndarray:

@@ -175,3 +175,26 @@ def test_table_one_counts_a_collision_the_crowdnav_task_judged_in_the_middle_of_
     assert episode["collision"] == 1.0 and episode["steps"] == 5
     assert 0 < episode["gl_min_distance_to_human"] < 0.01  # apart at every sample
     assert episode["gl_human_collisions"] == episode["gl_collisions"] == 1 and not episode["gl_success"]
+
+
+def test_a_closed_door_is_a_wall_for_the_clearing_distance_as_for_the_contacts():
+    """GoAlone drives into the closed elevator door of exiting an elevator (suite o, test case 0): the
+    live path counted the contact as a wall collision but measured the clearing distance to the map's
+    walls only, 0.30 m, as if nothing had been near."""
+    from socialzoo.agents import make_policy
+    from socialzoo.bench.episodes import play_cases
+    from socialzoo.bench.suite import SuiteScenario, suite_task
+
+    scenario = SuiteScenario("exiting_elevator", "o", "Exiting an elevator", "elevator", "")
+    task = suite_task("action_selection", scenario)
+    probe = task.make(1)
+    (episode,) = play_cases(
+        task.task,
+        make_policy("goalone", task=probe).act,
+        "test",
+        [0],
+        config=probe.config,
+        guideline_metrics=True,
+    )
+    assert episode["gl_wall_collisions"] >= 1
+    assert episode["gl_clearing_distance_min"] < 0
