@@ -27,3 +27,11 @@ def test_a_scenario_a_policy_did_not_play_is_not_a_zero():
     assert corner == ["50 / 50", "-"]
     frontal = [c.strip() for c in rows["a. Frontal approach"].split("|")[2:-1]]
     assert frontal == ["100 / 0", "50 / 50"]
+
+
+def test_a_family_outside_the_suite_is_a_row_under_its_name():
+    # `socialzoo suite --scenarios a,crossing` plays any registered family; the table stopped with
+    # "KeyError: unknown suite scenario 'crossing'".
+    outcomes = {("ref", "frontal_approach"): ([True], [False]), ("ref", "crossing"): ([False], [True])}
+    rows = [line.split("|")[1].strip() for line in _tool().table(outcomes).splitlines()[2:]]
+    assert rows[:2] == ["a. Frontal approach", "crossing"]

@@ -20,6 +20,16 @@ from socialzoo.bench.stats import rate_interval
 from socialzoo.scenarios.suite import suite_entry
 
 
+def label(scenario: str) -> str:
+    """A row's label: "a. Frontal approach" for a suite scenario, the family's name for another
+    registered family that `socialzoo suite --scenarios` played."""
+    try:
+        entry = suite_entry(scenario)
+    except KeyError:
+        return scenario
+    return f"{entry.letter}. {entry.title}"
+
+
 def unit_outcomes(folder: Path) -> dict[tuple[str, str], tuple[list[bool], list[bool]]]:
     """(policy, scenario) -> (successes, collided) of the folder's stored episodes, in case order."""
     config = json.loads((folder / "config.json").read_text())
@@ -41,13 +51,12 @@ def table(outcomes: dict[tuple[str, str], tuple[list[bool], list[bool]]]) -> str
     scenarios = list(dict.fromkeys(s for _, s in outcomes))
     lines = ["| scenario | " + " | ".join(policies) + " |", "|---|" + "---|" * len(policies)]
     for scenario in scenarios:
-        entry = suite_entry(scenario)
         cells = []
         for policy in policies:
             success, collided = outcomes.get((policy, scenario), ([], []))
             n = len(success)  # 0: not played (a folder without this scenario), not a 0% success
             cells.append(f"{100 * sum(success) / n:.0f} / {100 * sum(collided) / n:.0f}" if n else "-")
-        lines.append(f"| {entry.letter}. {entry.title} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label(scenario)} | " + " | ".join(cells) + " |")
     totals = []
     for policy in policies:
         success = [x for (p, _), (s, _) in outcomes.items() if p == policy for x in s]
