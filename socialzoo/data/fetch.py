@@ -89,9 +89,16 @@ def data_dir(cache: str | Path | None = None) -> Path:
         return Path(cache).expanduser()
     if os.environ.get(ENV_VAR):
         return Path(os.environ[ENV_VAR]).expanduser()
+    return user_cache() / CACHE_NAME
+
+
+def user_cache() -> Path:
+    """The user's own socialzoo cache folder, platformdirs.user_cache_dir("socialzoo")
+    (~/.cache/socialzoo on Linux): the data cache's default home, and where what cannot be written into
+    a read-only data cache goes (socialzoo.scenarios.recorded.RecordedScene.open_map)."""
     import platformdirs
 
-    return Path(platformdirs.user_cache_dir("socialzoo")) / CACHE_NAME
+    return Path(platformdirs.user_cache_dir("socialzoo"))
 
 
 def sha256(path: str | Path) -> str:

@@ -140,9 +140,13 @@ class Map:
             data["provenance"] = self.provenance
         return data
 
+    def to_text(self) -> str:
+        """The map file's text (`save` writes it): to_json as compact JSON, one line."""
+        return json.dumps(self.to_json(), separators=(",", ":")) + "\n"
+
     def save(self, path: str | Path) -> Path:
         """Write the map as JSON, whole or not at all (core.files.write_text_atomic); returns the path."""
-        return files.write_text_atomic(path, json.dumps(self.to_json(), separators=(",", ":")) + "\n")
+        return files.write_text_atomic(path, self.to_text())
 
 
 # ----------------------------------------------------------------------------- reading JSON

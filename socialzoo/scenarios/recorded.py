@@ -3,9 +3,10 @@ and everyone else walks as recorded (the rules, budgets and splits: docs/recorde
 
 from __future__ import annotations
 
+import contextlib
 import heapq
+import logging
 import math
-import os
 import zlib
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -19,6 +20,8 @@ from socialzoo.scenarios.scenario import Scenario
 if TYPE_CHECKING:
     from socialzoo.data.tracks import Recording
     from socialzoo.maps.map_file import Map
+
+logger = logging.getLogger(__name__)
 
 # The robot's time budget: this many times the replaced person's time (or its path at
 # REFERENCE_SPEED, if longer), and at least MIN_TIME_LIMIT s.
@@ -291,21 +294,41 @@ class RecordedScene(ScenarioFamily):
         """The path of the scene's open area as a map file (open_area_map) in the data cache
         (socialzoo.data.fetch.data_dir), beside the recordings. The file is named after the family,
         so it is rewritten whenever it does not hold this recording's area: another recording
-        registered under the same name, or the same file edited since, gets its own walls."""
-        from socialzoo.data.fetch import data_dir
+        registered under the same name, or the same file edited since, gets its own walls.
 
-        path = data_dir() / "maps" / f"{self.name}.json"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        # Built beside it and renamed over it: another process reading or writing the same
-        # family's map never sees half a file.
-        staged = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        A file that holds it already is only read, so a read-only cache (a shared folder) serves once
+        the map is in it. A cache that cannot be written gets no map: it goes to the user's own cache
+        folder (socialzoo.data.fetch.user_cache, maps/), rewritten there by the same rule.
+
+        Raises:
+            OSError: neither folder can be written (the message names both).
+        """
+        from socialzoo.core.files import write_text_atomic
+        from socialzoo.data.fetch import data_dir, user_cache
+
+        text = open_area_map(self.recording, self.name).to_text()
+        name = f"{self.name}.json"
+        shared, own = data_dir() / "maps" / name, user_cache() / "maps" / name
+        for path in (shared, own):
+            with contextlib.suppress(OSError):  # none there yet, or not readable
+                if path.read_text(encoding="utf-8") == text:
+                    return str(path)
         try:
-            open_area_map(self.recording, self.name).save(staged)
-            if not path.exists() or path.read_bytes() != staged.read_bytes():
-                os.replace(staged, path)
-        finally:
-            staged.unlink(missing_ok=True)
-        return str(path)
+            # Written whole and renamed over it: another process reading or writing the same family's
+            # map never sees half a file.
+            return str(write_text_atomic(shared, text))
+        except OSError as first:
+            try:
+                written = write_text_atomic(own, text)
+            except OSError as second:
+                raise OSError(
+                    f"{self.name}: cannot write its open-area map into the data cache ({shared}: {first}) "
+                    f"nor into the user's cache ({own}: {second}); give the task map=PATH"
+                ) from second
+            logger.info(
+                "%s: the data cache cannot be written (%s); its open-area map is %s", self.name, first, own
+            )
+            return str(written)
 
     def make(self, seed: int, num_robots: int = 1, m: Map | None = None) -> Scenario:
         """The episode of `seed`: the robot in the place of track_of(seed) (each track's episode is

@@ -357,6 +357,55 @@ def test_the_open_area_map_is_the_registered_recordings(tmp_path, monkeypatch) -
     assert [p.name for p in (tmp_path / "maps").iterdir()] == ["recorded_mine.json"]
 
 
+def _read_only(monkeypatch, folder) -> None:
+    """Every write below `folder` fails as on a read-only file system (the tests run as any user, root too)."""
+    import os
+    import pathlib
+
+    def guard(call):
+        def guarded(path, *args, **kwargs):
+            mode = str(kwargs.get("mode", args[0] if args else "r"))
+            writing = call.__name__ != "open" or any(c in mode for c in "wax+")
+            if writing and pathlib.Path(path).resolve().is_relative_to(pathlib.Path(folder).resolve()):
+                raise OSError(30, "Read-only file system", str(path))
+            return call(path, *args, **kwargs)
+
+        return guarded
+
+    for name in ("mkdir", "open", "unlink", "touch"):
+        monkeypatch.setattr(pathlib.Path, name, guard(getattr(pathlib.Path, name)))
+    monkeypatch.setattr(os, "replace", guard(os.replace))
+
+
+def test_the_open_area_map_is_read_from_a_read_only_cache(tmp_path, monkeypatch) -> None:
+    # docs/data.md: a complete cache may be read-only (a shared folder). Recorded-v3 builds on the scene's
+    # open-area map in that cache; it wrote the map again (a staged copy) on every env made, so a read-only
+    # cache refused every env even with the current map in it.
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "shared"))
+    path = RecordedScene(_recording(count=20), name="recorded_mine").open_map()
+    written = (tmp_path / "shared" / "maps" / "recorded_mine.json").read_bytes()
+    _read_only(monkeypatch, tmp_path / "shared")
+    assert RecordedScene(_recording(count=20), name="recorded_mine").open_map() == path
+    assert (tmp_path / "shared" / "maps" / "recorded_mine.json").read_bytes() == written
+
+
+def test_a_read_only_cache_without_the_open_area_map_writes_it_to_the_users_cache(
+    tmp_path, monkeypatch
+) -> None:
+    # The shared read-only cache holds the recordings but no map yet (nobody who could write it played
+    # the scene): the map goes to the user's own socialzoo cache folder instead.
+    from socialzoo.maps.map_file import load_map
+
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "shared"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "mine"))
+    (tmp_path / "shared").mkdir()
+    _read_only(monkeypatch, tmp_path / "shared")
+    path = RecordedScene(_recording(count=20), name="recorded_mine").open_map()
+    assert path == str(tmp_path / "mine" / "socialzoo" / "maps" / "recorded_mine.json")
+    assert load_map(path).name == "recorded_mine"
+    assert not (tmp_path / "shared" / "maps").exists()
+
+
 def test_the_open_area_map_of_a_large_recording_keeps_its_graph_small() -> None:
     # A recording of one's own over a 150 m square (a plaza; or positions left in pixels) made a 2 m
     # grid of 5,900 nodes, whose all-pairs table (N^3) kept Recorded-v3's first reset busy for tens of
