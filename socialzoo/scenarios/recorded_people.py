@@ -236,10 +236,12 @@ class RecordedPeople:
     __hash__ = None  # type: ignore[assignment]
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready; absent positions are null, floats exact."""
+        """JSON-ready; absent positions are null, floats exact. "num_frames" keeps T where no track
+        does (an episode with nobody else in it)."""
         tracks = np.where(np.isnan(self.tracks), None, self.tracks).tolist()  # type: ignore[call-overload]
         return {
             "dt": self.dt,
+            "num_frames": self.num_frames,
             "tracks": tracks,
             "follow": self.follow.tolist(),
             "time_limit": None if math.isinf(self.time_limit) else self.time_limit,
@@ -254,6 +256,14 @@ class RecordedPeople:
         """Inverse of `to_json` (ValueError or KeyError naming the field on bad data)."""
         tracks = np.array(data["tracks"], dtype=object)
         tracks = np.where(tracks == None, np.nan, tracks).astype(np.float64)  # noqa: E711 (elementwise)
+        if "num_frames" in data:
+            frames = int(data["num_frames"])
+            if tracks.size == 0:  # nobody: [] holds no shape
+                tracks = tracks.reshape(0, frames, 2)
+            elif tracks.ndim != 3 or tracks.shape[1] != frames:
+                raise ValueError(
+                    f"RecordedPeople.num_frames is {frames}, but the tracks have shape {tracks.shape}"
+                )
         limit = data.get("time_limit")
         return cls(
             dt=float(data["dt"]),

@@ -290,6 +290,20 @@ def test_the_replaced_scenario_and_its_json(family: RecordedScene) -> None:
     assert not (test & val or test & train or val & train) and train
 
 
+def test_an_episode_with_nobody_else_in_it_and_its_json(tmp_path) -> None:
+    # A recording of one's own may be quiet: nobody else is seen during the robot's budget, so the
+    # episode has no person slots. Its JSON wrote the tracks as [], which read back as shape (0,) and
+    # was refused ("RecordedPeople.tracks must have 3 dimensions"), so the scenario did not round-trip.
+    alone = Recording(
+        name="alone", dt=DT, num_frames=21, tracks=(_walker(1, 0, (0, 0), (8, 0), 1.0),), source="t"
+    )
+    scenario = replaced_scenario(alone, 0, seed=1000, family="test")
+    assert scenario.num_humans == 0 and scenario.recorded.tracks.shape == (0, 21, 2)
+    path = scenario.save(tmp_path / "alone.json")
+    assert Scenario.load(path) == scenario
+    assert Scenario.load(path).recorded.tracks.shape == (0, 21, 2)
+
+
 def test_a_person_split_by_a_gap_is_in_one_split() -> None:
     # A gap longer than MAX_GAP_FRAMES splits a person into two tracks with one person id; the tracks
     # were split apart, so the robot could train in the place of a person it is tested in place of.
