@@ -22,6 +22,8 @@ XY_COLUMNS: dict[str, tuple[int, int]] = {"trajectron": (2, 3), "obsmat": (2, 4)
 DEFAULT_DT = 0.4
 # The longest run of a person's missing frames that is interpolated; a longer one splits the track.
 MAX_GAP_FRAMES = 2
+# Frame and person numbers are read as floats, which hold every whole number below this one only.
+MAX_WHOLE = 2**53
 
 
 class TrackFileError(ValueError):
@@ -202,8 +204,9 @@ def read_tracks(
 
     Raises:
         TrackFileError: a file that is empty, not text, has the wrong number of columns, a value
-            that is not a finite number, a frame or person number that is not whole, a person twice
-            in one frame (an identical row twice included), or a frame off the grid.
+            that is not a finite number, a frame or person number that is not whole or not below
+            2**53 (MAX_WHOLE: larger ones are not all read exactly, so two people could read as one),
+            a person twice in one frame (an identical row twice included), or a frame off the grid.
         ValueError: an unknown layout or a dt that is not a positive number.
         OSError: the file cannot be read.
     """
@@ -322,6 +325,12 @@ def _parse(path: Path, layout: str) -> tuple[np.ndarray, np.ndarray]:
                 raise TrackFileError(path, line_number, f"{column} must be a finite number, got {field!r}")
             if column in ("frame", "person") and value != round(value):
                 raise TrackFileError(path, line_number, f"{column} must be a whole number, got {field!r}")
+            if column in ("frame", "person") and abs(value) >= MAX_WHOLE:
+                raise TrackFileError(
+                    path,
+                    line_number,
+                    f"{column} must be a whole number below 2**53 ({MAX_WHOLE}), got {field!r}",
+                )
             row.append(value)
         numbers.append(row)
         lines.append(line_number)

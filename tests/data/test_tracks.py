@@ -206,6 +206,18 @@ def test_join_refuses_bad_arguments(tmp_path):
         ("0\t1\t1.0\t2.0\n10\t1\tinf\t2.0\n", 2, "x must be a finite number, got 'inf'"),
         ("0\t1.5\t1.0\t2.0\n", 1, "person must be a whole number, got '1.5'"),
         ("0\t1\t1\t1\n10.5\t1\t1\t1\n", 2, "frame must be a whole number, got '10.5'"),
+        # Whole numbers from 2**53 on are not all floats: two people (ids a tracker counted up to
+        # 2**53 + 1) read as one, silently; a huge frame number was named as -9223372036854775808.
+        (
+            "0\t9007199254740992\t0\t0\n10\t9007199254740993\t5\t5\n",
+            1,
+            "person must be a whole number below 2**53 (9007199254740992), got '9007199254740992'",
+        ),
+        (
+            "0\t1\t0\t0\n10\t1\t1\t0\n1e20\t2\t0\t0\n",
+            3,
+            "frame must be a whole number below 2**53 (9007199254740992), got '1e20'",
+        ),
         (
             "0\t1\t1\t1\n10\t1\t1\t1\n10\t2\t2\t2\n10\t1\t1\t1\n",
             4,
