@@ -273,7 +273,7 @@ def cases(recorded: tuple[str, ...] = ()) -> dict[str, Callable[[], dict[str, st
     for scene in recorded:
         for humans in ("replay", "hybrid:orca", "hybrid:sf"):
             out[f"recorded {scene} {humans}"] = lambda scene=scene, humans=humans: gym_vector(
-                "socialzoo/CrowdNavRecorded-v2", 16, steps=300, family=f"recorded_{scene}", humans=humans
+                "socialzoo/CrowdNavRecorded-v3", 16, steps=300, family=f"recorded_{scene}", humans=humans
             )
     return out
 

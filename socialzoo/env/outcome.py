@@ -110,8 +110,9 @@ def robot_outcome(
             code's quirks: socialzoo.env.quirks).
         may_arrive: (B, R) bool, robots whose goal may count as reached now (a robot escorting a
             person arrives only with that person: socialzoo.env.script); None: all.
-        max_steps: (B,) each row's own step limit (a recorded scene's time budget), below the
-            config's; None: the config's for all.
+        max_steps: (B,) each row's own step limit (a recorded scene's time budget), cut by the
+            config's where that is lower (the recorded ids' is a day: socialzoo.env.registration);
+            None: the config's for all.
 
     Returns:
         The RobotOutcome.

@@ -2,6 +2,14 @@
 docstrings point here).
 
 Version History (action-selection ids, their ParallelEnv and TorchRL envs):
+    socialzoo/Recorded-v4 and socialzoo/CrowdNavRecorded-v3 (the recorded ids, each two versions ahead
+        of its task's other ids; no other id changes), on 2026-11-29: an episode lasts its whole time
+        budget (twice the replaced person's time, docs/recorded.md), however long. Each row's budget
+        was cut at its task's default limit (the smaller of the two), 80 s in Recorded-v3 (max_steps
+        3200) and 200 s in CrowdNavRecorded-v2, which the longest budgets pass (up to 466 s; 13 of univ's
+        and 5 of zara2's 100 and 78 test cases in Recorded-v3). The ids' limits are now a day
+        (RECORDED_TIME_CEILING); a limit given in their config still cuts a longer budget. Only the
+        episodes with longer budgets change, past the old limits.
     socialzoo/Suite-v3 and socialzoo/CrowdNavSuite-v2 (the suite ids, each one version ahead of its
         task's other ids; no other id changes), on 2026-11-29: an escort (families following_person,
         leading_person, accompanying_peer) holds all the way, not only at the goal. The escorted
@@ -83,6 +91,7 @@ import dataclasses
 
 import gymnasium as gym
 
+from socialzoo.core.config import WorldConfig
 from socialzoo.env.crowd_variants import CROWD_ENV_VERSION, VARIANTS, crowd_env_id
 from socialzoo.env.quirks import REFERENCE_QUIRKS
 from socialzoo.scenarios.catalogue import get_family
@@ -180,18 +189,23 @@ SUITE_IDS: dict[str, dict] = {
 # `family` keyword (recorded_eth, recorded_hotel, recorded_univ, recorded_zara1, recorded_zara2;
 # `socialzoo data fetch eth-ucy` first), the people replaying their tracks by default (people
 # "hybrid:sf", "hybrid:orca" react). Each episode's time budget is its scene's (twice the replaced
-# person's time). The CrowdNav task in the open with a visible robot and person slots for the
-# scene's largest episode; the action-selection task on the scene's open area as a map.
+# person's time): the task's own limit, which a budget never exceeds (min with it), is set to
+# RECORDED_TIME_CEILING, and a config limit given below a budget cuts it. The CrowdNav task in the
+# open with a visible robot and person slots for the scene's largest episode; the action-selection
+# task on the scene's open area as a map.
 RECORDED_DEFAULT_FAMILY = "recorded_eth"
-# The recorded ids' own versions, one ahead of their task's other ids (the Version History's first line).
-RECORDED_VERSION = ENV_VERSION + 1
-CROWD_RECORDED_VERSION = CROWD_ENV_VERSION + 1
+# The recorded ids' own versions, two ahead of their task's other ids (the Version History's first line).
+RECORDED_VERSION = ENV_VERSION + 2
+CROWD_RECORDED_VERSION = CROWD_ENV_VERSION + 2
+# The recorded ids' task limit, s: a day, above any recorded person's budget (the five scenes' reach 466 s).
+RECORDED_TIME_CEILING = 86400.0
 RECORDED_IDS: dict[str, dict] = {
     f"socialzoo/Recorded-v{RECORDED_VERSION}": {
         "task": "action_selection",
         "map": None,
         "family": RECORDED_DEFAULT_FAMILY,
         "people": {"models": "replay"},
+        "max_steps": round(RECORDED_TIME_CEILING / WorldConfig().dt),  # the action-selection task's steps
     },
     f"socialzoo/CrowdNavRecorded-v{CROWD_RECORDED_VERSION}": {
         "task": "crowdnav",
@@ -199,7 +213,7 @@ RECORDED_IDS: dict[str, dict] = {
         "family": RECORDED_DEFAULT_FAMILY,
         "humans": "replay",
         "robot_visible": True,
-        "time_limit": 200.0,
+        "time_limit": RECORDED_TIME_CEILING,
     },
 }
 

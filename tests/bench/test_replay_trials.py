@@ -136,7 +136,7 @@ def test_a_changed_configuration_is_flagged(results, tmp_path):
 
 
 def test_a_task_ids_trial_names_the_command_that_plays_it(tmp_path):
-    # A task id's benchmark (socialzoo benchmark --maps socialzoo/Recorded-v3, ...) stores fixed
+    # A task id's benchmark (socialzoo benchmark --maps socialzoo/Recorded-v4, ...) stores fixed
     # cases with the task's config, not an EnvConfig: it used to fail with KeyError 'env'.
     from socialzoo.agents.crowd_engineered import CrowdOrcaRobot
     from socialzoo.bench.task_benchmark import TaskId, evaluate_stored

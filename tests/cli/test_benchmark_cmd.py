@@ -173,16 +173,16 @@ def test_task_config_names_a_family_that_a_module_of_one_s_own_registers(tmp_pat
         f"register_family(RecordedScene(read_tracks({str(tmp_path / 'my_tracks.txt')!r}), name='recorded_own'))\n"
     )
     monkeypatch.syspath_prepend(str(tmp_path))
-    env = ["--maps", "socialzoo/CrowdNavRecorded-v2", "--task-config", "family=my_scene_own:recorded_own"]
+    env = ["--maps", "socialzoo/CrowdNavRecorded-v3", "--task-config", "family=my_scene_own:recorded_own"]
     try:
         argv = ["benchmark", *env, "--policies", "orca", "--trials", "1", "--no-figures", "--no-progress"]
         assert socialzoo_main([*argv, "--out", str(tmp_path / "out")]) == 0
         table = (tmp_path / "out" / "crowdnav.md").read_text()
-        assert table.startswith("socialzoo/CrowdNavRecorded-v2, family=recorded_own, test cases")
+        assert table.startswith("socialzoo/CrowdNavRecorded-v3, family=recorded_own, test cases")
         argv = [
             "replay",
             "--env",
-            "socialzoo/Recorded-v3",
+            "socialzoo/Recorded-v4",
             *env[2:],
             "--policy",
             "goalone",
@@ -190,13 +190,13 @@ def test_task_config_names_a_family_that_a_module_of_one_s_own_registers(tmp_pat
             "10",
         ]
         assert socialzoo_main([*argv, "--out", str(tmp_path / "own.html")]) == 0
-        assert "1 episode(s) on socialzoo/Recorded-v3, test case 0" in capsys.readouterr().out
+        assert "1 episode(s) on socialzoo/Recorded-v4, test case 0" in capsys.readouterr().out
     finally:
         FAMILIES.pop("recorded_own", None)
     argv = [
         "benchmark",
         "--maps",
-        "socialzoo/CrowdNavRecorded-v2",
+        "socialzoo/CrowdNavRecorded-v3",
         "--policies",
         "orca",
         "--out",
@@ -218,7 +218,7 @@ def test_a_task_id_whose_split_holds_no_cases_says_so(tmp_path, capsys, monkeypa
     register_family(
         RecordedScene(Recording(name="alone", dt=0.4, num_frames=30, tracks=(alone,), source="test"))
     )
-    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v2", "--task-config", "family=recorded_alone"]
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v3", "--task-config", "family=recorded_alone"]
     try:
         assert socialzoo_main([*argv, "--policies", "orca", "--out", str(tmp_path), "--no-figures"]) == 2
     finally:

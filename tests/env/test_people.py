@@ -221,7 +221,7 @@ def test_bad_people_fail_naming_them_before_any_state(tmp_path, walker_policy_pa
         EnvConfig().replace(people={"models": f"learned:{tmp_path}"})
     with pytest.raises(ValueError, match="counterfactual needs people the env drives itself"):
         EnvConfig().replace(num_learned_humans=2, people={"counterfactual": True})
-    # Learned-human agents among recorded people (socialzoo/Recorded-v3 with num_learned_humans):
+    # Learned-human agents among recorded people (socialzoo/Recorded-v4 with num_learned_humans):
     # the recording placed their slots' people, and the learner's actions were silently ignored.
     for models in ("replay", "hybrid:sf", "replay@0.5+sf@0.5"):
         with pytest.raises(ValueError, match="on their recorded tracks, where num_learned_humans = 2"):

@@ -392,7 +392,7 @@ def _read_only(monkeypatch, folder) -> None:
 
 
 def test_the_open_area_map_is_read_from_a_read_only_cache(tmp_path, monkeypatch) -> None:
-    # docs/data.md: a complete cache may be read-only (a shared folder). Recorded-v3 builds on the scene's
+    # docs/data.md: a complete cache may be read-only (a shared folder). Recorded-v4 builds on the scene's
     # open-area map in that cache; it wrote the map again (a staged copy) on every env made, so a read-only
     # cache refused every env even with the current map in it.
     monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "shared"))
@@ -422,7 +422,7 @@ def test_a_read_only_cache_without_the_open_area_map_writes_it_to_the_users_cach
 
 def test_the_open_area_map_of_a_large_recording_keeps_its_graph_small() -> None:
     # A recording of one's own over a 150 m square (a plaza; or positions left in pixels) made a 2 m
-    # grid of 5,900 nodes, whose all-pairs table (N^3) kept Recorded-v3's first reset busy for tens of
+    # grid of 5,900 nodes, whose all-pairs table (N^3) kept Recorded-v4's first reset busy for tens of
     # minutes (a 60 m square: 1,100 nodes, 15 s). Its spacing widens instead; a scene's own size keeps 2 m.
     from socialzoo.scenarios.recorded import MAX_OPEN_NODES, OPEN_SPACING, open_area_map
 
@@ -441,7 +441,7 @@ def test_crowdnav_plays_a_recorded_scene_deterministically(family: RecordedScene
     from gymnasium.utils.env_checker import check_env
 
     def rollout() -> tuple[np.ndarray, dict]:
-        env = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans=humans)
+        env = gym.make("socialzoo/CrowdNavRecorded-v3", family=family.name, humans=humans)
         check_env(env.unwrapped, skip_render_check=True)
         obs, _ = env.reset(seed=4)
         trace = [obs]
@@ -463,7 +463,7 @@ def test_crowdnav_takes_the_hybrid_reaction_rule(family: RecordedScene) -> None:
     from socialzoo.humans.models import REPLAY
 
     def walked_by_a_model(humans: object) -> tuple[int, int]:
-        env = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans=humans)
+        env = gym.make("socialzoo/CrowdNavRecorded-v3", family=family.name, humans=humans)
         env.reset(seed=0, options={"split": "test", "case": 0})
         env.step(np.zeros(2, dtype=np.float32))
         state = env.unwrapped.task.core.state
@@ -475,9 +475,9 @@ def test_crowdnav_takes_the_hybrid_reaction_rule(family: RecordedScene) -> None:
     by_default, _ = walked_by_a_model("hybrid:orca")
     assert by_default < present
     with pytest.raises(ValueError, match="react_radius must be >= 0"):
-        gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans={"react_radius": -1.0})
+        gym.make("socialzoo/CrowdNavRecorded-v3", family=family.name, humans={"react_radius": -1.0})
     with pytest.raises(ValueError, match="known fields"):
-        gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name, humans={"radius": 2.0})
+        gym.make("socialzoo/CrowdNavRecorded-v3", family=family.name, humans={"radius": 2.0})
 
 
 def test_the_task_id_commands_play_the_family_and_people_given(
@@ -486,20 +486,20 @@ def test_the_task_id_commands_play_the_family_and_people_given(
     from socialzoo.cli import main
 
     config = ["--task-config", f"family={family.name}", "--task-config", 'humans={"models": "hybrid:orca"}']
-    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v2", "--policies", "orca", "--trials", "3"]
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v3", "--policies", "orca", "--trials", "3"]
     assert main([*argv, *config, "--out", str(tmp_path), "--no-figures"]) == 0
     table = (tmp_path / "crowdnav.md").read_text()
     assert f"family={family.name}" in table and "hybrid:orca" in table
     assert "| orca |" in table and "replaced person's time" in table
     page = tmp_path / "case.html"
-    argv = ["replay", "--env", "socialzoo/CrowdNavRecorded-v2", "--policy", "orca", "--case", "1", *config]
+    argv = ["replay", "--env", "socialzoo/CrowdNavRecorded-v3", "--policy", "orca", "--case", "1", *config]
     assert main([*argv, "--out", str(page)]) == 0
     assert f"family={family.name}" in page.read_text()
     assert "test case 1" in capsys.readouterr().out
 
 
 def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
-    env = gym.make("socialzoo/Recorded-v3", family=family.name, people={"models": "hybrid:sf"})
+    env = gym.make("socialzoo/Recorded-v4", family=family.name, people={"models": "hybrid:sf"})
     env.reset(seed=0, options={"split": "test", "case": 0})
     for _ in range(5000):
         _, _, term, trunc, info = env.step(0)  # GoAlone
@@ -509,7 +509,7 @@ def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
     for key in ("person_time", "person_time_ratio", "person_path_deviation", "people_reacting"):
         assert key in metrics
     assert metrics["person_time"] > 0
-    crowd = gym.make("socialzoo/CrowdNavRecorded-v2", family=family.name)
+    crowd = gym.make("socialzoo/CrowdNavRecorded-v3", family=family.name)
     crowd.reset(seed=0, options={"split": "test", "case": 0})
     for _ in range(500):
         _, _, term, trunc, info = crowd.step(np.zeros(2, dtype=np.float32))
@@ -532,7 +532,7 @@ def test_recorded_metrics_in_both_tasks(family: RecordedScene) -> None:
 def test_crowdnav_counts_the_people_who_walked_into_the_robot_among_the_collisions_it_judged(
     other: list[tuple[int, float, float]], drive: float, walked_into: int, tmp_path, monkeypatch
 ) -> None:
-    # CrowdNavRecorded-v2 judges a collision by the closest approach during a step; its
+    # CrowdNavRecorded-v3 judges a collision by the closest approach during a step; its
     # people_walked_into_robot counted only contacts at the steps' ends, so a person walking past the
     # robot ended the episode in a collision with nobody counted (docs/recorded.md).
     from socialzoo.data.tracks import read_tracks
@@ -543,7 +543,7 @@ def test_crowdnav_counts_the_people_who_walked_into_the_robot_among_the_collisio
     path.write_text("".join(f"{f}\t{p}\t{x:.4f}\t{y:.4f}\n" for f, p, x, y in rows))
     name = "recorded_test_walked_into"
     monkeypatch.setitem(FAMILIES, name, RecordedScene(read_tracks(path), name=name))
-    env = gym.make("socialzoo/CrowdNavRecorded-v2", family=name, humans="replay")
+    env = gym.make("socialzoo/CrowdNavRecorded-v3", family=name, humans="replay")
     env.reset(seed=0)  # the one eligible track: the other person's lasts under 4 s or 2 m
     core = env.unwrapped.task.core
     for _ in range(40):
@@ -893,6 +893,37 @@ def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
     assert core.time_limit[0] == recorded.recorded.time_limit and core.time_limit[1] == np.inf
     core.reset_rows(np.array([0]), [plain])
     assert core.time_limit[0] == np.inf
+
+
+@pytest.mark.parametrize("env_id", ["socialzoo/Recorded-v4", "socialzoo/CrowdNavRecorded-v3"])
+def test_a_long_budget_is_the_episodes_whatever_the_tasks_default_limit(env_id: str, monkeypatch) -> None:
+    # A person who lingers 150 s and walks 2 m: a 300 s budget (docs/recorded.md). The recorded ids cut
+    # every budget at their task's default limit (min with it): 80 s in Recorded-v3 (max_steps 3200 of
+    # 0.025 s), 200 s in CrowdNavRecorded-v2; 18 of univ's and zara2's test cases have longer budgets.
+    lingering = _walker(1, 0, (0.0, 0.0), (2.0, 0.0), speed=2.0 / 150.0)
+    rec = Recording(
+        name="lingering", dt=DT, num_frames=lingering.last_frame + 1, tracks=(lingering,), source="t"
+    )
+    name = "recorded_test_lingering"
+    monkeypatch.setitem(FAMILIES, name, RecordedScene(rec, name=name))
+    env = gym.make(env_id, family=name)
+    env.reset(seed=0)  # the one track: the training split's
+    task = env.unwrapped.task
+    assert task.core.time_limit[0] == pytest.approx(300.0)
+    crowdnav = "CrowdNav" in env_id
+    action = np.zeros(2, dtype=np.float32) if crowdnav else 1  # CrowdNav's robot and the halting sub-policy
+
+    def ended_at(seconds: float) -> bool:
+        if crowdnav:  # CrowdNav's rule: a step starting 1 s before the limit or later ends the episode
+            task.time[:] = seconds - 1.0
+        else:
+            task.core.state.step_count[:] = round(seconds / task.config.dt) - 1
+        _, _, terminated, truncated, _ = env.step(action)
+        assert not terminated
+        return truncated
+
+    assert not ended_at(250.0)
+    assert ended_at(300.0)
 
 
 def test_a_recorded_row_reset_beside_a_plain_one_starts_as_reset_alone(family: RecordedScene) -> None:
