@@ -55,16 +55,19 @@ def _config(task: str) -> dict:
 def _learned_crowd_overrides(name: str) -> dict:
     """A learned CrowdNav policy's config in a recorded scene: its own actions and signals, its own
     id's wall rays, and as many observed people (the nearest) as it has person slots."""
-    import gymnasium as gym
-
     from socialzoo.env.crowd_config import resolve_config
-    from socialzoo.env.registration import register_envs
+    from socialzoo.env.registration import task_ids
 
     policy = make_policy(name, task="crowdnav")
     if not hasattr(policy, "slots"):
         return {}
-    register_envs()
-    trained = {k: v for k, v in gym.spec(str(policy.header["env_id"])).kwargs.items() if k != "task"}
+    # The id it was trained on, or where that id's version was bumped since (the shipped suite_crowdnav's
+    # socialzoo/CrowdNavSuite-v1, now -v2: gymnasium refuses the old one as deprecated), its current one.
+    ids, trained_id = task_ids(), str(policy.header["env_id"])
+    same = [k for k in ids if k.rpartition("-v")[0] == trained_id.rpartition("-v")[0]]
+    if trained_id not in ids and not same:
+        raise KeyError(f"{name}: trained on {trained_id}, which socialzoo registers under no version")
+    trained = {k: v for k, v in ids[trained_id if trained_id in ids else same[0]].items() if k != "task"}
     rays = resolve_config(None, trained).wall_rays
     return {**policy.task_overrides, "wall_rays": rays, "observed_people": policy.slots - rays}
 

@@ -1104,3 +1104,22 @@ def test_crowdnav_slots_too_few_for_a_family_are_refused_before_a_run(
     ):
         run_suite(config, tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_the_baselines_tool_gives_the_shipped_crowdnav_learners_their_own_observation(load_tool) -> None:
+    # tools/recorded_baselines.py (docs/recorded.md's baselines) read the wall rays of the id a learner
+    # was trained on through gymnasium, which refuses the shipped suite_crowdnav's socialzoo/CrowdNavSuite-v1
+    # as deprecated since the suite ids' bump to -v2: the tool stopped at that policy.
+    tool = load_tool("recorded_baselines")
+    assert tool._learned_crowd_overrides("suite_crowdnav") == {
+        "action": "discrete",
+        "signals": True,
+        "wall_rays": 16,
+        "observed_people": 20,
+    }
+    assert tool._learned_crowd_overrides("crowdnav") == {
+        "action": "discrete",
+        "wall_rays": 0,
+        "observed_people": 5,
+    }
+    assert tool._learned_crowd_overrides("orca") == {}
