@@ -14,6 +14,7 @@ from socialzoo.core.validation import check_choice, check_int, check_number, unk
 from socialzoo.env.human_agents import HumanRewardConfig
 from socialzoo.env.metrics import MetricsConfig
 from socialzoo.env.observation import ObservationConfig, observation_size
+from socialzoo.env.people import COUNTERFACTUAL_RECORDED
 from socialzoo.env.quirks import ReferenceQuirks
 from socialzoo.env.reward import RewardConfig
 from socialzoo.humans.models import PeopleConfig
@@ -174,6 +175,11 @@ class EnvConfig:
         path = self.people.learned_path
         if path is not None and not Path(path).is_file():
             raise ValueError(f"EnvConfig.people.models: {no_file(path, 'learned policy file')}")
+        if self.people.counterfactual and (self.people.recorded or _recorded_family(self.family)):
+            where = (
+                f"people spec {self.people.models!r}" if self.people.recorded else f"family {self.family!r}"
+            )
+            raise ValueError(f"EnvConfig.people.counterfactual: the {where} has {COUNTERFACTUAL_RECORDED}")
         if self.people.counterfactual and self.num_learned_humans:
             raise ValueError(
                 "EnvConfig.people.counterfactual needs people the env drives itself, but "
@@ -281,6 +287,13 @@ def check_family_robots(name: str | None, num_robots: int, owner: str) -> None:
         raise ValueError(
             f"{owner}.num_robots = {num_robots}, but scenario family {name!r} holds {most} robot(s) per episode"
         )
+
+
+def _recorded_family(name: str | None) -> bool:
+    """Whether family `name`'s episodes have recorded people (a recorded scene, loaded only when played)."""
+    from socialzoo.scenarios.recorded import RecordedScene
+
+    return name is not None and isinstance(get_family(name), RecordedScene)
 
 
 def _nested_overrides(base: EnvConfig | None, data: Mapping[str, Any]) -> dict[str, Any]:

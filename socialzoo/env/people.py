@@ -30,6 +30,13 @@ if TYPE_CHECKING:
 PEOPLE_KEYS = metric_names("people")
 GROUP_KEYS = registered("group_intrusions")
 COST_KEYS = tuple(key for key in PEOPLE_KEYS if key not in GROUP_KEYS)
+# Why counterfactual rows refuse recorded people (the end of the message naming where they are): the twin
+# steps the world without the robot, not the recording.
+COUNTERFACTUAL_RECORDED = (
+    "recorded people, who have no twin without the robot (it would not replay the recording, nor let anyone "
+    "enter): the recording is that world; a recorded scene's measures compare with it (people_reacting, "
+    "reacting_time_lost, reacting_extra_distance: docs/recorded.md)"
+)
 # Two members farther apart than this are not walking together: passing between them is no intrusion.
 GROUP_SPAN = 3.0
 
@@ -159,6 +166,12 @@ class People:
     def prepare(self, scenarios: list[Scenario]) -> tuple[list[Scenario], np.ndarray]:
         """The scenarios as the config's people walk them, and (len, H) each slot's index into the
         spec's parts (`kinds`, drawn once per reset: `models_of` gives their models)."""
+        recorded = next((s for s in scenarios if s.recorded is not None), None)
+        if self.counterfactual and recorded is not None:
+            raise ValueError(
+                f"PeopleConfig.counterfactual: scenario {recorded.family} seed {recorded.seed} "
+                f"has {COUNTERFACTUAL_RECORDED}"
+            )
         kinds = self.kinds([s.seed for s in scenarios], [s.num_humans for s in scenarios])
         if not self.groups:
             return scenarios, kinds

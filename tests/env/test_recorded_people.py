@@ -304,6 +304,29 @@ def test_an_episode_with_nobody_else_in_it_and_its_json(tmp_path) -> None:
     assert Scenario.load(path).recorded.tracks.shape == (0, 21, 2)
 
 
+@pytest.mark.parametrize("models", ["replay", "hybrid:sf", "sf"])
+def test_counterfactual_people_are_refused_among_recorded_people(family: RecordedScene, models: str) -> None:
+    # PeopleConfig.counterfactual steps each row's twin without the robot, but not the recording: its
+    # replayed people stood still or walked off their tracks and nobody entered, so with people replaying
+    # (who ignore the robot) Recorded-v3 read people_time_lost 3.0 s and people_extra_distance 9.2 m on
+    # zara1's test case 1 where both are 0. The recording is the world without the robot; its measures
+    # (docs/recorded.md) compare with it.
+    from socialzoo.env.config import EnvConfig
+
+    people = {"models": models, "counterfactual": True}
+    with pytest.raises(ValueError, match=r"counterfactual.*recorded"):
+        EnvConfig(family=family.name, people=PeopleConfig(**people))
+    with pytest.raises(ValueError, match=r"counterfactual.*recorded"):
+        gym.make("socialzoo/Recorded-v4", family=family.name, people=people)
+    scenario = _two_walkers()
+    core = BatchedCore(
+        1, 1, 2, WorldConfig(dt=0.1), WallIndex(np.zeros((0, 4))), people=PeopleConfig(**people)
+    )
+    with pytest.raises(ValueError, match=r"counterfactual.*recorded"):
+        core.reset_rows(np.arange(1), [scenario])
+    assert core.state is None  # refused before anything was written
+
+
 def test_a_person_split_by_a_gap_is_in_one_split() -> None:
     # A gap longer than MAX_GAP_FRAMES splits a person into two tracks with one person id; the tracks
     # were split apart, so the robot could train in the place of a person it is tested in place of.
