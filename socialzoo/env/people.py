@@ -175,14 +175,18 @@ class People:
         kinds = self.kinds([s.seed for s in scenarios], [s.num_humans for s in scenarios])
         if not self.groups:
             return scenarios, kinds
-        assert self.map is not None, "walking groups form on a map"
         grouped = np.array([p.model == "groups" for p in self.parts])
-        out = [
-            with_groups(
-                scenario, self.map, grouped[kinds[row, : scenario.num_humans]], self.config.group_sizes
-            )
-            for row, scenario in enumerate(scenarios)
-        ]
+        out = []
+        for row, scenario in enumerate(scenarios):
+            members = grouped[kinds[row, : scenario.num_humans]]
+            if scenario.recorded is not None:
+                # Recorded people walk with their recorded companions, each from its entry along its own
+                # route (with_groups would group strangers and give them their leader's route).
+                group = scenario.recorded.companion_groups(members)
+                out.append(dataclasses.replace(scenario, human_group=group))
+                continue
+            assert self.map is not None, "walking groups form on a map"
+            out.append(with_groups(scenario, self.map, members, self.config.group_sizes))
         return out, kinds
 
     def reset(self, rows: np.ndarray, state: WorldState) -> None:

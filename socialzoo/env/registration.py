@@ -9,7 +9,10 @@ Version History (action-selection ids, their ParallelEnv and TorchRL envs):
         3200) and 200 s in CrowdNavRecorded-v2, which the longest budgets pass (up to 466 s; 13 of univ's
         and 5 of zara2's 100 and 78 test cases in Recorded-v3). The ids' limits are now a day
         (RECORDED_TIME_CEILING); a limit given in their config still cuts a longer budget. Only the
-        episodes with longer budgets change, past the old limits.
+        episodes with longer budgets change, past the old limits. In Recorded-v4 the people of the
+        "groups" model walk with their recorded companions (entering together), each along its own
+        route (socialzoo.scenarios.recorded_people.RecordedPeople.companion_groups); they were grouped
+        in slot order, strangers, and given their group's first route.
     socialzoo/Suite-v3 and socialzoo/CrowdNavSuite-v2 (the suite ids, each one version ahead of its
         task's other ids; no other id changes), on 2026-11-29: an escort (families following_person,
         leading_person, accompanying_peer) holds all the way, not only at the goal. The escorted

@@ -19,6 +19,13 @@ ROUTE_TIME = 1.6
 MIN_SPEED = 0.3
 # Unused occupant entries (Occupants) hold this frame.
 NEVER = np.iinfo(np.int64).max // 4
+# Recorded companions: people who enter on the same frame within this distance of each other, m, and with
+# velocities within COMPANION_SPEED, m/s, walk as a group ("groups"; the realism study takes a subject's
+# companions by the same thresholds).
+COMPANION_DISTANCE = 1.2
+COMPANION_SPEED = 0.5
+# A group of recorded companions has at most this many people (Moussaid et al. 2010: groups of 2 to 4).
+MAX_COMPANIONS = 4
 
 
 def runs(track: np.ndarray) -> list[tuple[int, int]]:
@@ -221,6 +228,29 @@ class RecordedPeople:
                 index += points
                 speed[s, k] = speed_over(float(segments[a:b].sum()), (b - a) * self.dt)
         return Occupants(entry, exit_, first, last, speed)
+
+    def companion_groups(self, members: np.ndarray) -> np.ndarray:
+        """(n,) the walking group of each slot among the slots `members` (n,) marks (the index of its
+        first member, -1: none, as Scenario.human_group): a slot's person and the later slots' people who
+        enter on the same frame within COMPANION_DISTANCE of it with velocities within COMPANION_SPEED
+        of its own, up to MAX_COMPANIONS in all, in slot order. A slot that more than one person occupies
+        walks alone (its next person would inherit the group)."""
+        occupants, vel = self.occupants, self.velocities
+        entry = occupants.entry[:, 0]
+        free = np.asarray(members, dtype=bool) & ~occupants.shared
+        group = np.full(self.num_people, -1, dtype=np.int64)
+        for s in np.flatnonzero(free).tolist():
+            if group[s] >= 0:
+                continue
+            f = entry[s]
+            others = np.flatnonzero(free & (group < 0) & (entry == f) & (np.arange(self.num_people) > s))
+            near = np.hypot(*(self.tracks[others, f] - self.tracks[s, f]).T) <= COMPANION_DISTANCE
+            alike = np.hypot(*(vel[others, f] - vel[s, f]).T) <= COMPANION_SPEED
+            mates = others[near & alike][: MAX_COMPANIONS - 1]
+            if len(mates):
+                group[s] = s
+                group[mates] = s
+        return group
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, RecordedPeople):

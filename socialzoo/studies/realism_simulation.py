@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.core.config import HumanConfig, OrcaConfig, RobotConfig, WorldConfig
-from socialzoo.scenarios.recorded_people import exit_route
+from socialzoo.scenarios.recorded_people import COMPANION_DISTANCE, COMPANION_SPEED, exit_route
 from socialzoo.studies.realism_cases import Cases, SceneTracks, frames_inside, start_velocity
 
 # The world step, s, and world steps per recorded frame (0.4 s at 2.5 Hz).
@@ -20,9 +20,9 @@ REALISM_DT = 0.1
 # People's radius, m (CrowdNav's, socialzoo.env.crowd_config).
 HUMAN_RADIUS = 0.3
 # A recorded companion of a "groups" subject: within this distance at the start, m, and with a
-# velocity within GROUP_SPEED of the subject's, m/s.
-GROUP_DISTANCE = 1.2
-GROUP_SPEED = 0.5
+# velocity within GROUP_SPEED of the subject's, m/s (the recorded scenes' companions' rule).
+GROUP_DISTANCE = COMPANION_DISTANCE
+GROUP_SPEED = COMPANION_SPEED
 # Batch rows per core.
 BATCH_ROWS = 512
 # The robot every row must have, parked far away, invisible, still.

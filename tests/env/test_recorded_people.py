@@ -327,6 +327,36 @@ def test_counterfactual_people_are_refused_among_recorded_people(family: Recorde
     assert core.state is None  # refused before anything was written
 
 
+def test_groups_among_recorded_people_are_companions_who_keep_their_own_routes() -> None:
+    # "groups" on a recorded scene grouped people in slot order, strangers entering far apart and at other
+    # times, and gave each member its leader's route: on zara1 a person entering at (0.2, 3.9) for
+    # (15.1, 4.9) was sent back to (0.1, 6.9). docs/recorded.md: a model walks each recorded person from
+    # its entry along its own route. Now the people who enter together (the same frame, within 1.2 m, with
+    # velocities within 0.5 m/s) walk as a group, each along its own route.
+    from socialzoo.env.people import People
+    from socialzoo.scenarios.recorded import open_area_map
+
+    tracks = np.full((5, 40, 2), np.nan)
+    ahead = np.arange(30)[:, None] * np.array([0.5, 0.0])
+    tracks[0, 2:32] = np.array([0.0, 0.0]) + ahead  # a couple entering at frame 2 side by side...
+    tracks[1, 2:32] = np.array([0.0, 0.8]) + ahead
+    tracks[2, 2:32] = np.array([0.0, 5.0]) + ahead  # ... someone entering then, 5 m away
+    tracks[3, 2:32] = np.array([0.3, -0.6]) - ahead  # ... and beside them, walking the other way
+    tracks[4, 9:39] = np.array([0.0, 0.4]) + ahead  # ... and later where they entered
+    start = np.array([[50.0, 50.0, 0.0]])
+    scenario = people_scenario(
+        RecordedPeople(dt=DT, tracks=tracks), start, start + [[1.0, 0.0, 0.0]], seed=3, family="test"
+    )
+    walls = open_area_map(_recording(count=20), "groups_test")
+    people = People(PeopleConfig(models="groups"), WorldConfig(dt=0.1), 1, 1, 5, walls.wall_index, walls)
+    (grouped,), _ = people.prepare([scenario])
+    assert grouped.human_group.tolist() == [0, 0, -1, -1, -1]
+    for a, b in zip(grouped.human_routes, scenario.human_routes, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(grouped.human_spawn, scenario.human_spawn)
+    np.testing.assert_array_equal(grouped.human_speed, scenario.human_speed)
+
+
 def test_a_person_split_by_a_gap_is_in_one_split() -> None:
     # A gap longer than MAX_GAP_FRAMES splits a person into two tracks with one person id; the tracks
     # were split apart, so the robot could train in the place of a person it is tested in place of.
