@@ -12,7 +12,9 @@ Version History (action-selection ids, their ParallelEnv and TorchRL envs):
         episodes with longer budgets change, past the old limits. In Recorded-v4 the people of the
         "groups" model walk with their recorded companions (entering together), each along its own
         route (socialzoo.scenarios.recorded_people.RecordedPeople.companion_groups); they were grouped
-        in slot order, strangers, and given their group's first route.
+        in slot order, strangers, and given their group's first route. In both, a person a model walks
+        whose entry frame has no next frame recorded when the world reaches it (one seen on one frame)
+        enters where it was last recorded, not at NaN (the five scenes have none: unchanged there).
     socialzoo/Suite-v3 and socialzoo/CrowdNavSuite-v2 (the suite ids, each one version ahead of its
         task's other ids; no other id changes), on 2026-11-29: an escort (families following_person,
         leading_person, accompanying_peer) holds all the way, not only at the goal. The escorted

@@ -88,8 +88,10 @@ def settle_rows(
       person follows its track (REPLAY) or walks by its model from its route's second point, a shared
       slot's person along its own part at its own speed.
     - Placing: a follower where its track is, present while recorded; a person a model walks enters on its
-      track and leaves where its route ends. A frame the row's own recording does not have is absent (a
-      wider recording in another row does not keep this row's people on its last frame).
+      track (where it was last recorded by then, when the frame after it is not: a person seen on one
+      frame, or one whose whole track fell between two steps) and leaves where its route ends. A frame
+      the row's own recording does not have is absent (a wider recording in another row does not keep
+      this row's people on its last frame).
     - Reacting: a hybrid person on its track whom a robot's centre is within the reaction radius of, or
       would meet (centres within the collision distance) within react_time keeping both velocities (the
       point of closest approach, its time clipped to [0, react_time]), walks by its model towards the first
@@ -174,6 +176,13 @@ def settle_rows(
                     exit_at[r, s] = t
             else:
                 if new:
+                    if not present:
+                        # Its frame has no next one recorded (a person seen on one frame) or it is past its
+                        # last (its whole track fell between two steps): it enters where it was last seen by
+                        # then, on a recorded frame.
+                        p = point_at[r] + min(i0, exit_[occupants_at[g] + now]) * n + s
+                        x, y = track_pos[p, 0], track_pos[p, 1]
+                        vx, vy = track_vel[p, 0], track_vel[p, 1]
                     pos[r, s, 0], pos[r, s, 1] = x, y
                     vel[r, s, 0], vel[r, s, 1] = vx, vy
                 walking = seen and not gone[r, s]

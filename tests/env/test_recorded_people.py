@@ -357,6 +357,34 @@ def test_groups_among_recorded_people_are_companions_who_keep_their_own_routes()
     np.testing.assert_array_equal(grouped.human_speed, scenario.human_speed)
 
 
+@pytest.mark.parametrize("models", ["sf", "orca"])
+def test_a_modelled_person_seen_on_one_frame_enters_where_it_was_seen(models: str) -> None:
+    # A tracker's one-frame detection (a person on one row of a track file), or a person whose whole track
+    # falls between two world steps: a model walks it from its recorded entry. At 0.25 s steps the row of
+    # frame 3 (1.2 s) is first reached at 1.25 s, between frames, where the next frame is not recorded: the
+    # person entered at NaN and stayed present there, so every observation of the robot held NaN.
+    tracks = np.full((3, 30, 2), np.nan)
+    tracks[0, 3] = (4.0, 3.0)  # one frame
+    tracks[1, :25] = np.stack((np.arange(25) * 0.5, np.zeros(25)), -1)
+    tracks[2, 10:12] = ((1.0, -2.0), (1.01, -2.0))  # two frames, both between steps of 1.2 s (3.6, 4.8 s)
+    start = np.array([[50.0, 50.0, 0.0]])
+    scenario = people_scenario(
+        RecordedPeople(dt=DT, tracks=tracks), start, start + [[1.0, 0.0, 0.0]], seed=3, family="test"
+    )
+    for dt, slot, entry in ((0.25, 0, (4.0, 3.0)), (1.2, 2, (1.01, -2.0))):
+        core = _core([scenario], models, dt=dt)
+        seen = []
+        for _ in range(round(12.0 / dt)):
+            core.step(np.zeros((1, 1, 2)))
+            state = core.state
+            assert np.isfinite(state.human_pos[0][state.human_mask[0]]).all()
+            if state.human_mask[0, slot]:
+                seen.append(state.human_pos[0, slot].copy())
+        # It enters at its recorded place and leaves there: its route is that place.
+        assert seen and np.hypot(*(seen[0] - entry)) < 0.5
+        assert not core.state.human_mask[0, slot]
+
+
 def test_a_person_split_by_a_gap_is_in_one_split() -> None:
     # A gap longer than MAX_GAP_FRAMES splits a person into two tracks with one person id; the tracks
     # were split apart, so the robot could train in the place of a person it is tested in place of.
