@@ -69,11 +69,26 @@ class RealismConfig:
         if not self.models:
             raise ValueError("RealismConfig.models must name at least one model")
         for name in self.models:
-            model_spec(name)
+            spec = model_spec(name)
+            if spec.people.startswith("learned:"):
+                _check_learned(spec.people.partition(":")[2], name)
         if len(set(self.models)) != len(self.models):
             raise ValueError(f"RealismConfig.models has duplicates: {list(self.models)!r}")
         if self.tracks is not None and (not isinstance(self.tracks, int) or self.tracks < 1):
             raise ValueError(f"RealismConfig.tracks must be None or an int >= 1, got {self.tracks!r}")
+
+
+def _check_learned(path: str, name: str) -> None:
+    """Refuse model `name`'s learned policy file when it cannot be loaded, before any scene is walked."""
+    from socialzoo.core.files import no_file
+    from socialzoo.env.human_policy import LearnedHumanPolicy
+
+    if not Path(path).is_file():
+        raise ValueError(f"RealismConfig.models: {name}: {no_file(path, 'learned policy file')}")
+    try:
+        LearnedHumanPolicy.load(path)
+    except ValueError as err:  # PolicyFileError: not a learned human policy, naming the file
+        raise ValueError(f"RealismConfig.models: {name}: {err}") from None
 
 
 def run_realism(
