@@ -18,6 +18,8 @@ from socialzoo.scenarios.recorded_people import RecordedPeople, frames_in, path_
 from socialzoo.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from socialzoo.data.tracks import Recording
     from socialzoo.maps.map_file import Map
 
@@ -309,15 +311,21 @@ class RecordedScene(ScenarioFamily):
         text = open_area_map(self.recording, self.name).to_text()
         name = f"{self.name}.json"
         shared, own = data_dir() / "maps" / name, user_cache() / "maps" / name
-        for path in (shared, own):
+
+        def holds(path: Path) -> bool:
             with contextlib.suppress(OSError):  # none there yet, or not readable
-                if path.read_text(encoding="utf-8") == text:
-                    return str(path)
+                return path.read_text(encoding="utf-8") == text
+            return False
+
+        if holds(shared):
+            return str(shared)
         try:
             # Written whole and renamed over it: another process reading or writing the same family's
             # map never sees half a file.
             return str(write_text_atomic(shared, text))
         except OSError as first:
+            if holds(own):
+                return str(own)
             try:
                 written = write_text_atomic(own, text)
             except OSError as second:

@@ -499,6 +499,12 @@ def test_a_read_only_cache_without_the_open_area_map_writes_it_to_the_users_cach
     assert path == str(tmp_path / "mine" / "socialzoo" / "maps" / "recorded_mine.json")
     assert load_map(path).name == "recorded_mine"
     assert not (tmp_path / "shared" / "maps").exists()
+    # Once the shared cache can be written, its map is written there (the user's copy is a fallback).
+    monkeypatch.undo()
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "shared"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "mine"))
+    shared = RecordedScene(_recording(count=20), name="recorded_mine").open_map()
+    assert shared == str(tmp_path / "shared" / "maps" / "recorded_mine.json")
 
 
 def test_the_open_area_map_of_a_large_recording_keeps_its_graph_small() -> None:
