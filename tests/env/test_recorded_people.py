@@ -983,7 +983,9 @@ def test_a_row_reset_from_a_recording_to_a_plain_scenario_gets_the_tasks_budget(
 
 
 @pytest.mark.parametrize("env_id", ["socialzoo/Recorded-v4", "socialzoo/CrowdNavRecorded-v3"])
-def test_a_long_budget_is_the_episodes_whatever_the_tasks_default_limit(env_id: str, monkeypatch) -> None:
+def test_a_long_budget_is_the_episodes_whatever_the_tasks_default_limit(
+    env_id: str, monkeypatch, tmp_path
+) -> None:
     # A person who lingers 150 s and walks 2 m: a 300 s budget (docs/recorded.md). The recorded ids cut
     # every budget at their task's default limit (min with it): 80 s in Recorded-v3 (max_steps 3200 of
     # 0.025 s), 200 s in CrowdNavRecorded-v2; 18 of univ's and zara2's test cases have longer budgets.
@@ -992,6 +994,7 @@ def test_a_long_budget_is_the_episodes_whatever_the_tasks_default_limit(env_id: 
         name="lingering", dt=DT, num_frames=lingering.last_frame + 1, tracks=(lingering,), source="t"
     )
     name = "recorded_test_lingering"
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path))  # Recorded's open-area map goes there
     monkeypatch.setitem(FAMILIES, name, RecordedScene(rec, name=name))
     env = gym.make(env_id, family=name)
     env.reset(seed=0)  # the one track: the training split's
