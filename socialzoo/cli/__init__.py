@@ -131,9 +131,9 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (2 for a usage or input error, 130 when
-    interrupted by Ctrl-C and 143 by SIGTERM, 1 when a worker process was killed: a line on stderr
-    instead of a traceback, which --verbose keeps)."""
+    """Run the command line; returns the exit status (2 for a usage or input error or a missing file,
+    130 when interrupted by Ctrl-C and 143 by SIGTERM, 1 when a worker process was killed: a line on
+    stderr instead of a traceback, which --verbose keeps)."""
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(words)
     _refuse_moved(parser, words)
@@ -151,6 +151,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(
             args.command, f"this needs {err.name}, of the {extra} extra: pip install 'socialzoo[{extra}]'"
         )
+    except FileNotFoundError as err:
+        # A file the command needs and does not find wherever it is looked for (a recorded scene not
+        # fetched yet, read when a task is built): the message names it and says what to do.
+        if args.verbose:
+            raise
+        return fail(args.command, err)
     except BrokenPipeError:
         # The reader of stdout left (`socialzoo data list | head -1`): not an error of the command.
         # Nothing more can go there, and Python's flush at exit would raise again.

@@ -446,3 +446,22 @@ def test_humans_learned_alone_are_the_shipped_humans(tmp_path, capsys):
     assert socialzoo_main([*argv, "--out", str(out)]) == 0, capsys.readouterr().err
     recorded = json.loads((out / "config.json").read_text())
     assert recorded["benchmark"]["humans"] == f"learned:{shipped_humans()}"
+
+
+def test_a_recorded_scene_not_fetched_ends_in_one_line_naming_the_file(tmp_path, monkeypatch, capsys):
+    """`socialzoo benchmark --maps socialzoo/CrowdNavRecorded-v3 --task-config family=recorded_zara1`
+    before `socialzoo data fetch` ended in a FileNotFoundError traceback (the task reads the scene
+    when it is built, outside the command's own error handling); every command now says it in one
+    line, exit status 2, and --verbose keeps the traceback."""
+    monkeypatch.setenv("SOCIALZOO_DATA_DIR", str(tmp_path / "empty"))
+    argv = ["benchmark", "--maps", "socialzoo/CrowdNavRecorded-v3", "--task-config", "family=recorded_zara1"]
+    argv += ["--policies", "orca", "--trials", "1", "--no-figures", "--out", str(tmp_path / "out")]
+    assert socialzoo_main(argv) == 2
+    err = capsys.readouterr().err
+    assert (
+        err.startswith("socialzoo benchmark: error: scene 'zara1' is not fetched") and "Traceback" not in err
+    )
+    assert "crowds_zara01.txt" in err and "socialzoo data fetch eth-ucy" in err
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(FileNotFoundError):
+        socialzoo_main(["-v", *argv])
