@@ -215,7 +215,8 @@ def run_realism(args: argparse.Namespace) -> int:
             print(
                 f"{r.model}: ADE {r.metrics['ade']:.3f} m, FDE {r.metrics['fde']:.3f} m over 4.8 s (mean of scenes)"
             )
-    print(f"results in {args.out}: realism.md, realism.csv, realism.json")
+    figures = "" if args.no_figures else ", ade.png, speeds.png"
+    print(f"results in {args.out}: realism.md, realism.csv, realism.json{figures}")
     return 0
 
 

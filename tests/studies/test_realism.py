@@ -194,6 +194,13 @@ def test_realism_command_on_a_synthetic_cache(cache, tmp_path, capsys):
     out = tmp_path / "out"
     args = ["humans", "realism", "--scenes", "one,two", "--models", "cv,orca", "--cache", str(cache)]
     assert main([*args, "--out", str(out), "--no-progress", "--no-figures"]) == 0
+    assert (
+        capsys.readouterr().out.rstrip().endswith(f"results in {out}: realism.md, realism.csv, realism.json")
+    )
+    drawn = tmp_path / "drawn"  # the figures are said too (they were written but not listed)
+    assert main([*args, "--out", str(drawn), "--no-progress"]) == 0
+    listed = capsys.readouterr().out.rstrip().rpartition(": ")[2].split(", ")
+    assert listed[3:] == ["ade.png", "speeds.png"] and all((drawn / name).is_file() for name in listed)
     table = (out / "realism.md").read_text()
     assert "| one | cv |" in table and "| overall | orca |" in table
     record = json.loads((out / "realism.json").read_text(), parse_constant=pytest.fail)
