@@ -153,12 +153,14 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
     if len(set(names)) != len(names):
         twice = next(n for n in names if names.count(n) > 1)
         preset = next((p.preset for p in parts if p.model == twice and p.preset), None)
-        why = (
-            f" (the preset {preset} sets {twice}'s parameters for everyone {twice} walks, so it cannot "
-            f"share a crowd with {twice} itself)"
-            if preset
-            else ""
-        )
+        why = ""
+        if preset:
+            why = (
+                f" (the preset {preset} sets {twice}'s parameters for everyone {twice} walks, so it cannot "
+                f"share a crowd with {twice} itself)"
+            )
+        elif twice == "hybrid":
+            why = " (the hybrid people of a crowd react as one model: hybrid:sf, hybrid:orca or hybrid:learned:PATH)"
         raise PeopleSpecError(f"people spec {spec!r} names the model {twice!r} twice{why}")
     files = {p.path for p in parts if p.path is not None}
     if len(files) > 1:

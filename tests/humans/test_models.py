@@ -24,6 +24,11 @@ def test_specs_name_models_and_shares():
         ("sf@half", "must be a number"),
         ("orca@0.5+orca@0.5", "names the model 'orca' twice"),
         ("sf@0.5+sf-eth-ucy@0.5", r"names the model 'sf' twice \(the preset sf-eth-ucy sets sf's parameters"),
+        # Two reacting models in one crowd: the message said only that 'hybrid' was named twice.
+        (
+            "hybrid:sf@0.5+hybrid:orca@0.5",
+            r"'hybrid' twice \(the hybrid people of a crowd react as one model",
+        ),
         ("learned", "name the learned policy file as learned:PATH"),
         ("orca:fast", "orca takes no file"),
         ("", "non-empty string"),
