@@ -4,6 +4,7 @@ humans (socialzoo.studies.human_compare) for every checkpoint of a training run,
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -193,20 +194,28 @@ def select_humans(
     out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(chosen, out / SELECTED_FILE)
     scenarios = test_set.name if test_set is not None else f"{family or map_name}-val"
+
+    def from_out(path: str | Path) -> str:
+        """A path as the files written in `out` name it: relative to `out`, never the machine's absolute
+        one (a selection is shipped and read elsewhere)."""
+        return os.path.relpath(path, out)
+
+    # The tables and the record name the checkpoints from `out`; the rows returned keep the paths given.
+    written = [{**r, "file": from_out(r["file"])} if r["frames"] is not None else r for r in rows]
     record = {
-        "run": str(run),
-        "map": map_name,
+        "run": from_out(run),
+        "map": from_out(map_name) if map_name.endswith(".json") and Path(map_name).is_file() else map_name,
         "scenarios": scenarios,
         "family": family,
         "trials": trials,
         "robot_policy": policy,
         "rule": "the most trained checkpoint meeting both targets; else the one missing them by the least",
-        "chosen": {"file": str(chosen), "frames": best["frames"], "met": best["met"]},
-        "checkpoints": rows[:-1],
-        "social_force": rows[-1],
+        "chosen": {"file": from_out(chosen), "frames": best["frames"], "met": best["met"]},
+        "checkpoints": written[:-1],
+        "social_force": written[-1],
     }
     write_text_atomic(out / "selection.json", json_text(record, indent=1) + "\n")
-    _write_tables(rows, best, out, scenarios)
+    _write_tables(written, written[rows.index(best)], out, scenarios)
     return Selection(chosen, int(best["frames"]), bool(best["met"]), rows, out)
 
 

@@ -56,6 +56,15 @@ def test_select_humans_compares_every_checkpoint_and_keeps_one(rooms_map_path, w
     assert (out / "humans.safetensors").read_bytes() == result.chosen.read_bytes()
     record = json.loads((out / "selection.json").read_text(), parse_constant=pytest.fail)
     assert record["chosen"]["frames"] == 1000 and record["scenarios"] == "rooms-val"
+    # The files it names are the run's, from the selection's folder: no absolute path of this machine
+    # (the shipped selection named /work/runs/...).
+    assert (
+        record["run"] == ".."
+        and record["chosen"]["file"] == "../checkpoints/step_000001000.humans.safetensors"
+    )
+    assert (out / record["chosen"]["file"]).read_bytes() == result.chosen.read_bytes()
+    assert str(tmp_path) not in (out / "selection.json").read_text() + (out / "selection.csv").read_text()
+    assert (out / record["map"]).resolve() == rooms_map_path.resolve()  # a map file, from there too
     assert len(record["checkpoints"]) == 2 and "(chosen)" in (out / "selection.md").read_text()
     assert (out / "selection.csv").read_text().count("\n") == 4
     # A rerun reads every trial back and chooses the same.
