@@ -287,12 +287,22 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
     """
     from socialzoo.bench.task_benchmark import config_hash
     from socialzoo.core.metrics import metric
+    from socialzoo.env.people import COST_KEYS
 
-    # Every suite episode holds its task's metrics and Table I's (play_cases(guideline_metrics=True)).
+    # Every suite episode holds its task's metrics and Table I's (play_cases(guideline_metrics=True)); the
+    # action-selection task's also what the robot costs the people (people_time_lost, ...; the scenario
+    # cards recommend them) when those are asked for: each scenario is then played beside a twin
+    # without the robot (PeopleConfig.counterfactual), which doubles the rows stepped.
     computed = {config.task, "guidelines"}
-    others = [name for name in config.metrics if not computed & set(metric(name).sources)]
+    twins = config.task == "action_selection" and any(name in COST_KEYS for name in config.metrics)
+    others = [
+        name
+        for name in config.metrics
+        if not computed & set(metric(name).sources) and not (twins and name in COST_KEYS)
+    ]
     if others:
         raise SuiteError(f"the {config.task} task's episodes hold no metric {', '.join(others)}")
+    counterfactual = {"people": {"counterfactual": True}} if twins else {}
     scenarios = resolve_scenarios(config.scenarios)
     units: list[SuiteUnit] = []
     notes: list[str] = []
@@ -324,6 +334,7 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
             overrides = {
                 **({"signals": False} if blind[spec] else {}),
                 **(getattr(policy, "task_overrides", {}) or {}),
+                **counterfactual,
             }
             acting = _probe(task, scenario, overrides) if overrides else probe
             runner_set = scenario.name + (f" {json.dumps(overrides, sort_keys=True)}" if overrides else "")

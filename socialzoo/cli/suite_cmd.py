@@ -66,7 +66,9 @@ def register(subparsers: Any) -> None:
         "--metrics",
         type=_names,
         default=None,
-        help="comma-separated metrics of the tables and heatmaps (default: the headline metrics the episodes hold)",
+        help="comma-separated metrics of the tables and heatmaps (default: the headline metrics the episodes hold); "
+        "with the action-selection task, people_time_lost, people_time_lost_max or people_extra_distance play "
+        "each scenario beside a twin without the robot to measure them",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(

@@ -7,6 +7,7 @@ suite names (monkeypatch), or name them on their own (a registered family outsid
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -134,6 +135,32 @@ def test_table_i_metrics_can_be_chosen(task, policy):
     with pytest.raises(SuiteError, match=f"the {task} task's episodes hold no metric humans_goal_rate"):
         plan_suite(
             SuiteConfig(task=task, policies=(policy,), metrics=("humans_goal_rate",), scenarios=("doorway",))
+        )
+
+
+def test_what_the_robot_costs_the_people_can_be_chosen_as_the_scenario_cards_recommend(tmp_path):
+    """16 scenario cards list people_time_lost among their metrics of interest, but `socialzoo suite
+    --metrics people_time_lost` was refused ("the action_selection task's episodes hold no metric"): the
+    suite never played the counterfactual twin without the robot that measures it. Asking for it now
+    plays the twins (the action-selection task's people.counterfactual), stored apart from plain runs."""
+    from socialzoo.env.people import COST_KEYS
+    from socialzoo.scenarios.cards import suite_cards
+
+    recommended = {name for card in suite_cards() for name in card.metrics if name in COST_KEYS}
+    assert recommended  # the cards do recommend them
+    chosen = ("success", *sorted(recommended))
+    config = SuiteConfig(policies=("goalone",), scenarios=("narrow_hallway",), seeds=2, workers=1, replays=0)
+    with_twins = run_suite(dataclasses.replace(config, metrics=chosen), tmp_path / "twins")
+    plain = run_suite(dataclasses.replace(config, metrics=("success",)), tmp_path / "plain")
+    (entry,) = with_twins.entries
+    assert all(math.isfinite(entry[f"{name}_mean"]) for name in recommended)
+    assert entry["people_time_lost_mean"] > 0  # the robot delays the person it meets in the hallway
+    assert with_twins.units[0].digest != plain.units[0].digest  # not one another's stored episodes
+    (alone,) = plain.entries  # the robot's episodes are the same, every number of them
+    np.testing.assert_equal({k: entry[k] for k in alone}, alone)
+    with pytest.raises(SuiteError, match="the crowdnav task's episodes hold no metric people_time_lost"):
+        plan_suite(
+            dataclasses.replace(config, task="crowdnav", policies=("orca",), metrics=("people_time_lost",))
         )
 
 
