@@ -113,7 +113,7 @@ def run_realism(
     results: list[SceneResult] = []
     started = time.perf_counter()
     for scene, windows, tracks in plan:
-        results.append(recorded_reference(scene, tracks))
+        results.append(recorded_reference(scene, windows, tracks))
         for spec in specs:
             bar.set_postfix_str(f"{scene.name} {spec.name}")
             results.append(evaluate_model(scene, windows, tracks, spec, progress=bar.update))

@@ -256,3 +256,20 @@ def test_calibrate_names_a_scene_without_a_window(cache, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "scene 'short': none of the 2 people of its fit sample has a 4.8 s window" in err
     assert "Traceback" not in err
+
+
+def test_the_recorded_reference_is_blank_where_the_models_are_not_measured():
+    """The realism table's "recorded" row read ADE 0.000 on a scene without a 4.8 s window, where every
+    model's row is blank (no windowed error): it now has no windowed error either."""
+    from socialzoo.studies.realism_metrics import recorded_reference
+
+    short = SceneTracks.of(_walkers(frames=OBS_FRAMES + PRED_FRAMES - 1, start=(0, 0)))
+    windows, tracks = window_cases(short), track_cases(short)
+    assert len(windows) == 0 and len(tracks) > 0
+    model = evaluate_model(short, windows, tracks, model_spec("cv"))
+    reference = recorded_reference(short, windows, tracks)
+    for name in ("ade", "fde"):
+        assert np.isnan(model.metrics[name]) and np.isnan(reference.metrics[name])
+    assert reference.metrics["track_ade"] == 0.0 and np.isfinite(model.metrics["track_ade"])
+    full = SceneTracks.of(_walkers())
+    assert recorded_reference(full, window_cases(full), track_cases(full)).metrics["ade"] == 0.0
