@@ -82,6 +82,36 @@ def _model_of(name: str) -> tuple[str, str | None]:
     return (PRESETS[name]["model"], name) if name in PRESETS else (name, None)
 
 
+def _learned(token: str) -> bool:
+    """Whether a part of a spec names a learned policy's file (learned:PATH, hybrid:learned:PATH)."""
+    model, _, rest = token.strip().partition(":")
+    return _model_of(model)[0] == "learned" or (
+        _model_of(model)[0] == "hybrid" and _model_of(rest.partition(":")[0])[0] == "learned"
+    )
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _mix_tokens(spec: str) -> list[str]:
+    """The parts of a mix, split at its '+' signs, but a '+' inside a learned policy's file name (a part
+    that names no model, after a learned part) stays in that name."""
+    tokens: list[str] = []
+    for token in spec.split("+"):
+        model = _model_of(token.partition(":")[0].partition("@")[0])[0]
+        known = model in MODEL_IDS or model in ALIASES
+        if tokens and not known and _learned(tokens[-1]):
+            tokens[-1] += "+" + token
+        else:
+            tokens.append(token)
+    return [t.strip() for t in tokens]
+
+
 def parse_people(spec: str) -> tuple[PeoplePart, ...]:
     """The parts of a people spec.
 
@@ -103,11 +133,13 @@ def parse_people(spec: str) -> tuple[PeoplePart, ...]:
         raise PeopleSpecError(
             f"a people spec is a non-empty string such as 'sf' or 'sf@0.5+orca@0.5', got {spec!r}"
         )
-    tokens = [t.strip() for t in spec.split("+")]
+    tokens = _mix_tokens(spec)
     parts: list[PeoplePart] = []
     for token in tokens:
         name, share = token, None
         head, at, tail = token.rpartition("@")
+        if at and _learned(token) and not _is_number(tail):
+            at = ""  # an '@' of a learned policy's file name, not a share
         if at:
             try:
                 share = float(tail)

@@ -41,6 +41,20 @@ def test_bad_specs_fail_naming_what_is_wrong(spec, message):
         PeopleConfig(models=spec)
 
 
+def test_a_learned_policys_file_name_may_hold_plus_and_at_signs():
+    """A learned policy's path such as runs/a+b/x@2.safetensors was split as a mix ('+') and a share
+    ('@'): "unknown model 'b/x'". A '+' before a part that names no model, or an '@' before no number,
+    after learned:PATH belongs to the path; a mix still splits where a model follows."""
+    (part,) = parse_people("learned:runs/a+b/x@2.safetensors")
+    assert (part.model, part.path, part.share) == ("learned", "runs/a+b/x@2.safetensors", 1.0)
+    (part,) = parse_people("hybrid:learned:runs/a+b/x.safetensors")
+    assert (part.model, part.reacts_as, part.path) == ("hybrid", "learned", "runs/a+b/x.safetensors")
+    learned, sf = parse_people("learned:runs/a+b/x.safetensors@0.4+sf@0.6")
+    assert (learned.path, learned.share, sf.model, sf.share) == ("runs/a+b/x.safetensors", 0.4, "sf", 0.6)
+    with pytest.raises(PeopleSpecError, match="unknown model 'robots'"):
+        parse_people("sf@0.5+robots@0.5")  # not a learned part before it: a model's name, unknown
+
+
 def test_bad_group_sizes_and_flags_are_refused():
     with pytest.raises(ValueError, match=r"PeopleConfig.group_sizes\[1\] must be >= 0.0"):
         PeopleConfig(group_sizes=(1.0, -1.0, 0.0))
