@@ -60,11 +60,14 @@ def measure(name: str, venv, n_steps: int, batch_size: int, seconds: float) -> T
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from socialzoo.train.sb3_common import quiet_logger
+
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*mini-batch size.*")
         model = PPO(
             "MlpPolicy", VecNormalize(venv), n_steps=n_steps, batch_size=batch_size, seed=0, device="cpu"
         )
+    model.set_logger(quiet_logger())  # SB3's own logger leaves an empty /tmp/SB3-<date> folder
     rollout = n_steps * venv.num_envs
     model.learn(rollout)  # warm-up: env creation, compiled kernels, the first reset
     start, cpu_start = time.perf_counter(), time.process_time()

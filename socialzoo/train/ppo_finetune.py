@@ -99,6 +99,7 @@ def ppo_from_policy(
 
     from socialzoo.env.sb3_vec import SB3VecEnv
     from socialzoo.train.policy_net import ACTIVATION_MODULES
+    from socialzoo.train.sb3_common import quiet_logger
 
     fixed = source.normalizer
     if fixed is None or source.activation not in ACTIVATION_MODULES:
@@ -130,6 +131,7 @@ def ppo_from_policy(
         },
         **ppo,
     )
+    model.set_logger(quiet_logger())
     policy = model.policy
     linears = [m for m in policy.mlp_extractor.policy_net if isinstance(m, torch.nn.Linear)] + [
         policy.action_net

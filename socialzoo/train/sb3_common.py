@@ -353,6 +353,17 @@ def run_sb3(trainer: SB3Trainer, args: SB3Args) -> Path:
     return run_training(trainer, args, lambda run: _fit(run, trainer, args), evaluator=evaluator)
 
 
+def quiet_logger() -> Any:
+    """An SB3 logger that writes nothing, anywhere: a model learns with it and leaves no folder behind.
+
+    SB3 gives a model that has no logger one of its own on its first learn(), made by
+    stable_baselines3.common.logger.configure: with no folder named, that makes an empty
+    <temp folder>/SB3-<date and time> for every such model, even with no output at all."""
+    from stable_baselines3.common.logger import Logger
+
+    return Logger(folder=None, output_formats=[])
+
+
 def sb3_model(run: TrainingRun, model: str, venv: Any, kwargs: Mapping[str, Any]) -> Any:
     """stable_baselines3.<model>("MlpPolicy", venv, **kwargs) on the CPU, silent, logging to the run's
     tensorboard/."""

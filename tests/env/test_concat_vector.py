@@ -159,7 +159,9 @@ def test_sb3_trains_on_it():
     from stable_baselines3 import PPO
 
     from socialzoo.env.sb3_vec import SB3VecEnv
+    from socialzoo.train.sb3_common import quiet_logger
 
     venv = ConcatVectorEnv(_parts())
     model = PPO("MlpPolicy", SB3VecEnv(venv.num_envs, vector_env=venv), n_steps=16, batch_size=40, seed=0)
+    model.set_logger(quiet_logger())  # SB3's own logger leaves an empty /tmp/SB3-<date> folder
     model.learn(80)

@@ -448,6 +448,8 @@ def test_sb3_ppo_learns_a_few_steps_on_the_supersuit_vec_env():
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecMonitor
 
+    from socialzoo.train.sb3_common import quiet_logger
+
     env = make(num_robots=2, max_steps=40, episode_info=False)
     venv = VecMonitor(
         ss.concat_vec_envs_v1(
@@ -455,5 +457,6 @@ def test_sb3_ppo_learns_a_few_steps_on_the_supersuit_vec_env():
         )
     )
     model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, device="cpu")
+    model.set_logger(quiet_logger())  # SB3's own logger leaves an empty /tmp/SB3-<date> folder
     model.learn(256)
     assert len(model.ep_info_buffer) > 0

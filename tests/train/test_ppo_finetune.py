@@ -3,6 +3,7 @@ statistics stay the file's, the critic's warm-up leaves the actor as it was, and
 skeleton writes a policy of the source's name with its run record."""
 
 import json
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -96,3 +97,18 @@ def test_the_run_shows_its_progress_in_env_steps():
     bar = Bar()
     ppo_finetune.finetune(model, warmup=100, steps=100, bar=bar)
     assert bar.n == 200
+
+
+def test_fine_tuning_leaves_no_empty_sb3_folder_in_the_temp_folder(tmp_path, monkeypatch):
+    # SB3 gives a model built without a logger one of its own on the first learn(): an empty
+    # folder SB3-<date> in the temp folder per model, which piled up in /tmp by the hundred.
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    source = MlpPolicy.load(SHIPPED)
+    model = ppo_finetune.ppo_from_policy(
+        source, EnvConfig().replace(max_steps=60), num_envs=4, n_steps=25, batch_size=50, n_epochs=1
+    )
+    ppo_finetune.finetune(model, warmup=100, steps=100)
+    assert list(temp.glob("SB3-*")) == []

@@ -9,7 +9,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from socialzoo.agents import make_policy
 from socialzoo.env.policy_file import read_policy_file
 from socialzoo.env.sb3_vec import SB3VecEnv
-from socialzoo.train.sb3_common import env_id_of
+from socialzoo.train.sb3_common import env_id_of, quiet_logger
 from socialzoo.train.sb3_export import ExportError, export_policy
 
 ROOM = {"map": "open_room", "family": "circle_crossing", "max_steps": 200}
@@ -43,6 +43,7 @@ def test_exported_policy_acts_as_sb3_predict_on_normalised_observations(tmp_path
         model = PPO("MlpPolicy", norm, n_steps=25, batch_size=50, n_epochs=2, seed=1, device="cpu")
     else:
         model = DQN("MlpPolicy", norm, learning_starts=50, train_freq=1, seed=1, device="cpu")
+    model.set_logger(quiet_logger())  # SB3's own logger leaves an empty /tmp/SB3-<date> folder
     model.learn(400)
     assert norm.obs_rms.count > 400  # statistics were collected, so normalising changes the input
     path = _save(model, algo, norm, tmp_path, venv.config)
@@ -61,6 +62,7 @@ def test_exported_policy_acts_as_sb3_predict_on_normalised_observations(tmp_path
 def test_export_without_normalisation_and_custom_layers(tmp_path):
     venv = SB3VecEnv(4, **ROOM)
     model = PPO("MlpPolicy", venv, n_steps=8, batch_size=32, policy_kwargs={"net_arch": [16, 8, 8]}, seed=2)
+    model.set_logger(quiet_logger())
     model.learn(32)
     policy = make_policy(f"ppo:{_save(model, 'ppo', None, tmp_path, venv.config)}")
     obs = _observations(venv, steps=10)
