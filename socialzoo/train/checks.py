@@ -76,6 +76,16 @@ def check_choice(args: Any, name: str, choices: Any) -> None:
     validation.check_choice(owner(args), name, getattr(args, name), get_args(choices) or choices)
 
 
+def check_minibatch(args: Any, name: str, pool: int, what: str) -> None:
+    """Raise ValueError unless the minibatch size args.<name> is at most `pool`, the samples it is
+    drawn from (a rollout or a replay buffer, named by `what`): SB3's PPO would take the whole
+    rollout as its minibatch and DQN draw the buffer's transitions again and again, each training
+    otherwise than its run record says."""
+    value = getattr(args, name)
+    if value > pool:
+        raise ValueError(f"{owner(args)}.{name} ({value}) must be at most {what} ({pool})")
+
+
 def check_block(args: Any, block: int, what: str) -> None:
     """Raise ValueError unless args.checkpoint_every and args.total_steps are multiples of `block` env
     steps (a rollout, or a training interval, named by `what`), so that each checkpoint holds the policy

@@ -16,6 +16,7 @@ from socialzoo.train.checks import (
     check_block,
     check_choice,
     check_int,
+    check_minibatch,
     check_number,
     check_seed,
     check_sizes,
@@ -57,9 +58,9 @@ class CrowdNavArgs:
         checkpoint_every: a policy file every this many env steps; a multiple of the rollout.
         num_envs: rows of the batched training env.
         n_steps: env steps per row per rollout.
-        batch_size: minibatch size of the PPO update.
+        batch_size: minibatch size of the PPO update, 2 to the rollout (num_envs * n_steps).
         n_epochs: passes over each rollout.
-        learning_rate: Adam learning rate.
+        learning_rate: Adam learning rate, > 0.
         gamma: discount per decision step (0.25 s).
         gae_lambda: GAE lambda.
         clip_range: PPO clipping.
@@ -124,13 +125,18 @@ class CrowdNavArgs:
                 f"CrowdNavArgs.num_envs ({self.num_envs}) must be at least the number of families "
                 f"({len(families)}): each family's part needs a row"
             )
-        check_number(self, "learning_rate", "gamma", "gae_lambda", low=0.0, high=1.0)
+        check_number(self, "learning_rate", low=0.0, high=1.0, low_open=True)  # 0: nothing learned
+        check_number(self, "gamma", "gae_lambda", low=0.0, high=1.0)
         check_number(self, "clip_range", "ent_coef", "vf_coef", low=0.0, high=10.0)
         check_number(self, "max_grad_norm", low=0.0, high=1e6)
         check_number(self, "progress_reward", low=0.0, high=100.0)
         check_number(self, "collision_penalty", low=-100.0, high=0.0)
         check_choice(self, "action", ("discrete", "continuous"))
-        check_block(self, self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
+        # SB3's PPO normalises each minibatch's advantages, which takes two samples at least.
+        check_int(self, "batch_size", low=2)
+        rollout = (self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
+        check_block(self, *rollout)
+        check_minibatch(self, "batch_size", *rollout)
         try:
             self.tasks()
         except (TypeError, ValueError) as err:

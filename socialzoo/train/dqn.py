@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.checks import check_int, check_minibatch, check_number
 from socialzoo.train.sb3_common import SB3Args, SB3Trainer, run_sb3
 
 TRAINER = SB3Trainer("dqn", policy_file="dqn.safetensors", model="DQN", activation="ReLU")
@@ -24,8 +24,8 @@ class DQNArgs(SB3Args):
         scenario_repeats: episodes run on each scenario before a new one is drawn (the original:
             20 for DQN).
         num_envs: rows of the batched training env (SB3's default set-up: 1).
-        learning_rate: Adam learning rate (SB3: 1e-4).
-        batch_size: replay minibatch size (SB3: 32).
+        learning_rate: Adam learning rate, > 0 (SB3: 1e-4).
+        batch_size: replay minibatch size, at most buffer_size (SB3: 32).
         max_grad_norm: gradient clipping (SB3: 10).
         normalize: normalise observations with VecNormalize (saved with the policy; the original
             DQN did not).
@@ -63,6 +63,7 @@ class DQNArgs(SB3Args):
         super().__post_init__()
         check_int(self, "buffer_size", "train_freq", "gradient_steps", "target_update_interval", low=1)
         check_int(self, "learning_starts", low=0)
+        check_minibatch(self, "batch_size", self.buffer_size, "the replay buffer, buffer_size")
         self.check_block(self.num_envs * self.train_freq, "num_envs * train_freq")
         names = ("tau", "exploration_fraction", "exploration_initial_eps", "exploration_final_eps")
         check_number(self, *names, low=0.0, high=1.0)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from socialzoo.train.checks import check_int, check_number
+from socialzoo.train.checks import check_int, check_minibatch, check_number
 from socialzoo.train.sb3_common import SB3Args, SB3Trainer, run_sb3
 
 TRAINER = SB3Trainer("ppo", policy_file="ppo.safetensors", model="PPO", activation="Tanh")
@@ -39,7 +39,11 @@ class PPOArgs(SB3Args):
     def __post_init__(self) -> None:
         super().__post_init__()
         check_int(self, "n_steps", "n_epochs", low=1)
-        self.check_block(self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
+        # SB3's PPO normalises each minibatch's advantages, which takes two samples at least.
+        check_int(self, "batch_size", low=2)
+        rollout = (self.num_envs * self.n_steps, "the rollout, num_envs * n_steps")
+        self.check_block(*rollout)
+        check_minibatch(self, "batch_size", *rollout)
         check_number(self, "gae_lambda", low=0.0, high=1.0)
         check_number(self, "clip_range", "ent_coef", "vf_coef", low=0.0, high=10.0)
 

@@ -65,8 +65,9 @@ class SB3Args:
             one that a field above decides (map, family, max_steps, scenario.repeats) is refused
             unless it is that field's value.
         num_envs: rows of the batched training env.
-        learning_rate: Adam learning rate (SB3: PPO 3e-4, DQN 1e-4).
-        batch_size: minibatch size of an update (SB3: PPO 64, DQN 32).
+        learning_rate: Adam learning rate, > 0 (SB3: PPO 3e-4, DQN 1e-4).
+        batch_size: minibatch size of an update (SB3: PPO 64, DQN 32); PPO: 2 to the rollout,
+            DQN: at most buffer_size.
         gamma: discount factor (SB3: 0.99).
         max_grad_norm: gradient clipping (SB3: PPO 0.5, DQN 10).
         net_arch: hidden layer sizes of the network (SB3: 64 64; tanh for PPO, ReLU for DQN).
@@ -117,7 +118,8 @@ class SB3Args:
                 f"{owner}.eval_every ({self.eval_every}) must be a multiple of checkpoint_every "
                 f"({self.checkpoint_every})"
             )
-        check_number(self, "learning_rate", "gamma", low=0.0, high=1.0)
+        check_number(self, "learning_rate", low=0.0, high=1.0, low_open=True)  # 0: nothing learned
+        check_number(self, "gamma", low=0.0, high=1.0)
         check_number(self, "max_grad_norm", low=0.0, high=1e6)
         check_sizes(self, "net_arch")
         for name, given in self._overridden().items():

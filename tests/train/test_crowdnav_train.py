@@ -56,6 +56,14 @@ def test_bad_arguments_are_refused():
         CrowdNavArgs(collision_penalty=1.0, **TINY)
     with pytest.raises(ValueError, match="eval_trials"):
         CrowdNavArgs(eval_trials=101, **TINY)
+    with pytest.raises(ValueError, match=r"CrowdNavArgs.learning_rate must be in \(0.0, 1.0\], got 0.0"):
+        CrowdNavArgs(learning_rate=0.0, **TINY)
+    with pytest.raises(
+        ValueError, match=r"CrowdNavArgs.batch_size \(65\) must be at most the rollout.*\(64\)"
+    ):
+        CrowdNavArgs(**{**TINY, "batch_size": 65}, total_steps=64, checkpoint_every=64)
+    with pytest.raises(ValueError, match=r"CrowdNavArgs.batch_size must be an int >= 2, got 1"):
+        CrowdNavArgs(**{**TINY, "batch_size": 1})
     assert np.isclose(
         CrowdNavArgs(**TINY).task().reward.collision_penalty, -0.25
     )  # the task keeps CrowdNav's

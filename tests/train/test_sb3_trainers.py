@@ -151,6 +151,23 @@ def test_trainers_are_registered_with_the_papers_defaults():
         (DQNArgs, {"scenario_repeats": 0}, "DQNArgs.scenario_repeats must be an int >= 1, got 0"),
         (DQNArgs, {"exploration_final_eps": -0.1}, "DQNArgs.exploration_final_eps"),
         (DQNArgs, {"family": "nope"}, "family"),
+        # A learning rate of 0 trains nothing; the other trainers refused it, these took it.
+        (PPOArgs, {"learning_rate": 0.0}, r"PPOArgs.learning_rate must be in \(0.0, 1.0\], got 0.0"),
+        (DQNArgs, {"learning_rate": 0.0}, r"DQNArgs.learning_rate must be in \(0.0, 1.0\], got 0.0"),
+        # A minibatch larger than what it is drawn from: SB3's PPO took the whole rollout and DQN
+        # drew the buffer's transitions again and again, while the record said otherwise.
+        (
+            PPOArgs,
+            {"num_envs": 4, "n_steps": 25, "total_steps": 100, "checkpoint_every": 100, "batch_size": 101},
+            r"PPOArgs.batch_size \(101\) must be at most the rollout, num_envs \* n_steps \(100\)",
+        ),
+        # SB3's PPO normalises each minibatch's advantages: one sample ended the run in an AssertionError.
+        (PPOArgs, {"batch_size": 1}, r"PPOArgs.batch_size must be an int >= 2, got 1"),
+        (
+            DQNArgs,
+            {"buffer_size": 10, "batch_size": 32},
+            r"DQNArgs.batch_size \(32\) must be at most the replay buffer, buffer_size \(10\)",
+        ),
     ],
 )
 def test_bad_arguments_name_the_field(cls, changes, message):
