@@ -13,6 +13,21 @@ from socialzoo.bench.tables import policy_label
 FORMATS: tuple[str, ...] = ("png", "pdf")
 
 
+def figures_allowed(results: Mapping[str, Any]) -> set[str]:
+    """The names of the figures that `results` can draw (draw_figures): a figure file of another name
+    in the folder is an earlier run's."""
+    allowed = set()
+    allowed |= {"success", "metrics"} if results.get("performance") or results.get("transfer") else set()
+    allowed |= {"rl_curves"} if results.get("rl_curves") else set()
+    allowed |= {"lfd"} if results.get("lfd") else set()
+    allowed |= {"profiles"} if results.get("profiles") else set()
+    return allowed
+
+
+# Every figure draw_figures may draw, by name.
+FIGURE_NAMES: tuple[str, ...] = ("success", "metrics", "rl_curves", "lfd", "profiles")
+
+
 def plot_lfd(rows: Sequence[Mapping[str, Any]], out_dir: str | Path) -> list[Path]:
     """lfd.{png,pdf}: success % of each LfD policy against its demonstration steps (log scale),
     with 90% intervals, and the paper's numbers as black crosses."""
@@ -54,6 +69,9 @@ def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, l
     - lfd.{png,pdf}: LfD success against demonstration steps with 90% intervals and the paper's marks;
     - profiles.{png,pdf}: with several training seeds, performance profiles per map
       (socialzoo.studies.seeds.plot_profiles).
+
+    The files of the other FIGURE_NAMES are removed: an earlier run's in the same folder (a run of
+    other settings, of parts these results lack) would be shown and published as this run's.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -79,4 +97,7 @@ def draw_figures(results: Mapping[str, Any], out_dir: str | Path) -> dict[str, l
         profiles = plot_profiles(results["profiles"], out, FORMATS)
         if profiles:
             drawn["profiles"] = profiles
+    from socialzoo.bench.tables import remove_outputs
+
+    remove_outputs(out, set(FIGURE_NAMES) - set(drawn), FORMATS)
     return drawn

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from socialzoo.bench.tables import policy_label
-from socialzoo.reproduce.figures import draw_figures
+from socialzoo.reproduce.figures import draw_figures, figures_allowed
 from socialzoo.reproduce.paper import PAPER_PROTOCOL, SPEC_REFERENCE
 from socialzoo.reproduce.plan import PARTS, REFERENCE_PART
 from socialzoo.reproduce.quirk_report import quirk_note, reference_section
@@ -286,16 +286,13 @@ def render_reproduction(results: Mapping[str, Any], prefix: str = "", figures: s
     Args:
         results: socialzoo.reproduce.results.load's output.
         prefix: path from the Markdown file to the folder holding results/, figures/, tables/.
-        figures: names of the figures drawn (None: those the results allow).
+        figures: names of the figures drawn (None: those the results allow); one the results do not
+            allow is not linked (an earlier run's file in the folder).
     """
     run = results["run"]
     tables = build_tables(results)
-    if figures is None:
-        figures = set()
-        figures |= {"success", "metrics"} if results.get("performance") or results.get("transfer") else set()
-        figures |= {"rl_curves"} if results.get("rl_curves") else set()
-        figures |= {"lfd"} if results.get("lfd") else set()
-        figures |= {"profiles"} if results.get("profiles") else set()
+    allowed = figures_allowed(results)
+    figures = allowed if figures is None else set(figures) & allowed
     machine = run["machine"]
     quick = run["settings"]["name"] == "quick"
     lines = [

@@ -9,7 +9,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from socialzoo.bench.tables import interval_text, number_text, policy_label, write_csv
+from socialzoo.bench.tables import interval_text, number_text, policy_label, remove_outputs, write_csv
 from socialzoo.reproduce.paper import EXPERIMENT_MAPS, PAPER_POLICIES, PAPER_SUCCESS
 
 
@@ -174,10 +174,16 @@ def build_tables(results: Mapping[str, Any]) -> dict[str, tuple[list[dict[str, A
     return {name: (rows, builders[name][1](rows)) for name, rows in tables.items()}
 
 
+# Every table build_tables may make, by name.
+TABLE_NAMES: tuple[str, ...] = (*EXPERIMENT_MAPS, "lfd", "rl_curves")
+
+
 def write_tables(tables: Mapping[str, tuple[list[dict[str, Any]], str]], out_dir: str | Path) -> list[Path]:
-    """Each table as NAME.csv and NAME.md in out_dir."""
+    """Each table as NAME.csv and NAME.md in out_dir; the files of the other TABLE_NAMES are removed
+    (an earlier run's in the same folder, of parts these results lack)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    remove_outputs(out, set(TABLE_NAMES) - set(tables), ("csv", "md"))
     files = []
     for name, (rows, markdown) in tables.items():
         plain = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]

@@ -120,3 +120,33 @@ def test_a_paper_number_outside_the_seeds_range_is_explained(results_dir):
     listed = "\n".join(_differences(tables, [row(98.0, 99.0)]))
     assert "- performance (gdc1), GoAlone" in listed and "the paper's number is below all 5 seeds" in listed
     assert "- performance (gdc1), GoAlone" not in "\n".join(_differences(tables, [row(96.0, 99.0)]))
+
+
+def test_a_report_shows_no_table_or_figure_of_an_earlier_run_in_its_folder(results_dir, tmp_path):
+    """A rerun into a DIR that held a run of other settings (--seeds 2, then --quick --seeds 3 --only
+    demos) kept that run's tables and figures: the report linked its figures, and --publish copied
+    them into the repository beside a report saying "Not run yet"."""
+    from socialzoo.reproduce.publish import regenerate_report
+    from socialzoo.reproduce.report import write_report
+
+    base = results_dir.parent
+    (base / "figures").mkdir()
+    (base / "tables").mkdir()
+    for name in ("rl_curves", "profiles"):  # results_dir has neither curves nor several seeds
+        for suffix in ("png", "pdf"):
+            (base / "figures" / f"{name}.{suffix}").write_bytes(b"an earlier run's figure")
+    for name in ("rl_curves", "transfer"):
+        for suffix in ("csv", "md"):
+            (base / "tables" / f"{name}.{suffix}").write_text("an earlier run's table")
+    between_parts = write_report(base, figures=False).read_text()
+    assert "figures/rl_curves.png" not in between_parts and "figures/profiles.png" not in between_parts
+    assert "figures/rl_curves.png" not in regenerate_report(base, "published/")
+    assert sorted(p.name for p in (base / "tables").iterdir()) == [
+        "lfd.csv",
+        "lfd.md",
+        "performance.csv",
+        "performance.md",
+    ]
+    text = write_report(base).read_text()
+    assert sorted(p.stem for p in (base / "figures").glob("*.png")) == ["lfd", "metrics", "success"]
+    assert "figures/success.png" in text and "figures/rl_curves.png" not in text
