@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from socialzoo.train.checks import check_choice, check_int, check_number, check_seed
+from socialzoo.train.checks import check_choice, check_int, check_minibatch, check_number, check_seed
 
 Algo = Literal["mappo", "ippo"]
 CollectorKind = Literal["single", "multiprocess", "ray"]
@@ -75,7 +75,8 @@ class MarlArgs:
             "ray" (TorchRL RayCollector).
         ray_address: Ray cluster address for collector=ray; none starts a local Ray.
         epochs: PPO epochs per batch.
-        minibatch_size: world steps per minibatch (each with all its agents).
+        minibatch_size: world steps per minibatch (each with all its agents), at most
+            frames_per_batch.
         lr: Adam learning rate (of the humans).
         gamma: discount per 0.025 s step.
         lmbda: GAE lambda.
@@ -160,6 +161,7 @@ class MarlArgs:
                 f"{owner}.frames_per_batch ({self.frames_per_batch}) must be a multiple of workers x "
                 f"batch_size ({per_worker})"
             )
+        check_minibatch(self, "minibatch_size", self.frames_per_batch, "a collected batch, frames_per_batch")
         if self.ray_address is not None and self.collector != "ray":
             raise ValueError(f"{owner}.ray_address is for collector='ray', got collector={self.collector!r}")
         self.env_config()  # a bad map, reward weight or override fails here, naming it

@@ -208,6 +208,12 @@ def test_bad_arguments_name_the_field(tmp_path):
         HumansArgs(out=tmp_path, batch_size=16, frames_per_batch=1000)
     with pytest.raises(ValueError, match=r"CotrainArgs\.schedule"):
         CotrainArgs(out=tmp_path, schedule="sometimes")
+    # A minibatch larger than the batch was cut to the batch while run.json recorded it as asked.
+    with pytest.raises(
+        ValueError,
+        match=r"HumansArgs\.minibatch_size \(6401\) must be at most a collected batch, frames_per_batch \(6400\)",
+    ):
+        HumansArgs(out=tmp_path, minibatch_size=6401)
     # No human to learn: `socialzoo train humans --num-learned-humans 0` failed inside the run with a
     # traceback (exit 1) instead of a named argument error (exit 2).
     for zero in ({"num_learned_humans": 0}, {"env_overrides": {"num_learned_humans": 0}}):
