@@ -11,7 +11,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from socialzoo.train.checks import Activation, check_choice, check_int, check_number, check_sizes, coerce
+from socialzoo.train.checks import (
+    Activation,
+    check_choice,
+    check_int,
+    check_minibatch,
+    check_number,
+    check_sizes,
+    coerce,
+)
 from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_parts
 from socialzoo.train.skeleton import Trainer, TrainingRun, run_training
 
@@ -48,7 +56,8 @@ class Args(ImitationArgs):
         disc_epochs: passes of the discriminator over each iteration's transitions.
         grad_penalty: gradient-penalty weight of GAILLoss (0: none).
         ppo_epochs: PPO passes over each iteration's transitions.
-        minibatch: transitions per gradient step (PPO and discriminator).
+        minibatch: transitions per gradient step (PPO and discriminator), at most an iteration's
+            (num_envs * rollout_len).
         gamma: discount.
         gae_lambda: GAE lambda.
         clip_epsilon: PPO ratio clip.
@@ -89,6 +98,9 @@ class Args(ImitationArgs):
         check_number(self, "disc_lr", "clip_epsilon", "max_grad_norm", low=0.0, low_open=True)
         check_number(self, "grad_penalty", "entropy_coeff", "critic_coeff", low=0.0)
         check_number(self, "gamma", "gae_lambda", low=0.0, high=1.0)
+        check_minibatch(
+            self, "minibatch", self.frames_per_batch, "an iteration's transitions, num_envs * rollout_len"
+        )
 
     @property
     def frames_per_batch(self) -> int:

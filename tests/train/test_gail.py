@@ -67,3 +67,8 @@ def test_bad_arguments_name_the_field():
         Args(num_envs=0)
     with pytest.raises(ValueError, match=r"gail Args\.reward"):
         Args(reward="other")
+    # A minibatch larger than an iteration's transitions was cut to them, recorded as asked.
+    with pytest.raises(
+        ValueError, match=r"gail Args\.minibatch \(201\) must be at most .* num_envs \* rollout_len \(200\)"
+    ):
+        Args(num_envs=4, rollout_len=50, minibatch=201)
