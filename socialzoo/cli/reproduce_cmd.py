@@ -90,6 +90,7 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
     from socialzoo.reproduce.ledger import LedgerError
     from socialzoo.reproduce.plan import full_settings, parse_parts, quick_settings, reference_sets
     from socialzoo.reproduce.run import reproduce
+    from socialzoo.train.run_dir import RunDirError
 
     try:
         parts = parse_parts(args.only)
@@ -121,7 +122,8 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
             on_part=report,
             reference=reference,
         )
-    except LedgerError as err:  # mixed settings, an unreadable settings or timings file
+    except (LedgerError, RunDirError) as err:
+        # Mixed settings, an unreadable settings, timings or training run record (each named).
         return fail("reproduce", err)
     print(f"socialzoo reproduce: items in {result.work_dir}; report {result.report}")
     if args.publish is not None:

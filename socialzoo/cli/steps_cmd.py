@@ -59,6 +59,7 @@ def describe(record: dict[str, Any]) -> str:
 def run_steps_to_ref(args: argparse.Namespace) -> int:
     """Run `socialzoo steps-to-ref`; returns the exit status."""
     from socialzoo.studies.rl_training import steps_to_reference
+    from socialzoo.train.run_dir import RunDirError
 
     if args.total_steps % args.checkpoint_every:
         return fail(
@@ -77,7 +78,8 @@ def run_steps_to_ref(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             figure=not args.no_figures,
         )
-    except (ValueError, KeyError, FileNotFoundError) as err:
+    except (ValueError, KeyError, FileNotFoundError, RunDirError) as err:
+        # RunDirError: DIR/ppo_long holds a run of other arguments, or a damaged record (named).
         return fail("steps-to-ref", err)
     print(describe(record))
     print(f"wrote {args.out / 'steps_to_ref.json'}")

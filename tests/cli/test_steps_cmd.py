@@ -30,3 +30,19 @@ def test_total_steps_must_be_a_multiple_of_the_checkpoint_interval(tmp_path, cap
     )
     assert code == 2
     assert "--total-steps (1000) must be a multiple of --checkpoint-every (300)" in capsys.readouterr().err
+
+
+def test_a_run_folder_of_other_arguments_is_a_usage_error(tmp_path, capsys):
+    # Found rerunning `socialzoo steps-to-ref --out DIR` with another --total-steps: a RunDirError
+    # traceback (exit status 1) instead of the one line `socialzoo train` gives for the same folder.
+    from socialzoo.train.ppo import PPOArgs
+    from socialzoo.train.run_dir import RunDir
+
+    run = tmp_path / "ppo_long"
+    RunDir(run, "ppo", PPOArgs(out=run, total_steps=4000, checkpoint_every=2000))
+    before = (run / "run.json").read_text()
+    argv = ["--total-steps", "2000", "--checkpoint-every", "2000", "--no-progress", "--no-figures"]
+    assert main(["steps-to-ref", "--out", str(tmp_path), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("socialzoo steps-to-ref: error: ") and "total_steps differ" in err
+    assert (run / "run.json").read_text() == before

@@ -113,3 +113,17 @@ def test_notebook_draws_the_quick_results(quick_run, monkeypatch):
             exec(compile("".join(cell["source"]), path.name, "exec"), namespace)
     assert namespace["DIR"] == quick_run
     assert set(namespace["drawn"]) == set(FIGURES) and set(namespace["tables"]) == set(TABLES)
+
+
+def test_a_damaged_run_record_is_named_in_one_line(tmp_path, capsys):
+    # Found truncating a PPO run's run.json in a work folder: the rerun ended in a RunDirError
+    # traceback (exit status 1) where a damaged timings or settings file is one line (exit status 2).
+    from socialzoo.reproduce.plan import quick_settings, settings_hash
+
+    record = tmp_path / settings_hash(quick_settings()) / "rl" / "ppo" / "run.json"
+    record.parent.mkdir(parents=True)
+    record.write_text('{"trunc')
+    assert main(["reproduce", "--out", str(tmp_path), "--quick", "--only", "rl-curves", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("socialzoo reproduce: error: ") and f"{record}: not a run record" in err
+    assert len(err.splitlines()) == 1
