@@ -241,6 +241,24 @@ def seeded_torch(seed: int, threads: int | None) -> Iterator[None]:
         torch.use_deterministic_algorithms(deterministic, warn_only=warn_only)
 
 
+def masked_interrupt(err: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C (KeyboardInterrupt, or the command line's SIGTERM, a subclass) that `err` replaced:
+    one that `err` was raised while handling, when `err` is no interrupt itself; else None.
+
+    A library's cleanup can fail on the way out of an interrupted block: TorchRL's BCLoss runs its
+    actor inside tensordict's `to_module()`, whose exit tests a TensorDict as a bool and raises
+    RuntimeError, so Ctrl-C during a BC update ended `socialzoo train bc` in that traceback (exit
+    status 1) instead of "interrupted" (130)."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return None if cause is err else cause
+        seen.add(id(cause))
+        cause = cause.__context__
+    return None
+
+
 def run_training(
     trainer: Trainer,
     args: Any,
@@ -288,9 +306,12 @@ def run_training(
             # Inside the run's torch settings, so the threads recorded are the run's.
             run.record["machine"] = machine_facts()
             results = fit(run)
-    except BaseException:
+    except BaseException as err:
         run.close()
         run.dir.discard()
+        interrupt = masked_interrupt(err)
+        if interrupt is not None:
+            raise interrupt from None
         raise
     finally:
         run.close()

@@ -77,6 +77,47 @@ def test_an_interrupted_run_trains_again(tmp_path):
     assert len(calls) == 1 and finished_run(TOY, args)
 
 
+class MaskingContext:
+    """A context whose exit fails whenever the block raised, as tensordict's
+    TensorDictBase.to_module() does (its exit tests a TensorDict as a bool), which TorchRL's BCLoss
+    enters on every update."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, traceback):
+        if kind is not None:
+            raise RuntimeError("Converting a tensordict to boolean value is not permitted")
+
+
+@pytest.mark.parametrize("signum", [None, 15])
+def test_ctrl_c_or_sigterm_inside_a_library_that_masks_it_still_ends_the_run_as_interrupted(tmp_path, signum):
+    # Found pressing Ctrl-C in `socialzoo train bc`: now and then the command ended in a RuntimeError
+    # traceback (exit status 1) instead of "socialzoo train: interrupted" (exit status 130).
+    from socialzoo.cli import Terminated
+
+    interrupt = KeyboardInterrupt() if signum is None else Terminated(signum)
+
+    def fit(run):
+        with MaskingContext():
+            raise interrupt
+
+    with pytest.raises(KeyboardInterrupt) as caught:
+        run_training(TOY, ToyArgs(out=tmp_path / "run"), fit)
+    assert caught.value is interrupt
+    # A failure of its own that merely happened while handling another exception stays itself.
+
+    def failing(run):
+        try:
+            raise ValueError("first")
+        except ValueError:
+            with MaskingContext():
+                raise OSError("second") from None
+
+    with pytest.raises(RuntimeError, match="tensordict"):
+        run_training(TOY, ToyArgs(out=tmp_path / "other"), failing)
+
+
 def test_a_run_stopped_before_writing_anything_leaves_the_folder_as_it_was(tmp_path):
     # Found with `socialzoo train bc --demos MISTYPED` (or ppo-finetune --init): the refused run left a
     # record, so the corrected command in the same folder was refused ("demos differ").
