@@ -53,11 +53,12 @@ class RunDir:
     holding a Path, `out`, and the files the trainer's `inputs` name: "ref" or "eth" are names), those same paths
     and any absolute path on the command line and in the results (`recorded`). A folder already holding a run of
     other arguments is refused, so two runs never mix; a finished run of the same arguments is reported as done, so
-    a rerun repeats nothing. An argument added to a trainer after a run was recorded does not count against it while
-    it has its default value. A path argument that lies where it lay relative to the run folder names the same file,
-    so a work folder moved or copied whole together with its inputs (a `socialzoo reproduce` folder) holds the same
-    runs; so does an input file (a trainer's `inputs`, such as imitation's demonstrations) of a record written
-    before paths were relative, when it lies where it lay relative to the run's `out`.
+    a rerun repeats nothing; an unfinished run of the same arguments (an interrupted one, which trains again from its
+    first step) gets a new record of this run. An argument added to a trainer after a run was recorded does not count
+    against it while it has its default value. A path argument that lies where it lay relative to the run folder
+    names the same file, so a work folder moved or copied whole together with its inputs (a `socialzoo reproduce`
+    folder) holds the same runs; so does an input file (a trainer's `inputs`, such as imitation's demonstrations)
+    of a record written before paths were relative, when it lies where it lay relative to the run's `out`.
 
     Args:
         path: the folder (created).
@@ -86,14 +87,15 @@ class RunDir:
 
         self.path = Path(path)
         self.file = self.path / record_name
+        existing = self.read()
         # Before the folder is made: a map that does not load (MapError) leaves no folder behind.
-        digest = {} if self.file.exists() else map_digest(args)
+        # (The record of a finished run is kept as it is; any other is this run's, with its digest.)
+        digest = {} if existing is not None and existing.get("finished") else map_digest(args)
         self._made = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
         self.algo = algo
         self._paths = given_paths(args, inputs)
         self._fields = path_fields(args, inputs)
-        existing = self.read()
         # What the folder held before this run's record (None: the record was there already).
         self._before = None if existing is not None else {p.name for p in self.path.iterdir()}
         if existing is not None:
@@ -104,18 +106,24 @@ class RunDir:
                     f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
                 )
         resolved = recorded_args(plain(args), self.path, self._paths, self._fields)
-        self.record: dict[str, Any] = existing or {
-            "algo": algo,
-            "args": resolved,
-            "command": recorded_command(
-                [program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths, self._fields
-            ),
-            "seed": resolved.get("seed"),
-            **digest,
-            "package_version": __version__,
-            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-            "finished": None,
-        }
+        # A finished run is kept as recorded; an interrupted one trains again from its first step, so
+        # its record is this command's: its command line, start and volatile arguments (--threads).
+        self.record: dict[str, Any] = (
+            existing
+            if existing is not None and existing.get("finished")
+            else {
+                "algo": algo,
+                "args": resolved,
+                "command": recorded_command(
+                    [program_name(sys.argv[0]), *sys.argv[1:]], self.path, self._paths, self._fields
+                ),
+                "seed": resolved.get("seed"),
+                **digest,
+                "package_version": __version__,
+                "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                "finished": None,
+            }
+        )
         write_json(self.file, self.record)
 
     def read(self) -> dict[str, Any] | None:

@@ -118,6 +118,26 @@ def test_ctrl_c_or_sigterm_inside_a_library_that_masks_it_still_ends_the_run_as_
         run_training(TOY, ToyArgs(out=tmp_path / "other"), failing)
 
 
+def test_an_interrupted_run_trained_again_records_the_command_that_trained_it(tmp_path, monkeypatch):
+    # Found interrupting `socialzoo train bc --threads 2` and rerunning it without --threads: the
+    # finished record kept the first command, its --threads 2 and its start time, while the policy
+    # came from the second command on one thread (run.json's "machine" said so).
+    def interrupted(run):
+        run.checkpoint(4, lambda path: path.write_text("policy at 4"), ".txt")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sys, "argv", ["socialzoo", "train", "toy", "--progress"])
+    monkeypatch.setattr("socialzoo.train.run_dir.time.strftime", lambda fmt: "first")
+    with pytest.raises(KeyboardInterrupt):
+        run_training(TOY, ToyArgs(out=tmp_path / "run", progress=True), interrupted)
+    monkeypatch.setattr(sys, "argv", ["socialzoo", "train", "toy", "--no-progress"])
+    monkeypatch.setattr("socialzoo.train.run_dir.time.strftime", lambda fmt: "second")
+    run_training(TOY, ToyArgs(out=tmp_path / "run", progress=False), toy_fit([]))
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["command"] == "socialzoo train toy --no-progress"
+    assert record["args"]["progress"] is False and record["started"] == "second"
+
+
 def test_a_run_stopped_before_writing_anything_leaves_the_folder_as_it_was(tmp_path):
     # Found with `socialzoo train bc --demos MISTYPED` (or ppo-finetune --init): the refused run left a
     # record, so the corrected command in the same folder was refused ("demos differ").
