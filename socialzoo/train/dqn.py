@@ -31,7 +31,7 @@ class DQNArgs(SB3Args):
             DQN did not).
         normalize_reward: normalise rewards with VecNormalize during training.
         buffer_size: replay buffer capacity in transitions (SB3: 1,000,000).
-        learning_starts: env steps of random actions before learning (SB3: 100).
+        learning_starts: env steps of random actions before learning, below total_steps (SB3: 100).
         tau: target network soft-update coefficient (SB3: 1.0, a hard copy).
         train_freq: vec-env steps between gradient phases (SB3: 4).
         gradient_steps: gradient steps per phase (SB3: 1).
@@ -63,6 +63,12 @@ class DQNArgs(SB3Args):
         super().__post_init__()
         check_int(self, "buffer_size", "train_freq", "gradient_steps", "target_update_interval", low=1)
         check_int(self, "learning_starts", low=0)
+        if self.learning_starts >= self.total_steps:
+            raise ValueError(
+                f"DQNArgs.learning_starts ({self.learning_starts}) must be below total_steps "
+                f"({self.total_steps}): DQN takes no gradient step before it, and its policy would be "
+                "the untrained network"
+            )
         check_minibatch(self, "batch_size", self.buffer_size, "the replay buffer, buffer_size")
         self.check_block(self.num_envs * self.train_freq, "num_envs * train_freq")
         names = ("tau", "exploration_fraction", "exploration_initial_eps", "exploration_final_eps")

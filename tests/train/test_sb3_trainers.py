@@ -168,6 +168,12 @@ def test_trainers_are_registered_with_the_papers_defaults():
             {"buffer_size": 10, "batch_size": 32},
             r"DQNArgs.batch_size \(32\) must be at most the replay buffer, buffer_size \(10\)",
         ),
+        # No gradient step at all: the "trained" policy was the untrained network.
+        (
+            DQNArgs,
+            {"total_steps": 2000, "learning_starts": 2000},
+            r"DQNArgs.learning_starts \(2000\) must be below total_steps \(2000\)",
+        ),
     ],
 )
 def test_bad_arguments_name_the_field(cls, changes, message):
