@@ -101,9 +101,11 @@ class RunDir:
         if existing is not None:
             changed = differing_args(existing, algo, args, volatile, inputs, self.path)
             if changed is not None:
+                # The record, not its folder, is the run: PIPS keeps NAME.train.json beside each
+                # program, so one folder holds any number of them.
                 raise RunDirError(
-                    f"{self.file}: {self.path} holds a {existing.get('algo')} run with other arguments "
-                    f"({', '.join(changed) or 'algorithm'} differ); choose another folder"
+                    f"{self.file}: a {existing.get('algo')} run with other arguments "
+                    f"({', '.join(changed) or 'algorithm'} differ); choose another --out"
                 )
         resolved = recorded_args(plain(args), self.path, self._paths, self._fields)
         # A finished run is kept as recorded; an interrupted one trains again from its first step, so

@@ -1,6 +1,7 @@
 """PIPS synthesis: unit-consistent enumeration, exact threshold search against z3 and brute force,
 windowing, recovery of a known program, train()'s files, and agreement with Ref."""
 
+import dataclasses
 import itertools
 import json
 
@@ -42,6 +43,7 @@ from socialzoo.train.pips import (
 from socialzoo.train.pips_enumerate import combine, enumerate_depth
 from socialzoo.train.pips_search import SearchSettings, physical_thresholds
 from socialzoo.train.pips_thresholds import PairSearch, fit_single, solve_z3
+from socialzoo.train.run_dir import RunDirError
 
 pytest.importorskip("z3")
 
@@ -221,6 +223,14 @@ def test_train_writes_the_program_and_its_record(tmp_path):
     assert record["agreement"]["held_out"]["agreement"] > 0.98
     policy = PipsPolicy.load(out)
     assert np.array_equal(policy.act(obs), load_program(out).decide(obs))
+    # Another program of other arguments under the same name is refused; the folder may hold any
+    # number of programs, so the message named the folder ("tmp holds a pips run ... choose another
+    # folder") where the file is what to change.
+    with pytest.raises(RunDirError) as refused:
+        train(dataclasses.replace(args, max_depth=2))
+    message = str(refused.value)
+    assert "max_depth differ" in message and "choose another --out" in message
+    assert "choose another folder" not in message and f"{tmp_path} holds" not in message
 
 
 def test_thresholds_only_the_absent_person_stand_in_reaches_are_refused():
