@@ -86,6 +86,22 @@ def check_minibatch(args: Any, name: str, pool: int, what: str) -> None:
         raise ValueError(f"{owner(args)}.{name} ({value}) must be at most {what} ({pool})")
 
 
+def check_eval_trials(args: Any, where: str, family: str | None = None) -> None:
+    """Raise ValueError unless args.eval_trials is at most the validation cases a checkpoint evaluation
+    can play (socialzoo.train.validation): those of scenario family `family`'s validation split, else
+    the training map's validation set ("<map>-val", VALIDATION_SIZE scenarios on any map), the map
+    named by `where` ("map 'gdc1'"). More failed at the run's first evaluation, after training up to it."""
+    from socialzoo.bench.test_sets import family_validation_size
+    from socialzoo.scenarios.scenario_sets import VALIDATION_SIZE
+
+    cases = VALIDATION_SIZE if family is None else family_validation_size(family)
+    if args.eval_trials > cases:
+        of = where if family is None else f"family {family!r}"
+        raise ValueError(
+            f"{owner(args)}.eval_trials ({args.eval_trials}) is more than the {cases} validation cases of {of}"
+        )
+
+
 def check_block(args: Any, block: int, what: str) -> None:
     """Raise ValueError unless args.checkpoint_every and args.total_steps are multiples of `block` env
     steps (a rollout, or a training interval, named by `what`), so that each checkpoint holds the policy

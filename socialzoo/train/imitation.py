@@ -11,6 +11,7 @@ from typing import Any
 from socialzoo.train.checks import (
     Activation,
     check_choice,
+    check_eval_trials,
     check_int,
     check_number,
     check_seed,
@@ -63,6 +64,7 @@ class ImitationArgs:
         check_int(self, "steps", low=1, optional=True)
         check_int(self, "checkpoint_every", "threads", low=1)
         check_int(self, "eval_trials", low=0)
+        check_eval_trials(self, "the demonstrations' map")
         check_seed(self)
         check_sizes(self, "hidden")
         check_choice(self, "activation", Activation)

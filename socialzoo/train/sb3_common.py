@@ -17,6 +17,7 @@ from socialzoo.env.config import EnvConfig
 from socialzoo.train.checks import (
     MAX_SB3_SEED,
     check_block,
+    check_eval_trials,
     check_int,
     check_number,
     check_seed,
@@ -134,15 +135,7 @@ class SB3Args:
             raise ValueError(f"{owner}: bad training env ({err})") from None
         if self.family is not None and self.map != default_map(self.family):
             check_family_fits(owner, self.family, self.map)
-        if self.family is not None:
-            from socialzoo.bench.test_sets import family_validation_size
-
-            cases = family_validation_size(self.family)
-            if self.eval_trials > cases:
-                raise ValueError(
-                    f"{owner}.eval_trials ({self.eval_trials}) is more than the {cases} validation "
-                    f"cases of family {self.family!r}"
-                )
+        check_eval_trials(self, f"map {self.map!r}", self.family)
 
     def _overridden(self) -> dict[str, Any]:
         """The env_overrides values of the EnvConfig fields that env_config sets from this

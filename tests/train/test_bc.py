@@ -106,3 +106,9 @@ def test_bad_arguments_name_the_field():
     for bad in (float("inf"), float("nan")):
         with pytest.raises(ValueError, match=r"bc Args\.lr must be a finite number"):
             Args(lr=bad)
+    # More checkpoint evaluations than the map has validation scenarios (1,000) ended the run in a
+    # traceback at its first checkpoint, after training up to it.
+    with pytest.raises(
+        ValueError, match=r"bc Args\.eval_trials \(1001\) is more than the 1000 validation cases"
+    ):
+        Args(eval_trials=1001)

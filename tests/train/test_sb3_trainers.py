@@ -174,6 +174,13 @@ def test_trainers_are_registered_with_the_papers_defaults():
             {"total_steps": 2000, "learning_starts": 2000},
             r"DQNArgs.learning_starts \(2000\) must be below total_steps \(2000\)",
         ),
+        # More than the map's 1,000 validation scenarios ended the run in a traceback at its first
+        # checkpoint evaluation, after training up to it (a family's split was checked already).
+        (
+            PPOArgs,
+            {"eval_trials": 1001},
+            r"PPOArgs.eval_trials \(1001\) is more than the 1000 validation cases of map 'gdc1'",
+        ),
     ],
 )
 def test_bad_arguments_name_the_field(cls, changes, message):
