@@ -276,18 +276,20 @@ def run_select(args: argparse.Namespace) -> int:
         run_checkpoints(args.run)
         training_map(args.run)
         check_policy_spec(args.policy)
+        # Its comparison's own checks too (more --trials than the validation set holds), named
+        # before any trial runs, as `humans compare` reports them.
+        result = select_humans(
+            args.run,
+            args.out,
+            trials=args.trials,
+            policy=args.policy,
+            workers=args.workers,
+            batch_size=args.batch_size,
+            env_overrides=given(args, "max_steps"),
+            progress=not args.no_progress,
+        )
     except (FileNotFoundError, ValueError) as err:
         return fail("humans select", err)
-    result = select_humans(
-        args.run,
-        args.out,
-        trials=args.trials,
-        policy=args.policy,
-        workers=args.workers,
-        batch_size=args.batch_size,
-        env_overrides=given(args, "max_steps"),
-        progress=not args.no_progress,
-    )
     status = "meets both targets" if result.met else "meets no target set; the closest"
     print(f"chose {result.chosen} ({result.frames:,} frames): {status} on the validation scenarios")
     print(f"results in {result.out_dir}: selection.md, selection.csv, selection.json, humans.safetensors")

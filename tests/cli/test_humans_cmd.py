@@ -48,6 +48,23 @@ def test_humans_select_runs(write_walker, tmp_path, capsys):
     assert (run / "selection" / "humans.safetensors").is_file()
 
 
+def test_humans_select_refuses_more_trials_than_the_validation_set_in_one_line(
+    write_walker, tmp_path, capsys
+):
+    # Found with `socialzoo humans select --trials 1001`: a ValueError traceback (exit status 1), where
+    # `socialzoo humans compare` gives the same refusal in one line (exit status 2).
+    run = tmp_path / "run"
+    (run / "checkpoints").mkdir(parents=True)
+    (run / "run.json").write_text(json.dumps({"args": {"map": "open_room"}}))
+    write_walker(run / "checkpoints" / "step_000001000.humans.safetensors", speed=3.0)
+    assert (
+        main(["humans", "select", "--run", str(run), "--trials", "1001", "--workers", "1", "--no-progress"])
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert err.startswith("socialzoo humans select: error: ") and "'open_room-val' holds only 1000" in err
+
+
 def test_humans_compare_takes_the_shipped_humans_as_learned(tmp_path, capsys):
     """It took only learned:PATH, so the docs named socialzoo/agents/shipped/humans.safetensors,
     a path that exists only in a source checkout."""
