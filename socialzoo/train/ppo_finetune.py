@@ -40,6 +40,7 @@ class Args:
         gamma: discount factor (SB3's and the paper's: 0.99).
         seed: seeds PPO and the training scenarios.
         threads: torch CPU threads.
+        progress: show progress (in env steps).
     """
 
     init: Path
@@ -53,6 +54,7 @@ class Args:
     gamma: float = 0.99
     seed: int = 0
     threads: int = 1
+    progress: bool = True
 
     def __post_init__(self) -> None:
         coerce(self, init=policy_file_or_shipped, out=Path)

@@ -153,3 +153,16 @@ def test_a_family_that_does_not_fit_the_map_is_a_usage_error(tmp_path, capsys):
     assert err.startswith("socialzoo train ppo: error: ")
     assert "family 'frontal_approach' does not fit map 'gdc1'" in err and "no corridor" in err
     assert not out.exists()
+
+
+def test_every_trainer_that_shows_progress_can_be_silenced(tmp_path):
+    # `socialzoo train ppo-finetune` drew a progress display (440,000 steps by default) that no
+    # option turned off: `--no-progress`, which every other trainer with one takes, was refused.
+    from socialzoo.cli import build_parser
+    from socialzoo.cli.dataclass_args import dataclass_from_namespace
+    from socialzoo.train import TRAINERS
+
+    for name in sorted(set(TRAINERS) - {"pips"}):  # PIPS shows no progress display: it logs its stages
+        argv = ["train", name, "--out", str(tmp_path / name), "--no-progress"]
+        args = build_parser(argv).parse_args(argv + (["--init", "dagger"] if name == "ppo-finetune" else []))
+        assert dataclass_from_namespace(args.trainer_class, args).progress is False, name
