@@ -77,8 +77,9 @@ def train(args: Args) -> Path:
     the file's normaliser is kept fixed (VecNormalize's observation statistics never update), so the untrained
     model acts exactly as the file does (checked before training). The critic, new, first learns for
     `--warmup` steps with the actor frozen; then PPO trains both with a small learning rate for `--steps`
-    steps on the benchmark env's own training scenarios (never a validation or test scenario) with the
-    reward's blame and collision weights set by `--w-blame` and `--w-collision`. The policy has the name of
+    steps on the benchmark env's own training scenarios (never a validation or test scenario), in the
+    observation layout the file was trained with, with the reward's blame and collision weights set by
+    `--w-blame` and `--w-collision`. The policy has the name of
     the source ("dagger" for the shipped DAgger), so `socialzoo study ref-tradeoff --learned` evaluates it
     beside Ref's settings. docs/reproduce.md ("A learned policy against Ref") gives the measurements.
     """
@@ -184,7 +185,11 @@ def exported(model: Any, source: MlpPolicy) -> MlpPolicy:
 
 def _fit(run: TrainingRun, args: Args) -> Mapping[str, Any]:
     source = MlpPolicy.load(args.init)
-    config = EnvConfig().replace(reward={"w_blame": args.w_blame, "w_collision": args.w_collision})
+    # The benchmark env in the observation layout the file reads (the paper's 25 person slots, or
+    # the layout it was trained with), so its actor acts on what it learned from.
+    config = EnvConfig().replace(
+        observation=source.observation, reward={"w_blame": args.w_blame, "w_collision": args.w_collision}
+    )
     model = ppo_from_policy(
         source, config, seed=args.seed, learning_rate=args.lr, clip_range=args.clip, gamma=args.gamma,
         **PPO_SETTINGS,

@@ -112,3 +112,24 @@ def test_fine_tuning_leaves_no_empty_sb3_folder_in_the_temp_folder(tmp_path, mon
     )
     ppo_finetune.finetune(model, warmup=100, steps=100)
     assert list(temp.glob("SB3-*")) == []
+
+
+def test_a_policy_of_another_observation_layout_is_fine_tuned_on_its_own_observations(tmp_path):
+    # Found fine-tuning a PPO trained with {"observation": {"num_human_slots": 10}} (47 numbers): the run
+    # ended in a torch RuntimeError (107 against 47), since the fine-tuning env had the default layout.
+    source = MlpPolicy.load(SHIPPED)
+    mean, var = source.normalizer.mean[:47], source.normalizer.var[:47]
+    first = (source.layers[0][0][:, :47], source.layers[0][1])
+    small = MlpPolicy(
+        "dagger",
+        [first, *source.layers[1:]],
+        source.activation,
+        {"layout": "paper", "num_human_slots": 10},
+        type(source.normalizer)(mean, var, source.normalizer.clip, source.normalizer.epsilon),
+    )
+    init = small.save(tmp_path / "small.safetensors", dict(source.header))
+    path = ppo_finetune.train(
+        ppo_finetune.Args(init=init, out=tmp_path / "ft", warmup=0, steps=1, progress=False)
+    )
+    tuned = MlpPolicy.load(path)
+    assert tuned.observation == {"layout": "paper", "num_human_slots": 10} and tuned.input_size == 47
