@@ -397,6 +397,7 @@ def crowd_tensors(model: Any) -> dict[str, Any]:
 def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> Any:
     """The numpy policy (header and all) of an SB3 PPO model trained on `task`."""
     from socialzoo.agents.crowd_policy import POLICY_NAME, CrowdAttentionPolicy
+    from socialzoo.train.sb3_common import sb3_training_record
 
     tensors = {k: v.detach().cpu().numpy() for k, v in crowd_tensors(model).items()}
     args = run.args
@@ -412,15 +413,6 @@ def export_crowd_policy(model: Any, task: Any, run: TrainingRun, step: int) -> A
             "attention": list(args.attention),
             "net_arch": list(args.net_arch),
         },
-        "training": {
-            "algo": "ppo",
-            "library": "stable-baselines3",
-            "seed": args.seed,
-            "steps": step,
-            "command": run.record["command"],
-            "args": run.record["args"],
-            "task": task.to_dict(),
-            **_family_record(args),
-        },
+        "training": sb3_training_record(run, "ppo", step, task=task.to_dict(), **_family_record(args)),
     }
     return CrowdAttentionPolicy(tensors, header)

@@ -114,6 +114,6 @@ def imitation_parts(run: TrainingRun, args: ImitationArgs, *, max_steps: int | N
     def save(path: Path, **training: Any) -> Path:
         policy = to_mlp_policy(name, net, data.observation, args.activation)
         header = policy_header(name, data, run.record, wall_seconds=run.seconds, **training)
-        return policy.save(path, header)
+        return policy.save(path, {**header, "training": run.recorded(header["training"])})
 
     return ImitationParts(data, stats, generator, net, save)

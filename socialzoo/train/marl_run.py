@@ -135,16 +135,18 @@ def _fit(
     )
 
     def training(frames: int) -> dict[str, Any]:
-        return {
-            "algo": args.algo,
-            "trainer": run.trainer.name,
-            "command": run.record.get("command"),
-            "seed": args.seed,
-            "frames": frames,
-            "map": cfg.map,
-            "robot": robot_policy,
-            "human_reward": dict(args.reward),
-        }
+        return run.recorded(
+            {
+                "algo": args.algo,
+                "trainer": run.trainer.name,
+                "command": run.record.get("command"),
+                "seed": args.seed,
+                "frames": frames,
+                "map": cfg.map,
+                "robot": robot_policy,
+                "human_reward": dict(args.reward),
+            }
+        )
 
     def save_humans(path: Path, frames: int) -> Path:
         return export_humans(nets["human"], cfg).save(path, env_id(), training(frames))

@@ -238,8 +238,10 @@ def fit(run: TrainingRun) -> dict[str, Any]:
     policy.save(
         run.policy,
         env_id(),
-        training_record(
-            args, per_scene, len(train_set), len(val_set), best, best_epoch, command=run.record["command"]
+        run.recorded(
+            training_record(
+                args, per_scene, len(train_set), len(val_set), best, best_epoch, command=run.record["command"]
+            )
         ),
     )
     with torch.no_grad():

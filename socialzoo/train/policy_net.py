@@ -196,7 +196,8 @@ def policy_header(algo: str, data: Any, run_record: dict[str, Any], **training: 
             "command": run_record.get("command"),
             "args": run_record.get("args"),
             "package_version": __version__,
-            "demonstrations": data.record(),
+            # The file as run.json names it (relative to the run folder), not as it was given.
+            "demonstrations": {**data.record(), "file": run_record.get("args", {}).get("demos")},
             **training,
         },
     }

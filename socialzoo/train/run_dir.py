@@ -154,6 +154,13 @@ class RunDir:
         self.record["results"] = recorded(plain(results), self.path, self._paths)
         write_json(self.file, self.record)
 
+    def recorded(self, value: Any) -> Any:
+        """`value` as plain JSON with every absolute path in it (alone or inside a spec such as
+        "ppo:PATH") written relative to the run folder, as run.json holds paths: for what the run
+        writes besides run.json, such as the training record in its policy files' headers. Relative
+        strings are left as they are: there a name ("gdc1") and a path cannot be told apart."""
+        return recorded(plain(value), self.path, set())
+
     def checkpoint_path(self, step: int, suffix: str) -> Path:
         """checkpoints/step_<step>.<suffix> (folder created)."""
         folder = self.path / "checkpoints"

@@ -376,6 +376,14 @@ def sb3_model(run: TrainingRun, model: str, venv: Any, kwargs: Mapping[str, Any]
     return made
 
 
+def sb3_training_record(run: TrainingRun, algo: str, step: int, **extra: Any) -> dict[str, Any]:
+    """The training record of an SB3 model's policy file after `step` env steps: algorithm, library,
+    seed, steps, the run's command and arguments, and `extra` (its env or task), with its paths as
+    run.json holds them (TrainingRun.recorded)."""
+    record = {"algo": algo, "library": "stable-baselines3", "seed": run.args.seed, "steps": step}
+    return run.recorded({**record, "command": run.record["command"], "args": run.record["args"], **extra})
+
+
 def _fit(run: TrainingRun, trainer: SB3Trainer, args: SB3Args) -> Mapping[str, Any]:
     from socialzoo.train.run_dir import plain
     from socialzoo.train.sb3_export import export_policy
@@ -391,15 +399,7 @@ def _fit(run: TrainingRun, trainer: SB3Trainer, args: SB3Args) -> Mapping[str, A
         header = {
             "env_id": env_id_of(config),
             "network": {"output": output},
-            "training": {
-                "algo": algo,
-                "library": "stable-baselines3",
-                "seed": args.seed,
-                "steps": step,
-                "command": run.record["command"],
-                "args": run.record["args"],
-                "env": config.to_dict(),
-            },
+            "training": sb3_training_record(run, algo, step, env=config.to_dict()),
         }
         policy.save(path, header)
 

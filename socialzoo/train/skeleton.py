@@ -154,6 +154,11 @@ class TrainingRun:
             self._writer = self._closing.enter_context(self.dir.tensorboard())
         return self._writer
 
+    def recorded(self, value: Any) -> Any:
+        """`value` with its absolute paths relative to the run folder, as run.json holds them (never
+        the machine's absolute ones): a policy file's training record (RunDir.recorded)."""
+        return self.dir.recorded(value)
+
     def progress(self, total: int, unit: str = "step", desc: str | None = None) -> Any:
         """A progress display of `total` units, closed when the run ends (args.progress=False: silent)."""
         bar = progress_bar(total, desc or self.trainer.name, getattr(self.args, "progress", True), unit)

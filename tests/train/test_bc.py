@@ -57,6 +57,10 @@ def test_run_folder_records_the_run(trained):
     assert list((run / "tensorboard").glob("events.out.tfevents.*"))
     header = MlpPolicy.load(path).header
     assert header["policy"] == "bc" and header["training"]["demonstrations"]["policy"] == "ref"
+    # The demonstrations as run.json names them (relative to the run folder), never the machine's
+    # absolute path, which the header held.
+    assert header["training"]["demonstrations"]["file"] == record["args"]["demos"]
+    assert not Path(record["args"]["demos"]).is_absolute()
     assert header["env_id"].startswith("socialzoo/ActionSelection-v")
 
 

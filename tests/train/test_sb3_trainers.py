@@ -115,6 +115,37 @@ def test_run_folder_from_the_command_line(tmp_path, monkeypatch, capsys):
     assert "seed differ" in capsys.readouterr().err
 
 
+def strings(value):
+    """Every string inside plain JSON `value`."""
+    if isinstance(value, dict):
+        return [s for v in value.values() for s in strings(v)]
+    if isinstance(value, list):
+        return [s for v in value for s in strings(v)]
+    return [value] if isinstance(value, str) else []
+
+
+def test_the_policy_file_names_paths_as_the_run_record_does(tmp_path):
+    # Found reading the header of a policy trained with --map /abs/path/hallway.json: run.json said
+    # "../hallway.json", the policy file the machine's absolute path (training.env.map).
+    import os
+    import shutil
+
+    from socialzoo.maps.map_file import load_map
+
+    map_file = tmp_path / "maps" / "hall.json"
+    map_file.parent.mkdir()
+    shutil.copyfile(load_map("hallway").path, map_file)
+    args = PPOArgs(
+        out=tmp_path / "run", map=str(map_file), num_envs=4, n_steps=25, total_steps=100, checkpoint_every=100,
+        max_steps=50, progress=False,
+    )  # fmt: skip
+    path = trainer_function("ppo")(args)
+    _, header = read_policy_file(path)
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert header["training"]["env"]["map"] == record["args"]["map"] == "../maps/hall.json"
+    assert [s for s in strings(header) if os.path.isabs(s)] == []
+
+
 def test_trainers_are_registered_with_the_papers_defaults():
     assert {"ppo", "dqn"} <= set(TRAINERS)
     ppo, dqn = PPOArgs(), DQNArgs()
