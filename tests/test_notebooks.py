@@ -14,18 +14,22 @@ DRAW_STORED_RESULTS = {"reproduce_paper.ipynb"}
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs(path, monkeypatch):
+def test_notebook_runs(path, monkeypatch, tmp_path):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     pytest.importorskip("ipykernel")
     monkeypatch.setenv(QUICK_ENV, "1")  # the kernel inherits the environment
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    # A temp folder of its own: an SB3 model learning without a logger leaves an empty SB3-<date>
+    # folder there (the quickstart's PPO left one in /tmp on every run).
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
     notebook = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(
         notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
     )
     client.execute()  # raises CellExecutionError naming the cell on any error
     assert any(cell.get("outputs") for cell in notebook.cells if cell.cell_type == "code")
+    assert list(tmp_path.glob("SB3-*")) == []
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
