@@ -16,6 +16,7 @@ __all__ = [
     "LoadablePolicy",
     "Policy",
     "PolicyTaskError",
+    "check_observation_size",
     "check_policy_spec",
     "make_policy",
     "policy_file",
@@ -239,14 +240,14 @@ def make_policy(
         policy = cls(**kwargs)
     space = getattr(task, "observation_space", observation_space)
     if space is not None:
-        _check_observation_size(name, policy, task_name, space)
+        check_observation_size(name, policy, task_name, space)
     config = getattr(task, "config", None)
     if config is not None and hasattr(policy, "check_config"):  # what else it was trained for
         policy.check_config(config)
     return policy
 
 
-def _check_observation_size(name: str, policy: Any, task: str, space: Any) -> None:
+def check_observation_size(name: str, policy: Any, task: str, space: Any) -> None:
     """Refuse a learned policy whose observations are not the size of the task's, naming both."""
     size = getattr(policy, "observation_size", getattr(policy, "input_size", None))
     shape = getattr(space, "shape", None)

@@ -385,8 +385,9 @@ def run_benchmark(
         socialzoo.bench.store.StoreError: out_dir holds a results file that is not a socialzoo
             store or is corrupted (it is left untouched).
     """
-    from socialzoo.agents import make_policy
+    from socialzoo.agents import check_observation_size, make_policy
     from socialzoo.agents.base import policy_config
+    from socialzoo.env.observation import observation_space
 
     out = Path(out_dir)
     # Every policy is built (a bad policy file refused) and the store opened (an unusable one refused)
@@ -409,6 +410,12 @@ def run_benchmark(
         set_names[m]: env_config_for(ts, **{**people_overrides(config), **dict(config.env_overrides)})
         for m, ts in sets.items()
     }
+    # A learned policy reads the observations of the benchmark's env configs: one of another layout (a
+    # file trained with other observation settings) is refused here, by name, not when it first acts.
+    for env_config in {c.observation_size: c for c in env_configs.values()}.values():
+        space = observation_space(env_config.observation, env_config.signals)
+        for p in config.policies:
+            check_observation_size(p, policies[p], "action_selection", space)
     policy_configs = {p: policy_config(policies[p]) for p in config.policies}
     spec = RunSpec(
         test_sets={set_names[m]: ts for m, ts in sets.items()},

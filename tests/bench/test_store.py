@@ -347,3 +347,23 @@ def test_a_bad_policy_file_or_store_is_refused_before_a_test_set_is_made(rooms_m
     with pytest.raises(StoreError, match="not an SQLite database"):
         run_benchmark(config(maps=(str(rooms_map_path),), trials=2), out, progress=False, figures=False)
     assert sorted(p.name for p in out.iterdir()) == [STORE_NAME]  # no test_sets/ made
+
+
+def test_a_learned_policy_of_another_observation_layout_is_refused_before_any_trial(tmp_path):
+    """The shipped PPO reads the default layout's 107 numbers; on a benchmark whose env config reads the
+    social_gym 1.0 layout (another size) it was refused only when it first acted, after the run had
+    begun and the store was made ("2 trials to run"). It is refused with the sizes before any trial."""
+    from socialzoo.agents import PolicyTaskError
+
+    out = tmp_path / "out"
+    layout = {"observation": {"layout": "socialgym1"}}
+    with pytest.raises(
+        PolicyTaskError, match=r"policy 'ppo' reads observations of 107 numbers .* have (?!107)\d+"
+    ):
+        run_benchmark(
+            config(maps=("open_room",), policies=("goalone", "ppo"), trials=2, env_overrides=layout),
+            out,
+            progress=False,
+            figures=False,
+        )
+    assert not (out / STORE_NAME).exists()
