@@ -102,6 +102,16 @@ def check_eval_trials(args: Any, where: str, family: str | None = None) -> None:
         )
 
 
+def check_whole_batches(args: Any, name: str, batch: int, what: str) -> None:
+    """Raise ValueError unless args.<name>, the steps to train, is a multiple of `batch`, the steps one
+    iteration collects (named by `what`): a collector stops after whole batches, so any other count
+    trained up to a batch more than asked."""
+    if getattr(args, name) % batch:
+        raise ValueError(
+            f"{owner(args)}.{name} ({getattr(args, name)}) must be a multiple of {what} ({batch})"
+        )
+
+
 def check_block(args: Any, block: int, what: str) -> None:
     """Raise ValueError unless args.checkpoint_every and args.total_steps are multiples of `block` env
     steps (a rollout, or a training interval, named by `what`), so that each checkpoint holds the policy

@@ -18,6 +18,7 @@ from socialzoo.train.checks import (
     check_minibatch,
     check_number,
     check_sizes,
+    check_whole_batches,
     coerce,
 )
 from socialzoo.train.imitation import INPUT_FILES, ImitationArgs, imitation_parts
@@ -100,6 +101,9 @@ class Args(ImitationArgs):
         check_number(self, "gamma", "gae_lambda", low=0.0, high=1.0)
         check_minibatch(
             self, "minibatch", self.frames_per_batch, "an iteration's transitions, num_envs * rollout_len"
+        )
+        check_whole_batches(
+            self, "total_steps", self.frames_per_batch, "an iteration's transitions, num_envs * rollout_len"
         )
 
     @property

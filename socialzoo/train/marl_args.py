@@ -67,7 +67,7 @@ class MarlArgs:
         num_learned_humans: learned human slots per world; the other humans are social-force.
         max_humans: human slots per world (scenario.max_humans).
         max_steps: episode time limit, steps.
-        frames: world steps to collect in all.
+        frames: world steps to collect in all (whole batches: rounded up to frames_per_batch's next multiple).
         batch_size: worlds per env (B); every collector worker steps one env.
         frames_per_batch: world steps per collected batch, over all workers.
         workers: collector workers (processes or Ray actors; 1 for the single collector).

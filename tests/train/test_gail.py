@@ -72,3 +72,10 @@ def test_bad_arguments_name_the_field():
         ValueError, match=r"gail Args\.minibatch \(201\) must be at most .* num_envs \* rollout_len \(200\)"
     ):
         Args(num_envs=4, rollout_len=50, minibatch=201)
+    # 300 steps in iterations of 4 x 50 trained 400 (the collector gathers whole iterations).
+    with pytest.raises(
+        ValueError,
+        match=r"gail Args\.total_steps \(300\) must be a multiple of an iteration's transitions, .* \(200\)",
+    ):
+        Args(total_steps=300, num_envs=4, rollout_len=50, minibatch=100)
+    assert Args(total_steps=400, num_envs=4, rollout_len=50, minibatch=100).total_steps == 400
