@@ -25,9 +25,10 @@ from socialzoo.train.run_dir import (
 logger = logging.getLogger(__name__)
 
 EVALUATIONS_FILE = "evaluations.csv"
-# Arguments of every trainer that never change what is trained: a progress display, the run folder
-# itself (it may move) and the number of CPU threads.
-VOLATILE: tuple[str, ...] = ("progress", "out", "threads")
+# Arguments of every trainer that never change what is trained: a progress display and the run folder
+# itself (it may move). Not the number of CPU threads: two threads take another kernel path and train
+# other weights (REPRODUCTION.md, "Where the runs part"), so a run of another --threads is another run.
+VOLATILE: tuple[str, ...] = ("progress", "out")
 
 # A checkpoint's evaluation: policy file -> metrics (success first; plain floats).
 Evaluator = Callable[[Path], Mapping[str, float]]

@@ -25,6 +25,7 @@ class ToyArgs:
     every: int = 4
     seed: int = 0
     progress: bool = False
+    threads: int = 1
 
 
 def toy_fit(calls):
@@ -310,3 +311,13 @@ def test_eval_every_evaluates_multiples_and_the_last_and_the_kept_policy_is_the_
     # A run that evaluated nothing keeps its final policy.
     plain = run_training(TOY, ToyArgs(out=tmp_path / "plain"), toy_fit([]))
     assert kept_policy(plain) == plain
+
+
+def test_a_run_of_another_thread_count_is_another_run(tmp_path):
+    # skeleton.VOLATILE said the thread count never changes what is trained, so a finished
+    # `--threads 2` run was handed back for `--threads 1`; REPRODUCTION.md measures two threads
+    # training other weights (BC: 3,040 of 10 tensors' values part). Now it is refused by name.
+    run_training(TOY, ToyArgs(out=tmp_path / "run", threads=2), toy_fit([]))
+    with pytest.raises(RunDirError, match="threads differ"):
+        run_training(TOY, ToyArgs(out=tmp_path / "run", threads=1), toy_fit([]))
+    run_training(TOY, ToyArgs(out=tmp_path / "run", threads=2, progress=False), toy_fit([]))  # the same run
