@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from socialzoo.bench.replay import episode_outcome, play_episode, step_seconds
+from socialzoo.bench.episode_play import episode_outcome, play_episode, step_seconds
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def animate_episode(
     size: tuple[int, int] = (480, 360),
 ) -> EpisodeVideo:
     """Run `policy` on row 0 of a task of one row (any task, already reset: see
-    socialzoo.bench.replay.scenario_task and case_task) and write the animation.
+    socialzoo.bench.episode_play.scenario_task and socialzoo.bench.replay.case_task) and write the animation.
 
     One frame every `stride` steps and one of the episode's last state (at the action-selection task's
     defaults 100 ms of simulated time per frame, played at twice real time); the animation stops after

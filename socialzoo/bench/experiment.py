@@ -589,8 +589,8 @@ def write_episode_gif(
     """Animate one episode of `policy` on scenario `index` of a test set as a GIF
     (socialzoo.bench.episode_video.animate_episode at its defaults), among the env config's people."""
     from socialzoo.agents import make_policy
+    from socialzoo.bench.episode_play import scenario_task
     from socialzoo.bench.episode_video import animate_episode
-    from socialzoo.bench.replay import scenario_task
     from socialzoo.maps.map_file import load_map
 
     m = load_map(env_config.map_name)

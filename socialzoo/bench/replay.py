@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from socialzoo.agents import Policy, make_policy
+from socialzoo.bench.episode_play import episode_outcome, play_episode, scenario_task, step_seconds
 from socialzoo.core.config import LaserConfig
 from socialzoo.core.laser import laser_scan, ray_angles
 from socialzoo.core.validation import check_int
@@ -75,26 +76,6 @@ def benchmark_scenario(env_config: EnvConfig, seed: int, world_map: Map | None =
     return stream.make(seed)
 
 
-def episode_outcome(metrics: dict[str, Any], last: Any) -> str:
-    """One phrase for how robot 0's episode of row 0 ended: its metrics and its last TaskStep."""
-    info = last.info
-
-    def value(key: str) -> bool:
-        return bool(info[key][0, 0]) if key in info else False
-
-    if metrics.get("success"):
-        return "success"
-    if metrics.get("reached"):
-        return "goal reached after a collision"
-    if last.terminated[0, 0] and value("wall_collision") and not value("reached"):
-        return "wall collision"
-    if metrics.get("collision"):
-        return "collision"
-    if last.truncated[0, 0]:
-        return "time limit"
-    return "ended"
-
-
 def record_episode(
     env_config: EnvConfig,
     scenario: Scenario,
@@ -125,16 +106,6 @@ def record_episode(
     return record_task_episode(task, policy, label=label, laser_rays=laser_rays, laser_stride=laser_stride)
 
 
-def scenario_task(env_config: EnvConfig, scenario: Scenario, world_map: Map | None = None) -> Any:
-    """An action-selection task of one row of env_config, reset to play `scenario` (world_map: the
-    already loaded map of env_config.map, if at hand)."""
-    from socialzoo.env.tasks.action_selection import ActionSelectionTask
-
-    task = ActionSelectionTask(env_config, 1, map_data=world_map)
-    task.reset(np.array([0]), {"scenario": scenario})
-    return task
-
-
 def case_task(env_id: str, split: str, case: int, **overrides: Any) -> Any:
     """A task of one row of any registered task id (socialzoo.bench.task_benchmark.TaskId), reset to
     play case `case` of a split; `overrides` are the task's config fields."""
@@ -158,12 +129,6 @@ def record_case(
     (case_task); `overrides` are the task's config fields."""
     task = case_task(env_id, split, case, **overrides)
     return record_task_episode(task, policy, label=label), task
-
-
-def step_seconds(task: Any) -> float:
-    """A task's step, s: its config's dt (the action-selection task), else its time_step (the
-    CrowdNav task's decision step)."""
-    return float(getattr(task.config, "dt", getattr(task.config, "time_step", None)))  # type: ignore[arg-type]
 
 
 def record_task_episode(
@@ -204,30 +169,6 @@ def record_task_episode(
         recorder.keep_state(scan=len(recorder.actions) % laser_stride == 0 or ended)
     name = getattr(policy, "name", type(policy).__name__)
     return recorder.trace(label or str(name))
-
-
-def play_episode(task: Any, policy: Policy) -> Iterator[tuple[np.ndarray, Any, bool]]:
-    """Step `policy` on row 0 of a task of one row (already reset) until robot 0's episode ends,
-    yielding each step's actions (1, R, *action_space.shape), its TaskStep, and whether robot 0's
-    episode ended with it; the task is stepped again only when the next step is asked for (an
-    episode's viewer and animation read its state in between, and may stop early).
-
-    Every robot of the row acts (robot 0 is the one followed); a policy of observations alone
-    (reads_core False) takes them as the runner gives them, a (N, D) batch."""
-    shape = (1, task.world_state.robot_pose.shape[1], *(task.action_space.shape or ()))
-    reads_core = getattr(policy, "reads_core", True)
-    while True:
-        obs = task.observations()
-        if reads_core:
-            action = np.asarray(policy.act(obs, task)).reshape(shape)
-        else:
-            flat = obs.reshape(-1, obs.shape[-1]) if isinstance(obs, np.ndarray) and obs.ndim == 3 else obs
-            action = np.asarray(policy.act(flat)).reshape(shape)
-        step = task.step(action)
-        ended = bool(step.terminated[0, 0] or step.truncated[0, 0])
-        yield action, step, ended
-        if ended:
-            return
 
 
 class _Recorder:

@@ -726,7 +726,8 @@ def write_replays(
     episode or --replays) are removed. Each new recording is checked against the stored episode."""
     import numpy as np
 
-    from socialzoo.bench.replay import record_task_episode, step_seconds
+    from socialzoo.bench.episode_play import step_seconds
+    from socialzoo.bench.replay import record_task_episode
     from socialzoo.render.replay_data import Encoding, default_stride
     from socialzoo.render.replay_html import write_replay_html
 

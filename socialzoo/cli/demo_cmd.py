@@ -55,8 +55,8 @@ def register(subparsers: Any) -> None:
 
 def run_demo(args: argparse.Namespace) -> int:
     """Run `socialzoo demo`; returns the exit status."""
+    from socialzoo.bench.episode_play import step_seconds
     from socialzoo.bench.episode_video import animate_episode
-    from socialzoo.bench.replay import step_seconds
     from socialzoo.maps.map_file import MapError
 
     try:
@@ -91,7 +91,8 @@ def _learned_file(args: argparse.Namespace) -> dict[str, Any]:
 def _scenario(args: argparse.Namespace) -> tuple[Any, Any, str]:
     """(task, policy, label) of a benchmark map's scenario: --map, --family, --seed."""
     from socialzoo.agents import make_policy
-    from socialzoo.bench.replay import benchmark_scenario, scenario_task
+    from socialzoo.bench.episode_play import scenario_task
+    from socialzoo.bench.replay import benchmark_scenario
     from socialzoo.env.config import EnvConfig
     from socialzoo.maps.map_file import load_map
     from socialzoo.scenarios.catalogue import family_name
