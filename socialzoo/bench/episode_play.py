@@ -41,14 +41,19 @@ def step_seconds(task: Any) -> float:
     return float(getattr(task.config, "dt", getattr(task.config, "time_step", None)))  # type: ignore[arg-type]
 
 
-def play_episode(task: Any, policy: Policy) -> Iterator[tuple[np.ndarray, Any, bool]]:
+def play_episode(
+    task: Any, policy: Policy, human_policy: Any = None
+) -> Iterator[tuple[np.ndarray, Any, bool]]:
     """Step `policy` on row 0 of a task of one row (already reset) until robot 0's episode ends,
     yielding each step's actions (1, R, *action_space.shape), its TaskStep, and whether robot 0's
     episode ended with it; the task is stepped again only when the next step is asked for (an
     episode's viewer and animation read its state in between, and may stop early).
 
     Every robot of the row acts (robot 0 is the one followed); a policy of observations alone
-    (reads_core False) takes them as the runner gives them, a (N, D) batch."""
+    (reads_core False) takes them as the runner gives them, a (N, D) batch. `human_policy` (an
+    act(observations) such as socialzoo.env.human_policy.LearnedHumanPolicy) drives the task's
+    learned-human agents (EnvConfig.num_learned_humans) from their observations
+    (Task.human_observations); without it they get no actions."""
     shape = (1, task.world_state.robot_pose.shape[1], *(task.action_space.shape or ()))
     reads_core = getattr(policy, "reads_core", True)
     while True:
@@ -58,7 +63,8 @@ def play_episode(task: Any, policy: Policy) -> Iterator[tuple[np.ndarray, Any, b
         else:
             flat = obs.reshape(-1, obs.shape[-1]) if isinstance(obs, np.ndarray) and obs.ndim == 3 else obs
             action = np.asarray(policy.act(flat)).reshape(shape)
-        step = task.step(action)
+        humans = None if human_policy is None else human_policy.act(task.human_observations())
+        step = task.step(action, humans)
         ended = bool(step.terminated[0, 0] or step.truncated[0, 0])
         yield action, step, ended
         if ended:

@@ -46,13 +46,15 @@ def animate_episode(
     fps: float = 20.0,
     max_frames: int = 600,
     size: tuple[int, int] = (480, 360),
+    human_policy: Any = None,
 ) -> EpisodeVideo:
     """Run `policy` on row 0 of a task of one row (any task, already reset: see
     socialzoo.bench.episode_play.scenario_task and socialzoo.bench.replay.case_task) and write the animation.
 
     One frame every `stride` steps and one of the episode's last state (at the action-selection task's
     defaults 100 ms of simulated time per frame, played at twice real time); the animation stops after
-    `max_frames` frames if the episode has not ended.
+    `max_frames` frames if the episode has not ended. `human_policy` drives the task's learned-human
+    agents (socialzoo.bench.episode_play.play_episode).
     """
     from socialzoo.render.animation import write_animation
 
@@ -66,7 +68,7 @@ def animate_episode(
         played.frames = 1
         if max_frames <= 1:
             return
-        for _, step, ended in play_episode(task, policy):
+        for _, step, ended in play_episode(task, policy, human_policy):
             played.steps += 1
             if played.steps % stride == 0 or ended:
                 played.frames += 1
