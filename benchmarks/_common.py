@@ -10,6 +10,8 @@ import tracemalloc
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
+from numba.core import event
+
 
 @dataclass
 class Figure:
@@ -29,29 +31,56 @@ def parser(description: str) -> argparse.ArgumentParser:
     return p
 
 
+class _Compilations(event.Listener):
+    """Counts numba's compilations in this process. A kernel compiles on its first call with new argument
+    types (with a cold cache: a fresh checkout, a new NUMBA_CACHE_DIR), which can come many steps into a
+    run (a code path first taken at step 6, arrays of another layout at B > 1): seconds and tens of MiB
+    that belong to no step. Loading a kernel from the cache is no compilation."""
+
+    count = 0
+
+    def on_start(self, event: event.Event) -> None:
+        pass
+
+    def on_end(self, event: event.Event) -> None:
+        self.count += 1
+
+
+COMPILATIONS = _Compilations()
+event.register("numba:compile", COMPILATIONS)
+
+
 def measure(step: Callable[[], None], seconds: float, warmup: int = 5) -> tuple[float, int]:
-    """Calls per second of `step`, run for about `seconds` after `warmup` calls."""
+    """Calls per second of `step`, run for about `seconds` after `warmup` calls; a call in which a
+    kernel compiled starts the timing again after it."""
     for _ in range(warmup):
         step()
-    calls = 0
-    start = time.perf_counter()
+    calls, compiled, start = 0, COMPILATIONS.count, time.perf_counter()
     while True:
         step()
         calls += 1
+        if COMPILATIONS.count != compiled:
+            calls, compiled, start = 0, COMPILATIONS.count, time.perf_counter()
+            continue
         elapsed = time.perf_counter() - start
         if elapsed >= seconds:
             return calls / elapsed, calls
 
 
 def traced_peak_mib(build: Callable[[], Callable[[], None]], steps: int = 3) -> float:
-    """Peak numpy/Python allocation (MiB) of building a workload and running a few steps of it."""
-    tracemalloc.start()
-    step = build()
-    for _ in range(steps):
-        step()
-    _, peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
-    return peak / 2**20
+    """Peak numpy/Python allocation (MiB) of building a workload and running a few steps of it (again
+    where a kernel compiled meanwhile: the compiler's memory is no part of the workload's)."""
+    while True:
+        compiled = COMPILATIONS.count
+        tracemalloc.start()
+        step = build()
+        for _ in range(steps):
+            step()
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        del step
+        if COMPILATIONS.count == compiled:
+            return peak / 2**20
 
 
 def report(fig: Figure, as_json: bool) -> None:

@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from _common import parser
+from _common import measure, parser
 
 try:
     from socialzoo.env.vector import CrowdNavVectorEnv
@@ -31,21 +31,17 @@ except ImportError:  # a tree before the task interface (benchmarks/compare_comm
 CASES = "1x5,256x5,1x20,256x20"  # B x people
 
 
-def measure(batch: int, people: int, variant: str, seconds: float) -> float:
+def throughput(batch: int, people: int, variant: str, seconds: float) -> float:
     """env-steps/s of a vector env of `batch` rows with `people` people each."""
-    import time
-
     env = CrowdNavVectorEnv(batch, variant=variant, cases={"num_humans": people})
     env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    actions = rng.uniform(-1, 1, (256, batch, 2)).astype(np.float32)
-    for k in range(5):
-        env.step(actions[k])
-    steps, start = 0, time.perf_counter()
-    while time.perf_counter() - start < seconds:
-        env.step(actions[steps % 256])
-        steps += 1
-    return steps * batch / (time.perf_counter() - start)
+    actions = np.random.default_rng(0).uniform(-1, 1, (256, batch, 2)).astype(np.float32)
+    steps = iter(range(10**12))
+
+    def step() -> None:
+        env.step(actions[next(steps) % 256])
+
+    return measure(step, seconds)[0] * batch
 
 
 def main() -> None:
@@ -60,7 +56,7 @@ def main() -> None:
             batch, people = (int(n) for n in case.split("x"))
         except ValueError:
             p.error(f"--cases: {case!r} is not B x people, e.g. 256x5")
-        rate = measure(batch, people, args.variant, args.seconds)
+        rate = throughput(batch, people, args.variant, args.seconds)
         figure = {
             "variant": args.variant or "CrowdNav",
             "batch": batch,

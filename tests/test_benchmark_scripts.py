@@ -50,3 +50,41 @@ def test_a_peak_not_measured_is_printed_as_none_not_zero(capsys):
     as_json, text = capsys.readouterr().out.splitlines()
     assert json.loads(as_json)["peak_mem_mib"] is None
     assert "peak" not in text and "agent-steps/s" in text
+
+
+def test_a_kernel_compiled_during_the_timed_calls_is_not_timed():
+    # With a cold numba cache, env_throughput's single env compiled arc_wall_codes on its 6th call, the
+    # first timed one: 1 env-step/s printed at --seconds 0.5 (1,355 once the cache was warm).
+    import numba
+
+    common = script("_common")
+    kernel = numba.njit(lambda x: x + 1.5)
+    calls = [0]
+
+    def step() -> None:
+        calls[0] += 1
+        if calls[0] == 7:  # the second timed call compiles (a new kernel: seconds)
+            kernel(1.0)
+
+    _, timed = common.measure(step, seconds=0.05, warmup=5)
+    assert timed > 10
+
+
+def test_a_kernel_compiled_while_traced_is_not_in_the_peak():
+    # nav_throughput --batches 1 4 with a cold numba cache printed a peak of 14.8 MiB at B=4 (0.6 MiB
+    # warm): B > 1 passes arrays of another layout, whose kernels compiled inside the traced steps.
+    import numba
+    import numpy as np
+
+    common = script("_common")
+    kernel = numba.njit(lambda x: x * 2.5)
+
+    def build():
+        data = np.zeros(1000)  # 8 KiB
+
+        def step() -> None:
+            kernel(data)
+
+        return step
+
+    assert common.traced_peak_mib(build) < 0.1
