@@ -34,11 +34,12 @@ CPU_CLOCK = (
 )
 
 
-def tree(spec: str, scratch: Path) -> Path:
-    """The folder of `spec`: an existing folder as it is, else a git revision checked out under `scratch`."""
+def tree(spec: str, scratch: Path, side: str) -> Path:
+    """The folder of `spec`: an existing folder as it is, else a git revision checked out under `scratch`
+    in a folder named by its `side` (old and new may be one revision: a run that measures the noise)."""
     if Path(spec).is_dir():
         return Path(spec).resolve()
-    folder = scratch / f"tree-{spec.replace('/', '_')}"
+    folder = scratch / f"tree-{side}"
     added = subprocess.run(
         ["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), spec],
         capture_output=True,
@@ -116,7 +117,7 @@ def main() -> None:
         scratch, trees = Path(tmp), {}
         try:
             for side, spec in (("old", args.old), ("new", args.new)):
-                trees[side] = tree(spec, scratch)
+                trees[side] = tree(spec, scratch, side)
             cache_root = args.cache or scratch
             caches = {side: cache_root / f"numba-{side}" for side in trees}
             name = Path(args.script).name

@@ -3,8 +3,11 @@ asserted here; speed is read from the scripts' own output)."""
 
 import importlib.util
 import json
+import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -88,3 +91,20 @@ def test_a_kernel_compiled_while_traced_is_not_in_the_peak():
         return step
 
     assert common.traced_peak_mib(build) < 0.1
+
+
+@pytest.mark.skipif(not (ROOT / ".git").exists(), reason="compares git revisions of a checkout")
+def test_compare_commits_runs_one_revision_against_itself(tmp_path):
+    # `compare_commits.py HEAD HEAD ...` (an A/A run: the noise) said "'HEAD' is neither a folder nor a
+    # revision": both sides were checked out into one folder, tree-HEAD.
+    toy = tmp_path / "toy.py"
+    toy.write_text('import json\nprint(json.dumps({"name": "toy", "env_steps_per_s": 5.0}))\n')
+    command = [sys.executable, str(ROOT / "benchmarks" / "compare_commits.py"), "HEAD", "HEAD", "toy.py"]
+    out = subprocess.run(
+        [*command, "--scripts", str(tmp_path), "--rounds", "1", "--no-warmup"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "round 1  toy" in out.stdout and "new/old 1.000" in out.stdout
