@@ -15,13 +15,25 @@ import argparse
 import ast
 import fnmatch
 import subprocess
+import sys
+from pathlib import Path
+
+# The repository this tool belongs to: git reads it wherever the tool is run from (from tools/, a
+# relative --folder matched nothing and every count was 0).
+REPO = Path(__file__).resolve().parent.parent
+
+
+def git(*args: str) -> str:
+    """The output of `git args` in REPO; a failure (an unknown revision) ends the run naming it."""
+    out = subprocess.run(["git", "-C", str(REPO), *args], capture_output=True, text=True)
+    if out.returncode:
+        sys.exit(f"line_report: git {' '.join(args)}: {out.stderr.strip()}")
+    return out.stdout
 
 
 def files_at(rev: str, folder: str) -> list[str]:
-    """The .py files under `folder` at commit `rev`."""
-    out = subprocess.run(
-        ["git", "ls-tree", "-r", "--name-only", rev, folder], capture_output=True, text=True, check=True
-    ).stdout
+    """The .py files under `folder` (relative to the repository's root) at commit `rev`."""
+    out = git("ls-tree", "-r", "--name-only", rev, "--", folder)
     return [name for name in out.splitlines() if name.endswith(".py")]
 
 
@@ -62,9 +74,7 @@ def report(rev: str, folder: str, without: list[str]) -> dict[str, int]:
     for name in files_at(rev, folder):
         if any(fnmatch.fnmatch(name, pattern) for pattern in without):
             continue
-        source = subprocess.run(
-            ["git", "show", f"{rev}:{name}"], capture_output=True, text=True, check=True
-        ).stdout
+        source = git("show", f"{rev}:{name}")
         total["files"] += 1
         for kind, n in count(source).items():
             total[kind] += n
@@ -74,7 +84,7 @@ def report(rev: str, folder: str, without: list[str]) -> dict[str, int]:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("revs", nargs="+", help="commits to measure")
-    p.add_argument("--folder", default="socialzoo")
+    p.add_argument("--folder", default="socialzoo", help="relative to the repository's root")
     p.add_argument("--without", action="append", default=[], help="glob of files to leave out (repeatable)")
     args = p.parse_args()
     print(
