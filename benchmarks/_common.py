@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 import tracemalloc
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from typing import Any
 
 from numba.core import event
 
@@ -24,10 +26,32 @@ class Figure:
     peak_mem_mib: float | None
 
 
+def at_least(low: float, kind: type = int, above: bool = False) -> Callable[[str], Any]:
+    """argparse type: a finite `kind` (int or float) >= `low` (> `low` with `above`), so that a bad option
+    ends in argparse's "argument --X: expected ..., got VALUE" before any measurement, not in a
+    traceback or a figure of nothing (the scripts run without socialzoo.cli.arg_types: an old tree)."""
+    what = f"{'an integer' if kind is int else 'a finite number'} {'>' if above else '>='} {low:g}"
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and (value > low if above else value >= low)):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
+
+
+positive_int = at_least(1)
+positive_seconds = at_least(0, float, above=True)
+
+
 def parser(description: str) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=description)
     p.add_argument("--json", action="store_true", help="print one JSON object per line")
-    p.add_argument("--seconds", type=float, default=3.0, help="time per configuration (s)")
+    p.add_argument("--seconds", type=positive_seconds, default=3.0, help="time per configuration (s)")
     return p
 
 

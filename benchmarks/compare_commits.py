@@ -25,6 +25,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from _common import positive_int
+
 REPO = Path(__file__).resolve().parent.parent
 KEY_NUMBERS = ("batch", "people", "envs")  # integer fields that name a case rather than measure it
 # Runs a script (the first argument) with the wall clock replaced by the process's CPU time.
@@ -98,7 +100,7 @@ def main() -> None:
     p.add_argument("old", help="folder or git revision of the baseline")
     p.add_argument("new", help="folder or git revision measured against it")
     p.add_argument("script", help="a script of benchmarks/ (name or path)")
-    p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--rounds", type=positive_int, default=3)
     p.add_argument(
         "--scripts", default="new", help="whose copy of the script: new, old, own (each its own) or a folder"
     )

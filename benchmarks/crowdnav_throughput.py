@@ -56,6 +56,8 @@ def main() -> None:
             batch, people = (int(n) for n in case.split("x"))
         except ValueError:
             p.error(f"--cases: {case!r} is not B x people, e.g. 256x5")
+        if batch < 1 or people < 0:
+            p.error(f"--cases: {case!r} needs B >= 1 and people >= 0")
         rate = throughput(batch, people, args.variant, args.seconds)
         figure = {
             "variant": args.variant or "CrowdNav",

@@ -7,7 +7,7 @@ Run: python benchmarks/env_throughput.py [--json] [--vector-batch 256]
 from __future__ import annotations
 
 import numpy as np
-from _common import Figure, measure, parser, report, traced_peak_mib
+from _common import Figure, measure, parser, positive_int, report, traced_peak_mib
 
 import socialzoo  # noqa: F401
 from socialzoo.env import ActionSelectionEnv, ActionSelectionVectorEnv, parallel_env
@@ -61,7 +61,7 @@ def parallel(map_name: str):
 def main() -> None:
     p = parser(__doc__)
     p.add_argument("--map", default="gdc1")
-    p.add_argument("--vector-batch", type=int, default=256)
+    p.add_argument("--vector-batch", type=positive_int, default=256)
     args = p.parse_args()
     single(args.map)()  # shared map tables outside the traced peaks
     rate, _ = measure(single(args.map), args.seconds)

@@ -17,6 +17,8 @@ import json
 import sys
 import time
 
+from _common import positive_int
+
 from socialzoo.bench.runner import BatchedRunner, Trial, TrialResult, make_spec
 
 
@@ -94,8 +96,8 @@ def main() -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--map", default="gdc1", help="map of the quick test set (default gdc1)")
     p.add_argument("--policies", default="goalone,ref", help="comma-separated policies")
-    p.add_argument("--trials", type=int, default=100, help="scenarios per policy (at most 100)")
-    p.add_argument("--batch-size", type=int, default=64, help="env rows stepped together (B)")
+    p.add_argument("--trials", type=positive_int, default=100, help="scenarios per policy (at most 100)")
+    p.add_argument("--batch-size", type=positive_int, default=64, help="env rows stepped together (B)")
     p.add_argument("--no-compact", action="store_true", help="keep finished rows in the batch (the old tail)")
     args = p.parse_args()
     fig = measure(args.map, args.policies.split(","), args.trials, args.batch_size, not args.no_compact)

@@ -17,7 +17,7 @@ import json
 import sys
 
 import torch
-from _common import measure, parser
+from _common import measure, parser, positive_int
 
 import socialzoo  # noqa: F401
 from socialzoo.env.parallel import parallel_env
@@ -79,7 +79,7 @@ def report(name: str, batch: int, calls_per_s: float, as_json: bool) -> None:
 def main() -> None:
     p = parser(__doc__.split("\n\n")[0])
     p.add_argument("--map", default="gdc1")
-    p.add_argument("--batch", type=int, default=256, help="worlds of the native env")
+    p.add_argument("--batch", type=positive_int, default=256, help="worlds of the native env")
     args = p.parse_args()
     torch.set_num_threads(1)
     torch.manual_seed(0)

@@ -7,7 +7,7 @@ Run: python benchmarks/nav_throughput.py [--json] [--batches 1 256]
 from __future__ import annotations
 
 import numpy as np
-from _common import Figure, measure, parser, report, traced_peak_mib
+from _common import Figure, measure, parser, positive_int, report, traced_peak_mib
 
 from socialzoo.core.config import WorldConfig
 from socialzoo.env.world import step_world
@@ -61,7 +61,7 @@ def build(batch: int, map_name: str = "gdc1"):
 
 def main() -> None:
     p = parser(__doc__)
-    p.add_argument("--batches", type=int, nargs="+", default=[1, 256])
+    p.add_argument("--batches", type=positive_int, nargs="+", default=[1, 256])
     p.add_argument("--map", default="gdc1")
     args = p.parse_args()
     build(1, args.map)()  # shared map tables and planner fields, outside the traced peak

@@ -36,7 +36,7 @@ import statistics
 import time
 
 import numpy as np
-from _common import parser
+from _common import at_least, parser, positive_int
 
 from socialzoo.env.vector import CrowdNavVectorEnv
 from socialzoo.scenarios.crowd_cases import CrowdCaseConfig
@@ -125,15 +125,27 @@ def main() -> None:
     p.add_argument(
         "--scenes", default="eth,zara1", help="recorded scenes (socialzoo data fetch eth-ucy first)"
     )
-    p.add_argument("--warmup", type=float, default=0.0, help="untimed seconds before each case's measurement")
     p.add_argument(
-        "--rounds", type=int, default=1, help="run every case --seconds per round, interleaved, ROUNDS times"
+        "--warmup",
+        type=at_least(0, float),
+        default=0.0,
+        help="untimed seconds before each case's measurement",
+    )
+    p.add_argument(
+        "--rounds",
+        type=positive_int,
+        default=1,
+        help="run every case --seconds per round, interleaved, ROUNDS times",
     )
     p.add_argument(
         "--floor", action="store_true", help="also the arena with 1 person and 5 people in many slots"
     )
     p.add_argument(
-        "--memory", type=int, default=0, metavar="STEPS", help="print the recordings' bytes after STEPS"
+        "--memory",
+        type=at_least(0),
+        default=0,
+        metavar="STEPS",
+        help="print the recordings' bytes after STEPS",
     )
     args = p.parse_args()
     if args.memory:

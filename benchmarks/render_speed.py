@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import positive_int
 
 from socialzoo.core.config import LaserConfig, WorldConfig
 from socialzoo.core.laser import laser_scan
@@ -81,9 +82,9 @@ def rollout(num_steps: int, map_name: str = "gdc1", seed: int = 0):
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__)
-    p.add_argument("--steps", type=int, default=600, help="rollout length whose frames are rendered")
+    p.add_argument("--steps", type=positive_int, default=600, help="rollout length whose frames are rendered")
     p.add_argument("--map", default="gdc1")
-    p.add_argument("--antialias", type=int, default=2)
+    p.add_argument("--antialias", type=positive_int, default=2)
     p.add_argument("--png", type=Path, default=None, help="directory for the last frame of each view")
     p.add_argument("--gif", type=Path, default=None, help="also write a GIF of the follow view here")
     p.add_argument("--json", action="store_true", help="print one JSON object per view")

@@ -27,6 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from _common import positive_int
+
 from socialzoo.reproduce.plan import full_settings
 
 # The full protocol's counts (socialzoo.reproduce.plan.full_settings; SPEC section 10).
@@ -197,26 +199,26 @@ def extrapolate(figures: dict[str, Any], seeds: int, workers: int = 2, batch: in
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--curve-trials", type=int, default=4, help="scenarios per checkpoint in the curve batch")
-    p.add_argument(
-        "--checkpoint-trials", type=int, default=64, help="scenarios of the one-checkpoint evaluation"
+    counts = (  # option, default, help: each a count of at least 1
+        ("--curve-trials", 4, "scenarios per checkpoint in the curve batch"),
+        ("--checkpoint-trials", 64, "scenarios of the one-checkpoint evaluation"),
+        ("--perf-trials", 16, "scenarios per policy in the performance batch"),
+        ("--checkpoints", 21, "PPO and DQN checkpoints in the curve batch"),
+        ("--train-steps", 4_000, "env steps of each training-rate run"),
+        ("--validation-trials", 32, "validation scenarios of one evaluation"),
+        ("--seeds", 5, "also extrapolate this many seeds"),
+        ("--batch-size", 64, None),
     )
-    p.add_argument(
-        "--perf-trials", type=int, default=16, help="scenarios per policy in the performance batch"
-    )
-    p.add_argument("--checkpoints", type=int, default=21, help="PPO and DQN checkpoints in the curve batch")
-    p.add_argument("--train-steps", type=int, default=4_000, help="env steps of each training-rate run")
-    p.add_argument("--validation-trials", type=int, default=32, help="validation scenarios of one evaluation")
-    p.add_argument("--seeds", type=int, default=5, help="also extrapolate this many seeds")
-    p.add_argument("--batch-size", type=int, default=64)
+    for option, default, text in counts:
+        p.add_argument(option, type=positive_int, default=default, help=text)
     p.add_argument(
         "--body-batches",
-        type=lambda t: [int(x) for x in t.split(",")],
+        type=lambda t: [positive_int(x) for x in t.split(",")],
         default=[64, 256],
         help="batch sizes of the body-rate measures (comma-separated)",
     )
     p.add_argument(
-        "--body-finished", type=int, default=40, help="trials finished before a body measure stops"
+        "--body-finished", type=positive_int, default=40, help="trials finished before a body measure stops"
     )
     args = p.parse_args()
     figures: dict[str, Any] = {}

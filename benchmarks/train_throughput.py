@@ -20,7 +20,7 @@ import time
 import warnings
 from dataclasses import asdict, dataclass
 
-from _common import parser
+from _common import parser, positive_int
 
 import socialzoo  # noqa: F401  (registers the ids)
 from socialzoo.env.registration import ENV_VERSION
@@ -100,8 +100,8 @@ def report(fig: TrainFigure, as_json: bool) -> None:
 def main() -> None:
     p = parser(__doc__)
     p.set_defaults(seconds=20.0)
-    p.add_argument("--rows", type=int, default=64, help="rows of the SB3VecEnv (default 64)")
-    p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--rows", type=positive_int, default=64, help="rows of the SB3VecEnv (default 64)")
+    p.add_argument("--threads", type=positive_int, default=1, help="torch threads (default 1)")
     args = p.parse_args()
     import torch
 

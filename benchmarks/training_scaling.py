@@ -20,6 +20,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from _common import positive_int
+
 MODES = {"serial": ("local", 1), "local": ("local", None), "ray": ("ray", None)}
 
 
@@ -38,9 +40,11 @@ def trainings(root: Path, steps: int, seeds: int) -> list[tuple[str, object]]:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--steps", type=int, default=12_000, help="env steps per training")
-    p.add_argument("--seeds", type=int, default=2, help="seeds per learner (PPO and DQN)")
-    p.add_argument("--workers", type=int, default=2, help="processes / Ray CPUs of the parallel modes")
+    p.add_argument("--steps", type=positive_int, default=12_000, help="env steps per training")
+    p.add_argument("--seeds", type=positive_int, default=2, help="seeds per learner (PPO and DQN)")
+    p.add_argument(
+        "--workers", type=positive_int, default=2, help="processes / Ray CPUs of the parallel modes"
+    )
     p.add_argument("--modes", default="serial,local,ray", help=f"comma-separated, of {','.join(MODES)}")
     p.add_argument("--json", action="store_true", help="print one JSON object per line")
     args = p.parse_args()

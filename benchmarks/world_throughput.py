@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from _common import Figure, measure, parser, report, traced_peak_mib
+from _common import Figure, measure, parser, positive_int, report, traced_peak_mib
 
 from socialzoo.core.config import OrcaConfig, WorldConfig
 from socialzoo.env.world import step_world
@@ -88,7 +88,7 @@ def episodes(batch: int, map_name: str, humans: str, counterfactual: bool, orca:
 
 def main() -> None:
     p = parser(__doc__)
-    p.add_argument("--batches", type=int, nargs="+", default=[1, 64, 256, 1024])
+    p.add_argument("--batches", type=positive_int, nargs="+", default=[1, 64, 256, 1024])
     p.add_argument("--map", default="gdc1")
     p.add_argument("--humans", nargs="+", default=["sf"], help="people specs, measured in turn")
     p.add_argument("--orca", default="socialzoo", help="ORCA parameter set: socialzoo (default) or crowdnav")
@@ -97,7 +97,9 @@ def main() -> None:
         action="store_true",
         help="also time episodes with and without counterfactual rows",
     )
-    p.add_argument("--repeats", type=int, default=3, help="interleaved timings of the episodes, best kept")
+    p.add_argument(
+        "--repeats", type=positive_int, default=3, help="interleaved timings of the episodes, best kept"
+    )
     args = p.parse_args()
     # Load the shared map (and build its wall index) and the compiled kernels before tracing: the
     # peak is then what the batch itself costs, so peak / B is the memory per env beyond the map.

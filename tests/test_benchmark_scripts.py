@@ -108,3 +108,32 @@ def test_compare_commits_runs_one_revision_against_itself(tmp_path):
     )
     assert out.returncode == 0, out.stderr
     assert "round 1  toy" in out.stdout and "new/old 1.000" in out.stdout
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["world_throughput.py", "--batches", "1", "--humans", "sf", "orca", "--repeats", "0"],
+        ["train_throughput.py", "--rows", "0"],
+        ["recorded_throughput.py", "--rounds", "0"],
+        ["render_speed.py", "--steps", "0"],
+        ["reproduce_profile.py", "--body-batches", "64,0"],
+    ],
+    ids=lambda argv: argv[0],
+)
+def test_a_count_below_one_is_refused_by_argparse(argv):
+    # They ended in a ZeroDivisionError or an IndexError traceback after minutes of measuring, or printed
+    # a figure of nothing; now argparse names the option before anything runs.
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / argv[0]), *argv[1:]], capture_output=True, text=True
+    )
+    assert out.returncode == 2, out.stderr
+    assert f"argument {argv[-2]}: expected an integer >= 1" in out.stderr
+
+
+def test_seconds_must_be_a_finite_positive_number():
+    common = script("_common")
+    for text in ("0", "-1", "nan", "inf", "x"):
+        with pytest.raises(SystemExit):
+            common.parser("").parse_args(["--seconds", text])
+    assert common.parser("").parse_args(["--seconds", "0.5"]).seconds == 0.5
