@@ -115,7 +115,8 @@ def main() -> None:
             elapsed = time.perf_counter() - start
             figure.update(gif_frames=len(frames[::2]), gif_s=elapsed, gif_mib=args.gif.stat().st_size / 2**20)
             if not args.json:
-                print(f"GIF of {figure['gif_frames']} frames: {elapsed:.1f} s, {figure['gif_mib']:.1f} MiB")
+                # 3 significant digits: a short run's GIF (22 KiB at --steps 5) printed as "0.0 MiB".
+                print(f"GIF of {figure['gif_frames']} frames: {elapsed:.3g} s, {figure['gif_mib']:.3g} MiB")
         if args.json:
             print(json.dumps(figure), flush=True)
 

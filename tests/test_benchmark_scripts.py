@@ -137,3 +137,14 @@ def test_seconds_must_be_a_finite_positive_number():
         with pytest.raises(SystemExit):
             common.parser("").parse_args(["--seconds", text])
     assert common.parser("").parse_args(["--seconds", "0.5"]).seconds == 0.5
+
+
+def test_render_speed_prints_a_small_gif_size_not_as_zero(monkeypatch, capsys, tmp_path):
+    # --steps 5 printed "GIF of 3 frames: 0.1 s, 0.0 MiB" for a 22 KiB file.
+    argv = ["render_speed.py", "--steps", "2", "--map", "hallway", "--gif", str(tmp_path / "a.gif")]
+    monkeypatch.setattr(sys, "argv", argv)
+    script("render_speed").main()
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("GIF"))
+    assert float(line.split(", ")[-1].removesuffix(" MiB")) == pytest.approx(
+        (tmp_path / "a.gif").stat().st_size / 2**20, rel=1e-2
+    )
