@@ -41,3 +41,13 @@ def test_every_recorded_position_is_replayed_where_the_file_has_it(dt, count):
     compared, worst, mismatched = check_replay.check_scene(name, cases=8)
     assert compared > 0
     assert worst < 0.01 and mismatched == 0
+
+
+def test_no_cases_is_refused_by_argparse(monkeypatch, capsys):
+    # --cases 0 ended in an IndexError traceback (scenarios[0] of no scenarios).
+    monkeypatch.setattr("sys.argv", ["check_replay.py", "--scenes", "eth", "--cases", "0"])
+    with pytest.raises(SystemExit) as exit_:
+        check_replay.main()
+    assert (
+        exit_.value.code == 2 and "argument --cases: expected a positive integer" in capsys.readouterr().err
+    )

@@ -16,6 +16,7 @@ import argparse
 
 import numpy as np
 
+from socialzoo.cli.arg_types import positive_int
 from socialzoo.core.config import WorldConfig
 from socialzoo.core.walls import WallIndex
 from socialzoo.env.core import BatchedCore
@@ -65,7 +66,7 @@ def check_scene(scene: str, cases: int) -> tuple[int, float, int]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenes", default="eth,hotel,univ,zara1,zara2")
-    parser.add_argument("--cases", type=int, default=100)
+    parser.add_argument("--cases", type=positive_int, default=100, help="episodes per scene (default 100)")
     args = parser.parse_args()
     bad = 0
     for scene in args.scenes.split(","):
