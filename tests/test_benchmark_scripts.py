@@ -148,3 +148,15 @@ def test_render_speed_prints_a_small_gif_size_not_as_zero(monkeypatch, capsys, t
     assert float(line.split(", ")[-1].removesuffix(" MiB")) == pytest.approx(
         (tmp_path / "a.gif").stat().st_size / 2**20, rel=1e-2
     )
+
+
+def test_training_scaling_gives_a_speed_up_whatever_the_order_of_modes(monkeypatch, capsys):
+    # --modes local,serial printed "speed-up -" for local: the baseline was set only once serial had run.
+    import socialzoo.reproduce.backend
+
+    monkeypatch.setattr(socialzoo.reproduce.backend, "run_tasks", lambda *args, **kwargs: None)
+    monkeypatch.setattr(sys, "argv", ["training_scaling.py", "--modes", "local,serial", "--json"])
+    script("training_scaling").main()
+    figures = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [f["mode"] for f in figures] == ["serial", "local"]
+    assert all(f["speedup_over_serial"] is not None for f in figures)
