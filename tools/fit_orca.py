@@ -4,7 +4,7 @@ Walks the social-force people and ORCA people of each candidate parameter set on
 validation scenarios (socialzoo.studies.human_report.walk, no robot) and ranks the candidates by
 how closely their people walk like the social-force ones: the relative differences of mean speed,
 10th-percentile speed (how much people slow down for each other), route-goal reach rate and
-median time to goal, summed. Prints one line per candidate, best last.
+median time to goal, summed. Prints one line per candidate as it is scored (grid order), then the best one.
 
 Run: python tools/fit_orca.py [--map gdc1] [--scenarios 8] [--seconds 40]
 """
