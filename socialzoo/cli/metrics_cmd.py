@@ -12,6 +12,9 @@ from typing import Any
 from socialzoo.cli import command_help, fail
 from socialzoo.cli.arg_types import out_file
 
+# The columns of --out's CSV, in order: its help names them from here, so the two cannot drift apart.
+CSV_COLUMNS = ("log", "label", "metric", "value", "unit")
+
 
 def _non_negative(text: str) -> float:
     try:
@@ -37,7 +40,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("logs", nargs="+", type=Path, metavar="LOG.json", help="episode logs")
     parser.add_argument(
-        "--out", type=out_file, help="also write every log's table to this CSV (log, metric, value, unit)"
+        "--out", type=out_file, help=f"also write every log's table to this CSV ({', '.join(CSV_COLUMNS)})"
     )
     parser.add_argument(
         "--personal-space", type=_non_negative, default=0.5, help="personal space, m (default 0.5)"
@@ -140,6 +143,6 @@ def run_metrics(args: argparse.Namespace) -> int:
     if args.out is not None:
         from socialzoo.bench.tables import write_csv
 
-        write_csv(rows, args.out, ["log", "label", "metric", "value", "unit"], lineterminator="\n")
+        write_csv(rows, args.out, list(CSV_COLUMNS), lineterminator="\n")
         print(f"wrote {args.out}")
     return 0

@@ -5,6 +5,7 @@ import csv
 import json
 
 import numpy as np
+import pytest
 
 from socialzoo.bench.episode_log import make_episode_log, write_episode_log
 from socialzoo.cli import main
@@ -72,3 +73,15 @@ def test_an_out_that_is_one_of_the_logs_is_refused_and_the_log_kept(tmp_path, ca
         err = capsys.readouterr().err
         assert err.startswith("socialzoo metrics: error: --out") and "run.json" in err
         assert log.read_bytes() == before
+
+
+def test_out_help_names_the_columns_written(tmp_path, capsys):
+    # --help said "(log, metric, value, unit)" while the CSV has a label column too (docs/guideline_metrics.md
+    # names all five); found following that page.
+    with pytest.raises(SystemExit):
+        main(["metrics", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    out = tmp_path / "table.csv"
+    assert main(["metrics", str(_log(tmp_path, "one", [0, 1])), "--out", str(out)]) == 0
+    header = out.read_text().splitlines()[0].split(",")
+    assert f"this CSV ({', '.join(header)})" in help_text
