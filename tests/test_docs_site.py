@@ -9,6 +9,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import gymnasium as gym
 import pytest
 
 from socialzoo.cli import build_parser
@@ -198,3 +199,26 @@ def test_doc_names_exist(page):
         if why is not None:
             missing.append(f"{name} ({why})")
     assert not missing, f"{page} names what the package does not have: {missing}"
+
+
+# The recipes' example of an id a reader registers (docs/architecture.md).
+EXAMPLE_IDS = {"socialzoo/MyFamily-v2"}
+
+
+@pytest.mark.parametrize("page", NAMED_PAGES)
+def test_doc_env_ids_are_registered(page):
+    # An id a page names is registered, or it is an earlier version of a registered id (a page's
+    # history: gym.make of it raises DeprecatedEnv naming the current one), never an id that does not
+    # exist at any version (a misspelt name, a version from the future).
+    current: dict[str, int] = {}  # registered name -> its newest version
+    for env_id in gym.registry:
+        name, _, version = env_id.rpartition("-v")
+        if env_id.startswith("socialzoo/") and version.isdigit():
+            current[name] = max(current.get(name, -1), int(version))
+    named = set(re.findall(r"\bsocialzoo/[A-Z]\w*-v\d+\b", (ROOT / page).read_text())) - EXAMPLE_IDS
+    wrong = []
+    for env_id in sorted(named):
+        name, _, version = env_id.rpartition("-v")
+        if env_id not in gym.registry and int(version) >= current.get(name, 0):
+            wrong.append(env_id)
+    assert not wrong, f"{page} names ids that are not registered at any version: {wrong}"
