@@ -19,6 +19,10 @@ from pathlib import Path
 from socialzoo.bench.stats import rate_interval
 from socialzoo.scenarios.suite import suite_entry
 
+# The last row's intervals: 95%, as robot_sf reports them and as `socialzoo suite`'s own tables are
+# (rate_interval's default is the benchmark tables' 90%).
+CONFIDENCE = 0.95
+
 
 def label(scenario: str) -> str:
     """A row's label: "a. Frontal approach" for a suite scenario, the family's name for another
@@ -61,11 +65,12 @@ def table(outcomes: dict[tuple[str, str], tuple[list[bool], list[bool]]]) -> str
     for policy in policies:
         success = [x for (p, _), (s, _) in outcomes.items() if p == policy for x in s]
         collided = [x for (p, _), (_, c) in outcomes.items() if p == policy for x in c]
-        s, c = rate_interval(sum(success), len(success)), rate_interval(sum(collided), len(collided))
+        s = rate_interval(sum(success), len(success), CONFIDENCE)
+        c = rate_interval(sum(collided), len(collided), CONFIDENCE)
         totals.append(
             f"**{s.value:.3f}** [{s.low:.3f}, {s.high:.3f}] / **{c.value:.3f}** [{c.low:.3f}, {c.high:.3f}]"
         )
-    lines.append("| all (success / collision rate, 95% CI) | " + " | ".join(totals) + " |")
+    lines.append(f"| all (success / collision rate, {CONFIDENCE:.0%} CI) | " + " | ".join(totals) + " |")
     return "\n".join(lines)
 
 
