@@ -114,6 +114,14 @@ def weidmann_speed(density: np.ndarray, free_speed: float = WEIDMANN_V0) -> np.n
     return np.where(rho < WEIDMANN_RHO_MAX, v, 0.0)
 
 
+def spec_label(spec: str) -> str:
+    """A people spec as the report shows it: the shipped learned humans' file (which `--humans learned`
+    names by its absolute path, this machine's) as "learned" alone."""
+    from socialzoo.agents import SHIPPED_DIR
+
+    return spec.replace(f"learned:{SHIPPED_DIR / 'humans.safetensors'}", "learned")
+
+
 def model_slug(spec: str) -> str:
     """A file-name part for a people spec ("learned:runs/h.safetensors" -> "learned")."""
     parts = [p.strip() for p in spec.split("+")]
@@ -172,7 +180,7 @@ def walk(spec: str, cfg: HumanReportConfig) -> WalkResult:
     ratios = [s["humans_path_ratio"] for s in summaries if np.isfinite(s["humans_path_ratio"])]
     reach = arrived[routes]
     row = {
-        "model": spec,
+        "model": spec_label(spec),
         "people": int(mask.sum()),
         "mean_speed": float(speed.mean()) if len(speed) else math.nan,
         "speed_p10": float(np.percentile(speed, 10)) if len(speed) else math.nan,
@@ -281,7 +289,7 @@ def plot_walk(result: WalkResult, out_dir: Path) -> Path:
     ax.hist(result.time_to_goal, bins=20, color="tab:green")
     ax.set_xlabel("time to goal (s)")
     ax.set_title(f"reach rate {result.row['reach_rate']:.2f}")
-    fig.suptitle(f"people: {result.spec}")
+    fig.suptitle(f"people: {spec_label(result.spec)}")
     fig.tight_layout()
     return save_figure(fig, out_dir, f"walk_{model_slug(result.spec)}", ("png",), dpi=110)[0]
 
@@ -317,7 +325,11 @@ def human_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     files = write_report(results, cfg, out)
-    record = {**asdict(cfg), "humans": list(cfg.humans), "env_overrides": dict(cfg.env_overrides)}
+    record = {
+        **asdict(cfg),
+        "humans": [spec_label(spec) for spec in cfg.humans],
+        "env_overrides": dict(cfg.env_overrides),
+    }
     files.append(write_text_atomic(out / "config.json", json_text(record, indent=2, default=str) + "\n"))
     if figures:
         files += [plot_walk(r, out) for r in results]

@@ -87,3 +87,16 @@ def test_an_unknown_map_fails_leaving_no_folder(tmp_path, capsys):
     assert socialzoo_main(["humans", "report", "--map", "nowhere", "--out", str(out)]) == 2
     assert "unknown map 'nowhere'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_shipped_learned_humans_are_named_learned_not_by_this_machines_path(tmp_path, capsys):
+    """`socialzoo humans report --humans learned` labelled its row, its figure and config.json with
+    the shipped file's absolute path (learned:/home/.../socialzoo/agents/shipped/humans.safetensors)."""
+    from socialzoo.agents import SHIPPED_DIR
+
+    out = tmp_path / "report"
+    argv = ["humans", "report", "--humans", "sf,learned", "--map", "open_room", "--scenarios", "1"]
+    assert socialzoo_main([*argv, "--seconds", "2", "--out", str(out), "--no-figures"]) == 0
+    assert "| learned |" in capsys.readouterr().out
+    for name in ("report.md", "report.csv", "config.json"):
+        assert str(SHIPPED_DIR) not in (out / name).read_text(), name
