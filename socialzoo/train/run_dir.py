@@ -7,6 +7,7 @@ import logging
 import os
 import re
 import shlex
+import shutil
 import sys
 import time
 from collections.abc import Iterator
@@ -107,9 +108,13 @@ class RunDir:
                     f"{self.file}: a {existing.get('algo')} run with other arguments "
                     f"({', '.join(changed) or 'algorithm'} differ); choose another --out"
                 )
+        if existing is not None and not existing.get("finished"):
+            # An interrupted run trains again from its first step and logs its curves anew: the first
+            # attempt's TensorBoard events showed beside them, the same steps twice.
+            shutil.rmtree(self.path / "tensorboard", ignore_errors=True)
         resolved = recorded_args(plain(args), self.path, self._paths, self._fields)
         # A finished run is kept as recorded; an interrupted one trains again from its first step, so
-        # its record is this command's: its command line, start and volatile arguments (--threads).
+        # its record is this command's: its command line, start and volatile arguments (--progress).
         self.record: dict[str, Any] = (
             existing
             if existing is not None and existing.get("finished")

@@ -321,3 +321,22 @@ def test_a_run_of_another_thread_count_is_another_run(tmp_path):
     with pytest.raises(RunDirError, match="threads differ"):
         run_training(TOY, ToyArgs(out=tmp_path / "run", threads=1), toy_fit([]))
     run_training(TOY, ToyArgs(out=tmp_path / "run", threads=2, progress=False), toy_fit([]))  # the same run
+
+
+def test_an_interrupted_run_trained_again_logs_its_curves_once(tmp_path):
+    # The first attempt's TensorBoard events stayed beside the second attempt's, which trains again
+    # from step 0: TensorBoard drew the same steps twice.
+    def interrupted(run):
+        events = run.dir.path / "tensorboard"
+        events.mkdir()
+        (events / "events.out.tfevents.first").write_text("first attempt")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_training(TOY, ToyArgs(out=tmp_path / "run"), interrupted)
+    run_training(TOY, ToyArgs(out=tmp_path / "run"), toy_fit([]))
+    assert not (tmp_path / "run" / "tensorboard" / "events.out.tfevents.first").exists()
+    (tmp_path / "run" / "tensorboard").mkdir(exist_ok=True)
+    (tmp_path / "run" / "tensorboard" / "events.out.tfevents.kept").write_text("finished run")
+    run_training(TOY, ToyArgs(out=tmp_path / "run"), toy_fit([]))  # finished: returned as it is
+    assert (tmp_path / "run" / "tensorboard" / "events.out.tfevents.kept").exists()
