@@ -398,9 +398,12 @@ def encode_replay(
                 f"encode_replay: {t.label} took action {int(t.action.max())}, but the scene names "
                 f"{len(names)} actions {list(names)}"
             )
-    # The legend shows what the page draws: the task's actions, the bodies, and the scan and the
-    # followed person only where an episode has them.
-    legend = ["robot", "humans", "goal", "carrot"]
+    # The legend shows what the page draws: the task's actions, the bodies, and the carrot, the scan and
+    # the followed person only where an episode has them (without a navigator the recorder keeps the
+    # goal as the carrot: a velocity task in the open has none).
+    legend = ["robot", "humans", "goal"]
+    if any(not np.array_equal(t.carrot, np.broadcast_to(t.goal[:2], t.carrot.shape)) for t in traces):
+        legend.append("carrot")
     if any(t.other_robots is not None and t.other_robots.shape[1] for t in traces):
         legend.insert(1, "other robots")
     if any(t.laser_ranges.shape[1] for t in traces):

@@ -162,6 +162,8 @@ def test_socialzoo_replay_writes_a_page_of_a_case_with_the_tasks_own_legend(tmp_
     velocity = tmp_path / "crowd.html"
     assert main(["replay", "--env", "socialzoo/CrowdNav-v1", "--policy", "orca", "--out", str(velocity)]) == 0
     assert data(velocity)["actions"]["names"] == []  # a velocity task: no sub-policy legend
+    # Nor a carrot: without a navigator the recorder keeps the goal there (the legend said "carrot").
+    assert "carrot" not in data(velocity)["legend"] and "goal" in data(velocity)["legend"]
 
 
 def test_socialzoo_demo_animates_a_case_of_any_task_id(tmp_path, capsys):

@@ -487,14 +487,17 @@
           X(pose[0] + ARROW_SECONDS * v * Math.cos(pose[2])), Y(pose[1] + ARROW_SECONDS * v * Math.sin(pose[2])), 7);
       }
 
-      // Carrot (the local target on the plan).
-      ctx.fillStyle = COLORS.carrot;
-      ctx.strokeStyle = "#6e0064";
-      ctx.lineWidth = 1;
-      ctx.beginPath();
-      ctx.arc(X(d.carrot[2 * f]), Y(d.carrot[2 * f + 1]), Math.max(3.5, 0.1 * px), 0, 2 * Math.PI);
-      ctx.fill();
-      ctx.stroke();
+      // Carrot (the local target on the plan), where the episodes have one (a task without a navigator
+      // keeps its goal there: the legend leaves the carrot out, and so does the picture).
+      if (!DATA.legend || DATA.legend.includes("carrot")) {
+        ctx.fillStyle = COLORS.carrot;
+        ctx.strokeStyle = "#6e0064";
+        ctx.lineWidth = 1;
+        ctx.beginPath();
+        ctx.arc(X(d.carrot[2 * f]), Y(d.carrot[2 * f + 1]), Math.max(3.5, 0.1 * px), 0, 2 * Math.PI);
+        ctx.fill();
+        ctx.stroke();
+      }
 
       this.drawHud(ctx, w, h, s, last);
     }
