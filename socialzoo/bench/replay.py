@@ -116,12 +116,6 @@ def case_task(env_id: str, split: str, case: int, **overrides: Any) -> Any:
     return task
 
 
-def acting_overrides(policy: Policy, overrides: dict[str, Any]) -> dict[str, Any]:
-    """The config fields of the task a policy acts in: `overrides` and those the policy needs
-    (its task_overrides, such as a CrowdNav learner's robot kinematics)."""
-    return {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
-
-
 def record_case(
     env_id: str, policy: Policy, split: str, case: int, *, label: str | None = None, **overrides: Any
 ) -> tuple[EpisodeTrace, Any]:

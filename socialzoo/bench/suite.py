@@ -285,7 +285,7 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
             config refuses the family; a policy that does not act in the task; more seeds than the
             split holds.
     """
-    from socialzoo.bench.task_benchmark import config_hash
+    from socialzoo.bench.task_benchmark import acting_overrides, config_hash
     from socialzoo.core.metrics import metric
     from socialzoo.env.people import COST_KEYS
 
@@ -331,11 +331,7 @@ def plan_suite(config: SuiteConfig) -> tuple[list[SuiteUnit], list[str]]:
                         "suite's signals), so it plays with signals off: it does not see gestures or doors"
                     )
             policy = policies[spec]
-            overrides = {
-                **({"signals": False} if blind[spec] else {}),
-                **(getattr(policy, "task_overrides", {}) or {}),
-                **counterfactual,
-            }
+            overrides = acting_overrides(policy, {"signals": False} if blind[spec] else {}) | counterfactual
             acting = _probe(task, scenario, overrides) if overrides else probe
             runner_set = scenario.name + (f" {json.dumps(overrides, sort_keys=True)}" if overrides else "")
             units.append(

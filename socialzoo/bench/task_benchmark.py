@@ -293,6 +293,12 @@ def task_policies(
     return probe, [(spec, make_policy(spec, task=probe)) for spec in policies]
 
 
+def acting_overrides(policy: Any, overrides: dict[str, Any]) -> dict[str, Any]:
+    """The config fields of the task a policy acts in: `overrides` and those the policy needs
+    (its task_overrides, such as a CrowdNav learner's robot kinematics)."""
+    return {**overrides, **(getattr(policy, "task_overrides", {}) or {})}
+
+
 def run_task_benchmark(
     env_id: str,
     policies: Sequence[str],
@@ -334,7 +340,7 @@ def run_task_benchmark(
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for spec, policy in built:
-        overrides = config | dict(getattr(policy, "task_overrides", {}) or {})
+        overrides = acting_overrides(policy, config)
         episodes, played = evaluate_stored(
             out / STORE_FILE, task, spec, policy, split, cases, batch_size, overrides
         )

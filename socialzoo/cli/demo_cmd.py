@@ -109,8 +109,8 @@ def _scenario(args: argparse.Namespace) -> tuple[Any, Any, str]:
 def _case(args: argparse.Namespace) -> tuple[Any, Any, str]:
     """(task, policy, label) of a fixed case of a registered task id: --env, --case, --split, --task-config."""
     from socialzoo.agents import make_policy
-    from socialzoo.bench.replay import acting_overrides, case_task
-    from socialzoo.bench.task_benchmark import TaskId
+    from socialzoo.bench.replay import case_task
+    from socialzoo.bench.task_benchmark import TaskId, acting_overrides
 
     if args.policy is None:
         raise ValueError(f"name the policy to play on {args.env} (--policy)")

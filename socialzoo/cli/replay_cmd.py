@@ -169,8 +169,8 @@ def _recording(args: argparse.Namespace, dt: float, world_map: Any) -> dict[str,
 def _replay_case(args: argparse.Namespace) -> int:
     """`socialzoo replay --env ID --case K`: every policy on one fixed case of any task id."""
     from socialzoo.agents import make_policy
-    from socialzoo.bench.replay import acting_overrides, record_case
-    from socialzoo.bench.task_benchmark import TaskId
+    from socialzoo.bench.replay import record_case
+    from socialzoo.bench.task_benchmark import TaskId, acting_overrides
 
     task_id = TaskId.of(args.env)
     overrides = given(args, "max_steps") | task_config(args.task_config)
